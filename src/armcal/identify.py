@@ -1,0 +1,562 @@
+"""Identification of the deviations from measured (joint angles, position) pairs.
+
+Two solvers reach the same least-squares optimum (paper eq. 3):
+
+* ``"closed-form"`` (the default, ``method="auto"``): the planar model is
+  *linear* in the complex link vectors ``z_k = (l_k + dl_k) exp(i dtheta_k)``
+  and the base ``x0 + i y0``::
+
+      x + i y = (x0 + i y0) + sum_k z_k exp(i theta_k)
+
+  so one linear least-squares solve gives the global optimum, and
+  ``z_k -> (dl_k, dtheta_k) = (|z_k| - l_k, arg z_k)`` maps it back (a bijection
+  for ``|z_k| > 0``).  No iterations, no starting point, and it batches over
+  trials: many measurement sets share one factorization.
+* ``"gauss-newton"``: the paper's iterative algorithm (Section III, Steps 1-5),
+  Gauss-Newton on the full nonlinear model in the paper's parametrization,
+  starting from zero deviations, with a step tolerance and an iteration cap.
+
+Uncertainty is ``cov = sigma^2 (J^T J)^-1`` at the solution (paper eq. 16), with
+``sigma`` given by the user or estimated as ``s^2 = RSS / (2m - p)``.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+from typing import Literal
+
+import numpy as np
+
+from .arm import PlanarArm, forward_kinematics, jacobian, paper_from_user_matrix, wrap_angle
+from .errors import ArmcalError, NotIdentifiableError
+
+__all__ = [
+    "METHODS",
+    "Calibration",
+    "Identifiability",
+    "check_identifiable",
+    "format_report",
+    "identifiability",
+    "identify",
+    "solve_closed_form",
+    "solve_gauss_newton",
+]
+
+Method = Literal["auto", "closed-form", "gauss-newton"]
+
+#: Relative singular-value threshold of the column-scaled Jacobian below which a
+#: direction in parameter space counts as not identifiable.  A plan that close
+#: to singular would give standard errors more than 1e10 times the best-case ones.
+RANK_RTOL = 1e-10
+
+
+@dataclass(frozen=True)
+class Identifiability:
+    """Rank analysis of a plan's column-scaled Jacobian.
+
+    Attributes
+    ----------
+    rank : int
+        Numerical rank (singular values above ``RANK_RTOL`` times the largest).
+    n_params : int
+        Number of parameters ``p``.
+    singular_values : ndarray, shape (min(2m, p),)
+        Singular values of the Jacobian with unit-norm columns, descending.
+    unidentifiable : tuple of str
+        Parameters that have a component in the null space (cannot be identified).
+    combinations : tuple of str
+        A basis of the null space written as parameter combinations (largest
+        coefficient 1): moving the parameters along one of these changes no
+        measured position to first order.
+    """
+
+    rank: int
+    n_params: int
+    singular_values: np.ndarray
+    unidentifiable: tuple[str, ...]
+    combinations: tuple[str, ...]
+
+    @property
+    def identifiable(self) -> bool:
+        """True when the Jacobian has full column rank."""
+        return self.rank == self.n_params
+
+    @property
+    def condition_number(self) -> float:
+        """Ratio of largest to smallest singular value (inf when rank deficient)."""
+        s = self.singular_values
+        if s.size < self.n_params or s[-1] == 0:
+            return float("inf")
+        return float(s[0] / s[-1])
+
+
+def _combination(vector: np.ndarray, names: Sequence[str]) -> str:
+    coeffs = vector / vector[np.argmax(np.abs(vector))]
+    terms = []
+    for c, name in zip(coeffs, names, strict=True):
+        if abs(c) < 1e-6:
+            continue
+        mag = "" if abs(abs(c) - 1) < 1e-9 else f"{abs(c):.3g}*"
+        sign = "-" if c < 0 else "+"
+        terms.append(f"{sign} {mag}{name}")
+    text = " ".join(terms)
+    return text[2:] if text.startswith("+ ") else "-" + text[2:]
+
+
+def identifiability(arm: PlanarArm, q: np.ndarray) -> Identifiability:
+    """Rank of the Jacobian of a plan at the nominal parameters, on scaled columns.
+
+    Parameters
+    ----------
+    arm : PlanarArm
+    q : ndarray, shape (m, n)
+        Joint angles of the plan in rad.
+
+    Returns
+    -------
+    Identifiability
+
+    Notes
+    -----
+    Columns mix mm/mm and mm/rad, so each is scaled to unit norm before the SVD;
+    the rank does not depend on the deviations (a rotation of each link's pair of
+    columns maps nominal to actual Jacobian), so the nominal model suffices.
+
+    Examples
+    --------
+    >>> arm = PlanarArm([2.0, 1.0])
+    >>> info = identifiability(arm, np.zeros((3, 2)))   # three identical poses
+    >>> info.rank, info.unidentifiable
+    (2, ('dl1', 'dl2', 'dq1', 'dq2'))
+    """
+    jac = jacobian(arm, q).reshape(-1, arm.n_params)
+    norms = np.linalg.norm(jac, axis=0)
+    norms[norms == 0] = 1.0
+    _, s, vt = np.linalg.svd(jac / norms, full_matrices=True)
+    s_max = s[0] if s.size else 0.0
+    rank = int(np.sum(s > RANK_RTOL * s_max)) if s_max > 0 else 0
+    null = vt[rank:]  # rows span the null space of the scaled Jacobian
+    names = arm.param_names
+    bad = tuple(n for n, w in zip(names, np.linalg.norm(null, axis=0), strict=True) if w > 1e-8)
+    # Express null directions per unit of each parameter (undo the column scaling).
+    combos = tuple(_combination(v / norms, names) for v in null)
+    return Identifiability(rank, arm.n_params, s, bad, combos)
+
+
+def check_identifiable(arm: PlanarArm, q: np.ndarray) -> Identifiability:
+    """Raise :class:`NotIdentifiableError` unless the plan ``q`` identifies every parameter.
+
+    The message counts poses and parameters, names the parameters that cannot be
+    identified and up to three unseen combinations, and says how to fix the plan.
+    """
+    m = q.shape[0]
+    p = arm.n_params
+    min_poses = -(-p // 2)
+    info = identifiability(arm, q)
+    if info.identifiable:
+        return info
+    shown = "; ".join(info.combinations[:3])
+    more = f" (and {len(info.combinations) - 3} more)" if len(info.combinations) > 3 else ""
+    if m < min_poses:
+        why = (
+            f"{m} poses give {2 * m} equations for {p} parameters; "
+            f"measure at least {min_poses} poses"
+        )
+    else:
+        why = "add poses that differ in every joint angle (armcal design makes such plans)"
+    raise NotIdentifiableError(
+        f"the {m} poses cannot identify all {p} parameters of {arm.name} "
+        f"(Jacobian rank {info.rank} of {p}): not identifiable: {', '.join(info.unidentifiable)}; "
+        f"unseen combinations: {shown}{more}; {why}",
+        list(info.combinations),
+    )
+
+
+# --------------------------------------------------------------------------- solvers
+
+
+def _regressor(arm: PlanarArm, q: np.ndarray) -> np.ndarray:
+    """Real design matrix ``(2m, p)`` of the linear model in ``(Re z, Im z, x0, y0)``.
+
+    Rows alternate x, y per pose.  Columns: ``Re z_k``, ``Im z_k`` for every link,
+    then ``x0, y0`` with a base offset.
+    """
+    unit = np.exp(1j * np.cumsum(q, axis=-1))  # (m, n)
+    cols = [unit, 1j * unit]
+    if arm.base_offset:
+        cols.append(np.broadcast_to(np.array([1.0, 1j]), (q.shape[0], 2)))
+    a = np.concatenate(cols, axis=-1)
+    return np.stack([a.real, a.imag], axis=1).reshape(2 * q.shape[0], -1)
+
+
+def solve_closed_form(arm: PlanarArm, q: np.ndarray, xy: np.ndarray) -> np.ndarray:
+    """Exact least-squares deviations by one linear solve; batched over measurement sets.
+
+    Parameters
+    ----------
+    arm : PlanarArm
+    q : ndarray, shape (m, n)
+        Joint angles in rad (shared by every measurement set).
+    xy : ndarray, shape (m, 2) or (N, m, 2)
+        Measured positions in mm; a leading axis holds ``N`` independent sets.
+
+    Returns
+    -------
+    ndarray, shape (p,) or (N, p)
+        User deviations ``[dl (mm), dq (rad), (x0, y0) (mm)]``.
+
+    Notes
+    -----
+    Solves ``min ||A w - y||`` for ``w = (Re z, Im z, x0, y0)`` with
+    :func:`numpy.linalg.lstsq` (SVD), then ``dl_k = |z_k| - l_k``,
+    ``dtheta_k = arg z_k`` and ``dq_k = wrap(dtheta_k - dtheta_{k-1})``.
+    The plan must identify every parameter (:func:`check_identifiable`).
+
+    Examples
+    --------
+    >>> arm = PlanarArm([2.0, 1.0])
+    >>> q = np.radians([[0, 0], [0, 90], [90, 90], [45, -120]])
+    >>> truth = np.array([0.1, -0.05, 0.01, -0.02])
+    >>> est = solve_closed_form(arm, q, forward_kinematics(arm, q, truth))
+    >>> bool(np.allclose(est, truth, atol=1e-12))
+    True
+    """
+    q = np.asarray(q, dtype=float)
+    xy = np.asarray(xy, dtype=float)
+    batched = xy.ndim == 3
+    rhs = xy.reshape(-1, 2 * q.shape[0]).T  # (2m, N)
+    w, *_ = np.linalg.lstsq(_regressor(arm, q), rhs, rcond=None)
+    w = w.T  # (N, p)
+    n = arm.n_joints
+    z = w[:, :n] + 1j * w[:, n : 2 * n]
+    dtheta = np.angle(z)
+    dq = wrap_angle(np.diff(dtheta, axis=-1, prepend=0.0))
+    params = np.concatenate([np.abs(z) - arm.link_lengths, dq, w[:, 2 * n :]], axis=-1)
+    return params if batched else params[0]
+
+
+def solve_gauss_newton(
+    arm: PlanarArm,
+    q: np.ndarray,
+    xy: np.ndarray,
+    *,
+    tol: float = 1e-12,
+    max_iter: int = 50,
+) -> tuple[np.ndarray, int, bool]:
+    """The paper's iterative algorithm (Section III, Steps 1-5) as Gauss-Newton.
+
+    Parameters
+    ----------
+    arm : PlanarArm
+    q : ndarray, shape (m, n)
+        Joint angles in rad.
+    xy : ndarray, shape (m, 2)
+        Measured positions in mm.
+    tol : float
+        Converged when the largest step, in mm (angles times their link length),
+        is below ``tol`` times the arm's reach.
+    max_iter : int
+        Iteration cap; the result then has ``converged = False``.
+
+    Returns
+    -------
+    params : ndarray, shape (p,)
+        User deviations (mm, rad).
+    iterations : int
+        Linearized solves performed (paper eq. 11).
+    converged : bool
+        Whether the step tolerance was met within ``max_iter``.
+
+    Notes
+    -----
+    Step 1 starts from ``DeltaPi = 0``; Steps 2-3 evaluate model (1) and solve the
+    linearized problem (11) at the current estimate (the Jacobian (7)-(8) uses the
+    corrected lengths and angles of Step 4); Step 5 repeats until the step is below
+    the tolerance.  Each solve is a least-squares solve on the column-scaled
+    Jacobian rather than ``(J^T J)^-1`` so that round-off stays at machine level.
+    """
+    to_paper = paper_from_user_matrix(arm.n_joints, base_offset=arm.base_offset)
+    to_user = np.linalg.inv(to_paper)
+    n = arm.n_joints
+    step_scale = np.ones(arm.n_params)
+    step_scale[:n] = arm.link_lengths  # rad -> mm at the link tip
+    threshold = tol * float(np.sum(arm.link_lengths))
+    paper = np.zeros(arm.n_params)
+    for iteration in range(1, max_iter + 1):
+        user = to_user @ paper
+        residual = (xy - forward_kinematics(arm, q, user)).reshape(-1)
+        jac = jacobian(arm, q, user, parametrization="paper").reshape(-1, arm.n_params)
+        norms = np.linalg.norm(jac, axis=0)
+        step, *_ = np.linalg.lstsq(jac / norms, residual, rcond=None)
+        step /= norms
+        paper = paper + step
+        if np.max(np.abs(step * step_scale)) <= threshold:
+            return to_user @ paper, iteration, True
+    return to_user @ paper, max_iter, False
+
+
+# --------------------------------------------------------------------------- result
+
+
+@dataclass(frozen=True, eq=False)
+class Calibration:
+    """Identified deviations with their uncertainty and the fit's residuals.
+
+    Attributes
+    ----------
+    arm : PlanarArm
+        The nominal arm that was calibrated.
+    method : str
+        Solver used: ``"closed-form"`` or ``"gauss-newton"``.
+    params : ndarray, shape (p,)
+        User deviations in internal units: ``dl`` (mm), ``dq`` (rad), ``x0, y0`` (mm).
+    covariance : ndarray, shape (p, p)
+        ``sigma^2 (J^T J)^-1`` in internal units (mm, rad).
+    sigma : float
+        Measurement noise (1 std, mm) used for ``covariance``.
+    sigma_source : {"given", "estimated"}
+        Whether ``sigma`` was given or estimated as ``sqrt(RSS / (2m - p))``.
+    residuals : ndarray, shape (m, 2)
+        Measured minus fitted positions in mm.
+    iterations : int
+        Linearized solves (1 for the closed form).
+    converged : bool
+        Whether the solver met its tolerance.
+    pose_labels : tuple of str
+        A label for every pose (the measurement file's ``pose`` column, or 1..m).
+    """
+
+    arm: PlanarArm
+    method: str
+    params: np.ndarray
+    covariance: np.ndarray
+    sigma: float
+    sigma_source: Literal["given", "estimated"]
+    residuals: np.ndarray
+    iterations: int
+    converged: bool
+    pose_labels: tuple[str, ...]
+
+    @property
+    def n_poses(self) -> int:
+        """Number of measured poses ``m``."""
+        return int(self.residuals.shape[0])
+
+    @property
+    def dof(self) -> int:
+        """Residual degrees of freedom ``2m - p``."""
+        return 2 * self.n_poses - self.arm.n_params
+
+    @property
+    def names(self) -> tuple[str, ...]:
+        """Parameter names ``dl1.., dq1.., (x0, y0)``."""
+        return self.arm.param_names
+
+    @property
+    def units(self) -> tuple[str, ...]:
+        """Display units of the parameters (``mm`` or ``deg``)."""
+        return self.arm.param_units
+
+    @property
+    def values(self) -> np.ndarray:
+        """Parameter values ``(p,)`` in display units (mm, deg)."""
+        return self.params * self.arm.display_scale
+
+    @property
+    def covariance_display(self) -> np.ndarray:
+        """Covariance ``(p, p)`` in display units (mm, deg)."""
+        s = self.arm.display_scale
+        return self.covariance * np.outer(s, s)
+
+    @property
+    def std(self) -> np.ndarray:
+        """Standard errors ``(p,)`` in display units (mm, deg)."""
+        return np.sqrt(np.diag(self.covariance_display))
+
+    @property
+    def correlation(self) -> np.ndarray:
+        """Correlation matrix ``(p, p)`` of the estimates."""
+        d = np.sqrt(np.diag(self.covariance))
+        return self.covariance / np.outer(d, d)
+
+    @property
+    def pose_residuals(self) -> np.ndarray:
+        """Euclidean residual of every pose ``(m,)`` in mm."""
+        return np.hypot(self.residuals[:, 0], self.residuals[:, 1])
+
+    @property
+    def residual_rms(self) -> float:
+        """RMS of all ``2m`` residual coordinates in mm, ``sqrt(RSS / 2m)``."""
+        return float(np.sqrt(np.mean(self.residuals**2)))
+
+    @property
+    def residual_max(self) -> float:
+        """Largest Euclidean residual of a pose, in mm."""
+        return float(np.max(self.pose_residuals))
+
+
+def _covariance(arm: PlanarArm, q: np.ndarray, params: np.ndarray) -> np.ndarray:
+    """``(J^T J)^-1`` at ``params`` via the SVD of the column-scaled Jacobian."""
+    jac = jacobian(arm, q, params).reshape(-1, arm.n_params)
+    norms = np.linalg.norm(jac, axis=0)
+    _, s, vt = np.linalg.svd(jac / norms, full_matrices=False)
+    inv_scaled = (vt.T / s**2) @ vt
+    return inv_scaled / np.outer(norms, norms)
+
+
+def _auto(arm: PlanarArm, q: np.ndarray, xy: np.ndarray, **_: object):
+    return solve_closed_form(arm, q, xy), 1, True
+
+
+#: Solvers by name; each returns ``(params, iterations, converged)``.
+METHODS: dict[str, Callable[..., tuple[np.ndarray, int, bool]]] = {
+    "closed-form": _auto,
+    "gauss-newton": solve_gauss_newton,
+}
+
+
+def identify(
+    arm: PlanarArm,
+    q: np.ndarray,
+    xy: np.ndarray,
+    *,
+    method: Method = "auto",
+    sigma: float | None = None,
+    pose_labels: Sequence[str] | None = None,
+    tol: float = 1e-12,
+    max_iter: int = 50,
+) -> Calibration:
+    """Identify the deviations of ``arm`` from measured poses.
+
+    Parameters
+    ----------
+    arm : PlanarArm
+    q : ndarray, shape (m, n)
+        Commanded joint angles in rad.
+    xy : ndarray, shape (m, 2)
+        Measured end-effector positions in mm, in the instrument frame.
+    method : {"auto", "closed-form", "gauss-newton"}
+        ``"auto"`` is the closed form, exact for this model (see module notes).
+    sigma : float, optional
+        Measurement noise (1 std, mm).  Defaults to ``arm.sigma``; when neither is
+        set it is estimated from the residuals, which needs ``2m > p``.
+    pose_labels : sequence of str, optional
+        Labels of the poses for reports; ``"1".."m"`` by default.
+    tol, max_iter
+        Gauss-Newton step tolerance (relative to the reach) and iteration cap.
+
+    Returns
+    -------
+    Calibration
+
+    Raises
+    ------
+    NotIdentifiableError
+        If the plan cannot identify every parameter.
+    ArmcalError
+        If ``sigma`` must be estimated but ``2m = p`` leaves no residual freedom.
+
+    Examples
+    --------
+    >>> arm = PlanarArm([260.0, 180.0])
+    >>> q = np.radians([[0, 0], [0, 90], [0, 180], [0, -90]])
+    >>> truth = arm.params_from_display([1.5, -0.6], [0.5, -0.5])
+    >>> cal = identify(arm, q, forward_kinematics(arm, q, truth), sigma=0.1)
+    >>> cal.values.round(9).tolist(), cal.std.round(4).tolist()
+    ([1.5, -0.6, 0.5, -0.5], [0.05, 0.05, 0.011, 0.0194])
+    """
+    q = np.asarray(q, dtype=float)
+    xy = np.asarray(xy, dtype=float)
+    m = q.shape[0]
+    if q.ndim != 2 or q.shape[1] != arm.n_joints:
+        raise ValueError(f"q must have shape (m, {arm.n_joints}) in rad, got {q.shape}")
+    if xy.shape != (m, 2):
+        raise ValueError(f"xy must have shape ({m}, 2) in mm, got {xy.shape}")
+    if not (np.all(np.isfinite(q)) and np.all(np.isfinite(xy))):
+        raise ArmcalError("joint angles and positions must be finite")
+    if method == "auto":
+        method = "closed-form"
+    if method not in METHODS:
+        raise ArmcalError(f"unknown method {method!r}; choose one of auto, {', '.join(METHODS)}")
+    check_identifiable(arm, q)
+    given = sigma if sigma is not None else arm.sigma
+    dof = 2 * m - arm.n_params
+    if given is None and dof <= 0:
+        raise ArmcalError(
+            f"{m} poses leave no residual to estimate sigma from ({2 * m} equations, "
+            f"{arm.n_params} parameters); give the instrument noise with --sigma or measure "
+            "more poses"
+        )
+    params, iterations, converged = METHODS[method](arm, q, xy, tol=tol, max_iter=max_iter)
+    residuals = xy - forward_kinematics(arm, q, params)
+    if given is None:
+        sigma_value, source = float(np.sqrt(np.sum(residuals**2) / dof)), "estimated"
+    else:
+        sigma_value, source = float(given), "given"
+    labels = tuple(str(i) for i in range(1, m + 1)) if pose_labels is None else tuple(pose_labels)
+    return Calibration(
+        arm=arm,
+        method=method,
+        params=params,
+        covariance=sigma_value**2 * _covariance(arm, q, params),
+        sigma=sigma_value,
+        sigma_source=source,
+        residuals=residuals,
+        iterations=iterations,
+        converged=converged,
+        pose_labels=labels,
+    )
+
+
+# --------------------------------------------------------------------------- report
+
+
+def format_report(cal: Calibration, *, truth: np.ndarray | None = None) -> str:
+    """Human-readable table of a calibration: value ± std with units, and a fit summary.
+
+    Parameters
+    ----------
+    cal : Calibration
+    truth : ndarray, shape (p,), optional
+        Known deviations (internal units) of a virtual robot; adds columns with the
+        truth and the error in standard errors.
+
+    Returns
+    -------
+    str
+        Lines without a trailing newline.
+    """
+    header = f"{'parameter':<10}{'value':>12}  {'± std':>10}  unit"
+    if truth is not None:
+        header += f"{'truth':>12}{'error/std':>11}"
+    lines = [
+        f"calibration of {cal.arm.name}: {cal.n_poses} poses, {cal.arm.n_params} parameters, "
+        f"method {cal.method}",
+        "",
+        header,
+    ]
+    truth_display = None if truth is None else np.asarray(truth) * cal.arm.display_scale
+    for i, (name, unit) in enumerate(zip(cal.names, cal.units, strict=True)):
+        line = f"{name:<10}{cal.values[i]:>12.5f}  ± {cal.std[i]:<8.5f}  {unit:<4}"
+        if truth_display is not None:
+            z = (cal.values[i] - truth_display[i]) / cal.std[i]
+            line += f"{truth_display[i]:>12.5f}{z:>+11.2f}"
+        lines.append(line.rstrip())
+    worst = int(np.argmax(cal.pose_residuals))
+    lines += [
+        "",
+        f"sigma {cal.sigma:.4g} mm ({cal.sigma_source}); residual RMS {cal.residual_rms:.4g} mm "
+        f"per coordinate, max {cal.residual_max:.4g} mm at pose {cal.pose_labels[worst]}; "
+        f"{cal.dof} degrees of freedom",
+        f"{cal.method}: {cal.iterations} iteration(s), "
+        + ("converged" if cal.converged else "NOT converged: the estimate may be off"),
+    ]
+    corr = np.abs(cal.correlation - np.eye(cal.arm.n_params))
+    strong = [
+        f"{cal.names[i]}/{cal.names[j]} {cal.correlation[i, j]:+.2f}"
+        for i, j in zip(*np.nonzero(np.triu(corr > 0.9)), strict=True)
+    ]
+    if strong:
+        lines.append("strongly correlated (|r| > 0.9): " + ", ".join(strong))
+    return "\n".join(lines)

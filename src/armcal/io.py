@@ -1,0 +1,526 @@
+"""Files in and out: robot and truth TOML, plan and measurement CSV, calibration JSON.
+
+Every reader validates strictly and raises :class:`~armcal.errors.InputError`
+with a message that names the file, the row (data row and file line) and the
+column or key, and says how to fix it.  Every writer writes a temporary file
+next to the target and renames it, so a failed run never leaves half a file.
+
+Units: files use mm and degrees with the unit in every column or key name
+(``q1_deg``, ``x_mm``); everything returned to the library is in mm and rad.
+"""
+
+from __future__ import annotations
+
+import csv
+import difflib
+import json
+import math
+import os
+import re
+import sys
+import tempfile
+from collections.abc import Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from ._version import __version__
+from .arm import Annulus, Box, PlanarArm, Region
+from .errors import InputError
+from .identify import Calibration
+
+if sys.version_info >= (3, 11):
+    import tomllib
+else:  # pragma: no cover - exercised on Python 3.10 only
+    import tomli as tomllib
+
+__all__ = [
+    "BUILTIN_ROBOTS",
+    "CALIBRATION_FORMAT",
+    "Measurements",
+    "RobotSpec",
+    "atomic_write",
+    "calibration_to_dict",
+    "format_measurements_csv",
+    "format_plan_csv",
+    "load_robot",
+    "load_truth",
+    "read_measurements",
+    "read_plan",
+]
+
+CALIBRATION_FORMAT = "armcal-calibration/1"
+
+#: The paper's arms (Section V-VI): lengths in mm and the deviations used as truth.
+PAPER_LINK_LENGTHS_MM = (260.0, 180.0, 120.0, 100.0)
+PAPER_DL_MM = (1.5, -0.6, -0.4, 0.7)
+PAPER_DQ_DEG = (0.5, -0.5, 0.7, -0.3)
+BUILTIN_ROBOTS = {f"paper-{n}link": n for n in (2, 3, 4)}
+DEFAULT_ROBOT = "paper-4link"
+
+_JOINT_COLUMN = re.compile(r"^q([1-9][0-9]*)_deg$")
+
+
+@dataclass(frozen=True, eq=False)
+class RobotSpec:
+    """A robot as loaded from a built-in name or a TOML file.
+
+    Attributes
+    ----------
+    arm : PlanarArm
+    default_truth : ndarray, shape (p,), or None
+        Deviations (mm, rad) of the built-in virtual robot; None for robot files.
+    source : str
+        The built-in name or the file path it came from.
+    """
+
+    arm: PlanarArm
+    default_truth: np.ndarray | None
+    source: str
+
+
+@dataclass(frozen=True, eq=False)
+class Measurements:
+    """Measured poses read from a CSV file.
+
+    Attributes
+    ----------
+    q : ndarray, shape (m, n)
+        Commanded joint angles in rad.
+    xy : ndarray, shape (m, 2)
+        Measured positions in mm.
+    labels : tuple of str
+        The ``pose`` column, or ``"1".."m"`` when the file has none.
+    """
+
+    q: np.ndarray
+    xy: np.ndarray
+    labels: tuple[str, ...]
+
+
+# --------------------------------------------------------------------------- helpers
+
+
+def _fail(path: str | os.PathLike, message: str) -> InputError:
+    return InputError(f"{os.fspath(path)}: {message}")
+
+
+def _read_text(path: str | os.PathLike, what: str) -> str:
+    try:
+        return Path(path).read_text(encoding="utf-8-sig")
+    except FileNotFoundError:
+        raise _fail(path, f"{what} file not found") from None
+    except IsADirectoryError:
+        raise _fail(path, f"is a directory, expected a {what} file") from None
+    except UnicodeDecodeError:
+        raise _fail(path, f"is not UTF-8 text; expected a {what} file") from None
+    except OSError as exc:
+        raise _fail(path, f"cannot read: {exc.strerror}") from None
+
+
+def atomic_write(path: str | os.PathLike, text: str) -> None:
+    """Write ``text`` to ``path`` through a temporary file and a rename.
+
+    Raises
+    ------
+    InputError
+        If the folder does not exist or cannot be written.
+    """
+    target = Path(path)
+    folder = target.parent if str(target.parent) else Path(".")
+    if not folder.is_dir():
+        raise _fail(path, f"cannot write: folder {folder} does not exist; create it first")
+    try:
+        fd, tmp = tempfile.mkstemp(prefix=f".{target.name}.", suffix=".tmp", dir=folder)
+    except OSError as exc:
+        raise _fail(path, f"cannot write: {exc.strerror}") from None
+    try:
+        with os.fdopen(fd, "w", encoding="utf-8", newline="") as handle:
+            handle.write(text)
+        os.replace(tmp, target)
+    except BaseException:
+        Path(tmp).unlink(missing_ok=True)
+        raise
+
+
+def _suggest(key: str, allowed: Sequence[str]) -> str:
+    close = difflib.get_close_matches(key, allowed, n=1)
+    return f"did you mean '{close[0]}'? " if close else ""
+
+
+def _check_keys(path, table: dict, allowed: Sequence[str], where: str = "") -> None:
+    for key in table:
+        if key not in allowed:
+            raise _fail(
+                path,
+                f"unknown key '{where}{key}': {_suggest(key, allowed)}"
+                f"allowed keys are {', '.join(allowed)}",
+            )
+
+
+def _number(path, value: Any, key: str) -> float:
+    if isinstance(value, bool) or not isinstance(value, int | float):
+        raise _fail(path, f"key '{key}': expected a number, got {value!r}")
+    if not math.isfinite(value):
+        raise _fail(path, f"key '{key}': expected a finite number, got {value!r}")
+    return float(value)
+
+
+def _numbers(path, value: Any, key: str, count: int | None = None) -> list[float]:
+    if not isinstance(value, list):
+        raise _fail(path, f"key '{key}': expected a list of numbers, got {value!r}")
+    if count is not None and len(value) != count:
+        raise _fail(path, f"key '{key}': expected {count} numbers, got {len(value)}")
+    return [_number(path, v, f"{key}[{i}]") for i, v in enumerate(value)]
+
+
+def _load_toml(path, what: str) -> dict:
+    text = _read_text(path, what)
+    try:
+        return tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        raise _fail(path, f"invalid TOML: {exc}") from None
+
+
+# --------------------------------------------------------------------------- robots
+
+
+def _builtin(name: str) -> RobotSpec:
+    n = BUILTIN_ROBOTS[name]
+    arm = PlanarArm(PAPER_LINK_LENGTHS_MM[:n], name=name)
+    truth = arm.params_from_display(PAPER_DL_MM[:n], PAPER_DQ_DEG[:n])
+    return RobotSpec(arm, truth, name)
+
+
+def _parse_region(path, region: Any) -> Region:
+    key = "measurement.region"
+    if not isinstance(region, dict):
+        raise _fail(path, f"key '{key}': expected a table such as {{ kind = \"annulus\", ... }}")
+    kind = region.get("kind")
+    if kind == "annulus":
+        _check_keys(path, region, ["kind", "center_mm", "r_min_mm", "r_max_mm"], f"{key}.")
+        center = _numbers(path, region.get("center_mm", [0.0, 0.0]), f"{key}.center_mm", 2)
+        r_min = _number(path, region.get("r_min_mm", 0.0), f"{key}.r_min_mm")
+        if "r_max_mm" not in region:
+            raise _fail(path, f"key '{key}': an annulus needs r_max_mm")
+        r_max = _number(path, region["r_max_mm"], f"{key}.r_max_mm")
+        if not 0 <= r_min < r_max:
+            raise _fail(path, f"key '{key}': need 0 <= r_min_mm < r_max_mm, got {r_min}, {r_max}")
+        return Annulus((center[0], center[1]), r_min, r_max)
+    if kind == "box":
+        _check_keys(path, region, ["kind", "x_mm", "y_mm"], f"{key}.")
+        bounds = []
+        for axis in ("x_mm", "y_mm"):
+            if axis not in region:
+                raise _fail(path, f"key '{key}': a box needs {axis} = [lo, hi]")
+            lo, hi = _numbers(path, region[axis], f"{key}.{axis}", 2)
+            if not lo < hi:
+                raise _fail(path, f"key '{key}.{axis}': need lo < hi, got [{lo}, {hi}]")
+            bounds.append((lo, hi))
+        return Box(bounds[0], bounds[1])
+    raise _fail(path, f'key \'{key}.kind\': expected "annulus" or "box", got {kind!r}')
+
+
+def load_robot(name_or_path: str | os.PathLike) -> RobotSpec:
+    """Load a built-in robot by name or a robot TOML file.
+
+    Parameters
+    ----------
+    name_or_path : str or path
+        ``paper-2link``, ``paper-3link``, ``paper-4link``, or a TOML file with
+        ``link_lengths_mm`` and the optional ``name``, ``joint_limits_deg``,
+        ``base_offset`` and ``[measurement]`` (``sigma_mm``, ``region``).
+
+    Returns
+    -------
+    RobotSpec
+
+    Raises
+    ------
+    InputError
+        For a missing file, invalid TOML, an unknown key or an invalid value.
+
+    Examples
+    --------
+    >>> load_robot("paper-4link").arm.link_lengths.tolist()
+    [260.0, 180.0, 120.0, 100.0]
+    """
+    key = os.fspath(name_or_path)
+    if key in BUILTIN_ROBOTS:
+        return _builtin(key)
+    path = Path(key)
+    if not path.exists():
+        raise InputError(
+            f"{key}: robot is neither a built-in ({', '.join(BUILTIN_ROBOTS)}) "
+            "nor an existing file"
+        )
+    data = _load_toml(path, "robot")
+    _check_keys(
+        path, data, ["name", "link_lengths_mm", "joint_limits_deg", "base_offset", "measurement"]
+    )
+    if "link_lengths_mm" not in data:
+        raise _fail(path, "missing key 'link_lengths_mm' (a list of link lengths in mm)")
+    lengths = _numbers(path, data["link_lengths_mm"], "link_lengths_mm")
+    if not lengths:
+        raise _fail(path, "key 'link_lengths_mm': needs at least one link")
+    for i, length in enumerate(lengths):
+        if length <= 0:
+            raise _fail(
+                path,
+                f"key 'link_lengths_mm[{i}]': link {i + 1} length must be > 0 mm, got {length}",
+            )
+    n = len(lengths)
+    name = data.get("name", path.stem)
+    if not isinstance(name, str) or not name.strip():
+        raise _fail(path, f"key 'name': expected a non-empty string, got {name!r}")
+    limits = None
+    if "joint_limits_deg" in data:
+        raw = data["joint_limits_deg"]
+        if not isinstance(raw, list) or len(raw) != n:
+            raise _fail(
+                path,
+                f"key 'joint_limits_deg': expected {n} pairs [lo, hi], one per joint, got {raw!r}",
+            )
+        limits = []
+        for j, pair in enumerate(raw):
+            lo, hi = _numbers(path, pair, f"joint_limits_deg[{j}]", 2)
+            if not lo < hi:
+                raise _fail(path, f"key 'joint_limits_deg[{j}]': need lo < hi, got [{lo}, {hi}]")
+            limits.append((math.radians(lo), math.radians(hi)))
+    base_offset = data.get("base_offset", False)
+    if not isinstance(base_offset, bool):
+        raise _fail(path, f"key 'base_offset': expected true or false, got {base_offset!r}")
+    sigma, region = None, None
+    if "measurement" in data:
+        meas = data["measurement"]
+        if not isinstance(meas, dict):
+            raise _fail(path, "key 'measurement': expected a table [measurement]")
+        _check_keys(path, meas, ["sigma_mm", "region"], "measurement.")
+        if "sigma_mm" in meas:
+            sigma = _number(path, meas["sigma_mm"], "measurement.sigma_mm")
+            if sigma <= 0:
+                raise _fail(path, f"key 'measurement.sigma_mm': must be > 0 mm, got {sigma}")
+        if "region" in meas:
+            region = _parse_region(path, meas["region"])
+    arm = PlanarArm(
+        lengths, limits, base_offset=base_offset, name=name, sigma=sigma, region=region
+    )
+    return RobotSpec(arm, None, str(path))
+
+
+def load_truth(path: str | os.PathLike, arm: PlanarArm) -> np.ndarray:
+    """Read a truth TOML (``dl_mm``, ``dq_deg``, optional ``base_mm``) for ``arm``.
+
+    Returns
+    -------
+    ndarray, shape (p,)
+        User deviations in mm and rad.
+    """
+    data = _load_toml(path, "truth")
+    _check_keys(path, data, ["dl_mm", "dq_deg", "base_mm"])
+    n = arm.n_joints
+    for key in ("dl_mm", "dq_deg"):
+        if key not in data:
+            raise _fail(path, f"missing key '{key}' ({n} numbers, one per joint)")
+    dl = _numbers(path, data["dl_mm"], "dl_mm", n)
+    dq = _numbers(path, data["dq_deg"], "dq_deg", n)
+    base = None
+    if "base_mm" in data:
+        if not arm.base_offset:
+            raise _fail(
+                path,
+                f"key 'base_mm': robot {arm.name} has base_offset = false; "
+                "set base_offset = true in the robot file or remove base_mm",
+            )
+        base = _numbers(path, data["base_mm"], "base_mm", 2)
+    for i, v in enumerate(dl):
+        if arm.link_lengths[i] + v <= 0:
+            raise _fail(path, f"key 'dl_mm[{i}]': link {i + 1} would have length <= 0")
+    return arm.params_from_display(dl, dq, base)
+
+
+# --------------------------------------------------------------------------- CSV
+
+
+def _joint_names(n: int) -> list[str]:
+    return [f"q{j}_deg" for j in range(1, n + 1)]
+
+
+def _read_csv(
+    path, arm: PlanarArm, what: str, numeric: Sequence[str], optional: Sequence[str] = ()
+) -> tuple[np.ndarray, dict[str, list[str]]]:
+    """Validate a CSV with joint columns plus ``numeric`` ones; return values and text columns.
+
+    Returns ``values (m, n + len(numeric))`` in file units and the optional text
+    columns by name.
+    """
+    expected = _joint_names(arm.n_joints) + list(numeric)
+    layout = ",".join(expected) + "".join(f" [,{c}]" for c in optional)
+    text = _read_text(path, what)
+    if not text.strip():
+        raise _fail(path, f"file is empty; expected a header line {layout}")
+    rows = [
+        (line, row)
+        for line, row in enumerate(csv.reader(text.splitlines()), start=1)
+        if any(field.strip() for field in row)
+    ]
+    header_line, header = rows[0]
+    header = [h.strip() for h in header]
+    for col, name in enumerate(header, start=1):
+        if not name:
+            raise _fail(path, f"line {header_line}: header column {col} is empty")
+        if header.count(name) > 1:
+            raise _fail(path, f"line {header_line}: duplicate column '{name}'; keep one")
+    joints = sorted(int(m.group(1)) for h in header if (m := _JOINT_COLUMN.match(h)))
+    if joints and joints != list(range(1, len(joints) + 1)):
+        raise _fail(path, f"joint columns must be q1_deg..qN_deg without gaps, got q{joints}_deg")
+    if joints and len(joints) != arm.n_joints:
+        raise _fail(
+            path,
+            f"has {len(joints)} joint columns (q1_deg..q{len(joints)}_deg) but robot "
+            f"{arm.name} has {arm.n_joints} joints; pass the matching --robot or fix the header",
+        )
+    for name in header:
+        if name not in expected and name not in optional:
+            raise _fail(
+                path,
+                f"line {header_line}: unknown column '{name}': {_suggest(name, expected)}"
+                f"expected {layout}",
+            )
+    for name in expected:
+        if name not in header:
+            raise _fail(path, f"line {header_line}: missing column '{name}'; expected {layout}")
+    data_rows = rows[1:]
+    if not data_rows:
+        raise _fail(
+            path, f"has a header but no poses; add one row per pose after line {header_line}"
+        )
+    index = {name: header.index(name) for name in expected}
+    values = np.empty((len(data_rows), len(expected)))
+    texts: dict[str, list[str]] = {name: [] for name in optional if name in header}
+    for r, (line, row) in enumerate(data_rows, start=1):
+        where = f"row {r} (line {line})"
+        if len(row) != len(header):
+            raise _fail(
+                path,
+                f"{where} has {len(row)} fields but the header has {len(header)}; "
+                "give every column a value",
+            )
+        for c, name in enumerate(expected):
+            field = row[index[name]].strip()
+            try:
+                value = float(field)
+            except ValueError:
+                raise _fail(path, f"{where}, column {name}: {field!r} is not a number") from None
+            if not math.isfinite(value):
+                raise _fail(path, f"{where}, column {name}: {field!r} is not a finite number")
+            values[r - 1, c] = value
+        for name in texts:
+            texts[name].append(row[header.index(name)].strip())
+    q = np.radians(values[:, : arm.n_joints])
+    inside = arm.within_limits(q)
+    if not inside.all():
+        r, j = map(int, np.argwhere(~inside)[0])
+        lo, hi = np.degrees(arm.joint_limits[j])
+        raise _fail(
+            path,
+            f"row {r + 1} (line {data_rows[r][0]}), column q{j + 1}_deg: "
+            f"{values[r, j]:g} deg is outside joint {j + 1}'s limits [{lo:g}, {hi:g}] deg; "
+            "fix the pose or the robot's joint_limits_deg",
+        )
+    return values, texts
+
+
+def read_plan(path: str | os.PathLike, arm: PlanarArm) -> np.ndarray:
+    """Read a plan CSV (header ``q1_deg,...,qn_deg``) for ``arm``.
+
+    Returns
+    -------
+    ndarray, shape (m, n)
+        Joint angles in rad, each within the joint limits.
+    """
+    values, _ = _read_csv(path, arm, "plan", [])
+    return np.radians(values)
+
+
+def read_measurements(path: str | os.PathLike, arm: PlanarArm) -> Measurements:
+    """Read a measurements CSV (``q1_deg..qn_deg,x_mm,y_mm`` and an optional ``pose`` label).
+
+    Returns
+    -------
+    Measurements
+    """
+    values, texts = _read_csv(path, arm, "measurements", ["x_mm", "y_mm"], ["pose"])
+    n = arm.n_joints
+    labels = texts.get("pose") or [str(i) for i in range(1, values.shape[0] + 1)]
+    return Measurements(np.radians(values[:, :n]), values[:, n:], tuple(labels))
+
+
+def _angle_text(q_rad: float) -> str:
+    # Rounded to 1e-12 deg so an exact 90 deg is written "90.0", not "89.99999999999999".
+    return repr(round(math.degrees(q_rad), 12) + 0.0)
+
+
+def format_plan_csv(q: np.ndarray) -> str:
+    """Plan CSV text for joint angles ``q`` ``(m, n)`` in rad."""
+    lines = [",".join(_joint_names(q.shape[1]))]
+    lines += [",".join(_angle_text(v) for v in row) for row in q]
+    return "\n".join(lines) + "\n"
+
+
+def format_measurements_csv(
+    q: np.ndarray, xy: np.ndarray, labels: Sequence[str] | None = None
+) -> str:
+    """Measurements CSV text; positions are written with full round-trip precision."""
+    head = ["pose"] if labels is not None else []
+    lines = [",".join(head + _joint_names(q.shape[1]) + ["x_mm", "y_mm"])]
+    for i, (row, point) in enumerate(zip(q, xy, strict=True)):
+        fields = [str(labels[i])] if labels is not None else []
+        fields += [_angle_text(v) for v in row] + [repr(float(v)) for v in point]
+        lines.append(",".join(fields))
+    return "\n".join(lines) + "\n"
+
+
+# --------------------------------------------------------------------------- JSON
+
+
+def calibration_to_dict(cal: Calibration) -> dict:
+    """The ``armcal-calibration/1`` document of a calibration (see PRODUCT.md)."""
+    arm = cal.arm
+    corr = cal.correlation
+    return {
+        "format": CALIBRATION_FORMAT,
+        "armcal_version": __version__,
+        "robot": {
+            "name": arm.name,
+            "link_lengths_mm": arm.link_lengths.tolist(),
+            "joint_limits_deg": np.degrees(arm.joint_limits).tolist(),
+            "base_offset": arm.base_offset,
+        },
+        "method": cal.method,
+        "poses": cal.n_poses,
+        "sigma_mm": cal.sigma,
+        "sigma_source": cal.sigma_source,
+        "parameters": [
+            {"name": name, "unit": unit, "value": float(v), "std": float(s)}
+            for name, unit, v, s in zip(cal.names, cal.units, cal.values, cal.std, strict=True)
+        ],
+        "covariance": {"names": list(cal.names), "matrix": cal.covariance_display.tolist()},
+        "correlation": {"names": list(cal.names), "matrix": corr.tolist()},
+        "residual_rms_mm": cal.residual_rms,
+        "residual_max_mm": cal.residual_max,
+        "degrees_of_freedom": cal.dof,
+        "residuals": [
+            {"pose": label, "dx_mm": float(r[0]), "dy_mm": float(r[1])}
+            for label, r in zip(cal.pose_labels, cal.residuals, strict=True)
+        ],
+        "iterations": cal.iterations,
+        "converged": cal.converged,
+    }
+
+
+def to_json(document: dict) -> str:
+    """Serialize a result document; refuses NaN and infinity rather than writing them."""
+    return json.dumps(document, indent=2, allow_nan=False) + "\n"
