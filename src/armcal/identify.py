@@ -66,8 +66,8 @@ class Identifiability:
     unidentifiable : tuple of str
         Parameters that have a component in the null space (cannot be identified).
     combinations : tuple of str
-        A basis of the null space written as parameter combinations (largest
-        coefficient 1): moving the parameters along one of these changes no
+        A basis of the null space written as parameter combinations in display
+        units (mm, deg), each with leading coefficient 1: moving the parameters along one of these changes no
         measured position to first order.
     """
 
@@ -92,7 +92,9 @@ class Identifiability:
 
 
 def _combination(vector: np.ndarray, names: Sequence[str]) -> str:
-    coeffs = vector / vector[np.argmax(np.abs(vector))]
+    # Leading coefficient 1 (the echelon pivot), so combinations read "dl1 - dl2".
+    leading = np.flatnonzero(np.abs(vector) > 1e-6 * np.max(np.abs(vector)))[0]
+    coeffs = vector / vector[leading]
     terms = []
     for c, name in zip(coeffs, names, strict=True):
         if abs(c) < 1e-6:
@@ -139,9 +141,33 @@ def identifiability(arm: PlanarArm, q: np.ndarray) -> Identifiability:
     null = vt[rank:]  # rows span the null space of the scaled Jacobian
     names = arm.param_names
     bad = tuple(n for n, w in zip(names, np.linalg.norm(null, axis=0), strict=True) if w > 1e-8)
-    # Express null directions per unit of each parameter (undo the column scaling).
-    combos = tuple(_combination(v / norms, names) for v in null)
+    # Undo the column scaling, show in display units (mm, deg), and pick the sparse basis.
+    combos = tuple(_combination(v, names) for v in _row_echelon(null / norms / arm.display_scale))
     return Identifiability(rank, arm.n_params, s, bad, combos)
+
+
+def _row_echelon(basis: np.ndarray, *, tol: float = 1e-9) -> np.ndarray:
+    """Reduced row echelon form of a basis ``(k, p)``: the same span, sparse rows.
+
+    The SVD returns an arbitrary rotation of the null space; the echelon form
+    gives each unseen combination a parameter of its own (e.g. ``dl1 - dl2``
+    and ``dq1 - 3*dq2`` rather than two mixtures of all four).
+    """
+    rows = basis.copy()
+    scale = np.max(np.abs(rows)) if rows.size else 0.0
+    pivot_row = 0
+    for col in range(rows.shape[1]):
+        if pivot_row == rows.shape[0]:
+            break
+        best = pivot_row + int(np.argmax(np.abs(rows[pivot_row:, col])))
+        if abs(rows[best, col]) <= tol * scale:
+            continue
+        rows[[pivot_row, best]] = rows[[best, pivot_row]]
+        rows[pivot_row] /= rows[pivot_row, col]
+        others = np.arange(rows.shape[0]) != pivot_row
+        rows[others] -= np.outer(rows[others, col], rows[pivot_row])
+        pivot_row += 1
+    return rows
 
 
 def check_identifiable(arm: PlanarArm, q: np.ndarray) -> Identifiability:

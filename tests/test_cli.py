@@ -1,0 +1,139 @@
+"""The command line: main([...]) for the flows, a real subprocess for the program itself."""
+
+import json
+import subprocess
+import sys
+
+import numpy as np
+from numpy.testing import assert_allclose
+
+from armcal import __version__
+from armcal.cli import main
+
+
+def _run(*args: str, cwd=None) -> subprocess.CompletedProcess:
+    return subprocess.run(
+        [sys.executable, "-m", "armcal", *args],
+        capture_output=True,
+        text=True,
+        cwd=cwd,
+        check=False,
+    )
+
+
+def test_version_through_python_dash_m():
+    result = _run("--version")
+    assert result.returncode == 0
+    assert result.stdout.strip() == f"armcal {__version__}"
+
+
+def test_synthesize_identify_round_trip_noiseless(tmp_path, capsys):
+    plan = tmp_path / "plan.csv"
+    plan.write_text(
+        "q1_deg,q2_deg,q3_deg,q4_deg\n"
+        + "".join(
+            f"{7 * k},{36 * k - 180},{72 * k % 360 - 180},{108 * k % 360 - 180}\n"
+            for k in range(10)
+        )
+    )
+    meas, cal = tmp_path / "meas.csv", tmp_path / "cal.json"
+    assert main(["synthesize", "--plan", str(plan), "--sigma", "0", "-o", str(meas)]) == 0
+    assert main(["identify", "--measurements", str(meas), "--sigma", "0.1", "-o", str(cal)]) == 0
+    report = capsys.readouterr().out
+    assert "dq4" in report and "± " in report
+    document = json.loads(cal.read_text())
+    values = [p["value"] for p in document["parameters"]]
+    assert_allclose(values, [1.5, -0.6, -0.4, 0.7, 0.5, -0.5, 0.7, -0.3], rtol=0, atol=1e-9)
+
+
+def test_identify_json_on_stdout_matches_file(tmp_path, capsys):
+    assert main(["demo", "-o", str(tmp_path)]) == 0
+    capsys.readouterr()
+    meas = tmp_path / "measurements.csv"
+    assert (
+        main(["identify", "--measurements", str(meas), "--json", "--method", "gauss-newton"]) == 0
+    )
+    document = json.loads(capsys.readouterr().out)
+    saved = json.loads((tmp_path / "calibration.json").read_text())
+    assert document["method"] == "gauss-newton" and document["converged"] is True
+    # Estimated sigma here (the built-in robot gives none), given sigma in the demo.
+    assert document["sigma_source"] == "estimated" and saved["sigma_source"] == "given"
+    assert_allclose(
+        [p["value"] for p in document["parameters"]],
+        [p["value"] for p in saved["parameters"]],
+        rtol=0,
+        atol=1e-9,
+    )
+
+
+def test_same_seed_same_measurements(tmp_path):
+    assert main(["demo", "-o", str(tmp_path / "a"), "--seed", "7"]) == 0
+    assert main(["demo", "-o", str(tmp_path / "b"), "--seed", "7"]) == 0
+    assert main(["demo", "-o", str(tmp_path / "c"), "--seed", "8"]) == 0
+    a, b, c = ((tmp_path / d / "measurements.csv").read_bytes() for d in "abc")
+    assert a == b and a != c
+
+
+def test_robot_file_with_base_offset_and_truth(tmp_path, capsys):
+    robot = tmp_path / "robot.toml"
+    robot.write_text("link_lengths_mm = [300.0, 200.0]\nbase_offset = true\n")
+    truth = tmp_path / "truth.toml"
+    truth.write_text("dl_mm = [0.3, -0.2]\ndq_deg = [0.1, 0.2]\nbase_mm = [15.0, -5.0]\n")
+    plan = tmp_path / "plan.csv"
+    plan.write_text("q1_deg,q2_deg\n0,0\n72,72\n144,144\n-144,-144\n-72,-72\n")
+    meas = tmp_path / "meas.csv"
+    common = ["--robot", str(robot)]
+    assert (
+        main(
+            [
+                "synthesize",
+                *common,
+                "--plan",
+                str(plan),
+                "--truth",
+                str(truth),
+                "--sigma",
+                "0",
+                "-o",
+                str(meas),
+            ]
+        )
+        == 0
+    )
+    capsys.readouterr()
+    assert (
+        main(["identify", *common, "--measurements", str(meas), "--sigma", "0.1", "--json"]) == 0
+    )
+    document = json.loads(capsys.readouterr().out)
+    values = {p["name"]: p["value"] for p in document["parameters"]}
+    expected = {"dl1": 0.3, "dl2": -0.2, "dq1": 0.1, "dq2": 0.2, "x0": 15.0, "y0": -5.0}
+    assert values.keys() == expected.keys()
+    assert_allclose([values[k] for k in expected], list(expected.values()), rtol=0, atol=1e-9)
+    assert document["robot"]["base_offset"] is True
+
+
+def test_import_prints_nothing_and_is_fast():
+    code = (
+        "import time, sys; t = time.perf_counter(); import armcal; "
+        "print(time.perf_counter() - t); print('matplotlib' in sys.modules)"
+    )
+    result = subprocess.run(
+        [sys.executable, "-c", code], capture_output=True, text=True, check=True
+    )
+    seconds, mpl = result.stdout.split()
+    assert result.stderr == ""
+    assert mpl == "False"
+    # The contract is ~0.5 s; numpy alone takes ~0.1 s.  Generous for a shared machine.
+    assert float(seconds) < 1.0
+
+
+def test_synthesize_without_output_writes_csv_to_stdout(tmp_path, capsys):
+    plan = tmp_path / "plan.csv"
+    plan.write_text("q1_deg,q2_deg\n0,0\n0,90\n")
+    assert main(["synthesize", "--robot", "paper-2link", "--plan", str(plan), "--sigma", "0"]) == 0
+    out = capsys.readouterr().out.splitlines()
+    assert out[0] == "q1_deg,q2_deg,x_mm,y_mm"
+    x, y = map(float, out[2].split(",")[2:])
+    # Pose (0, 90) deg with the paper's truth: dtheta = (0.5, 0) deg, lengths 261.5 and 179.4.
+    expected = [261.5 * np.cos(np.radians(0.5)), 261.5 * np.sin(np.radians(0.5)) + 179.4]
+    assert_allclose([x, y], expected, rtol=0, atol=1e-9)
