@@ -9,7 +9,6 @@ from __future__ import annotations
 import argparse
 import sys
 from collections.abc import Callable, Sequence
-from pathlib import Path
 
 import numpy as np
 
@@ -27,6 +26,7 @@ from .io import (
     format_plan_csv,
     load_robot,
     load_truth,
+    make_folder,
     read_measurements,
     read_plan,
     to_json,
@@ -164,8 +164,7 @@ def _demo(args: argparse.Namespace) -> None:
         format_report(cal, truth=truth),
     ]
     if args.output is not None:
-        folder = Path(args.output)
-        folder.mkdir(parents=True, exist_ok=True)
+        folder = make_folder(args.output)
         files = {
             "plan.csv": format_plan_csv(q),
             "measurements.csv": format_measurements_csv(q, xy),

@@ -67,8 +67,8 @@ class Identifiability:
         Parameters that have a component in the null space (cannot be identified).
     combinations : tuple of str
         A basis of the null space written as parameter combinations in display
-        units (mm, deg), each with leading coefficient 1: moving the parameters along one of these changes no
-        measured position to first order.
+        units (mm, deg), each with leading coefficient 1: moving the parameters
+        along one of these changes no measured position to first order.
     """
 
     rank: int
@@ -190,7 +190,7 @@ def check_identifiable(arm: PlanarArm, q: np.ndarray) -> Identifiability:
             f"measure at least {min_poses} poses"
         )
     else:
-        why = "add poses that differ in every joint angle (armcal design makes such plans)"
+        why = "add poses in which every joint takes several different angles"
     raise NotIdentifiableError(
         f"the {m} poses cannot identify all {p} parameters of {arm.name} "
         f"(Jacobian rank {info.rank} of {p}): not identifiable: {', '.join(info.unidentifiable)}; "
@@ -515,6 +515,8 @@ def identify(
             "more poses"
         )
     params, iterations, converged = METHODS[method](arm, q, xy, tol=tol, max_iter=max_iter)
+    if not np.all(np.isfinite(params)):
+        raise ArmcalError("the fit overflowed; check that positions are in mm and plausible")
     residuals = xy - forward_kinematics(arm, q, params)
     if given is None:
         sigma_value, source = float(np.sqrt(np.sum(residuals**2) / dof)), "estimated"

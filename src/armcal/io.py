@@ -47,6 +47,7 @@ __all__ = [
     "format_plan_csv",
     "load_robot",
     "load_truth",
+    "make_folder",
     "read_measurements",
     "read_plan",
 ]
@@ -59,6 +60,10 @@ PAPER_DL_MM = (1.5, -0.6, -0.4, 0.7)
 PAPER_DQ_DEG = (0.5, -0.5, 0.7, -0.3)
 BUILTIN_ROBOTS = {f"paper-{n}link": n for n in (2, 3, 4)}
 DEFAULT_ROBOT = "paper-4link"
+
+#: Largest magnitude accepted in a CSV field (1000 km in mm): larger values are unit
+#: mistakes or corrupt data, and their squares would overflow in the least squares.
+MAX_ABS_VALUE = 1e9
 
 _JOINT_COLUMN = re.compile(r"^q([1-9][0-9]*)_deg$")
 
@@ -132,6 +137,8 @@ def atomic_write(path: str | os.PathLike, text: str) -> None:
     folder = target.parent if str(target.parent) else Path(".")
     if not folder.is_dir():
         raise _fail(path, f"cannot write: folder {folder} does not exist; create it first")
+    if target.is_dir():
+        raise _fail(path, "cannot write: is a folder; give a file name")
     try:
         fd, tmp = tempfile.mkstemp(prefix=f".{target.name}.", suffix=".tmp", dir=folder)
     except OSError as exc:
@@ -143,6 +150,24 @@ def atomic_write(path: str | os.PathLike, text: str) -> None:
     except BaseException:
         Path(tmp).unlink(missing_ok=True)
         raise
+
+
+def make_folder(path: str | os.PathLike) -> Path:
+    """Create the output folder ``path`` (and its parents) unless it exists.
+
+    Raises
+    ------
+    InputError
+        If ``path`` or one of its parents is a file, or it cannot be created.
+    """
+    folder = Path(path)
+    try:
+        folder.mkdir(parents=True, exist_ok=True)
+    except FileExistsError:
+        raise _fail(path, "cannot create the output folder: a file has that name") from None
+    except OSError as exc:
+        raise _fail(path, f"cannot create the output folder: {exc.strerror}") from None
+    return folder
 
 
 def _suggest(key: str, allowed: Sequence[str]) -> str:
@@ -163,9 +188,13 @@ def _check_keys(path, table: dict, allowed: Sequence[str], where: str = "") -> N
 def _number(path, value: Any, key: str) -> float:
     if isinstance(value, bool) or not isinstance(value, int | float):
         raise _fail(path, f"key '{key}': expected a number, got {value!r}")
-    if not math.isfinite(value):
-        raise _fail(path, f"key '{key}': expected a finite number, got {value!r}")
-    return float(value)
+    try:
+        number = float(value)
+    except OverflowError:
+        number = math.inf
+    if not math.isfinite(number) or abs(number) > MAX_ABS_VALUE:
+        raise _fail(path, f"key '{key}': expected a finite number within ±{MAX_ABS_VALUE:g}")
+    return number
 
 
 def _numbers(path, value: Any, key: str, count: int | None = None) -> list[float]:
@@ -366,6 +395,8 @@ def _read_csv(
         for line, row in enumerate(csv.reader(text.splitlines()), start=1)
         if any(field.strip() for field in row)
     ]
+    if not rows:
+        raise _fail(path, f"file has no header, only empty fields; expected {layout}")
     header_line, header = rows[0]
     header = [h.strip() for h in header]
     for col, name in enumerate(header, start=1):
@@ -416,6 +447,12 @@ def _read_csv(
                 raise _fail(path, f"{where}, column {name}: {field!r} is not a number") from None
             if not math.isfinite(value):
                 raise _fail(path, f"{where}, column {name}: {field!r} is not a finite number")
+            if abs(value) > MAX_ABS_VALUE:
+                raise _fail(
+                    path,
+                    f"{where}, column {name}: {field} is beyond ±{MAX_ABS_VALUE:g}; "
+                    "check the unit (mm, deg)",
+                )
             values[r - 1, c] = value
         for name in texts:
             texts[name].append(row[header.index(name)].strip())

@@ -1,0 +1,509 @@
+"""Bad input to the ``armcal`` program: exit 2, one ``armcal: error:`` line, no output.
+
+Every case runs the real program in a subprocess (``python -m armcal``) in an
+empty folder that holds only the case's input files, and checks the contract of
+PRODUCT.md "Errors": exit status 2, exactly one stderr line that starts with
+``armcal: error:`` and says what is wrong and where (file, row, column or key),
+no traceback, and no output or temporary file left behind.
+"""
+
+from __future__ import annotations
+
+import math
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+# --------------------------------------------------------------------------- valid inputs
+
+#: Joint columns of the default robot, paper-4link (4 joints, ±180 deg, 8 parameters).
+JOINTS = ("q1_deg", "q2_deg", "q3_deg", "q4_deg")
+PLAN_HEADER = ",".join(JOINTS)
+MEAS_HEADER = ",".join((*JOINTS, "x_mm", "y_mm"))
+
+#: The paper's lengths and deviations, used to make measurements that identify cleanly.
+LINKS_MM = (260.0, 180.0, 120.0, 100.0)
+DL_MM = (1.5, -0.6, -0.4, 0.7)
+DQ_DEG = (0.5, -0.5, 0.7, -0.3)
+
+
+def _wrap(deg: float) -> float:
+    return deg - 360.0 if deg > 180.0 else deg
+
+
+#: A valid 20-pose plan: q1 = 0, q2 = q3 = q4 = 18 k deg (k = 0..19), wrapped to ±180.
+POSES = [(0.0, a, a, a) for a in (_wrap(18.0 * k) for k in range(20))]
+
+
+def _position(q_deg: tuple[float, ...], k: int) -> tuple[float, float]:
+    """Position of the deviated arm plus a deterministic ~0.1 mm 'noise'."""
+    x = y = angle = 0.0
+    for length, dl, q, dq in zip(LINKS_MM, DL_MM, q_deg, DQ_DEG, strict=True):
+        angle += math.radians(q + dq)
+        x += (length + dl) * math.cos(angle)
+        y += (length + dl) * math.sin(angle)
+    return x + 0.1 * math.sin(3.7 * k), y + 0.1 * math.cos(2.3 * k)
+
+
+PLAN_ROWS = [",".join(f"{v:g}" for v in pose) for pose in POSES]
+MEAS_ROWS = [
+    ",".join([*(f"{v:g}" for v in pose), *(repr(v) for v in _position(pose, k))])
+    for k, pose in enumerate(POSES)
+]
+
+
+def _csv(header: str, rows: list[str]) -> str:
+    return "\n".join([header, *rows]) + "\n"
+
+
+def _with_field(rows: list[str], row: int, column: str, value: str, header: str) -> list[str]:
+    """A copy of ``rows`` with data row ``row`` (1-based), column ``column`` set to ``value``."""
+    col = header.split(",").index(column)
+    out = list(rows)
+    fields = out[row - 1].split(",")
+    fields[col] = value
+    out[row - 1] = ",".join(fields)
+    return out
+
+
+def _meas_with(row: int, column: str, value: str) -> str:
+    return _csv(MEAS_HEADER, _with_field(MEAS_ROWS, row, column, value, MEAS_HEADER))
+
+
+def _drop_column(header: str, rows: list[str], column: str) -> str:
+    col = header.split(",").index(column)
+
+    def drop(line: str) -> str:
+        fields = line.split(",")
+        del fields[col]
+        return ",".join(fields)
+
+    return _csv(drop(header), [drop(r) for r in rows])
+
+
+VALID_PLAN = _csv(PLAN_HEADER, PLAN_ROWS)
+VALID_MEAS = _csv(MEAS_HEADER, MEAS_ROWS)
+ROBOT_TOML = 'name = "my-scara"\nlink_lengths_mm = [260.0, 180.0, 120.0, 100.0]\n'
+TRUTH_TOML = "dl_mm = [1.5, -0.6, -0.4, 0.7]\ndq_deg = [0.5, -0.5, 0.7, -0.3]\n"
+
+#: Marks an input that is a folder rather than a file.
+FOLDER = object()
+
+IDENTIFY = ("identify", "--measurements", "meas.csv", "-o", "cal.json")
+SYNTHESIZE = ("synthesize", "--plan", "plan.csv", "-o", "meas.csv")
+SYNTHESIZE_ROBOT = (
+    "synthesize",
+    "--robot",
+    "robot.toml",
+    "--truth",
+    "truth.toml",
+    *SYNTHESIZE[1:],
+)
+IDENTIFY_ROBOT = ("identify", "--robot", "robot.toml", *IDENTIFY[1:])
+
+
+# --------------------------------------------------------------------------- helpers
+
+
+def run_cli(tmp_path: Path, *args: str) -> subprocess.CompletedProcess[str]:
+    """Run ``python -m armcal *args`` in ``tmp_path``."""
+    return subprocess.run(
+        [sys.executable, "-m", "armcal", *args],
+        cwd=tmp_path,
+        capture_output=True,
+        text=True,
+        encoding="utf-8",
+        timeout=60,
+        check=False,
+    )
+
+
+def _write(root: Path, files: dict[str, object]) -> None:
+    for name, content in files.items():
+        path = root / name
+        if content is FOLDER:
+            path.mkdir()
+        elif isinstance(content, bytes):
+            path.write_bytes(content)
+        else:
+            assert isinstance(content, str)
+            path.write_text(content, encoding="utf-8")
+
+
+def _snapshot(root: Path) -> dict[str, bytes | None]:
+    """Every path under ``root`` (hidden temp files included) with its bytes; None for folders."""
+    return {
+        p.relative_to(root).as_posix(): None if p.is_dir() else p.read_bytes()
+        for p in sorted(root.rglob("*"))
+    }
+
+
+def _output(argv: tuple[str, ...]) -> str | None:
+    return argv[argv.index("-o") + 1] if "-o" in argv else None
+
+
+def case(
+    id: str,
+    files: dict[str, object],
+    argv: tuple[str, ...],
+    expected: tuple[str, ...],
+):
+    return pytest.param(files, argv, expected, id=id)
+
+
+# --------------------------------------------------------------------------- cases
+
+CASES = [
+    # ---- measurements CSV
+    case(
+        "meas-missing-column",
+        {"meas.csv": _drop_column(MEAS_HEADER, MEAS_ROWS, "y_mm")},
+        IDENTIFY,
+        ("meas.csv", "line 1", "y_mm"),
+    ),
+    case(
+        "meas-unknown-column",
+        {"meas.csv": _csv(MEAS_HEADER + ",z_mm", [r + ",0.0" for r in MEAS_ROWS])},
+        IDENTIFY,
+        ("meas.csv", "line 1", "z_mm"),
+    ),
+    case(
+        "meas-duplicate-column",
+        {"meas.csv": _csv(MEAS_HEADER + ",x_mm", [r + ",0.0" for r in MEAS_ROWS])},
+        IDENTIFY,
+        ("meas.csv", "line 1", "x_mm", "duplicate"),
+    ),
+    case(
+        "meas-nan",
+        {"meas.csv": _meas_with(3, "x_mm", "nan")},
+        IDENTIFY,
+        ("meas.csv", "row 3", "x_mm", "nan"),
+    ),
+    case(
+        "meas-inf",
+        {"meas.csv": _meas_with(5, "y_mm", "inf")},
+        IDENTIFY,
+        ("meas.csv", "row 5", "y_mm", "inf"),
+    ),
+    case(
+        "meas-overflowing-literal",
+        {"meas.csv": _meas_with(7, "y_mm", "1e400")},
+        IDENTIFY,
+        ("meas.csv", "row 7", "y_mm", "1e400"),
+    ),
+    case(
+        "meas-text",
+        {"meas.csv": _meas_with(2, "q3_deg", "abc")},
+        IDENTIFY,
+        ("meas.csv", "row 2", "q3_deg", "abc"),
+    ),
+    case(
+        "meas-empty-field",
+        {"meas.csv": _meas_with(4, "x_mm", "")},
+        IDENTIFY,
+        ("meas.csv", "row 4", "x_mm"),
+    ),
+    case(
+        "meas-short-row",
+        {"meas.csv": _csv(MEAS_HEADER, [*MEAS_ROWS[:2], MEAS_ROWS[2].rsplit(",", 1)[0]])},
+        IDENTIFY,
+        ("meas.csv", "row 3"),
+    ),
+    case(
+        "meas-row-numbering-skips-blank-lines",
+        {"meas.csv": _csv(MEAS_HEADER, [*MEAS_ROWS[:2], "", "0,abc,0,0,1,2", *MEAS_ROWS[3:]])},
+        IDENTIFY,
+        ("meas.csv", "row 3 (line 5)", "q2_deg", "abc"),
+    ),
+    case("meas-empty-file", {"meas.csv": ""}, IDENTIFY, ("meas.csv", "empty")),
+    case(
+        "meas-commas-only",
+        {"meas.csv": ",,,,,\n,,,,,\n"},
+        IDENTIFY,
+        ("meas.csv",),
+    ),
+    case(
+        "meas-header-only",
+        {"meas.csv": MEAS_HEADER + "\n"},
+        IDENTIFY,
+        ("meas.csv", "no poses"),
+    ),
+    case(
+        "meas-3-joint-columns-for-4-joint-robot",
+        {"meas.csv": _drop_column(MEAS_HEADER, MEAS_ROWS, "q4_deg")},
+        IDENTIFY,
+        ("meas.csv", "3 joint columns", "paper-4link", "4 joints"),
+    ),
+    case(
+        "meas-pose-outside-default-limits",
+        {"meas.csv": _meas_with(3, "q2_deg", "200")},
+        IDENTIFY,
+        ("meas.csv", "row 3", "q2_deg", "200"),
+    ),
+    case(
+        "meas-pose-outside-robot-file-limits",
+        {
+            "robot.toml": ROBOT_TOML
+            + "joint_limits_deg = [[-180, 180], [-150, 150], [-150, 150], [-150, 150]]\n",
+            "meas.csv": VALID_MEAS,
+        },
+        IDENTIFY_ROBOT,
+        ("meas.csv", "row 10", "q2_deg", "162"),
+    ),
+    case(
+        "meas-too-few-poses",
+        {"meas.csv": _csv(MEAS_HEADER, MEAS_ROWS[1:3])},
+        IDENTIFY,
+        ("meas.csv", "not identifiable", "2 poses", "8 parameters"),
+    ),
+    case(
+        "meas-identical-poses",
+        {"meas.csv": _csv(MEAS_HEADER, [MEAS_ROWS[3]] * 6)},
+        IDENTIFY,
+        ("meas.csv", "not identifiable", "6 poses"),
+    ),
+    case(
+        "meas-no-residual-to-estimate-sigma",
+        {"meas.csv": _csv(MEAS_HEADER, MEAS_ROWS[0:20:5])},
+        IDENTIFY,
+        ("meas.csv", "4 poses", "--sigma"),
+    ),
+    case(
+        "meas-absurd-magnitude",
+        {"meas.csv": _meas_with(20, "x_mm", "1e200")},
+        IDENTIFY,
+        ("meas.csv",),
+    ),
+    case("meas-missing-file", {}, IDENTIFY, ("meas.csv", "not found")),
+    case("meas-is-a-folder", {"meas.csv": FOLDER}, IDENTIFY, ("meas.csv", "directory")),
+    case(
+        "meas-not-utf8",
+        {"meas.csv": b"\xff\xfeq\x001\x00"},
+        IDENTIFY,
+        ("meas.csv", "UTF-8"),
+    ),
+    # ---- plan CSV
+    case(
+        "plan-text",
+        {"plan.csv": _csv(PLAN_HEADER, _with_field(PLAN_ROWS, 3, "q2_deg", "abc", PLAN_HEADER))},
+        SYNTHESIZE,
+        ("plan.csv", "row 3", "q2_deg", "abc"),
+    ),
+    case(
+        "plan-is-a-measurements-file",
+        {"plan.csv": VALID_MEAS},
+        SYNTHESIZE,
+        ("plan.csv", "line 1", "x_mm"),
+    ),
+    case("plan-missing-file", {}, SYNTHESIZE, ("plan.csv", "not found")),
+    # ---- robot TOML
+    case(
+        "robot-unknown-key",
+        {
+            "robot.toml": ROBOT_TOML.replace("link_lengths_mm", "link_length_mm"),
+            "meas.csv": VALID_MEAS,
+        },
+        IDENTIFY_ROBOT,
+        ("robot.toml", "link_length_mm", "link_lengths_mm"),
+    ),
+    case(
+        "robot-missing-link-lengths",
+        {"robot.toml": 'name = "my-scara"\n', "meas.csv": VALID_MEAS},
+        IDENTIFY_ROBOT,
+        ("robot.toml", "link_lengths_mm"),
+    ),
+    case(
+        "robot-negative-link-length",
+        {"robot.toml": ROBOT_TOML.replace("180.0", "-180.0"), "meas.csv": VALID_MEAS},
+        IDENTIFY_ROBOT,
+        ("robot.toml", "link_lengths_mm[1]", "-180"),
+    ),
+    case(
+        "robot-invalid-toml",
+        {"robot.toml": ROBOT_TOML.replace("100.0]", "100.0"), "meas.csv": VALID_MEAS},
+        IDENTIFY_ROBOT,
+        ("robot.toml", "invalid TOML"),
+    ),
+    case(
+        "robot-joint-limits-wrong-count",
+        {
+            "robot.toml": ROBOT_TOML
+            + "joint_limits_deg = [[-180, 180], [-150, 150], [-150, 150]]\n",
+            "plan.csv": VALID_PLAN,
+            "truth.toml": TRUTH_TOML,
+        },
+        SYNTHESIZE_ROBOT,
+        ("robot.toml", "joint_limits_deg"),
+    ),
+    case(
+        "robot-joint-limits-reversed",
+        {
+            "robot.toml": ROBOT_TOML
+            + "joint_limits_deg = [[-180, 180], [150, -150], [-150, 150], [-150, 150]]\n",
+            "meas.csv": VALID_MEAS,
+        },
+        IDENTIFY_ROBOT,
+        ("robot.toml", "joint_limits_deg[1]"),
+    ),
+    case(
+        "robot-zero-sigma",
+        {"robot.toml": ROBOT_TOML + "[measurement]\nsigma_mm = 0\n", "meas.csv": VALID_MEAS},
+        IDENTIFY_ROBOT,
+        ("robot.toml", "measurement.sigma_mm"),
+    ),
+    case(
+        "robot-integer-too-large-for-float",
+        {"robot.toml": ROBOT_TOML.replace("180.0", "1" + "0" * 400), "meas.csv": VALID_MEAS},
+        IDENTIFY_ROBOT,
+        ("robot.toml", "link_lengths_mm[1]"),
+    ),
+    case(
+        "robot-fewer-joints-than-measurements",
+        {"robot.toml": ROBOT_TOML.replace(", 100.0]", "]"), "meas.csv": VALID_MEAS},
+        IDENTIFY_ROBOT,
+        ("meas.csv", "4 joint columns", "my-scara", "3 joints"),
+    ),
+    case(
+        "robot-file-without-truth",
+        {"robot.toml": ROBOT_TOML, "plan.csv": VALID_PLAN},
+        ("synthesize", "--robot", "robot.toml", *SYNTHESIZE[1:]),
+        ("robot.toml", "--truth"),
+    ),
+    case(
+        "robot-unknown-name",
+        {"meas.csv": VALID_MEAS},
+        ("identify", "--robot", "paper-5link", *IDENTIFY[1:]),
+        ("paper-5link", "paper-4link"),
+    ),
+    # ---- truth TOML
+    case(
+        "truth-dl-wrong-length",
+        {"truth.toml": TRUTH_TOML.replace(", 0.7]", "]"), "plan.csv": VALID_PLAN},
+        ("synthesize", "--truth", "truth.toml", *SYNTHESIZE[1:]),
+        ("truth.toml", "dl_mm", "4"),
+    ),
+    case(
+        "truth-missing-dq",
+        {"truth.toml": TRUTH_TOML.split("\n")[0] + "\n", "plan.csv": VALID_PLAN},
+        ("synthesize", "--truth", "truth.toml", *SYNTHESIZE[1:]),
+        ("truth.toml", "dq_deg"),
+    ),
+    case(
+        "truth-missing-file",
+        {"plan.csv": VALID_PLAN},
+        ("synthesize", "--truth", "truth.toml", *SYNTHESIZE[1:]),
+        ("truth.toml", "not found"),
+    ),
+    # ---- output paths
+    case(
+        "output-folder-missing",
+        {"meas.csv": VALID_MEAS},
+        ("identify", "--measurements", "meas.csv", "-o", "nodir/cal.json"),
+        ("nodir",),
+    ),
+    case(
+        "output-is-a-folder",
+        {"meas.csv": VALID_MEAS, "outdir": FOLDER},
+        ("identify", "--measurements", "meas.csv", "-o", "outdir"),
+        ("outdir",),
+    ),
+    case(
+        "demo-output-is-a-file",
+        {"afile": "keep me\n"},
+        ("demo", "-o", "afile"),
+        ("afile",),
+    ),
+    # ---- command-line usage (no file to name; check the option is named)
+    case(
+        "usage-negative-sigma",
+        {"meas.csv": VALID_MEAS},
+        ("identify", "--measurements", "meas.csv", "--sigma", "-1", "-o", "cal.json"),
+        ("--sigma",),
+    ),
+    case(
+        "usage-zero-sigma",
+        {"meas.csv": VALID_MEAS},
+        ("identify", "--measurements", "meas.csv", "--sigma", "0", "-o", "cal.json"),
+        ("--sigma",),
+    ),
+    case(
+        "usage-unknown-method",
+        {"meas.csv": VALID_MEAS},
+        ("identify", "--measurements", "meas.csv", "--method", "bogus", "-o", "cal.json"),
+        ("--method", "bogus"),
+    ),
+    case(
+        "usage-seed-not-a-number",
+        {"plan.csv": VALID_PLAN},
+        ("synthesize", "--plan", "plan.csv", "--seed", "abc", "-o", "meas.csv"),
+        ("--seed",),
+    ),
+    case("usage-unknown-subcommand", {}, ("frobnicate", "-o", "out.csv"), ("frobnicate",)),
+    case("usage-no-subcommand", {}, (), ()),
+    case(
+        "usage-missing-measurements",
+        {},
+        ("identify", "-o", "cal.json"),
+        ("--measurements",),
+    ),
+]
+
+
+# --------------------------------------------------------------------------- tests
+
+
+@pytest.mark.parametrize(("files", "argv", "expected"), CASES)
+def test_bad_input_exits_2_with_one_error_line(
+    tmp_path: Path, files: dict[str, object], argv: tuple[str, ...], expected: tuple[str, ...]
+) -> None:
+    _write(tmp_path, files)
+    before = _snapshot(tmp_path)
+
+    result = run_cli(tmp_path, *argv)
+
+    assert "Traceback" not in result.stderr, result.stderr
+    assert result.returncode == 2, result.stderr
+    message = result.stderr.removesuffix("\n")
+    assert len(message.splitlines()) == 1, result.stderr
+    assert "\n" not in message, result.stderr
+    assert message.startswith("armcal: error:"), result.stderr
+    for text in expected:
+        assert text in message, f"{text!r} not in {message!r}"
+    assert result.stdout == "", result.stdout
+    out = _output(argv)
+    if out is not None and out not in files:
+        assert not (tmp_path / out).exists(), f"{out} was written"
+    assert _snapshot(tmp_path) == before, "files were written, changed or left behind"
+
+
+@pytest.mark.parametrize(
+    ("files", "argv", "output"),
+    [
+        pytest.param({"meas.csv": VALID_MEAS}, IDENTIFY, "cal.json", id="identify"),
+        pytest.param(
+            {"meas.csv": VALID_MEAS, "robot.toml": ROBOT_TOML},
+            IDENTIFY_ROBOT,
+            "cal.json",
+            id="identify-robot-file",
+        ),
+        pytest.param({"plan.csv": VALID_PLAN}, SYNTHESIZE, "meas.csv", id="synthesize"),
+        pytest.param(
+            {"plan.csv": VALID_PLAN, "robot.toml": ROBOT_TOML, "truth.toml": TRUTH_TOML},
+            SYNTHESIZE_ROBOT,
+            "meas.csv",
+            id="synthesize-robot-and-truth-files",
+        ),
+    ],
+)
+def test_valid_inputs_succeed(
+    tmp_path: Path, files: dict[str, object], argv: tuple[str, ...], output: str
+) -> None:
+    """Control: the valid files the bad cases are derived from are accepted."""
+    _write(tmp_path, files)
+    result = run_cli(tmp_path, *argv)
+    assert result.returncode == 0, result.stderr
+    assert result.stderr == ""
+    assert (tmp_path / output).is_file()
+    assert sorted(p.name for p in tmp_path.iterdir()) == sorted({*files, output})
