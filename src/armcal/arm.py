@@ -67,6 +67,21 @@ class Annulus:
         r = np.hypot(xy[..., 0] - self.center[0], xy[..., 1] - self.center[1])
         return (r >= self.r_min - tol) & (r <= self.r_max + tol)
 
+    def constraints(self, xy: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Smooth constraint values ``g (..., k)``, ``>= 0`` inside, and ``dg/dxy (..., k, 2)``.
+
+        ``g = ((r_max^2 - r^2), (r^2 - r_min^2)) / r_max`` (mm), the second only
+        when ``r_min > 0``.
+        """
+        d = xy - np.asarray(self.center)
+        r2 = np.sum(d**2, axis=-1)
+        g = [(self.r_max**2 - r2) / self.r_max]
+        dg = [-2.0 * d / self.r_max]
+        if self.r_min > 0:
+            g.append((r2 - self.r_min**2) / self.r_max)
+            dg.append(2.0 * d / self.r_max)
+        return np.stack(g, axis=-1), np.stack(dg, axis=-2)
+
 
 @dataclass(frozen=True)
 class Box:
@@ -90,6 +105,13 @@ class Box:
             & (py >= self.y[0] - tol)
             & (py <= self.y[1] + tol)
         )
+
+    def constraints(self, xy: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Constraint values ``g (..., 4)``, ``>= 0`` inside (mm), and ``dg/dxy (..., 4, 2)``."""
+        px, py = xy[..., 0], xy[..., 1]
+        g = np.stack([px - self.x[0], self.x[1] - px, py - self.y[0], self.y[1] - py], axis=-1)
+        dg = np.array([[1.0, 0.0], [-1.0, 0.0], [0.0, 1.0], [0.0, -1.0]])
+        return g, np.broadcast_to(dg, (*xy.shape[:-1], 4, 2))
 
 
 Region = Annulus | Box

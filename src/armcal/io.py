@@ -19,10 +19,10 @@ import os
 import re
 import sys
 import tempfile
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import Any, BinaryIO
 
 import numpy as np
 
@@ -125,13 +125,33 @@ def _read_text(path: str | os.PathLike, what: str) -> str:
         raise _fail(path, f"cannot read: {exc.strerror}") from None
 
 
-def atomic_write(path: str | os.PathLike, text: str) -> None:
-    """Write ``text`` to ``path`` through a temporary file and a rename.
+def _file_mode(target: Path) -> int:
+    """Permissions for ``target``: kept if it exists, else what ``open()`` would give.
+
+    ``mkstemp`` creates files readable by the owner only (0600).
+    """
+    if target.exists():
+        return target.stat().st_mode & 0o7777
+    umask = os.umask(0o022)  # the only portable way to read the umask
+    os.umask(umask)
+    return 0o666 & ~umask
+
+
+def atomic_write(path: str | os.PathLike, content: str | Callable[[BinaryIO], None]) -> None:
+    """Write ``content`` to ``path`` through a temporary file and a rename.
+
+    Parameters
+    ----------
+    path : str or path
+        Target file; its folder must exist.  An existing file is replaced.
+    content : str or callable
+        UTF-8 text, or a function that writes bytes to the open binary handle
+        (e.g. ``lambda handle: fig.savefig(handle, format="png")``).
 
     Raises
     ------
     InputError
-        If the folder does not exist or cannot be written.
+        If the folder does not exist, ``path`` is a folder, or it cannot be written.
     """
     target = Path(path)
     folder = target.parent if str(target.parent) else Path(".")
@@ -144,8 +164,12 @@ def atomic_write(path: str | os.PathLike, text: str) -> None:
     except OSError as exc:
         raise _fail(path, f"cannot write: {exc.strerror}") from None
     try:
-        with os.fdopen(fd, "w", encoding="utf-8", newline="") as handle:
-            handle.write(text)
+        with os.fdopen(fd, "wb") as handle:
+            if isinstance(content, str):
+                handle.write(content.encode("utf-8"))
+            else:
+                content(handle)
+        os.chmod(tmp, _file_mode(target))
         os.replace(tmp, target)
     except BaseException:
         Path(tmp).unlink(missing_ok=True)

@@ -1,0 +1,345 @@
+"""Quality of a calibration plan: information matrix, optimality criteria, predicted accuracy.
+
+Everything here is a pure function of a plan ``q`` (joint angles, rad, shape
+``(m, n)`` or batched ``(..., m, n)``) at the nominal parameters, with unit
+measurement noise unless ``sigma`` is given.
+
+**Scaling.** The information matrix ``F = sum_i J_i^T J_i`` (paper eq. 16-19) in
+the paper's parametrization ``(dtheta, dl, [x0, y0])`` mixes mm^2 and mm^2/rad^2.
+Every criterion is computed on the *Hadamard-normalized* matrix
+
+    Fs = D F D,   D = diag(1 / sqrt(F_opt)),   F_opt = diag(m l_i^2, m, [m, m])
+
+where ``F_opt`` is the information matrix of an orthogonal plan (paper eq. 24,
+Table II).  Since the diagonal of ``F`` is ``(m l_i^2, m, [m, m])`` for *every*
+plan, ``Fs`` has a unit diagonal, and Hadamard's inequality gives
+``det Fs <= 1`` with equality iff ``F`` is diagonal -- the paper's optimality
+conditions (21).  So every efficiency below is 1 exactly for orthogonal plans
+and smaller otherwise.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+
+from .arm import PlanarArm, jacobian, link_angles
+
+__all__ = [
+    "CRITERIA",
+    "Criterion",
+    "DStar",
+    "PositionAccuracy",
+    "d_efficiency",
+    "dstar",
+    "efficiencies",
+    "hadamard_scale",
+    "information_matrix",
+    "observability_indices",
+    "optimality_sums",
+    "position_accuracy",
+    "predicted_std",
+    "scaled_information",
+]
+
+
+def information_matrix(arm: PlanarArm, q: np.ndarray) -> np.ndarray:
+    """Information matrix ``F = sum_i J_i^T J_i`` in the paper's parametrization.
+
+    Parameters
+    ----------
+    arm : PlanarArm
+    q : ndarray, shape (..., m, n)
+        Plans (joint angles in rad); leading axes batch over plans.
+
+    Returns
+    -------
+    ndarray, shape (..., p, p)
+        Per unit noise variance: ``cov = sigma^2 F^-1`` (paper eq. 16).
+    """
+    jac = jacobian(arm, q, parametrization="paper")
+    return np.einsum("...mki,...mkj->...ij", jac, jac)
+
+
+def hadamard_scale(arm: PlanarArm) -> np.ndarray:
+    """``sqrt(diag(F_opt) / m)``, shape ``(p,)``: ``(l_i, 1, [1, 1])`` in the paper's order."""
+    return np.concatenate([arm.link_lengths, np.ones(arm.n_params - arm.n_joints)])
+
+
+def scaled_information(arm: PlanarArm, q: np.ndarray) -> np.ndarray:
+    """Hadamard-normalized information ``Fs = D F D`` ``(..., p, p)`` with unit diagonal."""
+    m = np.shape(q)[-2]
+    s = hadamard_scale(arm)
+    return information_matrix(arm, q) / (m * np.outer(s, s))
+
+
+def _logdet(fs: np.ndarray) -> np.ndarray:
+    sign, logdet = np.linalg.slogdet(fs)
+    return np.where(sign > 0, logdet, -np.inf)
+
+
+def d_efficiency(arm: PlanarArm, q: np.ndarray) -> np.ndarray:
+    """D-efficiency ``(det F / det F_opt)^(1/p)`` of plans ``q`` ``(..., m, n)``.
+
+    1 exactly for plans meeting the paper's conditions (21); 0 for plans that
+    cannot identify every parameter.
+
+    Examples
+    --------
+    >>> from armcal.design import orthogonal_plan
+    >>> arm = PlanarArm([260.0, 180.0, 120.0, 100.0])
+    >>> round(float(d_efficiency(arm, orthogonal_plan(arm, 20))), 12)
+    1.0
+    """
+    return np.exp(_logdet(scaled_information(arm, q)) / arm.n_params)
+
+
+@dataclass(frozen=True)
+class DStar:
+    """The paper's D* pair (eq. 20) with ``C' = C / m`` and ``S' = S / m``.
+
+    Attributes
+    ----------
+    det_c : float or ndarray
+        ``det(C')``, at most 1 (Hadamard), 1 exactly at the optimum.
+    abs_det_s : float or ndarray
+        ``|det(S')|``, 0 at the optimum and identically 0 for odd ``n``.
+
+    Notes
+    -----
+    ``c_jk = sum_i cos(theta_j - theta_k)`` and ``s_jk = sum_i sin(theta_j - theta_k)``
+    (eq. 18).  The paper prints ``C' = [c_jk / n]``; but ``c_jj = m`` for every plan,
+    so only division by the number of poses ``m`` gives ``det C' = 1`` at the
+    optimum (``C = m I``) as the paper states -- ``/n`` is a typo.  ``S`` is
+    skew-symmetric (``s_kj = -s_jk``), so ``det S = det S^T = (-1)^n det S``
+    vanishes for odd ``n`` whatever the plan: ``|det S'|`` only carries information
+    for even ``n``, and minimizing it is not the same as making ``S = 0``.
+    """
+
+    det_c: np.ndarray
+    abs_det_s: np.ndarray
+
+
+def _relative_sums(q: np.ndarray) -> np.ndarray:
+    """``sum_i exp(i (theta_j - theta_k))`` ``(..., n, n)``: ``C + i S`` of eq. (18)."""
+    unit = np.exp(1j * link_angles(q))
+    return np.einsum("...mj,...mk->...jk", unit, unit.conj())
+
+
+def dstar(arm: PlanarArm, q: np.ndarray) -> DStar:
+    """The paper's D* criterion pair ``det(C')``, ``|det(S')|`` (eq. 20), see :class:`DStar`."""
+    m = np.shape(q)[-2]
+    sums = _relative_sums(q) / m
+    return DStar(np.linalg.det(sums.real), np.abs(np.linalg.det(sums.imag)))
+
+
+def optimality_sums(arm: PlanarArm, q: np.ndarray) -> dict[str, float]:
+    """Every sum of the paper's optimality conditions (21) / Table I, by name.
+
+    For ``1 <= j < k <= n`` the keys ``"cos(q{j+1}+...+q{k})"`` and
+    ``"sin(...)"`` hold ``sum_i cos(theta_k - theta_j)`` and the sine, i.e. the
+    paper's ``c_jk, s_jk``; with a base offset ``"cos(q1+...+qj)"`` sums (from
+    the base columns) are included.  All vanish for an optimal plan.
+
+    Examples
+    --------
+    >>> from armcal.design import orthogonal_plan
+    >>> sums = optimality_sums(PlanarArm([2.0, 1.0]), orthogonal_plan(PlanarArm([2.0, 1.0]), 3))
+    >>> sorted(sums), max(abs(v) for v in sums.values()) < 1e-12
+    (['cos(q2)', 'sin(q2)'], True)
+    """
+    q = np.asarray(q, dtype=float)
+    n = arm.n_joints
+    # theta_0 = 0 stands for the base: its pairs appear only when the base is identified.
+    theta = np.concatenate([np.zeros((q.shape[0], 1)), link_angles(q)], axis=1)
+    out: dict[str, float] = {}
+    for j in range(0 if arm.base_offset else 1, n + 1):
+        for k in range(j + 1, n + 1):
+            label = "+".join(f"q{a}" for a in range(j + 1, k + 1))
+            angle = theta[:, k] - theta[:, j]
+            out[f"cos({label})"] = float(np.sum(np.cos(angle)))
+            out[f"sin({label})"] = float(np.sum(np.sin(angle)))
+    return out
+
+
+# --------------------------------------------------------------------------- criteria
+
+
+def _eigvalsh(fs: np.ndarray) -> np.ndarray:
+    return np.clip(np.linalg.eigvalsh(fs), 0.0, None)
+
+
+@dataclass(frozen=True)
+class Criterion:
+    """A larger-is-better design criterion on the normalized information ``Fs``.
+
+    Attributes
+    ----------
+    name : str
+        Registry key (``"D"``, ``"A"``, ``"E"``).
+    description : str
+        Formula and source, for help texts and reports.
+    efficiency : callable
+        ``Fs (..., p, p) -> (...)``, 1 for orthogonal plans.
+    log_gradient : callable
+        ``Fs (..., p, p) -> (..., p, p)``: the symmetric matrix gradient of
+        ``log efficiency`` with respect to ``Fs`` (used by the optimizer).
+    """
+
+    name: str
+    description: str
+    efficiency: Callable[[np.ndarray], np.ndarray]
+    log_gradient: Callable[[np.ndarray], np.ndarray]
+
+
+def _d_eff(fs: np.ndarray) -> np.ndarray:
+    return np.exp(_logdet(fs) / fs.shape[-1])
+
+
+def _d_grad(fs: np.ndarray) -> np.ndarray:
+    return np.linalg.inv(fs) / fs.shape[-1]
+
+
+def _a_eff(fs: np.ndarray) -> np.ndarray:
+    return fs.shape[-1] / np.trace(np.linalg.inv(fs), axis1=-2, axis2=-1)
+
+
+def _a_grad(fs: np.ndarray) -> np.ndarray:
+    inv = np.linalg.inv(fs)
+    inv2 = inv @ inv
+    return inv2 / np.trace(inv, axis1=-2, axis2=-1)[..., None, None]
+
+
+def _e_eff(fs: np.ndarray) -> np.ndarray:
+    return _eigvalsh(fs)[..., 0]
+
+
+def _e_grad(fs: np.ndarray) -> np.ndarray:
+    values, vectors = np.linalg.eigh(fs)
+    v = vectors[..., :, 0]
+    return v[..., :, None] * v[..., None, :] / values[..., 0, None, None]
+
+
+#: The design criteria by name.  All are computed on the Hadamard-normalized
+#: information matrix and equal 1 for the paper's orthogonal plans.
+CRITERIA: dict[str, Criterion] = {
+    "D": Criterion(
+        "D",
+        "D-efficiency (det Fs)^(1/p): volume of the confidence ellipsoid (Kiefer 1959)",
+        _d_eff,
+        _d_grad,
+    ),
+    "A": Criterion(
+        "A",
+        "A-efficiency p / tr(Fs^-1): mean variance of the scaled parameters",
+        _a_eff,
+        _a_grad,
+    ),
+    "E": Criterion(
+        "E",
+        "E-efficiency lambda_min(Fs): worst-determined direction of the scaled parameters",
+        _e_eff,
+        _e_grad,
+    ),
+}
+
+
+def efficiencies(arm: PlanarArm, q: np.ndarray) -> dict[str, np.ndarray]:
+    """Every criterion of :data:`CRITERIA` for plans ``q`` ``(..., m, n)``, by name."""
+    fs = scaled_information(arm, q)
+    return {name: crit.efficiency(fs) for name, crit in CRITERIA.items()}
+
+
+def observability_indices(arm: PlanarArm, q: np.ndarray) -> dict[str, np.ndarray]:
+    """Observability indices on the singular values of the column-scaled Jacobian.
+
+    With ``s_1 >= ... >= s_p`` the singular values of ``J D / sqrt(m)`` (``D`` the
+    Hadamard scaling, so ``s_i = sqrt(eig(Fs))`` and all equal 1 at the optimum):
+
+    * ``O1 = (s_1 ... s_p)^(1/p)`` (Borm & Menq 1991; equals ``sqrt(D-efficiency)``),
+    * ``O2 = s_p / s_1``, the inverse condition number (Driels & Pathre 1990),
+    * ``O3 = s_p``, the minimum singular value (Nahvi et al. 1994),
+    * ``O4 = s_p^2 / s_1``, the noise amplification index (Nahvi & Hollerbach 1996).
+
+    All are larger-is-better and 1 for orthogonal plans.
+    """
+    s = np.sqrt(_eigvalsh(scaled_information(arm, q)))[..., ::-1]
+    with np.errstate(divide="ignore"):
+        return {
+            "O1": np.exp(np.mean(np.log(s), axis=-1)),
+            "O2": s[..., -1] / s[..., 0],
+            "O3": s[..., -1],
+            "O4": s[..., -1] ** 2 / s[..., 0],
+        }
+
+
+def predicted_std(arm: PlanarArm, q: np.ndarray, sigma: float) -> np.ndarray:
+    """Predicted standard errors ``(p,)`` of the user parameters in display units (mm, deg).
+
+    ``sqrt(diag(sigma^2 (J^T J)^-1))`` at the nominal parameters, ``J`` in the
+    user parametrization (``dl``, ``dq``, ``[x0, y0]``).  Infinite entries mean
+    the plan cannot identify that parameter.
+    """
+    jac = jacobian(arm, q).reshape(-1, arm.n_params)
+    norms = np.linalg.norm(jac, axis=0)
+    s = np.linalg.svd(jac / norms, compute_uv=False)
+    if s[-1] <= 1e-12 * s[0]:
+        return np.full(arm.n_params, np.inf)
+    inv = np.linalg.inv((jac / norms).T @ (jac / norms)) / np.outer(norms, norms)
+    return sigma * np.sqrt(np.diag(inv)) * arm.display_scale
+
+
+@dataclass(frozen=True)
+class PositionAccuracy:
+    """Predicted end-effector position error after calibration at test poses.
+
+    Attributes
+    ----------
+    rms_mm : float
+        ``sqrt(mean_x sigma^2 tr(J0(x) F^-1 J0(x)^T))``: RMS over the test poses.
+    max_mm : float
+        The same at the worst test pose.
+    per_pose_mm : ndarray, shape (k,)
+        Predicted RMS error at each test pose.
+    """
+
+    rms_mm: float
+    max_mm: float
+    per_pose_mm: np.ndarray
+
+
+def position_accuracy(
+    arm: PlanarArm, q: np.ndarray, test_q: np.ndarray, sigma: float
+) -> PositionAccuracy:
+    """Predicted positioning accuracy after calibration with plan ``q`` at poses ``test_q``.
+
+    Parameters
+    ----------
+    arm : PlanarArm
+    q : ndarray, shape (m, n)
+        The calibration plan (rad).
+    test_q : ndarray, shape (k, n)
+        Poses where the calibrated arm will work (rad).
+    sigma : float
+        Measurement noise (1 std, mm).
+
+    Returns
+    -------
+    PositionAccuracy
+
+    Notes
+    -----
+    The error of the predicted tip position at ``x`` has covariance
+    ``sigma^2 J0(x) F^-1 J0(x)^T``; its trace is the mean squared position error.
+    For an orthogonal plan it equals ``2 n sigma^2 / m`` at every pose
+    (``2 (n + 1) sigma^2 / m`` with a base offset).
+    """
+    f_inv = np.linalg.inv(information_matrix(arm, q))
+    j0 = jacobian(arm, test_q, parametrization="paper")  # (k, 2, p)
+    var = np.einsum("kip,pr,kir->k", j0, f_inv, j0)
+    per_pose = sigma * np.sqrt(np.clip(var, 0.0, None))
+    return PositionAccuracy(
+        float(np.sqrt(np.mean(per_pose**2))), float(np.max(per_pose)), per_pose
+    )

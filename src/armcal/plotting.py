@@ -1,0 +1,200 @@
+"""Figures of calibration plans (matplotlib, object-oriented API, Agg only).
+
+Every function builds a :class:`matplotlib.figure.Figure` without touching
+``pyplot`` or any global state and returns it; :func:`save_figure` renders it
+to PNG through the Agg canvas.  Nothing else in :mod:`armcal` imports this
+module, so ``import armcal`` does not import matplotlib.
+"""
+
+from __future__ import annotations
+
+import os
+
+import numpy as np
+from matplotlib.backends.backend_agg import FigureCanvasAgg
+from matplotlib.collections import LineCollection
+from matplotlib.colors import Normalize
+from matplotlib.figure import Figure
+from matplotlib.lines import Line2D
+from matplotlib.patches import Circle, Rectangle, Wedge
+from matplotlib.ticker import MaxNLocator
+
+from .arm import Annulus, PlanarArm, link_angles
+from .io import atomic_write
+
+__all__ = ["plot_plan", "save_figure"]
+
+_CMAP = "viridis"
+_REGION_STYLE = {"facecolor": "tab:orange", "edgecolor": "tab:orange", "alpha": 0.18, "lw": 1.0}
+
+
+def _joint_positions(arm: PlanarArm, q: np.ndarray) -> np.ndarray:
+    """Base and joint positions ``(m, n + 1, 2)`` in mm at the nominal geometry."""
+    steps = arm.link_lengths * np.exp(1j * link_angles(q))
+    points = np.concatenate([np.zeros((q.shape[0], 1)), np.cumsum(steps, axis=1)], axis=1)
+    return np.stack([points.real, points.imag], axis=-1)
+
+
+def _draw_workspace(ax, arm: PlanarArm, joints: np.ndarray, norm: Normalize) -> None:
+    m, n = joints.shape[0], joints.shape[1] - 1
+    pose = np.arange(m)
+    alpha = float(np.clip(3.0 / np.sqrt(m), 0.15, 0.8))
+    arms = LineCollection(list(joints), cmap=_CMAP, norm=norm, linewidths=1.2, alpha=alpha)
+    arms.set_array(pose)
+    arms.set_gid("poses")
+    ax.add_collection(arms)
+    if n > 1:
+        inner = joints[:, 1:-1].reshape(-1, 2)
+        ax.scatter(
+            *inner.T,
+            c=np.repeat(pose, n - 1),
+            cmap=_CMAP,
+            norm=norm,
+            s=6,
+            alpha=alpha,
+            linewidths=0,
+            zorder=3,
+        )
+    ax.scatter(
+        *joints[:, -1].T,
+        c=pose,
+        cmap=_CMAP,
+        norm=norm,
+        s=float(np.clip(480.0 / m, 8.0, 24.0)),
+        marker="D",
+        edgecolors="k",
+        linewidths=0.4 if m <= 50 else 0.2,
+        zorder=4,
+    )
+    ax.plot(0.0, 0.0, "ks", ms=8, zorder=5, label="base")
+    reach = float(arm.link_lengths.sum())
+    ax.add_patch(Circle((0.0, 0.0), reach, fill=False, ls="--", color="0.55", label="reach"))
+    lo, hi = np.array([-reach, -reach]), np.array([reach, reach])
+    region = arm.region
+    if isinstance(region, Annulus):
+        cx, cy = region.center
+        width = region.r_max - region.r_min if region.r_min > 0 else None
+        patch = Wedge((cx, cy), region.r_max, 0.0, 360.0, width=width, **_REGION_STYLE)
+        lo = np.minimum(lo, [cx - region.r_max, cy - region.r_max])
+        hi = np.maximum(hi, [cx + region.r_max, cy + region.r_max])
+    elif region is not None:
+        (x0, x1), (y0, y1) = region.x, region.y
+        patch = Rectangle((x0, y0), x1 - x0, y1 - y0, **_REGION_STYLE)
+        lo, hi = np.minimum(lo, [x0, y0]), np.maximum(hi, [x1, y1])
+    if region is not None:
+        patch.set_label("measurement region")
+        patch.set_zorder(0)
+        ax.add_patch(patch)
+    pad = 0.05 * float(np.max(hi - lo))
+    ax.set_xlim(lo[0] - pad, hi[0] + pad)
+    ax.set_ylim(lo[1] - pad, hi[1] + pad)
+    ax.set_aspect("equal")
+    ax.set_xlabel("x [mm]")
+    ax.set_ylabel("y [mm]")
+    ax.set_title("workspace", fontsize="medium")
+    ax.grid(True, lw=0.4, alpha=0.4)
+
+
+def _draw_joint_space(ax, arm: PlanarArm, q: np.ndarray, norm: Normalize) -> None:
+    m, n = q.shape
+    joint = np.arange(1, n + 1)
+    limits = np.degrees(arm.joint_limits)
+    for j, (lo, hi) in zip(joint, limits, strict=True):
+        ax.fill_between([j - 0.38, j + 0.38], lo, hi, color="0.9", lw=0, zorder=0)
+        ax.hlines([lo, hi], j - 0.38, j + 0.38, color="0.35", lw=1.5, zorder=1)
+    # Spread the poses across each column in pose order: deterministic, and it
+    # repeats the colour coding (pose 1 on the left, pose m on the right).
+    jitter = np.linspace(-0.3, 0.3, m) if m > 1 else np.zeros(1)
+    x = (joint[None, :] + jitter[:, None]).ravel()
+    pose = np.repeat(np.arange(m), n)
+    size = float(np.clip(600.0 / m, 4.0, 30.0))
+    ax.scatter(
+        x,
+        np.degrees(q).ravel(),
+        c=pose,
+        cmap=_CMAP,
+        norm=norm,
+        s=size,
+        edgecolors="k",
+        linewidths=0.2,
+        zorder=3,
+        gid="joint angles",
+    )
+    ax.set_xticks(joint, [f"q{j}" for j in joint])
+    ax.set_xlim(0.5, n + 0.5)
+    ax.yaxis.set_major_locator(MaxNLocator(nbins=9, steps=[1, 1.5, 3, 4.5, 9, 10]))
+    ax.set_ylabel("joint angle [deg]")
+    ax.set_title("joint space", fontsize="medium")
+    ax.grid(True, axis="y", lw=0.4, alpha=0.4)
+
+
+def plot_plan(arm: PlanarArm, q: np.ndarray, *, title: str | None = None) -> Figure:
+    """Draw a calibration plan in the workspace and in joint space.
+
+    Parameters
+    ----------
+    arm : PlanarArm
+        Nominal geometry (link lengths in mm), joint limits and measurement region.
+    q : ndarray, shape (m, n)
+        Commanded joint angles in rad, one row per pose.
+    title : str, optional
+        Figure title; default ``"<arm.name>: <m> poses"``.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        Two axes: the workspace (every pose as a stick arm at the nominal
+        geometry, base, reach circle and measurement region; mm, equal aspect)
+        and joint space (each ``q_j`` in degrees against its limits).  Poses are
+        coloured by index (viridis) in both.
+
+    Raises
+    ------
+    ValueError
+        If ``q`` is not a finite array of shape ``(m, n)`` with ``m >= 1``.
+
+    Examples
+    --------
+    >>> fig = plot_plan(PlanarArm([2.0, 1.0]), np.zeros((3, 2)))
+    >>> [ax.get_xlabel() for ax in fig.axes]
+    ['x [mm]', '']
+    """
+    q = np.asarray(q, dtype=float)
+    n = arm.n_joints
+    if q.ndim != 2 or q.shape[0] < 1 or q.shape[1] != n or not np.all(np.isfinite(q)):
+        raise ValueError(f"q must be finite with shape (m, {n}) in rad, m >= 1; got {q.shape}")
+    m = q.shape[0]
+    fig = Figure(figsize=(11, 5), layout="constrained")
+    ax_ws, ax_js = fig.subplots(1, 2, width_ratios=[1.0, 1.0])
+    norm = Normalize(vmin=0, vmax=max(m - 1, 1))
+    _draw_workspace(ax_ws, arm, _joint_positions(arm, q), norm)
+    _draw_joint_space(ax_js, arm, q, norm)
+    cmap = ax_ws.collections[0].get_cmap()
+    handles = [
+        Line2D([], [], color=cmap(norm(0)), lw=2, label="pose 1"),
+        *([Line2D([], [], color=cmap(norm(m - 1)), lw=2, label=f"pose {m}")] if m > 1 else []),
+        Line2D([], [], ls="", marker="D", mfc="w", mec="k", label="tip"),
+        *ax_ws.get_legend_handles_labels()[0],
+        Rectangle((0, 0), 1, 1, fc="0.9", ec="0.35", label="joint limits"),
+    ]
+    fig.legend(handles=handles, loc="outside lower center", ncols=len(handles), frameon=False)
+    fig.suptitle(title if title is not None else f"{arm.name}: {m} poses")
+    return fig
+
+
+def save_figure(fig: Figure, path: str | os.PathLike) -> None:
+    """Write ``fig`` to ``path`` as PNG (120 dpi) through a temporary file and a rename.
+
+    Parameters
+    ----------
+    fig : matplotlib.figure.Figure
+    path : str or os.PathLike
+        Target file; its folder must exist.  An existing file is replaced.
+
+    Raises
+    ------
+    InputError
+        If the folder does not exist, ``path`` is a folder, or it cannot be written.
+    """
+    FigureCanvasAgg(fig)  # attach the Agg canvas: no GUI backend is ever involved
+    atomic_write(path, lambda handle: fig.savefig(handle, format="png", dpi=120))
