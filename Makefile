@@ -7,7 +7,7 @@ BIN    := $(VENV)/bin
 DEMO_DIR ?= demo-out
 LINT_PATHS := src tests $(wildcard benchmarks)
 
-.PHONY: demo test lint clean
+.PHONY: demo test lint bench clean
 
 $(BIN)/python:
 	$(PYTHON) -m venv $(VENV)
@@ -30,6 +30,9 @@ lint: $(VENV)/.installed-test
 
 test: lint
 	$(BIN)/python -m pytest src tests
+
+bench: $(VENV)/.installed
+	$(BIN)/python benchmarks/bench_design.py
 
 clean:
 	rm -rf $(VENV) $(DEMO_DIR) .pytest_cache .ruff_cache

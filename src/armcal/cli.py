@@ -8,13 +8,16 @@ from __future__ import annotations
 
 import argparse
 import sys
+import time
 from collections.abc import Callable, Sequence
 
 import numpy as np
 
 from ._version import __version__
 from .arm import forward_kinematics
-from .design import orthogonal_plan
+from .criteria import CRITERIA, evaluate_plan, format_quality, quality_to_dict
+from .design import METHODS as DESIGN_METHODS
+from .design import Design, design, feasible, random_plan
 from .errors import ArmcalError, NotIdentifiableError
 from .identify import METHODS, Calibration, format_report, identify
 from .io import (
@@ -152,13 +155,13 @@ def _demo(args: argparse.Namespace) -> None:
     arm = spec.arm
     truth = _truth(args, spec)
     sigma = _sigma_for_simulation(args, spec)
-    q = orthogonal_plan(arm, args.poses)
     rng = np.random.default_rng(args.seed)
+    q = design(arm, args.poses, rng=rng).q
     xy = forward_kinematics(arm, q, truth) + rng.normal(0.0, sigma, size=(q.shape[0], 2))
     cal = identify(arm, q, xy, sigma=sigma)
     document = calibration_to_dict(cal)
     lines = [
-        f"armcal demo on {arm.name}: {args.poses}-pose orthogonal plan (paper Table I), "
+        f"armcal demo on {arm.name}: {args.poses}-pose optimal plan (armcal design), "
         f"virtual robot with the paper's deviations, noise sigma {sigma:g} mm, seed {args.seed}",
         "",
         format_report(cal, truth=truth),
@@ -174,6 +177,96 @@ def _demo(args: argparse.Namespace) -> None:
             atomic_write(folder / name, text)
         lines += ["", f"wrote {', '.join(files)} to {folder}/"]
     _emit(args, document, "\n".join(lines))
+
+
+def _test_poses(args: argparse.Namespace, spec: RobotSpec) -> np.ndarray:
+    """Poses where positioning accuracy matters: --test-poses, else 1000 uniform in the limits."""
+    if args.test_poses is not None:
+        return read_plan(args.test_poses, spec.arm)
+    return random_plan(spec.arm, 1000, np.random.default_rng(args.seed))
+
+
+def _quality_report(args: argparse.Namespace, spec: RobotSpec, q: np.ndarray):
+    quality = evaluate_plan(
+        spec.arm, q, sigma=_sigma_for_simulation(args, spec), test_q=_test_poses(args, spec)
+    )
+    return quality, quality_to_dict(spec.arm, quality), format_quality(spec.arm, quality)
+
+
+def _design_summary(result: Design, seconds: float) -> tuple[dict, list[str]]:
+    cert = result.certificate
+    document = {
+        "criterion": result.criterion,
+        "method": result.method,
+        "certified_d_efficiency": cert.certified_d_efficiency,
+        "plan_only_bound": cert.plan_only_bound,
+        "best_weighted_design_d_efficiency": cert.reference_d_efficiency,
+        "notes": list(result.notes),
+        "seconds": seconds,
+    }
+    lines = [
+        f"design: {result.q.shape[0]} poses, criterion {result.criterion}, method {result.method} "
+        f"({seconds:.2f} s)",
+        *(f"note: {note}" for note in result.notes),
+        f"D-efficiency {result.d_efficiency:.4f} of the unconstrained optimum; certified "
+        f">= {cert.certified_d_efficiency:.4f} of the best plan within the constraints "
+        f"(plan-only bound {cert.plan_only_bound:.4f})",
+        "",
+    ]
+    return document, lines
+
+
+def _design(args: argparse.Namespace) -> None:
+    spec = load_robot(args.robot)
+    candidates = None if args.candidates is None else read_plan(args.candidates, spec.arm)
+    if candidates is not None and not np.all(feasible(spec.arm, candidates)):
+        row = int(np.flatnonzero(~feasible(spec.arm, candidates))[0]) + 1
+        raise ArmcalError(
+            f"{args.candidates}: row {row}: the tip is outside the measurement region; "
+            "remove the pose or widen the region"
+        )
+    start = time.perf_counter()
+    result = design(
+        spec.arm,
+        args.poses,
+        criterion=args.criterion,
+        method=args.method,
+        rng=np.random.default_rng(args.seed),
+        candidates=candidates,
+    )
+    seconds = time.perf_counter() - start
+    _, document, report = _quality_report(args, spec, result.q)
+    extra, header = _design_summary(result, seconds)
+    document.update(extra)
+    written = []
+    if args.output is not None:
+        atomic_write(args.output, format_plan_csv(result.q))
+        written.append(f"wrote {args.output}")
+    if args.plot is not None:
+        from .plotting import plot_plan, save_figure  # matplotlib only when a plot is asked for
+
+        save_figure(plot_plan(spec.arm, result.q), args.plot)
+        written.append(f"wrote {args.plot}")
+    _emit(args, document, "\n".join([*header, report, *([""] if written else []), *written]))
+
+
+def _evaluate(args: argparse.Namespace) -> None:
+    spec = load_robot(args.robot)
+    q = read_plan(args.plan, spec.arm)
+    quality, document, report = _quality_report(args, spec, q)
+    outside = np.flatnonzero(~feasible(spec.arm, q))
+    if outside.size:
+        print(
+            f"armcal: warning: {args.plan}: the tip of pose(s) {', '.join(map(str, outside + 1))} "
+            "is outside the measurement region",
+            file=sys.stderr,
+        )
+    if not quality.identifiable:
+        print(
+            f"armcal: warning: {args.plan}: the plan cannot identify every parameter",
+            file=sys.stderr,
+        )
+    _emit(args, document, report)
 
 
 # --------------------------------------------------------------------------- parser
@@ -233,6 +326,33 @@ def build_parser() -> argparse.ArgumentParser:
     )
     _add_common(sub, output="calibration JSON to write")
     sub.set_defaults(run=_identify)
+
+    sigma_help = f"noise std in mm (default: robot file's sigma_mm, else {DEFAULT_SIGMA_MM})"
+    test_help = "plan CSV of poses where accuracy matters (default: 1000 uniform in the limits)"
+    sub = subs.add_parser("design", help="an optimal plan within the limits and region")
+    sub.add_argument("--poses", type=_poses, required=True, metavar="M", help="number of poses")
+    sub.add_argument(
+        "--criterion", choices=list(CRITERIA), default="D", help="criterion (default D)"
+    )
+    sub.add_argument(
+        "--method",
+        choices=list(DESIGN_METHODS),
+        default="auto",
+        help="auto = analytic if it fits the constraints, else optimize + exchange",
+    )
+    sub.add_argument("--candidates", metavar="PLAN_CSV", help="reachable poses for exchange")
+    sub.add_argument("--plot", metavar="PNG", help="draw the plan's poses as stick arms")
+    sub.add_argument("--sigma", type=_positive, metavar="MM", help=sigma_help)
+    sub.add_argument("--test-poses", metavar="PLAN_CSV", help=test_help)
+    _add_common(sub, seed=True, output="plan CSV to write")
+    sub.set_defaults(run=_design)
+
+    sub = subs.add_parser("evaluate", help="quality of a plan: criteria, predicted std")
+    sub.add_argument("--plan", required=True, metavar="PLAN_CSV", help="plan CSV (q1_deg..)")
+    sub.add_argument("--sigma", type=_positive, metavar="MM", help=sigma_help)
+    sub.add_argument("--test-poses", metavar="PLAN_CSV", help=test_help)
+    _add_common(sub, seed=True)
+    sub.set_defaults(run=_evaluate)
 
     sub = subs.add_parser("demo", help="the whole workflow on a virtual robot")
     sub.add_argument("--poses", type=_poses, default=20, help="number of poses (default 20)")

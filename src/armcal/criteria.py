@@ -31,16 +31,20 @@ __all__ = [
     "CRITERIA",
     "Criterion",
     "DStar",
+    "PlanQuality",
     "PositionAccuracy",
     "d_efficiency",
     "dstar",
     "efficiencies",
+    "evaluate_plan",
+    "format_quality",
     "hadamard_scale",
     "information_matrix",
     "observability_indices",
     "optimality_sums",
     "position_accuracy",
     "predicted_std",
+    "quality_to_dict",
     "scaled_information",
 ]
 
@@ -203,7 +207,9 @@ def _d_grad(fs: np.ndarray) -> np.ndarray:
 
 
 def _a_eff(fs: np.ndarray) -> np.ndarray:
-    return fs.shape[-1] / np.trace(np.linalg.inv(fs), axis1=-2, axis2=-1)
+    values = _eigvalsh(fs)
+    with np.errstate(divide="ignore"):
+        return fs.shape[-1] / np.sum(1.0 / values, axis=-1)  # 0 when singular
 
 
 def _a_grad(fs: np.ndarray) -> np.ndarray:
@@ -343,3 +349,134 @@ def position_accuracy(
     return PositionAccuracy(
         float(np.sqrt(np.mean(per_pose**2))), float(np.max(per_pose)), per_pose
     )
+
+
+# --------------------------------------------------------------------------- summary
+
+
+@dataclass(frozen=True, eq=False)
+class PlanQuality:
+    """Everything known about a plan before measuring, for a given noise level.
+
+    Attributes
+    ----------
+    n_poses : int
+    sigma : float
+        Measurement noise assumed (mm).
+    identifiable : bool
+        Whether the plan identifies every parameter.
+    efficiencies : dict of str to float
+        D, A, E efficiencies (1 for orthogonal plans, 0 when not identifiable).
+    observability : dict of str to float
+        O1..O4 (see :func:`observability_indices`).
+    dstar : DStar
+        The paper's ``det C'``, ``|det S'|``.
+    optimality_sums : dict of str to float
+        Table I sums (see :func:`optimality_sums`).
+    predicted_std : ndarray, shape (p,)
+        Standard errors of the user parameters in mm / deg (inf if not identifiable).
+    position : PositionAccuracy or None
+        Predicted positioning accuracy after calibration at the test poses
+        (None if not identifiable).
+    """
+
+    n_poses: int
+    sigma: float
+    identifiable: bool
+    efficiencies: dict[str, float]
+    observability: dict[str, float]
+    dstar: DStar
+    optimality_sums: dict[str, float]
+    predicted_std: np.ndarray
+    position: PositionAccuracy | None
+
+
+def evaluate_plan(
+    arm: PlanarArm, q: np.ndarray, *, sigma: float, test_q: np.ndarray
+) -> PlanQuality:
+    """Criteria, predicted std and positioning accuracy of plan ``q`` ``(m, n)``.
+
+    ``test_q`` ``(k, n)`` are the poses where positioning accuracy matters.
+
+    Examples
+    --------
+    >>> from armcal.design import orthogonal_plan, random_plan
+    >>> arm = PlanarArm([260.0, 180.0, 120.0, 100.0])
+    >>> quality = evaluate_plan(arm, orthogonal_plan(arm, 20), sigma=0.1,
+    ...                         test_q=random_plan(arm, 50, rng=0))
+    >>> bool(np.isclose(quality.position.rms_mm, 0.1 * np.sqrt(2 * 4 / 20), rtol=1e-12))
+    True
+    """
+    std = predicted_std(arm, q, sigma)
+    identifiable = bool(np.all(np.isfinite(std)))
+    return PlanQuality(
+        n_poses=int(q.shape[0]),
+        sigma=float(sigma),
+        identifiable=identifiable,
+        efficiencies={k: float(v) for k, v in efficiencies(arm, q).items()},
+        observability={k: float(v) for k, v in observability_indices(arm, q).items()},
+        dstar=dstar(arm, q),
+        optimality_sums=optimality_sums(arm, q),
+        predicted_std=std,
+        position=position_accuracy(arm, q, test_q, sigma) if identifiable else None,
+    )
+
+
+def format_quality(arm: PlanarArm, quality: PlanQuality) -> str:
+    """Human-readable report of :func:`evaluate_plan`: criteria, std table, accuracy."""
+    eff = quality.efficiencies
+    obs = quality.observability
+    lines = [
+        f"{quality.n_poses} poses of {arm.name}, {arm.n_params} parameters, "
+        f"sigma {quality.sigma:g} mm",
+        f"efficiency (1 = orthogonal optimum): D {eff['D']:.4f}  A {eff['A']:.4f}  "
+        f"E {eff['E']:.4f}",
+        f"observability: O1 {obs['O1']:.4f}  O2 {obs['O2']:.4f}  O3 {obs['O3']:.4f}  "
+        f"O4 {obs['O4']:.4f}",
+        f"paper D*: det C' {float(quality.dstar.det_c):.4f}  "
+        f"|det S'| {float(quality.dstar.abs_det_s):.3g}",
+        f"largest Table I sum: {max(abs(v) for v in quality.optimality_sums.values()):.3g}"
+        f" (0 for an optimal plan; {quality.n_poses} is the worst possible)",
+    ]
+    if not quality.identifiable:
+        lines.append("warning: this plan cannot identify every parameter (see armcal identify)")
+        return "\n".join(lines)
+    lines += ["", f"{'parameter':<10}{'predicted std':>14}  unit"]
+    for name, unit, std in zip(
+        arm.param_names, arm.param_units, quality.predicted_std, strict=True
+    ):
+        lines.append(f"{name:<10}{std:>14.5f}  {unit}")
+    pos = quality.position
+    lines += [
+        "",
+        f"predicted position error after calibration: RMS {pos.rms_mm:.4g} mm, "
+        f"max {pos.max_mm:.4g} mm over {pos.per_pose_mm.size} test poses",
+    ]
+    return "\n".join(lines)
+
+
+def quality_to_dict(arm: PlanarArm, quality: PlanQuality) -> dict:
+    """JSON document of :func:`evaluate_plan` (keys of PRODUCT.md plus details).
+
+    Not-identifiable values are ``None`` (JSON null), never NaN or infinity.
+    """
+    std = {
+        name: (float(v) if np.isfinite(v) else None)
+        for name, v in zip(arm.param_names, quality.predicted_std, strict=True)
+    }
+    pos = quality.position
+    return {
+        "poses": quality.n_poses,
+        "sigma_mm": quality.sigma,
+        "identifiable": quality.identifiable,
+        "d_efficiency": quality.efficiencies["D"],
+        "a_efficiency": quality.efficiencies["A"],
+        "e_efficiency": quality.efficiencies["E"],
+        "observability": quality.observability,
+        "det_c_prime": float(quality.dstar.det_c),
+        "abs_det_s_prime": float(quality.dstar.abs_det_s),
+        "optimality_sums": quality.optimality_sums,
+        "predicted_std": std,
+        "predicted_position_rms_mm": None if pos is None else pos.rms_mm,
+        "predicted_position_max_mm": None if pos is None else pos.max_mm,
+    }

@@ -678,6 +678,9 @@ def certify(
     rng = np.random.default_rng(rng)
     q = np.asarray(q, dtype=float)
     p = arm.n_params
+    if _d_eff_of(arm, q) >= 1.0 - 1e-12:
+        # Fs = I: the Hadamard bound is attained, and d(x) = tr(Is(x)) = p at every pose.
+        return Certificate(1.0, 1.0, 1.0, float(p), q, np.full(q.shape[0], 1.0 / q.shape[0]))
     pool = np.concatenate([q, _corner_poses(arm, rng), feasible_poses(arm, candidates, rng)])
     weights = np.full(pool.shape[0], 1.0 / pool.shape[0])
     for _ in range(rounds):

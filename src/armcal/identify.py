@@ -190,7 +190,7 @@ def check_identifiable(arm: PlanarArm, q: np.ndarray) -> Identifiability:
             f"measure at least {min_poses} poses"
         )
     else:
-        why = "add poses in which every joint takes several different angles"
+        why = "add poses in which every joint takes several different angles (armcal design)"
     raise NotIdentifiableError(
         f"the {m} poses cannot identify all {p} parameters of {arm.name} "
         f"(Jacobian rank {info.rank} of {p}): not identifiable: {', '.join(info.unidentifiable)}; "

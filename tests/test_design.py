@@ -1,0 +1,157 @@
+"""Optimal plans: analytic optimum, constrained optimization, exchange, certificate."""
+
+import numpy as np
+import pytest
+
+from armcal import Annulus, ArmcalError, PlanarArm, random_plan
+from armcal.cli import main
+from armcal.criteria import d_efficiency, optimality_sums
+from armcal.design import (
+    _blocks,
+    analytic_plan,
+    certify,
+    design,
+    exchange_plan,
+    feasible,
+    feasible_poses,
+    optimize_plan,
+)
+
+PAPER_LENGTHS = [260.0, 180.0, 120.0, 100.0]
+LIMITS_60 = np.radians([[-180, 180], [-60, 60], [-60, 60], [-60, 60]])
+#: Best D-efficiency within +-60 deg found by any method (the 8 corners of the cube of
+#: joints 2..4, equal weights); the certificate proves no plan does better than ~0.806.
+BEST_60 = 0.805927
+
+
+@pytest.fixture(scope="module")
+def arm60() -> PlanarArm:
+    return PlanarArm(PAPER_LENGTHS, LIMITS_60, name="paper-4link-60")
+
+
+@pytest.fixture(scope="module")
+def designs60(arm60):
+    return {m: design(arm60, m, rng=0) for m in (8, 20)}
+
+
+@pytest.mark.parametrize("base_offset", [False, True])
+@pytest.mark.parametrize("n", range(2, 9))
+def test_analytic_plans_are_optimal_for_every_m(n, base_offset):
+    arm = PlanarArm(np.linspace(300.0, 80.0, n), base_offset=base_offset)
+    first = n + 1 if base_offset else n
+    plans = [analytic_plan(arm, m) for m in range(first, 61)]
+    for q in plans:
+        assert np.all(feasible(arm, q))
+        assert d_efficiency(arm, q) == pytest.approx(1.0, abs=1e-9)
+        assert max(abs(v) for v in optimality_sums(arm, q).values()) <= 1e-9
+
+
+@pytest.mark.parametrize(("n", "m", "base_offset"), [(2, 2, False), (4, 5, True), (8, 60, False)])
+def test_design_takes_the_analytic_plan_when_unconstrained(n, m, base_offset):
+    arm = PlanarArm(np.linspace(300.0, 80.0, n), base_offset=base_offset)
+    result = design(arm, m, rng=0)
+    assert result.method == "analytic"
+    assert result.d_efficiency == pytest.approx(1.0, abs=1e-9)
+    assert result.certificate.certified_d_efficiency == pytest.approx(1.0, abs=1e-9)
+
+
+def test_analytic_plan_reports_when_limits_forbid_it(arm60):
+    with pytest.raises(ArmcalError, match="joint limits"):
+        analytic_plan(arm60, 8)
+    # Limits of +-170 deg still admit 18 poses spaced 20 deg apart, not 19.
+    arm170 = PlanarArm(PAPER_LENGTHS, np.radians([[-170, 170]] * 4))
+    assert d_efficiency(arm170, analytic_plan(arm170, 18)) == pytest.approx(1.0, abs=1e-12)
+    with pytest.raises(ArmcalError):
+        analytic_plan(arm170, 19)
+
+
+@pytest.mark.parametrize("m", [8, 20])
+def test_limited_paper_arm_design_is_certified(m, arm60, designs60, rng):
+    result = designs60[m]
+    assert result.method.startswith("optimize")
+    assert result.d_efficiency >= 0.80
+    lo, hi = LIMITS_60[:, 0], LIMITS_60[:, 1]
+    assert np.all((result.q >= lo - 1e-9) & (result.q <= hi + 1e-9))
+    cert = result.certificate
+    assert cert.certified_d_efficiency >= 0.99
+    # Never overclaim: the certificate bounds the efficiency relative to the best plan known.
+    assert cert.certified_d_efficiency <= result.d_efficiency / BEST_60 + 1e-6
+    assert cert.plan_only_bound <= cert.certified_d_efficiency
+    random_best = float(
+        d_efficiency(arm60, np.stack([random_plan(arm60, m, rng) for _ in range(1000)])).max()
+    )
+    print(f"m={m}: design {result.d_efficiency:.4f} vs best of 1000 random {random_best:.4f}")
+    assert result.d_efficiency > 1.4 * random_best
+
+
+def test_plan_only_bound_is_looser_at_m20(designs60):
+    cert = designs60[20].certificate
+    assert cert.plan_only_bound == pytest.approx(0.970, abs=0.005)
+    assert cert.reference_d_efficiency == pytest.approx(BEST_60, abs=1e-4)
+
+
+def test_certificate_never_overclaims_for_random_plans(arm60, rng):
+    for _ in range(3):
+        q = random_plan(arm60, 12, rng)
+        cert = certify(arm60, q, rng=rng)
+        true_upper = float(d_efficiency(arm60, q)) / BEST_60
+        assert cert.certified_d_efficiency <= true_upper + 1e-9
+        assert cert.certified_d_efficiency >= cert.plan_only_bound
+
+
+def test_annulus_region_keeps_every_tip_inside():
+    region = Annulus((0.0, 0.0), 300.0, 520.0)  # excludes the inner workspace and the rim
+    arm = PlanarArm(PAPER_LENGTHS, LIMITS_60, name="annulus", region=region)
+    result = design(arm, 12, rng=1)
+    tips = np.sum(arm.link_lengths * np.exp(1j * np.cumsum(result.q, axis=1)), axis=1)
+    assert np.all((np.abs(tips) >= 300.0 - 1e-9) & (np.abs(tips) <= 520.0 + 1e-9))
+    assert result.d_efficiency > 0.6
+    assert result.certificate.certified_d_efficiency > 0.95
+
+
+def test_exchange_swap_ratio_matches_direct_determinants(rng):
+    arm = PlanarArm([2.0, 1.5, 1.0])
+    candidates = random_plan(arm, 50, rng)
+    start = random_plan(arm, 8, rng)
+    plan = exchange_plan(arm, 8, candidates, start=start)
+    assert d_efficiency(arm, plan) > d_efficiency(arm, start)
+    # Exchange optimality: no single swap improves the determinant.
+    blocks = _blocks(arm, plan)
+    info = np.einsum("iap,iaq->pq", blocks, blocks)
+    logdet = np.linalg.slogdet(info)[1]
+    cand_blocks = _blocks(arm, candidates)
+    for i in range(8):
+        for x in range(0, 50, 7):
+            swapped = info - blocks[i].T @ blocks[i] + cand_blocks[x].T @ cand_blocks[x]
+            assert np.linalg.slogdet(swapped)[1] <= logdet + 1e-9
+
+
+def test_exchange_uses_user_candidates_only(rng):
+    arm = PlanarArm(PAPER_LENGTHS, LIMITS_60)
+    candidates = feasible_poses(arm, 300, rng)
+    plan = exchange_plan(arm, 10, candidates, rng=rng)
+    assert all(any(np.array_equal(p, c) for c in candidates) for p in plan)
+
+
+@pytest.mark.parametrize("criterion", ["A", "E"])
+def test_other_criteria_optimize_their_own_efficiency(criterion, arm60):
+    from armcal.criteria import efficiencies
+
+    q_d = optimize_plan(arm60, 12, criterion="D", rng=0, starts=16)
+    q_c = optimize_plan(arm60, 12, criterion=criterion, rng=0, starts=16)
+    assert efficiencies(arm60, q_c)[criterion] >= efficiencies(arm60, q_d)[criterion] - 1e-6
+
+
+def test_same_seed_gives_the_same_plan_file(tmp_path):
+    robot = tmp_path / "robot.toml"
+    robot.write_text(
+        "link_lengths_mm = [260.0, 180.0, 120.0, 100.0]\n"
+        "joint_limits_deg = [[-180, 180], [-60, 60], [-60, 60], [-60, 60]]\n"
+    )
+    files = []
+    for name, seed in (("a", "3"), ("b", "3")):
+        out = tmp_path / f"{name}.csv"
+        args = ["design", "--robot", str(robot), "--poses", "10", "--seed", seed]
+        assert main([*args, "-o", str(out)]) == 0
+        files.append(out.read_bytes())
+    assert files[0] == files[1]
