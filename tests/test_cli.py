@@ -137,3 +137,30 @@ def test_synthesize_without_output_writes_csv_to_stdout(tmp_path, capsys):
     # Pose (0, 90) deg with the paper's truth: dtheta = (0.5, 0) deg, lengths 261.5 and 179.4.
     expected = [261.5 * np.cos(np.radians(0.5)), 261.5 * np.sin(np.radians(0.5)) + 179.4]
     assert_allclose([x, y], expected, rtol=0, atol=1e-9)
+
+
+def test_design_and_evaluate_json_keys(tmp_path, capsys):
+    plan = tmp_path / "plan.csv"
+    png = tmp_path / "plan.png"
+    args = ["design", "--poses", "12", "-o", str(plan), "--plot", str(png), "--json"]
+    assert main(args) == 0
+    designed = json.loads(capsys.readouterr().out)
+    assert designed["poses"] == 12 and designed["method"] == "analytic"
+    assert designed["d_efficiency"] == designed["certified_d_efficiency"] == 1.0
+    assert png.read_bytes().startswith(b"\x89PNG")
+    assert main(["evaluate", "--plan", str(plan), "--sigma", "0.1", "--json"]) == 0
+    evaluated = json.loads(capsys.readouterr().out)
+    assert evaluated["d_efficiency"] == 1.0
+    # Orthogonal plan: sigma * sqrt(2n/m) at every pose; dl std sigma / sqrt(m).
+    assert_allclose(evaluated["predicted_position_rms_mm"], 0.1 * np.sqrt(8 / 12), rtol=1e-9)
+    assert_allclose(evaluated["predicted_std"]["dl3"], 0.1 / np.sqrt(12), rtol=1e-9)
+    assert set(evaluated["predicted_std"]) == {f"d{k}{i}" for k in "lq" for i in range(1, 5)}
+
+
+def test_evaluate_warns_about_an_unidentifiable_plan(tmp_path):
+    plan = tmp_path / "plan.csv"
+    plan.write_text("q1_deg,q2_deg,q3_deg,q4_deg\n" + "10,20,30,40\n" * 6)
+    result = _run("evaluate", "--plan", str(plan))
+    assert result.returncode == 0
+    assert "cannot identify every parameter" in result.stderr
+    assert "nan" not in result.stdout.lower()
