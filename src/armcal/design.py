@@ -284,18 +284,37 @@ def _criterion_value_and_gradient(
     return value, _q_from_theta_gradient(_theta_gradient(arm, columns, phi))
 
 
+def _region_constraints(arm: PlanarArm, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Region constraint values ``g (..., m, k)`` (>= 0 inside) and ``dg/dq (..., m, k, n)``."""
+    unit = np.exp(1j * link_angles(q))
+    tip = np.sum(arm.link_lengths * unit, axis=-1)
+    g, dg = arm.region.constraints(np.stack([tip.real, tip.imag], axis=-1))  # dg (..., m, k, 2)
+    d_tip = 1j * arm.link_lengths * unit  # d tip / d theta_j, complex (..., m, n)
+    grad_theta = dg[..., :1] * d_tip.real[..., None, :] + dg[..., 1:] * d_tip.imag[..., None, :]
+    return g, _q_from_theta_gradient(grad_theta)
+
+
 def _region_penalty(arm: PlanarArm, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """``sum min(0, g)^2`` over poses and constraints ``(...)`` and its gradient in ``q``."""
     if arm.region is None:
         return np.zeros(q.shape[:-2]), np.zeros_like(q)
-    unit = np.exp(1j * link_angles(q))
-    tip = np.sum(arm.link_lengths * unit, axis=-1)
-    g, dg = arm.region.constraints(np.stack([tip.real, tip.imag], axis=-1))
-    violation = np.minimum(g, 0.0)  # (..., m, k)
-    d_tip = np.einsum("...k,...kc->...c", 2.0 * violation, dg)  # dP/d(x, y)  (..., m, 2)
-    d_theta_tip = 1j * arm.link_lengths * unit  # d tip / d theta_j (complex)
-    grad_theta = d_tip[..., :1] * d_theta_tip.real + d_tip[..., 1:] * d_theta_tip.imag
-    return np.sum(violation**2, axis=(-2, -1)), _q_from_theta_gradient(grad_theta)
+    g, dg = _region_constraints(arm, q)
+    violation = np.minimum(g, 0.0)
+    grad = np.einsum("...k,...kn->...n", 2.0 * violation, dg)
+    return np.sum(violation**2, axis=(-2, -1)), grad
+
+
+def _to_u(arm: PlanarArm, q: np.ndarray) -> np.ndarray:
+    """Unconstrained variables ``u`` with ``q = c + h sin u`` (``c, h``: middle, half-width)."""
+    lo, hi = arm.joint_limits[:, 0], arm.joint_limits[:, 1]
+    return np.arcsin(np.clip((q - (lo + hi) / 2) / ((hi - lo) / 2), -1.0, 1.0))
+
+
+def _to_q(arm: PlanarArm, u: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Joint angles within the limits and ``dq/du`` for the variables of :func:`_to_u`."""
+    lo, hi = arm.joint_limits[:, 0], arm.joint_limits[:, 1]
+    half = (hi - lo) / 2
+    return (lo + hi) / 2 + half * np.sin(u), half * np.cos(u)
 
 
 # --------------------------------------------------------------------------- optimizer
@@ -372,24 +391,21 @@ def optimize_plan(
     if criterion not in CRITERIA:
         raise ArmcalError(f"unknown criterion {criterion!r}; choose one of {', '.join(CRITERIA)}")
     rng = np.random.default_rng(rng)
-    lo, hi = arm.joint_limits[:, 0], arm.joint_limits[:, 1]
-    center, half = (lo + hi) / 2, (hi - lo) / 2
     q0 = np.stack([random_plan(arm, m, rng) for _ in range(starts)])
     if arm.region is not None:
         q0[:, :, :] = feasible_poses(arm, starts * m, rng).reshape(starts, m, arm.n_joints)
     if initial is not None:
         q0 = np.concatenate([np.asarray(initial, dtype=float).reshape(-1, m, arm.n_joints), q0])
-    u0 = np.arcsin(np.clip((q0 - center) / half, -1.0, 1.0))
 
     def objective(u: np.ndarray, step: int):
-        q = center + half * np.sin(u)
+        q, dq_du = _to_q(arm, u)
         value, grad = _criterion_value_and_gradient(arm, q, criterion)
         penalty, grad_pen = _region_penalty(arm, q)
         weight = _penalty_weight(arm, step / steps)
-        return value - weight * penalty, (grad - weight * grad_pen) * half * np.cos(u)
+        return value - weight * penalty, (grad - weight * grad_pen) * dq_du
 
-    u, _ = _adam_ascent(objective, u0, steps=steps, learning_rate=0.05)
-    q_final = center + half * np.sin(u)
+    u, _ = _adam_ascent(objective, _to_u(arm, q0), steps=steps, learning_rate=0.05)
+    q_final, _ = _to_q(arm, u)
     value, _ = _criterion_value_and_gradient(arm, q_final, criterion)
     penalty, _ = _region_penalty(arm, q_final)
     order = np.argsort(-(value - _penalty_weight(arm, 1.0) * penalty), kind="stable")
@@ -439,18 +455,10 @@ def _polish(arm: PlanarArm, q: np.ndarray, criterion: str) -> np.ndarray:
         return g.ravel() - margin
 
     def region_jacobian(x: np.ndarray) -> np.ndarray:
-        qq = x.reshape(m, n)
-        unit = np.exp(1j * link_angles(qq))
-        tip = np.sum(arm.link_lengths * unit, axis=-1)
-        _, dg = arm.region.constraints(np.stack([tip.real, tip.imag], axis=-1))  # (m, k, 2)
-        d_theta = 1j * arm.link_lengths * unit  # (m, n)
-        grad_theta = (
-            dg[..., :1] * d_theta.real[:, None, :] + dg[..., 1:] * d_theta.imag[:, None, :]
-        )
-        grad_q = _q_from_theta_gradient(grad_theta)  # (m, k, n)
-        k = grad_q.shape[1]
+        _, dg = _region_constraints(arm, x.reshape(m, n))  # (m, k, n): pose i only moves g_i
+        k = dg.shape[1]
         jac = np.zeros((m, k, m, n))
-        jac[np.arange(m), :, np.arange(m), :] = grad_q
+        jac[np.arange(m), :, np.arange(m), :] = dg
         return jac.reshape(m * k, m * n)
 
     result = minimize(
@@ -591,19 +599,16 @@ def _maximize_variance(
     arm: PlanarArm, m_inv: np.ndarray, starts: np.ndarray, *, steps: int = 150
 ) -> np.ndarray:
     """Batched ascent of ``d(x)`` from ``starts (k, n)`` within the limits (near the region)."""
-    lo, hi = arm.joint_limits[:, 0], arm.joint_limits[:, 1]
-    center, half = (lo + hi) / 2, (hi - lo) / 2
-    u0 = np.arcsin(np.clip((starts - center) / half, -1.0, 1.0))
 
     def objective(u: np.ndarray, step: int):
-        q = center + half * np.sin(u)
+        q, dq_du = _to_q(arm, u)
         value, grad = _variance_function(arm, q, m_inv)
         penalty, grad_pen = _region_penalty(arm, q[:, None, :])
         weight = _penalty_weight(arm, step / steps) * 1e3
-        return value - weight * penalty, (grad - weight * grad_pen[:, 0]) * half * np.cos(u)
+        return value - weight * penalty, (grad - weight * grad_pen[:, 0]) * dq_du
 
-    u, _ = _adam_ascent(objective, u0, steps=steps, learning_rate=0.05)
-    return center + half * np.sin(u)
+    u, _ = _adam_ascent(objective, _to_u(arm, starts), steps=steps, learning_rate=0.05)
+    return _to_q(arm, u)[0]
 
 
 def _corner_poses(arm: PlanarArm, rng: np.random.Generator) -> np.ndarray:
