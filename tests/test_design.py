@@ -36,14 +36,17 @@ def designs60(arm60):
 
 @pytest.mark.parametrize("base_offset", [False, True])
 @pytest.mark.parametrize("n", range(2, 9))
-def test_analytic_plans_are_optimal_for_every_m(n, base_offset):
+def test_unconstrained_designs_are_optimal_for_every_m(n, base_offset):
     arm = PlanarArm(np.linspace(300.0, 80.0, n), base_offset=base_offset)
     first = n + 1 if base_offset else n
-    plans = [analytic_plan(arm, m) for m in range(first, 61)]
-    for q in plans:
-        assert np.all(feasible(arm, q))
-        assert d_efficiency(arm, q) == pytest.approx(1.0, abs=1e-9)
-        assert max(abs(v) for v in optimality_sums(arm, q).values()) <= 1e-9
+    for m in range(first, 61):
+        result = design(arm, m, rng=0)
+        assert result.method == "analytic"
+        assert np.all(feasible(arm, result.q))
+        assert result.d_efficiency == pytest.approx(1.0, abs=1e-9)
+        assert float(d_efficiency(arm, result.q)) == pytest.approx(1.0, abs=1e-9)
+        assert max(abs(v) for v in optimality_sums(arm, result.q).values()) <= 1e-9
+        assert result.certificate.certified_d_efficiency == pytest.approx(1.0, abs=1e-9)
 
 
 @pytest.mark.parametrize(("n", "m", "base_offset"), [(2, 2, False), (4, 5, True), (8, 60, False)])

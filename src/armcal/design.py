@@ -25,7 +25,7 @@ from typing import Literal
 
 import numpy as np
 
-from .arm import PlanarArm, link_angles, wrap_angle
+from .arm import PlanarArm, forward_kinematics, link_angles, wrap_angle
 from .criteria import CRITERIA
 from .errors import ArmcalError
 
@@ -124,17 +124,11 @@ def random_plan(
 # --------------------------------------------------------------------------- feasibility
 
 
-def _tips(arm: PlanarArm, q: np.ndarray) -> np.ndarray:
-    """Nominal tip positions ``(..., m, 2)`` (the region is defined in the nominal model)."""
-    tip = np.sum(arm.link_lengths * np.exp(1j * link_angles(q)), axis=-1)
-    return np.stack([tip.real, tip.imag], axis=-1)
-
-
 def feasible(arm: PlanarArm, q: np.ndarray, *, tol: float = 1e-9) -> np.ndarray:
     """Mask ``(..., m)`` of poses inside the joint limits and (if any) the measurement region."""
     ok = np.all(arm.within_limits(q, tol=tol), axis=-1)
     if arm.region is not None:
-        ok &= arm.region.contains(_tips(arm, q), tol=tol)
+        ok &= arm.region.contains(forward_kinematics(arm, q), tol=tol)
     return ok
 
 
@@ -226,7 +220,7 @@ def _placement_margin(arm: PlanarArm, q: np.ndarray) -> np.ndarray:
     lo, hi = arm.joint_limits[:, 0], arm.joint_limits[:, 1]
     margin = np.minimum(q - lo, hi - q).min(axis=-1)
     if arm.region is not None:
-        g, _ = arm.region.constraints(_tips(arm, q))
+        g, _ = arm.region.constraints(forward_kinematics(arm, q))
         margin = np.minimum(margin, g.min(axis=-1))
     return margin
 
@@ -451,7 +445,7 @@ def _polish(arm: PlanarArm, q: np.ndarray, criterion: str) -> np.ndarray:
     margin = 1e-6  # mm inside the region, so that round-off never puts a tip outside
 
     def region_values(x: np.ndarray) -> np.ndarray:
-        g, _ = arm.region.constraints(_tips(arm, x.reshape(m, n)))
+        g, _ = arm.region.constraints(forward_kinematics(arm, x.reshape(m, n)))
         return g.ravel() - margin
 
     def region_jacobian(x: np.ndarray) -> np.ndarray:
@@ -735,7 +729,7 @@ def _max_variance(
     found = _maximize_variance(arm, m_inv, starts, steps=300)
     d_found, _ = _variance_function(arm, found, m_inv)
     if arm.region is not None:  # count iterates that stray outside only a little
-        g, _ = arm.region.constraints(_tips(arm, found[:, None, :]))
+        g, _ = arm.region.constraints(forward_kinematics(arm, found[:, None, :]))
         d_found = np.where(g.min(axis=(-2, -1)) > -1e-3, d_found, -np.inf)
     return float(max(d.max(), d_found.max()))
 
