@@ -431,13 +431,13 @@ def _covariance(arm: PlanarArm, q: np.ndarray, params: np.ndarray) -> np.ndarray
     return inv_scaled / np.outer(norms, norms)
 
 
-def _auto(arm: PlanarArm, q: np.ndarray, xy: np.ndarray, **_: object):
+def _closed_form(arm: PlanarArm, q: np.ndarray, xy: np.ndarray, **_: object):
     return solve_closed_form(arm, q, xy), 1, True
 
 
 #: Solvers by name; each returns ``(params, iterations, converged)``.
 METHODS: dict[str, Callable[..., tuple[np.ndarray, int, bool]]] = {
-    "closed-form": _auto,
+    "closed-form": _closed_form,
     "gauss-newton": solve_gauss_newton,
 }
 
