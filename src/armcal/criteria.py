@@ -27,8 +27,14 @@ import numpy as np
 
 from .arm import PlanarArm, jacobian, link_angles
 
+#: Relative singular-value threshold of the column-scaled Jacobian below which a
+#: direction in parameter space counts as not identifiable.  A plan that close
+#: to singular would give standard errors more than 1e10 times the best-case ones.
+RANK_RTOL = 1e-10
+
 __all__ = [
     "CRITERIA",
+    "RANK_RTOL",
     "Criterion",
     "DStar",
     "PlanQuality",
@@ -38,14 +44,16 @@ __all__ = [
     "efficiencies",
     "evaluate_plan",
     "format_quality",
-    "hadamard_scale",
     "information_matrix",
+    "inverse_information",
     "observability_indices",
     "optimality_sums",
     "position_accuracy",
     "predicted_std",
     "quality_to_dict",
+    "scaled_columns",
     "scaled_information",
+    "weighted_information",
 ]
 
 
@@ -67,16 +75,46 @@ def information_matrix(arm: PlanarArm, q: np.ndarray) -> np.ndarray:
     return np.einsum("...mki,...mkj->...ij", jac, jac)
 
 
-def hadamard_scale(arm: PlanarArm) -> np.ndarray:
-    """``sqrt(diag(F_opt) / m)``, shape ``(p,)``: ``(l_i, 1, [1, 1])`` in the paper's order."""
-    return np.concatenate([arm.link_lengths, np.ones(arm.n_params - arm.n_joints)])
+def scaled_columns(arm: PlanarArm, q: np.ndarray) -> np.ndarray:
+    """Hadamard-scaled Jacobian columns ``(..., m, p)`` in the paper's order, as complex numbers.
+
+    Row x of the real Jacobian is the real part, row y the imaginary part;
+    column ``dtheta_k`` (``i l_k e^{i theta_k}``) is divided by ``l_k``.
+    """
+    unit = np.exp(1j * link_angles(q))
+    cols = [1j * unit, unit]
+    if arm.base_offset:
+        cols.append(np.broadcast_to(np.array([1.0, 1j]), (*np.shape(q)[:-1], 2)))
+    return np.concatenate(cols, axis=-1)
+
+
+def weighted_information(columns: np.ndarray, weights: np.ndarray) -> np.ndarray:
+    """``sum_i w_i J_i^T J_i`` ``(..., p, p)`` from complex columns and weights ``(..., m)``."""
+    return np.einsum("...m,...ma,...mb->...ab", weights, columns.conj(), columns).real
 
 
 def scaled_information(arm: PlanarArm, q: np.ndarray) -> np.ndarray:
     """Hadamard-normalized information ``Fs = D F D`` ``(..., p, p)`` with unit diagonal."""
-    m = np.shape(q)[-2]
-    s = hadamard_scale(arm)
-    return information_matrix(arm, q) / (m * np.outer(s, s))
+    q = np.asarray(q, dtype=float)
+    return weighted_information(scaled_columns(arm, q), np.full(q.shape[:-1], 1 / q.shape[-2]))
+
+
+def inverse_information(
+    arm: PlanarArm, q: np.ndarray, params: np.ndarray | None = None
+) -> np.ndarray | None:
+    """``(J^T J)^-1`` ``(p, p)`` in the user parametrization (mm, rad), or None if singular.
+
+    Computed from the SVD of the column-scaled Jacobian at ``params`` (nominal
+    when omitted); singular means a singular value below ``RANK_RTOL`` times the
+    largest, the same test as :func:`armcal.identify.identifiability`.
+    """
+    jac = jacobian(arm, q, params).reshape(-1, arm.n_params)
+    norms = np.linalg.norm(jac, axis=0)
+    norms[norms == 0] = 1.0
+    _, s, vt = np.linalg.svd(jac / norms, full_matrices=False)
+    if s.size < arm.n_params or s[-1] <= RANK_RTOL * s[0]:
+        return None
+    return ((vt.T / s**2) @ vt) / np.outer(norms, norms)
 
 
 def _logdet(fs: np.ndarray) -> np.ndarray:
@@ -288,12 +326,9 @@ def predicted_std(arm: PlanarArm, q: np.ndarray, sigma: float) -> np.ndarray:
     user parametrization (``dl``, ``dq``, ``[x0, y0]``).  Infinite entries mean
     the plan cannot identify that parameter.
     """
-    jac = jacobian(arm, q).reshape(-1, arm.n_params)
-    norms = np.linalg.norm(jac, axis=0)
-    s = np.linalg.svd(jac / norms, compute_uv=False)
-    if s[-1] <= 1e-12 * s[0]:
+    inv = inverse_information(arm, q)
+    if inv is None:
         return np.full(arm.n_params, np.inf)
-    inv = np.linalg.inv((jac / norms).T @ (jac / norms)) / np.outer(norms, norms)
     return sigma * np.sqrt(np.diag(inv)) * arm.display_scale
 
 

@@ -26,7 +26,13 @@ from typing import Literal
 import numpy as np
 
 from .arm import PlanarArm, forward_kinematics, link_angles, wrap_angle
-from .criteria import CRITERIA
+from .criteria import (
+    CRITERIA,
+    d_efficiency,
+    scaled_columns,
+    scaled_information,
+    weighted_information,
+)
 from .errors import ArmcalError
 
 __all__ = [
@@ -228,23 +234,6 @@ def _placement_margin(arm: PlanarArm, q: np.ndarray) -> np.ndarray:
 # --------------------------------------------------------------------------- gradients
 
 
-def _scaled_columns(arm: PlanarArm, q: np.ndarray) -> np.ndarray:
-    """Complex Jacobian columns ``(..., m, p)`` in the paper's order, Hadamard-scaled.
-
-    Row x of the real Jacobian is the real part, row y the imaginary part.
-    """
-    unit = np.exp(1j * link_angles(q))
-    cols = [1j * unit, unit]  # d/d dtheta_k = i l_k e^{i theta_k}, divided by l_k
-    if arm.base_offset:
-        cols.append(np.broadcast_to(np.array([1.0, 1j]), (*q.shape[:-1], 2)))
-    return np.concatenate(cols, axis=-1)
-
-
-def _information(columns: np.ndarray, weights: np.ndarray) -> np.ndarray:
-    """``sum_i w_i J_i^T J_i`` ``(..., p, p)`` from complex columns and weights ``(..., m)``."""
-    return np.einsum("...m,...ma,...mb->...ab", weights, columns.conj(), columns).real
-
-
 def _theta_gradient(arm: PlanarArm, columns: np.ndarray, phi: np.ndarray) -> np.ndarray:
     """``d/dtheta_j <Phi, J_i^T J_i> = 2 <J_i Phi, dJ_i/dtheta_j>`` ``(..., m, n)``.
 
@@ -267,9 +256,9 @@ def _criterion_value_and_gradient(
 ) -> tuple[np.ndarray, np.ndarray]:
     """``log efficiency`` ``(...)`` of plans ``q`` ``(..., m, n)`` and its gradient in ``q``."""
     crit = CRITERIA[criterion]
-    columns = _scaled_columns(arm, q)
+    columns = scaled_columns(arm, q)
     m = q.shape[-2]
-    fs = _information(columns, np.full(q.shape[:-1], 1.0 / m))
+    fs = weighted_information(columns, np.full(q.shape[:-1], 1.0 / m))
     sign, logdet = np.linalg.slogdet(fs)
     singular = (sign <= 0) | (logdet < -40.0 * arm.n_params)
     fs = np.where(singular[..., None, None], fs + 1e-6 * np.eye(arm.n_params), fs)
@@ -472,7 +461,7 @@ def _polish(arm: PlanarArm, q: np.ndarray, criterion: str) -> np.ndarray:
 
 def _blocks(arm: PlanarArm, q: np.ndarray) -> np.ndarray:
     """Real scaled Jacobian blocks ``(k, 2, p)`` of poses ``q`` ``(k, n)``."""
-    columns = _scaled_columns(arm, q)
+    columns = scaled_columns(arm, q)
     return np.stack([columns.real, columns.imag], axis=-2)
 
 
@@ -583,7 +572,7 @@ class Certificate:
 
 def _variance_function(arm: PlanarArm, q: np.ndarray, m_inv: np.ndarray):
     """``d(x) = tr(M^-1 I(x))`` ``(k,)`` of poses ``q`` ``(k, n)`` and its gradient ``(k, n)``."""
-    columns = _scaled_columns(arm, q)[:, None, :]  # one pose per "plan"
+    columns = scaled_columns(arm, q)[:, None, :]  # one pose per "plan"
     value = np.einsum("kma,ab,kmb->k", columns.conj(), m_inv, columns).real
     grad = _q_from_theta_gradient(_theta_gradient(arm, columns, m_inv))[:, 0, :]
     return value, grad
@@ -677,14 +666,14 @@ def certify(
     rng = np.random.default_rng(rng)
     q = np.asarray(q, dtype=float)
     p = arm.n_params
-    if _d_eff_of(arm, q) >= 1.0 - 1e-12:
+    if float(d_efficiency(arm, q)) >= 1.0 - 1e-12:
         # Fs = I: the Hadamard bound is attained, and d(x) = tr(Is(x)) = p at every pose.
         return Certificate(1.0, 1.0, 1.0, float(p), q, np.full(q.shape[0], 1.0 / q.shape[0]))
     pool = np.concatenate([q, _corner_poses(arm, rng), feasible_poses(arm, candidates, rng)])
     weights = np.full(pool.shape[0], 1.0 / pool.shape[0])
     for _ in range(rounds):
         weights = _weights_multiplicative(_blocks(arm, pool), weights, 300)
-        m_inv = np.linalg.inv(_design_information(arm, pool, weights))
+        m_inv = np.linalg.inv(weighted_information(scaled_columns(arm, pool), weights))
         d, _ = _variance_function(arm, pool, m_inv)
         top = pool[np.argsort(-d)[: 4 * p]]
         found = _maximize_variance(arm, m_inv, top)
@@ -696,8 +685,8 @@ def certify(
     weights = _weights_multiplicative(_blocks(arm, pool), weights, 1000)
     support_mask = weights > 1e-6
     support, support_w = pool[support_mask], weights[support_mask] / weights[support_mask].sum()
-    m_star = _design_information(arm, support, support_w)
-    m_plan = _design_information(arm, q, np.full(q.shape[0], 1.0 / q.shape[0]))
+    m_star = weighted_information(scaled_columns(arm, support), support_w)
+    m_plan = scaled_information(arm, q)
     max_star = _max_variance(arm, np.linalg.inv(m_star), support, rng, search)
     max_plan = _max_variance(arm, np.linalg.inv(m_plan), q, rng, search)
     logdet_plan = np.linalg.slogdet(m_plan)[1]
@@ -713,10 +702,6 @@ def certify(
         support=support,
         weights=support_w,
     )
-
-
-def _design_information(arm: PlanarArm, q: np.ndarray, weights: np.ndarray) -> np.ndarray:
-    return _information(_scaled_columns(arm, q), weights)
 
 
 def _max_variance(
@@ -766,11 +751,6 @@ class Design:
     d_efficiency: float
     certificate: Certificate
     notes: tuple[str, ...]
-
-
-def _d_eff_of(arm: PlanarArm, q: np.ndarray) -> float:
-    value, _ = _criterion_value_and_gradient(arm, q, "D")
-    return float(np.exp(value))
 
 
 def design(
@@ -834,7 +814,7 @@ def design(
         if criterion == "D":
             pool = feasible_poses(arm, 4000, rng) if candidates is None else candidates
             polished = exchange_plan(arm, m, pool, start=q, rng=rng)
-            if _d_eff_of(arm, polished) > _d_eff_of(arm, q) * (1 + 1e-12):
+            if float(d_efficiency(arm, polished)) > float(d_efficiency(arm, q)) * (1 + 1e-12):
                 q, used = polished, "optimize+exchange"
     q = np.asarray(q, dtype=float)
     return Design(
@@ -842,7 +822,7 @@ def design(
         q=q,
         criterion=criterion,
         method=used,
-        d_efficiency=_d_eff_of(arm, q),
+        d_efficiency=float(d_efficiency(arm, q)),
         certificate=certify(arm, q, rng=rng),
         notes=tuple(notes),
     )

@@ -29,6 +29,7 @@ from typing import Literal
 import numpy as np
 
 from .arm import PlanarArm, forward_kinematics, jacobian, paper_from_user_matrix, wrap_angle
+from .criteria import RANK_RTOL, inverse_information
 from .errors import ArmcalError, NotIdentifiableError
 
 __all__ = [
@@ -44,11 +45,6 @@ __all__ = [
 ]
 
 Method = Literal["auto", "closed-form", "gauss-newton"]
-
-#: Relative singular-value threshold of the column-scaled Jacobian below which a
-#: direction in parameter space counts as not identifiable.  A plan that close
-#: to singular would give standard errors more than 1e10 times the best-case ones.
-RANK_RTOL = 1e-10
 
 
 @dataclass(frozen=True)
@@ -422,15 +418,6 @@ class Calibration:
         return float(np.max(self.pose_residuals))
 
 
-def _covariance(arm: PlanarArm, q: np.ndarray, params: np.ndarray) -> np.ndarray:
-    """``(J^T J)^-1`` at ``params`` via the SVD of the column-scaled Jacobian."""
-    jac = jacobian(arm, q, params).reshape(-1, arm.n_params)
-    norms = np.linalg.norm(jac, axis=0)
-    _, s, vt = np.linalg.svd(jac / norms, full_matrices=False)
-    inv_scaled = (vt.T / s**2) @ vt
-    return inv_scaled / np.outer(norms, norms)
-
-
 def _closed_form(arm: PlanarArm, q: np.ndarray, xy: np.ndarray, **_: object):
     return solve_closed_form(arm, q, xy), 1, True
 
@@ -518,6 +505,9 @@ def identify(
     if not np.all(np.isfinite(params)):
         raise ArmcalError("the fit overflowed; check that positions are in mm and plausible")
     residuals = xy - forward_kinematics(arm, q, params)
+    covariance = inverse_information(arm, q, params)
+    if covariance is None:  # identifiable at nominal, so only for absurd deviations
+        raise ArmcalError("the Jacobian is singular at the estimate; check the data")
     if given is None:
         sigma_value, source = float(np.sqrt(np.sum(residuals**2) / dof)), "estimated"
     else:
@@ -527,7 +517,7 @@ def identify(
         arm=arm,
         method=method,
         params=params,
-        covariance=sigma_value**2 * _covariance(arm, q, params),
+        covariance=sigma_value**2 * covariance,
         sigma=sigma_value,
         sigma_source=source,
         residuals=residuals,
