@@ -112,8 +112,13 @@ def test_gauss_newton_monte_carlo_matches_reported_std(arm4, paper_truth4, rng):
     q = random_plan(arm4, 20, rng)
     sigma, trials = 0.1, 2000
     xy, closed = _monte_carlo(arm4, q, paper_truth4, sigma, trials, rng)
-    newton = np.array([solve_gauss_newton(arm4, q, xy_k)[0] for xy_k in xy]) * arm4.display_scale
+    params, iterations, converged = solve_gauss_newton(arm4, q, xy)
+    assert converged.all() and iterations.max() <= 8
+    newton = params * arm4.display_scale
     assert_allclose(newton, closed, rtol=0, atol=1e-9)
+    # The batched solve is the per-set solve, set by set.
+    for k in range(0, trials, 400):
+        assert_allclose(params[k], solve_gauss_newton(arm4, q, xy[k])[0], rtol=0, atol=1e-12)
     reported = identify(arm4, q, xy[0], method="gauss-newton", sigma=sigma).std
     # 2000 draws: relative sampling error of a std is 1.6 %, 5 % is a 3-sigma bound.
     assert_allclose(newton.std(axis=0, ddof=1), reported, rtol=0.05, atol=0)

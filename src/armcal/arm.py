@@ -355,14 +355,15 @@ def jacobian(
     arm : PlanarArm
     q : ndarray, shape (m, n)
         Commanded joint angles in rad.
-    params : ndarray, shape (p,), optional
+    params : ndarray, shape (p,) or (..., p), optional
         User deviations (mm, rad) at which to linearize; nominal when omitted.
+        Leading axes broadcast against those of ``q`` (one Jacobian per estimate).
     parametrization : {"user", "paper"}
         Columns ``[dl, dq, (x0, y0)]`` or the paper's ``[dtheta, dl, (x0, y0)]``.
 
     Returns
     -------
-    ndarray, shape (m, 2, p)
+    ndarray, shape (m, 2, p) or (..., m, 2, p)
         ``d(x, y) / d(params)``: mm per mm for lengths and base, mm per rad for angles.
 
     Notes
@@ -381,10 +382,8 @@ def jacobian(
     [[0.0, 0.0, 1.0, 1.0], [2.0, 1.0, 0.0, 0.0]]
     """
     q = _check_q(arm, q)
-    if params is not None and np.ndim(params) != 1:
-        raise ValueError(f"params must have shape ({arm.n_params},), got {np.shape(params)}")
     lengths, unit, _ = _phasors(arm, q, params)
-    d_theta = 1j * lengths * unit  # complex d(tip)/d(dtheta_k), shape (m, n)
+    d_theta = 1j * lengths[..., None, :] * unit  # complex d(tip)/d(dtheta_k), shape (..., m, n)
     cols = [d_theta, unit]
     if parametrization == "user":
         # d/d dq_j = sum over k >= j of d/d dtheta_k: reverse cumulative sum.
@@ -392,6 +391,6 @@ def jacobian(
     elif parametrization != "paper":
         raise ValueError(f"parametrization must be 'user' or 'paper', got {parametrization!r}")
     if arm.base_offset:
-        cols.append(np.broadcast_to(np.array([1.0, 1j]), (*q.shape[:-1], 2)))
+        cols.append(np.broadcast_to(np.array([1.0, 1j]), (*unit.shape[:-1], 2)))
     jc = np.concatenate(cols, axis=-1)
     return np.stack([jc.real, jc.imag], axis=-2)

@@ -46,6 +46,7 @@ __all__ = [
     "format_quality",
     "information_matrix",
     "inverse_information",
+    "inverse_information_batch",
     "observability_indices",
     "optimality_sums",
     "position_accuracy",
@@ -99,6 +100,40 @@ def scaled_information(arm: PlanarArm, q: np.ndarray) -> np.ndarray:
     return weighted_information(scaled_columns(arm, q), np.full(q.shape[:-1], 1 / q.shape[-2]))
 
 
+def inverse_information_batch(
+    arm: PlanarArm, q: np.ndarray, params: np.ndarray | None = None
+) -> tuple[np.ndarray, np.ndarray]:
+    """``(J^T J)^-1`` in the user parametrization for a stack of plans, with an identifiable mask.
+
+    Parameters
+    ----------
+    arm : PlanarArm
+    q : ndarray, shape (..., m, n)
+        Plans (rad); leading axes batch over plans.
+    params : ndarray, shape (p,) or (..., p), optional
+        Deviations at which to linearize (nominal when omitted).
+
+    Returns
+    -------
+    inverse : ndarray, shape (..., p, p)
+        ``(J^T J)^-1`` (mm, rad); rows of singular plans are ``inf``.
+    identifiable : ndarray of bool, shape (...)
+        False where a singular value of the column-scaled Jacobian is below
+        ``RANK_RTOL`` times the largest -- the test of
+        :func:`armcal.identify.identifiability`.
+    """
+    jac = jacobian(arm, q, params)
+    jac = jac.reshape(*jac.shape[:-3], -1, arm.n_params)
+    norms = np.linalg.norm(jac, axis=-2)
+    norms[norms == 0] = 1.0
+    _, s, vt = np.linalg.svd(jac / norms[..., None, :], full_matrices=False)
+    ok = (s.shape[-1] == arm.n_params) & (s[..., -1] > RANK_RTOL * s[..., 0])
+    safe = np.where(ok[..., None], s, 1.0)
+    inverse = np.einsum("...ki,...k,...kj->...ij", vt, 1 / safe**2, vt)
+    inverse /= norms[..., :, None] * norms[..., None, :]
+    return np.where(ok[..., None, None], inverse, np.inf), ok
+
+
 def inverse_information(
     arm: PlanarArm, q: np.ndarray, params: np.ndarray | None = None
 ) -> np.ndarray | None:
@@ -108,13 +143,8 @@ def inverse_information(
     when omitted); singular means a singular value below ``RANK_RTOL`` times the
     largest, the same test as :func:`armcal.identify.identifiability`.
     """
-    jac = jacobian(arm, q, params).reshape(-1, arm.n_params)
-    norms = np.linalg.norm(jac, axis=0)
-    norms[norms == 0] = 1.0
-    _, s, vt = np.linalg.svd(jac / norms, full_matrices=False)
-    if s.size < arm.n_params or s[-1] <= RANK_RTOL * s[0]:
-        return None
-    return ((vt.T / s**2) @ vt) / np.outer(norms, norms)
+    inverse, ok = inverse_information_batch(arm, q, params)
+    return inverse if bool(ok) else None
 
 
 def _logdet(fs: np.ndarray) -> np.ndarray:
@@ -319,17 +349,30 @@ def observability_indices(arm: PlanarArm, q: np.ndarray) -> dict[str, np.ndarray
         }
 
 
-def predicted_std(arm: PlanarArm, q: np.ndarray, sigma: float) -> np.ndarray:
-    """Predicted standard errors ``(p,)`` of the user parameters in display units (mm, deg).
+def predicted_std(
+    arm: PlanarArm, q: np.ndarray, sigma: float, params: np.ndarray | None = None
+) -> np.ndarray:
+    """Predicted standard errors of the user parameters in display units (mm, deg).
 
-    ``sqrt(diag(sigma^2 (J^T J)^-1))`` at the nominal parameters, ``J`` in the
-    user parametrization (``dl``, ``dq``, ``[x0, y0]``).  Infinite entries mean
-    the plan cannot identify that parameter.
+    Parameters
+    ----------
+    arm : PlanarArm
+    q : ndarray, shape (..., m, n)
+        Plans (rad); leading axes batch over plans.
+    sigma : float
+        Measurement noise (1 std, mm).
+    params : ndarray, shape (p,), optional
+        Deviations at which to linearize (nominal when omitted).
+
+    Returns
+    -------
+    ndarray, shape (..., p)
+        ``sqrt(diag(sigma^2 (J^T J)^-1))``, ``J`` in the user parametrization
+        (``dl``, ``dq``, ``[x0, y0]``).  Infinite entries mean the plan cannot
+        identify the parameters.
     """
-    inv = inverse_information(arm, q)
-    if inv is None:
-        return np.full(arm.n_params, np.inf)
-    return sigma * np.sqrt(np.diag(inv)) * arm.display_scale
+    inverse, _ = inverse_information_batch(arm, q, params)
+    return sigma * np.sqrt(np.diagonal(inverse, axis1=-2, axis2=-1)) * arm.display_scale
 
 
 @dataclass(frozen=True)
