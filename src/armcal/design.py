@@ -738,8 +738,9 @@ class Design:
         ``exchange``.
     d_efficiency : float
         ``(det F / det F_opt)^(1/p)``: relative to the unconstrained optimum.
-    certificate : Certificate
-        Lower bound relative to the best plan within the constraints.
+    certificate : Certificate or None
+        Lower bound relative to the best plan within the constraints (None when
+        not asked for).
     notes : tuple of str
         Why a method was not used (e.g. the analytic plan breaks the limits).
     """
@@ -749,7 +750,7 @@ class Design:
     criterion: str
     method: str
     d_efficiency: float
-    certificate: Certificate
+    certificate: Certificate | None
     notes: tuple[str, ...]
 
 
@@ -761,6 +762,7 @@ def design(
     method: Method = "auto",
     rng: np.random.Generator | int | None = None,
     candidates: np.ndarray | None = None,
+    with_certificate: bool = True,
 ) -> Design:
     """An optimal ``m``-pose plan within the arm's joint limits and measurement region.
 
@@ -779,6 +781,9 @@ def design(
     candidates : ndarray, shape (N, n), optional
         Poses the robot can really reach, for ``exchange`` (default: random
         feasible poses).
+    with_certificate : bool
+        Certify the plan (:func:`certify`); searches that design many plans
+        skip it.
 
     Returns
     -------
@@ -823,6 +828,6 @@ def design(
         criterion=criterion,
         method=used,
         d_efficiency=float(d_efficiency(arm, q)),
-        certificate=certify(arm, q, rng=rng),
+        certificate=certify(arm, q, rng=rng) if with_certificate else None,
         notes=tuple(notes),
     )

@@ -28,7 +28,14 @@ from typing import Any, Literal
 
 import numpy as np
 
-from .arm import PlanarArm, forward_kinematics, jacobian, paper_from_user_matrix, wrap_angle
+from .arm import (
+    PlanarArm,
+    forward_kinematics,
+    jacobian,
+    link_angles,
+    paper_from_user_matrix,
+    wrap_angle,
+)
 from .criteria import RANK_RTOL, inverse_information
 from .errors import ArmcalError, NotIdentifiableError
 
@@ -295,12 +302,20 @@ def solve_gauss_newton(
     Step 1 starts from ``DeltaPi = 0``; Steps 2-3 evaluate model (1) and solve the
     linearized problem (11) at the current estimate (the Jacobian (7)-(8) uses the
     corrected lengths and angles of Step 4); Step 5 repeats until the step is below
-    the tolerance.  All sets still iterating are solved together: their normal
-    equations ``(D J^T J D) s = D J^T r`` (``D`` scales every column of ``J`` to
-    unit norm, so mm and rad columns weigh alike) are stacked and solved by one
-    batched :func:`numpy.linalg.solve`.  Rounding in the step is corrected by the
-    next iteration, whose residual is evaluated exactly, so the converged
-    estimate is accurate to round-off as long as ``cond(D J^T J D) * eps < 1``.
+    the tolerance.
+
+    Every set still iterating is solved at once.  In phasor form the model is
+    ``x + i y = b + sum_k z_k u_k`` with ``u_k = exp(i theta_k(q))`` fixed by the
+    plan and ``z_k = (l_k + dl_k) exp(i dtheta_k)``, so each Jacobian column is a
+    per-set coefficient times a plan-only column ``v_a`` (``i z_k u_k`` for
+    ``dtheta_k``, ``exp(i dtheta_k) u_k`` for ``dl_k``, ``1`` and ``i`` for the
+    base).  The normal matrix is then ``Re(conj(g_a) g_b W_ab)`` with the plan's
+    ``W = V^H V`` computed once, and ``J^T r = Re(conj(g) V^H r)``: the stacked
+    normal equations of all sets cost a few matrix products and one batched
+    :func:`numpy.linalg.solve`.  Columns are scaled to unit norm first, so mm
+    and rad weigh alike; rounding in a step is corrected by the next iteration,
+    whose residual is exact, so the converged estimate is accurate to round-off
+    whenever ``cond(D J^T J D) * eps < 1``.
 
     Examples
     --------
@@ -315,32 +330,42 @@ def solve_gauss_newton(
     xy = np.asarray(xy, dtype=float)
     batched = xy.ndim == 3
     xy = xy.reshape(-1, q.shape[0], 2)
-    to_paper = paper_from_user_matrix(arm.n_joints, base_offset=arm.base_offset)
-    to_user = np.linalg.inv(to_paper)
-    n = arm.n_joints
-    step_scale = np.ones(arm.n_params)
+    measured = xy[..., 0] + 1j * xy[..., 1]  # (N, m)
+    n, p, sets = arm.n_joints, arm.n_params, xy.shape[0]
+    unit = np.exp(1j * link_angles(q))  # (m, n), plan only
+    columns = [unit, unit] + [np.ones((q.shape[0], 2))] * arm.base_offset
+    basis = np.concatenate(columns, axis=1)  # (m, p): v_a
+    gram = basis.conj().T @ basis  # W
+    step_scale = np.ones(p)
     step_scale[:n] = arm.link_lengths  # rad -> mm at the link tip
     threshold = tol * float(np.sum(arm.link_lengths))
-    paper = np.zeros((xy.shape[0], arm.n_params))
-    iterations = np.zeros(xy.shape[0], dtype=int)
-    active = np.arange(xy.shape[0])
+    paper = np.zeros((sets, p))  # (dtheta, dl, [x0, y0]) of every set
+    iterations = np.zeros(sets, dtype=int)
+    active = np.arange(sets)
     for _ in range(max_iter):
-        user = paper[active] @ to_user.T
-        residual = (xy[active] - forward_kinematics(arm, q, user)).reshape(active.size, -1)
-        jac = jacobian(arm, q, user, parametrization="paper")
-        jac = jac.reshape(active.size, -1, arm.n_params)
-        norms = np.linalg.norm(jac, axis=1)  # (k, p)
-        scaled = jac / norms[:, None, :]
-        normal = np.einsum("kei,kej->kij", scaled, scaled)
-        rhs = np.einsum("kei,ke->ki", scaled, residual)
-        step = np.linalg.solve(normal, rhs[..., None])[..., 0] / norms
+        current = paper[active]
+        rotation = np.exp(1j * current[:, :n])
+        z = (arm.link_lengths + current[:, n : 2 * n]) * rotation
+        coefficients = [1j * z, rotation]
+        base = 0.0
+        if arm.base_offset:
+            base = current[:, 2 * n] + 1j * current[:, 2 * n + 1]
+            coefficients.append(np.broadcast_to(np.array([1.0, 1j]), (active.size, 2)))
+        g = np.concatenate(coefficients, axis=1)  # (k, p)
+        residual = measured[active] - z @ unit.T - np.reshape(base, (-1, 1))
+        normal = (g.conj()[:, :, None] * g[:, None, :] * gram).real
+        rhs = (g.conj() * (residual @ basis.conj())).real
+        norms = np.sqrt(np.einsum("kaa->ka", normal))
+        scaled = normal / (norms[:, :, None] * norms[:, None, :])
+        step = np.linalg.solve(scaled, (rhs / norms)[..., None])[..., 0] / norms
         paper[active] += step
         iterations[active] += 1
         active = active[np.max(np.abs(step * step_scale), axis=1) > threshold]
         if active.size == 0:
             break
-    converged = np.ones(xy.shape[0], dtype=bool)
+    converged = np.ones(sets, dtype=bool)
     converged[active] = False
+    to_user = np.linalg.inv(paper_from_user_matrix(n, base_offset=arm.base_offset))
     params = paper @ to_user.T
     if batched:
         return params, iterations, converged

@@ -1,0 +1,732 @@
+"""Monte Carlo accuracy studies, random-plan studies and the number of poses a target needs.
+
+* :func:`monte_carlo` -- ``N`` noisy measurement sets of one plan, identified
+  together (one batched solve per chunk of trials), against the predicted
+  covariance ``sigma^2 (J^T J)^-1`` (paper eq. 16);
+* :func:`random_plan_study` -- the paper's Figure 1 criteria and the predicted
+  accuracy of many random plans at once;
+* :func:`poses_needed` -- the smallest number of poses whose best plan reaches
+  a target accuracy, by search over ``m``.
+
+Memory is bounded by the chunk size, not by the number of trials: empirical
+moments are merged chunk by chunk (Chan et al.'s pairwise update) and the
+positioning errors go into a fixed histogram.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass
+from typing import Literal
+
+import numpy as np
+
+from .arm import PlanarArm, forward_kinematics, jacobian, link_angles
+from .criteria import dstar, inverse_information_batch, scaled_information
+from .design import design, random_plan
+from .errors import ArmcalError
+from .identify import METHODS, check_identifiable
+from .progress import ProgressCallback
+
+__all__ = [
+    "TARGETS",
+    "MonteCarlo",
+    "PlanStudy",
+    "PosesNeeded",
+    "PositionErrors",
+    "accuracy_metric",
+    "format_monte_carlo",
+    "monte_carlo",
+    "monte_carlo_to_dict",
+    "poses_needed",
+    "position_rms",
+    "random_plan_study",
+]
+
+#: Bytes of working arrays allowed per chunk of trials or plans.
+CHUNK_BYTES = 32 * 2**20
+
+#: Quantiles of the positioning error reported by :class:`PositionErrors`.
+POSITION_QUANTILES = (0.5, 0.95, 0.99)
+
+_HISTOGRAM_BINS = 2000
+
+
+def _chunk_size(per_item_floats: int, total: int) -> int:
+    return int(max(1, min(total, CHUNK_BYTES // (8 * max(per_item_floats, 1)))))
+
+
+# --------------------------------------------------------------------------- moments
+
+
+class _Moments:
+    """Running mean and scatter matrix of row vectors, merged chunk by chunk."""
+
+    def __init__(self, p: int) -> None:
+        self.count = 0
+        self.mean = np.zeros(p)
+        self.scatter = np.zeros((p, p))
+
+    def add(self, rows: np.ndarray) -> None:
+        k = rows.shape[0]
+        mean = rows.mean(axis=0)
+        centred = rows - mean
+        scatter = centred.T @ centred
+        total = self.count + k
+        delta = mean - self.mean
+        self.scatter += scatter + np.outer(delta, delta) * (self.count * k / total)
+        self.mean += delta * (k / total)
+        self.count = total
+
+    def covariance(self) -> np.ndarray:
+        return self.scatter / (self.count - 1)  # callers ensure count >= 2
+
+
+# --------------------------------------------------------------------------- Monte Carlo
+
+
+@dataclass(frozen=True, eq=False)
+class PositionErrors:
+    """Empirical distribution of the tip error of the calibrated model at test poses.
+
+    The error at a test pose ``x`` in a trial is ``|p(x, estimate) - p(x, truth)|``
+    (mm): where the calibrated model puts the tip against where the real arm
+    is.  Every (trial, test pose) pair is one sample.
+
+    Attributes
+    ----------
+    rms_mm : float
+        RMS over all samples; compare with ``predicted_rms_mm``.
+    predicted_rms_mm : float
+        ``sigma sqrt(mean_x tr(J(x) F^-1 J(x)^T))`` at the truth.
+    quantiles_mm : dict of str to float
+        ``"50"``, ``"95"``, ``"99"`` percent quantiles, from a histogram of
+        2000 bins up to 8 times the largest predicted per-pose RMS (so to within
+        0.4 % of that RMS).
+    max_mm : float
+        Largest sample.
+    samples : int
+        Trials times test poses.
+    """
+
+    rms_mm: float
+    predicted_rms_mm: float
+    quantiles_mm: dict[str, float]
+    max_mm: float
+    samples: int
+
+
+def _link_phasors(arm: PlanarArm, params: np.ndarray) -> np.ndarray:
+    """``z_k = (l_k + dl_k) exp(i dtheta_k)`` plus the base ``x0 + i y0`` ``(..., n + 1)``."""
+    n = arm.n_joints
+    z = (arm.link_lengths + params[..., :n]) * np.exp(1j * np.cumsum(params[..., n : 2 * n], -1))
+    base = params[..., 2 * n] + 1j * params[..., 2 * n + 1] if arm.base_offset else 0.0 * z[..., 0]
+    return np.concatenate([z, base[..., None]], axis=-1)
+
+
+class _PositionAccumulator:
+    """Tip errors at test poses, chunk by chunk, into a histogram of fixed bins.
+
+    The tip is linear in the link phasors (``x + i y = b + sum_k z_k u_k(x)``), so
+    the errors of a chunk of estimates at all test poses are one matrix product.
+    """
+
+    def __init__(self, arm: PlanarArm, test_q: np.ndarray, truth: np.ndarray, covariance):
+        self.arm = arm
+        self.truth = _link_phasors(arm, truth)
+        unit = np.exp(1j * link_angles(np.asarray(test_q, dtype=float)))  # (k, n)
+        self.basis = np.concatenate([unit, np.ones((unit.shape[0], 1))], axis=1).T
+        j0 = jacobian(arm, test_q, truth)  # (k, 2, p)
+        per_pose = np.einsum("kip,pr,kir->k", j0, covariance, j0)
+        self.predicted_rms = float(np.sqrt(np.mean(per_pose)))
+        self.edges = np.linspace(0.0, 8.0 * float(np.sqrt(per_pose.max())), _HISTOGRAM_BINS + 1)
+        self.counts = np.zeros(_HISTOGRAM_BINS + 1, dtype=np.int64)  # last: overflow
+        self.sum_squares, self.max, self.samples = 0.0, 0.0, 0
+
+    def add(self, estimates: np.ndarray) -> None:
+        error = np.abs((_link_phasors(self.arm, estimates) - self.truth) @ self.basis).ravel()
+        self.sum_squares += float(error @ error)
+        self.max = max(self.max, float(error.max()))
+        self.samples += error.size
+        # Uniform bins: the index is a division, not a search.
+        bins = np.minimum(error * (_HISTOGRAM_BINS / self.edges[-1]), _HISTOGRAM_BINS)
+        self.counts += np.bincount(bins.astype(np.int64), minlength=self.counts.size)
+
+    def result(self) -> PositionErrors:
+        cumulative = np.cumsum(self.counts[:-1]) / self.samples
+        quantiles = {}
+        for level in POSITION_QUANTILES:
+            # Linear interpolation of the empirical CDF inside the bin that crosses `level`.
+            i = int(np.searchsorted(cumulative, level))
+            if i >= _HISTOGRAM_BINS:
+                value = self.max  # beyond the histogram: only the maximum is known exactly
+            else:
+                below = cumulative[i - 1] if i > 0 else 0.0
+                width = self.edges[i + 1] - self.edges[i]
+                share = (level - below) / (cumulative[i] - below)
+                value = float(self.edges[i] + share * width)
+            quantiles[f"{round(100 * level)}"] = min(value, self.max)
+        return PositionErrors(
+            rms_mm=math.sqrt(self.sum_squares / self.samples),
+            predicted_rms_mm=self.predicted_rms,
+            quantiles_mm=quantiles,
+            max_mm=self.max,
+            samples=self.samples,
+        )
+
+
+@dataclass(frozen=True, eq=False)
+class MonteCarlo:
+    """Empirical against predicted accuracy of a plan over ``trials`` noisy measurement sets.
+
+    Internal units are mm and rad; the properties give display units (mm, deg).
+
+    Attributes
+    ----------
+    arm : PlanarArm
+    q : ndarray, shape (m, n)
+        The plan (rad).
+    truth : ndarray, shape (p,)
+        Deviations of the virtual robot (mm, rad).
+    sigma : float
+        Isotropic noise of each coordinate (mm).
+    method : str
+        Solver (key of :data:`armcal.identify.METHODS`).
+    trials : int
+    mean : ndarray, shape (p,)
+        Mean estimate (mm, rad).
+    covariance : ndarray, shape (p, p)
+        Empirical covariance of the estimates (``ddof=1``; mm, rad).
+    predicted_covariance : ndarray, shape (p, p)
+        ``sigma^2 (J^T J)^-1`` at the truth (mm, rad).
+    position : PositionErrors or None
+        Tip errors of the calibrated model at the test poses (None without test poses).
+    not_converged : int
+        Trials where Gauss-Newton hit its iteration cap (0 for the closed form).
+    seconds : float
+        Wall time of the Monte Carlo itself.
+    """
+
+    arm: PlanarArm
+    q: np.ndarray
+    truth: np.ndarray
+    sigma: float
+    method: str
+    trials: int
+    mean: np.ndarray
+    covariance: np.ndarray
+    predicted_covariance: np.ndarray
+    position: PositionErrors | None
+    not_converged: int
+    seconds: float
+
+    @property
+    def names(self) -> tuple[str, ...]:
+        return self.arm.param_names
+
+    @property
+    def bias(self) -> np.ndarray:
+        """Mean estimate minus truth ``(p,)`` in mm / deg."""
+        return (self.mean - self.truth) * self.arm.display_scale
+
+    @property
+    def std(self) -> np.ndarray:
+        """Empirical std ``(p,)`` in mm / deg."""
+        return np.sqrt(np.diag(self.covariance)) * self.arm.display_scale
+
+    @property
+    def predicted_std(self) -> np.ndarray:
+        """Predicted std ``(p,)`` in mm / deg."""
+        return np.sqrt(np.diag(self.predicted_covariance)) * self.arm.display_scale
+
+    @property
+    def bias_limit(self) -> np.ndarray:
+        """``4 std / sqrt(N)`` ``(p,)``: a bias beyond it is significant at about 1e-4."""
+        return 4.0 * self.predicted_std / math.sqrt(self.trials)
+
+
+def monte_carlo(
+    arm: PlanarArm,
+    q: np.ndarray,
+    truth: np.ndarray,
+    sigma: float,
+    trials: int,
+    *,
+    method: str = "closed-form",
+    rng: np.random.Generator | int | None = None,
+    test_q: np.ndarray | None = None,
+    progress: ProgressCallback | None = None,
+) -> MonteCarlo:
+    """Identify ``trials`` noisy measurement sets of plan ``q`` and compare with theory.
+
+    Parameters
+    ----------
+    arm : PlanarArm
+    q : ndarray, shape (m, n)
+        The plan (rad); must identify every parameter.
+    truth : ndarray, shape (p,)
+        Deviations of the virtual robot (mm, rad).
+    sigma : float
+        Noise std of each measured coordinate (mm), iid normal.
+    trials : int
+        Number of measurement sets.
+    method : {"closed-form", "gauss-newton"}
+        Solver; every chunk of trials is one batched call of it.
+    rng : numpy.random.Generator or int or None
+        Noise source; the same seed gives the same result.
+    test_q : ndarray, shape (k, n), optional
+        Poses where the positioning error of the calibrated model is measured.
+    progress : callable, optional
+        ``progress(done, total)`` after every chunk.
+
+    Returns
+    -------
+    MonteCarlo
+
+    Raises
+    ------
+    NotIdentifiableError
+        If the plan cannot identify every parameter.
+
+    Examples
+    --------
+    >>> from armcal.design import orthogonal_plan
+    >>> arm = PlanarArm([260.0, 180.0])
+    >>> result = monte_carlo(arm, orthogonal_plan(arm, 20), np.zeros(4), 0.1, 20000, rng=1)
+    >>> bool(np.allclose(result.std, result.predicted_std, rtol=0.03))
+    True
+    """
+    q = np.asarray(q, dtype=float)
+    truth = np.asarray(truth, dtype=float)
+    if method not in METHODS:
+        raise ArmcalError(f"unknown method {method!r}; choose one of {', '.join(METHODS)}")
+    if trials < 2:
+        raise ArmcalError(f"a Monte Carlo needs at least 2 trials, got {trials}")
+    if not (sigma > 0 and math.isfinite(sigma)):
+        raise ArmcalError(f"a Monte Carlo needs a positive noise sigma (mm), got {sigma}")
+    check_identifiable(arm, q)
+    rng = np.random.default_rng(rng)
+    inverse, ok = inverse_information_batch(arm, q, truth)
+    if not ok:
+        raise ArmcalError("the plan cannot identify every parameter at the given truth")
+    predicted = sigma**2 * inverse
+    m, p = q.shape[0], arm.n_params
+    k = 0 if test_q is None else np.asarray(test_q).shape[0]
+    # Per trial: noise and positions (2m), Jacobian and products (3 * 2m p), test tips (3k).
+    chunk = _chunk_size(2 * m * (3 * p + 2) + 3 * k, trials)
+    clean = forward_kinematics(arm, q, truth)
+    moments = _Moments(p)
+    positions = None if test_q is None else _PositionAccumulator(arm, test_q, truth, predicted)
+    not_converged = 0
+    start = time.perf_counter()
+    done = 0
+    while done < trials:
+        size = min(chunk, trials - done)
+        xy = clean + sigma * rng.standard_normal((size, m, 2))
+        estimates, _, converged = METHODS[method](arm, q, xy)
+        not_converged += int(np.size(converged) - np.count_nonzero(converged))
+        moments.add(estimates - truth)  # deviations from the truth keep round-off small
+        if positions is not None:
+            positions.add(estimates)
+        done += size
+        if progress is not None:
+            progress(done, trials)
+    seconds = time.perf_counter() - start
+    return MonteCarlo(
+        arm=arm,
+        q=q,
+        truth=truth,
+        sigma=float(sigma),
+        method=method,
+        trials=int(trials),
+        mean=truth + moments.mean,
+        covariance=moments.covariance(),
+        predicted_covariance=predicted,
+        position=None if positions is None else positions.result(),
+        not_converged=not_converged,
+        seconds=seconds,
+    )
+
+
+def format_monte_carlo(result: MonteCarlo) -> str:
+    """Human-readable table of :func:`monte_carlo`: empirical vs predicted std and bias."""
+    arm = result.arm
+    lines = [
+        f"Monte Carlo: {result.trials} trials of {result.q.shape[0]} poses of {arm.name}, "
+        f"sigma {result.sigma:g} mm, {result.method} ({result.seconds:.2f} s)",
+        "",
+        f"{'parameter':<10}{'truth':>10}{'bias':>11}{'empirical std':>15}{'predicted std':>15}"
+        f"{'ratio':>8}  unit",
+    ]
+    truth = result.truth * arm.display_scale
+    for name, unit, t, b, s, ps in zip(
+        arm.param_names,
+        arm.param_units,
+        truth,
+        result.bias,
+        result.std,
+        result.predicted_std,
+        strict=True,
+    ):
+        lines.append(f"{name:<10}{t:>10.4f}{b:>11.2e}{s:>15.5f}{ps:>15.5f}{s / ps:>8.3f}  {unit}")
+    flagged = [
+        name
+        for name, b, limit in zip(arm.param_names, result.bias, result.bias_limit, strict=True)
+        if abs(b) > limit
+    ]
+    lines += [
+        "",
+        "bias within 4 std/sqrt(N) for every parameter"
+        if not flagged
+        else f"bias beyond 4 std/sqrt(N): {', '.join(flagged)}",
+    ]
+    if result.position is not None:
+        pos = result.position
+        quantiles = ", ".join(f"{key} % {value:.4g}" for key, value in pos.quantiles_mm.items())
+        lines.append(
+            f"tip error of the calibrated model at test poses: RMS {pos.rms_mm:.4g} mm "
+            f"(predicted {pos.predicted_rms_mm:.4g}); quantiles {quantiles}; "
+            f"max {pos.max_mm:.4g} mm"
+        )
+    if result.not_converged:
+        lines.append(f"warning: Gauss-Newton did not converge in {result.not_converged} trials")
+    return "\n".join(lines)
+
+
+def monte_carlo_to_dict(result: MonteCarlo) -> dict:
+    """JSON document of :func:`monte_carlo` (the keys of PRODUCT.md plus details)."""
+    names = result.arm.param_names
+
+    def by_name(values: np.ndarray) -> dict[str, float]:
+        return {name: float(v) for name, v in zip(names, values, strict=True)}
+
+    document: dict = {
+        "trials": result.trials,
+        "poses": int(result.q.shape[0]),
+        "sigma_mm": result.sigma,
+        "method": result.method,
+        "units": dict(zip(names, result.arm.param_units, strict=True)),
+        "truth": by_name(result.truth * result.arm.display_scale),
+        "empirical_mean": by_name(result.mean * result.arm.display_scale),
+        "empirical_std": by_name(result.std),
+        "predicted_std": by_name(result.predicted_std),
+        "bias": by_name(result.bias),
+        "bias_limit": by_name(result.bias_limit),
+        "not_converged": result.not_converged,
+        "seconds": result.seconds,
+    }
+    if result.position is not None:
+        pos = result.position
+        document["position_error_mm"] = {
+            "rms": pos.rms_mm,
+            "predicted_rms": pos.predicted_rms_mm,
+            "quantiles": pos.quantiles_mm,
+            "max": pos.max_mm,
+            "samples": pos.samples,
+        }
+    return document
+
+
+# --------------------------------------------------------------------------- random plans
+
+
+def position_rms(arm: PlanarArm, inverse: np.ndarray, test_q: np.ndarray, sigma: float):
+    """Predicted RMS tip error ``(...)`` after calibration, from ``(J^T J)^-1`` ``(..., p, p)``.
+
+    ``sigma sqrt(tr(F^-1 G))`` with ``G = mean_x J(x)^T J(x)`` over the test poses:
+    the mean over test poses of ``sigma^2 tr(J(x) F^-1 J(x)^T)``.
+    """
+    j0 = jacobian(arm, test_q)  # (k, 2, p), user parametrization like `inverse`
+    gram = np.einsum("kia,kib->ab", j0, j0) / j0.shape[0]
+    return sigma * np.sqrt(np.clip(np.einsum("...ab,ba->...", inverse, gram), 0.0, None))
+
+
+@dataclass(frozen=True, eq=False)
+class PlanStudy:
+    """Criteria and predicted accuracy of many random plans (paper Figure 1).
+
+    Attributes
+    ----------
+    arm : PlanarArm
+    poses : int
+        Poses per plan.
+    sigma : float
+        Noise (mm) for the predicted std.
+    det_d : ndarray, shape (N,)
+        ``det D'``: determinant of the Hadamard-normalized information matrix,
+        ``= d_efficiency ** p`` (1 for an orthogonal plan).
+    det_c : ndarray, shape (N,)
+        ``det C'`` with ``C' = C / m`` (eq. 20 corrected, see :class:`~armcal.criteria.DStar`).
+    abs_det_s : ndarray, shape (N,)
+        ``|det S'|`` with ``S' = S / m``.
+    std : ndarray, shape (N, p)
+        Predicted std of the user parameters (mm, deg); ``inf`` rows for plans that
+        cannot identify the parameters.
+    position_rms : ndarray, shape (N,)
+        Predicted RMS tip error after calibration at the test poses (mm; ``inf``
+        if not identifiable).
+    """
+
+    arm: PlanarArm
+    poses: int
+    sigma: float
+    det_d: np.ndarray
+    det_c: np.ndarray
+    abs_det_s: np.ndarray
+    std: np.ndarray
+    position_rms: np.ndarray
+
+    @property
+    def identifiable(self) -> np.ndarray:
+        return np.all(np.isfinite(self.std), axis=-1)
+
+
+def random_plan_study(
+    arm: PlanarArm,
+    poses: int,
+    plans: int,
+    *,
+    sigma: float,
+    rng: np.random.Generator | int | None = None,
+    test_q: np.ndarray | None = None,
+    progress: ProgressCallback | None = None,
+) -> PlanStudy:
+    """Evaluate ``plans`` random plans of ``poses`` poses (uniform within the joint limits).
+
+    Every plan's criteria and predicted std are computed in batches of plans
+    (one stacked SVD per batch), not one plan at a time.
+
+    Parameters
+    ----------
+    arm : PlanarArm
+    poses : int
+        Poses per plan.
+    plans : int
+        Number of random plans.
+    sigma : float
+        Noise std (mm).
+    rng : numpy.random.Generator or int or None
+    test_q : ndarray, shape (k, n), optional
+        Poses for the positioning error (default: 1000 uniform within the limits).
+    progress : callable, optional
+        ``progress(done, total)`` after every batch.
+
+    Returns
+    -------
+    PlanStudy
+
+    Examples
+    --------
+    >>> study = random_plan_study(PlanarArm([260.0, 180.0, 120.0, 100.0]), 10, 500,
+    ...                           sigma=0.1, rng=0)
+    >>> bool(np.all(study.det_d < 1)), bool(np.all(study.det_c < 1))
+    (True, True)
+    """
+    rng = np.random.default_rng(rng)
+    test_q = random_plan(arm, 1000, rng) if test_q is None else np.asarray(test_q, dtype=float)
+    p = arm.n_params
+    chunk = _chunk_size(2 * poses * p * 4, plans)
+    parts: dict[str, list[np.ndarray]] = {key: [] for key in ("d", "c", "s", "std", "pos")}
+    done = 0
+    while done < plans:
+        size = min(chunk, plans - done)
+        q = random_plan(arm, size * poses, rng).reshape(size, poses, arm.n_joints)
+        sign, logdet = np.linalg.slogdet(scaled_information(arm, q))
+        parts["d"].append(np.where(sign > 0, np.exp(logdet), 0.0))
+        star = dstar(arm, q)
+        parts["c"].append(star.det_c)
+        parts["s"].append(star.abs_det_s)
+        inverse, _ = inverse_information_batch(arm, q)
+        diag = np.diagonal(inverse, axis1=-2, axis2=-1)
+        parts["std"].append(sigma * np.sqrt(diag) * arm.display_scale)
+        parts["pos"].append(position_rms(arm, inverse, test_q, sigma))
+        done += size
+        if progress is not None:
+            progress(done, plans)
+    joined = {key: np.concatenate(value) for key, value in parts.items()}
+    return PlanStudy(
+        arm=arm,
+        poses=int(poses),
+        sigma=float(sigma),
+        det_d=joined["d"],
+        det_c=joined["c"],
+        abs_det_s=joined["s"],
+        std=joined["std"],
+        position_rms=joined["pos"],
+    )
+
+
+# --------------------------------------------------------------------------- poses needed
+
+Target = Literal["length_std_mm", "angle_std_deg", "position_rms_mm"]
+
+#: Accuracy targets: what each measures, in which unit.
+TARGETS: dict[str, str] = {
+    "length_std_mm": "largest std of a link-length deviation dl (mm)",
+    "angle_std_deg": "largest std of a joint-offset deviation dq (deg)",
+    "position_rms_mm": "predicted RMS tip error after calibration at the test poses (mm)",
+}
+
+#: Relative slack when comparing an accuracy with its target, so that a plan
+#: reaching it exactly (sigma / sqrt(100) = 0.01) is not rejected by round-off.
+TARGET_RTOL = 1e-9
+
+
+def accuracy_metric(
+    arm: PlanarArm, q: np.ndarray, target: str, sigma: float, test_q: np.ndarray
+) -> float:
+    """Accuracy ``target`` (a key of :data:`TARGETS`) of plan ``q``; inf if it is singular."""
+    if target not in TARGETS:
+        raise ArmcalError(f"unknown target {target!r}; choose one of {', '.join(TARGETS)}")
+    inverse, ok = inverse_information_batch(arm, q)
+    if not ok:
+        return math.inf
+    n = arm.n_joints
+    std = sigma * np.sqrt(np.diag(inverse)) * arm.display_scale
+    if target == "length_std_mm":
+        return float(std[:n].max())
+    if target == "angle_std_deg":
+        return float(std[n : 2 * n].max())
+    return float(position_rms(arm, inverse, test_q, sigma))
+
+
+@dataclass(frozen=True, eq=False)
+class PosesNeeded:
+    """The smallest number of poses whose best plan reaches an accuracy target.
+
+    Attributes
+    ----------
+    target : str
+        Key of :data:`TARGETS`.
+    goal : float
+        The accuracy asked for (mm or deg).
+    sigma : float
+        Measurement noise (mm).
+    poses : int
+        Smallest ``m`` found whose best plan reaches ``goal``.
+    achieved : float
+        The accuracy of that plan.
+    previous : float
+        The accuracy of the best plan with ``poses - 1`` poses (inf when fewer
+        poses cannot identify the parameters).
+    method : str
+        How the plans were made (``analytic`` or the optimizer's name).
+    plan : ndarray, shape (poses, n)
+        The plan that reaches the goal (rad).
+    evaluated : dict of int to float
+        Every ``m`` tried and the accuracy of its best plan.
+    """
+
+    target: str
+    goal: float
+    sigma: float
+    poses: int
+    achieved: float
+    previous: float
+    method: str
+    plan: np.ndarray
+    evaluated: dict[int, float]
+
+
+def poses_needed(
+    arm: PlanarArm,
+    target: str,
+    goal: float,
+    *,
+    sigma: float,
+    rng: np.random.Generator | int | None = None,
+    test_q: np.ndarray | None = None,
+    max_poses: int = 5000,
+) -> PosesNeeded:
+    """The smallest ``m`` whose best plan (:func:`armcal.design.design`) reaches ``goal``.
+
+    Parameters
+    ----------
+    arm : PlanarArm
+    target : {"length_std_mm", "angle_std_deg", "position_rms_mm"}
+        What must reach ``goal`` (see :data:`TARGETS`).
+    goal : float
+        Accuracy asked for, in mm (lengths, position) or deg (joint offsets).
+    sigma : float
+        Measurement noise (mm).
+    rng : numpy.random.Generator or int or None
+        Seeds the plan optimizer and the default test poses.
+    test_q : ndarray, shape (k, n), optional
+        Poses for ``position_rms_mm`` (default: 1000 uniform within the limits).
+    max_poses : int
+        Give up beyond this many poses.
+
+    Returns
+    -------
+    PosesNeeded
+
+    Raises
+    ------
+    ArmcalError
+        If even ``max_poses`` poses do not reach ``goal``.
+
+    Notes
+    -----
+    Accuracy of the best plan falls like ``1 / sqrt(m)`` once ``m`` is a few
+    times ``n`` (the plan's efficiency settles), so each step jumps to
+    ``ceil(m (a_m / goal)^2)`` and the answer is then confirmed by stepping one
+    pose at a time: the result ``m`` reaches the goal and ``m - 1`` does not.
+    For arms without binding limits the best plans are orthogonal and the
+    answers are the closed forms ``ceil((sigma / goal)^2)`` for lengths,
+    ``ceil((sigma / (goal l))^2)`` for a single joint offset and
+    ``ceil(2 n (sigma / goal)^2)`` for the position RMS -- found here by search,
+    not by formula.
+
+    Examples
+    --------
+    >>> arm = PlanarArm([260.0, 180.0, 120.0, 100.0])
+    >>> poses_needed(arm, "length_std_mm", 0.01, sigma=0.1).poses
+    100
+    >>> poses_needed(arm, "position_rms_mm", 0.02, sigma=0.1).poses
+    200
+    """
+    if target not in TARGETS:
+        raise ArmcalError(f"unknown target {target!r}; choose one of {', '.join(TARGETS)}")
+    if not (goal > 0 and math.isfinite(goal)):
+        raise ArmcalError(f"the target accuracy must be a positive number, got {goal}")
+    rng = np.random.default_rng(rng)
+    if test_q is None:
+        test_q = random_plan(arm, 1000, rng)
+    min_poses = -(-arm.n_params // 2)
+    plans: dict[int, tuple[np.ndarray, str, float]] = {}
+
+    def best(m: int) -> float:
+        if m not in plans:
+            made = design(arm, m, rng=rng, with_certificate=False)
+            plans[m] = (made.q, made.method, accuracy_metric(arm, made.q, target, sigma, test_q))
+        return plans[m][2]
+
+    def reaches(m: int) -> bool:
+        return best(m) <= goal * (1 + TARGET_RTOL)
+
+    m = max(min_poses, 2 * arm.n_joints)
+    while not reaches(m):
+        value = best(m)
+        if m >= max_poses:
+            raise ArmcalError(
+                f"{max_poses} poses reach only {value:.4g} against a target of {goal:g}; "
+                "relax the target or measure with a better instrument (smaller --sigma)"
+            )
+        # 1/sqrt(m) law from here; an unidentifiable m (inf) just doubles.
+        jump = m * (value / goal) ** 2 if math.isfinite(value) else 2 * m
+        m = min(max_poses, max(m + 1, math.ceil(jump * (1 - 1e-12))))
+    while m > min_poses and reaches(m - 1):
+        m -= 1
+    q, method, achieved = plans[m]
+    return PosesNeeded(
+        target=target,
+        goal=float(goal),
+        sigma=float(sigma),
+        poses=m,
+        achieved=achieved,
+        previous=best(m - 1) if m > min_poses else math.inf,
+        method=method,
+        plan=q,
+        evaluated={key: value[2] for key, value in sorted(plans.items())},
+    )

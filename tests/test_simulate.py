@@ -1,0 +1,244 @@
+"""Monte Carlo, random-plan studies and poses-needed against theory and closed forms."""
+
+import io
+import itertools
+import math
+import tracemalloc
+
+import numpy as np
+import pytest
+from numpy.testing import assert_allclose
+
+from armcal import NotIdentifiableError, PlanarArm, forward_kinematics, solve_closed_form
+from armcal import simulate as sim
+from armcal.criteria import d_efficiency, position_accuracy, predicted_std
+from armcal.design import orthogonal_plan, random_plan
+from armcal.progress import ProgressBar
+from helpers import random_arm
+
+
+@pytest.mark.parametrize("method", ["closed-form", "gauss-newton"])
+def test_ten_thousand_trials_match_theory(arm4, paper_truth4, method):
+    """Issue 4: paper-4link, orthogonal 20-pose plan, sigma 0.1 mm, 10 000 trials."""
+    q = orthogonal_plan(arm4, 20)
+    result = sim.monte_carlo(arm4, q, paper_truth4, 0.1, 10_000, method=method, rng=7)
+    # Sampling error of a std from 10 000 normal draws is 1/sqrt(20 000) = 0.7 %,
+    # so 3 % is a 4-sigma bound.
+    assert_allclose(result.std, result.predicted_std, rtol=0.03, atol=0)
+    assert np.all(np.abs(result.bias) <= result.bias_limit)
+    # Theory for the orthogonal plan (Table II): dl std = sigma / sqrt(m).
+    assert_allclose(result.predicted_std[:4], 0.1 / np.sqrt(20), rtol=1e-9)
+    assert result.not_converged == 0 and result.trials == 10_000
+
+
+def test_solvers_give_the_same_monte_carlo(arm4, paper_truth4):
+    q = random_plan(arm4, 12, rng=3)
+    closed = sim.monte_carlo(arm4, q, paper_truth4, 0.1, 3000, rng=5)
+    newton = sim.monte_carlo(arm4, q, paper_truth4, 0.1, 3000, method="gauss-newton", rng=5)
+    assert_allclose(newton.mean, closed.mean, rtol=0, atol=1e-10)
+    assert_allclose(newton.covariance, closed.covariance, rtol=1e-7, atol=0)
+
+
+def test_chunking_does_not_change_the_result(arm4, paper_truth4, monkeypatch):
+    """Moments merged chunk by chunk equal the moments of all trials at once."""
+    q = orthogonal_plan(arm4, 20)
+    test_q = random_plan(arm4, 50, rng=1)
+    whole = sim.monte_carlo(arm4, q, paper_truth4, 0.1, 5000, rng=11, test_q=test_q)
+    monkeypatch.setattr(sim, "CHUNK_BYTES", 8 * 2 * 20 * 26 * 37)  # chunks of about 30 trials
+    calls = []
+    chunked = sim.monte_carlo(
+        arm4,
+        q,
+        paper_truth4,
+        0.1,
+        5000,
+        rng=11,
+        test_q=test_q,
+        progress=lambda *a: calls.append(a),
+    )
+    assert len(calls) > 100 and calls[-1] == (5000, 5000)
+    assert all(a[0] < b[0] for a, b in itertools.pairwise(calls))
+    assert_allclose(chunked.mean, whole.mean, rtol=0, atol=1e-13)
+    assert_allclose(chunked.covariance, whole.covariance, rtol=1e-10, atol=0)
+    assert chunked.position.quantiles_mm == whole.position.quantiles_mm
+
+
+def test_the_estimates_are_those_of_the_solver(arm4, paper_truth4):
+    """The Monte Carlo draws noise once per chunk and solves; redo it by hand."""
+    q = random_plan(arm4, 15, rng=2)
+    result = sim.monte_carlo(arm4, q, paper_truth4, 0.2, 400, rng=9)
+    xy = forward_kinematics(arm4, q, paper_truth4) + 0.2 * np.random.default_rng(
+        9
+    ).standard_normal((400, 15, 2))
+    estimates = solve_closed_form(arm4, q, xy)
+    assert_allclose(result.mean, estimates.mean(axis=0), rtol=0, atol=1e-13)
+    assert_allclose(result.covariance, np.cov(estimates.T), rtol=1e-9, atol=0)
+
+
+def test_position_errors_match_prediction_and_exact_quantiles(arm4, paper_truth4):
+    q = orthogonal_plan(arm4, 20)
+    test_q = random_plan(arm4, 200, rng=4)
+    trials = 4000
+    result = sim.monte_carlo(arm4, q, paper_truth4, 0.1, trials, rng=13, test_q=test_q)
+    pos = result.position
+    # sigma sqrt(2n/m) for an orthogonal plan (criteria.position_accuracy); the
+    # prediction here is linearized at the truth, so equal only to 1e-3.
+    assert_allclose(pos.predicted_rms_mm, 0.1 * np.sqrt(8 / 20), rtol=1e-3)
+    assert_allclose(pos.rms_mm, pos.predicted_rms_mm, rtol=0.03)
+    assert pos.samples == trials * 200
+    # Exact quantiles from the same draws.
+    xy = forward_kinematics(arm4, q, paper_truth4) + 0.1 * np.random.default_rng(
+        13
+    ).standard_normal((trials, 20, 2))
+    estimates = solve_closed_form(arm4, q, xy)
+    errors = np.linalg.norm(
+        forward_kinematics(arm4, test_q, estimates)
+        - forward_kinematics(arm4, test_q, paper_truth4),
+        axis=-1,
+    )
+    bin_width = 8 * pos.predicted_rms_mm / 2000 * 1.5  # the bins span 8 x the worst pose's RMS
+    for key, level in (("50", 0.5), ("95", 0.95), ("99", 0.99)):
+        assert abs(pos.quantiles_mm[key] - np.quantile(errors, level)) <= bin_width
+    assert_allclose(pos.max_mm, errors.max(), rtol=1e-10)
+    assert_allclose(pos.rms_mm, np.sqrt(np.mean(errors**2)), rtol=1e-10)
+
+
+def test_memory_stays_flat_for_a_million_trials(arm2):
+    q = orthogonal_plan(arm2, 8)
+    peaks = []
+    for trials in (60_000, 1_000_000):  # both several chunks
+        tracemalloc.start()
+        sim.monte_carlo(arm2, q, np.zeros(4), 0.1, trials, rng=0)
+        peaks.append(tracemalloc.get_traced_memory()[1])
+        tracemalloc.stop()
+    # Both runs hold one chunk of working arrays (about 8 MB); a million stored
+    # estimates alone would add 32 MB.
+    assert peaks[1] < 1.05 * peaks[0]
+
+
+def test_unidentifiable_plan_and_bad_arguments_are_refused(arm4, paper_truth4):
+    with pytest.raises(NotIdentifiableError):
+        sim.monte_carlo(arm4, random_plan(arm4, 3, rng=0), paper_truth4, 0.1, 100)
+    q = orthogonal_plan(arm4, 8)
+    for kwargs in ({"trials": 1}, {"sigma": 0.0}, {"sigma": float("nan")}):
+        args = {"sigma": 0.1, "trials": 100, **kwargs}
+        with pytest.raises(ValueError, match="Monte Carlo"):
+            sim.monte_carlo(arm4, q, paper_truth4, args["sigma"], args["trials"])
+
+
+def test_report_and_json_name_every_parameter(arm4, paper_truth4):
+    result = sim.monte_carlo(arm4, orthogonal_plan(arm4, 8), paper_truth4, 0.1, 500, rng=1)
+    text = sim.format_monte_carlo(result)
+    document = sim.monte_carlo_to_dict(result)
+    for name in arm4.param_names:
+        assert f"\n{name} " in text
+        assert name in document["empirical_std"] and name in document["bias"]
+    assert document["trials"] == 500 and document["seconds"] >= 0
+
+
+# --------------------------------------------------------------------------- random plans
+
+
+def test_random_plan_study_matches_plan_by_plan_evaluation(arm4):
+    test_q = random_plan(arm4, 100, rng=1)
+    study = sim.random_plan_study(arm4, 10, 300, sigma=0.1, rng=21, test_q=test_q)
+    plans = random_plan(arm4, 3000, np.random.default_rng(21)).reshape(300, 10, 4)
+    for k in (0, 17, 299):
+        assert_allclose(study.det_d[k], d_efficiency(arm4, plans[k]) ** 8, rtol=1e-9)
+        assert_allclose(study.std[k], predicted_std(arm4, plans[k], 0.1), rtol=1e-9)
+        rms = position_accuracy(arm4, plans[k], test_q, 0.1).rms_mm
+        assert_allclose(study.position_rms[k], rms, rtol=1e-9)
+    # Hadamard: every random plan is below the orthogonal optimum (1).
+    assert np.all(study.det_d < 1) and np.all(study.det_c < 1)
+    assert study.identifiable.all()
+
+
+def test_det_s_vanishes_for_odd_n_and_optimum_is_one(rng):
+    arm3 = random_arm(3, rng)
+    study = sim.random_plan_study(arm3, 10, 200, sigma=0.1, rng=rng)
+    # S is antisymmetric, so det S = 0 for odd n whatever the plan.
+    assert np.max(study.abs_det_s) < 1e-12
+
+
+# --------------------------------------------------------------------------- poses needed
+
+
+def _ceil(x: float) -> int:
+    return math.ceil(x - 1e-9)  # (sigma / goal)^2 = 100 may round to 100.00000000000001
+
+
+@pytest.mark.parametrize("n", [1, 2, 3, 4, 6])
+@pytest.mark.parametrize("goal", [0.05, 0.02, 0.0123])
+def test_poses_needed_matches_closed_forms_for_unconstrained_arms(n, goal, rng):
+    arm = random_arm(n, rng)
+    sigma = 0.1
+    lengths = arm.link_lengths
+    # Worst joint-offset std of an orthogonal plan times sqrt(m), in deg: dq_1 = dtheta_1 has
+    # sigma/l_1, dq_i = dtheta_i - dtheta_{i-1} has sigma sqrt(1/l_i^2 + 1/l_{i-1}^2).
+    angle = sigma * np.degrees(
+        max([1 / lengths[0], *list(np.hypot(1 / lengths[1:], 1 / lengths[:-1]))])
+    )
+    expected = {
+        "length_std_mm": _ceil((sigma / goal) ** 2),
+        "angle_std_deg": _ceil((angle / goal) ** 2),
+        "position_rms_mm": _ceil(2 * n * (sigma / goal) ** 2),
+    }
+    goals = {"length_std_mm": goal, "angle_std_deg": goal, "position_rms_mm": goal}
+    min_poses = n  # ceil(2n / 2)
+    for target, poses in expected.items():
+        found = sim.poses_needed(arm, target, goals[target], sigma=sigma, rng=0)
+        assert found.poses == max(poses, min_poses), target
+        assert found.method == "analytic"
+        assert found.achieved <= goals[target] * (1 + 1e-9)
+        assert found.previous > goals[target] or found.poses == min_poses
+
+
+def test_poses_needed_paper_examples(arm4):
+    """Issue 4: sigma 0.1 mm -- length std 0.01 mm needs 100 poses, position RMS 0.02 mm 200."""
+    assert sim.poses_needed(arm4, "length_std_mm", 0.01, sigma=0.1).poses == 100
+    assert sim.poses_needed(arm4, "position_rms_mm", 0.02, sigma=0.1).poses == 200
+    # One link, one offset: sigma / (sqrt(m) l).
+    one = PlanarArm([250.0])
+    goal = np.degrees(0.1 / (np.sqrt(30) * 250.0))
+    assert sim.poses_needed(one, "angle_std_deg", goal, sigma=0.1).poses == 30
+
+
+def test_poses_needed_searches_under_joint_limits():
+    """With joints 2-4 limited to +-60 deg no orthogonal plan fits: the answer is found by
+    designing plans, and is more than the unconstrained closed form."""
+    limits = np.radians([[-180, 180], [-60, 60], [-60, 60], [-60, 60]])
+    arm = PlanarArm([260.0, 180.0, 120.0, 100.0], limits)
+    found = sim.poses_needed(arm, "length_std_mm", 0.03, sigma=0.1, rng=1)
+    assert found.method != "analytic"
+    assert found.achieved <= 0.03 < found.previous
+    assert found.poses > _ceil((0.1 / 0.03) ** 2)  # 12 without limits
+    assert np.all(arm.within_limits(found.plan))
+    assert found.poses in found.evaluated and found.poses - 1 in found.evaluated
+
+
+def test_poses_needed_gives_up_with_a_reason(arm4):
+    with pytest.raises(ValueError, match="relax the target"):
+        sim.poses_needed(arm4, "length_std_mm", 1e-4, sigma=0.1, max_poses=500)
+    with pytest.raises(ValueError, match="unknown target"):
+        sim.poses_needed(arm4, "speed", 1.0, sigma=0.1)
+
+
+# --------------------------------------------------------------------------- progress
+
+
+class _Terminal(io.StringIO):
+    def isatty(self) -> bool:
+        return True
+
+
+def test_progress_bar_appears_only_after_the_delay():
+    now = [0.0]
+    stream = _Terminal()
+    bar = ProgressBar("simulate", stream=stream, delay=2.0, clock=lambda: now[0])
+    bar(1, 4)
+    assert stream.getvalue() == ""
+    now[0] = 2.5
+    bar(2, 4)
+    bar(4, 4)
+    text = stream.getvalue()
+    assert "simulate [" in text and " 50%" in text and "100%" in text and text.endswith("\n")
