@@ -164,3 +164,50 @@ def test_evaluate_warns_about_an_unidentifiable_plan(tmp_path):
     assert result.returncode == 0
     assert "cannot identify every parameter" in result.stderr
     assert "nan" not in result.stdout.lower()
+
+
+def test_simulate_json_and_seed(tmp_path, capsys):
+    plan = tmp_path / "plan.csv"
+    assert main(["design", "--poses", "20", "-o", str(plan)]) == 0
+    capsys.readouterr()
+    runs = []
+    for _ in range(2):
+        assert main(["simulate", "--plan", str(plan), "--trials", "3000", "--json"]) == 0
+        runs.append(json.loads(capsys.readouterr().out))
+    document = runs[0]
+    assert {"trials", "empirical_std", "predicted_std", "bias", "seconds"} <= set(document)
+    assert document["trials"] == 3000 and document["seconds"] > 0
+    names = ["dl1", "dl2", "dl3", "dl4", "dq1", "dq2", "dq3", "dq4"]
+    assert list(document["empirical_std"]) == names
+    # Orthogonal 20-pose plan (Table II): sigma / sqrt(m) for every length.
+    for name in names[:4]:
+        assert_allclose(document["predicted_std"][name], 0.1 / np.sqrt(20), rtol=1e-9)
+    empirical = np.array(list(document["empirical_std"].values()))
+    predicted = np.array(list(document["predicted_std"].values()))
+    # 3000 trials: 1.3 % sampling error of a std, 6 % is > 4 sigma.
+    assert_allclose(empirical, predicted, rtol=0.06)
+    assert runs[1]["empirical_std"] == document["empirical_std"]  # same --seed, same numbers
+
+
+def test_simulate_gauss_newton_text_report(tmp_path, capsys):
+    plan = tmp_path / "plan.csv"
+    assert main(["design", "--poses", "12", "--robot", "paper-2link", "-o", str(plan)]) == 0
+    capsys.readouterr()
+    argv = ["simulate", "--robot", "paper-2link", "--plan", str(plan), "--method", "gauss-newton"]
+    assert main([*argv, "--trials", "2000"]) == 0
+    out = capsys.readouterr().out
+    assert "2000 trials of 12 poses of paper-2link" in out and "gauss-newton" in out
+    assert "bias within 4 std/sqrt(N)" in out and "tip error of the calibrated model" in out
+
+
+def test_poses_needed_paper_examples_and_plan_file(tmp_path, capsys):
+    plan = tmp_path / "plan.csv"
+    assert main(["poses-needed", "--length-std-mm", "0.01", "--json", "-o", str(plan)]) == 0
+    document = json.loads(capsys.readouterr().out)
+    assert document["poses"] == 100 and document["achieved"] <= 0.01 * (1 + 1e-9)
+    assert document["with_one_pose_less"] > 0.01
+    assert len(plan.read_text().splitlines()) == 101  # header + 100 poses
+    assert main(["poses-needed", "--position-rms-mm", "0.02", "--json"]) == 0
+    assert json.loads(capsys.readouterr().out)["poses"] == 200
+    assert main(["poses-needed", "--angle-std-deg", "0.01", "--sigma", "0.05"]) == 0
+    assert "poses: the best" in capsys.readouterr().out

@@ -448,6 +448,49 @@ CASES = [
         ("identify", "-o", "cal.json"),
         ("--measurements",),
     ),
+    # ---- simulate and poses-needed
+    case(
+        "simulate-unidentifiable-plan",
+        {"plan.csv": _csv(PLAN_HEADER, PLAN_ROWS[:3])},
+        ("simulate", "--plan", "plan.csv"),
+        ("plan.csv", "cannot identify"),
+    ),
+    case(
+        "simulate-one-trial",
+        {"plan.csv": VALID_PLAN},
+        ("simulate", "--plan", "plan.csv", "--trials", "1"),
+        ("--trials", "at least 2"),
+    ),
+    case(
+        "simulate-missing-plan",
+        {},
+        ("simulate", "--plan", "nothere.csv"),
+        ("nothere.csv",),
+    ),
+    case(
+        "poses-needed-no-target",
+        {},
+        ("poses-needed", "-o", "plan.csv"),
+        ("--length-std-mm", "--angle-std-deg", "--position-rms-mm"),
+    ),
+    case(
+        "poses-needed-two-targets",
+        {},
+        ("poses-needed", "--length-std-mm", "0.01", "--angle-std-deg", "0.01"),
+        ("--angle-std-deg", "not allowed with"),
+    ),
+    case(
+        "poses-needed-negative-target",
+        {},
+        ("poses-needed", "--position-rms-mm", "-0.1"),
+        ("--position-rms-mm",),
+    ),
+    case(
+        "poses-needed-out-of-reach",
+        {},
+        ("poses-needed", "--length-std-mm", "1e-5", "--max-poses", "300", "-o", "plan.csv"),
+        ("300 poses", "relax the target"),
+    ),
 ]
 
 

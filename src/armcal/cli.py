@@ -34,6 +34,14 @@ from .io import (
     read_plan,
     to_json,
 )
+from .progress import ProgressBar
+from .simulate import (
+    TARGETS,
+    format_monte_carlo,
+    monte_carlo,
+    monte_carlo_to_dict,
+    poses_needed,
+)
 
 __all__ = ["main"]
 
@@ -71,6 +79,13 @@ def _poses(text: str) -> int:
         raise argparse.ArgumentTypeError(f"expected a whole number, got {text!r}") from None
     if value < 1:
         raise argparse.ArgumentTypeError(f"expected at least 1 pose, got {value}")
+    return value
+
+
+def _trials(text: str) -> int:
+    value = _poses(text)
+    if value < 2:
+        raise argparse.ArgumentTypeError(f"expected at least 2 trials, got {value}")
     return value
 
 
@@ -269,6 +284,85 @@ def _evaluate(args: argparse.Namespace) -> None:
     _emit(args, document, report)
 
 
+def _simulate(args: argparse.Namespace) -> None:
+    spec = load_robot(args.robot)
+    q = read_plan(args.plan, spec.arm)
+    truth = _truth(args, spec)
+    try:
+        result = monte_carlo(
+            spec.arm,
+            q,
+            truth,
+            _sigma_for_simulation(args, spec),
+            args.trials,
+            method=args.method,
+            rng=np.random.default_rng(args.seed),
+            test_q=_test_poses(args, spec),
+            progress=ProgressBar("simulate"),
+        )
+    except NotIdentifiableError as exc:
+        raise NotIdentifiableError(f"{args.plan}: {exc}", exc.combinations) from None
+    if result.not_converged:
+        print(
+            f"armcal: warning: gauss-newton did not converge in {result.not_converged} of "
+            f"{result.trials} trials; their last iterates are included",
+            file=sys.stderr,
+        )
+    _emit(args, monte_carlo_to_dict(result), format_monte_carlo(result))
+
+
+_TARGET_OPTIONS = {
+    "length_std_mm": "--length-std-mm",
+    "angle_std_deg": "--angle-std-deg",
+    "position_rms_mm": "--position-rms-mm",
+}
+
+
+def _poses_needed(args: argparse.Namespace) -> None:
+    spec = load_robot(args.robot)
+    target = next(key for key in TARGETS if getattr(args, key) is not None)
+    sigma = _sigma_for_simulation(args, spec)
+    start = time.perf_counter()
+    found = poses_needed(
+        spec.arm,
+        target,
+        getattr(args, target),
+        sigma=sigma,
+        rng=np.random.default_rng(args.seed),
+        test_q=_test_poses(args, spec),
+        max_poses=args.max_poses,
+    )
+    seconds = time.perf_counter() - start
+    unit = "deg" if target == "angle_std_deg" else "mm"
+    document = {
+        "poses": found.poses,
+        "target": target,
+        "goal": found.goal,
+        "achieved": found.achieved,
+        "with_one_pose_less": None if np.isinf(found.previous) else found.previous,
+        "sigma_mm": sigma,
+        "method": found.method,
+        "evaluated": {str(m): v for m, v in found.evaluated.items() if np.isfinite(v)},
+        "seconds": seconds,
+    }
+    less = (
+        f"{found.poses - 1} poses give {found.previous:.6g} {unit}"
+        if np.isfinite(found.previous)
+        else f"{found.poses - 1} poses cannot identify every parameter"
+    )
+    lines = [
+        f"{found.poses} poses: the best {found.poses}-pose plan of {spec.arm.name} "
+        f"({found.method}) reaches {found.achieved:.6g} {unit} against a target of "
+        f"{found.goal:g} {unit}; {less}",
+        f"({TARGETS[target]}; sigma {sigma:g} mm; {len(found.evaluated)} plan sizes tried "
+        f"in {seconds:.2f} s)",
+    ]
+    if args.output is not None:
+        atomic_write(args.output, format_plan_csv(found.plan))
+        lines.append(f"wrote {args.output}")
+    _emit(args, document, "\n".join(lines))
+
+
 # --------------------------------------------------------------------------- parser
 
 
@@ -353,6 +447,37 @@ def build_parser() -> argparse.ArgumentParser:
     sub.add_argument("--test-poses", metavar="PLAN_CSV", help=test_help)
     _add_common(sub, seed=True)
     sub.set_defaults(run=_evaluate)
+
+    sub = subs.add_parser("simulate", help="Monte Carlo: empirical vs predicted std and bias")
+    sub.add_argument("--plan", required=True, metavar="PLAN_CSV", help="plan CSV (q1_deg..)")
+    sub.add_argument("--truth", metavar="TRUTH_TOML", help="deviations (default: the built-in's)")
+    sub.add_argument("--sigma", type=_positive, metavar="MM", help=sigma_help)
+    sub.add_argument(
+        "--trials", type=_trials, default=10_000, metavar="N", help="trials (default 10000)"
+    )
+    sub.add_argument(
+        "--method",
+        choices=list(METHODS),
+        default="closed-form",
+        help="solver applied to every trial (default closed-form)",
+    )
+    sub.add_argument("--test-poses", metavar="PLAN_CSV", help=test_help)
+    _add_common(sub, seed=True)
+    sub.set_defaults(run=_simulate)
+
+    sub = subs.add_parser("poses-needed", help="the smallest m whose best plan reaches a target")
+    group = sub.add_mutually_exclusive_group(required=True)
+    for key, option in _TARGET_OPTIONS.items():
+        group.add_argument(
+            option, dest=key, type=_positive, metavar="A", help=TARGETS[key] + " to reach"
+        )
+    sub.add_argument("--sigma", type=_positive, metavar="MM", help=sigma_help)
+    sub.add_argument("--test-poses", metavar="PLAN_CSV", help=test_help)
+    sub.add_argument(
+        "--max-poses", type=_poses, default=5000, metavar="M", help="give up beyond (default 5000)"
+    )
+    _add_common(sub, seed=True, output="plan CSV of the plan that reaches the target")
+    sub.set_defaults(run=_poses_needed)
 
     sub = subs.add_parser("demo", help="the whole workflow on a virtual robot")
     sub.add_argument("--poses", type=_poses, default=20, help="number of poses (default 20)")
