@@ -1,4 +1,4 @@
-"""Figures of calibration plans (matplotlib, object-oriented API, Agg only).
+"""Figures of calibration plans and accuracy studies (matplotlib, object-oriented API, Agg only).
 
 Every function builds a :class:`matplotlib.figure.Figure` without touching
 ``pyplot`` or any global state and returns it; :func:`save_figure` renders it
@@ -17,12 +17,12 @@ from matplotlib.colors import Normalize
 from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
 from matplotlib.patches import Circle, Rectangle, Wedge
-from matplotlib.ticker import MaxNLocator
+from matplotlib.ticker import FuncFormatter, MaxNLocator, NullFormatter
 
 from .arm import Annulus, PlanarArm, link_angles
 from .io import atomic_write
 
-__all__ = ["plot_plan", "save_figure"]
+__all__ = ["plot_accuracy_curves", "plot_plan", "plot_random_plans", "save_figure"]
 
 _CMAP = "viridis"
 _REGION_STYLE = {"facecolor": "tab:orange", "edgecolor": "tab:orange", "alpha": 0.18, "lw": 1.0}
@@ -179,6 +179,115 @@ def plot_plan(arm: PlanarArm, q: np.ndarray, *, title: str | None = None) -> Fig
     ]
     fig.legend(handles=handles, loc="outside lower center", ncols=len(handles), frameon=False)
     fig.suptitle(title if title is not None else f"{arm.name}: {m} poses")
+    return fig
+
+
+def plot_random_plans(
+    det_d: np.ndarray,
+    det_c: np.ndarray,
+    abs_det_s: np.ndarray,
+    *,
+    poses: int,
+    title: str | None = None,
+) -> Figure:
+    """Histograms of the paper's Figure 1 criteria over random plans, against the optimum.
+
+    Parameters
+    ----------
+    det_d, det_c, abs_det_s : ndarray, shape (N,)
+        ``det D'``, ``det C'`` and ``|det S'|`` of ``N`` random plans
+        (:class:`armcal.simulate.PlanStudy`).
+    poses : int
+        Poses per plan (for the labels).
+    title : str, optional
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        Three panels; the optimal plan's value (1, 1, 0) is a vertical line.
+    """
+    fig = Figure(figsize=(11, 3.6), layout="constrained")
+    axes = fig.subplots(1, 3)
+    panels = (
+        (det_d, "det(D')  (= D-efficiency$^p$)", 1.0),
+        (det_c, "det(C'),  C' = C / m", 1.0),
+        (abs_det_s, "|det(S')|,  S' = S / m", 0.0),
+    )
+    for ax, (values, label, optimum) in zip(axes, panels, strict=True):
+        top = max(float(np.max(values)), optimum) * 1.02 or 1.0
+        ax.hist(values, bins=60, range=(0.0, top), color="tab:blue", alpha=0.75)
+        ax.axvline(optimum, color="tab:red", lw=2, label=f"optimal plan ({optimum:g})")
+        ax.axvline(float(np.median(values)), color="k", ls="--", lw=1, label="median, random")
+        ax.set_xlabel(label)
+        ax.set_ylabel("random plans")
+        ax.legend(loc="upper center", fontsize=8, frameon=False)
+    fig.suptitle(
+        title
+        if title is not None
+        else f"{det_d.size} random {poses}-pose plans (uniform joint angles) vs the optimum"
+    )
+    return fig
+
+
+def plot_accuracy_curves(curves: dict[str, np.ndarray], *, title: str | None = None) -> Figure:
+    """Accuracy against the number of poses: analytic, simulated optimal and random plans.
+
+    Parameters
+    ----------
+    curves : dict of str to ndarray
+        ``poses`` and, for ``key`` in ``length`` (mm), ``angle`` (deg) and
+        ``position`` (mm): ``analytic_key``, ``simulated_key``,
+        ``random_mean_key`` and ``random_median_key`` (see
+        :class:`armcal.reproduce.Reproduction`).
+    title : str, optional
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        Three log-log panels in the paper's Figure 2 style: curve 1 analytic, x
+        simulated, curve 2 the random-plan average.
+    """
+    fig = Figure(figsize=(12, 4), layout="constrained")
+    axes = fig.subplots(1, 3)
+    poses = curves["poses"]
+    panels = (
+        ("length", "length deviation std (mm)"),
+        ("angle", "worst joint-offset std (deg)"),
+        ("position", "RMS tip error after calibration (mm)"),
+    )
+    for ax, (key, label) in zip(axes, panels, strict=True):
+        ax.plot(poses, curves[f"analytic_{key}"], color="tab:blue", label="1: analytic, optimal")
+        ax.plot(
+            poses,
+            curves[f"simulated_{key}"],
+            "x",
+            color="k",
+            ms=6,
+            label="x: simulated, optimal",
+        )
+        ax.plot(poses, curves[f"random_mean_{key}"], color="tab:red", label="2: random, mean")
+        ax.plot(
+            poses,
+            curves[f"random_median_{key}"],
+            color="tab:red",
+            ls="--",
+            lw=1,
+            label="random, median",
+        )
+        ax.set_xscale("log")
+        ax.set_yscale("log")
+        ticks = [m for m in (2, 3, 4, 6, 10, 20, 30, 50, 100, 200) if poses[0] <= m <= poses[-1]]
+        ax.set_xticks(ticks, labels=[str(m) for m in ticks])
+        ax.xaxis.set_minor_formatter(NullFormatter())
+        ax.yaxis.set_major_formatter(FuncFormatter(lambda v, _: f"{v:g}"))
+        ax.yaxis.set_minor_formatter(FuncFormatter(lambda v, _: f"{v:g}"))
+        ax.tick_params(axis="y", which="minor", labelsize=7)
+        ax.set_xlabel("poses m")
+        ax.set_ylabel(label)
+        ax.grid(True, which="both", alpha=0.3)
+    axes[0].legend(fontsize=8, frameon=False)
+    fig.suptitle(title if title is not None else "Accuracy against the number of poses")
+    fig.get_layout_engine().set(w_pad=0.1)
     return fig
 
 
