@@ -237,8 +237,8 @@ def solve_closed_form(arm: PlanarArm, q: np.ndarray, xy: np.ndarray) -> np.ndarr
 
     Notes
     -----
-    Solves ``min ||A w - y||`` for ``w = (Re z, Im z, x0, y0)`` with
-    :func:`numpy.linalg.lstsq` (SVD), then ``dl_k = |z_k| - l_k``,
+    Solves ``min ||A w - y||`` for ``w = (Re z, Im z, x0, y0)`` with the
+    SVD-based pseudo-inverse of ``A`` (:func:`numpy.linalg.pinv`), then ``dl_k = |z_k| - l_k``,
     ``dtheta_k = arg z_k`` and ``dq_k = wrap(dtheta_k - dtheta_{k-1})``.
     The plan must identify every parameter (:func:`check_identifiable`).
 
@@ -254,9 +254,10 @@ def solve_closed_form(arm: PlanarArm, q: np.ndarray, xy: np.ndarray) -> np.ndarr
     q = np.asarray(q, dtype=float)
     xy = np.asarray(xy, dtype=float)
     batched = xy.ndim == 3
-    rhs = xy.reshape(-1, 2 * q.shape[0]).T  # (2m, N)
-    w, *_ = np.linalg.lstsq(_regressor(arm, q), rhs, rcond=None)
-    w = w.T  # (N, p)
+    # One SVD-based pseudo-inverse of the plan's regressor serves every set: the
+    # solution is the same as lstsq's, and N sets cost one matrix product.
+    pseudo_inverse = np.linalg.pinv(_regressor(arm, q))  # (p, 2m)
+    w = xy.reshape(-1, 2 * q.shape[0]) @ pseudo_inverse.T  # (N, p)
     n = arm.n_joints
     z = w[:, :n] + 1j * w[:, n : 2 * n]
     dtheta = np.angle(z)
@@ -336,6 +337,7 @@ def solve_gauss_newton(
     columns = [unit, unit] + [np.ones((q.shape[0], 2))] * arm.base_offset
     basis = np.concatenate(columns, axis=1)  # (m, p): v_a
     gram = basis.conj().T @ basis  # W
+    column_norms = np.sqrt(np.diagonal(gram).real)
     step_scale = np.ones(p)
     step_scale[:n] = arm.link_lengths  # rad -> mm at the link tip
     threshold = tol * float(np.sum(arm.link_lengths))
@@ -351,13 +353,14 @@ def solve_gauss_newton(
         if arm.base_offset:
             base = current[:, 2 * n] + 1j * current[:, 2 * n + 1]
             coefficients.append(np.broadcast_to(np.array([1.0, 1j]), (active.size, 2)))
-        g = np.concatenate(coefficients, axis=1)  # (k, p)
+        # Column norms |g_a| sqrt(W_aa), folded into g: the scaled normal matrix
+        # has a unit diagonal.
+        norms = np.abs(np.concatenate(coefficients, axis=1)) * column_norms  # (k, p)
+        g = np.concatenate(coefficients, axis=1).conj() / norms  # conj(g) D
         residual = measured[active] - z @ unit.T - np.reshape(base, (-1, 1))
-        normal = (g.conj()[:, :, None] * g[:, None, :] * gram).real
-        rhs = (g.conj() * (residual @ basis.conj())).real
-        norms = np.sqrt(np.einsum("kaa->ka", normal))
-        scaled = normal / (norms[:, :, None] * norms[:, None, :])
-        step = np.linalg.solve(scaled, (rhs / norms)[..., None])[..., 0] / norms
+        scaled = (g[:, :, None] * g.conj()[:, None, :] * gram).real
+        rhs = (g * (residual @ basis.conj())).real
+        step = np.linalg.solve(scaled, rhs[..., None])[..., 0] / norms
         paper[active] += step
         iterations[active] += 1
         active = active[np.max(np.abs(step * step_scale), axis=1) > threshold]
