@@ -6,6 +6,8 @@ The public API (see each module for details):
 * :mod:`armcal.identify` -- :func:`identify` (closed form and Gauss-Newton) and
   the :class:`Calibration` result;
 * :mod:`armcal.design` -- plan constructors;
+* :mod:`armcal.simulate` -- batched Monte Carlo, random-plan studies, poses-needed;
+* :mod:`armcal.reproduce` -- the paper's tables and figures recomputed;
 * :mod:`armcal.io` -- robot, truth, plan, measurement and calibration files.
 
 Importing armcal prints nothing, plots nothing and does not import matplotlib.
@@ -34,6 +36,14 @@ from .identify import (
     solve_gauss_newton,
 )
 from .io import load_robot, load_truth, read_measurements, read_plan
+from .simulate import (
+    MonteCarlo,
+    PlanStudy,
+    PosesNeeded,
+    monte_carlo,
+    poses_needed,
+    random_plan_study,
+)
 
 __all__ = [
     "Annulus",
@@ -41,8 +51,11 @@ __all__ = [
     "Box",
     "Calibration",
     "InputError",
+    "MonteCarlo",
     "NotIdentifiableError",
+    "PlanStudy",
     "PlanarArm",
+    "PosesNeeded",
     "__version__",
     "check_identifiable",
     "format_report",
@@ -53,9 +66,12 @@ __all__ = [
     "link_angles",
     "load_robot",
     "load_truth",
+    "monte_carlo",
     "orthogonal_plan",
     "paper_from_user_matrix",
+    "poses_needed",
     "random_plan",
+    "random_plan_study",
     "read_measurements",
     "read_plan",
     "solve_closed_form",
