@@ -39,6 +39,7 @@ __all__ = [
     "forward_kinematics",
     "jacobian",
     "link_angles",
+    "link_phasors",
     "paper_from_user_matrix",
     "wrap_angle",
 ]
@@ -308,6 +309,24 @@ def _phasors(arm: PlanarArm, q: np.ndarray, params: np.ndarray | None):
     dl, dq, base = _split(arm, params)
     phi = link_angles(q) + link_angles(dq)[..., None, :]
     return arm.link_lengths + dl, np.exp(1j * phi), base
+
+
+def link_phasors(arm: PlanarArm, params: np.ndarray) -> np.ndarray:
+    """The deviated links and base as complex numbers ``(..., n + 1)``.
+
+    ``z_k = (l_k + dl_k) exp(i dtheta_k)`` for every link, then the base
+    ``x0 + i y0`` (0 without a base offset): the tip at joint angles ``q`` is
+    ``base + sum_k z_k exp(i theta_k(q))``, linear in these numbers.
+
+    Examples
+    --------
+    >>> z = link_phasors(PlanarArm([2.0, 1.0]), np.array([0.5, 0.0, np.pi / 2, 0.0]))
+    >>> z.round(12).tolist()
+    [2.5j, 1j, 0j]
+    """
+    dl, dq, base = _split(arm, params)
+    z = (arm.link_lengths + dl) * np.exp(1j * link_angles(dq))
+    return np.concatenate([z, (base[..., 0] + 1j * base[..., 1])[..., None]], axis=-1)
 
 
 def forward_kinematics(

@@ -375,22 +375,23 @@ def _reproduce(args: argparse.Namespace) -> None:
         seed=args.seed,
         progress=ProgressBar("reproduce"),
     )
-    for name in ("table1", "table2", "table3"):
-        atomic_write(folder / f"{name}.csv", table_csv(result.tables[name], TABLE_COLUMNS[name]))
     study = result.figure1
-    save_figure(
-        plot_random_plans(study.det_d, study.det_c, study.abs_det_s, poses=study.poses),
-        folder / "figure1.png",
-    )
-    save_figure(
-        plot_accuracy_curves(
-            result.figure2,
-            title=f"paper-4link, sigma {result.sigma:g} mm: accuracy against the number of poses",
+    title = f"paper-4link, sigma {result.sigma:g} mm: accuracy against the number of poses"
+    tables = result.tables
+    outputs = {
+        **{f"{name}.csv": table_csv(tables[name], cols) for name, cols in TABLE_COLUMNS.items()},
+        "figure1.png": plot_random_plans(
+            study.det_d, study.det_c, study.abs_det_s, poses=study.poses
         ),
-        folder / "figure2.png",
-    )
-    atomic_write(folder / "report.md", format_report_md(result))
-    files = ["table1.csv", "table2.csv", "table3.csv", "figure1.png", "figure2.png", "report.md"]
+        "figure2.png": plot_accuracy_curves(result.figure2, title=title),
+        "report.md": format_report_md(result),
+    }
+    for name, content in outputs.items():
+        if isinstance(content, str):
+            atomic_write(folder / name, content)
+        else:
+            save_figure(content, folder / name)
+    files = list(outputs)
     table3 = result.tables["table3"]
     document = {
         "trials": result.trials,

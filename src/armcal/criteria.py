@@ -54,6 +54,7 @@ __all__ = [
     "quality_to_dict",
     "scaled_columns",
     "scaled_information",
+    "std_from_covariance",
     "weighted_information",
 ]
 
@@ -372,7 +373,16 @@ def predicted_std(
         identify the parameters.
     """
     inverse, _ = inverse_information_batch(arm, q, params)
-    return sigma * np.sqrt(np.diagonal(inverse, axis1=-2, axis2=-1)) * arm.display_scale
+    return std_from_covariance(arm, sigma**2 * inverse)
+
+
+def std_from_covariance(arm: PlanarArm, covariance: np.ndarray) -> np.ndarray:
+    """Standard deviations ``(..., p)`` in display units (mm, deg) of a covariance in mm, rad.
+
+    ``covariance`` has shape ``(..., p, p)`` in the user parametrization; ``inf``
+    entries (singular plans) stay ``inf``.
+    """
+    return np.sqrt(np.diagonal(covariance, axis1=-2, axis2=-1)) * arm.display_scale
 
 
 @dataclass(frozen=True)

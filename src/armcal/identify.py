@@ -355,8 +355,9 @@ def solve_gauss_newton(
             coefficients.append(np.broadcast_to(np.array([1.0, 1j]), (active.size, 2)))
         # Column norms |g_a| sqrt(W_aa), folded into g: the scaled normal matrix
         # has a unit diagonal.
-        norms = np.abs(np.concatenate(coefficients, axis=1)) * column_norms  # (k, p)
-        g = np.concatenate(coefficients, axis=1).conj() / norms  # conj(g) D
+        g = np.concatenate(coefficients, axis=1)  # (k, p)
+        norms = np.abs(g) * column_norms
+        g = g.conj() / norms  # conj(g) D
         residual = measured[active] - z @ unit.T - np.reshape(base, (-1, 1))
         scaled = (g[:, :, None] * g.conj()[:, None, :] * gram).real
         rhs = (g * (residual @ basis.conj())).real

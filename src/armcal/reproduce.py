@@ -27,6 +27,7 @@ from .criteria import (
     inverse_information,
     optimality_sums,
     scaled_information,
+    std_from_covariance,
 )
 from .design import orthogonal_plan, random_plan
 from .io import load_robot
@@ -265,7 +266,7 @@ def _table3(
         inverse = inverse_information(arm, q)
         assert inverse is not None  # an orthogonal plan with 2m >= p identifies everything
         predicted = sigma**2 * inverse
-        analytic = np.sqrt(np.diag(predicted)) * arm.display_scale
+        analytic = std_from_covariance(arm, predicted)
         square = 2 * m == arm.n_params
         for k in range(n):
             note = "exactly determined (2m = p): zero residual, sigma must be known" * square
@@ -487,7 +488,8 @@ def _disagreements(
             f"100 poses give {_fmt(at[100])} mm; 0.001 mm needs {needed.poses} poses "
             f"(armcal poses-needed). The angles quoted for 100 poses do match: "
             + ", ".join(f"{a:.4f}" for a in angles)
-            + " deg (dtheta_k) against 0.002, 0.003, 0.005, 0.006",
+            + " deg (dtheta_k) against "
+            + ", ".join(f"{a:g}" for a in PAPER_100_POSE_ANGLES_DEG),
             "sigma/sqrt(100) = 0.01 mm: the length claim is off by a factor 10 (100 poses "
             "reach 0.01 mm), the angle claim is right",
         )
@@ -548,7 +550,7 @@ def _disagreements(
         )
     )
     arm3, _ = _paper_arm(3)
-    odd = random_plan_study(arm3, _FIGURE1_POSES, 2000, sigma=sigma, rng=rng)
+    odd = dstar(arm3, random_plan(arm3, 2000 * _FIGURE1_POSES, rng).reshape(2000, -1, 3))
     found.append(
         Disagreement(
             "Eq. (20): |det(S')| -> min",

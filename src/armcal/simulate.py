@@ -22,8 +22,14 @@ from typing import Literal
 
 import numpy as np
 
-from .arm import PlanarArm, forward_kinematics, jacobian, link_angles
-from .criteria import dstar, inverse_information_batch, scaled_information
+from .arm import PlanarArm, forward_kinematics, jacobian, link_angles, link_phasors
+from .criteria import (
+    dstar,
+    inverse_information_batch,
+    predicted_std,
+    scaled_information,
+    std_from_covariance,
+)
 from .design import design, random_plan
 from .errors import ArmcalError
 from .identify import METHODS, check_identifiable
@@ -117,14 +123,6 @@ class PositionErrors:
     samples: int
 
 
-def _link_phasors(arm: PlanarArm, params: np.ndarray) -> np.ndarray:
-    """``z_k = (l_k + dl_k) exp(i dtheta_k)`` plus the base ``x0 + i y0`` ``(..., n + 1)``."""
-    n = arm.n_joints
-    z = (arm.link_lengths + params[..., :n]) * np.exp(1j * np.cumsum(params[..., n : 2 * n], -1))
-    base = params[..., 2 * n] + 1j * params[..., 2 * n + 1] if arm.base_offset else 0.0 * z[..., 0]
-    return np.concatenate([z, base[..., None]], axis=-1)
-
-
 class _PositionAccumulator:
     """Tip errors at test poses, chunk by chunk, into a histogram of fixed bins.
 
@@ -134,7 +132,7 @@ class _PositionAccumulator:
 
     def __init__(self, arm: PlanarArm, test_q: np.ndarray, truth: np.ndarray, covariance):
         self.arm = arm
-        self.truth = _link_phasors(arm, truth)
+        self.truth = link_phasors(arm, truth)
         unit = np.exp(1j * link_angles(np.asarray(test_q, dtype=float)))  # (k, n)
         self.basis = np.concatenate([unit, np.ones((unit.shape[0], 1))], axis=1).T
         j0 = jacobian(arm, test_q, truth)  # (k, 2, p)
@@ -145,7 +143,7 @@ class _PositionAccumulator:
         self.sum_squares, self.max, self.samples = 0.0, 0.0, 0
 
     def add(self, estimates: np.ndarray) -> None:
-        error = np.abs((_link_phasors(self.arm, estimates) - self.truth) @ self.basis).ravel()
+        error = np.abs((link_phasors(self.arm, estimates) - self.truth) @ self.basis).ravel()
         self.sum_squares += float(error @ error)
         self.max = max(self.max, float(error.max()))
         self.samples += error.size
@@ -233,12 +231,12 @@ class MonteCarlo:
     @property
     def std(self) -> np.ndarray:
         """Empirical std ``(p,)`` in mm / deg."""
-        return np.sqrt(np.diag(self.covariance)) * self.arm.display_scale
+        return std_from_covariance(self.arm, self.covariance)
 
     @property
     def predicted_std(self) -> np.ndarray:
         """Predicted std ``(p,)`` in mm / deg."""
-        return np.sqrt(np.diag(self.predicted_covariance)) * self.arm.display_scale
+        return std_from_covariance(self.arm, self.predicted_covariance)
 
     @property
     def bias_limit(self) -> np.ndarray:
@@ -538,8 +536,7 @@ def random_plan_study(
         parts["c"].append(star.det_c)
         parts["s"].append(star.abs_det_s)
         inverse, _ = inverse_information_batch(arm, q)
-        diag = np.diagonal(inverse, axis1=-2, axis2=-1)
-        parts["std"].append(sigma * np.sqrt(diag) * arm.display_scale)
+        parts["std"].append(std_from_covariance(arm, sigma**2 * inverse))
         parts["pos"].append(position_rms(arm, inverse, test_q, sigma))
         done += size
         if progress is not None:
@@ -579,16 +576,12 @@ def accuracy_metric(
     """Accuracy ``target`` (a key of :data:`TARGETS`) of plan ``q``; inf if it is singular."""
     if target not in TARGETS:
         raise ArmcalError(f"unknown target {target!r}; choose one of {', '.join(TARGETS)}")
-    inverse, ok = inverse_information_batch(arm, q)
-    if not ok:
-        return math.inf
+    if target == "position_rms_mm":
+        inverse, ok = inverse_information_batch(arm, q)
+        return float(position_rms(arm, inverse, test_q, sigma)) if ok else math.inf
     n = arm.n_joints
-    std = sigma * np.sqrt(np.diag(inverse)) * arm.display_scale
-    if target == "length_std_mm":
-        return float(std[:n].max())
-    if target == "angle_std_deg":
-        return float(std[n : 2 * n].max())
-    return float(position_rms(arm, inverse, test_q, sigma))
+    std = predicted_std(arm, q, sigma)  # inf when the plan is singular
+    return float(std[:n].max() if target == "length_std_mm" else std[n : 2 * n].max())
 
 
 @dataclass(frozen=True, eq=False)
