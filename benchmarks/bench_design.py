@@ -1,4 +1,4 @@
-"""Benchmark: optimal calibration plans from ``armcal.design.design`` vs random plans.
+"""Benchmark: optimal calibration plans from ``armcal.doe.design`` vs random plans.
 
 What it measures
 ----------------
@@ -50,7 +50,7 @@ import scipy.optimize  # noqa: F401  (pre-import: keep its one-off cost out of t
 
 from armcal import PlanarArm
 from armcal.criteria import d_efficiency
-from armcal.design import design, feasible
+from armcal.doe import design, feasible
 
 BATCH = 2000
 FIXED_N = 1000

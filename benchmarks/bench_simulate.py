@@ -41,8 +41,8 @@ import numpy as np
 from scipy.optimize import least_squares
 
 from armcal import forward_kinematics, jacobian, load_robot, paper_from_user_matrix
-from armcal.design import orthogonal_plan
-from armcal.identify import solve_closed_form, solve_gauss_newton
+from armcal.doe import orthogonal_plan
+from armcal.identification import solve_closed_form, solve_gauss_newton
 from armcal.simulate import monte_carlo
 
 

@@ -5,7 +5,7 @@ import pytest
 from numpy.testing import assert_allclose
 
 from armcal import PlanarArm, forward_kinematics, jacobian, paper_from_user_matrix, wrap_angle
-from armcal.design import random_plan
+from armcal.doe import random_plan
 from helpers import random_arm, random_truth
 
 

@@ -16,9 +16,9 @@ from armcal.criteria import (
     optimality_sums,
     position_accuracy,
     predicted_std,
-    quality_to_dict,
 )
-from armcal.design import _criterion_value_and_gradient
+from armcal.doe.optimizer import _criterion_value_and_gradient
+from armcal.report import quality_to_dict
 from helpers import random_arm
 
 

@@ -6,8 +6,7 @@ import pytest
 from armcal import Annulus, ArmcalError, PlanarArm, random_plan
 from armcal.cli import main
 from armcal.criteria import d_efficiency, optimality_sums
-from armcal.design import (
-    _blocks,
+from armcal.doe import (
     analytic_plan,
     certify,
     design,
@@ -16,6 +15,7 @@ from armcal.design import (
     feasible_poses,
     optimize_plan,
 )
+from armcal.doe.exchange import _blocks
 
 PAPER_LENGTHS = [260.0, 180.0, 120.0, 100.0]
 LIMITS_60 = np.radians([[-180, 180], [-60, 60], [-60, 60], [-60, 60]])

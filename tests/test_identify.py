@@ -15,7 +15,8 @@ from armcal import (
     random_plan,
     solve_closed_form,
 )
-from armcal.identify import format_report, solve_gauss_newton
+from armcal.identification import solve_gauss_newton
+from armcal.report import format_calibration as format_report
 from helpers import random_arm, random_truth
 
 SOLVERS = ["closed-form", "gauss-newton"]

@@ -8,15 +8,14 @@ from numpy.testing import assert_allclose
 
 from armcal import Annulus, Box, InputError, forward_kinematics, identify, orthogonal_plan
 from armcal.io import (
-    calibration_to_dict,
     format_measurements_csv,
     format_plan_csv,
     load_robot,
     load_truth,
     read_measurements,
     read_plan,
-    to_json,
 )
+from armcal.report import calibration_to_dict, to_json
 
 
 def test_builtin_robots_carry_the_paper_geometry_and_truth():

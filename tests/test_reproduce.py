@@ -8,7 +8,9 @@ import numpy as np
 import pytest
 
 from armcal.cli import main
-from armcal.reproduce import TABLE_COLUMNS, format_report, reproduce, table_csv
+from armcal.report import format_reproduction as format_report
+from armcal.report import table_csv
+from armcal.reproduction import TABLE_COLUMNS, reproduce
 
 
 @pytest.fixture(scope="module")

@@ -9,10 +9,17 @@ import numpy as np
 import pytest
 from numpy.testing import assert_allclose
 
-from armcal import NotIdentifiableError, PlanarArm, forward_kinematics, solve_closed_form
+from armcal import (
+    NotIdentifiableError,
+    PlanarArm,
+    doe,
+    forward_kinematics,
+    report,
+    solve_closed_form,
+)
 from armcal import simulate as sim
 from armcal.criteria import d_efficiency, position_accuracy, predicted_std
-from armcal.design import orthogonal_plan, random_plan
+from armcal.doe import orthogonal_plan, random_plan
 from armcal.progress import ProgressBar
 from helpers import random_arm
 
@@ -128,8 +135,8 @@ def test_unidentifiable_plan_and_bad_arguments_are_refused(arm4, paper_truth4):
 
 def test_report_and_json_name_every_parameter(arm4, paper_truth4):
     result = sim.monte_carlo(arm4, orthogonal_plan(arm4, 8), paper_truth4, 0.1, 500, rng=1)
-    text = sim.format_monte_carlo(result)
-    document = sim.monte_carlo_to_dict(result)
+    text = report.format_monte_carlo(result)
+    document = report.monte_carlo_to_dict(result)
     for name in arm4.param_names:
         assert f"\n{name} " in text
         assert name in document["empirical_std"] and name in document["bias"]
@@ -186,7 +193,7 @@ def test_poses_needed_matches_closed_forms_for_unconstrained_arms(n, goal, rng):
     goals = {"length_std_mm": goal, "angle_std_deg": goal, "position_rms_mm": goal}
     min_poses = n  # ceil(2n / 2)
     for target, poses in expected.items():
-        found = sim.poses_needed(arm, target, goals[target], sigma=sigma, rng=0)
+        found = doe.poses_needed(arm, target, goals[target], sigma=sigma, rng=0)
         assert found.poses == max(poses, min_poses), target
         assert found.method == "analytic"
         assert found.achieved <= goals[target] * (1 + 1e-9)
@@ -195,12 +202,12 @@ def test_poses_needed_matches_closed_forms_for_unconstrained_arms(n, goal, rng):
 
 def test_poses_needed_paper_examples(arm4):
     """Issue 4: sigma 0.1 mm -- length std 0.01 mm needs 100 poses, position RMS 0.02 mm 200."""
-    assert sim.poses_needed(arm4, "length_std_mm", 0.01, sigma=0.1).poses == 100
-    assert sim.poses_needed(arm4, "position_rms_mm", 0.02, sigma=0.1).poses == 200
+    assert doe.poses_needed(arm4, "length_std_mm", 0.01, sigma=0.1).poses == 100
+    assert doe.poses_needed(arm4, "position_rms_mm", 0.02, sigma=0.1).poses == 200
     # One link, one offset: sigma / (sqrt(m) l).
     one = PlanarArm([250.0])
     goal = np.degrees(0.1 / (np.sqrt(30) * 250.0))
-    assert sim.poses_needed(one, "angle_std_deg", goal, sigma=0.1).poses == 30
+    assert doe.poses_needed(one, "angle_std_deg", goal, sigma=0.1).poses == 30
 
 
 def test_poses_needed_searches_under_joint_limits():
@@ -208,7 +215,7 @@ def test_poses_needed_searches_under_joint_limits():
     designing plans, and is more than the unconstrained closed form."""
     limits = np.radians([[-180, 180], [-60, 60], [-60, 60], [-60, 60]])
     arm = PlanarArm([260.0, 180.0, 120.0, 100.0], limits)
-    found = sim.poses_needed(arm, "length_std_mm", 0.03, sigma=0.1, rng=1)
+    found = doe.poses_needed(arm, "length_std_mm", 0.03, sigma=0.1, rng=1)
     assert found.method != "analytic"
     assert found.achieved <= 0.03 < found.previous
     assert found.poses > _ceil((0.1 / 0.03) ** 2)  # 12 without limits
@@ -218,9 +225,9 @@ def test_poses_needed_searches_under_joint_limits():
 
 def test_poses_needed_gives_up_with_a_reason(arm4):
     with pytest.raises(ValueError, match="relax the target"):
-        sim.poses_needed(arm4, "length_std_mm", 1e-4, sigma=0.1, max_poses=500)
+        doe.poses_needed(arm4, "length_std_mm", 1e-4, sigma=0.1, max_poses=500)
     with pytest.raises(ValueError, match="unknown target"):
-        sim.poses_needed(arm4, "speed", 1.0, sigma=0.1)
+        doe.poses_needed(arm4, "speed", 1.0, sigma=0.1)
 
 
 # --------------------------------------------------------------------------- progress

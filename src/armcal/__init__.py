@@ -1,16 +1,20 @@
 """armcal: design, run and evaluate geometric calibration experiments for planar arms.
 
-The public API (see each module for details):
+The public API, by concern (each module's docstring says more):
 
-* :mod:`armcal.arm` -- :class:`PlanarArm`, forward kinematics, Jacobians;
-* :mod:`armcal.identify` -- :func:`identify` (closed form and Gauss-Newton) and
-  the :class:`Calibration` result;
-* :mod:`armcal.design` -- plan constructors;
-* :mod:`armcal.simulate` -- batched Monte Carlo, random-plan studies, poses-needed;
-* :mod:`armcal.reproduce` -- the paper's tables and figures recomputed;
-* :mod:`armcal.io` -- robot, truth, plan, measurement and calibration files.
+* :mod:`armcal.arm` -- :class:`PlanarArm`, forward kinematics, Jacobians, regions;
+* :mod:`armcal.criteria` -- information matrix, design criteria (:data:`CRITERIA`),
+  identifiability, predicted accuracy, :func:`evaluate_plan`;
+* :mod:`armcal.doe` -- plans: :func:`design`, :func:`certify`, :func:`poses_needed`;
+* :mod:`armcal.identification` -- :func:`identify` and its :class:`Calibration`;
+* :mod:`armcal.simulate` -- :func:`synthesize_measurements`, batched
+  :func:`monte_carlo`, :func:`random_plan_study`;
+* :mod:`armcal.reproduction` -- the paper's tables and figures recomputed;
+* :mod:`armcal.report` -- every result as text and as JSON;
+* :mod:`armcal.io` -- robot, truth, plan and measurement files.
 
-Importing armcal prints nothing, plots nothing and does not import matplotlib.
+Importing armcal prints nothing, plots nothing and imports neither matplotlib
+nor scipy.
 """
 
 from ._version import __version__
@@ -24,41 +28,62 @@ from .arm import (
     paper_from_user_matrix,
     wrap_angle,
 )
-from .design import orthogonal_plan, random_plan
-from .errors import ArmcalError, InputError, NotIdentifiableError
-from .identify import (
-    Calibration,
+from .criteria import (
+    CRITERIA,
+    Identifiability,
+    PlanQuality,
     check_identifiable,
-    format_report,
+    d_efficiency,
+    evaluate_plan,
     identifiability,
-    identify,
-    solve_closed_form,
-    solve_gauss_newton,
+    position_accuracy,
+    predicted_std,
 )
+from .doe import (
+    Certificate,
+    Design,
+    PosesNeeded,
+    certify,
+    design,
+    orthogonal_plan,
+    poses_needed,
+    random_plan,
+)
+from .errors import ArmcalError, InputError, NotIdentifiableError
+from .identification import Calibration, identify, solve_closed_form, solve_gauss_newton
 from .io import load_robot, load_truth, read_measurements, read_plan
+from .report import format_calibration
 from .simulate import (
     MonteCarlo,
     PlanStudy,
-    PosesNeeded,
     monte_carlo,
-    poses_needed,
     random_plan_study,
+    synthesize_measurements,
 )
 
 __all__ = [
+    "CRITERIA",
     "Annulus",
     "ArmcalError",
     "Box",
     "Calibration",
+    "Certificate",
+    "Design",
+    "Identifiability",
     "InputError",
     "MonteCarlo",
     "NotIdentifiableError",
+    "PlanQuality",
     "PlanStudy",
     "PlanarArm",
     "PosesNeeded",
     "__version__",
+    "certify",
     "check_identifiable",
-    "format_report",
+    "d_efficiency",
+    "design",
+    "evaluate_plan",
+    "format_calibration",
     "forward_kinematics",
     "identifiability",
     "identify",
@@ -70,11 +95,14 @@ __all__ = [
     "orthogonal_plan",
     "paper_from_user_matrix",
     "poses_needed",
+    "position_accuracy",
+    "predicted_std",
     "random_plan",
     "random_plan_study",
     "read_measurements",
     "read_plan",
     "solve_closed_form",
     "solve_gauss_newton",
+    "synthesize_measurements",
     "wrap_angle",
 ]

@@ -14,17 +14,15 @@ from collections.abc import Callable, Sequence
 import numpy as np
 
 from ._version import __version__
-from .arm import forward_kinematics
-from .criteria import CRITERIA, evaluate_plan, format_quality, quality_to_dict
-from .design import METHODS as DESIGN_METHODS
-from .design import Design, design, feasible, random_plan
+from .criteria import CRITERIA, evaluate_plan
+from .doe import METHODS as DESIGN_METHODS
+from .doe import TARGETS, design, feasible, poses_needed, random_plan
 from .errors import ArmcalError, NotIdentifiableError
-from .identify import METHODS, Calibration, format_report, identify
+from .identification import METHODS, Calibration, identify
 from .io import (
     DEFAULT_ROBOT,
     RobotSpec,
     atomic_write,
-    calibration_to_dict,
     format_measurements_csv,
     format_plan_csv,
     load_robot,
@@ -32,18 +30,22 @@ from .io import (
     make_folder,
     read_measurements,
     read_plan,
-    to_json,
 )
 from .progress import ProgressBar
-from .reproduce import TABLE_COLUMNS, reproduce, table_csv
-from .reproduce import format_report as format_report_md
-from .simulate import (
-    TARGETS,
+from .report import (
+    calibration_to_dict,
+    design_summary,
+    format_calibration,
     format_monte_carlo,
-    monte_carlo,
+    format_quality,
+    format_reproduction,
     monte_carlo_to_dict,
-    poses_needed,
+    quality_to_dict,
+    table_csv,
+    to_json,
 )
+from .reproduction import TABLE_COLUMNS, reproduce
+from .simulate import monte_carlo, synthesize_measurements
 
 __all__ = ["main"]
 
@@ -120,8 +122,7 @@ def _synthesize(args: argparse.Namespace) -> None:
     q = read_plan(args.plan, spec.arm)
     truth = _truth(args, spec)
     sigma = _sigma_for_simulation(args, spec)
-    rng = np.random.default_rng(args.seed)
-    xy = forward_kinematics(spec.arm, q, truth) + rng.normal(0.0, sigma, size=(q.shape[0], 2))
+    xy = synthesize_measurements(spec.arm, q, truth, sigma, rng=args.seed)
     text = format_measurements_csv(q, xy)
     if args.output is None:
         sys.stdout.write(text)
@@ -164,7 +165,7 @@ def _identify(args: argparse.Namespace) -> None:
     if args.output is not None:
         atomic_write(args.output, to_json(document))
     _warn_unconverged(cal)
-    _emit(args, document, format_report(cal))
+    _emit(args, document, format_calibration(cal))
 
 
 def _demo(args: argparse.Namespace) -> None:
@@ -174,14 +175,14 @@ def _demo(args: argparse.Namespace) -> None:
     sigma = _sigma_for_simulation(args, spec)
     rng = np.random.default_rng(args.seed)
     q = design(arm, args.poses, rng=rng).q
-    xy = forward_kinematics(arm, q, truth) + rng.normal(0.0, sigma, size=(q.shape[0], 2))
+    xy = synthesize_measurements(arm, q, truth, sigma, rng=rng)
     cal = identify(arm, q, xy, sigma=sigma)
     document = calibration_to_dict(cal)
     lines = [
         f"armcal demo on {arm.name}: {args.poses}-pose optimal plan (armcal design), "
         f"virtual robot with the paper's deviations, noise sigma {sigma:g} mm, seed {args.seed}",
         "",
-        format_report(cal, truth=truth),
+        format_calibration(cal, truth=truth),
     ]
     if args.output is not None:
         folder = make_folder(args.output)
@@ -210,29 +211,6 @@ def _quality_report(args: argparse.Namespace, spec: RobotSpec, q: np.ndarray):
     return quality, quality_to_dict(spec.arm, quality), format_quality(spec.arm, quality)
 
 
-def _design_summary(result: Design, seconds: float) -> tuple[dict, list[str]]:
-    cert = result.certificate
-    document = {
-        "criterion": result.criterion,
-        "method": result.method,
-        "certified_d_efficiency": cert.certified_d_efficiency,
-        "plan_only_bound": cert.plan_only_bound,
-        "best_weighted_design_d_efficiency": cert.reference_d_efficiency,
-        "notes": list(result.notes),
-        "seconds": seconds,
-    }
-    lines = [
-        f"design: {result.q.shape[0]} poses, criterion {result.criterion}, method {result.method} "
-        f"({seconds:.2f} s)",
-        *(f"note: {note}" for note in result.notes),
-        f"D-efficiency {result.d_efficiency:.4f} of the unconstrained optimum; certified "
-        f">= {cert.certified_d_efficiency:.4f} of the best plan within the constraints "
-        f"(plan-only bound {cert.plan_only_bound:.4f})",
-        "",
-    ]
-    return document, lines
-
-
 def _design(args: argparse.Namespace) -> None:
     spec = load_robot(args.robot)
     candidates = None if args.candidates is None else read_plan(args.candidates, spec.arm)
@@ -253,7 +231,7 @@ def _design(args: argparse.Namespace) -> None:
     )
     seconds = time.perf_counter() - start
     _, document, report = _quality_report(args, spec, result.q)
-    extra, header = _design_summary(result, seconds)
+    extra, header = design_summary(result, seconds)
     document.update(extra)
     written = []
     if args.output is not None:
@@ -384,7 +362,7 @@ def _reproduce(args: argparse.Namespace) -> None:
             study.det_d, study.det_c, study.abs_det_s, poses=study.poses
         ),
         "figure2.png": plot_accuracy_curves(result.figure2, title=title),
-        "report.md": format_report_md(result),
+        "report.md": format_reproduction(result),
     }
     for name, content in outputs.items():
         if isinstance(content, str):

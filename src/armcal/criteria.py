@@ -20,43 +20,47 @@ and smaller otherwise.
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
 import numpy as np
 
 from .arm import PlanarArm, jacobian, link_angles
-
-#: Relative singular-value threshold of the column-scaled Jacobian below which a
-#: direction in parameter space counts as not identifiable.  A plan that close
-#: to singular would give standard errors more than 1e10 times the best-case ones.
-RANK_RTOL = 1e-10
+from .errors import NotIdentifiableError
 
 __all__ = [
     "CRITERIA",
     "RANK_RTOL",
     "Criterion",
     "DStar",
+    "Identifiability",
     "PlanQuality",
     "PositionAccuracy",
+    "check_identifiable",
     "d_efficiency",
     "dstar",
     "efficiencies",
     "evaluate_plan",
-    "format_quality",
+    "identifiability",
     "information_matrix",
     "inverse_information",
     "inverse_information_batch",
     "observability_indices",
     "optimality_sums",
     "position_accuracy",
+    "position_rms",
     "predicted_std",
-    "quality_to_dict",
     "scaled_columns",
     "scaled_information",
     "std_from_covariance",
     "weighted_information",
 ]
+
+
+#: Relative singular-value threshold of the column-scaled Jacobian below which a
+#: direction in parameter space counts as not identifiable.  A plan that close
+#: to singular would give standard errors more than 1e10 times the best-case ones.
+RANK_RTOL = 1e-10
 
 
 def information_matrix(arm: PlanarArm, q: np.ndarray) -> np.ndarray:
@@ -121,7 +125,7 @@ def inverse_information_batch(
     identifiable : ndarray of bool, shape (...)
         False where a singular value of the column-scaled Jacobian is below
         ``RANK_RTOL`` times the largest -- the test of
-        :func:`armcal.identify.identifiability`.
+        :func:`armcal.criteria.identifiability`.
     """
     jac = jacobian(arm, q, params)
     jac = jac.reshape(*jac.shape[:-3], -1, arm.n_params)
@@ -142,7 +146,7 @@ def inverse_information(
 
     Computed from the SVD of the column-scaled Jacobian at ``params`` (nominal
     when omitted); singular means a singular value below ``RANK_RTOL`` times the
-    largest, the same test as :func:`armcal.identify.identifiability`.
+    largest, the same test as :func:`armcal.criteria.identifiability`.
     """
     inverse, ok = inverse_information_batch(arm, q, params)
     return inverse if bool(ok) else None
@@ -161,7 +165,7 @@ def d_efficiency(arm: PlanarArm, q: np.ndarray) -> np.ndarray:
 
     Examples
     --------
-    >>> from armcal.design import orthogonal_plan
+    >>> from armcal.doe import orthogonal_plan
     >>> arm = PlanarArm([260.0, 180.0, 120.0, 100.0])
     >>> round(float(d_efficiency(arm, orthogonal_plan(arm, 20))), 12)
     1.0
@@ -218,7 +222,7 @@ def optimality_sums(arm: PlanarArm, q: np.ndarray) -> dict[str, float]:
 
     Examples
     --------
-    >>> from armcal.design import orthogonal_plan
+    >>> from armcal.doe import orthogonal_plan
     >>> sums = optimality_sums(PlanarArm([2.0, 1.0]), orthogonal_plan(PlanarArm([2.0, 1.0]), 3))
     >>> sorted(sums), max(abs(v) for v in sums.values()) < 1e-12
     (['cos(q2)', 'sin(q2)'], True)
@@ -235,9 +239,6 @@ def optimality_sums(arm: PlanarArm, q: np.ndarray) -> dict[str, float]:
             out[f"cos({label})"] = float(np.sum(np.cos(angle)))
             out[f"sin({label})"] = float(np.sum(np.sin(angle)))
     return out
-
-
-# --------------------------------------------------------------------------- criteria
 
 
 def _eigvalsh(fs: np.ndarray) -> np.ndarray:
@@ -439,7 +440,163 @@ def position_accuracy(
     )
 
 
-# --------------------------------------------------------------------------- summary
+def position_rms(arm: PlanarArm, inverse: np.ndarray, test_q: np.ndarray, sigma: float):
+    """Predicted RMS tip error ``(...)`` after calibration, from ``(J^T J)^-1`` ``(..., p, p)``.
+
+    ``sigma sqrt(tr(F^-1 G))`` with ``G = mean_x J(x)^T J(x)`` over the test poses:
+    the mean over test poses of ``sigma^2 tr(J(x) F^-1 J(x)^T)``.
+    """
+    j0 = jacobian(arm, test_q)  # (k, 2, p), user parametrization like `inverse`
+    gram = np.einsum("kia,kib->ab", j0, j0) / j0.shape[0]
+    return sigma * np.sqrt(np.clip(np.einsum("...ab,ba->...", inverse, gram), 0.0, None))
+
+
+@dataclass(frozen=True)
+class Identifiability:
+    """Rank analysis of a plan's column-scaled Jacobian.
+
+    Attributes
+    ----------
+    rank : int
+        Numerical rank (singular values above ``RANK_RTOL`` times the largest).
+    n_params : int
+        Number of parameters ``p``.
+    singular_values : ndarray, shape (min(2m, p),)
+        Singular values of the Jacobian with unit-norm columns, descending.
+    unidentifiable : tuple of str
+        Parameters that have a component in the null space (cannot be identified).
+    combinations : tuple of str
+        A basis of the null space written as parameter combinations in display
+        units (mm, deg), each with leading coefficient 1: moving the parameters
+        along one of these changes no measured position to first order.
+    """
+
+    rank: int
+    n_params: int
+    singular_values: np.ndarray
+    unidentifiable: tuple[str, ...]
+    combinations: tuple[str, ...]
+
+    @property
+    def identifiable(self) -> bool:
+        """True when the Jacobian has full column rank."""
+        return self.rank == self.n_params
+
+    @property
+    def condition_number(self) -> float:
+        """Ratio of largest to smallest singular value (inf when rank deficient)."""
+        s = self.singular_values
+        if s.size < self.n_params or s[-1] == 0:
+            return float("inf")
+        return float(s[0] / s[-1])
+
+
+def _combination(vector: np.ndarray, names: Sequence[str]) -> str:
+    # Leading coefficient 1 (the echelon pivot), so combinations read "dl1 - dl2".
+    leading = np.flatnonzero(np.abs(vector) > 1e-6 * np.max(np.abs(vector)))[0]
+    coeffs = vector / vector[leading]
+    terms = []
+    for c, name in zip(coeffs, names, strict=True):
+        if abs(c) < 1e-6:
+            continue
+        mag = "" if abs(abs(c) - 1) < 1e-9 else f"{abs(c):.3g}*"
+        sign = "-" if c < 0 else "+"
+        terms.append(f"{sign} {mag}{name}")
+    text = " ".join(terms)
+    return text[2:] if text.startswith("+ ") else "-" + text[2:]
+
+
+def identifiability(arm: PlanarArm, q: np.ndarray) -> Identifiability:
+    """Rank of the Jacobian of a plan at the nominal parameters, on scaled columns.
+
+    Parameters
+    ----------
+    arm : PlanarArm
+    q : ndarray, shape (m, n)
+        Joint angles of the plan in rad.
+
+    Returns
+    -------
+    Identifiability
+
+    Notes
+    -----
+    Columns mix mm/mm and mm/rad, so each is scaled to unit norm before the SVD;
+    the rank does not depend on the deviations (a rotation of each link's pair of
+    columns maps nominal to actual Jacobian), so the nominal model suffices.
+
+    Examples
+    --------
+    >>> arm = PlanarArm([2.0, 1.0])
+    >>> info = identifiability(arm, np.zeros((3, 2)))   # three identical poses
+    >>> info.rank, info.unidentifiable
+    (2, ('dl1', 'dl2', 'dq1', 'dq2'))
+    """
+    jac = jacobian(arm, q).reshape(-1, arm.n_params)
+    norms = np.linalg.norm(jac, axis=0)
+    norms[norms == 0] = 1.0
+    _, s, vt = np.linalg.svd(jac / norms, full_matrices=True)
+    s_max = s[0] if s.size else 0.0
+    rank = int(np.sum(s > RANK_RTOL * s_max)) if s_max > 0 else 0
+    null = vt[rank:]  # rows span the null space of the scaled Jacobian
+    names = arm.param_names
+    bad = tuple(n for n, w in zip(names, np.linalg.norm(null, axis=0), strict=True) if w > 1e-8)
+    # Undo the column scaling, show in display units (mm, deg), and pick the sparse basis.
+    combos = tuple(_combination(v, names) for v in _row_echelon(null / norms / arm.display_scale))
+    return Identifiability(rank, arm.n_params, s, bad, combos)
+
+
+def _row_echelon(basis: np.ndarray, *, tol: float = 1e-9) -> np.ndarray:
+    """Reduced row echelon form of a basis ``(k, p)``: the same span, sparse rows.
+
+    The SVD returns an arbitrary rotation of the null space; the echelon form
+    gives each unseen combination a parameter of its own (e.g. ``dl1 - dl2``
+    and ``dq1 - 3*dq2`` rather than two mixtures of all four).
+    """
+    rows = basis.copy()
+    scale = np.max(np.abs(rows)) if rows.size else 0.0
+    pivot_row = 0
+    for col in range(rows.shape[1]):
+        if pivot_row == rows.shape[0]:
+            break
+        best = pivot_row + int(np.argmax(np.abs(rows[pivot_row:, col])))
+        if abs(rows[best, col]) <= tol * scale:
+            continue
+        rows[[pivot_row, best]] = rows[[best, pivot_row]]
+        rows[pivot_row] /= rows[pivot_row, col]
+        others = np.arange(rows.shape[0]) != pivot_row
+        rows[others] -= np.outer(rows[others, col], rows[pivot_row])
+        pivot_row += 1
+    return rows
+
+
+def check_identifiable(arm: PlanarArm, q: np.ndarray) -> Identifiability:
+    """Raise :class:`NotIdentifiableError` unless the plan ``q`` identifies every parameter.
+
+    The message counts poses and parameters, names the parameters that cannot be
+    identified and up to three unseen combinations, and says how to fix the plan.
+    """
+    m = q.shape[0]
+    p = arm.n_params
+    min_poses = -(-p // 2)
+    info = identifiability(arm, q)
+    if info.identifiable:
+        return info
+    shown = "; ".join(info.combinations[:3])
+    more = f" (and {len(info.combinations) - 3} more)" if len(info.combinations) > 3 else ""
+    if m < min_poses:
+        why = (
+            f"{m} poses give {2 * m} equations for {p} parameters; "
+            f"measure at least {min_poses} poses"
+        )
+    else:
+        why = "add poses in which every joint takes several different angles (armcal design)"
+    raise NotIdentifiableError(
+        f"the {m} poses cannot identify all {p} parameters of {arm.name} "
+        f"(Jacobian rank {info.rank} of {p}): not identifiable: {', '.join(info.unidentifiable)}; "
+        f"unseen combinations: {shown}{more}; {why}",
+        list(info.combinations),
+    )
 
 
 @dataclass(frozen=True, eq=False)
@@ -488,7 +645,7 @@ def evaluate_plan(
 
     Examples
     --------
-    >>> from armcal.design import orthogonal_plan, random_plan
+    >>> from armcal.doe import orthogonal_plan, random_plan
     >>> arm = PlanarArm([260.0, 180.0, 120.0, 100.0])
     >>> quality = evaluate_plan(arm, orthogonal_plan(arm, 20), sigma=0.1,
     ...                         test_q=random_plan(arm, 50, rng=0))
@@ -508,63 +665,3 @@ def evaluate_plan(
         predicted_std=std,
         position=position_accuracy(arm, q, test_q, sigma) if identifiable else None,
     )
-
-
-def format_quality(arm: PlanarArm, quality: PlanQuality) -> str:
-    """Human-readable report of :func:`evaluate_plan`: criteria, std table, accuracy."""
-    eff = quality.efficiencies
-    obs = quality.observability
-    lines = [
-        f"{quality.n_poses} poses of {arm.name}, {arm.n_params} parameters, "
-        f"sigma {quality.sigma:g} mm",
-        f"efficiency (1 = orthogonal optimum): D {eff['D']:.4f}  A {eff['A']:.4f}  "
-        f"E {eff['E']:.4f}",
-        f"observability: O1 {obs['O1']:.4f}  O2 {obs['O2']:.4f}  O3 {obs['O3']:.4f}  "
-        f"O4 {obs['O4']:.4f}",
-        f"paper D*: det C' {float(quality.dstar.det_c):.4f}  "
-        f"|det S'| {float(quality.dstar.abs_det_s):.3g}",
-        f"largest Table I sum: {max(abs(v) for v in quality.optimality_sums.values()):.3g}"
-        f" (0 for an optimal plan; {quality.n_poses} is the worst possible)",
-    ]
-    if not quality.identifiable:
-        lines.append("warning: this plan cannot identify every parameter (see armcal identify)")
-        return "\n".join(lines)
-    lines += ["", f"{'parameter':<10}{'predicted std':>14}  unit"]
-    for name, unit, std in zip(
-        arm.param_names, arm.param_units, quality.predicted_std, strict=True
-    ):
-        lines.append(f"{name:<10}{std:>14.5f}  {unit}")
-    pos = quality.position
-    lines += [
-        "",
-        f"predicted position error after calibration: RMS {pos.rms_mm:.4g} mm, "
-        f"max {pos.max_mm:.4g} mm over {pos.per_pose_mm.size} test poses",
-    ]
-    return "\n".join(lines)
-
-
-def quality_to_dict(arm: PlanarArm, quality: PlanQuality) -> dict:
-    """JSON document of :func:`evaluate_plan` (keys of PRODUCT.md plus details).
-
-    Not-identifiable values are ``None`` (JSON null), never NaN or infinity.
-    """
-    std = {
-        name: (float(v) if np.isfinite(v) else None)
-        for name, v in zip(arm.param_names, quality.predicted_std, strict=True)
-    }
-    pos = quality.position
-    return {
-        "poses": quality.n_poses,
-        "sigma_mm": quality.sigma,
-        "identifiable": quality.identifiable,
-        "d_efficiency": quality.efficiencies["D"],
-        "a_efficiency": quality.efficiencies["A"],
-        "e_efficiency": quality.efficiencies["E"],
-        "observability": quality.observability,
-        "det_c_prime": float(quality.dstar.det_c),
-        "abs_det_s_prime": float(quality.dstar.abs_det_s),
-        "optimality_sums": quality.optimality_sums,
-        "predicted_std": std,
-        "predicted_position_rms_mm": None if pos is None else pos.rms_mm,
-        "predicted_position_max_mm": None if pos is None else pos.max_mm,
-    }

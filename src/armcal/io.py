@@ -13,7 +13,6 @@ from __future__ import annotations
 
 import csv
 import difflib
-import json
 import math
 import os
 import re
@@ -26,10 +25,9 @@ from typing import Any, BinaryIO
 
 import numpy as np
 
-from ._version import __version__
 from .arm import Annulus, Box, PlanarArm, Region
 from .errors import InputError
-from .identify import Calibration
+from .paper import BUILTIN_ROBOTS, paper_arm
 
 if sys.version_info >= (3, 11):
     import tomllib
@@ -38,11 +36,10 @@ else:  # pragma: no cover - exercised on Python 3.10 only
 
 __all__ = [
     "BUILTIN_ROBOTS",
-    "CALIBRATION_FORMAT",
+    "DEFAULT_ROBOT",
     "Measurements",
     "RobotSpec",
     "atomic_write",
-    "calibration_to_dict",
     "format_measurements_csv",
     "format_plan_csv",
     "load_robot",
@@ -52,13 +49,7 @@ __all__ = [
     "read_plan",
 ]
 
-CALIBRATION_FORMAT = "armcal-calibration/1"
-
-#: The paper's arms (Section V-VI): lengths in mm and the deviations used as truth.
-PAPER_LINK_LENGTHS_MM = (260.0, 180.0, 120.0, 100.0)
-PAPER_DL_MM = (1.5, -0.6, -0.4, 0.7)
-PAPER_DQ_DEG = (0.5, -0.5, 0.7, -0.3)
-BUILTIN_ROBOTS = {f"paper-{n}link": n for n in (2, 3, 4)}
+#: The robot used when a command is given none.
 DEFAULT_ROBOT = "paper-4link"
 
 #: Largest magnitude accepted in a CSV field (1000 km in mm): larger values are unit
@@ -241,9 +232,7 @@ def _load_toml(path, what: str) -> dict:
 
 
 def _builtin(name: str) -> RobotSpec:
-    n = BUILTIN_ROBOTS[name]
-    arm = PlanarArm(PAPER_LINK_LENGTHS_MM[:n], name=name)
-    truth = arm.params_from_display(PAPER_DL_MM[:n], PAPER_DQ_DEG[:n])
+    arm, truth = paper_arm(BUILTIN_ROBOTS[name])
     return RobotSpec(arm, truth, name)
 
 
@@ -542,46 +531,3 @@ def format_measurements_csv(
         fields += [_angle_text(v) for v in row] + [repr(float(v)) for v in point]
         lines.append(",".join(fields))
     return "\n".join(lines) + "\n"
-
-
-# --------------------------------------------------------------------------- JSON
-
-
-def calibration_to_dict(cal: Calibration) -> dict:
-    """The ``armcal-calibration/1`` document of a calibration (see PRODUCT.md)."""
-    arm = cal.arm
-    corr = cal.correlation
-    return {
-        "format": CALIBRATION_FORMAT,
-        "armcal_version": __version__,
-        "robot": {
-            "name": arm.name,
-            "link_lengths_mm": arm.link_lengths.tolist(),
-            "joint_limits_deg": np.degrees(arm.joint_limits).tolist(),
-            "base_offset": arm.base_offset,
-        },
-        "method": cal.method,
-        "poses": cal.n_poses,
-        "sigma_mm": cal.sigma,
-        "sigma_source": cal.sigma_source,
-        "parameters": [
-            {"name": name, "unit": unit, "value": float(v), "std": float(s)}
-            for name, unit, v, s in zip(cal.names, cal.units, cal.values, cal.std, strict=True)
-        ],
-        "covariance": {"names": list(cal.names), "matrix": cal.covariance_display.tolist()},
-        "correlation": {"names": list(cal.names), "matrix": corr.tolist()},
-        "residual_rms_mm": cal.residual_rms,
-        "residual_max_mm": cal.residual_max,
-        "degrees_of_freedom": cal.dof,
-        "residuals": [
-            {"pose": label, "dx_mm": float(r[0]), "dy_mm": float(r[1])}
-            for label, r in zip(cal.pose_labels, cal.residuals, strict=True)
-        ],
-        "iterations": cal.iterations,
-        "converged": cal.converged,
-    }
-
-
-def to_json(document: dict) -> str:
-    """Serialize a result document; refuses NaN and infinity rather than writing them."""
-    return json.dumps(document, indent=2, allow_nan=False) + "\n"

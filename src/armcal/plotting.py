@@ -238,7 +238,7 @@ def plot_accuracy_curves(curves: dict[str, np.ndarray], *, title: str | None = N
         ``poses`` and, for ``key`` in ``length`` (mm), ``angle`` (deg) and
         ``position`` (mm): ``analytic_key``, ``simulated_key``,
         ``random_mean_key`` and ``random_median_key`` (see
-        :class:`armcal.reproduce.Reproduction`).
+        :class:`armcal.reproduction.Reproduction`).
     title : str, optional
 
     Returns

@@ -18,52 +18,48 @@ from __future__ import annotations
 import math
 import time
 from dataclasses import dataclass
-from typing import Literal
 
 import numpy as np
 
 from .arm import PlanarArm, forward_kinematics, jacobian, link_angles, link_phasors
 from .criteria import (
+    check_identifiable,
     dstar,
     inverse_information_batch,
-    predicted_std,
+    position_rms,
     scaled_information,
     std_from_covariance,
 )
-from .design import design, random_plan
+from .doe.plans import random_plan
 from .errors import ArmcalError
-from .identify import METHODS, check_identifiable
+from .identification import METHODS
 from .progress import ProgressCallback
 
 __all__ = [
-    "TARGETS",
+    "CHUNK_BYTES",
+    "POSITION_QUANTILES",
     "MonteCarlo",
     "PlanStudy",
-    "PosesNeeded",
     "PositionErrors",
-    "accuracy_metric",
-    "format_monte_carlo",
     "monte_carlo",
-    "monte_carlo_to_dict",
-    "poses_needed",
-    "position_rms",
     "random_plan_study",
+    "synthesize_measurements",
 ]
+
 
 #: Bytes of working arrays allowed per chunk of trials or plans.
 CHUNK_BYTES = 32 * 2**20
 
+
 #: Quantiles of the positioning error reported by :class:`PositionErrors`.
 POSITION_QUANTILES = (0.5, 0.95, 0.99)
+
 
 _HISTOGRAM_BINS = 2000
 
 
 def _chunk_size(per_item_floats: int, total: int) -> int:
     return int(max(1, min(total, CHUNK_BYTES // (8 * max(per_item_floats, 1)))))
-
-
-# --------------------------------------------------------------------------- moments
 
 
 class _Moments:
@@ -87,9 +83,6 @@ class _Moments:
 
     def covariance(self) -> np.ndarray:
         return self.scatter / (self.count - 1)  # callers ensure count >= 2
-
-
-# --------------------------------------------------------------------------- Monte Carlo
 
 
 @dataclass(frozen=True, eq=False)
@@ -190,7 +183,7 @@ class MonteCarlo:
     sigma : float
         Isotropic noise of each coordinate (mm).
     method : str
-        Solver (key of :data:`armcal.identify.METHODS`).
+        Solver (key of :data:`armcal.identification.METHODS`).
     trials : int
     mean : ndarray, shape (p,)
         Mean estimate (mm, rad).
@@ -289,7 +282,7 @@ def monte_carlo(
 
     Examples
     --------
-    >>> from armcal.design import orthogonal_plan
+    >>> from armcal.doe import orthogonal_plan
     >>> arm = PlanarArm([260.0, 180.0])
     >>> result = monte_carlo(arm, orthogonal_plan(arm, 20), np.zeros(4), 0.1, 20000, rng=1)
     >>> bool(np.allclose(result.std, result.predicted_std, rtol=0.03))
@@ -313,7 +306,6 @@ def monte_carlo(
     k = 0 if test_q is None else np.asarray(test_q).shape[0]
     # Per trial: noise and positions (2m), Jacobian and products (3 * 2m p), test tips (3k).
     chunk = _chunk_size(2 * m * (3 * p + 2) + 3 * k, trials)
-    clean = forward_kinematics(arm, q, truth)
     moments = _Moments(p)
     positions = None if test_q is None else _PositionAccumulator(arm, test_q, truth, predicted)
     not_converged = 0
@@ -321,7 +313,7 @@ def monte_carlo(
     done = 0
     while done < trials:
         size = min(chunk, trials - done)
-        xy = clean + sigma * rng.standard_normal((size, m, 2))
+        xy = synthesize_measurements(arm, q, truth, sigma, rng=rng, trials=size)
         estimates, _, converged = METHODS[method](arm, q, xy)
         not_converged += int(np.size(converged) - np.count_nonzero(converged))
         moments.add(estimates - truth)  # deviations from the truth keep round-off small
@@ -345,99 +337,6 @@ def monte_carlo(
         not_converged=not_converged,
         seconds=seconds,
     )
-
-
-def format_monte_carlo(result: MonteCarlo) -> str:
-    """Human-readable table of :func:`monte_carlo`: empirical vs predicted std and bias."""
-    arm = result.arm
-    lines = [
-        f"Monte Carlo: {result.trials} trials of {result.q.shape[0]} poses of {arm.name}, "
-        f"sigma {result.sigma:g} mm, {result.method} ({result.seconds:.2f} s)",
-        "",
-        f"{'parameter':<10}{'truth':>10}{'bias':>11}{'empirical std':>15}{'predicted std':>15}"
-        f"{'ratio':>8}  unit",
-    ]
-    truth = result.truth * arm.display_scale
-    for name, unit, t, b, s, ps in zip(
-        arm.param_names,
-        arm.param_units,
-        truth,
-        result.bias,
-        result.std,
-        result.predicted_std,
-        strict=True,
-    ):
-        lines.append(f"{name:<10}{t:>10.4f}{b:>11.2e}{s:>15.5f}{ps:>15.5f}{s / ps:>8.3f}  {unit}")
-    flagged = [
-        name
-        for name, b, limit in zip(arm.param_names, result.bias, result.bias_limit, strict=True)
-        if abs(b) > limit
-    ]
-    lines += [
-        "",
-        "bias within 4 std/sqrt(N) for every parameter"
-        if not flagged
-        else f"bias beyond 4 std/sqrt(N): {', '.join(flagged)}",
-    ]
-    if result.position is not None:
-        pos = result.position
-        quantiles = ", ".join(f"{key} % {value:.4g}" for key, value in pos.quantiles_mm.items())
-        lines.append(
-            f"tip error of the calibrated model at test poses: RMS {pos.rms_mm:.4g} mm "
-            f"(predicted {pos.predicted_rms_mm:.4g}); quantiles {quantiles}; "
-            f"max {pos.max_mm:.4g} mm"
-        )
-    if result.not_converged:
-        lines.append(f"warning: Gauss-Newton did not converge in {result.not_converged} trials")
-    return "\n".join(lines)
-
-
-def monte_carlo_to_dict(result: MonteCarlo) -> dict:
-    """JSON document of :func:`monte_carlo` (the keys of PRODUCT.md plus details)."""
-    names = result.arm.param_names
-
-    def by_name(values: np.ndarray) -> dict[str, float]:
-        return {name: float(v) for name, v in zip(names, values, strict=True)}
-
-    document: dict = {
-        "trials": result.trials,
-        "poses": int(result.q.shape[0]),
-        "sigma_mm": result.sigma,
-        "method": result.method,
-        "units": dict(zip(names, result.arm.param_units, strict=True)),
-        "truth": by_name(result.truth * result.arm.display_scale),
-        "empirical_mean": by_name(result.mean * result.arm.display_scale),
-        "empirical_std": by_name(result.std),
-        "predicted_std": by_name(result.predicted_std),
-        "bias": by_name(result.bias),
-        "bias_limit": by_name(result.bias_limit),
-        "not_converged": result.not_converged,
-        "seconds": result.seconds,
-    }
-    if result.position is not None:
-        pos = result.position
-        document["position_error_mm"] = {
-            "rms": pos.rms_mm,
-            "predicted_rms": pos.predicted_rms_mm,
-            "quantiles": pos.quantiles_mm,
-            "max": pos.max_mm,
-            "samples": pos.samples,
-        }
-    return document
-
-
-# --------------------------------------------------------------------------- random plans
-
-
-def position_rms(arm: PlanarArm, inverse: np.ndarray, test_q: np.ndarray, sigma: float):
-    """Predicted RMS tip error ``(...)`` after calibration, from ``(J^T J)^-1`` ``(..., p, p)``.
-
-    ``sigma sqrt(tr(F^-1 G))`` with ``G = mean_x J(x)^T J(x)`` over the test poses:
-    the mean over test poses of ``sigma^2 tr(J(x) F^-1 J(x)^T)``.
-    """
-    j0 = jacobian(arm, test_q)  # (k, 2, p), user parametrization like `inverse`
-    gram = np.einsum("kia,kib->ab", j0, j0) / j0.shape[0]
-    return sigma * np.sqrt(np.clip(np.einsum("...ab,ba->...", inverse, gram), 0.0, None))
 
 
 @dataclass(frozen=True, eq=False)
@@ -554,172 +453,46 @@ def random_plan_study(
     )
 
 
-# --------------------------------------------------------------------------- poses needed
-
-Target = Literal["length_std_mm", "angle_std_deg", "position_rms_mm"]
-
-#: Accuracy targets: what each measures, in which unit.
-TARGETS: dict[str, str] = {
-    "length_std_mm": "largest std of a link-length deviation dl (mm)",
-    "angle_std_deg": "largest std of a joint-offset deviation dq (deg)",
-    "position_rms_mm": "predicted RMS tip error after calibration at the test poses (mm)",
-}
-
-#: Relative slack when comparing an accuracy with its target, so that a plan
-#: reaching it exactly (sigma / sqrt(100) = 0.01) is not rejected by round-off.
-TARGET_RTOL = 1e-9
-
-
-def accuracy_metric(
-    arm: PlanarArm, q: np.ndarray, target: str, sigma: float, test_q: np.ndarray
-) -> float:
-    """Accuracy ``target`` (a key of :data:`TARGETS`) of plan ``q``; inf if it is singular."""
-    if target not in TARGETS:
-        raise ArmcalError(f"unknown target {target!r}; choose one of {', '.join(TARGETS)}")
-    if target == "position_rms_mm":
-        inverse, ok = inverse_information_batch(arm, q)
-        return float(position_rms(arm, inverse, test_q, sigma)) if ok else math.inf
-    n = arm.n_joints
-    std = predicted_std(arm, q, sigma)  # inf when the plan is singular
-    return float(std[:n].max() if target == "length_std_mm" else std[n : 2 * n].max())
-
-
-@dataclass(frozen=True, eq=False)
-class PosesNeeded:
-    """The smallest number of poses whose best plan reaches an accuracy target.
-
-    Attributes
-    ----------
-    target : str
-        Key of :data:`TARGETS`.
-    goal : float
-        The accuracy asked for (mm or deg).
-    sigma : float
-        Measurement noise (mm).
-    poses : int
-        Smallest ``m`` found whose best plan reaches ``goal``.
-    achieved : float
-        The accuracy of that plan.
-    previous : float
-        The accuracy of the best plan with ``poses - 1`` poses (inf when fewer
-        poses cannot identify the parameters).
-    method : str
-        How the plans were made (``analytic`` or the optimizer's name).
-    plan : ndarray, shape (poses, n)
-        The plan that reaches the goal (rad).
-    evaluated : dict of int to float
-        Every ``m`` tried and the accuracy of its best plan.
-    """
-
-    target: str
-    goal: float
-    sigma: float
-    poses: int
-    achieved: float
-    previous: float
-    method: str
-    plan: np.ndarray
-    evaluated: dict[int, float]
-
-
-def poses_needed(
+def synthesize_measurements(
     arm: PlanarArm,
-    target: str,
-    goal: float,
-    *,
+    plan: np.ndarray,
+    truth: np.ndarray,
     sigma: float,
+    *,
     rng: np.random.Generator | int | None = None,
-    test_q: np.ndarray | None = None,
-    max_poses: int = 5000,
-) -> PosesNeeded:
-    """The smallest ``m`` whose best plan (:func:`armcal.design.design`) reaches ``goal``.
+    trials: int | None = None,
+) -> np.ndarray:
+    """Measurements of a virtual robot: positions at ``truth`` plus iid normal noise.
+
+    The one place where armcal draws measurement noise (``armcal synthesize``,
+    ``armcal demo`` and :func:`monte_carlo` all call it).
 
     Parameters
     ----------
     arm : PlanarArm
-    target : {"length_std_mm", "angle_std_deg", "position_rms_mm"}
-        What must reach ``goal`` (see :data:`TARGETS`).
-    goal : float
-        Accuracy asked for, in mm (lengths, position) or deg (joint offsets).
+    plan : ndarray, shape (m, n)
+        Joint angles in rad.
+    truth : ndarray, shape (p,)
+        Deviations of the virtual robot (mm, rad).
     sigma : float
-        Measurement noise (mm).
+        Noise std of each coordinate (mm); 0 gives noiseless data.
     rng : numpy.random.Generator or int or None
-        Seeds the plan optimizer and the default test poses.
-    test_q : ndarray, shape (k, n), optional
-        Poses for ``position_rms_mm`` (default: 1000 uniform within the limits).
-    max_poses : int
-        Give up beyond this many poses.
+        Noise source.
+    trials : int, optional
+        Draw this many independent measurement sets at once.
 
     Returns
     -------
-    PosesNeeded
-
-    Raises
-    ------
-    ArmcalError
-        If even ``max_poses`` poses do not reach ``goal``.
-
-    Notes
-    -----
-    Accuracy of the best plan falls like ``1 / sqrt(m)`` once ``m`` is a few
-    times ``n`` (the plan's efficiency settles), so each step jumps to
-    ``ceil(m (a_m / goal)^2)`` and the answer is then confirmed by stepping one
-    pose at a time: the result ``m`` reaches the goal and ``m - 1`` does not.
-    For arms without binding limits the best plans are orthogonal and the
-    answers are the closed forms ``ceil((sigma / goal)^2)`` for lengths,
-    ``ceil((sigma / (goal l))^2)`` for a single joint offset and
-    ``ceil(2 n (sigma / goal)^2)`` for the position RMS -- found here by search,
-    not by formula.
+    ndarray, shape (m, 2) or (trials, m, 2)
+        Measured positions in mm.
 
     Examples
     --------
-    >>> arm = PlanarArm([260.0, 180.0, 120.0, 100.0])
-    >>> poses_needed(arm, "length_std_mm", 0.01, sigma=0.1).poses
-    100
-    >>> poses_needed(arm, "position_rms_mm", 0.02, sigma=0.1).poses
-    200
+    >>> arm = PlanarArm([2.0, 1.0])
+    >>> synthesize_measurements(arm, np.zeros((1, 2)), np.zeros(4), 0.0).tolist()
+    [[3.0, 0.0]]
     """
-    if target not in TARGETS:
-        raise ArmcalError(f"unknown target {target!r}; choose one of {', '.join(TARGETS)}")
-    if not (goal > 0 and math.isfinite(goal)):
-        raise ArmcalError(f"the target accuracy must be a positive number, got {goal}")
     rng = np.random.default_rng(rng)
-    if test_q is None:
-        test_q = random_plan(arm, 1000, rng)
-    min_poses = -(-arm.n_params // 2)
-    plans: dict[int, tuple[np.ndarray, str, float]] = {}
-
-    def best(m: int) -> float:
-        if m not in plans:
-            made = design(arm, m, rng=rng, with_certificate=False)
-            plans[m] = (made.q, made.method, accuracy_metric(arm, made.q, target, sigma, test_q))
-        return plans[m][2]
-
-    def reaches(m: int) -> bool:
-        return best(m) <= goal * (1 + TARGET_RTOL)
-
-    m = max(min_poses, 2 * arm.n_joints)
-    while not reaches(m):
-        value = best(m)
-        if m >= max_poses:
-            raise ArmcalError(
-                f"{max_poses} poses reach only {value:.4g} against a target of {goal:g}; "
-                "relax the target or measure with a better instrument (smaller --sigma)"
-            )
-        # 1/sqrt(m) law from here; an unidentifiable m (inf) just doubles.
-        jump = m * (value / goal) ** 2 if math.isfinite(value) else 2 * m
-        m = min(max_poses, max(m + 1, math.ceil(jump * (1 - 1e-12))))
-    while m > min_poses and reaches(m - 1):
-        m -= 1
-    q, method, achieved = plans[m]
-    return PosesNeeded(
-        target=target,
-        goal=float(goal),
-        sigma=float(sigma),
-        poses=m,
-        achieved=achieved,
-        previous=best(m - 1) if m > min_poses else math.inf,
-        method=method,
-        plan=q,
-        evaluated={key: value[2] for key, value in sorted(plans.items())},
-    )
+    clean = forward_kinematics(arm, plan, truth)
+    shape = clean.shape if trials is None else (trials, *clean.shape)
+    return clean + sigma * rng.standard_normal(shape)

@@ -31,178 +31,23 @@ import numpy as np
 from .arm import (
     PlanarArm,
     forward_kinematics,
-    jacobian,
     link_angles,
     paper_from_user_matrix,
     wrap_angle,
 )
-from .criteria import RANK_RTOL, inverse_information
-from .errors import ArmcalError, NotIdentifiableError
+from .criteria import check_identifiable, inverse_information
+from .errors import ArmcalError
 
 __all__ = [
     "METHODS",
     "Calibration",
-    "Identifiability",
-    "check_identifiable",
-    "format_report",
-    "identifiability",
     "identify",
     "solve_closed_form",
     "solve_gauss_newton",
 ]
 
+
 Method = Literal["auto", "closed-form", "gauss-newton"]
-
-
-@dataclass(frozen=True)
-class Identifiability:
-    """Rank analysis of a plan's column-scaled Jacobian.
-
-    Attributes
-    ----------
-    rank : int
-        Numerical rank (singular values above ``RANK_RTOL`` times the largest).
-    n_params : int
-        Number of parameters ``p``.
-    singular_values : ndarray, shape (min(2m, p),)
-        Singular values of the Jacobian with unit-norm columns, descending.
-    unidentifiable : tuple of str
-        Parameters that have a component in the null space (cannot be identified).
-    combinations : tuple of str
-        A basis of the null space written as parameter combinations in display
-        units (mm, deg), each with leading coefficient 1: moving the parameters
-        along one of these changes no measured position to first order.
-    """
-
-    rank: int
-    n_params: int
-    singular_values: np.ndarray
-    unidentifiable: tuple[str, ...]
-    combinations: tuple[str, ...]
-
-    @property
-    def identifiable(self) -> bool:
-        """True when the Jacobian has full column rank."""
-        return self.rank == self.n_params
-
-    @property
-    def condition_number(self) -> float:
-        """Ratio of largest to smallest singular value (inf when rank deficient)."""
-        s = self.singular_values
-        if s.size < self.n_params or s[-1] == 0:
-            return float("inf")
-        return float(s[0] / s[-1])
-
-
-def _combination(vector: np.ndarray, names: Sequence[str]) -> str:
-    # Leading coefficient 1 (the echelon pivot), so combinations read "dl1 - dl2".
-    leading = np.flatnonzero(np.abs(vector) > 1e-6 * np.max(np.abs(vector)))[0]
-    coeffs = vector / vector[leading]
-    terms = []
-    for c, name in zip(coeffs, names, strict=True):
-        if abs(c) < 1e-6:
-            continue
-        mag = "" if abs(abs(c) - 1) < 1e-9 else f"{abs(c):.3g}*"
-        sign = "-" if c < 0 else "+"
-        terms.append(f"{sign} {mag}{name}")
-    text = " ".join(terms)
-    return text[2:] if text.startswith("+ ") else "-" + text[2:]
-
-
-def identifiability(arm: PlanarArm, q: np.ndarray) -> Identifiability:
-    """Rank of the Jacobian of a plan at the nominal parameters, on scaled columns.
-
-    Parameters
-    ----------
-    arm : PlanarArm
-    q : ndarray, shape (m, n)
-        Joint angles of the plan in rad.
-
-    Returns
-    -------
-    Identifiability
-
-    Notes
-    -----
-    Columns mix mm/mm and mm/rad, so each is scaled to unit norm before the SVD;
-    the rank does not depend on the deviations (a rotation of each link's pair of
-    columns maps nominal to actual Jacobian), so the nominal model suffices.
-
-    Examples
-    --------
-    >>> arm = PlanarArm([2.0, 1.0])
-    >>> info = identifiability(arm, np.zeros((3, 2)))   # three identical poses
-    >>> info.rank, info.unidentifiable
-    (2, ('dl1', 'dl2', 'dq1', 'dq2'))
-    """
-    jac = jacobian(arm, q).reshape(-1, arm.n_params)
-    norms = np.linalg.norm(jac, axis=0)
-    norms[norms == 0] = 1.0
-    _, s, vt = np.linalg.svd(jac / norms, full_matrices=True)
-    s_max = s[0] if s.size else 0.0
-    rank = int(np.sum(s > RANK_RTOL * s_max)) if s_max > 0 else 0
-    null = vt[rank:]  # rows span the null space of the scaled Jacobian
-    names = arm.param_names
-    bad = tuple(n for n, w in zip(names, np.linalg.norm(null, axis=0), strict=True) if w > 1e-8)
-    # Undo the column scaling, show in display units (mm, deg), and pick the sparse basis.
-    combos = tuple(_combination(v, names) for v in _row_echelon(null / norms / arm.display_scale))
-    return Identifiability(rank, arm.n_params, s, bad, combos)
-
-
-def _row_echelon(basis: np.ndarray, *, tol: float = 1e-9) -> np.ndarray:
-    """Reduced row echelon form of a basis ``(k, p)``: the same span, sparse rows.
-
-    The SVD returns an arbitrary rotation of the null space; the echelon form
-    gives each unseen combination a parameter of its own (e.g. ``dl1 - dl2``
-    and ``dq1 - 3*dq2`` rather than two mixtures of all four).
-    """
-    rows = basis.copy()
-    scale = np.max(np.abs(rows)) if rows.size else 0.0
-    pivot_row = 0
-    for col in range(rows.shape[1]):
-        if pivot_row == rows.shape[0]:
-            break
-        best = pivot_row + int(np.argmax(np.abs(rows[pivot_row:, col])))
-        if abs(rows[best, col]) <= tol * scale:
-            continue
-        rows[[pivot_row, best]] = rows[[best, pivot_row]]
-        rows[pivot_row] /= rows[pivot_row, col]
-        others = np.arange(rows.shape[0]) != pivot_row
-        rows[others] -= np.outer(rows[others, col], rows[pivot_row])
-        pivot_row += 1
-    return rows
-
-
-def check_identifiable(arm: PlanarArm, q: np.ndarray) -> Identifiability:
-    """Raise :class:`NotIdentifiableError` unless the plan ``q`` identifies every parameter.
-
-    The message counts poses and parameters, names the parameters that cannot be
-    identified and up to three unseen combinations, and says how to fix the plan.
-    """
-    m = q.shape[0]
-    p = arm.n_params
-    min_poses = -(-p // 2)
-    info = identifiability(arm, q)
-    if info.identifiable:
-        return info
-    shown = "; ".join(info.combinations[:3])
-    more = f" (and {len(info.combinations) - 3} more)" if len(info.combinations) > 3 else ""
-    if m < min_poses:
-        why = (
-            f"{m} poses give {2 * m} equations for {p} parameters; "
-            f"measure at least {min_poses} poses"
-        )
-    else:
-        why = "add poses in which every joint takes several different angles (armcal design)"
-    raise NotIdentifiableError(
-        f"the {m} poses cannot identify all {p} parameters of {arm.name} "
-        f"(Jacobian rank {info.rank} of {p}): not identifiable: {', '.join(info.unidentifiable)}; "
-        f"unseen combinations: {shown}{more}; {why}",
-        list(info.combinations),
-    )
-
-
-# --------------------------------------------------------------------------- solvers
 
 
 def _regressor(arm: PlanarArm, q: np.ndarray) -> np.ndarray:
@@ -374,9 +219,6 @@ def solve_gauss_newton(
     if batched:
         return params, iterations, converged
     return params[0], iterations[0], converged[0]
-
-
-# --------------------------------------------------------------------------- result
 
 
 @dataclass(frozen=True, eq=False)
@@ -584,56 +426,3 @@ def identify(
         converged=bool(converged),
         pose_labels=labels,
     )
-
-
-# --------------------------------------------------------------------------- report
-
-
-def format_report(cal: Calibration, *, truth: np.ndarray | None = None) -> str:
-    """Human-readable table of a calibration: value ± std with units, and a fit summary.
-
-    Parameters
-    ----------
-    cal : Calibration
-    truth : ndarray, shape (p,), optional
-        Known deviations (internal units) of a virtual robot; adds columns with the
-        truth and the error in standard errors.
-
-    Returns
-    -------
-    str
-        Lines without a trailing newline.
-    """
-    header = f"{'parameter':<10}{'value':>12}  {'± std':>10}  unit"
-    if truth is not None:
-        header += f"{'truth':>12}{'error/std':>11}"
-    lines = [
-        f"calibration of {cal.arm.name}: {cal.n_poses} poses, {cal.arm.n_params} parameters, "
-        f"method {cal.method}",
-        "",
-        header,
-    ]
-    truth_display = None if truth is None else np.asarray(truth) * cal.arm.display_scale
-    for i, (name, unit) in enumerate(zip(cal.names, cal.units, strict=True)):
-        line = f"{name:<10}{cal.values[i]:>12.5f}  ± {cal.std[i]:<8.5f}  {unit:<4}"
-        if truth_display is not None:
-            z = (cal.values[i] - truth_display[i]) / cal.std[i]
-            line += f"{truth_display[i]:>12.5f}{z:>+11.2f}"
-        lines.append(line.rstrip())
-    worst = int(np.argmax(cal.pose_residuals))
-    lines += [
-        "",
-        f"sigma {cal.sigma:.4g} mm ({cal.sigma_source}); residual RMS {cal.residual_rms:.4g} mm "
-        f"per coordinate, max {cal.residual_max:.4g} mm at pose {cal.pose_labels[worst]}; "
-        f"{cal.dof} degrees of freedom",
-        f"{cal.method}: {cal.iterations} iteration(s), "
-        + ("converged" if cal.converged else "NOT converged: the estimate may be off"),
-    ]
-    corr = np.abs(cal.correlation - np.eye(cal.arm.n_params))
-    strong = [
-        f"{cal.names[i]}/{cal.names[j]} {cal.correlation[i, j]:+.2f}"
-        for i, j in zip(*np.nonzero(np.triu(corr > 0.9)), strict=True)
-    ]
-    if strong:
-        lines.append("strongly correlated (|r| > 0.9): " + ", ".join(strong))
-    return "\n".join(lines)

@@ -1,0 +1,43 @@
+"""Design of calibration experiments: which poses to measure, and how many.
+
+A plan is an array of joint angles of shape ``(m, n)`` in rad.  Plans are
+judged by the criteria of :mod:`armcal.criteria` on the Hadamard-normalized
+information matrix ``Fs`` (1 for the paper's orthogonal plans).
+
+* :mod:`~armcal.doe.plans` -- orthogonal (Table I), analytic (placed within the
+  limits and region) and random plans; feasibility of poses;
+* :mod:`~armcal.doe.optimizer` -- batched gradient ascent on a criterion,
+  polished by L-BFGS-B / SLSQP;
+* :mod:`~armcal.doe.exchange` -- modified Fedorov exchange over candidates;
+* :mod:`~armcal.doe.certificate` -- a lower bound on the D-efficiency relative
+  to the best plan within the constraints (Kiefer-Wolfowitz);
+* :mod:`~armcal.doe.designer` -- :func:`design`: all of the above in one call;
+* :mod:`~armcal.doe.sizing` -- :func:`poses_needed`: the smallest ``m`` whose
+  best plan reaches a target accuracy.
+"""
+
+from .certificate import Certificate, certify
+from .designer import METHODS, Design, design
+from .exchange import exchange_plan
+from .optimizer import optimize_plan
+from .plans import analytic_plan, feasible, feasible_poses, orthogonal_plan, random_plan
+from .sizing import TARGETS, PosesNeeded, accuracy_metric, poses_needed
+
+__all__ = [
+    "METHODS",
+    "TARGETS",
+    "Certificate",
+    "Design",
+    "PosesNeeded",
+    "accuracy_metric",
+    "analytic_plan",
+    "certify",
+    "design",
+    "exchange_plan",
+    "feasible",
+    "feasible_poses",
+    "optimize_plan",
+    "orthogonal_plan",
+    "poses_needed",
+    "random_plan",
+]

@@ -1,0 +1,194 @@
+"""How many poses a target accuracy needs: a search over m of the best plans."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Literal
+
+import numpy as np
+
+from ..arm import PlanarArm
+from ..criteria import inverse_information_batch, position_rms, predicted_std
+from ..errors import ArmcalError
+from .designer import design
+from .plans import random_plan
+
+__all__ = [
+    "TARGETS",
+    "TARGET_RTOL",
+    "PosesNeeded",
+    "accuracy_metric",
+    "poses_needed",
+]
+
+
+Target = Literal["length_std_mm", "angle_std_deg", "position_rms_mm"]
+
+
+#: Accuracy targets: what each measures, in which unit.
+TARGETS: dict[str, str] = {
+    "length_std_mm": "largest std of a link-length deviation dl (mm)",
+    "angle_std_deg": "largest std of a joint-offset deviation dq (deg)",
+    "position_rms_mm": "predicted RMS tip error after calibration at the test poses (mm)",
+}
+
+
+#: Relative slack when comparing an accuracy with its target, so that a plan
+#: reaching it exactly (sigma / sqrt(100) = 0.01) is not rejected by round-off.
+TARGET_RTOL = 1e-9
+
+
+def accuracy_metric(
+    arm: PlanarArm, q: np.ndarray, target: str, sigma: float, test_q: np.ndarray
+) -> float:
+    """Accuracy ``target`` (a key of :data:`TARGETS`) of plan ``q``; inf if it is singular."""
+    if target not in TARGETS:
+        raise ArmcalError(f"unknown target {target!r}; choose one of {', '.join(TARGETS)}")
+    if target == "position_rms_mm":
+        inverse, ok = inverse_information_batch(arm, q)
+        return float(position_rms(arm, inverse, test_q, sigma)) if ok else math.inf
+    n = arm.n_joints
+    std = predicted_std(arm, q, sigma)  # inf when the plan is singular
+    return float(std[:n].max() if target == "length_std_mm" else std[n : 2 * n].max())
+
+
+@dataclass(frozen=True, eq=False)
+class PosesNeeded:
+    """The smallest number of poses whose best plan reaches an accuracy target.
+
+    Attributes
+    ----------
+    target : str
+        Key of :data:`TARGETS`.
+    goal : float
+        The accuracy asked for (mm or deg).
+    sigma : float
+        Measurement noise (mm).
+    poses : int
+        Smallest ``m`` found whose best plan reaches ``goal``.
+    achieved : float
+        The accuracy of that plan.
+    previous : float
+        The accuracy of the best plan with ``poses - 1`` poses (inf when fewer
+        poses cannot identify the parameters).
+    method : str
+        How the plans were made (``analytic`` or the optimizer's name).
+    plan : ndarray, shape (poses, n)
+        The plan that reaches the goal (rad).
+    evaluated : dict of int to float
+        Every ``m`` tried and the accuracy of its best plan.
+    """
+
+    target: str
+    goal: float
+    sigma: float
+    poses: int
+    achieved: float
+    previous: float
+    method: str
+    plan: np.ndarray
+    evaluated: dict[int, float]
+
+
+def poses_needed(
+    arm: PlanarArm,
+    target: str,
+    goal: float,
+    *,
+    sigma: float,
+    rng: np.random.Generator | int | None = None,
+    test_q: np.ndarray | None = None,
+    max_poses: int = 5000,
+) -> PosesNeeded:
+    """The smallest ``m`` whose best plan (:func:`armcal.doe.design`) reaches ``goal``.
+
+    Parameters
+    ----------
+    arm : PlanarArm
+    target : {"length_std_mm", "angle_std_deg", "position_rms_mm"}
+        What must reach ``goal`` (see :data:`TARGETS`).
+    goal : float
+        Accuracy asked for, in mm (lengths, position) or deg (joint offsets).
+    sigma : float
+        Measurement noise (mm).
+    rng : numpy.random.Generator or int or None
+        Seeds the plan optimizer and the default test poses.
+    test_q : ndarray, shape (k, n), optional
+        Poses for ``position_rms_mm`` (default: 1000 uniform within the limits).
+    max_poses : int
+        Give up beyond this many poses.
+
+    Returns
+    -------
+    PosesNeeded
+
+    Raises
+    ------
+    ArmcalError
+        If even ``max_poses`` poses do not reach ``goal``.
+
+    Notes
+    -----
+    Accuracy of the best plan falls like ``1 / sqrt(m)`` once ``m`` is a few
+    times ``n`` (the plan's efficiency settles), so each step jumps to
+    ``ceil(m (a_m / goal)^2)`` and the answer is then confirmed by stepping one
+    pose at a time: the result ``m`` reaches the goal and ``m - 1`` does not.
+    For arms without binding limits the best plans are orthogonal and the
+    answers are the closed forms ``ceil((sigma / goal)^2)`` for lengths,
+    ``ceil((sigma / (goal l))^2)`` for a single joint offset and
+    ``ceil(2 n (sigma / goal)^2)`` for the position RMS -- found here by search,
+    not by formula.
+
+    Examples
+    --------
+    >>> arm = PlanarArm([260.0, 180.0, 120.0, 100.0])
+    >>> poses_needed(arm, "length_std_mm", 0.01, sigma=0.1).poses
+    100
+    >>> poses_needed(arm, "position_rms_mm", 0.02, sigma=0.1).poses
+    200
+    """
+    if target not in TARGETS:
+        raise ArmcalError(f"unknown target {target!r}; choose one of {', '.join(TARGETS)}")
+    if not (goal > 0 and math.isfinite(goal)):
+        raise ArmcalError(f"the target accuracy must be a positive number, got {goal}")
+    rng = np.random.default_rng(rng)
+    if test_q is None:
+        test_q = random_plan(arm, 1000, rng)
+    min_poses = -(-arm.n_params // 2)
+    plans: dict[int, tuple[np.ndarray, str, float]] = {}
+
+    def best(m: int) -> float:
+        if m not in plans:
+            made = design(arm, m, rng=rng, with_certificate=False)
+            plans[m] = (made.q, made.method, accuracy_metric(arm, made.q, target, sigma, test_q))
+        return plans[m][2]
+
+    def reaches(m: int) -> bool:
+        return best(m) <= goal * (1 + TARGET_RTOL)
+
+    m = max(min_poses, 2 * arm.n_joints)
+    while not reaches(m):
+        value = best(m)
+        if m >= max_poses:
+            raise ArmcalError(
+                f"{max_poses} poses reach only {value:.4g} against a target of {goal:g}; "
+                "relax the target or measure with a better instrument (smaller --sigma)"
+            )
+        # 1/sqrt(m) law from here; an unidentifiable m (inf) just doubles.
+        jump = m * (value / goal) ** 2 if math.isfinite(value) else 2 * m
+        m = min(max_poses, max(m + 1, math.ceil(jump * (1 - 1e-12))))
+    while m > min_poses and reaches(m - 1):
+        m -= 1
+    q, method, achieved = plans[m]
+    return PosesNeeded(
+        target=target,
+        goal=float(goal),
+        sigma=float(sigma),
+        poses=m,
+        achieved=achieved,
+        previous=best(m - 1) if m > min_poses else math.inf,
+        method=method,
+        plan=q,
+        evaluated={key: value[2] for key, value in sorted(plans.items())},
+    )
