@@ -1,13 +1,14 @@
 # Two entry points, each self-contained on a machine with python3 and make:
 #   make demo   set up .venv and run the calibration workflow on the built-in paper-4link arm
-#   make test   set up .venv with the test extras and run lint + tests
+#   make test   set up .venv with the test extras and run lint, types and tests
+#   make test-slow   the few long end-to-end checks (CI runs them after make test)
 PYTHON ?= python3
 VENV   := .venv
 BIN    := $(VENV)/bin
 DEMO_DIR ?= demo-out
 LINT_PATHS := src tests $(wildcard benchmarks)
 
-.PHONY: demo test lint bench clean
+.PHONY: demo test test-slow lint types bench readme clean
 
 $(BIN)/python:
 	$(PYTHON) -m venv $(VENV)
@@ -28,8 +29,15 @@ lint: $(VENV)/.installed-test
 	$(BIN)/ruff check $(LINT_PATHS)
 	$(BIN)/ruff format --check $(LINT_PATHS)
 
-test: lint
-	$(BIN)/python -m pytest src tests
+types: $(VENV)/.installed-test
+	$(BIN)/mypy
+
+# Two workers: this project's machines have 2 cores.
+test: lint types
+	$(BIN)/python -m pytest -n 2 src tests
+
+test-slow: $(VENV)/.installed-test
+	$(BIN)/python -m pytest -n 2 -m slow tests
 
 bench: $(VENV)/.installed
 	$(BIN)/python benchmarks/bench_design.py

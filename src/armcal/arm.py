@@ -25,10 +25,11 @@ All functions are batched on leading axes: joint angles ``q`` of shape
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from typing import Literal
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 __all__ = [
     "Annulus",
@@ -124,7 +125,7 @@ def _readonly(a: np.ndarray) -> np.ndarray:
     return a
 
 
-@dataclass(frozen=True, eq=False)
+@dataclass(frozen=True, eq=False, init=False)
 class PlanarArm:
     """Nominal geometry of a planar serial arm and what is identified.
 
@@ -154,32 +155,44 @@ class PlanarArm:
     """
 
     link_lengths: np.ndarray
-    joint_limits: np.ndarray | None = None
-    base_offset: bool = False
-    name: str = "arm"
-    sigma: float | None = None
-    region: Region | None = field(default=None)
+    joint_limits: np.ndarray
+    base_offset: bool
+    name: str
+    sigma: float | None
+    region: Region | None
 
-    def __post_init__(self) -> None:
-        lengths = _readonly(np.atleast_1d(self.link_lengths))
+    def __init__(
+        self,
+        link_lengths: ArrayLike,
+        joint_limits: ArrayLike | None = None,
+        *,
+        base_offset: bool = False,
+        name: str = "arm",
+        sigma: float | None = None,
+        region: Region | None = None,
+    ) -> None:
+        lengths = _readonly(np.atleast_1d(np.asarray(link_lengths, dtype=float)))
         if lengths.ndim != 1 or lengths.size == 0:
             raise ValueError(f"link_lengths must have shape (n,) with n >= 1, got {lengths.shape}")
         if not np.all(np.isfinite(lengths) & (lengths > 0)):
             raise ValueError(f"link_lengths must be positive and finite, got {lengths.tolist()}")
         n = lengths.size
-        if self.joint_limits is None:
+        if joint_limits is None:
             limits = np.tile([-np.pi, np.pi], (n, 1))
         else:
-            limits = np.array(self.joint_limits, dtype=float)
+            limits = np.array(joint_limits, dtype=float)
         if limits.shape != (n, 2):
             raise ValueError(f"joint_limits must have shape ({n}, 2), got {limits.shape}")
         if not (np.all(np.isfinite(limits)) and np.all(limits[:, 0] < limits[:, 1])):
             raise ValueError("joint_limits must be finite with lo < hi for every joint")
-        if self.sigma is not None and not (np.isfinite(self.sigma) and self.sigma > 0):
-            raise ValueError(f"sigma must be positive and finite, got {self.sigma}")
+        if sigma is not None and not (np.isfinite(sigma) and sigma > 0):
+            raise ValueError(f"sigma must be positive and finite, got {sigma}")
         object.__setattr__(self, "link_lengths", lengths)
         object.__setattr__(self, "joint_limits", _readonly(limits))
-        object.__setattr__(self, "base_offset", bool(self.base_offset))
+        object.__setattr__(self, "base_offset", bool(base_offset))
+        object.__setattr__(self, "name", str(name))
+        object.__setattr__(self, "sigma", None if sigma is None else float(sigma))
+        object.__setattr__(self, "region", region)
 
     @property
     def n_joints(self) -> int:
@@ -220,7 +233,7 @@ class PlanarArm:
         return scale
 
     def params_from_display(
-        self, dl_mm: np.ndarray, dq_deg: np.ndarray, base_mm: np.ndarray | None = None
+        self, dl_mm: ArrayLike, dq_deg: ArrayLike, base_mm: ArrayLike | None = None
     ) -> np.ndarray:
         """Pack user deviations given in mm and degrees into an internal vector ``(p,)``.
 

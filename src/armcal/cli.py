@@ -17,7 +17,7 @@ from ._version import __version__
 from .criteria import CRITERIA, evaluate_plan
 from .doe import METHODS as DESIGN_METHODS
 from .doe import TARGETS, design, feasible, poses_needed, random_plan
-from .errors import ArmcalError, NotIdentifiableError
+from .errors import ArmcalError, ArmcalWarning, NotIdentifiableError
 from .identification import METHODS, Calibration, identify
 from .io import (
     DEFAULT_ROBOT,
@@ -149,13 +149,10 @@ def _identify_file(spec: RobotSpec, path: str, *, method: str, sigma: float | No
         raise ArmcalError(f"{path}: {exc}") from None
 
 
-def _warn_unconverged(cal: Calibration) -> None:
-    if not cal.converged:
-        print(
-            f"armcal: warning: {cal.method} did not converge in {cal.iterations} iterations; "
-            "try --method closed-form",
-            file=sys.stderr,
-        )
+def _print_warnings(warnings: Sequence[ArmcalWarning]) -> None:
+    """Each warning of a result as one ``armcal: warning: ...`` line on stderr."""
+    for warning in warnings:
+        print(f"armcal: warning: {warning.message}", file=sys.stderr)
 
 
 def _identify(args: argparse.Namespace) -> None:
@@ -164,7 +161,7 @@ def _identify(args: argparse.Namespace) -> None:
     document = calibration_to_dict(cal)
     if args.output is not None:
         atomic_write(args.output, to_json(document))
-    _warn_unconverged(cal)
+    _print_warnings(cal.warnings)
     _emit(args, document, format_calibration(cal))
 
 

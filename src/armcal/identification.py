@@ -36,7 +36,7 @@ from .arm import (
     wrap_angle,
 )
 from .criteria import check_identifiable, inverse_information
-from .errors import ArmcalError
+from .errors import ArmcalError, ArmcalWarning
 
 __all__ = [
     "METHODS",
@@ -247,6 +247,9 @@ class Calibration:
         Whether the solver met its tolerance.
     pose_labels : tuple of str
         A label for every pose (the measurement file's ``pose`` column, or 1..m).
+    warnings : tuple of ArmcalWarning
+        What makes the result suspicious (e.g. a solver that did not converge);
+        empty when nothing does.
     """
 
     arm: PlanarArm
@@ -259,6 +262,7 @@ class Calibration:
     iterations: int
     converged: bool
     pose_labels: tuple[str, ...]
+    warnings: tuple[ArmcalWarning, ...] = ()
 
     @property
     def n_poses(self) -> int:
@@ -414,6 +418,15 @@ def identify(
     else:
         sigma_value, source = float(given), "given"
     labels = tuple(str(i) for i in range(1, m + 1)) if pose_labels is None else tuple(pose_labels)
+    warnings = []
+    if not converged:
+        warnings.append(
+            ArmcalWarning(
+                "not-converged",
+                f"{method} did not converge in {int(iterations)} iterations; "
+                "try --method closed-form",
+            )
+        )
     return Calibration(
         arm=arm,
         method=method,
@@ -425,4 +438,5 @@ def identify(
         iterations=int(iterations),
         converged=bool(converged),
         pose_labels=labels,
+        warnings=tuple(warnings),
     )

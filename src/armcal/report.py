@@ -175,6 +175,7 @@ def calibration_to_dict(cal: Calibration) -> dict:
         ],
         "iterations": cal.iterations,
         "converged": cal.converged,
+        "warnings": [w.to_dict() for w in cal.warnings],
     }
 
 
