@@ -6,7 +6,7 @@ PYTHON ?= python3
 VENV   := .venv
 BIN    := $(VENV)/bin
 DEMO_DIR ?= demo-out
-LINT_PATHS := src tests $(wildcard benchmarks)
+LINT_PATHS := src tests tools $(wildcard benchmarks)
 
 .PHONY: demo test test-slow lint types bench readme clean
 
@@ -42,6 +42,10 @@ test-slow: $(VENV)/.installed-test
 bench: $(VENV)/.installed
 	$(BIN)/python benchmarks/bench_design.py
 	$(BIN)/python benchmarks/bench_simulate.py
+
+# Run every example of README.md and write its real output into it (and docs/img/).
+readme: $(VENV)/.installed
+	$(BIN)/python tools/readme.py
 
 clean:
 	rm -rf $(VENV) $(DEMO_DIR) .pytest_cache .ruff_cache

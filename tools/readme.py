@@ -1,0 +1,136 @@
+"""Run every example of README.md and write (or check) its printed output.
+
+The README cannot go stale: each ```console block is a script whose lines that
+start with ``$ `` are run, in order, in one fresh temporary folder, with the
+``armcal`` of this checkout on PATH; the lines after a command are its output
+(stdout and stderr, as a terminal shows them).  A ```toml block whose first
+line is ``# NAME`` is written to NAME in that folder before the blocks after it
+run, so the files the README shows are the files the commands read.  A
+```python block of ``>>>`` examples is run as a doctest.
+
+    python tools/readme.py            # rewrite README.md with fresh output
+    python tools/readme.py --check    # exit 1 and show a diff if README.md is stale
+
+Wall-clock figures (``0.62 s``) differ from run to run; ``--check`` compares
+them as ``<t> s``.  Figures that a command writes under ``docs/`` are copied
+into the repository by a rewrite and must exist for ``--check``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import difflib
+import doctest
+import os
+import re
+import shutil
+import subprocess
+import sys
+import tempfile
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parent.parent
+README = ROOT / "README.md"
+FENCE = re.compile(r"^```(\w*)\n(.*?)^```\n", re.M | re.S)
+SECONDS = re.compile(r"\b\d+(?:\.\d+)? s\b")
+#: Files the README's commands write that are kept in the repository (as pictures).
+KEPT_FIGURES = ("plan.png",)
+FIGURE_DIR = ROOT / "docs" / "img"
+
+
+def _run(command: str, cwd: Path) -> str:
+    env = dict(os.environ)
+    env["PATH"] = f"{Path(sys.executable).parent}{os.pathsep}{env.get('PATH', '')}"
+    env["COLUMNS"] = "100"
+    done = subprocess.run(
+        ["bash", "-o", "pipefail", "-c", command],
+        cwd=cwd,
+        env=env,
+        stdin=subprocess.DEVNULL,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.STDOUT,
+        text=True,
+        check=False,
+    )
+    if done.returncode not in (0, 2):  # 2: the README may show an error on purpose
+        raise SystemExit(f"README command failed ({done.returncode}): {command}\n{done.stdout}")
+    return done.stdout
+
+
+def _console(body: str, cwd: Path) -> str:
+    commands = [line[2:] for line in body.splitlines() if line.startswith("$ ")]
+    out = []
+    for command in commands:
+        out.append(f"$ {command}\n")
+        out.append(_run(command, cwd))
+    return "".join(out)
+
+
+def _python(body: str, cwd: Path) -> None:
+    parser = doctest.DocTestParser()
+    test = parser.get_doctest(body, {}, "README.md", str(README), 0)
+    runner = doctest.DocTestRunner(optionflags=doctest.ELLIPSIS | doctest.NORMALIZE_WHITESPACE)
+    here = Path.cwd()
+    os.chdir(cwd)
+    try:
+        runner.run(test)
+    finally:
+        os.chdir(here)
+    if runner.failures:
+        raise SystemExit(f"README python example failed ({runner.failures} failure(s))")
+
+
+def render(text: str) -> tuple[str, Path]:
+    """README text with every console block's output regenerated, and the work folder."""
+    work = Path(tempfile.mkdtemp(prefix="armcal-readme-"))
+    pieces, last = [], 0
+    for match in FENCE.finditer(text):
+        kind, body = match.group(1), match.group(2)
+        pieces.append(text[last : match.start()])
+        if kind == "toml" and body.startswith("# "):
+            name = body.splitlines()[0][2:].strip()
+            (work / name).write_text(body, encoding="utf-8")
+        elif kind == "console":
+            body = _console(body, work)
+        elif kind == "python" and ">>>" in body:
+            _python(body, work)
+        pieces.append(f"```{kind}\n{body}```\n")
+        last = match.end()
+    pieces.append(text[last:])
+    return "".join(pieces), work
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--check", action="store_true", help="compare instead of rewriting")
+    args = parser.parse_args(argv)
+    text = README.read_text(encoding="utf-8")
+    fresh, work = render(text)
+    try:
+        if args.check:
+            old, new = SECONDS.sub("<t> s", text), SECONDS.sub("<t> s", fresh)
+            missing = [f for f in KEPT_FIGURES if not (FIGURE_DIR / f).is_file()]
+            if old != new or missing:
+                diff = difflib.unified_diff(
+                    old.splitlines(True), new.splitlines(True), "README.md", "fresh run"
+                )
+                sys.stdout.writelines(diff)
+                if missing:
+                    print(f"missing figures in {FIGURE_DIR}: {', '.join(missing)}")
+                print("README.md is stale: run `make readme`")
+                return 1
+            print("README.md matches a fresh run of its examples")
+            return 0
+        README.write_text(fresh, encoding="utf-8")
+        FIGURE_DIR.mkdir(parents=True, exist_ok=True)
+        for name in KEPT_FIGURES:
+            if (work / name).is_file():
+                shutil.copyfile(work / name, FIGURE_DIR / name)
+        print(f"rewrote {README.name} from a fresh run of its examples")
+        return 0
+    finally:
+        shutil.rmtree(work, ignore_errors=True)
+
+
+if __name__ == "__main__":
+    sys.exit(main())
