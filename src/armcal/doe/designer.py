@@ -107,7 +107,8 @@ def design(
         )
     rng = np.random.default_rng(rng)
     notes: list[str] = []
-    q, used = None, method
+    q: np.ndarray | None = None
+    used: str = method
     if method in ("auto", "analytic"):
         try:
             q, used = analytic_plan(arm, m), "analytic"

@@ -49,9 +49,11 @@ def _criterion_value_and_gradient(
 
 def _region_constraints(arm: PlanarArm, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Region constraint values ``g (..., m, k)`` (>= 0 inside) and ``dg/dq (..., m, k, n)``."""
+    region = arm.region
+    assert region is not None, "callers check arm.region first"
     unit = np.exp(1j * link_angles(q))
     tip = np.sum(arm.link_lengths * unit, axis=-1)
-    g, dg = arm.region.constraints(np.stack([tip.real, tip.imag], axis=-1))  # dg (..., m, k, 2)
+    g, dg = region.constraints(np.stack([tip.real, tip.imag], axis=-1))  # dg (..., m, k, 2)
     d_tip = 1j * arm.link_lengths * unit  # d tip / d theta_j, complex (..., m, n)
     grad_theta = dg[..., :1] * d_tip.real[..., None, :] + dg[..., 1:] * d_tip.imag[..., None, :]
     return g, _q_from_theta_gradient(grad_theta)
@@ -208,10 +210,11 @@ def _polish(arm: PlanarArm, q: np.ndarray, criterion: str) -> np.ndarray:
             options={"maxiter": 500, "ftol": 1e-15, "gtol": 1e-10},
         )
         return result.x.reshape(m, n)
+    region = arm.region
     margin = 1e-6  # mm inside the region, so that round-off never puts a tip outside
 
     def region_values(x: np.ndarray) -> np.ndarray:
-        g, _ = arm.region.constraints(forward_kinematics(arm, x.reshape(m, n)))
+        g, _ = region.constraints(forward_kinematics(arm, x.reshape(m, n)))
         return g.ravel() - margin
 
     def region_jacobian(x: np.ndarray) -> np.ndarray:
