@@ -295,6 +295,10 @@ def test_check_outputs_folders(tmp_path):
             {"-o": OutputFolder(tmp_path, ("truth.toml",))}, {"--truth": tmp_path / "truth.toml"}
         )
     check_outputs({"-o": OutputFolder(tmp_path / "new" / "deeper", files)})  # made when written
+    with pytest.raises(InputError, match="output folder name is empty"):  # "" is not "."
+        check_outputs({"-o": OutputFolder("", files)})
+    with pytest.raises(InputError, match="output file name is empty"):
+        check_outputs({"-o": ""})
     assert sorted(p.name for p in tmp_path.rglob("*")) == [
         "afile",
         "out",

@@ -170,6 +170,8 @@ def _check_output_file(path: PathArg, fix: str = "give another path") -> Path:
     A symbolic link is followed to the file it points to (see :func:`atomic_write`).
     ``fix`` says what to do about a directory or a special file in the way.
     """
+    if not os.fspath(path):
+        raise InputError("an output file name is empty; give a file name")
     real = Path(os.path.realpath(path))
     try:
         info = _stat(real)
@@ -198,6 +200,8 @@ def _check_output_file(path: PathArg, fix: str = "give another path") -> Path:
 
 def _check_output_folder(path: PathArg) -> Path:
     """The folder ``path`` (through links), if files can be written into it or it can be made."""
+    if not os.fspath(path):
+        raise InputError("an output folder name is empty; give a folder name")
     real = Path(os.path.realpath(path))
     try:
         info = _stat(real)
