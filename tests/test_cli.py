@@ -112,19 +112,14 @@ def test_robot_file_with_base_offset_and_truth(tmp_path, capsys):
     assert document["robot"]["base_offset"] is True
 
 
-def test_import_prints_nothing_and_is_fast():
-    code = (
-        "import time, sys; t = time.perf_counter(); import armcal; "
-        "print(time.perf_counter() - t); print('matplotlib' in sys.modules)"
-    )
+def test_import_prints_nothing_and_loads_no_heavy_dependency():
+    # No wall-clock limit here: shared machines are too noisy for one (see STYLE.md).
+    code = "import sys, armcal; print('matplotlib' in sys.modules, 'scipy' in sys.modules)"
     result = subprocess.run(
         [sys.executable, "-c", code], capture_output=True, text=True, check=True
     )
-    seconds, mpl = result.stdout.split()
     assert result.stderr == ""
-    assert mpl == "False"
-    # The contract is ~0.5 s; numpy alone takes ~0.1 s.  Generous for a shared machine.
-    assert float(seconds) < 1.0
+    assert result.stdout == "False False\n"
 
 
 def test_synthesize_without_output_writes_csv_to_stdout(tmp_path, capsys):

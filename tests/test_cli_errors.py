@@ -9,9 +9,16 @@ no traceback, and no output or temporary file left behind.
 
 from __future__ import annotations
 
+import errno
+import json
 import math
+import os
+import signal
+import stat
 import subprocess
 import sys
+import time
+from dataclasses import dataclass
 from pathlib import Path
 
 import pytest
@@ -37,13 +44,19 @@ def _wrap(deg: float) -> float:
 POSES = [(0.0, a, a, a) for a in (_wrap(18.0 * k) for k in range(20))]
 
 
-def _position(q_deg: tuple[float, ...], k: int) -> tuple[float, float]:
-    """Position of the deviated arm plus a deterministic ~0.1 mm 'noise'."""
+def _exact_position(q_deg: tuple[float, ...]) -> tuple[float, float]:
+    """Position of the deviated arm (paper eq. 1, written out independently)."""
     x = y = angle = 0.0
     for length, dl, q, dq in zip(LINKS_MM, DL_MM, q_deg, DQ_DEG, strict=True):
         angle += math.radians(q + dq)
         x += (length + dl) * math.cos(angle)
         y += (length + dl) * math.sin(angle)
+    return x, y
+
+
+def _position(q_deg: tuple[float, ...], k: int) -> tuple[float, float]:
+    """Position of the deviated arm plus a deterministic ~0.1 mm 'noise'."""
+    x, y = _exact_position(q_deg)
     return x + 0.1 * math.sin(3.7 * k), y + 0.1 * math.cos(2.3 * k)
 
 
@@ -90,6 +103,16 @@ TRUTH_TOML = "dl_mm = [1.5, -0.6, -0.4, 0.7]\ndq_deg = [0.5, -0.5, 0.7, -0.3]\n"
 
 #: Marks an input that is a folder rather than a file.
 FOLDER = object()
+#: Marks a FIFO (named pipe); never opened by these tests, since opening one blocks.
+FIFO = object()
+
+
+@dataclass(frozen=True)
+class Link:
+    """A symbolic link to ``target``."""
+
+    target: str
+
 
 IDENTIFY = ("identify", "--measurements", "meas.csv", "-o", "cal.json")
 SYNTHESIZE = ("synthesize", "--plan", "plan.csv", "-o", "meas.csv")
@@ -125,6 +148,10 @@ def _write(root: Path, files: dict[str, object]) -> None:
         path = root / name
         if content is FOLDER:
             path.mkdir()
+        elif content is FIFO:
+            os.mkfifo(path)
+        elif isinstance(content, Link):
+            path.symlink_to(content.target)
         elif isinstance(content, bytes):
             path.write_bytes(content)
         else:
@@ -132,12 +159,24 @@ def _write(root: Path, files: dict[str, object]) -> None:
             path.write_text(content, encoding="utf-8")
 
 
-def _snapshot(root: Path) -> dict[str, bytes | None]:
-    """Every path under ``root`` (hidden temp files included) with its bytes; None for folders."""
-    return {
-        p.relative_to(root).as_posix(): None if p.is_dir() else p.read_bytes()
-        for p in sorted(root.rglob("*"))
-    }
+def _entry(path: Path) -> bytes | str | None:
+    """A file's bytes, a link's target, a special file's kind, or None for a folder.
+
+    Never opens anything but a regular file (opening a FIFO would block).
+    """
+    mode = path.lstat().st_mode
+    if stat.S_ISLNK(mode):
+        return f"link to {os.readlink(path)}"
+    if stat.S_ISDIR(mode):
+        return None
+    if stat.S_ISREG(mode):
+        return path.read_bytes()
+    return f"special file {stat.filemode(mode)}"
+
+
+def _snapshot(root: Path) -> dict[str, bytes | str | None]:
+    """Every path under ``root`` (hidden temp files included) as :func:`_entry` sees it."""
+    return {p.relative_to(root).as_posix(): _entry(p) for p in sorted(root.rglob("*"))}
 
 
 def _output(argv: tuple[str, ...]) -> str | None:
@@ -415,6 +454,67 @@ CASES = [
         ("demo", "-o", "afile"),
         ("afile",),
     ),
+    case(
+        "output-is-a-fifo",
+        {"meas.csv": VALID_MEAS, "cal.json": FIFO},
+        IDENTIFY,
+        ("cal.json", "FIFO"),
+    ),
+    case(
+        "output-is-the-input-by-another-name",
+        {"meas.csv": VALID_MEAS},
+        ("identify", "--measurements", "meas.csv", "-o", "./meas.csv"),
+        ("./meas.csv", "--measurements meas.csv"),
+    ),
+    case(
+        "output-is-a-link-to-the-input",
+        {"meas.csv": VALID_MEAS, "cal.json": Link("meas.csv")},
+        IDENTIFY,
+        ("cal.json", "--measurements meas.csv"),
+    ),
+    case(
+        "design-output-is-the-robot-file",
+        {"robot.toml": ROBOT_TOML},
+        ("design", "--robot", "robot.toml", "--poses", "12", "-o", "robot.toml"),
+        ("robot.toml", "--robot robot.toml"),
+    ),
+    case(
+        "synthesize-output-is-the-plan",
+        {"plan.csv": VALID_PLAN},
+        ("synthesize", "--plan", "plan.csv", "-o", "plan.csv"),
+        ("plan.csv", "--plan plan.csv"),
+    ),
+    case(
+        "design-same-file-for-plan-and-plot",
+        {},
+        ("design", "--poses", "12", "--plot", "plan.csv", "-o", "plan.csv"),
+        ("plan.csv", "two outputs"),
+    ),
+    # Checked before any work: no plan.csv is written, and no optimizing is done first.
+    case(
+        "design-plot-folder-missing",
+        {},
+        ("design", "--poses", "12", "--plot", "nodir/plan.png", "-o", "plan.csv"),
+        ("nodir/plan.png", "folder nodir"),
+    ),
+    case(
+        "design-output-folder-missing",
+        {},
+        ("design", "--poses", "7", "--method", "optimize", "-o", "nodir/plan.csv"),
+        ("nodir/plan.csv", "folder nodir"),
+    ),
+    case(
+        "reproduce-output-folder-under-a-file",
+        {"afile": "keep me\n"},
+        ("reproduce", "-o", "afile/out"),
+        ("afile/out", "afile is a file"),
+    ),
+    case(
+        "demo-output-folder-holds-a-folder-named-like-an-output",
+        {"out": FOLDER, "out/plan.csv": FOLDER},
+        ("demo", "-o", "out"),
+        ("out/plan.csv", "directory"),
+    ),
     # ---- command-line usage (no file to name; check the option is named)
     case(
         "usage-negative-sigma",
@@ -447,6 +547,31 @@ CASES = [
         {},
         ("identify", "-o", "cal.json"),
         ("--measurements",),
+    ),
+    case(
+        "usage-synthesize-sigma-nan",
+        {"plan.csv": VALID_PLAN},
+        ("synthesize", "--plan", "plan.csv", "--sigma", "nan", "-o", "meas.csv"),
+        ("--sigma", "nan"),
+    ),
+    case(
+        "usage-synthesize-sigma-negative",
+        {"plan.csv": VALID_PLAN},
+        ("synthesize", "--plan", "plan.csv", "--sigma", "-0.5", "-o", "meas.csv"),
+        ("--sigma", "-0.5"),
+    ),
+    # ---- a negative --seed, in every command that takes one (reproduce makes no folder)
+    *(
+        case(f"usage-negative-seed-{argv[0]}", files, (*argv, "--seed", "-1"), ("--seed", "-1"))
+        for files, argv in [
+            ({"plan.csv": VALID_PLAN}, ("synthesize", "--plan", "plan.csv", "-o", "meas.csv")),
+            ({}, ("design", "--poses", "12", "-o", "plan.csv")),
+            ({"plan.csv": VALID_PLAN}, ("evaluate", "--plan", "plan.csv")),
+            ({"plan.csv": VALID_PLAN}, ("simulate", "--plan", "plan.csv")),
+            ({}, ("poses-needed", "--length-std-mm", "0.01", "-o", "plan.csv")),
+            ({}, ("reproduce", "-o", "out")),
+            ({}, ("demo", "-o", "out")),
+        ]
     ),
     # ---- simulate and poses-needed
     case(
@@ -516,7 +641,7 @@ def test_bad_input_exits_2_with_one_error_line(
         assert text in message, f"{text!r} not in {message!r}"
     assert result.stdout == "", result.stdout
     out = _output(argv)
-    if out is not None and out not in files:
+    if out is not None and os.path.normpath(out) not in files:
         assert not (tmp_path / out).exists(), f"{out} was written"
     assert _snapshot(tmp_path) == before, "files were written, changed or left behind"
 
@@ -550,3 +675,81 @@ def test_valid_inputs_succeed(
     assert result.stderr == ""
     assert (tmp_path / output).is_file()
     assert sorted(p.name for p in tmp_path.iterdir()) == sorted({*files, output})
+
+
+# --------------------------------------------------------------------------- outputs
+
+
+def test_output_link_is_written_through(tmp_path: Path) -> None:
+    """A symbolic link as -o: the file it points to is replaced (mode kept), the link kept."""
+    _write(tmp_path, {"meas.csv": VALID_MEAS, "data": FOLDER, "data/cal.json": "old\n"})
+    (tmp_path / "cal.json").symlink_to("data/cal.json")
+    (tmp_path / "data" / "cal.json").chmod(0o640)
+
+    result = run_cli(tmp_path, *IDENTIFY)
+
+    assert result.returncode == 0, result.stderr
+    assert os.readlink(tmp_path / "cal.json") == "data/cal.json"
+    target = tmp_path / "data" / "cal.json"
+    assert json.loads(target.read_text(encoding="utf-8"))["format"] == "armcal-calibration/1"
+    assert stat.S_IMODE(target.stat().st_mode) == 0o640
+    assert set(_snapshot(tmp_path)) == {"meas.csv", "cal.json", "data", "data/cal.json"}
+
+
+def test_synthesize_sigma_zero_gives_noiseless_data(tmp_path: Path) -> None:
+    _write(tmp_path, {"plan.csv": VALID_PLAN})
+
+    result = run_cli(tmp_path, "synthesize", "--plan", "plan.csv", "--sigma", "0.00")
+
+    assert result.returncode == 0, result.stderr
+    lines = result.stdout.splitlines()
+    assert lines[0] == MEAS_HEADER and len(lines) == 1 + len(POSES)
+    for line, pose in zip(lines[1:], POSES, strict=True):
+        fields = [float(v) for v in line.split(",")]
+        assert fields[:4] == list(pose)
+        # Exact positions of the paper's deviated arm; both sides round off at ~1e-13 mm.
+        for got, want in zip(fields[4:], _exact_position(pose), strict=True):
+            assert math.isclose(got, want, rel_tol=0, abs_tol=1e-9), (line, want)
+
+
+@pytest.mark.skipif(not hasattr(os, "mkfifo"), reason="needs a FIFO to know the run has started")
+def test_ctrl_c_exits_130_with_one_line(tmp_path: Path) -> None:
+    """SIGINT during a long simulate: status 130, one stderr line, nothing written.
+
+    The plan is a FIFO: opening it for writing succeeds only once the program
+    opens it to read the plan, so the signal surely arrives while ``main`` runs.
+    """
+    _write(tmp_path, {"plan.csv": FIFO})
+    before = _snapshot(tmp_path)
+    argv = ["simulate", "--plan", "plan.csv", "--trials", "100000000"]
+    with subprocess.Popen(
+        [sys.executable, "-m", "armcal", *argv],
+        cwd=tmp_path,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        encoding="utf-8",
+    ) as proc:
+        try:
+            deadline = time.monotonic() + 60.0
+            while True:
+                try:
+                    fd = os.open(tmp_path / "plan.csv", os.O_WRONLY | os.O_NONBLOCK)
+                    break
+                except OSError as exc:  # ENXIO: no reader yet
+                    assert exc.errno == errno.ENXIO, exc
+                assert proc.poll() is None, proc.communicate()
+                assert time.monotonic() < deadline, "armcal never opened its plan"
+                time.sleep(0.02)
+            os.set_blocking(fd, True)
+            with os.fdopen(fd, "w", encoding="utf-8") as plan:
+                plan.write(VALID_PLAN)
+            proc.send_signal(signal.SIGINT)
+            stdout, stderr = proc.communicate(timeout=60)
+        finally:
+            proc.kill()
+
+    assert proc.returncode == 130, stderr
+    assert stderr == "armcal: interrupted\n"
+    assert stdout == ""
+    assert _snapshot(tmp_path) == before

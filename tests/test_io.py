@@ -1,6 +1,8 @@
 """Files: robot and truth TOML, plan and measurement CSV, calibration JSON."""
 
 import json
+import os
+import stat
 
 import numpy as np
 import pytest
@@ -8,12 +10,16 @@ from numpy.testing import assert_allclose
 
 from armcal import Annulus, Box, InputError, forward_kinematics, identify, orthogonal_plan
 from armcal.io import (
+    OutputFolder,
+    atomic_write,
+    check_outputs,
     format_measurements_csv,
     format_plan_csv,
     load_robot,
     load_truth,
     read_measurements,
     read_plan,
+    write_folder,
 )
 from armcal.report import calibration_to_dict, to_json
 
@@ -187,3 +193,158 @@ def test_calibration_json_has_the_contract_keys(arm4, paper_truth4, rng):
 def test_to_json_refuses_nan():
     with pytest.raises(ValueError):
         to_json({"x": float("nan")})
+
+
+# --------------------------------------------------------------------------- writing
+
+
+def _umask() -> int:
+    umask = os.umask(0o022)
+    os.umask(umask)
+    return umask
+
+
+def _mode(path) -> int:
+    return stat.S_IMODE(path.stat().st_mode)
+
+
+def test_atomic_write_through_a_link_keeps_the_link_and_the_mode(tmp_path):
+    (tmp_path / "data").mkdir()
+    target = tmp_path / "data" / "plan.csv"
+    target.write_text("old\n")
+    target.chmod(0o640)
+    link = tmp_path / "plan.csv"
+    link.symlink_to("data/plan.csv")
+    atomic_write(link, "new\n")
+    assert link.is_symlink() and os.readlink(link) == "data/plan.csv"
+    assert target.read_text() == "new\n" and _mode(target) == 0o640
+    assert sorted(p.name for p in tmp_path.rglob("*")) == ["data", "plan.csv", "plan.csv"]
+
+
+def test_atomic_write_through_a_dangling_link_makes_its_target(tmp_path):
+    link = tmp_path / "out.csv"
+    link.symlink_to("made.csv")
+    atomic_write(link, b"bytes\n")
+    assert link.is_symlink() and (tmp_path / "made.csv").read_bytes() == b"bytes\n"
+    assert _mode(tmp_path / "made.csv") == 0o666 & ~_umask()
+
+
+@pytest.mark.skipif(not hasattr(os, "mkfifo"), reason="POSIX FIFO")
+def test_atomic_write_never_replaces_a_fifo_or_a_folder(tmp_path):
+    fifo = tmp_path / "pipe"
+    os.mkfifo(fifo)
+    with pytest.raises(InputError, match=r"pipe: is a FIFO \(named pipe\), not a regular file"):
+        atomic_write(fifo, "x")
+    assert stat.S_ISFIFO(os.lstat(fifo).st_mode)
+    link = tmp_path / "link"
+    link.symlink_to("pipe")  # a link is followed, and what it points to is checked
+    with pytest.raises(InputError, match="FIFO"):
+        atomic_write(link, "x")
+    with pytest.raises(InputError, match="is a directory, expected a file"):
+        atomic_write(tmp_path, "x")
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["link", "pipe"]
+
+
+def test_atomic_write_interrupted_keeps_the_old_file(tmp_path):
+    target = tmp_path / "cal.json"
+    target.write_text("old\n")
+
+    def interrupted(handle):
+        handle.write(b"half")
+        raise KeyboardInterrupt
+
+    with pytest.raises(KeyboardInterrupt):
+        atomic_write(target, interrupted)
+    assert [p.name for p in tmp_path.iterdir()] == ["cal.json"]
+    assert target.read_text() == "old\n"
+
+
+def test_check_outputs_finds_an_input_under_any_name(tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "m.csv").write_text("input\n")
+    (tmp_path / "link.csv").symlink_to("m.csv")
+    os.link(tmp_path / "m.csv", tmp_path / "hard.csv")
+    inputs = {"--robot": None, "--measurements": "m.csv"}
+    for name in ("m.csv", "./m.csv", str(tmp_path / "m.csv"), "link.csv", "hard.csv"):
+        with pytest.raises(InputError, match=r"is the input --measurements m\.csv") as info:
+            check_outputs({"-o": name}, inputs)
+        assert str(info.value).startswith(f"{name}: ")
+    check_outputs({"-o": "other.csv", "--plot": None}, inputs)  # a new file is fine
+    with pytest.raises(InputError, match=r"two outputs \(-o a\.csv and --plot \./a\.csv\)"):
+        check_outputs({"-o": "a.csv", "--plot": "./a.csv"})
+    assert (tmp_path / "m.csv").read_text() == "input\n"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["hard.csv", "link.csv", "m.csv"]
+
+
+def test_check_outputs_folders(tmp_path):
+    (tmp_path / "afile").write_text("keep\n")
+    (tmp_path / "out").mkdir()
+    (tmp_path / "out" / "plan.csv").mkdir()
+    files = ("plan.csv", "cal.json")
+    cases = [
+        (tmp_path / "afile", "is a file, expected a folder"),
+        (tmp_path / "afile" / "sub", "afile is a file, not a folder"),
+        (tmp_path / "out", r"out/plan\.csv: is a directory.*give -o another folder"),
+    ]
+    for path, match in cases:
+        with pytest.raises(InputError, match=match):
+            check_outputs({"-o": OutputFolder(path, files)})
+    (tmp_path / "truth.toml").write_text("")
+    with pytest.raises(InputError, match="is the input --truth"):
+        check_outputs(
+            {"-o": OutputFolder(tmp_path, ("truth.toml",))}, {"--truth": tmp_path / "truth.toml"}
+        )
+    check_outputs({"-o": OutputFolder(tmp_path / "new" / "deeper", files)})  # made when written
+    with pytest.raises(InputError, match="output folder name is empty"):  # "" is not "."
+        check_outputs({"-o": OutputFolder("", files)})
+    with pytest.raises(InputError, match="output file name is empty"):
+        check_outputs({"-o": ""})
+    assert sorted(p.name for p in tmp_path.rglob("*")) == [
+        "afile",
+        "out",
+        "plan.csv",
+        "truth.toml",
+    ]
+
+
+def test_write_folder_makes_a_new_folder_only_when_complete(tmp_path):
+    folder = tmp_path / "a" / "b"
+    write_folder(folder, {"x.txt": "text\n", "y.bin": lambda path: path.write_bytes(b"\x00")})
+    assert (folder / "x.txt").read_text() == "text\n"
+    assert (folder / "y.bin").read_bytes() == b"\x00"
+    for made in (tmp_path / "a", folder):  # as mkdir would make them, not mkdtemp's 0700
+        assert _mode(made) == 0o777 & ~_umask()
+    assert _mode(folder / "x.txt") == 0o666 & ~_umask()
+    assert sorted(p.name for p in tmp_path.rglob("*")) == ["a", "b", "x.txt", "y.bin"]
+
+
+@pytest.mark.parametrize("error", [RuntimeError, KeyboardInterrupt])
+def test_write_folder_failure_leaves_nothing(tmp_path, error):
+    def fail(path):
+        path.write_bytes(b"half")
+        raise error("render failed")
+
+    with pytest.raises(error):
+        write_folder(tmp_path / "new" / "out", {"x.txt": "text\n", "y.png": fail})
+    assert list(tmp_path.iterdir()) == []
+    old = tmp_path / "old"
+    old.mkdir()
+    (old / "x.txt").write_text("old\n")
+    with pytest.raises(error):
+        write_folder(old, {"x.txt": "text\n", "y.png": fail})
+    assert [p.name for p in old.iterdir()] == ["x.txt"]
+    assert (old / "x.txt").read_text() == "old\n"
+
+
+def test_write_folder_into_an_existing_folder(tmp_path):
+    (tmp_path / "real.txt").write_text("old\n")
+    (tmp_path / "real.txt").chmod(0o600)
+    out = tmp_path / "out"
+    out.mkdir()
+    (out / "other").write_text("keep\n")
+    (out / "x.txt").symlink_to("../real.txt")
+    write_folder(out, {"x.txt": "new\n", "y.txt": "y\n"})
+    assert (out / "x.txt").is_symlink() and (tmp_path / "real.txt").read_text() == "new\n"
+    assert _mode(tmp_path / "real.txt") == 0o600
+    assert (out / "other").read_text() == "keep\n" and (out / "y.txt").read_text() == "y\n"
+    assert sorted(p.name for p in out.iterdir()) == ["other", "x.txt", "y.txt"]

@@ -1,15 +1,20 @@
 """The ``armcal`` command line: parse arguments, call the library, write files.
 
 Exit status: 0 on success, 2 for bad input (one ``armcal: error: ...`` line on
-stderr, no traceback, no output file), 1 for bugs.
+stderr, no traceback, no output file), 130 when interrupted (Ctrl-C; one
+``armcal: interrupted`` line), 1 for bugs.  Output paths are checked before any
+work (:func:`armcal.io.check_outputs`).
 """
 
 from __future__ import annotations
 
 import argparse
+import math
 import sys
 import time
 from collections.abc import Callable, Sequence
+from functools import partial
+from pathlib import Path
 
 import numpy as np
 
@@ -18,18 +23,21 @@ from .criteria import CRITERIA, evaluate_plan
 from .doe import METHODS as DESIGN_METHODS
 from .doe import TARGETS, design, feasible, poses_needed, random_plan
 from .errors import ArmcalError, ArmcalWarning, NotIdentifiableError
-from .identification import METHODS, Calibration, identify
+from .identification import METHODS, Calibration, Method, identify
 from .io import (
+    BUILTIN_ROBOTS,
     DEFAULT_ROBOT,
+    OutputFolder,
     RobotSpec,
     atomic_write,
+    check_outputs,
     format_measurements_csv,
     format_plan_csv,
     load_robot,
     load_truth,
-    make_folder,
     read_measurements,
     read_plan,
+    write_folder,
 )
 from .progress import ProgressBar
 from .report import (
@@ -60,20 +68,59 @@ class _Parser(argparse.ArgumentParser):
         raise ArmcalError(f"{message} (see '{self.prog} --help')")
 
 
-def _positive(text: str) -> float:
+#: Files written by ``demo -o DIR`` and ``reproduce -o DIR``, checked before any work.
+_DEMO_FILES = ("plan.csv", "measurements.csv", "calibration.json")
+_REPRODUCE_FILES = (
+    *(f"{name}.csv" for name in TABLE_COLUMNS),
+    "figure1.png",
+    "figure2.png",
+    "report.md",
+)
+
+_OUTPUTS_EPILOG = (
+    "Outputs: every output path is checked before any work.  A file is written to a "
+    "temporary file and renamed into place, so a failed or interrupted run leaves no "
+    "half-written file; an output folder appears only once all its files are complete.  "
+    "An output that is a symbolic link is written through: the file it points to is "
+    "replaced and the link is kept.  An output that is an input of the same command, a "
+    "directory where a file is expected, or a special file (FIFO, device, socket) is "
+    "refused.  Exit status: 0 done, 2 bad input (one 'armcal: error:' line), "
+    "130 interrupted, 1 a bug."
+)
+
+
+def _finite(text: str) -> float:
     try:
         value = float(text)
     except ValueError:
         raise argparse.ArgumentTypeError(f"expected a number, got {text!r}") from None
-    if not (np.isfinite(value) and value > 0):
-        raise argparse.ArgumentTypeError(f"expected a positive number, got {text!r}")
+    if not math.isfinite(value):
+        raise argparse.ArgumentTypeError(f"expected a finite number, got {text!r}")
+    return value
+
+
+def _positive(text: str) -> float:
+    value = _finite(text)
+    if value <= 0:
+        raise argparse.ArgumentTypeError(f"expected a number > 0, got {text!r}")
     return value
 
 
 def _non_negative(text: str) -> float:
-    if text.strip() in ("0", "0.0"):
-        return 0.0
-    return _positive(text)
+    value = _finite(text)
+    if value < 0:
+        raise argparse.ArgumentTypeError(f"expected a number >= 0, got {text!r}")
+    return value + 0.0  # -0.0 -> 0.0
+
+
+def _seed(text: str) -> int:
+    try:
+        value = int(text)
+    except ValueError:
+        value = -1
+    if value < 0:
+        raise argparse.ArgumentTypeError(f"expected a whole number >= 0, got {text!r}")
+    return value
 
 
 def _poses(text: str) -> int:
@@ -137,7 +184,9 @@ def _synthesize(args: argparse.Namespace) -> None:
     )
 
 
-def _identify_file(spec: RobotSpec, path: str, *, method: str, sigma: float | None) -> Calibration:
+def _identify_file(
+    spec: RobotSpec, path: str, *, method: Method, sigma: float | None
+) -> Calibration:
     meas = read_measurements(path, spec.arm)
     try:
         return identify(
@@ -182,15 +231,9 @@ def _demo(args: argparse.Namespace) -> None:
         format_calibration(cal, truth=truth),
     ]
     if args.output is not None:
-        folder = make_folder(args.output)
-        files = {
-            "plan.csv": format_plan_csv(q),
-            "measurements.csv": format_measurements_csv(q, xy),
-            "calibration.json": to_json(document),
-        }
-        for name, text in files.items():
-            atomic_write(folder / name, text)
-        lines += ["", f"wrote {', '.join(files)} to {folder}/"]
+        texts = (format_plan_csv(q), format_measurements_csv(q, xy), to_json(document))
+        folder = write_folder(args.output, dict(zip(_DEMO_FILES, texts, strict=True)))
+        lines += ["", f"wrote {', '.join(_DEMO_FILES)} to {folder}/"]
     _emit(args, document, "\n".join(lines))
 
 
@@ -231,13 +274,14 @@ def _design(args: argparse.Namespace) -> None:
     extra, header = design_summary(result, seconds)
     document.update(extra)
     written = []
+    if args.plot is not None:  # first: drawing is what can fail, the plan CSV is text
+        from .plotting import plot_plan, save_figure  # matplotlib only when a plot is asked for
+
+        save_figure(plot_plan(spec.arm, result.q), args.plot)
     if args.output is not None:
         atomic_write(args.output, format_plan_csv(result.q))
         written.append(f"wrote {args.output}")
     if args.plot is not None:
-        from .plotting import plot_plan, save_figure  # matplotlib only when a plot is asked for
-
-        save_figure(plot_plan(spec.arm, result.q), args.plot)
         written.append(f"wrote {args.plot}")
     _emit(args, document, "\n".join([*header, report, *([""] if written else []), *written]))
 
@@ -343,7 +387,6 @@ def _poses_needed(args: argparse.Namespace) -> None:
 def _reproduce(args: argparse.Namespace) -> None:
     from .plotting import plot_accuracy_curves, plot_random_plans, save_figure
 
-    folder = make_folder(args.output)
     result = reproduce(
         trials=args.trials,
         random_plans=args.random_plans,
@@ -353,19 +396,15 @@ def _reproduce(args: argparse.Namespace) -> None:
     study = result.figure1
     title = f"paper-4link, sigma {result.sigma:g} mm: accuracy against the number of poses"
     tables = result.tables
-    outputs = {
+    figure1 = plot_random_plans(study.det_d, study.det_c, study.abs_det_s, poses=study.poses)
+    figure2 = plot_accuracy_curves(result.figure2, title=title)
+    outputs: dict[str, str | Callable[[Path], None]] = {
         **{f"{name}.csv": table_csv(tables[name], cols) for name, cols in TABLE_COLUMNS.items()},
-        "figure1.png": plot_random_plans(
-            study.det_d, study.det_c, study.abs_det_s, poses=study.poses
-        ),
-        "figure2.png": plot_accuracy_curves(result.figure2, title=title),
+        "figure1.png": partial(save_figure, figure1),
+        "figure2.png": partial(save_figure, figure2),
         "report.md": format_reproduction(result),
     }
-    for name, content in outputs.items():
-        if isinstance(content, str):
-            atomic_write(folder / name, content)
-        else:
-            save_figure(content, folder / name)
+    folder = write_folder(args.output, outputs)
     files = list(outputs)
     table3 = result.tables["table3"]
     document = {
@@ -403,7 +442,7 @@ def _add_common(
         help=f"built-in robot name or robot TOML file (default {DEFAULT_ROBOT})",
     )
     if seed:
-        sub.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
+        sub.add_argument("--seed", type=_seed, default=0, help="random seed >= 0 (default 0)")
     sub.add_argument("--json", action="store_true", help="print a JSON document on stdout")
     if output is not None:
         sub.add_argument("-o", "--output", metavar="PATH", help=output)
@@ -414,12 +453,17 @@ def build_parser() -> argparse.ArgumentParser:
     parser = _Parser(
         prog="armcal",
         description="Design, run and evaluate calibration experiments for planar serial arms.",
+        epilog=_OUTPUTS_EPILOG,
     )
     parser.add_argument("--version", action="version", version=f"armcal {__version__}")
     subs = parser.add_subparsers(dest="command", metavar="COMMAND", parser_class=_Parser)
     subs.required = True
 
-    sub = subs.add_parser("synthesize", help="measurements of a virtual robot (truth + noise)")
+    sub = subs.add_parser(
+        "synthesize",
+        help="measurements of a virtual robot (truth + noise)",
+        epilog=_OUTPUTS_EPILOG,
+    )
     sub.add_argument("--plan", required=True, metavar="PLAN_CSV", help="plan CSV (q1_deg..)")
     sub.add_argument("--truth", metavar="TRUTH_TOML", help="deviations (default: the built-in's)")
     sub.add_argument(
@@ -429,9 +473,11 @@ def build_parser() -> argparse.ArgumentParser:
         help=f"noise std in mm (default: robot file's sigma_mm, else {DEFAULT_SIGMA_MM})",
     )
     _add_common(sub, seed=True, output="measurements CSV to write (default: stdout)")
-    sub.set_defaults(run=_synthesize)
+    sub.set_defaults(run=_synthesize, inputs=("robot", "plan", "truth"), outputs=("output",))
 
-    sub = subs.add_parser("identify", help="parameter deviations ± std from measurements")
+    sub = subs.add_parser(
+        "identify", help="parameter deviations ± std from measurements", epilog=_OUTPUTS_EPILOG
+    )
     sub.add_argument("--measurements", required=True, metavar="CSV", help="measurements CSV")
     sub.add_argument(
         "--method",
@@ -446,11 +492,13 @@ def build_parser() -> argparse.ArgumentParser:
         help="instrument noise in mm (default: robot file's sigma_mm, else estimated)",
     )
     _add_common(sub, output="calibration JSON to write")
-    sub.set_defaults(run=_identify)
+    sub.set_defaults(run=_identify, inputs=("robot", "measurements"), outputs=("output",))
 
     sigma_help = f"noise std in mm (default: robot file's sigma_mm, else {DEFAULT_SIGMA_MM})"
     test_help = "plan CSV of poses where accuracy matters (default: 1000 uniform in the limits)"
-    sub = subs.add_parser("design", help="an optimal plan within the limits and region")
+    sub = subs.add_parser(
+        "design", help="an optimal plan within the limits and region", epilog=_OUTPUTS_EPILOG
+    )
     sub.add_argument("--poses", type=_poses, required=True, metavar="M", help="number of poses")
     sub.add_argument(
         "--criterion", choices=list(CRITERIA), default="D", help="criterion (default D)"
@@ -466,14 +514,16 @@ def build_parser() -> argparse.ArgumentParser:
     sub.add_argument("--sigma", type=_positive, metavar="MM", help=sigma_help)
     sub.add_argument("--test-poses", metavar="PLAN_CSV", help=test_help)
     _add_common(sub, seed=True, output="plan CSV to write")
-    sub.set_defaults(run=_design)
+    sub.set_defaults(
+        run=_design, inputs=("robot", "candidates", "test_poses"), outputs=("output", "plot")
+    )
 
     sub = subs.add_parser("evaluate", help="quality of a plan: criteria, predicted std")
     sub.add_argument("--plan", required=True, metavar="PLAN_CSV", help="plan CSV (q1_deg..)")
     sub.add_argument("--sigma", type=_positive, metavar="MM", help=sigma_help)
     sub.add_argument("--test-poses", metavar="PLAN_CSV", help=test_help)
     _add_common(sub, seed=True)
-    sub.set_defaults(run=_evaluate)
+    sub.set_defaults(run=_evaluate, inputs=("robot", "plan", "test_poses"))
 
     sub = subs.add_parser("simulate", help="Monte Carlo: empirical vs predicted std and bias")
     sub.add_argument("--plan", required=True, metavar="PLAN_CSV", help="plan CSV (q1_deg..)")
@@ -490,9 +540,13 @@ def build_parser() -> argparse.ArgumentParser:
     )
     sub.add_argument("--test-poses", metavar="PLAN_CSV", help=test_help)
     _add_common(sub, seed=True)
-    sub.set_defaults(run=_simulate)
+    sub.set_defaults(run=_simulate, inputs=("robot", "plan", "truth", "test_poses"))
 
-    sub = subs.add_parser("poses-needed", help="the smallest m whose best plan reaches a target")
+    sub = subs.add_parser(
+        "poses-needed",
+        help="the smallest m whose best plan reaches a target",
+        epilog=_OUTPUTS_EPILOG,
+    )
     group = sub.add_mutually_exclusive_group(required=True)
     for key, option in _TARGET_OPTIONS.items():
         group.add_argument(
@@ -504,9 +558,13 @@ def build_parser() -> argparse.ArgumentParser:
         "--max-poses", type=_poses, default=5000, metavar="M", help="give up beyond (default 5000)"
     )
     _add_common(sub, seed=True, output="plan CSV of the plan that reaches the target")
-    sub.set_defaults(run=_poses_needed)
+    sub.set_defaults(run=_poses_needed, inputs=("robot", "test_poses"), outputs=("output",))
 
-    sub = subs.add_parser("reproduce", help="the paper's Tables I-III and Figures 1-2, recomputed")
+    sub = subs.add_parser(
+        "reproduce",
+        help="the paper's Tables I-III and Figures 1-2, recomputed",
+        epilog=_OUTPUTS_EPILOG,
+    )
     sub.add_argument(
         "--trials",
         type=_trials,
@@ -521,29 +579,58 @@ def build_parser() -> argparse.ArgumentParser:
         metavar="N",
         help="random plans per study (default 10000, as in the paper)",
     )
-    sub.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
+    sub.add_argument("--seed", type=_seed, default=0, help="random seed >= 0 (default 0)")
     sub.add_argument("--json", action="store_true", help="print a JSON document on stdout")
     sub.add_argument("-o", "--output", required=True, metavar="DIR", help="folder to write")
-    sub.set_defaults(run=_reproduce)
+    sub.set_defaults(run=_reproduce, outputs=("output",), folder_files=_REPRODUCE_FILES)
 
-    sub = subs.add_parser("demo", help="the whole workflow on a virtual robot")
+    sub = subs.add_parser(
+        "demo", help="the whole workflow on a virtual robot", epilog=_OUTPUTS_EPILOG
+    )
     sub.add_argument("--poses", type=_poses, default=20, help="number of poses (default 20)")
     sub.add_argument("--truth", metavar="TRUTH_TOML", help="deviations (default: the built-in's)")
     sub.add_argument("--sigma", type=_positive, metavar="MM", help="noise std in mm")
     _add_common(sub, seed=True, output="folder for plan, measurements and calibration")
-    sub.set_defaults(run=_demo)
+    sub.set_defaults(
+        run=_demo, inputs=("robot", "truth"), outputs=("output",), folder_files=_DEMO_FILES
+    )
     return parser
+
+
+def _option(dest: str) -> str:
+    return "-o" if dest == "output" else "--" + dest.replace("_", "-")
+
+
+def _check_paths(args: argparse.Namespace) -> None:
+    """Refuse the command's unusable output paths before it does any work."""
+    inputs = {_option(dest): getattr(args, dest) for dest in getattr(args, "inputs", ())}
+    if inputs.get("--robot") in BUILTIN_ROBOTS:
+        del inputs["--robot"]  # a name, not a file
+    folder_files = getattr(args, "folder_files", ())
+    outputs: dict[str, str | OutputFolder | None] = {}
+    for dest in getattr(args, "outputs", ()):
+        path = getattr(args, dest)
+        outputs[_option(dest)] = (
+            OutputFolder(path, folder_files) if folder_files and path is not None else path
+        )
+    check_outputs(outputs, inputs)
 
 
 def main(argv: Sequence[str] | None = None) -> int:
     """Run the ``armcal`` program; returns the exit status."""
     try:
         args = build_parser().parse_args(argv)
+        _check_paths(args)
         run: Callable[[argparse.Namespace], None] = args.run
         run(args)
     except ArmcalError as exc:
         print(f"armcal: error: {exc}", file=sys.stderr)
         return 2
+    except KeyboardInterrupt:  # Ctrl-C: writers have removed their temporary files
+        if sys.stderr.isatty():
+            sys.stderr.write("\n")  # after a progress bar or the terminal's ^C
+        print("armcal: interrupted", file=sys.stderr)
+        return 130
     except BrokenPipeError:  # e.g. `armcal synthesize ... | head`
         sys.stderr.close()
         return 0

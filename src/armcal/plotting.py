@@ -298,12 +298,14 @@ def save_figure(fig: Figure, path: str | os.PathLike) -> None:
     ----------
     fig : matplotlib.figure.Figure
     path : str or os.PathLike
-        Target file; its folder must exist.  An existing file is replaced.
+        Target file; its folder must exist.  An existing file is replaced; a
+        symbolic link is written through (see :func:`armcal.io.atomic_write`).
 
     Raises
     ------
     InputError
-        If the folder does not exist, ``path`` is a folder, or it cannot be written.
+        If the folder does not exist or is not writable, or ``path`` is a
+        directory or a special file (FIFO, device, socket).
     """
     FigureCanvasAgg(fig)  # attach the Agg canvas: no GUI backend is ever involved
     atomic_write(path, lambda handle: fig.savefig(handle, format="png", dpi=120))
