@@ -10,6 +10,8 @@ import numpy as np
 import pytest
 
 from armcal import (
+    PlanarArm,
+    design,
     forward_kinematics,
     jacobian,
     link_angles,
@@ -17,8 +19,8 @@ from armcal import (
 )
 from armcal.cli import main
 from armcal.paper import PAPER_DIGIT, PAPER_SIGMA_MM, PAPER_TABLE3, paper_arm
+from armcal.report import design_summary, reproduction_summary, table_csv
 from armcal.report import format_reproduction as format_report
-from armcal.report import reproduction_summary, table_csv
 from armcal.reproduction import TABLE_COLUMNS, reproduce
 from armcal.reproduction.catalogue import EQUATIONS, fill
 from armcal.reproduction.equations import FD_RTOL, paper_model
@@ -314,6 +316,22 @@ def test_csv_and_report(result):
 
 def test_fill_writes_lists_element_by_element():
     assert fill("{a:.1f} and {b}", {"a": [1.25, 2.0], "b": "x"}) == "1.2, 2.0 and x"
+
+
+def test_design_note_says_only_the_closed_form_family_was_ruled_out():
+    # Joints 2..3 within +-150 deg: 9 closed-form angles 40 deg apart cannot all fit, yet
+    # other orthogonal plans do: the 3 x 3 factorial q2, q3 in {-120, 0, 120} deg has
+    # sum e^(i q2) = sum e^(i q3) = sum e^(i (q2 + q3)) = 0.
+    arm = PlanarArm([260.0, 180.0, 120.0], np.radians([[-170, 170], [-150, 150], [-150, 150]]))
+    made = design(arm, 9, rng=0, with_certificate=False)
+    document, lines = design_summary(made, 0.0)
+    assert made.method != "analytic" and len(made.notes) == 1
+    assert "closed-form orthogonal plans" in made.notes[0]
+    assert "searched all plans" in made.notes[0]
+    assert "not feasible" not in "\n".join(lines)
+    assert made.d_efficiency >= 1 - 1e-9
+    assert "outside the closed-form family" in lines[2]
+    assert document["certified_d_efficiency"] is None  # no certificate was asked for
 
 
 @pytest.mark.slow

@@ -19,6 +19,7 @@ from .simulate import MonteCarlo
 __all__ = [
     "CALIBRATION_FORMAT",
     "calibration_to_dict",
+    "design_summary",
     "format_calibration",
     "format_monte_carlo",
     "format_quality",
@@ -265,23 +266,48 @@ def monte_carlo_to_dict(result: MonteCarlo) -> dict:
 
 
 def design_summary(result: Design, seconds: float) -> tuple[dict, list[str]]:
+    """JSON keys and header lines of ``armcal design`` (before the plan's quality report).
+
+    Parameters
+    ----------
+    result : Design
+    seconds : float
+        Wall time of the design.
+
+    Returns
+    -------
+    document : dict
+        ``criterion``, ``method``, the certificate's bounds (None without one),
+        ``notes`` and ``seconds``.
+    lines : list of str
+        The method, the notes (why the closed-form plans were not used), the
+        D-efficiency against the unconstrained optimum and the certificate, and
+        an empty line.
+    """
     cert = result.certificate
     document = {
         "criterion": result.criterion,
         "method": result.method,
-        "certified_d_efficiency": cert.certified_d_efficiency,
-        "plan_only_bound": cert.plan_only_bound,
-        "best_weighted_design_d_efficiency": cert.reference_d_efficiency,
+        "certified_d_efficiency": None if cert is None else cert.certified_d_efficiency,
+        "plan_only_bound": None if cert is None else cert.plan_only_bound,
+        "best_weighted_design_d_efficiency": None if cert is None else cert.reference_d_efficiency,
         "notes": list(result.notes),
         "seconds": seconds,
     }
+    efficiency = f"D-efficiency {result.d_efficiency:.4f} of the unconstrained optimum"
+    if result.method != "analytic" and result.d_efficiency >= 1 - 1e-9:
+        # Only the closed-form family was ruled out: say that the search met the optimum.
+        efficiency += " (an orthogonal plan outside the closed-form family)"
+    if cert is not None:
+        efficiency += (
+            f"; certified >= {cert.certified_d_efficiency:.4f} of the best plan within the "
+            f"constraints (plan-only bound {cert.plan_only_bound:.4f})"
+        )
     lines = [
         f"design: {result.q.shape[0]} poses, criterion {result.criterion}, method {result.method} "
         f"({seconds:.2f} s)",
         *(f"note: {note}" for note in result.notes),
-        f"D-efficiency {result.d_efficiency:.4f} of the unconstrained optimum; certified "
-        f">= {cert.certified_d_efficiency:.4f} of the best plan within the constraints "
-        f"(plan-only bound {cert.plan_only_bound:.4f})",
+        efficiency,
         "",
     ]
     return document, lines
