@@ -394,8 +394,10 @@ def _covariance_checks(
     m = s.q.shape[0]
     jac = _printed_jacobian(s.lengths, link_angles(s.q)).reshape(2 * m, -1)
     inverse = np.linalg.inv(jac.T @ jac)
-    noise = s.sigma**2 * np.eye(2 * m)  # E(eps_a eps_a^T): one entry per measured coordinate
-    sandwich = _rel(inverse @ jac.T @ noise @ jac @ inverse, s.sigma**2 * inverse)
+    # E(eps_a eps_a^T) = sigma^2 I_2m, kept as its diagonal (one entry per measured
+    # coordinate) so that no 2m x 2m matrix is formed.
+    noise = np.full(2 * m, s.sigma**2)
+    sandwich = _rel(inverse @ (jac.T * noise) @ jac @ inverse, s.sigma**2 * inverse)
     allowed = 4 / math.sqrt(2 * simulation.trials)
     covariance = equation_check(
         "covariance",
