@@ -233,32 +233,46 @@ def _agrees(computed: float | None, printed: float) -> bool:
     return computed is not None and abs(computed - printed) <= PAPER_DIGIT * (1 + 1e-9)
 
 
-def _row(
+def _configuration_rows(
     n: int,
     m: int,
-    name: str,
-    compared_with: str,
-    unit: str,
-    analytic: float | None,
-    simulated: float | None,
-    printed: float,
-    joint_offset: float | None,
-    note: str,
-) -> dict:
-    return {
-        "links": n,
-        "poses": m,
-        "parameter": name,
-        "compared_with": compared_with,
-        "unit": unit,
-        "analytic_std": None if analytic is None else float(analytic),
-        "simulated_std": None if simulated is None else float(simulated),
-        "paper_value": printed,
-        "computable": "no" if analytic is None else "yes",
-        "agrees": "yes" if _agrees(analytic, printed) else "no",
-        "joint_offset_std": None if joint_offset is None else float(joint_offset),
-        "note": note,
-    }
+    notes: list[str],
+    analytic: np.ndarray | None = None,
+    simulated: np.ndarray | None = None,
+    joint_offsets: np.ndarray | None = None,
+) -> list[dict]:
+    """The ``2n`` rows of one Table III configuration, one per printed value.
+
+    ``analytic`` and ``simulated`` hold the std of ``dl_1..dl_n`` (mm) then of
+    ``dtheta_1..dtheta_n`` (deg), the quantities the printed dL and 'dq' are
+    compared with; ``joint_offsets`` the std of ``dq_1..dq_n`` (deg).  None
+    when the configuration cannot be computed.
+    """
+    printed = PAPER_TABLE3[(n, m)]
+    rows = []
+    for i in range(2 * n):
+        k, is_length = i % n, i < n
+        computed = None if analytic is None else float(analytic[i])
+        value = printed["dl" if is_length else "dq"][k]
+        rows.append(
+            {
+                "links": n,
+                "poses": m,
+                "parameter": f"{'dL' if is_length else 'dq'}{k + 1}",
+                "compared_with": f"{'dl' if is_length else 'dtheta'}{k + 1}",
+                "unit": "mm" if is_length else "deg",
+                "analytic_std": computed,
+                "simulated_std": None if simulated is None else float(simulated[i]),
+                "paper_value": value,
+                "computable": "no" if computed is None else "yes",
+                "agrees": "yes" if _agrees(computed, value) else "no",
+                "joint_offset_std": None
+                if joint_offsets is None or is_length
+                else float(joint_offsets[k]),
+                "note": notes[i],
+            }
+        )
+    return rows
 
 
 def _identifying_plan(arm: PlanarArm, m: int) -> np.ndarray | None:
@@ -280,7 +294,6 @@ def _table3(
     parameters, worst_bias, worst_std = 0, 0.0, 0.0
     for step, (n, m) in enumerate((n, m) for n in _LINKS for m in _POSES):
         arm, truth = paper_arm(n)
-        paper = PAPER_TABLE3[(n, m)]
         q = _identifying_plan(arm, m)
         if q is None:
             rank = max_random_rank(arm, m, rng)
@@ -291,36 +304,7 @@ def _table3(
                 ROWS["note_not_computable"],
                 {"poses": m, "equations": 2 * m, "params": arm.n_params, "rank": rank},
             )
-            for k in range(n):
-                rows.append(
-                    _row(
-                        n,
-                        m,
-                        f"dL{k + 1}",
-                        f"dl{k + 1}",
-                        "mm",
-                        None,
-                        None,
-                        paper["dl"][k],
-                        None,
-                        note,
-                    )
-                )
-            for k in range(n):
-                rows.append(
-                    _row(
-                        n,
-                        m,
-                        f"dq{k + 1}",
-                        f"dtheta{k + 1}",
-                        "deg",
-                        None,
-                        None,
-                        paper["dq"][k],
-                        None,
-                        note,
-                    )
-                )
+            rows += _configuration_rows(n, m, [note] * (2 * n))
             progress(step + 1, len(_LINKS) * len(_POSES))
             continue
         plans[(n, m)] = q
@@ -332,40 +316,18 @@ def _table3(
         assert inverse is not None  # _identifying_plan checked the rank
         predicted = sigma**2 * inverse
         analytic = std_from_covariance(arm, predicted)
-        theta_analytic = np.degrees(_cumulative(predicted, n))
-        theta_simulated = np.degrees(_cumulative(mc.covariance, n))
         exact = ROWS["note_exact"] if 2 * m == arm.n_params else ""
-        for k in range(n):
-            rows.append(
-                _row(
-                    n,
-                    m,
-                    f"dL{k + 1}",
-                    f"dl{k + 1}",
-                    "mm",
-                    analytic[k],
-                    mc.std[k],
-                    paper["dl"][k],
-                    None,
-                    exact,
-                )
-            )
-        for k in range(n):
-            note = fill(ROWS["note_dq1" if k == 0 else "note_dq"], {"k": k + 1})
-            rows.append(
-                _row(
-                    n,
-                    m,
-                    f"dq{k + 1}",
-                    f"dtheta{k + 1}",
-                    "deg",
-                    theta_analytic[k],
-                    theta_simulated[k],
-                    paper["dq"][k],
-                    analytic[n + k],
-                    note,
-                )
-            )
+        notes = [exact] * n + [
+            fill(ROWS["note_dq1" if k == 0 else "note_dq"], {"k": k + 1}) for k in range(n)
+        ]
+        rows += _configuration_rows(
+            n,
+            m,
+            notes,
+            analytic=np.concatenate([analytic[:n], np.degrees(_cumulative(predicted, n))]),
+            simulated=np.concatenate([mc.std[:n], np.degrees(_cumulative(mc.covariance, n))]),
+            joint_offsets=analytic[n : 2 * n],
+        )
         progress(step + 1, len(_LINKS) * len(_POSES))
     evidence = SimulationEvidence(
         trials=int(trials),
