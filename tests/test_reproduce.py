@@ -330,7 +330,7 @@ def test_design_note_says_only_the_closed_form_family_was_ruled_out():
     assert "searched all plans" in made.notes[0]
     assert "not feasible" not in "\n".join(lines)
     assert made.d_efficiency >= 1 - 1e-9
-    assert "outside the closed-form family" in lines[2]
+    assert "an orthogonal plan, found by search" in lines[2]
     assert document["certified_d_efficiency"] is None  # no certificate was asked for
 
 

@@ -296,8 +296,8 @@ def design_summary(result: Design, seconds: float) -> tuple[dict, list[str]]:
     }
     efficiency = f"D-efficiency {result.d_efficiency:.4f} of the unconstrained optimum"
     if result.method != "analytic" and result.d_efficiency >= 1 - 1e-9:
-        # Only the closed-form family was ruled out: say that the search met the optimum.
-        efficiency += " (an orthogonal plan outside the closed-form family)"
+        # The note ruled out only the closed-form family: say that the search met the optimum.
+        efficiency += " (an orthogonal plan, found by search)"
     if cert is not None:
         efficiency += (
             f"; certified >= {cert.certified_d_efficiency:.4f} of the best plan within the "
