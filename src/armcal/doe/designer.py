@@ -60,6 +60,17 @@ class Design:
     notes: tuple[str, ...]
 
 
+def _closed_form_note(arm: PlanarArm, m: int) -> str:
+    """Why the closed-form plans were not used -- only they, not orthogonal plans in general."""
+    where = "joint limits" if arm.region is None else "joint limits and measurement region"
+    first = 1 if arm.base_offset else 2  # joint 1 steps too when the base is identified
+    return (
+        f"the closed-form orthogonal plans (the paper's Table I family: joints "
+        f"{first}..{arm.n_joints} at {m} angles {360 / m:g} deg apart) do not fit the {where} "
+        f"of {arm.name}; the optimizer searched all plans within the {where} instead"
+    )
+
+
 def design(
     arm: PlanarArm,
     m: int,
@@ -112,10 +123,10 @@ def design(
     if method in ("auto", "analytic"):
         try:
             q, used = analytic_plan(arm, m), "analytic"
-        except ArmcalError as exc:
+        except ArmcalError:
             if method == "analytic":
                 raise
-            notes.append(f"analytic plan not feasible ({exc}); optimized instead")
+            notes.append(_closed_form_note(arm, m))
     if q is None and method == "exchange":
         pool = feasible_poses(arm, 4000, rng) if candidates is None else candidates
         q = exchange_plan(arm, m, pool, rng=rng)

@@ -1,21 +1,31 @@
-"""The paper's Sections V-VI recomputed: Tables I-III, Figures 1-2, and where the paper differs.
+"""The paper recomputed: Tables I-III, Figures 1-2, every printed equation, and where it differs.
 
 Everything is computed from the model -- plans from :mod:`armcal.doe`,
 accuracies from :mod:`armcal.criteria`, simulations from
-:mod:`armcal.simulate`.  The paper's printed numbers (:mod:`armcal.paper`)
-appear only in the ``paper_value`` column and in the comparison, never as a
-result.
+:mod:`armcal.simulate`, equations from central differences of the printed
+model.  The paper's printed numbers (:mod:`armcal.paper`) appear only in the
+``paper_value`` column and in the comparison, never as a result.
 
-* :mod:`~armcal.reproduction.compute` -- :func:`reproduce`: the tables and the
-  data of the figures;
-* :mod:`~armcal.reproduction.catalogue` -- the disagreements with the paper:
-  what it says, what is computed, and why they differ.
+* :mod:`~armcal.reproduction.compute` -- :func:`reproduce`: the tables, the
+  data of the figures and the disagreements with the paper's tables and text;
+* :mod:`~armcal.reproduction.equations` -- every printed equation of
+  Sections II-V computed and compared (:func:`check_equations`);
+* :mod:`~armcal.reproduction.catalogue` -- the words: where, what the paper
+  says and why it differs, as data filled with the computed numbers.
 
 :mod:`armcal.report` turns a :class:`Reproduction` into the files of
 ``armcal reproduce``; :mod:`armcal.plotting` draws the figures.
 """
 
-from .catalogue import Disagreement
+from .catalogue import Disagreement, EquationCheck
 from .compute import TABLE_COLUMNS, Reproduction, reproduce
+from .equations import check_equations
 
-__all__ = ["TABLE_COLUMNS", "Disagreement", "Reproduction", "reproduce"]
+__all__ = [
+    "TABLE_COLUMNS",
+    "Disagreement",
+    "EquationCheck",
+    "Reproduction",
+    "check_equations",
+    "reproduce",
+]

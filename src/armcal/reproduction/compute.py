@@ -1,4 +1,4 @@
-"""The paper's Sections V-VI recomputed: Tables I-III and Figures 1-2."""
+"""The paper's Sections V-VI recomputed: Tables I-III, Figures 1-2, and where the paper differs."""
 
 from __future__ import annotations
 
@@ -8,17 +8,35 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..arm import PlanarArm
 from ..criteria import (
+    CRITERIA,
+    identifiability,
     information_matrix,
     inverse_information,
     optimality_sums,
+    predicted_std,
+    scaled_information,
     std_from_covariance,
 )
 from ..doe.plans import orthogonal_plan, random_plan
-from ..paper import PAPER_DIGIT, PAPER_FIGURE1_POSES, PAPER_SIGMA_MM, PAPER_TABLE3, paper_arm
+from ..errors import ArmcalError
+from ..paper import (
+    PAPER_100_POSE_ANGLES_DEG,
+    PAPER_DIGIT,
+    PAPER_FIGURE1_POSES,
+    PAPER_GOAL_LENGTH_MM,
+    PAPER_GOAL_POSES,
+    PAPER_RANGE_LENGTH_MM,
+    PAPER_RANGE_POSES,
+    PAPER_SIGMA_MM,
+    PAPER_TABLE3,
+    paper_arm,
+)
 from ..progress import ProgressCallback
 from ..simulate import PlanStudy, monte_carlo, random_plan_study
-from .catalogue import Disagreement, _disagreements
+from .catalogue import ROWS, Disagreement, EquationCheck, disagreement, fill
+from .equations import RANK_PLANS, SimulationEvidence, check_equations, max_random_rank
 
 __all__ = [
     "TABLE_COLUMNS",
@@ -42,15 +60,19 @@ TABLE_COLUMNS = {
         "formula_std",
         "agrees",
     ),
+    # One row per value printed in Table III.
     "table3": (
         "links",
         "poses",
         "parameter",
+        "compared_with",
         "unit",
         "analytic_std",
         "simulated_std",
         "paper_value",
+        "computable",
         "agrees",
+        "joint_offset_std",
         "note",
     ),
 }
@@ -59,10 +81,14 @@ TABLE_COLUMNS = {
 _LINKS = (2, 3, 4)
 
 
-_POSES = (3, 20)
+_POSES = tuple(sorted({m for _, m in PAPER_TABLE3}))
 
 
 _FIGURE2_POSES = tuple(range(4, 31))
+
+
+#: Random plans behind the A-criterion statement of Section V.
+_A_CRITERION_PLANS = 2000
 
 
 @dataclass(frozen=True, eq=False)
@@ -73,7 +99,8 @@ class Reproduction:
     ----------
     tables : dict of str to list of dict
         ``table1``, ``table2``, ``table3``: rows keyed by :data:`TABLE_COLUMNS`
-        (``None`` for an empty cell).
+        (``None`` for an empty cell).  ``table3`` has one row per value printed
+        in the paper's Table III.
     figure1 : PlanStudy
         Random 10-pose plans of the 4-link arm.
     figure2 : dict of str to ndarray
@@ -81,7 +108,10 @@ class Reproduction:
         ``simulated_*`` (orthogonal plans), ``random_mean_*`` and
         ``random_median_*`` for ``length`` (mm), ``angle`` (worst joint offset,
         deg) and ``position`` (RMS tip error after calibration, mm).
+    equations : list of EquationCheck
+        Every printed equation of Sections II-V, computed, with its verdict.
     disagreements : list of Disagreement
+        Tables, sentences and equations where the paper differs, with causes.
     trials : int
         Monte Carlo trials per configuration.
     random_plans : int
@@ -94,12 +124,33 @@ class Reproduction:
     tables: dict[str, list[dict]]
     figure1: PlanStudy
     figure2: dict[str, np.ndarray]
+    equations: list[EquationCheck]
     disagreements: list[Disagreement]
     trials: int
     random_plans: int
     seed: int
     sigma: float
     seconds: float
+
+    def printed_values(self) -> dict[str, int]:
+        """Table III's printed values, each counted once.
+
+        Returns
+        -------
+        dict of str to int
+            ``printed``: values printed; ``agree``: within one unit of the last
+            printed digit of the computed value; ``differ``: computable but not
+            agreeing; ``not_computable``: in configurations no plan identifies.
+        """
+        rows = self.tables["table3"]
+        computable = [r for r in rows if r["computable"] == "yes"]
+        agree = sum(r["agrees"] == "yes" for r in computable)
+        return {
+            "printed": len(rows),
+            "agree": agree,
+            "differ": len(computable) - agree,
+            "not_computable": len(rows) - len(computable),
+        }
 
 
 def _cumulative(cov: np.ndarray, n: int) -> np.ndarray:
@@ -177,82 +228,310 @@ def _table2(plans: dict[tuple[int, int], np.ndarray], sigma: float) -> list[dict
     return rows
 
 
+def _agrees(computed: float | None, printed: float) -> bool:
+    """Whether ``printed`` is within one unit of its last digit of ``computed``."""
+    return computed is not None and abs(computed - printed) <= PAPER_DIGIT * (1 + 1e-9)
+
+
+def _configuration_rows(
+    n: int,
+    m: int,
+    notes: list[str],
+    analytic: np.ndarray | None = None,
+    simulated: np.ndarray | None = None,
+    joint_offsets: np.ndarray | None = None,
+) -> list[dict]:
+    """The ``2n`` rows of one Table III configuration, one per printed value.
+
+    ``analytic`` and ``simulated`` hold the std of ``dl_1..dl_n`` (mm) then of
+    ``dtheta_1..dtheta_n`` (deg), the quantities the printed dL and 'dq' are
+    compared with; ``joint_offsets`` the std of ``dq_1..dq_n`` (deg).  None
+    when the configuration cannot be computed.
+    """
+    printed = PAPER_TABLE3[(n, m)]
+    rows = []
+    for i in range(2 * n):
+        k, is_length = i % n, i < n
+        computed = None if analytic is None else float(analytic[i])
+        value = printed["dl" if is_length else "dq"][k]
+        rows.append(
+            {
+                "links": n,
+                "poses": m,
+                "parameter": f"{'dL' if is_length else 'dq'}{k + 1}",
+                "compared_with": f"{'dl' if is_length else 'dtheta'}{k + 1}",
+                "unit": "mm" if is_length else "deg",
+                "analytic_std": computed,
+                "simulated_std": None if simulated is None else float(simulated[i]),
+                "paper_value": value,
+                "computable": "no" if computed is None else "yes",
+                "agrees": "yes" if _agrees(computed, value) else "no",
+                "joint_offset_std": None
+                if joint_offsets is None or is_length
+                else float(joint_offsets[k]),
+                "note": notes[i],
+            }
+        )
+    return rows
+
+
+def _identifying_plan(arm: PlanarArm, m: int) -> np.ndarray | None:
+    """The orthogonal ``m``-pose plan if it identifies every parameter, else None."""
+    try:
+        q = orthogonal_plan(arm, m)
+    except ArmcalError:
+        return None
+    return q if identifiability(arm, q).identifiable else None
+
+
 def _table3(
     sigma: float, trials: int, rng: np.random.Generator, progress: ProgressCallback
-) -> tuple[list[dict], dict[tuple[int, int], np.ndarray]]:
+) -> tuple[list[dict], dict[tuple[int, int], np.ndarray], dict, SimulationEvidence]:
+    """Rows of Table III, the plans used, the ranks of the others and the Monte Carlo summary."""
     rows: list[dict] = []
     plans: dict[tuple[int, int], np.ndarray] = {}
+    ranks: dict[tuple[int, int], int] = {}
+    parameters, worst_bias, worst_std = 0, 0.0, 0.0
     for step, (n, m) in enumerate((n, m) for n in _LINKS for m in _POSES):
         arm, truth = paper_arm(n)
-        paper = PAPER_TABLE3[(n, m)]
-        if 2 * m < arm.n_params:
-            note = (
-                f"not identifiable: {m} poses give {2 * m} equations for {arm.n_params} "
-                f"parameters, so no plan can separate them; the paper's value is the "
-                f"formula sigma/sqrt(m) used beyond its validity"
+        q = _identifying_plan(arm, m)
+        if q is None:
+            rank = max_random_rank(arm, m, rng)
+            if rank == arm.n_params:  # pragma: no cover - orthogonal plans exist for m >= n
+                raise RuntimeError(f"{m} random poses identify {arm.name}: use them")
+            ranks[(n, m)] = rank
+            note = fill(
+                ROWS["note_not_computable"],
+                {"poses": m, "equations": 2 * m, "params": arm.n_params, "rank": rank},
             )
-            for kind, unit in (("dl", "mm"), ("dq", "deg"), ("dtheta", "deg")):
-                for k in range(n):
-                    printed = paper["dq" if kind == "dtheta" else kind][k]
-                    rows.append(_row(n, m, f"{kind}{k + 1}", unit, None, None, printed, note))
+            rows += _configuration_rows(n, m, [note] * (2 * n))
+            progress(step + 1, len(_LINKS) * len(_POSES))
             continue
-        q = orthogonal_plan(arm, m)
         plans[(n, m)] = q
         mc = monte_carlo(arm, q, truth, sigma, trials, rng=rng)
+        parameters += arm.n_params
+        worst_bias = max(worst_bias, float(np.max(np.abs(mc.bias) / mc.bias_limit)))
+        worst_std = max(worst_std, float(np.max(np.abs(mc.std / mc.predicted_std - 1))))
         inverse = inverse_information(arm, q)
-        assert inverse is not None  # an orthogonal plan with 2m >= p identifies everything
+        assert inverse is not None  # _identifying_plan checked the rank
         predicted = sigma**2 * inverse
         analytic = std_from_covariance(arm, predicted)
-        square = 2 * m == arm.n_params
-        for k in range(n):
-            note = "exactly determined (2m = p): zero residual, sigma must be known" * square
-            rows.append(
-                _row(n, m, f"dl{k + 1}", "mm", analytic[k], mc.std[k], paper["dl"][k], note)
-            )
-        for k in range(n):
-            note = (
-                "dq1 = dtheta1"
-                if k == 0
-                else f"joint offset dq{k + 1} = dtheta{k + 1} - dtheta{k}: the paper's "
-                f"'dq' column is the cumulative angle, compare the dtheta{k + 1} row"
-            )
-            rows.append(
-                _row(
-                    n, m, f"dq{k + 1}", "deg", analytic[n + k], mc.std[n + k], paper["dq"][k], note
-                )
-            )
-        theta_analytic = np.degrees(_cumulative(predicted, n))
-        theta_simulated = np.degrees(_cumulative(mc.covariance, n))
-        for k in range(n):
-            rows.append(
-                _row(
-                    n,
-                    m,
-                    f"dtheta{k + 1}",
-                    "deg",
-                    theta_analytic[k],
-                    theta_simulated[k],
-                    paper["dq"][k],
-                    "paper's 'dq': link angle theta_k = q_1 + ... + q_k (eq. 1)",
-                )
-            )
+        exact = ROWS["note_exact"] if 2 * m == arm.n_params else ""
+        notes = [exact] * n + [
+            fill(ROWS["note_dq1" if k == 0 else "note_dq"], {"k": k + 1}) for k in range(n)
+        ]
+        rows += _configuration_rows(
+            n,
+            m,
+            notes,
+            analytic=np.concatenate([analytic[:n], np.degrees(_cumulative(predicted, n))]),
+            simulated=np.concatenate([mc.std[:n], np.degrees(_cumulative(mc.covariance, n))]),
+            joint_offsets=analytic[n : 2 * n],
+        )
         progress(step + 1, len(_LINKS) * len(_POSES))
-    return rows, plans
+    evidence = SimulationEvidence(
+        trials=int(trials),
+        parameters=parameters,
+        worst_bias_ratio=worst_bias,
+        worst_std_deviation=worst_std,
+    )
+    return rows, plans, ranks, evidence
 
 
-def _row(n, m, name, unit, analytic, simulated, printed, note) -> dict:
-    agrees = analytic is not None and abs(analytic - printed) <= PAPER_DIGIT * (1 + 1e-9)
-    return {
-        "links": n,
-        "poses": m,
-        "parameter": name,
-        "unit": unit,
-        "analytic_std": None if analytic is None else float(analytic),
-        "simulated_std": None if simulated is None else float(simulated),
-        "paper_value": printed,
-        "agrees": "yes" if agrees else "no",
-        "note": note,
+def _table3_disagreements(
+    table3: list[dict], ranks: dict[tuple[int, int], int], sigma: float, rng: np.random.Generator
+) -> list[Disagreement]:
+    found: list[Disagreement] = []
+    value = {
+        (r["links"], r["poses"], r["parameter"]): r["analytic_std"]
+        for r in table3
+        if r["computable"] == "yes"
     }
+    groups: dict[tuple[int, int, str], list[dict]] = {}
+    for r in table3:
+        if r["computable"] == "yes" and r["agrees"] == "no":
+            groups.setdefault((r["links"], r["poses"], r["unit"]), []).append(r)
+    for (n, m, unit), wrong in groups.items():
+        # Is the printed value another column's value, repeated?
+        other = next(
+            (
+                m2
+                for m2 in _POSES
+                if m2 != m
+                and all(
+                    _agrees(value.get((n, m2, r["parameter"])), r["paper_value"]) for r in wrong
+                )
+            ),
+            None,
+        )
+        fields = {
+            "links": n,
+            "poses": m,
+            "unit": unit,
+            "names": ", ".join(r["parameter"] for r in wrong),
+            "printed": [r["paper_value"] for r in wrong],
+            "analytic": [r["analytic_std"] for r in wrong],
+            "simulated": [r["simulated_std"] for r in wrong],
+        }
+        if other is None:
+            found.append(disagreement("table3_differs", **fields))
+        else:
+            others = [value[(n, other, r["parameter"])] for r in wrong]
+            found.append(
+                disagreement("table3_repeated", other_poses=other, other=others, **fields)
+            )
+    for (n, m), rank in sorted(ranks.items()):
+        arm, _ = paper_arm(n)
+        printed = PAPER_TABLE3[(n, m)]
+        formula_dl = sigma / math.sqrt(m)
+        formula_dq = np.degrees(sigma / (math.sqrt(m) * arm.link_lengths)).tolist()
+        explained = all(_agrees(formula_dl, v) for v in printed["dl"]) and all(
+            _agrees(f, v) for f, v in zip(formula_dq, printed["dq"], strict=True)
+        )
+        min_poses = m + 1
+        while max_random_rank(arm, min_poses, rng) < arm.n_params:
+            min_poses += 1
+        found.append(
+            disagreement(
+                "table3_not_computable" if explained else "table3_not_computable_unexplained",
+                links=n,
+                poses=m,
+                params=arm.n_params,
+                equations=2 * m,
+                plans=RANK_PLANS,
+                rank=rank,
+                printed_dl=list(printed["dl"]),
+                printed_dq=list(printed["dq"]),
+                formula_dl=formula_dl,
+                formula_dq=formula_dq,
+                min_poses=min_poses,
+            )
+        )
+    angles = [r for r in table3 if r["compared_with"].startswith("dtheta")]
+    computable = [r for r in angles if r["computable"] == "yes"]
+    as_joint = [r for r in computable if _agrees(r["joint_offset_std"], r["paper_value"])]
+    mislabelled = [r for r in computable if r not in as_joint]
+    if mislabelled:
+        example = max(mislabelled, key=lambda r: (r["links"], r["poses"], r["parameter"]))
+        found.append(
+            disagreement(
+                "table3_dq_label",
+                links=example["links"],
+                poses=example["poses"],
+                k=example["parameter"][2:],
+                printed=example["paper_value"],
+                total=len(computable),
+                theta_agree=sum(r["agrees"] == "yes" for r in computable),
+                dq_agree=len(as_joint),
+                joint=example["joint_offset_std"],
+                theta=example["analytic_std"],
+            )
+        )
+    return found
+
+
+def _length_std(arm: PlanarArm, m: int, sigma: float) -> float:
+    """Largest length std (mm) of the orthogonal ``m``-pose plan."""
+    return float(predicted_std(arm, orthogonal_plan(arm, m), sigma)[: arm.n_joints].max())
+
+
+def _poses_for_length_std(arm: PlanarArm, goal: float, sigma: float) -> int:
+    """Smallest ``m`` whose orthogonal plan reaches a length std ``goal``, by bisection.
+
+    The std of an orthogonal plan decreases with ``m``, so doubling then
+    halving finds the smallest ``m`` in O(log m) evaluations of O(m) each.
+    """
+
+    def reaches(m: int) -> bool:
+        return _length_std(arm, m, sigma) <= goal * (1 + 1e-9)
+
+    low = arm.n_joints  # fewest poses of an orthogonal plan
+    if reaches(low):
+        return low
+    high = 2 * low
+    while not reaches(high):
+        low, high = high, 2 * high
+    while high - low > 1:
+        middle = (low + high) // 2
+        low, high = (low, middle) if reaches(middle) else (middle, high)
+    return high
+
+
+def _text_disagreements(
+    table1: list[dict], sigma: float, rng: np.random.Generator
+) -> list[Disagreement]:
+    """Table I's notation and the sentences of Sections V-VI."""
+    found: list[Disagreement] = []
+    three = [r for r in table1 if r["links"] == 3]
+    found.append(
+        disagreement(
+            "table1_notation",
+            s23=max(abs(r["value"]) for r in three if r["paper_notation"] == "sum s23"),
+            s3=max(abs(r["value"]) for r in three if r["paper_notation"] == "sum s3"),
+        )
+    )
+    arm4, _ = paper_arm(4)
+    n = arm4.n_joints
+    plans = random_plan(arm4, _A_CRITERION_PLANS * PAPER_FIGURE1_POSES, rng).reshape(
+        _A_CRITERION_PLANS, PAPER_FIGURE1_POSES, n
+    )
+    trace = np.trace(information_matrix(arm4, plans), axis1=-2, axis2=-1)
+    a_eff = CRITERIA["A"].efficiency(scaled_information(arm4, plans))
+    found.append(
+        disagreement(
+            "a_criterion",
+            plans=_A_CRITERION_PLANS,
+            poses=PAPER_FIGURE1_POSES,
+            trace_min=float(trace.min()),
+            trace_max=float(trace.max()),
+            a_min=float(a_eff.min()),
+            a_max=float(a_eff.max()),
+        )
+    )
+    m_from, m_to = PAPER_RANGE_POSES
+    printed_from, printed_to = PAPER_RANGE_LENGTH_MM
+    length_from, length_to = _length_std(arm4, m_from, sigma), _length_std(arm4, m_to, sigma)
+    theta1_to = float(predicted_std(arm4, orthogonal_plan(arm4, m_to), sigma)[n])  # dq1 = dtheta1
+    if not (_agrees(length_from, printed_from) and _agrees(length_to, printed_to)):
+        explained = _agrees(length_to, printed_from) and _agrees(theta1_to, printed_to)
+        found.append(
+            disagreement(
+                "section6_range" if explained else "section6_range_unexplained",
+                printed_from=printed_from,
+                printed_to=printed_to,
+                m_from=m_from,
+                m_to=m_to,
+                length_from=length_from,
+                length_to=length_to,
+                theta1_to=theta1_to,
+            )
+        )
+    std_at = _length_std(arm4, PAPER_GOAL_POSES, sigma)
+    if not std_at <= PAPER_GOAL_LENGTH_MM * (1 + 1e-9):
+        needed = _poses_for_length_std(arm4, PAPER_GOAL_LENGTH_MM, sigma)
+        inverse = inverse_information(arm4, orthogonal_plan(arm4, PAPER_GOAL_POSES))
+        assert inverse is not None  # orthogonal plans identify every parameter
+        theta = np.degrees(_cumulative(sigma**2 * inverse, n))
+        angles_agree = all(
+            _agrees(t, p) for t, p in zip(theta, PAPER_100_POSE_ANGLES_DEG, strict=True)
+        )
+        found.append(
+            disagreement(
+                "section6_goal",
+                goal=PAPER_GOAL_LENGTH_MM,
+                poses=PAPER_GOAL_POSES,
+                angles=list(PAPER_100_POSE_ANGLES_DEG),
+                std_at=std_at,
+                needed=needed,
+                before=needed - 1,
+                std_before=_length_std(arm4, needed - 1, sigma),
+                theta=theta.tolist(),
+                angles_agree=ROWS["angles_agree" if angles_agree else "angles_differ"],
+                factor=std_at / PAPER_GOAL_LENGTH_MM,
+                factor_poses=needed / PAPER_GOAL_POSES,
+            )
+        )
+    return found
 
 
 def _figure2(
@@ -268,7 +547,7 @@ def _figure2(
     worst = max(1 / lengths[0], *np.hypot(1 / lengths[1:], 1 / lengths[:-1]))
     curves: dict[str, list[float]] = {}
 
-    def put(key: str, value: float) -> None:
+    def put(key: str, value: float | np.floating) -> None:
         curves.setdefault(key, []).append(float(value))
 
     for i, m in enumerate(_FIGURE2_POSES):
@@ -306,7 +585,7 @@ def reproduce(
     sigma: float = PAPER_SIGMA_MM,
     progress: ProgressCallback | None = None,
 ) -> Reproduction:
-    """Recompute the paper's Section V-VI results.
+    """Recompute the paper's Section V-VI results and check its equations.
 
     Parameters
     ----------
@@ -328,7 +607,7 @@ def reproduce(
     start = time.perf_counter()
     rng = np.random.default_rng(seed)
     configurations = len(_LINKS) * len(_POSES)
-    total = configurations + 1 + len(_FIGURE2_POSES)
+    total = configurations + 2 + len(_FIGURE2_POSES)
 
     def stage(offset: int) -> ProgressCallback:
         def report(done: int, _: int) -> None:
@@ -337,22 +616,33 @@ def reproduce(
 
         return report
 
-    table3, plans = _table3(sigma, trials, rng, stage(0))
+    table3, plans, ranks, evidence = _table3(sigma, trials, rng, stage(0))
     arm4, _ = paper_arm(4)
     # Three poses cannot calibrate the 4-link arm; Tables I-II also show its smallest plan.
-    plans = dict(sorted({**plans, (4, 4): orthogonal_plan(arm4, 4)}.items()))
+    shown = dict(sorted({**plans, (4, 4): orthogonal_plan(arm4, 4)}.items()))
+    table1 = _table1(shown)
     study = random_plan_study(arm4, PAPER_FIGURE1_POSES, random_plans, sigma=sigma, rng=rng)
     stage(configurations)(1, 1)
     figure2 = _figure2(sigma, trials, random_plans, rng, stage(configurations + 1))
+    equations = check_equations(
+        sigma=sigma,
+        plans=plans,
+        configurations=sorted(PAPER_TABLE3),
+        simulation=evidence,
+        rng=rng,
+    )
+    stage(configurations + 1 + len(_FIGURE2_POSES))(1, 1)
+    disagreements = [
+        *_table3_disagreements(table3, ranks, sigma, rng),
+        *_text_disagreements(table1, sigma, rng),
+        *(d for d in (check.disagreement() for check in equations) if d is not None),
+    ]
     return Reproduction(
-        tables={
-            "table1": _table1(plans),
-            "table2": _table2(plans, sigma),
-            "table3": table3,
-        },
+        tables={"table1": table1, "table2": _table2(shown, sigma), "table3": table3},
         figure1=study,
         figure2=figure2,
-        disagreements=_disagreements(table3, sigma, rng),
+        equations=equations,
+        disagreements=disagreements,
         trials=int(trials),
         random_plans=int(random_plans),
         seed=int(seed),
