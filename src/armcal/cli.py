@@ -48,7 +48,9 @@ from .report import (
     format_quality,
     format_reproduction,
     monte_carlo_to_dict,
+    poses_needed_summary,
     quality_to_dict,
+    reproduction_summary,
     table_csv,
     to_json,
 )
@@ -354,30 +356,7 @@ def _poses_needed(args: argparse.Namespace) -> None:
         max_poses=args.max_poses,
     )
     seconds = time.perf_counter() - start
-    unit = "deg" if target == "angle_std_deg" else "mm"
-    document = {
-        "poses": found.poses,
-        "target": target,
-        "goal": found.goal,
-        "achieved": found.achieved,
-        "with_one_pose_less": None if np.isinf(found.previous) else found.previous,
-        "sigma_mm": sigma,
-        "method": found.method,
-        "evaluated": {str(m): v for m, v in found.evaluated.items() if np.isfinite(v)},
-        "seconds": seconds,
-    }
-    less = (
-        f"{found.poses - 1} poses give {found.previous:.6g} {unit}"
-        if np.isfinite(found.previous)
-        else f"{found.poses - 1} poses cannot identify every parameter"
-    )
-    lines = [
-        f"{found.poses} poses: the best {found.poses}-pose plan of {spec.arm.name} "
-        f"({found.method}) reaches {found.achieved:.6g} {unit} against a target of "
-        f"{found.goal:g} {unit}; {less}",
-        f"({TARGETS[target]}; sigma {sigma:g} mm; {len(found.evaluated)} plan sizes tried "
-        f"in {seconds:.2f} s)",
-    ]
+    document, lines = poses_needed_summary(found, spec.arm, seconds)
     if args.output is not None:
         atomic_write(args.output, format_plan_csv(found.plan))
         lines.append(f"wrote {args.output}")
@@ -405,27 +384,9 @@ def _reproduce(args: argparse.Namespace) -> None:
         "report.md": format_reproduction(result),
     }
     folder = write_folder(args.output, outputs)
-    files = list(outputs)
-    table3 = result.tables["table3"]
-    document = {
-        "trials": result.trials,
-        "random_plans": result.random_plans,
-        "seed": result.seed,
-        "seconds": result.seconds,
-        "files": [str(folder / name) for name in files],
-        "table3_rows": len(table3),
-        "table3_disagreeing_rows": sum(row["agrees"] == "no" for row in table3),
-        "disagreements": [d.where for d in result.disagreements],
-    }
-    lines = [
-        f"reproduced the paper's Tables I-III and Figures 1-2 with {result.trials} trials "
-        f"per configuration (seed {result.seed}) in {result.seconds:.1f} s",
-        f"Table III: {len(table3) - document['table3_disagreeing_rows']} of {len(table3)} rows "
-        "agree with the printed values; the others are explained in report.md",
-        f"{len(result.disagreements)} places where the paper differs:",
-        *(f"  - {d.where}" for d in result.disagreements),
-        f"wrote {', '.join(files)} to {folder}/",
-    ]
+    document, lines = reproduction_summary(result)
+    document["files"] = [str(folder / name) for name in outputs]
+    lines.append(f"wrote {', '.join(outputs)} to {folder}/")
     _emit(args, document, "\n".join(lines))
 
 

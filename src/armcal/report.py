@@ -11,6 +11,7 @@ from ._version import __version__
 from .arm import PlanarArm
 from .criteria import PlanQuality
 from .doe.designer import Design
+from .doe.sizing import TARGETS, PosesNeeded
 from .identification import Calibration
 from .paper import PAPER_DIGIT
 from .reproduction.compute import TABLE_COLUMNS, Reproduction
@@ -25,6 +26,7 @@ __all__ = [
     "format_quality",
     "format_reproduction",
     "monte_carlo_to_dict",
+    "poses_needed_summary",
     "quality_to_dict",
     "reproduction_summary",
     "table_csv",
@@ -494,5 +496,56 @@ def reproduction_summary(result: Reproduction) -> tuple[dict, list[str]]:
         _equations_line(result),
         f"{len(result.disagreements)} places where the paper differs (causes in report.md):",
         *(f"  - {d.where}" for d in result.disagreements),
+    ]
+    return document, lines
+
+
+def poses_needed_summary(
+    found: PosesNeeded, arm: PlanarArm, seconds: float
+) -> tuple[dict, list[str]]:
+    """The JSON document and the text lines of ``armcal poses-needed``.
+
+    Parameters
+    ----------
+    found : PosesNeeded
+    arm : PlanarArm
+        The arm the plans were designed for (its name is printed).
+    seconds : float
+        Wall time of the search.
+
+    Returns
+    -------
+    document : dict
+        ``poses`` (PRODUCT.md), ``target``, ``goal``, ``achieved``,
+        ``with_one_pose_less`` (null when fewer poses cannot identify every
+        parameter), ``sigma_mm``, ``method``, ``evaluated`` (m -> accuracy of the
+        best m-pose plan, identifiable ones only) and ``seconds``.
+    lines : list of str
+        The answer and how it was found; the caller adds the file it wrote.
+    """
+    unit = "deg" if found.target == "angle_std_deg" else "mm"
+    finite_previous = math.isfinite(found.previous)
+    document = {
+        "poses": found.poses,
+        "target": found.target,
+        "goal": found.goal,
+        "achieved": found.achieved,
+        "with_one_pose_less": found.previous if finite_previous else None,
+        "sigma_mm": found.sigma,
+        "method": found.method,
+        "evaluated": {str(m): v for m, v in found.evaluated.items() if math.isfinite(v)},
+        "seconds": seconds,
+    }
+    less = (
+        f"{found.poses - 1} poses give {found.previous:.6g} {unit}"
+        if finite_previous
+        else f"{found.poses - 1} poses cannot identify every parameter"
+    )
+    lines = [
+        f"{found.poses} poses: the best {found.poses}-pose plan of {arm.name} "
+        f"({found.method}) reaches {found.achieved:.6g} {unit} against a target of "
+        f"{found.goal:g} {unit}; {less}",
+        f"({TARGETS[found.target]}; sigma {found.sigma:g} mm; {len(found.evaluated)} plan "
+        f"sizes tried in {seconds:.2f} s)",
     ]
     return document, lines
