@@ -152,13 +152,20 @@ def test_design_and_evaluate_json_keys(tmp_path, capsys):
     assert set(evaluated["predicted_std"]) == {f"d{k}{i}" for k in "lq" for i in range(1, 5)}
 
 
-def test_evaluate_warns_about_an_unidentifiable_plan(tmp_path):
+def test_evaluate_rejects_an_unidentifiable_plan(tmp_path):
+    """PRODUCT.md: a plan that cannot identify the parameters is an error (exit 2, one line)."""
     plan = tmp_path / "plan.csv"
     plan.write_text("q1_deg,q2_deg,q3_deg,q4_deg\n" + "10,20,30,40\n" * 6)
     result = _run("evaluate", "--plan", str(plan))
-    assert result.returncode == 0
-    assert "cannot identify every parameter" in result.stderr
-    assert "nan" not in result.stdout.lower()
+    assert result.returncode == 2, result.stderr
+    assert "Traceback" not in result.stderr
+    assert result.stdout == ""
+    lines = result.stderr.splitlines()
+    assert len(lines) == 1 and lines[0].startswith(f"armcal: error: {plan}: ")
+    # Six identical poses: 2 equations for 8 parameters, a 6-dimensional null space.
+    assert "cannot identify" in lines[0] and "rank 2 of 8" in lines[0]
+    # Every length can be moved freely, so the first unseen combination starts with dl1.
+    assert "unseen combinations: dl1" in lines[0] and "(and 3 more)" in lines[0]
 
 
 def test_simulate_json_and_seed(tmp_path, capsys):

@@ -4,7 +4,14 @@ import numpy as np
 import pytest
 from numpy.testing import assert_allclose
 
-from armcal import PlanarArm, forward_kinematics, identify, orthogonal_plan, random_plan
+from armcal import (
+    NotIdentifiableError,
+    PlanarArm,
+    forward_kinematics,
+    identify,
+    orthogonal_plan,
+    random_plan,
+)
 from armcal.criteria import (
     CRITERIA,
     d_efficiency,
@@ -18,7 +25,6 @@ from armcal.criteria import (
     predicted_std,
 )
 from armcal.doe.optimizer import _criterion_value_and_gradient
-from armcal.report import quality_to_dict
 from helpers import random_arm
 
 
@@ -94,15 +100,16 @@ def test_predicted_std_equals_the_std_identify_reports_for_nominal_truth(rng):
     assert_allclose(predicted_std(arm, q, 0.2), cal.std, rtol=1e-9)
 
 
-def test_unidentifiable_plan_reports_null_not_nan(rng):
+def test_unidentifiable_plan_is_an_error_not_numbers(rng):
     arm = PlanarArm([260.0, 180.0, 120.0, 100.0])
     q = np.tile(random_plan(arm, 1, rng), (6, 1))
-    quality = evaluate_plan(arm, q, sigma=0.1, test_q=random_plan(arm, 10, rng))
-    assert not quality.identifiable
-    document = quality_to_dict(arm, quality)
-    assert document["d_efficiency"] == pytest.approx(0.0, abs=1e-6)
-    assert document["predicted_position_rms_mm"] is None
-    assert all(v is None for v in document["predicted_std"].values())
+    # Six identical poses give 2 independent equations for 8 parameters: rank 2.
+    with pytest.raises(NotIdentifiableError, match="rank 2 of 8") as info:
+        evaluate_plan(arm, q, sigma=0.1, test_q=random_plan(arm, 10, rng))
+    assert len(info.value.combinations) == 6  # the null space has dimension 8 - 2
+    for name, value in efficiencies(arm, q).items():
+        assert value == 0.0, name
+    assert np.all(np.isinf(predicted_std(arm, q, 0.1)))
 
 
 @pytest.mark.parametrize("criterion", list(CRITERIA))

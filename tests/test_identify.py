@@ -12,6 +12,7 @@ from armcal import (
     identifiability,
     identify,
     orthogonal_plan,
+    paper_from_user_matrix,
     random_plan,
     solve_closed_form,
 )
@@ -150,12 +151,15 @@ def test_joint_offset_std_uses_the_identified_lengths(arm4, paper_truth4):
     inv_sq = 1.0 / actual**2
     expected = 0.1 / np.sqrt(20) * np.sqrt(inv_sq + np.concatenate([[0.0], inv_sq[:-1]]))
     assert_allclose(cal.std[4:], np.degrees(expected), rtol=1e-12, atol=0)
-    # The paper's Table III numbers are the cumulative dtheta_i: sigma / (sqrt(m) l_i).
-    assert_allclose(
-        np.degrees(0.1 / np.sqrt(20) / arm4.link_lengths),
-        [0.00493, 0.00712, 0.01068, 0.01281],
-        rtol=1e-3,
-    )
+    # The cumulative dtheta_i = dq_1 + ... + dq_i are uncorrelated for an orthogonal plan,
+    # with std sigma / (sqrt(m) L_i) at the identified lengths L_i = l_i + dl_i.
+    to_paper = paper_from_user_matrix(4)
+    dtheta_std = np.sqrt(np.diag(to_paper @ cal.covariance @ to_paper.T))[:4]
+    assert_allclose(dtheta_std, 0.1 / np.sqrt(20) / actual, rtol=1e-12, atol=0)
+    # On the nominal arm they are the paper's Table III, printed to 3 significant digits.
+    nominal = identify(arm4, q, forward_kinematics(arm4, q), sigma=0.1)
+    dtheta_deg = np.degrees(np.sqrt(np.diag(to_paper @ nominal.covariance @ to_paper.T))[:4])
+    assert_allclose(dtheta_deg, [0.00493, 0.00712, 0.01068, 0.01281], rtol=1e-3)
 
 
 def test_sigma_is_estimated_without_bias(arm4, paper_truth4, rng):

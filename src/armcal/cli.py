@@ -291,7 +291,10 @@ def _design(args: argparse.Namespace) -> None:
 def _evaluate(args: argparse.Namespace) -> None:
     spec = load_robot(args.robot)
     q = read_plan(args.plan, spec.arm)
-    quality, document, report = _quality_report(args, spec, q)
+    try:
+        quality, document, report = _quality_report(args, spec, q)
+    except NotIdentifiableError as exc:  # PRODUCT.md: an error, exit 2, one line
+        raise NotIdentifiableError(f"{args.plan}: {exc}", exc.combinations) from None
     outside = np.flatnonzero(~feasible(spec.arm, q))
     if outside.size:
         print(
@@ -299,11 +302,7 @@ def _evaluate(args: argparse.Namespace) -> None:
             "is outside the measurement region",
             file=sys.stderr,
         )
-    if not quality.identifiable:
-        print(
-            f"armcal: warning: {args.plan}: the plan cannot identify every parameter",
-            file=sys.stderr,
-        )
+    _print_warnings(quality.warnings)
     _emit(args, document, report)
 
 

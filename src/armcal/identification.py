@@ -16,6 +16,13 @@ Two solvers reach the same least-squares optimum (paper eq. 3):
   Gauss-Newton on the full nonlinear model in the paper's parametrization,
   starting from zero deviations, with a step tolerance and an iteration cap.
 
+Both rest on one thin QR of the plan's regressor ``H``
+(:func:`armcal.criteria.scaled_jacobian`, ``2m x p``, memory ``O(m p)``) and the
+SVD of its ``p x p`` triangle, with the rank policy of :mod:`armcal.numerics`:
+no normal equations, so accuracy degrades with ``cond(J)``, never ``cond(J)^2``,
+and a singular plan is a :class:`~armcal.errors.NotIdentifiableError` that names
+the unseen combinations, never a :class:`numpy.linalg.LinAlgError`.
+
 Uncertainty is ``cov = sigma^2 (J^T J)^-1`` at the solution (paper eq. 16), with
 ``sigma`` given by the user or estimated as ``s^2 = RSS / (2m - p)``.
 """
@@ -28,15 +35,15 @@ from typing import Any, Literal
 
 import numpy as np
 
-from .arm import (
-    PlanarArm,
-    forward_kinematics,
-    link_angles,
-    paper_from_user_matrix,
-    wrap_angle,
+from .arm import PlanarArm, forward_kinematics, wrap_angle
+from .criteria import (
+    check_identifiable,
+    conditioning_warning,
+    inverse_information,
+    scaled_jacobian,
 )
-from .criteria import check_identifiable, inverse_information
 from .errors import ArmcalError, ArmcalWarning
+from .numerics import LinearLeastSquares, factor_least_squares
 
 __all__ = [
     "METHODS",
@@ -50,18 +57,40 @@ __all__ = [
 Method = Literal["auto", "closed-form", "gauss-newton"]
 
 
-def _regressor(arm: PlanarArm, q: np.ndarray) -> np.ndarray:
-    """Real design matrix ``(2m, p)`` of the linear model in ``(Re z, Im z, x0, y0)``.
+def _factor(arm: PlanarArm, q: np.ndarray) -> LinearLeastSquares:
+    """The plan's factorization; raises :class:`NotIdentifiableError` for a singular plan."""
+    factor = factor_least_squares(scaled_jacobian(arm, q))
+    if not bool(factor.svd.full_rank):
+        check_identifiable(arm, q, svd=factor.svd)  # raises, naming the unseen combinations
+    return factor
 
-    Rows alternate x, y per pose.  Columns: ``Re z_k``, ``Im z_k`` for every link,
-    then ``x0, y0`` with a base offset.
+
+def _link_phasors_fit(factor: LinearLeastSquares, xy: np.ndarray) -> np.ndarray:
+    """Least-squares ``v = (Im z_1..n, Re z_1..n, [x0, y0])`` ``(N, p)`` of sets ``xy (N, m, 2)``.
+
+    The tip is ``sqrt(m) H v`` (:func:`armcal.criteria.scaled_jacobian`), so
+    ``v = H^+ y / sqrt(m)``: one projection ``Q^T y`` and a ``p x p`` product per set.
     """
-    unit = np.exp(1j * np.cumsum(q, axis=-1))  # (m, n)
-    cols = [unit, 1j * unit]
-    if arm.base_offset:
-        cols.append(np.broadcast_to(np.array([1.0, 1j]), (q.shape[0], 2)))
-    a = np.concatenate(cols, axis=-1)
-    return np.stack([a.real, a.imag], axis=1).reshape(2 * q.shape[0], -1)
+    m = xy.shape[-2]
+    return factor.solve(xy.reshape(-1, 2 * m)) / np.sqrt(m)
+
+
+def _closed_form_params(arm: PlanarArm, v: np.ndarray) -> np.ndarray:
+    n = arm.n_joints
+    z = v[:, n : 2 * n] + 1j * v[:, :n]
+    dtheta = np.angle(z)
+    dq = wrap_angle(np.diff(dtheta, axis=-1, prepend=0.0))
+    return np.concatenate([np.abs(z) - arm.link_lengths, dq, v[:, 2 * n :]], axis=-1)
+
+
+def _as_sets(arm: PlanarArm, q: np.ndarray, xy: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    q = np.asarray(q, dtype=float)
+    xy = np.asarray(xy, dtype=float)
+    if q.ndim != 2 or q.shape[1] != arm.n_joints:
+        raise ValueError(f"q must have shape (m, {arm.n_joints}) in rad, got {q.shape}")
+    if xy.shape[-2:] != (q.shape[0], 2) or xy.ndim not in (2, 3):
+        raise ValueError(f"xy must have shape ({q.shape[0]}, 2) or (N, {q.shape[0]}, 2) in mm")
+    return q, xy.reshape(-1, q.shape[0], 2)
 
 
 def solve_closed_form(arm: PlanarArm, q: np.ndarray, xy: np.ndarray) -> np.ndarray:
@@ -80,12 +109,18 @@ def solve_closed_form(arm: PlanarArm, q: np.ndarray, xy: np.ndarray) -> np.ndarr
     ndarray, shape (p,) or (N, p)
         User deviations ``[dl (mm), dq (rad), (x0, y0) (mm)]``.
 
+    Raises
+    ------
+    NotIdentifiableError
+        If the plan cannot identify every parameter (:func:`check_identifiable`).
+
     Notes
     -----
-    Solves ``min ||A w - y||`` for ``w = (Re z, Im z, x0, y0)`` with the
-    SVD-based pseudo-inverse of ``A`` (:func:`numpy.linalg.pinv`), then ``dl_k = |z_k| - l_k``,
-    ``dtheta_k = arg z_k`` and ``dq_k = wrap(dtheta_k - dtheta_{k-1})``.
-    The plan must identify every parameter (:func:`check_identifiable`).
+    Solves ``min ||A w - y||`` for the link phasors ``w`` by a thin QR of the
+    plan's regressor and the SVD of its triangle (the rank policy of
+    :mod:`armcal.numerics`), then ``dl_k = |z_k| - l_k``, ``dtheta_k = arg z_k``
+    and ``dq_k = wrap(dtheta_k - dtheta_{k-1})``.  Round-off errs by about
+    ``cond(H) eps`` of the link lengths (:func:`armcal.criteria.scaled_jacobian`).
 
     Examples
     --------
@@ -96,19 +131,49 @@ def solve_closed_form(arm: PlanarArm, q: np.ndarray, xy: np.ndarray) -> np.ndarr
     >>> bool(np.allclose(est, truth, atol=1e-12))
     True
     """
-    q = np.asarray(q, dtype=float)
-    xy = np.asarray(xy, dtype=float)
-    batched = xy.ndim == 3
-    # One SVD-based pseudo-inverse of the plan's regressor serves every set: the
-    # solution is the same as lstsq's, and N sets cost one matrix product.
-    pseudo_inverse = np.linalg.pinv(_regressor(arm, q))  # (p, 2m)
-    w = xy.reshape(-1, 2 * q.shape[0]) @ pseudo_inverse.T  # (N, p)
-    n = arm.n_joints
-    z = w[:, :n] + 1j * w[:, n : 2 * n]
-    dtheta = np.angle(z)
-    dq = wrap_angle(np.diff(dtheta, axis=-1, prepend=0.0))
-    params = np.concatenate([np.abs(z) - arm.link_lengths, dq, w[:, 2 * n :]], axis=-1)
+    batched = np.ndim(xy) == 3
+    q, sets = _as_sets(arm, q, xy)
+    params = _closed_form_params(arm, _link_phasors_fit(_factor(arm, q), sets))
     return params if batched else params[0]
+
+
+def _gauss_newton(
+    arm: PlanarArm, v: np.ndarray, *, tol: float, max_iter: int
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Gauss-Newton iterations from zero deviations towards the fitted phasors ``v (N, p)``."""
+    n = arm.n_joints
+    sets = v.shape[0]
+    target = v[:, n : 2 * n] + 1j * v[:, :n]  # least-squares z_k of every set
+    step_scale = np.ones(arm.n_params)
+    step_scale[:n] = arm.link_lengths  # rad -> mm at the link tip
+    threshold = tol * float(np.sum(arm.link_lengths))
+    paper = np.zeros((sets, arm.n_params))  # (dtheta, dl, [x0, y0]) of every set
+    iterations = np.zeros(sets, dtype=int)
+    failed = np.zeros(sets, dtype=bool)
+    active = np.arange(sets)
+    for _ in range(max_iter):
+        current = paper[active]
+        rotation = np.exp(1j * current[:, :n])
+        length = arm.link_lengths + current[:, n : 2 * n]
+        # The linearized least-squares step (11): K^-1 (v_fit - v(current)), each
+        # link's phasor residual turned back by dtheta_k, its normal part over L_k.
+        turned = (target[active] - length * rotation) * rotation.conj()
+        with np.errstate(divide="ignore", invalid="ignore"):
+            d_theta = turned.imag / length
+        step = np.concatenate([d_theta, turned.real, v[active, 2 * n :] - current[:, 2 * n :]], 1)
+        paper[active] += step
+        iterations[active] += 1
+        finite = np.all(np.isfinite(step), axis=1)
+        failed[active[~finite]] = True
+        moving = np.max(np.abs(step * step_scale), axis=1, initial=0.0) > threshold
+        active = active[finite & moving]
+        if active.size == 0:
+            break
+    converged = ~failed
+    converged[active] = False
+    dq = np.diff(paper[:, :n], axis=-1, prepend=0.0)
+    params = np.concatenate([paper[:, n : 2 * n], dq, paper[:, 2 * n :]], axis=-1)
+    return params, iterations, converged
 
 
 def solve_gauss_newton(
@@ -143,6 +208,11 @@ def solve_gauss_newton(
     converged : ndarray of bool, shape () or (N,)
         Whether the step tolerance was met within ``max_iter``.
 
+    Raises
+    ------
+    NotIdentifiableError
+        If the plan cannot identify every parameter (:func:`check_identifiable`).
+
     Notes
     -----
     Step 1 starts from ``DeltaPi = 0``; Steps 2-3 evaluate model (1) and solve the
@@ -150,18 +220,24 @@ def solve_gauss_newton(
     corrected lengths and angles of Step 4); Step 5 repeats until the step is below
     the tolerance.
 
-    Every set still iterating is solved at once.  In phasor form the model is
-    ``x + i y = b + sum_k z_k u_k`` with ``u_k = exp(i theta_k(q))`` fixed by the
-    plan and ``z_k = (l_k + dl_k) exp(i dtheta_k)``, so each Jacobian column is a
-    per-set coefficient times a plan-only column ``v_a`` (``i z_k u_k`` for
-    ``dtheta_k``, ``exp(i dtheta_k) u_k`` for ``dl_k``, ``1`` and ``i`` for the
-    base).  The normal matrix is then ``Re(conj(g_a) g_b W_ab)`` with the plan's
-    ``W = V^H V`` computed once, and ``J^T r = Re(conj(g) V^H r)``: the stacked
-    normal equations of all sets cost a few matrix products and one batched
-    :func:`numpy.linalg.solve`.  Columns are scaled to unit norm first, so mm
-    and rad weigh alike; rounding in a step is corrected by the next iteration,
-    whose residual is exact, so the converged estimate is accurate to round-off
-    whenever ``cond(D J^T J D) * eps < 1``.
+    How Step 3 is solved.  The model is linear in the link phasors: the tip is
+    ``A w`` with the plan-only regressor ``A = sqrt(m) H``
+    (:func:`armcal.criteria.scaled_jacobian`) and ``w = w(DeltaPi)``, so the
+    Jacobian of a set at its estimate is ``J = A K`` with ``K = dw/dDeltaPi``
+    ``(p x p)``.  Per link ``K`` is a rotation by ``dtheta_k`` times
+    ``diag(L_k, 1)``: with unit-norm columns ``J D = A R`` for an orthogonal ``R``,
+    so ``J D`` has the singular values of ``A`` and its SVD is that of the plan's
+    triangle ``Q^T A`` (one thin QR of ``A``, shared by every set and iteration)
+    turned by ``R``.  The minimum-norm least-squares step of (11) is therefore
+    ``K^-1 A^+ (y - A w) = K^-1 (A^+ y - w)``: ``A^+ y`` (the rank policy's
+    pseudo-inverse, ``cond(J)`` accurate, never ``cond(J)^2``) is computed once
+    per set, and each iteration turns every link's phasor residual back by
+    ``dtheta_k`` and divides its normal part by ``L_k`` -- the same iterates as
+    forming ``J`` and solving (11), for every active set at once, with nothing
+    that can raise :class:`numpy.linalg.LinAlgError`.  The residual part
+    ``A^+ y - w`` is formed exactly at each iterate, so the iteration converges
+    to round-off however ill-conditioned the plan: its accuracy is that of
+    ``A^+ y``, the same as the closed form's.
 
     Examples
     --------
@@ -172,50 +248,10 @@ def solve_gauss_newton(
     >>> bool(np.allclose(est, truth, atol=1e-12)), bool(converged)
     (True, True)
     """
-    q = np.asarray(q, dtype=float)
-    xy = np.asarray(xy, dtype=float)
-    batched = xy.ndim == 3
-    xy = xy.reshape(-1, q.shape[0], 2)
-    measured = xy[..., 0] + 1j * xy[..., 1]  # (N, m)
-    n, p, sets = arm.n_joints, arm.n_params, xy.shape[0]
-    unit = np.exp(1j * link_angles(q))  # (m, n), plan only
-    columns = [unit, unit] + [np.ones((q.shape[0], 2))] * arm.base_offset
-    basis = np.concatenate(columns, axis=1)  # (m, p): v_a
-    gram = basis.conj().T @ basis  # W
-    column_norms = np.sqrt(np.diagonal(gram).real)
-    step_scale = np.ones(p)
-    step_scale[:n] = arm.link_lengths  # rad -> mm at the link tip
-    threshold = tol * float(np.sum(arm.link_lengths))
-    paper = np.zeros((sets, p))  # (dtheta, dl, [x0, y0]) of every set
-    iterations = np.zeros(sets, dtype=int)
-    active = np.arange(sets)
-    for _ in range(max_iter):
-        current = paper[active]
-        rotation = np.exp(1j * current[:, :n])
-        z = (arm.link_lengths + current[:, n : 2 * n]) * rotation
-        coefficients = [1j * z, rotation]
-        base = 0.0
-        if arm.base_offset:
-            base = current[:, 2 * n] + 1j * current[:, 2 * n + 1]
-            coefficients.append(np.broadcast_to(np.array([1.0, 1j]), (active.size, 2)))
-        # Column norms |g_a| sqrt(W_aa), folded into g: the scaled normal matrix
-        # has a unit diagonal.
-        g = np.concatenate(coefficients, axis=1)  # (k, p)
-        norms = np.abs(g) * column_norms
-        g = g.conj() / norms  # conj(g) D
-        residual = measured[active] - z @ unit.T - np.reshape(base, (-1, 1))
-        scaled = (g[:, :, None] * g.conj()[:, None, :] * gram).real
-        rhs = (g * (residual @ basis.conj())).real
-        step = np.linalg.solve(scaled, rhs[..., None])[..., 0] / norms
-        paper[active] += step
-        iterations[active] += 1
-        active = active[np.max(np.abs(step * step_scale), axis=1) > threshold]
-        if active.size == 0:
-            break
-    converged = np.ones(sets, dtype=bool)
-    converged[active] = False
-    to_user = np.linalg.inv(paper_from_user_matrix(n, base_offset=arm.base_offset))
-    params = paper @ to_user.T
+    batched = np.ndim(xy) == 3
+    q, sets = _as_sets(arm, q, xy)
+    v = _link_phasors_fit(_factor(arm, q), sets)
+    params, iterations, converged = _gauss_newton(arm, v, tol=tol, max_iter=max_iter)
     if batched:
         return params, iterations, converged
     return params[0], iterations[0], converged[0]
@@ -248,8 +284,10 @@ class Calibration:
     pose_labels : tuple of str
         A label for every pose (the measurement file's ``pose`` column, or 1..m).
     warnings : tuple of ArmcalWarning
-        What makes the result suspicious (e.g. a solver that did not converge);
-        empty when nothing does.
+        What makes the result suspicious: an ``ill-conditioned`` plan (condition
+        number above :data:`armcal.numerics.COND_WARN`, naming the poorly
+        determined combinations), a solver that did not converge; empty when
+        nothing does.
     """
 
     arm: PlanarArm
@@ -371,7 +409,8 @@ def identify(
     Raises
     ------
     NotIdentifiableError
-        If the plan cannot identify every parameter.
+        If the plan cannot identify every parameter (the rank policy of
+        :mod:`armcal.numerics`); the message names the unseen combinations.
     ArmcalError
         If ``sigma`` must be estimated but ``2m = p`` leaves no residual freedom.
 
@@ -397,7 +436,8 @@ def identify(
         method = "closed-form"
     if method not in METHODS:
         raise ArmcalError(f"unknown method {method!r}; choose one of auto, {', '.join(METHODS)}")
-    check_identifiable(arm, q)
+    factor = factor_least_squares(scaled_jacobian(arm, q))  # one thin QR for everything
+    info = check_identifiable(arm, q, svd=factor.svd)
     given = sigma if sigma is not None else arm.sigma
     dof = 2 * m - arm.n_params
     if given is None and dof <= 0:
@@ -406,19 +446,25 @@ def identify(
             f"{arm.n_params} parameters); give the instrument noise with --sigma or measure "
             "more poses"
         )
-    params, iterations, converged = METHODS[method](arm, q, xy, tol=tol, max_iter=max_iter)
+    v = _link_phasors_fit(factor, xy[None])
+    if method == "closed-form":
+        params, iterations, converged = _closed_form_params(arm, v)[0], 1, True
+    else:
+        fitted, steps, done = _gauss_newton(arm, v, tol=tol, max_iter=max_iter)
+        params, iterations, converged = fitted[0], int(steps[0]), bool(done[0])
     if not np.all(np.isfinite(params)):
         raise ArmcalError("the fit overflowed; check that positions are in mm and plausible")
     residuals = xy - forward_kinematics(arm, q, params)
-    covariance = inverse_information(arm, q, params)
+    covariance = inverse_information(arm, q, params, svd=factor.svd)
     if covariance is None:  # identifiable at nominal, so only for absurd deviations
         raise ArmcalError("the Jacobian is singular at the estimate; check the data")
+    source: Literal["given", "estimated"]
     if given is None:
         sigma_value, source = float(np.sqrt(np.sum(residuals**2) / dof)), "estimated"
     else:
         sigma_value, source = float(given), "given"
     labels = tuple(str(i) for i in range(1, m + 1)) if pose_labels is None else tuple(pose_labels)
-    warnings = []
+    warnings = [w for w in (conditioning_warning(arm, info),) if w is not None]
     if not converged:
         warnings.append(
             ArmcalWarning(

@@ -7,7 +7,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..arm import PlanarArm, forward_kinematics
-from ..criteria import d_efficiency, scaled_columns, scaled_information, weighted_information
+from ..criteria import check_identifiable, d_efficiency, plan_svd, scaled_columns
+from ..numerics import ScaledSVD, scaled_svd, spd_inverse
 from .exchange import _blocks
 from .optimizer import (
     _adam_ascent,
@@ -93,15 +94,32 @@ def _corner_poses(arm: PlanarArm, rng: np.random.Generator) -> np.ndarray:
 
 
 def _weights_multiplicative(blocks: np.ndarray, weights: np.ndarray, iterations: int):
-    """Multiplicative algorithm for D-optimal weights (Titterington 1976; Silvey et al. 1978)."""
+    """Multiplicative algorithm for D-optimal weights (Titterington 1976; Silvey et al. 1978).
+
+    ``M(xi)`` stays positive definite: the pool holds the (identifiable) plan's
+    own poses or the support of an earlier positive definite design, every weight
+    stays positive, and the algorithm never decreases ``det M``.  The inverse is
+    :func:`~armcal.numerics.spd_inverse`, which cannot raise whatever round-off does.
+    """
     p = blocks.shape[-1]
     info = np.einsum("xap,xaq->xpq", blocks, blocks)  # (N, p, p)
     for _ in range(iterations):
-        m_inv = np.linalg.inv(np.einsum("x,xpq->pq", weights, info))
+        m_inv = spd_inverse(np.einsum("x,xpq->pq", weights, info))
         d = np.einsum("xap,pq,xaq->x", blocks, m_inv, blocks)
         weights = weights * d / p
         weights /= weights.sum()
     return weights
+
+
+def _weighted_svd(arm: PlanarArm, poses: np.ndarray, weights: np.ndarray) -> ScaledSVD:
+    """The rank policy's SVD of ``M(xi) = sum_x w_x I(x)``, from its square-root factor.
+
+    Rows ``sqrt(w_x) F_x`` (``F_x`` the scaled ``2 x p`` blocks) have Gram matrix
+    ``M(xi)``: its inverse and ``log det`` come from singular values, not from
+    inverting ``M``.
+    """
+    blocks = _blocks(arm, poses) * np.sqrt(weights)[:, None, None]
+    return scaled_svd(blocks.reshape(-1, arm.n_params))
 
 
 def certify(
@@ -133,6 +151,12 @@ def certify(
     -------
     Certificate
 
+    Raises
+    ------
+    NotIdentifiableError
+        If the plan cannot identify every parameter: its D-efficiency is 0, and
+        there is nothing to certify.
+
     Notes
     -----
     For a weighted design ``xi`` with normalized information ``M(xi)`` and
@@ -152,6 +176,8 @@ def certify(
     rng = np.random.default_rng(rng)
     q = np.asarray(q, dtype=float)
     p = arm.n_params
+    plan = plan_svd(arm, q)
+    check_identifiable(arm, q, svd=plan)
     if float(d_efficiency(arm, q)) >= 1.0 - 1e-12:
         # Fs = I: the Hadamard bound is attained, and d(x) = tr(Is(x)) = p at every pose.
         return Certificate(1.0, 1.0, 1.0, float(p), q, np.full(q.shape[0], 1.0 / q.shape[0]))
@@ -159,7 +185,7 @@ def certify(
     weights = np.full(pool.shape[0], 1.0 / pool.shape[0])
     for _ in range(rounds):
         weights = _weights_multiplicative(_blocks(arm, pool), weights, 300)
-        m_inv = np.linalg.inv(weighted_information(scaled_columns(arm, pool), weights))
+        m_inv, _ = _weighted_svd(arm, pool, weights).inverse_gram()
         d, _ = _variance_function(arm, pool, m_inv)
         top = pool[np.argsort(-d)[: 4 * p]]
         found = _maximize_variance(arm, m_inv, top)
@@ -171,13 +197,18 @@ def certify(
     weights = _weights_multiplicative(_blocks(arm, pool), weights, 1000)
     support_mask = weights > 1e-6
     support, support_w = pool[support_mask], weights[support_mask] / weights[support_mask].sum()
-    m_star = weighted_information(scaled_columns(arm, support), support_w)
-    m_plan = scaled_information(arm, q)
-    max_star = _max_variance(arm, np.linalg.inv(m_star), support, rng, search)
-    max_plan = _max_variance(arm, np.linalg.inv(m_plan), q, rng, search)
-    logdet_plan = np.linalg.slogdet(m_plan)[1]
-    logdet_star = np.linalg.slogdet(m_star)[1]
-    kw = np.exp((logdet_plan - logdet_star) / p + 1.0 - max_star / p)
+    star = _weighted_svd(arm, support, support_w)
+    # Fs = H^T H with H the plan's scaled Jacobian: inverses and log dets from SVDs.
+    star_inverse, star_ok = star.inverse_gram()
+    plan_inverse, _ = plan.inverse_gram()
+    if bool(star_ok):
+        max_star = _max_variance(arm, star_inverse, support, rng, search)
+        logdet_star = float(star.log_det_gram())
+    else:  # not expected (xi* is near D-optimal); the other two bounds still hold
+        max_star, logdet_star = np.inf, -np.inf
+    max_plan = _max_variance(arm, plan_inverse, q, rng, search)
+    logdet_plan = float(plan.log_det_gram())
+    kw = np.exp((logdet_plan - logdet_star) / p + 1.0 - max_star / p) if bool(star_ok) else 0.0
     plan_only = np.exp(1.0 - max_plan / p)
     hadamard = np.exp(logdet_plan / p)
     return Certificate(

@@ -1,0 +1,336 @@
+"""The one rank and conditioning policy of armcal, and the factorizations it rests on.
+
+Whether a plan can identify the parameters, the covariance of the estimates,
+every efficiency and observability index, the D-efficiency certificate and
+every Gauss-Newton step are decided from the singular values ``s_1 >= ... >= s_p``
+of a Jacobian **with unit-norm columns** (columns in mm/mm and mm/rad are not
+comparable until scaled).  This module holds that policy:
+
+* :data:`RANK_RTOL` -- a direction whose relative singular value ``s_i / s_1``
+  is at or below it is not identifiable: the plan is singular, efficiencies are
+  0 and standard errors infinite, and armcal raises
+  :class:`~armcal.errors.NotIdentifiableError` where it needs the inverse;
+* :data:`COND_WARN` -- above this condition number ``s_1 / s_p`` results are
+  computed but carry an ``ill-conditioned`` warning.
+
+**Thin factorizations only.**  A matrix with ``r`` rows and ``p`` columns
+(``r = 2m`` equations) is reduced by a thin QR to its ``p x p`` triangular
+factor ``R``, which has the same singular values and right singular vectors;
+the SVD is then taken of ``R``.  Memory is ``O(r p)``; no ``r x r`` matrix is
+ever formed.  When ``r < p`` the matrix itself is small and its full SVD gives
+the null space.  No normal matrix ``J^T J`` is factored, so accuracy degrades
+with ``cond(J)``, not ``cond(J)^2``.  Nothing here raises
+:class:`numpy.linalg.LinAlgError`: inputs are checked to be finite, and
+singular cases are decided by the policy, never by a failing factorization.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from .errors import ArmcalError
+
+__all__ = [
+    "COND_WARN",
+    "RANK_RTOL",
+    "LinearLeastSquares",
+    "ScaledSVD",
+    "factor_least_squares",
+    "scaled_svd",
+    "spd_inverse",
+]
+
+
+#: Relative singular value ``s_i / s_1`` of the column-scaled Jacobian at or below
+#: which a direction in parameter space is not identifiable.  Such a plan would
+#: give that combination a standard error more than 1e10 times the best-case one,
+#: and round-off in double precision (``eps = 2.2e-16``) would corrupt its
+#: estimate by more than ``1e10 eps ~ 2e-6`` of the parameter scale.
+RANK_RTOL = 1e-10
+
+#: Condition number ``s_1 / s_p`` of the column-scaled Jacobian above which a result
+#: carries an ``ill-conditioned`` warning.
+#:
+#: Why 1e4.  With unit-norm columns ``sum s_i^2 = p`` and every ``s_i = 1`` for an
+#: orthogonal plan (paper eq. 21-24), so ``1 <= s_1 <= sqrt(p)`` and the worst-
+#: determined combination of the scaled parameters has a standard error
+#: ``sigma / s_p`` between ``cond / sqrt(p)`` and ``cond`` times an orthogonal
+#: plan's: the condition number bounds, within ``sqrt(p)``, how much worse the
+#: plan is than the optimum in its worst direction.  At 1e4 matching that
+#: direction's precision would take at least ``1e8 / p`` times more poses; random
+#: plans never come close (the worst of 2000 random 4-pose plans of the paper's
+#: 4-link arm has cond ~ 800, plans of 8 or more poses stay below 10).  The same
+#: number is where round-off starts to matter: a backward-stable least-squares
+#: solve errs by about ``cond * eps`` of the parameter scale (the reach,
+#: ~1e3 mm), and ``1e4 * 2.2e-16 * 1e3 mm = 2e-9 mm`` reaches the 1e-9 mm
+#: recovery promised for noiseless data.
+COND_WARN = 1e4
+
+
+def _check_finite(matrix: np.ndarray) -> None:
+    if not np.all(np.isfinite(matrix)):
+        raise ArmcalError(
+            "a Jacobian has non-finite entries; joint angles and deviations must be finite"
+        )
+
+
+def _triangular_factor(scaled: np.ndarray) -> np.ndarray:
+    """``R`` ``(..., min(r, p), p)`` with ``R^T R = A^T A`` for ``A`` ``(..., r, p)``.
+
+    A thin QR when ``r > p`` (memory ``O(r p)``); the matrix itself otherwise.
+    """
+    r, p = scaled.shape[-2:]
+    if r <= p:
+        return scaled
+    triangle: np.ndarray = np.linalg.qr(scaled, mode="r")  # type: ignore[assignment]
+    return triangle
+
+
+def _padded(values: np.ndarray, p: int) -> np.ndarray:
+    missing = p - values.shape[-1]
+    if missing == 0:
+        return values
+    return np.concatenate([values, np.zeros((*values.shape[:-1], missing))], axis=-1)
+
+
+@dataclass(frozen=True, eq=False)
+class ScaledSVD:
+    """Singular values and right singular vectors of a matrix with unit-norm columns.
+
+    For ``A`` ``(..., r, p)`` with column norms ``c`` the scaled matrix is
+    ``A diag(1 / c)`` (zero columns are left as they are) and
+    ``A diag(1 / c) = U diag(s) V^T``.
+
+    Attributes
+    ----------
+    singular_values : ndarray, shape (..., p)
+        ``s`` in descending order, padded with zeros when ``r < p``.
+    vt : ndarray, shape (..., p, p)
+        Rows are the right singular vectors ``V^T`` in the scaled coordinates
+        ``c * x``; row ``i`` belongs to ``s_i``.
+    column_norms : ndarray, shape (..., p)
+        ``c`` (1 for zero columns).
+    """
+
+    singular_values: np.ndarray
+    vt: np.ndarray
+    column_norms: np.ndarray
+
+    @property
+    def relative(self) -> np.ndarray:
+        """``s_i / s_1`` ``(..., p)`` (0 for a zero matrix)."""
+        s = self.singular_values
+        top = s[..., :1]
+        with np.errstate(divide="ignore", invalid="ignore"):
+            return np.where(top > 0, s / np.where(top > 0, top, 1.0), 0.0)
+
+    @property
+    def kept(self) -> np.ndarray:
+        """Boolean ``(..., p)``: directions the policy counts as identifiable."""
+        return self.relative > RANK_RTOL
+
+    @property
+    def rank(self) -> np.ndarray:
+        """Numerical rank ``(...)``: singular values above ``RANK_RTOL`` times the largest."""
+        return np.sum(self.kept, axis=-1)
+
+    @property
+    def full_rank(self) -> np.ndarray:
+        """Boolean ``(...)``: every direction identifiable."""
+        return self.rank == self.singular_values.shape[-1]
+
+    @property
+    def truncated(self) -> np.ndarray:
+        """Singular values ``(..., p)`` with those the policy calls zero set to 0."""
+        return np.where(self.kept, self.singular_values, 0.0)
+
+    @property
+    def condition_number(self) -> np.ndarray:
+        """``s_1 / s_p`` ``(...)``; inf when ``s_p = 0``."""
+        s = self.singular_values
+        with np.errstate(divide="ignore", invalid="ignore"):
+            return np.where(
+                s[..., -1] > 0, s[..., 0] / np.where(s[..., -1] > 0, s[..., -1], 1), np.inf
+            )
+
+    def inverse_gram_factor(self) -> tuple[np.ndarray, np.ndarray]:
+        """``G`` ``(..., p, p)`` with ``(A^T A)^-1 = G G^T``, and the full-rank mask ``(...)``.
+
+        ``G = diag(1 / c) V diag(1 / s)``; computed from ``s`` and ``V`` (never
+        by inverting ``A^T A``), so its relative accuracy is ``cond(A) eps``.
+        Where the policy calls the matrix singular ``G`` is ``inf``.
+        """
+        ok = self.full_rank
+        safe = np.where(ok[..., None], self.singular_values, 1.0)
+        factor = (
+            np.swapaxes(self.vt, -1, -2) / safe[..., None, :] / self.column_norms[..., :, None]
+        )
+        return np.where(ok[..., None, None], factor, np.inf), ok
+
+    def inverse_gram(self) -> tuple[np.ndarray, np.ndarray]:
+        """``(A^T A)^-1`` ``(..., p, p)`` (``inf`` where singular) and the full-rank mask."""
+        factor, ok = self.inverse_gram_factor()
+        safe = np.where(ok[..., None, None], factor, 0.0)
+        inverse = safe @ np.swapaxes(safe, -1, -2)
+        return np.where(ok[..., None, None], inverse, np.inf), ok
+
+    def log_det_gram(self) -> np.ndarray:
+        """``log det(A^T A)`` ``(...)`` from the singular values; ``-inf`` where singular."""
+        s = self.truncated
+        with np.errstate(divide="ignore"):
+            return 2.0 * np.sum(np.log(s), axis=-1) + 2.0 * np.sum(
+                np.log(self.column_norms), axis=-1
+            )
+
+    def directions(self, rtol: float) -> np.ndarray:
+        """Right singular vectors ``(k, p)`` with ``s_i / s_1 <= rtol``, in unscaled coordinates.
+
+        ``rtol = RANK_RTOL`` gives a basis of the null space as the policy sees
+        it; ``1 / COND_WARN`` adds the poorly determined directions.  Unbatched.
+        """
+        if self.vt.ndim != 2:
+            raise ValueError("directions() needs a single matrix, not a stack")
+        return self.vt[self.relative <= rtol] / self.column_norms
+
+
+def scaled_svd(matrix: np.ndarray) -> ScaledSVD:
+    """SVD of ``matrix`` ``(..., r, p)`` after scaling its columns to unit norm.
+
+    Parameters
+    ----------
+    matrix : ndarray, shape (..., r, p)
+        E.g. a Jacobian (rows: equations, columns: parameters); leading axes batch.
+
+    Returns
+    -------
+    ScaledSVD
+
+    Raises
+    ------
+    ArmcalError
+        If ``matrix`` has a non-finite entry.
+
+    Notes
+    -----
+    A thin QR reduces the matrix to its ``p x p`` triangle first (memory
+    ``O(r p)``, no ``r x r`` factor); the SVD of that triangle has the same
+    singular values and right singular vectors.
+
+    Examples
+    --------
+    >>> svd = scaled_svd(np.array([[1.0, 0.0], [0.0, 1e-3], [0.0, 0.0]]))
+    >>> svd.singular_values.tolist(), bool(svd.full_rank)
+    ([1.0, 1.0], True)
+    >>> bool(scaled_svd(np.array([[1.0, 2.0], [2.0, 4.0]])).full_rank)
+    False
+    """
+    matrix = np.asarray(matrix, dtype=float)
+    _check_finite(matrix)
+    p = matrix.shape[-1]
+    norms = np.linalg.norm(matrix, axis=-2)
+    norms = np.where(norms > 0, norms, 1.0)
+    factor = _triangular_factor(matrix / norms[..., None, :])
+    if factor.shape[-2] == 0:
+        shape = factor.shape[:-2]
+        return ScaledSVD(np.zeros((*shape, p)), np.broadcast_to(np.eye(p), (*shape, p, p)), norms)
+    _, s, vt = np.linalg.svd(factor, full_matrices=True)
+    return ScaledSVD(_padded(s, p), vt, norms)
+
+
+@dataclass(frozen=True, eq=False)
+class LinearLeastSquares:
+    """A thin factorization of one matrix ``A`` ``(r, p)`` for least squares, many right sides.
+
+    ``A diag(1 / c) = Q U diag(s) V^T`` with ``Q`` ``(r, k)`` orthonormal columns
+    (``k = min(r, p)``) and the SVD of the triangular factor.
+
+    Attributes
+    ----------
+    basis : ndarray, shape (r, k)
+        ``Q``.
+    left : ndarray, shape (k, k)
+        ``U``.
+    svd : ScaledSVD
+        ``s``, ``V^T`` and the column norms ``c``: the policy's view of ``A``.
+    """
+
+    basis: np.ndarray
+    left: np.ndarray
+    svd: ScaledSVD
+
+    def project(self, rhs: np.ndarray) -> np.ndarray:
+        """``Q^T b`` ``(..., k)`` for right-hand sides ``b`` ``(..., r)``."""
+        return rhs @ self.basis
+
+    def solve(self, rhs: np.ndarray) -> np.ndarray:
+        """Least-squares solutions ``(..., p)`` of ``A x = b`` for ``b`` ``(..., r)``.
+
+        Directions the policy calls unidentifiable are left out (minimum norm
+        in the scaled coordinates), so nothing is divided by a round-off-sized
+        singular value.
+        """
+        s = self.svd.singular_values
+        k = self.left.shape[0]
+        kept = self.svd.kept[:k]
+        inverse = np.where(kept, 1.0 / np.where(kept, s[:k], 1.0), 0.0)
+        scaled = ((self.project(rhs) @ self.left) * inverse) @ self.svd.vt[:k]
+        return scaled / self.svd.column_norms
+
+
+def factor_least_squares(matrix: np.ndarray) -> LinearLeastSquares:
+    """Thin QR, then SVD of the triangle, of one matrix ``(r, p)`` with unit-norm columns.
+
+    Memory ``O(r p)``.  See :class:`LinearLeastSquares`.
+
+    Raises
+    ------
+    ArmcalError
+        If ``matrix`` has a non-finite entry.
+
+    Examples
+    --------
+    >>> a = np.array([[1.0, 0.0], [1.0, 1.0], [1.0, 2.0]])
+    >>> factor_least_squares(a).solve(np.array([1.0, 3.0, 5.0])).round(12).tolist()
+    [1.0, 2.0]
+    """
+    matrix = np.asarray(matrix, dtype=float)
+    if matrix.ndim != 2:
+        raise ValueError(f"factor_least_squares needs one (r, p) matrix, got {matrix.shape}")
+    _check_finite(matrix)
+    p = matrix.shape[1]
+    norms = np.linalg.norm(matrix, axis=0)
+    norms = np.where(norms > 0, norms, 1.0)
+    basis, triangle = np.linalg.qr(matrix / norms, mode="reduced")
+    left, s, vt = np.linalg.svd(triangle, full_matrices=True)
+    return LinearLeastSquares(basis, left, ScaledSVD(_padded(s, p), vt, norms))
+
+
+def spd_inverse(matrix: np.ndarray) -> np.ndarray:
+    """Inverse ``(..., p, p)`` of symmetric positive definite matrices, without raising.
+
+    For Gram matrices that are positive definite by construction (each caller
+    says why).  Computed from :func:`numpy.linalg.eigh`, with eigenvalues floored
+    at ``p eps`` times the largest -- the accuracy to which ``eigh`` knows them --
+    so round-off that makes a tiny eigenvalue zero or negative gives a huge but
+    finite inverse rather than :class:`numpy.linalg.LinAlgError`.
+
+    Raises
+    ------
+    ArmcalError
+        If ``matrix`` has a non-finite entry.
+
+    Examples
+    --------
+    >>> spd_inverse(np.array([[4.0, 0.0], [0.0, 0.5]])).tolist()
+    [[0.25, 0.0], [0.0, 2.0]]
+    """
+    matrix = np.asarray(matrix, dtype=float)
+    if not np.all(np.isfinite(matrix)):
+        raise ArmcalError("a Gram matrix has non-finite entries")
+    values, vectors = np.linalg.eigh(matrix)
+    p = matrix.shape[-1]
+    floor = p * np.finfo(float).eps * np.maximum(values[..., -1:], np.finfo(float).tiny)
+    values = np.maximum(values, floor)
+    return (vectors / values[..., None, :]) @ np.swapaxes(vectors, -1, -2)
