@@ -272,7 +272,8 @@ def _design(args: argparse.Namespace) -> None:
         candidates=candidates,
     )
     seconds = time.perf_counter() - start
-    _, document, report = _quality_report(args, spec, result.q)
+    quality, document, report = _quality_report(args, spec, result.q)
+    _print_warnings(quality.warnings)
     extra, header = design_summary(result, seconds)
     document.update(extra)
     written = []
@@ -295,14 +296,18 @@ def _evaluate(args: argparse.Namespace) -> None:
         quality, document, report = _quality_report(args, spec, q)
     except NotIdentifiableError as exc:  # PRODUCT.md: an error, exit 2, one line
         raise NotIdentifiableError(f"{args.plan}: {exc}", exc.combinations) from None
+    warnings = list(quality.warnings)
     outside = np.flatnonzero(~feasible(spec.arm, q))
     if outside.size:
-        print(
-            f"armcal: warning: {args.plan}: the tip of pose(s) {', '.join(map(str, outside + 1))} "
-            "is outside the measurement region",
-            file=sys.stderr,
+        poses = ", ".join(map(str, outside + 1))
+        warnings.append(
+            ArmcalWarning(
+                "outside-region",
+                f"{args.plan}: the tip of pose(s) {poses} is outside the measurement region",
+            )
         )
-    _print_warnings(quality.warnings)
+    document["warnings"] = [w.to_dict() for w in warnings]
+    _print_warnings(warnings)
     _emit(args, document, report)
 
 

@@ -886,9 +886,6 @@ class PlanQuality:
     n_poses : int
     sigma : float
         Measurement noise assumed (mm).
-    identifiable : bool
-        Whether the plan identifies every parameter; always True, since
-        :func:`evaluate_plan` raises for a plan that does not.
     efficiencies : dict of str to float
         D, A, E efficiencies (1 for orthogonal plans).
     observability : dict of str to float
@@ -899,7 +896,7 @@ class PlanQuality:
         Table I sums (see :func:`optimality_sums`).
     predicted_std : ndarray, shape (p,)
         Standard errors of the user parameters in mm / deg.
-    position : PositionAccuracy or None
+    position : PositionAccuracy
         Predicted positioning accuracy after calibration at the test poses.
     warnings : tuple of ArmcalWarning
         An ``ill-conditioned`` warning when the plan's condition number exceeds
@@ -908,13 +905,12 @@ class PlanQuality:
 
     n_poses: int
     sigma: float
-    identifiable: bool
     efficiencies: dict[str, float]
     observability: dict[str, float]
     dstar: DStar
     optimality_sums: dict[str, float]
     predicted_std: np.ndarray
-    position: PositionAccuracy | None
+    position: PositionAccuracy
     warnings: tuple[ArmcalWarning, ...] = ()
 
 
@@ -946,7 +942,6 @@ def evaluate_plan(
     return PlanQuality(
         n_poses=int(q.shape[0]),
         sigma=float(sigma),
-        identifiable=True,
         efficiencies={k: float(v) for k, v in efficiencies(arm, q).items()},
         observability={k: float(v) for k, v in observability_indices(arm, q).items()},
         dstar=dstar(arm, q),

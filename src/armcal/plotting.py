@@ -15,8 +15,9 @@ from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.collections import LineCollection
 from matplotlib.colors import Normalize
 from matplotlib.figure import Figure
+from matplotlib.layout_engine import ConstrainedLayoutEngine
 from matplotlib.lines import Line2D
-from matplotlib.patches import Circle, Rectangle, Wedge
+from matplotlib.patches import Circle, Patch, Rectangle, Wedge
 from matplotlib.ticker import FuncFormatter, MaxNLocator, NullFormatter
 
 from .arm import Annulus, PlanarArm, link_angles
@@ -25,7 +26,6 @@ from .io import atomic_write
 __all__ = ["plot_accuracy_curves", "plot_plan", "plot_random_plans", "save_figure"]
 
 _CMAP = "viridis"
-_REGION_STYLE = {"facecolor": "tab:orange", "edgecolor": "tab:orange", "alpha": 0.18, "lw": 1.0}
 
 
 def _joint_positions(arm: PlanarArm, q: np.ndarray) -> np.ndarray:
@@ -71,17 +71,19 @@ def _draw_workspace(ax, arm: PlanarArm, joints: np.ndarray, norm: Normalize) -> 
     ax.add_patch(Circle((0.0, 0.0), reach, fill=False, ls="--", color="0.55", label="reach"))
     lo, hi = np.array([-reach, -reach]), np.array([reach, reach])
     region = arm.region
+    patch: Patch | None = None
     if isinstance(region, Annulus):
         cx, cy = region.center
         width = region.r_max - region.r_min if region.r_min > 0 else None
-        patch = Wedge((cx, cy), region.r_max, 0.0, 360.0, width=width, **_REGION_STYLE)
+        patch = Wedge((cx, cy), region.r_max, 0.0, 360.0, width=width)
         lo = np.minimum(lo, [cx - region.r_max, cy - region.r_max])
         hi = np.maximum(hi, [cx + region.r_max, cy + region.r_max])
     elif region is not None:
         (x0, x1), (y0, y1) = region.x, region.y
-        patch = Rectangle((x0, y0), x1 - x0, y1 - y0, **_REGION_STYLE)
+        patch = Rectangle((x0, y0), x1 - x0, y1 - y0)
         lo, hi = np.minimum(lo, [x0, y0]), np.maximum(hi, [x1, y1])
-    if region is not None:
+    if patch is not None:
+        patch.set(facecolor="tab:orange", edgecolor="tab:orange", alpha=0.18, linewidth=1.0)
         patch.set_label("measurement region")
         patch.set_zorder(0)
         ax.add_patch(patch)
@@ -287,7 +289,9 @@ def plot_accuracy_curves(curves: dict[str, np.ndarray], *, title: str | None = N
         ax.grid(True, which="both", alpha=0.3)
     axes[0].legend(fontsize=8, frameon=False)
     fig.suptitle(title if title is not None else "Accuracy against the number of poses")
-    fig.get_layout_engine().set(w_pad=0.1)
+    engine = fig.get_layout_engine()
+    if isinstance(engine, ConstrainedLayoutEngine):
+        engine.set(w_pad=0.1)
     return fig
 
 

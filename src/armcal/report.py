@@ -53,9 +53,6 @@ def format_quality(arm: PlanarArm, quality: PlanQuality) -> str:
         f"largest Table I sum: {max(abs(v) for v in quality.optimality_sums.values()):.3g}"
         f" (0 for an optimal plan; {quality.n_poses} is the worst possible)",
     ]
-    if not quality.identifiable:
-        lines.append("warning: this plan cannot identify every parameter (see armcal identify)")
-        return "\n".join(lines)
     lines += ["", f"{'parameter':<10}{'predicted std':>14}  unit"]
     for name, unit, std in zip(
         arm.param_names, arm.param_units, quality.predicted_std, strict=True
@@ -73,17 +70,15 @@ def format_quality(arm: PlanarArm, quality: PlanQuality) -> str:
 def quality_to_dict(arm: PlanarArm, quality: PlanQuality) -> dict:
     """JSON document of :func:`evaluate_plan` (keys of PRODUCT.md plus details).
 
-    Not-identifiable values are ``None`` (JSON null), never NaN or infinity.
+    Only identifiable plans have a quality (:func:`~armcal.criteria.evaluate_plan`
+    raises otherwise), so every value is finite.
     """
-    std = {
-        name: (float(v) if np.isfinite(v) else None)
-        for name, v in zip(arm.param_names, quality.predicted_std, strict=True)
-    }
+    std = {name: float(v) for name, v in zip(arm.param_names, quality.predicted_std, strict=True)}
     pos = quality.position
     return {
         "poses": quality.n_poses,
         "sigma_mm": quality.sigma,
-        "identifiable": quality.identifiable,
+        "identifiable": True,  # a plan that is not has no quality: evaluate_plan raises
         "d_efficiency": quality.efficiencies["D"],
         "a_efficiency": quality.efficiencies["A"],
         "e_efficiency": quality.efficiencies["E"],
@@ -92,8 +87,9 @@ def quality_to_dict(arm: PlanarArm, quality: PlanQuality) -> dict:
         "abs_det_s_prime": float(quality.dstar.abs_det_s),
         "optimality_sums": quality.optimality_sums,
         "predicted_std": std,
-        "predicted_position_rms_mm": None if pos is None else pos.rms_mm,
-        "predicted_position_max_mm": None if pos is None else pos.max_mm,
+        "predicted_position_rms_mm": pos.rms_mm,
+        "predicted_position_max_mm": pos.max_mm,
+        "warnings": [w.to_dict() for w in quality.warnings],
     }
 
 
