@@ -32,12 +32,15 @@ lint: $(VENV)/.installed-test
 types: $(VENV)/.installed-test
 	$(BIN)/mypy
 
-# Two workers: this project's machines have 2 cores.
+# Two workers, one BLAS thread each: this project's machines have 2 cores, and
+# OpenBLAS's own thread pool on top of two workers oversubscribes them.
+TEST_ENV := OPENBLAS_NUM_THREADS=1 OMP_NUM_THREADS=1 MKL_NUM_THREADS=1
+
 test: lint types
-	$(BIN)/python -m pytest -n 2 src tests
+	$(TEST_ENV) $(BIN)/python -m pytest -n 2 src tests
 
 test-slow: $(VENV)/.installed-test
-	$(BIN)/python -m pytest -n 2 -m slow tests
+	$(TEST_ENV) $(BIN)/python -m pytest -n 2 -m slow tests
 
 bench: $(VENV)/.installed
 	$(BIN)/python benchmarks/bench_design.py
