@@ -1,4 +1,8 @@
-"""Helpers shared by the tests: random arms and deviations."""
+"""Helpers shared by the tests: random arms and deviations, and the program in a subprocess."""
+
+import subprocess
+import sys
+from pathlib import Path
 
 import numpy as np
 
@@ -21,3 +25,16 @@ def random_truth(arm: PlanarArm, rng: np.random.Generator) -> np.ndarray:
     dq = rng.uniform(-1.0, 1.0, n)
     base = rng.uniform(-20.0, 20.0, 2) if arm.base_offset else None
     return arm.params_from_display(dl, dq, base)
+
+
+def run_cli(cwd: Path, *args: str, timeout: float = 120) -> subprocess.CompletedProcess[str]:
+    """Run ``python -m armcal *args`` in the folder ``cwd``, capturing stdout and stderr."""
+    return subprocess.run(
+        [sys.executable, "-m", "armcal", *args],
+        cwd=cwd,
+        capture_output=True,
+        text=True,
+        encoding="utf-8",
+        timeout=timeout,
+        check=False,
+    )

@@ -23,6 +23,8 @@ from pathlib import Path
 
 import pytest
 
+from helpers import run_cli
+
 # --------------------------------------------------------------------------- valid inputs
 
 #: Joint columns of the default robot, paper-4link (4 joints, ±180 deg, 8 parameters).
@@ -128,19 +130,6 @@ IDENTIFY_ROBOT = ("identify", "--robot", "robot.toml", *IDENTIFY[1:])
 
 
 # --------------------------------------------------------------------------- helpers
-
-
-def run_cli(tmp_path: Path, *args: str) -> subprocess.CompletedProcess[str]:
-    """Run ``python -m armcal *args`` in ``tmp_path``."""
-    return subprocess.run(
-        [sys.executable, "-m", "armcal", *args],
-        cwd=tmp_path,
-        capture_output=True,
-        text=True,
-        encoding="utf-8",
-        timeout=60,
-        check=False,
-    )
 
 
 def _write(root: Path, files: dict[str, object]) -> None:

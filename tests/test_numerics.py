@@ -17,8 +17,6 @@ from __future__ import annotations
 
 import json
 import math
-import subprocess
-import sys
 import tracemalloc
 from pathlib import Path
 
@@ -57,6 +55,7 @@ from armcal.numerics import (
     scaled_svd,
     spd_inverse,
 )
+from helpers import run_cli
 
 EPS = np.finfo(float).eps
 
@@ -145,18 +144,6 @@ def _phasor_errors(values_display: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return np.abs(delta[:4]), (LINKS_MM + DL_MM) * np.abs(dtheta)
 
 
-def _run(tmp_path: Path, *args: str) -> subprocess.CompletedProcess[str]:
-    return subprocess.run(
-        [sys.executable, "-m", "armcal", *args],
-        cwd=tmp_path,
-        capture_output=True,
-        text=True,
-        encoding="utf-8",
-        timeout=120,
-        check=False,
-    )
-
-
 def _write_csv(path: Path, header: str, rows: np.ndarray) -> None:
     lines = [header, *(",".join(repr(float(v)) for v in row) for row in rows)]
     path.write_text("\n".join(lines) + "\n", encoding="utf-8")
@@ -173,7 +160,7 @@ def test_ill_conditioned_plan_identifies_with_a_warning(tmp_path, method):
     header = "q1_deg,q2_deg,q3_deg,q4_deg,x_mm,y_mm"
     _write_csv(tmp_path / "meas.csv", header, np.hstack([q_deg, _positions(q_deg)]))
 
-    result = _run(tmp_path, "identify", "--measurements", "meas.csv", "--method", method,
+    result = run_cli(tmp_path, "identify", "--measurements", "meas.csv", "--method", method,
                   "--sigma", "0.1", "--json")  # fmt: skip
 
     assert result.returncode == 0, result.stderr
@@ -198,7 +185,7 @@ def test_evaluate_six_identical_poses_is_one_error_line(tmp_path):
         tmp_path / "plan.csv", "q1_deg,q2_deg,q3_deg,q4_deg", np.tile([30, -60, 90, 45], (6, 1))
     )
 
-    result = _run(tmp_path, "evaluate", "--plan", "plan.csv")
+    result = run_cli(tmp_path, "evaluate", "--plan", "plan.csv")
 
     assert result.returncode == 2
     assert "Traceback" not in result.stderr and result.stdout == ""
