@@ -51,4 +51,4 @@ readme: $(VENV)/.installed
 	$(BIN)/python tools/readme.py
 
 clean:
-	rm -rf $(VENV) $(DEMO_DIR) .pytest_cache .ruff_cache
+	rm -rf $(VENV) $(DEMO_DIR) .pytest_cache .ruff_cache .mypy_cache
