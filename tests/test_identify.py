@@ -166,7 +166,7 @@ def test_sigma_is_estimated_without_bias(arm4, paper_truth4, rng):
     q = random_plan(arm4, 20, rng)
     clean = forward_kinematics(arm4, q, paper_truth4)
     variances = [
-        identify(arm4, q, clean + rng.normal(0.0, 0.2, clean.shape)).sigma ** 2 for _ in range(400)
+        identify(arm4, q, clean + rng.normal(0.0, 0.2, clean.shape)).sigma_mm ** 2 for _ in range(400)
     ]
     # s^2 = RSS/(2m - p) with 32 dof: sd of the mean of 400 draws is sqrt(2/32/400) = 1.25 %.
     assert_allclose(np.mean(variances), 0.04, rtol=0.05)
@@ -177,9 +177,9 @@ def test_sigma_source_given_or_estimated(arm4, paper_truth4, rng):
     xy = forward_kinematics(arm4, q, paper_truth4) + rng.normal(0.0, 0.1, (12, 2))
     assert identify(arm4, q, xy).sigma_source == "estimated"
     given = identify(arm4, q, xy, sigma=0.3)
-    assert (given.sigma, given.sigma_source) == (0.3, "given")
+    assert (given.sigma_mm, given.sigma_source) == (0.3, "given")
     with_file_sigma = PlanarArm(arm4.link_lengths, sigma=0.05)
-    assert identify(with_file_sigma, q, xy).sigma == 0.05
+    assert identify(with_file_sigma, q, xy).sigma_mm == 0.05
 
 
 def test_estimating_sigma_needs_residual_freedom(arm4, paper_truth4, rng):

@@ -884,7 +884,7 @@ class PlanQuality:
     Attributes
     ----------
     n_poses : int
-    sigma : float
+    sigma_mm : float
         Measurement noise assumed (mm).
     efficiencies : dict of str to float
         D, A, E efficiencies (1 for orthogonal plans).
@@ -904,7 +904,7 @@ class PlanQuality:
     """
 
     n_poses: int
-    sigma: float
+    sigma_mm: float
     efficiencies: dict[str, float]
     observability: dict[str, float]
     dstar: DStar
@@ -941,7 +941,7 @@ def evaluate_plan(
     warning = conditioning_warning(arm, info)
     return PlanQuality(
         n_poses=int(q.shape[0]),
-        sigma=float(sigma),
+        sigma_mm=float(sigma),
         efficiencies={k: float(v) for k, v in efficiencies(arm, q).items()},
         observability={k: float(v) for k, v in observability_indices(arm, q).items()},
         dstar=dstar(arm, q),

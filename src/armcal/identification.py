@@ -271,10 +271,10 @@ class Calibration:
         User deviations in internal units: ``dl`` (mm), ``dq`` (rad), ``x0, y0`` (mm).
     covariance : ndarray, shape (p, p)
         ``sigma^2 (J^T J)^-1`` in internal units (mm, rad).
-    sigma : float
+    sigma_mm : float
         Measurement noise (1 std, mm) used for ``covariance``.
     sigma_source : {"given", "estimated"}
-        Whether ``sigma`` was given or estimated as ``sqrt(RSS / (2m - p))``.
+        Whether ``sigma_mm`` was given or estimated as ``sqrt(RSS / (2m - p))``.
     residuals : ndarray, shape (m, 2)
         Measured minus fitted positions in mm.
     iterations : int
@@ -294,7 +294,7 @@ class Calibration:
     method: str
     params: np.ndarray
     covariance: np.ndarray
-    sigma: float
+    sigma_mm: float
     sigma_source: Literal["given", "estimated"]
     residuals: np.ndarray
     iterations: int
@@ -478,7 +478,7 @@ def identify(
         method=method,
         params=params,
         covariance=sigma_value**2 * covariance,
-        sigma=sigma_value,
+        sigma_mm=sigma_value,
         sigma_source=source,
         residuals=residuals,
         iterations=int(iterations),

@@ -43,7 +43,7 @@ def format_quality(arm: PlanarArm, quality: PlanQuality) -> str:
     obs = quality.observability
     lines = [
         f"{quality.n_poses} poses of {arm.name}, {arm.n_params} parameters, "
-        f"sigma {quality.sigma:g} mm",
+        f"sigma {quality.sigma_mm:g} mm",
         f"efficiency (1 = orthogonal optimum): D {eff['D']:.4f}  A {eff['A']:.4f}  "
         f"E {eff['E']:.4f}",
         f"observability: O1 {obs['O1']:.4f}  O2 {obs['O2']:.4f}  O3 {obs['O3']:.4f}  "
@@ -77,7 +77,7 @@ def quality_to_dict(arm: PlanarArm, quality: PlanQuality) -> dict:
     pos = quality.position
     return {
         "poses": quality.n_poses,
-        "sigma_mm": quality.sigma,
+        "sigma_mm": quality.sigma_mm,
         "identifiable": True,  # a plan that is not has no quality: evaluate_plan raises
         "d_efficiency": quality.efficiencies["D"],
         "a_efficiency": quality.efficiencies["A"],
@@ -127,7 +127,7 @@ def format_calibration(cal: Calibration, *, truth: np.ndarray | None = None) -> 
     worst = int(np.argmax(cal.pose_residuals))
     lines += [
         "",
-        f"sigma {cal.sigma:.4g} mm ({cal.sigma_source}); residual RMS {cal.residual_rms:.4g} mm "
+        f"sigma {cal.sigma_mm:.4g} mm ({cal.sigma_source}); residual RMS {cal.residual_rms:.4g} mm "
         f"per coordinate, max {cal.residual_max:.4g} mm at pose {cal.pose_labels[worst]}; "
         f"{cal.dof} degrees of freedom",
         f"{cal.method}: {cal.iterations} iteration(s), "
@@ -158,7 +158,7 @@ def calibration_to_dict(cal: Calibration) -> dict:
         },
         "method": cal.method,
         "poses": cal.n_poses,
-        "sigma_mm": cal.sigma,
+        "sigma_mm": cal.sigma_mm,
         "sigma_source": cal.sigma_source,
         "parameters": [
             {"name": name, "unit": unit, "value": float(v), "std": float(s)}
