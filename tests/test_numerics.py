@@ -196,6 +196,24 @@ def test_evaluate_six_identical_poses_is_one_error_line(tmp_path):
     assert lines[0].count(";") >= 3 and "unseen combinations: dl1" in lines[0]
 
 
+def test_design_from_identical_candidates_is_one_error_line_and_writes_nothing(tmp_path):
+    # Exchange can only pick copies of one pose, so the certificate's plan is singular.
+    _write_csv(
+        tmp_path / "cands.csv", "q1_deg,q2_deg,q3_deg,q4_deg", np.tile([10, 20, 30, 40], (8, 1))
+    )
+
+    result = run_cli(
+        tmp_path, "design", "--poses", "6", "--method", "exchange", "--candidates", "cands.csv",
+        "-o", "plan.csv",
+    )  # fmt: skip
+
+    assert result.returncode == 2
+    assert "Traceback" not in result.stderr and result.stdout == ""
+    lines = result.stderr.splitlines()
+    assert len(lines) == 1 and "rank 2 of 8" in lines[0] and "unseen combinations" in lines[0]
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["cands.csv"]
+
+
 # --------------------------------------------------------------------------- the library
 
 
