@@ -2,12 +2,16 @@
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from ..arm import PlanarArm, forward_kinematics, wrap_angle
 from ..errors import ArmcalError
 
 __all__ = [
+    "PLACEMENT_CANDIDATES",
+    "PLACEMENT_CHUNK_BYTES",
     "analytic_plan",
     "feasible",
     "feasible_poses",
@@ -124,64 +128,258 @@ def feasible_poses(
     return np.concatenate(found)[:k]
 
 
+#: Candidate angles tried for joint 1 in every pose (or, with a base offset, for
+#: the plan's common rotation of joint 1) when a measurement region constrains it.
+PLACEMENT_CANDIDATES = 720
+
+#: Bytes of working arrays per chunk of poses while joint 1 is placed in a
+#: measurement region (see :func:`analytic_plan`).
+PLACEMENT_CHUNK_BYTES = 16 * 2**20
+
+#: Upper bound on the bytes of working arrays per (candidate angle, pose) pair
+#: while joint 1 is placed in a region: the tip (complex and as x, y), the
+#: region's constraint values and gradients (at most 4 of each, 2 doubles per
+#: gradient), the score -- fewer than 32 doubles.
+BYTES_PER_CANDIDATE_POSE = 256
+
+
+def _turn_limits(arm: PlanarArm) -> tuple[np.ndarray, np.ndarray]:
+    """Joint limits ``(n,)`` clipped to one turn ``[-pi, pi]``, where a placed plan's angles lie."""
+    lo = np.maximum(arm.joint_limits[:, 0], -np.pi)
+    hi = np.minimum(arm.joint_limits[:, 1], np.pi)
+    return lo, hi
+
+
+def _shift_margin(shift: np.ndarray, lo: float, hi: float, m: int) -> np.ndarray:
+    """Margin (rad) of the ``m`` angles ``shift + 2 pi k / m`` within ``[lo, hi]``; any shape.
+
+    Needs ``0 < hi - lo <= 2 pi``.  Each angle counts at its representative in
+    ``[lo, lo + 2 pi)``: the lowest is ``t = lo + mod(shift - lo, h)`` with
+    ``h = 2 pi / m`` and the highest ``t + (m - 1) h``, so the margin is
+    ``min(t - lo, hi - t - (m - 1) h)``, negative when an angle is outside.
+    """
+    step = 2 * np.pi / m
+    lowest = lo + np.mod(np.asarray(shift, dtype=float) - lo, step)
+    return np.minimum(lowest - lo, hi - lowest - (m - 1) * step)
+
+
+def _best_common_shift(lo: np.ndarray, hi: np.ndarray, m: int) -> tuple[float, float]:
+    """The shift ``alpha`` whose angles ``alpha + 2 pi k / m`` lie deepest inside every interval.
+
+    Parameters
+    ----------
+    lo, hi : ndarray, shape (J,)
+        Feasible intervals of ``J`` joints (rad), ``0 < hi - lo <= 2 pi``.
+    m : int
+        Number of angles, spaced ``h = 2 pi / m`` apart.
+
+    Returns
+    -------
+    shift : float
+        The best ``alpha`` (rad), in ``[0, h)``.
+    margin : float
+        The smallest distance (rad) from an angle to a limit of its joint at that
+        shift (``inf`` without joints); negative when no shift fits every joint.
+
+    Notes
+    -----
+    Shifting by ``h`` only relabels the angles, so ``alpha`` lives on the circle
+    ``R / hZ``.  An angle breaks joint ``j`` when it lies in the forbidden arc
+    ``(hi_j, lo_j + 2 pi)`` of length ``gap_j = 2 pi - (hi_j - lo_j)``, so the
+    shifts that break joint ``j`` form one arc of that circle, ``(hi_j, hi_j +
+    gap_j)`` mod ``h`` (the whole circle when ``gap_j > h``).  Moving ``alpha``
+    by ``d`` moves the lowest angle away from ``lo_j`` by ``d`` and the highest
+    towards ``hi_j`` by ``d``, so at an allowed shift the margin of joint ``j``
+    is the distance along the circle to its blocked arc, and the margin of the
+    plan is the distance to the union of the blocked arcs.  It is largest at the
+    midpoint of the longest free arc, which starts where a blocked arc ends
+    and runs to the next start: those midpoints (and the ends, for free arcs of
+    length 0) are the candidates, each evaluated by :func:`_shift_margin`.
+
+    For one joint the free arc has length ``h - gap``: the ``m`` angles fit iff
+    ``gap <= 2 pi / m``, and the largest margin is ``(2 pi / m - gap) / 2``, at
+    ``alpha = (lo + hi - (m - 1) h) / 2`` (the angles centred in ``[lo, hi]``).
+    """
+    lo, hi = np.asarray(lo, dtype=float), np.asarray(hi, dtype=float)
+    if lo.size == 0:
+        return 0.0, math.inf
+    step = 2 * np.pi / m
+    gap = np.clip(2 * np.pi - (hi - lo), 0.0, None)
+    start = np.mod(hi, step)
+    end = start + gap
+    # Forward distance from the end of arc j to the start of arc i; a start at the
+    # very end point (a full-turn joint's point arc, or arc j itself when gap = h)
+    # does not close the free arc.
+    ahead = np.mod(start[None, :] - end[:, None], step)
+    ahead = np.where(ahead == 0, step, ahead)
+    np.fill_diagonal(ahead, step - np.minimum(gap, step))
+    free = ahead.min(axis=1)
+    candidates = np.mod(np.concatenate([end + free / 2, end]), step)
+    margins = np.min(
+        [_shift_margin(candidates, a, b, m) for a, b in zip(lo, hi, strict=True)], axis=0
+    )
+    best = int(np.argmax(margins))
+    return float(candidates[best]), float(margins[best])
+
+
+def _placed_angles(shift: float, lo: float, hi: float, m: int) -> np.ndarray:
+    """The angles ``shift + 2 pi k / m``, ``k = 0..m-1``, each at its representative in ``[lo, hi]``.
+
+    When an angle lies outside (by round-off at a margin of 0) it is given the
+    representative nearest to the interval.
+    """
+    offset = np.mod(shift + 2 * np.pi * np.arange(m) / m - lo, 2 * np.pi)  # in [0, 2 pi)
+    width = hi - lo
+    # Angles past `hi` by more than half the forbidden arc are closer to `lo` from below.
+    offset = np.where(offset > width + (2 * np.pi - width) / 2, offset - 2 * np.pi, offset)
+    return lo + offset
+
+
 def analytic_plan(arm: PlanarArm, m: int) -> np.ndarray:
     """An orthogonal plan (Table I) placed inside the joint limits and region, if one fits.
 
-    The conditions are invariant to a common shift ``alpha`` of joints 2..n and,
-    without a base offset, to the angle of joint 1 in each pose; with a base
-    offset, to a common rotation of joint 1.  These freedoms are searched on a
-    fine grid for the placement with the largest margin to the limits and region.
+    Parameters
+    ----------
+    arm : PlanarArm
+    m : int
+        Number of poses; at least ``n`` (``n + 1`` with a base offset).
+
+    Returns
+    -------
+    ndarray, shape (m, n)
+        Joint angles in rad, within the joint limits and in ``[-pi, pi]``; pose
+        ``k`` sets joints 2..n to ``alpha + 2 pi k / m``.
 
     Raises
     ------
     ArmcalError
-        If no such placement keeps every pose within the limits and region (use
+        If no placement keeps every pose within the limits and region (use
         :func:`optimize_plan` then).
+
+    Notes
+    -----
+    The optimality conditions (21) hold for the poses of :func:`orthogonal_plan`
+    shifted by a common ``alpha`` in joints 2..n (the relative link angles
+    ``theta_j - theta_i = (j - i)(alpha + 2 pi k / m)`` still sum to zero), with
+    joint 1 free in every pose -- or, with a base offset, for joint 1 at ``beta
+    + 2 pi k / m`` with any common ``beta``.  The placement uses these freedoms:
+
+    * ``alpha`` in closed form (:func:`_best_common_shift`): the largest
+      smallest distance of joints 2..n to their limits, ``(2 pi / m - gap) / 2``
+      for joints sharing one interval of ``2 pi - gap`` rad;
+    * joint 1 without a region: the middle of its limits (no base offset), or
+      ``beta`` by the same closed form for its own limits (base offset);
+    * joint 1 with a region: the best of :data:`PLACEMENT_CANDIDATES` angles
+      (per pose; with a base offset, common rotations ``beta`` over a full turn,
+      starting at the closed-form one), scored by the smaller of the joint-1
+      limit margin (rad) and the region margin (mm) divided by the arm's reach
+      (a turn of joint 1 by ``d`` rad moves the tip by at most ``reach d`` mm).
+
+    Time and memory are O(m n) without a region.  With one, candidates are
+    scored for chunks of poses: the working arrays hold at most
+    ``PLACEMENT_CHUNK_BYTES`` bytes (16 MiB: ``PLACEMENT_CANDIDATES`` candidates
+    times the chunk's poses times :data:`BYTES_PER_CANDIDATE_POSE`) besides
+    the O(m n) plan, and the time is O(m (n + PLACEMENT_CANDIDATES)).
+
+    Examples
+    --------
+    >>> np.degrees(analytic_plan(PlanarArm([2.0, 1.0]), 4)).round(9).tolist()
+    [[0.0, 45.0], [0.0, 135.0], [0.0, -135.0], [0.0, -45.0]]
     """
-    base = orthogonal_plan(arm, m)
     n = arm.n_joints
-    grid = np.linspace(-np.pi, np.pi, 721)[:-1]
-    lo, hi = arm.joint_limits[:, 0], arm.joint_limits[:, 1]
-    # Common shift of joints 2..n: margin of every candidate shift (grid, m, n-1).
-    shifted = wrap_angle(base[None, :, 1:] + grid[:, None, None])
-    margin = np.minimum(shifted - lo[1:], hi[1:] - shifted).min(axis=(1, 2), initial=np.inf)
-    if margin.max() < 0:
+    min_poses = n + 1 if arm.base_offset else n
+    if m < min_poses:
+        raise ArmcalError(
+            f"an orthogonal plan for {arm.name} needs at least {min_poses} poses, got {m}"
+        )
+    lo, hi = _turn_limits(arm)
+    alpha, margin = _best_common_shift(lo[1:], hi[1:], m)
+    if margin < 0:
         raise ArmcalError(
             f"no orthogonal {m}-pose plan fits the joint limits of {arm.name}: joints 2..{n} "
             f"would each need {m} angles spaced {360 / m:g} deg apart"
         )
-    q = base.copy()
-    q[:, 1:] = shifted[int(np.argmax(margin))]
+    q = np.empty((m, n))
+    for j in range(1, n):
+        q[:, j] = _placed_angles(alpha, lo[j], hi[j], m)
     if arm.base_offset:
-        rotated = wrap_angle(base[None, :, 0] + grid[:, None])  # (grid, m)
-        candidates = np.repeat(q[None], grid.size, axis=0)
-        candidates[:, :, 0] = rotated
-        score = _placement_margin(arm, candidates).min(axis=1)
-        if score.max() < 0:
+        beta, margin1 = _best_common_shift(lo[:1], hi[:1], m)
+        if margin1 < 0:
             raise ArmcalError(
-                f"no rotation of the orthogonal {m}-pose plan keeps every pose of {arm.name} "
-                "inside the joint limits and measurement region"
+                f"no rotation of the orthogonal {m}-pose plan keeps joint 1 of {arm.name} "
+                f"within its limits: it would need {m} angles spaced {360 / m:g} deg apart"
             )
-        return candidates[int(np.argmax(score))]
-    # Joint 1 is free pose by pose: choose the angle with the largest margin.
-    candidates = np.repeat(q[None], grid.size, axis=0)
-    candidates[:, :, 0] = grid[:, None]
-    score = _placement_margin(arm, candidates)  # (grid, m)
-    best = np.argmax(score, axis=0)
-    if np.any(score[best, np.arange(m)] < 0):
-        raise ArmcalError(
-            f"no angle of joint 1 puts every pose of the orthogonal {m}-pose plan of {arm.name} "
-            "inside the measurement region"
-        )
-    q[:, 0] = grid[best]
+        if arm.region is not None:
+            beta = _best_rotation_in_region(arm, q, beta, lo[0], hi[0])
+        q[:, 0] = _placed_angles(beta, lo[0], hi[0], m)
+    elif arm.region is not None:
+        q[:, 0] = _joint1_in_region(arm, q, lo[0], hi[0])
+    else:
+        q[:, 0] = (lo[0] + hi[0]) / 2
     return q
 
 
-def _placement_margin(arm: PlanarArm, q: np.ndarray) -> np.ndarray:
-    """Smallest margin (rad for limits, mm for the region) of each pose ``(..., m)``."""
-    lo, hi = arm.joint_limits[:, 0], arm.joint_limits[:, 1]
-    margin = np.minimum(q - lo, hi - q).min(axis=-1)
-    if arm.region is not None:
-        g, _ = arm.region.constraints(forward_kinematics(arm, q))
-        margin = np.minimum(margin, g.min(axis=-1))
-    return margin
+def _reach(arm: PlanarArm) -> float:
+    return float(np.sum(arm.link_lengths))
+
+
+def _chunks(m: int):
+    """Slices of poses whose candidate scores fit in :data:`PLACEMENT_CHUNK_BYTES`."""
+    size = max(1, PLACEMENT_CHUNK_BYTES // (BYTES_PER_CANDIDATE_POSE * PLACEMENT_CANDIDATES))
+    return (slice(i, min(i + size, m)) for i in range(0, m, size))
+
+
+def _tip_after_joint1(arm: PlanarArm, q_rest: np.ndarray) -> np.ndarray:
+    """Tip ``(k,)`` as a complex number with joint 1 at 0: the tip is ``exp(i q1)`` times it."""
+    relative = np.cumsum(np.concatenate([np.zeros((q_rest.shape[0], 1)), q_rest], axis=1), axis=1)
+    return np.exp(1j * relative) @ arm.link_lengths
+
+
+def _region_margin(arm: PlanarArm, tip: np.ndarray) -> np.ndarray:
+    """Smallest region constraint ``(...)`` (mm, >= 0 inside) of complex tips ``(...)``."""
+    assert arm.region is not None
+    g, _ = arm.region.constraints(np.stack([tip.real, tip.imag], axis=-1))
+    return g.min(axis=-1)
+
+
+def _joint1_in_region(arm: PlanarArm, q: np.ndarray, lo: float, hi: float) -> np.ndarray:
+    """Joint 1 of every pose ``(m,)``: the candidate with the best limit and region margin."""
+    candidates = np.linspace(lo, hi, PLACEMENT_CANDIDATES + 1)  # both ends and the middle
+    limit_margin = np.minimum(candidates - lo, hi - candidates)[:, None]
+    rotation = np.exp(1j * candidates)[:, None]
+    reach = _reach(arm)
+    q1 = np.empty(q.shape[0])
+    for part in _chunks(q.shape[0]):
+        tip = rotation * _tip_after_joint1(arm, q[part, 1:])[None, :]  # (candidates, chunk)
+        score = np.minimum(limit_margin, _region_margin(arm, tip) / reach)
+        best = np.argmax(score, axis=0)
+        if np.any(score[best, np.arange(best.size)] < 0):
+            raise ArmcalError(
+                f"no angle of joint 1 puts every pose of the orthogonal {q.shape[0]}-pose plan "
+                f"of {arm.name} inside the measurement region"
+            )
+        q1[part] = candidates[best]
+    return q1
+
+
+def _best_rotation_in_region(
+    arm: PlanarArm, q: np.ndarray, beta: float, lo: float, hi: float
+) -> float:
+    """The common rotation ``beta`` of joint 1 (base offset) with the best limit and region margin."""
+    m = q.shape[0]
+    candidates = beta + 2 * np.pi * np.arange(PLACEMENT_CANDIDATES) / PLACEMENT_CANDIDATES
+    rotation = np.exp(1j * candidates)[:, None]
+    region = np.full(PLACEMENT_CANDIDATES, np.inf)
+    for part in _chunks(m):
+        # Pose k turns joint 1 by beta + 2 pi k / m.
+        steps = np.exp(2j * np.pi * np.arange(m)[part] / m)
+        tip = rotation * (steps * _tip_after_joint1(arm, q[part, 1:]))[None, :]
+        region = np.minimum(region, _region_margin(arm, tip).min(axis=1))
+    score = np.minimum(_shift_margin(candidates, lo, hi, m), region / _reach(arm))
+    best = int(np.argmax(score))
+    if score[best] < 0:
+        raise ArmcalError(
+            f"no rotation of the orthogonal {m}-pose plan keeps every pose of {arm.name} "
+            "inside the joint limits and measurement region"
+        )
+    return float(candidates[best])
