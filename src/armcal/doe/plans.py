@@ -144,7 +144,7 @@ BYTES_PER_CANDIDATE_POSE = 256
 
 
 def _turn_limits(arm: PlanarArm) -> tuple[np.ndarray, np.ndarray]:
-    """Joint limits ``(n,)`` clipped to one turn ``[-pi, pi]``, where a placed plan's angles lie."""
+    """Joint limits ``(n,)`` clipped to ``[-pi, pi]``, where a placed plan's angles lie."""
     lo = np.maximum(arm.joint_limits[:, 0], -np.pi)
     hi = np.minimum(arm.joint_limits[:, 1], np.pi)
     return lo, hi
@@ -223,7 +223,7 @@ def _best_common_shift(lo: np.ndarray, hi: np.ndarray, m: int) -> tuple[float, f
 
 
 def _placed_angles(shift: float, lo: float, hi: float, m: int) -> np.ndarray:
-    """The angles ``shift + 2 pi k / m``, ``k = 0..m-1``, each at its representative in ``[lo, hi]``.
+    """The angles ``shift + 2 pi k / m`` (``k < m``), each at its representative in ``[lo, hi]``.
 
     When an angle lies outside (by round-off at a margin of 0) it is given the
     representative nearest to the interval.
@@ -339,7 +339,10 @@ def _region_margin(arm: PlanarArm, tip: np.ndarray) -> np.ndarray:
     """Smallest region constraint ``(...)`` (mm, >= 0 inside) of complex tips ``(...)``."""
     assert arm.region is not None
     g, _ = arm.region.constraints(np.stack([tip.real, tip.imag], axis=-1))
-    return g.min(axis=-1)
+    margin = g[..., 0].copy()
+    for i in range(1, g.shape[-1]):  # faster than a reduction over the short last axis
+        np.minimum(margin, g[..., i], out=margin)
+    return margin
 
 
 def _joint1_in_region(arm: PlanarArm, q: np.ndarray, lo: float, hi: float) -> np.ndarray:
@@ -365,7 +368,7 @@ def _joint1_in_region(arm: PlanarArm, q: np.ndarray, lo: float, hi: float) -> np
 def _best_rotation_in_region(
     arm: PlanarArm, q: np.ndarray, beta: float, lo: float, hi: float
 ) -> float:
-    """The common rotation ``beta`` of joint 1 (base offset) with the best limit and region margin."""
+    """The common rotation ``beta`` of joint 1 (base offset) with the best score."""
     m = q.shape[0]
     candidates = beta + 2 * np.pi * np.arange(PLACEMENT_CANDIDATES) / PLACEMENT_CANDIDATES
     rotation = np.exp(1j * candidates)[:, None]

@@ -132,8 +132,10 @@ def poses_needed(
     -----
     Accuracy of the best plan falls like ``1 / sqrt(m)`` once ``m`` is a few
     times ``n`` (the plan's efficiency settles), so each step jumps to
-    ``ceil(m (a_m / goal)^2)`` and the answer is then confirmed by stepping one
-    pose at a time: the result ``m`` reaches the goal and ``m - 1`` does not.
+    ``ceil(m (a_m / goal)^2)``; the first size that reaches is then checked
+    against one pose less and, if that reaches too, bisected against the last
+    size that failed (a few designs, not one per pose when a jump overshoots):
+    the result ``m`` reaches the goal and ``m - 1`` does not.
     For arms without binding limits the best plans are orthogonal and the
     answers are the closed forms ``ceil((sigma / goal)^2)`` for lengths,
     ``ceil((sigma / (goal l))^2)`` for a single joint offset and
@@ -168,6 +170,7 @@ def poses_needed(
         return best(m) <= goal * (1 + TARGET_RTOL)
 
     m = max(min_poses, 2 * arm.n_joints)
+    failed = min_poses - 1  # largest m known not to reach the goal
     while not reaches(m):
         value = best(m)
         if m >= max_poses:
@@ -175,11 +178,21 @@ def poses_needed(
                 f"{max_poses} poses reach only {value:.4g} against a target of {goal:g}; "
                 "relax the target or measure with a better instrument (smaller --sigma)"
             )
+        failed = m
         # 1/sqrt(m) law from here; an unidentifiable m (inf) just doubles.
         jump = m * (value / goal) ** 2 if math.isfinite(value) else 2 * m
         m = min(max_poses, max(m + 1, math.ceil(jump * (1 - 1e-12))))
-    while m > min_poses and reaches(m - 1):
-        m -= 1
+    # The jump usually lands on the answer, so try one pose less first; if that
+    # reaches too, bisect between a size that fails and one that reaches: O(log m)
+    # designs, not one per pose below an overshooting jump.
+    low = failed
+    middle = m - 1
+    while m - low > 1:
+        if reaches(middle):
+            m = middle
+        else:
+            low = middle
+        middle = (low + m) // 2
     q, method, achieved = plans[m]
     return PosesNeeded(
         target=target,
