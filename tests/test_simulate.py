@@ -2,6 +2,7 @@
 
 import io
 import itertools
+import json
 import math
 import tracemalloc
 
@@ -18,10 +19,11 @@ from armcal import (
     solve_closed_form,
 )
 from armcal import simulate as sim
+from armcal.arm import link_phasors
 from armcal.criteria import d_efficiency, position_accuracy, predicted_std
 from armcal.doe import orthogonal_plan, random_plan
 from armcal.progress import ProgressBar
-from helpers import random_arm
+from helpers import random_arm, random_truth
 
 
 @pytest.mark.parametrize("method", ["closed-form", "gauss-newton"])
@@ -67,7 +69,14 @@ def test_chunking_does_not_change_the_result(arm4, paper_truth4, monkeypatch):
     assert all(a[0] < b[0] for a, b in itertools.pairwise(calls))
     assert_allclose(chunked.mean, whole.mean, rtol=0, atol=1e-13)
     assert_allclose(chunked.covariance, whole.covariance, rtol=1e-10, atol=0)
-    assert chunked.position.quantiles_mm == whole.position.quantiles_mm
+    # The quantiles' subsample is drawn before the first chunk: the same pairs (their
+    # errors equal up to the round-off of solves batched differently).
+    pos, ref = chunked.position, whole.position
+    assert pos.subsample < pos.pairs
+    for key in ref.quantiles_mm:
+        assert_allclose(pos.quantiles_mm[key], ref.quantiles_mm[key], rtol=1e-12)
+        assert_allclose(pos.quantile_intervals_mm[key], ref.quantile_intervals_mm[key], rtol=1e-12)
+    assert_allclose(pos.rms_mm, ref.rms_mm, rtol=1e-12)
 
 
 def test_the_estimates_are_those_of_the_solver(arm4, paper_truth4):
@@ -82,44 +91,105 @@ def test_the_estimates_are_those_of_the_solver(arm4, paper_truth4):
     assert_allclose(result.covariance, np.cov(estimates.T), rtol=1e-9, atol=0)
 
 
-def test_position_errors_match_prediction_and_exact_quantiles(arm4, paper_truth4):
-    q = orthogonal_plan(arm4, 20)
-    test_q = random_plan(arm4, 200, rng=4)
-    trials = 4000
-    result = sim.monte_carlo(arm4, q, paper_truth4, 0.1, trials, rng=13, test_q=test_q)
-    pos = result.position
-    # sigma sqrt(2n/m) for an orthogonal plan (criteria.position_accuracy); the
-    # prediction here is linearized at the truth, so equal only to 1e-3.
-    assert_allclose(pos.predicted_rms_mm, 0.1 * np.sqrt(8 / 20), rtol=1e-3)
-    assert_allclose(pos.rms_mm, pos.predicted_rms_mm, rtol=0.03)
-    assert pos.samples == trials * 200
-    # Exact quantiles from the same draws.
-    xy = forward_kinematics(arm4, q, paper_truth4) + 0.1 * np.random.default_rng(
-        13
-    ).standard_normal((trials, 20, 2))
-    estimates = solve_closed_form(arm4, q, xy)
-    errors = np.linalg.norm(
-        forward_kinematics(arm4, test_q, estimates)
-        - forward_kinematics(arm4, test_q, paper_truth4),
+def _all_tip_errors(arm, q, truth, sigma, trials, seed, test_q):
+    """Every (trial, test pose) tip error of a run, by brute force: ``(trials, k)`` two ways.
+
+    The noise is redrawn from the same seed (monte_carlo draws it chunk by chunk
+    from ``rng`` in trial order).  Returns the errors from explicit phasor sums
+    per pair, and from differences of forward kinematics.
+    """
+    noise = np.random.default_rng(seed).standard_normal((trials, q.shape[0], 2))
+    estimates = solve_closed_form(arm, q, forward_kinematics(arm, q, truth) + sigma * noise)
+    dz = link_phasors(arm, estimates) - link_phasors(arm, truth)  # (trials, n+1)
+    unit = np.exp(1j * np.cumsum(test_q, axis=1))
+    basis = np.concatenate([unit, np.ones((test_q.shape[0], 1))], axis=1)  # (k, n+1)
+    phasor = np.abs(np.sum(dz[:, None, :] * basis[None, :, :], axis=-1))
+    fk = np.linalg.norm(
+        forward_kinematics(arm, test_q, estimates) - forward_kinematics(arm, test_q, truth),
         axis=-1,
     )
-    bin_width = 8 * pos.predicted_rms_mm / 2000 * 1.5  # the bins span 8 x the worst pose's RMS
+    return phasor, fk
+
+
+@pytest.mark.parametrize("base_offset", [False, True])
+def test_position_rms_is_exact(base_offset, rng):
+    """RMS = sqrt(tr(S G)) equals the RMS of every (trial, test pose) error."""
+    arm = random_arm(3, rng, base_offset=base_offset)
+    truth = random_truth(arm, rng)
+    q = random_plan(arm, 9, rng)
+    test_q = random_plan(arm, 70, rng)
+    result = sim.monte_carlo(arm, q, truth, 0.2, 300, rng=17, test_q=test_q)
+    phasor, fk = _all_tip_errors(arm, q, truth, 0.2, 300, 17, test_q)
+    pos = result.position
+    assert pos.pairs == 300 * 70
+    # Same numbers summed in another order: round-off only.
+    assert_allclose(pos.rms_mm, np.sqrt(np.mean(phasor**2)), rtol=1e-12)
+    # Differences of tip positions (~500 mm) cancel to errors of ~0.1 mm: ~1e-12 each.
+    assert_allclose(pos.rms_mm, np.sqrt(np.mean(fk**2)), rtol=1e-9)
+
+
+def test_small_runs_keep_every_error_for_exact_quantiles(arm4, paper_truth4):
+    q = orthogonal_plan(arm4, 20)
+    test_q = random_plan(arm4, 40, rng=4)
+    result = sim.monte_carlo(arm4, q, paper_truth4, 0.1, 2000, rng=13, test_q=test_q)
+    pos = result.position
+    assert pos.pairs == pos.subsample == 2000 * 40 and pos.exact_quantiles
+    phasor, _ = _all_tip_errors(arm4, q, paper_truth4, 0.1, 2000, 13, test_q)
     for key, level in (("50", 0.5), ("95", 0.95), ("99", 0.99)):
-        assert abs(pos.quantiles_mm[key] - np.quantile(errors, level)) <= bin_width
-    assert_allclose(pos.max_mm, errors.max(), rtol=1e-10)
-    assert_allclose(pos.rms_mm, np.sqrt(np.mean(errors**2)), rtol=1e-10)
+        assert_allclose(pos.quantiles_mm[key], np.quantile(phasor, level), rtol=1e-12)
+        assert pos.quantile_intervals_mm[key] == (pos.quantiles_mm[key],) * 2
 
 
-def test_memory_stays_flat_for_a_million_trials(arm2):
+def test_subsample_quantiles_are_within_their_sampling_error(arm4, paper_truth4, monkeypatch):
+    """B pairs drawn uniformly with replacement are iid draws from all the pairs' errors.
+
+    The fraction of all errors below the subsample's P-quantile is then within
+    P +- 4 sqrt(P (1 - P) / B) (+ 2 / B for interpolation between order
+    statistics) but with probability ~6e-5; the 95 % interval ends sit at the
+    levels P -+ 1.96 sqrt(P (1 - P) / B), within the same tolerance.
+    """
+    budget = 4000
+    monkeypatch.setattr(sim, "POSITION_SUBSAMPLE", budget)
+    q = orthogonal_plan(arm4, 20)
+    test_q = random_plan(arm4, 100, rng=4)
+    trials = 2000
+    result = sim.monte_carlo(arm4, q, paper_truth4, 0.1, trials, rng=13, test_q=test_q)
+    pos = result.position
+    assert pos.pairs == trials * 100 and pos.subsample == budget
+    phasor, _ = _all_tip_errors(arm4, q, paper_truth4, 0.1, trials, 13, test_q)
+    ordered = np.sort(phasor.ravel())
+
+    def level_of(value: float) -> float:
+        return np.searchsorted(ordered, value, side="right") / ordered.size
+
+    for key, level in (("50", 0.5), ("95", 0.95), ("99", 0.99)):
+        sd = np.sqrt(level * (1 - level) / budget)
+        assert abs(level_of(pos.quantiles_mm[key]) - level) <= 4 * sd + 2 / budget
+        low, high = pos.quantile_intervals_mm[key]
+        assert low <= pos.quantiles_mm[key] <= high
+        assert abs(level_of(low) - (level - 1.96 * sd)) <= 4 * sd + 2 / budget
+        assert abs(level_of(high) - (level + 1.96 * sd)) <= 4 * sd + 2 / budget
+    # The prediction is linearized at the truth: sigma sqrt(2n/m) to about 1e-3.  A
+    # trial's mean square error over the test poses is a quadratic form in the 8 normal
+    # phasor errors (relative std at most 1); over 2000 trials the RMS has a relative
+    # std of at most 1 / (2 sqrt(2000)) = 1.1 %, so 5 % is a 4.5-sigma bound.
+    assert_allclose(pos.predicted_rms_mm, 0.1 * np.sqrt(8 / 20), rtol=1e-3)
+    assert_allclose(pos.rms_mm, pos.predicted_rms_mm, rtol=0.05)
+
+
+@pytest.mark.parametrize("test_poses", [0, 200])
+def test_memory_stays_flat_for_a_million_trials(arm2, test_poses):
     q = orthogonal_plan(arm2, 8)
+    test_q = random_plan(arm2, test_poses, rng=0) if test_poses else None
     peaks = []
     for trials in (60_000, 1_000_000):  # both several chunks
         tracemalloc.start()
-        sim.monte_carlo(arm2, q, np.zeros(4), 0.1, trials, rng=0)
+        sim.monte_carlo(arm2, q, np.zeros(4), 0.1, trials, rng=0, test_q=test_q)
         peaks.append(tracemalloc.get_traced_memory()[1])
         tracemalloc.stop()
-    # Both runs hold one chunk of working arrays (about 8 MB); a million stored
-    # estimates alone would add 32 MB.
+    # Both runs hold one chunk of working arrays (about 8 MB) and, with test poses,
+    # the same subsample of POSITION_SUBSAMPLE errors (2.4 MB); a million stored
+    # estimates alone would add 32 MB, and the errors at 200 test poses 1.6 GB.
     assert peaks[1] < 1.05 * peaks[0]
 
 
@@ -141,6 +211,23 @@ def test_report_and_json_name_every_parameter(arm4, paper_truth4):
         assert f"\n{name} " in text
         assert name in document["empirical_std"] and name in document["bias"]
     assert document["trials"] == 500 and document["seconds"] >= 0
+
+
+@pytest.mark.parametrize(("trials", "exact"), [(200, True), (500, False)])
+def test_report_says_where_the_quantiles_come_from(arm4, paper_truth4, trials, exact):
+    test_q = random_plan(arm4, 300, rng=2)  # 500 x 300 pairs exceed POSITION_SUBSAMPLE
+    q = orthogonal_plan(arm4, 8)
+    result = sim.monte_carlo(arm4, q, paper_truth4, 0.1, trials, rng=1, test_q=test_q)
+    assert result.position.exact_quantiles is exact
+    text = report.format_monte_carlo(result)
+    document = json.loads(report.to_json(report.monte_carlo_to_dict(result)))
+    errors = document["position_error_mm"]
+    assert errors["pairs"] == trials * 300
+    assert errors["quantile_subsample"] == min(trials * 300, sim.POSITION_SUBSAMPLE)
+    assert set(errors["quantiles"]) == set(errors["quantile_intervals_95"]) == {"50", "95", "99"}
+    assert "max" not in errors and "max" not in text
+    assert ("random subsample" in text) is not exact
+    assert f"over all {trials * 300} (trial, test pose) pairs" in text
 
 
 # --------------------------------------------------------------------------- random plans

@@ -218,12 +218,27 @@ def format_monte_carlo(result: MonteCarlo) -> str:
     ]
     if result.position is not None:
         pos = result.position
-        quantiles = ", ".join(f"{key} % {value:.4g}" for key, value in pos.quantiles_mm.items())
-        lines.append(
-            f"tip error of the calibrated model at test poses: RMS {pos.rms_mm:.4g} mm "
-            f"(predicted {pos.predicted_rms_mm:.4g}); quantiles {quantiles}; "
-            f"max {pos.max_mm:.4g} mm"
-        )
+        if pos.exact_quantiles:
+            quantiles = ", ".join(
+                f"{key} % {value:.4g}" for key, value in pos.quantiles_mm.items()
+            )
+            source = f"all {pos.pairs} (trial, test pose) pairs"
+        else:
+            quantiles = ", ".join(
+                f"{key} % {value:.4g} [{low:.4g}, {high:.4g}]"
+                for (key, value), (low, high) in zip(
+                    pos.quantiles_mm.items(), pos.quantile_intervals_mm.values(), strict=True
+                )
+            )
+            source = (
+                f"a random subsample of {pos.subsample} of the {pos.pairs} (trial, test pose) "
+                "pairs, with 95 % intervals"
+            )
+        lines += [
+            f"tip error of the calibrated model at test poses: RMS {pos.rms_mm:.4g} mm over all "
+            f"{pos.pairs} (trial, test pose) pairs (predicted {pos.predicted_rms_mm:.4g} mm)",
+            f"quantiles (mm) from {source}: {quantiles}",
+        ]
     if result.not_converged:
         lines.append(f"warning: Gauss-Newton did not converge in {result.not_converged} trials")
     return "\n".join(lines)
@@ -257,8 +272,11 @@ def monte_carlo_to_dict(result: MonteCarlo) -> dict:
             "rms": pos.rms_mm,
             "predicted_rms": pos.predicted_rms_mm,
             "quantiles": pos.quantiles_mm,
-            "max": pos.max_mm,
-            "samples": pos.samples,
+            "quantile_intervals_95": {
+                key: list(bounds) for key, bounds in pos.quantile_intervals_mm.items()
+            },
+            "pairs": pos.pairs,
+            "quantile_subsample": pos.subsample,
         }
     return document
 
