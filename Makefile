@@ -45,6 +45,7 @@ test-slow: $(VENV)/.installed-test
 bench: $(VENV)/.installed
 	$(BIN)/python benchmarks/bench_design.py
 	$(BIN)/python benchmarks/bench_simulate.py
+	$(BIN)/python benchmarks/bench_scale.py
 
 # Run every example of README.md and write its real output into it (and docs/img/).
 readme: $(VENV)/.installed

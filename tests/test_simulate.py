@@ -69,14 +69,15 @@ def test_chunking_does_not_change_the_result(arm4, paper_truth4, monkeypatch):
     assert all(a[0] < b[0] for a, b in itertools.pairwise(calls))
     assert_allclose(chunked.mean, whole.mean, rtol=0, atol=1e-13)
     assert_allclose(chunked.covariance, whole.covariance, rtol=1e-10, atol=0)
-    # The quantiles' subsample is drawn before the first chunk: the same pairs (their
-    # errors equal up to the round-off of solves batched differently).
+    # The quantiles' subsample is drawn before the first chunk: the same pairs.  Their
+    # errors differ by the round-off of solves batched differently, ~1e-16 of the
+    # ~250 mm link phasors, i.e. ~1e-12 of the ~0.05 mm errors: 1e-10 is safe.
     pos, ref = chunked.position, whole.position
     assert pos.subsample < pos.pairs
     for key in ref.quantiles_mm:
-        assert_allclose(pos.quantiles_mm[key], ref.quantiles_mm[key], rtol=1e-12)
-        assert_allclose(pos.quantile_intervals_mm[key], ref.quantile_intervals_mm[key], rtol=1e-12)
-    assert_allclose(pos.rms_mm, ref.rms_mm, rtol=1e-12)
+        assert_allclose(pos.quantiles_mm[key], ref.quantiles_mm[key], rtol=1e-10)
+        assert_allclose(pos.quantile_intervals_mm[key], ref.quantile_intervals_mm[key], rtol=1e-10)
+    assert_allclose(pos.rms_mm, ref.rms_mm, rtol=1e-10)
 
 
 def test_the_estimates_are_those_of_the_solver(arm4, paper_truth4):
@@ -131,10 +132,11 @@ def test_position_rms_is_exact(base_offset, rng):
 def test_small_runs_keep_every_error_for_exact_quantiles(arm4, paper_truth4):
     q = orthogonal_plan(arm4, 20)
     test_q = random_plan(arm4, 40, rng=4)
-    result = sim.monte_carlo(arm4, q, paper_truth4, 0.1, 2000, rng=13, test_q=test_q)
+    result = sim.monte_carlo(arm4, q, paper_truth4, 0.1, 750, rng=13, test_q=test_q)
     pos = result.position
-    assert pos.pairs == pos.subsample == 2000 * 40 and pos.exact_quantiles
-    phasor, _ = _all_tip_errors(arm4, q, paper_truth4, 0.1, 2000, 13, test_q)
+    assert pos.pairs == pos.subsample == 750 * 40 <= sim.POSITION_SUBSAMPLE
+    assert pos.exact_quantiles
+    phasor, _ = _all_tip_errors(arm4, q, paper_truth4, 0.1, 750, 13, test_q)
     for key, level in (("50", 0.5), ("95", 0.95), ("99", 0.99)):
         assert_allclose(pos.quantiles_mm[key], np.quantile(phasor, level), rtol=1e-12)
         assert pos.quantile_intervals_mm[key] == (pos.quantiles_mm[key],) * 2
@@ -188,7 +190,7 @@ def test_memory_stays_flat_for_a_million_trials(arm2, test_poses):
         peaks.append(tracemalloc.get_traced_memory()[1])
         tracemalloc.stop()
     # Both runs hold one chunk of working arrays (about 8 MB) and, with test poses,
-    # the same subsample of POSITION_SUBSAMPLE errors (2.4 MB); a million stored
+    # the same subsample of POSITION_SUBSAMPLE errors (0.7 MB); a million stored
     # estimates alone would add 32 MB, and the errors at 200 test poses 1.6 GB.
     assert peaks[1] < 1.05 * peaks[0]
 
@@ -213,9 +215,10 @@ def test_report_and_json_name_every_parameter(arm4, paper_truth4):
     assert document["trials"] == 500 and document["seconds"] >= 0
 
 
-@pytest.mark.parametrize(("trials", "exact"), [(200, True), (500, False)])
+@pytest.mark.parametrize(("trials", "exact"), [(100, True), (500, False)])
 def test_report_says_where_the_quantiles_come_from(arm4, paper_truth4, trials, exact):
-    test_q = random_plan(arm4, 300, rng=2)  # 500 x 300 pairs exceed POSITION_SUBSAMPLE
+    assert 100 * 300 <= sim.POSITION_SUBSAMPLE < 500 * 300
+    test_q = random_plan(arm4, 300, rng=2)
     q = orthogonal_plan(arm4, 8)
     result = sim.monte_carlo(arm4, q, paper_truth4, 0.1, trials, rng=1, test_q=test_q)
     assert result.position.exact_quantiles is exact

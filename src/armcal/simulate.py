@@ -57,12 +57,15 @@ POSITION_QUANTILES = (0.5, 0.95, 0.99)
 
 
 #: Largest number of (trial, test pose) pairs whose tip errors are kept for the
-#: quantiles; runs with fewer pairs keep them all (exact quantiles).
-POSITION_SUBSAMPLE = 100_000
+#: quantiles; runs with fewer pairs keep them all (exact quantiles).  At this size
+#: the subsample's 50, 95 and 99 % quantiles sit within +-0.006, +-0.0025 and
+#: +-0.0011 in level of those of all pairs (95 % intervals, see :func:`monte_carlo`),
+#: and keeping them costs less than half the noise draw of 10 000 trials of 20 poses.
+POSITION_SUBSAMPLE = 30_000
 
 
 #: Pairs of the subsample whose tip errors are computed at once.
-_PAIR_BLOCK = 4096
+_PAIR_BLOCK = 2048
 
 
 #: Normal quantile of the two-sided 95 % intervals of the subsample quantiles.
@@ -138,18 +141,6 @@ class PositionErrors:
         return self.subsample == self.pairs
 
 
-def _sorted_uniform_integers(rng: np.random.Generator, high: int, size: int) -> np.ndarray:
-    """``size`` iid uniform integers in ``[0, high)``, in ascending order, without a sort.
-
-    The order statistics of ``size`` iid uniforms on (0, 1) are distributed as
-    ``S_i / S_{size+1}`` with ``S`` the running sums of ``size + 1`` iid
-    exponentials (Renyi's representation); ``floor(high U)`` keeps the order.
-    """
-    sums = np.cumsum(rng.standard_exponential(size + 1))
-    uniform = sums[:-1] / sums[-1]
-    return np.minimum((uniform * high).astype(np.int64), high - 1)
-
-
 class _PositionAccumulator:
     """Tip errors at test poses: an exact mean square and a bounded subsample.
 
@@ -185,7 +176,8 @@ class _PositionAccumulator:
         if self.pairs <= POSITION_SUBSAMPLE:
             trial, pose = np.divmod(np.arange(self.pairs), poses)
         else:  # uniform with replacement: iid draws from the pairs' errors
-            trial = _sorted_uniform_integers(rng, trials, POSITION_SUBSAMPLE)
+            trial = rng.integers(0, trials, POSITION_SUBSAMPLE)
+            trial.sort()  # chunks take consecutive trials
             pose = rng.integers(0, poses, POSITION_SUBSAMPLE)
         self.sample_trial, self.sample_pose = trial, pose
         self.sample = np.empty(trial.size)
@@ -386,7 +378,7 @@ def monte_carlo(
       draws from the N k errors.  The number of draws below the pairs' true
       ``P``-quantile is then Binomial(B, P), so the subsample quantile sits at a
       level within ``P +- 1.96 sqrt(P (1 - P) / B)`` of the pairs' CDF with 95 %
-      probability (+-0.0006 for the 95 % quantile at B = 10^5); the
+      probability (+-0.0025 for the 95 % quantile at B = 30 000); the
       order statistics at those ranks give ``quantile_intervals_mm``.  The
       largest error is not reported: a subsample cannot bound it.
 
@@ -607,4 +599,7 @@ def synthesize_measurements(
     rng = np.random.default_rng(rng)
     clean = forward_kinematics(arm, plan, truth)
     shape = clean.shape if trials is None else (trials, *clean.shape)
-    return clean + sigma * rng.standard_normal(shape)
+    noisy = rng.standard_normal(shape)
+    noisy *= sigma  # in place: the noise is the largest array of a Monte Carlo chunk
+    noisy += clean
+    return noisy
