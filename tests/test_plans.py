@@ -147,6 +147,21 @@ def test_paper_arm_plan_is_the_textbook_one_centred():
         assert_allclose(q[:, j], expected, rtol=0, atol=1e-9)
 
 
+def test_limits_beyond_half_a_turn_are_used_as_they_are():
+    """Joints that turn 200..300 deg or more than a full turn: the plan stays inside."""
+    limits = np.radians([[200.0, 300.0], [100.0, 460.0], [-400.0, 400.0], [-150.0, 150.0]])
+    arm = PlanarArm([260.0, 180.0, 120.0, 100.0], limits)
+    # Joint 4 leaves a gap of 60 deg: 12 angles 30 deg apart cannot avoid it ...
+    with pytest.raises(ArmcalError, match="joint limits"):
+        analytic_plan(arm, 12)
+    m = 6  # ... 6 angles 60 deg apart just fit, with margin 0
+    q = analytic_plan(arm, m)
+    assert np.all(feasible(arm, q))
+    assert_allclose(q[:, 0], np.radians(250.0), rtol=0, atol=1e-12)  # middle of 200..300
+    assert max(abs(v) for v in optimality_sums(arm, q).values()) <= 1e-9 * m
+    assert _margins(arm, q)[:, 1:].min() == pytest.approx(0.0, abs=1e-12)
+
+
 REGIONS = {
     "box off the base": Box((-100.0, 700.0), (-300.0, 300.0)),
     "annulus off the base": Annulus((200.0, 100.0), 50.0, 500.0),

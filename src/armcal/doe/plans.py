@@ -143,11 +143,16 @@ PLACEMENT_CHUNK_BYTES = 16 * 2**20
 BYTES_PER_CANDIDATE_POSE = 256
 
 
-def _turn_limits(arm: PlanarArm) -> tuple[np.ndarray, np.ndarray]:
-    """Joint limits ``(n,)`` clipped to ``[-pi, pi]``, where a placed plan's angles lie."""
-    lo = np.maximum(arm.joint_limits[:, 0], -np.pi)
-    hi = np.minimum(arm.joint_limits[:, 1], np.pi)
-    return lo, hi
+def _placement_limits(arm: PlanarArm) -> tuple[np.ndarray, np.ndarray]:
+    """Where a placed plan's angles lie ``(n,)``: the joint limits, at most one turn wide.
+
+    Limits wider than a turn are narrowed to the turn centred in them (every
+    angle has a representative there, and the margins only grow).
+    """
+    lo, hi = arm.joint_limits[:, 0], arm.joint_limits[:, 1]
+    centre = (lo + hi) / 2
+    wide = hi - lo > 2 * np.pi
+    return np.where(wide, centre - np.pi, lo), np.where(wide, centre + np.pi, hi)
 
 
 def _shift_margin(shift: np.ndarray, lo: float, hi: float, m: int) -> np.ndarray:
@@ -247,8 +252,9 @@ def analytic_plan(arm: PlanarArm, m: int) -> np.ndarray:
     Returns
     -------
     ndarray, shape (m, n)
-        Joint angles in rad, within the joint limits and in ``[-pi, pi]``; pose
-        ``k`` sets joints 2..n to ``alpha + 2 pi k / m``.
+        Joint angles in rad, within the joint limits (and within ``[-pi, pi]``
+        when the limits allow a full turn about 0); pose ``k`` sets joints 2..n
+        to ``alpha + 2 pi k / m``.
 
     Raises
     ------
@@ -264,7 +270,7 @@ def analytic_plan(arm: PlanarArm, m: int) -> np.ndarray:
     joint 1 free in every pose -- or, with a base offset, for joint 1 at ``beta
     + 2 pi k / m`` with any common ``beta``.  The placement uses these freedoms:
 
-    * ``alpha`` in closed form (:func:`_best_common_shift`): the largest
+    * ``alpha`` in closed form (see ``_best_common_shift``): the largest
       smallest distance of joints 2..n to their limits, ``(2 pi / m - gap) / 2``
       for joints sharing one interval of ``2 pi - gap`` rad;
     * joint 1 without a region: the middle of its limits (no base offset), or
@@ -292,7 +298,7 @@ def analytic_plan(arm: PlanarArm, m: int) -> np.ndarray:
         raise ArmcalError(
             f"an orthogonal plan for {arm.name} needs at least {min_poses} poses, got {m}"
         )
-    lo, hi = _turn_limits(arm)
+    lo, hi = _placement_limits(arm)
     alpha, margin = _best_common_shift(lo[1:], hi[1:], m)
     if margin < 0:
         raise ArmcalError(
@@ -323,9 +329,9 @@ def _reach(arm: PlanarArm) -> float:
     return float(np.sum(arm.link_lengths))
 
 
-def _chunks(m: int):
+def _chunks(m: int, candidates: int):
     """Slices of poses whose candidate scores fit in :data:`PLACEMENT_CHUNK_BYTES`."""
-    size = max(1, PLACEMENT_CHUNK_BYTES // (BYTES_PER_CANDIDATE_POSE * PLACEMENT_CANDIDATES))
+    size = max(1, PLACEMENT_CHUNK_BYTES // (BYTES_PER_CANDIDATE_POSE * candidates))
     return (slice(i, min(i + size, m)) for i in range(0, m, size))
 
 
@@ -352,7 +358,7 @@ def _joint1_in_region(arm: PlanarArm, q: np.ndarray, lo: float, hi: float) -> np
     rotation = np.exp(1j * candidates)[:, None]
     reach = _reach(arm)
     q1 = np.empty(q.shape[0])
-    for part in _chunks(q.shape[0]):
+    for part in _chunks(q.shape[0], candidates.size):
         tip = rotation * _tip_after_joint1(arm, q[part, 1:])[None, :]  # (candidates, chunk)
         score = np.minimum(limit_margin, _region_margin(arm, tip) / reach)
         best = np.argmax(score, axis=0)
@@ -373,7 +379,7 @@ def _best_rotation_in_region(
     candidates = beta + 2 * np.pi * np.arange(PLACEMENT_CANDIDATES) / PLACEMENT_CANDIDATES
     rotation = np.exp(1j * candidates)[:, None]
     region = np.full(PLACEMENT_CANDIDATES, np.inf)
-    for part in _chunks(m):
+    for part in _chunks(m, candidates.size):
         # Pose k turns joint 1 by beta + 2 pi k / m.
         steps = np.exp(2j * np.pi * np.arange(m)[part] / m)
         tip = rotation * (steps * _tip_after_joint1(arm, q[part, 1:]))[None, :]
