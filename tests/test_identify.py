@@ -166,7 +166,8 @@ def test_sigma_is_estimated_without_bias(arm4, paper_truth4, rng):
     q = random_plan(arm4, 20, rng)
     clean = forward_kinematics(arm4, q, paper_truth4)
     variances = [
-        identify(arm4, q, clean + rng.normal(0.0, 0.2, clean.shape)).sigma_mm ** 2 for _ in range(400)
+        identify(arm4, q, clean + rng.normal(0.0, 0.2, clean.shape)).sigma_mm ** 2
+        for _ in range(400)
     ]
     # s^2 = RSS/(2m - p) with 32 dof: sd of the mean of 400 draws is sqrt(2/32/400) = 1.25 %.
     assert_allclose(np.mean(variances), 0.04, rtol=0.05)

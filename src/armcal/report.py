@@ -127,8 +127,9 @@ def format_calibration(cal: Calibration, *, truth: np.ndarray | None = None) -> 
     worst = int(np.argmax(cal.pose_residuals))
     lines += [
         "",
-        f"sigma {cal.sigma_mm:.4g} mm ({cal.sigma_source}); residual RMS {cal.residual_rms:.4g} mm "
-        f"per coordinate, max {cal.residual_max:.4g} mm at pose {cal.pose_labels[worst]}; "
+        f"sigma {cal.sigma_mm:.4g} mm ({cal.sigma_source}); "
+        f"residual RMS {cal.residual_rms:.4g} mm per coordinate, "
+        f"max {cal.residual_max:.4g} mm at pose {cal.pose_labels[worst]}; "
         f"{cal.dof} degrees of freedom",
         f"{cal.method}: {cal.iterations} iteration(s), "
         + ("converged" if cal.converged else "NOT converged: the estimate may be off"),
