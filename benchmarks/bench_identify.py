@@ -88,7 +88,7 @@ def main() -> None:
     rng = np.random.default_rng(args.seed)
     n, m = args.links, args.poses
     arm = PlanarArm(rng.uniform(50.0, 300.0, n), name=f"random-{n}link")
-    q = random_plan(arm, m, rng)
+    q = random_plan(arm, m, rng=rng)
     truth = arm.params_from_display(rng.uniform(-3, 3, n), rng.uniform(-1, 1, n))
     xy = forward_kinematics(arm, q, truth) + rng.normal(0.0, 0.1, (m, 2))
     regressor_mb = 2 * m * arm.n_params * 8 / 1e6

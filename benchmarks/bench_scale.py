@@ -226,7 +226,7 @@ class Row:
 def bench_identify(seed: int, folder: Path) -> list[Row]:
     rng = np.random.default_rng(seed)
     arm = PlanarArm(rng.uniform(50.0, 300.0, 12), name="random-12link")
-    q = random_plan(arm, 10_000, rng)
+    q = random_plan(arm, 10_000, rng=rng)
     truth = arm.params_from_display(rng.uniform(-3.0, 3.0, 12), rng.uniform(-1.0, 1.0, 12))
     xy = synthesize_measurements(arm, q, truth, 0.1, rng=rng)
 
@@ -323,7 +323,7 @@ def bench_simulate(seed: int, quick: bool) -> list[Row]:
     arm, truth = spec.arm, spec.default_truth
     assert truth is not None
     q = orthogonal_plan(arm, 20)
-    test_q = random_plan(arm, 1000, np.random.default_rng(seed))  # as armcal simulate
+    test_q = random_plan(arm, 1000, rng=np.random.default_rng(seed))  # as armcal simulate
     clean = forward_kinematics(arm, q, truth)
     lengths = arm.link_lengths
 

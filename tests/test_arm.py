@@ -26,7 +26,7 @@ def test_forward_kinematics_applies_deviations_as_paper_eq1():
 
 def test_forward_kinematics_batches_over_parameter_sets(rng):
     arm = random_arm(3, rng)
-    q = random_plan(arm, 7, rng)
+    q = random_plan(arm, 7, rng=rng)
     params = np.stack([random_truth(arm, rng) for _ in range(5)])
     batched = forward_kinematics(arm, q, params)
     assert batched.shape == (5, 7, 2)
@@ -54,7 +54,7 @@ def _central_difference(arm, q, params, parametrization, h):
 @pytest.mark.parametrize("n", [1, 2, 3, 4, 7, 12])
 def test_jacobian_matches_central_differences(n, base_offset, parametrization, rng):
     arm = random_arm(n, rng, base_offset=base_offset)
-    q = random_plan(arm, 6, rng)
+    q = random_plan(arm, 6, rng=rng)
     params = random_truth(arm, rng)
     analytic = jacobian(arm, q, params, parametrization=parametrization)
     assert analytic.shape == (6, 2, arm.n_params)
@@ -66,7 +66,7 @@ def test_jacobian_matches_central_differences(n, base_offset, parametrization, r
 
 def test_user_and_paper_jacobians_are_related_by_the_conversion_matrix(rng):
     arm = random_arm(5, rng, base_offset=True)
-    q = random_plan(arm, 9, rng)
+    q = random_plan(arm, 9, rng=rng)
     params = random_truth(arm, rng)
     to_paper = paper_from_user_matrix(5, base_offset=True)
     j_user = jacobian(arm, q, params)
@@ -76,7 +76,7 @@ def test_user_and_paper_jacobians_are_related_by_the_conversion_matrix(rng):
 
 def test_covariance_propagation_between_parametrizations(rng):
     arm = random_arm(4, rng)
-    q = random_plan(arm, 12, rng)
+    q = random_plan(arm, 12, rng=rng)
     j_user = jacobian(arm, q).reshape(-1, arm.n_params)
     j_paper = jacobian(arm, q, parametrization="paper").reshape(-1, arm.n_params)
     to_paper = paper_from_user_matrix(4)

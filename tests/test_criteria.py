@@ -45,7 +45,7 @@ def test_orthogonal_plans_have_the_diagonal_information_of_table_ii(n, base_offs
 
 def test_hadamard_bound_holds_for_random_plans(rng):
     arm = random_arm(5, rng, base_offset=True)
-    plans = np.stack([random_plan(arm, 12, rng) for _ in range(500)])
+    plans = np.stack([random_plan(arm, 12, rng=rng) for _ in range(500)])
     values = efficiencies(arm, plans)
     for name in CRITERIA:
         assert np.all((values[name] > 0) & (values[name] < 1))
@@ -60,10 +60,10 @@ def test_dstar_uses_m_and_det_s_vanishes_for_odd_n(rng):
     assert optimal.det_c == pytest.approx(1.0, abs=1e-12)
     assert optimal.abs_det_s == pytest.approx(0.0, abs=1e-12)
     arm3 = PlanarArm([260.0, 180.0, 120.0])
-    plans = np.stack([random_plan(arm3, 10, rng) for _ in range(200)])
+    plans = np.stack([random_plan(arm3, 10, rng=rng) for _ in range(200)])
     assert np.all(dstar(arm3, plans).abs_det_s < 1e-12)  # S skew-symmetric, n odd
     assert np.all(
-        dstar(arm4, np.stack([random_plan(arm4, 10, rng) for _ in range(20)])).abs_det_s > 0
+        dstar(arm4, np.stack([random_plan(arm4, 10, rng=rng) for _ in range(20)])).abs_det_s > 0
     )
 
 
@@ -87,7 +87,7 @@ def test_optimality_sums_name_the_table_i_conditions():
 def test_position_rms_of_orthogonal_plans_is_sigma_sqrt_2n_over_m(n, m, base_offset, rng):
     arm = random_arm(n, rng, base_offset=base_offset)
     q = orthogonal_plan(arm, m)
-    accuracy = position_accuracy(arm, q, random_plan(arm, 200, rng), 0.1)
+    accuracy = position_accuracy(arm, q, random_plan(arm, 200, rng=rng), 0.1)
     k = n + (1 if base_offset else 0)
     assert_allclose(accuracy.per_pose_mm, 0.1 * np.sqrt(2 * k / m), rtol=1e-10)
     assert accuracy.rms_mm == pytest.approx(0.1 * np.sqrt(2 * k / m), rel=1e-10)
@@ -95,17 +95,17 @@ def test_position_rms_of_orthogonal_plans_is_sigma_sqrt_2n_over_m(n, m, base_off
 
 def test_predicted_std_equals_the_std_identify_reports_for_nominal_truth(rng):
     arm = random_arm(4, rng, base_offset=True)
-    q = random_plan(arm, 15, rng)
+    q = random_plan(arm, 15, rng=rng)
     cal = identify(arm, q, forward_kinematics(arm, q), sigma=0.2)
     assert_allclose(predicted_std(arm, q, 0.2), cal.std, rtol=1e-9)
 
 
 def test_unidentifiable_plan_is_an_error_not_numbers(rng):
     arm = PlanarArm([260.0, 180.0, 120.0, 100.0])
-    q = np.tile(random_plan(arm, 1, rng), (6, 1))
+    q = np.tile(random_plan(arm, 1, rng=rng), (6, 1))
     # Six identical poses give 2 independent equations for 8 parameters: rank 2.
     with pytest.raises(NotIdentifiableError, match="rank 2 of 8") as info:
-        evaluate_plan(arm, q, sigma=0.1, test_q=random_plan(arm, 10, rng))
+        evaluate_plan(arm, q, sigma=0.1, test_q=random_plan(arm, 10, rng=rng))
     assert len(info.value.combinations) == 6  # the null space has dimension 8 - 2
     for name, value in efficiencies(arm, q).items():
         assert value == 0.0, name
@@ -116,7 +116,7 @@ def test_unidentifiable_plan_is_an_error_not_numbers(rng):
 @pytest.mark.parametrize("base_offset", [False, True])
 def test_criterion_gradient_matches_central_differences(criterion, base_offset, rng):
     arm = random_arm(3, rng, base_offset=base_offset)
-    q = random_plan(arm, 7, rng)
+    q = random_plan(arm, 7, rng=rng)
     value, grad = _criterion_value_and_gradient(arm, q, criterion)
     h = 1e-6
     numeric = np.zeros_like(q)
@@ -133,6 +133,6 @@ def test_criterion_gradient_matches_central_differences(criterion, base_offset, 
 
 def test_d_efficiency_is_batched(rng):
     arm = PlanarArm([2.0, 1.0, 0.5])
-    plans = np.stack([random_plan(arm, 6, rng) for _ in range(4)])
+    plans = np.stack([random_plan(arm, 6, rng=rng) for _ in range(4)])
     batched = d_efficiency(arm, plans)
     assert_allclose(batched, [d_efficiency(arm, p) for p in plans], rtol=1e-12)

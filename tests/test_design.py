@@ -55,7 +55,7 @@ def test_corner_design_is_d_optimal(arm60, rng):
     np.testing.assert_allclose(variance(corners), p, rtol=1e-12)
     # The maximum over 50 000 random feasible poses stays below p (the bound is attained
     # only at the corners, which a random pose reaches with probability 0).
-    assert float(variance(random_plan(arm60, 50_000, rng)).max()) <= p * (1 + 1e-12)
+    assert float(variance(random_plan(arm60, 50_000, rng=rng)).max()) <= p * (1 + 1e-12)
 
 
 @pytest.fixture(scope="module")
@@ -110,7 +110,7 @@ def test_limited_paper_arm_design_is_certified(m, arm60, designs60, rng):
     assert cert.certified_d_efficiency <= result.d_efficiency / BEST_60 + 1e-6
     assert cert.plan_only_bound <= cert.certified_d_efficiency
     random_best = float(
-        d_efficiency(arm60, np.stack([random_plan(arm60, m, rng) for _ in range(1000)])).max()
+        d_efficiency(arm60, np.stack([random_plan(arm60, m, rng=rng) for _ in range(1000)])).max()
     )
     print(f"m={m}: design {result.d_efficiency:.4f} vs best of 1000 random {random_best:.4f}")
     assert result.d_efficiency > 1.4 * random_best
@@ -130,7 +130,7 @@ def test_plan_only_bound_is_looser_at_m20(designs60):
 
 def test_certificate_never_overclaims_for_random_plans(arm60, rng):
     for _ in range(3):
-        q = random_plan(arm60, 12, rng)
+        q = random_plan(arm60, 12, rng=rng)
         cert = certify(arm60, q, rng=rng)
         true_upper = float(d_efficiency(arm60, q)) / BEST_60
         assert cert.certified_d_efficiency <= true_upper + 1e-9
@@ -149,8 +149,8 @@ def test_annulus_region_keeps_every_tip_inside():
 
 def test_exchange_swap_ratio_matches_direct_determinants(rng):
     arm = PlanarArm([2.0, 1.5, 1.0])
-    candidates = random_plan(arm, 50, rng)
-    start = random_plan(arm, 8, rng)
+    candidates = random_plan(arm, 50, rng=rng)
+    start = random_plan(arm, 8, rng=rng)
     plan = exchange_plan(arm, 8, candidates, start=start)
     assert d_efficiency(arm, plan) > d_efficiency(arm, start)
     # Exchange optimality: no single swap improves the determinant.
@@ -166,7 +166,7 @@ def test_exchange_swap_ratio_matches_direct_determinants(rng):
 
 def test_exchange_uses_user_candidates_only(rng):
     arm = PlanarArm(PAPER_LENGTHS, LIMITS_60)
-    candidates = feasible_poses(arm, 300, rng)
+    candidates = feasible_poses(arm, 300, rng=rng)
     plan = exchange_plan(arm, 10, candidates, rng=rng)
     assert all(any(np.array_equal(p, c) for c in candidates) for p in plan)
 

@@ -29,7 +29,7 @@ SOLVERS = ["closed-form", "gauss-newton"]
 def test_noiseless_data_are_recovered_to_round_off(n, base_offset, method, rng):
     limits = rng.uniform(60.0, 180.0)
     arm = random_arm(n, rng, base_offset=base_offset, limits_deg=limits)
-    q = random_plan(arm, 3 * n + 2, rng)
+    q = random_plan(arm, 3 * n + 2, rng=rng)
     assert np.all(arm.within_limits(q, tol=0.0))
     truth = random_truth(arm, rng)
     cal = identify(arm, q, forward_kinematics(arm, q, truth), method=method, sigma=0.1)
@@ -43,7 +43,7 @@ def test_noiseless_data_are_recovered_to_round_off(n, base_offset, method, rng):
 @pytest.mark.parametrize("n", [2, 4, 6, 8])
 def test_closed_form_and_gauss_newton_agree_on_noisy_data(n, base_offset, rng):
     arm = random_arm(n, rng, base_offset=base_offset)
-    q = random_plan(arm, 4 * n, rng)
+    q = random_plan(arm, 4 * n, rng=rng)
     truth = random_truth(arm, rng)
     for sigma in (0.01, 0.1, 0.5):
         xy = forward_kinematics(arm, q, truth) + rng.normal(0.0, sigma, (q.shape[0], 2))
@@ -56,7 +56,7 @@ def test_closed_form_and_gauss_newton_agree_on_noisy_data(n, base_offset, rng):
 
 
 def test_closed_form_batches_over_measurement_sets(arm4, paper_truth4, rng):
-    q = random_plan(arm4, 15, rng)
+    q = random_plan(arm4, 15, rng=rng)
     xy = forward_kinematics(arm4, q, paper_truth4) + rng.normal(0.0, 0.1, (6, 15, 2))
     batched = solve_closed_form(arm4, q, xy)
     assert batched.shape == (6, 8)
@@ -65,7 +65,7 @@ def test_closed_form_batches_over_measurement_sets(arm4, paper_truth4, rng):
 
 
 def test_gauss_newton_reports_non_convergence_honestly(arm4, paper_truth4, rng):
-    q = random_plan(arm4, 20, rng)
+    q = random_plan(arm4, 20, rng=rng)
     xy = forward_kinematics(arm4, q, paper_truth4) + rng.normal(0.0, 0.1, (20, 2))
     _, iterations, converged = solve_gauss_newton(arm4, q, xy, max_iter=1)
     assert (iterations, converged) == (1, False)
@@ -98,7 +98,7 @@ def test_reported_std_matches_monte_carlo(robot, base_offset, plan, rng):
     else:
         arm = random_arm(6, rng, base_offset=base_offset)
         truth = random_truth(arm, rng)
-    q = random_plan(arm, 20, rng) if plan == "random" else orthogonal_plan(arm, 20)
+    q = random_plan(arm, 20, rng=rng) if plan == "random" else orthogonal_plan(arm, 20)
     sigma, trials = 0.1, 4000
     xy, estimates = _monte_carlo(arm, q, truth, sigma, trials, rng)
     reported = identify(arm, q, xy[0], sigma=sigma).std
@@ -111,7 +111,7 @@ def test_reported_std_matches_monte_carlo(robot, base_offset, plan, rng):
 
 
 def test_gauss_newton_monte_carlo_matches_reported_std(arm4, paper_truth4, rng):
-    q = random_plan(arm4, 20, rng)
+    q = random_plan(arm4, 20, rng=rng)
     sigma, trials = 0.1, 2000
     xy, closed = _monte_carlo(arm4, q, paper_truth4, sigma, trials, rng)
     params, iterations, converged = solve_gauss_newton(arm4, q, xy)
@@ -163,7 +163,7 @@ def test_joint_offset_std_uses_the_identified_lengths(arm4, paper_truth4):
 
 
 def test_sigma_is_estimated_without_bias(arm4, paper_truth4, rng):
-    q = random_plan(arm4, 20, rng)
+    q = random_plan(arm4, 20, rng=rng)
     clean = forward_kinematics(arm4, q, paper_truth4)
     variances = [
         identify(arm4, q, clean + rng.normal(0.0, 0.2, clean.shape)).sigma_mm ** 2
@@ -174,7 +174,7 @@ def test_sigma_is_estimated_without_bias(arm4, paper_truth4, rng):
 
 
 def test_sigma_source_given_or_estimated(arm4, paper_truth4, rng):
-    q = random_plan(arm4, 12, rng)
+    q = random_plan(arm4, 12, rng=rng)
     xy = forward_kinematics(arm4, q, paper_truth4) + rng.normal(0.0, 0.1, (12, 2))
     assert identify(arm4, q, xy).sigma_source == "estimated"
     given = identify(arm4, q, xy, sigma=0.3)
@@ -184,7 +184,7 @@ def test_sigma_source_given_or_estimated(arm4, paper_truth4, rng):
 
 
 def test_estimating_sigma_needs_residual_freedom(arm4, paper_truth4, rng):
-    q = random_plan(arm4, 4, rng)  # 8 equations, 8 parameters
+    q = random_plan(arm4, 4, rng=rng)  # 8 equations, 8 parameters
     xy = forward_kinematics(arm4, q, paper_truth4)
     with pytest.raises(ArmcalError, match="--sigma"):
         identify(arm4, q, xy)
@@ -204,14 +204,14 @@ def test_estimating_sigma_needs_residual_freedom(arm4, paper_truth4, rng):
 )
 def test_unidentifiable_plans_are_errors_naming_parameters(case, expected_bad, arm4, rng):
     if case == "too-few":
-        q = random_plan(arm4, 3, rng)
+        q = random_plan(arm4, 3, rng=rng)
     elif case == "identical":
-        q = np.tile(random_plan(arm4, 1, rng), (10, 1))
+        q = np.tile(random_plan(arm4, 1, rng=rng), (10, 1))
     elif case == "joint4-fixed":
-        q = random_plan(arm4, 10, rng)
+        q = random_plan(arm4, 10, rng=rng)
         q[:, 3] = 0.0  # links 3 and 4 always collinear
     else:
-        q = random_plan(arm4, 10, rng)
+        q = random_plan(arm4, 10, rng=rng)
         q[:, 1] = 0.7  # links 1 and 2 always at the same relative angle
     with pytest.raises(NotIdentifiableError, match="not identifiable") as info:
         identify(arm4, q, forward_kinematics(arm4, q), sigma=0.1)

@@ -229,7 +229,7 @@ SINGULAR_PLANS = {
 def test_singular_plans_raise_armcal_errors_or_report_zero(case, rng):
     q = SINGULAR_PLANS[case]
     xy = forward_kinematics(ARM, q, TRUTH)
-    test_q = random_plan(ARM, 20, rng)
+    test_q = random_plan(ARM, 20, rng=rng)
     for call in (
         lambda: identify(ARM, q, xy, sigma=0.1),
         lambda: identify(ARM, q, xy, sigma=0.1, method="gauss-newton"),
@@ -310,7 +310,7 @@ def test_gauss_newton_and_closed_form_agree_on_ill_conditioned_plans(spread, rng
 
 
 def test_well_conditioned_plans_carry_no_warning(rng):
-    q = random_plan(ARM, 20, rng)
+    q = random_plan(ARM, 20, rng=rng)
     cal = identify(ARM, q, forward_kinematics(ARM, q, TRUTH), sigma=0.1)
     assert cal.warnings == ()
     assert not identifiability(ARM, q).ill_conditioned
@@ -323,7 +323,7 @@ def test_well_conditioned_plans_carry_no_warning(rng):
 def big_problem():
     rng = np.random.default_rng(12)
     arm = PlanarArm(rng.uniform(50.0, 300.0, 12))
-    q = random_plan(arm, 10_000, rng)
+    q = random_plan(arm, 10_000, rng=rng)
     truth = arm.params_from_display(rng.uniform(-3, 3, 12), rng.uniform(-1, 1, 12))
     xy = forward_kinematics(arm, q, truth) + rng.normal(0.0, 0.1, (10_000, 2))
     return arm, q, xy

@@ -117,8 +117,8 @@ def test_position_rms_is_exact(base_offset, rng):
     """RMS = sqrt(tr(S G)) equals the RMS of every (trial, test pose) error."""
     arm = random_arm(3, rng, base_offset=base_offset)
     truth = random_truth(arm, rng)
-    q = random_plan(arm, 9, rng)
-    test_q = random_plan(arm, 70, rng)
+    q = random_plan(arm, 9, rng=rng)
+    test_q = random_plan(arm, 70, rng=rng)
     result = sim.monte_carlo(arm, q, truth, 0.2, 300, rng=17, test_q=test_q)
     phasor, fk = _all_tip_errors(arm, q, truth, 0.2, 300, 17, test_q)
     pos = result.position
@@ -239,7 +239,7 @@ def test_report_says_where_the_quantiles_come_from(arm4, paper_truth4, trials, e
 def test_random_plan_study_matches_plan_by_plan_evaluation(arm4):
     test_q = random_plan(arm4, 100, rng=1)
     study = sim.random_plan_study(arm4, 10, 300, sigma=0.1, rng=21, test_q=test_q)
-    plans = random_plan(arm4, 3000, np.random.default_rng(21)).reshape(300, 10, 4)
+    plans = random_plan(arm4, 3000, rng=np.random.default_rng(21)).reshape(300, 10, 4)
     for k in (0, 17, 299):
         assert_allclose(study.det_d[k], d_efficiency(arm4, plans[k]) ** 8, rtol=1e-9)
         assert_allclose(study.std[k], predicted_std(arm4, plans[k], 0.1), rtol=1e-9)

@@ -243,7 +243,7 @@ def _test_poses(args: argparse.Namespace, spec: RobotSpec) -> np.ndarray:
     """Poses where positioning accuracy matters: --test-poses, else 1000 uniform in the limits."""
     if args.test_poses is not None:
         return read_plan(args.test_poses, spec.arm)
-    return random_plan(spec.arm, 1000, np.random.default_rng(args.seed))
+    return random_plan(spec.arm, 1000, rng=np.random.default_rng(args.seed))
 
 
 def _quality_report(args: argparse.Namespace, spec: RobotSpec, q: np.ndarray):

@@ -183,7 +183,7 @@ def certify(
     if float(d_efficiency(arm, q)) >= 1.0 - (1e-12 + q.shape[0] * np.finfo(float).eps):
         # Fs = I: the Hadamard bound is attained, and d(x) = tr(Is(x)) = p at every pose.
         return Certificate(1.0, 1.0, 1.0, float(p), q, np.full(q.shape[0], 1.0 / q.shape[0]))
-    pool = np.concatenate([q, _corner_poses(arm, rng), feasible_poses(arm, candidates, rng)])
+    pool = np.concatenate([q, _corner_poses(arm, rng), feasible_poses(arm, candidates, rng=rng)])
     weights = np.full(pool.shape[0], 1.0 / pool.shape[0])
     for _ in range(rounds):
         weights = _weights_multiplicative(_blocks(arm, pool), weights, 300)
@@ -227,7 +227,7 @@ def _max_variance(
     arm: PlanarArm, m_inv: np.ndarray, seeds: np.ndarray, rng: np.random.Generator, search: int
 ) -> float:
     """A thorough ``max_x d(x)`` over feasible poses: random search, then multistart ascent."""
-    sample = np.concatenate([seeds, _corner_poses(arm, rng), feasible_poses(arm, search, rng)])
+    sample = np.concatenate([seeds, _corner_poses(arm, rng), feasible_poses(arm, search, rng=rng)])
     d, _ = _variance_function(arm, sample, m_inv)
     starts = sample[np.argsort(-d)[:64]]
     found = _maximize_variance(arm, m_inv, starts, steps=300)

@@ -128,14 +128,14 @@ def design(
                 raise
             notes.append(_closed_form_note(arm, m))
     if q is None and method == "exchange":
-        pool = feasible_poses(arm, 4000, rng) if candidates is None else candidates
+        pool = feasible_poses(arm, 4000, rng=rng) if candidates is None else candidates
         q = exchange_plan(arm, m, pool, rng=rng)
         if criterion != "D":
             notes.append("exchange maximizes D; the plan was not tuned for " + criterion)
     elif q is None:
         q, used = optimize_plan(arm, m, criterion=criterion, rng=rng), "optimize"
         if criterion == "D":
-            pool = feasible_poses(arm, 4000, rng) if candidates is None else candidates
+            pool = feasible_poses(arm, 4000, rng=rng) if candidates is None else candidates
             polished = exchange_plan(arm, m, pool, start=q, rng=rng)
             if float(d_efficiency(arm, polished)) > float(d_efficiency(arm, q)) * (1 + 1e-12):
                 q, used = polished, "optimize+exchange"

@@ -153,9 +153,9 @@ def optimize_plan(
     if criterion not in CRITERIA:
         raise ArmcalError(f"unknown criterion {criterion!r}; choose one of {', '.join(CRITERIA)}")
     rng = np.random.default_rng(rng)
-    q0 = np.stack([random_plan(arm, m, rng) for _ in range(starts)])
+    q0 = np.stack([random_plan(arm, m, rng=rng) for _ in range(starts)])
     if arm.region is not None:
-        q0[:, :, :] = feasible_poses(arm, starts * m, rng).reshape(starts, m, arm.n_joints)
+        q0[:, :, :] = feasible_poses(arm, starts * m, rng=rng).reshape(starts, m, arm.n_joints)
     if initial is not None:
         q0 = np.concatenate([np.asarray(initial, dtype=float).reshape(-1, m, arm.n_joints), q0])
 

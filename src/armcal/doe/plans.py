@@ -66,7 +66,7 @@ def orthogonal_plan(arm: PlanarArm, m: int, *, q1: float = 0.0) -> np.ndarray:
 
 
 def random_plan(
-    arm: PlanarArm, m: int, rng: np.random.Generator | int | None = None
+    arm: PlanarArm, m: int, *, rng: np.random.Generator | int | None = None
 ) -> np.ndarray:
     """``m`` poses drawn uniformly within the joint limits.
 
@@ -102,7 +102,7 @@ def feasible(arm: PlanarArm, q: np.ndarray, *, tol: float = 1e-9) -> np.ndarray:
 
 
 def feasible_poses(
-    arm: PlanarArm, k: int, rng: np.random.Generator | int | None = None
+    arm: PlanarArm, k: int, *, rng: np.random.Generator | int | None = None
 ) -> np.ndarray:
     """``k`` poses ``(k, n)`` uniform in the joint limits, restricted to the region.
 
@@ -115,7 +115,7 @@ def feasible_poses(
     found: list[np.ndarray] = []
     count, drawn = 0, 0
     while count < k:
-        batch = random_plan(arm, max(4 * k, 1000), rng)
+        batch = random_plan(arm, max(4 * k, 1000), rng=rng)
         drawn += batch.shape[0]
         batch = batch[feasible(arm, batch)]
         found.append(batch)

@@ -156,7 +156,7 @@ def poses_needed(
         raise ArmcalError(f"the target accuracy must be a positive number, got {goal}")
     rng = np.random.default_rng(rng)
     if test_q is None:
-        test_q = random_plan(arm, 1000, rng)
+        test_q = random_plan(arm, 1000, rng=rng)
     min_poses = -(-arm.n_params // 2)
     plans: dict[int, tuple[np.ndarray, str, float]] = {}
 

@@ -472,7 +472,7 @@ def _text_disagreements(
     )
     arm4, _ = paper_arm(4)
     n = arm4.n_joints
-    plans = random_plan(arm4, _A_CRITERION_PLANS * PAPER_FIGURE1_POSES, rng).reshape(
+    plans = random_plan(arm4, _A_CRITERION_PLANS * PAPER_FIGURE1_POSES, rng=rng).reshape(
         _A_CRITERION_PLANS, PAPER_FIGURE1_POSES, n
     )
     trace = np.trace(information_matrix(arm4, plans), axis1=-2, axis2=-1)
@@ -543,7 +543,7 @@ def _figure2(
 ) -> dict[str, np.ndarray]:
     arm, truth = paper_arm(4)
     n, lengths = arm.n_joints, arm.link_lengths
-    test_q = random_plan(arm, 1000, rng)
+    test_q = random_plan(arm, 1000, rng=rng)
     worst = max(1 / lengths[0], *np.hypot(1 / lengths[1:], 1 / lengths[:-1]))
     curves: dict[str, list[float]] = {}
 

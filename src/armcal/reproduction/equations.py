@@ -165,7 +165,7 @@ def _relative_sums(theta: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 
 def max_random_rank(arm: PlanarArm, m: int, rng: np.random.Generator) -> int:
     """Largest Jacobian rank over :data:`RANK_PLANS` random ``m``-pose plans."""
-    return max(identifiability(arm, random_plan(arm, m, rng)).rank for _ in range(RANK_PLANS))
+    return max(identifiability(arm, random_plan(arm, m, rng=rng)).rank for _ in range(RANK_PLANS))
 
 
 @dataclass(frozen=True)
@@ -477,7 +477,7 @@ def _dstar_checks(
         det_over_m=det_over_m,
     )
     arm3, _ = paper_arm(3)
-    odd = random_plan(arm3, RANDOM_PLANS * m, rng).reshape(RANDOM_PLANS, m, 3)
+    odd = random_plan(arm3, RANDOM_PLANS * m, rng=rng).reshape(RANDOM_PLANS, m, 3)
     _, sin_odd = _relative_sums(link_angles(odd))
     det_max = float(np.abs(np.linalg.det(sin_odd / m)).max())
     s_max = float(np.abs(sin_odd / m).max())
@@ -490,7 +490,7 @@ def _dstar_checks(
         det_max=det_max,
         s_max=s_max,
     )
-    random4 = random_plan(s.arm, RANDOM_PLANS * m, rng).reshape(RANDOM_PLANS, m, n)
+    random4 = random_plan(s.arm, RANDOM_PLANS * m, rng=rng).reshape(RANDOM_PLANS, m, n)
     orthogonal = max(
         abs(1 - float(d_efficiency(paper_arm(k)[0], q))) for (k, _), q in plans.items()
     )
@@ -672,7 +672,7 @@ def check_equations(
     """
     arm, truth = paper_arm(4)
     to_paper = paper_from_user_matrix(arm.n_joints)
-    q = random_plan(arm, PAPER_FIGURE1_POSES, rng)
+    q = random_plan(arm, PAPER_FIGURE1_POSES, rng=rng)
     setting = _Setting(
         arm=arm,
         lengths=arm.link_lengths,
