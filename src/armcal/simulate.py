@@ -525,14 +525,14 @@ def random_plan_study(
     (True, True)
     """
     rng = np.random.default_rng(rng)
-    test_q = random_plan(arm, 1000, rng) if test_q is None else np.asarray(test_q, dtype=float)
+    test_q = random_plan(arm, 1000, rng=rng) if test_q is None else np.asarray(test_q, dtype=float)
     p = arm.n_params
     chunk = _chunk_size(2 * poses * p * 4, plans)
     parts: dict[str, list[np.ndarray]] = {key: [] for key in ("d", "c", "s", "std", "pos")}
     done = 0
     while done < plans:
         size = min(chunk, plans - done)
-        q = random_plan(arm, size * poses, rng).reshape(size, poses, arm.n_joints)
+        q = random_plan(arm, size * poses, rng=rng).reshape(size, poses, arm.n_joints)
         sign, logdet = np.linalg.slogdet(scaled_information(arm, q))
         parts["d"].append(np.where(sign > 0, np.exp(logdet), 0.0))
         star = dstar(arm, q)
