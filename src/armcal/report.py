@@ -395,7 +395,7 @@ def format_reproduction(result: Reproduction) -> str:
         "- Arms: the paper's 2-, 3- and 4-link arms, l = 260, 180, 120, 100 mm, true "
         "deviations dl = 1.5, -0.6, -0.4, 0.7 mm and dq = 0.5, -0.5, 0.7, -0.3 deg "
         "(built-in robots `paper-2link`, `paper-3link`, `paper-4link`), no joint limits.",
-        f"- Noise: sigma = {result.sigma:g} mm per coordinate, iid normal.",
+        f"- Noise: sigma = {result.sigma_mm:g} mm per coordinate, iid normal.",
         f"- Plans: orthogonal plans meeting Table I exactly (`armcal.doe.orthogonal_plan`: "
         f"q1 = 0, q2 = ... = qn = 360 k / m deg); Monte Carlo with {result.trials} trials per "
         f"configuration (closed-form solver); {result.random_plans} random plans (uniform "

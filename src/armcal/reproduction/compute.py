@@ -117,7 +117,7 @@ class Reproduction:
     random_plans : int
         Random plans per study.
     seed : int
-    sigma : float
+    sigma_mm : float
     seconds : float
     """
 
@@ -129,7 +129,7 @@ class Reproduction:
     trials: int
     random_plans: int
     seed: int
-    sigma: float
+    sigma_mm: float
     seconds: float
 
     def printed_values(self) -> dict[str, int]:
@@ -646,6 +646,6 @@ def reproduce(
         trials=int(trials),
         random_plans=int(random_plans),
         seed=int(seed),
-        sigma=float(sigma),
+        sigma_mm=float(sigma),
         seconds=time.perf_counter() - start,
     )
