@@ -24,11 +24,12 @@ import numpy as np
 
 from .arm import PlanarArm, forward_kinematics, jacobian, link_angles, link_phasors
 from .criteria import (
+    CRITERIA,
     check_identifiable,
     dstar,
     inverse_information_batch,
+    plan_svd,
     position_rms,
-    scaled_information,
     std_from_covariance,
 )
 from .doe.plans import random_plan
@@ -533,12 +534,14 @@ def random_plan_study(
     while done < plans:
         size = min(chunk, plans - done)
         q = random_plan(arm, size * poses, rng=rng).reshape(size, poses, arm.n_joints)
-        sign, logdet = np.linalg.slogdet(scaled_information(arm, q))
-        parts["d"].append(np.where(sign > 0, np.exp(logdet), 0.0))
+        # One SVD per plan serves det D' (the product of the squared singular values,
+        # 0 for plans the rank policy calls singular) and the covariance.
+        svd = plan_svd(arm, q)
+        parts["d"].append(CRITERIA["D"].from_singular_values(svd.truncated) ** p)
         star = dstar(arm, q)
         parts["c"].append(star.det_c)
         parts["s"].append(star.abs_det_s)
-        inverse, _ = inverse_information_batch(arm, q)
+        inverse, _ = inverse_information_batch(arm, q, svd=svd)
         parts["std"].append(std_from_covariance(arm, sigma**2 * inverse))
         parts["pos"].append(position_rms(arm, inverse, test_q, sigma))
         done += size
