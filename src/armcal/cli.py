@@ -379,7 +379,7 @@ def _reproduce(args: argparse.Namespace) -> None:
     study = result.figure1
     title = f"paper-4link, sigma {result.sigma_mm:g} mm: accuracy against the number of poses"
     tables = result.tables
-    figure1 = plot_random_plans(study.det_d, study.det_c, study.abs_det_s, poses=study.poses)
+    figure1 = plot_random_plans(study.det_d, study.det_c, study.abs_det_s, poses=study.n_poses)
     figure2 = plot_accuracy_curves(result.figure2, title=title)
     outputs: dict[str, str | Callable[[Path], None]] = {
         **{f"{name}.csv": table_csv(tables[name], cols) for name, cols in TABLE_COLUMNS.items()},

@@ -190,7 +190,7 @@ def format_monte_carlo(result: MonteCarlo) -> str:
     arm = result.arm
     lines = [
         f"Monte Carlo: {result.trials} trials of {result.q.shape[0]} poses of {arm.name}, "
-        f"sigma {result.sigma:g} mm, {result.method} ({result.seconds:.2f} s)",
+        f"sigma {result.sigma_mm:g} mm, {result.method} ({result.seconds:.2f} s)",
         "",
         f"{'parameter':<10}{'truth':>10}{'bias':>11}{'empirical std':>15}{'predicted std':>15}"
         f"{'ratio':>8}  unit",
@@ -255,7 +255,7 @@ def monte_carlo_to_dict(result: MonteCarlo) -> dict:
     document: dict = {
         "trials": result.trials,
         "poses": int(result.q.shape[0]),
-        "sigma_mm": result.sigma,
+        "sigma_mm": result.sigma_mm,
         "method": result.method,
         "units": dict(zip(names, result.arm.param_units, strict=True)),
         "truth": by_name(result.truth * result.arm.display_scale),
@@ -546,7 +546,7 @@ def poses_needed_summary(
         "goal": found.goal,
         "achieved": found.achieved,
         "with_one_pose_less": found.previous if finite_previous else None,
-        "sigma_mm": found.sigma,
+        "sigma_mm": found.sigma_mm,
         "method": found.method,
         "evaluated": {str(m): v for m, v in found.evaluated.items() if math.isfinite(v)},
         "seconds": seconds,
@@ -560,7 +560,7 @@ def poses_needed_summary(
         f"{found.poses} poses: the best {found.poses}-pose plan of {arm.name} "
         f"({found.method}) reaches {found.achieved:.6g} {unit} against a target of "
         f"{found.goal:g} {unit}; {less}",
-        f"({TARGETS[found.target]}; sigma {found.sigma:g} mm; {len(found.evaluated)} plan "
+        f"({TARGETS[found.target]}; sigma {found.sigma_mm:g} mm; {len(found.evaluated)} plan "
         f"sizes tried in {seconds:.2f} s)",
     ]
     return document, lines

@@ -260,7 +260,7 @@ class MonteCarlo:
         The plan (rad).
     truth : ndarray, shape (p,)
         Deviations of the virtual robot (mm, rad).
-    sigma : float
+    sigma_mm : float
         Isotropic noise of each coordinate (mm).
     method : str
         Solver (key of :data:`armcal.identification.METHODS`).
@@ -282,7 +282,7 @@ class MonteCarlo:
     arm: PlanarArm
     q: np.ndarray
     truth: np.ndarray
-    sigma: float
+    sigma_mm: float
     method: str
     trials: int
     mean: np.ndarray
@@ -432,7 +432,7 @@ def monte_carlo(
         arm=arm,
         q=q,
         truth=truth,
-        sigma=float(sigma),
+        sigma_mm=float(sigma),
         method=method,
         trials=int(trials),
         mean=truth + moments.mean,
@@ -451,9 +451,9 @@ class PlanStudy:
     Attributes
     ----------
     arm : PlanarArm
-    poses : int
+    n_poses : int
         Poses per plan.
-    sigma : float
+    sigma_mm : float
         Noise (mm) for the predicted std.
     det_d : ndarray, shape (N,)
         ``det D'``: determinant of the Hadamard-normalized information matrix,
@@ -471,8 +471,8 @@ class PlanStudy:
     """
 
     arm: PlanarArm
-    poses: int
-    sigma: float
+    n_poses: int
+    sigma_mm: float
     det_d: np.ndarray
     det_c: np.ndarray
     abs_det_s: np.ndarray
@@ -550,8 +550,8 @@ def random_plan_study(
     joined = {key: np.concatenate(value) for key, value in parts.items()}
     return PlanStudy(
         arm=arm,
-        poses=int(poses),
-        sigma=float(sigma),
+        n_poses=int(poses),
+        sigma_mm=float(sigma),
         det_d=joined["d"],
         det_c=joined["c"],
         abs_det_s=joined["s"],

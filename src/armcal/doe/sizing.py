@@ -63,7 +63,7 @@ class PosesNeeded:
         Key of :data:`TARGETS`.
     goal : float
         The accuracy asked for (mm or deg).
-    sigma : float
+    sigma_mm : float
         Measurement noise (mm).
     poses : int
         Smallest ``m`` found whose best plan reaches ``goal``.
@@ -82,7 +82,7 @@ class PosesNeeded:
 
     target: str
     goal: float
-    sigma: float
+    sigma_mm: float
     poses: int
     achieved: float
     previous: float
@@ -197,7 +197,7 @@ def poses_needed(
     return PosesNeeded(
         target=target,
         goal=float(goal),
-        sigma=float(sigma),
+        sigma_mm=float(sigma),
         poses=m,
         achieved=achieved,
         previous=best(m - 1) if m > min_poses else math.inf,
