@@ -38,31 +38,18 @@ import time
 import tracemalloc
 
 import numpy as np
+from baselines import numpy_gauss_newton
 from scipy.optimize import least_squares
 
-from armcal import forward_kinematics, jacobian, load_robot, paper_from_user_matrix
+from armcal import forward_kinematics, jacobian, load_robot
 from armcal.doe import orthogonal_plan
 from armcal.identification import solve_closed_form, solve_gauss_newton
 from armcal.simulate import monte_carlo
 
 
-def lstsq_gauss_newton(arm, q, xy, tol=1e-12, max_iter=50):
-    """The obvious per-trial Gauss-Newton: FK, Jacobian and lstsq every iteration."""
-    to_paper = paper_from_user_matrix(arm.n_joints)
-    to_user = np.linalg.inv(to_paper)
-    scale = np.ones(arm.n_params)
-    scale[: arm.n_joints] = arm.link_lengths
-    threshold = tol * arm.link_lengths.sum()
-    paper = np.zeros(arm.n_params)
-    for _ in range(max_iter):
-        user = to_user @ paper
-        residual = (xy - forward_kinematics(arm, q, user)).ravel()
-        jac = jacobian(arm, q, user, parametrization="paper").reshape(-1, arm.n_params)
-        step = np.linalg.lstsq(jac, residual, rcond=None)[0]
-        paper += step
-        if np.max(np.abs(step * scale)) <= threshold:
-            break
-    return to_user @ paper
+def lstsq_gauss_newton(arm, q, xy):
+    """The obvious per-trial Gauss-Newton (:func:`baselines.numpy_gauss_newton`)."""
+    return numpy_gauss_newton(arm.link_lengths, q, xy)
 
 
 def scipy_fit(arm, q, xy):
