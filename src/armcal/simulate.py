@@ -406,8 +406,11 @@ def monte_carlo(
         raise ArmcalError("the plan cannot identify every parameter at the given truth")
     predicted = sigma**2 * inverse
     m, p = q.shape[0], arm.n_params
-    # Per trial: noise and positions (2m), Jacobian and products (3 * 2m p).
-    chunk = _chunk_size(2 * m * (3 * p + 2), trials)
+    # Floats per trial: noise and positions (2 x 2m) and the estimates (a few p); Gauss-Newton
+    # also holds Jacobian-sized products (3 x 2m p).  The closed form's chunks are then large
+    # enough that the command's default 10^4 trials are one solve.
+    per_trial = 2 * m * (3 * p + 2) if method == "gauss-newton" else 2 * m * 3 + 4 * p
+    chunk = _chunk_size(per_trial, trials)
     moments = _Moments(p)
     positions = None
     if test_q is not None:
