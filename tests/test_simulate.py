@@ -184,12 +184,14 @@ def test_memory_stays_flat_for_a_million_trials(arm2, test_poses):
     q = orthogonal_plan(arm2, 8)
     test_q = random_plan(arm2, test_poses, rng=0) if test_poses else None
     peaks = []
-    for trials in (60_000, 1_000_000):  # both several chunks
+    # Both several chunks: the closed form's chunk holds CHUNK_BYTES / (8 (6m + 4p)) trials.
+    chunk = sim.CHUNK_BYTES // (8 * (6 * q.shape[0] + 4 * arm2.n_params))
+    for trials in (3 * chunk, 1_000_000):
         tracemalloc.start()
         sim.monte_carlo(arm2, q, np.zeros(4), 0.1, trials, rng=0, test_q=test_q)
         peaks.append(tracemalloc.get_traced_memory()[1])
         tracemalloc.stop()
-    # Both runs hold one chunk of working arrays (about 8 MB) and, with test poses,
+    # Both runs hold one chunk of working arrays and, with test poses,
     # the same subsample of POSITION_SUBSAMPLE errors (0.7 MB); a million stored
     # estimates alone would add 32 MB, and the errors at 200 test poses 1.6 GB.
     assert peaks[1] < 1.05 * peaks[0]
