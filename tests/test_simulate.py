@@ -53,7 +53,8 @@ def test_chunking_does_not_change_the_result(arm4, paper_truth4, monkeypatch):
     q = orthogonal_plan(arm4, 20)
     test_q = random_plan(arm4, 50, rng=1)
     whole = sim.monte_carlo(arm4, q, paper_truth4, 0.1, 5000, rng=11, test_q=test_q)
-    monkeypatch.setattr(sim, "CHUNK_BYTES", 8 * 2 * 20 * 26 * 37)  # chunks of about 30 trials
+    # The closed form holds 6m + 4p floats per trial: chunks of 37 trials.
+    monkeypatch.setattr(sim, "CHUNK_BYTES", 8 * (6 * 20 + 4 * 8) * 37)
     calls = []
     chunked = sim.monte_carlo(
         arm4,
