@@ -30,12 +30,9 @@ from .arm import (
 )
 from .criteria import (
     CRITERIA,
-    Identifiability,
     PlanQuality,
-    check_identifiable,
     d_efficiency,
     evaluate_plan,
-    identifiability,
     position_accuracy,
     predicted_std,
 )
@@ -52,6 +49,7 @@ from .doe import (
 from .errors import ArmcalError, InputError, NotIdentifiableError
 from .identification import Calibration, identify, solve_closed_form, solve_gauss_newton
 from .io import load_robot, load_truth, read_measurements, read_plan
+from .observability import Identifiability, check_identifiable, identifiability
 from .report import format_calibration
 from .simulate import (
     MonteCarlo,

@@ -17,13 +17,15 @@ plan, ``Fs`` has a unit diagonal, and Hadamard's inequality gives
 conditions (21).  So every efficiency below is 1 exactly for orthogonal plans
 and smaller otherwise.
 
-**One rank policy.**  ``Fs = H^T H`` with ``H`` (:func:`scaled_jacobian`) the
-Jacobian of the nominal arm in the paper's parametrization with unit-norm
-columns, rows divided by ``sqrt(m)``.  At *any* deviations the paper Jacobian
-with unit-norm columns is ``H`` times an orthogonal matrix (each link's two
-columns turn by ``dtheta_k``), so the singular values of ``H`` alone decide,
-through :mod:`armcal.numerics`, whether a plan is identifiable
-(:func:`identifiability`), its covariance (:func:`inverse_information_batch`),
+**One rank policy.**  ``Fs = H^T H`` with ``H``
+(:func:`armcal.observability.scaled_jacobian`) the Jacobian of the nominal arm
+in the paper's parametrization with unit-norm columns, rows divided by
+``sqrt(m)``.  At *any* deviations the paper Jacobian with unit-norm columns is
+``H`` times an orthogonal matrix (each link's two columns turn by
+``dtheta_k``), so the singular values of ``H`` alone decide, through
+:mod:`armcal.numerics`, whether a plan is identifiable
+(:func:`armcal.observability.identifiability`), its covariance
+(:func:`inverse_information_batch`),
 its efficiencies and observability indices, and whether results carry an
 ``ill-conditioned`` warning.  They are computed from a thin QR of ``H``, never
 from the eigenvalues of ``Fs``, which cannot resolve a relative singular value
@@ -32,14 +34,21 @@ below ``sqrt(eps) ~ 1e-8``.
 
 from __future__ import annotations
 
-from collections.abc import Callable, Sequence
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
 
-from .arm import PlanarArm, jacobian, link_angles, paper_from_user_matrix
-from .errors import ArmcalWarning, NotIdentifiableError
-from .numerics import COND_WARN, RANK_RTOL, ScaledSVD, scaled_svd, spd_inverse
+from .arm import PlanarArm, jacobian, link_angles
+from .errors import ArmcalWarning
+from .numerics import COND_WARN, RANK_RTOL, ScaledSVD, spd_inverse
+from .observability import (
+    check_identifiable,
+    conditioning_warning,
+    plan_svd,
+    scaled_columns,
+    user_from_scaled,
+)
 
 __all__ = [
     "COND_WARN",
@@ -47,28 +56,21 @@ __all__ = [
     "RANK_RTOL",
     "Criterion",
     "DStar",
-    "Identifiability",
     "PlanQuality",
     "PositionAccuracy",
-    "check_identifiable",
-    "conditioning_warning",
     "d_efficiency",
     "dstar",
     "efficiencies",
     "evaluate_plan",
-    "identifiability",
     "information_matrix",
     "inverse_information",
     "inverse_information_batch",
     "observability_indices",
     "optimality_sums",
-    "plan_svd",
     "position_accuracy",
     "position_rms",
     "predicted_std",
-    "scaled_columns",
     "scaled_information",
-    "scaled_jacobian",
     "std_from_covariance",
     "weighted_information",
 ]
@@ -92,19 +94,6 @@ def information_matrix(arm: PlanarArm, q: np.ndarray) -> np.ndarray:
     return np.einsum("...mki,...mkj->...ij", jac, jac)
 
 
-def scaled_columns(arm: PlanarArm, q: np.ndarray) -> np.ndarray:
-    """Hadamard-scaled Jacobian columns ``(..., m, p)`` in the paper's order, as complex numbers.
-
-    Row x of the real Jacobian is the real part, row y the imaginary part;
-    column ``dtheta_k`` (``i l_k e^{i theta_k}``) is divided by ``l_k``.
-    """
-    unit = np.exp(1j * link_angles(q))
-    cols = [1j * unit, unit]
-    if arm.base_offset:
-        cols.append(np.broadcast_to(np.array([1.0, 1j]), (*np.shape(q)[:-1], 2)))
-    return np.concatenate(cols, axis=-1)
-
-
 def weighted_information(columns: np.ndarray, weights: np.ndarray) -> np.ndarray:
     """``sum_i w_i J_i^T J_i`` ``(..., p, p)`` from complex columns and weights ``(..., m)``."""
     return np.einsum("...m,...ma,...mb->...ab", weights, columns.conj(), columns).real
@@ -116,77 +105,13 @@ def scaled_information(arm: PlanarArm, q: np.ndarray) -> np.ndarray:
     return weighted_information(scaled_columns(arm, q), np.full(q.shape[:-1], 1 / q.shape[-2]))
 
 
-def scaled_jacobian(arm: PlanarArm, q: np.ndarray) -> np.ndarray:
-    """The policy's matrix ``H`` ``(..., 2m, p)``: the Hadamard-normalized nominal Jacobian.
-
-    The real form of :func:`scaled_columns` divided by ``sqrt(m)``: rows alternate
-    x, y per pose, columns are the paper's ``(dtheta, dl, [x0, y0])``, every
-    column has unit norm and ``H^T H = Fs``.  Its singular values are 1 for an
-    orthogonal plan.
-
-    It is also the plan's regressor of the model that is linear in the links:
-    the tip is ``sqrt(m) H v`` with ``v = (Im z_1..n, Re z_1..n, [x0, y0])`` and
-    ``z_k = (l_k + dl_k) exp(i dtheta_k)`` (see :mod:`armcal.identification`).
-    """
-    q = np.asarray(q, dtype=float)
-    columns = scaled_columns(arm, q) / np.sqrt(q.shape[-2])
-    real = np.stack([columns.real, columns.imag], axis=-2)  # (..., m, 2, p)
-    return real.reshape(*q.shape[:-2], 2 * q.shape[-2], arm.n_params)
-
-
-def plan_svd(arm: PlanarArm, q: np.ndarray) -> ScaledSVD:
-    """Singular values and right singular vectors of :func:`scaled_jacobian` (batched).
-
-    Thin factorizations only (:func:`armcal.numerics.scaled_svd`): memory
-    ``O(m p)`` per plan.
-    """
-    return scaled_svd(scaled_jacobian(arm, q))
-
-
-def _user_from_scaled(arm: PlanarArm, params: np.ndarray | None) -> np.ndarray:
-    """``T`` ``(..., p, p)``: user deviations ``= T u`` for a change ``u`` in ``H``'s coordinates.
-
-    At deviations ``params`` the user Jacobian is ``sqrt(m) H T^-1``: with
-    ``phi_k = dtheta_k`` and ``L_k = l_k + dl_k``, a change ``u`` of link ``k``'s
-    two coordinates gives ``dtheta_k = (cos phi u_theta - sin phi u_l) / L_k``,
-    ``dl_k = sin phi u_theta + cos phi u_l`` (a rotation, then a division by the
-    length), and ``dq_k = dtheta_k - dtheta_(k-1)``.  Explicit, so nothing is
-    inverted; ``inf`` entries for a link of length 0.
-    """
-    n, p = arm.n_joints, arm.n_params
-    values = np.zeros(p) if params is None else np.asarray(params, dtype=float)
-    if values.shape[-1] != p:
-        raise ValueError(
-            f"params must have shape (..., {p}) for {arm.param_names}, got {values.shape}"
-        )
-    phi = np.cumsum(values[..., n : 2 * n], axis=-1)
-    length = arm.link_lengths + values[..., :n]
-    cos, sin = np.cos(phi), np.sin(phi)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        inverse_length = 1.0 / length
-    paper = np.zeros((*values.shape[:-1], p, p))
-    k = np.arange(n)
-    paper[..., k, k] = cos * inverse_length
-    paper[..., k, n + k] = -sin * inverse_length
-    paper[..., n + k, k] = sin
-    paper[..., n + k, n + k] = cos
-    if arm.base_offset:
-        paper[..., 2 * n :, 2 * n :] = np.eye(2)
-    user = np.empty_like(paper)
-    user[..., :n, :] = paper[..., n : 2 * n, :]
-    with np.errstate(invalid="ignore"):
-        user[..., n : 2 * n, :] = np.diff(paper[..., :n, :], axis=-2, prepend=0.0)
-    user[..., 2 * n :, :] = paper[..., 2 * n :, :]
-    return user
-
-
 def _covariance_factor(
     arm: PlanarArm, q: np.ndarray, params: np.ndarray | None, svd: ScaledSVD | None = None
 ) -> tuple[np.ndarray, np.ndarray]:
     """``G`` ``(..., p, p)`` with ``(J^T J)^-1 = G G^T`` (user parametrization) and the ok mask."""
     q = np.asarray(q, dtype=float)
     factor, ok = (plan_svd(arm, q) if svd is None else svd).inverse_gram_factor()
-    to_user = _user_from_scaled(arm, params)
+    to_user = user_from_scaled(arm, params)
     with np.errstate(invalid="ignore", over="ignore"):
         g = to_user @ np.where(ok[..., None, None], factor, 0.0) / np.sqrt(q.shape[-2])
     ok = ok & np.all(np.isfinite(g), axis=(-2, -1))
@@ -598,283 +523,6 @@ def position_rms(arm: PlanarArm, inverse: np.ndarray, test_q: np.ndarray, sigma:
     j0 = jacobian(arm, test_q)  # (k, 2, p), user parametrization like `inverse`
     gram = np.einsum("kia,kib->ab", j0, j0) / j0.shape[0]
     return sigma * np.sqrt(np.clip(np.einsum("...ab,ba->...", inverse, gram), 0.0, None))
-
-
-@dataclass(frozen=True)
-class Identifiability:
-    """Rank analysis of a plan's column-scaled Jacobian (:func:`scaled_jacobian`).
-
-    Attributes
-    ----------
-    rank : int
-        Numerical rank: singular values above ``RANK_RTOL`` times the largest
-        (:mod:`armcal.numerics`).
-    n_params : int
-        Number of parameters ``p``.
-    singular_values : ndarray, shape (p,)
-        Singular values of the Jacobian with unit-norm columns divided by
-        ``sqrt(m)``, descending (zeros when ``2m < p``); all 1 for an orthogonal plan.
-    unidentifiable : tuple of str
-        Parameters that have a component in the null space (cannot be identified).
-    combinations : tuple of str
-        A basis of the null space written as parameter combinations in display
-        units (mm, deg), each with leading coefficient 1: moving the parameters
-        along one of these changes no measured position to first order.
-    poorly_determined : tuple of str
-        The same for every direction whose relative singular value is at most
-        ``1 / COND_WARN`` (the null space included): what an ``ill-conditioned``
-        warning names.
-    joints_to_vary : tuple of int
-        Joints (1-based) whose angles the plan should vary more to see the
-        unseen or poorly determined combinations: for a combination of the
-        parameters of links ``a..b`` (the base counting as link 0), joints
-        ``a+1..b`` set their relative angles.
-    """
-
-    rank: int
-    n_params: int
-    singular_values: np.ndarray
-    unidentifiable: tuple[str, ...]
-    combinations: tuple[str, ...]
-    poorly_determined: tuple[str, ...] = ()
-    joints_to_vary: tuple[int, ...] = ()
-
-    @property
-    def identifiable(self) -> bool:
-        """True when the Jacobian has full column rank."""
-        return self.rank == self.n_params
-
-    @property
-    def condition_number(self) -> float:
-        """Ratio of largest to smallest singular value (inf when one is 0)."""
-        s = self.singular_values
-        if s.size < self.n_params or s[-1] == 0:
-            return float("inf")
-        return float(s[0] / s[-1])
-
-    @property
-    def ill_conditioned(self) -> bool:
-        """Identifiable, but with a condition number above ``COND_WARN``."""
-        return self.identifiable and self.condition_number > COND_WARN
-
-
-def _combination(vector: np.ndarray, names: Sequence[str], *, drop: float = 1e-6) -> str:
-    # Leading coefficient 1 (the echelon pivot), so combinations read "dl1 - dl2";
-    # terms below `drop` times the leading one are left out.
-    leading = np.flatnonzero(np.abs(vector) > drop * np.max(np.abs(vector)))[0]
-    coeffs = vector / vector[leading]
-    terms = []
-    for c, name in zip(coeffs, names, strict=True):
-        if abs(c) < drop:
-            continue
-        mag = "" if abs(abs(c) - 1) < 1e-9 else f"{abs(c):.3g}*"
-        sign = "-" if c < 0 else "+"
-        terms.append(f"{sign} {mag}{name}")
-    text = " ".join(terms)
-    return text[2:] if text.startswith("+ ") else "-" + text[2:]
-
-
-def _scaled_from_user_nominal(arm: PlanarArm) -> np.ndarray:
-    """``T0^-1`` ``(p, p)``: ``u = diag(l, 1, [1, 1]) P user`` at zero deviations (explicit)."""
-    n = arm.n_joints
-    scale = np.ones(arm.n_params)
-    scale[:n] = arm.link_lengths  # u_theta_k = l_k dtheta_k, in mm
-    return paper_from_user_matrix(n, base_offset=arm.base_offset) * scale[:, None]
-
-
-def _link_of(arm: PlanarArm) -> np.ndarray:
-    """The link (1..n; 0 for the base) each user parameter belongs to."""
-    links = np.arange(1, arm.n_joints + 1)
-    return np.concatenate([links, links, [0, 0] if arm.base_offset else []]).astype(int)
-
-
-def _joints_to_vary(arm: PlanarArm, rows: np.ndarray, drop: float) -> tuple[int, ...]:
-    joints: set[int] = set()
-    link_of = _link_of(arm)
-    for row in rows:
-        involved = link_of[np.abs(row) > drop * np.max(np.abs(row))]
-        lo, hi = int(involved.min()), int(involved.max())
-        joints.update(range(lo + 1, hi + 1) if hi > lo else [max(hi, 1)])
-    return tuple(sorted(joints))
-
-
-def identifiability(
-    arm: PlanarArm, q: np.ndarray, *, svd: ScaledSVD | None = None
-) -> Identifiability:
-    """Rank of the Jacobian of a plan, on scaled columns, by the one rank policy.
-
-    Parameters
-    ----------
-    arm : PlanarArm
-    q : ndarray, shape (m, n)
-        Joint angles of the plan in rad.
-    svd : ScaledSVD, optional
-        ``plan_svd(arm, q)`` when the caller has it already.
-
-    Returns
-    -------
-    Identifiability
-
-    Notes
-    -----
-    The singular values are those of :func:`scaled_jacobian` (thin QR, then SVD
-    of the ``p x p`` triangle: memory ``O(m p)``).  They do not depend on the
-    deviations: at any deviations the paper Jacobian with unit-norm columns is
-    that matrix times an orthogonal one, so the nominal model suffices.  Null
-    and poorly determined directions are mapped to the user parameters and
-    shown in display units (mm, deg).
-
-    Examples
-    --------
-    >>> arm = PlanarArm([2.0, 1.0])
-    >>> info = identifiability(arm, np.zeros((3, 2)))   # three identical poses
-    >>> info.rank, info.unidentifiable
-    (2, ('dl1', 'dl2', 'dq1', 'dq2'))
-    """
-    if svd is None:
-        svd = plan_svd(arm, q)
-    rank = int(svd.rank)
-    to_user = _user_from_scaled(arm, None)
-    names = arm.param_names
-    null = svd.directions(RANK_RTOL) @ to_user.T  # rows: unseen directions (mm, rad)
-    weak = svd.directions(1.0 / COND_WARN) @ to_user.T
-    bad: tuple[str, ...] = ()
-    if null.shape[0]:
-        # Which parameters the null space touches, judged on the user Jacobian with
-        # unit-norm columns: |J_user e_j| = sqrt(m) |S V^T (c * T0^-1 e_j)|.
-        user_columns = svd.column_norms[:, None] * _scaled_from_user_nominal(arm)
-        user_norms = np.linalg.norm(svd.singular_values[:, None] * (svd.vt @ user_columns), axis=0)
-        basis, _ = np.linalg.qr((null * user_norms).T)  # orthonormal, (p, k)
-        weights = np.linalg.norm(basis, axis=1)
-        bad = tuple(n for n, w in zip(names, weights, strict=True) if w > 1e-8)
-    display = arm.display_scale  # a direction in mm, rad shown in mm, deg
-    null_rows = _row_echelon(null * display)
-    # A poorly determined direction is only near the null space of a nearby plan:
-    # terms below the 3 significant digits shown of the leading one are left out.
-    weak_drop = 1e-3
-    weak_rows = _row_echelon(weak * display, tol=weak_drop)
-    if null.shape[0]:
-        joints = _joints_to_vary(arm, null_rows, 1e-6)
-    else:
-        joints = _joints_to_vary(arm, weak_rows, weak_drop)
-    return Identifiability(
-        rank=rank,
-        n_params=arm.n_params,
-        singular_values=svd.singular_values,
-        unidentifiable=bad,
-        combinations=tuple(_combination(v, names) for v in null_rows),
-        poorly_determined=tuple(_combination(v, names, drop=weak_drop) for v in weak_rows),
-        joints_to_vary=joints,
-    )
-
-
-def _row_echelon(basis: np.ndarray, *, tol: float = 1e-9) -> np.ndarray:
-    """Reduced row echelon form of a basis ``(k, p)``: the same span, sparse rows.
-
-    The SVD returns an arbitrary rotation of the null space; the echelon form
-    gives each unseen combination a parameter of its own (e.g. ``dl1 - dl2``
-    and ``dq1 - 3*dq2`` rather than two mixtures of all four).  Entries below
-    ``tol`` times the largest are not used as pivots.
-    """
-    rows = basis.copy()
-    scale = np.max(np.abs(rows)) if rows.size else 0.0
-    pivot_row = 0
-    for col in range(rows.shape[1]):
-        if pivot_row == rows.shape[0]:
-            break
-        best = pivot_row + int(np.argmax(np.abs(rows[pivot_row:, col])))
-        if abs(rows[best, col]) <= tol * scale:
-            continue
-        rows[[pivot_row, best]] = rows[[best, pivot_row]]
-        rows[pivot_row] /= rows[pivot_row, col]
-        others = np.arange(rows.shape[0]) != pivot_row
-        rows[others] -= np.outer(rows[others, col], rows[pivot_row])
-        pivot_row += 1
-    return rows
-
-
-def _listing(items: Sequence[object]) -> str:
-    """``"a"``, ``"a and b"``, ``"a, b and c"``."""
-    words = [str(item) for item in items]
-    return words[0] if len(words) == 1 else ", ".join(words[:-1]) + " and " + words[-1]
-
-
-def _joints_phrase(joints: Sequence[int]) -> str:
-    return ("joint " if len(joints) == 1 else "joints ") + _listing(joints)
-
-
-def check_identifiable(
-    arm: PlanarArm, q: np.ndarray, *, svd: ScaledSVD | None = None
-) -> Identifiability:
-    """Raise :class:`NotIdentifiableError` unless the plan ``q`` identifies every parameter.
-
-    The message counts poses and parameters, names the parameters that cannot be
-    identified and up to three unseen combinations, and says how to fix the plan.
-    ``svd`` is ``plan_svd(arm, q)`` when the caller has it already.
-    """
-    q = np.asarray(q, dtype=float)
-    m = q.shape[0]
-    p = arm.n_params
-    min_poses = -(-p // 2)
-    info = identifiability(arm, q, svd=svd)
-    if info.identifiable:
-        return info
-    shown = "; ".join(info.combinations[:3])
-    more = f" (and {len(info.combinations) - 3} more)" if len(info.combinations) > 3 else ""
-    if m < min_poses:
-        why = (
-            f"{m} poses give {2 * m} equations for {p} parameters; "
-            f"measure at least {min_poses} poses"
-        )
-    else:
-        joints = info.joints_to_vary
-        why = (
-            f"add poses in which {_joints_phrase(joints)} "
-            f"{'takes' if len(joints) == 1 else 'take'} several different angles (armcal design)"
-        )
-    raise NotIdentifiableError(
-        f"the {m} poses cannot identify all {p} parameters of {arm.name} "
-        f"(Jacobian rank {info.rank} of {p}): not identifiable: {', '.join(info.unidentifiable)}; "
-        f"unseen combinations: {shown}{more}; {why}",
-        list(info.combinations),
-    )
-
-
-def conditioning_warning(arm: PlanarArm, info: Identifiability) -> ArmcalWarning | None:
-    """An ``ill-conditioned`` warning for a plan above ``COND_WARN``, else None.
-
-    Names the poorly determined combinations (the right singular vectors of the
-    smallest singular values, in echelon form like the unseen combinations),
-    how much less precise they are than with an orthogonal plan, and which
-    joints to move more.
-
-    Examples
-    --------
-    >>> arm = PlanarArm([2.0, 1.0])
-    >>> q = np.column_stack([np.linspace(-3, 3, 8), 1e-7 * np.arange(8)])  # q2 barely moves
-    >>> text = conditioning_warning(arm, identifiability(arm, q)).message
-    >>> text.startswith("the plan determines dl1 - dl2 and dq1 - 3*dq2 poorly")
-    True
-    >>> text.endswith("measure poses in which joint 2 moves more (armcal design)")
-    True
-    """
-    if not info.ill_conditioned:
-        return None
-    cond = info.condition_number
-    combos = list(info.poorly_determined[:3])
-    if len(info.poorly_determined) > 3:
-        combos.append(f"{len(info.poorly_determined) - 3} more")
-    joints = info.joints_to_vary
-    verb = "moves" if len(joints) == 1 else "move"
-    round_off = cond * np.finfo(float).eps * float(np.sum(arm.link_lengths))
-    return ArmcalWarning(
-        "ill-conditioned",
-        f"the plan determines {_listing(combos)} poorly: the condition number of its "
-        f"scaled Jacobian is {cond:.2g} (above {COND_WARN:.0e}), so these combinations are "
-        f"up to {cond:.2g} times less precise than with an orthogonal plan, and round-off "
-        f"alone can shift them by about {round_off:.1g} mm; measure poses in which "
-        f"{_joints_phrase(joints)} {verb} more (armcal design)",
-    )
 
 
 @dataclass(frozen=True, eq=False)

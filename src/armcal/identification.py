@@ -36,14 +36,10 @@ from typing import Any, Literal
 import numpy as np
 
 from .arm import PlanarArm, forward_kinematics, wrap_angle
-from .criteria import (
-    check_identifiable,
-    conditioning_warning,
-    inverse_information,
-    scaled_jacobian,
-)
+from .criteria import inverse_information
 from .errors import ArmcalError, ArmcalWarning
 from .numerics import LinearLeastSquares, factor_least_squares
+from .observability import check_identifiable, conditioning_warning, scaled_jacobian
 
 __all__ = [
     "METHODS",

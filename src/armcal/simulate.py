@@ -23,18 +23,11 @@ from dataclasses import dataclass
 import numpy as np
 
 from .arm import PlanarArm, forward_kinematics, jacobian, link_angles, link_phasors
-from .criteria import (
-    CRITERIA,
-    check_identifiable,
-    dstar,
-    inverse_information_batch,
-    plan_svd,
-    position_rms,
-    std_from_covariance,
-)
+from .criteria import CRITERIA, dstar, inverse_information_batch, position_rms, std_from_covariance
 from .doe.plans import random_plan
 from .errors import ArmcalError
 from .identification import METHODS
+from .observability import check_identifiable, plan_svd
 from .progress import ProgressCallback
 
 __all__ = [

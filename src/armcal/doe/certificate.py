@@ -7,8 +7,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..arm import PlanarArm, forward_kinematics
-from ..criteria import check_identifiable, d_efficiency, plan_svd, scaled_columns
+from ..criteria import d_efficiency
 from ..numerics import ScaledSVD, scaled_svd, spd_inverse
+from ..observability import check_identifiable, plan_svd, scaled_columns
 from .exchange import _blocks
 from .optimizer import (
     _adam_ascent,

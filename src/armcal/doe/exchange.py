@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..arm import PlanarArm
-from ..criteria import scaled_columns
+from ..observability import scaled_columns
 
 __all__ = [
     "exchange_plan",

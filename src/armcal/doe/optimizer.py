@@ -5,8 +5,9 @@ from __future__ import annotations
 import numpy as np
 
 from ..arm import PlanarArm, forward_kinematics, link_angles
-from ..criteria import CRITERIA, scaled_columns, weighted_information
+from ..criteria import CRITERIA, weighted_information
 from ..errors import ArmcalError
+from ..observability import scaled_columns
 from .plans import feasible, feasible_poses, random_plan
 
 __all__ = [

@@ -11,7 +11,6 @@ import numpy as np
 from ..arm import PlanarArm
 from ..criteria import (
     CRITERIA,
-    identifiability,
     information_matrix,
     inverse_information,
     optimality_sums,
@@ -21,6 +20,7 @@ from ..criteria import (
 )
 from ..doe.plans import orthogonal_plan, random_plan
 from ..errors import ArmcalError
+from ..observability import identifiability
 from ..paper import (
     PAPER_100_POSE_ANGLES_DEG,
     PAPER_DIGIT,
