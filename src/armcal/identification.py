@@ -35,7 +35,7 @@ from typing import Any, Literal
 
 import numpy as np
 
-from .arm import PlanarArm, forward_kinematics, wrap_angle
+from .arm import PlanarArm, forward_kinematics
 from .criteria import inverse_information
 from .errors import ArmcalError, ArmcalWarning
 from .numerics import LinearLeastSquares, factor_least_squares
@@ -74,9 +74,13 @@ def _link_phasors_fit(factor: LinearLeastSquares, xy: np.ndarray) -> np.ndarray:
 def _closed_form_params(arm: PlanarArm, v: np.ndarray) -> np.ndarray:
     n = arm.n_joints
     z = v[:, n : 2 * n] + 1j * v[:, :n]
-    dtheta = np.angle(z)
-    dq = wrap_angle(np.diff(dtheta, axis=-1, prepend=0.0))
-    return np.concatenate([np.abs(z) - arm.link_lengths, dq, v[:, 2 * n :]], axis=-1)
+    # dq_k = dtheta_k - dtheta_(k-1), wrapped into (-pi, pi], is the angle of
+    # z_k conj(z_(k-1)) (z_0 = 1): one angle instead of n angles, a diff and a wrap.
+    relative = z.copy()
+    relative[:, 1:] *= z[:, :-1].conj()
+    return np.concatenate(
+        [np.abs(z) - arm.link_lengths, np.angle(relative), v[:, 2 * n :]], axis=-1
+    )
 
 
 def _as_sets(arm: PlanarArm, q: np.ndarray, xy: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
