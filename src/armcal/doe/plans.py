@@ -302,8 +302,9 @@ def analytic_plan(arm: PlanarArm, m: int) -> np.ndarray:
     alpha, margin = _best_common_shift(lo[1:], hi[1:], m)
     if margin < 0:
         raise ArmcalError(
-            f"no orthogonal {m}-pose plan fits the joint limits of {arm.name}: joints 2..{n} "
-            f"would each need {m} angles spaced {360 / m:g} deg apart"
+            f"the closed-form orthogonal {m}-pose plan (the paper's Table I family) does not fit "
+            f"the joint limits of {arm.name}: joints 2..{n} would each need {m} angles spaced "
+            f"{360 / m:g} deg apart; other plans may still be optimal (--method optimize)"
         )
     q = np.empty((m, n))
     for j in range(1, n):
