@@ -518,6 +518,18 @@ CASES = [
         ("--sigma",),
     ),
     case(
+        "usage-sigma-beyond-any-instrument",
+        {"plan.csv": VALID_PLAN},
+        ("evaluate", "--plan", "plan.csv", "--sigma", "1e160"),
+        ("--sigma", "between 1e-06 and 1000 mm"),
+    ),
+    case(
+        "synthesize-output-ends-with-a-slash",
+        {"plan.csv": VALID_PLAN},
+        ("synthesize", "--plan", "plan.csv", "-o", "meas.csv/"),
+        ("meas.csv/", "names a folder"),
+    ),
+    case(
         "usage-unknown-method",
         {"meas.csv": VALID_MEAS},
         ("identify", "--measurements", "meas.csv", "--method", "bogus", "-o", "cal.json"),

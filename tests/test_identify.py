@@ -239,3 +239,16 @@ def test_report_lists_every_parameter_with_unit(arm4, paper_truth4, rng):
     for name in arm4.param_names:
         assert f"\n{name} " in text
     assert "deg" in text and "mm" in text and "given" in text and "nan" not in text.lower()
+
+
+@pytest.mark.parametrize("dq2_deg", [90.0, 150.0, 179.0])
+def test_gauss_newton_reports_large_offsets_in_canonical_form(dq2_deg):
+    # (L, dtheta) and (-L, dtheta + pi) are the same link: both solvers must report the
+    # positive length and a joint offset in (-180, 180] deg, whichever branch GN reaches.
+    arm = PlanarArm([250.0, 180.0, 120.0])
+    q = orthogonal_plan(arm, 8)
+    truth = arm.params_from_display([0.5, 0.2, 0.1], [0.3, dq2_deg, 0.1])
+    xy = forward_kinematics(arm, q, truth)
+    for method in SOLVERS:
+        cal = identify(arm, q, xy, method=method, sigma=0.1)
+        assert_allclose(cal.values, truth * arm.display_scale, rtol=0, atol=1e-9)

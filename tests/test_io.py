@@ -76,7 +76,9 @@ def test_box_region_and_default_name(tmp_path):
         ("link_lengths_mm = [1.0]\nbase_offset = 1", "true or false"),
         ("link_lengths_mm = [1.0]\njoint_limits_deg = [[10, -10]]", "lo < hi"),
         ("link_lengths_mm = [1.0, 1.0]\njoint_limits_deg = [[0, 10]]", "2 pairs"),
-        ("link_lengths_mm = [1.0]\n[measurement]\nsigma_mm = 0", "must be > 0"),
+        ("link_lengths_mm = [1.0]\n[measurement]\nsigma_mm = 0", "between 1e-06 and 1000 mm"),
+        ("link_lengths_mm = [1.0]\n[measurement]\nsigma_mm = 5000", "check the unit"),
+        ("link_lengths_mm = [1e-300, 1.0]", "link 1 length must be between 0.001 and 1e.07 mm"),
         ("link_lengths_mm = [1.0]\n[measurement]\nsigma = 0.1", "unknown key 'measurement.sigma'"),
         (
             "link_lengths_mm = [1.0]\n[measurement]\nregion = { kind = 'circle' }",

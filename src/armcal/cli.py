@@ -27,6 +27,7 @@ from .identification import METHODS, Calibration, Method, identify
 from .io import (
     BUILTIN_ROBOTS,
     DEFAULT_ROBOT,
+    SIGMA_RANGE_MM,
     OutputFolder,
     RobotSpec,
     atomic_write,
@@ -108,11 +109,20 @@ def _positive(text: str) -> float:
     return value
 
 
-def _non_negative(text: str) -> float:
+def _sigma(text: str) -> float:
+    """Instrument noise in mm, within the range any instrument has (io.SIGMA_RANGE_MM)."""
     value = _finite(text)
-    if value < 0:
-        raise argparse.ArgumentTypeError(f"expected a number >= 0, got {text!r}")
-    return value + 0.0  # -0.0 -> 0.0
+    low, high = SIGMA_RANGE_MM
+    if not low <= value <= high:
+        raise argparse.ArgumentTypeError(
+            f"expected a noise std between {low:g} and {high:g} mm, got {text!r}"
+        )
+    return value
+
+
+def _sigma_or_zero(text: str) -> float:
+    """Like :func:`_sigma`, or 0 for noiseless synthetic data."""
+    return 0.0 if _finite(text) == 0 else _sigma(text)
 
 
 def _seed(text: str) -> int:
@@ -433,7 +443,7 @@ def build_parser() -> argparse.ArgumentParser:
     sub.add_argument("--truth", metavar="TRUTH_TOML", help="deviations (default: the built-in's)")
     sub.add_argument(
         "--sigma",
-        type=_non_negative,
+        type=_sigma_or_zero,
         metavar="MM",
         help=f"noise std in mm (default: robot file's sigma_mm, else {DEFAULT_SIGMA_MM})",
     )
@@ -452,7 +462,7 @@ def build_parser() -> argparse.ArgumentParser:
     )
     sub.add_argument(
         "--sigma",
-        type=_positive,
+        type=_sigma,
         metavar="MM",
         help="instrument noise in mm (default: robot file's sigma_mm, else estimated)",
     )
@@ -476,7 +486,7 @@ def build_parser() -> argparse.ArgumentParser:
     )
     sub.add_argument("--candidates", metavar="PLAN_CSV", help="reachable poses for exchange")
     sub.add_argument("--plot", metavar="PNG", help="draw the plan's poses as stick arms")
-    sub.add_argument("--sigma", type=_positive, metavar="MM", help=sigma_help)
+    sub.add_argument("--sigma", type=_sigma, metavar="MM", help=sigma_help)
     sub.add_argument("--test-poses", metavar="PLAN_CSV", help=test_help)
     _add_common(sub, seed=True, output="plan CSV to write")
     sub.set_defaults(
@@ -485,7 +495,7 @@ def build_parser() -> argparse.ArgumentParser:
 
     sub = subs.add_parser("evaluate", help="quality of a plan: criteria, predicted std")
     sub.add_argument("--plan", required=True, metavar="PLAN_CSV", help="plan CSV (q1_deg..)")
-    sub.add_argument("--sigma", type=_positive, metavar="MM", help=sigma_help)
+    sub.add_argument("--sigma", type=_sigma, metavar="MM", help=sigma_help)
     sub.add_argument("--test-poses", metavar="PLAN_CSV", help=test_help)
     _add_common(sub, seed=True)
     sub.set_defaults(run=_evaluate, inputs=("robot", "plan", "test_poses"))
@@ -493,7 +503,7 @@ def build_parser() -> argparse.ArgumentParser:
     sub = subs.add_parser("simulate", help="Monte Carlo: empirical vs predicted std and bias")
     sub.add_argument("--plan", required=True, metavar="PLAN_CSV", help="plan CSV (q1_deg..)")
     sub.add_argument("--truth", metavar="TRUTH_TOML", help="deviations (default: the built-in's)")
-    sub.add_argument("--sigma", type=_positive, metavar="MM", help=sigma_help)
+    sub.add_argument("--sigma", type=_sigma, metavar="MM", help=sigma_help)
     sub.add_argument(
         "--trials", type=_trials, default=10_000, metavar="N", help="trials (default 10000)"
     )
@@ -517,7 +527,7 @@ def build_parser() -> argparse.ArgumentParser:
         group.add_argument(
             option, dest=key, type=_positive, metavar="A", help=TARGETS[key] + " to reach"
         )
-    sub.add_argument("--sigma", type=_positive, metavar="MM", help=sigma_help)
+    sub.add_argument("--sigma", type=_sigma, metavar="MM", help=sigma_help)
     sub.add_argument("--test-poses", metavar="PLAN_CSV", help=test_help)
     sub.add_argument(
         "--max-poses", type=_poses, default=5000, metavar="M", help="give up beyond (default 5000)"
@@ -554,7 +564,7 @@ def build_parser() -> argparse.ArgumentParser:
     )
     sub.add_argument("--poses", type=_poses, default=20, help="number of poses (default 20)")
     sub.add_argument("--truth", metavar="TRUTH_TOML", help="deviations (default: the built-in's)")
-    sub.add_argument("--sigma", type=_positive, metavar="MM", help="noise std in mm")
+    sub.add_argument("--sigma", type=_sigma, metavar="MM", help="noise std in mm")
     _add_common(sub, seed=True, output="folder for plan, measurements and calibration")
     sub.set_defaults(
         run=_demo, inputs=("robot", "truth"), outputs=("output",), folder_files=_DEMO_FILES

@@ -35,7 +35,7 @@ from typing import Any, Literal
 
 import numpy as np
 
-from .arm import PlanarArm, forward_kinematics
+from .arm import PlanarArm, forward_kinematics, wrap_angle
 from .criteria import inverse_information
 from .errors import ArmcalError, ArmcalWarning
 from .numerics import LinearLeastSquares, factor_least_squares
@@ -171,8 +171,15 @@ def _gauss_newton(
             break
     converged = ~failed
     converged[active] = False
-    dq = np.diff(paper[:, :n], axis=-1, prepend=0.0)
-    params = np.concatenate([paper[:, n : 2 * n], dq, paper[:, 2 * n :]], axis=-1)
+    # The same point of the model in canonical form, as the closed form reports it:
+    # (L, dtheta) and (-L, dtheta + pi) give the same link, so a negative length
+    # is flipped, and joint offsets are wrapped into (-pi, pi].
+    length = arm.link_lengths + paper[:, n : 2 * n]
+    flipped = length < 0
+    dtheta = paper[:, :n] + np.pi * flipped
+    dl = np.where(flipped, -length, length) - arm.link_lengths
+    dq = wrap_angle(np.diff(dtheta, axis=-1, prepend=0.0))
+    params = np.concatenate([dl, dq, paper[:, 2 * n :]], axis=-1)
     return params, iterations, converged
 
 

@@ -43,6 +43,8 @@ else:  # pragma: no cover - exercised on Python 3.10 only
 __all__ = [
     "BUILTIN_ROBOTS",
     "DEFAULT_ROBOT",
+    "LINK_LENGTH_RANGE_MM",
+    "SIGMA_RANGE_MM",
     "Measurements",
     "OutputFolder",
     "RobotSpec",
@@ -56,6 +58,13 @@ __all__ = [
     "read_plan",
     "write_folder",
 ]
+
+#: Instrument noise accepted (1 std, mm): from a nanometre to a metre.  Beyond it the
+#: value is a unit mistake, and its square under- or overflows in the covariance.
+SIGMA_RANGE_MM = (1e-6, 1e3)
+
+#: Link lengths accepted (mm): from a micrometre to 10 km.
+LINK_LENGTH_RANGE_MM = (1e-3, 1e7)
 
 #: The robot used when a command is given none.
 DEFAULT_ROBOT = "paper-4link"
@@ -172,6 +181,8 @@ def _check_output_file(path: PathArg, fix: str = "give another path") -> Path:
     """
     if not os.fspath(path):
         raise InputError("an output file name is empty; give a file name")
+    if os.fspath(path).endswith(("/", os.sep)):  # realpath would drop the slash
+        raise _fail(path, f"names a folder (it ends with a slash), expected a file; {fix}")
     real = Path(os.path.realpath(path))
     try:
         info = _stat(real)
@@ -557,11 +568,13 @@ def load_robot(name_or_path: str | os.PathLike) -> RobotSpec:
     lengths = _numbers(path, data["link_lengths_mm"], "link_lengths_mm")
     if not lengths:
         raise _fail(path, "key 'link_lengths_mm': needs at least one link")
+    low, high = LINK_LENGTH_RANGE_MM
     for i, length in enumerate(lengths):
-        if length <= 0:
+        if not low <= length <= high:
             raise _fail(
                 path,
-                f"key 'link_lengths_mm[{i}]': link {i + 1} length must be > 0 mm, got {length}",
+                f"key 'link_lengths_mm[{i}]': link {i + 1} length must be between {low:g} and "
+                f"{high:g} mm, got {length:g}; check the unit (mm)",
             )
     n = len(lengths)
     name = data.get("name", path.stem)
@@ -592,8 +605,13 @@ def load_robot(name_or_path: str | os.PathLike) -> RobotSpec:
         _check_keys(path, meas, ["sigma_mm", "region"], "measurement.")
         if "sigma_mm" in meas:
             sigma = _number(path, meas["sigma_mm"], "measurement.sigma_mm")
-            if sigma <= 0:
-                raise _fail(path, f"key 'measurement.sigma_mm': must be > 0 mm, got {sigma}")
+            low, high = SIGMA_RANGE_MM
+            if not low <= sigma <= high:
+                raise _fail(
+                    path,
+                    f"key 'measurement.sigma_mm': must be between {low:g} and {high:g} mm, "
+                    f"got {sigma:g}; check the unit (mm)",
+                )
         if "region" in meas:
             region = _parse_region(path, meas["region"])
     arm = PlanarArm(

@@ -331,6 +331,7 @@ def spd_inverse(matrix: np.ndarray) -> np.ndarray:
         raise ArmcalError("a Gram matrix has non-finite entries")
     values, vectors = np.linalg.eigh(matrix)
     p = matrix.shape[-1]
-    floor = p * np.finfo(float).eps * np.maximum(values[..., -1:], np.finfo(float).tiny)
+    # At least 1e-290, so that even a zero matrix gives a huge but finite inverse.
+    floor = np.maximum(p * np.finfo(float).eps * values[..., -1:], 1e-290)
     values = np.maximum(values, floor)
     return (vectors / values[..., None, :]) @ np.swapaxes(vectors, -1, -2)

@@ -66,8 +66,10 @@ def _closed_form_note(arm: PlanarArm, m: int) -> str:
     first = 1 if arm.base_offset else 2  # joint 1 steps too when the base is identified
     return (
         f"the closed-form orthogonal plans (the paper's Table I family: joints "
-        f"{first}..{arm.n_joints} at {m} angles {360 / m:g} deg apart) do not fit the {where} "
-        f"of {arm.name}; the optimizer searched all plans within the {where} instead"
+        f"{first}..{arm.n_joints} at {m} angles {360 / m:g} deg apart"
+        + (", placed for the largest joint-limit margin" if arm.region is not None else "")
+        + f") do not fit the {where} of {arm.name}; the optimizer searched all plans within "
+        f"the {where} instead"
     )
 
 

@@ -260,7 +260,10 @@ def analytic_plan(arm: PlanarArm, m: int) -> np.ndarray:
     ------
     ArmcalError
         If no placement keeps every pose within the limits and region (use
-        :func:`optimize_plan` then).
+        :func:`optimize_plan` then).  With a region the common shift ``alpha`` is
+        the one with the largest joint-limit margin, and only joint 1 is then
+        searched against the region: a shift with a smaller margin that also fits
+        the region can be missed (the optimizer still finds such plans).
 
     Notes
     -----
