@@ -128,6 +128,7 @@ def test_plan_only_bound_is_looser_at_m20(designs60):
     assert cert.reference_d_efficiency == pytest.approx(BEST_60, rel=1e-4)
 
 
+@pytest.mark.slow  # seconds of certificate searches: run by make test-slow
 def test_certificate_never_overclaims_for_random_plans(arm60, rng):
     for _ in range(3):
         q = random_plan(arm60, 12, rng=rng)
@@ -137,6 +138,7 @@ def test_certificate_never_overclaims_for_random_plans(arm60, rng):
         assert cert.certified_d_efficiency >= cert.plan_only_bound
 
 
+@pytest.mark.slow  # seconds of certificate searches: run by make test-slow
 def test_annulus_region_keeps_every_tip_inside():
     region = Annulus((0.0, 0.0), 300.0, 520.0)  # excludes the inner workspace and the rim
     arm = PlanarArm(PAPER_LENGTHS, LIMITS_60, name="annulus", region=region)
@@ -180,6 +182,7 @@ def test_other_criteria_optimize_their_own_efficiency(criterion, arm60):
     assert efficiencies(arm60, q_c)[criterion] >= efficiencies(arm60, q_d)[criterion] - 1e-6
 
 
+@pytest.mark.slow  # seconds of certificate searches: run by make test-slow
 def test_same_seed_gives_the_same_plan_file(tmp_path):
     robot = tmp_path / "robot.toml"
     robot.write_text(
