@@ -382,17 +382,21 @@ CRITERIA: dict[str, Criterion] = {
 }
 
 
-def efficiencies(arm: PlanarArm, q: np.ndarray) -> dict[str, np.ndarray]:
+def efficiencies(
+    arm: PlanarArm, q: np.ndarray, *, svd: ScaledSVD | None = None
+) -> dict[str, np.ndarray]:
     """Every criterion of :data:`CRITERIA` for plans ``q`` ``(..., m, n)``, by name.
 
     From the singular values of :func:`scaled_jacobian`; 0 for a plan the rank
     policy calls singular.
     """
-    s = plan_svd(arm, q).truncated
+    s = (plan_svd(arm, q) if svd is None else svd).truncated
     return {name: crit.from_singular_values(s) for name, crit in CRITERIA.items()}
 
 
-def observability_indices(arm: PlanarArm, q: np.ndarray) -> dict[str, np.ndarray]:
+def observability_indices(
+    arm: PlanarArm, q: np.ndarray, *, svd: ScaledSVD | None = None
+) -> dict[str, np.ndarray]:
     """Observability indices on the singular values of the column-scaled Jacobian.
 
     With ``s_1 >= ... >= s_p`` the singular values of ``J D / sqrt(m)`` (``D`` the
@@ -407,7 +411,7 @@ def observability_indices(arm: PlanarArm, q: np.ndarray) -> dict[str, np.ndarray
     All are larger-is-better and 1 for orthogonal plans; all are 0 for a plan
     the rank policy calls singular.
     """
-    s = plan_svd(arm, q).truncated
+    s = (plan_svd(arm, q) if svd is None else svd).truncated
     with np.errstate(divide="ignore"):
         return {
             "O1": np.exp(np.mean(np.log(s), axis=-1)),
@@ -418,7 +422,12 @@ def observability_indices(arm: PlanarArm, q: np.ndarray) -> dict[str, np.ndarray
 
 
 def predicted_std(
-    arm: PlanarArm, q: np.ndarray, sigma: float, params: np.ndarray | None = None
+    arm: PlanarArm,
+    q: np.ndarray,
+    sigma: float,
+    params: np.ndarray | None = None,
+    *,
+    svd: ScaledSVD | None = None,
 ) -> np.ndarray:
     """Predicted standard errors of the user parameters in display units (mm, deg).
 
@@ -431,6 +440,9 @@ def predicted_std(
         Measurement noise (1 std, mm).
     params : ndarray, shape (p,), optional
         Deviations at which to linearize (nominal when omitted).
+    svd : ScaledSVD, optional
+        The plan's :func:`~armcal.observability.plan_svd`, when the caller has it
+        already (it is computed otherwise).
 
     Returns
     -------
@@ -439,7 +451,7 @@ def predicted_std(
         (``dl``, ``dq``, ``[x0, y0]``).  Infinite entries mean the plan cannot
         identify the parameters.
     """
-    inverse, _ = inverse_information_batch(arm, q, params)
+    inverse, _ = inverse_information_batch(arm, q, params, svd=svd)
     return std_from_covariance(arm, sigma**2 * inverse)
 
 
@@ -472,7 +484,12 @@ class PositionAccuracy:
 
 
 def position_accuracy(
-    arm: PlanarArm, q: np.ndarray, test_q: np.ndarray, sigma: float
+    arm: PlanarArm,
+    q: np.ndarray,
+    test_q: np.ndarray,
+    sigma: float,
+    *,
+    svd: ScaledSVD | None = None,
 ) -> PositionAccuracy:
     """Predicted positioning accuracy after calibration with plan ``q`` at poses ``test_q``.
 
@@ -485,6 +502,9 @@ def position_accuracy(
         Poses where the calibrated arm will work (rad).
     sigma : float
         Measurement noise (1 std, mm).
+    svd : ScaledSVD, optional
+        The plan's :func:`~armcal.observability.plan_svd`, when the caller has it
+        already (it is computed otherwise).
 
     Returns
     -------
@@ -505,8 +525,9 @@ def position_accuracy(
         If the plan cannot identify every parameter (:func:`check_identifiable`).
     """
     q = np.asarray(q, dtype=float)
-    check_identifiable(arm, q)
-    g, _ = _covariance_factor(arm, q, None)  # finite: same policy, positive lengths
+    svd = plan_svd(arm, q) if svd is None else svd
+    check_identifiable(arm, q, svd=svd)
+    g, _ = _covariance_factor(arm, q, None, svd)  # finite: same policy, positive lengths
     j0 = jacobian(arm, test_q)  # (k, 2, p), user parametrization like g
     per_pose = sigma * np.sqrt(np.sum((j0 @ g) ** 2, axis=(-2, -1)))
     return PositionAccuracy(
@@ -585,16 +606,17 @@ def evaluate_plan(
     True
     """
     q = np.asarray(q, dtype=float)
-    info = check_identifiable(arm, q)
+    svd = plan_svd(arm, q)  # one factorization of the plan serves every figure below
+    info = check_identifiable(arm, q, svd=svd)
     warning = conditioning_warning(arm, info)
     return PlanQuality(
         n_poses=int(q.shape[0]),
         sigma_mm=float(sigma),
-        efficiencies={k: float(v) for k, v in efficiencies(arm, q).items()},
-        observability={k: float(v) for k, v in observability_indices(arm, q).items()},
+        efficiencies={k: float(v) for k, v in efficiencies(arm, q, svd=svd).items()},
+        observability={k: float(v) for k, v in observability_indices(arm, q, svd=svd).items()},
         dstar=dstar(arm, q),
         optimality_sums=optimality_sums(arm, q),
-        predicted_std=predicted_std(arm, q, sigma),
-        position=position_accuracy(arm, q, test_q, sigma),
+        predicted_std=predicted_std(arm, q, sigma, svd=svd),
+        position=position_accuracy(arm, q, test_q, sigma, svd=svd),
         warnings=() if warning is None else (warning,),
     )

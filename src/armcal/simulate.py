@@ -392,9 +392,10 @@ def monte_carlo(
         raise ArmcalError(f"a Monte Carlo needs at least 2 trials, got {trials}")
     if not (sigma > 0 and math.isfinite(sigma)):
         raise ArmcalError(f"a Monte Carlo needs a positive noise sigma (mm), got {sigma}")
-    check_identifiable(arm, q)
+    svd = plan_svd(arm, q)
+    check_identifiable(arm, q, svd=svd)
     rng = np.random.default_rng(rng)
-    inverse, ok = inverse_information_batch(arm, q, truth)
+    inverse, ok = inverse_information_batch(arm, q, truth, svd=svd)
     if not ok:
         raise ArmcalError("the plan cannot identify every parameter at the given truth")
     predicted = sigma**2 * inverse
