@@ -25,11 +25,14 @@ All functions are batched on leading axes: joint angles ``q`` of shape
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import Literal
+from typing import Any, Literal
 
 import numpy as np
 from numpy.typing import ArrayLike
+
+from .noise import NoiseModel
 
 __all__ = [
     "Annulus",
@@ -141,11 +144,15 @@ class PlanarArm:
         identified (two more parameters).
     name : str
         A label for reports and files.
-    sigma : float or None
-        Instrument noise (1 std, mm) from the robot file's ``[measurement]``
-        table, or None when the file does not give it.
+    noise : NoiseModel or None
+        The measurement noise (:mod:`armcal.noise`) from the robot file's
+        ``[measurement]`` table, or None when the file does not give it;
+        ``sigma=s`` is short for ``noise=NoiseModel.isotropic(s)``.
     region : Annulus or Box or None
         Where the instrument can measure, in the base frame (nominal model).
+    fixed : tuple of str
+        User parameters held at their nominal value (not identified), e.g.
+        ``("dl4",)`` for a link measured otherwise; every other one is free.
 
     Examples
     --------
@@ -158,8 +165,9 @@ class PlanarArm:
     joint_limits: np.ndarray
     base_offset: bool
     name: str
-    sigma: float | None
+    noise: NoiseModel | None
     region: Region | None
+    fixed: tuple[str, ...]
 
     def __init__(
         self,
@@ -170,6 +178,8 @@ class PlanarArm:
         name: str = "arm",
         sigma: float | None = None,
         region: Region | None = None,
+        noise: NoiseModel | None = None,
+        fixed: Sequence[str] = (),
     ) -> None:
         lengths = _readonly(np.atleast_1d(np.asarray(link_lengths, dtype=float)))
         if lengths.ndim != 1 or lengths.size == 0:
@@ -185,14 +195,73 @@ class PlanarArm:
             raise ValueError(f"joint_limits must have shape ({n}, 2), got {limits.shape}")
         if not (np.all(np.isfinite(limits)) and np.all(limits[:, 0] < limits[:, 1])):
             raise ValueError("joint_limits must be finite with lo < hi for every joint")
-        if sigma is not None and not (np.isfinite(sigma) and sigma > 0):
-            raise ValueError(f"sigma must be positive and finite, got {sigma}")
+        if sigma is not None:
+            if noise is not None:
+                raise ValueError("give sigma or noise, not both")
+            if not (np.isfinite(sigma) and sigma > 0):
+                raise ValueError(f"sigma must be positive and finite, got {sigma}")
+            noise = NoiseModel.isotropic(float(sigma))
+        if noise is not None:
+            noise.check_joints(n)
         object.__setattr__(self, "link_lengths", lengths)
         object.__setattr__(self, "joint_limits", _readonly(limits))
         object.__setattr__(self, "base_offset", bool(base_offset))
         object.__setattr__(self, "name", str(name))
-        object.__setattr__(self, "sigma", None if sigma is None else float(sigma))
+        object.__setattr__(self, "noise", noise)
         object.__setattr__(self, "region", region)
+        names = self.param_names
+        unknown = [f for f in fixed if f not in names]
+        if unknown:
+            raise ValueError(
+                f"unknown parameter {unknown[0]!r} to fix; the parameters of this arm are "
+                f"{', '.join(names)}"
+            )
+        if len(set(fixed)) == len(names):
+            raise ValueError("every parameter is fixed: leave at least one free to identify")
+        object.__setattr__(self, "fixed", tuple(nm for nm in names if nm in set(fixed)))
+
+    def replace(self, **changes: Any) -> PlanarArm:
+        """A copy with some constructor arguments changed (``sigma=`` replaces ``noise``)."""
+        kwargs: dict[str, Any] = {
+            "link_lengths": self.link_lengths,
+            "joint_limits": self.joint_limits,
+            "base_offset": self.base_offset,
+            "name": self.name,
+            "noise": self.noise,
+            "region": self.region,
+            "fixed": self.fixed,
+        }
+        if "sigma" in changes:
+            kwargs.pop("noise")
+        if "base_offset" in changes and "fixed" not in changes:
+            kwargs["fixed"] = tuple(f for f in self.fixed if f not in ("x0", "y0"))
+        kwargs.update(changes)
+        return PlanarArm(**kwargs)
+
+    @property
+    def sigma(self) -> float | None:
+        """Reference instrument noise (1 std, mm) of :attr:`noise`, or None."""
+        return None if self.noise is None else self.noise.sigma_mm
+
+    @property
+    def free(self) -> np.ndarray:
+        """Boolean mask ``(p,)`` of the identified (free) user parameters."""
+        return np.array([name not in self.fixed for name in self.param_names])
+
+    @property
+    def n_free(self) -> int:
+        """Number of identified parameters ``p_f`` (``p`` minus the fixed ones)."""
+        return self.n_params - len(self.fixed)
+
+    @property
+    def free_names(self) -> tuple[str, ...]:
+        """Names of the free parameters, in the order of :attr:`param_names`."""
+        return tuple(name for name in self.param_names if name not in self.fixed)
+
+    @property
+    def standard(self) -> bool:
+        """Every parameter free and isotropic iid noise: the paper's model, no weights."""
+        return not self.fixed and (self.noise is None or self.noise.isotropic_iid)
 
     @property
     def n_joints(self) -> int:

@@ -30,6 +30,16 @@ its efficiencies and observability indices, and whether results carry an
 ``ill-conditioned`` warning.  They are computed from a thin QR of ``H``, never
 from the eigenvalues of ``Fs``, which cannot resolve a relative singular value
 below ``sqrt(eps) ~ 1e-8``.
+
+**Weighted and reduced models.**  With anisotropic or encoder noise
+(:mod:`armcal.noise`) or fixed parameters, ``H`` is the whitened Jacobian in the
+coordinates of the free parameters (:func:`armcal.observability.model_basis`):
+every criterion is then the same function of the weighted information matrix
+``H^T H``, no longer Hadamard-normalized (its diagonal depends on the plan), so
+an efficiency compares plans of one model but is not 1 at its optimum; the
+certificate of :mod:`armcal.doe` says how far from the optimum a plan is.  The
+paper's conditions (21), its D* and the orthogonal plans assume isotropic iid
+noise and every parameter free.
 """
 
 from __future__ import annotations
@@ -41,12 +51,15 @@ import numpy as np
 
 from .arm import PlanarArm, jacobian, link_angles
 from .errors import ArmcalWarning
-from .numerics import COND_WARN, RANK_RTOL, ScaledSVD, spd_inverse
+from .noise import NoiseModel
+from .numerics import COND_WARN, RANK_RTOL, ScaledSVD, scaled_svd, spd_inverse
 from .observability import (
     check_identifiable,
     conditioning_warning,
+    model_basis,
+    model_columns,
     plan_svd,
-    scaled_columns,
+    scaled_jacobian,
     user_from_scaled,
 )
 
@@ -65,6 +78,7 @@ __all__ = [
     "information_matrix",
     "inverse_information",
     "inverse_information_batch",
+    "model_singular_values",
     "observability_indices",
     "optimality_sums",
     "position_accuracy",
@@ -73,6 +87,7 @@ __all__ = [
     "scaled_information",
     "std_from_covariance",
     "weighted_information",
+    "weighted_user_jacobian",
 ]
 
 
@@ -102,7 +117,7 @@ def weighted_information(columns: np.ndarray, weights: np.ndarray) -> np.ndarray
 def scaled_information(arm: PlanarArm, q: np.ndarray) -> np.ndarray:
     """Hadamard-normalized information ``Fs = D F D`` ``(..., p, p)`` with unit diagonal."""
     q = np.asarray(q, dtype=float)
-    return weighted_information(scaled_columns(arm, q), np.full(q.shape[:-1], 1 / q.shape[-2]))
+    return weighted_information(model_columns(arm, q), np.full(q.shape[:-1], 1 / q.shape[-2]))
 
 
 def _covariance_factor(
@@ -110,12 +125,51 @@ def _covariance_factor(
 ) -> tuple[np.ndarray, np.ndarray]:
     """``G`` ``(..., p, p)`` with ``(J^T J)^-1 = G G^T`` (user parametrization) and the ok mask."""
     q = np.asarray(q, dtype=float)
+    if params is not None and not arm.standard:
+        return _covariance_factor_at(arm, q, params)
     factor, ok = (plan_svd(arm, q) if svd is None else svd).inverse_gram_factor()
-    to_user = user_from_scaled(arm, params)
+    to_user = user_from_scaled(arm, params) if arm.standard else model_basis(arm)[1]
     with np.errstate(invalid="ignore", over="ignore"):
         g = to_user @ np.where(ok[..., None, None], factor, 0.0) / np.sqrt(q.shape[-2])
     ok = ok & np.all(np.isfinite(g), axis=(-2, -1))
     return np.where(ok[..., None, None], g, np.inf), ok
+
+
+def _covariance_factor_at(
+    arm: PlanarArm, q: np.ndarray, params: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`_covariance_factor` of a weighted or reduced model at deviations ``params``.
+
+    The free columns of the user Jacobian at ``params``, each pose whitened at
+    ``params`` (:meth:`armcal.noise.NoiseModel.whitening`), through the rank
+    policy's SVD: ``G`` ``(..., p, p_f)`` with zero rows for fixed parameters.
+    """
+    jac = weighted_user_jacobian(arm, q, params)
+    factor, ok = scaled_svd(jac).inverse_gram_factor()
+    g = np.eye(arm.n_params)[:, arm.free] @ np.where(ok[..., None, None], factor, 0.0)
+    ok = ok & np.all(np.isfinite(g), axis=(-2, -1))
+    return np.where(ok[..., None, None], g, np.inf), ok
+
+
+def weighted_user_jacobian(
+    arm: PlanarArm,
+    q: np.ndarray,
+    params: np.ndarray | None = None,
+    row_sigma: np.ndarray | None = None,
+) -> np.ndarray:
+    """Whitened free columns of the user Jacobian ``(..., 2m, p_f)`` at ``params``.
+
+    Rows are ``W_i J_i`` (:meth:`armcal.noise.NoiseModel.whitening` at ``params``,
+    the identity for isotropic iid noise), so ``sigma_ref^2 (J_w^T J_w)^-1`` is
+    the generalized-least-squares covariance of the free parameters.
+    """
+    jac = jacobian(arm, q, params)  # (..., m, 2, p)
+    noise = arm.noise
+    if row_sigma is not None or (noise is not None and not noise.isotropic_iid):
+        model = noise if noise is not None else NoiseModel.isotropic(1.0)
+        jac = model.whitening(arm, q, params, row_sigma) @ jac
+    jac = jac[..., arm.free]
+    return jac.reshape(*jac.shape[:-3], -1, arm.n_free)
 
 
 def inverse_information_batch(
@@ -197,7 +251,24 @@ def d_efficiency(arm: PlanarArm, q: np.ndarray) -> np.ndarray:
     >>> float(d_efficiency(arm, np.zeros((6, 4))))   # six identical poses
     0.0
     """
-    return CRITERIA["D"].from_singular_values(plan_svd(arm, q).truncated)
+    return CRITERIA["D"].from_singular_values(model_singular_values(arm, q))
+
+
+def model_singular_values(
+    arm: PlanarArm, q: np.ndarray, svd: ScaledSVD | None = None
+) -> np.ndarray:
+    """Singular values ``(..., p_f)`` of :func:`scaled_jacobian`, those the policy drops set to 0.
+
+    For the paper's model the columns have unit norm and these are the policy's
+    own.  For a weighted or reduced model (:attr:`PlanarArm.standard` false) they
+    are the singular values of the unnormalized matrix, so that the criteria
+    measure the weighted information, not only how orthogonal the columns are.
+    """
+    svd = plan_svd(arm, q) if svd is None else svd
+    if arm.standard:
+        return svd.truncated
+    raw = np.linalg.svd(scaled_jacobian(arm, q), compute_uv=False)
+    return np.where(svd.kept, raw, 0.0)
 
 
 @dataclass(frozen=True)
@@ -390,7 +461,7 @@ def efficiencies(
     From the singular values of :func:`scaled_jacobian`; 0 for a plan the rank
     policy calls singular.
     """
-    s = (plan_svd(arm, q) if svd is None else svd).truncated
+    s = model_singular_values(arm, q, svd)
     return {name: crit.from_singular_values(s) for name, crit in CRITERIA.items()}
 
 
@@ -411,7 +482,7 @@ def observability_indices(
     All are larger-is-better and 1 for orthogonal plans; all are 0 for a plan
     the rank policy calls singular.
     """
-    s = (plan_svd(arm, q) if svd is None else svd).truncated
+    s = model_singular_values(arm, q, svd)
     with np.errstate(divide="ignore"):
         return {
             "O1": np.exp(np.mean(np.log(s), axis=-1)),

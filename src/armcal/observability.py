@@ -27,6 +27,8 @@ __all__ = [
     "check_identifiable",
     "conditioning_warning",
     "identifiability",
+    "model_basis",
+    "model_columns",
     "plan_svd",
     "scaled_columns",
     "scaled_jacobian",
@@ -47,22 +49,92 @@ def scaled_columns(arm: PlanarArm, q: np.ndarray) -> np.ndarray:
     return np.concatenate(cols, axis=-1)
 
 
+def model_basis(arm: PlanarArm) -> tuple[np.ndarray, np.ndarray]:
+    """The free parameters in the scaled paper coordinates: ``C`` and ``T`` ``(p, p_f)``.
+
+    A change ``u`` ``(p_f,)`` of the model's coordinates moves the scaled paper
+    coordinates of :func:`scaled_columns` by ``C u`` and the user deviations by
+    ``T u`` (at nominal).  Every parameter free: ``C = I``, ``T =``
+    :func:`user_from_scaled` at nominal.  A fixed ``dl_k`` or base coordinate
+    drops its column.  Fixed joint offsets tie link angles together: with
+    ``dq_j`` fixed for ``j > 1``, link ``j`` turns with link ``j - 1``, so links
+    form groups ``G`` that share one absolute offset (``dq1`` fixed pins the
+    first group to the base).  A group's column is ``sum_{k in G} l_k e_theta_k``
+    divided by ``sqrt(sum_{k in G} l_k^2)``: unit mean square over random
+    poses, the normalization of the columns of a single link.
+    """
+    n, p = arm.n_joints, arm.n_params
+    free = arm.free
+    if free.all():
+        return np.eye(p), user_from_scaled(arm, None)
+    columns_c: list[np.ndarray] = []
+    columns_t: list[np.ndarray] = []
+    free_dq = [j for j in range(n) if free[n + j]]
+    for a, j in enumerate(free_dq):
+        end = free_dq[a + 1] if a + 1 < len(free_dq) else n
+        group = np.arange(j, end)
+        scale = float(np.sqrt(np.sum(arm.link_lengths[group] ** 2)))
+        c = np.zeros(p)
+        c[group] = arm.link_lengths[group] / scale
+        t = np.zeros(p)
+        t[n + j] = 1.0 / scale  # dq_j = phi_G - phi_(previous group)
+        if end < n:
+            t[n + end] = -1.0 / scale
+        columns_c.append(c)
+        columns_t.append(t)
+    for k in [k for k in range(n) if free[k]] + [k for k in range(2 * n, p) if free[k]]:
+        e = np.zeros(p)
+        e[n + k if k < n else k] = 1.0  # scaled paper order: (dtheta, dl, base)
+        t = np.zeros(p)
+        t[k] = 1.0
+        columns_c.append(e)
+        columns_t.append(t)
+    return np.array(columns_c).T, np.array(columns_t).T
+
+
+def model_columns(arm: PlanarArm, q: np.ndarray) -> np.ndarray:
+    """The model's scaled Jacobian ``(..., m, p_f)`` as complex columns, at nominal.
+
+    :func:`scaled_columns` in the coordinates of :func:`model_basis` (the free
+    parameters), each pose whitened by the noise model
+    (:meth:`armcal.noise.NoiseModel.whitening`, as ``alpha c + beta conj(c)``):
+    the information matrix of any model is ``sum_i Re(c_i^H c_i)`` over these
+    columns.  For the paper's model (:attr:`PlanarArm.standard`) it is
+    :func:`scaled_columns` itself.
+    """
+    columns = scaled_columns(arm, q)
+    if arm.standard:
+        return columns
+    from .noise import complex_whitening
+
+    if not arm.free.all():
+        columns = columns @ model_basis(arm)[0]
+    if arm.noise is not None and not arm.noise.isotropic_iid:
+        alpha, beta = complex_whitening(arm.noise.whitening(arm, np.asarray(q, dtype=float)))
+        columns = alpha[..., None] * columns + beta[..., None] * columns.conj()
+    return columns
+
+
 def scaled_jacobian(arm: PlanarArm, q: np.ndarray) -> np.ndarray:
-    """The policy's matrix ``H`` ``(..., 2m, p)``: the Hadamard-normalized nominal Jacobian.
+    """The policy's matrix ``H`` ``(..., 2m, p_f)``: the Hadamard-normalized nominal Jacobian.
 
-    The real form of :func:`scaled_columns` divided by ``sqrt(m)``: rows alternate
-    x, y per pose, columns are the paper's ``(dtheta, dl, [x0, y0])``, every
-    column has unit norm and ``H^T H = Fs``.  Its singular values are 1 for an
-    orthogonal plan.
+    The real form of :func:`model_columns` divided by ``sqrt(m)``: rows alternate
+    x, y per pose.  For the paper's model (every parameter free, isotropic iid
+    noise) columns are the paper's ``(dtheta, dl, [x0, y0])``, every column has
+    unit norm and ``H^T H = Fs``; its singular values are 1 for an orthogonal
+    plan.  Otherwise columns are the free parameters of :func:`model_basis` and
+    rows are whitened: ``sigma_ref^2 (H^T H)^-1 / m`` is the weighted
+    (generalized) least-squares covariance in the model's coordinates.
 
-    It is also the plan's regressor of the model that is linear in the links:
-    the tip is ``sqrt(m) H v`` with ``v = (Im z_1..n, Re z_1..n, [x0, y0])`` and
-    ``z_k = (l_k + dl_k) exp(i dtheta_k)`` (see :mod:`armcal.identification`).
+    For the paper's model it is also the plan's regressor of the model that is
+    linear in the links: the tip is ``sqrt(m) H v`` with
+    ``v = (Im z_1..n, Re z_1..n, [x0, y0])`` and ``z_k = (l_k + dl_k) exp(i dtheta_k)``
+    (see :mod:`armcal.identification`).
     """
     q = np.asarray(q, dtype=float)
-    columns = scaled_columns(arm, q) / np.sqrt(q.shape[-2])
-    real = np.stack([columns.real, columns.imag], axis=-2)  # (..., m, 2, p)
-    return real.reshape(*q.shape[:-2], 2 * q.shape[-2], arm.n_params)
+    columns = model_columns(arm, q) / np.sqrt(q.shape[-2])
+    real = np.stack([columns.real, columns.imag], axis=-2)  # (..., m, 2, p_f)
+    return real.reshape(*q.shape[:-2], 2 * q.shape[-2], columns.shape[-1])
 
 
 def plan_svd(arm: PlanarArm, q: np.ndarray) -> ScaledSVD:
@@ -186,7 +258,14 @@ def _combination(vector: np.ndarray, names: Sequence[str], *, drop: float = 1e-6
 
 
 def _scaled_from_user_nominal(arm: PlanarArm) -> np.ndarray:
-    """``T0^-1`` ``(p, p)``: ``u = diag(l, 1, [1, 1]) P user`` at zero deviations (explicit)."""
+    """``T0^-1`` ``(p_f, p_f)``: model coordinates of a change of the free user parameters.
+
+    Every parameter free: ``u = diag(l, 1, [1, 1]) P user`` (explicit).  Otherwise
+    the inverse of the free rows of :func:`model_basis`'s ``T``, a small matrix
+    that is nonsingular by construction (triangular per joint group).
+    """
+    if not arm.free.all():
+        return np.linalg.inv(model_basis(arm)[1][arm.free])
     n = arm.n_joints
     scale = np.ones(arm.n_params)
     scale[:n] = arm.link_lengths  # u_theta_k = l_k dtheta_k, in mm
@@ -245,8 +324,9 @@ def identifiability(
     if svd is None:
         svd = plan_svd(arm, q)
     rank = int(svd.rank)
-    to_user = user_from_scaled(arm, None)
+    to_user = model_basis(arm)[1]
     names = arm.param_names
+    free = arm.free
     null = svd.directions(RANK_RTOL) @ to_user.T  # rows: unseen directions (mm, rad)
     weak = svd.directions(1.0 / COND_WARN) @ to_user.T
     bad: tuple[str, ...] = ()
@@ -255,9 +335,9 @@ def identifiability(
         # unit-norm columns: |J_user e_j| = sqrt(m) |S V^T (c * T0^-1 e_j)|.
         user_columns = svd.column_norms[:, None] * _scaled_from_user_nominal(arm)
         user_norms = np.linalg.norm(svd.singular_values[:, None] * (svd.vt @ user_columns), axis=0)
-        basis, _ = np.linalg.qr((null * user_norms).T)  # orthonormal, (p, k)
+        basis, _ = np.linalg.qr((null[:, free] * user_norms).T)  # orthonormal, (p_f, k)
         weights = np.linalg.norm(basis, axis=1)
-        bad = tuple(n for n, w in zip(names, weights, strict=True) if w > 1e-8)
+        bad = tuple(n for n, w in zip(arm.free_names, weights, strict=True) if w > 1e-8)
     display = arm.display_scale  # a direction in mm, rad shown in mm, deg
     null_rows = _row_echelon(null * display)
     # A poorly determined direction is only near the null space of a nearby plan:
@@ -270,7 +350,7 @@ def identifiability(
         joints = _joints_to_vary(arm, weak_rows, weak_drop)
     return Identifiability(
         rank=rank,
-        n_params=arm.n_params,
+        n_params=arm.n_free,
         singular_values=svd.singular_values,
         unidentifiable=bad,
         combinations=tuple(_combination(v, names) for v in null_rows),
@@ -325,7 +405,7 @@ def check_identifiable(
     """
     q = np.asarray(q, dtype=float)
     m = q.shape[0]
-    p = arm.n_params
+    p = arm.n_free
     min_poses = -(-p // 2)
     info = identifiability(arm, q, svd=svd)
     if info.identifiable:

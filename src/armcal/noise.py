@@ -1,0 +1,220 @@
+"""The measurement noise model, one definition for identification, design and simulation.
+
+An instrument measures the tip with a ``2 x 2`` covariance ``Sigma_meas`` (mm^2):
+isotropic ``sigma^2 I``, per axis ``diag(sx^2, sy^2)``, or a full matrix.  The
+joint encoders may add noise ``sigma_q`` (rad, per joint): the arm was really at
+``q + dq`` when the controller reported ``q``, so the measured tip moves by
+``J_q dq`` to first order (errors in variables), and pose ``i`` carries::
+
+    Sigma_i = Sigma_meas + J_q(q_i) diag(sigma_q^2) J_q(q_i)^T
+
+with ``J_q = d tip / d q`` at the current deviations (the user Jacobian's
+``dq`` columns: a joint offset and an encoder error move the tip alike).
+An instrument that reports each point's uncertainty replaces ``Sigma_meas`` by
+``s_i^2 I`` row by row.
+
+Everything downstream sees the noise through one *relative whitening*
+``W_i`` (:meth:`NoiseModel.whitening`) with ``W_i^T W_i = sigma_ref^2 Sigma_i^-1``:
+weighted least squares is ordinary least squares on ``W_i`` times the rows, and
+``cov = sigma_ref^2 (J_w^T J_w)^-1`` is the generalized-least-squares covariance.
+The reference ``sigma_ref`` (:attr:`NoiseModel.sigma_mm`) is the isotropic
+noise with the same information per pose averaged over orientations,
+``sqrt(2 / tr(Sigma_meas^-1))``: ``W = I`` for isotropic noise, so every result
+of the isotropic model is unchanged.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import TYPE_CHECKING
+
+import numpy as np
+from numpy.typing import ArrayLike
+
+if TYPE_CHECKING:
+    from .arm import PlanarArm
+
+__all__ = [
+    "NoiseModel",
+]
+
+
+def _spd2(matrix: np.ndarray) -> bool:
+    """Whether a ``2 x 2`` matrix is symmetric positive definite and finite."""
+    a, b, c, d = matrix[0, 0], matrix[0, 1], matrix[1, 0], matrix[1, 1]
+    finite = bool(np.all(np.isfinite(matrix)))
+    return finite and abs(b - c) <= 1e-12 * max(abs(a), abs(d)) and a > 0 and a * d - b * c > 0
+
+
+@dataclass(frozen=True, eq=False, init=False)
+class NoiseModel:
+    """Instrument and encoder noise of the measurements.
+
+    Parameters
+    ----------
+    covariance_mm2 : array_like, shape (2, 2)
+        Covariance of a measured position in mm^2 (symmetric positive definite).
+    joint_sigma : float or array_like of shape (n,), optional
+        Encoder noise (1 std) in rad, one value for every joint or one per joint.
+
+    Examples
+    --------
+    >>> noise = NoiseModel.per_axis(0.08, 0.02)
+    >>> round(noise.sigma_mm, 6), noise.isotropic_iid
+    (0.027442, False)
+    >>> NoiseModel.isotropic(0.1).whitening(None, np.zeros((1, 2))).tolist()
+    [[[1.0, 0.0], [0.0, 1.0]]]
+    """
+
+    covariance_mm2: np.ndarray
+    joint_sigma: np.ndarray | None
+
+    def __init__(self, covariance_mm2: ArrayLike, joint_sigma: ArrayLike | None = None) -> None:
+        cov = np.array(covariance_mm2, dtype=float)
+        if cov.shape != (2, 2) or not _spd2(cov):
+            raise ValueError(
+                "covariance_mm2 must be a symmetric positive definite 2 x 2 matrix, "
+                f"got {cov.tolist()}"
+            )
+        cov = (cov + cov.T) / 2
+        cov.flags.writeable = False
+        js = None
+        if joint_sigma is not None:
+            js = np.atleast_1d(np.array(joint_sigma, dtype=float))
+            if js.ndim != 1 or not np.all(np.isfinite(js) & (js >= 0)):
+                raise ValueError(f"joint_sigma must be finite and >= 0, got {js.tolist()}")
+            if not np.any(js > 0):
+                js = None
+            else:
+                js.flags.writeable = False
+        object.__setattr__(self, "covariance_mm2", cov)
+        object.__setattr__(self, "joint_sigma", js)
+
+    @classmethod
+    def isotropic(cls, sigma_mm: float, joint_sigma: ArrayLike | None = None) -> NoiseModel:
+        """``sigma^2 I``: the same noise along every direction (the paper's model)."""
+        return cls(np.eye(2) * float(sigma_mm) ** 2, joint_sigma)
+
+    @classmethod
+    def per_axis(
+        cls, sx_mm: float, sy_mm: float, joint_sigma: ArrayLike | None = None
+    ) -> NoiseModel:
+        """``diag(sx^2, sy^2)``: independent noise per instrument axis."""
+        return cls(np.diag([float(sx_mm) ** 2, float(sy_mm) ** 2]), joint_sigma)
+
+    @property
+    def sigma_mm(self) -> float:
+        """The reference noise ``sqrt(2 / tr(Sigma_meas^-1))`` (mm): ``sigma`` when isotropic."""
+        return float(np.sqrt(2.0 / np.trace(np.linalg.inv(self.covariance_mm2))))
+
+    @property
+    def isotropic_instrument(self) -> bool:
+        """Whether ``Sigma_meas`` is a multiple of the identity."""
+        c = self.covariance_mm2
+        return bool(c[0, 1] == 0 and c[0, 0] == c[1, 1])
+
+    @property
+    def isotropic_iid(self) -> bool:
+        """Isotropic instrument noise and no encoder noise: the paper's assumption."""
+        return self.isotropic_instrument and self.joint_sigma is None
+
+    def with_instrument_sigma(self, sigma_mm: float) -> NoiseModel:
+        """The same encoder noise with isotropic instrument noise ``sigma_mm``."""
+        return NoiseModel.isotropic(sigma_mm, self.joint_sigma)
+
+    def check_joints(self, n: int) -> None:
+        """Raise ValueError unless ``joint_sigma`` fits an arm of ``n`` joints."""
+        if self.joint_sigma is not None and self.joint_sigma.size not in (1, n):
+            raise ValueError(
+                f"joint_sigma must have 1 or {n} values for {n} joints, "
+                f"got {self.joint_sigma.size}"
+            )
+
+    def pose_covariances(
+        self,
+        arm: PlanarArm | None,
+        q: np.ndarray,
+        params: np.ndarray | None = None,
+        row_sigma: np.ndarray | None = None,
+    ) -> np.ndarray:
+        """``Sigma_i`` ``(..., m, 2, 2)`` in mm^2 of every pose of ``q`` ``(..., m, n)``.
+
+        ``params`` (user deviations, ``(p,)`` or ``(..., p)``) is where the encoder
+        term is linearized (nominal when omitted); ``row_sigma`` ``(m,)`` (mm)
+        replaces the instrument covariance row by row.
+        """
+        q = np.asarray(q, dtype=float)
+        shape = q.shape[:-1]
+        if row_sigma is None:
+            base = np.broadcast_to(self.covariance_mm2, (*shape, 2, 2))
+        else:
+            base = np.asarray(row_sigma, dtype=float)[..., None, None] ** 2 * np.eye(2)
+        if self.joint_sigma is None:
+            return np.broadcast_to(base, (*np.broadcast_shapes(shape, base.shape[:-2]), 2, 2))
+        from .arm import jacobian  # imported here: the arm module imports this one
+
+        assert arm is not None, "encoder noise needs the arm's Jacobian"
+
+        n = q.shape[-1]
+        j_q = jacobian(arm, q, params)[..., n : 2 * n]  # d tip / d q_j, (..., m, 2, n)
+        scaled = j_q * np.broadcast_to(self.joint_sigma, (n,))
+        return base + scaled @ np.swapaxes(scaled, -1, -2)
+
+    def whitening(
+        self,
+        arm: PlanarArm | None,
+        q: np.ndarray,
+        params: np.ndarray | None = None,
+        row_sigma: np.ndarray | None = None,
+    ) -> np.ndarray:
+        """Relative whitening ``W_i`` ``(..., m, 2, 2)``: ``W_i^T W_i = sigma_ref^2 Sigma_i^-1``.
+
+        ``W_i = sigma_ref L_i^-1`` for the Cholesky factor ``Sigma_i = L_i L_i^T``,
+        in closed form (lower triangular).  The identity for isotropic noise.
+        """
+        cov = self.pose_covariances(arm, q, params, row_sigma)
+        return whitening_from_covariance(cov, self.sigma_mm)
+
+    def to_dict(self) -> dict[str, object]:
+        """JSON form: ``covariance_mm2`` and ``joint_sigma_deg`` (null without encoder noise)."""
+        return {
+            "covariance_mm2": self.covariance_mm2.tolist(),
+            "joint_sigma_deg": None
+            if self.joint_sigma is None
+            else np.degrees(self.joint_sigma).tolist(),
+        }
+
+
+def whitening_from_covariance(cov: np.ndarray, reference: float) -> np.ndarray:
+    """``reference * L^-1`` ``(..., 2, 2)`` for ``cov = L L^T`` (closed-form Cholesky)."""
+    a = cov[..., 0, 0]
+    b = cov[..., 1, 0]
+    c = cov[..., 1, 1]
+    l11 = np.sqrt(a)
+    l21 = b / l11
+    l22 = np.sqrt(c - l21**2)
+    w = np.zeros(cov.shape)
+    w[..., 0, 0] = reference / l11
+    w[..., 1, 1] = reference / l22
+    w[..., 1, 0] = -reference * l21 / (l11 * l22)
+    return w
+
+
+def complex_whitening(w: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """``(alpha, beta)`` ``(...)`` with ``W (x, y) = alpha z + beta conj(z)`` for ``z = x + i y``.
+
+    Every real-linear map of the plane acts on complex numbers this way, which
+    keeps the complex-column form of the Jacobian (:mod:`armcal.observability`)
+    for weighted models.
+
+    Examples
+    --------
+    >>> alpha, beta = complex_whitening(np.array([[2.0, 0.0], [0.0, 1.0]]))
+    >>> z = 1 + 2j
+    >>> complex(alpha * z + beta * np.conj(z))
+    (2+2j)
+    """
+    w11, w12, w21, w22 = w[..., 0, 0], w[..., 0, 1], w[..., 1, 0], w[..., 1, 1]
+    alpha = ((w11 + w22) + 1j * (w21 - w12)) / 2
+    beta = ((w11 - w22) + 1j * (w21 + w12)) / 2
+    return alpha, beta
