@@ -61,8 +61,8 @@ class NoiseModel:
     --------
     >>> noise = NoiseModel.per_axis(0.08, 0.02)
     >>> round(noise.sigma_mm, 6), noise.isotropic_iid
-    (0.027442, False)
-    >>> NoiseModel.isotropic(0.1).whitening(None, np.zeros((1, 2))).tolist()
+    (0.02744, False)
+    >>> (NoiseModel.isotropic(0.1).whitening(None, np.zeros((1, 2))) + 0.0).tolist()  # no -0.0
     [[[1.0, 0.0], [0.0, 1.0]]]
     """
 
