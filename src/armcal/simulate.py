@@ -1,12 +1,19 @@
-"""Monte Carlo accuracy studies, random-plan studies and the number of poses a target needs.
+"""Simulated measurements, Monte Carlo accuracy studies and random-plan studies.
 
+* :func:`synthesize_measurements` -- the one place noise is drawn: instrument
+  noise ``N(0, Sigma_meas)`` and encoder noise through the exact tip at the
+  joints' true angles (the noise model of :mod:`armcal.noise`);
 * :func:`monte_carlo` -- ``N`` noisy measurement sets of one plan, identified
   together (one batched solve per chunk of trials), against the predicted
-  covariance ``sigma^2 (J^T J)^-1`` (paper eq. 16);
+  covariance: ``sigma^2 (J^T J)^-1`` (paper eq. 16) for isotropic iid noise,
+  the generalized-least-squares covariance of the free parameters otherwise;
 * :func:`random_plan_study` -- the paper's Figure 1 criteria and the predicted
-  accuracy of many random plans at once;
-* :func:`poses_needed` -- the smallest number of poses whose best plan reaches
-  a target accuracy, by search over ``m``.
+  accuracy of many random plans at once.
+
+One rule for ``sigma`` everywhere here (as ``--sigma`` on the command line):
+given, it is the instrument's isotropic noise and replaces the arm's
+instrument covariance, the arm's encoder noise kept; omitted, the arm's noise
+model is used as it is (:func:`simulated_noise`).
 
 Memory is bounded by the chunk size, not by the number of trials: empirical
 moments are merged chunk by chunk (Chan et al.'s pairwise update), the mean
@@ -23,10 +30,18 @@ from dataclasses import dataclass
 import numpy as np
 
 from .arm import PlanarArm, forward_kinematics, jacobian, link_angles, link_phasors
-from .criteria import CRITERIA, dstar, inverse_information_batch, position_rms, std_from_covariance
+from .criteria import (
+    CRITERIA,
+    dstar,
+    inverse_information_batch,
+    model_singular_values,
+    position_rms,
+    std_from_covariance,
+)
 from .doe.plans import random_plan
-from .errors import ArmcalError
+from .errors import ArmcalError, ArmcalWarning
 from .identification import METHODS
+from .noise import NoiseModel
 from .observability import check_identifiable, plan_svd
 from .progress import ProgressCallback
 
@@ -38,6 +53,7 @@ __all__ = [
     "PositionErrors",
     "monte_carlo",
     "random_plan_study",
+    "simulated_noise",
     "synthesize_measurements",
 ]
 
@@ -249,12 +265,15 @@ class MonteCarlo:
     Attributes
     ----------
     arm : PlanarArm
+        The arm as simulated: its noise model is the one the noise was drawn
+        from (:func:`simulated_noise`), its fixed parameters those held at 0.
     q : ndarray, shape (m, n)
         The plan (rad).
     truth : ndarray, shape (p,)
         Deviations of the virtual robot (mm, rad).
     sigma_mm : float
-        Isotropic noise of each coordinate (mm).
+        The instrument noise (mm): ``sigma`` when given, else the noise model's
+        reference ``sqrt(2 / tr(Sigma_meas^-1))`` (the isotropic sigma when isotropic).
     method : str
         Solver (key of :data:`armcal.identification.METHODS`).
     trials : int
@@ -263,13 +282,19 @@ class MonteCarlo:
     covariance : ndarray, shape (p, p)
         Empirical covariance of the estimates (``ddof=1``; mm, rad).
     predicted_covariance : ndarray, shape (p, p)
-        ``sigma^2 (J^T J)^-1`` at the truth (mm, rad).
+        The generalized-least-squares covariance at the truth,
+        ``sigma_ref^2 (J_w^T J_w)^-1`` over the free parameters (zero rows and
+        columns for fixed ones); ``sigma^2 (J^T J)^-1`` (paper eq. 16) for
+        isotropic iid noise.
     position : PositionErrors or None
         Tip errors of the calibrated model at the test poses (None without test poses).
     not_converged : int
         Trials where Gauss-Newton hit its iteration cap (0 for the closed form).
     seconds : float
         Wall time of the Monte Carlo itself.
+    warnings : tuple of ArmcalWarning
+        ``fixed-not-nominal`` when the truth moves a parameter the model holds
+        fixed (the fit is then misspecified, and the bias shows by how much).
     """
 
     arm: PlanarArm
@@ -284,6 +309,7 @@ class MonteCarlo:
     position: PositionErrors | None
     not_converged: int
     seconds: float
+    warnings: tuple[ArmcalWarning, ...] = ()
 
     @property
     def names(self) -> tuple[str, ...]:
@@ -310,14 +336,54 @@ class MonteCarlo:
         return 4.0 * self.predicted_std / math.sqrt(self.trials)
 
 
+def _fixed_truth_warning(arm: PlanarArm, truth: np.ndarray) -> tuple[ArmcalWarning, ...]:
+    moved = [
+        f"{name} = {value:g} {unit}"
+        for name, unit, value, free in zip(
+            arm.param_names, arm.param_units, truth * arm.display_scale, arm.free, strict=True
+        )
+        if not free and value != 0
+    ]
+    if not moved:
+        return ()
+    return (
+        ArmcalWarning(
+            "fixed-not-nominal",
+            f"the truth has {', '.join(moved)}, but the model holds "
+            f"{'it' if len(moved) == 1 else 'them'} at 0: every fit is misspecified and the "
+            "bias shows the effect; to simulate a known parameter, put its value into the "
+            "nominal arm and give it 0 in the truth",
+        ),
+    )
+
+
+def _floats_per_trial(arm: PlanarArm, m: int, method: str) -> int:
+    """Floats of working arrays a trial holds in one chunk (sets the chunk size)."""
+    n, p = arm.n_joints, arm.n_params
+    encoder = arm.noise is not None and arm.noise.joint_sigma is not None
+    if method == "closed-form" and not encoder:
+        # Noise and positions (2 x 2m) and the estimates (a few p): every set shares one
+        # factorization (whitened alike when the noise is anisotropic).  The chunks are
+        # then large enough that the command's default 10^4 trials are one solve.
+        return 2 * m * 3 + 4 * p
+    if arm.standard:
+        # Gauss-Newton also holds Jacobian-sized products (3 x 2m p).
+        return 2 * m * (3 * p + 2)
+    # Weighted or reduced models solve set by set: whitening (4m), whitened Jacobian
+    # and regressor rows with their factorization (a few 2m p); encoder noise draws
+    # and evaluates the tip at q + dq (a few m n).  Measured peaks stay below
+    # CHUNK_BYTES for m = 20 and 100 on the 4-link arm.
+    return 2 * m * (5 * p + 6) + (8 * m * n if encoder else 0)
+
+
 def monte_carlo(
     arm: PlanarArm,
     q: np.ndarray,
     truth: np.ndarray,
-    sigma: float,
+    sigma: float | None,
     trials: int,
     *,
-    method: str = "closed-form",
+    method: str = "auto",
     rng: np.random.Generator | int | None = None,
     test_q: np.ndarray | None = None,
     progress: ProgressCallback | None = None,
@@ -327,16 +393,21 @@ def monte_carlo(
     Parameters
     ----------
     arm : PlanarArm
+        The nominal arm: its noise model and fixed parameters are the model
+        simulated and identified.
     q : ndarray, shape (m, n)
-        The plan (rad); must identify every parameter.
+        The plan (rad); must identify every free parameter.
     truth : ndarray, shape (p,)
         Deviations of the virtual robot (mm, rad).
-    sigma : float
-        Noise std of each measured coordinate (mm), iid normal.
+    sigma : float or None
+        Isotropic instrument noise (1 std, mm) overriding the arm's, the arm's
+        encoder noise kept; None uses the arm's noise model as it is
+        (:func:`simulated_noise`).
     trials : int
         Number of measurement sets.
-    method : {"closed-form", "gauss-newton"}
-        Solver; every chunk of trials is one batched call of it.
+    method : {"auto", "closed-form", "gauss-newton"}
+        Solver; every chunk of trials is one batched call of it.  ``"auto"`` is
+        the closed form when every parameter is free, else Gauss-Newton.
     rng : numpy.random.Generator or int or None
         Noise source; the same seed gives the same result.
     test_q : ndarray, shape (k, n), optional
@@ -351,10 +422,22 @@ def monte_carlo(
     Raises
     ------
     NotIdentifiableError
-        If the plan cannot identify every parameter.
+        If the plan cannot identify every free parameter.
+    ArmcalError
+        For fewer than 2 trials, no noise (or a ``sigma`` that is not positive and
+        finite), an unknown method, or the closed form asked for a model with
+        fixed parameters.
 
     Notes
     -----
+    The noise is drawn by :func:`synthesize_measurements` from the model's
+    noise (instrument covariance and encoder noise, the latter exactly, through
+    the tip at ``q + dq``), and every set is identified by the solver
+    :data:`armcal.identification.METHODS` ``[method]`` on the model (weighted,
+    over the free parameters).  The prediction is the generalized-least-squares
+    covariance at the truth (:func:`armcal.criteria.inverse_information_batch`),
+    to which the estimates' covariance tends for small noise.
+
     Tip errors at the test poses (:class:`PositionErrors`) cost O(N + k), not
     O(N k):
 
@@ -363,7 +446,9 @@ def monte_carlo(
       ``u_{n+1} = 1``), so the squared error of a trial at ``x`` is
       ``|u(x)^T dz|^2`` and its mean over the N trials and k test poses is
       ``tr(S G)`` with ``S = mean_trials dz dz^H`` and ``G = mean_x conj(u(x))
-      u(x)^T``.  Only the ``(n + 1, n + 1)`` matrix ``S`` is accumulated.
+      u(x)^T``.  Only the ``(n + 1, n + 1)`` matrix ``S`` is accumulated.  A
+      fixed parameter is 0 in every estimate, and its rows of the predicted
+      covariance are 0, so both sides hold for reduced models as they are.
     * **Quantiles, from a subsample.**  With at most
       :data:`POSITION_SUBSAMPLE` pairs every error is kept and the quantiles are
       exact.  Otherwise ``B = POSITION_SUBSAMPLE`` pairs are drawn uniformly with
@@ -385,40 +470,49 @@ def monte_carlo(
     True
     """
     q = np.asarray(q, dtype=float)
-    truth = np.asarray(truth, dtype=float)
+    truth = _checked_truth(arm, truth)
+    if method == "auto":
+        method = "closed-form" if arm.free.all() else "gauss-newton"
     if method not in METHODS:
-        raise ArmcalError(f"unknown method {method!r}; choose one of {', '.join(METHODS)}")
+        raise ArmcalError(f"unknown method {method!r}; choose one of auto, {', '.join(METHODS)}")
+    if method == "closed-form" and not arm.free.all():
+        raise ArmcalError(
+            f"the closed form needs every parameter free, but {', '.join(arm.fixed)} "
+            f"{'is' if len(arm.fixed) == 1 else 'are'} fixed; use method gauss-newton or auto"
+        )
     if trials < 2:
         raise ArmcalError(f"a Monte Carlo needs at least 2 trials, got {trials}")
-    if not (sigma > 0 and math.isfinite(sigma)):
+    if sigma is not None and not (sigma > 0 and math.isfinite(sigma)):
         raise ArmcalError(f"a Monte Carlo needs a positive noise sigma (mm), got {sigma}")
-    svd = plan_svd(arm, q)
-    check_identifiable(arm, q, svd=svd)
+    noise = simulated_noise(arm, sigma)
+    model = arm.replace(noise=noise)
+    reference = float(sigma) if sigma is not None else noise.sigma_mm
+    svd = plan_svd(model, q)
+    check_identifiable(model, q, svd=svd)
     rng = np.random.default_rng(rng)
-    inverse, ok = inverse_information_batch(arm, q, truth, svd=svd)
+    inverse, ok = inverse_information_batch(model, q, truth, svd=svd)
     if not ok:
         raise ArmcalError("the plan cannot identify every parameter at the given truth")
-    predicted = sigma**2 * inverse
+    predicted = reference**2 * inverse
     m, p = q.shape[0], arm.n_params
-    # Floats per trial: noise and positions (2 x 2m) and the estimates (a few p); Gauss-Newton
-    # also holds Jacobian-sized products (3 x 2m p).  The closed form's chunks are then large
-    # enough that the command's default 10^4 trials are one solve.
-    per_trial = 2 * m * (3 * p + 2) if method == "gauss-newton" else 2 * m * 3 + 4 * p
-    chunk = _chunk_size(per_trial, trials)
+    chunk = _chunk_size(_floats_per_trial(model, m, method), trials)
     moments = _Moments(p)
+    # Moments about the truth keep round-off small; a fixed parameter is 0 in every
+    # estimate, so about 0 its mean and scatter are exactly 0 even when the truth moves it.
+    centre = truth * model.free
     positions = None
     if test_q is not None:
         sampler = rng.spawn(1)[0]  # leaves the noise stream as it is without test poses
-        positions = _PositionAccumulator(arm, test_q, truth, predicted, trials, sampler)
+        positions = _PositionAccumulator(model, test_q, truth, predicted, trials, sampler)
     not_converged = 0
     start = time.perf_counter()
     done = 0
     while done < trials:
         size = min(chunk, trials - done)
-        xy = synthesize_measurements(arm, q, truth, sigma, rng=rng, trials=size)
-        estimates, _, converged = METHODS[method](arm, q, xy)
+        xy = synthesize_measurements(model, q, truth, sigma, rng=rng, trials=size)
+        estimates, _, converged = METHODS[method](model, q, xy)
         not_converged += int(np.size(converged) - np.count_nonzero(converged))
-        moments.add(estimates - truth)  # deviations from the truth keep round-off small
+        moments.add(estimates - centre)
         if positions is not None:
             positions.add(estimates)
         done += size
@@ -426,18 +520,19 @@ def monte_carlo(
             progress(done, trials)
     seconds = time.perf_counter() - start
     return MonteCarlo(
-        arm=arm,
+        arm=model,
         q=q,
         truth=truth,
-        sigma_mm=float(sigma),
+        sigma_mm=reference,
         method=method,
         trials=int(trials),
-        mean=truth + moments.mean,
+        mean=centre + moments.mean,
         covariance=moments.covariance(),
         predicted_covariance=predicted,
         position=None if positions is None else positions.result(),
         not_converged=not_converged,
         seconds=seconds,
+        warnings=_fixed_truth_warning(model, truth),
     )
 
 
@@ -448,20 +543,28 @@ class PlanStudy:
     Attributes
     ----------
     arm : PlanarArm
+        The arm as studied, with the noise model of the predictions
+        (:func:`simulated_noise`).
     n_poses : int
         Poses per plan.
     sigma_mm : float
-        Noise (mm) for the predicted std.
+        Instrument noise (mm) for the predicted std: ``sigma`` when given, else
+        the noise model's reference.
     det_d : ndarray, shape (N,)
         ``det D'``: determinant of the Hadamard-normalized information matrix,
-        ``= d_efficiency ** p`` (1 for an orthogonal plan).
+        ``= d_efficiency ** p`` (1 for an orthogonal plan).  For a weighted or
+        reduced model, the determinant of its information matrix ``H^T H``
+        (:func:`armcal.observability.scaled_jacobian`, ``p_f x p_f``), which
+        compares plans of that model but is no longer at most 1.
     det_c : ndarray, shape (N,)
         ``det C'`` with ``C' = C / m`` (eq. 20 corrected, see :class:`~armcal.criteria.DStar`).
+        The paper's D* assumes isotropic iid noise and every parameter free: it
+        ignores the noise model and the fixed parameters.
     abs_det_s : ndarray, shape (N,)
-        ``|det S'|`` with ``S' = S / m``.
+        ``|det S'|`` with ``S' = S / m`` (the same caveat).
     std : ndarray, shape (N, p)
-        Predicted std of the user parameters (mm, deg); ``inf`` rows for plans that
-        cannot identify the parameters.
+        Predicted std of the user parameters (mm, deg), 0 for fixed ones;
+        ``inf`` rows for plans that cannot identify the parameters.
     position_rms : ndarray, shape (N,)
         Predicted RMS tip error after calibration at the test poses (mm; ``inf``
         if not identifiable).
@@ -486,7 +589,7 @@ def random_plan_study(
     poses: int,
     plans: int,
     *,
-    sigma: float,
+    sigma: float | None = None,
     rng: np.random.Generator | int | None = None,
     test_q: np.ndarray | None = None,
     progress: ProgressCallback | None = None,
@@ -494,7 +597,8 @@ def random_plan_study(
     """Evaluate ``plans`` random plans of ``poses`` poses (uniform within the joint limits).
 
     Every plan's criteria and predicted std are computed in batches of plans
-    (one stacked SVD per batch), not one plan at a time.
+    (one stacked SVD per batch), not one plan at a time, on the arm's model:
+    its noise (weighted information) and its free parameters.
 
     Parameters
     ----------
@@ -503,8 +607,9 @@ def random_plan_study(
         Poses per plan.
     plans : int
         Number of random plans.
-    sigma : float
-        Noise std (mm).
+    sigma : float, optional
+        Isotropic instrument noise (mm) overriding the arm's, its encoder noise
+        kept; the arm's noise model when omitted (:func:`simulated_noise`).
     rng : numpy.random.Generator or int or None
     test_q : ndarray, shape (k, n), optional
         Poses for the positioning error (default: 1000 uniform within the limits).
@@ -515,6 +620,12 @@ def random_plan_study(
     -------
     PlanStudy
 
+    Raises
+    ------
+    ArmcalError
+        If ``sigma`` is not positive and finite, or is omitted for an arm
+        without a noise model.
+
     Examples
     --------
     >>> study = random_plan_study(PlanarArm([260.0, 180.0, 120.0, 100.0]), 10, 500,
@@ -522,33 +633,39 @@ def random_plan_study(
     >>> bool(np.all(study.det_d < 1)), bool(np.all(study.det_c < 1))
     (True, True)
     """
+    noise = simulated_noise(arm, sigma)
+    model = arm.replace(noise=noise)
+    reference = float(sigma) if sigma is not None else noise.sigma_mm
     rng = np.random.default_rng(rng)
     test_q = random_plan(arm, 1000, rng=rng) if test_q is None else np.asarray(test_q, dtype=float)
-    p = arm.n_params
-    chunk = _chunk_size(2 * poses * p * 4, plans)
+    p = model.n_free
+    chunk = _chunk_size(2 * poses * arm.n_params * 4, plans)
     parts: dict[str, list[np.ndarray]] = {key: [] for key in ("d", "c", "s", "std", "pos")}
     done = 0
     while done < plans:
         size = min(chunk, plans - done)
         q = random_plan(arm, size * poses, rng=rng).reshape(size, poses, arm.n_joints)
         # One SVD per plan serves det D' (the product of the squared singular values,
-        # 0 for plans the rank policy calls singular) and the covariance.
-        svd = plan_svd(arm, q)
-        parts["d"].append(CRITERIA["D"].from_singular_values(svd.truncated) ** p)
-        star = dstar(arm, q)
+        # 0 for plans the rank policy calls singular; a weighted or reduced model's
+        # unnormalized ones) and the covariance.
+        svd = plan_svd(model, q)
+        parts["d"].append(
+            CRITERIA["D"].from_singular_values(model_singular_values(model, q, svd)) ** p
+        )
+        star = dstar(model, q)
         parts["c"].append(star.det_c)
         parts["s"].append(star.abs_det_s)
-        inverse, _ = inverse_information_batch(arm, q, svd=svd)
-        parts["std"].append(std_from_covariance(arm, sigma**2 * inverse))
-        parts["pos"].append(position_rms(arm, inverse, test_q, sigma))
+        inverse, _ = inverse_information_batch(model, q, svd=svd)
+        parts["std"].append(std_from_covariance(model, reference**2 * inverse))
+        parts["pos"].append(position_rms(model, inverse, test_q, reference))
         done += size
         if progress is not None:
             progress(done, plans)
     joined = {key: np.concatenate(value) for key, value in parts.items()}
     return PlanStudy(
-        arm=arm,
+        arm=model,
         n_poses=int(poses),
-        sigma_mm=float(sigma),
+        sigma_mm=reference,
         det_d=joined["d"],
         det_c=joined["c"],
         abs_det_s=joined["s"],
@@ -557,16 +674,118 @@ def random_plan_study(
     )
 
 
+def simulated_noise(arm: PlanarArm, sigma: float | None) -> NoiseModel:
+    """The noise model a simulation of ``arm`` draws from, with ``sigma`` as the instrument.
+
+    ``sigma`` (mm) overrides the instrument, as ``--sigma`` does: the
+    instrument covariance becomes ``sigma^2 I`` and the arm's encoder noise
+    stays (:meth:`armcal.noise.NoiseModel.with_instrument_sigma`).  Without
+    ``sigma`` the arm's own noise model is used as it is: its instrument
+    covariance (isotropic, per axis or full) and its encoder noise.
+
+    Parameters
+    ----------
+    arm : PlanarArm
+    sigma : float or None
+        Isotropic instrument noise (1 std, mm), positive and finite, or None.
+
+    Returns
+    -------
+    NoiseModel
+
+    Raises
+    ------
+    ArmcalError
+        If ``sigma`` is not positive and finite, or is None and the arm has no
+        noise model.
+
+    Examples
+    --------
+    >>> from armcal.noise import NoiseModel
+    >>> arm = PlanarArm([2.0, 1.0], noise=NoiseModel.per_axis(0.08, 0.02, joint_sigma=1e-4))
+    >>> simulated_noise(arm, None) is arm.noise
+    True
+    >>> noise = simulated_noise(arm, 0.05)
+    >>> noise.covariance_mm2.round(6).tolist(), noise.joint_sigma.tolist()
+    ([[0.0025, 0.0], [0.0, 0.0025]], [0.0001])
+    """
+    if sigma is None:
+        if arm.noise is None:
+            raise ArmcalError(
+                f"no measurement noise to simulate for {arm.name}: give the instrument "
+                "sigma (mm), or a [measurement] table in the robot file"
+            )
+        return arm.noise
+    if not (math.isfinite(sigma) and sigma > 0):
+        raise ArmcalError(
+            f"the instrument noise sigma must be positive and finite (mm), got {sigma}"
+        )
+    if arm.noise is None:
+        return NoiseModel.isotropic(sigma)
+    return arm.noise.with_instrument_sigma(sigma)
+
+
+def _checked_truth(arm: PlanarArm, truth: np.ndarray) -> np.ndarray:
+    """``truth`` as floats ``(p,)``; ArmcalError unless it is that shape and finite."""
+    values = np.asarray(truth, dtype=float)
+    if values.shape != (arm.n_params,) or not np.all(np.isfinite(values)):
+        names = ", ".join(arm.param_names)
+        raise ArmcalError(
+            f"the truth must hold {arm.n_params} finite deviations ({names}), "
+            f"got {values.tolist()}"
+        )
+    return values
+
+
+def _instrument_factor(
+    arm: PlanarArm, sigma: float | None, row_sigma: np.ndarray | None, m: int
+) -> float | np.ndarray:
+    """What multiplies standard normal draws ``z`` ``(..., m, 2)`` into instrument noise.
+
+    A number ``s`` (isotropic: ``s z``), a lower-triangular ``L`` ``(2, 2)`` with
+    ``L L^T = Sigma_meas`` (``L z`` per pose), or per-row ``s_i`` ``(m, 1)``.
+    """
+    if row_sigma is not None:
+        rows = np.asarray(row_sigma, dtype=float)
+        if rows.shape != (m,) or not np.all(np.isfinite(rows) & (rows > 0)):
+            raise ArmcalError(
+                f"row_sigma must hold one positive, finite sigma (mm) per pose, shape ({m},), "
+                f"got shape {rows.shape}"
+            )
+        return rows[:, None]
+    if sigma is not None:
+        if not (math.isfinite(sigma) and sigma >= 0):
+            raise ArmcalError(f"the noise sigma must be finite and >= 0 (mm), got {sigma}")
+        return float(sigma)  # exactly as given: the same draws give the same data as ever
+    cov = simulated_noise(arm, None).covariance_mm2
+    if cov[0, 1] == 0 and cov[0, 0] == cov[1, 1]:
+        return float(np.sqrt(cov[0, 0]))
+    return np.linalg.cholesky(cov)
+
+
+def _scale_instrument(z: np.ndarray, factor: float | np.ndarray) -> None:
+    """Turn standard normal draws ``z`` ``(..., m, 2)`` into instrument noise, in place."""
+    if np.ndim(factor) == 2 and np.shape(factor) == (2, 2):
+        lower = np.asarray(factor)
+        # (x, y) = L (z0, z1) with L lower triangular: y first, while z0 is still z0.
+        z[..., 1] *= lower[1, 1]
+        z[..., 1] += lower[1, 0] * z[..., 0]
+        z[..., 0] *= lower[0, 0]
+    else:
+        z *= factor
+
+
 def synthesize_measurements(
     arm: PlanarArm,
     plan: np.ndarray,
     truth: np.ndarray,
-    sigma: float,
+    sigma: float | None = None,
     *,
     rng: np.random.Generator | int | None = None,
     trials: int | None = None,
+    row_sigma: np.ndarray | None = None,
 ) -> np.ndarray:
-    """Measurements of a virtual robot: positions at ``truth`` plus iid normal noise.
+    """Measurements of a virtual robot: positions at ``truth`` drawn from the noise model.
 
     The one place where armcal draws measurement noise (``armcal synthesize``,
     ``armcal demo`` and :func:`monte_carlo` all call it).
@@ -574,21 +793,53 @@ def synthesize_measurements(
     Parameters
     ----------
     arm : PlanarArm
+        The nominal arm; its noise model (:attr:`PlanarArm.noise`) gives the
+        shape of the instrument noise and the encoder noise.
     plan : ndarray, shape (m, n)
-        Joint angles in rad.
+        Joint angles in rad, as the controller reports them.
     truth : ndarray, shape (p,)
         Deviations of the virtual robot (mm, rad).
-    sigma : float
-        Noise std of each coordinate (mm); 0 gives noiseless data.
+    sigma : float, optional
+        Isotropic instrument noise (1 std, mm) that overrides the arm's
+        instrument covariance, as ``--sigma`` does; the arm's encoder noise
+        stays.  0 gives no instrument noise.  Without it the arm's noise model
+        is used as it is (see :func:`simulated_noise`).
     rng : numpy.random.Generator or int or None
         Noise source.
     trials : int, optional
         Draw this many independent measurement sets at once.
+    row_sigma : ndarray, shape (m,), optional
+        Per-row instrument noise (mm), for instruments that report each point's
+        uncertainty: pose ``i`` gets ``s_i^2 I`` in place of the instrument
+        covariance (and of ``sigma``).
 
     Returns
     -------
     ndarray, shape (m, 2) or (trials, m, 2)
         Measured positions in mm.
+
+    Raises
+    ------
+    ArmcalError
+        If there is no noise to draw (no ``sigma``, ``row_sigma`` or noise
+        model), or ``sigma``/``row_sigma`` are negative or not finite.
+
+    Notes
+    -----
+    Instrument noise is ``N(0, Sigma_meas)``, drawn as ``L z`` with
+    ``L L^T = Sigma_meas`` (Cholesky) and ``z`` standard normal; isotropic
+    noise is ``sigma z``, the draws armcal has always made, so a seed gives the
+    same data as before noise models existed.
+
+    Encoder noise (``joint_sigma`` of the noise model) is errors in variables:
+    the controller reports ``q`` but the arm was at ``q + dq`` with
+    ``dq ~ N(0, diag(sigma_q^2))`` per pose, so the clean position is the exact
+    ``p(q + dq, truth)``, not its linearization.  To first order the measured
+    position then has the covariance ``Sigma_meas + J_q diag(sigma_q^2) J_q^T``
+    that identification and the criteria assume
+    (:meth:`armcal.noise.NoiseModel.pose_covariances`).  With encoder noise each
+    pose draws ``2 + n`` standard normals at once (instrument, then joints), in
+    trial order, so sets drawn in chunks of trials equal those drawn at once.
 
     Examples
     --------
@@ -597,9 +848,26 @@ def synthesize_measurements(
     [[3.0, 0.0]]
     """
     rng = np.random.default_rng(rng)
-    clean = forward_kinematics(arm, plan, truth)
-    shape = clean.shape if trials is None else (trials, *clean.shape)
-    noisy = rng.standard_normal(shape)
-    noisy *= sigma  # in place: the noise is the largest array of a Monte Carlo chunk
-    noisy += clean
-    return noisy
+    plan = np.asarray(plan, dtype=float)
+    if plan.ndim != 2 or plan.shape[1] != arm.n_joints:
+        raise ArmcalError(f"the plan must have shape (m, {arm.n_joints}) in rad, got {plan.shape}")
+    truth = _checked_truth(arm, truth)
+    m, n = plan.shape
+    factor = _instrument_factor(arm, sigma, row_sigma, m)
+    joint_sigma = None if arm.noise is None else arm.noise.joint_sigma
+    sets = () if trials is None else (int(trials),)
+    if joint_sigma is None:
+        clean = forward_kinematics(arm, plan, truth)
+        noisy = rng.standard_normal((*sets, m, 2))
+        _scale_instrument(noisy, factor)  # in place: the noise is a Monte Carlo's largest array
+        noisy += clean
+        return noisy
+    draws = rng.standard_normal((*sets, m, 2 + n))
+    actual = draws[..., 2:]  # where the joints really were: q + dq
+    actual *= np.broadcast_to(joint_sigma, (n,))
+    actual += plan
+    positions = forward_kinematics(arm, actual, truth)
+    instrument = draws[..., :2]
+    _scale_instrument(instrument, factor)
+    positions += instrument
+    return positions
