@@ -48,6 +48,7 @@ from __future__ import annotations
 
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
+from functools import cached_property
 from typing import Any, Literal, cast
 
 import numpy as np
@@ -380,6 +381,7 @@ def solve_model(
     method: Method = "auto",
     tol: float = 1e-12,
     max_iter: int = 50,
+    check_plan: bool = True,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Weighted least squares over the free parameters of any model; batched over sets.
 
@@ -404,6 +406,8 @@ def solve_model(
     tol, max_iter
         A set has converged when its largest step moves the tip by less than
         ``tol`` times the reach (mm); iteration cap.
+    check_plan : bool
+        Check that the poses identify the model (skip only when the caller has).
 
     Returns
     -------
@@ -439,7 +443,8 @@ def solve_model(
         if pose_weights is None
         else np.any(np.atleast_2d(pose_weights) > 0, axis=0)
     )
-    check_identifiable(arm, q[used], svd=plan_svd(arm, q[used]))
+    if check_plan:
+        check_identifiable(arm, q[used], svd=plan_svd(arm, q[used]))
     all_free = bool(arm.free.all())
     if method == "closed-form" and not all_free:
         raise ArmcalError(
@@ -712,17 +717,50 @@ METHODS: dict[str, Callable[..., tuple[np.ndarray, Any, Any]]] = {
 HUBER_K = float(np.sqrt(-2.0 * np.log(0.05)))
 
 
-@dataclass(frozen=True, eq=False)
 class _Fit:
-    """One least-squares fit and everything the diagnostics need, for all m poses."""
+    """One least-squares fit and everything the diagnostics need, for all m poses.
 
-    params: np.ndarray
-    iterations: int
-    converged: bool
-    residuals: np.ndarray  # (m, 2) mm
-    whitened: np.ndarray  # (m, 2) W_i e_i, in mm of the reference noise
-    factor: np.ndarray  # (p_f, p_f) G with (J_w^T J_w)^-1 = G G^T over the used poses
-    leverage: np.ndarray  # (m, 2, 2) B_i B_i^T
+    ``factor`` (``G`` with ``(J_w^T J_w)^-1 = G G^T`` over the used poses) and
+    ``leverage`` (``B_i B_i^T``, ``(m, 2, 2)``) are computed on first use: the
+    robust iterations only need the residuals.
+    """
+
+    def __init__(
+        self,
+        problem: _Problem,
+        params: np.ndarray,
+        used: np.ndarray,
+        iterations: int,
+        converged: bool,
+    ) -> None:
+        arm, q = problem.arm, problem.q
+        self.params, self.used = params, used
+        self.iterations, self.converged = iterations, converged
+        self.residuals = problem.xy - forward_kinematics(arm, q, params)  # (m, 2) mm
+        w = _whitening(arm, q, params, problem.row_sigma, None)
+        if w is not None and problem.row_sigma is not None:  # to the rows' own reference
+            w = w * (_reference_sigma(arm, problem.row_sigma) / _model_noise(arm).sigma_mm)
+        self._w, self._arm, self._q = w, arm, q
+        # W_i e_i, in mm of the reference noise
+        self.whitened = self.residuals if w is None else (w @ self.residuals[:, :, None])[:, :, 0]
+
+    @cached_property
+    def _jacobian(self) -> np.ndarray:
+        arm = self._arm
+        return _apply(self._w, jacobian(arm, self._q, self.params)[..., arm.free])  # (m, 2, p_f)
+
+    @cached_property
+    def factor(self) -> np.ndarray:
+        svd = scaled_svd(self._jacobian[self.used].reshape(-1, self._arm.n_free))
+        factor, ok = svd.inverse_gram_factor()
+        if not bool(ok):  # identifiable at nominal, so only for absurd deviations
+            raise ArmcalError("the Jacobian is singular at the estimate; check the data")
+        return factor
+
+    @cached_property
+    def leverage(self) -> np.ndarray:
+        b = self._jacobian @ self.factor
+        return b @ np.swapaxes(b, -1, -2)
 
 
 class _Problem:
@@ -770,26 +808,10 @@ class _Problem:
             pose_weights=None if weights is None else weights[used],
             start=start if method == "gauss-newton" else None,
             method=cast(Method, method),
+            check_plan=False,
             **kwargs,
         )
         return params, int(steps), bool(done)
-
-    def evaluate(self, params: np.ndarray, used: np.ndarray, iterations: int, converged: bool):
-        """Residuals, whitened residuals and leverages of every pose against ``params``."""
-        arm, q = self.arm, self.q
-        residuals = self.xy - forward_kinematics(arm, q, params)
-        w = _whitening(arm, q, params, self.row_sigma, None)
-        if w is not None and self.row_sigma is not None:  # to the rows' own reference
-            w = w * (_reference_sigma(arm, self.row_sigma) / _model_noise(arm).sigma_mm)
-        whitened = residuals if w is None else (w @ residuals[:, :, None])[:, :, 0]
-        jac = _apply(w, jacobian(arm, q, params)[..., arm.free])  # (m, 2, p_f)
-        svd = scaled_svd(jac[used].reshape(-1, arm.n_free))
-        factor, ok = svd.inverse_gram_factor()
-        if not bool(ok):  # identifiable at nominal, so only for absurd deviations
-            raise ArmcalError("the Jacobian is singular at the estimate; check the data")
-        b = jac @ factor
-        leverage = b @ np.swapaxes(b, -1, -2)
-        return _Fit(params, iterations, converged, residuals, whitened, factor, leverage)
 
     def fit(
         self,
@@ -799,7 +821,7 @@ class _Problem:
         start: np.ndarray | None = None,
     ) -> _Fit:
         params, steps, done = self.solve(used, weights=weights, start=start)
-        return self.evaluate(params, used, steps, done)
+        return _Fit(self, params, used, steps, done)
 
 
 def _reference_sigma(arm: PlanarArm, row_sigma: np.ndarray | None) -> float:
