@@ -54,6 +54,7 @@ from typing import Any, Literal, cast
 import numpy as np
 
 from .arm import PlanarArm, forward_kinematics, jacobian, wrap_angle
+from .criteria import covariance_factor
 from .diagnostics import (
     FEW_DOF,
     OUTLIER_ALPHA,
@@ -740,7 +741,7 @@ class _Fit:
         w = _whitening(arm, q, params, problem.row_sigma, None)
         if w is not None and problem.row_sigma is not None:  # to the rows' own reference
             w = w * (_reference_sigma(arm, problem.row_sigma) / _model_noise(arm).sigma_mm)
-        self._w, self._arm, self._q = w, arm, q
+        self._w, self._arm, self._q, self._problem = w, arm, q, problem
         # W_i e_i, in mm of the reference noise
         self.whitened = self.residuals if w is None else (w @ self.residuals[:, :, None])[:, :, 0]
 
@@ -751,8 +752,13 @@ class _Fit:
 
     @cached_property
     def factor(self) -> np.ndarray:
-        svd = scaled_svd(self._jacobian[self.used].reshape(-1, self._arm.n_free))
-        factor, ok = svd.inverse_gram_factor()
+        if self._problem.plain and self.used.all():  # from the plan's own SVD
+            factor, ok = covariance_factor(
+                self._arm, self._q, self.params, self._problem.plan_factor.svd
+            )
+        else:
+            svd = scaled_svd(self._jacobian[self.used].reshape(-1, self._arm.n_free))
+            factor, ok = svd.inverse_gram_factor()
         if not bool(ok):  # identifiable at nominal, so only for absurd deviations
             raise ArmcalError("the Jacobian is singular at the estimate; check the data")
         return factor
@@ -778,6 +784,14 @@ class _Problem:
     ) -> None:
         self.arm, self.q, self.xy, self.row_sigma = arm, q, xy, row_sigma
         self.method, self.tol, self.max_iter = method, tol, max_iter
+        #: The plain case (paper's model, every pose, no weights) shares one thin QR
+        #: of the plan's regressor between the check, the solve and the covariance.
+        self.plain = arm.standard and row_sigma is None
+
+    @cached_property
+    def plan_factor(self) -> LinearLeastSquares:
+        """The plan's factorization (:func:`_factor`): raises if it is not identifiable."""
+        return _factor(self.arm, self.q)
 
     def _rows(self, used: np.ndarray) -> np.ndarray | None:
         return None if self.row_sigma is None else self.row_sigma[used]
@@ -792,7 +806,13 @@ class _Problem:
         """Deviations fitted to the poses in ``used`` (times ``weights``, if given)."""
         arm, q, xy = self.arm, self.q[used], self.xy[used]
         kwargs: dict[str, Any] = {"tol": self.tol, "max_iter": self.max_iter}
-        if weights is None and start is None and arm.standard and self.row_sigma is None:
+        if weights is None and start is None and self.plain and used.all():
+            v = _link_phasors_fit(self.plan_factor, xy[None])
+            if self.method == "closed-form":
+                return _closed_form_params(arm, v)[0], 1, True
+            fitted, steps, done = _gauss_newton(arm, v, **kwargs)
+            return fitted[0], int(steps[0]), bool(done[0])
+        if weights is None and start is None and self.plain:
             if self.method == "closed-form":
                 return solve_closed_form(arm, q, xy), 1, True
             params, steps, done = solve_gauss_newton(arm, q, xy, **kwargs)
@@ -1051,7 +1071,9 @@ def identify(
             else noise.with_instrument_sigma(sigma)
         )
     given = arm.noise is not None or row_sigma is not None
-    info = check_identifiable(arm, q, svd=plan_svd(arm, q))
+    problem = _Problem(arm, q, xy, row_sigma, method, tol, max_iter)
+    plan = problem.plan_factor.svd if problem.plain else plan_svd(arm, q)
+    info = check_identifiable(arm, q, svd=plan)
     dof_all = 2 * m - arm.n_free
     if not given and dof_all <= 0:
         raise ArmcalError(
@@ -1059,7 +1081,6 @@ def identify(
             f"{arm.n_free} parameters); give the instrument noise with --sigma or measure "
             "more poses"
         )
-    problem = _Problem(arm, q, xy, row_sigma, method, tol, max_iter)
     reference = _reference_sigma(arm, row_sigma)
     everyone = np.ones(m, dtype=bool)
     extra: list[ArmcalWarning] = []
