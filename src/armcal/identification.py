@@ -474,7 +474,7 @@ def solve_model(
                 w = _whitening(
                     arm,
                     q,
-                    params[active][:, None, :],
+                    params[active],  # (N, p): per-set whitening (N, m, 2, 2)
                     row_sigma,
                     pose_weights if weights is None else weights,
                 )
@@ -527,8 +527,8 @@ def _gauss_newton_model(
             if pose_weights is None or pose_weights.ndim == 1
             else pose_weights[active]
         )
-        w = _whitening(arm, q, current[:, None, :], row_sigma, weights)
-        jac = jacobian(arm, q, current[:, None, :])[..., free]  # (N, m, 2, p_f)
+        w = _whitening(arm, q, current, row_sigma, weights)
+        jac = jacobian(arm, q, current)[..., free]  # (N, m, 2, p_f)
         residual = sets[active] - forward_kinematics(arm, q, current)
         rows = _apply(w, jac).reshape(active.size, -1, arm.n_free)
         rhs = _apply(w, residual[..., None])[..., 0].reshape(active.size, -1)
