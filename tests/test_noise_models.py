@@ -18,7 +18,7 @@ import numpy as np
 import pytest
 from numpy.testing import assert_allclose
 
-from armcal import PlanarArm, forward_kinematics, identification
+from armcal import PlanarArm, forward_kinematics
 from armcal import simulate as sim
 from armcal.criteria import predicted_std
 from armcal.doe import random_plan
@@ -41,15 +41,6 @@ TRIALS = 5000
 #: 0; at sigma = 0.02 mm on links of 100-260 mm the relative second-order terms are
 #: ~ sigma / l ~ 1e-4, invisible at 5 %.
 MC_RTOL = 0.05
-
-# The Monte Carlo needs solvers that identify weighted and reduced models
-# (identification.solve_model, being added on main): until they are there these
-# tests are expected to fail, and strict=True makes them fail loudly once they pass.
-needs_model_solvers = pytest.mark.xfail(
-    not hasattr(identification, "solve_model"),
-    reason="identification.METHODS identify weighted and reduced models once solve_model lands",
-    strict=True,
-)
 
 
 def _jacobian_by_hand(lengths: np.ndarray, q: np.ndarray, params: np.ndarray) -> np.ndarray:
@@ -345,7 +336,6 @@ def _model_truth(arm: PlanarArm, truth: np.ndarray) -> np.ndarray:
     return truth * arm.free
 
 
-@needs_model_solvers
 @pytest.mark.parametrize(
     ("name", "method"),
     [
@@ -387,7 +377,6 @@ def test_monte_carlo_agrees_with_the_gls_prediction(arm4, paper_truth4, name, me
     assert_allclose(result.position.rms_mm, result.position.predicted_rms_mm, rtol=0.05)
 
 
-@needs_model_solvers
 def test_a_fixed_parameter_the_truth_moves_is_a_warning(arm4, paper_truth4):
     """dl4 fixed but the virtual robot's dl4 = 0.7 mm: misspecified, and said so."""
     arm = arm4.replace(sigma=SIGMA, fixed=("dl4",))
@@ -411,7 +400,6 @@ def test_standard_arm_gives_the_same_monte_carlo_with_its_noise_model(arm4, pape
     assert_allclose(own.predicted_covariance, given.predicted_covariance, rtol=1e-12)
 
 
-@needs_model_solvers
 def test_weighted_monte_carlo_is_chunked_without_changing_it(arm4, paper_truth4, monkeypatch):
     """Encoder noise, full covariance and a fixed parameter: drawn in trial order, so chunks
     of 2 MB give the moments of one chunk of 32 MB up to the round-off of solves batched
