@@ -1,4 +1,4 @@
-"""One call for an optimal plan: analytic if it fits, else optimize and exchange; certified."""
+"""One call for an optimal plan: analytic if it fits and is optimal, else optimize and exchange."""
 
 from __future__ import annotations
 
@@ -12,6 +12,7 @@ from ..criteria import CRITERIA, d_efficiency
 from ..errors import ArmcalError
 from .certificate import Certificate, certify
 from .exchange import exchange_plan
+from .model import attains_unit_bound, model_description, rotation_invariant
 from .optimizer import optimize_plan
 from .plans import analytic_plan, feasible_poses
 
@@ -35,6 +36,8 @@ class Design:
     Attributes
     ----------
     arm : PlanarArm
+        The arm and the model designed for: its noise model and fixed
+        parameters (:mod:`armcal.doe.model`).
     q : ndarray, shape (m, n)
         The plan's joint angles in rad.
     criterion : str
@@ -43,12 +46,18 @@ class Design:
         How the plan was made: ``analytic``, ``optimize``, ``optimize+exchange`` or
         ``exchange``.
     d_efficiency : float
-        ``(det F / det F_opt)^(1/p)``: relative to the unconstrained optimum.
+        :func:`armcal.criteria.d_efficiency` on the arm's model.  For the paper's
+        model ``(det F / det F_opt)^(1/p)``, relative to the unconstrained
+        optimum; wherever :func:`armcal.doe.model.unit_trace` holds at most 1,
+        and 1 only for a plan with identity normalized information; for other
+        models the weighted information's ``det^(1/p_f)``, which compares plans
+        of that model only (the certificate says how far from its optimum).
     certificate : Certificate or None
         Lower bound relative to the best plan within the constraints (None when
         not asked for).
     notes : tuple of str
-        Why a method was not used (e.g. the analytic plan breaks the limits).
+        Why a method was not used (e.g. the analytic plan breaks the limits), and
+        whether the paper's closed-form plans are optimal for the arm's model.
     """
 
     arm: PlanarArm
@@ -73,6 +82,43 @@ def _closed_form_note(arm: PlanarArm, m: int) -> str:
     )
 
 
+_PAPER_ASSUMES = (
+    "the paper's orthogonal plans and its D* criterion assume isotropic iid noise and every "
+    "parameter free"
+)
+
+
+def _closed_form_plans(arm: PlanarArm, m: int) -> tuple[list[np.ndarray], ArmcalError | None]:
+    """The closed-form orthogonal plans that fit, and why the paper's own does not (or None).
+
+    Besides the paper's family, the one with joint 1 stepping too when the
+    model is not invariant to turning joint 1 (anisotropic instrument noise):
+    for ``m > 2 n`` it is D-optimal there (:func:`analytic_plan`).
+    """
+    plans: list[np.ndarray] = []
+    failure: ArmcalError | None = None
+    try:
+        plans.append(analytic_plan(arm, m))
+    except ArmcalError as error:
+        failure = error
+    if not rotation_invariant(arm) and not arm.base_offset:
+        try:
+            plans.append(analytic_plan(arm, m, turn_joint1=True))
+        except ArmcalError:
+            pass
+    return plans, failure
+
+
+def _optimal_closed_form_note(arm: PlanarArm) -> str:
+    """Why a closed-form plan is D-optimal for a model that is not the paper's."""
+    return (
+        f"{model_description(arm)}: every pose's information over the {arm.n_free} free "
+        f"parameters still has trace {arm.n_free}, so no plan has a larger determinant than "
+        "the identity, which this closed-form orthogonal plan reaches: it is D-optimal for "
+        "this model"
+    )
+
+
 def design(
     arm: PlanarArm,
     m: int,
@@ -83,18 +129,20 @@ def design(
     candidates: np.ndarray | None = None,
     with_certificate: bool = True,
 ) -> Design:
-    """An optimal ``m``-pose plan within the arm's joint limits and measurement region.
+    """An optimal ``m``-pose plan for the arm's model, within its joint limits and region.
 
     Parameters
     ----------
     arm : PlanarArm
+        The arm, with the noise model and fixed parameters to design for.
     m : int
-        Number of poses; at least ``ceil(p / 2)``.
+        Number of poses; at least ``ceil(p_f / 2)`` for ``p_f`` free parameters.
     criterion : {"D", "A", "E"}
         Criterion to maximize (the certificate is always for D).
     method : {"auto", "analytic", "optimize", "exchange"}
-        ``auto`` takes the analytic plan when it fits the constraints, else
-        optimizes and (for D) polishes by exchange over feasible candidates.
+        ``auto`` takes a closed-form orthogonal plan when it fits the constraints
+        and is provably optimal for the model (below), else optimizes and (for
+        D) polishes by exchange over feasible candidates.
     rng : numpy.random.Generator or int or None
         The same seed gives the same plan.
     candidates : ndarray, shape (N, n), optional
@@ -107,40 +155,95 @@ def design(
     Returns
     -------
     Design
+
+    Raises
+    ------
+    ArmcalError
+        If ``m`` is too small for the free parameters, the criterion or method
+        is unknown, or ``method="analytic"`` and no closed-form plan fits.
+
+    Notes
+    -----
+    Every criterion is the model's (:mod:`armcal.doe.model`): the weighted
+    information over the free parameters.  The paper's orthogonal plans are
+    optimal for its model -- isotropic iid noise, every parameter free -- by
+    Hadamard's bound; ``auto`` takes a closed-form plan whenever the model keeps
+    that bound (:func:`armcal.doe.model.unit_trace`) and the plan reaches it,
+    which covers fixed lengths, base coordinates or leading offsets under
+    isotropic noise, and anisotropic instrument noise with every parameter free
+    (joint 1 stepping too, ``m > 2 n``).  Otherwise -- encoder noise, a fixed
+    ``dq_j`` that ties links together, fixed parameters under anisotropic noise,
+    or binding limits -- it optimizes on the model, starting also from the
+    closed-form plans, and a note says how much better than them the plan is.
     """
     if criterion not in CRITERIA:
         raise ArmcalError(f"unknown criterion {criterion!r}; choose one of {', '.join(CRITERIA)}")
     if method not in METHODS:
         raise ArmcalError(f"unknown method {method!r}; choose one of {', '.join(METHODS)}")
-    min_poses = -(-arm.n_params // 2)
+    p = arm.n_free
+    min_poses = -(-p // 2)
     if m < min_poses:
+        free = "" if p == arm.n_params else " free"
         raise ArmcalError(
-            f"{m} poses give {2 * m} equations for the {arm.n_params} parameters of {arm.name}; "
+            f"{m} poses give {2 * m} equations for the {p}{free} parameters of {arm.name}; "
             f"use --poses {min_poses} or more"
         )
     rng = np.random.default_rng(rng)
     notes: list[str] = []
     q: np.ndarray | None = None
     used: str = method
+    closed: list[np.ndarray] = []
     if method in ("auto", "analytic"):
-        try:
-            q, used = analytic_plan(arm, m), "analytic"
-        except ArmcalError:
+        closed, failure = _closed_form_plans(arm, m)
+        if not closed:
             if method == "analytic":
-                raise
+                assert failure is not None
+                raise failure
             notes.append(_closed_form_note(arm, m))
-    if q is None and method == "exchange":
+    best_closed, closed_d = None, 0.0
+    if closed:
+        scores = [float(d_efficiency(arm, plan)) for plan in closed]
+        best = int(np.argmax(scores))
+        best_closed, closed_d = closed[best], scores[best]
+    optimal_closed = best_closed is not None and attains_unit_bound(arm, best_closed)
+    if method == "analytic" or (method == "auto" and optimal_closed):
+        q, used = best_closed, "analytic"
+        if not arm.standard:
+            notes.append(
+                _optimal_closed_form_note(arm)
+                if optimal_closed
+                else f"{model_description(arm)}: {_PAPER_ASSUMES}; the closed-form plan is not "
+                f"D-optimal for this model (D-criterion {closed_d:.4f}); --method auto "
+                "optimizes for it"
+            )
+    elif method == "exchange":
         pool = feasible_poses(arm, 4000, rng=rng) if candidates is None else candidates
         q = exchange_plan(arm, m, pool, rng=rng)
         if criterion != "D":
             notes.append("exchange maximizes D; the plan was not tuned for " + criterion)
-    elif q is None:
-        q, used = optimize_plan(arm, m, criterion=criterion, rng=rng), "optimize"
+    else:
+        initial = np.stack(closed) if closed else None
+        q = optimize_plan(arm, m, criterion=criterion, rng=rng, initial=initial)
+        used = "optimize"
         if criterion == "D":
             pool = feasible_poses(arm, 4000, rng=rng) if candidates is None else candidates
             polished = exchange_plan(arm, m, pool, start=q, rng=rng)
             if float(d_efficiency(arm, polished)) > float(d_efficiency(arm, q)) * (1 + 1e-12):
                 q, used = polished, "optimize+exchange"
+        if best_closed is not None and closed_d > float(d_efficiency(arm, q)):
+            q, used = best_closed, "analytic"  # not expected: the optimizer starts from it
+        if not arm.standard:
+            designed = float(d_efficiency(arm, q))
+            against = (
+                f" (the closed-form plan reaches D-criterion {closed_d:.4f}, this plan "
+                f"{designed:.4f})"
+                if best_closed is not None
+                else ""
+            )
+            notes.append(
+                f"{model_description(arm)}: {_PAPER_ASSUMES}; they are not D-optimal for this "
+                f"model{against}, so the plan was optimized for it"
+            )
     q = np.asarray(q, dtype=float)
     return Design(
         arm=arm,

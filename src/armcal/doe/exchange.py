@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..arm import PlanarArm
-from ..observability import scaled_columns
+from ..observability import model_columns
 
 __all__ = [
     "exchange_plan",
@@ -13,8 +13,12 @@ __all__ = [
 
 
 def _blocks(arm: PlanarArm, q: np.ndarray) -> np.ndarray:
-    """Real scaled Jacobian blocks ``(k, 2, p)`` of poses ``q`` ``(k, n)``."""
-    columns = scaled_columns(arm, q)
+    """Real blocks ``(k, 2, p_f)`` of the model's columns of poses ``q`` ``(k, n)``.
+
+    ``F_x^T F_x`` is the information of pose ``x`` in the model
+    (:func:`armcal.observability.model_columns`: whitened, free parameters).
+    """
+    columns = model_columns(arm, q)
     return np.stack([columns.real, columns.imag], axis=-2)
 
 
@@ -27,7 +31,7 @@ def exchange_plan(
     rng: np.random.Generator | int | None = None,
     max_swaps: int = 1000,
 ) -> np.ndarray:
-    """Modified Fedorov exchange for the D-criterion over a candidate set.
+    """Modified Fedorov exchange for the D-criterion of the arm's model over a candidate set.
 
     Parameters
     ----------
@@ -67,7 +71,7 @@ def exchange_plan(
         candidates = np.concatenate([np.asarray(start, dtype=float), candidates])
         index = np.arange(m)
     blocks = _blocks(arm, candidates)  # (N, 2, p)
-    eye2, p = np.eye(2), arm.n_params
+    eye2, p = np.eye(2), arm.n_free
     ridge = 1e-10 * np.eye(p)
     for _ in range(max_swaps):
         design_blocks = blocks[index]  # (m, 2, p)
