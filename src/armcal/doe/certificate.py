@@ -212,13 +212,22 @@ def certify(
     for _ in range(rounds):
         weights = _weights_multiplicative(_blocks(arm, pool), weights, 300)
         m_inv, _ = _weighted_svd(arm, pool, weights).inverse_gram()
-        d, _ = _variance_function(arm, pool, m_inv)
-        top = pool[np.argsort(-d)[: 4 * p]]
-        found = _maximize_variance(arm, m_inv, top)
+        # Ascend d from its largest values in the pool and in fresh random poses: the
+        # maximizers of a weighted model (encoder noise) can lie in narrow regions
+        # that the first candidates missed.
+        fresh = feasible_poses(arm, candidates, rng=rng)
+        starts = []
+        for poses in (pool, fresh):
+            d, _ = _variance_function(arm, poses, m_inv)
+            starts.append(poses[np.argsort(-d)[: 4 * p]])
+        found = _maximize_variance(arm, m_inv, np.concatenate(starts))
         found = found[feasible(arm, found[:, None, :])[:, 0]]
         keep = weights > 1e-6 / pool.shape[0]
         pool = np.concatenate([pool[keep], found])
-        weights = np.concatenate([weights[keep], np.full(found.shape[0], 1e-3 / pool.shape[0])])
+        # New points start at the mean weight: the multiplicative algorithm grows a
+        # weight only by the factor d(x) / p per iteration, too slowly from a tiny one.
+        mean_weight = weights[keep].sum() / np.count_nonzero(keep)
+        weights = np.concatenate([weights[keep], np.full(found.shape[0], mean_weight)])
         weights /= weights.sum()
     weights = _weights_multiplicative(_blocks(arm, pool), weights, 1000)
     support_mask = weights > 1e-6

@@ -8,7 +8,7 @@ from typing import Literal
 import numpy as np
 
 from ..arm import PlanarArm
-from ..criteria import CRITERIA, d_efficiency
+from ..criteria import CRITERIA, d_efficiency, efficiencies
 from ..errors import ArmcalError
 from .certificate import Certificate, certify
 from .exchange import exchange_plan
@@ -88,35 +88,59 @@ _PAPER_ASSUMES = (
 )
 
 
-def _closed_form_plans(arm: PlanarArm, m: int) -> tuple[list[np.ndarray], ArmcalError | None]:
+@dataclass(frozen=True)
+class _ClosedForm:
+    """A closed-form orthogonal plan that fits, and its D-criterion on the model."""
+
+    q: np.ndarray
+    turns_joint1: bool
+    d_efficiency: float
+
+
+def _closed_form_plans(arm: PlanarArm, m: int) -> tuple[list[_ClosedForm], ArmcalError | None]:
     """The closed-form orthogonal plans that fit, and why the paper's own does not (or None).
 
     Besides the paper's family, the one with joint 1 stepping too when the
     model is not invariant to turning joint 1 (anisotropic instrument noise):
     for ``m > 2 n`` it is D-optimal there (:func:`analytic_plan`).
     """
-    plans: list[np.ndarray] = []
+    plans: list[_ClosedForm] = []
     failure: ArmcalError | None = None
-    try:
-        plans.append(analytic_plan(arm, m))
-    except ArmcalError as error:
-        failure = error
-    if not rotation_invariant(arm) and not arm.base_offset:
+    variants = [False] + ([True] if not (rotation_invariant(arm) or arm.base_offset) else [])
+    for turns in variants:
         try:
-            plans.append(analytic_plan(arm, m, turn_joint1=True))
-        except ArmcalError:
-            pass
+            q = analytic_plan(arm, m, turn_joint1=turns)
+        except ArmcalError as error:
+            failure = failure if turns else error
+            continue
+        plans.append(_ClosedForm(q, turns, float(d_efficiency(arm, q))))
     return plans, failure
 
 
-def _optimal_closed_form_note(arm: PlanarArm) -> str:
+def _closed_form_would_be_optimal(arm: PlanarArm, m: int) -> bool:
+    """Whether a closed-form plan would be D-optimal for the model without limits or region."""
+    free = arm.replace(joint_limits=None, region=None)
+    return any(attains_unit_bound(free, plan.q) for plan in _closed_form_plans(free, m)[0])
+
+
+def _optimal_closed_form_note(arm: PlanarArm, chosen: _ClosedForm, paper_d: float) -> str:
     """Why a closed-form plan is D-optimal for a model that is not the paper's."""
+    how = "this closed-form orthogonal plan reaches it"
+    if chosen.turns_joint1:
+        how = (
+            "the closed-form orthogonal plan with joint 1 stepping too reaches it (the paper's, "
+            f"with joint 1 held still, only {paper_d:.4f})"
+        )
     return (
         f"{model_description(arm)}: every pose's information over the {arm.n_free} free "
-        f"parameters still has trace {arm.n_free}, so no plan has a larger determinant than "
-        "the identity, which this closed-form orthogonal plan reaches: it is D-optimal for "
-        "this model"
+        f"parameters still has trace {arm.n_free}, so no plan has a larger D-criterion than 1, "
+        f"and {how}: it is D-optimal for this model"
     )
+
+
+def _score(arm: PlanarArm, q: np.ndarray, criterion: str) -> float:
+    """The efficiency ``criterion`` of plan ``q`` on the arm's model."""
+    return float(efficiencies(arm, q)[criterion])
 
 
 def design(
@@ -192,7 +216,7 @@ def design(
     notes: list[str] = []
     q: np.ndarray | None = None
     used: str = method
-    closed: list[np.ndarray] = []
+    closed: list[_ClosedForm] = []
     if method in ("auto", "analytic"):
         closed, failure = _closed_form_plans(arm, m)
         if not closed:
@@ -200,20 +224,18 @@ def design(
                 assert failure is not None
                 raise failure
             notes.append(_closed_form_note(arm, m))
-    best_closed, closed_d = None, 0.0
-    if closed:
-        scores = [float(d_efficiency(arm, plan)) for plan in closed]
-        best = int(np.argmax(scores))
-        best_closed, closed_d = closed[best], scores[best]
-    optimal_closed = best_closed is not None and attains_unit_bound(arm, best_closed)
+    best = max(closed, key=lambda plan: plan.d_efficiency) if closed else None
+    optimal_closed = best is not None and attains_unit_bound(arm, best.q)
+    paper_d = closed[0].d_efficiency if closed and not closed[0].turns_joint1 else 0.0
     if method == "analytic" or (method == "auto" and optimal_closed):
-        q, used = best_closed, "analytic"
+        assert best is not None  # analytic_plan raised above otherwise
+        q, used = best.q, "analytic"
         if not arm.standard:
             notes.append(
-                _optimal_closed_form_note(arm)
+                _optimal_closed_form_note(arm, best, paper_d)
                 if optimal_closed
                 else f"{model_description(arm)}: {_PAPER_ASSUMES}; the closed-form plan is not "
-                f"D-optimal for this model (D-criterion {closed_d:.4f}); --method auto "
+                f"D-optimal for this model (D-criterion {best.d_efficiency:.4f}); --method auto "
                 "optimizes for it"
             )
     elif method == "exchange":
@@ -222,7 +244,7 @@ def design(
         if criterion != "D":
             notes.append("exchange maximizes D; the plan was not tuned for " + criterion)
     else:
-        initial = np.stack(closed) if closed else None
+        initial = np.stack([plan.q for plan in closed]) if closed else None
         q = optimize_plan(arm, m, criterion=criterion, rng=rng, initial=initial)
         used = "optimize"
         if criterion == "D":
@@ -230,19 +252,25 @@ def design(
             polished = exchange_plan(arm, m, pool, start=q, rng=rng)
             if float(d_efficiency(arm, polished)) > float(d_efficiency(arm, q)) * (1 + 1e-12):
                 q, used = polished, "optimize+exchange"
-        if best_closed is not None and closed_d > float(d_efficiency(arm, q)):
-            q, used = best_closed, "analytic"  # not expected: the optimizer starts from it
-        if not arm.standard:
-            designed = float(d_efficiency(arm, q))
-            against = (
-                f" (the closed-form plan reaches D-criterion {closed_d:.4f}, this plan "
-                f"{designed:.4f})"
-                if best_closed is not None
-                else ""
-            )
+        if best is not None and _score(arm, best.q, criterion) > _score(arm, q, criterion):
+            q, used = best.q, "analytic"  # not expected: the optimizer starts from it
+        if arm.standard:
+            pass  # the paper's model: the note above says why its closed form was not used
+        elif best is not None:
             notes.append(
                 f"{model_description(arm)}: {_PAPER_ASSUMES}; they are not D-optimal for this "
-                f"model{against}, so the plan was optimized for it"
+                f"model (the closed-form plan reaches D-criterion {best.d_efficiency:.4f}, "
+                f"this plan {float(d_efficiency(arm, q)):.4f}), so the plan was optimized for it"
+            )
+        elif method == "auto" and not _closed_form_would_be_optimal(arm, m):
+            notes.append(
+                f"{model_description(arm)}: {_PAPER_ASSUMES}; even where they fit they are "
+                "not D-optimal for this model, which the plan was optimized for"
+            )
+        else:
+            notes.append(
+                f"{model_description(arm)}: the plan was optimized for this model "
+                f"({p} free parameters)"
             )
     q = np.asarray(q, dtype=float)
     return Design(

@@ -192,15 +192,20 @@ class PoseModel:
 def pose_model(arm: PlanarArm, q: np.ndarray) -> PoseModel:
     """:class:`PoseModel` of poses ``q`` ``(..., m, n)`` (rad) at the nominal parameters."""
     q = np.asarray(q, dtype=float)
-    columns = model_columns(arm, q)
-    if arm.standard:
-        return PoseModel(columns, columns, None, None, None)
+    noise = arm.noise
+    if arm.standard or noise is None or noise.isotropic_iid:
+        columns = model_columns(arm, q)
+        if arm.standard:
+            return PoseModel(columns, columns, None, None, None)
+        return PoseModel(columns, scaled_columns(arm, q), model_basis(arm)[0], None, None)
+    # model_columns' own steps, sharing the whitening with the precision (the
+    # optimizer's hot loop); tests hold the columns equal to model_columns'.
     full = scaled_columns(arm, q)
     basis = None if arm.free.all() else model_basis(arm)[0]
-    noise = arm.noise
-    if noise is None or noise.isotropic_iid:
-        return PoseModel(columns, full, basis, None, None)
     w = noise.whitening(arm, q)
+    alpha, beta = complex_whitening(w)
+    unwhitened = full if basis is None else full @ basis
+    columns = alpha[..., None] * unwhitened + beta[..., None] * unwhitened.conj()
     precision = np.swapaxes(w, -1, -2) @ w
     joint_jacobian = None
     if noise.joint_sigma is not None:
