@@ -16,7 +16,7 @@ from armcal import ArmcalError, PlanarArm, jacobian, random_plan
 from armcal.criteria import CRITERIA, d_efficiency, efficiencies, predicted_std
 from armcal.doe import analytic_plan, certify, design, exchange_plan, optimize_plan, poses_needed
 from armcal.doe.certificate import _variance_function
-from armcal.doe.exchange import _blocks
+from armcal.doe.exchange import _blocks, _swap_ratios
 from armcal.doe.model import (
     information_gradient,
     model_description,
@@ -341,6 +341,30 @@ def test_exchange_on_a_weighted_model_leaves_no_improving_swap(rng):
         for x in range(0, 50, 7):
             swapped = info - blocks[i].T @ blocks[i] + cand_blocks[x].T @ cand_blocks[x]
             assert np.linalg.slogdet(swapped)[1] <= logdet + 1e-9
+
+
+def test_swap_ratios_are_the_4_by_4_determinants(rng):
+    # det M' / det M = det [[I + a_xx, a_xi], [-a_xi^T, I - a_ii]] (rank-2 updates, twice),
+    # here by LU for random blocks of a real model, against the closed-form Schur route.
+    arm = PlanarArm([2.0, 1.5, 1.0], noise=ANISOTROPIC, fixed=("dq2",))
+    blocks = _blocks(arm, random_plan(arm, 30, rng=rng))
+    plan = blocks[:7]
+    m_inv = np.linalg.inv(np.einsum("iap,iaq->pq", plan, plan))
+    a_xx = blocks @ m_inv @ np.swapaxes(blocks, -1, -2)
+    a_xi = np.einsum("xap,pq,ibq->xiab", blocks, m_inv, plan)  # (N, m, 2, 2)
+    a_ii = plan @ m_inv @ np.swapaxes(plan, -1, -2)
+    eye = np.eye(2)
+    top = np.concatenate([np.broadcast_to(eye + a_xx[:, None], a_xi.shape), a_xi], axis=-1)
+    bottom = np.concatenate(
+        [-np.swapaxes(a_xi, -1, -2), np.broadcast_to(eye - a_ii, a_xi.shape)], axis=-1
+    )
+    direct = np.linalg.det(np.concatenate([top, bottom], axis=-2))
+    ratios = _swap_ratios(a_xx, np.transpose(a_xi, (0, 2, 1, 3)), a_ii)
+    assert_allclose(ratios, direct, rtol=1e-12, atol=1e-12)
+    # And each is the ratio of determinants itself: swap plan pose 2 for candidate 11.
+    info = np.einsum("iap,iaq->pq", plan, plan)
+    swapped = info - plan[2].T @ plan[2] + blocks[11].T @ blocks[11]
+    assert ratios[11, 2] == pytest.approx(np.linalg.det(swapped) / np.linalg.det(info), rel=1e-10)
 
 
 def test_optimizer_works_over_the_free_parameters_only():
