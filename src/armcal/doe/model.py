@@ -240,7 +240,9 @@ def information_gradient(arm: PlanarArm, model: PoseModel, phi: np.ndarray) -> n
         a, b = complex_whitening(model.precision)  # P z = a z + b conj(z)
         weighted = a[..., None] * v + b[..., None] * v.conj()
     h = weighted if model.basis is None else weighted @ model.basis.T
-    t = np.real(1j * c * h.conj())
+    # In this order the paper's model gets its plans bit for bit as before (a complex
+    # product rounds differently with its operands swapped when numpy uses FMA).
+    t = np.real(h.conj() * 1j * c)
     grad_theta = 2.0 * (t[..., :n] + t[..., n : 2 * n])
     if model.joint_jacobian is not None:
         grad_theta = grad_theta + _encoder_gradient(arm, model, u, v)
