@@ -123,13 +123,18 @@ def _closed_form_would_be_optimal(arm: PlanarArm, m: int) -> bool:
     return any(attains_unit_bound(free, plan.q) for plan in _closed_form_plans(free, m)[0])
 
 
-def _optimal_closed_form_note(arm: PlanarArm, chosen: _ClosedForm, paper_d: float) -> str:
-    """Why a closed-form plan is D-optimal for a model that is not the paper's."""
+def _optimal_closed_form_note(arm: PlanarArm, chosen: _ClosedForm, paper_d: float | None) -> str:
+    """Why a closed-form plan is D-optimal for a model that is not the paper's.
+
+    ``paper_d`` is the D-criterion of the paper's plan (joint 1 held still), None
+    when it does not fit.
+    """
     how = "this closed-form orthogonal plan reaches it"
     if chosen.turns_joint1:
+        paper = "does not fit" if paper_d is None else f"reaches only {paper_d:.4f}"
         how = (
             "the closed-form orthogonal plan with joint 1 stepping too reaches it (the paper's, "
-            f"with joint 1 held still, only {paper_d:.4f})"
+            f"with joint 1 held still, {paper})"
         )
     return (
         f"{model_description(arm)}: every pose's information over the {arm.n_free} free "
@@ -226,7 +231,7 @@ def design(
             notes.append(_closed_form_note(arm, m))
     best = max(closed, key=lambda plan: plan.d_efficiency) if closed else None
     optimal_closed = best is not None and attains_unit_bound(arm, best.q)
-    paper_d = closed[0].d_efficiency if closed and not closed[0].turns_joint1 else 0.0
+    paper_d = closed[0].d_efficiency if closed and not closed[0].turns_joint1 else None
     if method == "analytic" or (method == "auto" and optimal_closed):
         assert best is not None  # analytic_plan raised above otherwise
         q, used = best.q, "analytic"
