@@ -872,11 +872,13 @@ def _identifiable(arm: PlanarArm, q: np.ndarray) -> bool:
 
 def _robust_fit(
     problem: _Problem, sigma: float | None
-) -> tuple[_Fit, np.ndarray, ArmcalWarning | None]:
+) -> tuple[_Fit, np.ndarray, np.ndarray, ArmcalWarning | None]:
     """Huber IRLS from the least-squares fit, then test, leave out, refit until stable.
 
-    Returns the final fit, the poses in it and a warning when the outliers could
-    not be left out without losing identifiability.
+    Returns the final fit, the poses in it, the poses flagged as outliers, and a
+    warning when the outliers could not be left out without losing identifiability.
+    When most poses disagree with the fit, nothing is an outlier: the model, the
+    units or sigma are wrong, which the goodness of fit reports.
     """
     arm = problem.arm
     m = problem.q.shape[0]
@@ -906,7 +908,10 @@ def _robust_fit(
         test = _test(problem, fit, used, scale, sigma is not None)
         keep = ~test.flagged
         if np.array_equal(keep, used):
-            return fit, used, None
+            return fit, used, ~used, None
+        if 2 * np.count_nonzero(keep) < m:
+            everything = problem.fit(everyone, start=fit.params)
+            return everything, everyone, ~everyone, None
         if not _identifiable(arm, problem.q[keep]):
             warning = ArmcalWarning(
                 "outliers-kept",
@@ -914,10 +919,10 @@ def _robust_fit(
                 "few poses to identify every parameter, so they stay in the fit; "
                 "measure more poses",
             )
-            return problem.fit(everyone, start=fit.params), everyone, warning
+            return problem.fit(everyone, start=fit.params), everyone, ~keep, warning
         used = keep
         fit = problem.fit(used, start=fit.params)
-    return fit, used, None
+    return fit, used, ~used, None
 
 
 def _listing(items: Sequence[str]) -> str:
@@ -1086,7 +1091,7 @@ def identify(
     extra: list[ArmcalWarning] = []
     robust_sigma = reference if given else None
     if robust:
-        fit, used, kept_warning = _robust_fit(problem, robust_sigma)
+        fit, used, flagged, kept_warning = _robust_fit(problem, robust_sigma)
         if kept_warning is not None:
             extra.append(kept_warning)
     else:
@@ -1099,19 +1104,19 @@ def identify(
         sigma_value, source = _scale(fit, used, max(dof, 1)), "estimated"
     standardized = fit.whitened / sigma_value
     test = studentized_test(standardized, fit.leverage, used, arm.n_free, sigma_given=given)
+    if not robust:
+        flagged = test.flagged
     if not robust and np.any(test.flagged):
         # Gross outliers pull a least-squares fit towards them and inflate every
         # residual, so the poses to flag are those the robust procedure would
         # leave out, judged against its fit; this fit keeps them.
-        clean, kept, _ = _robust_fit(problem, robust_sigma)
+        clean, kept, flagged, _ = _robust_fit(problem, robust_sigma)
         clean_dof = 2 * int(np.count_nonzero(kept)) - arm.n_free
         scale = reference if given else _scale(clean, kept, max(clean_dof, 1))
         test = _test(problem, clean, kept, scale, given)
-        test = PoseTest(test.statistic, test.p_value, test.flagged | ~kept)
     labels = tuple(str(i) for i in range(1, m + 1)) if pose_labels is None else tuple(pose_labels)
     row_numbers = tuple(range(1, m + 1)) if rows is None else tuple(int(r) for r in rows)
     distance = np.hypot(fit.residuals[:, 0], fit.residuals[:, 1])
-    flagged = test.flagged | ~used
     outliers = tuple(
         Outlier(
             index=int(i),
