@@ -7,16 +7,20 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..arm import PlanarArm, forward_kinematics
-from ..criteria import d_efficiency
 from ..numerics import ScaledSVD, scaled_svd, spd_inverse
-from ..observability import check_identifiable, plan_svd, scaled_columns
+from ..observability import check_identifiable, plan_svd
 from .exchange import _blocks
+from .model import (
+    attains_unit_bound,
+    information_gradient,
+    pose_model,
+    rotation_invariant,
+    unit_trace,
+)
 from .optimizer import (
     _adam_ascent,
     _penalty_weight,
-    _q_from_theta_gradient,
     _region_penalty,
-    _theta_gradient,
     _to_q,
     _to_u,
 )
@@ -32,6 +36,10 @@ __all__ = [
 class Certificate:
     """A lower bound on a plan's D-efficiency relative to the best possible plan.
 
+    Everything is in the arm's model (:mod:`armcal.doe.model`): ``p`` is the
+    number of free parameters and ``M`` the normalized information of the
+    whitened free-parameter columns -- the paper's ``Fs`` for the standard model.
+
     Attributes
     ----------
     certified_d_efficiency : float
@@ -40,7 +48,10 @@ class Certificate:
     plan_only_bound : float
         The looser bound ``exp(1 - max_x d(x, plan) / p)``.
     reference_d_efficiency : float
-        D-efficiency (Hadamard-normalized) of the best weighted design found.
+        ``(det M(xi*))^(1/p)`` of the best weighted design ``xi*`` found, in the
+        normalization of :func:`armcal.criteria.d_efficiency` (Hadamard-normalized
+        for the paper's model; at most 1 wherever
+        :func:`armcal.doe.model.unit_trace` holds).
     max_variance : float
         ``max_x d(x, xi*)`` over the feasible poses searched (``>= p``; ``= p`` at
         the optimum).
@@ -60,9 +71,10 @@ class Certificate:
 
 def _variance_function(arm: PlanarArm, q: np.ndarray, m_inv: np.ndarray):
     """``d(x) = tr(M^-1 I(x))`` ``(k,)`` of poses ``q`` ``(k, n)`` and its gradient ``(k, n)``."""
-    columns = scaled_columns(arm, q)[:, None, :]  # one pose per "plan"
+    model = pose_model(arm, q[:, None, :])  # one pose per "plan"
+    columns = model.columns
     value = np.einsum("kma,ab,kmb->k", columns.conj(), m_inv, columns).real
-    grad = _q_from_theta_gradient(_theta_gradient(arm, columns, m_inv))[:, 0, :]
+    grad = information_gradient(arm, model, m_inv)[:, 0, :]
     return value, grad
 
 
@@ -83,13 +95,13 @@ def _maximize_variance(
 
 
 def _corner_poses(arm: PlanarArm, rng: np.random.Generator) -> np.ndarray:
-    """Poses with every joint at a limit (joint 1 random when the base is not identified)."""
+    """Poses with every joint at a limit (joint 1 random where its angle does not matter)."""
     n = arm.n_joints
     if n > 10:
         return np.empty((0, n))
     grid = np.array(np.meshgrid(*[[0, 1]] * n, indexing="ij")).reshape(n, -1).T
     corners = arm.joint_limits[np.arange(n), grid]
-    if not arm.base_offset:
+    if rotation_invariant(arm):
         corners[:, 0] = rng.uniform(arm.joint_limits[0, 0], arm.joint_limits[0, 1], len(corners))
     return corners[feasible(arm, corners[:, None, :])[:, 0]]
 
@@ -120,7 +132,7 @@ def _weighted_svd(arm: PlanarArm, poses: np.ndarray, weights: np.ndarray) -> Sca
     inverting ``M``.
     """
     blocks = _blocks(arm, poses) * np.sqrt(weights)[:, None, None]
-    return scaled_svd(blocks.reshape(-1, arm.n_params))
+    return scaled_svd(blocks.reshape(-1, arm.n_free))
 
 
 def certify(
@@ -170,32 +182,52 @@ def certify(
     corners and the plan's own poses, refined by adding the maximizers of ``d``.
     The final ``max_x d`` is a multistart ascent from the best of ``search``
     random feasible poses (plus the support); ascent iterates that stray slightly
-    outside the region only raise the maximum, which keeps the bound safe.  The
-    Hadamard bound ``det Fs <= 1`` is a certificate too, so the result is never
-    below the plan's own D-efficiency.
+    outside the region only raise the maximum, which keeps the bound safe.
+    The theorem holds for any per-pose information ``I(x)``: weighted (anisotropic,
+    correlated or encoder noise) and reduced (fixed parameters) models are
+    certified against their own optimum, over their own columns.
+
+    Where every pose's information has trace ``p``
+    (:func:`armcal.doe.model.unit_trace`: the paper's model, isotropic iid noise
+    with only lengths, base or leading offsets fixed, or every parameter free
+    without encoder noise) every design has ``tr M = p``, so ``det M* <= 1``
+    (Hadamard's bound for the paper's unit diagonal; AM-GM in general) is a
+    certificate too: the result is then never below the plan's own
+    D-efficiency, and a plan with ``M = I`` (an orthogonal plan) is certified 1
+    without a search.  Other models have no such bound; only the two above apply.
     """
     rng = np.random.default_rng(rng)
     q = np.asarray(q, dtype=float)
-    p = arm.n_params
+    p = arm.n_free
     plan = plan_svd(arm, q)
     check_identifiable(arm, q, svd=plan)
-    # Round-off of the m-term sums in Fs grows like m eps: allow it, or a large
-    # orthogonal plan would miss this shortcut and run the whole search.
-    if float(d_efficiency(arm, q)) >= 1.0 - (1e-12 + q.shape[0] * np.finfo(float).eps):
-        # Fs = I: the Hadamard bound is attained, and d(x) = tr(Is(x)) = p at every pose.
+    bounded = unit_trace(arm)
+    # Round-off of the m-term sums in Fs grows like m eps: attains_unit_bound allows
+    # it, or a large orthogonal plan would miss this shortcut and run the whole search.
+    if attains_unit_bound(arm, q):
+        # M = I: the bound det M <= 1 is attained, and d(x) = tr(I(x)) = p at every pose.
         return Certificate(1.0, 1.0, 1.0, float(p), q, np.full(q.shape[0], 1.0 / q.shape[0]))
     pool = np.concatenate([q, _corner_poses(arm, rng), feasible_poses(arm, candidates, rng=rng)])
     weights = np.full(pool.shape[0], 1.0 / pool.shape[0])
     for _ in range(rounds):
         weights = _weights_multiplicative(_blocks(arm, pool), weights, 300)
         m_inv, _ = _weighted_svd(arm, pool, weights).inverse_gram()
-        d, _ = _variance_function(arm, pool, m_inv)
-        top = pool[np.argsort(-d)[: 4 * p]]
-        found = _maximize_variance(arm, m_inv, top)
+        # Ascend d from its largest values in the pool and in fresh random poses: the
+        # maximizers of a weighted model (encoder noise) can lie in narrow regions
+        # that the first candidates missed.
+        fresh = feasible_poses(arm, candidates, rng=rng)
+        starts = []
+        for poses in (pool, fresh):
+            d, _ = _variance_function(arm, poses, m_inv)
+            starts.append(poses[np.argsort(-d)[: 4 * p]])
+        found = _maximize_variance(arm, m_inv, np.concatenate(starts))
         found = found[feasible(arm, found[:, None, :])[:, 0]]
         keep = weights > 1e-6 / pool.shape[0]
         pool = np.concatenate([pool[keep], found])
-        weights = np.concatenate([weights[keep], np.full(found.shape[0], 1e-3 / pool.shape[0])])
+        # New points start at the mean weight: the multiplicative algorithm grows a
+        # weight only by the factor d(x) / p per iteration, too slowly from a tiny one.
+        mean_weight = weights[keep].sum() / np.count_nonzero(keep)
+        weights = np.concatenate([weights[keep], np.full(found.shape[0], mean_weight)])
         weights /= weights.sum()
     weights = _weights_multiplicative(_blocks(arm, pool), weights, 1000)
     support_mask = weights > 1e-6
@@ -207,13 +239,13 @@ def certify(
     if bool(star_ok):
         max_star = _max_variance(arm, star_inverse, support, rng, search)
         logdet_star = float(star.log_det_gram())
-    else:  # not expected (xi* is near D-optimal); the other two bounds still hold
+    else:  # not expected (xi* is near D-optimal); the other bounds still hold
         max_star, logdet_star = np.inf, -np.inf
     max_plan = _max_variance(arm, plan_inverse, q, rng, search)
     logdet_plan = float(plan.log_det_gram())
     kw = np.exp((logdet_plan - logdet_star) / p + 1.0 - max_star / p) if bool(star_ok) else 0.0
     plan_only = np.exp(1.0 - max_plan / p)
-    hadamard = np.exp(logdet_plan / p)
+    hadamard = np.exp(logdet_plan / p) if bounded else 0.0
     return Certificate(
         certified_d_efficiency=float(min(1.0, max(kw, plan_only, hadamard))),
         plan_only_bound=float(plan_only),

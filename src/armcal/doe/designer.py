@@ -1,4 +1,4 @@
-"""One call for an optimal plan: analytic if it fits, else optimize and exchange; certified."""
+"""One call for an optimal plan: analytic if it fits and is optimal, else optimize and exchange."""
 
 from __future__ import annotations
 
@@ -8,10 +8,11 @@ from typing import Literal
 import numpy as np
 
 from ..arm import PlanarArm
-from ..criteria import CRITERIA, d_efficiency
+from ..criteria import CRITERIA, d_efficiency, efficiencies
 from ..errors import ArmcalError
 from .certificate import Certificate, certify
 from .exchange import exchange_plan
+from .model import attains_unit_bound, model_description, rotation_invariant
 from .optimizer import optimize_plan
 from .plans import analytic_plan, feasible_poses
 
@@ -35,6 +36,8 @@ class Design:
     Attributes
     ----------
     arm : PlanarArm
+        The arm and the model designed for: its noise model and fixed
+        parameters (:mod:`armcal.doe.model`).
     q : ndarray, shape (m, n)
         The plan's joint angles in rad.
     criterion : str
@@ -43,12 +46,18 @@ class Design:
         How the plan was made: ``analytic``, ``optimize``, ``optimize+exchange`` or
         ``exchange``.
     d_efficiency : float
-        ``(det F / det F_opt)^(1/p)``: relative to the unconstrained optimum.
+        :func:`armcal.criteria.d_efficiency` on the arm's model.  For the paper's
+        model ``(det F / det F_opt)^(1/p)``, relative to the unconstrained
+        optimum; wherever :func:`armcal.doe.model.unit_trace` holds at most 1,
+        and 1 only for a plan with identity normalized information; for other
+        models the weighted information's ``det^(1/p_f)``, which compares plans
+        of that model only (the certificate says how far from its optimum).
     certificate : Certificate or None
         Lower bound relative to the best plan within the constraints (None when
         not asked for).
     notes : tuple of str
-        Why a method was not used (e.g. the analytic plan breaks the limits).
+        Why a method was not used (e.g. the analytic plan breaks the limits), and
+        whether the paper's closed-form plans are optimal for the arm's model.
     """
 
     arm: PlanarArm
@@ -73,6 +82,72 @@ def _closed_form_note(arm: PlanarArm, m: int) -> str:
     )
 
 
+_PAPER_ASSUMES = (
+    "the paper's orthogonal plans and its D* criterion assume isotropic iid noise and every "
+    "parameter free"
+)
+
+
+@dataclass(frozen=True)
+class _ClosedForm:
+    """A closed-form orthogonal plan that fits, and its D-criterion on the model."""
+
+    q: np.ndarray
+    turns_joint1: bool
+    d_efficiency: float
+
+
+def _closed_form_plans(arm: PlanarArm, m: int) -> tuple[list[_ClosedForm], ArmcalError | None]:
+    """The closed-form orthogonal plans that fit, and why the paper's own does not (or None).
+
+    Besides the paper's family, the one with joint 1 stepping too when the
+    model is not invariant to turning joint 1 (anisotropic instrument noise):
+    for ``m > 2 n`` it is D-optimal there (:func:`analytic_plan`).
+    """
+    plans: list[_ClosedForm] = []
+    failure: ArmcalError | None = None
+    variants = [False] + ([True] if not (rotation_invariant(arm) or arm.base_offset) else [])
+    for turns in variants:
+        try:
+            q = analytic_plan(arm, m, turn_joint1=turns)
+        except ArmcalError as error:
+            failure = failure if turns else error
+            continue
+        plans.append(_ClosedForm(q, turns, float(d_efficiency(arm, q))))
+    return plans, failure
+
+
+def _closed_form_would_be_optimal(arm: PlanarArm, m: int) -> bool:
+    """Whether a closed-form plan would be D-optimal for the model without limits or region."""
+    free = arm.replace(joint_limits=None, region=None)
+    return any(attains_unit_bound(free, plan.q) for plan in _closed_form_plans(free, m)[0])
+
+
+def _optimal_closed_form_note(arm: PlanarArm, chosen: _ClosedForm, paper_d: float | None) -> str:
+    """Why a closed-form plan is D-optimal for a model that is not the paper's.
+
+    ``paper_d`` is the D-criterion of the paper's plan (joint 1 held still), None
+    when it does not fit.
+    """
+    how = "this closed-form orthogonal plan reaches it"
+    if chosen.turns_joint1:
+        paper = "does not fit" if paper_d is None else f"reaches only {paper_d:.4f}"
+        how = (
+            "the closed-form orthogonal plan with joint 1 stepping too reaches it (the paper's, "
+            f"with joint 1 held still, {paper})"
+        )
+    return (
+        f"{model_description(arm)}: every pose's information over the {arm.n_free} free "
+        f"parameters still has trace {arm.n_free}, so no plan has a larger D-criterion than 1, "
+        f"and {how}: it is D-optimal for this model"
+    )
+
+
+def _score(arm: PlanarArm, q: np.ndarray, criterion: str) -> float:
+    """The efficiency ``criterion`` of plan ``q`` on the arm's model."""
+    return float(efficiencies(arm, q)[criterion])
+
+
 def design(
     arm: PlanarArm,
     m: int,
@@ -83,18 +158,20 @@ def design(
     candidates: np.ndarray | None = None,
     with_certificate: bool = True,
 ) -> Design:
-    """An optimal ``m``-pose plan within the arm's joint limits and measurement region.
+    """An optimal ``m``-pose plan for the arm's model, within its joint limits and region.
 
     Parameters
     ----------
     arm : PlanarArm
+        The arm, with the noise model and fixed parameters to design for.
     m : int
-        Number of poses; at least ``ceil(p / 2)``.
+        Number of poses; at least ``ceil(p_f / 2)`` for ``p_f`` free parameters.
     criterion : {"D", "A", "E"}
         Criterion to maximize (the certificate is always for D).
     method : {"auto", "analytic", "optimize", "exchange"}
-        ``auto`` takes the analytic plan when it fits the constraints, else
-        optimizes and (for D) polishes by exchange over feasible candidates.
+        ``auto`` takes a closed-form orthogonal plan when it fits the constraints
+        and is provably optimal for the model (below), else optimizes and (for
+        D) polishes by exchange over feasible candidates.
     rng : numpy.random.Generator or int or None
         The same seed gives the same plan.
     candidates : ndarray, shape (N, n), optional
@@ -107,40 +184,99 @@ def design(
     Returns
     -------
     Design
+
+    Raises
+    ------
+    ArmcalError
+        If ``m`` is too small for the free parameters, the criterion or method
+        is unknown, or ``method="analytic"`` and no closed-form plan fits.
+
+    Notes
+    -----
+    Every criterion is the model's (:mod:`armcal.doe.model`): the weighted
+    information over the free parameters.  The paper's orthogonal plans are
+    optimal for its model -- isotropic iid noise, every parameter free -- by
+    Hadamard's bound; ``auto`` takes a closed-form plan whenever the model keeps
+    that bound (:func:`armcal.doe.model.unit_trace`) and the plan reaches it,
+    which covers fixed lengths, base coordinates or leading offsets under
+    isotropic noise, and anisotropic instrument noise with every parameter free
+    (joint 1 stepping too, ``m > 2 n``).  Otherwise -- encoder noise, a fixed
+    ``dq_j`` that ties links together, fixed parameters under anisotropic noise,
+    or binding limits -- it optimizes on the model, starting also from the
+    closed-form plans, and a note says how much better than them the plan is.
     """
     if criterion not in CRITERIA:
         raise ArmcalError(f"unknown criterion {criterion!r}; choose one of {', '.join(CRITERIA)}")
     if method not in METHODS:
         raise ArmcalError(f"unknown method {method!r}; choose one of {', '.join(METHODS)}")
-    min_poses = -(-arm.n_params // 2)
+    p = arm.n_free
+    min_poses = -(-p // 2)
     if m < min_poses:
+        free = "" if p == arm.n_params else " free"
         raise ArmcalError(
-            f"{m} poses give {2 * m} equations for the {arm.n_params} parameters of {arm.name}; "
+            f"{m} poses give {2 * m} equations for the {p}{free} parameters of {arm.name}; "
             f"use --poses {min_poses} or more"
         )
     rng = np.random.default_rng(rng)
     notes: list[str] = []
     q: np.ndarray | None = None
     used: str = method
+    closed: list[_ClosedForm] = []
     if method in ("auto", "analytic"):
-        try:
-            q, used = analytic_plan(arm, m), "analytic"
-        except ArmcalError:
+        closed, failure = _closed_form_plans(arm, m)
+        if not closed:
             if method == "analytic":
-                raise
+                assert failure is not None
+                raise failure
             notes.append(_closed_form_note(arm, m))
-    if q is None and method == "exchange":
+    best = max(closed, key=lambda plan: plan.d_efficiency) if closed else None
+    optimal_closed = best is not None and attains_unit_bound(arm, best.q)
+    paper_d = closed[0].d_efficiency if closed and not closed[0].turns_joint1 else None
+    if method == "analytic" or (method == "auto" and optimal_closed):
+        assert best is not None  # analytic_plan raised above otherwise
+        q, used = best.q, "analytic"
+        if not arm.standard:
+            notes.append(
+                _optimal_closed_form_note(arm, best, paper_d)
+                if optimal_closed
+                else f"{model_description(arm)}: {_PAPER_ASSUMES}; the closed-form plan is not "
+                f"D-optimal for this model (D-criterion {best.d_efficiency:.4f}); --method auto "
+                "optimizes for it"
+            )
+    elif method == "exchange":
         pool = feasible_poses(arm, 4000, rng=rng) if candidates is None else candidates
         q = exchange_plan(arm, m, pool, rng=rng)
         if criterion != "D":
             notes.append("exchange maximizes D; the plan was not tuned for " + criterion)
-    elif q is None:
-        q, used = optimize_plan(arm, m, criterion=criterion, rng=rng), "optimize"
+    else:
+        initial = np.stack([plan.q for plan in closed]) if closed else None
+        q = optimize_plan(arm, m, criterion=criterion, rng=rng, initial=initial)
+        used = "optimize"
         if criterion == "D":
             pool = feasible_poses(arm, 4000, rng=rng) if candidates is None else candidates
             polished = exchange_plan(arm, m, pool, start=q, rng=rng)
             if float(d_efficiency(arm, polished)) > float(d_efficiency(arm, q)) * (1 + 1e-12):
                 q, used = polished, "optimize+exchange"
+        if best is not None and _score(arm, best.q, criterion) > _score(arm, q, criterion):
+            q, used = best.q, "analytic"  # not expected: the optimizer starts from it
+        if arm.standard:
+            pass  # the paper's model: the note above says why its closed form was not used
+        elif best is not None:
+            notes.append(
+                f"{model_description(arm)}: {_PAPER_ASSUMES}; they are not D-optimal for this "
+                f"model (the closed-form plan reaches D-criterion {best.d_efficiency:.4f}, "
+                f"this plan {float(d_efficiency(arm, q)):.4f}), so the plan was optimized for it"
+            )
+        elif method == "auto" and not _closed_form_would_be_optimal(arm, m):
+            notes.append(
+                f"{model_description(arm)}: {_PAPER_ASSUMES}; even where they fit they are "
+                "not D-optimal for this model, which the plan was optimized for"
+            )
+        else:
+            notes.append(
+                f"{model_description(arm)}: the plan was optimized for this model "
+                f"({p} free parameters)"
+            )
     q = np.asarray(q, dtype=float)
     return Design(
         arm=arm,

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..arm import PlanarArm
-from ..observability import scaled_columns
+from ..observability import model_columns
 
 __all__ = [
     "exchange_plan",
@@ -13,9 +13,44 @@ __all__ = [
 
 
 def _blocks(arm: PlanarArm, q: np.ndarray) -> np.ndarray:
-    """Real scaled Jacobian blocks ``(k, 2, p)`` of poses ``q`` ``(k, n)``."""
-    columns = scaled_columns(arm, q)
+    """Real blocks ``(k, 2, p_f)`` of the model's columns of poses ``q`` ``(k, n)``.
+
+    ``F_x^T F_x`` is the information of pose ``x`` in the model
+    (:func:`armcal.observability.model_columns`: whitened, free parameters).
+    """
+    columns = model_columns(arm, q)
     return np.stack([columns.real, columns.imag], axis=-2)
+
+
+def _swap_ratios(a_xx: np.ndarray, a_xi: np.ndarray, a_ii: np.ndarray) -> np.ndarray:
+    """``det M' / det M`` ``(N, m)`` of every swap, from the ``2 x 2`` blocks in closed form.
+
+    The ratio is ``det [[A, B], [-B^T, D]]`` with ``A = I + a_xx`` (candidate ``x``,
+    ``(N, 2, 2)``), ``B = a_xi`` (given as ``(N, 2, m, 2)``, ``B[x, r, i, s]``) and
+    ``D = I - a_ii`` (plan pose ``i``, ``(m, 2, 2)``).  ``A = I + F_x M^-1 F_x^T``
+    is positive definite with ``det A >= 1``, so the Schur complement gives
+    ``det A det(D + B^T A^-1 B)``; every ``2 x 2`` inverse and determinant is
+    written out, elementwise over the ``N x m`` pairs -- a few arrays of that
+    size, no batched LU of ``N m`` matrices of ``4 x 4``.
+    """
+    a11 = 1.0 + a_xx[:, 0, 0, None]
+    a12 = a_xx[:, 0, 1, None]
+    a21 = a_xx[:, 1, 0, None]
+    a22 = 1.0 + a_xx[:, 1, 1, None]
+    det_a = a11 * a22 - a12 * a21
+    b11, b12 = a_xi[:, 0, :, 0], a_xi[:, 0, :, 1]
+    b21, b22 = a_xi[:, 1, :, 0], a_xi[:, 1, :, 1]
+    # adj(A) B = det A * A^-1 B
+    t11 = a22 * b11 - a12 * b21
+    t12 = a22 * b12 - a12 * b22
+    t21 = a11 * b21 - a21 * b11
+    t22 = a11 * b22 - a21 * b12
+    # det A * (D + B^T A^-1 B) = det A * D + B^T adj(A) B
+    s11 = det_a * (1.0 - a_ii[:, 0, 0]) + b11 * t11 + b21 * t21
+    s12 = det_a * (-a_ii[:, 0, 1]) + b11 * t12 + b21 * t22
+    s21 = det_a * (-a_ii[:, 1, 0]) + b12 * t11 + b22 * t21
+    s22 = det_a * (1.0 - a_ii[:, 1, 1]) + b12 * t12 + b22 * t22
+    return (s11 * s22 - s12 * s21) / det_a
 
 
 def exchange_plan(
@@ -27,7 +62,7 @@ def exchange_plan(
     rng: np.random.Generator | int | None = None,
     max_swaps: int = 1000,
 ) -> np.ndarray:
-    """Modified Fedorov exchange for the D-criterion over a candidate set.
+    """Modified Fedorov exchange for the D-criterion of the arm's model over a candidate set.
 
     Parameters
     ----------
@@ -56,8 +91,9 @@ def exchange_plan(
         det M' / det M = det(I_4 + C U^T M^-1 U),  U = [F_x^T, F_i^T],  C = diag(I, -I),
 
     the rank-2 update formula ``det(M + F^T F) = det M det(I_2 + F M^-1 F^T)``
-    applied twice; every ratio is a 4 x 4 determinant, computed for all pairs in
-    one vectorized call.  Poses may repeat (an exact design may replicate a point).
+    applied twice; every ratio is a 4 x 4 determinant, evaluated for all pairs at
+    once from its 2 x 2 blocks (:func:`_swap_ratios`).  Poses may repeat (an
+    exact design may replicate a point).
     """
     rng = np.random.default_rng(rng)
     candidates = np.asarray(candidates, dtype=float)
@@ -67,7 +103,7 @@ def exchange_plan(
         candidates = np.concatenate([np.asarray(start, dtype=float), candidates])
         index = np.arange(m)
     blocks = _blocks(arm, candidates)  # (N, 2, p)
-    eye2, p = np.eye(2), arm.n_params
+    p = arm.n_free
     ridge = 1e-10 * np.eye(p)
     for _ in range(max_swaps):
         design_blocks = blocks[index]  # (m, 2, p)
@@ -75,13 +111,12 @@ def exchange_plan(
         m_inv = np.linalg.inv(info + ridge)
         g = blocks @ m_inv  # (N, 2, p)
         a_xx = g @ np.swapaxes(blocks, -1, -2)  # (N, 2, 2)
-        a_xi = np.einsum("xap,ibp->xiab", g, design_blocks)  # (N, m, 2, 2)
-        a_ii = design_blocks @ m_inv @ np.swapaxes(design_blocks, -1, -2)  # (m, 2, 2)
-        top = np.concatenate([np.broadcast_to(eye2 + a_xx[:, None], a_xi.shape), a_xi], axis=-1)
-        bottom = np.concatenate(
-            [-np.swapaxes(a_xi, -1, -2), np.broadcast_to(eye2 - a_ii, a_xi.shape)], axis=-1
+        # a_xi[x, r, i, s] = (F_x M^-1 F_i^T)_rs: one matrix product, (N, 2, m, 2)
+        a_xi = (g.reshape(-1, p) @ design_blocks.reshape(-1, p).T).reshape(
+            blocks.shape[0], 2, m, 2
         )
-        ratio = np.linalg.det(np.concatenate([top, bottom], axis=-2))  # (N, m)
+        a_ii = design_blocks @ m_inv @ np.swapaxes(design_blocks, -1, -2)  # (m, 2, 2)
+        ratio = _swap_ratios(a_xx, a_xi, a_ii)  # (N, m)
         x, i = np.unravel_index(int(np.argmax(ratio)), ratio.shape)
         if ratio[x, i] <= 1.0 + 1e-12:
             break

@@ -7,7 +7,8 @@ import numpy as np
 from ..arm import PlanarArm, forward_kinematics, link_angles
 from ..criteria import CRITERIA, weighted_information
 from ..errors import ArmcalError
-from ..observability import scaled_columns
+from .model import information_gradient, pose_model
+from .model import q_from_theta_gradient as _q_from_theta_gradient
 from .plans import feasible, feasible_poses, random_plan
 
 __all__ = [
@@ -15,37 +16,25 @@ __all__ = [
 ]
 
 
-def _theta_gradient(arm: PlanarArm, columns: np.ndarray, phi: np.ndarray) -> np.ndarray:
-    """``d/dtheta_j <Phi, J_i^T J_i> = 2 <J_i Phi, dJ_i/dtheta_j>`` ``(..., m, n)``.
-
-    The two columns of link ``j`` turn with ``theta_j`` (derivative ``i * column``);
-    the base columns are constant.
-    """
-    n = arm.n_joints
-    g = columns @ phi  # (..., m, p) complex, since phi is real
-    t = np.real(g.conj() * 1j * columns)
-    return 2.0 * (t[..., :n] + t[..., n : 2 * n])
-
-
-def _q_from_theta_gradient(grad_theta: np.ndarray) -> np.ndarray:
-    """theta_j = q_1 + ... + q_j, so d/dq_a = sum over j >= a of d/dtheta_j."""
-    return np.cumsum(grad_theta[..., ::-1], axis=-1)[..., ::-1]
-
-
 def _criterion_value_and_gradient(
     arm: PlanarArm, q: np.ndarray, criterion: str
 ) -> tuple[np.ndarray, np.ndarray]:
-    """``log efficiency`` ``(...)`` of plans ``q`` ``(..., m, n)`` and its gradient in ``q``."""
+    """``log efficiency`` ``(...)`` of plans ``q`` ``(..., m, n)`` and its gradient in ``q``.
+
+    On the model's information (:mod:`armcal.doe.model`): the paper's
+    normalized ``Fs`` for the standard model, the weighted information over the
+    free parameters otherwise.
+    """
     crit = CRITERIA[criterion]
-    columns = scaled_columns(arm, q)
-    m = q.shape[-2]
-    fs = weighted_information(columns, np.full(q.shape[:-1], 1.0 / m))
+    model = pose_model(arm, q)
+    m, p = q.shape[-2], arm.n_free
+    fs = weighted_information(model.columns, np.full(q.shape[:-1], 1.0 / m))
     sign, logdet = np.linalg.slogdet(fs)
-    singular = (sign <= 0) | (logdet < -40.0 * arm.n_params)
-    fs = np.where(singular[..., None, None], fs + 1e-6 * np.eye(arm.n_params), fs)
+    singular = (sign <= 0) | (logdet < -40.0 * p)
+    fs = np.where(singular[..., None, None], fs + 1e-6 * np.eye(p), fs)
     value = np.log(np.clip(crit.efficiency(fs), 1e-300, None))
     phi = crit.log_gradient(fs) / m
-    return value, _q_from_theta_gradient(_theta_gradient(arm, columns, phi))
+    return value, information_gradient(arm, model, phi)
 
 
 def _region_constraints(arm: PlanarArm, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

@@ -240,7 +240,7 @@ def _placed_angles(shift: float, lo: float, hi: float, m: int) -> np.ndarray:
     return lo + offset
 
 
-def analytic_plan(arm: PlanarArm, m: int) -> np.ndarray:
+def analytic_plan(arm: PlanarArm, m: int, *, turn_joint1: bool = False) -> np.ndarray:
     """An orthogonal plan (Table I) placed inside the joint limits and region, if one fits.
 
     Parameters
@@ -248,6 +248,10 @@ def analytic_plan(arm: PlanarArm, m: int) -> np.ndarray:
     arm : PlanarArm
     m : int
         Number of poses; at least ``n`` (``n + 1`` with a base offset).
+    turn_joint1 : bool
+        Step joint 1 with the others, as with a base offset, even without one:
+        for ``m > 2 n`` the plan is then D-optimal under anisotropic or
+        correlated instrument noise too (see Notes).
 
     Returns
     -------
@@ -270,19 +274,31 @@ def analytic_plan(arm: PlanarArm, m: int) -> np.ndarray:
     The optimality conditions (21) hold for the poses of :func:`orthogonal_plan`
     shifted by a common ``alpha`` in joints 2..n (the relative link angles
     ``theta_j - theta_i = (j - i)(alpha + 2 pi k / m)`` still sum to zero), with
-    joint 1 free in every pose -- or, with a base offset, for joint 1 at ``beta
-    + 2 pi k / m`` with any common ``beta``.  The placement uses these freedoms:
+    joint 1 free in every pose -- or, with a base offset (or ``turn_joint1``),
+    for joint 1 at ``beta + 2 pi k / m`` with any common ``beta``.  The
+    placement uses these freedoms:
 
     * ``alpha`` in closed form (see ``_best_common_shift``): the largest
       smallest distance of joints 2..n to their limits, ``(2 pi / m - gap) / 2``
       for joints sharing one interval of ``2 pi - gap`` rad;
-    * joint 1 without a region: the middle of its limits (no base offset), or
-      ``beta`` by the same closed form for its own limits (base offset);
+    * joint 1 without a region: the middle of its limits, or ``beta`` by the
+      same closed form for its own limits (base offset or ``turn_joint1``);
     * joint 1 with a region: the best of :data:`PLACEMENT_CANDIDATES` angles
-      (per pose; with a base offset, common rotations ``beta`` over a full turn,
+      (per pose; when it steps, common rotations ``beta`` over a full turn,
       starting at the closed-form one), scored by the smaller of the joint-1
       limit margin (rad) and the region margin (mm) divided by the arm's reach
       (a turn of joint 1 by ``d`` rad moves the tip by at most ``reach d`` mm).
+
+    **Anisotropic noise.**  With instrument precision ``P`` (relative, ``tr P = 2``,
+    :mod:`armcal.noise`) and every parameter free, each pose's information
+    ``A^T P A`` has trace ``p`` (``A A^T = (p / 2) I``: each link's two columns,
+    and the base's, are orthonormal in the plane), so ``det M <= 1`` for the
+    normalized information, with equality iff ``M = I``.  ``P`` adds
+    ``Re(b sum_i conj(c_ia c_ib))`` to ``M``, which vanishes when
+    ``sum_i exp(i (theta_a + theta_b)) = 0`` for all links ``a, b``: with joint 1
+    stepping (``turn_joint1``, or a base offset) ``theta_a + theta_b`` advances
+    by ``(a + b) 2 pi / m`` per pose, so ``m > 2 n`` gives ``M = I`` (without a
+    base offset; with one the base block stays ``P`` whatever the plan).
 
     Time and memory are O(m n) without a region.  With one, candidates are
     scored for chunks of poses: the working arrays hold at most
@@ -312,7 +328,7 @@ def analytic_plan(arm: PlanarArm, m: int) -> np.ndarray:
     q = np.empty((m, n))
     for j in range(1, n):
         q[:, j] = _placed_angles(alpha, lo[j], hi[j], m)
-    if arm.base_offset:
+    if arm.base_offset or turn_joint1:
         beta, margin1 = _best_common_shift(lo[:1], hi[:1], m)
         if margin1 < 0:
             raise ArmcalError(

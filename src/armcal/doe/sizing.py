@@ -111,7 +111,7 @@ def poses_needed(
     goal : float
         Accuracy asked for, in mm (lengths, position) or deg (joint offsets).
     sigma : float
-        Measurement noise (mm).
+        Measurement noise (mm): the reference ``sigma_ref`` of a weighted model.
     rng : numpy.random.Generator or int or None
         Seeds the plan optimizer and the default test poses.
     test_q : ndarray, shape (k, n), optional
@@ -126,7 +126,8 @@ def poses_needed(
     Raises
     ------
     ArmcalError
-        If even ``max_poses`` poses do not reach ``goal``.
+        If even ``max_poses`` poses do not reach ``goal``, or every parameter the
+        target measures is fixed.
 
     Notes
     -----
@@ -136,8 +137,11 @@ def poses_needed(
     against one pose less and, if that reaches too, bisected against the last
     size that failed (a few designs, not one per pose when a jump overshoots):
     the result ``m`` reaches the goal and ``m - 1`` does not.
-    For arms without binding limits the best plans are orthogonal and the
-    answers are the closed forms ``ceil((sigma / goal)^2)`` for lengths,
+    Plans are designed for the arm's model (its noise model and fixed
+    parameters, :func:`armcal.doe.design`), and ``sigma`` is its reference noise
+    (``arm.sigma``); fixed parameters have standard error 0 and do not count.
+    For the paper's model on arms without binding limits the best plans are
+    orthogonal and the answers are the closed forms ``ceil((sigma / goal)^2)`` for lengths,
     ``ceil((sigma / (goal l))^2)`` for a single joint offset and
     ``ceil(2 n (sigma / goal)^2)`` for the position RMS -- found here by search,
     not by formula.
@@ -154,10 +158,20 @@ def poses_needed(
         raise ArmcalError(f"unknown target {target!r}; choose one of {', '.join(TARGETS)}")
     if not (goal > 0 and math.isfinite(goal)):
         raise ArmcalError(f"the target accuracy must be a positive number, got {goal}")
+    n = arm.n_joints
+    measured = {
+        "length_std_mm": [f"dl{k}" for k in range(1, n + 1)],
+        "angle_std_deg": [f"dq{k}" for k in range(1, n + 1)],
+    }.get(target)
+    if measured is not None and not set(measured) - set(arm.fixed):
+        raise ArmcalError(
+            f"every parameter the target {target} measures ({', '.join(measured)}) is fixed for "
+            f"{arm.name}; choose a target on the free parameters ({', '.join(arm.free_names)})"
+        )
     rng = np.random.default_rng(rng)
     if test_q is None:
         test_q = random_plan(arm, 1000, rng=rng)
-    min_poses = -(-arm.n_params // 2)
+    min_poses = -(-arm.n_free // 2)
     plans: dict[int, tuple[np.ndarray, str, float]] = {}
 
     def best(m: int) -> float:

@@ -1,0 +1,267 @@
+"""The model a plan is designed for: its per-pose information and that information's gradient.
+
+Every design function (optimizer, exchange, certificate) sees a plan through
+the columns of :func:`armcal.observability.model_columns`: the paper's scaled
+columns ``c`` (:func:`~armcal.observability.scaled_columns`) in the free
+coordinates ``C`` of :func:`~armcal.observability.model_basis` and whitened
+per pose.  Pose ``i`` contributes ``I_i = A_i^T P_i A_i`` to the information,
+``A_i`` the real ``2 x p_f`` form of ``u_i = c_i C`` and
+``P_i = W_i^T W_i = sigma_ref^2 Sigma_i^-1`` its relative precision
+(:mod:`armcal.noise`); the identity for isotropic iid noise.
+
+**Gradient.**  The optimizer and the certificate need
+``d/dq <Phi, sum_i I_i>`` for a symmetric ``Phi`` ``(p_f, p_f)``.  With ``P``
+held fixed the columns give ``2 <dA_i, P_i A_i Phi>``; ``d c_k / d theta_j = i c_k``
+for ``k in {j, n + j}`` (link ``j`` turns) and 0 otherwise, so with
+``h_i = (P_i (u_i Phi)) C^T`` (``P`` acting on complex numbers as
+``a z + b conj(z)``) the derivative by ``theta_j`` is
+``2 (t_j + t_(n+j))``, ``t_k = Re(i c_k conj(h_k))``; for ``P = I``, ``C = I``
+this is the paper model's ``Re(conj(u Phi) i c)``.  Encoder noise makes ``P_i``
+depend on the pose through ``Sigma_i = Sigma_meas + J_q S J_q^T``
+(``S = diag(sigma_q^2)``), and that dependence is included, not neglected:
+``dP = -P dSigma P / sigma_ref^2``, so the term adds
+``<dJ_q, R_i>`` with ``R_i = -2 P_i G_i P_i J_q S / sigma_ref^2`` and
+``G_i = A_i Phi A_i^T``; column ``j`` of ``J_q`` is
+``sum_(k >= j) i l_k e^(i theta_k)``, whose derivative by ``theta_k`` (``k >= j``)
+is ``-l_k e^(i theta_k)``.
+
+**Where the paper's bound still holds.**  The paper's optimum rests on
+Hadamard's inequality: every column has unit modulus at every pose, so the
+normalized information has a unit diagonal and ``det <= 1``, with equality iff
+it is ``I`` (an orthogonal plan).  AM-GM on its eigenvalues gives the same
+bound whenever only the *trace* of every pose's information is ``p_f``
+(:func:`unit_trace`): ``tr M = p_f`` for every design, so ``det M <= 1``, and a
+plan with ``M = I`` is D-, A- and E-optimal.  That holds
+
+* with isotropic iid noise when each free coordinate is one paper column (a
+  fixed ``dl``, base coordinate or leading joint offset just drops columns);
+* with every parameter free and any instrument covariance, no encoder noise:
+  ``A_i A_i^T = (p / 2) I`` (each link's two columns, and the base's, are
+  orthonormal in the plane) and ``tr P_i = 2``, so ``tr(A_i^T P_i A_i) = p``.
+
+Encoder noise, or a fixed ``dq_j`` (``j >= 2``) after a free one (links
+``j - 1`` and ``j`` then share one column, whose norm depends on ``q_j``),
+or a fixed parameter under anisotropic noise, make the trace depend on the pose:
+such models have no closed-form bound, and only the Kiefer-Wolfowitz
+certificate (:func:`armcal.doe.certify`) says how far a plan is from their optimum.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..arm import PlanarArm, link_angles
+from ..criteria import d_efficiency
+from ..noise import complex_whitening
+from ..observability import model_basis, model_columns, scaled_columns
+
+__all__ = [
+    "PoseModel",
+    "attains_unit_bound",
+    "information_gradient",
+    "model_description",
+    "pose_model",
+    "rotation_invariant",
+    "unit_trace",
+]
+
+
+def unit_trace(arm: PlanarArm) -> bool:
+    """Whether every pose's information over the free parameters has trace ``p_f``.
+
+    Then ``det M <= 1`` for the normalized information of every plan and
+    design, with equality iff ``M = I`` (module notes): isotropic iid noise
+    with only ``dl``, base or leading ``dq`` parameters fixed, or every
+    parameter free without encoder noise.
+
+    Examples
+    --------
+    >>> from armcal.noise import NoiseModel
+    >>> arm = PlanarArm([260.0, 180.0, 120.0, 100.0], sigma=0.02)
+    >>> unit_trace(arm), unit_trace(arm.replace(fixed=("dl4",)))
+    (True, True)
+    >>> unit_trace(arm.replace(fixed=("dq2",)))
+    False
+    >>> anisotropic = arm.replace(noise=NoiseModel.per_axis(0.08, 0.02))
+    >>> unit_trace(anisotropic), unit_trace(anisotropic.replace(fixed=("dl4",)))
+    (True, False)
+    """
+    noise = arm.noise
+    if noise is not None and noise.joint_sigma is not None:
+        return False
+    if arm.free.all():
+        return True
+    if noise is not None and not noise.isotropic_instrument:
+        return False
+    basis = model_basis(arm)[0]
+    return bool(np.all(np.count_nonzero(basis, axis=0) == 1))
+
+
+def attains_unit_bound(arm: PlanarArm, q: np.ndarray) -> bool:
+    """Whether plan ``q`` ``(m, n)`` is provably D-optimal: :func:`unit_trace` and ``M = I``.
+
+    ``M = I`` is judged on the D-efficiency, to the round-off of its ``m``-term
+    sums (``m eps``).
+    """
+    if not unit_trace(arm):
+        return False
+    tol = 1e-12 + np.shape(q)[-2] * np.finfo(float).eps
+    return float(d_efficiency(arm, q)) >= 1.0 - tol
+
+
+def rotation_invariant(arm: PlanarArm) -> bool:
+    """Whether turning joint 1 leaves every pose's information unchanged.
+
+    Without a base offset the columns turn together with joint 1 and only
+    their relative angles matter -- unless the instrument's covariance has a
+    direction (anisotropic or correlated noise), which the arm turns against.
+    Encoder noise alone turns with the arm.
+    """
+    if arm.base_offset:
+        return False
+    return arm.noise is None or arm.noise.isotropic_instrument
+
+
+def _names(names: tuple[str, ...]) -> str:
+    return ", ".join(names)
+
+
+def model_description(arm: PlanarArm) -> str:
+    """What makes the model differ from the paper's, in words for design notes.
+
+    Examples
+    --------
+    >>> arm = PlanarArm([260.0, 180.0], fixed=("dl1", "dl2"))
+    >>> model_description(arm)
+    'joint offsets only (dl1, dl2 fixed)'
+    """
+    parts = []
+    n = arm.n_joints
+    if arm.fixed:
+        lengths = tuple(f"dl{k}" for k in range(1, n + 1))
+        if set(lengths) <= set(arm.fixed) and len(arm.fixed) == n:
+            parts.append(f"joint offsets only ({_names(arm.fixed)} fixed)")
+        else:
+            parts.append(f"{_names(arm.fixed)} fixed")
+    noise = arm.noise
+    if noise is not None and not noise.isotropic_instrument:
+        cov = noise.covariance_mm2
+        if cov[0, 1] == 0:
+            parts.append(
+                f"anisotropic instrument noise (sigma_x = {np.sqrt(cov[0, 0]):.4g} mm, "
+                f"sigma_y = {np.sqrt(cov[1, 1]):.4g} mm)"
+            )
+        else:
+            parts.append("correlated instrument noise (covariance_mm2 with x-y correlation)")
+    if noise is not None and noise.joint_sigma is not None:
+        js = np.degrees(noise.joint_sigma)
+        text = f"{js[0]:.4g}" if js.size == 1 else "[" + ", ".join(f"{v:.4g}" for v in js) + "]"
+        parts.append(f"encoder noise ({text} deg)")
+    return "; ".join(parts) if parts else "the paper's model"
+
+
+@dataclass(frozen=True, eq=False)
+class PoseModel:
+    """The model's columns of a stack of poses, with what their gradient needs.
+
+    Attributes
+    ----------
+    columns : ndarray, shape (..., m, p_f)
+        :func:`~armcal.observability.model_columns`: ``sum_i Re(c_i^H c_i)`` is
+        the information.
+    full : ndarray, shape (..., m, p)
+        The paper's scaled columns (before the basis and the whitening).
+    basis : ndarray, shape (p, p_f), or None
+        ``C`` of :func:`~armcal.observability.model_basis`; None when every
+        parameter is free.
+    precision : ndarray, shape (..., m, 2, 2), or None
+        ``P_i = W_i^T W_i`` (dimensionless); None for isotropic iid noise.
+    joint_jacobian : ndarray, shape (..., m, n), or None
+        ``J_q`` as complex numbers (mm/rad) when there is encoder noise.
+    """
+
+    columns: np.ndarray
+    full: np.ndarray
+    basis: np.ndarray | None
+    precision: np.ndarray | None
+    joint_jacobian: np.ndarray | None
+
+
+def pose_model(arm: PlanarArm, q: np.ndarray) -> PoseModel:
+    """:class:`PoseModel` of poses ``q`` ``(..., m, n)`` (rad) at the nominal parameters."""
+    q = np.asarray(q, dtype=float)
+    noise = arm.noise
+    if arm.standard or noise is None or noise.isotropic_iid:
+        columns = model_columns(arm, q)
+        if arm.standard:
+            return PoseModel(columns, columns, None, None, None)
+        return PoseModel(columns, scaled_columns(arm, q), model_basis(arm)[0], None, None)
+    # model_columns' own steps, sharing the whitening with the precision (the
+    # optimizer's hot loop); tests hold the columns equal to model_columns'.
+    full = scaled_columns(arm, q)
+    basis = None if arm.free.all() else model_basis(arm)[0]
+    w = noise.whitening(arm, q)
+    alpha, beta = complex_whitening(w)
+    unwhitened = full if basis is None else full @ basis
+    columns = alpha[..., None] * unwhitened + beta[..., None] * unwhitened.conj()
+    precision = np.swapaxes(w, -1, -2) @ w
+    joint_jacobian = None
+    if noise.joint_sigma is not None:
+        turn = 1j * arm.link_lengths * np.exp(1j * link_angles(q))  # d tip / d theta_k
+        joint_jacobian = np.cumsum(turn[..., ::-1], axis=-1)[..., ::-1]  # d tip / d q_j
+    return PoseModel(columns, full, basis, precision, joint_jacobian)
+
+
+def _real_pair(z: np.ndarray) -> np.ndarray:
+    """Complex ``(..., k)`` as real ``(..., 2, k)``: rows x and y."""
+    return np.stack([z.real, z.imag], axis=-2)
+
+
+def q_from_theta_gradient(grad_theta: np.ndarray) -> np.ndarray:
+    """theta_j = q_1 + ... + q_j, so d/dq_a = sum over j >= a of d/dtheta_j."""
+    return np.cumsum(grad_theta[..., ::-1], axis=-1)[..., ::-1]
+
+
+def information_gradient(arm: PlanarArm, model: PoseModel, phi: np.ndarray) -> np.ndarray:
+    """``d/dq_i <Phi, I_i>`` ``(..., m, n)`` for every pose of ``model`` (see the module notes).
+
+    ``phi`` ``(p_f, p_f)`` or one per plan ``(..., p_f, p_f)``, real symmetric
+    (a matrix product with the plans' columns ``(..., m, p_f)``).
+    """
+    n = arm.n_joints
+    c = model.full
+    u = c if model.basis is None else c @ model.basis  # unwhitened model columns
+    v = u @ phi  # (..., m, p_f), complex: phi is real
+    if model.precision is None:
+        weighted = v
+    else:
+        a, b = complex_whitening(model.precision)  # P z = a z + b conj(z)
+        weighted = a[..., None] * v + b[..., None] * v.conj()
+    h = weighted if model.basis is None else weighted @ model.basis.T
+    # In this order the paper's model gets its plans bit for bit as before (a complex
+    # product rounds differently with its operands swapped when numpy uses FMA).
+    t = np.real(h.conj() * 1j * c)
+    grad_theta = 2.0 * (t[..., :n] + t[..., n : 2 * n])
+    if model.joint_jacobian is not None:
+        grad_theta = grad_theta + _encoder_gradient(arm, model, u, v)
+    return q_from_theta_gradient(grad_theta)
+
+
+def _encoder_gradient(
+    arm: PlanarArm, model: PoseModel, u: np.ndarray, v: np.ndarray
+) -> np.ndarray:
+    """The part of the theta gradient through ``P_i(q)``: encoder noise (module notes)."""
+    assert arm.noise is not None and arm.noise.joint_sigma is not None
+    assert model.precision is not None and model.joint_jacobian is not None
+    n = arm.n_joints
+    p = model.precision
+    g = _real_pair(v) @ np.swapaxes(_real_pair(u), -1, -2)  # A Phi A^T, (..., m, 2, 2)
+    k = p @ g @ p / arm.noise.sigma_mm**2
+    variance = np.broadcast_to(arm.noise.joint_sigma, (n,)) ** 2
+    r = -2.0 * (k @ _real_pair(model.joint_jacobian)) * variance  # (..., m, 2, n)
+    r = np.cumsum(r, axis=-1)  # column k: sum over j <= k of R[:, j]
+    # d J_q[:, j] / d theta_k = -l_k e^(i theta_k) (k >= j); the dl columns are e^(i theta_k).
+    turn = -arm.link_lengths * model.full[..., n : 2 * n]
+    return r[..., 0, :] * turn.real + r[..., 1, :] * turn.imag
