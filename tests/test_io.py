@@ -160,7 +160,7 @@ def test_measurement_columns_may_come_in_any_order_with_blank_lines(tmp_path, ar
         ("q1_deg,q2_deg,x_mm,y_mm\n0,0,1,2\n0,0,nan,2\n", r"row 2 \(line 3\), column x_mm"),
         ("q1_deg,q2_deg,x_mm,y_mm\n0,0,1,2\n0,0,1,-inf\n", "y_mm: '-inf' is not a finite"),
         ("q1_deg,q2_deg,x_mm,y_mm\n0,abc,1,2\n", "column q2_deg: 'abc' is not a number"),
-        ("q1_deg,q2_deg,x_mm,y_mm\n0,181,1,2\n", "outside joint 2's limits"),
+        ("q1_deg,q2_deg,x_mm,y_mm\n0,183,1,2\n", "outside joint 2's limits"),
         ("q1_deg,q2_deg,q3_deg,x_mm,y_mm\n0,0,0,1,2\n", "3 joint columns .* has 2 joints"),
         ("q1_deg,q3_deg,x_mm,y_mm\n0,0,1,2\n", "without gaps"),
     ],
