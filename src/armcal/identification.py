@@ -25,28 +25,67 @@ the unseen combinations, never a :class:`numpy.linalg.LinAlgError`.
 
 Uncertainty is ``cov = sigma^2 (J^T J)^-1`` at the solution (paper eq. 16), with
 ``sigma`` given by the user or estimated as ``s^2 = RSS / (2m - p)``.
+
+**Weighted and reduced models** (:attr:`armcal.arm.PlanarArm.standard` false).
+With a noise model (:mod:`armcal.noise`) every pose's rows and residual are
+whitened by ``W_i`` (``W_i^T W_i = sigma_ref^2 Sigma_i^-1``), which turns
+weighted least squares into ordinary least squares:
+
+* every parameter free: the closed form on whitened rows (still linear in the
+  link phasors, so still the global optimum).  With encoder noise ``Sigma_i``
+  depends on the estimate (errors in variables): the whitening is re-evaluated
+  at the estimate and the solve repeated until it no longer moves;
+* fixed parameters: Gauss-Newton over the free parameters (user
+  parametrization, the whitening re-evaluated at every iterate), started from
+  the unconstrained closed form with the fixed deviations set to 0 when the plan
+  identifies the full model, else from zero.
+
+The covariance is then the generalized-least-squares one,
+``sigma_ref^2 (J_w^T J_w)^-1`` over the free parameters.
 """
 
 from __future__ import annotations
 
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
-from typing import Any, Literal
+from typing import Any, Literal, cast
 
 import numpy as np
 
-from .arm import PlanarArm, forward_kinematics, wrap_angle
-from .criteria import inverse_information
+from .arm import PlanarArm, forward_kinematics, jacobian, wrap_angle
+from .diagnostics import (
+    FEW_DOF,
+    OUTLIER_ALPHA,
+    GoodnessOfFit,
+    Outlier,
+    PoseTest,
+    goodness_of_fit,
+    studentized_test,
+)
 from .errors import ArmcalError, ArmcalWarning
-from .numerics import LinearLeastSquares, factor_least_squares
-from .observability import check_identifiable, conditioning_warning, scaled_jacobian
+from .noise import NoiseModel
+from .numerics import (
+    LinearLeastSquares,
+    factor_least_squares,
+    scaled_svd,
+    solve_least_squares,
+)
+from .observability import (
+    check_identifiable,
+    conditioning_warning,
+    plan_svd,
+    scaled_columns,
+    scaled_jacobian,
+)
 
 __all__ = [
+    "HUBER_K",
     "METHODS",
     "Calibration",
     "identify",
     "solve_closed_form",
     "solve_gauss_newton",
+    "solve_model",
 ]
 
 
@@ -264,26 +303,274 @@ def solve_gauss_newton(
     return params[0], iterations[0], converged[0]
 
 
+def _model_noise(arm: PlanarArm) -> NoiseModel:
+    """The arm's noise model, or unit isotropic noise (weights are relative)."""
+    return arm.noise if arm.noise is not None else NoiseModel.isotropic(1.0)
+
+
+def _whitening(
+    arm: PlanarArm,
+    q: np.ndarray,
+    params: np.ndarray | None,
+    row_sigma: np.ndarray | None,
+    pose_weights: np.ndarray | None,
+) -> np.ndarray | None:
+    """``W_i`` ``(..., m, 2, 2)`` times ``sqrt(pose weight)``; None when it is the identity."""
+    noise = _model_noise(arm)
+    if noise.isotropic_iid and row_sigma is None:
+        w = None
+    else:
+        w = noise.whitening(arm, q, params if noise.joint_sigma is not None else None, row_sigma)
+    if pose_weights is None:
+        return w
+    root = np.sqrt(pose_weights)[..., None, None]
+    return root * (np.eye(2) if w is None else w)
+
+
+def _apply(w: np.ndarray | None, rows: np.ndarray) -> np.ndarray:
+    """``W_i`` applied to per-pose rows ``(..., m, 2, k)``."""
+    return rows if w is None else w @ rows
+
+
+def _step_size(arm: PlanarArm, step: np.ndarray) -> np.ndarray:
+    """Largest change ``(N,)`` of a step ``(N, p)`` in mm (angles times the reach beyond them)."""
+    n = arm.n_joints
+    scale = np.ones(arm.n_params)
+    # dq_j moves every link from j outwards: the tip by up to the reach beyond joint j.
+    scale[n : 2 * n] = np.cumsum(arm.link_lengths[::-1])[::-1]
+    return np.max(np.abs(step * scale), axis=-1, initial=0.0)
+
+
+def _weighted_closed_form(
+    arm: PlanarArm,
+    q: np.ndarray,
+    xy: np.ndarray,
+    w: np.ndarray | None,
+) -> tuple[np.ndarray, np.ndarray]:
+    """Closed-form deviations ``(N, p)`` of sets ``xy (N, m, 2)`` on whitened rows, and full rank.
+
+    The regressor of the link phasors (:func:`scaled_columns` in real form),
+    each pose's two rows and measurement multiplied by ``W_i``: one batched
+    least-squares solve per set (one shared factorization when ``w`` does not
+    depend on the set).
+    """
+    columns = scaled_columns(arm, q)  # (m, p): tip = sum_k columns_k v_k
+    blocks = np.stack([columns.real, columns.imag], axis=-2)  # (m, 2, p)
+    m, p = q.shape[0], arm.n_params
+    if w is None or w.ndim == 3:  # one regressor for every set
+        regressor = _apply(w, blocks).reshape(2 * m, p)
+        rhs = _apply(w, xy[..., None])[..., 0].reshape(-1, 2 * m)
+        factor = factor_least_squares(regressor)
+        v, ok = factor.solve(rhs), np.full(rhs.shape[0], bool(factor.svd.full_rank))
+    else:
+        regressor = (w @ blocks).reshape(-1, 2 * m, p)
+        rhs = (w @ xy[..., None])[..., 0].reshape(-1, 2 * m)
+        v, ok, _ = solve_least_squares(regressor, rhs)
+    return _closed_form_params(arm, v), ok
+
+
+def solve_model(
+    arm: PlanarArm,
+    q: np.ndarray,
+    xy: np.ndarray,
+    *,
+    row_sigma: np.ndarray | None = None,
+    pose_weights: np.ndarray | None = None,
+    start: np.ndarray | None = None,
+    method: Method = "auto",
+    tol: float = 1e-12,
+    max_iter: int = 50,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Weighted least squares over the free parameters of any model; batched over sets.
+
+    Parameters
+    ----------
+    arm : PlanarArm
+        Its noise model (:mod:`armcal.noise`) weights the poses; its fixed
+        parameters stay at 0.
+    q : ndarray, shape (m, n)
+        Joint angles in rad, shared by every set.
+    xy : ndarray, shape (m, 2) or (N, m, 2)
+        Measured positions in mm.
+    row_sigma : ndarray, shape (m,), optional
+        Per-row instrument noise (mm), replacing the instrument covariance.
+    pose_weights : ndarray, shape (m,) or (N, m), optional
+        Extra weights per pose (robust fitting, leaving poses out with 0).
+    start : ndarray, shape (p,) or (N, p), optional
+        Gauss-Newton's starting point (see the module notes for the default).
+    method : {"auto", "closed-form", "gauss-newton"}
+        ``"auto"``: the weighted closed form when every parameter is free, else
+        Gauss-Newton.  ``"gauss-newton"`` starts from ``start`` or zero.
+    tol, max_iter
+        A set has converged when its largest step moves the tip by less than
+        ``tol`` times the reach (mm); iteration cap.
+
+    Returns
+    -------
+    params : ndarray, shape (p,) or (N, p)
+    iterations : ndarray of int, shape () or (N,)
+    converged : ndarray of bool, shape () or (N,)
+
+    Raises
+    ------
+    NotIdentifiableError
+        If the poses with positive weight cannot identify the free parameters.
+    ArmcalError
+        For ``method="closed-form"`` with fixed parameters.
+
+    Examples
+    --------
+    >>> arm = PlanarArm([2.0, 1.0], sigma=0.01, fixed=("dl2",))
+    >>> q = np.radians([[0, 0], [0, 90], [90, 90], [45, -120]])
+    >>> truth = np.array([0.1, 0.0, 0.01, -0.02])
+    >>> est, _, converged = solve_model(arm, q, forward_kinematics(arm, q, truth))
+    >>> bool(np.allclose(est, truth, atol=1e-12)), bool(converged)
+    (True, True)
+    """
+    batched = np.ndim(xy) == 3
+    q, sets = _as_sets(arm, q, xy)
+    n_sets = sets.shape[0]
+    if pose_weights is not None:
+        pose_weights = np.broadcast_to(np.asarray(pose_weights, dtype=float), sets.shape[:-1])
+        if pose_weights.shape[0] == 1 or np.all(pose_weights == pose_weights[:1]):
+            pose_weights = pose_weights[0]
+    used = (
+        np.ones(q.shape[0], bool)
+        if pose_weights is None
+        else np.any(np.atleast_2d(pose_weights) > 0, axis=0)
+    )
+    check_identifiable(arm, q[used], svd=plan_svd(arm, q[used]))
+    all_free = bool(arm.free.all())
+    if method == "closed-form" and not all_free:
+        raise ArmcalError(
+            f"the closed form needs every parameter free, but {', '.join(arm.fixed)} "
+            "are fixed; use method gauss-newton (or auto)"
+        )
+    joint_noise = _model_noise(arm).joint_sigma is not None
+    threshold = tol * float(np.sum(arm.link_lengths))
+    params = np.zeros((n_sets, arm.n_params))
+    iterations = np.zeros(n_sets, dtype=int)
+    converged = np.zeros(n_sets, dtype=bool)
+    if all_free and method != "gauss-newton":
+        # Weighted closed form; with encoder noise the weights follow the estimate.
+        w = _whitening(arm, q, None, row_sigma, pose_weights)
+        params, ok = _weighted_closed_form(arm, q, sets, w)
+        iterations[:] = 1
+        converged[:] = ok
+        if joint_noise:
+            active = np.arange(n_sets)
+            for _ in range(max_iter):
+                weights = (
+                    None
+                    if pose_weights is None or pose_weights.ndim == 1
+                    else pose_weights[active]
+                )
+                w = _whitening(
+                    arm,
+                    q,
+                    params[active][:, None, :],
+                    row_sigma,
+                    pose_weights if weights is None else weights,
+                )
+                new, ok = _weighted_closed_form(arm, q, sets[active], w)
+                moved = _step_size(arm, wrap_angle(new - params[active]))
+                params[active] = new
+                iterations[active] += 1
+                active = active[ok & (moved > threshold)]
+                if active.size == 0:
+                    break
+            converged[active] = False
+    else:
+        if start is not None:
+            params[:] = np.broadcast_to(np.asarray(start, dtype=float), params.shape)
+        elif method != "gauss-newton" and plan_svd(arm.replace(fixed=()), q[used]).full_rank:
+            full = arm.replace(fixed=(), noise=arm.noise)
+            w = _whitening(full, q, None, row_sigma, pose_weights)
+            params, _ = _weighted_closed_form(full, q, sets, w)
+        params = params * arm.free
+        params, iterations, converged = _gauss_newton_model(
+            arm, q, sets, params, row_sigma, pose_weights, threshold, max_iter
+        )
+    if batched:
+        return params, iterations, converged
+    return params[0], iterations[0], converged[0]
+
+
+def _gauss_newton_model(
+    arm: PlanarArm,
+    q: np.ndarray,
+    sets: np.ndarray,
+    params: np.ndarray,
+    row_sigma: np.ndarray | None,
+    pose_weights: np.ndarray | None,
+    threshold: float,
+    max_iter: int,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Gauss-Newton over the free user parameters, whitened rows, every active set at once."""
+    free = arm.free
+    n_sets = sets.shape[0]
+    iterations = np.zeros(n_sets, dtype=int)
+    failed = np.zeros(n_sets, dtype=bool)
+    previous = np.full(n_sets, np.inf)
+    active = np.arange(n_sets)
+    floor = 1e-9 * float(np.sum(arm.link_lengths))  # round-off floor of a stalled step
+    for _ in range(max_iter):
+        current = params[active]
+        weights = (
+            pose_weights
+            if pose_weights is None or pose_weights.ndim == 1
+            else pose_weights[active]
+        )
+        w = _whitening(arm, q, current[:, None, :], row_sigma, weights)
+        jac = jacobian(arm, q, current[:, None, :])[..., free]  # (N, m, 2, p_f)
+        residual = sets[active] - forward_kinematics(arm, q, current)
+        rows = _apply(w, jac).reshape(active.size, -1, arm.n_free)
+        rhs = _apply(w, residual[..., None])[..., 0].reshape(active.size, -1)
+        step, _, _ = solve_least_squares(rows, rhs)
+        full_step = np.zeros((active.size, arm.n_params))
+        full_step[:, free] = step
+        params[active] = current + full_step
+        iterations[active] += 1
+        finite = np.all(np.isfinite(full_step), axis=1)
+        failed[active[~finite]] = True
+        size = _step_size(arm, full_step)
+        stalled = (size >= 0.5 * previous[active]) & (size < floor)
+        previous[active] = size
+        active = active[finite & (size > threshold) & ~stalled]
+        if active.size == 0:
+            break
+    converged = ~failed
+    converged[active] = False
+    n = arm.n_joints
+    params[:, n : 2 * n] = wrap_angle(params[:, n : 2 * n])
+    return params, iterations, converged
+
+
 @dataclass(frozen=True, eq=False)
 class Calibration:
-    """Identified deviations with their uncertainty and the fit's residuals.
+    """Identified deviations with their uncertainty, the fit's residuals and its diagnostics.
 
     Attributes
     ----------
     arm : PlanarArm
-        The nominal arm that was calibrated.
+        The nominal arm that was calibrated, with the noise model and fixed
+        parameters used.
     method : str
         Solver used: ``"closed-form"`` or ``"gauss-newton"``.
     params : ndarray, shape (p,)
-        User deviations in internal units: ``dl`` (mm), ``dq`` (rad), ``x0, y0`` (mm).
+        User deviations in internal units: ``dl`` (mm), ``dq`` (rad), ``x0, y0`` (mm);
+        0 for fixed parameters.
     covariance : ndarray, shape (p, p)
-        ``sigma^2 (J^T J)^-1`` in internal units (mm, rad).
+        ``sigma^2 (J_w^T J_w)^-1`` over the free parameters in internal units
+        (mm, rad), zero rows and columns for fixed ones.
     sigma_mm : float
-        Measurement noise (1 std, mm) used for ``covariance``.
+        Measurement noise (1 std, mm) used for ``covariance``: the noise model's
+        reference (:attr:`armcal.noise.NoiseModel.sigma_mm`), or estimated.
     sigma_source : {"given", "estimated"}
-        Whether ``sigma_mm`` was given or estimated as ``sqrt(RSS / (2m - p))``.
+        Whether the noise was given (robot file, ``sigma``, per-row sigma) or
+        estimated as ``sqrt(RSS / (2m - p_f))``.
     residuals : ndarray, shape (m, 2)
-        Measured minus fitted positions in mm.
+        Measured minus fitted positions in mm, for every pose.
     iterations : int
         Linearized solves (1 for the closed form).
     converged : bool
@@ -291,10 +578,20 @@ class Calibration:
     pose_labels : tuple of str
         A label for every pose (the measurement file's ``pose`` column, or 1..m).
     warnings : tuple of ArmcalWarning
-        What makes the result suspicious: an ``ill-conditioned`` plan (condition
-        number above :data:`armcal.numerics.COND_WARN`, naming the poorly
-        determined combinations), a solver that did not converge; empty when
-        nothing does.
+        What makes the result suspicious (codes ``fit-inconsistent``,
+        ``few-dof``, ``outlier``, ``ill-conditioned``, ``not-converged``).
+    goodness_of_fit : GoodnessOfFit or None
+        The chi-square test over the poses in the fit (:mod:`armcal.diagnostics`).
+    standardized_residuals : ndarray, shape (m, 2) or None
+        ``W_i e_i / sigma`` of every pose: ``N(0, I)`` under the noise model.
+    outliers : tuple of Outlier
+        Poses the studentized test flags, removed from the fit or not.
+    used : ndarray of bool, shape (m,) or None
+        Poses in the final fit (all unless a robust fit left outliers out).
+    rows : tuple of int
+        1-based data row of every pose in its file.
+    robust : bool
+        Whether the fit was robust (Huber, then the outlier test and a refit).
     """
 
     arm: PlanarArm
@@ -308,16 +605,27 @@ class Calibration:
     converged: bool
     pose_labels: tuple[str, ...]
     warnings: tuple[ArmcalWarning, ...] = ()
+    goodness_of_fit: GoodnessOfFit | None = None
+    standardized_residuals: np.ndarray | None = None
+    outliers: tuple[Outlier, ...] = ()
+    used: np.ndarray | None = None
+    rows: tuple[int, ...] = ()
+    robust: bool = False
 
     @property
     def n_poses(self) -> int:
-        """Number of measured poses ``m``."""
+        """Number of measured poses ``m`` (including any left out of the fit)."""
         return int(self.residuals.shape[0])
 
     @property
+    def n_used(self) -> int:
+        """Number of poses in the final fit."""
+        return self.n_poses if self.used is None else int(np.count_nonzero(self.used))
+
+    @property
     def dof(self) -> int:
-        """Residual degrees of freedom ``2m - p``."""
-        return 2 * self.n_poses - self.arm.n_params
+        """Residual degrees of freedom ``2 m_used - p_f``."""
+        return 2 * self.n_used - self.arm.n_free
 
     @property
     def names(self) -> tuple[str, ...]:
@@ -342,41 +650,271 @@ class Calibration:
 
     @property
     def std(self) -> np.ndarray:
-        """Standard errors ``(p,)`` in display units (mm, deg)."""
+        """Standard errors ``(p,)`` in display units (mm, deg); 0 for fixed parameters."""
         return np.sqrt(np.diag(self.covariance_display))
 
     @property
     def correlation(self) -> np.ndarray:
-        """Correlation matrix ``(p, p)`` of the estimates."""
+        """Correlation matrix ``(p, p)`` of the estimates (identity rows for fixed ones)."""
         d = np.sqrt(np.diag(self.covariance))
-        return self.covariance / np.outer(d, d)
+        safe = np.where(d > 0, d, 1.0)
+        corr = self.covariance / np.outer(safe, safe)
+        fixed = d == 0
+        corr[fixed, :] = 0.0
+        corr[:, fixed] = 0.0
+        corr[fixed, fixed] = 1.0
+        return corr
 
     @property
     def pose_residuals(self) -> np.ndarray:
         """Euclidean residual of every pose ``(m,)`` in mm."""
         return np.hypot(self.residuals[:, 0], self.residuals[:, 1])
 
+    def _used_residuals(self) -> np.ndarray:
+        return self.residuals if self.used is None else self.residuals[self.used]
+
     @property
     def residual_rms(self) -> float:
-        """RMS of all ``2m`` residual coordinates in mm, ``sqrt(RSS / 2m)``."""
-        return float(np.sqrt(np.mean(self.residuals**2)))
+        """RMS of the residual coordinates of the poses in the fit, in mm."""
+        return float(np.sqrt(np.mean(self._used_residuals() ** 2)))
 
     @property
     def residual_max(self) -> float:
-        """Largest Euclidean residual of a pose, in mm."""
-        return float(np.max(self.pose_residuals))
+        """Largest Euclidean residual of a pose in the fit, in mm."""
+        used = self._used_residuals()
+        return float(np.max(np.hypot(used[:, 0], used[:, 1])))
 
 
 def _closed_form(arm: PlanarArm, q: np.ndarray, xy: np.ndarray, **_: object):
+    if not arm.standard:
+        return solve_model(arm, q, xy, method="closed-form")
     return solve_closed_form(arm, q, xy), 1, True
 
 
+def _gauss_newton_any(arm: PlanarArm, q: np.ndarray, xy: np.ndarray, **kwargs: Any):
+    if not arm.standard:
+        return solve_model(arm, q, xy, method="gauss-newton", **kwargs)
+    return solve_gauss_newton(arm, q, xy, **kwargs)
+
+
 #: Solvers by name; each takes ``xy`` of shape ``(m, 2)`` or ``(N, m, 2)`` and returns
-#: ``(params, iterations, converged)``, batched alike.
+#: ``(params, iterations, converged)``, batched alike.  Weighted or reduced arms go
+#: through :func:`solve_model` (the closed form needs every parameter free).
 METHODS: dict[str, Callable[..., tuple[np.ndarray, Any, Any]]] = {
     "closed-form": _closed_form,
-    "gauss-newton": solve_gauss_newton,
+    "gauss-newton": _gauss_newton_any,
 }
+
+#: Huber's tuning constant for the radial (2-D) residual of a pose: a clean pose
+#: has a standardized residual below it with probability 0.95 (chi-square, 2 dof),
+#: so clean data keep weight 1 almost everywhere and the fit stays efficient.
+#: (The chi-square law with 2 dof has survival function ``exp(-x / 2)``.)
+HUBER_K = float(np.sqrt(-2.0 * np.log(0.05)))
+
+
+@dataclass(frozen=True, eq=False)
+class _Fit:
+    """One least-squares fit and everything the diagnostics need, for all m poses."""
+
+    params: np.ndarray
+    iterations: int
+    converged: bool
+    residuals: np.ndarray  # (m, 2) mm
+    whitened: np.ndarray  # (m, 2) W_i e_i, in mm of the reference noise
+    factor: np.ndarray  # (p_f, p_f) G with (J_w^T J_w)^-1 = G G^T over the used poses
+    leverage: np.ndarray  # (m, 2, 2) B_i B_i^T
+
+
+class _Problem:
+    """The data of one identification and the fits made on it."""
+
+    def __init__(
+        self,
+        arm: PlanarArm,
+        q: np.ndarray,
+        xy: np.ndarray,
+        row_sigma: np.ndarray | None,
+        method: str,
+        tol: float,
+        max_iter: int,
+    ) -> None:
+        self.arm, self.q, self.xy, self.row_sigma = arm, q, xy, row_sigma
+        self.method, self.tol, self.max_iter = method, tol, max_iter
+
+    def _rows(self, used: np.ndarray) -> np.ndarray | None:
+        return None if self.row_sigma is None else self.row_sigma[used]
+
+    def solve(
+        self,
+        used: np.ndarray,
+        *,
+        weights: np.ndarray | None = None,
+        start: np.ndarray | None = None,
+    ) -> tuple[np.ndarray, int, bool]:
+        """Deviations fitted to the poses in ``used`` (times ``weights``, if given)."""
+        arm, q, xy = self.arm, self.q[used], self.xy[used]
+        kwargs: dict[str, Any] = {"tol": self.tol, "max_iter": self.max_iter}
+        if weights is None and start is None and arm.standard and self.row_sigma is None:
+            if self.method == "closed-form":
+                return solve_closed_form(arm, q, xy), 1, True
+            params, steps, done = solve_gauss_newton(arm, q, xy, **kwargs)
+            return params, int(steps), bool(done)
+        method = self.method if start is None else "gauss-newton"
+        if start is not None and arm.free.all() and method == "gauss-newton":
+            method = "auto" if self.method == "closed-form" else method
+        params, steps, done = solve_model(
+            arm,
+            q,
+            xy,
+            row_sigma=self._rows(used),
+            pose_weights=None if weights is None else weights[used],
+            start=start if method == "gauss-newton" else None,
+            method=cast(Method, method),
+            **kwargs,
+        )
+        return params, int(steps), bool(done)
+
+    def evaluate(self, params: np.ndarray, used: np.ndarray, iterations: int, converged: bool):
+        """Residuals, whitened residuals and leverages of every pose against ``params``."""
+        arm, q = self.arm, self.q
+        residuals = self.xy - forward_kinematics(arm, q, params)
+        w = _whitening(arm, q, params, self.row_sigma, None)
+        if w is not None and self.row_sigma is not None:  # to the rows' own reference
+            w = w * (_reference_sigma(arm, self.row_sigma) / _model_noise(arm).sigma_mm)
+        whitened = residuals if w is None else (w @ residuals[:, :, None])[:, :, 0]
+        jac = _apply(w, jacobian(arm, q, params)[..., arm.free])  # (m, 2, p_f)
+        svd = scaled_svd(jac[used].reshape(-1, arm.n_free))
+        factor, ok = svd.inverse_gram_factor()
+        if not bool(ok):  # identifiable at nominal, so only for absurd deviations
+            raise ArmcalError("the Jacobian is singular at the estimate; check the data")
+        b = jac @ factor
+        leverage = b @ np.swapaxes(b, -1, -2)
+        return _Fit(params, iterations, converged, residuals, whitened, factor, leverage)
+
+    def fit(
+        self,
+        used: np.ndarray,
+        *,
+        weights: np.ndarray | None = None,
+        start: np.ndarray | None = None,
+    ) -> _Fit:
+        params, steps, done = self.solve(used, weights=weights, start=start)
+        return self.evaluate(params, used, steps, done)
+
+
+def _reference_sigma(arm: PlanarArm, row_sigma: np.ndarray | None) -> float:
+    """The noise every whitened residual is measured in (mm).
+
+    The noise model's reference; with per-row sigma, ``sqrt(1 / mean(1 / s_i^2))``,
+    the isotropic noise that carries the same information (:mod:`armcal.noise`).
+    """
+    if row_sigma is not None:
+        return float(np.sqrt(1.0 / np.mean(1.0 / row_sigma**2)))
+    return _model_noise(arm).sigma_mm
+
+
+def _test(problem: _Problem, fit: _Fit, used: np.ndarray, sigma: float, given: bool) -> PoseTest:
+    return studentized_test(
+        fit.whitened / sigma, fit.leverage, used, problem.arm.n_free, sigma_given=given
+    )
+
+
+def _scale(fit: _Fit, used: np.ndarray, dof: int) -> float:
+    """``sqrt(RSS_w / dof)`` over the poses in the fit (mm of the reference noise)."""
+    return float(np.sqrt(np.sum(fit.whitened[used] ** 2) / dof))
+
+
+def _identifiable(arm: PlanarArm, q: np.ndarray) -> bool:
+    return 2 * q.shape[0] >= arm.n_free and bool(plan_svd(arm, q).full_rank)
+
+
+def _robust_fit(
+    problem: _Problem, sigma: float | None
+) -> tuple[_Fit, np.ndarray, ArmcalWarning | None]:
+    """Huber IRLS from the least-squares fit, then test, leave out, refit until stable.
+
+    Returns the final fit, the poses in it and a warning when the outliers could
+    not be left out without losing identifiability.
+    """
+    arm = problem.arm
+    m = problem.q.shape[0]
+    everyone = np.ones(m, dtype=bool)
+    fit = problem.fit(everyone)
+    weights = np.ones(m)
+    for _ in range(100):
+        distance = np.hypot(fit.whitened[:, 0], fit.whitened[:, 1])
+        if sigma is None:  # a robust scale: the median squared distance of chi2(2) is 2 ln 2
+            scale = float(np.sqrt(np.median(distance**2) / (2 * np.log(2))))
+            scale = max(scale, np.finfo(float).tiny)
+        else:
+            scale = sigma
+        new = np.minimum(1.0, HUBER_K * scale / np.maximum(distance, np.finfo(float).tiny))
+        fit = problem.fit(everyone, weights=new, start=fit.params)
+        if np.max(np.abs(new - weights)) < 1e-9:
+            break
+        weights = new
+    # The core: poses Huber left at full weight, if they identify the model.
+    used = weights >= 1.0
+    if not _identifiable(arm, problem.q[used]):
+        used = everyone
+    fit = problem.fit(used, start=fit.params)
+    for _ in range(20):
+        dof = 2 * int(np.count_nonzero(used)) - arm.n_free
+        scale = sigma if sigma is not None else _scale(fit, used, max(dof, 1))
+        test = _test(problem, fit, used, scale, sigma is not None)
+        keep = ~test.flagged
+        if np.array_equal(keep, used):
+            return fit, used, None
+        if not _identifiable(arm, problem.q[keep]):
+            warning = ArmcalWarning(
+                "outliers-kept",
+                f"leaving out the {int(np.count_nonzero(~keep))} flagged poses would leave too "
+                "few poses to identify every parameter, so they stay in the fit; "
+                "measure more poses",
+            )
+            return problem.fit(everyone, start=fit.params), everyone, warning
+        used = keep
+        fit = problem.fit(used, start=fit.params)
+    return fit, used, None
+
+
+def _listing(items: Sequence[str]) -> str:
+    return items[0] if len(items) == 1 else ", ".join(items[:-1]) + " and " + items[-1]
+
+
+def _outlier_warning(outliers: Sequence[Outlier], robust: bool) -> ArmcalWarning:
+    shown = [
+        f"row {o.row} (pose {o.pose}: residual {o.residual_mm:.3g} mm, "
+        f"studentized {o.studentized:.3g})"
+        for o in outliers[:5]
+    ]
+    more = f" and {len(outliers) - 5} more" if len(outliers) > 5 else ""
+    what = "outlier" if len(outliers) == 1 else "outliers"
+    if robust:
+        action = "left out of the fit; check these measurements"
+    else:
+        action = "rerun with --robust to fit without them, or check these measurements"
+    return ArmcalWarning(
+        "outlier",
+        f"{len(outliers)} {what} at the {OUTLIER_ALPHA:g} family-wise level: "
+        f"{_listing(shown)}{more}; {action}",
+    )
+
+
+def _fit_warning(
+    fit: GoodnessOfFit, sigma: float, suggested: float, flagged: int
+) -> ArmcalWarning:
+    causes = (
+        f"outliers ({flagged} flagged; try --robust)" if flagged else "outliers (try --robust)"
+    )
+    return ArmcalWarning(
+        "fit-inconsistent",
+        f"the fit is inconsistent with sigma = {sigma:.3g} mm: chi2 = {fit.chi2:.4g} on "
+        f"{fit.dof} degrees of freedom (p = {fit.p_value:.2g}); likely causes, in order: "
+        f"{causes}; a wrong unit (angles in radians, positions in metres); a model that "
+        "misses an effect (base offset, a wrong robot file, compliance under load); or sigma "
+        f"too small (the residuals suggest about {suggested:.3g} mm)",
+    )
 
 
 def identify(
@@ -387,25 +925,42 @@ def identify(
     method: Method = "auto",
     sigma: float | None = None,
     pose_labels: Sequence[str] | None = None,
+    rows: Sequence[int] | None = None,
+    row_sigma: np.ndarray | None = None,
+    robust: bool = False,
     tol: float = 1e-12,
     max_iter: int = 50,
 ) -> Calibration:
-    """Identify the deviations of ``arm`` from measured poses.
+    """Identify the deviations of ``arm`` from measured poses, and judge the fit.
 
     Parameters
     ----------
     arm : PlanarArm
+        The nominal arm, with its noise model (:mod:`armcal.noise`) and fixed
+        parameters.
     q : ndarray, shape (m, n)
         Commanded joint angles in rad.
     xy : ndarray, shape (m, 2)
         Measured end-effector positions in mm, in the instrument frame.
     method : {"auto", "closed-form", "gauss-newton"}
-        ``"auto"`` is the closed form, exact for this model (see module notes).
+        ``"auto"`` is the closed form (exact for this model, see module notes)
+        when every parameter is free, else Gauss-Newton.
     sigma : float, optional
-        Measurement noise (1 std, mm).  Defaults to ``arm.sigma``; when neither is
-        set it is estimated from the residuals, which needs ``2m > p``.
+        Instrument noise (1 std, mm), replacing the noise model's instrument
+        part (encoder noise stays).  Without it and without a noise model on the
+        arm or ``row_sigma``, sigma is estimated from the residuals, which needs
+        ``2m > p_f``.
     pose_labels : sequence of str, optional
         Labels of the poses for reports; ``"1".."m"`` by default.
+    rows : sequence of int, optional
+        1-based data rows of the poses in their file, for reports; ``1..m`` by default.
+    row_sigma : ndarray, shape (m,), optional
+        Per-row instrument noise (mm), for instruments that report each point's
+        uncertainty; replaces the instrument covariance row by row.
+    robust : bool
+        Fit with Huber's M-estimator from the least-squares fit, flag outliers
+        by the studentized test (:mod:`armcal.diagnostics`), leave them out and
+        refit until the set is stable.
     tol, max_iter
         Gauss-Newton step tolerance (relative to the reach) and iteration cap.
 
@@ -416,10 +971,22 @@ def identify(
     Raises
     ------
     NotIdentifiableError
-        If the plan cannot identify every parameter (the rank policy of
+        If the plan cannot identify every free parameter (the rank policy of
         :mod:`armcal.numerics`); the message names the unseen combinations.
     ArmcalError
-        If ``sigma`` must be estimated but ``2m = p`` leaves no residual freedom.
+        If ``sigma`` must be estimated but ``2m = p_f`` leaves no residual freedom.
+
+    Notes
+    -----
+    Without ``robust`` the fit is least squares on every pose, and the outlier
+    test still runs: flagged poses are listed and warned about, not removed.
+    Why Huber: the model is linear in the link phasors, so Huber's objective is
+    convex there -- one optimum, reached from the closed form whatever the
+    outliers -- and a pose's influence is bounded by its weight
+    ``min(1, k sigma / |r_i|)``, so gross outliers barely move the fit the test
+    then judges; clean poses keep weight 1 (``k`` is the 95 % point of a clean
+    pose's radial residual, :data:`HUBER_K`).  The final estimate is ordinary
+    (weighted) least squares on the poses kept, so its covariance is the usual one.
 
     Examples
     --------
@@ -429,6 +996,8 @@ def identify(
     >>> cal = identify(arm, q, forward_kinematics(arm, q, truth), sigma=0.1)
     >>> cal.values.round(9).tolist(), cal.std.round(4).tolist()
     ([1.5, -0.6, 0.5, -0.5], [0.05, 0.05, 0.011, 0.0194])
+    >>> cal.goodness_of_fit.dof, [w.code for w in cal.warnings]
+    (4, [])
     """
     q = np.asarray(q, dtype=float)
     xy = np.asarray(xy, dtype=float)
@@ -439,57 +1008,128 @@ def identify(
         raise ValueError(f"xy must have shape ({m}, 2) in mm, got {xy.shape}")
     if not (np.all(np.isfinite(q)) and np.all(np.isfinite(xy))):
         raise ArmcalError("joint angles and positions must be finite")
+    if row_sigma is not None:
+        row_sigma = np.asarray(row_sigma, dtype=float)
+        if row_sigma.shape != (m,) or not np.all(np.isfinite(row_sigma) & (row_sigma > 0)):
+            raise ArmcalError("per-row sigma must be positive and finite, one value per pose")
     if method == "auto":
-        method = "closed-form"
+        method = "closed-form" if arm.free.all() else "gauss-newton"
     if method not in METHODS:
         raise ArmcalError(f"unknown method {method!r}; choose one of auto, {', '.join(METHODS)}")
-    factor = factor_least_squares(scaled_jacobian(arm, q))  # one thin QR for everything
-    info = check_identifiable(arm, q, svd=factor.svd)
-    given = sigma if sigma is not None else arm.sigma
-    dof = 2 * m - arm.n_params
-    if given is None and dof <= 0:
+    if method == "closed-form" and not arm.free.all():
+        raise ArmcalError(
+            f"the closed form needs every parameter free, but {', '.join(arm.fixed)} "
+            f"{'is' if len(arm.fixed) == 1 else 'are'} fixed; use --method gauss-newton or auto"
+        )
+    if sigma is not None:
+        noise = arm.noise
+        arm = arm.replace(
+            noise=NoiseModel.isotropic(sigma)
+            if noise is None
+            else noise.with_instrument_sigma(sigma)
+        )
+    given = arm.noise is not None or row_sigma is not None
+    info = check_identifiable(arm, q, svd=plan_svd(arm, q))
+    dof_all = 2 * m - arm.n_free
+    if not given and dof_all <= 0:
         raise ArmcalError(
             f"{m} poses leave no residual to estimate sigma from ({2 * m} equations, "
-            f"{arm.n_params} parameters); give the instrument noise with --sigma or measure "
+            f"{arm.n_free} parameters); give the instrument noise with --sigma or measure "
             "more poses"
         )
-    v = _link_phasors_fit(factor, xy[None])
-    if method == "closed-form":
-        params, iterations, converged = _closed_form_params(arm, v)[0], 1, True
+    problem = _Problem(arm, q, xy, row_sigma, method, tol, max_iter)
+    reference = _reference_sigma(arm, row_sigma)
+    everyone = np.ones(m, dtype=bool)
+    extra: list[ArmcalWarning] = []
+    robust_sigma = reference if given else None
+    if robust:
+        fit, used, kept_warning = _robust_fit(problem, robust_sigma)
+        if kept_warning is not None:
+            extra.append(kept_warning)
     else:
-        fitted, steps, done = _gauss_newton(arm, v, tol=tol, max_iter=max_iter)
-        params, iterations, converged = fitted[0], int(steps[0]), bool(done[0])
-    if not np.all(np.isfinite(params)):
-        raise ArmcalError("the fit overflowed; check that positions are in mm and plausible")
-    residuals = xy - forward_kinematics(arm, q, params)
-    covariance = inverse_information(arm, q, params, svd=factor.svd)
-    if covariance is None:  # identifiable at nominal, so only for absurd deviations
-        raise ArmcalError("the Jacobian is singular at the estimate; check the data")
+        fit, used = problem.fit(everyone), everyone
+    dof = 2 * int(np.count_nonzero(used)) - arm.n_free
     source: Literal["given", "estimated"]
-    if given is None:
-        sigma_value, source = float(np.sqrt(np.sum(residuals**2) / dof)), "estimated"
+    if given:
+        sigma_value, source = reference, "given"
     else:
-        sigma_value, source = float(given), "given"
+        sigma_value, source = _scale(fit, used, max(dof, 1)), "estimated"
+    standardized = fit.whitened / sigma_value
+    test = studentized_test(standardized, fit.leverage, used, arm.n_free, sigma_given=given)
+    if not robust and np.any(test.flagged):
+        # Gross outliers pull a least-squares fit towards them and inflate every
+        # residual, so the poses to flag are those the robust procedure would
+        # leave out, judged against its fit; this fit keeps them.
+        clean, kept, _ = _robust_fit(problem, robust_sigma)
+        clean_dof = 2 * int(np.count_nonzero(kept)) - arm.n_free
+        scale = reference if given else _scale(clean, kept, max(clean_dof, 1))
+        test = _test(problem, clean, kept, scale, given)
+        test = PoseTest(test.statistic, test.p_value, test.flagged | ~kept)
     labels = tuple(str(i) for i in range(1, m + 1)) if pose_labels is None else tuple(pose_labels)
+    row_numbers = tuple(range(1, m + 1)) if rows is None else tuple(int(r) for r in rows)
+    distance = np.hypot(fit.residuals[:, 0], fit.residuals[:, 1])
+    flagged = test.flagged | ~used
+    outliers = tuple(
+        Outlier(
+            index=int(i),
+            row=row_numbers[i],
+            pose=labels[i],
+            target=None,
+            residual_mm=float(distance[i]),
+            studentized=float(test.statistic[i]),
+            p_value=float(test.p_value[i]),
+            removed=not bool(used[i]),
+        )
+        for i in np.flatnonzero(flagged)
+    )
+    fit_test = goodness_of_fit(standardized[used], dof, sigma_given=given)
     warnings = [w for w in (conditioning_warning(arm, info),) if w is not None]
-    if not converged:
+    if not fit.converged:
         warnings.append(
             ArmcalWarning(
                 "not-converged",
-                f"{method} did not converge in {int(iterations)} iterations; "
+                f"{method} did not converge in {fit.iterations} iterations; "
                 "try --method closed-form",
             )
         )
+    if outliers:
+        warnings.append(_outlier_warning(outliers, robust))
+    warnings.extend(extra)
+    if given and dof < FEW_DOF:
+        more = -(-(FEW_DOF - dof) // 2)
+        warnings.append(
+            ArmcalWarning(
+                "few-dof",
+                f"{int(np.count_nonzero(used))} poses leave {dof} degrees of freedom for "
+                f"{arm.n_free} parameters: too few to judge the fit against sigma or to find "
+                f"outliers; measure at least {more} more "
+                f"{'pose' if more == 1 else 'poses'}",
+            )
+        )
+    if not fit_test.consistent:
+        suggested = sigma_value * float(np.sqrt((fit_test.chi2 or 0.0) / max(dof, 1)))
+        warnings.append(
+            _fit_warning(fit_test, sigma_value, suggested, int(np.count_nonzero(test.flagged)))
+        )
+    g = np.zeros((arm.n_params, arm.n_free))
+    g[arm.free] = fit.factor
+    covariance = sigma_value**2 * (g @ g.T)
     return Calibration(
         arm=arm,
         method=method,
-        params=params,
-        covariance=sigma_value**2 * covariance,
-        sigma_mm=sigma_value,
+        params=fit.params,
+        covariance=covariance,
+        sigma_mm=float(sigma_value),
         sigma_source=source,
-        residuals=residuals,
-        iterations=int(iterations),
-        converged=bool(converged),
+        residuals=fit.residuals,
+        iterations=int(fit.iterations),
+        converged=bool(fit.converged),
         pose_labels=labels,
         warnings=tuple(warnings),
+        goodness_of_fit=fit_test,
+        standardized_residuals=standardized,
+        outliers=outliers,
+        used=used,
+        rows=row_numbers,
+        robust=bool(robust),
     )

@@ -39,6 +39,7 @@ __all__ = [
     "ScaledSVD",
     "factor_least_squares",
     "scaled_svd",
+    "solve_least_squares",
     "spd_inverse",
 ]
 
@@ -305,6 +306,58 @@ def factor_least_squares(matrix: np.ndarray) -> LinearLeastSquares:
     basis, triangle = np.linalg.qr(matrix / norms, mode="reduced")
     left, s, vt = np.linalg.svd(triangle, full_matrices=True)
     return LinearLeastSquares(basis, left, ScaledSVD(_padded(s, p), vt, norms))
+
+
+def solve_least_squares(
+    matrix: np.ndarray, rhs: np.ndarray
+) -> tuple[np.ndarray, np.ndarray, ScaledSVD]:
+    """Least-squares solutions of a stack of systems ``A x = b``, by the rank policy.
+
+    Parameters
+    ----------
+    matrix : ndarray, shape (..., r, p)
+        One matrix per system (leading axes batch).
+    rhs : ndarray, shape (..., r)
+
+    Returns
+    -------
+    x : ndarray, shape (..., p)
+        Minimum-norm solutions in the column-scaled coordinates: directions the
+        policy calls unidentifiable are left out.
+    full_rank : ndarray of bool, shape (...)
+    svd : ScaledSVD
+        The policy's view of every matrix.
+
+    Notes
+    -----
+    Thin QR of ``A diag(1 / c)`` (batched), then SVD of the ``p x p`` triangle:
+    memory ``O(r p)`` per system, accuracy ``cond(A) eps``.  Raises
+    :class:`~armcal.errors.ArmcalError` for non-finite entries.
+
+    Examples
+    --------
+    >>> a = np.array([[[1.0, 0.0], [1.0, 1.0], [1.0, 2.0]]])
+    >>> x, ok, _ = solve_least_squares(a, np.array([[1.0, 3.0, 5.0]]))
+    >>> x.round(12).tolist(), ok.tolist()
+    ([[1.0, 2.0]], [True])
+    """
+    matrix = np.asarray(matrix, dtype=float)
+    rhs = np.asarray(rhs, dtype=float)
+    _check_finite(matrix)
+    _check_finite(rhs)
+    p = matrix.shape[-1]
+    norms = np.linalg.norm(matrix, axis=-2)
+    norms = np.where(norms > 0, norms, 1.0)
+    basis, triangle = np.linalg.qr(matrix / norms[..., None, :], mode="reduced")
+    left, s, vt = np.linalg.svd(triangle, full_matrices=True)
+    svd = ScaledSVD(_padded(s, p), vt, norms)
+    k = triangle.shape[-2]
+    kept = svd.kept[..., :k]
+    inverse = np.where(kept, 1.0 / np.where(kept, s[..., :k], 1.0), 0.0)
+    projected = np.einsum("...rk,...r->...k", basis, rhs)
+    coeffs = np.einsum("...k,...kj->...j", projected, left) * inverse
+    x = np.einsum("...k,...kp->...p", coeffs, vt[..., :k, :]) / norms
+    return x, svd.full_rank, svd
 
 
 def spd_inverse(matrix: np.ndarray) -> np.ndarray:
