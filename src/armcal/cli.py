@@ -430,6 +430,9 @@ def _simulate(args: argparse.Namespace) -> None:
     arm = _model_arm(args, spec)
     q = read_plan(args.plan, arm)
     truth = _truth(args, spec)
+    method = args.method
+    if method == "auto":
+        method = "closed-form" if arm.free.all() else "gauss-newton"
     try:
         result = monte_carlo(
             arm,
@@ -437,7 +440,7 @@ def _simulate(args: argparse.Namespace) -> None:
             truth,
             _design_sigma(arm),
             args.trials,
-            method=args.method,
+            method=method,
             rng=np.random.default_rng(args.seed),
             test_q=_test_poses(args, spec),
             progress=ProgressBar("simulate"),
@@ -642,9 +645,10 @@ def build_parser() -> argparse.ArgumentParser:
     )
     sub.add_argument(
         "--method",
-        choices=list(METHODS),
-        default="closed-form",
-        help="solver applied to every trial (default closed-form)",
+        choices=["auto", *METHODS],
+        default="auto",
+        help="solver applied to every trial; auto = closed-form when every parameter is free, "
+        "else gauss-newton (default auto)",
     )
     sub.add_argument("--test-poses", metavar="PLAN_CSV", help=test_help)
     _add_fix(sub)

@@ -44,6 +44,7 @@ else:  # pragma: no cover - exercised on Python 3.10 only
 __all__ = [
     "BUILTIN_ROBOTS",
     "DEFAULT_ROBOT",
+    "INSTRUMENT_RANGE",
     "JOINT_SIGMA_MAX_DEG",
     "LIMIT_TOLERANCE_DEG",
     "LINK_LENGTH_RANGE_MM",
@@ -94,6 +95,11 @@ LIMIT_TOLERANCE_DEG = 2.0
 #: its link lengths) from the base is an error: no arm whose links deviate by less than
 #: 10 % (the ``large-deviation`` bound of :mod:`armcal.plausibility`) gets there.
 REACH_MARGIN = 0.1
+
+#: An instrument sees an arm from at most this many reaches away (a laser tracker a
+#: few metres from a sub-metre arm): a point beyond the reach but within it may be
+#: instrument-frame data without a base offset, one farther is a wrong value or unit.
+INSTRUMENT_RANGE = 100.0
 
 #: The robot used when a command is given none.
 DEFAULT_ROBOT = "paper-4link"
@@ -610,8 +616,11 @@ def _instrument_covariance(path, meas: dict) -> np.ndarray | None:
     if "covariance_mm2" in meas:
         key = "measurement.covariance_mm2"
         raw = meas["covariance_mm2"]
-        if not isinstance(raw, list) or len(raw) != 2:
-            raise _fail(path, f"key '{key}': expected a 2 x 2 matrix [[a, b], [b, c]] in mm^2")
+        square = isinstance(raw, list) and len(raw) == 2
+        if not square or not all(isinstance(row, list) and len(row) == 2 for row in raw):
+            raise _fail(
+                path, f"key '{key}': expected a 2 x 2 matrix [[a, b], [b, c]] in mm^2, got {raw!r}"
+            )
         cov = np.array([_numbers(path, row, f"{key}[{i}]", 2) for i, row in enumerate(raw)])
         a, b, c, d = cov[0, 0], cov[0, 1], cov[1, 0], cov[1, 1]
         if b != c:
@@ -1074,7 +1083,7 @@ def _check_reach(path, arm: PlanarArm, xy: np.ndarray, lines: list[int]) -> None
     c = int(np.argmax(np.abs(xy[r] - center)))
     column = ("x_mm", "y_mm")[c]
     fix = "check the value and the unit (mm)"
-    if not arm.base_offset:
+    if not arm.base_offset and distance[r] <= INSTRUMENT_RANGE * reach:
         fix += (
             "; if the instrument's origin is not at the arm's base (a laser tracker, a camera), "
             "set base_offset = true in the robot file"
@@ -1082,7 +1091,7 @@ def _check_reach(path, arm: PlanarArm, xy: np.ndarray, lines: list[int]) -> None
     raise _fail(
         path,
         f"row {r + 1} (line {lines[r]}), column {column}: {xy[r, c]:g} puts the tip "
-        f"{distance[r]:.4g} mm {where}, beyond what {arm.name} can reach ("
+        f"{distance[r]:.4g} mm {where}, beyond the reach of {arm.name} ("
         f"{'2 x ' if arm.base_offset else ''}{reach:g} mm, +{100 * REACH_MARGIN:g} % for "
         f"deviations: {limit:.4g} mm); {fix}",
     )

@@ -20,8 +20,9 @@ residuals (in the file's unit) unchanged and shows only in the deviations,
 about ``-99.9 %`` of every link for metres.  A wrong angle unit or a missing
 base offset shows in the residuals instead.  Hence two tests:
 
-* angles and base offset: the alternative's residual sum of squares is at least
-  :data:`IMPROVEMENT` times smaller, and its deviations are plausible;
+* angles and base offset: the alternative's residual mean square (RSS over its
+  degrees of freedom) is at least :data:`IMPROVEMENT` times smaller, it keeps at
+  least :data:`MIN_DOF` degrees of freedom, and its deviations are plausible;
 * lengths: the data as read give large deviations, the scaled data plausible
   ones, with residuals no worse in the file's unit.
 
@@ -54,6 +55,7 @@ __all__ = [
     "IMPROVEMENT",
     "LARGE_ANGLE_DEG",
     "LARGE_LENGTH_FRACTION",
+    "MIN_DOF",
     "SUSPICIOUS_RMS_FRACTION",
     "Explanation",
     "deviation_warning",
@@ -71,6 +73,13 @@ LARGE_ANGLE_DEG = 10.0
 #: How many times smaller an alternative's residual sum of squares must be (two
 #: orders of magnitude: far beyond what two extra parameters or chance give).
 IMPROVEMENT = 100.0
+
+#: Residual degrees of freedom an alternative must keep to be compared.  For data
+#: the original model fits (Gaussian noise), two extra parameters leave
+#: ``RSS_alt / RSS ~ Beta(k / 2, 1)`` on ``k`` degrees of freedom, so a 100-fold drop
+#: happens by chance with probability ``100^(-k/2)``: 1 % at ``k = 2``, ``1e-6`` at 6.
+#: With as many parameters as equations any reading fits exactly and proves nothing.
+MIN_DOF = 6
 
 #: A residual RMS above this fraction of the arm's reach (0.66 mm for the paper's
 #: 660 mm arm) is more than an instrument good enough to calibrate the arm leaves:
@@ -95,9 +104,9 @@ class Explanation:
         One line: what looks wrong, by how much the alternative fits better,
         and the fix (without the file name, which the caller adds).
     improvement : float
-        Residual sum of squares as read over the alternative's, in the file's
-        units (inf when the alternative fits to round-off; 1 for a length unit,
-        whose residuals scale with the data).
+        Residual mean square as read over the alternative's, in the file's units
+        (inf when the alternative fits to round-off or the data as read cannot be
+        fitted; about 1 for a length unit, whose residuals scale with the data).
     params : ndarray, shape (p_alt,)
         The alternative's deviations (mm, rad), in its arm's parametrization.
     """
@@ -113,6 +122,11 @@ class _Fit:
     arm: PlanarArm
     params: np.ndarray
     rss: float  # unweighted, in the squared unit of the positions fitted
+    dof: int  # 2 m - p_f
+
+    @property
+    def mean_square(self) -> float:
+        return self.rss / self.dof if self.dof > 0 else np.inf
 
 
 def _fit(arm: PlanarArm, q: np.ndarray, xy: np.ndarray) -> _Fit | None:
@@ -131,7 +145,7 @@ def _fit(arm: PlanarArm, q: np.ndarray, xy: np.ndarray) -> _Fit | None:
     if not np.all(np.isfinite(params)):
         return None
     residuals = xy - forward_kinematics(plain, q, params)
-    return _Fit(plain, params, float(np.sum(residuals**2)))
+    return _Fit(plain, params, float(np.sum(residuals**2)), 2 * q.shape[0] - plain.n_free)
 
 
 def large_deviations(
@@ -212,7 +226,7 @@ def deviation_warning(arm: PlanarArm, params: np.ndarray) -> ArmcalWarning | Non
         f"identified deviations are a large part of a link: {', '.join(found)}{rotation}; "
         f"calibration-sized deviations are a few mm and about a degree (here more than "
         f"{100 * LARGE_LENGTH_FRACTION:g} % of a link or {LARGE_ANGLE_DEG:g} deg); check the "
-        "robot file's link lengths and joint_map, the units of the measurements (mm, deg), "
+        "robot file's link lengths, the units of the measurements (mm, deg), "
         "and base_offset",
     )
 
@@ -247,19 +261,22 @@ def _fold(ratio: float) -> str:
 
 
 def _better(original: _Fit | None, alternative: _Fit | None, m: int, reach: float) -> float:
-    """RSS ratio of the data as read over an alternative (0 when the alternative is no answer).
+    """Mean-square ratio of the data as read over an alternative (0: the alternative is no answer).
 
-    With no fit of the data as read (the plan cannot identify the parameters),
-    the alternative must fit to within :data:`SUSPICIOUS_RMS_FRACTION` of the reach.
+    The alternative must keep :data:`MIN_DOF` degrees of freedom and plausible
+    deviations.  With no fit of the data as read (the plan cannot identify the
+    parameters), it must fit to within :data:`SUSPICIOUS_RMS_FRACTION` of the reach.
     """
-    if alternative is None or not _plausible(alternative):
+    if alternative is None or alternative.dof < MIN_DOF or not _plausible(alternative):
         return 0.0
     if original is None:
         fits = _rms(alternative, m) <= SUSPICIOUS_RMS_FRACTION * reach
         return np.inf if fits else 0.0
     if _rms(original, m) <= 1e-9 * reach:  # as read, the data fit to round-off
         return 0.0
-    return original.rss / alternative.rss if alternative.rss > 0 else np.inf
+    if alternative.rss <= 0:
+        return np.inf
+    return original.mean_square / alternative.mean_square
 
 
 def explain(
@@ -356,7 +373,7 @@ def explain(
                     f"the positions in x_mm, y_mm look like {unit}: times {scale:g} they give "
                     f"deviations of at most {_worst_fraction(arm, scaled.params):.2g} % of a "
                     f"link (as read: {worst:.3g} %); convert them to mm",
-                    original.rss / (scaled.rss / scale**2) if scaled.rss > 0 else np.inf,
+                    original.rss / (scaled.rss / scale**2) if scaled.rss > 0 else 1.0,
                     scaled.params,
                 )
             )

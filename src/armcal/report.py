@@ -68,29 +68,30 @@ def _noise_text(arm: PlanarArm) -> str | None:
     return "; ".join(parts) + f" (reference sigma {noise.sigma_mm:.4g} mm)"
 
 
-def model_lines(arm: PlanarArm) -> list[str]:
+def model_lines(arm: PlanarArm, *, plan: bool = True) -> list[str]:
     """Lines naming the fixed parameters and a noise model that is not isotropic iid.
 
     Empty for the paper's model (every parameter free, isotropic iid noise).
+    ``plan`` adds, for a noise model that is not isotropic iid, that the paper's
+    D*, Table I and analytic plans assume one (what changes the answer for a plan).
 
     Examples
     --------
     >>> model_lines(PlanarArm([260.0, 180.0], fixed=["dl2"]))
-    ['fixed (held at nominal, not identified): dl2; 3 of 4 parameters identified']
+    ['fixed (held at nominal, not identified): dl2']
     """
     lines = []
     if arm.fixed:
-        lines.append(
-            f"fixed (held at nominal, not identified): {', '.join(arm.fixed)}; "
-            f"{arm.n_free} of {arm.n_params} parameters identified"
-        )
+        lines.append(f"fixed (held at nominal, not identified): {', '.join(arm.fixed)}")
     noise = _noise_text(arm)
     if noise is not None:
-        lines.append(
-            f"noise model: {noise}; not isotropic iid, so weighted least squares and the "
-            "weighted information matrix are used: the paper's D* and Table I conditions and "
-            "the closed-form (analytic) plans assume isotropic iid noise"
-        )
+        line = f"noise model: {noise}; not isotropic iid: weighted least squares"
+        if plan:
+            line += (
+                " and the weighted information matrix (the paper's D*, Table I and the "
+                "analytic plans assume isotropic iid noise)"
+            )
+        lines.append(line)
     return lines
 
 
@@ -101,6 +102,13 @@ def model_to_dict(arm: PlanarArm) -> dict:
         "noise": None if arm.noise is None else arm.noise.to_dict(),
         "noise_isotropic_iid": arm.noise is None or arm.noise.isotropic_iid,
     }
+
+
+def _identified(arm: PlanarArm) -> str:
+    """``8 parameters``, or ``7 of 8 parameters identified`` when some are fixed."""
+    if not arm.fixed:
+        return f"{arm.n_params} parameters"
+    return f"{arm.n_free} of {arm.n_params} parameters identified"
 
 
 def _std_cell(arm: PlanarArm, name: str, value: float, width: int, digits: int) -> str:
@@ -115,9 +123,8 @@ def format_quality(arm: PlanarArm, quality: PlanQuality) -> str:
     eff = quality.efficiencies
     obs = quality.observability
     lines = [
-        f"{quality.n_poses} poses of {arm.name}, {arm.n_free} parameters identified"
-        + (f" of {arm.n_params}" if arm.fixed else "")
-        + f", sigma {quality.sigma_mm:g} mm",
+        f"{quality.n_poses} poses of {arm.name}, {_identified(arm)}, "
+        f"sigma {quality.sigma_mm:g} mm",
         *model_lines(arm),
         f"efficiency (1 = orthogonal optimum): D {eff['D']:.4f}  A {eff['A']:.4f}  "
         f"E {eff['E']:.4f}",
@@ -228,11 +235,10 @@ def format_calibration(cal: Calibration, *, truth: np.ndarray | None = None) -> 
     poses = f"{cal.n_poses} poses" + (
         f" ({cal.n_poses - used} left out of the fit)" if used < cal.n_poses else ""
     )
-    identified = f"{arm.n_free} parameters" + (f" of {arm.n_params}" if arm.fixed else "")
     lines = [
-        f"calibration of {arm.name}: {poses}, {identified}, method {cal.method}"
+        f"calibration of {arm.name}: {poses}, {_identified(arm)}, method {cal.method}"
         + (", robust" if cal.robust else ""),
-        *model_lines(arm),
+        *model_lines(arm, plan=False),
         "",
         header,
     ]
