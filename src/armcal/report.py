@@ -757,6 +757,7 @@ def poses_needed_summary(
         "method": found.method,
         "evaluated": {str(m): v for m, v in found.evaluated.items() if math.isfinite(v)},
         "seconds": seconds,
+        **model_to_dict(arm),
     }
     less = (
         f"{found.poses - 1} poses give {found.previous:.6g} {unit}"
@@ -769,5 +770,6 @@ def poses_needed_summary(
         f"{found.goal:g} {unit}; {less}",
         f"({TARGETS[found.target]}; sigma {found.sigma_mm:g} mm; {len(found.evaluated)} plan "
         f"sizes tried in {seconds:.2f} s)",
+        *model_lines(arm),
     ]
     return document, lines
