@@ -59,6 +59,7 @@ bench: $(VENV)/.installed
 	$(BIN)/python benchmarks/bench_design.py
 	$(BIN)/python benchmarks/bench_simulate.py
 	$(BIN)/python benchmarks/bench_scale.py
+	$(BIN)/python benchmarks/bench_outliers.py
 
 # Run every example of README.md and write its real output into it (and docs/img/).
 readme: $(VENV)/.installed

@@ -120,7 +120,7 @@ def scaled_information(arm: PlanarArm, q: np.ndarray) -> np.ndarray:
     return weighted_information(model_columns(arm, q), np.full(q.shape[:-1], 1 / q.shape[-2]))
 
 
-def _covariance_factor(
+def covariance_factor(
     arm: PlanarArm, q: np.ndarray, params: np.ndarray | None, svd: ScaledSVD | None = None
 ) -> tuple[np.ndarray, np.ndarray]:
     """``G`` ``(..., p, p)`` with ``(J^T J)^-1 = G G^T`` (user parametrization) and the ok mask."""
@@ -138,7 +138,7 @@ def _covariance_factor(
 def _covariance_factor_at(
     arm: PlanarArm, q: np.ndarray, params: np.ndarray
 ) -> tuple[np.ndarray, np.ndarray]:
-    """:func:`_covariance_factor` of a weighted or reduced model at deviations ``params``.
+    """:func:`covariance_factor` of a weighted or reduced model at deviations ``params``.
 
     The free columns of the user Jacobian at ``params``, each pose whitened at
     ``params`` (:meth:`armcal.noise.NoiseModel.whitening`), through the rank
@@ -207,7 +207,7 @@ def inverse_information_batch(
     link length per link), so ``(J^T J)^-1 = T V S^-2 V^T T^T / m`` from the SVD
     of ``H``: accurate to ``cond(H) eps``, with no Gram matrix inverted.
     """
-    g, ok = _covariance_factor(arm, q, params, svd)
+    g, ok = covariance_factor(arm, q, params, svd)
     safe = np.where(ok[..., None, None], g, 0.0)
     inverse = safe @ np.swapaxes(safe, -1, -2)
     return np.where(ok[..., None, None], inverse, np.inf), ok
@@ -598,7 +598,7 @@ def position_accuracy(
     q = np.asarray(q, dtype=float)
     svd = plan_svd(arm, q) if svd is None else svd
     check_identifiable(arm, q, svd=svd)
-    g, _ = _covariance_factor(arm, q, None, svd)  # finite: same policy, positive lengths
+    g, _ = covariance_factor(arm, q, None, svd)  # finite: same policy, positive lengths
     j0 = jacobian(arm, test_q)  # (k, 2, p), user parametrization like g
     per_pose = sigma * np.sqrt(np.sum((j0 @ g) ** 2, axis=(-2, -1)))
     return PositionAccuracy(

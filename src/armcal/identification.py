@@ -48,11 +48,13 @@ from __future__ import annotations
 
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
+from functools import cached_property
 from typing import Any, Literal, cast
 
 import numpy as np
 
 from .arm import PlanarArm, forward_kinematics, jacobian, wrap_angle
+from .criteria import covariance_factor
 from .diagnostics import (
     FEW_DOF,
     OUTLIER_ALPHA,
@@ -380,6 +382,7 @@ def solve_model(
     method: Method = "auto",
     tol: float = 1e-12,
     max_iter: int = 50,
+    check_plan: bool = True,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Weighted least squares over the free parameters of any model; batched over sets.
 
@@ -404,6 +407,8 @@ def solve_model(
     tol, max_iter
         A set has converged when its largest step moves the tip by less than
         ``tol`` times the reach (mm); iteration cap.
+    check_plan : bool
+        Check that the poses identify the model (skip only when the caller has).
 
     Returns
     -------
@@ -439,7 +444,8 @@ def solve_model(
         if pose_weights is None
         else np.any(np.atleast_2d(pose_weights) > 0, axis=0)
     )
-    check_identifiable(arm, q[used], svd=plan_svd(arm, q[used]))
+    if check_plan:
+        check_identifiable(arm, q[used], svd=plan_svd(arm, q[used]))
     all_free = bool(arm.free.all())
     if method == "closed-form" and not all_free:
         raise ArmcalError(
@@ -712,17 +718,55 @@ METHODS: dict[str, Callable[..., tuple[np.ndarray, Any, Any]]] = {
 HUBER_K = float(np.sqrt(-2.0 * np.log(0.05)))
 
 
-@dataclass(frozen=True, eq=False)
 class _Fit:
-    """One least-squares fit and everything the diagnostics need, for all m poses."""
+    """One least-squares fit and everything the diagnostics need, for all m poses.
 
-    params: np.ndarray
-    iterations: int
-    converged: bool
-    residuals: np.ndarray  # (m, 2) mm
-    whitened: np.ndarray  # (m, 2) W_i e_i, in mm of the reference noise
-    factor: np.ndarray  # (p_f, p_f) G with (J_w^T J_w)^-1 = G G^T over the used poses
-    leverage: np.ndarray  # (m, 2, 2) B_i B_i^T
+    ``factor`` (``G`` with ``(J_w^T J_w)^-1 = G G^T`` over the used poses) and
+    ``leverage`` (``B_i B_i^T``, ``(m, 2, 2)``) are computed on first use: the
+    robust iterations only need the residuals.
+    """
+
+    def __init__(
+        self,
+        problem: _Problem,
+        params: np.ndarray,
+        used: np.ndarray,
+        iterations: int,
+        converged: bool,
+    ) -> None:
+        arm, q = problem.arm, problem.q
+        self.params, self.used = params, used
+        self.iterations, self.converged = iterations, converged
+        self.residuals = problem.xy - forward_kinematics(arm, q, params)  # (m, 2) mm
+        w = _whitening(arm, q, params, problem.row_sigma, None)
+        if w is not None and problem.row_sigma is not None:  # to the rows' own reference
+            w = w * (_reference_sigma(arm, problem.row_sigma) / _model_noise(arm).sigma_mm)
+        self._w, self._arm, self._q, self._problem = w, arm, q, problem
+        # W_i e_i, in mm of the reference noise
+        self.whitened = self.residuals if w is None else (w @ self.residuals[:, :, None])[:, :, 0]
+
+    @cached_property
+    def _jacobian(self) -> np.ndarray:
+        arm = self._arm
+        return _apply(self._w, jacobian(arm, self._q, self.params)[..., arm.free])  # (m, 2, p_f)
+
+    @cached_property
+    def factor(self) -> np.ndarray:
+        if self._problem.plain and self.used.all():  # from the plan's own SVD
+            factor, ok = covariance_factor(
+                self._arm, self._q, self.params, self._problem.plan_factor.svd
+            )
+        else:
+            svd = scaled_svd(self._jacobian[self.used].reshape(-1, self._arm.n_free))
+            factor, ok = svd.inverse_gram_factor()
+        if not bool(ok):  # identifiable at nominal, so only for absurd deviations
+            raise ArmcalError("the Jacobian is singular at the estimate; check the data")
+        return factor
+
+    @cached_property
+    def leverage(self) -> np.ndarray:
+        b = self._jacobian @ self.factor
+        return b @ np.swapaxes(b, -1, -2)
 
 
 class _Problem:
@@ -740,6 +784,14 @@ class _Problem:
     ) -> None:
         self.arm, self.q, self.xy, self.row_sigma = arm, q, xy, row_sigma
         self.method, self.tol, self.max_iter = method, tol, max_iter
+        #: The plain case (paper's model, every pose, no weights) shares one thin QR
+        #: of the plan's regressor between the check, the solve and the covariance.
+        self.plain = arm.standard and row_sigma is None
+
+    @cached_property
+    def plan_factor(self) -> LinearLeastSquares:
+        """The plan's factorization (:func:`_factor`): raises if it is not identifiable."""
+        return _factor(self.arm, self.q)
 
     def _rows(self, used: np.ndarray) -> np.ndarray | None:
         return None if self.row_sigma is None else self.row_sigma[used]
@@ -754,7 +806,13 @@ class _Problem:
         """Deviations fitted to the poses in ``used`` (times ``weights``, if given)."""
         arm, q, xy = self.arm, self.q[used], self.xy[used]
         kwargs: dict[str, Any] = {"tol": self.tol, "max_iter": self.max_iter}
-        if weights is None and start is None and arm.standard and self.row_sigma is None:
+        if weights is None and start is None and self.plain and used.all():
+            v = _link_phasors_fit(self.plan_factor, xy[None])
+            if self.method == "closed-form":
+                return _closed_form_params(arm, v)[0], 1, True
+            fitted, steps, done = _gauss_newton(arm, v, **kwargs)
+            return fitted[0], int(steps[0]), bool(done[0])
+        if weights is None and start is None and self.plain:
             if self.method == "closed-form":
                 return solve_closed_form(arm, q, xy), 1, True
             params, steps, done = solve_gauss_newton(arm, q, xy, **kwargs)
@@ -770,26 +828,10 @@ class _Problem:
             pose_weights=None if weights is None else weights[used],
             start=start if method == "gauss-newton" else None,
             method=cast(Method, method),
+            check_plan=False,
             **kwargs,
         )
         return params, int(steps), bool(done)
-
-    def evaluate(self, params: np.ndarray, used: np.ndarray, iterations: int, converged: bool):
-        """Residuals, whitened residuals and leverages of every pose against ``params``."""
-        arm, q = self.arm, self.q
-        residuals = self.xy - forward_kinematics(arm, q, params)
-        w = _whitening(arm, q, params, self.row_sigma, None)
-        if w is not None and self.row_sigma is not None:  # to the rows' own reference
-            w = w * (_reference_sigma(arm, self.row_sigma) / _model_noise(arm).sigma_mm)
-        whitened = residuals if w is None else (w @ residuals[:, :, None])[:, :, 0]
-        jac = _apply(w, jacobian(arm, q, params)[..., arm.free])  # (m, 2, p_f)
-        svd = scaled_svd(jac[used].reshape(-1, arm.n_free))
-        factor, ok = svd.inverse_gram_factor()
-        if not bool(ok):  # identifiable at nominal, so only for absurd deviations
-            raise ArmcalError("the Jacobian is singular at the estimate; check the data")
-        b = jac @ factor
-        leverage = b @ np.swapaxes(b, -1, -2)
-        return _Fit(params, iterations, converged, residuals, whitened, factor, leverage)
 
     def fit(
         self,
@@ -799,7 +841,7 @@ class _Problem:
         start: np.ndarray | None = None,
     ) -> _Fit:
         params, steps, done = self.solve(used, weights=weights, start=start)
-        return self.evaluate(params, used, steps, done)
+        return _Fit(self, params, used, steps, done)
 
 
 def _reference_sigma(arm: PlanarArm, row_sigma: np.ndarray | None) -> float:
@@ -830,11 +872,13 @@ def _identifiable(arm: PlanarArm, q: np.ndarray) -> bool:
 
 def _robust_fit(
     problem: _Problem, sigma: float | None
-) -> tuple[_Fit, np.ndarray, ArmcalWarning | None]:
+) -> tuple[_Fit, np.ndarray, np.ndarray, ArmcalWarning | None]:
     """Huber IRLS from the least-squares fit, then test, leave out, refit until stable.
 
-    Returns the final fit, the poses in it and a warning when the outliers could
-    not be left out without losing identifiability.
+    Returns the final fit, the poses in it, the poses flagged as outliers, and a
+    warning when the outliers could not be left out without losing identifiability.
+    When most poses disagree with the fit, nothing is an outlier: the model, the
+    units or sigma are wrong, which the goodness of fit reports.
     """
     arm = problem.arm
     m = problem.q.shape[0]
@@ -864,7 +908,10 @@ def _robust_fit(
         test = _test(problem, fit, used, scale, sigma is not None)
         keep = ~test.flagged
         if np.array_equal(keep, used):
-            return fit, used, None
+            return fit, used, ~used, None
+        if 2 * np.count_nonzero(keep) < m:
+            everything = problem.fit(everyone, start=fit.params)
+            return everything, everyone, ~everyone, None
         if not _identifiable(arm, problem.q[keep]):
             warning = ArmcalWarning(
                 "outliers-kept",
@@ -872,10 +919,10 @@ def _robust_fit(
                 "few poses to identify every parameter, so they stay in the fit; "
                 "measure more poses",
             )
-            return problem.fit(everyone, start=fit.params), everyone, warning
+            return problem.fit(everyone, start=fit.params), everyone, ~keep, warning
         used = keep
         fit = problem.fit(used, start=fit.params)
-    return fit, used, None
+    return fit, used, ~used, None
 
 
 def _listing(items: Sequence[str]) -> str:
@@ -1029,7 +1076,9 @@ def identify(
             else noise.with_instrument_sigma(sigma)
         )
     given = arm.noise is not None or row_sigma is not None
-    info = check_identifiable(arm, q, svd=plan_svd(arm, q))
+    problem = _Problem(arm, q, xy, row_sigma, method, tol, max_iter)
+    plan = problem.plan_factor.svd if problem.plain else plan_svd(arm, q)
+    info = check_identifiable(arm, q, svd=plan)
     dof_all = 2 * m - arm.n_free
     if not given and dof_all <= 0:
         raise ArmcalError(
@@ -1037,13 +1086,12 @@ def identify(
             f"{arm.n_free} parameters); give the instrument noise with --sigma or measure "
             "more poses"
         )
-    problem = _Problem(arm, q, xy, row_sigma, method, tol, max_iter)
     reference = _reference_sigma(arm, row_sigma)
     everyone = np.ones(m, dtype=bool)
     extra: list[ArmcalWarning] = []
     robust_sigma = reference if given else None
     if robust:
-        fit, used, kept_warning = _robust_fit(problem, robust_sigma)
+        fit, used, flagged, kept_warning = _robust_fit(problem, robust_sigma)
         if kept_warning is not None:
             extra.append(kept_warning)
     else:
@@ -1056,19 +1104,19 @@ def identify(
         sigma_value, source = _scale(fit, used, max(dof, 1)), "estimated"
     standardized = fit.whitened / sigma_value
     test = studentized_test(standardized, fit.leverage, used, arm.n_free, sigma_given=given)
+    if not robust:
+        flagged = test.flagged
     if not robust and np.any(test.flagged):
         # Gross outliers pull a least-squares fit towards them and inflate every
         # residual, so the poses to flag are those the robust procedure would
         # leave out, judged against its fit; this fit keeps them.
-        clean, kept, _ = _robust_fit(problem, robust_sigma)
+        clean, kept, flagged, _ = _robust_fit(problem, robust_sigma)
         clean_dof = 2 * int(np.count_nonzero(kept)) - arm.n_free
         scale = reference if given else _scale(clean, kept, max(clean_dof, 1))
         test = _test(problem, clean, kept, scale, given)
-        test = PoseTest(test.statistic, test.p_value, test.flagged | ~kept)
     labels = tuple(str(i) for i in range(1, m + 1)) if pose_labels is None else tuple(pose_labels)
     row_numbers = tuple(range(1, m + 1)) if rows is None else tuple(int(r) for r in rows)
     distance = np.hypot(fit.residuals[:, 0], fit.residuals[:, 1])
-    flagged = test.flagged | ~used
     outliers = tuple(
         Outlier(
             index=int(i),
