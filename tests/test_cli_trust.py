@@ -424,3 +424,15 @@ def test_a_noise_model_that_is_not_isotropic_iid_is_said_in_reports(tmp_path):
     assert document["noise_isotropic_iid"] is False
     # sigma_ref = sqrt(2 / (1 / 0.08^2 + 1 / 0.02^2)) (armcal.noise)
     assert document["sigma_mm"] == pytest.approx(math.sqrt(2 / (1 / 0.0064 + 1 / 0.0004)))
+
+
+def test_simulating_a_fixed_parameter_the_truth_moves_is_a_warning(tmp_path):
+    """The built-in truth has dl4 = 0.7 mm; held at 0, dl4 is off by exactly that."""
+    (tmp_path / "plan.csv").write_text(_plan_csv(_plan(20)))
+    argv = ("simulate", "--plan", "plan.csv", "--trials", "50", "--fix", "dl4", "--json")
+    result = run_cli(tmp_path, *argv)
+    assert result.returncode == 0, result.stderr
+    document = _no_nan(result.stdout)
+    _assert_warned_once(result, document, "fixed-truth", "dl4 = 0.7 mm")
+    assert document["fixed"] == ["dl4"]
+    assert document["bias"]["dl4"] == pytest.approx(-0.7, abs=1e-12)

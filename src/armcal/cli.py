@@ -447,7 +447,7 @@ def _simulate(args: argparse.Namespace) -> None:
         )
     except NotIdentifiableError as exc:
         raise NotIdentifiableError(f"{args.plan}: {exc}", exc.combinations) from None
-    warnings = list(spec.warnings)
+    warnings = [*spec.warnings, *_fixed_truth_warnings(arm, truth)]
     if result.not_converged:
         warnings.append(
             ArmcalWarning(
@@ -457,6 +457,26 @@ def _simulate(args: argparse.Namespace) -> None:
             )
         )
     _emit(args, monte_carlo_to_dict(result), format_monte_carlo(result), warnings)
+
+
+def _fixed_truth_warnings(arm: PlanarArm, truth: np.ndarray) -> list[ArmcalWarning]:
+    """A warning when the truth moves a parameter the model holds at nominal."""
+    values = truth * arm.display_scale
+    held = [
+        f"{name} = {values[i]:.4g} {unit}"
+        for i, (name, unit) in enumerate(zip(arm.param_names, arm.param_units, strict=True))
+        if name in arm.fixed and values[i] != 0
+    ]
+    if not held:
+        return []
+    return [
+        ArmcalWarning(
+            "fixed-truth",
+            f"the truth has {', '.join(held)}, but the model holds "
+            f"{'it' if len(held) == 1 else 'them'} at nominal (0): the simulation shows the "
+            "error of a wrong fixed value; give 0 in the truth file to simulate a correct one",
+        )
+    ]
 
 
 _TARGET_OPTIONS = {
