@@ -304,6 +304,35 @@ CASES = [
         IDENTIFY,
         ("meas.csv",),
     ),
+    case(
+        "meas-sigma-column-not-positive",
+        {
+            "meas.csv": _csv(
+                MEAS_HEADER + ",sigma_mm", [r + ",0.1" for r in MEAS_ROWS[:-1]]
+            ).rstrip("\n")
+            + "\n"
+            + MEAS_ROWS[-1]
+            + ",-0.1\n"
+        },
+        IDENTIFY,
+        ("meas.csv", "row 20", "sigma_mm", "-0.1"),
+    ),
+    case(
+        "meas-value-beyond-any-reach",
+        {"meas.csv": _meas_with(9, "y_mm", "5e8")},
+        IDENTIFY,
+        ("meas.csv", "row 9", "y_mm", "5e+08", "reach"),
+    ),
+    case(
+        "meas-angle-far-beyond-a-limit",
+        {
+            "robot.toml": ROBOT_TOML
+            + "joint_limits_deg = [[-180, 180], [-159, 159], [-180, 180], [-180, 180]]\n",
+            "meas.csv": VALID_MEAS,
+        },
+        IDENTIFY_ROBOT,
+        ("meas.csv", "row 10", "q2_deg", "162", "2 deg"),
+    ),
     case("meas-missing-file", {}, IDENTIFY, ("meas.csv", "not found")),
     case("meas-is-a-folder", {"meas.csv": FOLDER}, IDENTIFY, ("meas.csv", "directory")),
     case(
@@ -392,6 +421,27 @@ CASES = [
         {"robot.toml": ROBOT_TOML.replace(", 100.0]", "]"), "meas.csv": VALID_MEAS},
         IDENTIFY_ROBOT,
         ("meas.csv", "4 joint columns", "my-scara", "3 joints"),
+    ),
+    case(
+        "robot-fixed-unknown-name",
+        {"robot.toml": ROBOT_TOML + "[identify]\nfixed = ['dl5']\n", "meas.csv": VALID_MEAS},
+        IDENTIFY_ROBOT,
+        ("robot.toml", "identify.fixed", "dl5", "dl1, dl2, dl3, dl4, dq1, dq2, dq3, dq4"),
+    ),
+    case(
+        "robot-encoder-noise-without-instrument-noise",
+        {
+            "robot.toml": ROBOT_TOML + "[measurement]\njoint_sigma_deg = 0.01\n",
+            "meas.csv": VALID_MEAS,
+        },
+        IDENTIFY_ROBOT,
+        ("robot.toml", "joint_sigma_deg", "sigma_mm"),
+    ),
+    case(
+        "usage-fix-empty-name",
+        {"meas.csv": VALID_MEAS},
+        (*IDENTIFY, "--fix", "dl4,"),
+        ("--fix", "dl4,"),
     ),
     case(
         "robot-file-without-truth",

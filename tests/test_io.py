@@ -8,7 +8,15 @@ import numpy as np
 import pytest
 from numpy.testing import assert_allclose
 
-from armcal import Annulus, Box, InputError, forward_kinematics, identify, orthogonal_plan
+from armcal import (
+    Annulus,
+    Box,
+    InputError,
+    PlanarArm,
+    forward_kinematics,
+    identify,
+    orthogonal_plan,
+)
 from armcal.io import (
     OutputFolder,
     atomic_write,
@@ -90,6 +98,48 @@ def test_box_region_and_default_name(tmp_path):
             "r_min_mm < r_max_mm",
         ),
         ("link_lengths_mm = [1.0", "invalid TOML"),
+        # ---- noise model
+        ("link_lengths_mm = [1.0]\n[measurement]\nsigma_mm = [0.1]", "one number or two"),
+        ("link_lengths_mm = [1.0]\n[measurement]\nsigma_mm = [0.1, 0]", r"sigma_mm\[1\]"),
+        (
+            "link_lengths_mm = [1.0]\n[measurement]\nsigma_mm = 0.1\n"
+            "covariance_mm2 = [[0.01, 0], [0, 0.01]]",
+            "keep one",
+        ),
+        (
+            "link_lengths_mm = [1.0]\n[measurement]\ncovariance_mm2 = [[0.01, 0.001], [0, 0.01]]",
+            "symmetric",
+        ),
+        (
+            "link_lengths_mm = [1.0]\n[measurement]\n"
+            "covariance_mm2 = [[0.01, 0.02], [0.02, 0.01]]",
+            "positive definite",
+        ),
+        ("link_lengths_mm = [1.0]\n[measurement]\ncovariance_mm2 = [0.01, 0.01]", r"2 x 2"),
+        (
+            "link_lengths_mm = [1.0]\n[measurement]\njoint_sigma_deg = 0.01",
+            "needs the instrument noise",
+        ),
+        (
+            "link_lengths_mm = [1.0, 1.0]\n[measurement]\nsigma_mm = 0.1\n"
+            "joint_sigma_deg = [0.01, 0.01, 0.01]",
+            "one number or 2",
+        ),
+        (
+            "link_lengths_mm = [1.0]\n[measurement]\nsigma_mm = 0.1\njoint_sigma_deg = -0.01",
+            "between 0 and 10 deg",
+        ),
+        (
+            "link_lengths_mm = [1.0]\n[measurement]\nsigma_mm = 0.1\njoint_sigma_deg = 36",
+            "check the unit",
+        ),
+        # ---- fixed and free parameters
+        ("link_lengths_mm = [1.0, 1.0]\n[identify]\nfixed = ['dl3']", "dl1, dl2, dq1, dq2"),
+        ("link_lengths_mm = [1.0, 1.0]\n[identify]\nfixed = ['x0']", "base_offset = true"),
+        ("link_lengths_mm = [1.0]\n[identify]\nfixed = ['dl1']\nfree = ['dq1']", "keep one"),
+        ("link_lengths_mm = [1.0]\n[identify]\nfree = []", "every parameter"),
+        ("link_lengths_mm = [1.0]\n[identify]\nfixed = 'dl1'", "list of parameter names"),
+        ("link_lengths_mm = [1.0]\n[identify]\nfix = ['dl1']", "did you mean 'fixed'"),
     ],
 )
 def test_robot_file_errors_name_the_file_and_key(tmp_path, text, match):
@@ -98,6 +148,56 @@ def test_robot_file_errors_name_the_file_and_key(tmp_path, text, match):
     with pytest.raises(InputError, match=match) as info:
         load_robot(path)
     assert str(info.value).startswith(f"{path}: ")
+
+
+def test_robot_file_noise_models(tmp_path):
+    path = tmp_path / "robot.toml"
+    base = "link_lengths_mm = [260.0, 180.0]\n[measurement]\n"
+    path.write_text(base + "sigma_mm = 0.05\n")
+    noise = load_robot(path).arm.noise
+    assert noise is not None and noise.isotropic_iid
+    assert_allclose(noise.covariance_mm2, 0.05**2 * np.eye(2), rtol=1e-15)
+    path.write_text(base + "sigma_mm = [0.08, 0.02]\njoint_sigma_deg = 0.01\n")
+    noise = load_robot(path).arm.noise
+    assert_allclose(noise.covariance_mm2, np.diag([0.08**2, 0.02**2]), rtol=1e-15)
+    assert_allclose(noise.joint_sigma, [np.radians(0.01)], rtol=1e-15)
+    # sigma_ref = sqrt(2 / tr(Sigma^-1)) = sqrt(2 / (1/0.0064 + 1/0.0004)) (noise.py)
+    assert load_robot(path).arm.sigma == pytest.approx(np.sqrt(2 / (156.25 + 2500)), rel=1e-12)
+    path.write_text(base + "covariance_mm2 = [[0.01, 0.004], [0.004, 0.0025]]\n")
+    path.write_text(path.read_text() + "joint_sigma_deg = [0.01, 0.02]\n")
+    noise = load_robot(path).arm.noise
+    assert_allclose(noise.covariance_mm2, [[0.01, 0.004], [0.004, 0.0025]], rtol=1e-15)
+    assert_allclose(noise.joint_sigma, np.radians([0.01, 0.02]), rtol=1e-15)
+    path.write_text(base + "sigma_mm = 0.1\njoint_sigma_deg = 0\n")  # no encoder noise
+    assert load_robot(path).arm.noise.joint_sigma is None
+
+
+def test_robot_file_fixed_and_free_parameters(tmp_path):
+    path = tmp_path / "robot.toml"
+    lengths = "link_lengths_mm = [260.0, 180.0, 120.0, 100.0]\nbase_offset = true\n"
+    path.write_text(lengths + "[identify]\nfixed = ['dl4', 'x0']\n")
+    arm = load_robot(path).arm
+    assert arm.fixed == ("dl4", "x0") and arm.n_free == 8
+    path.write_text(lengths + "[identify]\nfree = ['dq1', 'dq2', 'dq3', 'dq4']\n")
+    arm = load_robot(path).arm
+    assert arm.free_names == ("dq1", "dq2", "dq3", "dq4")
+    assert arm.fixed == ("dl1", "dl2", "dl3", "dl4", "x0", "y0")
+
+
+def test_joint_limits_in_radians_are_a_warning(tmp_path):
+    path = tmp_path / "robot.toml"
+    lengths = "link_lengths_mm = [260.0, 180.0]\n"
+    path.write_text(lengths + "joint_limits_deg = [[-2.97, 2.97], [-3.1416, 3.1416]]\n")
+    spec = load_robot(path)
+    assert [w.code for w in spec.warnings] == ["limits-radians"]
+    message = spec.warnings[0].message
+    assert message.startswith(f"{path}: key 'joint_limits_deg'")
+    # The fix, in degrees: 2.97 rad = 170.2 deg.
+    assert "radians" in message and "[-170.2, 170.2]" in message
+    # Degrees, even a narrow joint among wide ones, give no warning.
+    path.write_text(lengths + "joint_limits_deg = [[-170, 170], [-5, 5]]\n")
+    assert load_robot(path).warnings == ()
+    assert load_robot("paper-4link").warnings == ()
 
 
 def test_unknown_robot_name():
@@ -148,6 +248,55 @@ def test_measurement_columns_may_come_in_any_order_with_blank_lines(tmp_path, ar
     assert meas.labels == ("a",)
 
 
+def test_measurements_rows_and_per_row_sigma(tmp_path, arm2):
+    path = tmp_path / "meas.csv"
+    path.write_text("q1_deg,q2_deg,x_mm,y_mm,sigma_mm\n0,0,440,0,0.05\n\n0,90,260,180,0.2\n")
+    meas = read_measurements(path, arm2)
+    assert meas.rows == (1, 2)
+    assert_allclose(meas.row_sigma, [0.05, 0.2], rtol=0)
+    assert meas.warnings == ()
+    path.write_text("q1_deg,q2_deg,x_mm,y_mm\n0,0,440,0\n")
+    assert read_measurements(path, arm2).row_sigma is None
+
+
+def test_measured_angles_slightly_beyond_a_limit_are_a_warning(tmp_path):
+    arm = PlanarArm([260.0, 180.0], np.radians([[-170, 170], [-145, 145]]), name="limited")
+    path = tmp_path / "meas.csv"
+    path.write_text("q1_deg,q2_deg,x_mm,y_mm\n0,0,440,0\n0,145.004,110,100\n0,-146.5,110,-100\n")
+    meas = read_measurements(path, arm)
+    assert_allclose(np.degrees(meas.q[1:, 1]), [145.004, -146.5], rtol=1e-14)
+    assert [w.code for w in meas.warnings] == ["beyond-limits"]
+    message = meas.warnings[0].message
+    assert "row 2 q2_deg = 145.004" in message and "row 3 q2_deg = -146.5" in message
+    # Beyond the tolerance (LIMIT_TOLERANCE_DEG = 2): an error, as before.
+    path.write_text("q1_deg,q2_deg,x_mm,y_mm\n0,0,440,0\n0,147.5,110,100\n")
+    with pytest.raises(InputError, match=r"row 2 \(line 3\), column q2_deg: 147.5 deg is outside"):
+        read_measurements(path, arm)
+    # Plans are held to the limits exactly.
+    path.write_text("q1_deg,q2_deg\n0,145.004\n")
+    with pytest.raises(InputError, match="outside joint 2's limits"):
+        read_plan(path, arm)
+
+
+def test_points_beyond_any_arms_reach_are_an_error(tmp_path, arm2):
+    path = tmp_path / "meas.csv"
+    # paper-2link reaches 440 mm; 10 % more is 484 mm.
+    path.write_text("q1_deg,q2_deg,x_mm,y_mm\n0,0,440,0\n0,90,483,0\n")
+    assert read_measurements(path, arm2).rows == (1, 2)
+    path.write_text("q1_deg,q2_deg,x_mm,y_mm\n0,0,440,0\n0,90,260,5e8\n")
+    with pytest.raises(InputError, match=r"row 2 \(line 3\), column y_mm: 5e\+08 .* reach"):
+        read_measurements(path, arm2)
+    path.write_text("q1_deg,q2_deg,x_mm,y_mm\n0,0,1400,800\n0,90,1200,980\n")
+    with pytest.raises(InputError, match=r"column x_mm: 1400 .* set base_offset = true"):
+        read_measurements(path, arm2)
+    # With a base offset, points within 2 x 484 mm of their centroid are accepted.
+    based = arm2.replace(base_offset=True)
+    assert read_measurements(path, based).xy.shape == (2, 2)
+    path.write_text("q1_deg,q2_deg,x_mm,y_mm\n0,0,1400,800\n0,90,1200,980\n0,0,3400,800\n")
+    with pytest.raises(InputError, match=r"row 3 .* column x_mm: 3400 .* from the centroid"):
+        read_measurements(path, based)
+
+
 @pytest.mark.parametrize(
     ("text", "match"),
     [
@@ -160,9 +309,12 @@ def test_measurement_columns_may_come_in_any_order_with_blank_lines(tmp_path, ar
         ("q1_deg,q2_deg,x_mm,y_mm\n0,0,1,2\n0,0,nan,2\n", r"row 2 \(line 3\), column x_mm"),
         ("q1_deg,q2_deg,x_mm,y_mm\n0,0,1,2\n0,0,1,-inf\n", "y_mm: '-inf' is not a finite"),
         ("q1_deg,q2_deg,x_mm,y_mm\n0,abc,1,2\n", "column q2_deg: 'abc' is not a number"),
-        ("q1_deg,q2_deg,x_mm,y_mm\n0,181,1,2\n", "outside joint 2's limits"),
+        ("q1_deg,q2_deg,x_mm,y_mm\n0,183,1,2\n", "outside joint 2's limits"),
         ("q1_deg,q2_deg,q3_deg,x_mm,y_mm\n0,0,0,1,2\n", "3 joint columns .* has 2 joints"),
         ("q1_deg,q3_deg,x_mm,y_mm\n0,0,1,2\n", "without gaps"),
+        ("q1_deg,q2_deg,x_mm,y_mm,sigma_mm\n0,0,1,2,0\n", "column sigma_mm: 0 is not a noise"),
+        ("q1_deg,q2_deg,x_mm,y_mm,sigma_mm\n0,0,1,2,-1\n", "column sigma_mm: -1"),
+        ("q1_deg,q2_deg,x_mm,y_mm,sigma_mm\n0,0,1,2,x\n", "column sigma_mm: 'x' is not"),
     ],
 )
 def test_measurement_errors_name_file_row_and_column(tmp_path, arm2, text, match):

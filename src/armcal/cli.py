@@ -9,6 +9,7 @@ work (:func:`armcal.io.check_outputs`).
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import math
 import sys
 import time
@@ -19,15 +20,17 @@ from pathlib import Path
 import numpy as np
 
 from ._version import __version__
+from .arm import PlanarArm
 from .criteria import CRITERIA, evaluate_plan
 from .doe import METHODS as DESIGN_METHODS
 from .doe import TARGETS, design, feasible, poses_needed, random_plan
-from .errors import ArmcalError, ArmcalWarning, NotIdentifiableError
+from .errors import ArmcalError, ArmcalWarning, InputError, NotIdentifiableError
 from .identification import METHODS, Calibration, Method, identify
 from .io import (
     BUILTIN_ROBOTS,
     DEFAULT_ROBOT,
     SIGMA_RANGE_MM,
+    Measurements,
     OutputFolder,
     RobotSpec,
     atomic_write,
@@ -38,8 +41,11 @@ from .io import (
     load_truth,
     read_measurements,
     read_plan,
+    unknown_parameter,
     write_folder,
 )
+from .noise import NoiseModel
+from .plausibility import deviation_warning, explain, suspicious
 from .progress import ProgressBar
 from .report import (
     calibration_to_dict,
@@ -152,10 +158,47 @@ def _trials(text: str) -> int:
     return value
 
 
+def _names(text: str) -> tuple[str, ...]:
+    """``--fix dl4,dq1``: parameter names, checked against the robot once it is loaded."""
+    names = tuple(name.strip() for name in text.split(","))
+    if not all(names):
+        raise argparse.ArgumentTypeError(
+            f"expected parameter names separated by commas (e.g. dl4,dq1), got {text!r}"
+        )
+    return names
+
+
+def _model_arm(args: argparse.Namespace, spec: RobotSpec) -> PlanarArm:
+    """The robot's arm with ``--fix`` and ``--sigma`` applied.
+
+    ``--fix`` replaces the robot file's ``[identify]`` set; ``--sigma`` replaces
+    the instrument noise by isotropic noise and keeps the encoder noise.
+    """
+    arm = spec.arm
+    fix = getattr(args, "fix", None)
+    if fix is not None:
+        for name in fix:
+            if name not in arm.param_names:
+                raise ArmcalError(f"--fix: {unknown_parameter(name, arm.param_names, arm.name)}")
+        if len(set(fix)) == arm.n_params:
+            raise ArmcalError("--fix: every parameter would be fixed; leave at least one free")
+        arm = arm.replace(fixed=fix)
+    sigma = getattr(args, "sigma", None)
+    if sigma:  # 0 (noiseless synthesis) is no noise model
+        noise = NoiseModel.isotropic(sigma) if arm.noise is None else arm.noise
+        arm = arm.replace(noise=noise.with_instrument_sigma(sigma))
+    return arm
+
+
 def _sigma_for_simulation(args: argparse.Namespace, spec: RobotSpec) -> float:
     if args.sigma is not None:
         return args.sigma
     return spec.arm.sigma if spec.arm.sigma is not None else DEFAULT_SIGMA_MM
+
+
+def _design_sigma(arm: PlanarArm) -> float:
+    """The reference noise of a model arm (:func:`_model_arm`), else the default."""
+    return arm.sigma if arm.sigma is not None else DEFAULT_SIGMA_MM
 
 
 def _truth(args: argparse.Namespace, spec: RobotSpec) -> np.ndarray:
@@ -169,7 +212,31 @@ def _truth(args: argparse.Namespace, spec: RobotSpec) -> np.ndarray:
     return spec.default_truth
 
 
-def _emit(args: argparse.Namespace, document: dict, text: str) -> None:
+def _unique(warnings: Sequence[ArmcalWarning]) -> list[ArmcalWarning]:
+    """Each warning once, in order."""
+    seen: set[tuple[str, str]] = set()
+    kept = []
+    for warning in warnings:
+        if (warning.code, warning.message) not in seen:
+            seen.add((warning.code, warning.message))
+            kept.append(warning)
+    return kept
+
+
+def _emit(
+    args: argparse.Namespace,
+    document: dict,
+    text: str,
+    warnings: Sequence[ArmcalWarning] = (),
+) -> None:
+    """Print the result, after every warning of the run (once each) on stderr.
+
+    The warnings also replace the document's ``warnings`` list, so the JSON and
+    stderr say the same.
+    """
+    warnings = _unique(warnings)
+    document["warnings"] = [w.to_dict() for w in warnings]
+    _print_warnings(warnings)
     print(to_json(document) if args.json else text, end="" if args.json else "\n")
 
 
@@ -184,6 +251,7 @@ def _synthesize(args: argparse.Namespace) -> None:
     xy = synthesize_measurements(spec.arm, q, truth, sigma, rng=args.seed)
     text = format_measurements_csv(q, xy)
     if args.output is None:
+        _print_warnings(_unique(spec.warnings))
         sys.stdout.write(text)
         return
     atomic_write(args.output, text)
@@ -193,37 +261,73 @@ def _synthesize(args: argparse.Namespace) -> None:
         document,
         f"wrote {q.shape[0]} measurements of {spec.arm.name} (sigma {sigma:g} mm, "
         f"seed {args.seed}) to {args.output}",
+        spec.warnings,
     )
 
 
+def _explained(path: str, arm: PlanarArm, meas: Measurements) -> InputError | None:
+    """The error for data that another reading fits far better (:mod:`armcal.plausibility`)."""
+    found = explain(arm, meas.q, meas.xy)
+    return None if found is None else InputError(f"{path}: {found.message}")
+
+
 def _identify_file(
-    spec: RobotSpec, path: str, *, method: Method, sigma: float | None
+    arm: PlanarArm,
+    path: str,
+    meas: Measurements,
+    *,
+    method: Method,
+    robust: bool,
 ) -> Calibration:
-    meas = read_measurements(path, spec.arm)
+    """Identify from a measurement file; data that look like a unit mistake are an error."""
     try:
-        return identify(
-            spec.arm, meas.q, meas.xy, method=method, sigma=sigma, pose_labels=meas.labels
+        cal = identify(
+            arm,
+            meas.q,
+            meas.xy,
+            method=method,
+            pose_labels=meas.labels,
+            rows=meas.rows,
+            row_sigma=meas.row_sigma,
+            robust=robust,
         )
     except NotIdentifiableError as exc:
+        # Angles in radians read as degrees put every pose near the stretched arm.
+        unit = _explained(path, arm, meas)
+        if unit is not None:
+            raise unit from None
         raise NotIdentifiableError(f"{path}: {exc}", exc.combinations) from None
     except ArmcalError as exc:
         raise ArmcalError(f"{path}: {exc}") from None
+    if suspicious(cal):
+        unit = _explained(path, arm, meas)
+        if unit is not None:
+            raise unit
+    return cal
 
 
 def _print_warnings(warnings: Sequence[ArmcalWarning]) -> None:
-    """Each warning of a result as one ``armcal: warning: ...`` line on stderr."""
+    """Each warning as one ``armcal: warning: ...`` line on stderr."""
     for warning in warnings:
         print(f"armcal: warning: {warning.message}", file=sys.stderr)
 
 
 def _identify(args: argparse.Namespace) -> None:
     spec = load_robot(args.robot)
-    cal = _identify_file(spec, args.measurements, method=args.method, sigma=args.sigma)
-    document = calibration_to_dict(cal)
+    arm = _model_arm(args, spec)
+    meas = read_measurements(args.measurements, arm)
+    if args.sigma is not None:  # the command line's noise replaces the file's sigma_mm column too
+        meas = dataclasses.replace(meas, row_sigma=None)
+    cal = _identify_file(arm, args.measurements, meas, method=args.method, robust=args.robust)
+    warnings = [*spec.warnings, *meas.warnings, *cal.warnings]
+    large = deviation_warning(cal.arm, cal.params)
+    if large is not None and all(w.code != large.code for w in warnings):
+        warnings.append(large)
+    warnings = _unique(warnings)
+    document = calibration_to_dict(cal, warnings=warnings)
     if args.output is not None:
         atomic_write(args.output, to_json(document))
-    _print_warnings(cal.warnings)
-    _emit(args, document, format_calibration(cal))
+    _emit(args, document, format_calibration(cal), warnings)
 
 
 def _demo(args: argparse.Namespace) -> None:
@@ -242,11 +346,13 @@ def _demo(args: argparse.Namespace) -> None:
         "",
         format_calibration(cal, truth=truth),
     ]
+    warnings = _unique([*spec.warnings, *cal.warnings])
+    document["warnings"] = [w.to_dict() for w in warnings]
     if args.output is not None:
         texts = (format_plan_csv(q), format_measurements_csv(q, xy), to_json(document))
         folder = write_folder(args.output, dict(zip(_DEMO_FILES, texts, strict=True)))
         lines += ["", f"wrote {', '.join(_DEMO_FILES)} to {folder}/"]
-    _emit(args, document, "\n".join(lines))
+    _emit(args, document, "\n".join(lines), warnings)
 
 
 def _test_poses(args: argparse.Namespace, spec: RobotSpec) -> np.ndarray:
@@ -256,15 +362,14 @@ def _test_poses(args: argparse.Namespace, spec: RobotSpec) -> np.ndarray:
     return random_plan(spec.arm, 1000, rng=np.random.default_rng(args.seed))
 
 
-def _quality_report(args: argparse.Namespace, spec: RobotSpec, q: np.ndarray):
-    quality = evaluate_plan(
-        spec.arm, q, sigma=_sigma_for_simulation(args, spec), test_q=_test_poses(args, spec)
-    )
-    return quality, quality_to_dict(spec.arm, quality), format_quality(spec.arm, quality)
+def _quality_report(args: argparse.Namespace, spec: RobotSpec, arm: PlanarArm, q: np.ndarray):
+    quality = evaluate_plan(arm, q, sigma=_design_sigma(arm), test_q=_test_poses(args, spec))
+    return quality, quality_to_dict(arm, quality), format_quality(arm, quality)
 
 
 def _design(args: argparse.Namespace) -> None:
     spec = load_robot(args.robot)
+    arm = _model_arm(args, spec)
     candidates = None if args.candidates is None else read_plan(args.candidates, spec.arm)
     if candidates is not None and not np.all(feasible(spec.arm, candidates)):
         row = int(np.flatnonzero(~feasible(spec.arm, candidates))[0]) + 1
@@ -274,7 +379,7 @@ def _design(args: argparse.Namespace) -> None:
         )
     start = time.perf_counter()
     result = design(
-        spec.arm,
+        arm,
         args.poses,
         criterion=args.criterion,
         method=args.method,
@@ -282,8 +387,7 @@ def _design(args: argparse.Namespace) -> None:
         candidates=candidates,
     )
     seconds = time.perf_counter() - start
-    quality, document, report = _quality_report(args, spec, result.q)
-    _print_warnings(quality.warnings)
+    quality, document, report = _quality_report(args, spec, arm, result.q)
     extra, header = design_summary(result, seconds)
     document.update(extra)
     written = []
@@ -296,17 +400,19 @@ def _design(args: argparse.Namespace) -> None:
         written.append(f"wrote {args.output}")
     if args.plot is not None:
         written.append(f"wrote {args.plot}")
-    _emit(args, document, "\n".join([*header, report, *([""] if written else []), *written]))
+    text = "\n".join([*header, report, *([""] if written else []), *written])
+    _emit(args, document, text, [*spec.warnings, *quality.warnings])
 
 
 def _evaluate(args: argparse.Namespace) -> None:
     spec = load_robot(args.robot)
-    q = read_plan(args.plan, spec.arm)
+    arm = _model_arm(args, spec)
+    q = read_plan(args.plan, arm)
     try:
-        quality, document, report = _quality_report(args, spec, q)
+        quality, document, report = _quality_report(args, spec, arm, q)
     except NotIdentifiableError as exc:  # PRODUCT.md: an error, exit 2, one line
         raise NotIdentifiableError(f"{args.plan}: {exc}", exc.combinations) from None
-    warnings = list(quality.warnings)
+    warnings = [*spec.warnings, *quality.warnings]
     outside = np.flatnonzero(~feasible(spec.arm, q))
     if outside.size:
         poses = ", ".join(map(str, outside + 1))
@@ -316,36 +422,61 @@ def _evaluate(args: argparse.Namespace) -> None:
                 f"{args.plan}: the tip of pose(s) {poses} is outside the measurement region",
             )
         )
-    document["warnings"] = [w.to_dict() for w in warnings]
-    _print_warnings(warnings)
-    _emit(args, document, report)
+    _emit(args, document, report, warnings)
 
 
 def _simulate(args: argparse.Namespace) -> None:
     spec = load_robot(args.robot)
-    q = read_plan(args.plan, spec.arm)
+    arm = _model_arm(args, spec)
+    q = read_plan(args.plan, arm)
     truth = _truth(args, spec)
+    method = args.method
+    if method == "auto":
+        method = "closed-form" if arm.free.all() else "gauss-newton"
     try:
         result = monte_carlo(
-            spec.arm,
+            arm,
             q,
             truth,
-            _sigma_for_simulation(args, spec),
+            _design_sigma(arm),
             args.trials,
-            method=args.method,
+            method=method,
             rng=np.random.default_rng(args.seed),
             test_q=_test_poses(args, spec),
             progress=ProgressBar("simulate"),
         )
     except NotIdentifiableError as exc:
         raise NotIdentifiableError(f"{args.plan}: {exc}", exc.combinations) from None
+    warnings = [*spec.warnings, *_fixed_truth_warnings(arm, truth)]
     if result.not_converged:
-        print(
-            f"armcal: warning: gauss-newton did not converge in {result.not_converged} of "
-            f"{result.trials} trials; their last iterates are included",
-            file=sys.stderr,
+        warnings.append(
+            ArmcalWarning(
+                "not-converged",
+                f"gauss-newton did not converge in {result.not_converged} of "
+                f"{result.trials} trials; their last iterates are included",
+            )
         )
-    _emit(args, monte_carlo_to_dict(result), format_monte_carlo(result))
+    _emit(args, monte_carlo_to_dict(result), format_monte_carlo(result), warnings)
+
+
+def _fixed_truth_warnings(arm: PlanarArm, truth: np.ndarray) -> list[ArmcalWarning]:
+    """A warning when the truth moves a parameter the model holds at nominal."""
+    values = truth * arm.display_scale
+    held = [
+        f"{name} = {values[i]:.4g} {unit}"
+        for i, (name, unit) in enumerate(zip(arm.param_names, arm.param_units, strict=True))
+        if name in arm.fixed and values[i] != 0
+    ]
+    if not held:
+        return []
+    return [
+        ArmcalWarning(
+            "fixed-truth",
+            f"the truth has {', '.join(held)}, but the model holds "
+            f"{'it' if len(held) == 1 else 'them'} at nominal (0): the simulation shows the "
+            "error of a wrong fixed value; give 0 in the truth file to simulate a correct one",
+        )
+    ]
 
 
 _TARGET_OPTIONS = {
@@ -357,11 +488,12 @@ _TARGET_OPTIONS = {
 
 def _poses_needed(args: argparse.Namespace) -> None:
     spec = load_robot(args.robot)
+    arm = _model_arm(args, spec)
     target = next(key for key in TARGETS if getattr(args, key) is not None)
-    sigma = _sigma_for_simulation(args, spec)
+    sigma = _design_sigma(arm)
     start = time.perf_counter()
     found = poses_needed(
-        spec.arm,
+        arm,
         target,
         getattr(args, target),
         sigma=sigma,
@@ -370,11 +502,11 @@ def _poses_needed(args: argparse.Namespace) -> None:
         max_poses=args.max_poses,
     )
     seconds = time.perf_counter() - start
-    document, lines = poses_needed_summary(found, spec.arm, seconds)
+    document, lines = poses_needed_summary(found, arm, seconds)
     if args.output is not None:
         atomic_write(args.output, format_plan_csv(found.plan))
         lines.append(f"wrote {args.output}")
-    _emit(args, document, "\n".join(lines))
+    _emit(args, document, "\n".join(lines), spec.warnings)
 
 
 def _reproduce(args: argparse.Namespace) -> None:
@@ -423,6 +555,16 @@ def _add_common(
         sub.add_argument("-o", "--output", metavar="PATH", help=output)
 
 
+def _add_fix(sub: argparse.ArgumentParser) -> None:
+    sub.add_argument(
+        "--fix",
+        type=_names,
+        metavar="P,..",
+        help="parameters held at nominal, not identified (e.g. dl4,dq1); replaces the robot "
+        "file's [identify] set",
+    )
+
+
 def build_parser() -> argparse.ArgumentParser:
     """The argument parser of the ``armcal`` program."""
     parser = _Parser(
@@ -464,12 +606,24 @@ def build_parser() -> argparse.ArgumentParser:
         "--sigma",
         type=_sigma,
         metavar="MM",
-        help="instrument noise in mm (default: robot file's sigma_mm, else estimated)",
+        help="isotropic instrument noise in mm, replacing the robot file's (its encoder noise "
+        "is kept) and any sigma_mm column; default: the sigma_mm column, the robot file's "
+        "[measurement], else estimated",
     )
+    sub.add_argument(
+        "--robust",
+        action="store_true",
+        help="robust fit: Huber M-estimator from the least-squares fit, then the studentized "
+        "outlier test and a refit without the outliers",
+    )
+    _add_fix(sub)
     _add_common(sub, output="calibration JSON to write")
     sub.set_defaults(run=_identify, inputs=("robot", "measurements"), outputs=("output",))
 
-    sigma_help = f"noise std in mm (default: robot file's sigma_mm, else {DEFAULT_SIGMA_MM})"
+    sigma_help = (
+        "isotropic instrument noise in mm, replacing the robot file's (its encoder noise is "
+        f"kept); default: the robot file's [measurement], else {DEFAULT_SIGMA_MM}"
+    )
     test_help = "plan CSV of poses where accuracy matters (default: 1000 uniform in the limits)"
     sub = subs.add_parser(
         "design", help="an optimal plan within the limits and region", epilog=_OUTPUTS_EPILOG
@@ -488,6 +642,7 @@ def build_parser() -> argparse.ArgumentParser:
     sub.add_argument("--plot", metavar="PNG", help="draw the plan's poses as stick arms")
     sub.add_argument("--sigma", type=_sigma, metavar="MM", help=sigma_help)
     sub.add_argument("--test-poses", metavar="PLAN_CSV", help=test_help)
+    _add_fix(sub)
     _add_common(sub, seed=True, output="plan CSV to write")
     sub.set_defaults(
         run=_design, inputs=("robot", "candidates", "test_poses"), outputs=("output", "plot")
@@ -497,6 +652,7 @@ def build_parser() -> argparse.ArgumentParser:
     sub.add_argument("--plan", required=True, metavar="PLAN_CSV", help="plan CSV (q1_deg..)")
     sub.add_argument("--sigma", type=_sigma, metavar="MM", help=sigma_help)
     sub.add_argument("--test-poses", metavar="PLAN_CSV", help=test_help)
+    _add_fix(sub)
     _add_common(sub, seed=True)
     sub.set_defaults(run=_evaluate, inputs=("robot", "plan", "test_poses"))
 
@@ -509,11 +665,13 @@ def build_parser() -> argparse.ArgumentParser:
     )
     sub.add_argument(
         "--method",
-        choices=list(METHODS),
-        default="closed-form",
-        help="solver applied to every trial (default closed-form)",
+        choices=["auto", *METHODS],
+        default="auto",
+        help="solver applied to every trial; auto = closed-form when every parameter is free, "
+        "else gauss-newton (default auto)",
     )
     sub.add_argument("--test-poses", metavar="PLAN_CSV", help=test_help)
+    _add_fix(sub)
     _add_common(sub, seed=True)
     sub.set_defaults(run=_simulate, inputs=("robot", "plan", "truth", "test_poses"))
 
@@ -532,6 +690,7 @@ def build_parser() -> argparse.ArgumentParser:
     sub.add_argument(
         "--max-poses", type=_poses, default=5000, metavar="M", help="give up beyond (default 5000)"
     )
+    _add_fix(sub)
     _add_common(sub, seed=True, output="plan CSV of the plan that reaches the target")
     sub.set_defaults(run=_poses_needed, inputs=("robot", "test_poses"), outputs=("output",))
 

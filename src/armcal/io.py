@@ -32,7 +32,8 @@ from typing import Any, BinaryIO
 import numpy as np
 
 from .arm import Annulus, Box, PlanarArm, Region
-from .errors import InputError
+from .errors import ArmcalWarning, InputError
+from .noise import NoiseModel
 from .paper import BUILTIN_ROBOTS, paper_arm
 
 if sys.version_info >= (3, 11):
@@ -43,7 +44,12 @@ else:  # pragma: no cover - exercised on Python 3.10 only
 __all__ = [
     "BUILTIN_ROBOTS",
     "DEFAULT_ROBOT",
+    "INSTRUMENT_RANGE",
+    "JOINT_SIGMA_MAX_DEG",
+    "LIMIT_TOLERANCE_DEG",
     "LINK_LENGTH_RANGE_MM",
+    "RADIAN_LIMIT_BOUND",
+    "REACH_MARGIN",
     "SIGMA_RANGE_MM",
     "Measurements",
     "OutputFolder",
@@ -56,6 +62,7 @@ __all__ = [
     "load_truth",
     "read_measurements",
     "read_plan",
+    "unknown_parameter",
     "write_folder",
 ]
 
@@ -65,6 +72,34 @@ SIGMA_RANGE_MM = (1e-6, 1e3)
 
 #: Link lengths accepted (mm): from a micrometre to 10 km.
 LINK_LENGTH_RANGE_MM = (1e-3, 1e7)
+
+#: Encoder noise accepted (1 std, deg): 0 to 10 deg.  An encoder that reads a joint
+#: worse than 10 deg is no encoder; such a value is a unit mistake (mdeg, arcsec).
+JOINT_SIGMA_MAX_DEG = 10.0
+
+#: Joint limits whose every value lies within this many "degrees" (2 pi, rounded up so
+#: that written-out radians such as 6.2832 count) look like radians: a real joint
+#: confined to +-6.3 deg cannot move enough to be calibrated, while radians limits of
+#: any revolute joint lie within +-2 pi.  Such limits give a ``limits-radians`` warning.
+RADIAN_LIMIT_BOUND = 6.3
+
+#: How far (deg) a *measured* joint angle may lie beyond a joint limit and still be
+#: accepted, with a ``beyond-limits`` warning.  Limits constrain plans, not what the
+#: arm really did: a reading past a limit by encoder noise, overshoot or a soft limit
+#: set inside the hard stop is a few tenths of a degree.  Beyond 2 deg (twice the
+#: largest joint offset PRODUCT.md expects, about a degree) the file or the robot's
+#: limits are wrong, and the reading stays an error.
+LIMIT_TOLERANCE_DEG = 2.0
+
+#: A measured tip farther than ``(1 + REACH_MARGIN)`` times the arm's reach (the sum of
+#: its link lengths) from the base is an error: no arm whose links deviate by less than
+#: 10 % (the ``large-deviation`` bound of :mod:`armcal.plausibility`) gets there.
+REACH_MARGIN = 0.1
+
+#: An instrument sees an arm from at most this many reaches away (a laser tracker a
+#: few metres from a sub-metre arm): a point beyond the reach but within it may be
+#: instrument-frame data without a base offset, one farther is a wrong value or unit.
+INSTRUMENT_RANGE = 100.0
 
 #: The robot used when a command is given none.
 DEFAULT_ROBOT = "paper-4link"
@@ -86,15 +121,21 @@ class RobotSpec:
     Attributes
     ----------
     arm : PlanarArm
+        The arm, with the file's noise model (``[measurement]``) and fixed
+        parameters (``[identify]``).
     default_truth : ndarray, shape (p,), or None
         Deviations (mm, rad) of the built-in virtual robot; None for robot files.
     source : str
         The built-in name or the file path it came from.
+    warnings : tuple of ArmcalWarning
+        What in the file is accepted but suspicious (``limits-radians``); every
+        command prints these.
     """
 
     arm: PlanarArm
     default_truth: np.ndarray | None
     source: str
+    warnings: tuple[ArmcalWarning, ...] = ()
 
 
 @dataclass(frozen=True, eq=False)
@@ -109,11 +150,23 @@ class Measurements:
         Measured positions in mm.
     labels : tuple of str
         The ``pose`` column, or ``"1".."m"`` when the file has none.
+    rows : tuple of int
+        The 1-based data row of every pose (blank lines and the header not counted),
+        as error and warning messages name them.
+    row_sigma : ndarray, shape (m,), or None
+        The optional ``sigma_mm`` column: each point's instrument uncertainty
+        (1 std, mm), for instruments that report it.
+    warnings : tuple of ArmcalWarning
+        What is accepted but suspicious: ``beyond-limits`` (measured angles
+        slightly beyond a joint limit).
     """
 
     q: np.ndarray
     xy: np.ndarray
     labels: tuple[str, ...]
+    rows: tuple[int, ...] = ()
+    row_sigma: np.ndarray | None = None
+    warnings: tuple[ArmcalWarning, ...] = ()
 
 
 # --------------------------------------------------------------------------- helpers
@@ -526,6 +579,161 @@ def _parse_region(path, region: Any) -> Region:
     raise _fail(path, f'key \'{key}.kind\': expected "annulus" or "box", got {kind!r}')
 
 
+def _sigma_value(path, value: Any, key: str) -> float:
+    """An instrument noise (1 std, mm) within :data:`SIGMA_RANGE_MM`."""
+    sigma = _number(path, value, key)
+    low, high = SIGMA_RANGE_MM
+    if not low <= sigma <= high:
+        raise _fail(
+            path,
+            f"key '{key}': must be between {low:g} and {high:g} mm, got {sigma:g}; "
+            "check the unit (mm)",
+        )
+    return sigma
+
+
+def _instrument_covariance(path, meas: dict) -> np.ndarray | None:
+    """``[measurement] sigma_mm`` (a number or ``[sx, sy]``) or ``covariance_mm2``, in mm^2."""
+    if "sigma_mm" in meas and "covariance_mm2" in meas:
+        raise _fail(
+            path,
+            "keys 'measurement.sigma_mm' and 'measurement.covariance_mm2' both give the "
+            "instrument noise; keep one",
+        )
+    if "sigma_mm" in meas:
+        key = "measurement.sigma_mm"
+        raw = meas["sigma_mm"]
+        if isinstance(raw, list):
+            if len(raw) != 2:
+                raise _fail(
+                    path,
+                    f"key '{key}': expected one number or two [sx, sy] (per instrument axis), "
+                    f"got {len(raw)} numbers",
+                )
+            sx, sy = (_sigma_value(path, v, f"{key}[{i}]") for i, v in enumerate(raw))
+            return np.diag([sx**2, sy**2])
+        return np.eye(2) * _sigma_value(path, raw, key) ** 2
+    if "covariance_mm2" in meas:
+        key = "measurement.covariance_mm2"
+        raw = meas["covariance_mm2"]
+        square = isinstance(raw, list) and len(raw) == 2
+        if not square or not all(isinstance(row, list) and len(row) == 2 for row in raw):
+            raise _fail(
+                path, f"key '{key}': expected a 2 x 2 matrix [[a, b], [b, c]] in mm^2, got {raw!r}"
+            )
+        cov = np.array([_numbers(path, row, f"{key}[{i}]", 2) for i, row in enumerate(raw)])
+        a, b, c, d = cov[0, 0], cov[0, 1], cov[1, 0], cov[1, 1]
+        if b != c:
+            raise _fail(
+                path,
+                f"key '{key}': must be symmetric (b = c), got [[{a:g}, {b:g}], [{c:g}, {d:g}]]",
+            )
+        if not (a > 0 and d > 0 and a * d - b * c > 0):
+            raise _fail(
+                path,
+                f"key '{key}': must be positive definite (a > 0, c > 0, a c > b^2), got "
+                f"[[{a:g}, {b:g}], [{c:g}, {d:g}]]",
+            )
+        low, high = SIGMA_RANGE_MM
+        for i in (0, 1):
+            if not low <= math.sqrt(cov[i, i]) <= high:
+                raise _fail(
+                    path,
+                    f"key '{key}[{i}][{i}]': the std of axis {'xy'[i]} must be between {low:g} "
+                    f"and {high:g} mm, got {math.sqrt(cov[i, i]):g}; check the unit (mm^2)",
+                )
+        return cov
+    return None
+
+
+def _joint_sigma(path, meas: dict, n: int) -> np.ndarray | None:
+    """``[measurement] joint_sigma_deg``: one number or ``n``, in rad (None when absent)."""
+    if "joint_sigma_deg" not in meas:
+        return None
+    key = "measurement.joint_sigma_deg"
+    raw = meas["joint_sigma_deg"]
+    if isinstance(raw, list):
+        if len(raw) != n:
+            raise _fail(
+                path, f"key '{key}': expected one number or {n} (one per joint), got {len(raw)}"
+            )
+        values = [_number(path, v, f"{key}[{j}]") for j, v in enumerate(raw)]
+        names = [f"{key}[{j}]" for j in range(n)]
+    else:
+        values, names = [_number(path, raw, key)], [key]
+    for name, value in zip(names, values, strict=True):
+        if not 0 <= value <= JOINT_SIGMA_MAX_DEG:
+            raise _fail(
+                path,
+                f"key '{name}': encoder noise must be between 0 and {JOINT_SIGMA_MAX_DEG:g} deg, "
+                f"got {value:g}; check the unit (deg)",
+            )
+    return np.radians(values)
+
+
+def _fixed_parameters(path, table: Any, names: Sequence[str], arm_name: str) -> list[str]:
+    """``[identify] fixed = [...]`` or ``free = [...]`` as the list of fixed names."""
+    if not isinstance(table, dict):
+        raise _fail(path, "key 'identify': expected a table [identify]")
+    _check_keys(path, table, ["fixed", "free"], "identify.")
+    if "fixed" in table and "free" in table:
+        raise _fail(
+            path,
+            "keys 'identify.fixed' and 'identify.free' both say what is identified; keep one "
+            "(free = [...] fixes every other parameter)",
+        )
+    if not table:
+        return []
+    key = "fixed" if "fixed" in table else "free"
+    raw = table[key]
+    if not isinstance(raw, list) or not all(isinstance(v, str) for v in raw):
+        raise _fail(path, f"key 'identify.{key}': expected a list of parameter names, got {raw!r}")
+    for name in raw:
+        if name not in names:
+            raise _fail(path, f"key 'identify.{key}': {unknown_parameter(name, names, arm_name)}")
+    chosen = set(raw)
+    fixed = [nm for nm in names if (nm in chosen) == (key == "fixed")]
+    if len(fixed) == len(names):
+        raise _fail(
+            path,
+            f"key 'identify.{key}': every parameter would be fixed; leave at least one free",
+        )
+    return fixed
+
+
+def unknown_parameter(name: str, names: Sequence[str], arm_name: str) -> str:
+    """The message for a parameter name the arm does not have: the valid names, and a hint.
+
+    Examples
+    --------
+    >>> unknown_parameter("x0", ("dl1", "dq1"), "arm")
+    "unknown parameter 'x0'; the parameters of arm are dl1, dq1 (x0 and y0 exist only with base_offset = true)"
+    """  # noqa: E501
+    hint = _suggest(name, names)
+    message = (
+        f"unknown parameter '{name}'; {hint}the parameters of {arm_name} are {', '.join(names)}"
+    )
+    if name in ("x0", "y0"):
+        message += " (x0 and y0 exist only with base_offset = true)"
+    return message
+
+
+def _radian_limits_warning(path, raw_limits: list[tuple[float, float]]) -> ArmcalWarning | None:
+    """``limits-radians`` when every joint limit lies within :data:`RADIAN_LIMIT_BOUND`."""
+    if not all(abs(v) <= RADIAN_LIMIT_BOUND for pair in raw_limits for v in pair):
+        return None
+    shown = ", ".join(f"[{lo:g}, {hi:g}]" for lo, hi in raw_limits)
+    lo, hi = raw_limits[0]
+    return ArmcalWarning(
+        "limits-radians",
+        f"{os.fspath(path)}: key 'joint_limits_deg': every limit is within "
+        f"+-{RADIAN_LIMIT_BOUND:g} "
+        f"({shown}), which looks like radians; give the limits in degrees (e.g. "
+        f"[{math.degrees(lo):.1f}, {math.degrees(hi):.1f}] for [{lo:g}, {hi:g}] rad): as "
+        "written, every joint turns through a few degrees only",
+    )
+
+
 def load_robot(name_or_path: str | os.PathLike) -> RobotSpec:
     """Load a built-in robot by name or a robot TOML file.
 
@@ -534,16 +742,23 @@ def load_robot(name_or_path: str | os.PathLike) -> RobotSpec:
     name_or_path : str or path
         ``paper-2link``, ``paper-3link``, ``paper-4link``, or a TOML file with
         ``link_lengths_mm`` and the optional ``name``, ``joint_limits_deg``,
-        ``base_offset`` and ``[measurement]`` (``sigma_mm``, ``region``).
+        ``base_offset``, ``[measurement]`` (``sigma_mm`` as one number or per
+        axis ``[sx, sy]``, or ``covariance_mm2``; ``joint_sigma_deg``;
+        ``region``) and ``[identify]`` (``fixed`` or ``free``: lists of
+        parameter names).
 
     Returns
     -------
     RobotSpec
+        The arm carries the noise model (:class:`~armcal.noise.NoiseModel`) and
+        the fixed parameters; ``warnings`` holds ``limits-radians`` when every
+        joint limit looks like radians.
 
     Raises
     ------
     InputError
-        For a missing file, invalid TOML, an unknown key or an invalid value.
+        For a missing file, invalid TOML, an unknown key or parameter name, or an
+        invalid value; the message names the file and the key.
 
     Examples
     --------
@@ -561,7 +776,9 @@ def load_robot(name_or_path: str | os.PathLike) -> RobotSpec:
         )
     data = _load_toml(path, "robot")
     _check_keys(
-        path, data, ["name", "link_lengths_mm", "joint_limits_deg", "base_offset", "measurement"]
+        path,
+        data,
+        ["name", "link_lengths_mm", "joint_limits_deg", "base_offset", "measurement", "identify"],
     )
     if "link_lengths_mm" not in data:
         raise _fail(path, "missing key 'link_lengths_mm' (a list of link lengths in mm)")
@@ -580,6 +797,7 @@ def load_robot(name_or_path: str | os.PathLike) -> RobotSpec:
     name = data.get("name", path.stem)
     if not isinstance(name, str) or not name.strip():
         raise _fail(path, f"key 'name': expected a non-empty string, got {name!r}")
+    warnings: list[ArmcalWarning] = []
     limits = None
     if "joint_limits_deg" in data:
         raw = data["joint_limits_deg"]
@@ -588,36 +806,57 @@ def load_robot(name_or_path: str | os.PathLike) -> RobotSpec:
                 path,
                 f"key 'joint_limits_deg': expected {n} pairs [lo, hi], one per joint, got {raw!r}",
             )
-        limits = []
+        pairs = []
         for j, pair in enumerate(raw):
             lo, hi = _numbers(path, pair, f"joint_limits_deg[{j}]", 2)
             if not lo < hi:
                 raise _fail(path, f"key 'joint_limits_deg[{j}]': need lo < hi, got [{lo}, {hi}]")
-            limits.append((math.radians(lo), math.radians(hi)))
+            pairs.append((lo, hi))
+        limits = [(math.radians(lo), math.radians(hi)) for lo, hi in pairs]
+        radians = _radian_limits_warning(path, pairs)
+        if radians is not None:
+            warnings.append(radians)
     base_offset = data.get("base_offset", False)
     if not isinstance(base_offset, bool):
         raise _fail(path, f"key 'base_offset': expected true or false, got {base_offset!r}")
-    sigma, region = None, None
+    noise, region = None, None
     if "measurement" in data:
         meas = data["measurement"]
         if not isinstance(meas, dict):
             raise _fail(path, "key 'measurement': expected a table [measurement]")
-        _check_keys(path, meas, ["sigma_mm", "region"], "measurement.")
-        if "sigma_mm" in meas:
-            sigma = _number(path, meas["sigma_mm"], "measurement.sigma_mm")
-            low, high = SIGMA_RANGE_MM
-            if not low <= sigma <= high:
-                raise _fail(
-                    path,
-                    f"key 'measurement.sigma_mm': must be between {low:g} and {high:g} mm, "
-                    f"got {sigma:g}; check the unit (mm)",
-                )
+        _check_keys(
+            path,
+            meas,
+            ["sigma_mm", "covariance_mm2", "joint_sigma_deg", "region"],
+            "measurement.",
+        )
+        covariance = _instrument_covariance(path, meas)
+        joint_sigma = _joint_sigma(path, meas, n)
+        if joint_sigma is not None and covariance is None:
+            raise _fail(
+                path,
+                "key 'measurement.joint_sigma_deg': encoder noise needs the instrument noise "
+                "too; add sigma_mm (or covariance_mm2) to [measurement]",
+            )
+        if covariance is not None:
+            noise = NoiseModel(covariance, joint_sigma)
         if "region" in meas:
             region = _parse_region(path, meas["region"])
-    arm = PlanarArm(
-        lengths, limits, base_offset=base_offset, name=name, sigma=sigma, region=region
-    )
-    return RobotSpec(arm, None, str(path))
+    names = PlanarArm(lengths, base_offset=base_offset).param_names
+    fixed = _fixed_parameters(path, data["identify"], names, name) if "identify" in data else []
+    try:
+        arm = PlanarArm(
+            lengths,
+            limits,
+            base_offset=base_offset,
+            name=name,
+            noise=noise,
+            region=region,
+            fixed=fixed,
+        )
+    except ValueError as exc:  # every value was checked above; this names what is left
+        raise _fail(path, str(exc)) from None
+    return RobotSpec(arm, None, str(path), tuple(warnings))
 
 
 def load_truth(path: str | os.PathLike, arm: PlanarArm) -> np.ndarray:
@@ -658,16 +897,51 @@ def _joint_names(n: int) -> list[str]:
     return [f"q{j}_deg" for j in range(1, n + 1)]
 
 
-def _read_csv(
-    path, arm: PlanarArm, what: str, numeric: Sequence[str], optional: Sequence[str] = ()
-) -> tuple[np.ndarray, dict[str, list[str]]]:
-    """Validate a CSV with joint columns plus ``numeric`` ones; return values and text columns.
+@dataclass(frozen=True, eq=False)
+class _Table:
+    """A validated CSV: numbers in file units and the optional columns found."""
 
-    Returns ``values (m, n + len(numeric))`` in file units and the optional text
-    columns by name.
+    values: np.ndarray  # (m, n + len(numeric)): joint columns (deg), then the numeric ones
+    texts: dict[str, list[str]]  # optional text columns present
+    numbers: dict[str, np.ndarray]  # optional numeric columns present
+    lines: list[int]  # file line of every data row
+    beyond: list[tuple[int, int, float, float]]  # (row index, joint, value deg, by deg)
+
+
+def _parse_number(path, where: str, name: str, field: str) -> float:
+    try:
+        value = float(field)
+    except ValueError:
+        raise _fail(path, f"{where}, column {name}: {field!r} is not a number") from None
+    if not math.isfinite(value):
+        raise _fail(path, f"{where}, column {name}: {field!r} is not a finite number")
+    if abs(value) > MAX_ABS_VALUE:
+        raise _fail(
+            path,
+            f"{where}, column {name}: {field} is beyond ±{MAX_ABS_VALUE:g}; "
+            "check the unit (mm, deg)",
+        )
+    return value
+
+
+def _read_csv(
+    path,
+    arm: PlanarArm,
+    what: str,
+    numeric: Sequence[str],
+    optional: Sequence[str] = (),
+    optional_numeric: Sequence[str] = (),
+    limit_tol_deg: float = 0.0,
+) -> _Table:
+    """Validate a CSV with joint columns plus ``numeric`` ones.
+
+    ``optional`` text and ``optional_numeric`` columns may be present.  A joint
+    angle beyond its limit by at most ``limit_tol_deg`` is accepted and listed in
+    ``beyond``; farther is an error.
     """
     expected = _joint_names(arm.n_joints) + list(numeric)
-    layout = ",".join(expected) + "".join(f" [,{c}]" for c in optional)
+    extras = list(optional) + list(optional_numeric)
+    layout = ",".join(expected) + "".join(f" [,{c}]" for c in extras)
     text = _read_text(path, what)
     if not text.strip():
         raise _fail(path, f"file is empty; expected a header line {layout}")
@@ -695,7 +969,7 @@ def _read_csv(
             f"{arm.name} has {arm.n_joints} joints; pass the matching --robot or fix the header",
         )
     for name in header:
-        if name not in expected and name not in optional:
+        if name not in expected and name not in extras:
             raise _fail(
                 path,
                 f"line {header_line}: unknown column '{name}': {_suggest(name, expected)}"
@@ -712,6 +986,8 @@ def _read_csv(
     index = {name: header.index(name) for name in expected}
     values = np.empty((len(data_rows), len(expected)))
     texts: dict[str, list[str]] = {name: [] for name in optional if name in header}
+    present = [name for name in optional_numeric if name in header]
+    numbers = {name: np.empty(len(data_rows)) for name in present}
     for r, (line, row) in enumerate(data_rows, start=1):
         where = f"row {r} (line {line})"
         if len(row) != len(header):
@@ -721,34 +997,39 @@ def _read_csv(
                 "give every column a value",
             )
         for c, name in enumerate(expected):
-            field = row[index[name]].strip()
-            try:
-                value = float(field)
-            except ValueError:
-                raise _fail(path, f"{where}, column {name}: {field!r} is not a number") from None
-            if not math.isfinite(value):
-                raise _fail(path, f"{where}, column {name}: {field!r} is not a finite number")
-            if abs(value) > MAX_ABS_VALUE:
-                raise _fail(
-                    path,
-                    f"{where}, column {name}: {field} is beyond ±{MAX_ABS_VALUE:g}; "
-                    "check the unit (mm, deg)",
-                )
-            values[r - 1, c] = value
+            values[r - 1, c] = _parse_number(path, where, name, row[index[name]].strip())
+        for name in present:
+            numbers[name][r - 1] = _parse_number(
+                path, where, name, row[header.index(name)].strip()
+            )
         for name in texts:
             texts[name].append(row[header.index(name)].strip())
-    q = np.radians(values[:, : arm.n_joints])
-    inside = arm.within_limits(q)
-    if not inside.all():
-        r, j = map(int, np.argwhere(~inside)[0])
-        lo, hi = np.degrees(arm.joint_limits[j])
+    lines = [line for line, _ in data_rows]
+    q_deg = values[:, : arm.n_joints]
+    limits_deg = np.degrees(arm.joint_limits)
+    # Distance beyond the nearer limit (deg), 0 inside; the 1e-9 rad slack of
+    # PlanarArm.within_limits keeps a limit written out in the file inside.
+    by = np.maximum(limits_deg[:, 0] - q_deg, q_deg - limits_deg[:, 1])
+    outside = by > math.degrees(1e-9)
+    far = outside & (by > limit_tol_deg)
+    if far.any():
+        r, j = map(int, np.argwhere(far)[0])
+        lo, hi = limits_deg[j]
+        fix = "fix the pose or the robot's joint_limits_deg"
+        if limit_tol_deg > 0:
+            fix = (
+                f"readings up to {limit_tol_deg:g} deg beyond a limit are accepted; "
+                "check the robot file (joint_limits_deg) and the column"
+            )
         raise _fail(
             path,
-            f"row {r + 1} (line {data_rows[r][0]}), column q{j + 1}_deg: "
-            f"{values[r, j]:g} deg is outside joint {j + 1}'s limits [{lo:g}, {hi:g}] deg; "
-            "fix the pose or the robot's joint_limits_deg",
+            f"row {r + 1} (line {lines[r]}), column q{j + 1}_deg: "
+            f"{values[r, j]:g} deg is outside joint {j + 1}'s limits [{lo:g}, {hi:g}] deg; {fix}",
         )
-    return values, texts
+    beyond = [
+        (int(r), int(j), float(values[r, j]), float(by[r, j])) for r, j in np.argwhere(outside)
+    ]
+    return _Table(values, texts, numbers, lines, beyond)
 
 
 def read_plan(path: str | os.PathLike, arm: PlanarArm) -> np.ndarray:
@@ -759,21 +1040,123 @@ def read_plan(path: str | os.PathLike, arm: PlanarArm) -> np.ndarray:
     ndarray, shape (m, n)
         Joint angles in rad, each within the joint limits.
     """
-    values, _ = _read_csv(path, arm, "plan", [])
-    return np.radians(values)
+    return np.radians(_read_csv(path, arm, "plan", []).values)
+
+
+def _beyond_limits_warning(path, arm: PlanarArm, beyond) -> ArmcalWarning:
+    limits_deg = np.degrees(arm.joint_limits)
+    shown = [
+        f"row {r + 1} q{j + 1}_deg = {value:g} "
+        f"([{limits_deg[j, 0]:g}, {limits_deg[j, 1]:g}], {by:.3g} deg beyond)"
+        for r, j, value, by in beyond[:5]
+    ]
+    more = f" and {len(beyond) - 5} more" if len(beyond) > 5 else ""
+    return ArmcalWarning(
+        "beyond-limits",
+        f"{os.fspath(path)}: {len(beyond)} measured joint angle(s) beyond the robot's limits by "
+        f"at most {LIMIT_TOLERANCE_DEG:g} deg, accepted (limits constrain plans, not what the "
+        f"arm did): {'; '.join(shown)}{more}; if the arm cannot go there, check the robot "
+        "file's joint_limits_deg",
+    )
+
+
+def _check_reach(path, arm: PlanarArm, xy: np.ndarray, lines: list[int]) -> None:
+    """Refuse a measured point no arm of this geometry can reach (see :data:`REACH_MARGIN`).
+
+    Without a base offset the base is the instrument's origin, and every tip lies
+    within ``reach`` of it.  With one, the base is unknown, but every tip lies
+    within ``reach`` of it, so within ``2 reach`` of the data's centroid.
+    """
+    reach = float(np.sum(arm.link_lengths))
+    limit = (1 + REACH_MARGIN) * reach
+    if arm.base_offset:
+        center = np.mean(xy, axis=0)
+        limit *= 2
+        where = "from the centroid of the measured points"
+    else:
+        center = np.zeros(2)
+        where = "from the base (the instrument's origin; base_offset = false)"
+    distance = np.hypot(xy[:, 0] - center[0], xy[:, 1] - center[1])
+    r = int(np.argmax(distance))
+    if distance[r] <= limit:
+        return
+    c = int(np.argmax(np.abs(xy[r] - center)))
+    column = ("x_mm", "y_mm")[c]
+    fix = "check the value and the unit (mm)"
+    if not arm.base_offset and distance[r] <= INSTRUMENT_RANGE * reach:
+        fix += (
+            "; if the instrument's origin is not at the arm's base (a laser tracker, a camera), "
+            "set base_offset = true in the robot file"
+        )
+    raise _fail(
+        path,
+        f"row {r + 1} (line {lines[r]}), column {column}: {xy[r, c]:g} puts the tip "
+        f"{distance[r]:.4g} mm {where}, beyond the reach of {arm.name} ("
+        f"{'2 x ' if arm.base_offset else ''}{reach:g} mm, +{100 * REACH_MARGIN:g} % for "
+        f"deviations: {limit:.4g} mm); {fix}",
+    )
 
 
 def read_measurements(path: str | os.PathLike, arm: PlanarArm) -> Measurements:
-    """Read a measurements CSV (``q1_deg..qn_deg,x_mm,y_mm`` and an optional ``pose`` label).
+    """Read a measurements CSV: ``q1_deg..qn_deg,x_mm,y_mm``, optional ``pose`` and ``sigma_mm``.
+
+    Parameters
+    ----------
+    path : str or path
+    arm : PlanarArm
+        The robot measured: its joint count, limits, link lengths, base offset.
 
     Returns
     -------
     Measurements
+        Angles in rad, positions in mm, the data rows, the ``sigma_mm`` column
+        (per-row instrument noise, mm) and the ``beyond-limits`` warning.
+
+    Raises
+    ------
+    InputError
+        Naming the file, row and column: a malformed file; a joint angle more
+        than :data:`LIMIT_TOLERANCE_DEG` beyond its limit; a ``sigma_mm`` outside
+        :data:`SIGMA_RANGE_MM`; a point no arm of this geometry can reach
+        (:data:`REACH_MARGIN`).
     """
-    values, texts = _read_csv(path, arm, "measurements", ["x_mm", "y_mm"], ["pose"])
+    table = _read_csv(
+        path,
+        arm,
+        "measurements",
+        ["x_mm", "y_mm"],
+        ["pose"],
+        ["sigma_mm"],
+        limit_tol_deg=LIMIT_TOLERANCE_DEG,
+    )
     n = arm.n_joints
-    labels = texts.get("pose") or [str(i) for i in range(1, values.shape[0] + 1)]
-    return Measurements(np.radians(values[:, :n]), values[:, n:], tuple(labels))
+    values = table.values
+    m = values.shape[0]
+    labels = table.texts.get("pose") or [str(i) for i in range(1, m + 1)]
+    row_sigma = table.numbers.get("sigma_mm")
+    if row_sigma is not None:
+        low, high = SIGMA_RANGE_MM
+        bad = np.flatnonzero((row_sigma < low) | (row_sigma > high))
+        if bad.size:
+            r = int(bad[0])
+            raise _fail(
+                path,
+                f"row {r + 1} (line {table.lines[r]}), column sigma_mm: {row_sigma[r]:g} is not "
+                f"a noise std between {low:g} and {high:g} mm; check the unit (mm)",
+            )
+    xy = values[:, n:]
+    _check_reach(path, arm, xy, table.lines)
+    warnings = []
+    if table.beyond:
+        warnings.append(_beyond_limits_warning(path, arm, table.beyond))
+    return Measurements(
+        np.radians(values[:, :n]),
+        xy,
+        tuple(labels),
+        rows=tuple(range(1, m + 1)),
+        row_sigma=row_sigma,
+        warnings=tuple(warnings),
+    )
 
 
 def _angle_text(q_rad: float) -> str:

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 import math
+from collections.abc import Sequence
 
 import numpy as np
 
@@ -12,6 +13,7 @@ from .arm import PlanarArm
 from .criteria import PlanQuality
 from .doe.designer import Design
 from .doe.sizing import TARGETS, PosesNeeded
+from .errors import ArmcalWarning
 from .identification import Calibration
 from .paper import PAPER_DIGIT
 from .reproduction.compute import TABLE_COLUMNS, Reproduction
@@ -25,6 +27,8 @@ __all__ = [
     "format_monte_carlo",
     "format_quality",
     "format_reproduction",
+    "model_lines",
+    "model_to_dict",
     "monte_carlo_to_dict",
     "poses_needed_summary",
     "quality_to_dict",
@@ -37,13 +41,91 @@ __all__ = [
 CALIBRATION_FORMAT = "armcal-calibration/1"
 
 
+def _noise_text(arm: PlanarArm) -> str | None:
+    """The noise model in words when it is not isotropic iid (None when it is or is unknown)."""
+    noise = arm.noise
+    if noise is None or noise.isotropic_iid:
+        return None
+    cov = noise.covariance_mm2
+    if noise.isotropic_instrument:
+        parts = [f"instrument isotropic, sigma {math.sqrt(cov[0, 0]):.4g} mm"]
+    elif cov[0, 1] == 0:
+        parts = [
+            f"instrument per axis, sigma_x {math.sqrt(cov[0, 0]):.4g} mm, "
+            f"sigma_y {math.sqrt(cov[1, 1]):.4g} mm"
+        ]
+    else:
+        parts = [
+            f"instrument covariance [[{cov[0, 0]:.4g}, {cov[0, 1]:.4g}], "
+            f"[{cov[1, 0]:.4g}, {cov[1, 1]:.4g}]] mm^2"
+        ]
+    if noise.joint_sigma is not None:
+        joints = np.degrees(np.broadcast_to(noise.joint_sigma, (arm.n_joints,)))
+        if np.all(joints == joints[0]):
+            parts.append(f"encoder noise {joints[0]:.4g} deg on every joint")
+        else:
+            parts.append("encoder noise " + ", ".join(f"{v:.4g}" for v in joints) + " deg")
+    return "; ".join(parts) + f" (reference sigma {noise.sigma_mm:.4g} mm)"
+
+
+def model_lines(arm: PlanarArm, *, plan: bool = True) -> list[str]:
+    """Lines naming the fixed parameters and a noise model that is not isotropic iid.
+
+    Empty for the paper's model (every parameter free, isotropic iid noise).
+    ``plan`` adds, for a noise model that is not isotropic iid, that the paper's
+    D*, Table I and analytic plans assume one (what changes the answer for a plan).
+
+    Examples
+    --------
+    >>> model_lines(PlanarArm([260.0, 180.0], fixed=["dl2"]))
+    ['fixed (held at nominal, not identified): dl2']
+    """
+    lines = []
+    if arm.fixed:
+        lines.append(f"fixed (held at nominal, not identified): {', '.join(arm.fixed)}")
+    noise = _noise_text(arm)
+    if noise is not None:
+        line = f"noise model: {noise}; not isotropic iid: weighted least squares"
+        if plan:
+            line += (
+                " and the weighted information matrix (the paper's D*, Table I and the "
+                "analytic plans assume isotropic iid noise)"
+            )
+        lines.append(line)
+    return lines
+
+
+def model_to_dict(arm: PlanarArm) -> dict:
+    """JSON keys of the model: ``fixed`` (names), ``noise`` (or null), ``noise_isotropic_iid``."""
+    return {
+        "fixed": list(arm.fixed),
+        "noise": None if arm.noise is None else arm.noise.to_dict(),
+        "noise_isotropic_iid": arm.noise is None or arm.noise.isotropic_iid,
+    }
+
+
+def _identified(arm: PlanarArm) -> str:
+    """``8 parameters``, or ``7 of 8 parameters identified`` when some are fixed."""
+    if not arm.fixed:
+        return f"{arm.n_params} parameters"
+    return f"{arm.n_free} of {arm.n_params} parameters identified"
+
+
+def _std_cell(arm: PlanarArm, name: str, value: float, width: int, digits: int) -> str:
+    """A std column: the number, or ``fixed`` for a fixed parameter."""
+    if name in arm.fixed:
+        return f"{'fixed':>{width}}"
+    return f"{value:>{width}.{digits}f}"
+
+
 def format_quality(arm: PlanarArm, quality: PlanQuality) -> str:
     """Human-readable report of :func:`evaluate_plan`: criteria, std table, accuracy."""
     eff = quality.efficiencies
     obs = quality.observability
     lines = [
-        f"{quality.n_poses} poses of {arm.name}, {arm.n_params} parameters, "
+        f"{quality.n_poses} poses of {arm.name}, {_identified(arm)}, "
         f"sigma {quality.sigma_mm:g} mm",
+        *model_lines(arm),
         f"efficiency (1 = orthogonal optimum): D {eff['D']:.4f}  A {eff['A']:.4f}  "
         f"E {eff['E']:.4f}",
         f"observability: O1 {obs['O1']:.4f}  O2 {obs['O2']:.4f}  O3 {obs['O3']:.4f}  "
@@ -57,7 +139,7 @@ def format_quality(arm: PlanarArm, quality: PlanQuality) -> str:
     for name, unit, std in zip(
         arm.param_names, arm.param_units, quality.predicted_std, strict=True
     ):
-        lines.append(f"{name:<10}{std:>14.5f}  {unit}")
+        lines.append(f"{name:<10}{_std_cell(arm, name, std, 14, 5)}  {unit}")
     pos = quality.position
     lines += [
         "",
@@ -73,7 +155,10 @@ def quality_to_dict(arm: PlanarArm, quality: PlanQuality) -> dict:
     Only identifiable plans have a quality (:func:`~armcal.criteria.evaluate_plan`
     raises otherwise), so every value is finite.
     """
-    std = {name: float(v) for name, v in zip(arm.param_names, quality.predicted_std, strict=True)}
+    std = {
+        name: 0.0 if name in arm.fixed else float(v)
+        for name, v in zip(arm.param_names, quality.predicted_std, strict=True)
+    }
     pos = quality.position
     return {
         "poses": quality.n_poses,
@@ -89,8 +174,40 @@ def quality_to_dict(arm: PlanarArm, quality: PlanQuality) -> dict:
         "predicted_std": std,
         "predicted_position_rms_mm": pos.rms_mm,
         "predicted_position_max_mm": pos.max_mm,
+        **model_to_dict(arm),
         "warnings": [w.to_dict() for w in quality.warnings],
     }
+
+
+def _fit_line(cal: Calibration) -> str:
+    """The goodness of fit in words: chi-square, dof and p-value, or why there is no test."""
+    fit = cal.goodness_of_fit
+    dof = cal.dof if fit is None else fit.dof
+    if fit is None or fit.chi2 is None:
+        return f"goodness of fit: sigma estimated from the residuals, no test ({dof} dof)"
+    if fit.p_value is None:
+        return f"goodness of fit: chi2 = {fit.chi2:.4g} on {dof} dof: no test without dof"
+    verdict = "consistent with sigma" if fit.p_value >= 1e-3 else "INCONSISTENT with sigma"
+    return (
+        f"goodness of fit: chi2 = {fit.chi2:.4g} on {dof} dof "
+        f"(chi2/dof {fit.chi2 / max(dof, 1):.3g}), p = {fit.p_value:.3g}: {verdict}"
+    )
+
+
+def _outlier_lines(cal: Calibration) -> list[str]:
+    if not cal.outliers:
+        return []
+    lines = [
+        "",
+        f"outliers (studentized residual test, family-wise; {len(cal.outliers)}):",
+        f"{'row':>6}  {'pose':<10}{'residual mm':>12}{'studentized':>13}  status",
+    ]
+    for o in cal.outliers:
+        status = "removed from the fit" if o.removed else "flagged, kept in the fit"
+        lines.append(
+            f"{o.row:>6}  {o.pose:<10}{o.residual_mm:>12.4g}{o.studentized:>13.3g}  {status}"
+        )
+    return lines
 
 
 def format_calibration(cal: Calibration, *, truth: np.ndarray | None = None) -> str:
@@ -106,48 +223,93 @@ def format_calibration(cal: Calibration, *, truth: np.ndarray | None = None) -> 
     Returns
     -------
     str
-        Lines without a trailing newline.
+        Lines without a trailing newline: the model (fixed parameters, a noise
+        model that is not isotropic iid), the parameters (fixed ones marked
+        ``fixed``), sigma and residuals, the goodness of fit, the outliers.
     """
+    arm = cal.arm
     header = f"{'parameter':<10}{'value':>12}  {'± std':>10}  unit"
     if truth is not None:
         header += f"{'truth':>12}{'error/std':>11}"
+    used = cal.n_used
+    poses = f"{cal.n_poses} poses" + (
+        f" ({cal.n_poses - used} left out of the fit)" if used < cal.n_poses else ""
+    )
     lines = [
-        f"calibration of {cal.arm.name}: {cal.n_poses} poses, {cal.arm.n_params} parameters, "
-        f"method {cal.method}",
+        f"calibration of {arm.name}: {poses}, {_identified(arm)}, method {cal.method}"
+        + (", robust" if cal.robust else ""),
+        *model_lines(arm, plan=False),
         "",
         header,
     ]
-    truth_display = None if truth is None else np.asarray(truth) * cal.arm.display_scale
+    truth_display = None if truth is None else np.asarray(truth) * arm.display_scale
     for i, (name, unit) in enumerate(zip(cal.names, cal.units, strict=True)):
-        line = f"{name:<10}{cal.values[i]:>12.5f}  ± {cal.std[i]:<8.5f}  {unit:<4}"
+        if name in arm.fixed:
+            line = f"{name:<10}{cal.values[i]:>12.5f}  {'fixed':<10}  {unit:<4}"
+        else:
+            line = f"{name:<10}{cal.values[i]:>12.5f}  ± {cal.std[i]:<8.5f}  {unit:<4}"
         if truth_display is not None:
-            z = (cal.values[i] - truth_display[i]) / cal.std[i]
-            line += f"{truth_display[i]:>12.5f}{z:>+11.2f}"
+            line += f"{truth_display[i]:>12.5f}"
+            if name not in arm.fixed and cal.std[i] > 0:
+                line += f"{(cal.values[i] - truth_display[i]) / cal.std[i]:>+11.2f}"
         lines.append(line.rstrip())
-    worst = int(np.argmax(cal.pose_residuals))
+    kept = cal.pose_residuals if cal.used is None else np.where(cal.used, cal.pose_residuals, -1)
+    worst = int(np.argmax(kept))
     lines += [
         "",
         f"sigma {cal.sigma_mm:.4g} mm ({cal.sigma_source}); "
         f"residual RMS {cal.residual_rms:.4g} mm per coordinate, "
         f"max {cal.residual_max:.4g} mm at pose {cal.pose_labels[worst]}; "
         f"{cal.dof} degrees of freedom",
+        _fit_line(cal),
         f"{cal.method}: {cal.iterations} iteration(s), "
         + ("converged" if cal.converged else "NOT converged: the estimate may be off"),
     ]
-    corr = np.abs(cal.correlation - np.eye(cal.arm.n_params))
+    corr = np.abs(cal.correlation - np.eye(arm.n_params))
     strong = [
         f"{cal.names[i]}/{cal.names[j]} {cal.correlation[i, j]:+.2f}"
         for i, j in zip(*np.nonzero(np.triu(corr > 0.9)), strict=True)
     ]
     if strong:
         lines.append("strongly correlated (|r| > 0.9): " + ", ".join(strong))
+    lines += _outlier_lines(cal)
     return "\n".join(lines)
 
 
-def calibration_to_dict(cal: Calibration) -> dict:
-    """The ``armcal-calibration/1`` document of a calibration (see PRODUCT.md)."""
+def _finite_or_none(value: float | None) -> float | None:
+    """A float for JSON: None for a missing or non-finite value (never NaN)."""
+    if value is None or not math.isfinite(value):
+        return None
+    return float(value)
+
+
+def calibration_to_dict(
+    cal: Calibration, *, warnings: Sequence[ArmcalWarning] | None = None
+) -> dict:
+    """The ``armcal-calibration/1`` document of a calibration (see PRODUCT.md).
+
+    Parameters
+    ----------
+    cal : Calibration
+    warnings : sequence of ArmcalWarning, optional
+        Every warning of the run (the robot file's, the measurement file's, the
+        plausibility checks', the calibration's); default ``cal.warnings``.
+
+    Returns
+    -------
+    dict
+        The contract keys, plus ``goodness_of_fit`` ``{chi2, dof, p_value}``
+        (null chi2 and p-value when sigma was estimated), ``standardized_residuals``
+        per pose, ``outliers`` (``{row, pose, target, residual_mm, studentized,
+        removed}``), ``noise`` (the noise model or null), ``fixed`` (names; their
+        parameters carry ``"fixed": true`` and std 0).  No NaN anywhere.
+    """
     arm = cal.arm
     corr = cal.correlation
+    fit = cal.goodness_of_fit
+    rows = cal.rows or tuple(range(1, cal.n_poses + 1))
+    used = np.ones(cal.n_poses, dtype=bool) if cal.used is None else cal.used
+    standardized = cal.standardized_residuals
     return {
         "format": CALIBRATION_FORMAT,
         "armcal_version": __version__,
@@ -158,11 +320,21 @@ def calibration_to_dict(cal: Calibration) -> dict:
             "base_offset": arm.base_offset,
         },
         "method": cal.method,
+        "robust": bool(cal.robust),
         "poses": cal.n_poses,
+        "poses_used": cal.n_used,
         "sigma_mm": cal.sigma_mm,
         "sigma_source": cal.sigma_source,
+        "noise": None if arm.noise is None else arm.noise.to_dict(),
+        "fixed": list(arm.fixed),
         "parameters": [
-            {"name": name, "unit": unit, "value": float(v), "std": float(s)}
+            {
+                "name": name,
+                "unit": unit,
+                "value": float(v),
+                "std": 0.0 if name in arm.fixed else float(s),
+                "fixed": name in arm.fixed,
+            }
             for name, unit, v, s in zip(cal.names, cal.units, cal.values, cal.std, strict=True)
         ],
         "covariance": {"names": list(cal.names), "matrix": cal.covariance_display.tolist()},
@@ -170,13 +342,41 @@ def calibration_to_dict(cal: Calibration) -> dict:
         "residual_rms_mm": cal.residual_rms,
         "residual_max_mm": cal.residual_max,
         "degrees_of_freedom": cal.dof,
+        "goodness_of_fit": {
+            "chi2": None if fit is None else _finite_or_none(fit.chi2),
+            "dof": cal.dof if fit is None else int(fit.dof),
+            "p_value": None if fit is None else _finite_or_none(fit.p_value),
+        },
         "residuals": [
-            {"pose": label, "dx_mm": float(r[0]), "dy_mm": float(r[1])}
-            for label, r in zip(cal.pose_labels, cal.residuals, strict=True)
+            {
+                "row": int(row),
+                "pose": label,
+                "dx_mm": float(r[0]),
+                "dy_mm": float(r[1]),
+                "used": bool(u),
+            }
+            for row, label, r, u in zip(rows, cal.pose_labels, cal.residuals, used, strict=True)
+        ],
+        "standardized_residuals": []
+        if standardized is None
+        else [
+            {"row": int(row), "pose": label, "x": float(z[0]), "y": float(z[1])}
+            for row, label, z in zip(rows, cal.pose_labels, standardized, strict=True)
+        ],
+        "outliers": [
+            {
+                "row": int(o.row),
+                "pose": o.pose,
+                "target": o.target,
+                "residual_mm": float(o.residual_mm),
+                "studentized": float(o.studentized),
+                "removed": bool(o.removed),
+            }
+            for o in cal.outliers
         ],
         "iterations": cal.iterations,
         "converged": cal.converged,
-        "warnings": [w.to_dict() for w in cal.warnings],
+        "warnings": [w.to_dict() for w in (cal.warnings if warnings is None else warnings)],
     }
 
 
@@ -191,6 +391,7 @@ def format_monte_carlo(result: MonteCarlo) -> str:
     lines = [
         f"Monte Carlo: {result.trials} trials of {result.q.shape[0]} poses of {arm.name}, "
         f"sigma {result.sigma_mm:g} mm, {result.method} ({result.seconds:.2f} s)",
+        *model_lines(arm),
         "",
         f"{'parameter':<10}{'truth':>10}{'bias':>11}{'empirical std':>15}{'predicted std':>15}"
         f"{'ratio':>8}  unit",
@@ -205,6 +406,11 @@ def format_monte_carlo(result: MonteCarlo) -> str:
         result.predicted_std,
         strict=True,
     ):
+        if name in arm.fixed:  # held at nominal: no spread to compare
+            lines.append(
+                f"{name:<10}{t:>10.4f}{b:>11.2e}{'fixed':>15}{'fixed':>15}{'':>8}  {unit}"
+            )
+            continue
         lines.append(f"{name:<10}{t:>10.4f}{b:>11.2e}{s:>15.5f}{ps:>15.5f}{s / ps:>8.3f}  {unit}")
     flagged = [
         name
@@ -266,6 +472,7 @@ def monte_carlo_to_dict(result: MonteCarlo) -> dict:
         "bias_limit": by_name(result.bias_limit),
         "not_converged": result.not_converged,
         "seconds": result.seconds,
+        **model_to_dict(result.arm),
     }
     if result.position is not None:
         pos = result.position
@@ -550,6 +757,7 @@ def poses_needed_summary(
         "method": found.method,
         "evaluated": {str(m): v for m, v in found.evaluated.items() if math.isfinite(v)},
         "seconds": seconds,
+        **model_to_dict(arm),
     }
     less = (
         f"{found.poses - 1} poses give {found.previous:.6g} {unit}"
@@ -562,5 +770,6 @@ def poses_needed_summary(
         f"{found.goal:g} {unit}; {less}",
         f"({TARGETS[found.target]}; sigma {found.sigma_mm:g} mm; {len(found.evaluated)} plan "
         f"sizes tried in {seconds:.2f} s)",
+        *model_lines(arm),
     ]
     return document, lines
