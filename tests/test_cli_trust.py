@@ -433,6 +433,6 @@ def test_simulating_a_fixed_parameter_the_truth_moves_is_a_warning(tmp_path):
     result = run_cli(tmp_path, *argv)
     assert result.returncode == 0, result.stderr
     document = _no_nan(result.stdout)
-    _assert_warned_once(result, document, "fixed-truth", "dl4 = 0.7 mm")
+    _assert_warned_once(result, document, "fixed-not-nominal", "dl4 = 0.7 mm")
     assert document["fixed"] == ["dl4"]
     assert document["bias"]["dl4"] == pytest.approx(-0.7, abs=1e-12)

@@ -36,6 +36,7 @@ from .criteria import (
     position_accuracy,
     predicted_std,
 )
+from .diagnostics import GoodnessOfFit, Outlier
 from .doe import (
     Certificate,
     Design,
@@ -47,8 +48,15 @@ from .doe import (
     random_plan,
 )
 from .errors import ArmcalError, InputError, NotIdentifiableError
-from .identification import Calibration, identify, solve_closed_form, solve_gauss_newton
+from .identification import (
+    Calibration,
+    identify,
+    solve_closed_form,
+    solve_gauss_newton,
+    solve_model,
+)
 from .io import load_robot, load_truth, read_measurements, read_plan
+from .noise import NoiseModel
 from .observability import Identifiability, check_identifiable, identifiability
 from .report import format_calibration
 from .simulate import (
@@ -67,10 +75,13 @@ __all__ = [
     "Calibration",
     "Certificate",
     "Design",
+    "GoodnessOfFit",
     "Identifiability",
     "InputError",
     "MonteCarlo",
+    "NoiseModel",
     "NotIdentifiableError",
+    "Outlier",
     "PlanQuality",
     "PlanStudy",
     "PlanarArm",
@@ -101,6 +112,7 @@ __all__ = [
     "read_plan",
     "solve_closed_form",
     "solve_gauss_newton",
+    "solve_model",
     "synthesize_measurements",
     "wrap_angle",
 ]

@@ -190,10 +190,11 @@ def _model_arm(args: argparse.Namespace, spec: RobotSpec) -> PlanarArm:
     return arm
 
 
-def _sigma_for_simulation(args: argparse.Namespace, spec: RobotSpec) -> float:
+def _sigma_for_simulation(args: argparse.Namespace, spec: RobotSpec) -> float | None:
+    """``--sigma``, else None: the robot file's whole noise model (shape and encoders)."""
     if args.sigma is not None:
         return args.sigma
-    return spec.arm.sigma if spec.arm.sigma is not None else DEFAULT_SIGMA_MM
+    return None if spec.arm.noise is not None else DEFAULT_SIGMA_MM
 
 
 def _design_sigma(arm: PlanarArm) -> float:
@@ -255,11 +256,12 @@ def _synthesize(args: argparse.Namespace) -> None:
         sys.stdout.write(text)
         return
     atomic_write(args.output, text)
-    document = {"poses": int(q.shape[0]), "sigma_mm": sigma, "output": str(args.output)}
+    shown = sigma if sigma is not None else float(spec.arm.sigma or 0.0)
+    document = {"poses": int(q.shape[0]), "sigma_mm": shown, "output": str(args.output)}
     _emit(
         args,
         document,
-        f"wrote {q.shape[0]} measurements of {spec.arm.name} (sigma {sigma:g} mm, "
+        f"wrote {q.shape[0]} measurements of {spec.arm.name} (sigma {shown:g} mm, "
         f"seed {args.seed}) to {args.output}",
         spec.warnings,
     )
@@ -339,10 +341,11 @@ def _demo(args: argparse.Namespace) -> None:
     q = design(arm, args.poses, rng=rng).q
     xy = synthesize_measurements(arm, q, truth, sigma, rng=rng)
     cal = identify(arm, q, xy, sigma=sigma)
+    shown = cal.sigma_mm
     document = calibration_to_dict(cal)
     lines = [
         f"armcal demo on {arm.name}: {args.poses}-pose optimal plan (armcal design), "
-        f"virtual robot with the paper's deviations, noise sigma {sigma:g} mm, seed {args.seed}",
+        f"virtual robot with the paper's deviations, noise sigma {shown:g} mm, seed {args.seed}",
         "",
         format_calibration(cal, truth=truth),
     ]
@@ -438,7 +441,7 @@ def _simulate(args: argparse.Namespace) -> None:
             arm,
             q,
             truth,
-            _design_sigma(arm),
+            None if arm.noise is not None else DEFAULT_SIGMA_MM,  # the model as it is
             args.trials,
             method=method,
             rng=np.random.default_rng(args.seed),
@@ -447,7 +450,7 @@ def _simulate(args: argparse.Namespace) -> None:
         )
     except NotIdentifiableError as exc:
         raise NotIdentifiableError(f"{args.plan}: {exc}", exc.combinations) from None
-    warnings = [*spec.warnings, *_fixed_truth_warnings(arm, truth)]
+    warnings = [*spec.warnings, *result.warnings]
     if result.not_converged:
         warnings.append(
             ArmcalWarning(
@@ -457,26 +460,6 @@ def _simulate(args: argparse.Namespace) -> None:
             )
         )
     _emit(args, monte_carlo_to_dict(result), format_monte_carlo(result), warnings)
-
-
-def _fixed_truth_warnings(arm: PlanarArm, truth: np.ndarray) -> list[ArmcalWarning]:
-    """A warning when the truth moves a parameter the model holds at nominal."""
-    values = truth * arm.display_scale
-    held = [
-        f"{name} = {values[i]:.4g} {unit}"
-        for i, (name, unit) in enumerate(zip(arm.param_names, arm.param_units, strict=True))
-        if name in arm.fixed and values[i] != 0
-    ]
-    if not held:
-        return []
-    return [
-        ArmcalWarning(
-            "fixed-truth",
-            f"the truth has {', '.join(held)}, but the model holds "
-            f"{'it' if len(held) == 1 else 'them'} at nominal (0): the simulation shows the "
-            "error of a wrong fixed value; give 0 in the truth file to simulate a correct one",
-        )
-    ]
 
 
 _TARGET_OPTIONS = {

@@ -12,6 +12,7 @@ from ._version import __version__
 from .arm import PlanarArm
 from .criteria import PlanQuality
 from .doe.designer import Design
+from .doe.model import unit_trace
 from .doe.sizing import TARGETS, PosesNeeded
 from .errors import ArmcalWarning
 from .identification import Calibration
@@ -118,6 +119,13 @@ def _std_cell(arm: PlanarArm, name: str, value: float, width: int, digits: int) 
     return f"{value:>{width}.{digits}f}"
 
 
+def _efficiency_label(arm: PlanarArm) -> str:
+    """What the criteria are relative to: 1 at the optimum only where ``det M <= 1`` holds."""
+    if unit_trace(arm):
+        return "efficiency (1 = orthogonal optimum)"
+    return "criteria of the weighted information (not 1 at this model's optimum; see design)"
+
+
 def format_quality(arm: PlanarArm, quality: PlanQuality) -> str:
     """Human-readable report of :func:`evaluate_plan`: criteria, std table, accuracy."""
     eff = quality.efficiencies
@@ -126,8 +134,7 @@ def format_quality(arm: PlanarArm, quality: PlanQuality) -> str:
         f"{quality.n_poses} poses of {arm.name}, {_identified(arm)}, "
         f"sigma {quality.sigma_mm:g} mm",
         *model_lines(arm),
-        f"efficiency (1 = orthogonal optimum): D {eff['D']:.4f}  A {eff['A']:.4f}  "
-        f"E {eff['E']:.4f}",
+        f"{_efficiency_label(arm)}: D {eff['D']:.4f}  A {eff['A']:.4f}  E {eff['E']:.4f}",
         f"observability: O1 {obs['O1']:.4f}  O2 {obs['O2']:.4f}  O3 {obs['O3']:.4f}  "
         f"O4 {obs['O4']:.4f}",
         f"paper D*: det C' {float(quality.dstar.det_c):.4f}  "
@@ -518,8 +525,11 @@ def design_summary(result: Design, seconds: float) -> tuple[dict, list[str]]:
         "notes": list(result.notes),
         "seconds": seconds,
     }
-    efficiency = f"D-efficiency {result.d_efficiency:.4f} of the unconstrained optimum"
-    if result.method != "analytic" and result.d_efficiency >= 1 - 1e-9:
+    if unit_trace(result.arm):
+        efficiency = f"D-efficiency {result.d_efficiency:.4f} of the unconstrained optimum"
+    else:  # no closed-form optimum: only the certificate compares with the best plan
+        efficiency = f"D-criterion {result.d_efficiency:.4f} on this model"
+    if unit_trace(result.arm) and result.method != "analytic" and result.d_efficiency >= 1 - 1e-9:
         # The note ruled out only the closed-form family: say that the search met the optimum.
         efficiency += " (an orthogonal plan, found by search)"
     if cert is not None:
