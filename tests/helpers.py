@@ -1,7 +1,9 @@
 """Helpers shared by the tests: random arms and deviations, and the program in a subprocess."""
 
+import math
 import subprocess
 import sys
+from collections.abc import Sequence
 from pathlib import Path
 
 import numpy as np
@@ -38,3 +40,15 @@ def run_cli(cwd: Path, *args: str, timeout: float = 120) -> subprocess.Completed
         timeout=timeout,
         check=False,
     )
+
+
+def deviated_tip(
+    q_deg: Sequence[float], links: Sequence[float], dl: Sequence[float], dq: Sequence[float]
+) -> tuple[float, float]:
+    """Paper eq. (1), written out link by link independently of armcal: the tip (mm)."""
+    x = y = angle = 0.0
+    for length, d_length, q, d_q in zip(links, dl, q_deg, dq, strict=True):
+        angle += math.radians(q + d_q)
+        x += (length + d_length) * math.cos(angle)
+        y += (length + d_length) * math.sin(angle)
+    return x, y

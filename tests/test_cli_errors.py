@@ -23,7 +23,7 @@ from pathlib import Path
 
 import pytest
 
-from helpers import run_cli
+from helpers import deviated_tip, run_cli
 
 # --------------------------------------------------------------------------- valid inputs
 
@@ -48,12 +48,7 @@ POSES = [(0.0, a, a, a) for a in (_wrap(18.0 * k) for k in range(20))]
 
 def _exact_position(q_deg: tuple[float, ...]) -> tuple[float, float]:
     """Position of the deviated arm (paper eq. 1, written out independently)."""
-    x = y = angle = 0.0
-    for length, dl, q, dq in zip(LINKS_MM, DL_MM, q_deg, DQ_DEG, strict=True):
-        angle += math.radians(q + dq)
-        x += (length + dl) * math.cos(angle)
-        y += (length + dl) * math.sin(angle)
-    return x, y
+    return deviated_tip(q_deg, LINKS_MM, DL_MM, DQ_DEG)
 
 
 def _position(q_deg: tuple[float, ...], k: int) -> tuple[float, float]:

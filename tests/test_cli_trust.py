@@ -15,7 +15,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from helpers import run_cli
+from helpers import deviated_tip, run_cli
 
 LINKS_MM = (260.0, 180.0, 120.0, 100.0)
 DL_MM = (1.5, -0.6, -0.4, 0.7)
@@ -32,13 +32,7 @@ OUTLIERS = {7: (3.0, 1.5), 20: (-2.5, 3.5)}
 
 
 def _tip(q_deg, dl=DL_MM, dq=DQ_DEG, links=LINKS_MM) -> tuple[float, float]:
-    """Paper eq. (1): the tip of the deviated arm, link by link."""
-    x = y = angle = 0.0
-    for length, d_length, q, d_q in zip(links, dl, q_deg, dq, strict=True):
-        angle += math.radians(q + d_q)
-        x += (length + d_length) * math.cos(angle)
-        y += (length + d_length) * math.sin(angle)
-    return x, y
+    return deviated_tip(q_deg, links, dl, dq)
 
 
 def _plan(m: int, seed: int = 9, limit_deg: float = 170.0) -> np.ndarray:

@@ -75,6 +75,7 @@ from .numerics import (
 from .observability import (
     check_identifiable,
     conditioning_warning,
+    listing,
     plan_svd,
     scaled_columns,
     scaled_jacobian,
@@ -329,6 +330,22 @@ def _whitening(
     return root * (np.eye(2) if w is None else w)
 
 
+def _for_sets(pose_weights: np.ndarray | None, active: np.ndarray) -> np.ndarray | None:
+    """The pose weights of the sets ``active``: shared ``(m,)`` weights serve every set."""
+    if pose_weights is None or pose_weights.ndim == 1:
+        return pose_weights
+    return pose_weights[active]
+
+
+def _check_closed_form(arm: PlanarArm, method: str) -> None:
+    """The closed form is linear in the link phasors: it needs every parameter free."""
+    if method == "closed-form" and not arm.free.all():
+        raise ArmcalError(
+            f"the closed form needs every parameter free, but {', '.join(arm.fixed)} "
+            f"{'is' if len(arm.fixed) == 1 else 'are'} fixed; use --method gauss-newton or auto"
+        )
+
+
 def _apply(w: np.ndarray | None, rows: np.ndarray) -> np.ndarray:
     """``W_i`` applied to per-pose rows ``(..., m, 2, k)``."""
     return rows if w is None else w @ rows
@@ -447,11 +464,7 @@ def solve_model(
     if check_plan:
         check_identifiable(arm, q[used], svd=plan_svd(arm, q[used]))
     all_free = bool(arm.free.all())
-    if method == "closed-form" and not all_free:
-        raise ArmcalError(
-            f"the closed form needs every parameter free, but {', '.join(arm.fixed)} "
-            "are fixed; use method gauss-newton (or auto)"
-        )
+    _check_closed_form(arm, method)
     joint_noise = _model_noise(arm).joint_sigma is not None
     threshold = tol * float(np.sum(arm.link_lengths))
     params = np.zeros((n_sets, arm.n_params))
@@ -466,18 +479,8 @@ def solve_model(
         if joint_noise:
             active = np.arange(n_sets)
             for _ in range(max_iter):
-                weights = (
-                    None
-                    if pose_weights is None or pose_weights.ndim == 1
-                    else pose_weights[active]
-                )
-                w = _whitening(
-                    arm,
-                    q,
-                    params[active],  # (N, p): per-set whitening (N, m, 2, 2)
-                    row_sigma,
-                    pose_weights if weights is None else weights,
-                )
+                # (N, p) deviations: per-set whitening (N, m, 2, 2)
+                w = _whitening(arm, q, params[active], row_sigma, _for_sets(pose_weights, active))
                 new, ok = _weighted_closed_form(arm, q, sets[active], w)
                 moved = _step_size(arm, wrap_angle(new - params[active]))
                 params[active] = new
@@ -489,10 +492,11 @@ def solve_model(
     else:
         if start is not None:
             params[:] = np.broadcast_to(np.asarray(start, dtype=float), params.shape)
-        elif method != "gauss-newton" and plan_svd(arm.replace(fixed=()), q[used]).full_rank:
-            full = arm.replace(fixed=(), noise=arm.noise)
-            w = _whitening(full, q, None, row_sigma, pose_weights)
-            params, _ = _weighted_closed_form(full, q, sets, w)
+        elif method != "gauss-newton":
+            full = arm.replace(fixed=())
+            if plan_svd(full, q[used]).full_rank:
+                w = _whitening(full, q, None, row_sigma, pose_weights)
+                params, _ = _weighted_closed_form(full, q, sets, w)
         params = params * arm.free
         params, iterations, converged = _gauss_newton_model(
             arm, q, sets, params, row_sigma, pose_weights, threshold, max_iter
@@ -522,12 +526,7 @@ def _gauss_newton_model(
     floor = 1e-9 * float(np.sum(arm.link_lengths))  # round-off floor of a stalled step
     for _ in range(max_iter):
         current = params[active]
-        weights = (
-            pose_weights
-            if pose_weights is None or pose_weights.ndim == 1
-            else pose_weights[active]
-        )
-        w = _whitening(arm, q, current, row_sigma, weights)
+        w = _whitening(arm, q, current, row_sigma, _for_sets(pose_weights, active))
         jac = jacobian(arm, q, current)[..., free]  # (N, m, 2, p_f)
         residual = sets[active] - forward_kinematics(arm, q, current)
         rows = _apply(w, jac).reshape(active.size, -1, arm.n_free)
@@ -871,9 +870,9 @@ def _identifiable(arm: PlanarArm, q: np.ndarray) -> bool:
 
 
 def _robust_fit(
-    problem: _Problem, sigma: float | None
+    problem: _Problem, sigma: float | None, fit: _Fit
 ) -> tuple[_Fit, np.ndarray, np.ndarray, ArmcalWarning | None]:
-    """Huber IRLS from the least-squares fit, then test, leave out, refit until stable.
+    """Huber IRLS from the least-squares ``fit`` to every pose, then test, leave out, refit.
 
     Returns the final fit, the poses in it, the poses flagged as outliers, and a
     warning when the outliers could not be left out without losing identifiability.
@@ -883,7 +882,6 @@ def _robust_fit(
     arm = problem.arm
     m = problem.q.shape[0]
     everyone = np.ones(m, dtype=bool)
-    fit = problem.fit(everyone)
     weights = np.ones(m)
     for _ in range(100):
         distance = np.hypot(fit.whitened[:, 0], fit.whitened[:, 1])
@@ -925,10 +923,6 @@ def _robust_fit(
     return fit, used, ~used, None
 
 
-def _listing(items: Sequence[str]) -> str:
-    return items[0] if len(items) == 1 else ", ".join(items[:-1]) + " and " + items[-1]
-
-
 def _outlier_warning(outliers: Sequence[Outlier], robust: bool) -> ArmcalWarning:
     shown = [
         f"row {o.row} (pose {o.pose}: residual {o.residual_mm:.3g} mm, "
@@ -944,7 +938,7 @@ def _outlier_warning(outliers: Sequence[Outlier], robust: bool) -> ArmcalWarning
     return ArmcalWarning(
         "outlier",
         f"{len(outliers)} {what} at the {OUTLIER_ALPHA:g} family-wise level: "
-        f"{_listing(shown)}{more}; {action}",
+        f"{listing(shown)}{more}; {action}",
     )
 
 
@@ -1063,11 +1057,7 @@ def identify(
         method = "closed-form" if arm.free.all() else "gauss-newton"
     if method not in METHODS:
         raise ArmcalError(f"unknown method {method!r}; choose one of auto, {', '.join(METHODS)}")
-    if method == "closed-form" and not arm.free.all():
-        raise ArmcalError(
-            f"the closed form needs every parameter free, but {', '.join(arm.fixed)} "
-            f"{'is' if len(arm.fixed) == 1 else 'are'} fixed; use --method gauss-newton or auto"
-        )
+    _check_closed_form(arm, method)
     if sigma is not None:
         noise = arm.noise
         arm = arm.replace(
@@ -1090,12 +1080,12 @@ def identify(
     everyone = np.ones(m, dtype=bool)
     extra: list[ArmcalWarning] = []
     robust_sigma = reference if given else None
+    least_squares = problem.fit(everyone)
+    fit, used = least_squares, everyone
     if robust:
-        fit, used, flagged, kept_warning = _robust_fit(problem, robust_sigma)
+        fit, used, flagged, kept_warning = _robust_fit(problem, robust_sigma, least_squares)
         if kept_warning is not None:
             extra.append(kept_warning)
-    else:
-        fit, used = problem.fit(everyone), everyone
     dof = 2 * int(np.count_nonzero(used)) - arm.n_free
     source: Literal["given", "estimated"]
     if given:
@@ -1103,14 +1093,14 @@ def identify(
     else:
         sigma_value, source = _scale(fit, used, max(dof, 1)), "estimated"
     standardized = fit.whitened / sigma_value
-    test = studentized_test(standardized, fit.leverage, used, arm.n_free, sigma_given=given)
+    test = _test(problem, fit, used, sigma_value, given)
     if not robust:
         flagged = test.flagged
     if not robust and np.any(test.flagged):
         # Gross outliers pull a least-squares fit towards them and inflate every
         # residual, so the poses to flag are those the robust procedure would
         # leave out, judged against its fit; this fit keeps them.
-        clean, kept, flagged, _ = _robust_fit(problem, robust_sigma)
+        clean, kept, flagged, _ = _robust_fit(problem, robust_sigma, least_squares)
         clean_dof = 2 * int(np.count_nonzero(kept)) - arm.n_free
         scale = reference if given else _scale(clean, kept, max(clean_dof, 1))
         test = _test(problem, clean, kept, scale, given)

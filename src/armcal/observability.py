@@ -384,14 +384,14 @@ def _row_echelon(basis: np.ndarray, *, tol: float = 1e-9) -> np.ndarray:
     return rows
 
 
-def _listing(items: Sequence[object]) -> str:
+def listing(items: Sequence[object]) -> str:
     """``"a"``, ``"a and b"``, ``"a, b and c"``."""
     words = [str(item) for item in items]
     return words[0] if len(words) == 1 else ", ".join(words[:-1]) + " and " + words[-1]
 
 
 def _joints_phrase(joints: Sequence[int]) -> str:
-    return ("joint " if len(joints) == 1 else "joints ") + _listing(joints)
+    return ("joint " if len(joints) == 1 else "joints ") + listing(joints)
 
 
 def check_identifiable(
@@ -460,7 +460,7 @@ def conditioning_warning(arm: PlanarArm, info: Identifiability) -> ArmcalWarning
     round_off = cond * np.finfo(float).eps * float(np.sum(arm.link_lengths))
     return ArmcalWarning(
         "ill-conditioned",
-        f"the plan determines {_listing(combos)} poorly: the condition number of its "
+        f"the plan determines {listing(combos)} poorly: the condition number of its "
         f"scaled Jacobian is {cond:.2g} (above {COND_WARN:.0e}), so these combinations are "
         f"up to {cond:.2g} times less precise than with an orthogonal plan, and round-off "
         f"alone can shift them by about {round_off:.1g} mm; measure poses in which "

@@ -49,7 +49,7 @@ import numpy as np
 
 from .arm import PlanarArm, forward_kinematics
 from .errors import ArmcalError, ArmcalWarning
-from .identification import Calibration, identify, solve_closed_form
+from .identification import Calibration, solve_model
 
 __all__ = [
     "IMPROVEMENT",
@@ -136,10 +136,7 @@ def _fit(arm: PlanarArm, q: np.ndarray, xy: np.ndarray) -> _Fit | None:
     """
     plain = arm.replace(noise=None)
     try:
-        if plain.free.all():
-            params = solve_closed_form(plain, q, xy)
-        else:
-            params = identify(plain, q, xy, sigma=1.0).params
+        params = solve_model(plain, q, xy)[0]  # the closed form, or Gauss-Newton if fixed
     except ArmcalError:  # NotIdentifiableError among them: this reading tells nothing
         return None
     if not np.all(np.isfinite(params)):
