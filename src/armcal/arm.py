@@ -1,26 +1,37 @@
 """The planar n-link arm: geometry, parameters, forward kinematics and Jacobians.
 
-The model is paper eq. (1) with an optional base offset::
+The model is paper eq. (1) with an optional base pose::
 
-    p = (x0, y0) + sum_i (l_i + dl_i) * exp(1j * (theta_i + dtheta_i))
-    theta_i  = q_1 + ... + q_i          (commanded, cumulative)
-    dtheta_i = dq_1 + ... + dq_i        (joint zero offsets, cumulative)
+    p = (x0, y0) + sum_k (L_k + dl_k) * exp(1j * (theta_a(k) + alpha_k + dtheta_k))
+    theta    = M q                      (link angles from the joint readings)
+    dtheta   = A dq + phi0              (link-vector angle deviations)
+
+For the paper's arm ``M`` is the lower-triangular matrix of ones
+(``theta_i = q_1 + ... + q_i``), there is one link vector per joint
+(``L_k = l_k``, ``alpha_k = 0``, ``A = M``) and no base rotation.  A
+controller's joint convention gives another ``M`` (:attr:`PlanarArm.joint_map`:
+joints counted the other way round, angles from the horizon); several targets
+on the end effector each have their own last link vector (:class:`Target`);
+3-D instrument data identify the base's rotation ``phi0`` in the fitted plane.
 
 Two parametrizations of the deviations are used (internal units: mm and rad):
 
-* **user** ``[dl_1..dl_n, dq_1..dq_n, (x0, y0)]`` -- what files and reports show
-  (``dl*`` in mm, ``dq*`` in degrees once converted, ``x0, y0`` in mm);
-* **paper** ``[dtheta_1..dtheta_n, dl_1..dl_n, (x0, y0)]`` -- the paper's
+* **user** ``[dl_1..dl_K, dq_1..dq_K, (x0, y0), (phi0)]`` -- what files and
+  reports show (``dl*`` in mm, ``dq*`` and ``phi0`` in degrees once converted,
+  ``x0, y0`` in mm);
+* **paper** ``[dtheta_1..dtheta_K, dl_1..dl_K, (x0, y0)]`` -- the paper's
   ``DeltaPi`` (eq. 6-8), in which the information matrix has the block form
   (17)-(19).
 
-They are related by a constant linear map, :func:`paper_from_user_matrix`.
-A rotation of the base about joint 1 cannot be told apart from ``dq1`` (both add
-the same angle to every link), so armcal never identifies a base rotation: it is
-part of ``dq1``.
+They are related by a constant linear map, :func:`paper_from_user`.  A
+rotation of the base turns every link vector alike, so in 2-D data (instrument
+axes parallel to the base frame) it is part of the joint offsets and never
+identified; with :attr:`PlanarArm.base_rotation` one joint-offset direction is
+held instead (:attr:`PlanarArm.rotation_partner`).
 
 All functions are batched on leading axes: joint angles ``q`` of shape
-``(m, n)`` give positions ``(m, 2)`` and Jacobians ``(m, 2, p)``.
+``(m, n)`` give positions ``(m, 2)`` and Jacobians ``(m, 2, p)``.  An arm with
+several targets needs the ``target`` of every row.
 """
 
 from __future__ import annotations
@@ -40,11 +51,19 @@ __all__ = [
     "Parametrization",
     "PlanarArm",
     "Region",
+    "Target",
+    "check_target",
     "forward_kinematics",
     "jacobian",
+    "joint_jacobian",
     "link_angles",
     "link_phasors",
+    "link_units",
+    "paper_from_user",
     "paper_from_user_matrix",
+    "split_params",
+    "standard_joint_map",
+    "tool_angles",
     "wrap_angle",
 ]
 
@@ -128,6 +147,41 @@ def _readonly(a: np.ndarray) -> np.ndarray:
     return a
 
 
+@dataclass(frozen=True)
+class Target:
+    """A point measured on the end effector: a tracker reflector, a marker on a tool.
+
+    Every target has its own last link from joint ``n``: the arm up to the last
+    joint is shared, and target ``t`` is at ``length`` from joint ``n`` in the
+    direction ``angle`` from the last link's nominal axis.
+
+    Attributes
+    ----------
+    label : str
+        The name used in the measurements' ``target`` column and in the
+        parameter names ``dl{n}@{label}``, ``dq{n}@{label}``.
+    length : float
+        Nominal distance from joint ``n`` to the target, mm (positive).
+    angle : float
+        Nominal direction of the target from the last link's axis, rad.
+    """
+
+    label: str
+    length: float
+    angle: float = 0.0
+
+
+def standard_joint_map(n: int) -> np.ndarray:
+    """The default joint map ``(n, n)``: ``theta_i = q_1 + ... + q_i`` (lower-triangular ones).
+
+    Examples
+    --------
+    >>> standard_joint_map(3).astype(int).tolist()
+    [[1, 0, 0], [1, 1, 0], [1, 1, 1]]
+    """
+    return np.tril(np.ones((n, n)))
+
+
 @dataclass(frozen=True, eq=False, init=False)
 class PlanarArm:
     """Nominal geometry of a planar serial arm and what is identified.
@@ -153,12 +207,41 @@ class PlanarArm:
     fixed : tuple of str
         User parameters held at their nominal value (not identified), e.g.
         ``("dl4",)`` for a link measured otherwise; every other one is free.
+    joint_map : ndarray, shape (n, n)
+        ``M`` with link angles ``theta = M q`` and ``dtheta = M dq``: how the
+        controller's joint readings give the absolute link angles.  Default
+        :func:`standard_joint_map` (each joint relative to the previous link); a
+        joint that counts the other way round has a ``-1``, a joint reported
+        relative to the horizon (coupled axes) a row with a single 1.
+    targets : tuple of Target
+        Several targets on the end effector, each with its own last link
+        (parameters ``dl{n}@{label}``, ``dq{n}@{label}``).  Empty: one target,
+        the end of link ``n`` (parameters ``dl{n}``, ``dq{n}``).
+    base_rotation : bool
+        Whether the rotation ``phi0`` of the base in the instrument frame is
+        identified (3-D instrument data, whose fitted in-plane axes are
+        arbitrary).  It turns every link like one joint-offset direction
+        ``dq = M^-1 (1, ..., 1)``, so one joint offset on that direction is
+        held (:attr:`rotation_partner`, ``dq1`` for the default joint map)
+        unless ``fixed`` already removes it (e.g. ``fixed = ("phi0",)``).
+
+    Notes
+    -----
+    The arm has ``K = n - 1 + max(1, len(targets))`` *links* (link vectors):
+    links ``1..n-1`` and one last link per target.  Its parameters are, in order,
+    ``dl`` ``(K,)`` (mm), ``dq`` ``(K,)`` (rad, joint space), ``x0, y0`` (mm) with
+    a base offset, and ``phi0`` (rad) with a base rotation.
 
     Examples
     --------
     >>> arm = PlanarArm([260.0, 180.0])
     >>> arm.n_joints, arm.n_params, arm.param_names
     (2, 4, ('dl1', 'dl2', 'dq1', 'dq2'))
+    >>> nest = PlanarArm([260.0, 180.0], targets=[Target("A", 180.0), Target("B", 150.0, 0.3)])
+    >>> nest.param_names
+    ('dl1', 'dl2@A', 'dl2@B', 'dq1', 'dq2@A', 'dq2@B')
+    >>> PlanarArm([260.0, 180.0], base_offset=True, base_rotation=True).fixed
+    ('dq1',)
     """
 
     link_lengths: np.ndarray
@@ -168,6 +251,9 @@ class PlanarArm:
     noise: NoiseModel | None
     region: Region | None
     fixed: tuple[str, ...]
+    joint_map: np.ndarray
+    targets: tuple[Target, ...]
+    base_rotation: bool
 
     def __init__(
         self,
@@ -180,6 +266,9 @@ class PlanarArm:
         region: Region | None = None,
         noise: NoiseModel | None = None,
         fixed: Sequence[str] = (),
+        joint_map: ArrayLike | None = None,
+        targets: Sequence[Target] = (),
+        base_rotation: bool = False,
     ) -> None:
         lengths = _readonly(np.atleast_1d(np.asarray(link_lengths, dtype=float)))
         if lengths.ndim != 1 or lengths.size == 0:
@@ -203,12 +292,19 @@ class PlanarArm:
             noise = NoiseModel.isotropic(float(sigma))
         if noise is not None:
             noise.check_joints(n)
+        mapping = standard_joint_map(n) if joint_map is None else np.array(joint_map, dtype=float)
+        _check_joint_map(mapping, n, several_targets=len(targets) > 1)
+        targets = tuple(targets)
+        _check_targets(targets)
         object.__setattr__(self, "link_lengths", lengths)
         object.__setattr__(self, "joint_limits", _readonly(limits))
         object.__setattr__(self, "base_offset", bool(base_offset))
         object.__setattr__(self, "name", str(name))
         object.__setattr__(self, "noise", noise)
         object.__setattr__(self, "region", region)
+        object.__setattr__(self, "joint_map", _readonly(mapping))
+        object.__setattr__(self, "targets", targets)
+        object.__setattr__(self, "base_rotation", bool(base_rotation))
         names = self.param_names
         unknown = [f for f in fixed if f not in names]
         if unknown:
@@ -216,9 +312,15 @@ class PlanarArm:
                 f"unknown parameter {unknown[0]!r} to fix; the parameters of this arm are "
                 f"{', '.join(names)}"
             )
-        if len(set(fixed)) == len(names):
+        held = set(fixed)
+        partner = self.rotation_partner
+        if self.base_rotation and not any(
+            abs(self.rotation_direction[names.index(f)]) > 1e-12 for f in held
+        ):
+            held.add(partner)
+        if len(held) == len(names):
             raise ValueError("every parameter is fixed: leave at least one free to identify")
-        object.__setattr__(self, "fixed", tuple(nm for nm in names if nm in set(fixed)))
+        object.__setattr__(self, "fixed", tuple(nm for nm in names if nm in held))
 
     def replace(self, **changes: Any) -> PlanarArm:
         """A copy with some constructor arguments changed (``sigma=`` replaces ``noise``)."""
@@ -230,11 +332,21 @@ class PlanarArm:
             "noise": self.noise,
             "region": self.region,
             "fixed": self.fixed,
+            "joint_map": self.joint_map,
+            "targets": self.targets,
+            "base_rotation": self.base_rotation,
         }
         if "sigma" in changes:
             kwargs.pop("noise")
-        if "base_offset" in changes and "fixed" not in changes:
-            kwargs["fixed"] = tuple(f for f in self.fixed if f not in ("x0", "y0"))
+        kwargs.update(changes)
+        if "fixed" not in changes:
+            # Carry over the fixed parameters that still exist; the joint offset held
+            # only because of the base rotation is decided anew.
+            carried = [
+                f for f in self.fixed if not (self.base_rotation and f == self.rotation_partner)
+            ]
+            names = PlanarArm(**{**kwargs, "fixed": ()}).param_names
+            kwargs["fixed"] = tuple(f for f in carried if f in names)
         kwargs.update(changes)
         return PlanarArm(**kwargs)
 
@@ -259,52 +371,183 @@ class PlanarArm:
         return tuple(name for name in self.param_names if name not in self.fixed)
 
     @property
+    def standard_map(self) -> bool:
+        """The paper's structure: the default joint map, one target, no base rotation."""
+        return (
+            not self.targets
+            and not self.base_rotation
+            and bool(np.array_equal(self.joint_map, standard_joint_map(self.n_joints)))
+        )
+
+    @property
+    def complete(self) -> bool:
+        """Whether the free parameters map one to one onto the link vectors and the base.
+
+        Then the model is linear in the link phasors over exactly the free
+        parameters (the closed form applies): every parameter free, or with a
+        base rotation, exactly the one joint offset that it replaces held.
+        """
+        if self.base_rotation:
+            return len(self.fixed) == 1 and self.fixed[0] in self._rotation_names()
+        return not self.fixed
+
+    @property
     def standard(self) -> bool:
-        """Every parameter free and isotropic iid noise: the paper's model, no weights."""
-        return not self.fixed and (self.noise is None or self.noise.isotropic_iid)
+        """Linear in the link phasors over the free parameters and isotropic iid noise.
+
+        The paper's model up to a constant reparametrization (joint map, targets,
+        base rotation): no weights, and the closed form is exact.
+        """
+        return self.complete and (self.noise is None or self.noise.isotropic_iid)
 
     @property
     def n_joints(self) -> int:
-        """Number of joints (= links) ``n``."""
+        """Number of joints ``n``."""
         return int(self.link_lengths.size)
 
     @property
+    def n_target_links(self) -> int:
+        """Number of last links: one per target, at least one."""
+        return max(1, len(self.targets))
+
+    @property
+    def n_links(self) -> int:
+        """Number of link vectors ``K = n - 1 + max(1, len(targets))``."""
+        return self.n_joints - 1 + self.n_target_links
+
+    @property
+    def target_labels(self) -> tuple[str, ...]:
+        """Labels of the targets (empty for the single end-of-arm target)."""
+        return tuple(t.label for t in self.targets)
+
+    @property
+    def link_nominal(self) -> np.ndarray:
+        """Nominal length ``(K,)`` of every link vector, mm."""
+        if not self.targets:
+            return self.link_lengths
+        return np.concatenate([self.link_lengths[:-1], [t.length for t in self.targets]])
+
+    @property
+    def link_joint(self) -> np.ndarray:
+        """The link angle ``theta_i`` (0-based ``i``) each link vector turns with, ``(K,)``."""
+        n = self.n_joints
+        return np.concatenate([np.arange(n - 1), np.full(self.n_target_links, n - 1)])
+
+    @property
+    def link_angle0(self) -> np.ndarray:
+        """Nominal direction ``(K,)`` of every link vector from its link's axis, rad."""
+        tail = [t.angle for t in self.targets] if self.targets else [0.0]
+        return np.concatenate([np.zeros(self.n_joints - 1), tail])
+
+    @property
+    def link_names(self) -> tuple[str, ...]:
+        """``"1" .. "n-1"`` then ``"n"`` or ``"n@label"`` for every target."""
+        n = self.n_joints
+        tail = [f"{n}@{t.label}" for t in self.targets] if self.targets else [str(n)]
+        return tuple([str(k) for k in range(1, n)] + tail)
+
+    @property
+    def angle_map(self) -> np.ndarray:
+        """``A`` ``(K, K)`` with link-vector angle deviations ``dtheta = A dq`` (no base rotation).
+
+        Rows of the shared links are those of :attr:`joint_map`; every target's
+        row is the last row of the joint map with its own ``dq{n}@{label}``.
+        """
+        n, k = self.n_joints, self.n_links
+        mapping = self.joint_map
+        a = np.zeros((k, k))
+        a[: n - 1, : n - 1] = mapping[: n - 1, : n - 1]
+        a[n - 1 :, : n - 1] = mapping[n - 1, : n - 1]
+        a[n - 1 :, n - 1 :] = mapping[n - 1, n - 1] * np.eye(self.n_target_links)
+        if self.n_target_links == 1:
+            a[: n - 1, n - 1] = mapping[: n - 1, n - 1]
+        return a
+
+    @property
+    def n_paper(self) -> int:
+        """Number of link-vector coordinates ``2K`` (``2K + 2`` with base offset)."""
+        return 2 * self.n_links + (2 if self.base_offset else 0)
+
+    @property
     def n_params(self) -> int:
-        """Number of identified parameters ``p = 2n`` (``2n + 2`` with base offset)."""
-        return 2 * self.n_joints + (2 if self.base_offset else 0)
+        """Number of user parameters ``p``: ``2K`` (+2 with base offset, +1 with rotation)."""
+        return self.n_paper + (1 if self.base_rotation else 0)
 
     @property
     def param_names(self) -> tuple[str, ...]:
-        """User parameter names in order: ``dl1..dln, dq1..dqn[, x0, y0]``."""
-        n = self.n_joints
-        names = [f"dl{i}" for i in range(1, n + 1)] + [f"dq{i}" for i in range(1, n + 1)]
-        return tuple(names + (["x0", "y0"] if self.base_offset else []))
+        """User parameter names in order: ``dl.., dq..[, x0, y0][, phi0]``."""
+        links = self.link_names
+        names = [f"dl{k}" for k in links] + [f"dq{k}" for k in links]
+        names += ["x0", "y0"] if self.base_offset else []
+        return tuple(names + (["phi0"] if self.base_rotation else []))
 
     @property
     def param_units(self) -> tuple[str, ...]:
         """Units of the user parameters as shown to users: ``mm`` or ``deg``."""
-        n = self.n_joints
-        return ("mm",) * n + ("deg",) * n + (("mm", "mm") if self.base_offset else ())
+        k = self.n_links
+        base = ("mm", "mm") if self.base_offset else ()
+        return ("mm",) * k + ("deg",) * k + base + (("deg",) if self.base_rotation else ())
 
     @property
     def paper_param_names(self) -> tuple[str, ...]:
-        """Paper parameter names in order: ``dtheta1..dthetan, dl1..dln[, x0, y0]``."""
-        n = self.n_joints
-        names = [f"dtheta{i}" for i in range(1, n + 1)] + [f"dl{i}" for i in range(1, n + 1)]
+        """Paper parameter names in order: ``dtheta.., dl..[, x0, y0]``."""
+        links = self.link_names
+        names = [f"dtheta{k}" for k in links] + [f"dl{k}" for k in links]
         return tuple(names + (["x0", "y0"] if self.base_offset else []))
+
+    @property
+    def angle_params(self) -> np.ndarray:
+        """Boolean mask ``(p,)`` of the angle parameters (``dq``, ``phi0``: rad inside)."""
+        mask = np.zeros(self.n_params, dtype=bool)
+        mask[self.n_links : 2 * self.n_links] = True
+        if self.base_rotation:
+            mask[-1] = True
+        return mask
 
     @property
     def display_scale(self) -> np.ndarray:
         """Factors ``(p,)`` from internal units (mm, rad) to display units (mm, deg)."""
-        n = self.n_joints
-        scale = np.ones(self.n_params)
-        scale[n : 2 * n] = np.degrees(1.0)
-        return scale
+        return np.where(self.angle_params, np.degrees(1.0), 1.0)
+
+    def _rotation_names(self) -> tuple[str, ...]:
+        d = self.rotation_direction
+        return tuple(nm for nm, c in zip(self.param_names, d, strict=True) if abs(c) > 1e-12)
+
+    @property
+    def rotation_direction(self) -> np.ndarray:
+        """The user direction ``(p,)`` a base rotation cannot be told from (zeros without one).
+
+        ``phi0 = 1`` with ``dq = -A^-1 (1, ..., 1)``: every link vector keeps its
+        angle.  Which joint offsets it involves follows from the joint map.
+        """
+        d = np.zeros(self.n_params)
+        if self.base_rotation:
+            k = self.n_links
+            d[k : 2 * k] = -np.linalg.solve(self.angle_map, np.ones(k))
+            d[-1] = 1.0
+        return d
+
+    @property
+    def rotation_partner(self) -> str:
+        """The joint offset a base rotation replaces by default: the first on its direction."""
+        if not self.base_rotation:
+            return ""
+        k = self.n_links
+        d = self.rotation_direction[k : 2 * k]
+        first = int(np.flatnonzero(np.abs(d) > 1e-12)[0])
+        return self.param_names[k + first]
 
     def params_from_display(
-        self, dl_mm: ArrayLike, dq_deg: ArrayLike, base_mm: ArrayLike | None = None
+        self,
+        dl_mm: ArrayLike,
+        dq_deg: ArrayLike,
+        base_mm: ArrayLike | None = None,
+        rotation_deg: float = 0.0,
     ) -> np.ndarray:
         """Pack user deviations given in mm and degrees into an internal vector ``(p,)``.
+
+        ``dl_mm`` and ``dq_deg`` have one value per link vector (``K``) or per
+        joint (``n``; the last one then serves every target).
 
         Examples
         --------
@@ -312,18 +555,80 @@ class PlanarArm:
         >>> arm.params_from_display([0.5, 0.0], [180.0, 0.0]).round(6).tolist()
         [0.5, 0.0, 3.141593, 0.0]
         """
-        n = self.n_joints
-        parts = [np.broadcast_to(dl_mm, (n,)), np.radians(np.broadcast_to(dq_deg, (n,)))]
+        k, n = self.n_links, self.n_joints
+
+        def per_link(values: ArrayLike) -> np.ndarray:
+            v = np.atleast_1d(np.asarray(values, dtype=float))
+            if v.size == n and k != n:
+                v = np.concatenate([v[:-1], np.full(self.n_target_links, v[-1])])
+            return np.broadcast_to(v, (k,))
+
+        parts = [per_link(dl_mm), np.radians(per_link(dq_deg))]
         if self.base_offset:
             parts.append(np.zeros(2) if base_mm is None else np.broadcast_to(base_mm, (2,)))
         elif base_mm is not None and np.any(np.asarray(base_mm) != 0):
             raise ValueError("a base offset was given but the arm has base_offset = False")
+        if self.base_rotation:
+            parts.append(np.array([np.radians(rotation_deg)]))
+        elif rotation_deg:
+            raise ValueError("a base rotation was given but the arm has base_rotation = False")
         return np.concatenate(parts).astype(float)
 
     def within_limits(self, q: np.ndarray, *, tol: float = 1e-9) -> np.ndarray:
         """Boolean mask ``(m, n)`` of joint angles ``q`` (rad) inside the joint limits."""
         lo, hi = self.joint_limits[:, 0], self.joint_limits[:, 1]
         return (q >= lo - tol) & (q <= hi + tol)
+
+    def link_angles(self, q: np.ndarray) -> np.ndarray:
+        """Absolute link angles ``theta = M q`` ``(..., n)`` of joint readings ``q`` (rad)."""
+        if self._default_map:
+            return np.cumsum(q, axis=-1)  # the same numbers as the paper's sums, bit for bit
+        return np.asarray(q, dtype=float) @ self.joint_map.T
+
+    @property
+    def _default_map(self) -> bool:
+        return bool(np.array_equal(self.joint_map, standard_joint_map(self.n_joints)))
+
+    def target_index(self, labels: Sequence[str]) -> np.ndarray:
+        """Index ``(m,)`` into :attr:`targets` of every row's target label."""
+        index = {t.label: i for i, t in enumerate(self.targets)}
+        unknown = [lb for lb in labels if lb not in index]
+        if unknown:
+            raise ValueError(
+                f"unknown target {unknown[0]!r}; the targets of {self.name} are "
+                f"{', '.join(index) or '(none)'}"
+            )
+        return np.array([index[lb] for lb in labels], dtype=int)
+
+
+def _check_joint_map(mapping: np.ndarray, n: int, *, several_targets: bool) -> None:
+    if mapping.shape != (n, n):
+        raise ValueError(f"joint_map must have shape ({n}, {n}), got {mapping.shape}")
+    if not np.all(np.isfinite(mapping)):
+        raise ValueError("joint_map must be finite")
+    s = np.linalg.svd(mapping, compute_uv=False)
+    if s[-1] <= 1e-9 * s[0]:
+        raise ValueError(
+            "joint_map must be invertible: every link angle needs its own joint reading"
+        )
+    if several_targets and n > 1 and np.any(mapping[: n - 1, n - 1] != 0):
+        raise ValueError(
+            "with several targets the last joint may turn only the last link: "
+            "joint_map's last column must be 0 above its last row"
+        )
+
+
+def _check_targets(targets: tuple[Target, ...]) -> None:
+    labels = [t.label for t in targets]
+    if len(set(labels)) != len(labels):
+        raise ValueError(f"target labels must be distinct, got {labels}")
+    for t in targets:
+        if not t.label or any(c in t.label for c in ", @\t\n\"'"):
+            raise ValueError(
+                f"target label {t.label!r} must be non-empty, without spaces, commas, quotes or @"
+            )
+        if not (np.isfinite(t.length) and t.length > 0 and np.isfinite(t.angle)):
+            raise ValueError(f"target {t.label}: length must be positive and angle finite")
 
 
 def wrap_angle(angle: np.ndarray) -> np.ndarray:
@@ -339,7 +644,10 @@ def wrap_angle(angle: np.ndarray) -> np.ndarray:
 
 
 def link_angles(q: np.ndarray) -> np.ndarray:
-    """Absolute link orientations ``theta_i = q_1 + ... + q_i`` for ``q`` ``(..., n)`` (rad)."""
+    """Absolute link orientations ``theta_i = q_1 + ... + q_i`` for ``q`` ``(..., n)`` (rad).
+
+    The default joint map; :meth:`PlanarArm.link_angles` applies an arm's own.
+    """
     return np.cumsum(q, axis=-1)
 
 
@@ -348,7 +656,8 @@ def paper_from_user_matrix(n: int, *, base_offset: bool = False) -> np.ndarray:
 
     ``dtheta = T dq`` with ``T`` the lower-triangular matrix of ones; ``dl`` and
     the base are copied.  Jacobians transform as ``J_user = J_paper @ M`` and
-    covariances as ``cov_user = M^-1 cov_paper M^-T``.
+    covariances as ``cov_user = M^-1 cov_paper M^-T``.  :func:`paper_from_user`
+    is the same for any arm (joint map, targets, base rotation).
 
     Examples
     --------
@@ -364,19 +673,57 @@ def paper_from_user_matrix(n: int, *, base_offset: bool = False) -> np.ndarray:
     return m
 
 
-def _split(arm: PlanarArm, params: np.ndarray | None):
-    """Split user ``params (..., p)`` into ``dl``, ``dq`` ``(..., n)`` and ``base (..., 2)``."""
-    n = arm.n_joints
+def paper_from_user(arm: PlanarArm) -> np.ndarray:
+    """``P`` ``(2K [+2], p)``: link-vector deviations ``(dtheta, dl, [x0, y0]) = P user``.
+
+    ``dtheta = A dq + phi0`` (:attr:`PlanarArm.angle_map`; ``phi0`` turns every
+    link vector), ``dl`` and the base are copied.  Square and invertible unless
+    the arm has a base rotation (one more user parameter than link coordinates:
+    :attr:`PlanarArm.rotation_direction` spans its null space).
+
+    Examples
+    --------
+    >>> arm = PlanarArm([2.0, 1.0], joint_map=[[1, 0], [0, 1]])   # absolute link angles
+    >>> paper_from_user(arm).astype(int).tolist()
+    [[0, 0, 1, 0], [0, 0, 0, 1], [1, 0, 0, 0], [0, 1, 0, 0]]
+    """
+    k = arm.n_links
+    p = np.zeros((arm.n_paper, arm.n_params))
+    p[:k, k : 2 * k] = arm.angle_map
+    p[k : 2 * k, :k] = np.eye(k)
+    if arm.base_offset:
+        p[2 * k : 2 * k + 2, 2 * k : 2 * k + 2] = np.eye(2)
+    if arm.base_rotation:
+        p[:k, -1] = 1.0
+    return p
+
+
+def split_params(arm: PlanarArm, params: np.ndarray | None):
+    """User ``params (..., p)`` as ``dl (..., K)``, ``dtheta (..., K)``, ``base (..., 2)``.
+
+    ``dtheta`` are the link vectors' angle deviations (joint map, targets and base
+    rotation applied); ``base`` is 0 without a base offset.
+    """
+    k = arm.n_links
     if params is None:
-        return np.zeros(n), np.zeros(n), np.zeros(2)
+        return np.zeros(k), np.zeros(k), np.zeros(2)
     params = np.asarray(params, dtype=float)
     if params.shape[-1] != arm.n_params:
         raise ValueError(
             f"params must have shape (..., {arm.n_params}) for {arm.param_names}, "
             f"got {params.shape}"
         )
-    base = params[..., 2 * n :] if arm.base_offset else np.zeros((*params.shape[:-1], 2))
-    return params[..., :n], params[..., n : 2 * n], base
+    if arm.standard_map:
+        dtheta = np.cumsum(params[..., k : 2 * k], axis=-1)
+    else:
+        dtheta = params[..., k : 2 * k] @ arm.angle_map.T
+    if arm.base_rotation:
+        dtheta = dtheta + params[..., -1:]
+    if arm.base_offset:
+        base = params[..., 2 * k : 2 * k + 2]
+    else:
+        base = np.zeros((*params.shape[:-1], 2))
+    return params[..., :k], dtheta, base
 
 
 def _check_q(arm: PlanarArm, q: np.ndarray) -> np.ndarray:
@@ -386,19 +733,53 @@ def _check_q(arm: PlanarArm, q: np.ndarray) -> np.ndarray:
     return q
 
 
-def _phasors(arm: PlanarArm, q: np.ndarray, params: np.ndarray | None):
-    """Actual link lengths ``(..., n)`` and unit phasors ``exp(i phi)`` ``(..., m, n)``."""
-    dl, dq, base = _split(arm, params)
-    phi = link_angles(q) + link_angles(dq)[..., None, :]
-    return arm.link_lengths + dl, np.exp(1j * phi), base
+def check_target(arm: PlanarArm, q: np.ndarray, target: ArrayLike | None) -> np.ndarray | None:
+    """The rows' target indices ``(m,)`` (None: every row measures the only target).
+
+    Raises ValueError for an arm with several targets and no ``target``, or
+    indices out of range.
+    """
+    if target is None:
+        if arm.n_target_links > 1:
+            raise ValueError(
+                f"{arm.name} has {arm.n_target_links} targets: give the target of every row"
+            )
+        return None
+    index = np.asarray(target)
+    m = np.shape(q)[-2] if np.ndim(q) >= 2 else 1
+    if index.shape != (m,) or not np.issubdtype(index.dtype, np.integer):
+        raise ValueError(f"target must be an integer array of shape ({m},), got {index.shape}")
+    if index.size and (index.min() < 0 or index.max() >= arm.n_target_links):
+        raise ValueError(f"target indices must lie in 0..{arm.n_target_links - 1}")
+    return index if arm.n_target_links > 1 else None
+
+
+def link_units(arm: PlanarArm, q: np.ndarray, target: ArrayLike | None = None) -> np.ndarray:
+    """Unit phasors ``(..., m, K)`` of every link vector's nominal direction, 0 where unused.
+
+    ``exp(i (theta_a(k) + alpha_k))`` for link vector ``k`` turning with link
+    angle ``a(k)`` (:attr:`PlanarArm.link_joint`) at nominal direction
+    ``alpha_k`` (:attr:`PlanarArm.link_angle0`); a target's last link is 0 in the
+    rows of the other targets.  The tip is ``base + sum_k z_k u_k`` with the
+    link phasors ``z_k`` of :func:`link_phasors`.
+
+    Examples
+    --------
+    >>> arm = PlanarArm([2.0, 1.0], targets=[Target("A", 1.0), Target("B", 1.0, np.pi / 2)])
+    >>> link_units(arm, np.zeros((2, 2)), target=np.array([0, 1])).round(12).tolist()
+    [[(1+0j), (1+0j), 0j], [(1+0j), 0j, 1j]]
+    """
+    q = _check_q(arm, q)
+    return _tip_terms(arm, q, None, target)[1]
 
 
 def link_phasors(arm: PlanarArm, params: np.ndarray) -> np.ndarray:
-    """The deviated links and base as complex numbers ``(..., n + 1)``.
+    """The deviated link vectors and base as complex numbers ``(..., K + 1)``.
 
-    ``z_k = (l_k + dl_k) exp(i dtheta_k)`` for every link, then the base
-    ``x0 + i y0`` (0 without a base offset): the tip at joint angles ``q`` is
-    ``base + sum_k z_k exp(i theta_k(q))``, linear in these numbers.
+    ``z_k = (L_k + dl_k) exp(i dtheta_k)`` for every link vector (nominal length
+    ``L_k``, :attr:`PlanarArm.link_nominal`), then the base ``x0 + i y0`` (0
+    without a base offset): the tip is ``base + sum_k z_k u_k`` with the unit
+    phasors ``u_k`` of :func:`link_units`, linear in these numbers.
 
     Examples
     --------
@@ -406,13 +787,29 @@ def link_phasors(arm: PlanarArm, params: np.ndarray) -> np.ndarray:
     >>> z.round(12).tolist()
     [2.5j, 1j, 0j]
     """
-    dl, dq, base = _split(arm, params)
-    z = (arm.link_lengths + dl) * np.exp(1j * link_angles(dq))
+    dl, dtheta, base = split_params(arm, params)
+    z = (arm.link_nominal + dl) * np.exp(1j * dtheta)
     return np.concatenate([z, (base[..., 0] + 1j * base[..., 1])[..., None]], axis=-1)
 
 
+def _tip_terms(arm: PlanarArm, q: np.ndarray, params: np.ndarray | None, target):
+    """``z_k u_k`` ``(..., m, K)``, ``exp(i dtheta_k) u_k`` ``(..., m, K)`` and the base."""
+    index = check_target(arm, q, target)
+    dl, dtheta, base = split_params(arm, params)
+    theta = arm.link_angles(q)[..., arm.link_joint] + arm.link_angle0
+    turn = np.exp(1j * (theta + dtheta[..., None, :]))
+    if index is not None:
+        turn[..., arm.n_joints - 1 :] *= index[:, None] == np.arange(arm.n_target_links)
+    lengths = (arm.link_nominal + dl)[..., None, :]
+    return lengths * turn, turn, base
+
+
 def forward_kinematics(
-    arm: PlanarArm, q: np.ndarray, params: np.ndarray | None = None
+    arm: PlanarArm,
+    q: np.ndarray,
+    params: np.ndarray | None = None,
+    *,
+    target: ArrayLike | None = None,
 ) -> np.ndarray:
     """End-effector positions for joint angles ``q``.
 
@@ -422,23 +819,30 @@ def forward_kinematics(
     q : ndarray, shape (m, n)
         Commanded joint angles in rad.
     params : ndarray, shape (p,) or (..., p), optional
-        User deviations ``[dl (mm), dq (rad), (x0, y0) (mm)]``; nominal when omitted.
-        Leading axes broadcast, giving positions of shape ``(..., m, 2)``.
+        User deviations ``[dl (mm), dq (rad), (x0, y0) (mm), (phi0) (rad)]``;
+        nominal when omitted.  Leading axes broadcast, giving positions of
+        shape ``(..., m, 2)``.
+    target : ndarray of int, shape (m,), optional
+        Index into ``arm.targets`` of the target measured in every row; needed
+        when the arm has several targets.
 
     Returns
     -------
     ndarray, shape (m, 2) or (..., m, 2)
-        ``(x, y)`` in mm (paper eq. 1).
+        ``(x, y)`` in mm (paper eq. 1, with the arm's joint map).
 
     Examples
     --------
     >>> arm = PlanarArm([2.0, 1.0])
     >>> forward_kinematics(arm, np.array([[0.0, np.pi / 2]])).round(12).tolist()
     [[2.0, 1.0]]
+    >>> horizon = PlanarArm([2.0, 1.0], joint_map=[[1, 0], [0, 1]])  # q2 from the horizon
+    >>> forward_kinematics(horizon, np.array([[0.0, np.pi / 2]])).round(12).tolist()
+    [[2.0, 1.0]]
     """
     q = _check_q(arm, q)
-    lengths, unit, base = _phasors(arm, q, params)
-    tip = np.sum(lengths[..., None, :] * unit, axis=-1)
+    terms, _, base = _tip_terms(arm, q, params, target)
+    tip = np.sum(terms, axis=-1)
     return np.stack([tip.real, tip.imag], axis=-1) + base[..., None, :]
 
 
@@ -448,6 +852,7 @@ def jacobian(
     params: np.ndarray | None = None,
     *,
     parametrization: Parametrization = "user",
+    target: ArrayLike | None = None,
 ) -> np.ndarray:
     """Jacobian of the end-effector position with respect to the deviations.
 
@@ -460,7 +865,9 @@ def jacobian(
         User deviations (mm, rad) at which to linearize; nominal when omitted.
         Leading axes broadcast against those of ``q`` (one Jacobian per estimate).
     parametrization : {"user", "paper"}
-        Columns ``[dl, dq, (x0, y0)]`` or the paper's ``[dtheta, dl, (x0, y0)]``.
+        Columns ``[dl, dq, (x0, y0), (phi0)]`` or the paper's ``[dtheta, dl, (x0, y0)]``.
+    target : ndarray of int, shape (m,), optional
+        Every row's target (see :func:`forward_kinematics`).
 
     Returns
     -------
@@ -474,7 +881,8 @@ def jacobian(
 
         dp/ddtheta_k = L_k (-sin phi_k, cos phi_k),  dp/ddl_k = (cos phi_k, sin phi_k)
 
-    and ``dp/ddq_j = sum_{k >= j} dp/ddtheta_k``.
+    and ``dp/ddq_j = sum_k A_kj dp/ddtheta_k`` (``A`` the angle map; for the
+    default joint map the sum over ``k >= j``), ``dp/dphi0 = sum_k dp/ddtheta_k``.
 
     Examples
     --------
@@ -483,15 +891,66 @@ def jacobian(
     [[0.0, 0.0, 1.0, 1.0], [2.0, 1.0, 0.0, 0.0]]
     """
     q = _check_q(arm, q)
-    lengths, unit, _ = _phasors(arm, q, params)
-    d_theta = 1j * lengths[..., None, :] * unit  # complex d(tip)/d(dtheta_k), shape (..., m, n)
-    cols = [d_theta, unit]
+    terms, turn, _ = _tip_terms(arm, q, params, target)
+    d_theta = 1j * terms  # complex d(tip)/d(dtheta_k), shape (..., m, K)
     if parametrization == "user":
-        # d/d dq_j = sum over k >= j of d/d dtheta_k: reverse cumulative sum.
-        cols = [unit, np.cumsum(d_theta[..., ::-1], axis=-1)[..., ::-1]]
-    elif parametrization != "paper":
+        if arm.standard_map:
+            # d/d dq_j = sum over k >= j of d/d dtheta_k: reverse cumulative sum.
+            d_q = np.cumsum(d_theta[..., ::-1], axis=-1)[..., ::-1]
+        else:
+            d_q = d_theta @ arm.angle_map
+        cols = [turn, d_q]
+    elif parametrization == "paper":
+        cols = [d_theta, turn]
+    else:
         raise ValueError(f"parametrization must be 'user' or 'paper', got {parametrization!r}")
     if arm.base_offset:
-        cols.append(np.broadcast_to(np.array([1.0, 1j]), (*unit.shape[:-1], 2)))
+        cols.append(np.broadcast_to(np.array([1.0, 1j]), (*turn.shape[:-1], 2)))
+    if arm.base_rotation and parametrization == "user":
+        cols.append(np.sum(d_theta, axis=-1, keepdims=True))
     jc = np.concatenate(cols, axis=-1)
     return np.stack([jc.real, jc.imag], axis=-2)
+
+
+def joint_jacobian(
+    arm: PlanarArm,
+    q: np.ndarray,
+    params: np.ndarray | None = None,
+    *,
+    target: ArrayLike | None = None,
+) -> np.ndarray:
+    """``d(x, y) / dq`` ``(..., m, 2, n)``: how the tip moves with the joint readings (mm/rad).
+
+    ``theta = M q`` turns link vector ``k`` by ``M[a(k), j]`` per unit of ``q_j``.
+
+    Examples
+    --------
+    >>> arm = PlanarArm([2.0, 1.0])
+    >>> (joint_jacobian(arm, np.zeros((1, 2)))[0] + 0.0).tolist()
+    [[0.0, 0.0], [3.0, 1.0]]
+    """
+    q = _check_q(arm, q)
+    terms, _, _ = _tip_terms(arm, q, params, target)
+    jc = (1j * terms) @ arm.joint_map[arm.link_joint]
+    return np.stack([jc.real, jc.imag], axis=-2)
+
+
+def tool_angles(
+    arm: PlanarArm,
+    q: np.ndarray,
+    params: np.ndarray | None = None,
+    *,
+    target: ArrayLike | None = None,
+) -> np.ndarray:
+    """Direction ``(..., m)`` of every row's last link vector (the tool's orientation), rad.
+
+    ``theta_n + alpha_t + dtheta_(n, t)``: the angle of the last link vector of
+    the row's target, with the deviations ``params`` (nominal when omitted).
+    """
+    q = _check_q(arm, q)
+    index = check_target(arm, q, target)
+    _, dtheta, _ = split_params(arm, params)
+    k0 = arm.n_joints - 1
+    last = k0 + (0 if index is None else index)
+    theta_n = arm.link_angles(q)[..., -1]
+    return theta_n + arm.link_angle0[last] + np.take(dtheta, last, axis=-1)

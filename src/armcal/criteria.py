@@ -49,7 +49,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .arm import PlanarArm, jacobian, link_angles
+from .arm import PlanarArm, jacobian
 from .errors import ArmcalWarning
 from .noise import NoiseModel
 from .numerics import COND_WARN, RANK_RTOL, ScaledSVD, scaled_svd, spd_inverse
@@ -297,16 +297,16 @@ class DStar:
     abs_det_s: np.ndarray
 
 
-def _relative_sums(q: np.ndarray) -> np.ndarray:
+def _relative_sums(arm: PlanarArm, q: np.ndarray) -> np.ndarray:
     """``sum_i exp(i (theta_j - theta_k))`` ``(..., n, n)``: ``C + i S`` of eq. (18)."""
-    unit = np.exp(1j * link_angles(q))
+    unit = np.exp(1j * arm.link_angles(q))
     return np.einsum("...mj,...mk->...jk", unit, unit.conj())
 
 
 def dstar(arm: PlanarArm, q: np.ndarray) -> DStar:
     """The paper's D* criterion pair ``det(C')``, ``|det(S')|`` (eq. 20), see :class:`DStar`."""
     m = np.shape(q)[-2]
-    sums = _relative_sums(q) / m
+    sums = _relative_sums(arm, q) / m
     # The paper's own numbers: plain determinants of n x n matrices with entries in
     # [-1, 1] (no overflow); numpy's LU determinant returns 0 for a singular matrix.
     return DStar(np.linalg.det(sums.real), np.abs(np.linalg.det(sums.imag)))
@@ -330,7 +330,7 @@ def optimality_sums(arm: PlanarArm, q: np.ndarray) -> dict[str, float]:
     q = np.asarray(q, dtype=float)
     n = arm.n_joints
     # theta_0 = 0 stands for the base: its pairs appear only when the base is identified.
-    theta = np.concatenate([np.zeros((q.shape[0], 1)), link_angles(q)], axis=1)
+    theta = np.concatenate([np.zeros((q.shape[0], 1)), arm.link_angles(q)], axis=1)
     out: dict[str, float] = {}
     for j in range(0 if arm.base_offset else 1, n + 1):
         for k in range(j + 1, n + 1):

@@ -53,7 +53,14 @@ from typing import Any, Literal, cast
 
 import numpy as np
 
-from .arm import PlanarArm, forward_kinematics, jacobian, wrap_angle
+from .arm import (
+    PlanarArm,
+    check_target,
+    forward_kinematics,
+    jacobian,
+    paper_from_user,
+    wrap_angle,
+)
 from .criteria import covariance_factor
 from .diagnostics import (
     FEW_DOF,
@@ -95,11 +102,12 @@ __all__ = [
 Method = Literal["auto", "closed-form", "gauss-newton"]
 
 
-def _factor(arm: PlanarArm, q: np.ndarray) -> LinearLeastSquares:
+def _factor(arm: PlanarArm, q: np.ndarray, target: np.ndarray | None = None) -> LinearLeastSquares:
     """The plan's factorization; raises :class:`NotIdentifiableError` for a singular plan."""
-    factor = factor_least_squares(scaled_jacobian(arm, q))
+    factor = factor_least_squares(scaled_jacobian(arm, q, target))
     if not bool(factor.svd.full_rank):
-        check_identifiable(arm, q, svd=factor.svd)  # raises, naming the unseen combinations
+        # raises, naming the unseen combinations
+        check_identifiable(arm, q, svd=factor.svd, target=target)
     return factor
 
 
@@ -114,15 +122,40 @@ def _link_phasors_fit(factor: LinearLeastSquares, xy: np.ndarray) -> np.ndarray:
 
 
 def _closed_form_params(arm: PlanarArm, v: np.ndarray) -> np.ndarray:
-    n = arm.n_joints
-    z = v[:, n : 2 * n] + 1j * v[:, :n]
+    k = arm.n_links
+    z = v[:, k : 2 * k] + 1j * v[:, :k]
+    if not arm.standard_map:
+        return _user_from_links(arm, np.abs(z) - arm.link_nominal, np.angle(z), v[:, 2 * k :])
     # dq_k = dtheta_k - dtheta_(k-1), wrapped into (-pi, pi], is the angle of
     # z_k conj(z_(k-1)) (z_0 = 1): one angle instead of n angles, a diff and a wrap.
     relative = z.copy()
     relative[:, 1:] *= z[:, :-1].conj()
     return np.concatenate(
-        [np.abs(z) - arm.link_lengths, np.angle(relative), v[:, 2 * n :]], axis=-1
+        [np.abs(z) - arm.link_lengths, np.angle(relative), v[:, 2 * k :]], axis=-1
     )
+
+
+def _user_from_links(
+    arm: PlanarArm, dl: np.ndarray, dtheta: np.ndarray, base: np.ndarray
+) -> np.ndarray:
+    """User deviations ``(N, p)`` of link-vector deviations ``(N, K)`` and base ``(N, 2)``.
+
+    Solves ``P_free user_free = (dtheta, dl, base)`` (:func:`armcal.arm.paper_from_user`;
+    fixed parameters 0).  The link angles are first put on one branch around the
+    first link vector's (a base rotation can turn them all near +-pi), and for a
+    joint map of integers the angle parameters are wrapped into (-pi, pi]: whole
+    turns of them turn every link vector by whole turns.
+    """
+    first = dtheta[:, :1]
+    dtheta = first + wrap_angle(dtheta - first)
+    paper = np.concatenate([dtheta, dl, base], axis=-1)
+    free = arm.free
+    user = np.zeros((paper.shape[0], arm.n_params))
+    user[:, free] = np.linalg.solve(paper_from_user(arm)[:, free], paper.T).T
+    angles = arm.angle_params
+    if np.array_equal(arm.joint_map, np.round(arm.joint_map)):
+        user[:, angles] = wrap_angle(user[:, angles])
+    return user
 
 
 def _as_sets(arm: PlanarArm, q: np.ndarray, xy: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -135,7 +168,9 @@ def _as_sets(arm: PlanarArm, q: np.ndarray, xy: np.ndarray) -> tuple[np.ndarray,
     return q, xy.reshape(-1, q.shape[0], 2)
 
 
-def solve_closed_form(arm: PlanarArm, q: np.ndarray, xy: np.ndarray) -> np.ndarray:
+def solve_closed_form(
+    arm: PlanarArm, q: np.ndarray, xy: np.ndarray, *, target: np.ndarray | None = None
+) -> np.ndarray:
     """Exact least-squares deviations by one linear solve; batched over measurement sets.
 
     Parameters
@@ -145,11 +180,13 @@ def solve_closed_form(arm: PlanarArm, q: np.ndarray, xy: np.ndarray) -> np.ndarr
         Joint angles in rad (shared by every measurement set).
     xy : ndarray, shape (m, 2) or (N, m, 2)
         Measured positions in mm; a leading axis holds ``N`` independent sets.
+    target : ndarray of int, shape (m,), optional
+        Every row's target, for an arm with several.
 
     Returns
     -------
     ndarray, shape (p,) or (N, p)
-        User deviations ``[dl (mm), dq (rad), (x0, y0) (mm)]``.
+        User deviations ``[dl (mm), dq (rad), (x0, y0) (mm), (phi0) (rad)]``.
 
     Raises
     ------
@@ -175,7 +212,7 @@ def solve_closed_form(arm: PlanarArm, q: np.ndarray, xy: np.ndarray) -> np.ndarr
     """
     batched = np.ndim(xy) == 3
     q, sets = _as_sets(arm, q, xy)
-    params = _closed_form_params(arm, _link_phasors_fit(_factor(arm, q), sets))
+    params = _closed_form_params(arm, _link_phasors_fit(_factor(arm, q, target), sets))
     return params if batched else params[0]
 
 
@@ -183,20 +220,21 @@ def _gauss_newton(
     arm: PlanarArm, v: np.ndarray, *, tol: float, max_iter: int
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Gauss-Newton iterations from zero deviations towards the fitted phasors ``v (N, p)``."""
-    n = arm.n_joints
+    n = arm.n_links
+    lengths = arm.link_nominal
     sets = v.shape[0]
     target = v[:, n : 2 * n] + 1j * v[:, :n]  # least-squares z_k of every set
-    step_scale = np.ones(arm.n_params)
-    step_scale[:n] = arm.link_lengths  # rad -> mm at the link tip
+    step_scale = np.ones(arm.n_paper)
+    step_scale[:n] = lengths  # rad -> mm at the link tip
     threshold = tol * float(np.sum(arm.link_lengths))
-    paper = np.zeros((sets, arm.n_params))  # (dtheta, dl, [x0, y0]) of every set
+    paper = np.zeros((sets, arm.n_paper))  # (dtheta, dl, [x0, y0]) of every set
     iterations = np.zeros(sets, dtype=int)
     failed = np.zeros(sets, dtype=bool)
     active = np.arange(sets)
     for _ in range(max_iter):
         current = paper[active]
         rotation = np.exp(1j * current[:, :n])
-        length = arm.link_lengths + current[:, n : 2 * n]
+        length = lengths + current[:, n : 2 * n]
         # The linearized least-squares step (11): K^-1 (v_fit - v(current)), each
         # link's phasor residual turned back by dtheta_k, its normal part over L_k.
         turned = (target[active] - length * rotation) * rotation.conj()
@@ -216,10 +254,12 @@ def _gauss_newton(
     # The same point of the model in canonical form, as the closed form reports it:
     # (L, dtheta) and (-L, dtheta + pi) give the same link, so a negative length
     # is flipped, and joint offsets are wrapped into (-pi, pi].
-    length = arm.link_lengths + paper[:, n : 2 * n]
+    length = lengths + paper[:, n : 2 * n]
     flipped = length < 0
     dtheta = paper[:, :n] + np.pi * flipped
-    dl = np.where(flipped, -length, length) - arm.link_lengths
+    dl = np.where(flipped, -length, length) - lengths
+    if not arm.standard_map:
+        return _user_from_links(arm, dl, dtheta, paper[:, 2 * n :]), iterations, converged
     dq = wrap_angle(np.diff(dtheta, axis=-1, prepend=0.0))
     params = np.concatenate([dl, dq, paper[:, 2 * n :]], axis=-1)
     return params, iterations, converged
@@ -232,6 +272,7 @@ def solve_gauss_newton(
     *,
     tol: float = 1e-12,
     max_iter: int = 50,
+    target: np.ndarray | None = None,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """The paper's iterative algorithm (Section III, Steps 1-5) as Gauss-Newton; batched.
 
@@ -247,6 +288,8 @@ def solve_gauss_newton(
         link length), is below ``tol`` times the arm's reach.
     max_iter : int
         Iteration cap; sets still moving then have ``converged = False``.
+    target : ndarray of int, shape (m,), optional
+        Every row's target, for an arm with several.
 
     Returns
     -------
@@ -299,7 +342,7 @@ def solve_gauss_newton(
     """
     batched = np.ndim(xy) == 3
     q, sets = _as_sets(arm, q, xy)
-    v = _link_phasors_fit(_factor(arm, q), sets)
+    v = _link_phasors_fit(_factor(arm, q, target), sets)
     params, iterations, converged = _gauss_newton(arm, v, tol=tol, max_iter=max_iter)
     if batched:
         return params, iterations, converged
@@ -317,13 +360,15 @@ def _whitening(
     params: np.ndarray | None,
     row_sigma: np.ndarray | None,
     pose_weights: np.ndarray | None,
+    target: np.ndarray | None = None,
 ) -> np.ndarray | None:
     """``W_i`` ``(..., m, 2, 2)`` times ``sqrt(pose weight)``; None when it is the identity."""
     noise = _model_noise(arm)
     if noise.isotropic_iid and row_sigma is None:
         w = None
     else:
-        w = noise.whitening(arm, q, params if noise.joint_sigma is not None else None, row_sigma)
+        at = params if noise.joint_sigma is not None else None
+        w = noise.whitening(arm, q, at, row_sigma, target=target)
     if pose_weights is None:
         return w
     root = np.sqrt(pose_weights)[..., None, None]
@@ -339,7 +384,7 @@ def _for_sets(pose_weights: np.ndarray | None, active: np.ndarray) -> np.ndarray
 
 def _check_closed_form(arm: PlanarArm, method: str) -> None:
     """The closed form is linear in the link phasors: it needs every parameter free."""
-    if method == "closed-form" and not arm.free.all():
+    if method == "closed-form" and not arm.complete:
         raise ArmcalError(
             f"the closed form needs every parameter free, but {', '.join(arm.fixed)} "
             f"{'is' if len(arm.fixed) == 1 else 'are'} fixed; use --method gauss-newton or auto"
@@ -353,10 +398,15 @@ def _apply(w: np.ndarray | None, rows: np.ndarray) -> np.ndarray:
 
 def _step_size(arm: PlanarArm, step: np.ndarray) -> np.ndarray:
     """Largest change ``(N,)`` of a step ``(N, p)`` in mm (angles times the reach beyond them)."""
-    n = arm.n_joints
+    n = arm.n_links
     scale = np.ones(arm.n_params)
-    # dq_j moves every link from j outwards: the tip by up to the reach beyond joint j.
-    scale[n : 2 * n] = np.cumsum(arm.link_lengths[::-1])[::-1]
+    if arm.standard_map:
+        # dq_j moves every link from j outwards: the tip by up to the reach beyond joint j.
+        scale[n : 2 * n] = np.cumsum(arm.link_lengths[::-1])[::-1]
+    else:  # dq_j turns link vector k by A_kj; phi0 turns them all
+        scale[n : 2 * n] = arm.link_nominal @ np.abs(arm.angle_map)
+        if arm.base_rotation:
+            scale[-1] = float(np.sum(arm.link_nominal))
     return np.max(np.abs(step * scale), axis=-1, initial=0.0)
 
 
@@ -365,6 +415,7 @@ def _weighted_closed_form(
     q: np.ndarray,
     xy: np.ndarray,
     w: np.ndarray | None,
+    target: np.ndarray | None = None,
 ) -> tuple[np.ndarray, np.ndarray]:
     """Closed-form deviations ``(N, p)`` of sets ``xy (N, m, 2)`` on whitened rows, and full rank.
 
@@ -373,9 +424,9 @@ def _weighted_closed_form(
     least-squares solve per set (one shared factorization when ``w`` does not
     depend on the set).
     """
-    columns = scaled_columns(arm, q)  # (m, p): tip = sum_k columns_k v_k
+    columns = scaled_columns(arm, q, target)  # (m, p): tip = sum_k columns_k v_k
     blocks = np.stack([columns.real, columns.imag], axis=-2)  # (m, 2, p)
-    m, p = q.shape[0], arm.n_params
+    m, p = q.shape[0], arm.n_paper
     if w is None or w.ndim == 3:  # one regressor for every set
         regressor = _apply(w, blocks).reshape(2 * m, p)
         rhs = _apply(w, xy[..., None])[..., 0].reshape(-1, 2 * m)
@@ -400,6 +451,7 @@ def solve_model(
     tol: float = 1e-12,
     max_iter: int = 50,
     check_plan: bool = True,
+    target: np.ndarray | None = None,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Weighted least squares over the free parameters of any model; batched over sets.
 
@@ -426,6 +478,8 @@ def solve_model(
         ``tol`` times the reach (mm); iteration cap.
     check_plan : bool
         Check that the poses identify the model (skip only when the caller has).
+    target : ndarray of int, shape (m,), optional
+        Every row's target, for an arm with several.
 
     Returns
     -------
@@ -462,8 +516,9 @@ def solve_model(
         else np.any(np.atleast_2d(pose_weights) > 0, axis=0)
     )
     if check_plan:
-        check_identifiable(arm, q[used], svd=plan_svd(arm, q[used]))
-    all_free = bool(arm.free.all())
+        sub = _rows_of(target, used)
+        check_identifiable(arm, q[used], svd=plan_svd(arm, q[used], sub), target=sub)
+    all_free = arm.complete
     _check_closed_form(arm, method)
     joint_noise = _model_noise(arm).joint_sigma is not None
     threshold = tol * float(np.sum(arm.link_lengths))
@@ -472,16 +527,17 @@ def solve_model(
     converged = np.zeros(n_sets, dtype=bool)
     if all_free and method != "gauss-newton":
         # Weighted closed form; with encoder noise the weights follow the estimate.
-        w = _whitening(arm, q, None, row_sigma, pose_weights)
-        params, ok = _weighted_closed_form(arm, q, sets, w)
+        w = _whitening(arm, q, None, row_sigma, pose_weights, target)
+        params, ok = _weighted_closed_form(arm, q, sets, w, target)
         iterations[:] = 1
         converged[:] = ok
         if joint_noise:
             active = np.arange(n_sets)
             for _ in range(max_iter):
                 # (N, p) deviations: per-set whitening (N, m, 2, 2)
-                w = _whitening(arm, q, params[active], row_sigma, _for_sets(pose_weights, active))
-                new, ok = _weighted_closed_form(arm, q, sets[active], w)
+                weights = _for_sets(pose_weights, active)
+                w = _whitening(arm, q, params[active], row_sigma, weights, target)
+                new, ok = _weighted_closed_form(arm, q, sets[active], w, target)
                 moved = _step_size(arm, wrap_angle(new - params[active]))
                 params[active] = new
                 iterations[active] += 1
@@ -494,12 +550,13 @@ def solve_model(
             params[:] = np.broadcast_to(np.asarray(start, dtype=float), params.shape)
         elif method != "gauss-newton":
             full = arm.replace(fixed=())
-            if plan_svd(full, q[used]).full_rank:
-                w = _whitening(full, q, None, row_sigma, pose_weights)
-                params, _ = _weighted_closed_form(full, q, sets, w)
+            if plan_svd(full, q[used], _rows_of(target, used)).full_rank:
+                w = _whitening(full, q, None, row_sigma, pose_weights, target)
+                params, _ = _weighted_closed_form(full, q, sets, w, target)
+                params = _onto_free(arm, full, params)
         params = params * arm.free
         params, iterations, converged = _gauss_newton_model(
-            arm, q, sets, params, row_sigma, pose_weights, threshold, max_iter
+            arm, q, sets, params, row_sigma, pose_weights, threshold, max_iter, target
         )
     if batched:
         return params, iterations, converged
@@ -515,6 +572,7 @@ def _gauss_newton_model(
     pose_weights: np.ndarray | None,
     threshold: float,
     max_iter: int,
+    target: np.ndarray | None = None,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Gauss-Newton over the free user parameters, whitened rows, every active set at once."""
     free = arm.free
@@ -526,9 +584,9 @@ def _gauss_newton_model(
     floor = 1e-9 * float(np.sum(arm.link_lengths))  # round-off floor of a stalled step
     for _ in range(max_iter):
         current = params[active]
-        w = _whitening(arm, q, current, row_sigma, _for_sets(pose_weights, active))
-        jac = jacobian(arm, q, current)[..., free]  # (N, m, 2, p_f)
-        residual = sets[active] - forward_kinematics(arm, q, current)
+        w = _whitening(arm, q, current, row_sigma, _for_sets(pose_weights, active), target)
+        jac = jacobian(arm, q, current, target=target)[..., free]  # (N, m, 2, p_f)
+        residual = sets[active] - forward_kinematics(arm, q, current, target=target)
         rows = _apply(w, jac).reshape(active.size, -1, arm.n_free)
         rhs = _apply(w, residual[..., None])[..., 0].reshape(active.size, -1)
         step, _, _ = solve_least_squares(rows, rhs)
@@ -546,9 +604,33 @@ def _gauss_newton_model(
             break
     converged = ~failed
     converged[active] = False
-    n = arm.n_joints
-    params[:, n : 2 * n] = wrap_angle(params[:, n : 2 * n])
+    angles = arm.angle_params
+    params[:, angles] = wrap_angle(params[:, angles])
     return params, iterations, converged
+
+
+def _rows_of(target: np.ndarray | None, used: np.ndarray) -> np.ndarray | None:
+    """The targets of the rows ``used`` (None stays None)."""
+    return None if target is None else target[used]
+
+
+def _onto_free(arm: PlanarArm, full: PlanarArm, params: np.ndarray) -> np.ndarray:
+    """Deviations ``(N, p)`` of the complete ``full`` arm as a start for ``arm``'s free ones.
+
+    Without a base rotation the two share their parameters.  With one, the
+    complete arm holds the rotation's partner, which ``arm`` may free while
+    holding another parameter on the rotation's direction: the start is moved
+    along that direction so that the one ``arm`` holds is 0 (the same tip).
+    """
+    if not arm.base_rotation:
+        return params
+    direction = arm.rotation_direction
+    held = [i for i, name in enumerate(arm.param_names) if name in arm.fixed]
+    on_direction = [i for i in held if abs(direction[i]) > 1e-12]
+    if not on_direction:
+        return params
+    i = on_direction[0]
+    return params - np.outer(params[:, i] / direction[i], direction)
 
 
 @dataclass(frozen=True, eq=False)
@@ -597,6 +679,12 @@ class Calibration:
         1-based data row of every pose in its file.
     robust : bool
         Whether the fit was robust (Huber, then the outlier test and a refit).
+    target : ndarray of int, shape (m,), or None
+        Every pose's target (index into ``arm.targets``) on an arm with several.
+    plane : Plane or None
+        The plane of motion fitted to 3-D instrument data
+        (:class:`armcal.instrument.Plane`), in whose coordinates ``residuals``
+        and the base pose are; None for 2-D data.
     """
 
     arm: PlanarArm
@@ -616,6 +704,8 @@ class Calibration:
     used: np.ndarray | None = None
     rows: tuple[int, ...] = ()
     robust: bool = False
+    target: np.ndarray | None = None
+    plane: Any = None
 
     @property
     def n_poses(self) -> int:
@@ -690,10 +780,12 @@ class Calibration:
         return float(np.max(np.hypot(used[:, 0], used[:, 1])))
 
 
-def _closed_form(arm: PlanarArm, q: np.ndarray, xy: np.ndarray, **_: object):
+def _closed_form(
+    arm: PlanarArm, q: np.ndarray, xy: np.ndarray, *, target: np.ndarray | None = None, **_: object
+):
     if not arm.standard:
-        return solve_model(arm, q, xy, method="closed-form")
-    return solve_closed_form(arm, q, xy), 1, True
+        return solve_model(arm, q, xy, method="closed-form", target=target)
+    return solve_closed_form(arm, q, xy, target=target), 1, True
 
 
 def _gauss_newton_any(arm: PlanarArm, q: np.ndarray, xy: np.ndarray, **kwargs: Any):
@@ -733,11 +825,11 @@ class _Fit:
         iterations: int,
         converged: bool,
     ) -> None:
-        arm, q = problem.arm, problem.q
+        arm, q, target = problem.arm, problem.q, problem.target
         self.params, self.used = params, used
         self.iterations, self.converged = iterations, converged
-        self.residuals = problem.xy - forward_kinematics(arm, q, params)  # (m, 2) mm
-        w = _whitening(arm, q, params, problem.row_sigma, None)
+        self.residuals = problem.xy - forward_kinematics(arm, q, params, target=target)  # mm
+        w = _whitening(arm, q, params, problem.row_sigma, None, target)
         if w is not None and problem.row_sigma is not None:  # to the rows' own reference
             w = w * (_reference_sigma(arm, problem.row_sigma) / _model_noise(arm).sigma_mm)
         self._w, self._arm, self._q, self._problem = w, arm, q, problem
@@ -747,7 +839,8 @@ class _Fit:
     @cached_property
     def _jacobian(self) -> np.ndarray:
         arm = self._arm
-        return _apply(self._w, jacobian(arm, self._q, self.params)[..., arm.free])  # (m, 2, p_f)
+        jac = jacobian(arm, self._q, self.params, target=self._problem.target)
+        return _apply(self._w, jac[..., arm.free])  # (m, 2, p_f)
 
     @cached_property
     def factor(self) -> np.ndarray:
@@ -755,6 +848,7 @@ class _Fit:
             factor, ok = covariance_factor(
                 self._arm, self._q, self.params, self._problem.plan_factor.svd
             )
+            factor = factor[..., self._arm.free, :]
         else:
             svd = scaled_svd(self._jacobian[self.used].reshape(-1, self._arm.n_free))
             factor, ok = svd.inverse_gram_factor()
@@ -780,8 +874,10 @@ class _Problem:
         method: str,
         tol: float,
         max_iter: int,
+        target: np.ndarray | None = None,
     ) -> None:
         self.arm, self.q, self.xy, self.row_sigma = arm, q, xy, row_sigma
+        self.target = target
         self.method, self.tol, self.max_iter = method, tol, max_iter
         #: The plain case (paper's model, every pose, no weights) shares one thin QR
         #: of the plan's regressor between the check, the solve and the covariance.
@@ -790,7 +886,7 @@ class _Problem:
     @cached_property
     def plan_factor(self) -> LinearLeastSquares:
         """The plan's factorization (:func:`_factor`): raises if it is not identifiable."""
-        return _factor(self.arm, self.q)
+        return _factor(self.arm, self.q, self.target)
 
     def _rows(self, used: np.ndarray) -> np.ndarray | None:
         return None if self.row_sigma is None else self.row_sigma[used]
@@ -804,20 +900,21 @@ class _Problem:
     ) -> tuple[np.ndarray, int, bool]:
         """Deviations fitted to the poses in ``used`` (times ``weights``, if given)."""
         arm, q, xy = self.arm, self.q[used], self.xy[used]
-        kwargs: dict[str, Any] = {"tol": self.tol, "max_iter": self.max_iter}
+        target = _rows_of(self.target, used)
+        kwargs: dict[str, Any] = {"tol": self.tol, "max_iter": self.max_iter, "target": target}
         if weights is None and start is None and self.plain and used.all():
             v = _link_phasors_fit(self.plan_factor, xy[None])
             if self.method == "closed-form":
                 return _closed_form_params(arm, v)[0], 1, True
-            fitted, steps, done = _gauss_newton(arm, v, **kwargs)
+            fitted, steps, done = _gauss_newton(arm, v, tol=self.tol, max_iter=self.max_iter)
             return fitted[0], int(steps[0]), bool(done[0])
         if weights is None and start is None and self.plain:
             if self.method == "closed-form":
-                return solve_closed_form(arm, q, xy), 1, True
+                return solve_closed_form(arm, q, xy, target=target), 1, True
             params, steps, done = solve_gauss_newton(arm, q, xy, **kwargs)
             return params, int(steps), bool(done)
         method = self.method if start is None else "gauss-newton"
-        if start is not None and arm.free.all() and method == "gauss-newton":
+        if start is not None and arm.complete and method == "gauss-newton":
             method = "auto" if self.method == "closed-form" else method
         params, steps, done = solve_model(
             arm,
@@ -865,8 +962,8 @@ def _scale(fit: _Fit, used: np.ndarray, dof: int) -> float:
     return float(np.sqrt(np.sum(fit.whitened[used] ** 2) / dof))
 
 
-def _identifiable(arm: PlanarArm, q: np.ndarray) -> bool:
-    return 2 * q.shape[0] >= arm.n_free and bool(plan_svd(arm, q).full_rank)
+def _identifiable(arm: PlanarArm, q: np.ndarray, target: np.ndarray | None = None) -> bool:
+    return 2 * q.shape[0] >= arm.n_free and bool(plan_svd(arm, q, target).full_rank)
 
 
 def _robust_fit(
@@ -897,7 +994,7 @@ def _robust_fit(
         weights = new
     # The core: poses Huber left at full weight, if they identify the model.
     used = weights >= 1.0
-    if not _identifiable(arm, problem.q[used]):
+    if not _identifiable(arm, problem.q[used], _rows_of(problem.target, used)):
         used = everyone
     fit = problem.fit(used, start=fit.params)
     for _ in range(20):
@@ -910,7 +1007,7 @@ def _robust_fit(
         if 2 * np.count_nonzero(keep) < m:
             everything = problem.fit(everyone, start=fit.params)
             return everything, everyone, ~everyone, None
-        if not _identifiable(arm, problem.q[keep]):
+        if not _identifiable(arm, problem.q[keep], _rows_of(problem.target, keep)):
             warning = ArmcalWarning(
                 "outliers-kept",
                 f"leaving out the {int(np.count_nonzero(~keep))} flagged poses would leave too "
@@ -971,6 +1068,7 @@ def identify(
     robust: bool = False,
     tol: float = 1e-12,
     max_iter: int = 50,
+    target: np.ndarray | None = None,
 ) -> Calibration:
     """Identify the deviations of ``arm`` from measured poses, and judge the fit.
 
@@ -1004,6 +1102,8 @@ def identify(
         refit until the set is stable.
     tol, max_iter
         Gauss-Newton step tolerance (relative to the reach) and iteration cap.
+    target : ndarray of int, shape (m,), optional
+        Every pose's target (index into ``arm.targets``), for an arm with several.
 
     Returns
     -------
@@ -1049,12 +1149,13 @@ def identify(
         raise ValueError(f"xy must have shape ({m}, 2) in mm, got {xy.shape}")
     if not (np.all(np.isfinite(q)) and np.all(np.isfinite(xy))):
         raise ArmcalError("joint angles and positions must be finite")
+    target = check_target(arm, q, target)
     if row_sigma is not None:
         row_sigma = np.asarray(row_sigma, dtype=float)
         if row_sigma.shape != (m,) or not np.all(np.isfinite(row_sigma) & (row_sigma > 0)):
             raise ArmcalError("per-row sigma must be positive and finite, one value per pose")
     if method == "auto":
-        method = "closed-form" if arm.free.all() else "gauss-newton"
+        method = "closed-form" if arm.complete else "gauss-newton"
     if method not in METHODS:
         raise ArmcalError(f"unknown method {method!r}; choose one of auto, {', '.join(METHODS)}")
     _check_closed_form(arm, method)
@@ -1066,9 +1167,9 @@ def identify(
             else noise.with_instrument_sigma(sigma)
         )
     given = arm.noise is not None or row_sigma is not None
-    problem = _Problem(arm, q, xy, row_sigma, method, tol, max_iter)
-    plan = problem.plan_factor.svd if problem.plain else plan_svd(arm, q)
-    info = check_identifiable(arm, q, svd=plan)
+    problem = _Problem(arm, q, xy, row_sigma, method, tol, max_iter, target)
+    plan = problem.plan_factor.svd if problem.plain else plan_svd(arm, q, target)
+    info = check_identifiable(arm, q, svd=plan, target=target)
     dof_all = 2 * m - arm.n_free
     if not given and dof_all <= 0:
         raise ArmcalError(
@@ -1112,7 +1213,7 @@ def identify(
             index=int(i),
             row=row_numbers[i],
             pose=labels[i],
-            target=None,
+            target=None if target is None else arm.targets[target[i]].label,
             residual_mm=float(distance[i]),
             studentized=float(test.statistic[i]),
             p_value=float(test.p_value[i]),
@@ -1170,4 +1271,5 @@ def identify(
         used=used,
         rows=row_numbers,
         robust=bool(robust),
+        target=target,
     )

@@ -136,12 +136,15 @@ class NoiseModel:
         q: np.ndarray,
         params: np.ndarray | None = None,
         row_sigma: np.ndarray | None = None,
+        *,
+        target: np.ndarray | None = None,
     ) -> np.ndarray:
         """``Sigma_i`` ``(..., m, 2, 2)`` in mm^2 of every pose of ``q`` ``(..., m, n)``.
 
         ``params`` (user deviations, ``(p,)`` or ``(..., p)``) is where the encoder
         term is linearized (nominal when omitted); ``row_sigma`` ``(m,)`` (mm)
-        replaces the instrument covariance row by row.
+        replaces the instrument covariance row by row; ``target`` ``(m,)`` is
+        every row's target on an arm with several.
         """
         q = np.asarray(q, dtype=float)
         shape = q.shape[:-1]
@@ -151,12 +154,12 @@ class NoiseModel:
             base = np.asarray(row_sigma, dtype=float)[..., None, None] ** 2 * np.eye(2)
         if self.joint_sigma is None:
             return np.broadcast_to(base, (*np.broadcast_shapes(shape, base.shape[:-2]), 2, 2))
-        from .arm import jacobian  # imported here: the arm module imports this one
+        from .arm import joint_jacobian  # imported here: the arm module imports this one
 
         assert arm is not None, "encoder noise needs the arm's Jacobian"
 
         n = q.shape[-1]
-        j_q = jacobian(arm, q, params)[..., n : 2 * n]  # d tip / d q_j, (..., m, 2, n)
+        j_q = joint_jacobian(arm, q, params, target=target)  # d tip / d q_j, (..., m, 2, n)
         scaled = j_q * np.broadcast_to(self.joint_sigma, (n,))
         return base + scaled @ np.swapaxes(scaled, -1, -2)
 
@@ -166,13 +169,15 @@ class NoiseModel:
         q: np.ndarray,
         params: np.ndarray | None = None,
         row_sigma: np.ndarray | None = None,
+        *,
+        target: np.ndarray | None = None,
     ) -> np.ndarray:
         """Relative whitening ``W_i`` ``(..., m, 2, 2)``: ``W_i^T W_i = sigma_ref^2 Sigma_i^-1``.
 
         ``W_i = sigma_ref L_i^-1`` for the Cholesky factor ``Sigma_i = L_i L_i^T``,
         in closed form (lower triangular).  The identity for isotropic noise.
         """
-        cov = self.pose_covariances(arm, q, params, row_sigma)
+        cov = self.pose_covariances(arm, q, params, row_sigma, target=target)
         return whitening_from_covariance(cov, self.sigma_mm)
 
     def to_dict(self) -> dict[str, object]:

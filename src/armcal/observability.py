@@ -18,7 +18,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .arm import PlanarArm, link_angles, paper_from_user_matrix
+from .arm import PlanarArm, link_units, paper_from_user, paper_from_user_matrix, split_params
 from .errors import ArmcalWarning, NotIdentifiableError
 from .numerics import COND_WARN, RANK_RTOL, ScaledSVD, scaled_svd
 
@@ -36,13 +36,15 @@ __all__ = [
 ]
 
 
-def scaled_columns(arm: PlanarArm, q: np.ndarray) -> np.ndarray:
+def scaled_columns(arm: PlanarArm, q: np.ndarray, target: np.ndarray | None = None) -> np.ndarray:
     """Hadamard-scaled Jacobian columns ``(..., m, p)`` in the paper's order, as complex numbers.
 
     Row x of the real Jacobian is the real part, row y the imaginary part;
-    column ``dtheta_k`` (``i l_k e^{i theta_k}``) is divided by ``l_k``.
+    column ``dtheta_k`` (``i l_k e^{i theta_k}``) is divided by ``l_k``.  With
+    several targets, ``target`` ``(m,)`` says which one every row measures
+    (:func:`armcal.arm.link_units`).
     """
-    unit = np.exp(1j * link_angles(q))
+    unit = link_units(arm, q, target)
     cols = [1j * unit, unit]
     if arm.base_offset:
         cols.append(np.broadcast_to(np.array([1.0, 1j]), (*np.shape(q)[:-1], 2)))
@@ -63,10 +65,13 @@ def model_basis(arm: PlanarArm) -> tuple[np.ndarray, np.ndarray]:
     divided by ``sqrt(sum_{k in G} l_k^2)``: unit mean square over random
     poses, the normalization of the columns of a single link.
     """
-    n, p = arm.n_joints, arm.n_params
+    p = arm.n_params
     free = arm.free
-    if free.all():
-        return np.eye(p), user_from_scaled(arm, None)
+    if arm.complete:
+        return np.eye(arm.n_paper), user_from_scaled(arm, None)
+    if not arm.standard_map:
+        return _generic_basis(arm)
+    n = arm.n_joints
     columns_c: list[np.ndarray] = []
     columns_t: list[np.ndarray] = []
     free_dq = [j for j in range(n) if free[n + j]]
@@ -92,7 +97,29 @@ def model_basis(arm: PlanarArm) -> tuple[np.ndarray, np.ndarray]:
     return np.array(columns_c).T, np.array(columns_t).T
 
 
-def model_columns(arm: PlanarArm, q: np.ndarray) -> np.ndarray:
+def _scaled_from_user(arm: PlanarArm) -> np.ndarray:
+    """``U`` ``(p_paper, p)``: scaled paper coordinates (``l_k dtheta_k``, ``dl_k``, base) of a
+    change of the user parameters, at nominal."""
+    scale = np.ones(arm.n_paper)
+    scale[: arm.n_links] = arm.link_nominal  # u_theta_k = L_k dtheta_k, in mm
+    return paper_from_user(arm) * scale[:, None]
+
+
+def _generic_basis(arm: PlanarArm) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`model_basis` of any arm: each free parameter's own column, unit norm.
+
+    Column ``j`` of ``C`` is the change of the scaled paper coordinates per unit
+    of free parameter ``j``, divided by its norm (so a column has unit mean
+    square over random poses, like a single link's); ``T`` undoes the division.
+    """
+    u = _scaled_from_user(arm)[:, arm.free]
+    norms = np.linalg.norm(u, axis=0)
+    t = np.zeros((arm.n_params, arm.n_free))
+    t[np.flatnonzero(arm.free), np.arange(arm.n_free)] = 1.0 / norms
+    return u / norms, t
+
+
+def model_columns(arm: PlanarArm, q: np.ndarray, target: np.ndarray | None = None) -> np.ndarray:
     """The model's scaled Jacobian ``(..., m, p_f)`` as complex columns, at nominal.
 
     :func:`scaled_columns` in the coordinates of :func:`model_basis` (the free
@@ -102,20 +129,21 @@ def model_columns(arm: PlanarArm, q: np.ndarray) -> np.ndarray:
     columns.  For the paper's model (:attr:`PlanarArm.standard`) it is
     :func:`scaled_columns` itself.
     """
-    columns = scaled_columns(arm, q)
+    columns = scaled_columns(arm, q, target)
     if arm.standard:
         return columns
     from .noise import complex_whitening
 
-    if not arm.free.all():
+    if not arm.complete:
         columns = columns @ model_basis(arm)[0]
     if arm.noise is not None and not arm.noise.isotropic_iid:
-        alpha, beta = complex_whitening(arm.noise.whitening(arm, np.asarray(q, dtype=float)))
+        w = arm.noise.whitening(arm, np.asarray(q, dtype=float), target=target)
+        alpha, beta = complex_whitening(w)
         columns = alpha[..., None] * columns + beta[..., None] * columns.conj()
     return columns
 
 
-def scaled_jacobian(arm: PlanarArm, q: np.ndarray) -> np.ndarray:
+def scaled_jacobian(arm: PlanarArm, q: np.ndarray, target: np.ndarray | None = None) -> np.ndarray:
     """The policy's matrix ``H`` ``(..., 2m, p_f)``: the Hadamard-normalized nominal Jacobian.
 
     The real form of :func:`model_columns` divided by ``sqrt(m)``: rows alternate
@@ -132,18 +160,18 @@ def scaled_jacobian(arm: PlanarArm, q: np.ndarray) -> np.ndarray:
     (see :mod:`armcal.identification`).
     """
     q = np.asarray(q, dtype=float)
-    columns = model_columns(arm, q) / np.sqrt(q.shape[-2])
+    columns = model_columns(arm, q, target) / np.sqrt(q.shape[-2])
     real = np.stack([columns.real, columns.imag], axis=-2)  # (..., m, 2, p_f)
     return real.reshape(*q.shape[:-2], 2 * q.shape[-2], columns.shape[-1])
 
 
-def plan_svd(arm: PlanarArm, q: np.ndarray) -> ScaledSVD:
+def plan_svd(arm: PlanarArm, q: np.ndarray, target: np.ndarray | None = None) -> ScaledSVD:
     """Singular values and right singular vectors of :func:`scaled_jacobian` (batched).
 
     Thin factorizations only (:func:`armcal.numerics.scaled_svd`): memory
     ``O(m p)`` per plan.
     """
-    return scaled_svd(scaled_jacobian(arm, q))
+    return scaled_svd(scaled_jacobian(arm, q, target))
 
 
 def user_from_scaled(arm: PlanarArm, params: np.ndarray | None) -> np.ndarray:
@@ -156,25 +184,33 @@ def user_from_scaled(arm: PlanarArm, params: np.ndarray | None) -> np.ndarray:
     length), and ``dq_k = dtheta_k - dtheta_(k-1)``.  Explicit, so nothing is
     inverted; ``inf`` entries for a link of length 0.
     """
-    n, p = arm.n_joints, arm.n_params
+    k, p = arm.n_links, arm.n_params
     values = np.zeros(p) if params is None else np.asarray(params, dtype=float)
     if values.shape[-1] != p:
         raise ValueError(
             f"params must have shape (..., {p}) for {arm.param_names}, got {values.shape}"
         )
-    phi = np.cumsum(values[..., n : 2 * n], axis=-1)
-    length = arm.link_lengths + values[..., :n]
+    dl, phi, _ = split_params(arm, values)
+    length = arm.link_nominal + dl
     cos, sin = np.cos(phi), np.sin(phi)
     with np.errstate(divide="ignore", invalid="ignore"):
         inverse_length = 1.0 / length
-    paper = np.zeros((*values.shape[:-1], p, p))
-    k = np.arange(n)
-    paper[..., k, k] = cos * inverse_length
-    paper[..., k, n + k] = -sin * inverse_length
-    paper[..., n + k, k] = sin
-    paper[..., n + k, n + k] = cos
+    q = arm.n_paper
+    paper = np.zeros((*values.shape[:-1], q, q))
+    i = np.arange(k)
+    paper[..., i, i] = cos * inverse_length
+    paper[..., i, k + i] = -sin * inverse_length
+    paper[..., k + i, i] = sin
+    paper[..., k + i, k + i] = cos
     if arm.base_offset:
-        paper[..., 2 * n :, 2 * n :] = np.eye(2)
+        paper[..., 2 * k :, 2 * k :] = np.eye(2)
+    if not arm.standard_map:
+        # user = P_free^-1 paper over the free parameters (the arm is complete).
+        to_user = np.zeros((p, q))
+        to_user[arm.free] = np.linalg.inv(paper_from_user(arm)[:, arm.free])
+        with np.errstate(invalid="ignore"):
+            return to_user @ paper
+    n = k
     user = np.empty_like(paper)
     user[..., :n, :] = paper[..., n : 2 * n, :]
     with np.errstate(invalid="ignore"):
@@ -264,7 +300,7 @@ def _scaled_from_user_nominal(arm: PlanarArm) -> np.ndarray:
     the inverse of the free rows of :func:`model_basis`'s ``T``, a small matrix
     that is nonsingular by construction (triangular per joint group).
     """
-    if not arm.free.all():
+    if not arm.free.all() or not arm.standard_map:
         return np.linalg.inv(model_basis(arm)[1][arm.free])
     n = arm.n_joints
     scale = np.ones(arm.n_params)
@@ -274,8 +310,9 @@ def _scaled_from_user_nominal(arm: PlanarArm) -> np.ndarray:
 
 def _link_of(arm: PlanarArm) -> np.ndarray:
     """The link (1..n; 0 for the base) each user parameter belongs to."""
-    links = np.arange(1, arm.n_joints + 1)
-    return np.concatenate([links, links, [0, 0] if arm.base_offset else []]).astype(int)
+    links = arm.link_joint + 1
+    base = [0, 0] if arm.base_offset else []
+    return np.concatenate([links, links, base, [0] if arm.base_rotation else []]).astype(int)
 
 
 def _joints_to_vary(arm: PlanarArm, rows: np.ndarray, drop: float) -> tuple[int, ...]:
@@ -289,7 +326,11 @@ def _joints_to_vary(arm: PlanarArm, rows: np.ndarray, drop: float) -> tuple[int,
 
 
 def identifiability(
-    arm: PlanarArm, q: np.ndarray, *, svd: ScaledSVD | None = None
+    arm: PlanarArm,
+    q: np.ndarray,
+    *,
+    svd: ScaledSVD | None = None,
+    target: np.ndarray | None = None,
 ) -> Identifiability:
     """Rank of the Jacobian of a plan, on scaled columns, by the one rank policy.
 
@@ -300,6 +341,8 @@ def identifiability(
         Joint angles of the plan in rad.
     svd : ScaledSVD, optional
         ``plan_svd(arm, q)`` when the caller has it already.
+    target : ndarray of int, shape (m,), optional
+        Every row's target, for an arm with several.
 
     Returns
     -------
@@ -322,7 +365,7 @@ def identifiability(
     (2, ('dl1', 'dl2', 'dq1', 'dq2'))
     """
     if svd is None:
-        svd = plan_svd(arm, q)
+        svd = plan_svd(arm, q, target)
     rank = int(svd.rank)
     to_user = model_basis(arm)[1]
     names = arm.param_names
@@ -395,7 +438,11 @@ def _joints_phrase(joints: Sequence[int]) -> str:
 
 
 def check_identifiable(
-    arm: PlanarArm, q: np.ndarray, *, svd: ScaledSVD | None = None
+    arm: PlanarArm,
+    q: np.ndarray,
+    *,
+    svd: ScaledSVD | None = None,
+    target: np.ndarray | None = None,
 ) -> Identifiability:
     """Raise :class:`NotIdentifiableError` unless the plan ``q`` identifies every parameter.
 
@@ -407,7 +454,7 @@ def check_identifiable(
     m = q.shape[0]
     p = arm.n_free
     min_poses = -(-p // 2)
-    info = identifiability(arm, q, svd=svd)
+    info = identifiability(arm, q, svd=svd, target=target)
     if info.identifiable:
         return info
     shown = "; ".join(info.combinations[:3])

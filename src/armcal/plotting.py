@@ -20,7 +20,7 @@ from matplotlib.lines import Line2D
 from matplotlib.patches import Circle, Patch, Rectangle, Wedge
 from matplotlib.ticker import FuncFormatter, MaxNLocator, NullFormatter
 
-from .arm import Annulus, PlanarArm, link_angles
+from .arm import Annulus, PlanarArm
 from .io import atomic_write
 
 __all__ = ["plot_accuracy_curves", "plot_plan", "plot_random_plans", "save_figure"]
@@ -30,7 +30,7 @@ _CMAP = "viridis"
 
 def _joint_positions(arm: PlanarArm, q: np.ndarray) -> np.ndarray:
     """Base and joint positions ``(m, n + 1, 2)`` in mm at the nominal geometry."""
-    steps = arm.link_lengths * np.exp(1j * link_angles(q))
+    steps = arm.link_lengths * np.exp(1j * arm.link_angles(q))
     points = np.concatenate([np.zeros((q.shape[0], 1)), np.cumsum(steps, axis=1)], axis=1)
     return np.stack([points.real, points.imag], axis=-1)
 

@@ -29,7 +29,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .arm import PlanarArm, forward_kinematics, jacobian, link_angles, link_phasors
+from .arm import PlanarArm, forward_kinematics, jacobian, link_phasors, link_units
 from .criteria import (
     CRITERIA,
     dstar,
@@ -174,7 +174,7 @@ class _PositionAccumulator:
     ) -> None:
         self.arm = arm
         self.truth = link_phasors(arm, truth)
-        unit = np.exp(1j * link_angles(np.asarray(test_q, dtype=float)))  # (k, n)
+        unit = link_units(arm, np.asarray(test_q, dtype=float))  # (k, K)
         self.basis = np.concatenate([unit, np.ones((unit.shape[0], 1))], axis=1)  # u(x), (k, n+1)
         self.gram = self.basis.conj().T @ self.basis / self.basis.shape[0]  # G
         self.second_moment = np.zeros((self.truth.size, self.truth.size), dtype=complex)

@@ -52,8 +52,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..arm import PlanarArm, link_angles
+from ..arm import PlanarArm
 from ..criteria import d_efficiency
+from ..errors import ArmcalError
 from ..noise import complex_whitening
 from ..observability import model_basis, model_columns, scaled_columns
 
@@ -192,6 +193,7 @@ class PoseModel:
 def pose_model(arm: PlanarArm, q: np.ndarray) -> PoseModel:
     """:class:`PoseModel` of poses ``q`` ``(..., m, n)`` (rad) at the nominal parameters."""
     q = np.asarray(q, dtype=float)
+    _check_designable(arm)
     noise = arm.noise
     if arm.standard or noise is None or noise.isotropic_iid:
         columns = model_columns(arm, q)
@@ -209,9 +211,19 @@ def pose_model(arm: PlanarArm, q: np.ndarray) -> PoseModel:
     precision = np.swapaxes(w, -1, -2) @ w
     joint_jacobian = None
     if noise.joint_sigma is not None:
-        turn = 1j * arm.link_lengths * np.exp(1j * link_angles(q))  # d tip / d theta_k
-        joint_jacobian = np.cumsum(turn[..., ::-1], axis=-1)[..., ::-1]  # d tip / d q_j
+        turn = 1j * arm.link_lengths * np.exp(1j * arm.link_angles(q))  # d tip / d theta_k
+        joint_jacobian = q_from_theta_gradient(arm, turn)  # d tip / d q_j
     return PoseModel(columns, full, basis, precision, joint_jacobian)
+
+
+def _check_designable(arm: PlanarArm) -> None:
+    """Design works on one point per pose and the instrument's 2-D frame."""
+    if arm.n_target_links > 1:
+        raise ArmcalError(
+            f"{arm.name} has {arm.n_target_links} targets: plans are designed for the arm "
+            "with one target (remove [targets] from the robot file to design); every target "
+            "measured at a pose adds to the information that plan gives"
+        )
 
 
 def _real_pair(z: np.ndarray) -> np.ndarray:
@@ -219,9 +231,15 @@ def _real_pair(z: np.ndarray) -> np.ndarray:
     return np.stack([z.real, z.imag], axis=-2)
 
 
-def q_from_theta_gradient(grad_theta: np.ndarray) -> np.ndarray:
-    """theta_j = q_1 + ... + q_j, so d/dq_a = sum over j >= a of d/dtheta_j."""
-    return np.cumsum(grad_theta[..., ::-1], axis=-1)[..., ::-1]
+def q_from_theta_gradient(arm: PlanarArm, grad_theta: np.ndarray) -> np.ndarray:
+    """``d/dq = M^T d/dtheta`` ``(..., n)`` for ``theta = M q`` (the arm's joint map).
+
+    For the default map ``theta_j = q_1 + ... + q_j``: d/dq_a = sum over j >= a
+    of d/dtheta_j.
+    """
+    if arm.standard_map:
+        return np.cumsum(grad_theta[..., ::-1], axis=-1)[..., ::-1]
+    return grad_theta @ arm.joint_map
 
 
 def information_gradient(arm: PlanarArm, model: PoseModel, phi: np.ndarray) -> np.ndarray:
@@ -246,7 +264,7 @@ def information_gradient(arm: PlanarArm, model: PoseModel, phi: np.ndarray) -> n
     grad_theta = 2.0 * (t[..., :n] + t[..., n : 2 * n])
     if model.joint_jacobian is not None:
         grad_theta = grad_theta + _encoder_gradient(arm, model, u, v)
-    return q_from_theta_gradient(grad_theta)
+    return q_from_theta_gradient(arm, grad_theta)
 
 
 def _encoder_gradient(
@@ -261,7 +279,10 @@ def _encoder_gradient(
     k = p @ g @ p / arm.noise.sigma_mm**2
     variance = np.broadcast_to(arm.noise.joint_sigma, (n,)) ** 2
     r = -2.0 * (k @ _real_pair(model.joint_jacobian)) * variance  # (..., m, 2, n)
-    r = np.cumsum(r, axis=-1)  # column k: sum over j <= k of R[:, j]
+    if arm.standard_map:
+        r = np.cumsum(r, axis=-1)  # column k: sum over j <= k of R[:, j]
+    else:
+        r = r @ arm.joint_map.T  # column k: sum over j of M_kj R[:, j]
     # d J_q[:, j] / d theta_k = -l_k e^(i theta_k) (k >= j); the dl columns are e^(i theta_k).
     turn = -arm.link_lengths * model.full[..., n : 2 * n]
     return r[..., 0, :] * turn.real + r[..., 1, :] * turn.imag

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..arm import PlanarArm, forward_kinematics, link_angles
+from ..arm import PlanarArm, forward_kinematics
 from ..criteria import CRITERIA, weighted_information
 from ..errors import ArmcalError
 from .model import information_gradient, pose_model
@@ -41,12 +41,12 @@ def _region_constraints(arm: PlanarArm, q: np.ndarray) -> tuple[np.ndarray, np.n
     """Region constraint values ``g (..., m, k)`` (>= 0 inside) and ``dg/dq (..., m, k, n)``."""
     region = arm.region
     assert region is not None, "callers check arm.region first"
-    unit = np.exp(1j * link_angles(q))
+    unit = np.exp(1j * arm.link_angles(q))
     tip = np.sum(arm.link_lengths * unit, axis=-1)
     g, dg = region.constraints(np.stack([tip.real, tip.imag], axis=-1))  # dg (..., m, k, 2)
     d_tip = 1j * arm.link_lengths * unit  # d tip / d theta_j, complex (..., m, n)
     grad_theta = dg[..., :1] * d_tip.real[..., None, :] + dg[..., 1:] * d_tip.imag[..., None, :]
-    return g, _q_from_theta_gradient(grad_theta)
+    return g, _q_from_theta_gradient(arm, grad_theta)
 
 
 def _region_penalty(arm: PlanarArm, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

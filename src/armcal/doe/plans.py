@@ -62,6 +62,8 @@ def orthogonal_plan(arm: PlanarArm, m: int, *, q1: float = 0.0) -> np.ndarray:
     q = np.tile(step[:, None], (1, n))
     if not arm.base_offset:
         q[:, 0] = q1
+    if not arm.standard_map:  # the same link angles, read through the arm's joint map
+        q = np.linalg.solve(arm.joint_map, np.cumsum(q, axis=1).T).T
     return wrap_angle(q)
 
 
@@ -306,11 +308,20 @@ def analytic_plan(arm: PlanarArm, m: int, *, turn_joint1: bool = False) -> np.nd
     times the chunk's poses times :data:`BYTES_PER_CANDIDATE_POSE`) besides
     the O(m n) plan, and the time is O(m (n + PLACEMENT_CANDIDATES)).
 
+    With a joint map (:attr:`armcal.arm.PlanarArm.joint_map`) the plan is the
+    same in relative link angles ``r = D M q`` (``D`` the differences of
+    consecutive link angles).  When ``D M`` is diagonal (joints that count the
+    other way round: ``r_j = -q_j``) the limits are placed through it exactly;
+    otherwise (coupled axes) the plan for the relative angles is mapped to
+    joint readings and returned only if it keeps within the limits.
+
     Examples
     --------
     >>> np.degrees(analytic_plan(PlanarArm([2.0, 1.0]), 4)).round(9).tolist()
     [[0.0, 45.0], [0.0, 135.0], [0.0, -135.0], [0.0, -45.0]]
     """
+    if not arm.standard_map:
+        return _mapped_analytic_plan(arm, m, turn_joint1=turn_joint1)
     n = arm.n_joints
     min_poses = n + 1 if arm.base_offset else n
     if m < min_poses:
@@ -342,6 +353,29 @@ def analytic_plan(arm: PlanarArm, m: int, *, turn_joint1: bool = False) -> np.nd
         q[:, 0] = _joint1_in_region(arm, q, lo[0], hi[0])
     else:
         q[:, 0] = (lo[0] + hi[0]) / 2
+    return q
+
+
+def _mapped_analytic_plan(arm: PlanarArm, m: int, *, turn_joint1: bool) -> np.ndarray:
+    """:func:`analytic_plan` of an arm with a joint map, through the relative link angles."""
+    n = arm.n_joints
+    relative = np.diff(arm.joint_map, axis=0, prepend=0.0)  # r = D M q
+    signs = np.diag(relative)
+    plain = arm.replace(joint_map=None, targets=(), base_rotation=False, fixed=())
+    if np.array_equal(relative, np.diag(signs)) and np.all(np.abs(signs) == 1):
+        lo, hi = (arm.joint_limits * signs[:, None]).T
+        limits = np.column_stack([np.minimum(lo, hi), np.maximum(lo, hi)])
+        r = analytic_plan(plain.replace(joint_limits=limits), m, turn_joint1=turn_joint1)
+        return r * signs
+    r = analytic_plan(plain.replace(joint_limits=None), m, turn_joint1=turn_joint1)
+    q = np.linalg.solve(arm.joint_map, np.cumsum(r, axis=1).T).T
+    q = wrap_angle(q)
+    if not np.all(feasible(arm, q)):
+        raise ArmcalError(
+            f"the closed-form orthogonal {m}-pose plan (the paper's Table I family), read "
+            f"through the joint map of {arm.name}, leaves the joint limits or the region of "
+            f"joints 1..{n}; other plans may still be optimal (--method optimize)"
+        )
     return q
 
 
