@@ -188,9 +188,9 @@ CASES = [
     ),
     case(
         "meas-unknown-column",
-        {"meas.csv": _csv(MEAS_HEADER + ",z_mm", [r + ",0.0" for r in MEAS_ROWS])},
+        {"meas.csv": _csv(MEAS_HEADER + ",rz_deg", [r + ",0.0" for r in MEAS_ROWS])},
         IDENTIFY,
-        ("meas.csv", "line 1", "z_mm"),
+        ("meas.csv", "line 1", "rz_deg"),
     ),
     case(
         "meas-duplicate-column",

@@ -224,6 +224,10 @@ class PlanarArm:
         ``dq = M^-1 (1, ..., 1)``, so one joint offset on that direction is
         held (:attr:`rotation_partner`, ``dq1`` for the default joint map)
         unless ``fixed`` already removes it (e.g. ``fixed = ("phi0",)``).
+    joint_offsets : ndarray, shape (n,)
+        Known joint zero offsets ``o`` (rad), part of the nominal model:
+        ``theta = M (q + o)``.  Zero by default; a calibrated arm exported as a
+        robot file (``armcal export``) carries its identified offsets here.
 
     Notes
     -----
@@ -254,6 +258,7 @@ class PlanarArm:
     joint_map: np.ndarray
     targets: tuple[Target, ...]
     base_rotation: bool
+    joint_offsets: np.ndarray
 
     def __init__(
         self,
@@ -269,6 +274,7 @@ class PlanarArm:
         joint_map: ArrayLike | None = None,
         targets: Sequence[Target] = (),
         base_rotation: bool = False,
+        joint_offsets: ArrayLike | None = None,
     ) -> None:
         lengths = _readonly(np.atleast_1d(np.asarray(link_lengths, dtype=float)))
         if lengths.ndim != 1 or lengths.size == 0:
@@ -312,12 +318,15 @@ class PlanarArm:
                 f"unknown parameter {unknown[0]!r} to fix; the parameters of this arm are "
                 f"{', '.join(names)}"
             )
+        offsets = np.zeros(n) if joint_offsets is None else np.array(joint_offsets, dtype=float)
+        if offsets.shape != (n,) or not np.all(np.isfinite(offsets)):
+            raise ValueError(f"joint_offsets must be {n} finite angles in rad, got {offsets}")
+        object.__setattr__(self, "joint_offsets", _readonly(offsets))
         held = set(fixed)
-        partner = self.rotation_partner
         if self.base_rotation and not any(
             abs(self.rotation_direction[names.index(f)]) > 1e-12 for f in held
         ):
-            held.add(partner)
+            held.add(self.rotation_partner)
         if len(held) == len(names):
             raise ValueError("every parameter is fixed: leave at least one free to identify")
         object.__setattr__(self, "fixed", tuple(nm for nm in names if nm in held))
@@ -335,6 +344,7 @@ class PlanarArm:
             "joint_map": self.joint_map,
             "targets": self.targets,
             "base_rotation": self.base_rotation,
+            "joint_offsets": self.joint_offsets,
         }
         if "sigma" in changes:
             kwargs.pop("noise")
@@ -378,6 +388,11 @@ class PlanarArm:
             and not self.base_rotation
             and bool(np.array_equal(self.joint_map, standard_joint_map(self.n_joints)))
         )
+
+    @property
+    def paper_structure(self) -> bool:
+        """:attr:`standard_map` with no nominal joint offsets: link angles are ``cumsum(q)``."""
+        return self.standard_map and self._default_map
 
     @property
     def complete(self) -> bool:
@@ -583,11 +598,14 @@ class PlanarArm:
         """Absolute link angles ``theta = M q`` ``(..., n)`` of joint readings ``q`` (rad)."""
         if self._default_map:
             return np.cumsum(q, axis=-1)  # the same numbers as the paper's sums, bit for bit
-        return np.asarray(q, dtype=float) @ self.joint_map.T
+        return (np.asarray(q, dtype=float) + self.joint_offsets) @ self.joint_map.T
 
     @property
     def _default_map(self) -> bool:
-        return bool(np.array_equal(self.joint_map, standard_joint_map(self.n_joints)))
+        return bool(
+            np.array_equal(self.joint_map, standard_joint_map(self.n_joints))
+            and not np.any(self.joint_offsets)
+        )
 
     def target_index(self, labels: Sequence[str]) -> np.ndarray:
         """Index ``(m,)`` into :attr:`targets` of every row's target label."""

@@ -31,7 +31,7 @@ from typing import Any, BinaryIO
 
 import numpy as np
 
-from .arm import Annulus, Box, PlanarArm, Region
+from .arm import Annulus, Box, PlanarArm, Region, Target
 from .errors import ArmcalWarning, InputError
 from .noise import NoiseModel
 from .paper import BUILTIN_ROBOTS, paper_arm
@@ -54,6 +54,7 @@ __all__ = [
     "Measurements",
     "OutputFolder",
     "RobotSpec",
+    "arm_for_measurements",
     "atomic_write",
     "check_outputs",
     "format_measurements_csv",
@@ -159,6 +160,11 @@ class Measurements:
     warnings : tuple of ArmcalWarning
         What is accepted but suspicious: ``beyond-limits`` (measured angles
         slightly beyond a joint limit).
+    targets : tuple of str, or None
+        The optional ``target`` column: which target every row measured.
+    z : ndarray, shape (m,), or None
+        The optional ``z_mm`` column of 3-D instrument data; then ``xy`` are the
+        instrument's x and y, not yet in the plane of motion.
     """
 
     q: np.ndarray
@@ -167,6 +173,15 @@ class Measurements:
     rows: tuple[int, ...] = ()
     row_sigma: np.ndarray | None = None
     warnings: tuple[ArmcalWarning, ...] = ()
+    targets: tuple[str, ...] | None = None
+    z: np.ndarray | None = None
+
+    @property
+    def xyz(self) -> np.ndarray:
+        """The 3-D points ``(m, 3)`` in mm (requires :attr:`z`)."""
+        if self.z is None:
+            raise ValueError("the measurements are 2-D: no z_mm column")
+        return np.column_stack([self.xy, self.z])
 
 
 # --------------------------------------------------------------------------- helpers
@@ -778,7 +793,17 @@ def load_robot(name_or_path: str | os.PathLike) -> RobotSpec:
     _check_keys(
         path,
         data,
-        ["name", "link_lengths_mm", "joint_limits_deg", "base_offset", "measurement", "identify"],
+        [
+            "name",
+            "link_lengths_mm",
+            "joint_limits_deg",
+            "base_offset",
+            "joint_map",
+            "joint_offsets_deg",
+            "measurement",
+            "identify",
+            "targets",
+        ],
     )
     if "link_lengths_mm" not in data:
         raise _fail(path, "missing key 'link_lengths_mm' (a list of link lengths in mm)")
@@ -842,7 +867,16 @@ def load_robot(name_or_path: str | os.PathLike) -> RobotSpec:
             noise = NoiseModel(covariance, joint_sigma)
         if "region" in meas:
             region = _parse_region(path, meas["region"])
-    names = PlanarArm(lengths, base_offset=base_offset).param_names
+    mapping = _joint_map(path, data["joint_map"], n) if "joint_map" in data else None
+    offsets = None
+    if "joint_offsets_deg" in data:
+        offsets = np.radians(_numbers(path, data["joint_offsets_deg"], "joint_offsets_deg", n))
+    targets = _targets(path, data["targets"], lengths[-1]) if "targets" in data else ()
+    try:
+        structure = PlanarArm(lengths, base_offset=base_offset, joint_map=mapping, targets=targets)
+    except ValueError as exc:
+        raise _fail(path, str(exc)) from None
+    names = structure.param_names
     fixed = _fixed_parameters(path, data["identify"], names, name) if "identify" in data else []
     try:
         arm = PlanarArm(
@@ -853,10 +887,64 @@ def load_robot(name_or_path: str | os.PathLike) -> RobotSpec:
             noise=noise,
             region=region,
             fixed=fixed,
+            joint_map=mapping,
+            targets=targets,
+            joint_offsets=offsets,
         )
     except ValueError as exc:  # every value was checked above; this names what is left
         raise _fail(path, str(exc)) from None
     return RobotSpec(arm, None, str(path), tuple(warnings))
+
+
+def _joint_map(path, value: Any, n: int) -> np.ndarray:
+    """``joint_map``: ``n`` rows of ``n`` numbers, ``theta = M q``, invertible."""
+    if not isinstance(value, list) or len(value) != n:
+        raise _fail(
+            path,
+            f"key 'joint_map': expected {n} rows of {n} numbers (theta = M q), got {value!r}",
+        )
+    rows = [_numbers(path, row, f"joint_map[{i}]", n) for i, row in enumerate(value)]
+    mapping = np.array(rows)
+    s = np.linalg.svd(mapping, compute_uv=False)
+    if s[-1] <= 1e-9 * s[0]:
+        raise _fail(
+            path,
+            "key 'joint_map': the matrix is singular, so some link angle follows from no joint "
+            "reading; each row says how one link's absolute angle follows from the joints "
+            "(default: row i has ones in columns 1..i)",
+        )
+    return mapping
+
+
+def _targets(path, table: Any, last_length: float) -> tuple[Target, ...]:
+    """``[targets]``: ``label = { length_mm = ..., angle_deg = ... }`` per target."""
+    if not isinstance(table, dict) or not table:
+        raise _fail(
+            path,
+            "key 'targets': expected a table [targets] with one entry per target, e.g. "
+            "A = { length_mm = 100.0, angle_deg = 0.0 }",
+        )
+    targets = []
+    for label, entry in table.items():
+        key = f"targets.{label}"
+        if not isinstance(entry, dict):
+            raise _fail(path, f"key '{key}': expected {{ length_mm = ..., angle_deg = ... }}")
+        _check_keys(path, entry, ["length_mm", "angle_deg"], f"{key}.")
+        length = _number(path, entry.get("length_mm", last_length), f"{key}.length_mm")
+        angle = _number(path, entry.get("angle_deg", 0.0), f"{key}.angle_deg")
+        low, high = LINK_LENGTH_RANGE_MM
+        if not low <= length <= high:
+            raise _fail(
+                path,
+                f"key '{key}.length_mm': the distance from the last joint to the target must be "
+                f"between {low:g} and {high:g} mm, got {length:g}",
+            )
+        try:
+            targets.append(Target(str(label), length, math.radians(angle)))
+            PlanarArm([1.0], targets=targets)  # label rules
+        except ValueError as exc:
+            raise _fail(path, f"key '{key}': {exc}") from None
+    return tuple(targets)
 
 
 def load_truth(path: str | os.PathLike, arm: PlanarArm) -> np.ndarray:
@@ -869,12 +957,18 @@ def load_truth(path: str | os.PathLike, arm: PlanarArm) -> np.ndarray:
     """
     data = _load_toml(path, "truth")
     _check_keys(path, data, ["dl_mm", "dq_deg", "base_mm"])
-    n = arm.n_joints
+    n, k = arm.n_joints, arm.n_links
+    counts = f"{n} numbers, one per joint" + (
+        f", or {k}: one per link vector (the last link once per target)" if k != n else ""
+    )
     for key in ("dl_mm", "dq_deg"):
         if key not in data:
-            raise _fail(path, f"missing key '{key}' ({n} numbers, one per joint)")
-    dl = _numbers(path, data["dl_mm"], "dl_mm", n)
-    dq = _numbers(path, data["dq_deg"], "dq_deg", n)
+            raise _fail(path, f"missing key '{key}' ({counts})")
+    dl = _numbers(path, data["dl_mm"], "dl_mm")
+    dq = _numbers(path, data["dq_deg"], "dq_deg")
+    for key, values in (("dl_mm", dl), ("dq_deg", dq)):
+        if len(values) not in (n, k):
+            raise _fail(path, f"key '{key}': expected {counts}, got {len(values)}")
     base = None
     if "base_mm" in data:
         if not arm.base_offset:
@@ -884,10 +978,11 @@ def load_truth(path: str | os.PathLike, arm: PlanarArm) -> np.ndarray:
                 "set base_offset = true in the robot file or remove base_mm",
             )
         base = _numbers(path, data["base_mm"], "base_mm", 2)
-    for i, v in enumerate(dl):
-        if arm.link_lengths[i] + v <= 0:
-            raise _fail(path, f"key 'dl_mm[{i}]': link {i + 1} would have length <= 0")
-    return arm.params_from_display(dl, dq, base)
+    params = arm.params_from_display(dl, dq, base)
+    for i, v in enumerate(params[:k]):
+        if arm.link_nominal[i] + v <= 0:
+            raise _fail(path, f"key 'dl_mm': link {arm.link_names[i]} would have length <= 0")
+    return params
 
 
 # --------------------------------------------------------------------------- CSV
@@ -1067,21 +1162,21 @@ def _check_reach(path, arm: PlanarArm, xy: np.ndarray, lines: list[int]) -> None
     within ``reach`` of it.  With one, the base is unknown, but every tip lies
     within ``reach`` of it, so within ``2 reach`` of the data's centroid.
     """
-    reach = float(np.sum(arm.link_lengths))
+    reach = float(np.sum(arm.link_lengths[:-1]) + np.max(arm.link_nominal[arm.n_joints - 1 :]))
     limit = (1 + REACH_MARGIN) * reach
-    if arm.base_offset:
+    if arm.base_offset or xy.shape[1] == 3:
         center = np.mean(xy, axis=0)
         limit *= 2
         where = "from the centroid of the measured points"
     else:
         center = np.zeros(2)
         where = "from the base (the instrument's origin; base_offset = false)"
-    distance = np.hypot(xy[:, 0] - center[0], xy[:, 1] - center[1])
+    distance = np.linalg.norm(xy - center, axis=1)
     r = int(np.argmax(distance))
     if distance[r] <= limit:
         return
     c = int(np.argmax(np.abs(xy[r] - center)))
-    column = ("x_mm", "y_mm")[c]
+    column = ("x_mm", "y_mm", "z_mm")[c]
     fix = "check the value and the unit (mm)"
     if not arm.base_offset and distance[r] <= INSTRUMENT_RANGE * reach:
         fix += (
@@ -1125,8 +1220,8 @@ def read_measurements(path: str | os.PathLike, arm: PlanarArm) -> Measurements:
         arm,
         "measurements",
         ["x_mm", "y_mm"],
-        ["pose"],
-        ["sigma_mm"],
+        ["pose", "target"],
+        ["z_mm", "sigma_mm"],
         limit_tol_deg=LIMIT_TOLERANCE_DEG,
     )
     n = arm.n_joints
@@ -1145,7 +1240,14 @@ def read_measurements(path: str | os.PathLike, arm: PlanarArm) -> Measurements:
                 f"a noise std between {low:g} and {high:g} mm; check the unit (mm)",
             )
     xy = values[:, n:]
-    _check_reach(path, arm, xy, table.lines)
+    z = table.numbers.get("z_mm")
+    targets = table.texts.get("target")
+    if targets is not None:
+        _check_target_labels(path, arm, targets, table.lines)
+    if z is None:
+        _check_reach(path, arm, xy, table.lines)
+    else:
+        _check_reach(path, arm, np.column_stack([xy, z]), table.lines)
     warnings = []
     if table.beyond:
         warnings.append(_beyond_limits_warning(path, arm, table.beyond))
@@ -1156,7 +1258,64 @@ def read_measurements(path: str | os.PathLike, arm: PlanarArm) -> Measurements:
         rows=tuple(range(1, m + 1)),
         row_sigma=row_sigma,
         warnings=tuple(warnings),
+        targets=None if targets is None else tuple(targets),
+        z=z,
     )
+
+
+def _check_target_labels(path, arm: PlanarArm, labels: list[str], lines: list[int]) -> None:
+    """Every row names a target, one of the robot file's ``[targets]`` when it has them."""
+    known = arm.target_labels
+    for r, label in enumerate(labels):
+        if not label:
+            raise _fail(
+                path,
+                f"row {r + 1} (line {lines[r]}), column target: empty; name the target "
+                "(reflector, marker) every row measured",
+            )
+        if known and label not in known:
+            raise _fail(
+                path,
+                f"row {r + 1} (line {lines[r]}), column target: {label!r} is not a target of "
+                f"{arm.name}: {_suggest(label, known)}the robot file's [targets] has "
+                f"{', '.join(known)}",
+            )
+
+
+def arm_for_measurements(arm: PlanarArm, meas: Measurements) -> PlanarArm:
+    """The arm to identify from ``meas``: its targets are those measured.
+
+    With a ``target`` column, the targets are the labels measured, in the order
+    of the robot file's ``[targets]`` (nominal last link from there) or, without
+    one, in the order they first appear (nominal: the last link's length, angle
+    0).  With a ``z_mm`` column the base pose in the fitted plane is identified:
+    base offset and base rotation (:mod:`armcal.instrument`).
+    """
+    changes: dict[str, Any] = {}
+    if meas.targets is not None:
+        seen = list(dict.fromkeys(meas.targets))
+        if arm.targets:
+            targets = tuple(t for t in arm.targets if t.label in seen)
+        else:
+            targets = tuple(Target(label, float(arm.link_lengths[-1])) for label in seen)
+        if targets != arm.targets:
+            changes["targets"] = targets
+    elif arm.targets:
+        raise InputError(
+            f"{arm.name} has targets ({', '.join(arm.target_labels)}) but the measurements have "
+            "no target column; add a column 'target' naming the target of every row"
+        )
+    if meas.z is not None:
+        changes.update(base_offset=True, base_rotation=True)
+    if not changes:
+        return arm
+    fixed = [f for f in arm.fixed if not (f.startswith(("dl", "dq")) and "@" in f)]
+    try:
+        probe = arm.replace(**changes, fixed=())
+        changes["fixed"] = tuple(f for f in fixed if f in probe.param_names)
+        return arm.replace(**changes)
+    except ValueError as exc:
+        raise InputError(f"{arm.name}: {exc}") from None
 
 
 def _angle_text(q_rad: float) -> str:

@@ -172,19 +172,21 @@ def large_deviations(
     >>> large_deviations(arm, arm.params_from_display([378.0, 1.0], [0.5, -25.3]))
     ['dl1 = 378 mm (108 % of link 1, 350 mm)', 'dq2 = -25.3 deg']
     """
-    n = arm.n_joints
-    dl = params[:n]
-    dq = np.degrees(params[n : 2 * n])
+    k = arm.n_links
+    names = arm.param_names
+    nominal = arm.link_nominal
+    dl = params[:k]
+    dq = np.degrees(params[k : 2 * k])
     found = [
-        f"dl{k + 1} = {dl[k]:.4g} mm ({100 * abs(dl[k]) / arm.link_lengths[k]:.3g} % of link "
-        f"{k + 1}, {arm.link_lengths[k]:g} mm)"
-        for k in range(n)
-        if abs(dl[k]) > LARGE_LENGTH_FRACTION * arm.link_lengths[k]
+        f"{names[i]} = {dl[i]:.4g} mm ({100 * abs(dl[i]) / nominal[i]:.3g} % of link "
+        f"{arm.link_names[i]}, {nominal[i]:g} mm)"
+        for i in range(k)
+        if abs(dl[i]) > LARGE_LENGTH_FRACTION * nominal[i]
     ]
     found += [
-        f"dq{k + 1} = {dq[k]:.4g} deg"
-        for k in range(1 if rotation_free else 0, n)
-        if abs(dq[k]) > LARGE_ANGLE_DEG
+        f"{names[k + i]} = {dq[i]:.4g} deg"
+        for i in range(1 if rotation_free else 0, k)
+        if abs(dq[i]) > LARGE_ANGLE_DEG
     ]
     return found
 

@@ -62,8 +62,8 @@ def orthogonal_plan(arm: PlanarArm, m: int, *, q1: float = 0.0) -> np.ndarray:
     q = np.tile(step[:, None], (1, n))
     if not arm.base_offset:
         q[:, 0] = q1
-    if not arm.standard_map:  # the same link angles, read through the arm's joint map
-        q = np.linalg.solve(arm.joint_map, np.cumsum(q, axis=1).T).T
+    if not arm.paper_structure:  # the same link angles, read through the arm's joint map
+        q = np.linalg.solve(arm.joint_map, np.cumsum(q, axis=1).T).T - arm.joint_offsets
     return wrap_angle(q)
 
 
@@ -320,7 +320,7 @@ def analytic_plan(arm: PlanarArm, m: int, *, turn_joint1: bool = False) -> np.nd
     >>> np.degrees(analytic_plan(PlanarArm([2.0, 1.0]), 4)).round(9).tolist()
     [[0.0, 45.0], [0.0, 135.0], [0.0, -135.0], [0.0, -45.0]]
     """
-    if not arm.standard_map:
+    if not arm.paper_structure:
         return _mapped_analytic_plan(arm, m, turn_joint1=turn_joint1)
     n = arm.n_joints
     min_poses = n + 1 if arm.base_offset else n
@@ -358,6 +358,10 @@ def analytic_plan(arm: PlanarArm, m: int, *, turn_joint1: bool = False) -> np.nd
 
 def _mapped_analytic_plan(arm: PlanarArm, m: int, *, turn_joint1: bool) -> np.ndarray:
     """:func:`analytic_plan` of an arm with a joint map, through the relative link angles."""
+    offsets = arm.joint_offsets
+    if np.any(offsets):  # plan the readings q + o, whose limits are shifted by o
+        shifted = arm.replace(joint_offsets=None, joint_limits=arm.joint_limits + offsets[:, None])
+        return analytic_plan(shifted, m, turn_joint1=turn_joint1) - offsets
     n = arm.n_joints
     relative = np.diff(arm.joint_map, axis=0, prepend=0.0)  # r = D M q
     signs = np.diag(relative)
