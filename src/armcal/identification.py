@@ -61,6 +61,7 @@ from .arm import (
     paper_from_user,
     wrap_angle,
 )
+from .calibrated import CalibratedArm
 from .criteria import covariance_factor
 from .diagnostics import (
     FEW_DOF,
@@ -706,6 +707,10 @@ class Calibration:
     robust: bool = False
     target: np.ndarray | None = None
     plane: Any = None
+
+    def calibrated(self) -> CalibratedArm:
+        """The arm with these deviations, for validation, compensation and export."""
+        return CalibratedArm(self.arm, self.params, self.covariance, self.sigma_mm, self.plane)
 
     @property
     def n_poses(self) -> int:

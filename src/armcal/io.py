@@ -17,6 +17,7 @@ from __future__ import annotations
 import csv
 import difflib
 import errno
+import json
 import math
 import os
 import re
@@ -32,9 +33,11 @@ from typing import Any, BinaryIO
 import numpy as np
 
 from .arm import Annulus, Box, PlanarArm, Region, Target
+from .calibrated import CalibratedArm
 from .errors import ArmcalWarning, InputError
 from .noise import NoiseModel
 from .paper import BUILTIN_ROBOTS, paper_arm
+from .plane import Plane
 
 if sys.version_info >= (3, 11):
     import tomllib
@@ -43,6 +46,7 @@ else:  # pragma: no cover - exercised on Python 3.10 only
 
 __all__ = [
     "BUILTIN_ROBOTS",
+    "CALIBRATION_FORMAT",
     "DEFAULT_ROBOT",
     "INSTRUMENT_RANGE",
     "JOINT_SIGMA_MAX_DEG",
@@ -61,8 +65,10 @@ __all__ = [
     "format_plan_csv",
     "load_robot",
     "load_truth",
+    "read_calibration",
     "read_measurements",
     "read_plan",
+    "robot_to_dict",
     "unknown_parameter",
     "write_folder",
 ]
@@ -1341,3 +1347,145 @@ def format_measurements_csv(
         fields += [_angle_text(v) for v in row] + [repr(float(v)) for v in point]
         lines.append(",".join(fields))
     return "\n".join(lines) + "\n"
+
+
+# --------------------------------------------------------------------------- calibration JSON
+
+#: The format tag of calibration files (PRODUCT.md); other formats are refused.
+CALIBRATION_FORMAT = "armcal-calibration/1"
+
+
+def _region_to_dict(region: Region | None) -> dict[str, Any] | None:
+    if isinstance(region, Annulus):
+        return {
+            "kind": "annulus",
+            "center_mm": list(region.center),
+            "r_min_mm": region.r_min,
+            "r_max_mm": region.r_max,
+        }
+    if isinstance(region, Box):
+        return {"kind": "box", "x_mm": list(region.x), "y_mm": list(region.y)}
+    return None
+
+
+def robot_to_dict(arm: PlanarArm) -> dict[str, Any]:
+    """The ``robot`` section of a calibration file: everything needed to rebuild the arm.
+
+    ``name``, ``link_lengths_mm``, ``joint_limits_deg``, ``base_offset``,
+    ``base_rotation``, ``joint_map``, ``joint_offsets_deg``, ``targets``
+    (label to ``{length_mm, angle_deg}``) and ``region`` (or null); the noise
+    model and the fixed parameters are top-level keys of the document.
+    """
+    return {
+        "name": arm.name,
+        "link_lengths_mm": arm.link_lengths.tolist(),
+        "joint_limits_deg": np.degrees(arm.joint_limits).tolist(),
+        "base_offset": arm.base_offset,
+        "base_rotation": arm.base_rotation,
+        "joint_map": arm.joint_map.tolist(),
+        "joint_offsets_deg": np.degrees(arm.joint_offsets).tolist(),
+        "targets": {
+            t.label: {"length_mm": t.length, "angle_deg": math.degrees(t.angle)}
+            for t in arm.targets
+        },
+        "region": _region_to_dict(arm.region),
+    }
+
+
+def _arm_from_dict(data: dict[str, Any], noise: NoiseModel | None, fixed: list[str]) -> PlanarArm:
+    region = None
+    if data.get("region") is not None:
+        region = _parse_region("", data["region"])
+    targets = tuple(
+        Target(label, float(entry["length_mm"]), math.radians(float(entry["angle_deg"])))
+        for label, entry in data.get("targets", {}).items()
+    )
+    offsets = data.get("joint_offsets_deg")
+    return PlanarArm(
+        np.array(data["link_lengths_mm"], dtype=float),
+        np.radians(np.array(data["joint_limits_deg"], dtype=float)),
+        base_offset=bool(data["base_offset"]),
+        name=str(data["name"]),
+        noise=noise,
+        region=region,
+        fixed=fixed,
+        joint_map=data.get("joint_map"),
+        targets=targets,
+        base_rotation=bool(data.get("base_rotation", False)),
+        joint_offsets=None if offsets is None else np.radians(np.array(offsets, dtype=float)),
+    )
+
+
+def read_calibration(path: str | os.PathLike) -> CalibratedArm:
+    """Read a calibration file written by ``armcal identify`` (``armcal-calibration/1``).
+
+    Returns
+    -------
+    CalibratedArm
+        The arm rebuilt from the file's ``robot`` section, noise and fixed
+        parameters; the deviations and covariance in internal units (mm, rad);
+        the plane of 3-D data.
+
+    Raises
+    ------
+    InputError
+        For a file that is not JSON, of another format or version, or whose
+        parameters do not match its robot; the message names the file and key.
+    """
+    text = _read_text(path, "calibration")
+    try:
+        doc = json.loads(text)
+    except json.JSONDecodeError as exc:
+        raise _fail(path, f"not a calibration file: invalid JSON ({exc})") from None
+    if not isinstance(doc, dict) or "format" not in doc:
+        raise _fail(
+            path, "not a calibration file: no 'format' key; write one with armcal identify -o"
+        )
+    if doc["format"] != CALIBRATION_FORMAT:
+        raise _fail(
+            path,
+            f"format {doc['format']!r} is not {CALIBRATION_FORMAT!r}; write the calibration with "
+            "this version of armcal identify -o",
+        )
+    key = "robot"
+    try:
+        noise = None
+        if doc.get("noise") is not None:
+            key = "noise"
+            sigma_q = doc["noise"].get("joint_sigma_deg")
+            noise = NoiseModel(
+                np.array(doc["noise"]["covariance_mm2"], dtype=float),
+                None if sigma_q is None else np.radians(np.array(sigma_q, dtype=float)),
+            )
+        key = "robot"
+        arm = _arm_from_dict(doc["robot"], noise, list(doc.get("fixed", [])))
+        key = "parameters"
+        names = [entry["name"] for entry in doc["parameters"]]
+        if tuple(names) != arm.param_names:
+            raise ValueError(
+                f"parameters {', '.join(names)} do not match the robot's "
+                f"{', '.join(arm.param_names)}"
+            )
+        scale = arm.display_scale
+        params = np.array([float(entry["value"]) for entry in doc["parameters"]]) / scale
+        key = "covariance"
+        if list(doc["covariance"]["names"]) != names:
+            raise ValueError("covariance names do not match the parameters")
+        covariance = np.array(doc["covariance"]["matrix"], dtype=float) / np.outer(scale, scale)
+        if covariance.shape != (arm.n_params, arm.n_params):
+            raise ValueError(f"expected a {arm.n_params} x {arm.n_params} matrix")
+        key = "sigma_mm"
+        sigma = float(doc["sigma_mm"])
+        key = "plane"
+        plane = None if doc.get("plane") is None else Plane.from_dict(doc["plane"])
+    except (KeyError, TypeError, ValueError, InputError) as exc:
+        what = f"missing key {exc}" if isinstance(exc, KeyError) else str(exc)
+        raise _fail(
+            path, f"key '{key}': {what}; write the calibration again with armcal identify -o"
+        ) from None
+    if not (np.all(np.isfinite(params)) and np.all(np.isfinite(covariance))):
+        raise _fail(path, "key 'parameters': values must be finite numbers")
+    if plane is None and arm.base_rotation:
+        raise _fail(path, "key 'plane': a calibration from 3-D data must record its plane")
+    return CalibratedArm(arm, params, covariance, sigma, plane)
+

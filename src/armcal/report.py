@@ -16,6 +16,7 @@ from .doe.model import unit_trace
 from .doe.sizing import TARGETS, PosesNeeded
 from .errors import ArmcalWarning
 from .identification import Calibration
+from .io import CALIBRATION_FORMAT, robot_to_dict
 from .paper import PAPER_DIGIT
 from .reproduction.compute import TABLE_COLUMNS, Reproduction
 from .simulate import MonteCarlo
@@ -38,8 +39,6 @@ __all__ = [
     "to_json",
 ]
 
-
-CALIBRATION_FORMAT = "armcal-calibration/1"
 
 
 def _noise_text(arm: PlanarArm) -> str | None:
@@ -320,12 +319,7 @@ def calibration_to_dict(
     return {
         "format": CALIBRATION_FORMAT,
         "armcal_version": __version__,
-        "robot": {
-            "name": arm.name,
-            "link_lengths_mm": arm.link_lengths.tolist(),
-            "joint_limits_deg": np.degrees(arm.joint_limits).tolist(),
-            "base_offset": arm.base_offset,
-        },
+        "robot": robot_to_dict(arm),
         "method": cal.method,
         "robust": bool(cal.robust),
         "poses": cal.n_poses,
@@ -358,11 +352,14 @@ def calibration_to_dict(
             {
                 "row": int(row),
                 "pose": label,
+                "target": None if cal.target is None else arm.targets[cal.target[i]].label,
                 "dx_mm": float(r[0]),
                 "dy_mm": float(r[1]),
                 "used": bool(u),
             }
-            for row, label, r, u in zip(rows, cal.pose_labels, cal.residuals, used, strict=True)
+            for i, (row, label, r, u) in enumerate(
+                zip(rows, cal.pose_labels, cal.residuals, used, strict=True)
+            )
         ],
         "standardized_residuals": []
         if standardized is None
@@ -383,6 +380,7 @@ def calibration_to_dict(
         ],
         "iterations": cal.iterations,
         "converged": cal.converged,
+        "plane": None if cal.plane is None else cal.plane.to_dict(),
         "warnings": [w.to_dict() for w in (cal.warnings if warnings is None else warnings)],
     }
 
