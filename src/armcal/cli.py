@@ -16,16 +16,19 @@ import time
 from collections.abc import Callable, Sequence
 from functools import partial
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
 from ._version import __version__
 from .arm import PlanarArm
+from .compensate import compensate, cross_validate, validate
 from .criteria import CRITERIA, evaluate_plan
 from .doe import METHODS as DESIGN_METHODS
 from .doe import TARGETS, design, feasible, poses_needed, random_plan
 from .errors import ArmcalError, ArmcalWarning, InputError, NotIdentifiableError
 from .identification import METHODS, Calibration, Method, identify
+from .instrument import identify_3d
 from .io import (
     BUILTIN_ROBOTS,
     DEFAULT_ROBOT,
@@ -33,14 +36,18 @@ from .io import (
     Measurements,
     OutputFolder,
     RobotSpec,
+    arm_for_measurements,
     atomic_write,
     check_outputs,
     format_measurements_csv,
     format_plan_csv,
+    format_program_csv,
     load_robot,
     load_truth,
+    read_calibration,
     read_measurements,
     read_plan,
+    read_program,
     unknown_parameter,
     write_folder,
 )
@@ -49,8 +56,11 @@ from .plausibility import deviation_warning, explain, suspicious
 from .progress import ProgressBar
 from .report import (
     calibration_to_dict,
+    compensation_report,
+    cross_validation_warning,
     design_summary,
     format_calibration,
+    format_cross_validation,
     format_monte_carlo,
     format_quality,
     format_reproduction,
@@ -60,6 +70,8 @@ from .report import (
     reproduction_summary,
     table_csv,
     to_json,
+    validation_report,
+    validation_warnings,
 )
 from .reproduction import TABLE_COLUMNS, reproduce
 from .simulate import monte_carlo, synthesize_measurements
@@ -148,6 +160,19 @@ def _poses(text: str) -> int:
         raise argparse.ArgumentTypeError(f"expected a whole number, got {text!r}") from None
     if value < 1:
         raise argparse.ArgumentTypeError(f"expected at least 1 pose, got {value}")
+    return value
+
+
+def _folds(text: str) -> int:
+    """``--cross-validate K``: a whole number of folds >= 2."""
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(
+            f"expected a whole number of folds, got {text!r}"
+        ) from None
+    if value < 2:
+        raise argparse.ArgumentTypeError(f"needs at least 2 folds, got {value}")
     return value
 
 
@@ -273,6 +298,13 @@ def _explained(path: str, arm: PlanarArm, meas: Measurements) -> InputError | No
     return None if found is None else InputError(f"{path}: {found.message}")
 
 
+def _row_targets(arm: PlanarArm, meas: Measurements) -> np.ndarray | None:
+    """Every row's target index, for an arm with targets (None without)."""
+    if meas.targets is None or not arm.targets:
+        return None
+    return arm.target_index(meas.targets)
+
+
 def _identify_file(
     arm: PlanarArm,
     path: str,
@@ -281,27 +313,36 @@ def _identify_file(
     method: Method,
     robust: bool,
 ) -> Calibration:
-    """Identify from a measurement file; data that look like a unit mistake are an error."""
+    """Identify from a measurement file; data that look like a unit mistake are an error.
+
+    3-D data (a ``z_mm`` column) are fitted with their plane first
+    (:func:`armcal.instrument.identify_3d`).  The unit checks of
+    :mod:`armcal.plausibility` refit the plain 2-D model; they are skipped for
+    data with several targets or in 3-D, whose reach check stays.
+    """
+    plain = meas.z is None and arm.n_target_links == 1 and not arm.targets
+    kwargs: dict[str, Any] = {
+        "method": method,
+        "pose_labels": meas.labels,
+        "rows": meas.rows,
+        "row_sigma": meas.row_sigma,
+        "robust": robust,
+        "target": _row_targets(arm, meas),
+    }
     try:
-        cal = identify(
-            arm,
-            meas.q,
-            meas.xy,
-            method=method,
-            pose_labels=meas.labels,
-            rows=meas.rows,
-            row_sigma=meas.row_sigma,
-            robust=robust,
-        )
+        if meas.z is not None:
+            cal = identify_3d(arm, meas.q, meas.xyz, **kwargs)
+        else:
+            cal = identify(arm, meas.q, meas.xy, **kwargs)
     except NotIdentifiableError as exc:
         # Angles in radians read as degrees put every pose near the stretched arm.
-        unit = _explained(path, arm, meas)
+        unit = _explained(path, arm, meas) if plain else None
         if unit is not None:
             raise unit from None
         raise NotIdentifiableError(f"{path}: {exc}", exc.combinations) from None
     except ArmcalError as exc:
         raise ArmcalError(f"{path}: {exc}") from None
-    if suspicious(cal):
+    if plain and suspicious(cal):
         unit = _explained(path, arm, meas)
         if unit is not None:
             raise unit
@@ -314,10 +355,19 @@ def _print_warnings(warnings: Sequence[ArmcalWarning]) -> None:
         print(f"armcal: warning: {warning.message}", file=sys.stderr)
 
 
+def _measured_arm(args: argparse.Namespace, spec: RobotSpec, meas: Measurements) -> PlanarArm:
+    """The robot's arm as the data need it (targets, 3-D base pose), with --fix and --sigma."""
+    try:
+        structure = arm_for_measurements(spec.arm, meas)
+    except InputError as exc:
+        raise InputError(f"{args.measurements}: {exc}") from None
+    return _model_arm(args, dataclasses.replace(spec, arm=structure))
+
+
 def _identify(args: argparse.Namespace) -> None:
     spec = load_robot(args.robot)
-    arm = _model_arm(args, spec)
-    meas = read_measurements(args.measurements, arm)
+    meas = read_measurements(args.measurements, spec.arm)
+    arm = _measured_arm(args, spec, meas)
     if args.sigma is not None:  # the command line's noise replaces the file's sigma_mm column too
         meas = dataclasses.replace(meas, row_sigma=None)
     cal = _identify_file(arm, args.measurements, meas, method=args.method, robust=args.robust)
@@ -325,11 +375,96 @@ def _identify(args: argparse.Namespace) -> None:
     large = deviation_warning(cal.arm, cal.params)
     if large is not None and all(w.code != large.code for w in warnings):
         warnings.append(large)
+    text = format_calibration(cal)
+    extra: dict = {}
+    if args.cross_validate is not None:
+        xy = meas.xy if cal.plane is None else cal.plane.to_plane(meas.xyz)
+        groups = None if meas.targets is None else np.array(meas.labels)
+        result = cross_validate(
+            arm,
+            meas.q,
+            xy,
+            args.cross_validate,
+            groups=groups,
+            target=cal.target,
+            sigma=args.sigma,
+            row_sigma=meas.row_sigma,
+            rng=args.seed,
+        )
+        summary = result.summary()
+        extra["cross_validation"] = summary
+        text += "\n" + format_cross_validation(summary)
+        warning = cross_validation_warning(summary, meas.q.shape[0])
+        if warning is not None:
+            warnings.append(warning)
     warnings = _unique(warnings)
     document = calibration_to_dict(cal, warnings=warnings)
+    document.update(extra)
     if args.output is not None:
         atomic_write(args.output, to_json(document))
-    _emit(args, document, format_calibration(cal), warnings)
+    _emit(args, document, text, warnings)
+
+
+def _validate(args: argparse.Namespace) -> None:
+    cal = read_calibration(args.calibration)
+    meas = read_measurements(args.measurements, cal.arm)
+    if meas.targets is not None and not cal.arm.targets:
+        raise InputError(
+            f"{args.measurements}: has a target column but the calibration has no targets; "
+            "remove the column"
+        )
+    if cal.arm.targets and meas.targets is None:
+        raise InputError(
+            f"{args.measurements}: the calibration has targets "
+            f"({', '.join(cal.arm.target_labels)}); add a column 'target' naming the target "
+            "of every row"
+        )
+    points = meas.xy if meas.z is None else meas.xyz
+    try:
+        result = validate(
+            cal, meas.q, points, target=_row_targets(cal.arm, meas), row_sigma=meas.row_sigma
+        )
+    except ArmcalError as exc:
+        raise ArmcalError(f"{args.measurements}: {exc}") from None
+    if args.plot is not None:
+        from .plotting import plot_validation, save_figure  # matplotlib only when asked for
+
+        save_figure(plot_validation(cal.arm, meas.q, result), args.plot)
+    document, text = validation_report(cal, result, meas, per_pose=args.per_pose)
+    warnings = [*meas.warnings, *validation_warnings(result)]
+    if args.plot is not None:
+        text += f"\nwrote {args.plot}"
+    _emit(args, document, text, warnings)
+
+
+def _compensate(args: argparse.Namespace) -> None:
+    cal = read_calibration(args.calibration)
+    program = read_program(args.program, cal.arm)
+    arm = cal.arm
+    labels = program.targets
+    if labels is None and args.target is not None:
+        labels = (args.target,) * program.q.shape[0]
+    if labels is not None:
+        if args.target is not None and program.targets is not None:
+            raise ArmcalError("--target: the program has a target column already; give one")
+        if args.target is not None and args.target not in arm.target_labels:
+            raise ArmcalError(
+                f"--target: {args.target!r} is not a target of the calibration "
+                f"({', '.join(arm.target_labels) or 'none'})"
+            )
+    elif arm.n_target_links > 1:
+        raise ArmcalError(
+            f"{args.program}: the calibration has targets {', '.join(arm.target_labels)}; "
+            "add a column 'target' or pass --target LABEL for the tool point of the program"
+        )
+    target = None if labels is None or not arm.targets else arm.target_index(labels)
+    result = compensate(cal, program.q, target=target)
+    atomic_write(
+        args.output, format_program_csv(result.q, result.corrected, program.labels, labels)
+    )
+    document, text, warnings = compensation_report(cal, result, program)
+    text += f"\nwrote {args.output}"
+    _emit(args, document, text, warnings)
 
 
 def _demo(args: argparse.Namespace) -> None:
@@ -599,9 +734,63 @@ def build_parser() -> argparse.ArgumentParser:
         help="robust fit: Huber M-estimator from the least-squares fit, then the studentized "
         "outlier test and a refit without the outliers",
     )
+    sub.add_argument(
+        "--cross-validate",
+        type=_folds,
+        metavar="K",
+        help="K-fold cross-validation: every pose predicted by a calibration without it "
+        "(poses with the same pose label stay together); --seed shuffles the folds",
+    )
     _add_fix(sub)
-    _add_common(sub, output="calibration JSON to write")
+    _add_common(sub, seed=True, output="calibration JSON to write")
     sub.set_defaults(run=_identify, inputs=("robot", "measurements"), outputs=("output",))
+
+    sub = subs.add_parser(
+        "validate",
+        help="positioning error before and after calibration on held-out poses",
+        description="Compare held-out measurements (poses not used to calibrate) with the "
+        "nominal arm and with the calibrated one, both at the calibrated base pose, and with "
+        "the error the calibration predicts (its uncertainty plus the instrument noise). "
+        "3-D data are projected into the calibration's plane. Example: armcal validate "
+        "--calibration cal.json --measurements test.csv --per-pose --plot errors.png",
+        epilog=_OUTPUTS_EPILOG,
+    )
+    sub.add_argument("--calibration", required=True, metavar="JSON", help="from identify -o")
+    sub.add_argument(
+        "--measurements",
+        required=True,
+        metavar="CSV",
+        help="held-out measurements: q1_deg..qn_deg,x_mm,y_mm[,z_mm][,target][,pose][,sigma_mm]",
+    )
+    sub.add_argument("--per-pose", action="store_true", help="a table of every pose's errors")
+    sub.add_argument("--plot", metavar="PNG", help="draw the error vectors on the workspace")
+    sub.add_argument("--json", action="store_true", help="print a JSON document on stdout")
+    sub.set_defaults(run=_validate, inputs=("calibration", "measurements"), outputs=("plot",))
+
+    sub = subs.add_parser(
+        "compensate",
+        help="corrected joint commands of a robot program",
+        description="Correct a program's joint commands so that the calibrated arm puts the "
+        "tool where the nominal program meant, in the robot's own frame (the instrument's pose "
+        "is never corrected); for 3 or more joints the tool's direction too, the remaining "
+        "redundancy going to the smallest joint change. Commands that cannot be corrected "
+        "within the joint limits are kept and listed, never clipped. Example: armcal "
+        "compensate --calibration cal.json --program prog.csv -o corrected.csv",
+        epilog=_OUTPUTS_EPILOG,
+    )
+    sub.add_argument("--calibration", required=True, metavar="JSON", help="from identify -o")
+    sub.add_argument(
+        "--program",
+        required=True,
+        metavar="CSV",
+        help="joint commands q1_deg..qn_deg[,pose][,target]",
+    )
+    sub.add_argument("--target", metavar="LABEL", help="the target the program is for")
+    sub.add_argument("--json", action="store_true", help="print a JSON document on stdout")
+    sub.add_argument(
+        "-o", "--output", required=True, metavar="CSV", help="corrected program to write"
+    )
+    sub.set_defaults(run=_compensate, inputs=("calibration", "program"), outputs=("output",))
 
     sigma_help = (
         "isotropic instrument noise in mm, replacing the robot file's (its encoder noise is "

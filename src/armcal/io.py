@@ -57,17 +57,20 @@ __all__ = [
     "SIGMA_RANGE_MM",
     "Measurements",
     "OutputFolder",
+    "Program",
     "RobotSpec",
     "arm_for_measurements",
     "atomic_write",
     "check_outputs",
     "format_measurements_csv",
     "format_plan_csv",
+    "format_program_csv",
     "load_robot",
     "load_truth",
     "read_calibration",
     "read_measurements",
     "read_plan",
+    "read_program",
     "robot_to_dict",
     "unknown_parameter",
     "write_folder",
@@ -1144,6 +1147,68 @@ def read_plan(path: str | os.PathLike, arm: PlanarArm) -> np.ndarray:
     return np.radians(_read_csv(path, arm, "plan", []).values)
 
 
+@dataclass(frozen=True, eq=False)
+class Program:
+    """A robot program's joint commands read from a CSV file.
+
+    Attributes
+    ----------
+    q : ndarray, shape (m, n)
+        Joint commands in rad, within the joint limits.
+    labels : tuple of str, or None
+        The optional ``pose`` column.
+    targets : tuple of str, or None
+        The optional ``target`` column: the tool point each command is for.
+    """
+
+    q: np.ndarray
+    labels: tuple[str, ...] | None = None
+    targets: tuple[str, ...] | None = None
+
+
+def read_program(path: str | os.PathLike, arm: PlanarArm) -> Program:
+    """Read a program CSV: ``q1_deg..qn_deg``, optional ``pose`` and ``target`` columns.
+
+    Raises
+    ------
+    InputError
+        For a malformed file, a command outside the joint limits or an unknown target.
+    """
+    table = _read_csv(path, arm, "program", [], ["pose", "target"])
+    targets = table.texts.get("target")
+    if targets is not None:
+        if not arm.targets:
+            raise _fail(
+                path,
+                f"has a target column but {arm.name} has no targets; remove the column",
+            )
+        _check_target_labels(path, arm, targets, table.lines)
+    labels = table.texts.get("pose")
+    return Program(
+        np.radians(table.values),
+        None if labels is None else tuple(labels),
+        None if targets is None else tuple(targets),
+    )
+
+
+def format_program_csv(
+    q: np.ndarray,
+    corrected: np.ndarray,
+    labels: Sequence[str] | None = None,
+    targets: Sequence[str] | None = None,
+) -> str:
+    """Program CSV text: ``[pose,]q1_deg..qn_deg[,target],corrected`` (1 or 0 per row)."""
+    head = (["pose"] if labels is not None else []) + _joint_names(q.shape[1])
+    head += (["target"] if targets is not None else []) + ["corrected"]
+    lines = [",".join(head)]
+    for i, row in enumerate(q):
+        fields = [str(labels[i])] if labels is not None else []
+        fields += [_angle_text(v) for v in row]
+        fields += [str(targets[i])] if targets is not None else []
+        lines.append(",".join([*fields, "1" if corrected[i] else "0"]))
+    return "\n".join(lines) + "\n"
+
+
 def _beyond_limits_warning(path, arm: PlanarArm, beyond) -> ArmcalWarning:
     limits_deg = np.degrees(arm.joint_limits)
     shown = [
@@ -1337,14 +1402,24 @@ def format_plan_csv(q: np.ndarray) -> str:
 
 
 def format_measurements_csv(
-    q: np.ndarray, xy: np.ndarray, labels: Sequence[str] | None = None
+    q: np.ndarray,
+    xy: np.ndarray,
+    labels: Sequence[str] | None = None,
+    targets: Sequence[str] | None = None,
 ) -> str:
-    """Measurements CSV text; positions are written with full round-trip precision."""
+    """Measurements CSV text; positions are written with full round-trip precision.
+
+    ``xy`` of shape ``(m, 3)`` writes 3-D points (``z_mm``); ``targets`` adds the
+    ``target`` column.
+    """
     head = ["pose"] if labels is not None else []
-    lines = [",".join(head + _joint_names(q.shape[1]) + ["x_mm", "y_mm"])]
+    head += _joint_names(q.shape[1]) + ["x_mm", "y_mm", "z_mm"][: xy.shape[1]]
+    head += ["target"] if targets is not None else []
+    lines = [",".join(head)]
     for i, (row, point) in enumerate(zip(q, xy, strict=True)):
         fields = [str(labels[i])] if labels is not None else []
         fields += [_angle_text(v) for v in row] + [repr(float(v)) for v in point]
+        fields += [str(targets[i])] if targets is not None else []
         lines.append(",".join(fields))
     return "\n".join(lines) + "\n"
 
@@ -1488,4 +1563,3 @@ def read_calibration(path: str | os.PathLike) -> CalibratedArm:
     if plane is None and arm.base_rotation:
         raise _fail(path, "key 'plane': a calibration from 3-D data must record its plane")
     return CalibratedArm(arm, params, covariance, sigma, plane)
-

@@ -9,6 +9,7 @@ module, so ``import armcal`` does not import matplotlib.
 from __future__ import annotations
 
 import os
+from typing import Any
 
 import numpy as np
 from matplotlib.backends.backend_agg import FigureCanvasAgg
@@ -23,7 +24,15 @@ from matplotlib.ticker import FuncFormatter, MaxNLocator, NullFormatter
 from .arm import Annulus, PlanarArm
 from .io import atomic_write
 
-__all__ = ["plot_accuracy_curves", "plot_plan", "plot_random_plans", "save_figure"]
+__all__ = [
+    "plot_accuracy_curves",
+    "plot_error_map",
+    "plot_plan",
+    "plot_random_plans",
+    "plot_residuals",
+    "plot_validation",
+    "save_figure",
+]
 
 _CMAP = "viridis"
 
@@ -292,6 +301,164 @@ def plot_accuracy_curves(curves: dict[str, np.ndarray], *, title: str | None = N
     engine = fig.get_layout_engine()
     if isinstance(engine, ConstrainedLayoutEngine):
         engine.set(w_pad=0.1)
+    return fig
+
+
+def _error_arrows(ax, positions: np.ndarray, errors: np.ndarray, scale: float, **style) -> None:
+    """Arrows from each position along its error, drawn ``scale`` times longer (mm)."""
+    ax.quiver(
+        positions[:, 0],
+        positions[:, 1],
+        errors[:, 0] * scale,
+        errors[:, 1] * scale,
+        angles="xy",
+        scale_units="xy",
+        scale=1.0,
+        width=0.004,
+        **style,
+    )
+
+
+def _arrow_scale(positions: np.ndarray, errors: np.ndarray) -> float:
+    """A round factor that draws the largest error at about a tenth of the points' spread."""
+    spread = float(np.ptp(positions, axis=0).max()) if positions.shape[0] > 1 else 1.0
+    largest = float(np.max(np.hypot(errors[:, 0], errors[:, 1]), initial=0.0))
+    if largest <= 0 or spread <= 0:
+        return 1.0
+    raw = 0.1 * spread / largest
+    return float(10 ** np.floor(np.log10(raw)))
+
+
+def plot_validation(arm: PlanarArm, q: np.ndarray, result, *, title: str | None = None) -> Figure:
+    """Error vectors on the workspace and every pose's error against its prediction.
+
+    Parameters
+    ----------
+    arm : PlanarArm
+    q : ndarray, shape (m, n)
+        The held-out poses (rad).
+    result : armcal.compensate.Validation
+    title : str, optional
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        Left: the measured positions with their errors before (grey) and after
+        (red) calibration as arrows, magnified by a stated factor.  Right: every
+        pose's error before and after, and the error the calibration predicts.
+    """
+    fig = Figure(figsize=(11, 4.8), layout="constrained")
+    ax_ws, ax_err = fig.subplots(1, 2)
+    positions = result.positions
+    scale = _arrow_scale(positions, result.before)
+    scale_after = _arrow_scale(positions, result.after)
+    ax_ws.plot(positions[:, 0], positions[:, 1], ".", color="0.3", ms=3)
+    _error_arrows(
+        ax_ws, positions, result.before, scale, color="0.55", label=f"nominal model, x{scale:g}"
+    )
+    _error_arrows(
+        ax_ws,
+        positions,
+        result.after,
+        scale_after,
+        color="tab:red",
+        label=f"calibrated, x{scale_after:g}",
+    )
+    ax_ws.set_aspect("equal", adjustable="datalim")
+    ax_ws.set_xlabel("x [mm]")
+    ax_ws.set_ylabel("y [mm]")
+    ax_ws.set_title("position errors (arrows magnified)")
+    ax_ws.legend(fontsize=8, frameon=False, loc="best")
+    index = np.arange(1, positions.shape[0] + 1)
+    ax_err.semilogy(index, result.before_mm, "o", color="0.55", ms=3, label="nominal model")
+    ax_err.semilogy(index, result.after_mm, "o", color="tab:red", ms=3, label="calibrated")
+    ax_err.semilogy(index, result.predicted_mm, "-", color="k", lw=1, label="predicted (RMS)")
+    ax_err.set_xlabel("held-out pose")
+    ax_err.set_ylabel("position error [mm]")
+    ax_err.legend(fontsize=8, frameon=False)
+    fig.suptitle(title if title is not None else f"{arm.name}: validation on held-out poses")
+    return fig
+
+
+def plot_residuals(
+    residuals: np.ndarray,
+    sigma: float,
+    *,
+    used: np.ndarray | None = None,
+    title: str | None = None,
+) -> Figure:
+    """Every pose's residual (Euclidean, mm) of a fit, with the noise level.
+
+    Parameters
+    ----------
+    residuals : ndarray, shape (m, 2)
+        Measured minus fitted positions, mm.
+    sigma : float
+        The instrument noise (1 std per coordinate, mm): a clean pose's
+        residual is below ``sigma sqrt(-2 ln 0.01)`` with probability 0.99.
+    used : ndarray of bool, shape (m,), optional
+        Poses in the fit; the others (outliers left out) are drawn as crosses.
+    """
+    fig = Figure(figsize=(8, 3.6), layout="constrained")
+    ax = fig.subplots()
+    distance = np.hypot(residuals[:, 0], residuals[:, 1])
+    index = np.arange(1, distance.size + 1)
+    kept = np.ones(distance.size, dtype=bool) if used is None else used
+    ax.bar(index[kept], distance[kept], color="tab:blue", width=0.8, label="in the fit")
+    if not kept.all():
+        ax.plot(
+            index[~kept],
+            distance[~kept],
+            "x",
+            color="tab:red",
+            ms=8,
+            mew=2,
+            label="left out (outlier)",
+        )
+    limit = sigma * np.sqrt(-2.0 * np.log(0.01))
+    ax.axhline(limit, color="k", lw=1, ls="--", label="99 % of clean poses below")
+    ax.set_yscale("log")
+    ax.set_xlabel("pose")
+    ax.set_ylabel("residual [mm]")
+    ax.legend(fontsize=8, frameon=False)
+    ax.set_title(title if title is not None else "residual of every pose")
+    return fig
+
+
+def plot_error_map(
+    arm: PlanarArm,
+    q: np.ndarray,
+    before_mm: np.ndarray,
+    after_mm: np.ndarray,
+    positions: np.ndarray,
+    *,
+    title: str | None = None,
+) -> Figure:
+    """The positioning error over the workspace before and after calibration (two panels).
+
+    ``positions`` ``(k, 2)`` are the tips of the poses ``q`` (mm); the errors
+    ``(k,)`` colour them on one shared logarithmic scale.
+    """
+    from matplotlib.colors import LogNorm
+
+    fig = Figure(figsize=(11, 4.8), layout="constrained")
+    axes = fig.subplots(1, 2, sharex=True, sharey=True)
+    low = max(float(np.min(after_mm)), 1e-6)
+    norm = LogNorm(vmin=low, vmax=max(float(np.max(before_mm)), low * 10))
+    image: Any = None
+    for ax, values, name in zip(
+        axes, (before_mm, after_mm), ("nominal model", "calibrated"), strict=True
+    ):
+        image = ax.scatter(
+            positions[:, 0], positions[:, 1], c=values, s=8, cmap="magma_r", norm=norm
+        )
+        ax.plot([0], [0], "k+", ms=10)
+        ax.set_aspect("equal", adjustable="datalim")
+        ax.set_title(f"{name}: RMS {np.sqrt(np.mean(values**2)):.3g} mm")
+        ax.set_xlabel("x [mm]")
+    axes[0].set_ylabel("y [mm]")
+    fig.colorbar(image, ax=list(axes), label="position error [mm]")
+    fig.suptitle(title if title is not None else f"{arm.name}: error over the workspace")
     return fig
 
 

@@ -10,13 +10,15 @@ import numpy as np
 
 from ._version import __version__
 from .arm import PlanarArm
+from .calibrated import CalibratedArm
+from .compensate import Compensation, Validation
 from .criteria import PlanQuality
 from .doe.designer import Design
 from .doe.model import unit_trace
 from .doe.sizing import TARGETS, PosesNeeded
 from .errors import ArmcalWarning
 from .identification import Calibration
-from .io import CALIBRATION_FORMAT, robot_to_dict
+from .io import CALIBRATION_FORMAT, Measurements, Program, robot_to_dict
 from .paper import PAPER_DIGIT
 from .reproduction.compute import TABLE_COLUMNS, Reproduction
 from .simulate import MonteCarlo
@@ -24,8 +26,11 @@ from .simulate import MonteCarlo
 __all__ = [
     "CALIBRATION_FORMAT",
     "calibration_to_dict",
+    "compensation_report",
+    "cross_validation_warning",
     "design_summary",
     "format_calibration",
+    "format_cross_validation",
     "format_monte_carlo",
     "format_quality",
     "format_reproduction",
@@ -37,8 +42,9 @@ __all__ = [
     "reproduction_summary",
     "table_csv",
     "to_json",
+    "validation_report",
+    "validation_warnings",
 ]
-
 
 
 def _noise_text(arm: PlanarArm) -> str | None:
@@ -81,8 +87,22 @@ def model_lines(arm: PlanarArm, *, plan: bool = True) -> list[str]:
     ['fixed (held at nominal, not identified): dl2']
     """
     lines = []
+    if not np.array_equal(arm.joint_map, np.tril(np.ones((arm.n_joints, arm.n_joints)))):
+        rows = "; ".join(" ".join(f"{v:g}" for v in row) for row in arm.joint_map)
+        lines.append(f"joint map: link angles theta = M q with M = [{rows}]")
+    if arm.targets:
+        shown = ", ".join(
+            f"{t.label} ({t.length:g} mm, {math.degrees(t.angle):g} deg)" for t in arm.targets
+        )
+        lines.append(f"targets (nominal last link from joint {arm.n_joints}): {shown}")
     if arm.fixed:
         lines.append(f"fixed (held at nominal, not identified): {', '.join(arm.fixed)}")
+    if arm.base_rotation and arm.rotation_partner in arm.fixed:
+        lines.append(
+            f"base rotation phi0 identified, {arm.rotation_partner} held: a rotation of the base "
+            f"turns every link vector like the joint offsets {_rotation_words(arm)}, so the data "
+            f"cannot tell them apart (--fix phi0 identifies {arm.rotation_partner} instead)"
+        )
     noise = _noise_text(arm)
     if noise is not None:
         line = f"noise model: {noise}; not isotropic iid: weighted least squares"
@@ -93,6 +113,19 @@ def model_lines(arm: PlanarArm, *, plan: bool = True) -> list[str]:
             )
         lines.append(line)
     return lines
+
+
+def _rotation_words(arm: PlanarArm) -> str:
+    """The joint-offset direction a base rotation cannot be told from, e.g. ``-dq1``."""
+    d = arm.rotation_direction
+    k = arm.n_links
+    terms = [
+        f"{'-' if c < 0 else '+'} {'' if abs(abs(c) - 1) < 1e-12 else f'{abs(c):.3g}*'}{name}"
+        for name, c in zip(arm.param_names[k : 2 * k], -d[k : 2 * k], strict=True)
+        if abs(c) > 1e-12
+    ]
+    text = " ".join(terms)
+    return text[2:] if text.startswith("+ ") else text
 
 
 def model_to_dict(arm: PlanarArm) -> dict:
@@ -279,6 +312,19 @@ def format_calibration(cal: Calibration, *, truth: np.ndarray | None = None) -> 
     if strong:
         lines.append("strongly correlated (|r| > 0.9): " + ", ".join(strong))
     lines += _outlier_lines(cal)
+    if cal.plane is not None:
+        plane = cal.plane
+        offsets = ", ".join(
+            f"{label or 'all'} {d:+.4g}"
+            for label, d in zip(plane.labels or ("",), plane.offsets, strict=True)
+        )
+        normal = ", ".join(f"{v:.4f}" for v in plane.normal)
+        lines += [
+            "",
+            f"3-D data: plane of motion fitted with normal ({normal}) in the instrument frame; "
+            f"out of plane RMS {plane.rms_mm:.4g} mm, max {plane.max_mm:.4g} mm; target "
+            f"planes at {offsets} mm; x0, y0, phi0 are the base pose in the plane's axes",
+        ]
     return "\n".join(lines)
 
 
@@ -781,3 +827,166 @@ def poses_needed_summary(
         *model_lines(arm),
     ]
     return document, lines
+
+
+# --------------------------------------------------------------------------- validation
+
+
+def format_cross_validation(summary: dict) -> str:
+    """One line: the K-fold prediction error against what the calibrations predict."""
+    return (
+        f"cross-validation ({summary['folds']} folds): prediction error RMS "
+        f"{summary['rms_mm']:.4g} mm (max {summary['max_mm']:.4g} mm); predicted "
+        f"{summary['predicted_rms_mm']:.4g} mm"
+    )
+
+
+def _too_large(measured: float, predicted: float, count: int) -> bool:
+    """Whether an RMS over ``count`` points is above its prediction beyond chance.
+
+    The mean square of ``2 count`` coordinates has relative std ``1/sqrt(count)``
+    (chi-square), so the RMS about ``1/(2 sqrt(count))``: 6 of them, and at least 20 %.
+    """
+    return measured > predicted * (1.0 + max(0.2, 3.0 / np.sqrt(max(count, 1))))
+
+
+def cross_validation_warning(summary: dict, count: int) -> ArmcalWarning | None:
+    """``cross-validation`` when poses are predicted worse than the calibration says."""
+    if not _too_large(summary["rms_mm"], summary["predicted_rms_mm"], count):
+        return None
+    return ArmcalWarning(
+        "cross-validation",
+        f"held-out poses are predicted with RMS {summary['rms_mm']:.3g} mm, more than the "
+        f"{summary['predicted_rms_mm']:.3g} mm the calibrations predict: the model misses an "
+        "effect (compliance, a wrong joint map) or some poses are outliers (try --robust)",
+    )
+
+
+def validation_warnings(result: Validation) -> list[ArmcalWarning]:
+    """``validation-error`` when the calibrated error exceeds its prediction beyond chance."""
+    s = result.summary()
+    warnings = []
+    count = result.after.shape[0]
+    if _too_large(s["rms_after_mm"], s["predicted_rms_after_mm"], count):
+        warnings.append(
+            ArmcalWarning(
+                "validation-error",
+                f"the calibrated model misses the held-out poses by RMS {s['rms_after_mm']:.3g} "
+                f"mm, more than the {s['predicted_rms_after_mm']:.3g} mm it predicts (noise and "
+                "its uncertainty): the model misses an effect, the poses lie outside the "
+                "calibrated range, the arm changed, or the measurements belong to another setup",
+            )
+        )
+    if s["rms_after_mm"] > s["rms_before_mm"]:
+        warnings.append(
+            ArmcalWarning(
+                "calibration-worse",
+                f"the calibrated model is worse than the nominal one on these poses "
+                f"({s['rms_after_mm']:.3g} against {s['rms_before_mm']:.3g} mm RMS): check that "
+                "the calibration and the measurements are of the same robot and instrument setup",
+            )
+        )
+    return warnings
+
+
+def validation_report(
+    cal: CalibratedArm, result: Validation, meas: Measurements, *, per_pose: bool = False
+) -> tuple[dict, str]:
+    """The ``validate`` document and text: errors before and after, predicted, per pose."""
+    s = result.summary()
+    m = result.after.shape[0]
+    lines = [
+        f"validation of {cal.arm.name} on {m} held-out poses"
+        + (" (3-D, projected into the calibration's plane)" if cal.plane is not None else ""),
+        "",
+        f"{'position error (mm)':<24}{'RMS':>10}{'95 %':>10}{'max':>10}",
+        f"{'nominal model':<24}{s['rms_before_mm']:>10.4g}{s['p95_before_mm']:>10.4g}"
+        f"{s['max_before_mm']:>10.4g}",
+        f"{'calibrated model':<24}{s['rms_after_mm']:>10.4g}{s['p95_after_mm']:>10.4g}"
+        f"{s['max_after_mm']:>10.4g}",
+        f"{'predicted (calibrated)':<24}{s['predicted_rms_after_mm']:>10.4g}",
+        "",
+        f"predicted = the noise of a measurement and the calibration's own uncertainty "
+        f"({s['model_rms_mm']:.3g} mm RMS at these poses)",
+    ]
+    document: dict = {"poses": m, **s}
+    if result.out_of_plane_mm is not None:
+        oop = result.out_of_plane_mm
+        document["out_of_plane_rms_mm"] = float(np.sqrt(np.mean(oop**2)))
+        document["out_of_plane_max_mm"] = float(np.max(np.abs(oop)))
+        lines.append(
+            f"out of the calibration's plane: RMS {document['out_of_plane_rms_mm']:.3g} mm, "
+            f"max {document['out_of_plane_max_mm']:.3g} mm"
+        )
+    if per_pose:
+        targets = meas.targets
+        lines += [
+            "",
+            f"{'row':>5}  {'pose':<8}{'target':<8}{'before mm':>11}{'after mm':>10}"
+            f"{'predicted':>11}",
+        ]
+        rows = []
+        for i in range(m):
+            target = "" if targets is None else targets[i]
+            rows.append(
+                {
+                    "row": int(meas.rows[i]),
+                    "pose": meas.labels[i],
+                    "target": None if targets is None else target,
+                    "before_mm": float(result.before_mm[i]),
+                    "after_mm": float(result.after_mm[i]),
+                    "predicted_mm": float(result.predicted_mm[i]),
+                }
+            )
+            lines.append(
+                f"{meas.rows[i]:>5}  {meas.labels[i]:<8}{target:<8}"
+                f"{result.before_mm[i]:>11.4g}{result.after_mm[i]:>10.4g}"
+                f"{result.predicted_mm[i]:>11.4g}"
+            )
+        document["per_pose"] = rows
+    return document, "\n".join(lines)
+
+
+def compensation_report(
+    cal: CalibratedArm, result: Compensation, program: Program
+) -> tuple[dict, str, list[ArmcalWarning]]:
+    """The ``compensate`` document, text and warnings (one for the uncorrectable poses)."""
+    s = result.summary()
+    m = result.q.shape[0]
+    bad = result.uncorrectable
+    lines = [
+        f"compensated {m - bad.size} of {m} poses for {cal.arm.name} (robot frame; the "
+        "instrument's pose is not corrected)",
+        f"predicted position error: RMS {s['rms_before_mm']:.4g} mm before, "
+        f"{s['rms_after_mm']:.4g} mm after (the calibration's uncertainty)",
+    ]
+    if s["orientation_rms_before_deg"] is not None:
+        lines.append(
+            f"predicted tool orientation error: RMS {s['orientation_rms_before_deg']:.4g} deg "
+            f"before, {s['orientation_rms_after_deg']:.4g} deg after"
+        )
+    change = np.degrees(np.abs(result.q - program.q))
+    lines.append(f"largest joint change: {float(np.max(change, initial=0.0)):.4g} deg")
+    labels = program.labels or tuple(str(i + 1) for i in range(m))
+    uncorrectable = [
+        {"row": int(i) + 1, "pose": labels[i], "reason": result.reasons[i]} for i in bad
+    ]
+    warnings = []
+    if bad.size:
+        shown = "; ".join(f"row {u['row']}: {u['reason']}" for u in uncorrectable[:5])
+        more = f" and {bad.size - 5} more" if bad.size > 5 else ""
+        warnings.append(
+            ArmcalWarning(
+                "uncorrectable",
+                f"{bad.size} of {m} poses cannot be corrected and keep their commands "
+                f"(corrected = 0 in the output): {shown}{more}",
+            )
+        )
+    document = {
+        "poses": m,
+        **s,
+        "corrected": int(m - bad.size),
+        "uncorrectable": uncorrectable,
+        "largest_joint_change_deg": float(np.max(change, initial=0.0)),
+    }
+    return document, "\n".join(lines), warnings
