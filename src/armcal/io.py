@@ -1488,4 +1488,3 @@ def read_calibration(path: str | os.PathLike) -> CalibratedArm:
     if plane is None and arm.base_rotation:
         raise _fail(path, "key 'plane': a calibration from 3-D data must record its plane")
     return CalibratedArm(arm, params, covariance, sigma, plane)
-

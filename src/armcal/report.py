@@ -40,7 +40,6 @@ __all__ = [
 ]
 
 
-
 def _noise_text(arm: PlanarArm) -> str | None:
     """The noise model in words when it is not isotropic iid (None when it is or is unknown)."""
     noise = arm.noise
