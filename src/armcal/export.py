@@ -52,6 +52,7 @@ from __future__ import annotations
 import json
 import math
 import re
+import textwrap
 from xml.sax.saxutils import quoteattr
 
 import numpy as np
@@ -245,8 +246,19 @@ def _base_pose_text(cal: CalibratedArm) -> str | None:
     return ", ".join(parts) if parts else None
 
 
+def _pack(items: list[str], width: int = 90) -> list[str]:
+    """``items`` joined by ``", "`` into lines of at most ``width`` characters (items whole)."""
+    lines: list[str] = []
+    for item in items:
+        if lines and len(lines[-1]) + 2 + len(item) <= width:
+            lines[-1] += ", " + item
+        else:
+            lines.append(item)
+    return lines
+
+
 def _deviations_text(cal: CalibratedArm) -> list[str]:
-    """``name = value unit`` of every robot parameter, four to a line, for a comment."""
+    """``name = value unit`` of every robot parameter, in lines for a comment."""
     arm = cal.arm
     shown = [
         f"{name} = {_num(value * scale)} {unit}"
@@ -260,7 +272,7 @@ def _deviations_text(cal: CalibratedArm) -> list[str]:
         )
         if robot
     ]
-    return [", ".join(shown[i : i + 4]) for i in range(0, len(shown), 4)]
+    return _pack(shown)
 
 
 def robot_toml(cal: CalibratedArm) -> str:
@@ -317,7 +329,8 @@ def robot_toml(cal: CalibratedArm) -> str:
     if base_pose is not None:
         lines += [
             "# Base pose in the instrument frame during calibration (the instrument's, not",
-            f"# part of the robot): {base_pose}",
+            "# part of the robot):",
+            *(f"#   {line}" for line in _pack(base_pose.split(", "))),
         ]
     if arm.targets:
         lines.append(
@@ -511,7 +524,9 @@ def urdf(cal: CalibratedArm) -> str:
         "effort and velocity limits are placeholders (0): armcal identifies geometry only."
     )
     lines = ['<?xml version="1.0"?>', "<!--"]
-    lines += [f"  {_xml_comment(_one_line(text))}" for text in header]
+    for text in header:
+        wrapped = textwrap.wrap(_one_line(text), width=92, break_on_hyphens=False)
+        lines += [f"  {_xml_comment(line)}" for line in wrapped]
     lines += ["-->", f"<robot name={quoteattr(folded.name)}>", '  <link name="base_link"/>']
     parent = "base_link"
     for j in range(n):
