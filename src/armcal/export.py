@@ -140,7 +140,9 @@ def folded_arm(cal: CalibratedArm) -> PlanarArm:
         turn = arm.joint_map[n - 1, n - 1]
         targets = tuple(
             Target(
-                t.label, float(lengths[n - 1 + i]), t.angle + turn * (dq[n - 1 + i] - dq[n - 1])
+                t.label,
+                float(lengths[n - 1 + i]),
+                float(t.angle + turn * (dq[n - 1 + i] - dq[n - 1])),
             )
             for i, t in enumerate(arm.targets)
         )
