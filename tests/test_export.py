@@ -467,3 +467,20 @@ def test_bad_calibration_file_exits_2_with_one_line(tmp_path):
     assert done.returncode == 2
     assert done.stderr.count("\n") == 1 and done.stderr.startswith("armcal: error: cal.json")
     assert "Traceback" not in done.stderr and not (tmp_path / "out.toml").exists()
+
+
+def test_robot_file_quotes_names_and_labels_that_need_it(tmp_path):
+    arm = PlanarArm(
+        [200.0, 100.0],
+        name='shop "A"\\arm\x7f',
+        targets=[Target("nest.1", 100.0), Target("ü-2", 80.0, 0.2)],
+    )
+    exported = _exported_arm(_cal(arm, np.zeros(arm.n_params)), tmp_path)
+    assert exported.name == arm.name + "-calibrated"
+    assert exported.target_labels == ("nest.1", "ü-2")
+    root = ET.fromstring(urdf(_cal(arm, np.zeros(arm.n_params))))
+    assert root.get("name") == 'shop "A"\\arm_-calibrated'  # control characters become _
+    assert [link.get("name") for link in root.findall("link")][-2:] == [
+        "target_nest.1",
+        "target_ü-2",
+    ]

@@ -200,8 +200,9 @@ def _nums(values: ArrayLike) -> str:
 
 
 def _toml_string(text: str) -> str:
-    # A JSON string is a TOML basic string: the same escapes, \uXXXX for control characters.
-    return json.dumps(text, ensure_ascii=False)
+    # A JSON string is a TOML basic string: the same escapes, \uXXXX for control characters
+    # (TOML also refuses a raw DEL, which JSON leaves as it is).
+    return json.dumps(text, ensure_ascii=False).replace("\x7f", "\\u007f")
 
 
 def _toml_key(key: str) -> str:
@@ -209,8 +210,8 @@ def _toml_key(key: str) -> str:
 
 
 def _one_line(text: str) -> str:
-    """``text`` safe inside a one-line comment."""
-    return " ".join(text.split())
+    """``text`` safe inside a one-line comment: no line breaks or other control characters."""
+    return " ".join("".join(c if c.isprintable() else " " for c in text).split())
 
 
 def _region_toml(region: Annulus | Box) -> str:
@@ -440,6 +441,11 @@ def _urdf_limits(arm: PlanarArm) -> np.ndarray:
     return np.column_stack([np.minimum(lo, hi).sum(axis=1), np.maximum(lo, hi).sum(axis=1)])
 
 
+def _xml_name(text: str) -> str:
+    """``text`` for an XML attribute: control characters (most invalid in XML 1.0) as ``_``."""
+    return "".join(c if c.isprintable() else "_" for c in text)
+
+
 def _xml_comment(text: str) -> str:
     """``text`` safe inside an XML comment (no ``--``, no trailing ``-``)."""
     while "--" in text:
@@ -529,7 +535,8 @@ def urdf(cal: CalibratedArm) -> str:
     for text in header:
         wrapped = textwrap.wrap(_one_line(text), width=92, break_on_hyphens=False)
         lines += [f"  {_xml_comment(line)}" for line in wrapped]
-    lines += ["-->", f"<robot name={quoteattr(folded.name)}>", '  <link name="base_link"/>']
+    robot = f"<robot name={quoteattr(_xml_name(folded.name))}>"
+    lines += ["-->", robot, '  <link name="base_link"/>']
     parent = "base_link"
     for j in range(n):
         x = 0.0 if j == 0 else lengths_m[j - 1]
@@ -546,7 +553,7 @@ def urdf(cal: CalibratedArm) -> str:
         ]
         parent = f"link{j + 1}"
     if folded.targets:
-        frames = [(f"target_{t.label}", t.length, t.angle) for t in folded.targets]
+        frames = [(f"target_{_xml_name(t.label)}", t.length, t.angle) for t in folded.targets]
     else:
         frames = [("tool0", float(folded.link_lengths[-1]), 0.0)]
     for frame, length_mm, angle in frames:
