@@ -114,7 +114,7 @@ def cal(request) -> CalibratedArm:
 
 def _exported_arm(cal: CalibratedArm, tmp_path) -> PlanarArm:
     path = tmp_path / "calibrated.toml"
-    path.write_text(robot_toml(cal))
+    path.write_text(robot_toml(cal), encoding="utf-8")
     spec = load_robot(path)
     assert spec.warnings == ()
     return spec.arm
@@ -237,7 +237,7 @@ def _joint_values(arm: PlanarArm, q: np.ndarray) -> np.ndarray:
     """The documented convention: the readings when D M is diagonal +-1, else D M q."""
     relative = _relative_map(arm)
     signs = np.diag(relative)
-    if np.allclose(relative, np.diag(signs), rtol=0, atol=0) and np.all(np.abs(signs) == 1):
+    if np.array_equal(relative, np.diag(signs)) and np.all(np.abs(signs) == 1):
         return q
     return q @ relative.T
 
