@@ -12,6 +12,7 @@ import argparse
 import dataclasses
 import math
 import sys
+import textwrap
 import time
 from collections.abc import Callable, Sequence
 from functools import partial
@@ -27,6 +28,7 @@ from .criteria import CRITERIA, evaluate_plan
 from .doe import METHODS as DESIGN_METHODS
 from .doe import TARGETS, design, feasible, poses_needed, random_plan
 from .errors import ArmcalError, ArmcalWarning, InputError, NotIdentifiableError
+from .export import robot_toml, urdf, urdf_joints_are_readings
 from .identification import METHODS, Calibration, Method, identify
 from .instrument import identify_3d
 from .io import (
@@ -654,6 +656,34 @@ def _reproduce(args: argparse.Namespace) -> None:
     _emit(args, document, "\n".join(lines))
 
 
+def _export(args: argparse.Namespace) -> None:
+    if args.robot_toml is None and args.urdf is None:
+        raise ArmcalError(
+            "export needs an output: give --robot-toml FILE, --urdf FILE or both "
+            "(see 'armcal export --help')"
+        )
+    cal = read_calibration(args.calibration)
+    texts = {}  # every text made before any file is written
+    if args.robot_toml is not None:
+        texts[args.robot_toml] = robot_toml(cal)
+    warnings = []
+    if args.urdf is not None:
+        texts[args.urdf] = urdf(cal)
+        if not urdf_joints_are_readings(cal.arm):
+            warnings.append(
+                ArmcalWarning(
+                    "urdf-joint-values",
+                    f"{args.urdf}: {cal.arm.name} has coupled axes (joint_map): the URDF's joint "
+                    "values are the relative link angles D M q, not the controller's readings; "
+                    "convert them before publishing joint_states (see the file's comment)",
+                )
+            )
+    for path, text in texts.items():
+        atomic_write(path, text)
+    document = {"robot_toml": args.robot_toml, "urdf": args.urdf}
+    _emit(args, document, "\n".join(f"wrote {path}" for path in texts), warnings)
+
+
 # --------------------------------------------------------------------------- parser
 
 
@@ -900,6 +930,31 @@ def build_parser() -> argparse.ArgumentParser:
     sub.set_defaults(
         run=_demo, inputs=("robot", "truth"), outputs=("output",), folder_files=_DEMO_FILES
     )
+
+    sub = subs.add_parser(
+        "export",
+        help="the calibrated arm as a robot file every command accepts, or as URDF",
+        description=textwrap.fill(
+            "Write the arm of a calibration file (armcal identify -o) with its deviations "
+            "folded into the nominal values, in the robot's own frame: as a robot TOML file "
+            "that every armcal command accepts (link lengths l + dl, joint_offsets_deg, "
+            "targets' lengths and angles), and/or as a URDF for ROS (each joint's zero offset "
+            "in its origin's yaw, lengths in m). The base pose in the instrument frame "
+            "(x0, y0, phi0) is the instrument's and appears only as a comment.  Give "
+            "--robot-toml, --urdf or both.",
+            width=79,
+        ),
+        epilog="example:\n  armcal export --calibration cal.json --robot-toml my-arm.toml "
+        "--urdf my-arm.urdf\n\n" + textwrap.fill(_OUTPUTS_EPILOG, width=79),
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
+    sub.add_argument(
+        "--calibration", required=True, metavar="JSON", help="calibration file (identify -o)"
+    )
+    sub.add_argument("--robot-toml", metavar="PATH", help="robot TOML file to write")
+    sub.add_argument("--urdf", metavar="PATH", help="URDF file to write")
+    sub.add_argument("--json", action="store_true", help="print a JSON document on stdout")
+    sub.set_defaults(run=_export, inputs=("calibration",), outputs=("robot_toml", "urdf"))
     return parser
 
 
