@@ -51,12 +51,24 @@ def test_identify_json_on_stdout_matches_file(tmp_path, capsys):
     capsys.readouterr()
     meas = tmp_path / "measurements.csv"
     assert (
-        main(["identify", "--measurements", str(meas), "--json", "--method", "gauss-newton"]) == 0
+        main(
+            [
+                "identify",
+                "--measurements",
+                str(meas),
+                "--json",
+                "--method",
+                "gauss-newton",
+                "--robust",
+            ]
+        )
+        == 0
     )
     document = json.loads(capsys.readouterr().out)
     saved = json.loads((tmp_path / "calibration.json").read_text())
     assert document["method"] == "gauss-newton" and document["converged"] is True
-    # Estimated sigma here (the built-in robot gives none), given sigma in the demo.
+    # Estimated sigma here (the built-in robot gives none), given sigma in the demo; both
+    # robust fits leave out the demo's bumped measurement.
     assert document["sigma_source"] == "estimated" and saved["sigma_source"] == "given"
     assert_allclose(
         [p["value"] for p in document["parameters"]],

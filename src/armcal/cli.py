@@ -25,6 +25,7 @@ from ._version import __version__
 from .arm import PlanarArm
 from .compensate import compensate, cross_validate, validate
 from .criteria import CRITERIA, evaluate_plan
+from .demo import DEMO_FILES, run_demo
 from .doe import METHODS as DESIGN_METHODS
 from .doe import TARGETS, design, feasible, poses_needed, random_plan
 from .errors import ArmcalError, ArmcalWarning, InputError, NotIdentifiableError
@@ -91,8 +92,7 @@ class _Parser(argparse.ArgumentParser):
         raise ArmcalError(f"{message} (see '{self.prog} --help')")
 
 
-#: Files written by ``demo -o DIR`` and ``reproduce -o DIR``, checked before any work.
-_DEMO_FILES = ("plan.csv", "measurements.csv", "calibration.json")
+#: Files written by ``reproduce -o DIR``, checked before any work.
 _REPRODUCE_FILES = (
     *(f"{name}.csv" for name in TABLE_COLUMNS),
     "figure1.png",
@@ -276,8 +276,15 @@ def _synthesize(args: argparse.Namespace) -> None:
     q = read_plan(args.plan, spec.arm)
     truth = _truth(args, spec)
     sigma = _sigma_for_simulation(args, spec)
-    xy = synthesize_measurements(spec.arm, q, truth, sigma, rng=args.seed)
-    text = format_measurements_csv(q, xy)
+    labels = targets = target = None
+    if spec.arm.targets:  # every target measured at every pose, one row each
+        count = len(spec.arm.targets)
+        labels = [str(i // count + 1) for i in range(q.shape[0] * count)]
+        target = np.tile(np.arange(count), q.shape[0])
+        targets = [spec.arm.targets[t].label for t in target]
+        q = np.repeat(q, count, axis=0)
+    xy = synthesize_measurements(spec.arm, q, truth, sigma, rng=args.seed, target=target)
+    text = format_measurements_csv(q, xy, labels, targets)
     if args.output is None:
         _print_warnings(_unique(spec.warnings))
         sys.stdout.write(text)
@@ -471,27 +478,19 @@ def _compensate(args: argparse.Namespace) -> None:
 
 def _demo(args: argparse.Namespace) -> None:
     spec = load_robot(args.robot)
-    arm = spec.arm
     truth = _truth(args, spec)
-    sigma = _sigma_for_simulation(args, spec)
-    rng = np.random.default_rng(args.seed)
-    q = design(arm, args.poses, rng=rng).q
-    xy = synthesize_measurements(arm, q, truth, sigma, rng=rng)
-    cal = identify(arm, q, xy, sigma=sigma)
-    shown = cal.sigma_mm
-    document = calibration_to_dict(cal)
-    lines = [
-        f"armcal demo on {arm.name}: {args.poses}-pose optimal plan (armcal design), "
-        f"virtual robot with the paper's deviations, noise sigma {shown:g} mm, seed {args.seed}",
-        "",
-        format_calibration(cal, truth=truth),
-    ]
-    warnings = _unique([*spec.warnings, *cal.warnings])
-    document["warnings"] = [w.to_dict() for w in warnings]
+    sigma = _design_sigma(spec.arm) if args.sigma is None else args.sigma
+    result = run_demo(spec.arm, truth, poses=args.poses, sigma=sigma, seed=args.seed)
+    lines = [result.text]
     if args.output is not None:
-        texts = (format_plan_csv(q), format_measurements_csv(q, xy), to_json(document))
-        folder = write_folder(args.output, dict(zip(_DEMO_FILES, texts, strict=True)))
-        lines += ["", f"wrote {', '.join(_DEMO_FILES)} to {folder}/"]
+        folder = write_folder(args.output, result.files)
+        lines += [
+            "",
+            f"wrote {len(result.files)} files to {folder}/: report.md, figures, "
+            "plan, measurements, calibration, program, robot file, URDF",
+        ]
+    warnings = _unique([*spec.warnings, *result.warnings])
+    document = dict(result.document)
     _emit(args, document, "\n".join(lines), warnings)
 
 
@@ -921,14 +920,20 @@ def build_parser() -> argparse.ArgumentParser:
     sub.set_defaults(run=_reproduce, outputs=("output",), folder_files=_REPRODUCE_FILES)
 
     sub = subs.add_parser(
-        "demo", help="the whole workflow on a virtual robot", epilog=_OUTPUTS_EPILOG
+        "demo",
+        help="the whole workflow on a virtual robot",
+        description="Design a certified plan, measure a virtual arm with noise and one "
+        "bumped measurement, identify robustly, validate on fresh poses, compensate a "
+        "program and export the calibrated arm, then write report.md with its figures. "
+        "Example: armcal demo -o demo-out",
+        epilog=_OUTPUTS_EPILOG,
     )
     sub.add_argument("--poses", type=_poses, default=20, help="number of poses (default 20)")
     sub.add_argument("--truth", metavar="TRUTH_TOML", help="deviations (default: the built-in's)")
     sub.add_argument("--sigma", type=_sigma, metavar="MM", help="noise std in mm")
-    _add_common(sub, seed=True, output="folder for plan, measurements and calibration")
+    _add_common(sub, seed=True, output="folder for the report, figures and files")
     sub.set_defaults(
-        run=_demo, inputs=("robot", "truth"), outputs=("output",), folder_files=_DEMO_FILES
+        run=_demo, inputs=("robot", "truth"), outputs=("output",), folder_files=DEMO_FILES
     )
 
     sub = subs.add_parser(

@@ -139,7 +139,9 @@ def _draw_joint_space(ax, arm: PlanarArm, q: np.ndarray, norm: Normalize) -> Non
     ax.grid(True, axis="y", lw=0.4, alpha=0.4)
 
 
-def plot_plan(arm: PlanarArm, q: np.ndarray, *, title: str | None = None) -> Figure:
+def plot_plan(
+    arm: PlanarArm, q: np.ndarray, *, title: str | None = None, numbers: bool = False
+) -> Figure:
     """Draw a calibration plan in the workspace and in joint space.
 
     Parameters
@@ -150,6 +152,8 @@ def plot_plan(arm: PlanarArm, q: np.ndarray, *, title: str | None = None) -> Fig
         Commanded joint angles in rad, one row per pose.
     title : str, optional
         Figure title; default ``"<arm.name>: <m> poses"``.
+    numbers : bool
+        Write every pose's number (1-based, the plan's order) at its tip.
 
     Returns
     -------
@@ -178,7 +182,11 @@ def plot_plan(arm: PlanarArm, q: np.ndarray, *, title: str | None = None) -> Fig
     fig = Figure(figsize=(11, 5), layout="constrained")
     ax_ws, ax_js = fig.subplots(1, 2, width_ratios=[1.0, 1.0])
     norm = Normalize(vmin=0, vmax=max(m - 1, 1))
-    _draw_workspace(ax_ws, arm, _joint_positions(arm, q), norm)
+    joints = _joint_positions(arm, q)
+    _draw_workspace(ax_ws, arm, joints, norm)
+    if numbers:
+        for i, tip in enumerate(joints[:, -1]):
+            ax_ws.annotate(str(i + 1), tip, xytext=(3, 3), textcoords="offset points", fontsize=7)
     _draw_joint_space(ax_js, arm, q, norm)
     cmap = ax_ws.collections[0].get_cmap()
     handles = [
@@ -418,6 +426,7 @@ def plot_residuals(
     limit = sigma * np.sqrt(-2.0 * np.log(0.01))
     ax.axhline(limit, color="k", lw=1, ls="--", label="99 % of clean poses below")
     ax.set_yscale("log")
+    ax.xaxis.set_major_locator(MaxNLocator(integer=True))
     ax.set_xlabel("pose")
     ax.set_ylabel("residual [mm]")
     ax.legend(fontsize=8, frameon=False)
@@ -442,7 +451,7 @@ def plot_error_map(
     from matplotlib.colors import LogNorm
 
     fig = Figure(figsize=(11, 4.8), layout="constrained")
-    axes = fig.subplots(1, 2, sharex=True, sharey=True)
+    axes = fig.subplots(1, 2)
     low = max(float(np.min(after_mm)), 1e-6)
     norm = LogNorm(vmin=low, vmax=max(float(np.max(before_mm)), low * 10))
     image: Any = None

@@ -784,6 +784,7 @@ def synthesize_measurements(
     rng: np.random.Generator | int | None = None,
     trials: int | None = None,
     row_sigma: np.ndarray | None = None,
+    target: np.ndarray | None = None,
 ) -> np.ndarray:
     """Measurements of a virtual robot: positions at ``truth`` drawn from the noise model.
 
@@ -812,6 +813,8 @@ def synthesize_measurements(
         Per-row instrument noise (mm), for instruments that report each point's
         uncertainty: pose ``i`` gets ``s_i^2 I`` in place of the instrument
         covariance (and of ``sigma``).
+    target : ndarray of int, shape (m,), optional
+        The target every row measures, on an arm with several.
 
     Returns
     -------
@@ -857,7 +860,7 @@ def synthesize_measurements(
     joint_sigma = None if arm.noise is None else arm.noise.joint_sigma
     sets = () if trials is None else (int(trials),)
     if joint_sigma is None:
-        clean = forward_kinematics(arm, plan, truth)
+        clean = forward_kinematics(arm, plan, truth, target=target)
         noisy = rng.standard_normal((*sets, m, 2))
         _scale_instrument(noisy, factor)  # in place: the noise is a Monte Carlo's largest array
         noisy += clean
@@ -866,7 +869,7 @@ def synthesize_measurements(
     actual = draws[..., 2:]  # where the joints really were: q + dq
     actual *= np.broadcast_to(joint_sigma, (n,))
     actual += plan
-    positions = forward_kinematics(arm, actual, truth)
+    positions = forward_kinematics(arm, actual, truth, target=target)
     instrument = draws[..., :2]
     _scale_instrument(instrument, factor)
     positions += instrument
