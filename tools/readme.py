@@ -33,8 +33,9 @@ ROOT = Path(__file__).resolve().parent.parent
 README = ROOT / "README.md"
 FENCE = re.compile(r"^```(\w*)\n(.*?)^```\n", re.M | re.S)
 SECONDS = re.compile(r"\b\d+(?:\.\d+)? s\b")
-#: Files the README's commands write that are kept in the repository (as pictures).
-KEPT_FIGURES = ("plan.png",)
+#: Files the README's commands write that are kept in the repository (as pictures),
+#: by their path in the work folder; they are kept under their own name in docs/img.
+KEPT_FIGURES = ("plan.png", "demo-out/error_map.png")
 FIGURE_DIR = ROOT / "docs" / "img"
 
 
@@ -109,7 +110,7 @@ def main(argv: list[str] | None = None) -> int:
     try:
         if args.check:
             old, new = SECONDS.sub("<t> s", text), SECONDS.sub("<t> s", fresh)
-            missing = [f for f in KEPT_FIGURES if not (FIGURE_DIR / f).is_file()]
+            missing = [f for f in KEPT_FIGURES if not (FIGURE_DIR / Path(f).name).is_file()]
             if old != new or missing:
                 diff = difflib.unified_diff(
                     old.splitlines(True), new.splitlines(True), "README.md", "fresh run"
@@ -125,7 +126,7 @@ def main(argv: list[str] | None = None) -> int:
         FIGURE_DIR.mkdir(parents=True, exist_ok=True)
         for name in KEPT_FIGURES:
             if (work / name).is_file():
-                shutil.copyfile(work / name, FIGURE_DIR / name)
+                shutil.copyfile(work / name, FIGURE_DIR / Path(name).name)
         print(f"rewrote {README.name} from a fresh run of its examples")
         return 0
     finally:
