@@ -7,6 +7,11 @@ The public API, by concern (each module's docstring says more):
   identifiability, predicted accuracy, :func:`evaluate_plan`;
 * :mod:`armcal.doe` -- plans: :func:`design`, :func:`certify`, :func:`poses_needed`;
 * :mod:`armcal.identification` -- :func:`identify` and its :class:`Calibration`;
+* :mod:`armcal.instrument` -- 3-D instrument data: :func:`identify_3d` in the fitted
+  :class:`~armcal.plane.Plane`;
+* :mod:`armcal.compensate` -- :func:`validate` on held-out poses, :func:`cross_validate`,
+  :func:`compensate` a program, from a :class:`CalibratedArm`;
+* :mod:`armcal.export` -- :func:`robot_toml` and :func:`urdf` of a calibrated arm;
 * :mod:`armcal.simulate` -- :func:`synthesize_measurements`, batched
   :func:`monte_carlo`, :func:`random_plan_study`;
 * :mod:`armcal.reproduction` -- the paper's tables and figures recomputed;
@@ -22,11 +27,22 @@ from .arm import (
     Annulus,
     Box,
     PlanarArm,
+    Target,
     forward_kinematics,
     jacobian,
+    joint_jacobian,
     link_angles,
     paper_from_user_matrix,
     wrap_angle,
+)
+from .calibrated import CalibratedArm
+from .compensate import (
+    Compensation,
+    CrossValidation,
+    Validation,
+    compensate,
+    cross_validate,
+    validate,
 )
 from .criteria import (
     CRITERIA,
@@ -48,6 +64,7 @@ from .doe import (
     random_plan,
 )
 from .errors import ArmcalError, InputError, NotIdentifiableError
+from .export import robot_toml, urdf
 from .identification import (
     Calibration,
     identify,
@@ -55,9 +72,11 @@ from .identification import (
     solve_gauss_newton,
     solve_model,
 )
-from .io import load_robot, load_truth, read_measurements, read_plan
+from .instrument import identify_3d
+from .io import load_robot, load_truth, read_calibration, read_measurements, read_plan
 from .noise import NoiseModel
 from .observability import Identifiability, check_identifiable, identifiability
+from .plane import Plane, fit_plane
 from .report import format_calibration
 from .simulate import (
     MonteCarlo,
@@ -72,8 +91,11 @@ __all__ = [
     "Annulus",
     "ArmcalError",
     "Box",
+    "CalibratedArm",
     "Calibration",
     "Certificate",
+    "Compensation",
+    "CrossValidation",
     "Design",
     "GoodnessOfFit",
     "Identifiability",
@@ -85,18 +107,26 @@ __all__ = [
     "PlanQuality",
     "PlanStudy",
     "PlanarArm",
+    "Plane",
     "PosesNeeded",
+    "Target",
+    "Validation",
     "__version__",
     "certify",
     "check_identifiable",
+    "compensate",
+    "cross_validate",
     "d_efficiency",
     "design",
     "evaluate_plan",
+    "fit_plane",
     "format_calibration",
     "forward_kinematics",
     "identifiability",
     "identify",
+    "identify_3d",
     "jacobian",
+    "joint_jacobian",
     "link_angles",
     "load_robot",
     "load_truth",
@@ -108,11 +138,15 @@ __all__ = [
     "predicted_std",
     "random_plan",
     "random_plan_study",
+    "read_calibration",
     "read_measurements",
     "read_plan",
+    "robot_toml",
     "solve_closed_form",
     "solve_gauss_newton",
     "solve_model",
     "synthesize_measurements",
+    "urdf",
+    "validate",
     "wrap_angle",
 ]

@@ -26,7 +26,6 @@ from dataclasses import replace
 from typing import Any
 
 import numpy as np
-from scipy import stats
 
 from .arm import PlanarArm, forward_kinematics
 from .errors import ArmcalError, ArmcalWarning
@@ -135,6 +134,8 @@ def _planarity_warning(
     stated = ""
     if cal.sigma_source == "given" and dof > 0:
         s = row_sigma if row_sigma is not None else (sigma or cal.sigma_mm)
+        from scipy import stats  # imported on use: `import armcal` stays light
+
         chi2 = float(np.sum((d / s) ** 2))
         p_value = float(stats.chi2.sf(chi2, dof))
         if p_value >= PLANARITY_ALPHA:
