@@ -58,8 +58,10 @@ from .observability import (
     conditioning_warning,
     model_basis,
     model_columns,
+    plan_rows,
     plan_svd,
     scaled_jacobian,
+    target_weights,
     user_from_scaled,
 )
 
@@ -116,8 +118,8 @@ def weighted_information(columns: np.ndarray, weights: np.ndarray) -> np.ndarray
 
 def scaled_information(arm: PlanarArm, q: np.ndarray) -> np.ndarray:
     """Hadamard-normalized information ``Fs = D F D`` ``(..., p, p)`` with unit diagonal."""
-    q = np.asarray(q, dtype=float)
-    return weighted_information(model_columns(arm, q), np.full(q.shape[:-1], 1 / q.shape[-2]))
+    columns = model_columns(arm, np.asarray(q, dtype=float))
+    return weighted_information(columns, np.full(columns.shape[:-1], 1 / columns.shape[-2]))
 
 
 def covariance_factor(
@@ -125,12 +127,15 @@ def covariance_factor(
 ) -> tuple[np.ndarray, np.ndarray]:
     """``G`` ``(..., p, p)`` with ``(J^T J)^-1 = G G^T`` (user parametrization) and the ok mask."""
     q = np.asarray(q, dtype=float)
-    if params is not None and not arm.standard:
-        return _covariance_factor_at(arm, q, params)
+    rows, _, every = plan_rows(arm, q, None)
+    if not arm.standard and (params is not None or every):
+        return _covariance_factor_at(arm, q, np.zeros(arm.n_params) if params is None else params)
     factor, ok = (plan_svd(arm, q) if svd is None else svd).inverse_gram_factor()
     to_user = user_from_scaled(arm, params) if arm.standard else model_basis(arm)[1]
+    if every:  # the targets' columns were weighted (observability.target_weights)
+        to_user = to_user * target_weights(arm)[: to_user.shape[-1]]
     with np.errstate(invalid="ignore", over="ignore"):
-        g = to_user @ np.where(ok[..., None, None], factor, 0.0) / np.sqrt(q.shape[-2])
+        g = to_user @ np.where(ok[..., None, None], factor, 0.0) / np.sqrt(rows.shape[-2])
     ok = ok & np.all(np.isfinite(g), axis=(-2, -1))
     return np.where(ok[..., None, None], g, np.inf), ok
 
@@ -163,11 +168,12 @@ def weighted_user_jacobian(
     the identity for isotropic iid noise), so ``sigma_ref^2 (J_w^T J_w)^-1`` is
     the generalized-least-squares covariance of the free parameters.
     """
-    jac = jacobian(arm, q, params)  # (..., m, 2, p)
+    q, target, _ = plan_rows(arm, q, None)
+    jac = jacobian(arm, q, params, target=target)  # (..., m, 2, p)
     noise = arm.noise
     if row_sigma is not None or (noise is not None and not noise.isotropic_iid):
         model = noise if noise is not None else NoiseModel.isotropic(1.0)
-        jac = model.whitening(arm, q, params, row_sigma) @ jac
+        jac = model.whitening(arm, q, params, row_sigma, target=target) @ jac
     jac = jac[..., arm.free]
     return jac.reshape(*jac.shape[:-3], -1, arm.n_free)
 
@@ -599,7 +605,8 @@ def position_accuracy(
     svd = plan_svd(arm, q) if svd is None else svd
     check_identifiable(arm, q, svd=svd)
     g, _ = covariance_factor(arm, q, None, svd)  # finite: same policy, positive lengths
-    j0 = jacobian(arm, test_q)  # (k, 2, p), user parametrization like g
+    rows, target, _ = plan_rows(arm, test_q, None)  # every target of a test pose
+    j0 = jacobian(arm, rows, target=target)  # (k, 2, p), user parametrization like g
     per_pose = sigma * np.sqrt(np.sum((j0 @ g) ** 2, axis=(-2, -1)))
     return PositionAccuracy(
         float(np.sqrt(np.mean(per_pose**2))), float(np.max(per_pose)), per_pose
@@ -612,7 +619,8 @@ def position_rms(arm: PlanarArm, inverse: np.ndarray, test_q: np.ndarray, sigma:
     ``sigma sqrt(tr(F^-1 G))`` with ``G = mean_x J(x)^T J(x)`` over the test poses:
     the mean over test poses of ``sigma^2 tr(J(x) F^-1 J(x)^T)``.
     """
-    j0 = jacobian(arm, test_q)  # (k, 2, p), user parametrization like `inverse`
+    rows, target, _ = plan_rows(arm, test_q, None)
+    j0 = jacobian(arm, rows, target=target)  # (k, 2, p), user parametrization like `inverse`
     gram = np.einsum("kia,kib->ab", j0, j0) / j0.shape[0]
     return sigma * np.sqrt(np.clip(np.einsum("...ab,ba->...", inverse, gram), 0.0, None))
 

@@ -26,14 +26,57 @@ __all__ = [
     "Identifiability",
     "check_identifiable",
     "conditioning_warning",
+    "every_target",
     "identifiability",
     "model_basis",
     "model_columns",
+    "plan_rows",
     "plan_svd",
     "scaled_columns",
     "scaled_jacobian",
+    "target_weights",
     "user_from_scaled",
 ]
+
+
+def every_target(arm: PlanarArm, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Every target measured at every pose: rows ``(..., m T, n)`` and their targets ``(m T,)``.
+
+    Pose-major: pose ``i``'s targets are rows ``i T .. i T + T - 1``.
+    """
+    count = arm.n_target_links
+    q = np.asarray(q, dtype=float)
+    rows = np.repeat(q, count, axis=-2)
+    return rows, np.tile(np.arange(count), q.shape[-2])
+
+
+def target_weights(arm: PlanarArm) -> np.ndarray:
+    """Column weights ``(p,)`` of a plan measured at every target (:func:`scaled_columns`).
+
+    A target's last link is in ``1 / T`` of the rows of such a plan, the shared
+    links in all: its two columns are weighted ``sqrt(T)`` so that every column
+    has the same mean square, and the normalized information keeps its unit
+    diagonal (an orthogonal plan of the arm is orthogonal for all its targets).
+    """
+    w = np.ones(arm.n_paper)
+    k, k0 = arm.n_links, arm.n_joints - 1
+    w[k0:k] = w[k + k0 : 2 * k] = np.sqrt(arm.n_target_links)
+    return w
+
+
+def plan_rows(
+    arm: PlanarArm, q: np.ndarray, target: np.ndarray | None
+) -> tuple[np.ndarray, np.ndarray | None, bool]:
+    """The rows a plan is measured in: ``(rows, target, every)``.
+
+    With ``target`` given (or one target) the rows are ``q``'s own; a plan of an
+    arm with several targets and no ``target`` is measured at every target of
+    every pose (:func:`every_target`), ``every`` True.
+    """
+    if target is not None or arm.n_target_links == 1:
+        return np.asarray(q, dtype=float), target, False
+    rows, index = every_target(arm, q)
+    return rows, index, True
 
 
 def scaled_columns(arm: PlanarArm, q: np.ndarray, target: np.ndarray | None = None) -> np.ndarray:
@@ -42,9 +85,14 @@ def scaled_columns(arm: PlanarArm, q: np.ndarray, target: np.ndarray | None = No
     Row x of the real Jacobian is the real part, row y the imaginary part;
     column ``dtheta_k`` (``i l_k e^{i theta_k}``) is divided by ``l_k``.  With
     several targets, ``target`` ``(m,)`` says which one every row measures
-    (:func:`armcal.arm.link_units`).
+    (:func:`armcal.arm.link_units`); without it every target is measured at every
+    pose (``T`` rows per pose, :func:`plan_rows`) and the targets' columns are
+    weighted by :func:`target_weights`.
     """
+    q, target, every = plan_rows(arm, q, target)
     unit = link_units(arm, q, target)
+    if every:
+        unit = unit * target_weights(arm)[: arm.n_links]
     cols = [1j * unit, unit]
     if arm.base_offset:
         cols.append(np.broadcast_to(np.array([1.0, 1j]), (*np.shape(q)[:-1], 2)))
@@ -129,7 +177,10 @@ def model_columns(arm: PlanarArm, q: np.ndarray, target: np.ndarray | None = Non
     columns.  For the paper's model (:attr:`PlanarArm.standard`) it is
     :func:`scaled_columns` itself.
     """
+    q, target, every = plan_rows(arm, q, target)
     columns = scaled_columns(arm, q, target)
+    if every:  # as scaled_columns weights a plan measured at every target
+        columns = columns * target_weights(arm)
     if arm.standard:
         return columns
     from .noise import complex_whitening
@@ -160,9 +211,11 @@ def scaled_jacobian(arm: PlanarArm, q: np.ndarray, target: np.ndarray | None = N
     (see :mod:`armcal.identification`).
     """
     q = np.asarray(q, dtype=float)
-    columns = model_columns(arm, q, target) / np.sqrt(q.shape[-2])
+    columns = model_columns(arm, q, target)
+    rows = columns.shape[-2]
+    columns = columns / np.sqrt(rows)
     real = np.stack([columns.real, columns.imag], axis=-2)  # (..., m, 2, p_f)
-    return real.reshape(*q.shape[:-2], 2 * q.shape[-2], columns.shape[-1])
+    return real.reshape(*q.shape[:-2], 2 * rows, columns.shape[-1])
 
 
 def plan_svd(arm: PlanarArm, q: np.ndarray, target: np.ndarray | None = None) -> ScaledSVD:
@@ -368,6 +421,8 @@ def identifiability(
         svd = plan_svd(arm, q, target)
     rank = int(svd.rank)
     to_user = model_basis(arm)[1]
+    if target is None and arm.n_target_links > 1 and arm.complete:
+        to_user = to_user * target_weights(arm)  # a plan measured at every target
     names = arm.param_names
     free = arm.free
     null = svd.directions(RANK_RTOL) @ to_user.T  # rows: unseen directions (mm, rad)

@@ -6,7 +6,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..arm import PlanarArm, forward_kinematics
+from ..arm import PlanarArm
 from ..numerics import ScaledSVD, scaled_svd, spd_inverse
 from ..observability import check_identifiable, plan_svd
 from .exchange import _blocks
@@ -20,6 +20,7 @@ from .model import (
 from .optimizer import (
     _adam_ascent,
     _penalty_weight,
+    _region_constraints,
     _region_penalty,
     _to_q,
     _to_u,
@@ -71,11 +72,18 @@ class Certificate:
 
 def _variance_function(arm: PlanarArm, q: np.ndarray, m_inv: np.ndarray):
     """``d(x) = tr(M^-1 I(x))`` ``(k,)`` of poses ``q`` ``(k, n)`` and its gradient ``(k, n)``."""
-    model = pose_model(arm, q[:, None, :])  # one pose per "plan"
+    model = pose_model(arm, q[:, None, :])  # one pose per "plan" (its targets' rows)
     columns = model.columns
-    value = np.einsum("kma,ab,kmb->k", columns.conj(), m_inv, columns).real
-    grad = information_gradient(arm, model, m_inv)[:, 0, :]
+    # A pose's information is the mean over its targets' rows, as the plan's is over
+    # all its rows (the scaled Jacobian divides by the number of rows).
+    value = np.einsum("kma,ab,kmb->k", columns.conj(), m_inv, columns).real / model.targets
+    grad = information_gradient(arm, model, m_inv)[:, 0, :] / model.targets
     return value, grad
+
+
+def _pose_blocks(arm: PlanarArm, q: np.ndarray) -> np.ndarray:
+    """Every pose's real blocks ``(k, 2T, p_f)`` scaled to its information per row (``/ T``)."""
+    return _blocks(arm, q) / np.sqrt(arm.n_target_links)
 
 
 def _maximize_variance(
@@ -131,7 +139,7 @@ def _weighted_svd(arm: PlanarArm, poses: np.ndarray, weights: np.ndarray) -> Sca
     ``M(xi)``: its inverse and ``log det`` come from singular values, not from
     inverting ``M``.
     """
-    blocks = _blocks(arm, poses) * np.sqrt(weights)[:, None, None]
+    blocks = _pose_blocks(arm, poses) * np.sqrt(weights)[:, None, None]
     return scaled_svd(blocks.reshape(-1, arm.n_free))
 
 
@@ -210,7 +218,7 @@ def certify(
     pool = np.concatenate([q, _corner_poses(arm, rng), feasible_poses(arm, candidates, rng=rng)])
     weights = np.full(pool.shape[0], 1.0 / pool.shape[0])
     for _ in range(rounds):
-        weights = _weights_multiplicative(_blocks(arm, pool), weights, 300)
+        weights = _weights_multiplicative(_pose_blocks(arm, pool), weights, 300)
         m_inv, _ = _weighted_svd(arm, pool, weights).inverse_gram()
         # Ascend d from its largest values in the pool and in fresh random poses: the
         # maximizers of a weighted model (encoder noise) can lie in narrow regions
@@ -229,7 +237,7 @@ def certify(
         mean_weight = weights[keep].sum() / np.count_nonzero(keep)
         weights = np.concatenate([weights[keep], np.full(found.shape[0], mean_weight)])
         weights /= weights.sum()
-    weights = _weights_multiplicative(_blocks(arm, pool), weights, 1000)
+    weights = _weights_multiplicative(_pose_blocks(arm, pool), weights, 1000)
     support_mask = weights > 1e-6
     support, support_w = pool[support_mask], weights[support_mask] / weights[support_mask].sum()
     star = _weighted_svd(arm, support, support_w)
@@ -266,6 +274,6 @@ def _max_variance(
     found = _maximize_variance(arm, m_inv, starts, steps=300)
     d_found, _ = _variance_function(arm, found, m_inv)
     if arm.region is not None:  # count iterates that stray outside only a little
-        g, _ = arm.region.constraints(forward_kinematics(arm, found[:, None, :]))
+        g, _ = _region_constraints(arm, found[:, None, :])
         d_found = np.where(g.min(axis=(-2, -1)) > -1e-3, d_found, -np.inf)
     return float(max(d.max(), d_found.max()))

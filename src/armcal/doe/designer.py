@@ -252,7 +252,7 @@ def design(
         initial = np.stack([plan.q for plan in closed]) if closed else None
         q = optimize_plan(arm, m, criterion=criterion, rng=rng, initial=initial)
         used = "optimize"
-        if criterion == "D":
+        if criterion == "D" and arm.n_target_links == 1:
             pool = feasible_poses(arm, 4000, rng=rng) if candidates is None else candidates
             polished = exchange_plan(arm, m, pool, start=q, rng=rng)
             if float(d_efficiency(arm, polished)) > float(d_efficiency(arm, q)) * (1 + 1e-12):

@@ -5,6 +5,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..arm import PlanarArm
+from ..errors import ArmcalError
 from ..observability import model_columns
 
 __all__ = [
@@ -18,8 +19,9 @@ def _blocks(arm: PlanarArm, q: np.ndarray) -> np.ndarray:
     ``F_x^T F_x`` is the information of pose ``x`` in the model
     (:func:`armcal.observability.model_columns`: whitened, free parameters).
     """
-    columns = model_columns(arm, q)
-    return np.stack([columns.real, columns.imag], axis=-2)
+    columns = model_columns(arm, q)  # every target of every pose: T rows per pose
+    blocks = np.stack([columns.real, columns.imag], axis=-2)
+    return blocks.reshape(np.shape(q)[0], -1, columns.shape[-1])
 
 
 def _swap_ratios(a_xx: np.ndarray, a_xi: np.ndarray, a_ii: np.ndarray) -> np.ndarray:
@@ -64,6 +66,9 @@ def exchange_plan(
 ) -> np.ndarray:
     """Modified Fedorov exchange for the D-criterion of the arm's model over a candidate set.
 
+    One point per pose (its swaps are evaluated from ``2 x 2`` blocks in closed
+    form): an arm with several targets is designed by :func:`optimize_plan`.
+
     Parameters
     ----------
     arm : PlanarArm
@@ -95,6 +100,11 @@ def exchange_plan(
     once from its 2 x 2 blocks (:func:`_swap_ratios`).  Poses may repeat (an
     exact design may replicate a point).
     """
+    if arm.n_target_links > 1:
+        raise ArmcalError(
+            f"exchange evaluates one point per pose, and {arm.name} has "
+            f"{arm.n_target_links} targets; use --method optimize (or auto)"
+        )
     rng = np.random.default_rng(rng)
     candidates = np.asarray(candidates, dtype=float)
     if start is None:

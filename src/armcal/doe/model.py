@@ -181,6 +181,11 @@ class PoseModel:
         ``P_i = W_i^T W_i`` (dimensionless); None for isotropic iid noise.
     joint_jacobian : ndarray, shape (..., m, n), or None
         ``J_q`` as complex numbers (mm/rad) when there is encoder noise.
+    targets : int
+        Rows per pose: every target of the arm is measured at every pose, so
+        the row axis of the arrays above has ``m T`` rows, pose-major
+        (:func:`armcal.observability.every_target`), the targets' columns
+        weighted by :func:`armcal.observability.target_weights`.
     """
 
     columns: np.ndarray
@@ -188,6 +193,7 @@ class PoseModel:
     basis: np.ndarray | None
     precision: np.ndarray | None
     joint_jacobian: np.ndarray | None
+    targets: int = 1
 
 
 def pose_model(arm: PlanarArm, q: np.ndarray) -> PoseModel:
@@ -195,11 +201,13 @@ def pose_model(arm: PlanarArm, q: np.ndarray) -> PoseModel:
     q = np.asarray(q, dtype=float)
     _check_designable(arm)
     noise = arm.noise
+    count = arm.n_target_links
     if arm.standard or noise is None or noise.isotropic_iid:
-        columns = model_columns(arm, q)
+        columns = model_columns(arm, q)  # every target of every pose: count rows per pose
         if arm.standard:
-            return PoseModel(columns, columns, None, None, None)
-        return PoseModel(columns, scaled_columns(arm, q), model_basis(arm)[0], None, None)
+            return PoseModel(columns, columns, None, None, None, count)
+        full = scaled_columns(arm, q)
+        return PoseModel(columns, full, model_basis(arm)[0], None, None, count)
     # model_columns' own steps, sharing the whitening with the precision (the
     # optimizer's hot loop); tests hold the columns equal to model_columns'.
     full = scaled_columns(arm, q)
@@ -217,12 +225,13 @@ def pose_model(arm: PlanarArm, q: np.ndarray) -> PoseModel:
 
 
 def _check_designable(arm: PlanarArm) -> None:
-    """Design works on one point per pose and the instrument's 2-D frame."""
-    if arm.n_target_links > 1:
+    """Several targets are designed for with isotropic iid instrument noise."""
+    noise = arm.noise
+    if arm.n_target_links > 1 and not (noise is None or noise.isotropic_iid):
         raise ArmcalError(
-            f"{arm.name} has {arm.n_target_links} targets: plans are designed for the arm "
-            "with one target (remove [targets] from the robot file to design); every target "
-            "measured at a pose adds to the information that plan gives"
+            f"{arm.name} has {arm.n_target_links} targets: plans for several targets are "
+            "designed for isotropic instrument noise without encoder noise; give "
+            "[measurement] sigma_mm as one number, or --sigma"
         )
 
 
@@ -261,10 +270,19 @@ def information_gradient(arm: PlanarArm, model: PoseModel, phi: np.ndarray) -> n
     # In this order the paper's model gets its plans bit for bit as before (a complex
     # product rounds differently with its operands swapped when numpy uses FMA).
     t = np.real(h.conj() * 1j * c)
-    grad_theta = 2.0 * (t[..., :n] + t[..., n : 2 * n])
-    if model.joint_jacobian is not None:
-        grad_theta = grad_theta + _encoder_gradient(arm, model, u, v)
-    return q_from_theta_gradient(arm, grad_theta)
+    if model.targets == 1:
+        grad_theta = 2.0 * (t[..., :n] + t[..., n : 2 * n])
+        if model.joint_jacobian is not None:
+            grad_theta = grad_theta + _encoder_gradient(arm, model, u, v)
+        return q_from_theta_gradient(arm, grad_theta)
+    # Several targets: every link vector turns with its link angle, and a pose's
+    # gradient is the sum over the rows of its targets.
+    k = arm.n_links
+    per_link = 2.0 * (t[..., :k] + t[..., k : 2 * k])  # (..., m T, K)
+    turns = np.zeros((k, n))
+    turns[np.arange(k), arm.link_joint] = 1.0
+    rows = q_from_theta_gradient(arm, per_link @ turns)  # (..., m T, n)
+    return rows.reshape(*rows.shape[:-2], -1, model.targets, n).sum(axis=-2)
 
 
 def _encoder_gradient(

@@ -4,9 +4,10 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..arm import PlanarArm, forward_kinematics
+from ..arm import PlanarArm, forward_kinematics, joint_jacobian
 from ..criteria import CRITERIA, weighted_information
 from ..errors import ArmcalError
+from ..observability import every_target
 from .model import information_gradient, pose_model
 from .model import q_from_theta_gradient as _q_from_theta_gradient
 from .plans import feasible, feasible_poses, random_plan
@@ -27,8 +28,8 @@ def _criterion_value_and_gradient(
     """
     crit = CRITERIA[criterion]
     model = pose_model(arm, q)
-    m, p = q.shape[-2], arm.n_free
-    fs = weighted_information(model.columns, np.full(q.shape[:-1], 1.0 / m))
+    m, p = model.columns.shape[-2], arm.n_free  # rows: every target of every pose
+    fs = weighted_information(model.columns, np.full(model.columns.shape[:-1], 1.0 / m))
     sign, logdet = np.linalg.slogdet(fs)
     singular = (sign <= 0) | (logdet < -40.0 * p)
     fs = np.where(singular[..., None, None], fs + 1e-6 * np.eye(p), fs)
@@ -41,12 +42,26 @@ def _region_constraints(arm: PlanarArm, q: np.ndarray) -> tuple[np.ndarray, np.n
     """Region constraint values ``g (..., m, k)`` (>= 0 inside) and ``dg/dq (..., m, k, n)``."""
     region = arm.region
     assert region is not None, "callers check arm.region first"
+    if arm.n_target_links > 1:
+        return _targets_region_constraints(arm, q)
     unit = np.exp(1j * arm.link_angles(q))
     tip = np.sum(arm.link_lengths * unit, axis=-1)
     g, dg = region.constraints(np.stack([tip.real, tip.imag], axis=-1))  # dg (..., m, k, 2)
     d_tip = 1j * arm.link_lengths * unit  # d tip / d theta_j, complex (..., m, n)
     grad_theta = dg[..., :1] * d_tip.real[..., None, :] + dg[..., 1:] * d_tip.imag[..., None, :]
     return g, _q_from_theta_gradient(arm, grad_theta)
+
+
+def _targets_region_constraints(arm: PlanarArm, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`_region_constraints` with several targets: every target's point inside."""
+    assert arm.region is not None
+    rows, target = every_target(arm, q)
+    tip = forward_kinematics(arm, rows, target=target)
+    g, dg = arm.region.constraints(tip)  # (..., m T, k), (..., m T, k, 2)
+    dg_dq = dg @ joint_jacobian(arm, rows, target=target)  # (..., m T, k, n)
+    count, n = arm.n_target_links, arm.n_joints
+    shape = (*q.shape[:-1], count * g.shape[-1])
+    return g.reshape(shape), dg_dq.reshape(*shape, n)
 
 
 def _region_penalty(arm: PlanarArm, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -204,7 +219,10 @@ def _polish(arm: PlanarArm, q: np.ndarray, criterion: str) -> np.ndarray:
     margin = 1e-6  # mm inside the region, so that round-off never puts a tip outside
 
     def region_values(x: np.ndarray) -> np.ndarray:
-        g, _ = region.constraints(forward_kinematics(arm, x.reshape(m, n)))
+        if arm.n_target_links > 1:
+            g, _ = _region_constraints(arm, x.reshape(m, n))
+        else:
+            g, _ = region.constraints(forward_kinematics(arm, x.reshape(m, n)))
         return g.ravel() - margin
 
     def region_jacobian(x: np.ndarray) -> np.ndarray:

@@ -96,10 +96,17 @@ def random_plan(
 
 
 def feasible(arm: PlanarArm, q: np.ndarray, *, tol: float = 1e-9) -> np.ndarray:
-    """Mask ``(..., m)`` of poses inside the joint limits and (if any) the measurement region."""
+    """Mask ``(..., m)`` of poses inside the joint limits and (if any) the measurement region.
+
+    With several targets every target's point must lie in the region.
+    """
     ok = np.all(arm.within_limits(q, tol=tol), axis=-1)
     if arm.region is not None:
-        ok &= arm.region.contains(forward_kinematics(arm, q), tol=tol)
+        count = arm.n_target_links
+        rows = np.repeat(np.asarray(q, dtype=float), count, axis=-2)
+        target = np.tile(np.arange(count), np.shape(q)[-2]) if count > 1 else None
+        inside = arm.region.contains(forward_kinematics(arm, rows, target=target), tol=tol)
+        ok &= np.all(inside.reshape(*np.shape(q)[:-1], count), axis=-1)
     return ok
 
 
