@@ -123,13 +123,22 @@ def scaled_information(arm: PlanarArm, q: np.ndarray) -> np.ndarray:
 
 
 def covariance_factor(
-    arm: PlanarArm, q: np.ndarray, params: np.ndarray | None, svd: ScaledSVD | None = None
+    arm: PlanarArm,
+    q: np.ndarray,
+    params: np.ndarray | None,
+    svd: ScaledSVD | None = None,
+    target: np.ndarray | None = None,
 ) -> tuple[np.ndarray, np.ndarray]:
-    """``G`` ``(..., p, p)`` with ``(J^T J)^-1 = G G^T`` (user parametrization) and the ok mask."""
+    """``G`` ``(..., p, p)`` with ``(J^T J)^-1 = G G^T`` (user parametrization) and the ok mask.
+
+    ``target`` ``(m,)``: the rows' targets (measurements); without it a plan of
+    an arm with several targets is measured at every target of every pose.
+    """
     q = np.asarray(q, dtype=float)
-    rows, _, every = plan_rows(arm, q, None)
+    rows, _, every = plan_rows(arm, q, target)
     if not arm.standard and (params is not None or every):
-        return _covariance_factor_at(arm, q, np.zeros(arm.n_params) if params is None else params)
+        at = np.zeros(arm.n_params) if params is None else params
+        return _covariance_factor_at(arm, q, at, target)
     factor, ok = (plan_svd(arm, q) if svd is None else svd).inverse_gram_factor()
     to_user = user_from_scaled(arm, params) if arm.standard else model_basis(arm)[1]
     if every:  # the targets' columns were weighted (observability.target_weights)
@@ -141,7 +150,7 @@ def covariance_factor(
 
 
 def _covariance_factor_at(
-    arm: PlanarArm, q: np.ndarray, params: np.ndarray
+    arm: PlanarArm, q: np.ndarray, params: np.ndarray, target: np.ndarray | None = None
 ) -> tuple[np.ndarray, np.ndarray]:
     """:func:`covariance_factor` of a weighted or reduced model at deviations ``params``.
 
@@ -149,7 +158,7 @@ def _covariance_factor_at(
     ``params`` (:meth:`armcal.noise.NoiseModel.whitening`), through the rank
     policy's SVD: ``G`` ``(..., p, p_f)`` with zero rows for fixed parameters.
     """
-    jac = weighted_user_jacobian(arm, q, params)
+    jac = weighted_user_jacobian(arm, q, params, target=target)
     factor, ok = scaled_svd(jac).inverse_gram_factor()
     g = np.eye(arm.n_params)[:, arm.free] @ np.where(ok[..., None, None], factor, 0.0)
     ok = ok & np.all(np.isfinite(g), axis=(-2, -1))
@@ -161,6 +170,8 @@ def weighted_user_jacobian(
     q: np.ndarray,
     params: np.ndarray | None = None,
     row_sigma: np.ndarray | None = None,
+    *,
+    target: np.ndarray | None = None,
 ) -> np.ndarray:
     """Whitened free columns of the user Jacobian ``(..., 2m, p_f)`` at ``params``.
 
@@ -168,7 +179,7 @@ def weighted_user_jacobian(
     the identity for isotropic iid noise), so ``sigma_ref^2 (J_w^T J_w)^-1`` is
     the generalized-least-squares covariance of the free parameters.
     """
-    q, target, _ = plan_rows(arm, q, None)
+    q, target, _ = plan_rows(arm, q, target)
     jac = jacobian(arm, q, params, target=target)  # (..., m, 2, p)
     noise = arm.noise
     if row_sigma is not None or (noise is not None and not noise.isotropic_iid):

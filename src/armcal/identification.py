@@ -851,7 +851,11 @@ class _Fit:
     def factor(self) -> np.ndarray:
         if self._problem.plain and self.used.all():  # from the plan's own SVD
             factor, ok = covariance_factor(
-                self._arm, self._q, self.params, self._problem.plan_factor.svd
+                self._arm,
+                self._q,
+                self.params,
+                self._problem.plan_factor.svd,
+                target=self._problem.target,
             )
             factor = factor[..., self._arm.free, :]
         else:
