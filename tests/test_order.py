@@ -7,8 +7,17 @@ import numpy as np
 import pytest
 from numpy.testing import assert_allclose
 
-from armcal import ArmcalError
-from armcal.doe import joint_travel, order_poses
+from armcal import ArmcalError, PlanarArm, load_robot
+from armcal.criteria import efficiencies
+from armcal.doe import (
+    DISTINCT_TOLERANCE,
+    design,
+    exchange_plan,
+    feasible_poses,
+    joint_travel,
+    order_poses,
+    repeated_poses,
+)
 
 
 def test_joint_travel_is_the_sum_of_every_joints_moves():
@@ -117,3 +126,111 @@ def test_large_plans_are_ordered_in_neighbour_lists(rng):
     order = order_poses(q)
     assert _is_permutation(order, q.shape[0])
     assert joint_travel(q[order]) < joint_travel(q[_grid_sweep(q, -np.pi, np.pi)])
+
+
+# --------------------------------------------------------------------------- design
+
+
+PAPER_LENGTHS = [260.0, 180.0, 120.0, 100.0]
+
+
+@pytest.fixture(scope="module")
+def limited_arm() -> PlanarArm:
+    """Joints 2..4 within +-60 deg: the paper's plans do not fit, design optimizes."""
+    return PlanarArm(
+        PAPER_LENGTHS, np.radians([[-180, 180], [-60, 60], [-60, 60], [-60, 60]]), name="lim60"
+    )
+
+
+@pytest.mark.parametrize("which", ["paper-4link", "limited"])
+def test_designed_plans_travel_at_most_60_percent_of_a_random_order(which, limited_arm, rng):
+    # The done-when of issue 10, item 7, on 50-pose plans of both kinds of design.
+    arm = load_robot("paper-4link").arm if which == "paper-4link" else limited_arm
+    result = design(arm, 50, rng=0, with_certificate=False)
+    assert result.method == ("analytic" if which == "paper-4link" else "optimize+exchange")
+    random_orders = [joint_travel(result.q[rng.permutation(50)]) for _ in range(20)]
+    ratio = result.joint_travel / np.mean(random_orders)
+    print(f"{which}: ordered travel {ratio:.3f} of the mean of 20 random orders")
+    assert ratio <= 0.60
+    assert_allclose(result.joint_travel, joint_travel(result.q), rtol=1e-14, atol=0)
+    # the travel before ordering is the method's own order, kept by order="none"
+    as_made = design(arm, 50, rng=0, with_certificate=False, order="none")
+    assert_allclose(result.joint_travel_unordered, joint_travel(as_made.q), rtol=1e-14, atol=0)
+    assert as_made.joint_travel == as_made.joint_travel_unordered
+    assert result.joint_travel <= result.joint_travel_unordered
+
+
+def test_the_analytic_plan_is_ordered_along_its_line():
+    # Joints 2..4 step together through 50 angles 7.2 deg apart (joint 1 still): the
+    # shortest order sweeps them once, 3 joints x (360 - 7.2) deg.
+    result = design(load_robot("paper-4link").arm, 50, rng=0, with_certificate=False)
+    assert_allclose(np.degrees(result.joint_travel), 3 * (360 - 7.2), rtol=1e-12, atol=0)
+
+
+def test_ordering_changes_no_criterion(limited_arm):
+    made = design(limited_arm, 12, rng=3, order="none")
+    ordered = design(limited_arm, 12, rng=3, order="travel")
+    # the same poses, in another order
+    assert not np.array_equal(made.q, ordered.q)
+    assert np.array_equal(np.unique(made.q, axis=0), np.unique(ordered.q, axis=0))
+    assert ordered.d_efficiency == made.d_efficiency
+    assert ordered.certificate.certified_d_efficiency == made.certificate.certified_d_efficiency
+    before, after = efficiencies(limited_arm, made.q), efficiencies(limited_arm, ordered.q)
+    for name, value in before.items():
+        # a permutation changes only the order of the sums: round-off
+        assert_allclose(after[name], value, rtol=1e-12, atol=0, err_msg=name)
+    assert ordered.joint_travel < made.joint_travel
+
+
+def test_unknown_order_is_an_error(arm4):
+    with pytest.raises(ArmcalError, match="unknown order 'shortest'"):
+        design(arm4, 8, order="shortest")
+
+
+def _smallest_separation(q: np.ndarray) -> float:
+    """Smallest over pose pairs of the largest joint difference (rad): 0 for a repeat."""
+    gap = np.abs(q[:, None, :] - q[None, :, :]).max(axis=-1)
+    return float(gap[np.triu_indices(q.shape[0], 1)].min())
+
+
+@pytest.fixture(scope="module")
+def based_arm() -> PlanarArm:
+    """Every joint limited and a base offset: D-optimal plans repeat corner poses."""
+    limits = np.radians([[-90, 90], [-60, 60], [-60, 60], [-60, 60]])
+    return PlanarArm(PAPER_LENGTHS, limits, base_offset=True, name="based")
+
+
+def test_distinct_plans_repeat_no_pose_at_a_stated_cost(based_arm):
+    plain = design(based_arm, 30, rng=0, with_certificate=False)
+    distinct = design(based_arm, 30, rng=0, with_certificate=False, distinct=True)
+    assert repeated_poses(plain.q).any()  # the optimum within the box repeats corners
+    assert _smallest_separation(plain.q) == 0.0
+    assert _smallest_separation(distinct.q) > DISTINCT_TOLERANCE
+    assert distinct.distinct and not plain.distinct
+    # The cost: what the repeats were worth.  Measured: D-efficiency 0.8385 with 14
+    # repeated poses, 0.8102 distinct (3.4 % less; 5.6 % at m = 50); asserted: at most 10 %.
+    cost = 1 - distinct.d_efficiency / plain.d_efficiency
+    print(f"distinct poses cost {100 * cost:.1f} % of D-efficiency")
+    assert 0 <= cost <= 0.10
+    (note,) = [note for note in distinct.notes if note.startswith("distinct poses")]
+    assert f"{distinct.d_efficiency:.4f}" in note
+
+
+def test_exchange_takes_each_candidate_once(limited_arm, rng):
+    candidates = feasible_poses(limited_arm, 60, rng=rng)
+    candidates = np.concatenate([candidates, candidates[:20] + 1e-9])  # near-copies count once
+    plan = exchange_plan(limited_arm, 40, candidates, rng=rng, distinct=True)
+    assert _smallest_separation(plan) > DISTINCT_TOLERANCE
+    assert all(np.abs(candidates - pose).max(axis=1).min() == 0.0 for pose in plan)
+    with pytest.raises(ArmcalError, match="only 60 of the candidate poses are distinct"):
+        exchange_plan(limited_arm, 61, candidates, rng=rng, distinct=True)
+
+
+def test_distinct_skips_a_closed_form_plan_that_repeats_a_pose():
+    arm = PlanarArm([300.0], name="one-link")  # its closed form holds the one joint still
+    assert repeated_poses(design(arm, 4, rng=0).q)[1:].all()  # 4 times the same pose
+    result = design(arm, 4, rng=0, distinct=True)
+    assert result.method != "analytic" and not repeated_poses(result.q).any()
+    assert result.d_efficiency == pytest.approx(1.0, abs=1e-9)  # every pose is optimal
+    with pytest.raises(ArmcalError, match="repeats one pose"):
+        design(arm, 4, rng=0, distinct=True, method="analytic")

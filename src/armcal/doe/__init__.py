@@ -28,10 +28,19 @@ from .designer import METHODS, Design, design
 from .exchange import exchange_plan
 from .optimizer import optimize_plan
 from .order import ORDERS, joint_travel, order_poses
-from .plans import analytic_plan, feasible, feasible_poses, orthogonal_plan, random_plan
+from .plans import (
+    DISTINCT_TOLERANCE,
+    analytic_plan,
+    feasible,
+    feasible_poses,
+    orthogonal_plan,
+    random_plan,
+    repeated_poses,
+)
 from .sizing import TARGETS, PosesNeeded, accuracy_metric, poses_needed
 
 __all__ = [
+    "DISTINCT_TOLERANCE",
     "METHODS",
     "ORDERS",
     "TARGETS",
@@ -51,4 +60,5 @@ __all__ = [
     "orthogonal_plan",
     "poses_needed",
     "random_plan",
+    "repeated_poses",
 ]
