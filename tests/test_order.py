@@ -1,16 +1,19 @@
 """The order of a plan's poses: joint travel, the ordering heuristic, and design's use of it."""
 
 import itertools
+import json
 from functools import cache
 
 import numpy as np
 import pytest
 from numpy.testing import assert_allclose
 
-from armcal import ArmcalError, PlanarArm, load_robot
+from armcal import ArmcalError, PlanarArm, load_robot, read_plan
+from armcal.cli import main
 from armcal.criteria import efficiencies
 from armcal.doe import (
     DISTINCT_TOLERANCE,
+    analytic_plan,
     design,
     exchange_plan,
     feasible_poses,
@@ -234,3 +237,58 @@ def test_distinct_skips_a_closed_form_plan_that_repeats_a_pose():
     assert result.d_efficiency == pytest.approx(1.0, abs=1e-9)  # every pose is optimal
     with pytest.raises(ArmcalError, match="repeats one pose"):
         design(arm, 4, rng=0, distinct=True, method="analytic")
+
+
+# --------------------------------------------------------------------------- command line
+
+# The 20-pose plan of paper-4link is analytic: joints 2..4 step together by 360 / 20 = 18
+# deg (joint 1 still).  In the order found each joint steps 18 deg 18 times and jumps
+# back 342 deg once (its angles wrap at +-180 deg); in the shortest order each sweeps
+# its 20 angles once, 360 - 18 deg.
+FOUND_DEG = 3 * (18 * 18 + (360 - 18))
+ORDERED_DEG = 3 * (360 - 18)
+
+
+def test_cli_design_prints_the_travel_line(tmp_path, capsys):
+    plan = tmp_path / "plan.csv"
+    assert main(["design", "--poses", "20", "-o", str(plan)]) == 0
+    lines = [line for line in capsys.readouterr().out.splitlines() if line.startswith("order:")]
+    share = round(100 * ORDERED_DEG / FOUND_DEG)
+    assert lines == [
+        f"order: joint travel {ORDERED_DEG} deg after ordering "
+        f"({FOUND_DEG} deg in the order found, {share} %)"
+    ]
+    written = read_plan(str(plan), load_robot("paper-4link").arm)
+    assert_allclose(np.degrees(joint_travel(written)), ORDERED_DEG, rtol=1e-9, atol=0)
+
+
+def test_cli_order_none_keeps_the_methods_order(tmp_path, capsys):
+    plan = tmp_path / "plan.csv"
+    assert main(["design", "--poses", "20", "--order", "none", "-o", str(plan)]) == 0
+    out = capsys.readouterr().out
+    assert f"order: joint travel {FOUND_DEG} deg in the order found (not reordered)" in out
+    arm = load_robot("paper-4link").arm
+    # the CSV holds the angles to 12 decimals of a degree
+    assert_allclose(read_plan(str(plan), arm), analytic_plan(arm, 20), rtol=0, atol=1e-12)
+
+
+def test_cli_json_has_the_travel(capsys):
+    assert main(["design", "--poses", "20", "--json"]) == 0
+    document = json.loads(capsys.readouterr().out)
+    assert document["order"] == "travel" and document["distinct"] is False
+    assert_allclose(document["joint_travel_deg"], ORDERED_DEG, rtol=1e-12, atol=0)
+    assert_allclose(document["joint_travel_unordered_deg"], FOUND_DEG, rtol=1e-12, atol=0)
+
+
+def test_cli_distinct_takes_each_candidate_once(tmp_path, capsys):
+    # every candidate twice: exchange over them may take a pose twice, --distinct may not
+    poses = np.random.default_rng(0).uniform(-180.0, 180.0, size=(30, 2))
+    rows = "".join(f"{a!r},{b!r}\n" for a, b in np.concatenate([poses, poses]).tolist())
+    candidates, plan = tmp_path / "candidates.csv", tmp_path / "plan.csv"
+    candidates.write_text("q1_deg,q2_deg\n" + rows)
+    args = ["design", "--robot", "paper-2link", "--poses", "12", "--method", "exchange"]
+    args += ["--candidates", str(candidates), "--distinct", "--json", "-o", str(plan)]
+    assert main(args) == 0
+    assert json.loads(capsys.readouterr().out)["distinct"] is True
+    written = read_plan(str(plan), load_robot("paper-2link").arm)
+    assert not repeated_poses(written).any()
