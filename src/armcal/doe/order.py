@@ -44,6 +44,9 @@ OR_OPT_LENGTH = 3
 MULTI_START_POSES = 500
 MULTI_STARTS = 8
 
+#: Edges of the greedy matching turned into Python ints at a time (bounds that memory).
+_EDGE_BLOCK = 65536
+
 #: Rounds of the local search: each checks every pose for an improving move among
 #: its neighbours (vectorized) and then improves the tour move by move.
 MAX_ROUNDS = 10
@@ -162,19 +165,21 @@ def _greedy_path(q: np.ndarray, neighbours: np.ndarray, distances: np.ndarray) -
     second = neighbours.ravel()
     key = np.minimum(first, second) * m + np.maximum(first, second)
     key, index = np.unique(key, return_index=True)  # each edge once
-    by_length = np.argsort(distances.ravel()[index], kind="stable")
+    key = key[np.argsort(distances.ravel()[index], kind="stable")]  # shortest first
     degree = bytearray(m)
-    other_end = list(range(m))  # of a pose that ends a path: the path's other end
-    link = [-1] * (2 * m)  # the poses linked to pose u are link[2u], link[2u + 1]
-    for u, v in zip((key[by_length] // m).tolist(), (key[by_length] % m).tolist(), strict=True):
-        if degree[u] == 2 or degree[v] == 2 or other_end[u] == v:
-            continue
-        end_u, end_v = other_end[u], other_end[v]
-        other_end[end_u], other_end[end_v] = end_v, end_u
-        link[2 * u + degree[u]] = v
-        link[2 * v + degree[v]] = u
-        degree[u] += 1
-        degree[v] += 1
+    other_end = np.arange(m).data  # of a pose that ends a path: the path's other end
+    link = np.full(2 * m, -1).data  # the poses linked to pose u are link[2u], link[2u + 1]
+    for begin in range(0, key.size, _EDGE_BLOCK):  # Python ints for a block at a time
+        block = key[begin : begin + _EDGE_BLOCK]
+        for u, v in zip((block // m).tolist(), (block % m).tolist(), strict=True):
+            if degree[u] == 2 or degree[v] == 2 or other_end[u] == v:
+                continue
+            end_u, end_v = other_end[u], other_end[v]
+            other_end[end_u], other_end[end_v] = end_v, end_u
+            link[2 * u + degree[u]] = v
+            link[2 * v + degree[v]] = u
+            degree[u] += 1
+            degree[v] += 1
     ends = np.flatnonzero(np.frombuffer(degree, dtype=np.uint8) < 2)
     start = int(ends[np.argmax(np.abs(q[ends] - q.mean(axis=0)).sum(axis=1))])
     free = _NearestUnused(q, ends)
@@ -193,24 +198,26 @@ def _greedy_path(q: np.ndarray, neighbours: np.ndarray, distances: np.ndarray) -
         degree[current_end] += 1
         degree[following] += 1
         current = following
-    path = [start]
+    path = np.empty(m, dtype=np.intp)
+    at = path.data
     previous, pose = -1, start
-    for _ in range(m - 1):
+    for step in range(m):
+        at[step] = pose
         ahead = link[2 * pose] if link[2 * pose] != previous else link[2 * pose + 1]
         previous, pose = pose, ahead
-        path.append(pose)
-    return np.array(path, dtype=np.intp)
+    return path
 
 
-def _nearest_neighbour_path(q: np.ndarray, neighbours: list[list[int]], start: int) -> np.ndarray:
+def _nearest_neighbour_path(q: np.ndarray, neighbours: np.ndarray, start: int) -> np.ndarray:
     """Path ``(m,)`` from ``start`` that always moves on to the nearest pose not yet visited."""
-    m = q.shape[0]
+    m, k = neighbours.shape
+    near = neighbours.ravel().data
     free = _NearestUnused(q, np.arange(m))
     path = [start]
     free.use(start)
     current = start
     for _ in range(m - 1):
-        for nearest in neighbours[current]:
+        for nearest in near[current * k : (current + 1) * k]:
             if not free.used[nearest]:
                 break
         else:  # every neighbour visited: ask the tree
@@ -298,8 +305,8 @@ def _local_search(
     position[tour] = np.arange(m)
     at, where = tour.data, position.data  # memoryviews: fast scalar reads as Python ints
     coords = [tuple(row) for row in q.tolist()]
-    near = neighbours.tolist()
-    near_distance = distances.tolist()
+    k = neighbours.shape[1]
+    near, near_distance = neighbours.ravel().data, distances.ravel().data  # row a: a k .. a k + k
     # edge[k]: travel from the pose at position k - 1 to the one at k; 0 beyond the ends
     edge = np.zeros(m + 1)
     edge[1:m] = np.abs(np.diff(q[tour], axis=0)).sum(axis=1)
@@ -352,9 +359,11 @@ def _local_search(
             b = at[i + step]
             side = (step + 1) // 2  # the edge after position i is edge[i + 1]
             g1 = length[i + side]
-            for c, d_ac in zip(near[a], near_distance[a], strict=True):
+            for slot in range(a * k, a * k + k):
+                d_ac = near_distance[slot]
                 if d_ac >= g1 - eps:
                     break
+                c = near[slot]
                 j = where[c]
                 if j == i + step:
                     continue
@@ -383,9 +392,11 @@ def _local_search(
                 removed = length[lo] + length[hi + 1] - dist(p, x)
                 if removed <= eps:
                     continue
-                for c, d_ac in zip(near[a], near_distance[a], strict=True):
+                for slot in range(a * k, a * k + k):
+                    d_ac = near_distance[slot]
                     if d_ac >= removed - eps:
                         break
+                    c = near[slot]
                     j = where[c]
                     if lo <= j <= hi:
                         continue
@@ -503,7 +514,7 @@ def order_poses(
     if m <= MULTI_START_POSES:
         spread = np.abs(plan - plan.mean(axis=0)).sum(axis=1)
         starts = np.argsort(-spread, kind="stable")[:MULTI_STARTS].tolist()
-        paths += [_nearest_neighbour_path(plan, near.tolist(), start) for start in starts]
+        paths += [_nearest_neighbour_path(plan, near, start) for start in starts]
     best, best_travel = paths[0], np.inf
     for path in paths:
         tour = _local_search(plan, path, near, distances, max_rounds=max_rounds)
