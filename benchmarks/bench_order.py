@@ -109,7 +109,7 @@ def print_rows(rows: list[dict]) -> None:
             spent, travel = r[name]
             print(
                 f"{r['kind']:<9} {r['m']:>7}  {name:<18} {spent:>9.3f} {spent / base_time:>9.0f}x "
-                f"{travel / r['random']:>14.4f} {travel / r['method']:>14.4f}"
+                f"{travel / r['random']:>14.4g} {travel / r['method']:>14.4g}"
             )
         print(
             f"{'':<9} {'':>7}  peak traced memory of order_poses: {r['peak'] / 2**20:.1f} MiB "
