@@ -36,3 +36,47 @@ def numpy_gauss_newton(
         if max(np.abs(step[:n]).max(), np.abs(step[n:]).max() * lengths.sum()) < threshold:
             break
     return np.concatenate([dl, dq])
+
+
+def argsort_by_joint1(q: np.ndarray) -> np.ndarray:
+    """The trivial order of poses ``q`` ``(m, n)``: ascending joint 1."""
+    return np.argsort(q[:, 0], kind="stable")
+
+
+def nearest_neighbour_order(q: np.ndarray) -> np.ndarray:
+    """The plain nearest-neighbour path through poses ``q`` ``(m, n)`` from pose 0 (L1).
+
+    Each step asks a k-d tree of the poses not yet visited for the ``k`` nearest
+    (``k`` growing until one is unvisited); the tree is rebuilt when half of its
+    poses have been visited, so that queries stay short.
+    """
+    from scipy.spatial import cKDTree
+
+    m = q.shape[0]
+    visited = np.zeros(m, dtype=bool)
+    order = np.empty(m, dtype=np.intp)
+    current = 0
+    remaining = np.arange(m)
+    tree = cKDTree(q)
+    since_build = 0
+    for step in range(m):
+        order[step] = current
+        visited[current] = True
+        since_build += 1
+        if step == m - 1:
+            break
+        if 2 * since_build > remaining.size:
+            remaining = np.flatnonzero(~visited)
+            tree = cKDTree(q[remaining])
+            since_build = 0
+        k = 8
+        while True:
+            k = min(k, remaining.size)
+            _, found = tree.query(q[current], k=k, p=1)
+            candidates = remaining[np.atleast_1d(found)]
+            free = candidates[~visited[candidates]]
+            if free.size:
+                current = int(free[0])
+                break
+            k *= 4
+    return order

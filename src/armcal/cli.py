@@ -26,8 +26,8 @@ from .arm import PlanarArm
 from .compensate import compensate, cross_validate, validate
 from .criteria import CRITERIA, evaluate_plan
 from .demo import DEMO_FILES, run_demo
+from .doe import DISTINCT_TOLERANCE, ORDERS, TARGETS, design, feasible, poses_needed, random_plan
 from .doe import METHODS as DESIGN_METHODS
-from .doe import TARGETS, design, feasible, poses_needed, random_plan
 from .errors import ArmcalError, ArmcalWarning, InputError, NotIdentifiableError
 from .export import robot_toml, urdf, urdf_joints_are_readings
 from .identification import METHODS, Calibration, Method, identify
@@ -524,6 +524,8 @@ def _design(args: argparse.Namespace) -> None:
         method=args.method,
         rng=np.random.default_rng(args.seed),
         candidates=candidates,
+        order=args.order,
+        distinct=args.distinct,
     )
     seconds = time.perf_counter() - start
     quality, document, report = _quality_report(args, spec, arm, result.q)
@@ -840,6 +842,21 @@ def build_parser() -> argparse.ArgumentParser:
         help="auto = analytic if it fits the constraints, else optimize + exchange",
     )
     sub.add_argument("--candidates", metavar="PLAN_CSV", help="reachable poses for exchange")
+    sub.add_argument(
+        "--order",
+        choices=list(ORDERS),
+        default="travel",
+        help="order of the poses in the plan file, which the robot visits in turn: travel = "
+        "short joint travel (the sum of every joint's moves), none = as the method made them "
+        "(default travel; the plan's quality is the same)",
+    )
+    sub.add_argument(
+        "--distinct",
+        action="store_true",
+        help="no pose twice (poses count as one within "
+        f"{DISTINCT_TOLERANCE:g} rad on every joint): exchange takes each candidate pose once "
+        "and the optimizer's repeated poses are replaced; a note says what that cost",
+    )
     sub.add_argument("--plot", metavar="PNG", help="draw the plan's poses as stick arms")
     sub.add_argument("--sigma", type=_sigma, metavar="MM", help=sigma_help)
     sub.add_argument("--test-poses", metavar="PLAN_CSV", help=test_help)

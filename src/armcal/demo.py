@@ -153,7 +153,10 @@ def run_demo(
 
     cert = plan.certificate
     certified = "" if cert is None else f", certified >= {cert.certified_d_efficiency:.4f}"
-    travel = ""
+    travel = (
+        f"; ordered for joint travel {np.degrees(plan.joint_travel):.0f} deg "
+        f"({np.degrees(plan.joint_travel_unordered):.0f} deg as designed)"
+    )
     outliers = [o for o in cal.outliers if o.removed]
     found = ", ".join(f"pose {o.pose} ({o.residual_mm:.3g} mm)" for o in outliers) or "none found"
     lines = [

@@ -553,11 +553,13 @@ def design_summary(result: Design, seconds: float) -> tuple[dict, list[str]]:
     -------
     document : dict
         ``criterion``, ``method``, the certificate's bounds (None without one),
-        ``notes`` and ``seconds``.
+        ``notes``, ``seconds``, ``order``, ``distinct`` and the joint travel in
+        the plan's order and in the order the method found
+        (``joint_travel_deg``, ``joint_travel_unordered_deg``).
     lines : list of str
         The method, the notes (why the closed-form plans were not used), the
-        D-efficiency against the unconstrained optimum and the certificate, and
-        an empty line.
+        D-efficiency against the unconstrained optimum and the certificate, the
+        joint travel, and an empty line.
     """
     cert = result.certificate
     document = {
@@ -568,6 +570,10 @@ def design_summary(result: Design, seconds: float) -> tuple[dict, list[str]]:
         "best_weighted_design_d_efficiency": None if cert is None else cert.reference_d_efficiency,
         "notes": list(result.notes),
         "seconds": seconds,
+        "order": result.order,
+        "distinct": result.distinct,
+        "joint_travel_deg": math.degrees(result.joint_travel),
+        "joint_travel_unordered_deg": math.degrees(result.joint_travel_unordered),
     }
     if unit_trace(result.arm):
         efficiency = f"D-efficiency {result.d_efficiency:.4f} of the unconstrained optimum"
@@ -586,9 +592,23 @@ def design_summary(result: Design, seconds: float) -> tuple[dict, list[str]]:
         f"({seconds:.2f} s)",
         *(f"note: {note}" for note in result.notes),
         efficiency,
+        _travel_line(result),
         "",
     ]
     return document, lines
+
+
+def _travel_line(result: Design) -> str:
+    """``order: joint travel 1234 deg after ordering (5678 deg in the order found, 22 %)``."""
+    after = math.degrees(result.joint_travel)
+    found = math.degrees(result.joint_travel_unordered)
+    if result.order == "none":
+        return f"order: joint travel {after:.0f} deg in the order found (not reordered)"
+    share = f", {100 * after / found:.0f} %" if found > 0 else ""
+    return (
+        f"order: joint travel {after:.0f} deg after ordering "
+        f"({found:.0f} deg in the order found{share})"
+    )
 
 
 def _cell(value) -> str:

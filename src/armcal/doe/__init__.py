@@ -16,6 +16,8 @@ parameters otherwise.
 * :mod:`~armcal.doe.exchange` -- modified Fedorov exchange over candidates;
 * :mod:`~armcal.doe.certificate` -- a lower bound on the D-efficiency relative
   to the model's best plan within the constraints (Kiefer-Wolfowitz);
+* :mod:`~armcal.doe.order` -- :func:`order_poses`: the order of a plan's poses
+  with short joint travel (:func:`joint_travel`) for the shop floor;
 * :mod:`~armcal.doe.designer` -- :func:`design`: all of the above in one call;
 * :mod:`~armcal.doe.sizing` -- :func:`poses_needed`: the smallest ``m`` whose
   best plan reaches a target accuracy.
@@ -25,11 +27,22 @@ from .certificate import Certificate, certify
 from .designer import METHODS, Design, design
 from .exchange import exchange_plan
 from .optimizer import optimize_plan
-from .plans import analytic_plan, feasible, feasible_poses, orthogonal_plan, random_plan
+from .order import ORDERS, joint_travel, order_poses
+from .plans import (
+    DISTINCT_TOLERANCE,
+    analytic_plan,
+    feasible,
+    feasible_poses,
+    orthogonal_plan,
+    random_plan,
+    repeated_poses,
+)
 from .sizing import TARGETS, PosesNeeded, accuracy_metric, poses_needed
 
 __all__ = [
+    "DISTINCT_TOLERANCE",
     "METHODS",
+    "ORDERS",
     "TARGETS",
     "Certificate",
     "Design",
@@ -41,8 +54,11 @@ __all__ = [
     "exchange_plan",
     "feasible",
     "feasible_poses",
+    "joint_travel",
     "optimize_plan",
+    "order_poses",
     "orthogonal_plan",
     "poses_needed",
     "random_plan",
+    "repeated_poses",
 ]

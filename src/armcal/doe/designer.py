@@ -14,7 +14,8 @@ from .certificate import Certificate, certify
 from .exchange import exchange_plan
 from .model import attains_unit_bound, model_description, rotation_invariant
 from .optimizer import optimize_plan
-from .plans import analytic_plan, feasible_poses
+from .order import ORDERS, Order, joint_travel, order_poses
+from .plans import DISTINCT_TOLERANCE, analytic_plan, feasible_poses, repeated_poses
 
 __all__ = [
     "METHODS",
@@ -56,8 +57,20 @@ class Design:
         Lower bound relative to the best plan within the constraints (None when
         not asked for).
     notes : tuple of str
-        Why a method was not used (e.g. the analytic plan breaks the limits), and
-        whether the paper's closed-form plans are optimal for the arm's model.
+        Why a method was not used (e.g. the analytic plan breaks the limits),
+        whether the paper's closed-form plans are optimal for the arm's model,
+        and what making the poses distinct cost.
+    order : str
+        How the poses are ordered (key of :data:`armcal.doe.order.ORDERS`):
+        ``travel`` for short joint travel, ``none`` as the method made them.
+    joint_travel : float
+        :func:`armcal.doe.order.joint_travel` of ``q`` in its order (rad).
+    joint_travel_unordered : float
+        The joint travel (rad) in the order the method produced the poses, before
+        ordering; equal to ``joint_travel`` for ``order="none"``.
+    distinct : bool
+        Whether the plan was made of distinct poses (no two within
+        :data:`armcal.doe.plans.DISTINCT_TOLERANCE` on every joint).
     """
 
     arm: PlanarArm
@@ -67,6 +80,10 @@ class Design:
     d_efficiency: float
     certificate: Certificate | None
     notes: tuple[str, ...]
+    order: str
+    joint_travel: float
+    joint_travel_unordered: float
+    distinct: bool
 
 
 def _closed_form_note(arm: PlanarArm, m: int) -> str:
@@ -157,6 +174,8 @@ def design(
     rng: np.random.Generator | int | None = None,
     candidates: np.ndarray | None = None,
     with_certificate: bool = True,
+    order: Order = "travel",
+    distinct: bool = False,
 ) -> Design:
     """An optimal ``m``-pose plan for the arm's model, within its joint limits and region.
 
@@ -180,6 +199,15 @@ def design(
     with_certificate : bool
         Certify the plan (:func:`certify`); searches that design many plans
         skip it.
+    order : {"travel", "none"}
+        ``travel`` puts the poses in an order with short joint travel for the
+        shop floor (:func:`armcal.doe.order.order_poses`); ``none`` keeps the
+        order the method produced.  Either way the plan is the same set of
+        poses, with the same criteria and certificate.
+    distinct : bool
+        Make every pose distinct: no two poses within
+        :data:`armcal.doe.plans.DISTINCT_TOLERANCE` rad on every joint (see
+        Notes).  Off by default: an optimal exact plan may repeat a pose.
 
     Returns
     -------
@@ -188,8 +216,10 @@ def design(
     Raises
     ------
     ArmcalError
-        If ``m`` is too small for the free parameters, the criterion or method
-        is unknown, or ``method="analytic"`` and no closed-form plan fits.
+        If ``m`` is too small for the free parameters, the criterion, method or
+        order is unknown, ``method="analytic"`` and no closed-form plan fits
+        (or, with ``distinct``, every one that fits repeats a pose), or
+        ``distinct`` and fewer than ``m`` candidates are distinct.
 
     Notes
     -----
@@ -204,11 +234,28 @@ def design(
     ``dq_j`` that ties links together, fixed parameters under anisotropic noise,
     or binding limits -- it optimizes on the model, starting also from the
     closed-form plans, and a note says how much better than them the plan is.
+
+    **Repeated poses.**  Exchange may take a candidate pose more than once, and
+    the optimizer may put several poses at the same corner of the limits (an
+    optimal design often has fewer support points than the plan has poses).
+    With ``distinct`` every candidate counts once (candidates equal within the
+    tolerance are one), exchange never takes a candidate the plan holds, and
+    the optimizer's repeated poses are replaced, one by one, by the candidate
+    that adds the most information, before exchange (for D) improves the
+    plan; a closed-form plan that repeats poses (one joint, held still) is not
+    used.  A note then gives the D-criterion of the optimizer's plan with its
+    repeats and of the distinct plan: distinct poses cost what the repeats
+    were worth.
+
+    **Order.**  The criteria and the certificate are computed for the plan as
+    the method made it; ordering only permutes its poses.
     """
     if criterion not in CRITERIA:
         raise ArmcalError(f"unknown criterion {criterion!r}; choose one of {', '.join(CRITERIA)}")
     if method not in METHODS:
         raise ArmcalError(f"unknown method {method!r}; choose one of {', '.join(METHODS)}")
+    if order not in ORDERS:
+        raise ArmcalError(f"unknown order {order!r}; choose one of {', '.join(ORDERS)}")
     p = arm.n_free
     min_poses = -(-p // 2)
     if m < min_poses:
@@ -222,6 +269,7 @@ def design(
     q: np.ndarray | None = None
     used: str = method
     closed: list[_ClosedForm] = []
+    repeats, found = 0, 0.0  # the optimizer's repeated poses and its plan's D-criterion
     if method in ("auto", "analytic"):
         closed, failure = _closed_form_plans(arm, m)
         if not closed:
@@ -229,6 +277,19 @@ def design(
                 assert failure is not None
                 raise failure
             notes.append(_closed_form_note(arm, m))
+        elif distinct and all(repeated_poses(plan.q).any() for plan in closed):
+            if method == "analytic":
+                raise ArmcalError(
+                    f"the closed-form {m}-pose plan of {arm.name} repeats one pose (its one "
+                    "joint is held still); distinct poses need --method optimize or exchange"
+                )
+            notes.append(
+                f"the closed-form plan of {arm.name} repeats one pose {m} times (its one joint "
+                "is held still); for distinct poses the optimizer searched other plans"
+            )
+            closed = []
+        elif distinct:
+            closed = [plan for plan in closed if not repeated_poses(plan.q).any()]
     best = max(closed, key=lambda plan: plan.d_efficiency) if closed else None
     optimal_closed = best is not None and attains_unit_bound(arm, best.q)
     paper_d = closed[0].d_efficiency if closed and not closed[0].turns_joint1 else None
@@ -245,18 +306,24 @@ def design(
             )
     elif method == "exchange":
         pool = feasible_poses(arm, 4000, rng=rng) if candidates is None else candidates
-        q = exchange_plan(arm, m, pool, rng=rng)
+        q = exchange_plan(arm, m, pool, rng=rng, distinct=distinct)
         if criterion != "D":
             notes.append("exchange maximizes D; the plan was not tuned for " + criterion)
     else:
         initial = np.stack([plan.q for plan in closed]) if closed else None
         q = optimize_plan(arm, m, criterion=criterion, rng=rng, initial=initial)
         used = "optimize"
-        if criterion == "D" and arm.n_target_links == 1:
+        repeats = int(np.count_nonzero(repeated_poses(q))) if distinct else 0
+        found = float(d_efficiency(arm, q))
+        single = arm.n_target_links == 1  # exchange evaluates one point per pose
+        if criterion == "D" and single:
             pool = feasible_poses(arm, 4000, rng=rng) if candidates is None else candidates
-            polished = exchange_plan(arm, m, pool, start=q, rng=rng)
-            if float(d_efficiency(arm, polished)) > float(d_efficiency(arm, q)) * (1 + 1e-12):
+            polished = exchange_plan(arm, m, pool, start=q, rng=rng, distinct=distinct)
+            if repeats or float(d_efficiency(arm, polished)) > found * (1 + 1e-12):
                 q, used = polished, "optimize+exchange"
+        elif repeats and single:  # replace the repeats, without exchanges that tune for D
+            pool = feasible_poses(arm, 4000, rng=rng) if candidates is None else candidates
+            q = exchange_plan(arm, m, pool, start=q, rng=rng, max_swaps=0, distinct=True)
         if best is not None and _score(arm, best.q, criterion) > _score(arm, q, criterion):
             q, used = best.q, "analytic"  # not expected: the optimizer starts from it
         if arm.standard:
@@ -278,12 +345,31 @@ def design(
                 f"({p} free parameters)"
             )
     q = np.asarray(q, dtype=float)
+    efficiency = float(d_efficiency(arm, q))
+    if distinct:
+        assert not repeated_poses(q).any(), "a distinct plan repeats a pose"
+        if repeats and used != "analytic":
+            notes.append(
+                f"distinct poses: the optimizer's plan repeated {repeats} of its {m} poses "
+                f"(D-criterion {found:.4f}); each repeat was replaced by the candidate pose "
+                f"adding the most information, no candidate taken twice (D-criterion "
+                f"{efficiency:.4f}); poses count as one within {DISTINCT_TOLERANCE:g} rad on "
+                "every joint"
+            )
+    certificate = certify(arm, q, rng=rng) if with_certificate else None
+    travel_found = joint_travel(q)
+    if order == "travel":
+        q = q[order_poses(q)]
     return Design(
         arm=arm,
         q=q,
         criterion=criterion,
         method=used,
-        d_efficiency=float(d_efficiency(arm, q)),
-        certificate=certify(arm, q, rng=rng) if with_certificate else None,
+        d_efficiency=efficiency,
+        certificate=certificate,
         notes=tuple(notes),
+        order=order,
+        joint_travel=joint_travel(q),
+        joint_travel_unordered=travel_found,
+        distinct=distinct,
     )

@@ -7,6 +7,7 @@ import numpy as np
 from ..arm import PlanarArm
 from ..errors import ArmcalError
 from ..observability import model_columns
+from .plans import repeated_poses
 
 __all__ = [
     "exchange_plan",
@@ -55,6 +56,27 @@ def _swap_ratios(a_xx: np.ndarray, a_xi: np.ndarray, a_ii: np.ndarray) -> np.nda
     return (s11 * s22 - s12 * s21) / det_a
 
 
+def _add_most_informative(
+    blocks: np.ndarray, index: np.ndarray, count: int, ridge: np.ndarray
+) -> np.ndarray:
+    """``index`` and ``count`` more candidates, each the unused one adding the most information.
+
+    Adding pose ``x`` multiplies ``det M`` by ``det(I_2 + F_x M^-1 F_x^T)``
+    (``M`` with a small ridge while the poses so far do not determine it).
+    """
+    chosen = index.tolist()
+    info = np.einsum("iap,iaq->pq", blocks[chosen], blocks[chosen])
+    for _ in range(count):
+        g = blocks @ np.linalg.inv(info + ridge)
+        a_xx = g @ np.swapaxes(blocks, -1, -2)  # (N, 2, 2)
+        gain = (1 + a_xx[:, 0, 0]) * (1 + a_xx[:, 1, 1]) - a_xx[:, 0, 1] * a_xx[:, 1, 0]
+        gain[chosen] = -np.inf
+        x = int(np.argmax(gain))
+        chosen.append(x)
+        info = info + blocks[x].T @ blocks[x]
+    return np.array(chosen, dtype=np.intp)
+
+
 def exchange_plan(
     arm: PlanarArm,
     m: int,
@@ -63,6 +85,7 @@ def exchange_plan(
     start: np.ndarray | None = None,
     rng: np.random.Generator | int | None = None,
     max_swaps: int = 1000,
+    distinct: bool = False,
 ) -> np.ndarray:
     """Modified Fedorov exchange for the D-criterion of the arm's model over a candidate set.
 
@@ -82,10 +105,18 @@ def exchange_plan(
         Seeds the random start.
     max_swaps : int
         Cap on the number of exchanges.
+    distinct : bool
+        Take every candidate pose at most once, so that no two poses of the plan
+        are equal (:func:`armcal.doe.plans.repeated_poses`; see Notes).
 
     Returns
     -------
     ndarray, shape (m, n)
+
+    Raises
+    ------
+    ArmcalError
+        If ``distinct`` and fewer than ``m`` candidates are distinct.
 
     Notes
     -----
@@ -98,7 +129,11 @@ def exchange_plan(
     the rank-2 update formula ``det(M + F^T F) = det M det(I_2 + F M^-1 F^T)``
     applied twice; every ratio is a 4 x 4 determinant, evaluated for all pairs at
     once from its 2 x 2 blocks (:func:`_swap_ratios`).  Poses may repeat (an
-    exact design may replicate a point).
+    exact design may replicate a point) unless ``distinct``: then equal
+    candidates count once (the start's poses first), the start's repeated poses
+    are replaced one by one by the unused candidate that adds the most
+    information (largest ``det(I_2 + F_x M^-1 F_x^T)``), and a swap only takes a
+    candidate the plan does not hold.
     """
     if arm.n_target_links > 1:
         raise ArmcalError(
@@ -107,14 +142,25 @@ def exchange_plan(
         )
     rng = np.random.default_rng(rng)
     candidates = np.asarray(candidates, dtype=float)
+    if start is not None:
+        candidates = np.concatenate([np.asarray(start, dtype=float), candidates])
+    repeated = repeated_poses(candidates) if distinct else np.zeros(len(candidates), bool)
+    if distinct:
+        if np.count_nonzero(~repeated) < m:
+            raise ArmcalError(
+                f"distinct poses: only {np.count_nonzero(~repeated)} of the candidate poses "
+                f"are distinct, fewer than the {m} poses of the plan"
+            )
+        candidates = candidates[~repeated]
     if start is None:
         index = rng.choice(candidates.shape[0], size=m, replace=candidates.shape[0] < m)
-    else:
-        candidates = np.concatenate([np.asarray(start, dtype=float), candidates])
-        index = np.arange(m)
+    else:  # the start's poses, less its repeated ones (replaced below)
+        index = np.arange(m)[~repeated[:m]]
     blocks = _blocks(arm, candidates)  # (N, 2, p)
     p = arm.n_free
     ridge = 1e-10 * np.eye(p)
+    if index.size < m:
+        index = _add_most_informative(blocks, index, m - index.size, ridge)
     for _ in range(max_swaps):
         design_blocks = blocks[index]  # (m, 2, p)
         info = np.einsum("iap,iaq->pq", design_blocks, design_blocks)
@@ -127,6 +173,8 @@ def exchange_plan(
         )
         a_ii = design_blocks @ m_inv @ np.swapaxes(design_blocks, -1, -2)  # (m, 2, 2)
         ratio = _swap_ratios(a_xx, a_xi, a_ii)  # (N, m)
+        if distinct:
+            ratio[index] = 0.0  # a candidate the plan holds: it would repeat
         x, i = np.unravel_index(int(np.argmax(ratio)), ratio.shape)
         if ratio[x, i] <= 1.0 + 1e-12:
             break

@@ -10,6 +10,7 @@ from ..arm import PlanarArm, forward_kinematics, wrap_angle
 from ..errors import ArmcalError
 
 __all__ = [
+    "DISTINCT_TOLERANCE",
     "PLACEMENT_CANDIDATES",
     "PLACEMENT_CHUNK_BYTES",
     "analytic_plan",
@@ -17,6 +18,7 @@ __all__ = [
     "feasible_poses",
     "orthogonal_plan",
     "random_plan",
+    "repeated_poses",
 ]
 
 
@@ -108,6 +110,33 @@ def feasible(arm: PlanarArm, q: np.ndarray, *, tol: float = 1e-9) -> np.ndarray:
         inside = arm.region.contains(forward_kinematics(arm, rows, target=target), tol=tol)
         ok &= np.all(inside.reshape(*np.shape(q)[:-1], count), axis=-1)
     return ok
+
+
+#: Two poses are one pose when every joint angle agrees within this many rad (0.2
+#: arcsec: far below any arm's repeatability, so the robot would measure them as one).
+DISTINCT_TOLERANCE = 1e-6
+
+
+def repeated_poses(q: np.ndarray, *, tol: float = DISTINCT_TOLERANCE) -> np.ndarray:
+    """Mask ``(m,)`` of poses that repeat an earlier pose of ``q`` ``(m, n)``.
+
+    Pose ``j`` repeats pose ``i < j`` when ``|q_j - q_i| <= tol`` (rad) on every
+    joint.  Every pose within ``tol`` of an earlier one is marked, so the poses
+    not marked are pairwise distinct.
+
+    Examples
+    --------
+    >>> repeated_poses(np.array([[0.0, 1.0], [0.5, 1.0], [0.0, 1.0 + 1e-9]])).tolist()
+    [False, False, True]
+    """
+    from scipy.spatial import cKDTree  # ~0.3 s to import: keep scipy off `import armcal`
+
+    q = np.asarray(q, dtype=float)
+    marked = np.zeros(q.shape[0], dtype=bool)
+    if q.shape[0] > 1:
+        pairs = cKDTree(q).query_pairs(tol, p=np.inf, output_type="ndarray")  # i < j
+        marked[pairs[:, 1]] = True
+    return marked
 
 
 def feasible_poses(

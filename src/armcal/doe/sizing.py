@@ -12,6 +12,7 @@ from ..arm import PlanarArm
 from ..criteria import inverse_information_batch, position_rms, predicted_std
 from ..errors import ArmcalError
 from .designer import design
+from .order import order_poses
 from .plans import random_plan
 
 __all__ = [
@@ -75,7 +76,8 @@ class PosesNeeded:
     method : str
         How the plans were made (``analytic`` or the optimizer's name).
     plan : ndarray, shape (poses, n)
-        The plan that reaches the goal (rad).
+        The plan that reaches the goal (rad), ordered for short joint travel
+        (:func:`armcal.doe.order.order_poses`).
     evaluated : dict of int to float
         Every ``m`` tried and the accuracy of its best plan.
     """
@@ -176,7 +178,7 @@ def poses_needed(
 
     def best(m: int) -> float:
         if m not in plans:
-            made = design(arm, m, rng=rng, with_certificate=False)
+            made = design(arm, m, rng=rng, with_certificate=False, order="none")
             plans[m] = (made.q, made.method, accuracy_metric(arm, made.q, target, sigma, test_q))
         return plans[m][2]
 
@@ -216,6 +218,6 @@ def poses_needed(
         achieved=achieved,
         previous=best(m - 1) if m > min_poses else math.inf,
         method=method,
-        plan=q,
+        plan=q[order_poses(q)],  # only the plan kept is ordered: the order changes no accuracy
         evaluated={key: value[2] for key, value in sorted(plans.items())},
     )
