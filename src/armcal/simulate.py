@@ -42,7 +42,7 @@ from .doe.plans import random_plan
 from .errors import ArmcalError, ArmcalWarning
 from .identification import METHODS
 from .noise import NoiseModel
-from .observability import check_identifiable, plan_svd
+from .observability import check_identifiable, plan_rows, plan_svd
 from .progress import ProgressCallback
 
 __all__ = [
@@ -174,11 +174,12 @@ class _PositionAccumulator:
     ) -> None:
         self.arm = arm
         self.truth = link_phasors(arm, truth)
-        unit = link_units(arm, np.asarray(test_q, dtype=float))  # (k, K)
+        rows, target, _ = plan_rows(arm, test_q, None)  # every target of a test pose
+        unit = link_units(arm, rows, target)  # (k, K)
         self.basis = np.concatenate([unit, np.ones((unit.shape[0], 1))], axis=1)  # u(x), (k, n+1)
         self.gram = self.basis.conj().T @ self.basis / self.basis.shape[0]  # G
         self.second_moment = np.zeros((self.truth.size, self.truth.size), dtype=complex)
-        j0 = jacobian(arm, test_q, truth)  # (k, 2, p)
+        j0 = jacobian(arm, rows, truth, target=target)  # (k, 2, p)
         per_pose = np.sum((j0 @ covariance) * j0, axis=(1, 2))
         self.predicted_rms = float(np.sqrt(np.mean(per_pose)))
         self.trials, poses = trials, unit.shape[0]
@@ -472,10 +473,10 @@ def monte_carlo(
     q = np.asarray(q, dtype=float)
     truth = _checked_truth(arm, truth)
     if method == "auto":
-        method = "closed-form" if arm.free.all() else "gauss-newton"
+        method = "closed-form" if arm.complete else "gauss-newton"
     if method not in METHODS:
         raise ArmcalError(f"unknown method {method!r}; choose one of auto, {', '.join(METHODS)}")
-    if method == "closed-form" and not arm.free.all():
+    if method == "closed-form" and not arm.complete:
         raise ArmcalError(
             f"the closed form needs every parameter free, but {', '.join(arm.fixed)} "
             f"{'is' if len(arm.fixed) == 1 else 'are'} fixed; use method gauss-newton or auto"
@@ -494,7 +495,8 @@ def monte_carlo(
     if not ok:
         raise ArmcalError("the plan cannot identify every parameter at the given truth")
     predicted = reference**2 * inverse
-    m, p = q.shape[0], arm.n_params
+    rows, target, _ = plan_rows(model, q, None)  # every target of every pose
+    m, p = rows.shape[0], arm.n_params
     chunk = _chunk_size(_floats_per_trial(model, m, method), trials)
     moments = _Moments(p)
     # Moments about the truth keep round-off small; a fixed parameter is 0 in every
@@ -509,8 +511,10 @@ def monte_carlo(
     done = 0
     while done < trials:
         size = min(chunk, trials - done)
-        xy = synthesize_measurements(model, q, truth, sigma, rng=rng, trials=size)
-        estimates, _, converged = METHODS[method](model, q, xy)
+        xy = synthesize_measurements(
+            model, rows, truth, sigma, rng=rng, trials=size, target=target
+        )
+        estimates, _, converged = METHODS[method](model, rows, xy, target=target)
         not_converged += int(np.size(converged) - np.count_nonzero(converged))
         moments.add(estimates - centre)
         if positions is not None:
