@@ -704,6 +704,12 @@ def _add_common(
         sub.add_argument("-o", "--output", metavar="PATH", help=output)
 
 
+def _add_calibration(sub: argparse.ArgumentParser) -> None:
+    """``--calibration`` (the file identify wrote) and ``--json``: commands that start from one."""
+    sub.add_argument("--calibration", required=True, metavar="JSON", help="from identify -o")
+    sub.add_argument("--json", action="store_true", help="print a JSON document on stdout")
+
+
 def _add_fix(sub: argparse.ArgumentParser) -> None:
     sub.add_argument(
         "--fix",
@@ -786,7 +792,7 @@ def build_parser() -> argparse.ArgumentParser:
         "--calibration cal.json --measurements test.csv --per-pose --plot errors.png",
         epilog=_OUTPUTS_EPILOG,
     )
-    sub.add_argument("--calibration", required=True, metavar="JSON", help="from identify -o")
+    _add_calibration(sub)
     sub.add_argument(
         "--measurements",
         required=True,
@@ -795,7 +801,6 @@ def build_parser() -> argparse.ArgumentParser:
     )
     sub.add_argument("--per-pose", action="store_true", help="a table of every pose's errors")
     sub.add_argument("--plot", metavar="PNG", help="draw the error vectors on the workspace")
-    sub.add_argument("--json", action="store_true", help="print a JSON document on stdout")
     sub.set_defaults(run=_validate, inputs=("calibration", "measurements"), outputs=("plot",))
 
     sub = subs.add_parser(
@@ -809,7 +814,7 @@ def build_parser() -> argparse.ArgumentParser:
         "compensate --calibration cal.json --program prog.csv -o corrected.csv",
         epilog=_OUTPUTS_EPILOG,
     )
-    sub.add_argument("--calibration", required=True, metavar="JSON", help="from identify -o")
+    _add_calibration(sub)
     sub.add_argument(
         "--program",
         required=True,
@@ -817,7 +822,6 @@ def build_parser() -> argparse.ArgumentParser:
         help="joint commands q1_deg..qn_deg[,pose][,target]",
     )
     sub.add_argument("--target", metavar="LABEL", help="the target the program is for")
-    sub.add_argument("--json", action="store_true", help="print a JSON document on stdout")
     sub.add_argument(
         "-o", "--output", required=True, metavar="CSV", help="corrected program to write"
     )
@@ -970,12 +974,9 @@ def build_parser() -> argparse.ArgumentParser:
         "--urdf my-arm.urdf\n\n" + textwrap.fill(_OUTPUTS_EPILOG, width=79),
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
-    sub.add_argument(
-        "--calibration", required=True, metavar="JSON", help="calibration file (identify -o)"
-    )
+    _add_calibration(sub)
     sub.add_argument("--robot-toml", metavar="PATH", help="robot TOML file to write")
     sub.add_argument("--urdf", metavar="PATH", help="URDF file to write")
-    sub.add_argument("--json", action="store_true", help="print a JSON document on stdout")
     sub.set_defaults(run=_export, inputs=("calibration",), outputs=("robot_toml", "urdf"))
     return parser
 
