@@ -158,6 +158,17 @@ def _efficiency_label(arm: PlanarArm) -> str:
     return "criteria of the weighted information (not 1 at this model's optimum; see design)"
 
 
+def _table1_line(quality: PlanQuality) -> str:
+    """The largest of the paper's Table I sums, or that a one-link arm has none."""
+    sums = [abs(v) for v in quality.optimality_sums.values()]
+    if not sums:
+        return "Table I sums: none (one link, no base offset: no optimality condition)"
+    return (
+        f"largest Table I sum: {max(sums):.3g}"
+        f" (0 for an optimal plan; {quality.n_poses} is the worst possible)"
+    )
+
+
 def format_quality(arm: PlanarArm, quality: PlanQuality) -> str:
     """Human-readable report of :func:`evaluate_plan`: criteria, std table, accuracy."""
     eff = quality.efficiencies
@@ -171,8 +182,7 @@ def format_quality(arm: PlanarArm, quality: PlanQuality) -> str:
         f"O4 {obs['O4']:.4f}",
         f"paper D*: det C' {float(quality.dstar.det_c):.4f}  "
         f"|det S'| {float(quality.dstar.abs_det_s):.3g}",
-        f"largest Table I sum: {max(abs(v) for v in quality.optimality_sums.values()):.3g}"
-        f" (0 for an optimal plan; {quality.n_poses} is the worst possible)",
+        _table1_line(quality),
     ]
     lines += ["", f"{'parameter':<10}{'predicted std':>14}  unit"]
     for name, unit, std in zip(
