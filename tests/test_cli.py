@@ -227,3 +227,21 @@ def test_poses_needed_paper_examples_and_plan_file(tmp_path, capsys):
     assert json.loads(capsys.readouterr().out)["poses"] == 200
     assert main(["poses-needed", "--angle-std-deg", "0.01", "--sigma", "0.05"]) == 0
     assert "poses: the best" in capsys.readouterr().out
+
+
+def test_demo_report_shows_its_figures_and_the_story(tmp_path, capsys):
+    """Issue 10: the demo's report.md has at least 3 figures, each written beside it."""
+    import re
+
+    assert main(["demo", "-o", str(tmp_path)]) == 0
+    out = capsys.readouterr().out
+    for step in ("1. design", "3. identify (robust)", "4. validate", "5. compensate", "6. export"):
+        assert step in out
+    report = (tmp_path / "report.md").read_text()
+    figures = re.findall(r"!\[[^\]]*\]\(([^)]+\.png)\)", report)
+    assert len(figures) >= 3
+    for name in figures:
+        assert (tmp_path / name).stat().st_size > 10_000  # a drawn PNG, not an empty file
+    # the bumped measurement (pose 7 of 20) is found and left out
+    cal = json.loads((tmp_path / "calibration.json").read_text())
+    assert [o["pose"] for o in cal["outliers"] if o["removed"]] == ["7"]
