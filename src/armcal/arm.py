@@ -37,7 +37,7 @@ several targets needs the ``target`` of every row.
 from __future__ import annotations
 
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any, Literal
 
 import numpy as np
@@ -139,6 +139,10 @@ class Box:
 
 
 Region = Annulus | Box
+
+
+#: Constructor arguments that decide the parameter names.
+_STRUCTURE = frozenset({"link_lengths", "base_offset", "targets", "base_rotation"})
 
 
 def _readonly(a: np.ndarray) -> np.ndarray:
@@ -259,6 +263,7 @@ class PlanarArm:
     targets: tuple[Target, ...]
     base_rotation: bool
     joint_offsets: np.ndarray
+    _default_joint_map: bool = field(repr=False)
 
     def __init__(
         self,
@@ -311,6 +316,9 @@ class PlanarArm:
         object.__setattr__(self, "joint_map", _readonly(mapping))
         object.__setattr__(self, "targets", targets)
         object.__setattr__(self, "base_rotation", bool(base_rotation))
+        default = bool(np.array_equal(mapping, standard_joint_map(n)))
+        # Derived once: the fast paths test these on every kinematics call.
+        object.__setattr__(self, "_default_joint_map", default)
         names = self.param_names
         unknown = [f for f in fixed if f not in names]
         if unknown:
@@ -355,9 +363,10 @@ class PlanarArm:
             carried = [
                 f for f in self.fixed if not (self.base_rotation and f == self.rotation_partner)
             ]
-            names = PlanarArm(**{**kwargs, "fixed": ()}).param_names
-            kwargs["fixed"] = tuple(f for f in carried if f in names)
-        kwargs.update(changes)
+            if _STRUCTURE & set(changes):  # the parameter names may change
+                names = PlanarArm(**{**kwargs, "fixed": ()}).param_names
+                carried = [f for f in carried if f in names]
+            kwargs["fixed"] = tuple(carried)
         return PlanarArm(**kwargs)
 
     @property
@@ -383,11 +392,7 @@ class PlanarArm:
     @property
     def standard_map(self) -> bool:
         """The paper's structure: the default joint map, one target, no base rotation."""
-        return (
-            not self.targets
-            and not self.base_rotation
-            and bool(np.array_equal(self.joint_map, standard_joint_map(self.n_joints)))
-        )
+        return not self.targets and not self.base_rotation and self._default_joint_map
 
     @property
     def paper_structure(self) -> bool:
@@ -602,10 +607,7 @@ class PlanarArm:
 
     @property
     def _default_map(self) -> bool:
-        return bool(
-            np.array_equal(self.joint_map, standard_joint_map(self.n_joints))
-            and not np.any(self.joint_offsets)
-        )
+        return self._default_joint_map and not np.any(self.joint_offsets)
 
     def target_index(self, labels: Sequence[str]) -> np.ndarray:
         """Index ``(m,)`` into :attr:`targets` of every row's target label."""
@@ -627,7 +629,8 @@ def _check_joint_map(mapping: np.ndarray, n: int, *, several_targets: bool) -> N
     s = np.linalg.svd(mapping, compute_uv=False)
     if s[-1] <= 1e-9 * s[0]:
         raise ValueError(
-            "joint_map must be invertible: every link angle needs its own joint reading"
+            "joint_map must be invertible: every link angle needs its own joint reading "
+            "(the default has ones in row i, columns 1..i)"
         )
     if several_targets and n > 1 and np.any(mapping[: n - 1, n - 1] != 0):
         raise ValueError(

@@ -55,6 +55,7 @@ from .io import (
     write_folder,
 )
 from .noise import NoiseModel
+from .observability import every_target
 from .plausibility import deviation_warning, explain, suspicious
 from .progress import ProgressBar
 from .report import (
@@ -280,9 +281,8 @@ def _synthesize(args: argparse.Namespace) -> None:
     if spec.arm.targets:  # every target measured at every pose, one row each
         count = len(spec.arm.targets)
         labels = [str(i // count + 1) for i in range(q.shape[0] * count)]
-        target = np.tile(np.arange(count), q.shape[0])
+        q, target = every_target(spec.arm, q)
         targets = [spec.arm.targets[t].label for t in target]
-        q = np.repeat(q, count, axis=0)
     xy = synthesize_measurements(spec.arm, q, truth, sigma, rng=args.seed, target=target)
     text = format_measurements_csv(q, xy, labels, targets)
     if args.output is None:

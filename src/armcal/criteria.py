@@ -135,7 +135,8 @@ def covariance_factor(
     an arm with several targets is measured at every target of every pose.
     """
     q = np.asarray(q, dtype=float)
-    rows, _, every = plan_rows(arm, q, target)
+    every = target is None and arm.n_target_links > 1  # measured at every target
+    rows = q.shape[-2] * (arm.n_target_links if every else 1)
     if not arm.standard and (params is not None or every):
         at = np.zeros(arm.n_params) if params is None else params
         return _covariance_factor_at(arm, q, at, target)
@@ -144,7 +145,7 @@ def covariance_factor(
     if every:  # the targets' columns were weighted (observability.target_weights)
         to_user = to_user * target_weights(arm)[: to_user.shape[-1]]
     with np.errstate(invalid="ignore", over="ignore"):
-        g = to_user @ np.where(ok[..., None, None], factor, 0.0) / np.sqrt(rows.shape[-2])
+        g = to_user @ np.where(ok[..., None, None], factor, 0.0) / np.sqrt(rows)
     ok = ok & np.all(np.isfinite(g), axis=(-2, -1))
     return np.where(ok[..., None, None], g, np.inf), ok
 

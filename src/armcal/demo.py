@@ -136,7 +136,8 @@ def run_demo(
 
     q_test = random_plan(arm, VALIDATION_POSES, rng=rng)
     xy_test = synthesize_measurements(arm, q_test, truth, sigma, rng=rng)
-    check = validate(calibrated, q_test, xy_test).summary()
+    validation = validate(calibrated, q_test, xy_test)
+    check = validation.summary()
 
     limits = arm.joint_limits
     program = rng.uniform(0.8 * limits[:, 0], 0.8 * limits[:, 1], (PROGRAM_POSES, arm.n_joints))
@@ -195,7 +196,7 @@ def run_demo(
     def plot_validation_figure():
         from .plotting import plot_validation
 
-        return plot_validation(arm, q_test, validate(calibrated, q_test, xy_test))
+        return plot_validation(arm, q_test, validation)
 
     def plot_map_figure():
         from .plotting import plot_error_map

@@ -88,6 +88,7 @@ from .observability import (
     scaled_columns,
     scaled_jacobian,
 )
+from .plane import Plane
 
 __all__ = [
     "HUBER_K",
@@ -706,7 +707,7 @@ class Calibration:
     rows: tuple[int, ...] = ()
     robust: bool = False
     target: np.ndarray | None = None
-    plane: Any = None
+    plane: Plane | None = None
 
     def calibrated(self) -> CalibratedArm:
         """The arm with these deviations, for validation, compensation and export."""

@@ -906,23 +906,14 @@ def load_robot(name_or_path: str | os.PathLike) -> RobotSpec:
 
 
 def _joint_map(path, value: Any, n: int) -> np.ndarray:
-    """``joint_map``: ``n`` rows of ``n`` numbers, ``theta = M q``, invertible."""
+    """``joint_map``: ``n`` rows of ``n`` numbers, ``theta = M q``."""
     if not isinstance(value, list) or len(value) != n:
         raise _fail(
             path,
             f"key 'joint_map': expected {n} rows of {n} numbers (theta = M q), got {value!r}",
         )
     rows = [_numbers(path, row, f"joint_map[{i}]", n) for i, row in enumerate(value)]
-    mapping = np.array(rows)
-    s = np.linalg.svd(mapping, compute_uv=False)
-    if s[-1] <= 1e-9 * s[0]:
-        raise _fail(
-            path,
-            "key 'joint_map': the matrix is singular, so some link angle follows from no joint "
-            "reading; each row says how one link's absolute angle follows from the joints "
-            "(default: row i has ones in columns 1..i)",
-        )
-    return mapping
+    return np.array(rows)  # PlanarArm judges it (invertible; the last column with targets)
 
 
 def _targets(path, table: Any, last_length: float) -> tuple[Target, ...]:
@@ -1380,10 +1371,7 @@ def arm_for_measurements(arm: PlanarArm, meas: Measurements) -> PlanarArm:
         changes.update(base_offset=True, base_rotation=True)
     if not changes:
         return arm
-    fixed = [f for f in arm.fixed if not (f.startswith(("dl", "dq")) and "@" in f)]
-    try:
-        probe = arm.replace(**changes, fixed=())
-        changes["fixed"] = tuple(f for f in fixed if f in probe.param_names)
+    try:  # the fixed parameters that still exist are carried over
         return arm.replace(**changes)
     except ValueError as exc:
         raise InputError(f"{arm.name}: {exc}") from None

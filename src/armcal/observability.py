@@ -18,13 +18,14 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .arm import PlanarArm, link_units, paper_from_user, paper_from_user_matrix, split_params
+from .arm import PlanarArm, link_units, paper_from_user, split_params
 from .errors import ArmcalWarning, NotIdentifiableError
 from .numerics import COND_WARN, RANK_RTOL, ScaledSVD, scaled_svd
 
 __all__ = [
     "Identifiability",
     "check_identifiable",
+    "combination",
     "conditioning_warning",
     "every_target",
     "identifiability",
@@ -89,6 +90,13 @@ def scaled_columns(arm: PlanarArm, q: np.ndarray, target: np.ndarray | None = No
     pose (``T`` rows per pose, :func:`plan_rows`) and the targets' columns are
     weighted by :func:`target_weights`.
     """
+    return _plan_columns(arm, q, target)[0]
+
+
+def _plan_columns(
+    arm: PlanarArm, q: np.ndarray, target: np.ndarray | None
+) -> tuple[np.ndarray, np.ndarray, np.ndarray | None]:
+    """:func:`scaled_columns` with the rows and targets they were computed for."""
     q, target, every = plan_rows(arm, q, target)
     unit = link_units(arm, q, target)
     if every:
@@ -96,7 +104,7 @@ def scaled_columns(arm: PlanarArm, q: np.ndarray, target: np.ndarray | None = No
     cols = [1j * unit, unit]
     if arm.base_offset:
         cols.append(np.broadcast_to(np.array([1.0, 1j]), (*np.shape(q)[:-1], 2)))
-    return np.concatenate(cols, axis=-1)
+    return np.concatenate(cols, axis=-1), q, target
 
 
 def model_basis(arm: PlanarArm) -> tuple[np.ndarray, np.ndarray]:
@@ -177,10 +185,7 @@ def model_columns(arm: PlanarArm, q: np.ndarray, target: np.ndarray | None = Non
     columns.  For the paper's model (:attr:`PlanarArm.standard`) it is
     :func:`scaled_columns` itself.
     """
-    q, target, every = plan_rows(arm, q, target)
-    columns = scaled_columns(arm, q, target)
-    if every:  # as scaled_columns weights a plan measured at every target
-        columns = columns * target_weights(arm)
+    columns, q, target = _plan_columns(arm, q, target)
     if arm.standard:
         return columns
     from .noise import complex_whitening
@@ -330,7 +335,8 @@ class Identifiability:
         return self.identifiable and self.condition_number > COND_WARN
 
 
-def _combination(vector: np.ndarray, names: Sequence[str], *, drop: float = 1e-6) -> str:
+def combination(vector: np.ndarray, names: Sequence[str], *, drop: float = 1e-6) -> str:
+    """A direction ``(p,)`` written as a combination of ``names``, leading coefficient 1."""
     # Leading coefficient 1 (the echelon pivot), so combinations read "dl1 - dl2";
     # terms below `drop` times the leading one are left out.
     leading = np.flatnonzero(np.abs(vector) > drop * np.max(np.abs(vector)))[0]
@@ -355,10 +361,7 @@ def _scaled_from_user_nominal(arm: PlanarArm) -> np.ndarray:
     """
     if not arm.free.all() or not arm.standard_map:
         return np.linalg.inv(model_basis(arm)[1][arm.free])
-    n = arm.n_joints
-    scale = np.ones(arm.n_params)
-    scale[:n] = arm.link_lengths  # u_theta_k = l_k dtheta_k, in mm
-    return paper_from_user_matrix(n, base_offset=arm.base_offset) * scale[:, None]
+    return _scaled_from_user(arm)
 
 
 def _link_of(arm: PlanarArm) -> np.ndarray:
@@ -451,8 +454,8 @@ def identifiability(
         n_params=arm.n_free,
         singular_values=svd.singular_values,
         unidentifiable=bad,
-        combinations=tuple(_combination(v, names) for v in null_rows),
-        poorly_determined=tuple(_combination(v, names, drop=weak_drop) for v in weak_rows),
+        combinations=tuple(combination(v, names) for v in null_rows),
+        poorly_determined=tuple(combination(v, names, drop=weak_drop) for v in weak_rows),
         joints_to_vary=joints,
     )
 

@@ -19,6 +19,7 @@ from .doe.sizing import TARGETS, PosesNeeded
 from .errors import ArmcalWarning
 from .identification import Calibration
 from .io import CALIBRATION_FORMAT, Measurements, Program, robot_to_dict
+from .observability import combination
 from .paper import PAPER_DIGIT
 from .reproduction.compute import TABLE_COLUMNS, Reproduction
 from .simulate import MonteCarlo
@@ -116,16 +117,9 @@ def model_lines(arm: PlanarArm, *, plan: bool = True) -> list[str]:
 
 
 def _rotation_words(arm: PlanarArm) -> str:
-    """The joint-offset direction a base rotation cannot be told from, e.g. ``-dq1``."""
-    d = arm.rotation_direction
+    """The joint-offset direction a base rotation cannot be told from, e.g. ``dq1 - dq3@A``."""
     k = arm.n_links
-    terms = [
-        f"{'-' if c < 0 else '+'} {'' if abs(abs(c) - 1) < 1e-12 else f'{abs(c):.3g}*'}{name}"
-        for name, c in zip(arm.param_names[k : 2 * k], -d[k : 2 * k], strict=True)
-        if abs(c) > 1e-12
-    ]
-    text = " ".join(terms)
-    return text[2:] if text.startswith("+ ") else text
+    return combination(-arm.rotation_direction[k : 2 * k], arm.param_names[k : 2 * k])
 
 
 def model_to_dict(arm: PlanarArm) -> dict:

@@ -8,6 +8,7 @@ import numpy as np
 
 from ..arm import PlanarArm, forward_kinematics, wrap_angle
 from ..errors import ArmcalError
+from ..observability import plan_rows
 
 __all__ = [
     "DISTINCT_TOLERANCE",
@@ -104,11 +105,9 @@ def feasible(arm: PlanarArm, q: np.ndarray, *, tol: float = 1e-9) -> np.ndarray:
     """
     ok = np.all(arm.within_limits(q, tol=tol), axis=-1)
     if arm.region is not None:
-        count = arm.n_target_links
-        rows = np.repeat(np.asarray(q, dtype=float), count, axis=-2)
-        target = np.tile(np.arange(count), np.shape(q)[-2]) if count > 1 else None
+        rows, target, _ = plan_rows(arm, q, None)  # every target of every pose
         inside = arm.region.contains(forward_kinematics(arm, rows, target=target), tol=tol)
-        ok &= np.all(inside.reshape(*np.shape(q)[:-1], count), axis=-1)
+        ok &= np.all(inside.reshape(*np.shape(q)[:-1], arm.n_target_links), axis=-1)
     return ok
 
 
