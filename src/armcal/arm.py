@@ -59,6 +59,7 @@ __all__ = [
     "link_angles",
     "link_phasors",
     "link_units",
+    "link_vectors",
     "paper_from_user",
     "paper_from_user_matrix",
     "split_params",
@@ -813,16 +814,51 @@ def link_phasors(arm: PlanarArm, params: np.ndarray) -> np.ndarray:
     return np.concatenate([z, (base[..., 0] + 1j * base[..., 1])[..., None]], axis=-1)
 
 
-def _tip_terms(arm: PlanarArm, q: np.ndarray, params: np.ndarray | None, target):
-    """``z_k u_k`` ``(..., m, K)``, ``exp(i dtheta_k) u_k`` ``(..., m, K)`` and the base."""
+def _tip_terms(
+    arm: PlanarArm,
+    q: np.ndarray,
+    params: np.ndarray | None,
+    target,
+    deflection: np.ndarray | None = None,
+):
+    """``z_k u_k`` ``(..., m, K)``, ``exp(i dtheta_k) u_k`` ``(..., m, K)`` and the base.
+
+    ``deflection`` ``(..., m, n)``: joint deflections (rad, relative: joint ``j``
+    turns every link from ``j`` on), e.g. under load (:mod:`armcal.elastostatic`).
+    """
     index = check_target(arm, q, target)
     dl, dtheta, base = split_params(arm, params)
     theta = arm.link_angles(q)[..., arm.link_joint] + arm.link_angle0
+    if deflection is not None:
+        theta = theta + np.cumsum(deflection, axis=-1)[..., arm.link_joint]
     turn = np.exp(1j * (theta + dtheta[..., None, :]))
     if index is not None:
         turn[..., arm.n_joints - 1 :] *= index[:, None] == np.arange(arm.n_target_links)
     lengths = (arm.link_nominal + dl)[..., None, :]
     return lengths * turn, turn, base
+
+
+def link_vectors(
+    arm: PlanarArm,
+    q: np.ndarray,
+    params: np.ndarray | None = None,
+    *,
+    target: ArrayLike | None = None,
+    deflection: np.ndarray | None = None,
+) -> np.ndarray:
+    """Every link vector of every row as a complex number ``(..., m, K)`` (mm).
+
+    The tip is the base plus their sum (a target's last link is 0 in the rows
+    of the other targets); joint ``j + 1`` sits at the base plus the sum of the
+    first ``j``.  Arguments as for :func:`forward_kinematics`.
+
+    Examples
+    --------
+    >>> link_vectors(PlanarArm([2.0, 1.0]), np.array([[0.0, np.pi / 2]])).round(12).tolist()
+    [[(2+0j), 1j]]
+    """
+    q = _check_q(arm, q)
+    return _tip_terms(arm, q, params, target, deflection)[0]
 
 
 def forward_kinematics(
@@ -831,6 +867,7 @@ def forward_kinematics(
     params: np.ndarray | None = None,
     *,
     target: ArrayLike | None = None,
+    deflection: np.ndarray | None = None,
 ) -> np.ndarray:
     """End-effector positions for joint angles ``q``.
 
@@ -846,6 +883,9 @@ def forward_kinematics(
     target : ndarray of int, shape (m,), optional
         Index into ``arm.targets`` of the target measured in every row; needed
         when the arm has several targets.
+    deflection : ndarray, shape (m, n) or (..., m, n), optional
+        Joint deflections in rad (relative angles, e.g. under gravity:
+        :mod:`armcal.elastostatic`), added to the real joint angles.
 
     Returns
     -------
@@ -862,7 +902,7 @@ def forward_kinematics(
     [[2.0, 1.0]]
     """
     q = _check_q(arm, q)
-    terms, _, base = _tip_terms(arm, q, params, target)
+    terms, _, base = _tip_terms(arm, q, params, target, deflection)
     tip = np.sum(terms, axis=-1)
     return np.stack([tip.real, tip.imag], axis=-1) + base[..., None, :]
 
@@ -874,6 +914,7 @@ def jacobian(
     *,
     parametrization: Parametrization = "user",
     target: ArrayLike | None = None,
+    deflection: np.ndarray | None = None,
 ) -> np.ndarray:
     """Jacobian of the end-effector position with respect to the deviations.
 
@@ -889,6 +930,8 @@ def jacobian(
         Columns ``[dl, dq, (x0, y0), (phi0)]`` or the paper's ``[dtheta, dl, (x0, y0)]``.
     target : ndarray of int, shape (m,), optional
         Every row's target (see :func:`forward_kinematics`).
+    deflection : ndarray, shape (m, n) or (..., m, n), optional
+        Joint deflections in rad at which to linearize (see :func:`forward_kinematics`).
 
     Returns
     -------
@@ -912,7 +955,7 @@ def jacobian(
     [[0.0, 0.0, 1.0, 1.0], [2.0, 1.0, 0.0, 0.0]]
     """
     q = _check_q(arm, q)
-    terms, turn, _ = _tip_terms(arm, q, params, target)
+    terms, turn, _ = _tip_terms(arm, q, params, target, deflection)
     d_theta = 1j * terms  # complex d(tip)/d(dtheta_k), shape (..., m, K)
     if parametrization == "user":
         if arm.standard_map:
@@ -939,6 +982,7 @@ def joint_jacobian(
     params: np.ndarray | None = None,
     *,
     target: ArrayLike | None = None,
+    deflection: np.ndarray | None = None,
 ) -> np.ndarray:
     """``d(x, y) / dq`` ``(..., m, 2, n)``: how the tip moves with the joint readings (mm/rad).
 
@@ -951,7 +995,7 @@ def joint_jacobian(
     [[0.0, 0.0], [3.0, 1.0]]
     """
     q = _check_q(arm, q)
-    terms, _, _ = _tip_terms(arm, q, params, target)
+    terms, _, _ = _tip_terms(arm, q, params, target, deflection)
     jc = (1j * terms) @ arm.joint_map[arm.link_joint]
     return np.stack([jc.real, jc.imag], axis=-2)
 

@@ -28,12 +28,15 @@ from .criteria import CRITERIA, evaluate_plan
 from .demo import DEMO_FILES, run_demo
 from .doe import DISTINCT_TOLERANCE, ORDERS, TARGETS, design, feasible, poses_needed, random_plan
 from .doe import METHODS as DESIGN_METHODS
+from .doe.compliance import design_compliant
+from .elastostatic import Compliance, Loads, check_compliance_identifiable
 from .errors import ArmcalError, ArmcalWarning, InputError, NotIdentifiableError
 from .export import robot_toml, urdf, urdf_joints_are_readings
 from .identification import METHODS, Calibration, Method, identify
 from .instrument import identify_3d
 from .io import (
     BUILTIN_ROBOTS,
+    COMPLIANCE_TRUTH_KEYS,
     DEFAULT_ROBOT,
     SIGMA_RANGE_MM,
     Measurements,
@@ -45,9 +48,11 @@ from .io import (
     format_measurements_csv,
     format_plan_csv,
     format_program_csv,
+    load_compliance_truth,
     load_robot,
     load_truth,
     read_calibration,
+    read_loaded_plan,
     read_measurements,
     read_plan,
     read_program,
@@ -61,6 +66,8 @@ from .progress import ProgressBar
 from .report import (
     calibration_to_dict,
     compensation_report,
+    compliant_design_summary,
+    compliant_quality,
     cross_validation_warning,
     design_summary,
     format_calibration,
@@ -127,6 +134,20 @@ def _positive(text: str) -> float:
     value = _finite(text)
     if value <= 0:
         raise argparse.ArgumentTypeError(f"expected a number > 0, got {text!r}")
+    return value
+
+
+def _payloads(text: str) -> tuple[float, ...]:
+    values = tuple(_not_negative(part) for part in text.split(",") if part.strip())
+    if not values:
+        raise argparse.ArgumentTypeError(f"expected payloads in kg like 0,10, got {text!r}")
+    return values
+
+
+def _not_negative(text: str) -> float:
+    value = _finite(text)
+    if value < 0:
+        raise argparse.ArgumentTypeError(f"expected a number >= 0, got {text!r}")
     return value
 
 
@@ -272,8 +293,35 @@ def _emit(
 # --------------------------------------------------------------------------- commands
 
 
+def _synthesize_compliant(args: argparse.Namespace, spec: RobotSpec) -> None:
+    q, loads, model = _loaded_plan(args.plan, spec, spec.arm)
+    truth = _compliance_truth(args, spec, model)
+    sigma = _sigma_for_simulation(args, spec)
+    xy = synthesize_measurements(
+        spec.arm, q, truth, sigma, rng=args.seed, compliance=model, loads=loads
+    )
+    text = format_measurements_csv(q, xy, payload_kg=loads.payload_kg)
+    if args.output is None:
+        _print_warnings(_unique(spec.warnings))
+        sys.stdout.write(text)
+        return
+    atomic_write(args.output, text)
+    shown = sigma if sigma is not None else float(spec.arm.sigma or 0.0)
+    document = {"poses": int(q.shape[0]), "sigma_mm": shown, "output": str(args.output)}
+    _emit(
+        args,
+        document,
+        f"wrote {q.shape[0]} measurements of {spec.arm.name} with joint compliance "
+        f"(sigma {shown:g} mm, seed {args.seed}) to {args.output}",
+        spec.warnings,
+    )
+
+
 def _synthesize(args: argparse.Namespace) -> None:
     spec = load_robot(args.robot)
+    if spec.elastic is not None:
+        _synthesize_compliant(args, spec)
+        return
     q = read_plan(args.plan, spec.arm)
     truth = _truth(args, spec)
     sigma = _sigma_for_simulation(args, spec)
@@ -321,15 +369,18 @@ def _identify_file(
     *,
     method: Method,
     robust: bool,
+    spec: RobotSpec | None = None,
 ) -> Calibration:
     """Identify from a measurement file; data that look like a unit mistake are an error.
 
     3-D data (a ``z_mm`` column) are fitted with their plane first
     (:func:`armcal.instrument.identify_3d`).  The unit checks of
     :mod:`armcal.plausibility` refit the plain 2-D model; they are skipped for
-    data with several targets or in 3-D, whose reach check stays.
+    data with several targets or in 3-D, whose reach check stays.  With the
+    robot's ``[elastostatic]`` (``spec``) the joint compliance is fitted too.
     """
-    plain = meas.z is None and arm.n_target_links == 1 and not arm.targets
+    elastic = None if spec is None else spec.elastic
+    plain = meas.z is None and arm.n_target_links == 1 and not arm.targets and elastic is None
     kwargs: dict[str, Any] = {
         "method": method,
         "pose_labels": meas.labels,
@@ -338,8 +389,13 @@ def _identify_file(
         "robust": robust,
         "target": _row_targets(arm, meas),
     }
+    if elastic is not None:
+        kwargs["elastic"] = elastic
+        kwargs["loads"] = meas.loads(elastic.payload_kg)
     try:
         if meas.z is not None:
+            if elastic is not None:
+                kwargs["gravity_3d"] = None if spec is None else spec.gravity_3d
             cal = identify_3d(arm, meas.q, meas.xyz, **kwargs)
         else:
             cal = identify(arm, meas.q, meas.xy, **kwargs)
@@ -379,8 +435,12 @@ def _identify(args: argparse.Namespace) -> None:
     arm = _measured_arm(args, spec, meas)
     if args.sigma is not None:  # the command line's noise replaces the file's sigma_mm column too
         meas = dataclasses.replace(meas, row_sigma=None)
-    cal = _identify_file(arm, args.measurements, meas, method=args.method, robust=args.robust)
-    warnings = [*spec.warnings, *meas.warnings, *cal.warnings]
+    if args.no_compliance:
+        spec = dataclasses.replace(spec, elastic=None)
+    cal = _identify_file(
+        arm, args.measurements, meas, method=args.method, robust=args.robust, spec=spec
+    )
+    warnings = [*spec.warnings, *meas.warnings, *_ignored_loads(args, spec, meas), *cal.warnings]
     large = deviation_warning(cal.arm, cal.params)
     if large is not None and all(w.code != large.code for w in warnings):
         warnings.append(large)
@@ -399,6 +459,8 @@ def _identify(args: argparse.Namespace) -> None:
             sigma=args.sigma,
             row_sigma=meas.row_sigma,
             rng=args.seed,
+            elastic=None if cal.compliance is None else cal.compliance.model.elastic,
+            loads=cal.loads,
         )
         summary = result.summary()
         extra["cross_validation"] = summary
@@ -412,6 +474,26 @@ def _identify(args: argparse.Namespace) -> None:
     if args.output is not None:
         atomic_write(args.output, to_json(document))
     _emit(args, document, text, warnings)
+
+
+def _ignored_loads(
+    args: argparse.Namespace, spec: RobotSpec, meas: Measurements
+) -> list[ArmcalWarning]:
+    """A warning when the data carry loads that a rigid model cannot use."""
+    if spec.elastic is not None or not meas.has_loads:
+        return []
+    why = (
+        "--no-compliance fits the geometry only"
+        if getattr(args, "no_compliance", False)
+        else "the robot file has no [elastostatic] table"
+    )
+    return [
+        ArmcalWarning(
+            "loads-ignored",
+            f"{args.measurements}: the payload_kg/fx_N/fy_N columns are not used: {why}; "
+            "add [elastostatic] to the robot file to fit the joints' compliance",
+        )
+    ]
 
 
 def _validate(args: argparse.Namespace) -> None:
@@ -429,9 +511,15 @@ def _validate(args: argparse.Namespace) -> None:
             "of every row"
         )
     points = meas.xy if meas.z is None else meas.xyz
+    loads = None if cal.compliance is None else meas.loads(cal.compliance.elastic.payload_kg)
     try:
         result = validate(
-            cal, meas.q, points, target=_row_targets(cal.arm, meas), row_sigma=meas.row_sigma
+            cal,
+            meas.q,
+            points,
+            target=_row_targets(cal.arm, meas),
+            row_sigma=meas.row_sigma,
+            loads=loads,
         )
     except ArmcalError as exc:
         raise ArmcalError(f"{args.measurements}: {exc}") from None
@@ -467,7 +555,22 @@ def _compensate(args: argparse.Namespace) -> None:
             "add a column 'target' or pass --target LABEL for the tool point of the program"
         )
     target = None if labels is None or not arm.targets else arm.target_index(labels)
-    result = compensate(cal, program.q, target=target)
+    loads = None
+    if cal.compliance is not None:
+        payload: float | np.ndarray = cal.compliance.elastic.payload_kg
+        if args.payload_kg is not None:
+            if program.payload_kg is not None:
+                raise ArmcalError("--payload-kg: the program has a payload_kg column already")
+            payload = args.payload_kg
+        if program.payload_kg is not None:
+            payload = program.payload_kg
+        loads = Loads.create(program.q.shape[0], payload, program.force_n)
+    elif args.payload_kg is not None or program.payload_kg is not None:
+        raise ArmcalError(
+            "--payload-kg/payload_kg: the calibration has no joint compliance, so a payload "
+            "changes nothing; calibrate with [elastostatic] in the robot file"
+        )
+    result = compensate(cal, program.q, target=target, loads=loads)
     atomic_write(
         args.output, format_program_csv(result.q, result.corrected, program.labels, labels)
     )
@@ -506,9 +609,80 @@ def _quality_report(args: argparse.Namespace, spec: RobotSpec, arm: PlanarArm, q
     return quality, quality_to_dict(arm, quality), format_quality(arm, quality)
 
 
+def _loaded_plan(
+    path: str, spec: RobotSpec, arm: PlanarArm
+) -> tuple[np.ndarray, Loads, Compliance]:
+    """A plan of a robot with ``[elastostatic]``: poses, payloads and the compliance model."""
+    assert spec.elastic is not None
+    q, payload = read_loaded_plan(path, spec.arm)
+    loads = Loads.create(q.shape[0], spec.elastic.payload_kg if payload is None else payload)
+    try:
+        model = Compliance.for_loads(arm, spec.elastic, loads)
+    except ArmcalError as exc:
+        raise ArmcalError(f"{spec.source}: {exc}") from None
+    return q, loads, model
+
+
+def _compliance_truth(args: argparse.Namespace, spec: RobotSpec, model: Compliance) -> np.ndarray:
+    """The deviations and the compliance of the virtual robot (``--truth`` is required)."""
+    if args.truth is None:
+        keys = ", ".join(COMPLIANCE_TRUTH_KEYS[k] for k in dict.fromkeys(model.kinds))
+        raise ArmcalError(
+            f"{spec.source}: a robot with [elastostatic] needs --truth truth.toml with the "
+            f"deviations and {keys}"
+        )
+    geometry = load_truth(args.truth, spec.arm)
+    return np.concatenate([geometry, load_compliance_truth(args.truth, model)])
+
+
+def _design_compliant(args: argparse.Namespace, spec: RobotSpec, arm: PlanarArm) -> None:
+    assert spec.elastic is not None
+    if args.criterion != "D" or args.method not in ("auto", "exchange"):
+        raise ArmcalError(
+            "a robot with [elastostatic] is designed D-optimal by exchange and polish; "
+            "leave --criterion and --method at their defaults"
+        )
+    if args.candidates is not None or args.distinct:
+        raise ArmcalError("--candidates and --distinct are not supported with [elastostatic] yet")
+    start = time.perf_counter()
+    result = design_compliant(
+        arm,
+        spec.elastic,
+        args.poses,
+        payloads=args.payloads,
+        sigma=_design_sigma(arm),
+        rng=np.random.default_rng(args.seed),
+        order=args.order,
+    )
+    seconds = time.perf_counter() - start
+    document, report = compliant_quality(result.model, result.q, result.loads, result.sigma_mm)
+    extra, header = compliant_design_summary(result, seconds)
+    document.update(extra)
+    written = []
+    if args.plot is not None:
+        from .plotting import plot_plan, save_figure  # matplotlib only when a plot is asked for
+
+        save_figure(plot_plan(spec.arm, result.q), args.plot)
+    if args.output is not None:
+        atomic_write(args.output, format_plan_csv(result.q, result.payload_kg))
+        written.append(f"wrote {args.output}")
+    if args.plot is not None:
+        written.append(f"wrote {args.plot}")
+    text = "\n".join([*header, report, *([""] if written else []), *written])
+    _emit(args, document, text, spec.warnings)
+
+
 def _design(args: argparse.Namespace) -> None:
     spec = load_robot(args.robot)
     arm = _model_arm(args, spec)
+    if spec.elastic is not None:
+        _design_compliant(args, spec, arm)
+        return
+    if args.payloads is not None:
+        raise ArmcalError(
+            f"--payloads: robot {spec.arm.name} has no [elastostatic] table, so a payload "
+            "changes nothing; add the table to the robot file"
+        )
     candidates = None if args.candidates is None else read_plan(args.candidates, spec.arm)
     if candidates is not None and not np.all(feasible(spec.arm, candidates)):
         row = int(np.flatnonzero(~feasible(spec.arm, candidates))[0]) + 1
@@ -548,6 +722,15 @@ def _design(args: argparse.Namespace) -> None:
 def _evaluate(args: argparse.Namespace) -> None:
     spec = load_robot(args.robot)
     arm = _model_arm(args, spec)
+    if spec.elastic is not None:
+        q, loads, model = _loaded_plan(args.plan, spec, arm)
+        try:
+            check_compliance_identifiable(model, q, loads)
+        except NotIdentifiableError as exc:
+            raise NotIdentifiableError(f"{args.plan}: {exc}", exc.combinations) from None
+        document, report = compliant_quality(model, q, loads, _design_sigma(arm))
+        _emit(args, document, report, spec.warnings)
+        return
     q = read_plan(args.plan, arm)
     try:
         quality, document, report = _quality_report(args, spec, arm, q)
@@ -566,9 +749,37 @@ def _evaluate(args: argparse.Namespace) -> None:
     _emit(args, document, report, warnings)
 
 
+def _simulate_compliant(args: argparse.Namespace, spec: RobotSpec, arm: PlanarArm) -> None:
+    q, loads, model = _loaded_plan(args.plan, spec, arm)
+    truth = _compliance_truth(args, spec, model)
+    try:
+        result = monte_carlo(
+            arm,
+            q,
+            truth,
+            None if arm.noise is not None else DEFAULT_SIGMA_MM,
+            args.trials,
+            rng=np.random.default_rng(args.seed),
+            progress=ProgressBar("simulate"),
+            compliance=model,
+            loads=loads,
+        )
+    except NotIdentifiableError as exc:
+        raise NotIdentifiableError(f"{args.plan}: {exc}", exc.combinations) from None
+    _emit(
+        args,
+        monte_carlo_to_dict(result),
+        format_monte_carlo(result),
+        [*spec.warnings, *result.warnings],
+    )
+
+
 def _simulate(args: argparse.Namespace) -> None:
     spec = load_robot(args.robot)
     arm = _model_arm(args, spec)
+    if spec.elastic is not None:
+        _simulate_compliant(args, spec, arm)
+        return
     q = read_plan(args.plan, arm)
     truth = _truth(args, spec)
     method = args.method
@@ -778,6 +989,12 @@ def build_parser() -> argparse.ArgumentParser:
         help="K-fold cross-validation: every pose predicted by a calibration without it "
         "(poses with the same pose label stay together); --seed shuffles the folds",
     )
+    sub.add_argument(
+        "--no-compliance",
+        action="store_true",
+        help="fit the geometry only, even when the robot file has [elastostatic] (to see what "
+        "the joints' compliance explains)",
+    )
     _add_fix(sub)
     _add_common(sub, seed=True, output="calibration JSON to write")
     sub.set_defaults(run=_identify, inputs=("robot", "measurements"), outputs=("output",))
@@ -823,6 +1040,13 @@ def build_parser() -> argparse.ArgumentParser:
     )
     sub.add_argument("--target", metavar="LABEL", help="the target the program is for")
     sub.add_argument(
+        "--payload-kg",
+        type=_not_negative,
+        metavar="KG",
+        help="the program's payload, for a calibration with joint compliance (default: the "
+        "robot file's payload_kg; a payload_kg column gives it per row)",
+    )
+    sub.add_argument(
         "-o", "--output", required=True, metavar="CSV", help="corrected program to write"
     )
     sub.set_defaults(run=_compensate, inputs=("calibration", "program"), outputs=("output",))
@@ -846,6 +1070,13 @@ def build_parser() -> argparse.ArgumentParser:
         help="auto = analytic if it fits the constraints, else optimize + exchange",
     )
     sub.add_argument("--candidates", metavar="PLAN_CSV", help="reachable poses for exchange")
+    sub.add_argument(
+        "--payloads",
+        type=_payloads,
+        metavar="KG,KG",
+        help="payloads a pose may carry, for a robot with [elastostatic]: the design picks "
+        "which poses to load and with what (default: 0 and the robot file's payload_kg)",
+    )
     sub.add_argument(
         "--order",
         choices=list(ORDERS),

@@ -40,6 +40,7 @@ from .arm import (
     wrap_angle,
 )
 from .calibrated import CalibratedArm
+from .elastostatic import Elastostatic, Loads
 from .errors import ArmcalError, NotIdentifiableError
 from .identification import identify
 from .noise import NoiseModel
@@ -123,6 +124,7 @@ def predicted_errors(
     *,
     target: np.ndarray | None = None,
     row_sigma: np.ndarray | None = None,
+    loads: Loads | None = None,
 ) -> tuple[np.ndarray, np.ndarray]:
     """The calibrated model's uncertainty and a measurement's expected error ``(m,)`` each, mm.
 
@@ -137,8 +139,8 @@ def predicted_errors(
     [[0.0], [0.014142]]
     """
     q = np.asarray(q, dtype=float)
-    j = jacobian(cal.arm, q, cal.params, target=target)  # (m, 2, p)
-    model = np.einsum("mia,ab,mib->m", j, cal.covariance, j)
+    j, covariance = cal.position_jacobian(q, loads=loads, target=target)  # (m, 2, p)
+    model = np.einsum("mia,ab,mib->m", j, covariance, j)
     noise = _noise(cal).pose_covariances(cal.arm, q, cal.params, row_sigma, target=target)
     total = model + np.trace(noise, axis1=-2, axis2=-1)
     return np.sqrt(np.clip(model, 0.0, None)), np.sqrt(np.clip(total, 0.0, None))
@@ -151,6 +153,7 @@ def validate(
     *,
     target: np.ndarray | None = None,
     row_sigma: np.ndarray | None = None,
+    loads: Loads | None = None,
 ) -> Validation:
     """Positioning error before and after calibration on held-out measurements.
 
@@ -166,6 +169,9 @@ def validate(
         Every row's target, for an arm with several.
     row_sigma : ndarray, shape (m,), optional
         Per-row instrument noise (mm) for the predicted error.
+    loads : Loads, optional
+        Every row's payload and tip force, for a calibration with compliance
+        (default: the robot file's payload).  The nominal model has none.
 
     Returns
     -------
@@ -204,8 +210,8 @@ def validate(
             )
         xy = points
     nominal = forward_kinematics(cal.arm, q, cal.base_pose_params(), target=target)
-    calibrated = forward_kinematics(cal.arm, q, cal.params, target=target)
-    model, predicted = predicted_errors(cal, q, target=target, row_sigma=row_sigma)
+    calibrated = cal.positions(q, loads=loads, target=target)
+    model, predicted = predicted_errors(cal, q, target=target, row_sigma=row_sigma, loads=loads)
     return Validation(xy - nominal, xy - calibrated, predicted, model, xy, out_of_plane)
 
 
@@ -258,6 +264,8 @@ def cross_validate(
     sigma: float | None = None,
     row_sigma: np.ndarray | None = None,
     rng: np.random.Generator | int | None = None,
+    elastic: Elastostatic | None = None,
+    loads: Loads | None = None,
 ) -> CrossValidation:
     """K-fold cross-validation of the calibration of ``arm`` from in-plane data.
 
@@ -274,7 +282,7 @@ def cross_validate(
     groups : ndarray, shape (m,), optional
         Rows that belong together (the targets measured at one pose) stay in
         one fold; every row its own group by default.
-    target, sigma, row_sigma
+    target, sigma, row_sigma, elastic, loads
         As for :func:`armcal.identification.identify`.
     rng : numpy.random.Generator or int or None
         Shuffles the groups into folds.
@@ -313,6 +321,8 @@ def cross_validate(
                 sigma=sigma,
                 row_sigma=None if row_sigma is None else row_sigma[train],
                 target=sub,
+                elastic=elastic,
+                loads=None if loads is None else loads.take(train),
             )
         except NotIdentifiableError:
             raise ArmcalError(
@@ -321,9 +331,12 @@ def cross_validate(
             ) from None
         test = None if target is None else target[held]
         fitted = cal.calibrated()
-        errors[held] = xy[held] - forward_kinematics(arm, q[held], cal.params, target=test)
+        held_loads = None if loads is None else loads.take(held)
+        errors[held] = xy[held] - fitted.positions(q[held], loads=held_loads, target=test)
         rows = None if row_sigma is None else row_sigma[held]
-        predicted[held] = predicted_errors(fitted, q[held], target=test, row_sigma=rows)[1]
+        predicted[held] = predicted_errors(
+            fitted, q[held], target=test, row_sigma=rows, loads=held_loads
+        )[1]
     return CrossValidation(folds, fold, errors, predicted)
 
 
@@ -385,20 +398,33 @@ def _residual(
     goal: np.ndarray,
     goal_angle: np.ndarray | None,
     scale: float,
+    deflection: np.ndarray | None = None,
 ) -> np.ndarray:
     """``(m, k)``: position (mm) and, with an orientation goal, ``scale`` times its angle (mm)."""
-    r = forward_kinematics(arm, q, params, target=target) - goal
+    r = forward_kinematics(arm, q, params, target=target, deflection=deflection) - goal
     if goal_angle is None:
         return r
-    turn = wrap_angle(tool_angles(arm, q, params, target=target) - goal_angle)
-    return np.column_stack([r, scale * turn])
+    turn = tool_angles(arm, q, params, target=target) - goal_angle
+    if deflection is not None:  # the tool turns with every joint's deflection
+        turn = turn + np.sum(deflection, axis=-1)
+    return np.column_stack([r, scale * wrap_angle(turn)])
 
 
 def _solve_jacobian(
-    arm: PlanarArm, q: np.ndarray, params: np.ndarray, target, orientation: bool, scale: float
+    arm: PlanarArm,
+    q: np.ndarray,
+    params: np.ndarray,
+    target,
+    orientation: bool,
+    scale: float,
+    deflection: np.ndarray | None = None,
 ) -> np.ndarray:
-    """``d residual / dq`` ``(m, k, n)``: the joint Jacobian, with the tool angle's row."""
-    jac = joint_jacobian(arm, q, params, target=target)
+    """``d residual / dq`` ``(m, k, n)``: the joint Jacobian, with the tool angle's row.
+
+    Under load, at the deflected pose; the deflection's own change with ``q``
+    (about 1e-3 of a step) only slows Newton's convergence from quadratic to fast linear.
+    """
+    jac = joint_jacobian(arm, q, params, target=target, deflection=deflection)
     if not orientation:
         return jac
     row = scale * arm.joint_map[-1]  # the tool turns with the last link angle
@@ -413,6 +439,7 @@ def compensate(
     orientation: bool | None = None,
     tol_mm: float = 1e-9,
     max_iter: int = 50,
+    loads: Loads | None = None,
 ) -> Compensation:
     """Corrected joint commands: the calibrated arm goes where the nominal program meant.
 
@@ -430,6 +457,10 @@ def compensate(
         this distance (mm; the tool angle's residual counted at the reach).
     max_iter : int
         Newton iterations at most.
+    loads : Loads, optional
+        The program's payload and tip force per row, for a calibration with
+        compliance (default: the robot file's payload): the corrected commands
+        also take out the joints' predicted deflection under that load.
 
     Returns
     -------
@@ -457,8 +488,19 @@ def compensate(
     scale = float(np.sum(arm.link_nominal))  # an angle counted as the tip's arc at full reach
     goal = forward_kinematics(arm, q0, None, target=target)
     goal_angle = tool_angles(arm, q0, None, target=target) if keep_angle else None
+    model = cal.robot_compliance()
+    if model is not None and loads is None:
+        loads = Loads.create(q0.shape[0], model.elastic.payload_kg)
+    values = cal.compliance_values
+
+    def deflection(rows: np.ndarray) -> np.ndarray | None:
+        if model is None or loads is None or values is None:
+            return None
+        return model.deflection(q[rows], robot, values, loads.take(rows))
+
     q = q0.copy()
-    residual = _residual(arm, q, robot, target, goal, goal_angle, scale)
+    everyone = np.arange(q.shape[0])
+    residual = _residual(arm, q, robot, target, goal, goal_angle, scale, deflection(everyone))
     done = np.zeros(q.shape[0], dtype=bool)
     for _ in range(max_iter):
         done = np.linalg.norm(residual, axis=1) <= tol_mm
@@ -466,7 +508,8 @@ def compensate(
         if active.size == 0:
             break
         sub = None if target is None else target[active]
-        jac = _solve_jacobian(arm, q[active], robot, sub, keep_angle, scale)
+        bend = deflection(active)
+        jac = _solve_jacobian(arm, q[active], robot, sub, keep_angle, scale, bend)
         pinv = np.linalg.pinv(jac, rcond=1e-10)  # (a, n, k)
         step = -np.einsum("ank,ak->an", pinv, residual[active])
         # Minimum-norm steps, and whatever the goal leaves free drifts back towards q0.
@@ -481,6 +524,7 @@ def compensate(
             goal[active],
             None if goal_angle is None else goal_angle[active],
             scale,
+            deflection(active),
         )
     done = np.linalg.norm(residual, axis=1) <= tol_mm
     reasons = [
@@ -497,20 +541,33 @@ def compensate(
         )
         done[i] = False
     q = np.where(done[:, None], q, q0)
-    before = np.linalg.norm(forward_kinematics(arm, q0, robot, target=target) - goal, axis=1)
-    covariance = cal.robot_covariance()
-    j_user = jacobian(arm, q, robot, target=target)
+    if model is None or values is None:
+        bent = forward_kinematics(arm, q0, robot, target=target)
+        covariance = cal.robot_covariance()
+        j_user = jacobian(arm, q, robot, target=target)
+    else:
+        bent = model.tip(q0, np.concatenate([robot, values]), loads)
+        covariance = cal.robot_full_covariance()
+        j_user = model.jacobian(q, np.concatenate([robot, values]), loads)
+    before = np.linalg.norm(bent - goal, axis=1)
     after = np.sqrt(np.clip(np.einsum("mia,ab,mib->m", j_user, covariance, j_user), 0, None))
     turn_before = turn_after = None
     if keep_angle:
         assert goal_angle is not None
-        turn = wrap_angle(tool_angles(arm, q0, robot, target=target) - goal_angle)
-        turn_before = np.degrees(np.abs(turn))
+        bend0 = None
+        if model is not None and values is not None:  # at the program's own commands
+            bend0 = model.deflection(q0, robot, values, loads)
+        turn = tool_angles(arm, q0, robot, target=target) - goal_angle
+        if bend0 is not None:
+            turn = turn + np.sum(bend0, axis=-1)
+        turn_before = np.degrees(np.abs(wrap_angle(turn)))
         # The tool angle moves with the last link vector's angle deviation only.
         k = arm.n_links
         last = k - arm.n_target_links + (0 if target is None else target)
         g = np.zeros((q.shape[0], arm.n_params))
         g[:, k : 2 * k] = arm.angle_map[last]
+        if model is not None:  # and with every compliance parameter's deflection
+            g = np.concatenate([g, model.loads(q, robot, loads)], axis=-1)
         variance = np.einsum("ma,ab,mb->m", g, covariance, g)
         turn_after = np.degrees(np.sqrt(np.clip(variance, 0.0, None)))
     return Compensation(q, done, tuple(reasons), before, after, turn_before, turn_after)

@@ -72,6 +72,14 @@ from .diagnostics import (
     goodness_of_fit,
     studentized_test,
 )
+from .elastostatic import (
+    Compliance,
+    Elastostatic,
+    Loads,
+    barely_identifiable_warning,
+    check_compliance_identifiable,
+    compliance_identifiability,
+)
 from .errors import ArmcalError, ArmcalWarning
 from .noise import NoiseModel
 from .numerics import (
@@ -635,6 +643,142 @@ def _onto_free(arm: PlanarArm, full: PlanarArm, params: np.ndarray) -> np.ndarra
     return params - np.outer(params[:, i] / direction[i], direction)
 
 
+def solve_compliant(
+    model: Compliance,
+    q: np.ndarray,
+    xy: np.ndarray,
+    loads: Loads | None,
+    *,
+    row_sigma: np.ndarray | None = None,
+    pose_weights: np.ndarray | None = None,
+    start: np.ndarray | None = None,
+    tol: float = 1e-12,
+    max_iter: int = 50,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Weighted least squares of geometry plus joint compliance; batched over sets.
+
+    Parameters
+    ----------
+    model : Compliance
+        The arm (noise model, fixed parameters) and its loads (:mod:`armcal.elastostatic`).
+    q : ndarray, shape (m, n)
+    xy : ndarray, shape (m, 2) or (N, m, 2)
+    loads : Loads or None
+        Every row's payload and tip force (None: the robot file's payload).
+    row_sigma, pose_weights, tol, max_iter
+        As for :func:`solve_model`.
+    start : ndarray, shape (p + P,) or (N, p + P), optional
+        Starting point; by default the geometry-only least-squares fit (the
+        closed form where every geometric parameter is free) with no compliance.
+
+    Returns
+    -------
+    params : ndarray, shape (p + P,) or (N, p + P)
+        User deviations (mm, rad) then compliance (rad/(N m), rad/m).
+    iterations, converged
+        As for :func:`solve_model`.
+
+    Notes
+    -----
+    Gauss-Newton on the whitened rows of :meth:`Compliance.jacobian` (the
+    deflected model), every active set at once; the step and stopping rule are
+    those of :func:`solve_model`, with a compliance step measured by the tip
+    motion it causes.
+    """
+    batched = np.ndim(xy) == 3
+    arm = model.arm
+    q, sets = _as_sets(arm, q, xy)
+    n_sets = sets.shape[0]
+    p = arm.n_params
+    total = p + model.n_params
+    free = model.all_free
+    if pose_weights is not None:
+        pose_weights = np.broadcast_to(np.asarray(pose_weights, dtype=float), sets.shape[:-1])
+    params = np.zeros((n_sets, total))
+    if start is not None:
+        params[:] = np.broadcast_to(np.asarray(start, dtype=float), params.shape)
+    else:
+        geometry, _, _ = solve_model(
+            arm, q, sets, row_sigma=row_sigma, pose_weights=pose_weights, check_plan=False
+        )
+        params[:, :p] = geometry
+    params = params * free
+    reach = float(np.sum(arm.link_lengths))
+    threshold = tol * reach
+    floor = 1e-9 * reach
+    tip_per_unit = model.typical_scale(q, loads) * reach  # mm per unit of compliance
+    iterations = np.zeros(n_sets, dtype=int)
+    failed = np.zeros(n_sets, dtype=bool)
+    previous = np.full(n_sets, np.inf)
+    active = np.arange(n_sets)
+    for _ in range(max_iter):
+        current = params[active]
+        weights = _for_sets(pose_weights, active)
+        w = _whitening(arm, q, current[:, :p], row_sigma, weights, None)
+        jac = model.jacobian(q, current, loads)[..., free]
+        residual = sets[active] - model.tip(q, current, loads)
+        rows = _apply(w, jac).reshape(active.size, -1, model.n_free)
+        rhs = _apply(w, residual[..., None])[..., 0].reshape(active.size, -1)
+        step, _, _ = solve_least_squares(rows, rhs)
+        full_step = np.zeros((active.size, total))
+        full_step[:, free] = step
+        params[active] = current + full_step
+        iterations[active] += 1
+        finite = np.all(np.isfinite(full_step), axis=1)
+        failed[active[~finite]] = True
+        size = np.maximum(
+            _step_size(arm, full_step[:, :p]),
+            np.max(np.abs(full_step[:, p:]) * tip_per_unit, axis=-1, initial=0.0),
+        )
+        stalled = (size >= 0.5 * previous[active]) & (size < floor)
+        previous[active] = size
+        active = active[finite & (size > threshold) & ~stalled]
+        if active.size == 0:
+            break
+    converged = ~failed
+    converged[active] = False
+    angles = arm.angle_params
+    params[:, :p][:, angles] = wrap_angle(params[:, :p][:, angles])
+    if batched:
+        return params, iterations, converged
+    return params[0], iterations[0], converged[0]
+
+
+@dataclass(frozen=True, eq=False)
+class ComplianceFit:
+    """The identified joint compliance of a :class:`Calibration`.
+
+    Attributes
+    ----------
+    model : Compliance
+        The parameters (names, units) and the loads model.
+    values : ndarray, shape (P,)
+        Compliance in internal units (rad/(N m) for ``k``, rad/m for ``c``).
+    covariance : ndarray, shape (p + P, p + P)
+        Covariance of the geometry and compliance together (internal units).
+    geometry_only_rms_mm : float or None
+        Residual RMS of a fit without compliance on the same poses, for the report.
+    max_deflection_rad : ndarray, shape (n,), or None
+        The largest fitted deflection of every joint over the poses.
+    """
+
+    model: Compliance
+    values: np.ndarray
+    covariance: np.ndarray
+    geometry_only_rms_mm: float | None = None
+    max_deflection_rad: np.ndarray | None = None
+
+    @property
+    def names(self) -> tuple[str, ...]:
+        return self.model.names
+
+    @property
+    def std(self) -> np.ndarray:
+        """Standard errors ``(P,)`` in display units."""
+        p = self.model.arm.n_params
+        return np.sqrt(np.diag(self.covariance)[p:]) * self.model.display_scale
+
+
 @dataclass(frozen=True, eq=False)
 class Calibration:
     """Identified deviations with their uncertainty, the fit's residuals and its diagnostics.
@@ -687,6 +831,12 @@ class Calibration:
         The plane of motion fitted to 3-D instrument data
         (:class:`armcal.instrument.Plane`), in whose coordinates ``residuals``
         and the base pose are; None for 2-D data.
+    compliance : ComplianceFit or None
+        The joint compliance identified with the geometry (:mod:`armcal.elastostatic`);
+        ``params`` and ``covariance`` stay the geometric ones, and ``names``,
+        ``values`` and ``std`` list both.
+    loads : Loads or None
+        The rows' payloads and tip forces, for a fit with compliance.
     """
 
     arm: PlanarArm
@@ -708,10 +858,27 @@ class Calibration:
     robust: bool = False
     target: np.ndarray | None = None
     plane: Plane | None = None
+    compliance: ComplianceFit | None = None
+    loads: Loads | None = None
 
     def calibrated(self) -> CalibratedArm:
         """The arm with these deviations, for validation, compensation and export."""
-        return CalibratedArm(self.arm, self.params, self.covariance, self.sigma_mm, self.plane)
+        c = self.compliance
+        return CalibratedArm(
+            self.arm,
+            self.params,
+            self.covariance,
+            self.sigma_mm,
+            self.plane,
+            compliance=None if c is None else c.model,
+            compliance_values=None if c is None else c.values,
+            full_covariance=None if c is None else c.covariance,
+        )
+
+    @property
+    def n_free(self) -> int:
+        """Free parameters of the fit (geometry and compliance)."""
+        return self.arm.n_free + (0 if self.compliance is None else self.compliance.model.n_params)
 
     @property
     def n_poses(self) -> int:
@@ -726,28 +893,44 @@ class Calibration:
     @property
     def dof(self) -> int:
         """Residual degrees of freedom ``2 m_used - p_f``."""
-        return 2 * self.n_used - self.arm.n_free
+        return 2 * self.n_used - self.n_free
 
     @property
     def names(self) -> tuple[str, ...]:
-        """Parameter names ``dl1.., dq1.., (x0, y0)``."""
+        """Parameter names ``dl1.., dq1.., (x0, y0)``, then any compliance ``k1..``/``c1..``."""
+        if self.compliance is not None:
+            return self.compliance.model.all_names
         return self.arm.param_names
 
     @property
     def units(self) -> tuple[str, ...]:
-        """Display units of the parameters (``mm`` or ``deg``)."""
+        """Display units of the parameters (``mm``, ``deg``, ``urad/(N*m)``, ``mdeg/m``)."""
+        if self.compliance is not None:
+            return self.compliance.model.all_units
         return self.arm.param_units
+
+    @property
+    def display_scale(self) -> np.ndarray:
+        """Internal to display units of every parameter in :attr:`names`."""
+        if self.compliance is not None:
+            return self.compliance.model.all_scale
+        return self.arm.display_scale
+
+    def _all_covariance(self) -> np.ndarray:
+        return self.covariance if self.compliance is None else self.compliance.covariance
 
     @property
     def values(self) -> np.ndarray:
         """Parameter values ``(p,)`` in display units (mm, deg)."""
+        if self.compliance is not None:
+            return np.concatenate([self.params, self.compliance.values]) * self.display_scale
         return self.params * self.arm.display_scale
 
     @property
     def covariance_display(self) -> np.ndarray:
         """Covariance ``(p, p)`` in display units (mm, deg)."""
-        s = self.arm.display_scale
-        return self.covariance * np.outer(s, s)
+        s = self.display_scale
+        return self._all_covariance() * np.outer(s, s)
 
     @property
     def std(self) -> np.ndarray:
@@ -757,9 +940,10 @@ class Calibration:
     @property
     def correlation(self) -> np.ndarray:
         """Correlation matrix ``(p, p)`` of the estimates (identity rows for fixed ones)."""
-        d = np.sqrt(np.diag(self.covariance))
+        covariance = self._all_covariance()
+        d = np.sqrt(np.diag(covariance))
         safe = np.where(d > 0, d, 1.0)
-        corr = self.covariance / np.outer(safe, safe)
+        corr = covariance / np.outer(safe, safe)
         fixed = d == 0
         corr[fixed, :] = 0.0
         corr[:, fixed] = 0.0
@@ -834,8 +1018,8 @@ class _Fit:
         arm, q, target = problem.arm, problem.q, problem.target
         self.params, self.used = params, used
         self.iterations, self.converged = iterations, converged
-        self.residuals = problem.xy - forward_kinematics(arm, q, params, target=target)  # mm
-        w = _whitening(arm, q, params, problem.row_sigma, None, target)
+        self.residuals = problem.xy - problem.predict(params)  # mm
+        w = _whitening(arm, q, params[: arm.n_params], problem.row_sigma, None, target)
         if w is not None and problem.row_sigma is not None:  # to the rows' own reference
             w = w * (_reference_sigma(arm, problem.row_sigma) / _model_noise(arm).sigma_mm)
         self._w, self._arm, self._q, self._problem = w, arm, q, problem
@@ -844,9 +1028,7 @@ class _Fit:
 
     @cached_property
     def _jacobian(self) -> np.ndarray:
-        arm = self._arm
-        jac = jacobian(arm, self._q, self.params, target=self._problem.target)
-        return _apply(self._w, jac[..., arm.free])  # (m, 2, p_f)
+        return _apply(self._w, self._problem.free_jacobian(self.params))  # (m, 2, p_f)
 
     @cached_property
     def factor(self) -> np.ndarray:
@@ -860,7 +1042,7 @@ class _Fit:
             )
             factor = factor[..., self._arm.free, :]
         else:
-            svd = scaled_svd(self._jacobian[self.used].reshape(-1, self._arm.n_free))
+            svd = scaled_svd(self._jacobian[self.used].reshape(-1, self._problem.n_free))
             factor, ok = svd.inverse_gram_factor()
         if not bool(ok):  # identifiable at nominal, so only for absurd deviations
             raise ArmcalError("the Jacobian is singular at the estimate; check the data")
@@ -897,6 +1079,28 @@ class _Problem:
     def plan_factor(self) -> LinearLeastSquares:
         """The plan's factorization (:func:`_factor`): raises if it is not identifiable."""
         return _factor(self.arm, self.q, self.target)
+
+    @property
+    def n_free(self) -> int:
+        """Free parameters of the model."""
+        return self.arm.n_free
+
+    @property
+    def free(self) -> np.ndarray:
+        """Free mask over every parameter ``(p,)``."""
+        return self.arm.free
+
+    def predict(self, params: np.ndarray) -> np.ndarray:
+        """Model positions ``(m, 2)`` (mm) of every pose."""
+        return forward_kinematics(self.arm, self.q, params, target=self.target)
+
+    def free_jacobian(self, params: np.ndarray) -> np.ndarray:
+        """Unwhitened Jacobian ``(m, 2, p_f)`` over the free parameters."""
+        return jacobian(self.arm, self.q, params, target=self.target)[..., self.arm.free]
+
+    def identifiable(self, used: np.ndarray) -> bool:
+        """Whether the poses ``used`` identify every free parameter."""
+        return _identifiable(self.arm, self.q[used], _rows_of(self.target, used))
 
     def _rows(self, used: np.ndarray) -> np.ndarray | None:
         return None if self.row_sigma is None else self.row_sigma[used]
@@ -950,6 +1154,64 @@ class _Problem:
         return _Fit(self, params, used, steps, done)
 
 
+class _CompliantProblem(_Problem):
+    """Geometry plus joint compliance (:mod:`armcal.elastostatic`): always Gauss-Newton."""
+
+    def __init__(
+        self,
+        model: Compliance,
+        loads: Loads,
+        q: np.ndarray,
+        xy: np.ndarray,
+        row_sigma: np.ndarray | None,
+        tol: float,
+        max_iter: int,
+    ) -> None:
+        super().__init__(model.arm, q, xy, row_sigma, "gauss-newton", tol, max_iter)
+        self.model, self.loads = model, loads
+        self.plain = False
+
+    @property
+    def n_free(self) -> int:
+        return self.model.n_free
+
+    @property
+    def free(self) -> np.ndarray:
+        return self.model.all_free
+
+    def predict(self, params: np.ndarray) -> np.ndarray:
+        return self.model.tip(self.q, params, self.loads)
+
+    def free_jacobian(self, params: np.ndarray) -> np.ndarray:
+        return self.model.jacobian(self.q, params, self.loads)[..., self.model.all_free]
+
+    def identifiable(self, used: np.ndarray) -> bool:
+        if 2 * int(np.count_nonzero(used)) < self.n_free:
+            return False
+        info, _ = compliance_identifiability(self.model, self.q[used], self.loads.take(used))
+        return info.identifiable
+
+    def solve(
+        self,
+        used: np.ndarray,
+        *,
+        weights: np.ndarray | None = None,
+        start: np.ndarray | None = None,
+    ) -> tuple[np.ndarray, int, bool]:
+        params, steps, done = solve_compliant(
+            self.model,
+            self.q[used],
+            self.xy[used],
+            self.loads.take(used),
+            row_sigma=self._rows(used),
+            pose_weights=None if weights is None else weights[used],
+            start=start,
+            tol=self.tol,
+            max_iter=self.max_iter,
+        )
+        return params, int(steps), bool(done)
+
+
 def _reference_sigma(arm: PlanarArm, row_sigma: np.ndarray | None) -> float:
     """The noise every whitened residual is measured in (mm).
 
@@ -963,7 +1225,7 @@ def _reference_sigma(arm: PlanarArm, row_sigma: np.ndarray | None) -> float:
 
 def _test(problem: _Problem, fit: _Fit, used: np.ndarray, sigma: float, given: bool) -> PoseTest:
     return studentized_test(
-        fit.whitened / sigma, fit.leverage, used, problem.arm.n_free, sigma_given=given
+        fit.whitened / sigma, fit.leverage, used, problem.n_free, sigma_given=given
     )
 
 
@@ -986,7 +1248,6 @@ def _robust_fit(
     When most poses disagree with the fit, nothing is an outlier: the model, the
     units or sigma are wrong, which the goodness of fit reports.
     """
-    arm = problem.arm
     m = problem.q.shape[0]
     everyone = np.ones(m, dtype=bool)
     weights = np.ones(m)
@@ -1004,11 +1265,11 @@ def _robust_fit(
         weights = new
     # The core: poses Huber left at full weight, if they identify the model.
     used = weights >= 1.0
-    if not _identifiable(arm, problem.q[used], _rows_of(problem.target, used)):
+    if not problem.identifiable(used):
         used = everyone
     fit = problem.fit(used, start=fit.params)
     for _ in range(20):
-        dof = 2 * int(np.count_nonzero(used)) - arm.n_free
+        dof = 2 * int(np.count_nonzero(used)) - problem.n_free
         scale = sigma if sigma is not None else _scale(fit, used, max(dof, 1))
         test = _test(problem, fit, used, scale, sigma is not None)
         keep = ~test.flagged
@@ -1017,7 +1278,7 @@ def _robust_fit(
         if 2 * np.count_nonzero(keep) < m:
             everything = problem.fit(everyone, start=fit.params)
             return everything, everyone, ~everyone, None
-        if not _identifiable(arm, problem.q[keep], _rows_of(problem.target, keep)):
+        if not problem.identifiable(keep):
             warning = ArmcalWarning(
                 "outliers-kept",
                 f"leaving out the {int(np.count_nonzero(~keep))} flagged poses would leave too "
@@ -1079,6 +1340,8 @@ def identify(
     tol: float = 1e-12,
     max_iter: int = 50,
     target: np.ndarray | None = None,
+    elastic: Elastostatic | None = None,
+    loads: Loads | None = None,
 ) -> Calibration:
     """Identify the deviations of ``arm`` from measured poses, and judge the fit.
 
@@ -1114,6 +1377,11 @@ def identify(
         Gauss-Newton step tolerance (relative to the reach) and iteration cap.
     target : ndarray of int, shape (m,), optional
         Every pose's target (index into ``arm.targets``), for an arm with several.
+    elastic : Elastostatic, optional
+        Identify the joint compliance under these loads with the geometry
+        (:mod:`armcal.elastostatic`; Gauss-Newton from the geometry-only fit).
+    loads : Loads, optional
+        Every pose's payload and tip force (default: the robot file's payload).
 
     Returns
     -------
@@ -1165,7 +1433,12 @@ def identify(
         if row_sigma.shape != (m,) or not np.all(np.isfinite(row_sigma) & (row_sigma > 0)):
             raise ArmcalError("per-row sigma must be positive and finite, one value per pose")
     if method == "auto":
-        method = "closed-form" if arm.complete else "gauss-newton"
+        method = "closed-form" if arm.complete and elastic is None else "gauss-newton"
+    if elastic is not None and method == "closed-form":
+        raise ArmcalError(
+            "the closed form fits the geometry only; joint compliance needs --method "
+            "gauss-newton (or auto)"
+        )
     if method not in METHODS:
         raise ArmcalError(f"unknown method {method!r}; choose one of auto, {', '.join(METHODS)}")
     _check_closed_form(arm, method)
@@ -1177,14 +1450,30 @@ def identify(
             else noise.with_instrument_sigma(sigma)
         )
     given = arm.noise is not None or row_sigma is not None
-    problem = _Problem(arm, q, xy, row_sigma, method, tol, max_iter, target)
-    plan = problem.plan_factor.svd if problem.plain else plan_svd(arm, q, target)
-    info = check_identifiable(arm, q, svd=plan, target=target)
-    dof_all = 2 * m - arm.n_free
+    problem: _Problem
+    model: Compliance | None = None
+    if elastic is not None:
+        loads = Loads.create(m, elastic.payload_kg) if loads is None else loads
+        if loads.n_rows != m:
+            raise ValueError(f"loads must have {m} rows, got {loads.n_rows}")
+        if target is not None:
+            raise ArmcalError(
+                "joint compliance is modelled for one target on the end effector; "
+                "measure one target per pose, or leave out [elastostatic]"
+            )
+        model = Compliance.for_loads(arm, elastic, loads)
+        problem = _CompliantProblem(model, loads, q, xy, row_sigma, tol, max_iter)
+        info, _ = check_compliance_identifiable(model, q, loads)
+    else:
+        problem = _Problem(arm, q, xy, row_sigma, method, tol, max_iter, target)
+        plan = problem.plan_factor.svd if problem.plain else plan_svd(arm, q, target)
+        info = check_identifiable(arm, q, svd=plan, target=target)
+    n_free = problem.n_free
+    dof_all = 2 * m - n_free
     if not given and dof_all <= 0:
         raise ArmcalError(
             f"{m} poses leave no residual to estimate sigma from ({2 * m} equations, "
-            f"{arm.n_free} parameters); give the instrument noise with --sigma or measure "
+            f"{n_free} parameters); give the instrument noise with --sigma or measure "
             "more poses"
         )
     reference = _reference_sigma(arm, row_sigma)
@@ -1197,7 +1486,7 @@ def identify(
         fit, used, flagged, kept_warning = _robust_fit(problem, robust_sigma, least_squares)
         if kept_warning is not None:
             extra.append(kept_warning)
-    dof = 2 * int(np.count_nonzero(used)) - arm.n_free
+    dof = 2 * int(np.count_nonzero(used)) - n_free
     source: Literal["given", "estimated"]
     if given:
         sigma_value, source = reference, "given"
@@ -1212,7 +1501,7 @@ def identify(
         # residual, so the poses to flag are those the robust procedure would
         # leave out, judged against its fit; this fit keeps them.
         clean, kept, flagged, _ = _robust_fit(problem, robust_sigma, least_squares)
-        clean_dof = 2 * int(np.count_nonzero(kept)) - arm.n_free
+        clean_dof = 2 * int(np.count_nonzero(kept)) - n_free
         scale = reference if given else _scale(clean, kept, max(clean_dof, 1))
         test = _test(problem, clean, kept, scale, given)
     labels = tuple(str(i) for i in range(1, m + 1)) if pose_labels is None else tuple(pose_labels)
@@ -1232,7 +1521,10 @@ def identify(
         for i in np.flatnonzero(flagged)
     )
     fit_test = goodness_of_fit(standardized[used], dof, sigma_given=given)
-    warnings = [w for w in (conditioning_warning(arm, info),) if w is not None]
+    conditioning = (
+        conditioning_warning(arm, info) if model is None else barely_identifiable_warning(info)
+    )
+    warnings = [w for w in (conditioning,) if w is not None]
     if not fit.converged:
         warnings.append(
             ArmcalWarning(
@@ -1250,7 +1542,7 @@ def identify(
             ArmcalWarning(
                 "few-dof",
                 f"{int(np.count_nonzero(used))} poses leave {dof} degrees of freedom for "
-                f"{arm.n_free} parameters: too few to judge the fit against sigma or to find "
+                f"{n_free} parameters: too few to judge the fit against sigma or to find "
                 f"outliers; measure at least {more} more "
                 f"{'pose' if more == 1 else 'poses'}",
             )
@@ -1260,14 +1552,27 @@ def identify(
         warnings.append(
             _fit_warning(fit_test, sigma_value, suggested, int(np.count_nonzero(test.flagged)))
         )
-    g = np.zeros((arm.n_params, arm.n_free))
-    g[arm.free] = fit.factor
+    g = np.zeros((problem.free.size, n_free))
+    g[problem.free] = fit.factor
     covariance = sigma_value**2 * (g @ g.T)
+    p = arm.n_params
+    compliance = None
+    if model is not None:
+        geometry_only = forward_kinematics(arm, q[used], solve_model(arm, q[used], xy[used])[0])
+        assert loads is not None
+        bent = model.deflection(q, fit.params[:p], fit.params[p:], loads)
+        compliance = ComplianceFit(
+            model,
+            fit.params[p:],
+            covariance,
+            float(np.sqrt(np.mean((xy[used] - geometry_only) ** 2))),
+            np.max(np.abs(bent), axis=0),
+        )
     return Calibration(
         arm=arm,
         method=method,
-        params=fit.params,
-        covariance=covariance,
+        params=fit.params[:p],
+        covariance=covariance[:p, :p],
         sigma_mm=float(sigma_value),
         sigma_source=source,
         residuals=fit.residuals,
@@ -1282,4 +1587,6 @@ def identify(
         rows=row_numbers,
         robust=bool(robust),
         target=target,
+        compliance=compliance,
+        loads=loads if model is not None else None,
     )

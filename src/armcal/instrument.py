@@ -28,6 +28,7 @@ from typing import Any
 import numpy as np
 
 from .arm import PlanarArm, forward_kinematics
+from .elastostatic import STANDARD_GRAVITY, Elastostatic
 from .errors import ArmcalError, ArmcalWarning
 from .identification import Calibration, identify, solve_model
 from .plane import Plane, fit_plane
@@ -61,6 +62,8 @@ def identify_3d(
     target: np.ndarray | None = None,
     sigma: float | None = None,
     row_sigma: np.ndarray | None = None,
+    elastic: Elastostatic | None = None,
+    gravity_3d: np.ndarray | None = None,
     **kwargs: Any,
 ) -> Calibration:
     """Identify from 3-D instrument data: fit the plane, pick its side, identify in it.
@@ -79,6 +82,12 @@ def identify_3d(
     sigma, row_sigma, **kwargs
         As for :func:`armcal.identification.identify` (``sigma`` the noise of
         every coordinate, in the plane as out of it).
+    elastic : Elastostatic, optional
+        Identify joint compliance too (:mod:`armcal.elastostatic`); gravity then
+        comes from ``gravity_3d``.
+    gravity_3d : ndarray, shape (3,), optional
+        Gravity's direction in the instrument frame (``[measurement] gravity``);
+        its component in the plane of motion loads the joints.
 
     Returns
     -------
@@ -97,8 +106,17 @@ def identify_3d(
     rss = [_rss(arm, q, side.to_plane(xyz), target, row_sigma) for side in sides]
     best = int(np.argmin(rss))
     chosen = sides[best]
+    if elastic is not None:
+        elastic = elastic.with_gravity(_gravity_in_plane(chosen, gravity_3d))
     cal = identify(
-        arm, q, chosen.to_plane(xyz), target=target, sigma=sigma, row_sigma=row_sigma, **kwargs
+        arm,
+        q,
+        chosen.to_plane(xyz),
+        target=target,
+        sigma=sigma,
+        row_sigma=row_sigma,
+        elastic=elastic,
+        **kwargs,
     )
     warnings = list(cal.warnings)
     other, mine = rss[1 - best], rss[best]
@@ -116,6 +134,24 @@ def identify_3d(
     if planarity is not None:
         warnings.append(planarity)
     return replace(cal, plane=chosen, warnings=tuple(warnings))
+
+
+def _gravity_in_plane(plane: Plane, gravity_3d: np.ndarray | None) -> np.ndarray:
+    """Gravity (m/s^2) in the plane's in-plane axes: the part that twists the joints."""
+    if gravity_3d is None:
+        raise ArmcalError(
+            "3-D data with [elastostatic]: give gravity's direction in the instrument frame "
+            "as [measurement] gravity = [gx, gy, gz] (e.g. [0, 0, -1] for a levelled tracker)"
+        )
+    g = np.asarray(gravity_3d, dtype=float)
+    g = g / np.linalg.norm(g) * STANDARD_GRAVITY
+    in_plane = plane.axes[:2] @ g
+    if np.linalg.norm(in_plane) < 1e-3 * STANDARD_GRAVITY:
+        raise ArmcalError(
+            "gravity is normal to the plane of motion: a horizontal arm's joints carry no "
+            "gravity torque in the plane; remove gravity or [elastostatic]"
+        )
+    return in_plane
 
 
 def _planarity_warning(

@@ -34,7 +34,8 @@ import numpy as np
 
 from .arm import Annulus, Box, PlanarArm, Region, Target
 from .calibrated import CalibratedArm
-from .errors import ArmcalWarning, InputError
+from .elastostatic import Compliance, Elastostatic, Loads
+from .errors import ArmcalError, ArmcalWarning, InputError
 from .noise import NoiseModel
 from .paper import BUILTIN_ROBOTS, paper_arm
 from .plane import Plane
@@ -121,6 +122,9 @@ MAX_ABS_VALUE = 1e9
 #: A file path as the functions here take it.
 PathArg = str | os.PathLike[str]
 
+#: Optional columns of static loads: payload (kg) and a force at the tip (N).
+LOAD_COLUMNS = ("payload_kg", "fx_N", "fy_N")
+
 _JOINT_COLUMN = re.compile(r"^q([1-9][0-9]*)_deg$")
 
 
@@ -140,12 +144,20 @@ class RobotSpec:
     warnings : tuple of ArmcalWarning
         What in the file is accepted but suspicious (``limits-radians``); every
         command prints these.
+    elastic : Elastostatic or None
+        The ``[elastostatic]`` table: gravity, masses and payload that twist the
+        joints (:mod:`armcal.elastostatic`); None for a rigid arm.
+    gravity_3d : ndarray, shape (3,), or None
+        ``[measurement] gravity``: gravity's direction in the instrument frame,
+        for 3-D data.
     """
 
     arm: PlanarArm
     default_truth: np.ndarray | None
     source: str
     warnings: tuple[ArmcalWarning, ...] = ()
+    elastic: Elastostatic | None = None
+    gravity_3d: np.ndarray | None = None
 
 
 @dataclass(frozen=True, eq=False)
@@ -174,6 +186,10 @@ class Measurements:
     z : ndarray, shape (m,), or None
         The optional ``z_mm`` column of 3-D instrument data; then ``xy`` are the
         instrument's x and y, not yet in the plane of motion.
+    payload_kg : ndarray, shape (m,), or None
+        The optional ``payload_kg`` column: the payload carried in every row.
+    force_n : ndarray, shape (m, 2), or None
+        The optional ``fx_N``, ``fy_N`` columns: a force applied at the tip (N).
     """
 
     q: np.ndarray
@@ -184,6 +200,19 @@ class Measurements:
     warnings: tuple[ArmcalWarning, ...] = ()
     targets: tuple[str, ...] | None = None
     z: np.ndarray | None = None
+    payload_kg: np.ndarray | None = None
+    force_n: np.ndarray | None = None
+
+    def loads(self, default_payload_kg: float = 0.0) -> Loads:
+        """Every row's payload (the file's default where there is no column) and tip force."""
+        m = self.q.shape[0]
+        payload = default_payload_kg if self.payload_kg is None else self.payload_kg
+        return Loads.create(m, payload, self.force_n)
+
+    @property
+    def has_loads(self) -> bool:
+        """Whether the file has a payload or force column."""
+        return self.payload_kg is not None or self.force_n is not None
 
     @property
     def xyz(self) -> np.ndarray:
@@ -812,6 +841,7 @@ def load_robot(name_or_path: str | os.PathLike) -> RobotSpec:
             "measurement",
             "identify",
             "targets",
+            "elastostatic",
         ],
     )
     if "link_lengths_mm" not in data:
@@ -853,7 +883,7 @@ def load_robot(name_or_path: str | os.PathLike) -> RobotSpec:
     base_offset = data.get("base_offset", False)
     if not isinstance(base_offset, bool):
         raise _fail(path, f"key 'base_offset': expected true or false, got {base_offset!r}")
-    noise, region = None, None
+    noise, region, gravity_3d = None, None, None
     if "measurement" in data:
         meas = data["measurement"]
         if not isinstance(meas, dict):
@@ -861,9 +891,17 @@ def load_robot(name_or_path: str | os.PathLike) -> RobotSpec:
         _check_keys(
             path,
             meas,
-            ["sigma_mm", "covariance_mm2", "joint_sigma_deg", "region"],
+            ["sigma_mm", "covariance_mm2", "joint_sigma_deg", "region", "gravity"],
             "measurement.",
         )
+        if "gravity" in meas:
+            gravity_3d = np.array(_numbers(path, meas["gravity"], "measurement.gravity", 3))
+            if not np.any(gravity_3d):
+                raise _fail(
+                    path,
+                    "key 'measurement.gravity': needs a non-zero direction in the instrument "
+                    "frame, e.g. [0, 0, -1] for a levelled tracker",
+                )
         covariance = _instrument_covariance(path, meas)
         joint_sigma = _joint_sigma(path, meas, n)
         if joint_sigma is not None and covariance is None:
@@ -902,7 +940,44 @@ def load_robot(name_or_path: str | os.PathLike) -> RobotSpec:
         )
     except ValueError as exc:  # every value was checked above; this names what is left
         raise _fail(path, str(exc)) from None
-    return RobotSpec(arm, None, str(path), tuple(warnings))
+    elastic = _elastostatic(path, data["elastostatic"], n) if "elastostatic" in data else None
+    return RobotSpec(arm, None, str(path), tuple(warnings), elastic, gravity_3d)
+
+
+def _elastostatic(path, table: Any, n: int) -> Elastostatic:
+    """``[elastostatic]``: ``gravity_xy``, ``link_masses_kg``, ``com_fraction``, ``payload_kg``."""
+    if not isinstance(table, dict):
+        raise _fail(path, "key 'elastostatic': expected a table [elastostatic]")
+    _check_keys(
+        path,
+        table,
+        ["gravity_xy", "link_masses_kg", "com_fraction", "payload_kg"],
+        "elastostatic.",
+    )
+    gravity = None
+    if "gravity_xy" in table:
+        gravity = _numbers(path, table["gravity_xy"], "elastostatic.gravity_xy", 2)
+    masses = None
+    if "link_masses_kg" in table:
+        masses = _numbers(path, table["link_masses_kg"], "elastostatic.link_masses_kg", n)
+    fraction: float | list[float] = 0.5
+    if "com_fraction" in table:
+        raw = table["com_fraction"]
+        key = "elastostatic.com_fraction"
+        fraction = (
+            _numbers(path, raw, key, n) if isinstance(raw, list) else _number(path, raw, key)
+        )
+    payload = (
+        _number(path, table["payload_kg"], "elastostatic.payload_kg")
+        if ("payload_kg" in table)
+        else 0.0
+    )
+    try:
+        return Elastostatic.create(
+            n, gravity_xy=gravity, link_masses_kg=masses, com_fraction=fraction, payload_kg=payload
+        )
+    except ArmcalError as exc:
+        raise _fail(path, f"[elastostatic]: {exc}") from None
 
 
 def _joint_map(path, value: Any, n: int) -> np.ndarray:
@@ -956,7 +1031,7 @@ def load_truth(path: str | os.PathLike, arm: PlanarArm) -> np.ndarray:
         User deviations in mm and rad.
     """
     data = _load_toml(path, "truth")
-    _check_keys(path, data, ["dl_mm", "dq_deg", "base_mm"])
+    _check_keys(path, data, ["dl_mm", "dq_deg", "base_mm", *COMPLIANCE_TRUTH_KEYS.values()])
     n, k = arm.n_joints, arm.n_links
     counts = f"{n} numbers, one per joint" + (
         f", or {k}: one per link vector (the last link once per target)" if k != n else ""
@@ -983,6 +1058,33 @@ def load_truth(path: str | os.PathLike, arm: PlanarArm) -> np.ndarray:
         if arm.link_nominal[i] + v <= 0:
             raise _fail(path, f"key 'dl_mm': link {arm.link_names[i]} would have length <= 0")
     return params
+
+
+#: Truth keys of the compliance parameters (:mod:`armcal.elastostatic`), by kind.
+COMPLIANCE_TRUTH_KEYS = {"k": "k_urad_per_Nm", "c": "c_mdeg_per_m"}
+
+
+def load_compliance_truth(path: str | os.PathLike, model: Compliance) -> np.ndarray:
+    """The compliance of a truth TOML (``k_urad_per_Nm``, ``c_mdeg_per_m``), internal units.
+
+    Returns
+    -------
+    ndarray, shape (P,)
+        In the order of ``model.names``: rad/(N m) for ``k``, rad/m for ``c``.
+    """
+    data = _load_toml(path, "truth")
+    n = model.arm.n_joints
+    values = []
+    for kind in dict.fromkeys(model.kinds):
+        key = COMPLIANCE_TRUTH_KEYS[kind]
+        if key not in data:
+            raise _fail(
+                path,
+                f"missing key '{key}' ({n} numbers): the robot's [elastostatic] model has "
+                f"parameters {', '.join(model.names)}",
+            )
+        values += _numbers(path, data[key], key, n)
+    return np.array(values) / model.display_scale
 
 
 # --------------------------------------------------------------------------- CSV
@@ -1135,7 +1237,31 @@ def read_plan(path: str | os.PathLike, arm: PlanarArm) -> np.ndarray:
     ndarray, shape (m, n)
         Joint angles in rad, each within the joint limits.
     """
-    return np.radians(_read_csv(path, arm, "plan", []).values)
+    q, payload = read_loaded_plan(path, arm)
+    if payload is not None:
+        raise _fail(
+            path,
+            f"has a payload_kg column but robot {arm.name} has no [elastostatic] table; "
+            "remove the column or add the table to the robot file",
+        )
+    return q
+
+
+def read_loaded_plan(
+    path: str | os.PathLike, arm: PlanarArm
+) -> tuple[np.ndarray, np.ndarray | None]:
+    """Read a plan CSV with an optional ``payload_kg`` column (designs with compliance).
+
+    Returns
+    -------
+    q : ndarray, shape (m, n)
+        Joint angles in rad.
+    payload : ndarray, shape (m,), or None
+        The payload of every pose (kg), when the column is there.
+    """
+    table = _read_csv(path, arm, "plan", [], (), ("payload_kg",))
+    payload, _ = _load_columns(path, table)
+    return np.radians(table.values), payload
 
 
 @dataclass(frozen=True, eq=False)
@@ -1155,17 +1281,19 @@ class Program:
     q: np.ndarray
     labels: tuple[str, ...] | None = None
     targets: tuple[str, ...] | None = None
+    payload_kg: np.ndarray | None = None
+    force_n: np.ndarray | None = None
 
 
 def read_program(path: str | os.PathLike, arm: PlanarArm) -> Program:
-    """Read a program CSV: ``q1_deg..qn_deg``, optional ``pose`` and ``target`` columns.
+    """Read a program CSV: ``q1_deg..qn_deg``; optional ``pose``, ``target`` and load columns.
 
     Raises
     ------
     InputError
         For a malformed file, a command outside the joint limits or an unknown target.
     """
-    table = _read_csv(path, arm, "program", [], ["pose", "target"])
+    table = _read_csv(path, arm, "program", [], ["pose", "target"], LOAD_COLUMNS)
     targets = table.texts.get("target")
     if targets is not None:
         if not arm.targets:
@@ -1175,10 +1303,13 @@ def read_program(path: str | os.PathLike, arm: PlanarArm) -> Program:
             )
         _check_target_labels(path, arm, targets, table.lines)
     labels = table.texts.get("pose")
+    payload, force = _load_columns(path, table)
     return Program(
         np.radians(table.values),
         None if labels is None else tuple(labels),
         None if targets is None else tuple(targets),
+        payload,
+        force,
     )
 
 
@@ -1283,7 +1414,7 @@ def read_measurements(path: str | os.PathLike, arm: PlanarArm) -> Measurements:
         "measurements",
         ["x_mm", "y_mm"],
         ["pose", "target"],
-        ["z_mm", "sigma_mm"],
+        ["z_mm", "sigma_mm", *LOAD_COLUMNS],
         limit_tol_deg=LIMIT_TOLERANCE_DEG,
     )
     n = arm.n_joints
@@ -1313,6 +1444,7 @@ def read_measurements(path: str | os.PathLike, arm: PlanarArm) -> Measurements:
     warnings = []
     if table.beyond:
         warnings.append(_beyond_limits_warning(path, arm, table.beyond))
+    payload, force = _load_columns(path, table)
     return Measurements(
         np.radians(values[:, :n]),
         xy,
@@ -1322,7 +1454,29 @@ def read_measurements(path: str | os.PathLike, arm: PlanarArm) -> Measurements:
         warnings=tuple(warnings),
         targets=None if targets is None else tuple(targets),
         z=z,
+        payload_kg=payload,
+        force_n=force,
     )
+
+
+def _load_columns(path, table: _Table) -> tuple[np.ndarray | None, np.ndarray | None]:
+    """The ``payload_kg`` column (not negative) and the tip force ``(m, 2)`` (a missing axis 0)."""
+    payload = table.numbers.get("payload_kg")
+    if payload is not None and np.any(payload < 0):
+        r = int(np.flatnonzero(payload < 0)[0])
+        raise _fail(
+            path,
+            f"row {r + 1} (line {table.lines[r]}), column payload_kg: {payload[r]:g} kg is "
+            "negative; give the mass carried (0 for none)",
+        )
+    fx, fy = table.numbers.get("fx_N"), table.numbers.get("fy_N")
+    force = None
+    if fx is not None or fy is not None:
+        m = table.values.shape[0]
+        force = np.column_stack(
+            [np.zeros(m) if fx is None else fx, np.zeros(m) if fy is None else fy]
+        )
+    return payload, force
 
 
 def _check_target_labels(path, arm: PlanarArm, labels: list[str], lines: list[int]) -> None:
@@ -1382,10 +1536,15 @@ def _angle_text(q_rad: float) -> str:
     return repr(round(math.degrees(q_rad), 12) + 0.0)
 
 
-def format_plan_csv(q: np.ndarray) -> str:
-    """Plan CSV text for joint angles ``q`` ``(m, n)`` in rad."""
-    lines = [",".join(_joint_names(q.shape[1]))]
-    lines += [",".join(_angle_text(v) for v in row) for row in q]
+def format_plan_csv(q: np.ndarray, payload_kg: np.ndarray | None = None) -> str:
+    """Plan CSV text for joint angles ``q`` ``(m, n)`` in rad (and every pose's payload)."""
+    head = _joint_names(q.shape[1]) + (["payload_kg"] if payload_kg is not None else [])
+    lines = [",".join(head)]
+    for i, row in enumerate(q):
+        fields = [_angle_text(v) for v in row]
+        if payload_kg is not None:
+            fields.append(repr(float(payload_kg[i])))
+        lines.append(",".join(fields))
     return "\n".join(lines) + "\n"
 
 
@@ -1394,20 +1553,23 @@ def format_measurements_csv(
     xy: np.ndarray,
     labels: Sequence[str] | None = None,
     targets: Sequence[str] | None = None,
+    payload_kg: np.ndarray | None = None,
 ) -> str:
     """Measurements CSV text; positions are written with full round-trip precision.
 
     ``xy`` of shape ``(m, 3)`` writes 3-D points (``z_mm``); ``targets`` adds the
-    ``target`` column.
+    ``target`` column, ``payload_kg`` the payload of every row.
     """
     head = ["pose"] if labels is not None else []
     head += _joint_names(q.shape[1]) + ["x_mm", "y_mm", "z_mm"][: xy.shape[1]]
     head += ["target"] if targets is not None else []
+    head += ["payload_kg"] if payload_kg is not None else []
     lines = [",".join(head)]
     for i, (row, point) in enumerate(zip(q, xy, strict=True)):
         fields = [str(labels[i])] if labels is not None else []
         fields += [_angle_text(v) for v in row] + [repr(float(v)) for v in point]
         fields += [str(targets[i])] if targets is not None else []
+        fields += [repr(float(payload_kg[i]))] if payload_kg is not None else []
         lines.append(",".join(fields))
     return "\n".join(lines) + "\n"
 
@@ -1522,21 +1684,27 @@ def read_calibration(path: str | os.PathLike) -> CalibratedArm:
             )
         key = "robot"
         arm = _arm_from_dict(doc["robot"], noise, list(doc.get("fixed", [])))
+        model = None
+        if doc.get("elastostatic") is not None:
+            key = "elastostatic"
+            model = _compliance_from_dict(arm, doc["elastostatic"])
         key = "parameters"
         names = [entry["name"] for entry in doc["parameters"]]
-        if tuple(names) != arm.param_names:
+        expected = arm.param_names if model is None else model.all_names
+        if tuple(names) != expected:
             raise ValueError(
-                f"parameters {', '.join(names)} do not match the robot's "
-                f"{', '.join(arm.param_names)}"
+                f"parameters {', '.join(names)} do not match the robot's {', '.join(expected)}"
             )
-        scale = arm.display_scale
-        params = np.array([float(entry["value"]) for entry in doc["parameters"]]) / scale
+        scale = arm.display_scale if model is None else model.all_scale
+        values = np.array([float(entry["value"]) for entry in doc["parameters"]]) / scale
         key = "covariance"
         if list(doc["covariance"]["names"]) != names:
             raise ValueError("covariance names do not match the parameters")
-        covariance = np.array(doc["covariance"]["matrix"], dtype=float) / np.outer(scale, scale)
-        if covariance.shape != (arm.n_params, arm.n_params):
-            raise ValueError(f"expected a {arm.n_params} x {arm.n_params} matrix")
+        full = np.array(doc["covariance"]["matrix"], dtype=float) / np.outer(scale, scale)
+        if full.shape != (len(names), len(names)):
+            raise ValueError(f"expected a {len(names)} x {len(names)} matrix")
+        p = arm.n_params
+        params, covariance = values[:p], full[:p, :p]
         key = "sigma_mm"
         sigma = float(doc["sigma_mm"])
         key = "plane"
@@ -1550,4 +1718,22 @@ def read_calibration(path: str | os.PathLike) -> CalibratedArm:
         raise _fail(path, "key 'parameters': values must be finite numbers")
     if plane is None and arm.base_rotation:
         raise _fail(path, "key 'plane': a calibration from 3-D data must record its plane")
-    return CalibratedArm(arm, params, covariance, sigma, plane)
+    if model is None:
+        return CalibratedArm(arm, params, covariance, sigma, plane)
+    return CalibratedArm(arm, params, covariance, sigma, plane, model, values[p:], full)
+
+
+def _compliance_from_dict(arm: PlanarArm, data: dict[str, Any]) -> Compliance:
+    """The compliance model of a calibration file's ``elastostatic`` section."""
+    gravity = data["gravity_mps2"]
+    masses = data["link_masses_kg"]
+    elastic = Elastostatic(
+        None if gravity is None else np.array(gravity, dtype=float).reshape(2),
+        None if masses is None else np.array(masses, dtype=float).reshape(arm.n_joints),
+        np.array(data["com_fraction"], dtype=float).reshape(arm.n_joints),
+        float(data["payload_kg"]),
+    )
+    model = Compliance(arm, elastic, bool(data["known_loads"]))
+    if list(data.get("parameters", model.names)) != list(model.names):
+        raise ValueError(f"compliance parameters do not match {', '.join(model.names)}")
+    return model

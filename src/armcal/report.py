@@ -13,9 +13,11 @@ from .arm import PlanarArm
 from .calibrated import CalibratedArm
 from .compensate import Compensation, Validation
 from .criteria import PlanQuality
+from .doe.compliance import CompliantDesign, d_efficiency_compliant
 from .doe.designer import Design
 from .doe.model import unit_trace
 from .doe.sizing import TARGETS, PosesNeeded
+from .elastostatic import Compliance, Loads
 from .errors import ArmcalWarning
 from .identification import Calibration
 from .io import CALIBRATION_FORMAT, Measurements, Program, robot_to_dict
@@ -279,13 +281,19 @@ def format_calibration(cal: Calibration, *, truth: np.ndarray | None = None) -> 
         f" ({cal.n_poses - used} left out of the fit)" if used < cal.n_poses else ""
     )
     lines = [
-        f"calibration of {arm.name}: {poses}, {_identified(arm)}, method {cal.method}"
+        f"calibration of {arm.name}: {poses}, {_identified(arm)}"
+        + (
+            ""
+            if cal.compliance is None
+            else f" and {cal.compliance.model.n_params} of joint compliance"
+        )
+        + f", method {cal.method}"
         + (", robust" if cal.robust else ""),
         *model_lines(arm, plan=False),
         "",
         header,
     ]
-    truth_display = None if truth is None else np.asarray(truth) * arm.display_scale
+    truth_display = None if truth is None else np.asarray(truth) * cal.display_scale
     for i, (name, unit) in enumerate(zip(cal.names, cal.units, strict=True)):
         if name in arm.fixed:
             line = f"{name:<10}{cal.values[i]:>12.5f}  {'fixed':<10}  {unit:<4}"
@@ -308,7 +316,7 @@ def format_calibration(cal: Calibration, *, truth: np.ndarray | None = None) -> 
         f"{cal.method}: {cal.iterations} iteration(s), "
         + ("converged" if cal.converged else "NOT converged: the estimate may be off"),
     ]
-    corr = np.abs(cal.correlation - np.eye(arm.n_params))
+    corr = np.abs(cal.correlation - np.eye(len(cal.names)))
     strong = [
         f"{cal.names[i]}/{cal.names[j]} {cal.correlation[i, j]:+.2f}"
         for i, j in zip(*np.nonzero(np.triu(corr > 0.9)), strict=True)
@@ -329,7 +337,34 @@ def format_calibration(cal: Calibration, *, truth: np.ndarray | None = None) -> 
             f"out of plane RMS {plane.rms_mm:.4g} mm, max {plane.max_mm:.4g} mm; target "
             f"planes at {offsets} mm; x0, y0, phi0 are the base pose in the plane's axes",
         ]
+    lines += compliance_lines(cal)
     return "\n".join(lines)
+
+
+def compliance_lines(cal: Calibration) -> list[str]:
+    """What the joint compliance explains: residuals without it and the deflections fitted."""
+    c = cal.compliance
+    if c is None:
+        return []
+    model = c.model
+    mode = (
+        "lumped mode (masses unknown): c_j is joint j's deflection per metre of horizontal "
+        "lever arm to the tip"
+        if model.elastic.lumped
+        else "link masses known: k_j is joint j's compliance"
+    )
+    out = [
+        "",
+        f"joint compliance, {mode}; geometry alone leaves {c.geometry_only_rms_mm:.4g} mm "
+        f"residual RMS, with compliance {cal.residual_rms:.4g} mm",
+    ]
+    if c.max_deflection_rad is not None:
+        worst = np.degrees(c.max_deflection_rad) * 1e3
+        out.append(
+            "largest fitted deflection per joint: "
+            + ", ".join(f"joint {j + 1} {v:.4g} mdeg" for j, v in enumerate(worst))
+        )
+    return out
 
 
 def _finite_or_none(value: float | None) -> float | None:
@@ -337,6 +372,24 @@ def _finite_or_none(value: float | None) -> float | None:
     if value is None or not math.isfinite(value):
         return None
     return float(value)
+
+
+def _elastostatic_dict(cal: Calibration) -> dict:
+    """The loads model of a fit with compliance, enough to rebuild it (gravity in m/s^2)."""
+    c = cal.compliance
+    assert c is not None
+    elastic = c.model.elastic
+    return {
+        "gravity_mps2": None if elastic.gravity is None else elastic.gravity.tolist(),
+        "link_masses_kg": None
+        if elastic.link_masses_kg is None
+        else elastic.link_masses_kg.tolist(),
+        "com_fraction": elastic.com_fraction.tolist(),
+        "payload_kg": elastic.payload_kg,
+        "known_loads": c.model.known_loads,
+        "parameters": list(c.model.names),
+        "geometry_only_rms_mm": c.geometry_only_rms_mm,
+    }
 
 
 def calibration_to_dict(
@@ -377,6 +430,7 @@ def calibration_to_dict(
         "sigma_mm": cal.sigma_mm,
         "sigma_source": cal.sigma_source,
         "noise": None if arm.noise is None else arm.noise.to_dict(),
+        "elastostatic": None if cal.compliance is None else _elastostatic_dict(cal),
         "fixed": list(arm.fixed),
         "parameters": [
             {
@@ -451,10 +505,10 @@ def format_monte_carlo(result: MonteCarlo) -> str:
         f"{'parameter':<10}{'truth':>10}{'bias':>11}{'empirical std':>15}{'predicted std':>15}"
         f"{'ratio':>8}  unit",
     ]
-    truth = result.truth * arm.display_scale
+    truth = result.truth * result.display_scale
     for name, unit, t, b, s, ps in zip(
-        arm.param_names,
-        arm.param_units,
+        result.names,
+        result.units,
         truth,
         result.bias,
         result.std,
@@ -469,7 +523,7 @@ def format_monte_carlo(result: MonteCarlo) -> str:
         lines.append(f"{name:<10}{t:>10.4f}{b:>11.2e}{s:>15.5f}{ps:>15.5f}{s / ps:>8.3f}  {unit}")
     flagged = [
         name
-        for name, b, limit in zip(arm.param_names, result.bias, result.bias_limit, strict=True)
+        for name, b, limit in zip(result.names, result.bias, result.bias_limit, strict=True)
         if abs(b) > limit
     ]
     lines += [
@@ -508,7 +562,7 @@ def format_monte_carlo(result: MonteCarlo) -> str:
 
 def monte_carlo_to_dict(result: MonteCarlo) -> dict:
     """JSON document of :func:`monte_carlo` (the keys of PRODUCT.md plus details)."""
-    names = result.arm.param_names
+    names = result.names
 
     def by_name(values: np.ndarray) -> dict[str, float]:
         return {name: float(v) for name, v in zip(names, values, strict=True)}
@@ -518,9 +572,9 @@ def monte_carlo_to_dict(result: MonteCarlo) -> dict:
         "poses": int(result.q.shape[0]),
         "sigma_mm": result.sigma_mm,
         "method": result.method,
-        "units": dict(zip(names, result.arm.param_units, strict=True)),
-        "truth": by_name(result.truth * result.arm.display_scale),
-        "empirical_mean": by_name(result.mean * result.arm.display_scale),
+        "units": dict(zip(names, result.units, strict=True)),
+        "truth": by_name(result.truth * result.display_scale),
+        "empirical_mean": by_name(result.mean * result.display_scale),
         "empirical_std": by_name(result.std),
         "predicted_std": by_name(result.predicted_std),
         "bias": by_name(result.bias),
@@ -1014,3 +1068,71 @@ def compensation_report(
         "largest_joint_change_deg": float(np.max(change, initial=0.0)),
     }
     return document, "\n".join(lines), warnings
+
+
+def compliant_quality(
+    model: Compliance, q: np.ndarray, loads: Loads, sigma: float
+) -> tuple[dict, str]:
+    """JSON keys and text of a plan's quality for geometry plus joint compliance.
+
+    The predicted std of every parameter (display units) at ``sigma``, the
+    D-efficiency of the normalized information on unit-norm columns
+    (:func:`armcal.doe.compliance.d_efficiency_compliant`; compares plans of
+    this model) and how many poses carry each payload.
+    """
+    covariance, _ = model.covariance(q, loads, sigma)
+    std = model.std(covariance)
+    d_eff = d_efficiency_compliant(model, q, loads)
+    values, counts = np.unique(loads.payload_kg, return_counts=True)
+    payloads = {f"{v:g}": int(c) for v, c in zip(values, counts, strict=True)}
+    free = dict(zip(model.all_names, model.all_free, strict=True))
+    document = {
+        "poses": int(q.shape[0]),
+        "sigma_mm": sigma,
+        "identifiable": True,
+        "d_efficiency": d_eff,
+        "predicted_std": {
+            name: float(v) if free[name] else 0.0
+            for name, v in zip(model.all_names, std, strict=True)
+        },
+        "units": dict(zip(model.all_names, model.all_units, strict=True)),
+        "payload_counts": payloads,
+        "compliance": list(model.names),
+    }
+    lines = [
+        f"{q.shape[0]} poses of {model.arm.name} with joint compliance "
+        f"({', '.join(model.names)}), sigma {sigma:g} mm",
+        "payloads: " + ", ".join(f"{c} poses at {v} kg" for v, c in payloads.items()),
+        f"D-efficiency (unit-norm columns, compares plans of this model): {d_eff:.4f}",
+        "",
+        f"{'parameter':<10}{'predicted std':>14}  unit",
+    ]
+    for name, unit, value in zip(model.all_names, model.all_units, std, strict=True):
+        cell = f"{'fixed':>14}" if not free[name] else f"{value:>14.5g}"
+        lines.append(f"{name:<10}{cell}  {unit}")
+    return document, "\n".join(lines)
+
+
+def compliant_design_summary(result: CompliantDesign, seconds: float) -> tuple[dict, list[str]]:
+    """JSON keys and header lines of ``armcal design`` for a model with joint compliance."""
+    document = {
+        "criterion": "D",
+        "method": "exchange+polish",
+        "certified_d_efficiency": result.certified_d_efficiency,
+        "plan_only_bound": result.plan_only_bound,
+        "max_variance": result.max_variance,
+        "payloads_allowed": list(result.payloads),
+        "seconds": seconds,
+        "order": result.order,
+        "joint_travel_deg": float(np.degrees(result.joint_travel)),
+    }
+    lines = [
+        f"design: D-optimal for geometry and joint compliance, poses and payloads "
+        f"(from {', '.join(f'{v:g}' for v in result.payloads)} kg) chosen together "
+        f"({seconds:.1f} s)",
+        f"certified D-efficiency >= {result.certified_d_efficiency:.4f} of the best plan "
+        f"within the limits and region (max d = {result.max_variance:.3f} for "
+        f"p = {result.model.n_free})",
+        "",
+    ]
+    return document, lines

@@ -39,8 +39,9 @@ from .criteria import (
     std_from_covariance,
 )
 from .doe.plans import random_plan
+from .elastostatic import Compliance, Loads, check_compliance_identifiable
 from .errors import ArmcalError, ArmcalWarning
-from .identification import METHODS
+from .identification import METHODS, solve_compliant
 from .noise import NoiseModel
 from .observability import check_identifiable, plan_rows, plan_svd
 from .progress import ProgressCallback
@@ -296,6 +297,9 @@ class MonteCarlo:
     warnings : tuple of ArmcalWarning
         ``fixed-not-nominal`` when the truth moves a parameter the model holds
         fixed (the fit is then misspecified, and the bias shows by how much).
+    compliance : Compliance or None
+        With joint compliance, every array also covers its parameters
+        (:attr:`names`), after the arm's.
     """
 
     arm: PlanarArm
@@ -311,25 +315,40 @@ class MonteCarlo:
     not_converged: int
     seconds: float
     warnings: tuple[ArmcalWarning, ...] = ()
+    compliance: Compliance | None = None
 
     @property
     def names(self) -> tuple[str, ...]:
+        if self.compliance is not None:
+            return self.compliance.all_names
         return self.arm.param_names
+
+    @property
+    def units(self) -> tuple[str, ...]:
+        if self.compliance is not None:
+            return self.compliance.all_units
+        return self.arm.param_units
+
+    @property
+    def display_scale(self) -> np.ndarray:
+        if self.compliance is not None:
+            return self.compliance.all_scale
+        return self.arm.display_scale
 
     @property
     def bias(self) -> np.ndarray:
         """Mean estimate minus truth ``(p,)`` in mm / deg."""
-        return (self.mean - self.truth) * self.arm.display_scale
+        return (self.mean - self.truth) * self.display_scale
 
     @property
     def std(self) -> np.ndarray:
         """Empirical std ``(p,)`` in mm / deg."""
-        return std_from_covariance(self.arm, self.covariance)
+        return np.sqrt(np.diagonal(self.covariance)) * self.display_scale
 
     @property
     def predicted_std(self) -> np.ndarray:
         """Predicted std ``(p,)`` in mm / deg."""
-        return std_from_covariance(self.arm, self.predicted_covariance)
+        return np.sqrt(np.diagonal(self.predicted_covariance)) * self.display_scale
 
     @property
     def bias_limit(self) -> np.ndarray:
@@ -388,6 +407,8 @@ def monte_carlo(
     rng: np.random.Generator | int | None = None,
     test_q: np.ndarray | None = None,
     progress: ProgressCallback | None = None,
+    compliance: Compliance | None = None,
+    loads: Loads | None = None,
 ) -> MonteCarlo:
     """Identify ``trials`` noisy measurement sets of plan ``q`` and compare with theory.
 
@@ -415,6 +436,12 @@ def monte_carlo(
         Poses where the positioning error of the calibrated model is measured.
     progress : callable, optional
         ``progress(done, total)`` after every chunk.
+    compliance : Compliance, optional
+        A robot whose joints deflect under load: ``truth`` holds the deviations
+        then the compliance, and every set is fitted with both
+        (:func:`armcal.identification.solve_compliant`; ``test_q`` is not used).
+    loads : Loads, optional
+        Every pose's payload and tip force, with ``compliance``.
 
     Returns
     -------
@@ -471,6 +498,10 @@ def monte_carlo(
     True
     """
     q = np.asarray(q, dtype=float)
+    if compliance is not None:
+        return _monte_carlo_compliant(
+            compliance, q, loads, truth, sigma, trials, rng=rng, progress=progress
+        )
     truth = _checked_truth(arm, truth)
     if method == "auto":
         method = "closed-form" if arm.complete else "gauss-newton"
@@ -537,6 +568,68 @@ def monte_carlo(
         not_converged=not_converged,
         seconds=seconds,
         warnings=_fixed_truth_warning(model, truth),
+    )
+
+
+def _monte_carlo_compliant(
+    compliance: Compliance,
+    q: np.ndarray,
+    loads: Loads | None,
+    truth: np.ndarray,
+    sigma: float | None,
+    trials: int,
+    *,
+    rng: np.random.Generator | int | None,
+    progress: ProgressCallback | None,
+) -> MonteCarlo:
+    """:func:`monte_carlo` of geometry plus joint compliance (Gauss-Newton on every set)."""
+    arm = compliance.arm
+    truth = _checked_truth(arm, truth, compliance)
+    if trials < 2:
+        raise ArmcalError(f"a Monte Carlo needs at least 2 trials, got {trials}")
+    if sigma is not None and not (sigma > 0 and math.isfinite(sigma)):
+        raise ArmcalError(f"a Monte Carlo needs a positive noise sigma (mm), got {sigma}")
+    noise = simulated_noise(arm, sigma)
+    model = Compliance(arm.replace(noise=noise), compliance.elastic, compliance.known_loads)
+    reference = float(sigma) if sigma is not None else noise.sigma_mm
+    check_compliance_identifiable(model, q, loads)
+    predicted, ok = model.covariance(q, loads, reference, truth)
+    if not ok:
+        raise ArmcalError("the plan cannot identify every parameter at the given truth")
+    rng = np.random.default_rng(rng)
+    m, p = q.shape[0], truth.size
+    chunk = _chunk_size(2 * m * (5 * p + 6) + 8 * m * arm.n_joints, trials)
+    moments = _Moments(p)
+    centre = truth * model.all_free
+    not_converged = 0
+    start = time.perf_counter()
+    done = 0
+    while done < trials:
+        size = min(chunk, trials - done)
+        xy = synthesize_measurements(
+            model.arm, q, truth, sigma, rng=rng, trials=size, compliance=model, loads=loads
+        )
+        estimates, _, converged = solve_compliant(model, q, xy, loads, start=truth)
+        not_converged += int(np.size(converged) - np.count_nonzero(converged))
+        moments.add(estimates - centre)
+        done += size
+        if progress is not None:
+            progress(done, trials)
+    return MonteCarlo(
+        arm=model.arm,
+        q=q,
+        truth=truth,
+        sigma_mm=reference,
+        method="gauss-newton",
+        trials=int(trials),
+        mean=centre + moments.mean,
+        covariance=moments.covariance(),
+        predicted_covariance=predicted,
+        position=None,
+        not_converged=not_converged,
+        seconds=time.perf_counter() - start,
+        warnings=_fixed_truth_warning(model.arm, truth[: arm.n_params]),
+        compliance=model,
     )
 
 
@@ -729,13 +822,15 @@ def simulated_noise(arm: PlanarArm, sigma: float | None) -> NoiseModel:
     return arm.noise.with_instrument_sigma(sigma)
 
 
-def _checked_truth(arm: PlanarArm, truth: np.ndarray) -> np.ndarray:
-    """``truth`` as floats ``(p,)``; ArmcalError unless it is that shape and finite."""
+def _checked_truth(
+    arm: PlanarArm, truth: np.ndarray, compliance: Compliance | None = None
+) -> np.ndarray:
+    """``truth`` as floats ``(p[+P],)``; ArmcalError unless it is that shape and finite."""
     values = np.asarray(truth, dtype=float)
-    if values.shape != (arm.n_params,) or not np.all(np.isfinite(values)):
-        names = ", ".join(arm.param_names)
+    names = arm.param_names if compliance is None else compliance.all_names
+    if values.shape != (len(names),) or not np.all(np.isfinite(values)):
         raise ArmcalError(
-            f"the truth must hold {arm.n_params} finite deviations ({names}), "
+            f"the truth must hold {len(names)} finite values ({', '.join(names)}), "
             f"got {values.tolist()}"
         )
     return values
@@ -789,6 +884,8 @@ def synthesize_measurements(
     trials: int | None = None,
     row_sigma: np.ndarray | None = None,
     target: np.ndarray | None = None,
+    compliance: Compliance | None = None,
+    loads: Loads | None = None,
 ) -> np.ndarray:
     """Measurements of a virtual robot: positions at ``truth`` drawn from the noise model.
 
@@ -819,6 +916,11 @@ def synthesize_measurements(
         covariance (and of ``sigma``).
     target : ndarray of int, shape (m,), optional
         The target every row measures, on an arm with several.
+    compliance : Compliance, optional
+        A virtual robot whose joints deflect under load (:mod:`armcal.elastostatic`):
+        ``truth`` then holds the deviations followed by the compliance.
+    loads : Loads, optional
+        Every row's payload and tip force, with ``compliance``.
 
     Returns
     -------
@@ -858,13 +960,19 @@ def synthesize_measurements(
     plan = np.asarray(plan, dtype=float)
     if plan.ndim != 2 or plan.shape[1] != arm.n_joints:
         raise ArmcalError(f"the plan must have shape (m, {arm.n_joints}) in rad, got {plan.shape}")
-    truth = _checked_truth(arm, truth)
+    truth = _checked_truth(arm, truth, compliance)
     m, n = plan.shape
     factor = _instrument_factor(arm, sigma, row_sigma, m)
     joint_sigma = None if arm.noise is None else arm.noise.joint_sigma
     sets = () if trials is None else (int(trials),)
+
+    def tip(q: np.ndarray) -> np.ndarray:
+        if compliance is None:
+            return forward_kinematics(arm, q, truth, target=target)
+        return compliance.tip(q, truth, loads)
+
     if joint_sigma is None:
-        clean = forward_kinematics(arm, plan, truth, target=target)
+        clean = tip(plan)
         noisy = rng.standard_normal((*sets, m, 2))
         _scale_instrument(noisy, factor)  # in place: the noise is a Monte Carlo's largest array
         noisy += clean
@@ -873,7 +981,7 @@ def synthesize_measurements(
     actual = draws[..., 2:]  # where the joints really were: q + dq
     actual *= np.broadcast_to(joint_sigma, (n,))
     actual += plan
-    positions = forward_kinematics(arm, actual, truth, target=target)
+    positions = tip(actual)
     instrument = draws[..., :2]
     _scale_instrument(instrument, factor)
     positions += instrument

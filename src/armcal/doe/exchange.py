@@ -10,6 +10,7 @@ from ..observability import model_columns
 from .plans import repeated_poses
 
 __all__ = [
+    "exchange_indices",
     "exchange_plan",
 ]
 
@@ -157,7 +158,26 @@ def exchange_plan(
     else:  # the start's poses, less its repeated ones (replaced below)
         index = np.arange(m)[~repeated[:m]]
     blocks = _blocks(arm, candidates)  # (N, 2, p)
-    p = arm.n_free
+    index = exchange_indices(blocks, index, m, max_swaps=max_swaps, distinct=distinct)
+    return candidates[index]
+
+
+def exchange_indices(
+    blocks: np.ndarray,
+    index: np.ndarray,
+    m: int,
+    *,
+    max_swaps: int = 1000,
+    distinct: bool = False,
+) -> np.ndarray:
+    """Modified Fedorov exchange over candidates given by their real blocks ``(N, 2, p)``.
+
+    ``index`` holds the starting candidates (fewer than ``m`` are filled up with
+    the most informative ones); returns the ``m`` chosen indices.  The engine of
+    :func:`exchange_plan`, for any model whose candidates carry ``2 x p``
+    information blocks (e.g. poses with a payload, :mod:`armcal.doe.compliance`).
+    """
+    p = blocks.shape[-1]
     ridge = 1e-10 * np.eye(p)
     if index.size < m:
         index = _add_most_informative(blocks, index, m - index.size, ridge)
@@ -180,4 +200,4 @@ def exchange_plan(
             break
         index = index.copy()
         index[i] = x
-    return candidates[index]
+    return index
