@@ -830,7 +830,8 @@ def _checked_truth(
     names = arm.param_names if compliance is None else compliance.all_names
     if values.shape != (len(names),) or not np.all(np.isfinite(values)):
         raise ArmcalError(
-            f"the truth must hold {len(names)} finite values ({', '.join(names)}), "
+            f"the truth must hold {len(names)} finite "
+            f"{'deviations' if compliance is None else 'values'} ({', '.join(names)}), "
             f"got {values.tolist()}"
         )
     return values

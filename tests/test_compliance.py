@@ -1,0 +1,319 @@
+"""Joint compliance under gravity and payload: model, identification, design, command line.
+
+Reference values are closed forms: the static torque of point masses on a
+stretched horizontal arm, ``tau_j = sum_i m_i g (x_i - x_j)`` (lever arms in m),
+and the expected residual RMS of least squares, ``sigma sqrt(1 - p / (2 m))``.
+"""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from armcal.arm import PlanarArm, forward_kinematics
+from armcal.compensate import compensate
+from armcal.compliance_check import check_compliance, virtual_vertical_arm
+from armcal.doe.compliance import design_compliant
+from armcal.elastostatic import (
+    STANDARD_GRAVITY,
+    Compliance,
+    Elastostatic,
+    Loads,
+    check_compliance_identifiable,
+)
+from armcal.errors import ArmcalError, NotIdentifiableError
+from armcal.identification import identify, solve_compliant
+from armcal.instrument import identify_3d
+from armcal.io import read_calibration
+
+G = STANDARD_GRAVITY
+
+
+def _two_link(**kwargs) -> tuple[PlanarArm, Elastostatic]:
+    arm = PlanarArm([500.0, 300.0])
+    return arm, Elastostatic.create(2, gravity_xy=[0, -1], **kwargs)
+
+
+def test_torques_of_a_stretched_horizontal_arm_match_point_masses():
+    arm, elastic = _two_link(link_masses_kg=[10.0, 4.0], com_fraction=[0.5, 0.25])
+    model = Compliance.for_loads(arm, elastic, Loads.create(1, 2.0))
+    torque = model.loads(np.zeros((1, 2)), None, Loads.create(1, 2.0))[0]
+    # joint 1 at x = 0, joint 2 at 0.5 m, link 2's centre at 0.5 + 0.075 m, the tip at 0.8 m
+    tau1 = -G * (10.0 * 0.25 + 4.0 * 0.575 + 2.0 * 0.8)
+    tau2 = -G * (4.0 * 0.075 + 2.0 * 0.3)
+    np.testing.assert_allclose(torque, [tau1, tau2], rtol=1e-12)
+
+
+def test_tip_force_and_lumped_lever_arms():
+    arm, elastic = _two_link()  # lumped: no masses
+    # 50 N upwards at the tip in one row, none in the other: a known load that varies
+    loads = Loads.create(2, 0.0, [[0.0, 50.0], [0.0, 0.0]])
+    model = Compliance.for_loads(arm, elastic, loads)
+    assert model.names == ("c1", "c2", "k1", "k2")
+    values = model.loads(np.zeros((2, 2)), None, loads)[0]
+    # h_j: horizontal lever arm (m) to the tip, signed as a weight's torque; force torque 50 x
+    np.testing.assert_allclose(values, [-0.8, -0.3, 50 * 0.8, 50 * 0.3], rtol=1e-12)
+
+
+def test_a_constant_payload_only_adds_to_the_lumped_weight():
+    arm, elastic = _two_link(payload_kg=5.0)
+    constant = Compliance.for_loads(arm, elastic, Loads.create(4, 5.0))
+    varying = Compliance.for_loads(arm, elastic, Loads.create(4, [0.0, 5.0, 0.0, 5.0]))
+    assert constant.names == ("c1", "c2")
+    assert varying.names == ("c1", "c2", "k1", "k2")
+
+
+def test_deflected_tip_is_a_rotation_about_each_joint():
+    arm, elastic = _two_link(link_masses_kg=[10.0, 4.0])
+    loads = Loads.create(1, 0.0)
+    model = Compliance.for_loads(arm, elastic, loads)
+    k = np.array([2e-6, 5e-6])
+    tip = model.tip(np.zeros((1, 2)), np.concatenate([np.zeros(4), k]), loads)[0]
+    tau = model.loads(np.zeros((1, 2)), None, loads)[0]
+    bend = k * tau
+    # joint 1 turns the whole arm by bend1, joint 2 the last link by bend2 in addition
+    expected = 500 * np.exp(1j * bend[0]) + 300 * np.exp(1j * (bend[0] + bend[1]))
+    np.testing.assert_allclose(tip, [expected.real, expected.imag], rtol=0, atol=1e-12)
+
+
+def test_compliance_columns_match_central_differences():
+    arm, elastic, truth = virtual_vertical_arm()
+    rng = np.random.default_rng(3)
+    q = rng.uniform(-2.5, 2.5, (6, 3))
+    loads = Loads.create(6, [0, 10, 0, 10, 0, 10])
+    model = Compliance.for_loads(arm, elastic, loads)
+    jac = model.jacobian(q, truth, loads)
+    p = arm.n_params
+    for i in range(p, p + model.n_params):
+        h = 1e-9
+        up, down = truth.copy(), truth.copy()
+        up[i] += h
+        down[i] -= h
+        numeric = (model.tip(q, up, loads) - model.tip(q, down, loads)) / (2 * h)
+        np.testing.assert_allclose(jac[..., i], numeric, rtol=1e-6, atol=1e-6)
+    # the geometric columns leave out the torques' own change with the geometry:
+    # a relative error of the order of the deflection over the reach (< 1e-3)
+    for i in range(p):
+        h = 1e-6
+        up, down = truth.copy(), truth.copy()
+        up[i] += h
+        down[i] -= h
+        numeric = (model.tip(q, up, loads) - model.tip(q, down, loads)) / (2 * h)
+        scale = np.max(np.abs(numeric))
+        assert np.max(np.abs(jac[..., i] - numeric)) < 1e-3 * scale
+
+
+@pytest.mark.parametrize("lumped", [False, True])
+def test_noiseless_data_are_recovered_to_round_off(lumped):
+    arm, elastic, truth = virtual_vertical_arm()
+    if lumped:
+        elastic = Elastostatic.create(3, gravity_xy=[0.3, -1.0], payload_kg=10.0)
+    rng = np.random.default_rng(11)
+    q = rng.uniform(-2.6, 2.6, (30, 3))
+    loads = Loads.create(30, np.where(np.arange(30) % 3 == 0, 0.0, 10.0))
+    model = Compliance.for_loads(arm, elastic, loads)
+    if lumped:  # c (mdeg/m) of a few mdeg per metre, then k
+        truth = np.concatenate([truth[:6], np.radians([3e-3, 2e-3, 1e-3]), truth[6:]])
+        assert model.names == ("c1", "c2", "c3", "k1", "k2", "k3")
+    xy = model.tip(q, truth, loads)
+    est, _, converged = solve_compliant(model, q, xy, loads)
+    assert converged
+    scale = np.concatenate([np.ones(6), 1.0 / np.abs(truth[6:])])
+    np.testing.assert_allclose((est - truth) * scale, 0.0, atol=1e-8)
+
+
+def test_identical_poses_cannot_identify_compliance_and_say_why():
+    arm, elastic, _ = virtual_vertical_arm()
+    q = np.tile(np.radians([[10.0, 20.0, 30.0]]), (20, 1))
+    loads = Loads.create(20, 0.0)
+    model = Compliance.for_loads(arm, elastic, loads)
+    with pytest.raises(NotIdentifiableError, match="k1"):
+        check_compliance_identifiable(model, q, loads)
+
+
+def test_lumped_k_needs_a_varying_payload():
+    arm = PlanarArm([600.0, 450.0, 200.0])
+    elastic = Elastostatic.create(3, payload_kg=10.0)  # no gravity: torques only from loads
+    loads = Loads.create(10, 0.0)
+    with pytest.raises(ArmcalError, match="nothing twists the joints"):
+        Compliance.for_loads(arm, elastic, loads)
+
+
+def test_compensation_takes_out_the_deflection_under_the_programs_payload():
+    arm, elastic, truth = virtual_vertical_arm()
+    rng = np.random.default_rng(5)
+    q = rng.uniform(-2.5, 2.5, (40, 3))
+    loads = Loads.create(40, np.where(np.arange(40) % 2 == 0, 0.0, 10.0))
+    model = Compliance.for_loads(arm, elastic, loads)
+    xy = model.tip(q, truth, loads)
+    cal = identify(arm, q, xy, sigma=0.02, elastic=elastic, loads=loads).calibrated()
+    program = rng.uniform(-1.5, 1.5, (20, 3))
+    program_loads = Loads.create(20, 10.0)
+    result = compensate(cal, program, loads=program_loads)
+    assert result.corrected.all()
+    reached = model.tip(result.q, truth, program_loads)
+    goal = forward_kinematics(arm, program)
+    assert np.max(np.linalg.norm(reached - goal, axis=1)) < 1e-6
+    before = np.linalg.norm(model.tip(program, truth, program_loads) - goal, axis=1)
+    np.testing.assert_allclose(result.position_before_mm, before, rtol=1e-9)
+
+
+def test_self_check_meets_the_issue_thresholds():
+    check = check_compliance(seed=0, trials=2000)
+    rigid, fit = check.rigid, check.compliant
+    assert "fit-inconsistent" in [w.code for w in rigid.warnings]
+    assert rigid.residual_rms > 5 * 0.02
+    assert np.max(np.abs(check.rigid_length_bias_in_std)) > 3  # biased lengths
+    assert not fit.warnings
+    n_free = fit.n_free
+    expected = 0.02 * np.sqrt(1 - n_free / (2 * fit.n_poses))  # least squares' residual RMS
+    assert abs(fit.residual_rms / expected - 1) < 0.10
+    assert np.all(np.abs(check.errors_in_std) < 3)
+    # held-out error: the noise of a point (sqrt(2) sigma) and the model's uncertainty
+    assert abs(check.validation_rms_mm / check.validation_predicted_mm - 1) < 0.15
+    mc = check.monte_carlo
+    k = [i for i, name in enumerate(mc.names) if name.startswith("k")]
+    np.testing.assert_allclose(mc.std[k] / mc.predicted_std[k], 1.0, atol=0.05)
+    assert np.all(np.abs(mc.bias) <= mc.bias_limit)
+    assert check.design.certified_d_efficiency >= 0.99
+    # the design's predicted std is reported per parameter, and is no worse in det
+    assert check.design.predicted_std.shape == (9,)
+
+
+def test_design_splits_payloads_when_the_masses_are_unknown():
+    arm = PlanarArm([600.0, 450.0, 200.0], np.radians([[-170, 170], [-150, 150], [-150, 150]]))
+    elastic = Elastostatic.create(3, gravity_xy=[0, -1], payload_kg=10.0)
+    plan = design_compliant(arm, elastic, 30, sigma=0.02, rng=2, candidates=1500, search=5000)
+    counts = plan.payload_counts()
+    assert plan.model.names == ("c1", "c2", "c3", "k1", "k2", "k3")
+    assert counts[0.0] > 0 and counts[10.0] > 0  # k is seen only through the payload's change
+    assert plan.certified_d_efficiency >= 0.97
+    assert np.all(arm.within_limits(plan.q))
+
+
+def test_3d_data_with_gravity_in_the_instrument_frame():
+    arm, elastic, truth = virtual_vertical_arm()
+    base = arm.replace(base_offset=True, base_rotation=True, fixed=("dq1",))
+    rng = np.random.default_rng(8)
+    q = rng.uniform(-2.5, 2.5, (40, 3))
+    loads = Loads.create(40, np.where(np.arange(40) % 2 == 0, 0.0, 10.0))
+    # the arm moves in the instrument's x-z plane, gravity along -z
+    full = np.concatenate([truth[:6], [20.0, -30.0, 0.0], truth[6:]])
+    full[3] = 0.0  # dq1 is held: the base rotation takes its place
+    model = Compliance.for_loads(base, elastic, loads)
+    xy = model.tip(q, full, loads)
+    xyz = np.column_stack([xy[:, 0], np.full(40, 5.0), xy[:, 1]])
+    cal = identify_3d(
+        base, q, xyz, sigma=0.02, elastic=elastic, loads=loads, gravity_3d=np.array([0, 0, -1.0])
+    )
+    k = cal.compliance.values * 1e6
+    np.testing.assert_allclose(k, [1.5, 3.0, 6.0], rtol=1e-6)
+
+
+def _armcal(*args: str, cwd: Path) -> subprocess.CompletedProcess:
+    return subprocess.run(
+        [sys.executable, "-m", "armcal", *args], cwd=cwd, capture_output=True, text=True
+    )
+
+
+ROBOT = """
+name = "vertical-3link"
+link_lengths_mm = [600.0, 450.0, 200.0]
+joint_limits_deg = [[-170, 170], [-150, 150], [-150, 150]]
+[measurement]
+sigma_mm = 0.02
+[elastostatic]
+gravity_xy = [0, -1]
+link_masses_kg = [20, 12, 6]
+payload_kg = 10
+"""
+
+TRUTH = """
+dl_mm = [1.0, -0.5, 0.8]
+dq_deg = [0.3, -0.2, 0.4]
+k_urad_per_Nm = [1.5, 3.0, 6.0]
+"""
+
+
+def test_command_line_round_trip_with_compliance(tmp_path):
+    (tmp_path / "robot.toml").write_text(ROBOT)
+    (tmp_path / "truth.toml").write_text(TRUTH)
+    plan = "\n".join(
+        ["q1_deg,q2_deg,q3_deg,payload_kg"]
+        + [
+            f"{a},{b},{c},{10 if i % 2 else 0}"
+            for i, (a, b, c) in enumerate(np.random.default_rng(4).uniform(-140, 140, (40, 3)))
+        ]
+    )
+    (tmp_path / "plan.csv").write_text(plan + "\n")
+    common = ["--robot", "robot.toml"]
+    run = _armcal("synthesize", *common, "--plan", "plan.csv", "--truth", "truth.toml",
+                  "-o", "meas.csv", "--seed", "3", cwd=tmp_path)  # fmt: skip
+    assert run.returncode == 0, run.stderr
+    run = _armcal("identify", *common, "--measurements", "meas.csv", "-o", "cal.json",
+                  "--json", cwd=tmp_path)  # fmt: skip
+    assert run.returncode == 0, run.stderr
+    doc = json.loads(run.stdout)
+    values = {p["name"]: (p["value"], p["std"]) for p in doc["parameters"]}
+    for name, truth in zip(("k1", "k2", "k3"), (1.5, 3.0, 6.0), strict=True):
+        value, std = values[name]
+        assert abs(value - truth) < 3 * std
+    assert doc["elastostatic"]["parameters"] == ["k1", "k2", "k3"]
+    cal = read_calibration(tmp_path / "cal.json")
+    assert cal.compliance is not None and cal.compliance_values is not None
+    np.testing.assert_allclose(
+        cal.compliance_values * 1e6, [values[f"k{j}"][0] for j in (1, 2, 3)]
+    )
+    run = _armcal("identify", *common, "--measurements", "meas.csv", "--no-compliance",
+                  cwd=tmp_path)  # fmt: skip
+    assert "inconsistent with sigma" in run.stderr and "loads-ignored" not in run.stderr
+    run = _armcal("validate", "--calibration", "cal.json", "--measurements", "meas.csv",
+                  "--json", cwd=tmp_path)  # fmt: skip
+    assert run.returncode == 0, run.stderr
+    assert json.loads(run.stdout)["rms_after_mm"] < 0.04
+    (tmp_path / "prog.csv").write_text("q1_deg,q2_deg,q3_deg\n10,20,30\n-40,50,-60\n")
+    run = _armcal("compensate", "--calibration", "cal.json", "--program", "prog.csv",
+                  "--payload-kg", "10", "-o", "out.csv", "--json", cwd=tmp_path)  # fmt: skip
+    assert run.returncode == 0, run.stderr
+    assert json.loads(run.stdout)["rms_before_mm"] > 0.1  # deflection and geometry
+    run = _armcal("evaluate", *common, "--plan", "plan.csv", "--json", cwd=tmp_path)
+    assert run.returncode == 0, run.stderr
+    assert set(json.loads(run.stdout)["predicted_std"]) >= {"k1", "k2", "k3"}
+    run = _armcal("simulate", *common, "--plan", "plan.csv", "--truth", "truth.toml",
+                  "--trials", "300", "--json", cwd=tmp_path)  # fmt: skip
+    assert run.returncode == 0, run.stderr
+    assert "k3" in json.loads(run.stdout)["empirical_std"]
+
+
+@pytest.mark.parametrize(
+    ("table", "message"),
+    [
+        ("[elastostatic]\ngravity = [0, -1]\n", "unknown key 'elastostatic.gravity'"),
+        ("[elastostatic]\ngravity_xy = [0, 0]\n", "non-zero direction"),
+        ("[elastostatic]\nlink_masses_kg = [1, 2]\n", "link_masses_kg"),
+        ("[elastostatic]\ngravity_xy = [0, -1]\npayload_kg = -1\n", "payload_kg"),
+        ("[elastostatic]\ngravity_xy = [0, -1]\ncom_fraction = 1.5\n", "com_fraction"),
+    ],
+)
+def test_bad_elastostatic_tables_are_one_line_errors(tmp_path, table, message):
+    base = "link_lengths_mm = [600.0, 450.0, 200.0]\n"
+    (tmp_path / "robot.toml").write_text(base + table)
+    (tmp_path / "plan.csv").write_text("q1_deg,q2_deg,q3_deg\n0,0,0\n")
+    run = _armcal("evaluate", "--robot", "robot.toml", "--plan", "plan.csv", cwd=tmp_path)
+    assert run.returncode == 2
+    assert run.stderr.startswith("armcal: error: ") and message in run.stderr
+    assert len(run.stderr.strip().splitlines()) == 1
+
+
+def test_payloads_need_an_elastostatic_robot(tmp_path):
+    run = _armcal("design", "--poses", "8", "--payloads", "0,10", cwd=tmp_path)
+    assert run.returncode == 2 and "no [elastostatic]" in run.stderr
+    (tmp_path / "m.csv").write_text("q1_deg,q2_deg,q3_deg,q4_deg,x_mm,y_mm,payload_kg\n"
+                                    "0,0,0,0,660,0,-1\n")  # fmt: skip
+    run = _armcal("identify", "--measurements", "m.csv", cwd=tmp_path)
+    assert run.returncode == 2 and "payload_kg" in run.stderr and "negative" in run.stderr
