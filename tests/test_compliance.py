@@ -163,6 +163,7 @@ def test_compensation_takes_out_the_deflection_under_the_programs_payload():
     np.testing.assert_allclose(result.position_before_mm, before, rtol=1e-9)
 
 
+@pytest.mark.slow
 def test_self_check_meets_the_issue_thresholds():
     check = check_compliance(seed=0, trials=2000)
     rigid, fit = check.rigid, check.compliant
@@ -185,6 +186,7 @@ def test_self_check_meets_the_issue_thresholds():
     assert check.design.predicted_std.shape == (9,)
 
 
+@pytest.mark.slow
 def test_design_splits_payloads_when_the_masses_are_unknown():
     arm = PlanarArm([600.0, 450.0, 200.0], np.radians([[-170, 170], [-150, 150], [-150, 150]]))
     elastic = Elastostatic.create(3, gravity_xy=[0, -1], payload_kg=10.0)

@@ -1,4 +1,4 @@
-"""Run every example of README.md and write (or check) its printed output.
+"""Run every example of README.md and the guides and write (or check) their printed output.
 
 The README cannot go stale: each ```console block is a script whose lines that
 start with ``$ `` are run, in order, in one fresh temporary folder, with the
@@ -31,6 +31,8 @@ from pathlib import Path
 
 ROOT = Path(__file__).resolve().parent.parent
 README = ROOT / "README.md"
+#: Every document whose examples are run: the README, then guides in docs/.
+DOCUMENTS = (README, ROOT / "docs" / "compliance.md")
 FENCE = re.compile(r"^```(\w*)\n(.*?)^```\n", re.M | re.S)
 SECONDS = re.compile(r"\b\d+(?:\.\d+)? s\b")
 #: Files the README's commands write that are kept in the repository (as pictures),
@@ -105,29 +107,38 @@ def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--check", action="store_true", help="compare instead of rewriting")
     args = parser.parse_args(argv)
-    text = README.read_text(encoding="utf-8")
+    status = 0
+    for document in DOCUMENTS:
+        status = max(status, _one(document, check=args.check))
+    return status
+
+
+def _one(document: Path, *, check: bool) -> int:
+    """Check or rewrite one document; 1 when a check finds it stale."""
+    name = document.relative_to(ROOT)
+    text = document.read_text(encoding="utf-8")
     fresh, work = render(text)
     try:
-        if args.check:
+        if check:
             old, new = SECONDS.sub("<t> s", text), SECONDS.sub("<t> s", fresh)
             missing = [f for f in KEPT_FIGURES if not (FIGURE_DIR / Path(f).name).is_file()]
-            if old != new or missing:
+            if old != new or (document == README and missing):
                 diff = difflib.unified_diff(
-                    old.splitlines(True), new.splitlines(True), "README.md", "fresh run"
+                    old.splitlines(True), new.splitlines(True), str(name), "fresh run"
                 )
                 sys.stdout.writelines(diff)
-                if missing:
+                if document == README and missing:
                     print(f"missing figures in {FIGURE_DIR}: {', '.join(missing)}")
-                print("README.md is stale: run `make readme`")
+                print(f"{name} is stale: run `make readme`")
                 return 1
-            print("README.md matches a fresh run of its examples")
+            print(f"{name} matches a fresh run of its examples")
             return 0
-        README.write_text(fresh, encoding="utf-8")
+        document.write_text(fresh, encoding="utf-8")
         FIGURE_DIR.mkdir(parents=True, exist_ok=True)
-        for name in KEPT_FIGURES:
-            if (work / name).is_file():
-                shutil.copyfile(work / name, FIGURE_DIR / Path(name).name)
-        print(f"rewrote {README.name} from a fresh run of its examples")
+        for figure in KEPT_FIGURES:
+            if (work / figure).is_file():
+                shutil.copyfile(work / figure, FIGURE_DIR / Path(figure).name)
+        print(f"rewrote {name} from a fresh run of its examples")
         return 0
     finally:
         shutil.rmtree(work, ignore_errors=True)
