@@ -820,6 +820,12 @@ _TARGET_OPTIONS = {
 
 def _poses_needed(args: argparse.Namespace) -> None:
     spec = load_robot(args.robot)
+    if spec.elastic is not None:
+        raise ArmcalError(
+            f"{spec.source}: poses-needed sizes plans of the geometric model only, and this "
+            "robot has [elastostatic]; compare the predicted std of armcal design --poses M at "
+            "a few sizes M (std falls like 1/sqrt(M))"
+        )
     arm = _model_arm(args, spec)
     target = next(key for key in TARGETS if getattr(args, key) is not None)
     sigma = _design_sigma(arm)
@@ -897,6 +903,24 @@ def _export(args: argparse.Namespace) -> None:
                     "convert them before publishing joint_states (see the file's comment)",
                 )
             )
+    if cal.compliance is not None and cal.compliance_values is not None:
+        values = ", ".join(
+            f"{name} = {v:.4g} {unit}"
+            for name, unit, v in zip(
+                cal.compliance.names,
+                cal.compliance.units,
+                cal.compliance_values * cal.compliance.display_scale,
+                strict=True,
+            )
+        )
+        warnings.append(
+            ArmcalWarning(
+                "compliance-not-exported",
+                f"the exported geometry is rigid: the joint compliance ({values}) is not part "
+                "of a robot file or URDF; compensate programs with armcal compensate, which "
+                "uses it",
+            )
+        )
     for path, text in texts.items():
         atomic_write(path, text)
     document = {"robot_toml": args.robot_toml, "urdf": args.urdf}
