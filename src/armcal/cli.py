@@ -293,46 +293,29 @@ def _emit(
 # --------------------------------------------------------------------------- commands
 
 
-def _synthesize_compliant(args: argparse.Namespace, spec: RobotSpec) -> None:
-    q, loads, model = _loaded_plan(args.plan, spec, spec.arm)
-    truth = _compliance_truth(args, spec, model)
-    sigma = _sigma_for_simulation(args, spec)
-    xy = synthesize_measurements(
-        spec.arm, q, truth, sigma, rng=args.seed, compliance=model, loads=loads
-    )
-    text = format_measurements_csv(q, xy, payload_kg=loads.payload_kg)
-    if args.output is None:
-        _print_warnings(_unique(spec.warnings))
-        sys.stdout.write(text)
-        return
-    atomic_write(args.output, text)
-    shown = sigma if sigma is not None else float(spec.arm.sigma or 0.0)
-    document = {"poses": int(q.shape[0]), "sigma_mm": shown, "output": str(args.output)}
-    _emit(
-        args,
-        document,
-        f"wrote {q.shape[0]} measurements of {spec.arm.name} with joint compliance "
-        f"(sigma {shown:g} mm, seed {args.seed}) to {args.output}",
-        spec.warnings,
-    )
-
-
 def _synthesize(args: argparse.Namespace) -> None:
     spec = load_robot(args.robot)
-    if spec.elastic is not None:
-        _synthesize_compliant(args, spec)
-        return
-    q = read_plan(args.plan, spec.arm)
-    truth = _truth(args, spec)
     sigma = _sigma_for_simulation(args, spec)
     labels = targets = target = None
-    if spec.arm.targets:  # every target measured at every pose, one row each
-        count = len(spec.arm.targets)
-        labels = [str(i // count + 1) for i in range(q.shape[0] * count)]
-        q, target = every_target(spec.arm, q)
-        targets = [spec.arm.targets[t].label for t in target]
-    xy = synthesize_measurements(spec.arm, q, truth, sigma, rng=args.seed, target=target)
-    text = format_measurements_csv(q, xy, labels, targets)
+    what = ""
+    if spec.elastic is not None:  # a robot whose joints deflect under load
+        q, loads, model = _loaded_plan(args.plan, spec, spec.arm)
+        truth = _compliance_truth(args, spec, model)
+        xy = synthesize_measurements(
+            spec.arm, q, truth, sigma, rng=args.seed, compliance=model, loads=loads
+        )
+        text = format_measurements_csv(q, xy, payload_kg=loads.payload_kg)
+        what = " with joint compliance"
+    else:
+        q = read_plan(args.plan, spec.arm)
+        truth = _truth(args, spec)
+        if spec.arm.targets:  # every target measured at every pose, one row each
+            count = len(spec.arm.targets)
+            labels = [str(i // count + 1) for i in range(q.shape[0] * count)]
+            q, target = every_target(spec.arm, q)
+            targets = [spec.arm.targets[t].label for t in target]
+        xy = synthesize_measurements(spec.arm, q, truth, sigma, rng=args.seed, target=target)
+        text = format_measurements_csv(q, xy, labels, targets)
     if args.output is None:
         _print_warnings(_unique(spec.warnings))
         sys.stdout.write(text)
@@ -343,7 +326,7 @@ def _synthesize(args: argparse.Namespace) -> None:
     _emit(
         args,
         document,
-        f"wrote {q.shape[0]} measurements of {spec.arm.name} (sigma {shown:g} mm, "
+        f"wrote {q.shape[0]} measurements of {spec.arm.name}{what} (sigma {shown:g} mm, "
         f"seed {args.seed}) to {args.output}",
         spec.warnings,
     )
