@@ -130,11 +130,20 @@ def _finite(text: str) -> float:
     return value
 
 
-def _positive(text: str) -> float:
+def _above_zero(text: str, *, strict: bool) -> float:
     value = _finite(text)
-    if value <= 0:
-        raise argparse.ArgumentTypeError(f"expected a number > 0, got {text!r}")
+    if value < 0 or (strict and value == 0):
+        bound = "> 0" if strict else ">= 0"
+        raise argparse.ArgumentTypeError(f"expected a number {bound}, got {text!r}")
     return value
+
+
+def _positive(text: str) -> float:
+    return _above_zero(text, strict=True)
+
+
+def _not_negative(text: str) -> float:
+    return _above_zero(text, strict=False)
 
 
 def _payloads(text: str) -> tuple[float, ...]:
@@ -142,13 +151,6 @@ def _payloads(text: str) -> tuple[float, ...]:
     if not values:
         raise argparse.ArgumentTypeError(f"expected payloads in kg like 0,10, got {text!r}")
     return values
-
-
-def _not_negative(text: str) -> float:
-    value = _finite(text)
-    if value < 0:
-        raise argparse.ArgumentTypeError(f"expected a number >= 0, got {text!r}")
-    return value
 
 
 def _sigma(text: str) -> float:

@@ -501,6 +501,7 @@ def compensate(
     q = q0.copy()
     everyone = np.arange(q.shape[0])
     residual = _residual(arm, q, robot, target, goal, goal_angle, scale, deflection(everyone))
+    at_program = residual.copy()  # where the program's own commands take the tool
     done = np.zeros(q.shape[0], dtype=bool)
     for _ in range(max_iter):
         done = np.linalg.norm(residual, axis=1) <= tol_mm
@@ -542,25 +543,17 @@ def compensate(
         done[i] = False
     q = np.where(done[:, None], q, q0)
     if model is None or values is None:
-        bent = forward_kinematics(arm, q0, robot, target=target)
         covariance = cal.robot_covariance()
         j_user = jacobian(arm, q, robot, target=target)
     else:
-        bent = model.tip(q0, np.concatenate([robot, values]), loads)
         covariance = cal.robot_full_covariance()
         j_user = model.jacobian(q, np.concatenate([robot, values]), loads)
-    before = np.linalg.norm(bent - goal, axis=1)
+    before = np.linalg.norm(at_program[:, :2], axis=1)
     after = np.sqrt(np.clip(np.einsum("mia,ab,mib->m", j_user, covariance, j_user), 0, None))
     turn_before = turn_after = None
     if keep_angle:
         assert goal_angle is not None
-        bend0 = None
-        if model is not None and values is not None:  # at the program's own commands
-            bend0 = model.deflection(q0, robot, values, loads)
-        turn = tool_angles(arm, q0, robot, target=target) - goal_angle
-        if bend0 is not None:
-            turn = turn + np.sum(bend0, axis=-1)
-        turn_before = np.degrees(np.abs(wrap_angle(turn)))
+        turn_before = np.degrees(np.abs(at_program[:, 2]) / scale)
         # The tool angle moves with the last link vector's angle deviation only.
         k = arm.n_links
         last = k - arm.n_target_links + (0 if target is None else target)

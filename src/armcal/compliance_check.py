@@ -29,7 +29,6 @@ from .compensate import validate
 from .doe.compliance import CompliantDesign, design_compliant
 from .doe.plans import feasible_poses
 from .elastostatic import Compliance, Elastostatic, Loads
-from .errors import ArmcalWarning
 from .identification import Calibration, identify
 from .simulate import MonteCarlo, monte_carlo, synthesize_measurements
 
@@ -125,10 +124,6 @@ class ComplianceCheck:
                 "random_plan_std": dict(zip(names, self.random_std.tolist(), strict=True)),
             },
         }
-
-    @property
-    def warnings(self) -> tuple[ArmcalWarning, ...]:
-        return ()
 
 
 def check_compliance(*, seed: int = 0, trials: int = 4000, poses: int = 40) -> ComplianceCheck:

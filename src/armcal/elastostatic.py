@@ -37,7 +37,6 @@ split of ``c_j`` into compliance and weight.
 
 from __future__ import annotations
 
-from collections.abc import Sequence
 from dataclasses import dataclass
 from functools import cached_property
 
@@ -47,7 +46,7 @@ from numpy.typing import ArrayLike
 from .arm import PlanarArm, forward_kinematics, jacobian, link_vectors
 from .errors import ArmcalError, ArmcalWarning, NotIdentifiableError
 from .numerics import COND_WARN, RANK_RTOL, ScaledSVD, scaled_svd
-from .observability import Identifiability, _row_echelon, combination, listing
+from .observability import Identifiability, combination, listing, row_echelon
 
 __all__ = [
     "STANDARD_GRAVITY",
@@ -155,17 +154,6 @@ class Elastostatic:
             self.payload_kg,
         )
 
-    def to_dict(self) -> dict[str, object]:
-        """The robot file's ``[elastostatic]`` table (gravity as a direction)."""
-        out: dict[str, object] = {}
-        if self.gravity is not None:
-            out["gravity_xy"] = (self.gravity / STANDARD_GRAVITY).tolist()
-        if self.link_masses_kg is not None:
-            out["link_masses_kg"] = self.link_masses_kg.tolist()
-        out["com_fraction"] = self.com_fraction.tolist()
-        out["payload_kg"] = self.payload_kg
-        return out
-
 
 @dataclass(frozen=True, eq=False)
 class Loads:
@@ -224,13 +212,6 @@ class Loads:
         """The loads of the rows ``rows`` (index or mask)."""
         return Loads(self.payload_kg[rows], self.force_n[rows])
 
-    @classmethod
-    def concatenate(cls, parts: Sequence[Loads]) -> Loads:
-        return cls(
-            np.concatenate([p.payload_kg for p in parts]),
-            np.concatenate([p.force_n for p in parts]),
-        )
-
 
 @dataclass(frozen=True, eq=False)
 class Compliance:
@@ -260,15 +241,11 @@ class Compliance:
                 "joint compliance is modelled for one target on the end effector; "
                 "measure one target per pose, or leave out [elastostatic]"
             )
-        if self.elastic.lumped and self.elastic.gravity is None and not self.known_loads:
-            raise ArmcalError(
-                "[elastostatic] has neither gravity_xy nor known loads: nothing twists the "
-                "joints; give gravity_xy for a vertical arm, or payload_kg/fx_N/fy_N"
-            )
-        if not self.elastic.lumped and self.elastic.gravity is None and not self.known_loads:
+        if self.elastic.gravity is None and not self.known_loads:
             raise ArmcalError(
                 "[elastostatic] has no gravity_xy and the data carry no payload or tip "
-                "force: nothing twists the joints; give gravity_xy for a vertical arm"
+                "force that varies: nothing twists the joints; give gravity_xy for a vertical "
+                "arm, or payload_kg/fx_N/fy_N"
             )
 
     @classmethod
@@ -490,8 +467,8 @@ def compliance_identifiability(
             n for n, w in zip(names, np.linalg.norm(basis, axis=1), strict=True) if w > 1e-8
         )
 
-    null_rows = _row_echelon(null * scale)
-    weak_rows = _row_echelon(weak * scale, tol=1e-3)
+    null_rows = row_echelon(null * scale)
+    weak_rows = row_echelon(weak * scale, tol=1e-3)
     m = q.shape[0]
     info = Identifiability(
         rank=int(svd.rank),

@@ -583,9 +583,36 @@ def _gauss_newton_model(
     threshold: float,
     max_iter: int,
     target: np.ndarray | None = None,
+    compliance: Compliance | None = None,
+    loads: Loads | None = None,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Gauss-Newton over the free user parameters, whitened rows, every active set at once."""
-    free = arm.free
+    """Gauss-Newton over the free user parameters, whitened rows, every active set at once.
+
+    With ``compliance`` the parameters are the deviations then the compliance
+    (:mod:`armcal.elastostatic`), the model its deflected tip under ``loads``,
+    and a compliance step is measured by the tip motion it causes.
+    """
+    p = arm.n_params
+    if compliance is None:
+        free, n_free = arm.free, arm.n_free
+
+        def tip(current: np.ndarray) -> np.ndarray:
+            return forward_kinematics(arm, q, current, target=target)
+
+        def columns(current: np.ndarray) -> np.ndarray:
+            return jacobian(arm, q, current, target=target)
+
+    else:
+        free, n_free = compliance.all_free, compliance.n_free
+        model = compliance  # bound for the closures
+        tip_per_unit = model.typical_scale(q, loads) * float(np.sum(arm.link_lengths))
+
+        def tip(current: np.ndarray) -> np.ndarray:
+            return model.tip(q, current, loads)
+
+        def columns(current: np.ndarray) -> np.ndarray:
+            return model.jacobian(q, current, loads)
+
     n_sets = sets.shape[0]
     iterations = np.zeros(n_sets, dtype=int)
     failed = np.zeros(n_sets, dtype=bool)
@@ -594,19 +621,23 @@ def _gauss_newton_model(
     floor = 1e-9 * float(np.sum(arm.link_lengths))  # round-off floor of a stalled step
     for _ in range(max_iter):
         current = params[active]
-        w = _whitening(arm, q, current, row_sigma, _for_sets(pose_weights, active), target)
-        jac = jacobian(arm, q, current, target=target)[..., free]  # (N, m, 2, p_f)
-        residual = sets[active] - forward_kinematics(arm, q, current, target=target)
-        rows = _apply(w, jac).reshape(active.size, -1, arm.n_free)
+        weights = _for_sets(pose_weights, active)
+        w = _whitening(arm, q, current[:, :p], row_sigma, weights, target)
+        jac = columns(current)[..., free]  # (N, m, 2, p_f)
+        residual = sets[active] - tip(current)
+        rows = _apply(w, jac).reshape(active.size, -1, n_free)
         rhs = _apply(w, residual[..., None])[..., 0].reshape(active.size, -1)
         step, _, _ = solve_least_squares(rows, rhs)
-        full_step = np.zeros((active.size, arm.n_params))
+        full_step = np.zeros((active.size, free.size))
         full_step[:, free] = step
         params[active] = current + full_step
         iterations[active] += 1
         finite = np.all(np.isfinite(full_step), axis=1)
         failed[active[~finite]] = True
-        size = _step_size(arm, full_step)
+        size = _step_size(arm, full_step[:, :p])
+        if compliance is not None:
+            bent = np.max(np.abs(full_step[:, p:]) * tip_per_unit, axis=-1, initial=0.0)
+            size = np.maximum(size, bent)
         stalled = (size >= 0.5 * previous[active]) & (size < floor)
         previous[active] = size
         active = active[finite & (size > threshold) & ~stalled]
@@ -614,7 +645,7 @@ def _gauss_newton_model(
             break
     converged = ~failed
     converged[active] = False
-    angles = arm.angle_params
+    angles = np.flatnonzero(arm.angle_params)
     params[:, angles] = wrap_angle(params[:, angles])
     return params, iterations, converged
 
@@ -703,42 +734,19 @@ def solve_compliant(
         )
         params[:, :p] = geometry
     params = params * free
-    reach = float(np.sum(arm.link_lengths))
-    threshold = tol * reach
-    floor = 1e-9 * reach
-    tip_per_unit = model.typical_scale(q, loads) * reach  # mm per unit of compliance
-    iterations = np.zeros(n_sets, dtype=int)
-    failed = np.zeros(n_sets, dtype=bool)
-    previous = np.full(n_sets, np.inf)
-    active = np.arange(n_sets)
-    for _ in range(max_iter):
-        current = params[active]
-        weights = _for_sets(pose_weights, active)
-        w = _whitening(arm, q, current[:, :p], row_sigma, weights, None)
-        jac = model.jacobian(q, current, loads)[..., free]
-        residual = sets[active] - model.tip(q, current, loads)
-        rows = _apply(w, jac).reshape(active.size, -1, model.n_free)
-        rhs = _apply(w, residual[..., None])[..., 0].reshape(active.size, -1)
-        step, _, _ = solve_least_squares(rows, rhs)
-        full_step = np.zeros((active.size, total))
-        full_step[:, free] = step
-        params[active] = current + full_step
-        iterations[active] += 1
-        finite = np.all(np.isfinite(full_step), axis=1)
-        failed[active[~finite]] = True
-        size = np.maximum(
-            _step_size(arm, full_step[:, :p]),
-            np.max(np.abs(full_step[:, p:]) * tip_per_unit, axis=-1, initial=0.0),
-        )
-        stalled = (size >= 0.5 * previous[active]) & (size < floor)
-        previous[active] = size
-        active = active[finite & (size > threshold) & ~stalled]
-        if active.size == 0:
-            break
-    converged = ~failed
-    converged[active] = False
-    angles = arm.angle_params
-    params[:, :p][:, angles] = wrap_angle(params[:, :p][:, angles])
+    threshold = tol * float(np.sum(arm.link_lengths))
+    params, iterations, converged = _gauss_newton_model(
+        arm,
+        q,
+        sets,
+        params,
+        row_sigma,
+        pose_weights,
+        threshold,
+        max_iter,
+        compliance=model,
+        loads=loads,
+    )
     if batched:
         return params, iterations, converged
     return params[0], iterations[0], converged[0]
@@ -767,16 +775,6 @@ class ComplianceFit:
     covariance: np.ndarray
     geometry_only_rms_mm: float | None = None
     max_deflection_rad: np.ndarray | None = None
-
-    @property
-    def names(self) -> tuple[str, ...]:
-        return self.model.names
-
-    @property
-    def std(self) -> np.ndarray:
-        """Standard errors ``(P,)`` in display units."""
-        p = self.model.arm.n_params
-        return np.sqrt(np.diag(self.covariance)[p:]) * self.model.display_scale
 
 
 @dataclass(frozen=True, eq=False)

@@ -967,11 +967,9 @@ def _elastostatic(path, table: Any, n: int) -> Elastostatic:
         fraction = (
             _numbers(path, raw, key, n) if isinstance(raw, list) else _number(path, raw, key)
         )
-    payload = (
-        _number(path, table["payload_kg"], "elastostatic.payload_kg")
-        if ("payload_kg" in table)
-        else 0.0
-    )
+    payload = 0.0
+    if "payload_kg" in table:
+        payload = _number(path, table["payload_kg"], "elastostatic.payload_kg")
     try:
         return Elastostatic.create(
             n, gravity_xy=gravity, link_masses_kg=masses, com_fraction=fraction, payload_kg=payload

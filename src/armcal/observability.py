@@ -33,6 +33,7 @@ __all__ = [
     "model_columns",
     "plan_rows",
     "plan_svd",
+    "row_echelon",
     "scaled_columns",
     "scaled_jacobian",
     "target_weights",
@@ -440,11 +441,11 @@ def identifiability(
         weights = np.linalg.norm(basis, axis=1)
         bad = tuple(n for n, w in zip(arm.free_names, weights, strict=True) if w > 1e-8)
     display = arm.display_scale  # a direction in mm, rad shown in mm, deg
-    null_rows = _row_echelon(null * display)
+    null_rows = row_echelon(null * display)
     # A poorly determined direction is only near the null space of a nearby plan:
     # terms below the 3 significant digits shown of the leading one are left out.
     weak_drop = 1e-3
-    weak_rows = _row_echelon(weak * display, tol=weak_drop)
+    weak_rows = row_echelon(weak * display, tol=weak_drop)
     if null.shape[0]:
         joints = _joints_to_vary(arm, null_rows, 1e-6)
     else:
@@ -460,7 +461,7 @@ def identifiability(
     )
 
 
-def _row_echelon(basis: np.ndarray, *, tol: float = 1e-9) -> np.ndarray:
+def row_echelon(basis: np.ndarray, *, tol: float = 1e-9) -> np.ndarray:
     """Reduced row echelon form of a basis ``(k, p)``: the same span, sparse rows.
 
     The SVD returns an arbitrary rotation of the null space; the echelon form

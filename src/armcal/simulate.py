@@ -512,10 +512,7 @@ def monte_carlo(
             f"the closed form needs every parameter free, but {', '.join(arm.fixed)} "
             f"{'is' if len(arm.fixed) == 1 else 'are'} fixed; use method gauss-newton or auto"
         )
-    if trials < 2:
-        raise ArmcalError(f"a Monte Carlo needs at least 2 trials, got {trials}")
-    if sigma is not None and not (sigma > 0 and math.isfinite(sigma)):
-        raise ArmcalError(f"a Monte Carlo needs a positive noise sigma (mm), got {sigma}")
+    _check_runs(trials, sigma)
     noise = simulated_noise(arm, sigma)
     model = arm.replace(noise=noise)
     reference = float(sigma) if sigma is not None else noise.sigma_mm
@@ -571,6 +568,14 @@ def monte_carlo(
     )
 
 
+def _check_runs(trials: int, sigma: float | None) -> None:
+    """At least 2 trials and, when given, a positive finite sigma (mm)."""
+    if trials < 2:
+        raise ArmcalError(f"a Monte Carlo needs at least 2 trials, got {trials}")
+    if sigma is not None and not (sigma > 0 and math.isfinite(sigma)):
+        raise ArmcalError(f"a Monte Carlo needs a positive noise sigma (mm), got {sigma}")
+
+
 def _monte_carlo_compliant(
     compliance: Compliance,
     q: np.ndarray,
@@ -585,10 +590,7 @@ def _monte_carlo_compliant(
     """:func:`monte_carlo` of geometry plus joint compliance (Gauss-Newton on every set)."""
     arm = compliance.arm
     truth = _checked_truth(arm, truth, compliance)
-    if trials < 2:
-        raise ArmcalError(f"a Monte Carlo needs at least 2 trials, got {trials}")
-    if sigma is not None and not (sigma > 0 and math.isfinite(sigma)):
-        raise ArmcalError(f"a Monte Carlo needs a positive noise sigma (mm), got {sigma}")
+    _check_runs(trials, sigma)
     noise = simulated_noise(arm, sigma)
     model = Compliance(arm.replace(noise=noise), compliance.elastic, compliance.known_loads)
     reference = float(sigma) if sigma is not None else noise.sigma_mm

@@ -27,7 +27,7 @@ poses and the given payloads is at least
 
 from __future__ import annotations
 
-from collections.abc import Callable, Sequence
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -46,8 +46,6 @@ __all__ = [
     "design_compliant",
     "payload_values",
 ]
-
-ProgressCallback = Callable[[str], None]
 
 
 def payload_values(elastic: Elastostatic, given: Sequence[float] | None) -> tuple[float, ...]:
@@ -216,8 +214,6 @@ def _reference_design(
     arm: PlanarArm,
     pool_q: np.ndarray,
     pool_w: np.ndarray,
-    values: np.ndarray,
-    rng: np.random.Generator,
     rounds: int,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """A near-D-optimal weighted design: its points, payloads, weights and ``M^-1``."""
@@ -328,9 +324,7 @@ def design_compliant(
     scale = np.where(scale > 0, scale, 1.0)
     points = _Points(model, scale)
     # The reference design first: its support seeds the exact plan.
-    ref_q, ref_w, ref_weights, ref_inv = _reference_design(
-        points, arm, pool_q, pool_w, values, rng, rounds
-    )
+    ref_q, ref_w, ref_weights, ref_inv = _reference_design(points, arm, pool_q, pool_w, rounds)
     cand_q = np.concatenate([ref_q, pool_q])
     cand_w = np.concatenate([ref_w, pool_w])
     blocks = points.blocks(cand_q, cand_w)
@@ -347,8 +341,6 @@ def design_compliant(
         arm,
         np.concatenate([ref_q, q]),
         np.concatenate([ref_w, w]),
-        values,
-        rng,
         1,
     )
     star_info = _information(points.blocks(ref_q, ref_w), ref_weights)
