@@ -8,8 +8,9 @@ line is ``# NAME`` is written to NAME in that folder before the blocks after it
 run, so the files the README shows are the files the commands read.  A
 ```python block of ``>>>`` examples is run as a doctest.
 
-    python tools/readme.py            # rewrite README.md with fresh output
-    python tools/readme.py --check    # exit 1 and show a diff if README.md is stale
+    python tools/readme.py                   # rewrite every document with fresh output
+    python tools/readme.py --check           # exit 1 and show a diff if one is stale
+    python tools/readme.py docs/guide.md     # only this document
 
 Wall-clock figures (``0.62 s``) differ from run to run; ``--check`` compares
 them as ``<t> s``.  Figures that a command writes under ``docs/`` are copied
@@ -31,14 +32,17 @@ from pathlib import Path
 
 ROOT = Path(__file__).resolve().parent.parent
 README = ROOT / "README.md"
-#: Every document whose examples are run: the README, then guides in docs/.
-DOCUMENTS = (README, ROOT / "docs" / "compliance.md")
+#: Every document whose examples are run: the README, then every guide in docs/.
+DOCUMENTS = (README, *sorted((ROOT / "docs").glob("*.md")))
 FENCE = re.compile(r"^```(\w*)\n(.*?)^```\n", re.M | re.S)
 SECONDS = re.compile(r"\b\d+(?:\.\d+)? s\b")
 #: Files the README's commands write that are kept in the repository (as pictures),
 #: by their path in the work folder; they are kept under their own name in docs/img.
 KEPT_FIGURES = ("plan.png", "demo-out/error_map.png")
 FIGURE_DIR = ROOT / "docs" / "img"
+#: A guide keeps every PNG its commands write into this folder of its work folder
+#: (``--plot figures/NAME.png``), under its own name in docs/img.
+GUIDE_FIGURES = "figures"
 
 
 def _run(command: str, cwd: Path) -> str:
@@ -69,9 +73,9 @@ def _console(body: str, cwd: Path) -> str:
     return "".join(out)
 
 
-def _python(body: str, cwd: Path) -> None:
+def _python(body: str, cwd: Path, name: str) -> None:
     parser = doctest.DocTestParser()
-    test = parser.get_doctest(body, {}, "README.md", str(README), 0)
+    test = parser.get_doctest(body, {}, name, name, 0)
     runner = doctest.DocTestRunner(optionflags=doctest.ELLIPSIS | doctest.NORMALIZE_WHITESPACE)
     here = Path.cwd()
     os.chdir(cwd)
@@ -80,10 +84,10 @@ def _python(body: str, cwd: Path) -> None:
     finally:
         os.chdir(here)
     if runner.failures:
-        raise SystemExit(f"README python example failed ({runner.failures} failure(s))")
+        raise SystemExit(f"{name}: python example failed ({runner.failures} failure(s))")
 
 
-def render(text: str) -> tuple[str, Path]:
+def render(text: str, name: str = "README.md") -> tuple[str, Path]:
     """README text with every console block's output regenerated, and the work folder."""
     work = Path(tempfile.mkdtemp(prefix="armcal-readme-"))
     pieces, last = [], 0
@@ -96,7 +100,7 @@ def render(text: str) -> tuple[str, Path]:
         elif kind == "console":
             body = _console(body, work)
         elif kind == "python" and ">>>" in body:
-            _python(body, work)
+            _python(body, work, name)
         pieces.append(f"```{kind}\n{body}```\n")
         last = match.end()
     pieces.append(text[last:])
@@ -106,38 +110,49 @@ def render(text: str) -> tuple[str, Path]:
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--check", action="store_true", help="compare instead of rewriting")
+    parser.add_argument(
+        "documents", nargs="*", type=Path, help="only these documents (default: all)"
+    )
     args = parser.parse_args(argv)
     status = 0
-    for document in DOCUMENTS:
+    for document in [d.resolve() for d in args.documents] or DOCUMENTS:
         status = max(status, _one(document, check=args.check))
     return status
+
+
+def _kept(document: Path, work: Path) -> list[Path]:
+    """The figures of ``document``'s run (in ``work``) that the repository keeps."""
+    if document == README:
+        return [work / figure for figure in KEPT_FIGURES]
+    return sorted((work / GUIDE_FIGURES).glob("*.png"))
 
 
 def _one(document: Path, *, check: bool) -> int:
     """Check or rewrite one document; 1 when a check finds it stale."""
     name = document.relative_to(ROOT)
     text = document.read_text(encoding="utf-8")
-    fresh, work = render(text)
+    fresh, work = render(text, str(name))
     try:
         if check:
             old, new = SECONDS.sub("<t> s", text), SECONDS.sub("<t> s", fresh)
-            missing = [f for f in KEPT_FIGURES if not (FIGURE_DIR / Path(f).name).is_file()]
-            if old != new or (document == README and missing):
+            missing = [f for f in _kept(document, work) if not (FIGURE_DIR / f.name).is_file()]
+            if old != new or missing:
                 diff = difflib.unified_diff(
                     old.splitlines(True), new.splitlines(True), str(name), "fresh run"
                 )
                 sys.stdout.writelines(diff)
-                if document == README and missing:
-                    print(f"missing figures in {FIGURE_DIR}: {', '.join(missing)}")
+                if missing:
+                    names = ", ".join(f.name for f in missing)
+                    print(f"missing figures in {FIGURE_DIR}: {names}")
                 print(f"{name} is stale: run `make readme`")
                 return 1
             print(f"{name} matches a fresh run of its examples")
             return 0
         document.write_text(fresh, encoding="utf-8")
         FIGURE_DIR.mkdir(parents=True, exist_ok=True)
-        for figure in KEPT_FIGURES:
-            if (work / figure).is_file():
-                shutil.copyfile(work / figure, FIGURE_DIR / Path(figure).name)
+        for figure in _kept(document, work):
+            if figure.is_file():
+                shutil.copyfile(figure, FIGURE_DIR / figure.name)
         print(f"rewrote {name} from a fresh run of its examples")
         return 0
     finally:
