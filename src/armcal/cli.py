@@ -23,6 +23,9 @@ import numpy as np
 
 from ._version import __version__
 from .arm import PlanarArm
+from .cli_help import COMMANDS, OUTPUTS_EPILOG
+from .cli_help import description as help_description
+from .cli_help import epilog as help_epilog
 from .compensate import compensate, cross_validate, validate
 from .criteria import CRITERIA, evaluate_plan
 from .demo import DEMO_FILES, run_demo
@@ -32,6 +35,7 @@ from .doe.compliance import design_compliant
 from .elastostatic import Compliance, Loads, check_compliance_identifiable
 from .errors import ArmcalError, ArmcalWarning, InputError, NotIdentifiableError
 from .export import robot_toml, urdf, urdf_joints_are_readings
+from .formats import format_reference
 from .identification import METHODS, Calibration, Method, identify
 from .instrument import identify_3d
 from .io import (
@@ -39,6 +43,7 @@ from .io import (
     COMPLIANCE_TRUTH_KEYS,
     DEFAULT_ROBOT,
     SIGMA_RANGE_MM,
+    STDIO,
     Measurements,
     OutputFolder,
     RobotSpec,
@@ -106,17 +111,6 @@ _REPRODUCE_FILES = (
     "figure1.png",
     "figure2.png",
     "report.md",
-)
-
-_OUTPUTS_EPILOG = (
-    "Outputs: every output path is checked before any work.  A file is written to a "
-    "temporary file and renamed into place, so a failed or interrupted run leaves no "
-    "half-written file; an output folder appears only once all its files are complete.  "
-    "An output that is a symbolic link is written through: the file it points to is "
-    "replaced and the link is kept.  An output that is an input of the same command, a "
-    "directory where a file is expected, or a special file (FIFO, device, socket) is "
-    "refused.  Exit status: 0 done, 2 bad input (one 'armcal: error:' line), "
-    "130 interrupted, 1 a bug."
 )
 
 
@@ -289,6 +283,8 @@ def _emit(
     warnings = _unique(warnings)
     document["warnings"] = [w.to_dict() for w in warnings]
     _print_warnings(warnings)
+    if getattr(args, "stdout_taken", False):  # `-o -`: the file is the command's output
+        return
     print(to_json(document) if args.json else text, end="" if args.json else "\n")
 
 
@@ -318,7 +314,7 @@ def _synthesize(args: argparse.Namespace) -> None:
             targets = [spec.arm.targets[t].label for t in target]
         xy = synthesize_measurements(spec.arm, q, truth, sigma, rng=args.seed, target=target)
         text = format_measurements_csv(q, xy, labels, targets)
-    if args.output is None:
+    if args.output is None or args.output == STDIO:
         _print_warnings(_unique(spec.warnings))
         sys.stdout.write(text)
         return
@@ -912,6 +908,10 @@ def _export(args: argparse.Namespace) -> None:
     _emit(args, document, "\n".join(f"wrote {path}" for path in texts), warnings)
 
 
+def _formats(args: argparse.Namespace) -> None:
+    print(format_reference())
+
+
 # --------------------------------------------------------------------------- parser
 
 
@@ -952,17 +952,14 @@ def build_parser() -> argparse.ArgumentParser:
     parser = _Parser(
         prog="armcal",
         description="Design, run and evaluate calibration experiments for planar serial arms.",
-        epilog=_OUTPUTS_EPILOG,
+        epilog=textwrap.fill(_WORKFLOW, 79) + "\n\n" + textwrap.fill(OUTPUTS_EPILOG, 79),
+        formatter_class=argparse.RawDescriptionHelpFormatter,
     )
     parser.add_argument("--version", action="version", version=f"armcal {__version__}")
     subs = parser.add_subparsers(dest="command", metavar="COMMAND", parser_class=_Parser)
     subs.required = True
 
-    sub = subs.add_parser(
-        "synthesize",
-        help="measurements of a virtual robot (truth + noise)",
-        epilog=_OUTPUTS_EPILOG,
-    )
+    sub = _command(subs, "synthesize")
     sub.add_argument("--plan", required=True, metavar="PLAN_CSV", help="plan CSV (q1_deg..)")
     sub.add_argument("--truth", metavar="TRUTH_TOML", help="deviations (default: the built-in's)")
     sub.add_argument(
@@ -974,9 +971,7 @@ def build_parser() -> argparse.ArgumentParser:
     _add_common(sub, seed=True, output="measurements CSV to write (default: stdout)")
     sub.set_defaults(run=_synthesize, inputs=("robot", "plan", "truth"), outputs=("output",))
 
-    sub = subs.add_parser(
-        "identify", help="parameter deviations ± std from measurements", epilog=_OUTPUTS_EPILOG
-    )
+    sub = _command(subs, "identify")
     sub.add_argument("--measurements", required=True, metavar="CSV", help="measurements CSV")
     sub.add_argument(
         "--method",
@@ -1015,16 +1010,7 @@ def build_parser() -> argparse.ArgumentParser:
     _add_common(sub, seed=True, output="calibration JSON to write")
     sub.set_defaults(run=_identify, inputs=("robot", "measurements"), outputs=("output",))
 
-    sub = subs.add_parser(
-        "validate",
-        help="positioning error before and after calibration on held-out poses",
-        description="Compare held-out measurements (poses not used to calibrate) with the "
-        "nominal arm and with the calibrated one, both at the calibrated base pose, and with "
-        "the error the calibration predicts (its uncertainty plus the instrument noise). "
-        "3-D data are projected into the calibration's plane. Example: armcal validate "
-        "--calibration cal.json --measurements test.csv --per-pose --plot errors.png",
-        epilog=_OUTPUTS_EPILOG,
-    )
+    sub = _command(subs, "validate")
     _add_calibration(sub)
     sub.add_argument(
         "--measurements",
@@ -1036,17 +1022,7 @@ def build_parser() -> argparse.ArgumentParser:
     sub.add_argument("--plot", metavar="PNG", help="draw the error vectors on the workspace")
     sub.set_defaults(run=_validate, inputs=("calibration", "measurements"), outputs=("plot",))
 
-    sub = subs.add_parser(
-        "compensate",
-        help="corrected joint commands of a robot program",
-        description="Correct a program's joint commands so that the calibrated arm puts the "
-        "tool where the nominal program meant, in the robot's own frame (the instrument's pose "
-        "is never corrected); for 3 or more joints the tool's direction too, the remaining "
-        "redundancy going to the smallest joint change. Commands that cannot be corrected "
-        "within the joint limits are kept and listed, never clipped. Example: armcal "
-        "compensate --calibration cal.json --program prog.csv -o corrected.csv",
-        epilog=_OUTPUTS_EPILOG,
-    )
+    sub = _command(subs, "compensate")
     _add_calibration(sub)
     sub.add_argument(
         "--program",
@@ -1072,9 +1048,7 @@ def build_parser() -> argparse.ArgumentParser:
         f"kept); default: the robot file's [measurement], else {DEFAULT_SIGMA_MM}"
     )
     test_help = "plan CSV of poses where accuracy matters (default: 1000 uniform in the limits)"
-    sub = subs.add_parser(
-        "design", help="an optimal plan within the limits and region", epilog=_OUTPUTS_EPILOG
-    )
+    sub = _command(subs, "design")
     sub.add_argument("--poses", type=_poses, required=True, metavar="M", help="number of poses")
     sub.add_argument(
         "--criterion", choices=list(CRITERIA), default="D", help="criterion (default D)"
@@ -1117,7 +1091,7 @@ def build_parser() -> argparse.ArgumentParser:
         run=_design, inputs=("robot", "candidates", "test_poses"), outputs=("output", "plot")
     )
 
-    sub = subs.add_parser("evaluate", help="quality of a plan: criteria, predicted std")
+    sub = _command(subs, "evaluate")
     sub.add_argument("--plan", required=True, metavar="PLAN_CSV", help="plan CSV (q1_deg..)")
     sub.add_argument("--sigma", type=_sigma, metavar="MM", help=sigma_help)
     sub.add_argument("--test-poses", metavar="PLAN_CSV", help=test_help)
@@ -1125,7 +1099,7 @@ def build_parser() -> argparse.ArgumentParser:
     _add_common(sub, seed=True)
     sub.set_defaults(run=_evaluate, inputs=("robot", "plan", "test_poses"))
 
-    sub = subs.add_parser("simulate", help="Monte Carlo: empirical vs predicted std and bias")
+    sub = _command(subs, "simulate")
     sub.add_argument("--plan", required=True, metavar="PLAN_CSV", help="plan CSV (q1_deg..)")
     sub.add_argument("--truth", metavar="TRUTH_TOML", help="deviations (default: the built-in's)")
     sub.add_argument("--sigma", type=_sigma, metavar="MM", help=sigma_help)
@@ -1144,11 +1118,7 @@ def build_parser() -> argparse.ArgumentParser:
     _add_common(sub, seed=True)
     sub.set_defaults(run=_simulate, inputs=("robot", "plan", "truth", "test_poses"))
 
-    sub = subs.add_parser(
-        "poses-needed",
-        help="the smallest m whose best plan reaches a target",
-        epilog=_OUTPUTS_EPILOG,
-    )
+    sub = _command(subs, "poses-needed")
     group = sub.add_mutually_exclusive_group(required=True)
     for key, option in _TARGET_OPTIONS.items():
         group.add_argument(
@@ -1163,11 +1133,7 @@ def build_parser() -> argparse.ArgumentParser:
     _add_common(sub, seed=True, output="plan CSV of the plan that reaches the target")
     sub.set_defaults(run=_poses_needed, inputs=("robot", "test_poses"), outputs=("output",))
 
-    sub = subs.add_parser(
-        "reproduce",
-        help="the paper's Tables I-III and Figures 1-2, recomputed",
-        epilog=_OUTPUTS_EPILOG,
-    )
+    sub = _command(subs, "reproduce")
     sub.add_argument(
         "--trials",
         type=_trials,
@@ -1187,15 +1153,7 @@ def build_parser() -> argparse.ArgumentParser:
     sub.add_argument("-o", "--output", required=True, metavar="DIR", help="folder to write")
     sub.set_defaults(run=_reproduce, outputs=("output",), folder_files=_REPRODUCE_FILES)
 
-    sub = subs.add_parser(
-        "check-compliance",
-        help="self-check of elastostatic calibration on a virtual vertical arm",
-        description="Calibrate a virtual vertical 3-link arm whose joints twist under the "
-        "weight of its links and a 10 kg payload (sigma 0.02 mm, 40 poses): the geometry-only "
-        "fit and its warning, the fit with joint compliance against the truth, held-out "
-        "validation, a Monte Carlo of the predicted std, and a certified design of poses and "
-        "payloads. Example: armcal check-compliance --trials 4000",
-    )
+    sub = _command(subs, "check-compliance")
     sub.add_argument(
         "--trials",
         type=_trials,
@@ -1207,15 +1165,7 @@ def build_parser() -> argparse.ArgumentParser:
     sub.add_argument("--json", action="store_true", help="print a JSON document on stdout")
     sub.set_defaults(run=_check_compliance)
 
-    sub = subs.add_parser(
-        "demo",
-        help="the whole workflow on a virtual robot",
-        description="Design a certified plan, measure a virtual arm with noise and one "
-        "bumped measurement, identify robustly, validate on fresh poses, compensate a "
-        "program and export the calibrated arm, then write report.md with its figures. "
-        "Example: armcal demo -o demo-out",
-        epilog=_OUTPUTS_EPILOG,
-    )
+    sub = _command(subs, "demo")
     sub.add_argument("--poses", type=_poses, default=20, help="number of poses (default 20)")
     sub.add_argument("--truth", metavar="TRUTH_TOML", help="deviations (default: the built-in's)")
     sub.add_argument("--sigma", type=_sigma, metavar="MM", help="noise std in mm")
@@ -1224,32 +1174,67 @@ def build_parser() -> argparse.ArgumentParser:
         run=_demo, inputs=("robot", "truth"), outputs=("output",), folder_files=DEMO_FILES
     )
 
-    sub = subs.add_parser(
-        "export",
-        help="the calibrated arm as a robot file every command accepts, or as URDF",
-        description=textwrap.fill(
-            "Write the arm of a calibration file (armcal identify -o) with its deviations "
-            "folded into the nominal values, in the robot's own frame: as a robot TOML file "
-            "that every armcal command accepts (link lengths l + dl, joint_offsets_deg, "
-            "targets' lengths and angles), and/or as a URDF for ROS (each joint's zero offset "
-            "in its origin's yaw, lengths in m). The base pose in the instrument frame "
-            "(x0, y0, phi0) is the instrument's and appears only as a comment.  Give "
-            "--robot-toml, --urdf or both.",
-            width=79,
-        ),
-        epilog="example:\n  armcal export --calibration cal.json --robot-toml my-arm.toml "
-        "--urdf my-arm.urdf\n\n" + textwrap.fill(_OUTPUTS_EPILOG, width=79),
-        formatter_class=argparse.RawDescriptionHelpFormatter,
-    )
+    sub = _command(subs, "export")
     _add_calibration(sub)
     sub.add_argument("--robot-toml", metavar="PATH", help="robot TOML file to write")
     sub.add_argument("--urdf", metavar="PATH", help="URDF file to write")
     sub.set_defaults(run=_export, inputs=("calibration",), outputs=("robot_toml", "urdf"))
+
+    sub = _command(subs, "formats")
+    sub.set_defaults(run=_formats)
+    return parser
+
+
+_WORKFLOW = (
+    "The workflow: write a robot file (armcal formats lists every key), design a plan "
+    "(design; evaluate, simulate and poses-needed judge and size it), measure it, identify "
+    "the deviations, validate them on held-out poses, then compensate programs or export the "
+    "calibrated arm. 'armcal COMMAND --help' shows a command's files and an example; "
+    "docs/guide.md walks through a whole calibration."
+)
+
+
+def _command(subs: Any, name: str) -> argparse.ArgumentParser:
+    """The parser of command ``name``, with its help from :mod:`armcal.cli_help`."""
+    parser: argparse.ArgumentParser = subs.add_parser(
+        name,
+        help=COMMANDS[name].summary,
+        description=help_description(name),
+        epilog=help_epilog(name),
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
     return parser
 
 
 def _option(dest: str) -> str:
     return "-o" if dest == "output" else "--" + dest.replace("_", "-")
+
+
+def _check_stdio(args: argparse.Namespace, inputs: dict, outputs: dict) -> None:
+    """``-`` reads stdin (one input) and writes stdout (one file output, instead of the report)."""
+    piped = [option for option, path in inputs.items() if path == STDIO]
+    if len(piped) > 1:
+        raise ArmcalError(
+            f"{' and '.join(piped)} both read '-' (stdin); pipe in one of them and give the "
+            "other a file name"
+        )
+    to_stdout = [option for option, path in outputs.items() if path == STDIO]
+    if not to_stdout:
+        return
+    if getattr(args, "folder_files", ()):
+        raise ArmcalError(f"{to_stdout[0]} -: a folder cannot go to stdout; give a folder name")
+    if "--plot" in to_stdout:
+        raise ArmcalError("--plot -: a figure cannot go to stdout; give a PNG file name")
+    if len(to_stdout) > 1:
+        raise ArmcalError(
+            f"{' and '.join(to_stdout)} both write '-' (stdout); give all but one a file name"
+        )
+    if getattr(args, "json", False):
+        raise ArmcalError(
+            f"--json and {to_stdout[0]} - both write stdout; drop --json (the file is the "
+            "output) or give a file name"
+        )
+    args.stdout_taken = True
 
 
 def _check_paths(args: argparse.Namespace) -> None:
@@ -1262,8 +1247,11 @@ def _check_paths(args: argparse.Namespace) -> None:
     for dest in getattr(args, "outputs", ()):
         path = getattr(args, dest)
         outputs[_option(dest)] = (
-            OutputFolder(path, folder_files) if folder_files and path is not None else path
+            OutputFolder(path, folder_files)
+            if folder_files and path is not None and path != STDIO
+            else path
         )
+    _check_stdio(args, inputs, outputs)
     check_outputs(outputs, inputs)
 
 

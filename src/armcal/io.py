@@ -36,6 +36,7 @@ from .arm import Annulus, Box, PlanarArm, Region, Target
 from .calibrated import CalibratedArm
 from .elastostatic import Compliance, Elastostatic, Loads
 from .errors import ArmcalError, ArmcalWarning, InputError
+from .formats import TRUTH_KEYS, allowed_keys, table_of
 from .noise import NoiseModel
 from .paper import BUILTIN_ROBOTS, paper_arm
 from .plane import Plane
@@ -56,6 +57,7 @@ __all__ = [
     "RADIAN_LIMIT_BOUND",
     "REACH_MARGIN",
     "SIGMA_RANGE_MM",
+    "STDIO",
     "Measurements",
     "OutputFolder",
     "Program",
@@ -126,6 +128,18 @@ PathArg = str | os.PathLike[str]
 LOAD_COLUMNS = ("payload_kg", "fx_N", "fy_N")
 
 _JOINT_COLUMN = re.compile(r"^q([1-9][0-9]*)_deg$")
+#: A column with a known stem and another unit suffix (``q1_rad``, ``x_m``).
+_UNIT_COLUMN = re.compile(r"^(q[1-9][0-9]*|x|y|z|sigma)_([A-Za-z]+)$")
+
+#: Units a column may be written in that armcal does not read (a unit hint, not a typo).
+_OTHER_UNITS = frozenset(
+    ("m", "cm", "um", "in", "inch", "inches", "ft", "rad", "mrad", "urad", "grad", "rev")
+)
+
+#: The path that means stdin for an input and stdout for an output file.
+STDIO = "-"
+#: stdin's text, once read (a second reader of ``-`` gets the same text).
+_stdin_text: list[str] = []
 
 
 @dataclass(frozen=True, eq=False)
@@ -226,10 +240,25 @@ class Measurements:
 
 
 def _fail(path: str | os.PathLike, message: str) -> InputError:
-    return InputError(f"{os.fspath(path)}: {message}")
+    name = os.fspath(path)
+    return InputError(f"{'<stdin>' if name == STDIO else name}: {message}")
+
+
+def _read_stdin(what: str) -> str:
+    if not _stdin_text:
+        if sys.stdin is None or sys.stdin.isatty():
+            raise _fail(STDIO, f"no {what} piped in; give a file name or pipe one into armcal")
+        data = sys.stdin.buffer.read()
+        try:
+            _stdin_text.append(data.decode("utf-8-sig"))
+        except UnicodeDecodeError:
+            raise _fail(STDIO, f"is not UTF-8 text; expected a {what} file") from None
+    return _stdin_text[0]
 
 
 def _read_text(path: str | os.PathLike, what: str) -> str:
+    if os.fspath(path) == STDIO:
+        return _read_stdin(what)
     try:
         return Path(path).read_text(encoding="utf-8-sig")
     except FileNotFoundError:
@@ -408,6 +437,8 @@ def check_outputs(
                 for name in output.files:
                     path = os.path.join(os.fspath(output.path), name)
                     files.append((option, path, _check_output_file(path, fix), fix))
+        elif output is not None and os.fspath(output) == STDIO:
+            continue  # stdout: the command checks that it is the only one
         elif output is not None:
             fix = f"give {option} another file name"
             files.append((option, os.fspath(output), _check_output_file(output, fix), fix))
@@ -445,6 +476,7 @@ def atomic_write(path: PathArg, content: str | bytes | Callable[[BinaryIO], None
     ----------
     path : str or path
         Target file; its folder must exist.  An existing file is replaced.
+        :data:`STDIO` (``-``) writes to stdout instead.
     content : str, bytes or callable
         UTF-8 text, bytes, or a function that writes bytes to the open binary
         handle (e.g. ``lambda handle: fig.savefig(handle, format="png")``).
@@ -455,6 +487,17 @@ def atomic_write(path: PathArg, content: str | bytes | Callable[[BinaryIO], None
         If the folder does not exist or is not writable, or ``path`` is a
         directory or a special file.
     """
+    if os.fspath(path) == STDIO:
+        if isinstance(content, str):
+            sys.stdout.write(content)
+        elif isinstance(content, bytes):
+            sys.stdout.flush()
+            sys.stdout.buffer.write(content)
+        else:
+            sys.stdout.flush()
+            content(sys.stdout.buffer)
+        sys.stdout.flush()
+        return
     target = _check_output_file(path)
     try:
         fd, tmp = tempfile.mkstemp(prefix=f".{target.name}.", suffix=".tmp", dir=target.parent)
@@ -553,18 +596,35 @@ def write_folder(path: PathArg, files: Mapping[str, str | Callable[[Path], None]
 
 
 def _suggest(key: str, allowed: Sequence[str]) -> str:
-    close = difflib.get_close_matches(key, allowed, n=1)
-    return f"did you mean '{close[0]}'? " if close else ""
+    """``did you mean 'X'? `` for the closest of ``allowed`` (case aside), else ``""``."""
+    lower = {name.lower(): name for name in allowed}
+    close = difflib.get_close_matches(key.lower(), list(lower), n=1)
+    return f"did you mean '{lower[close[0]]}'? " if close else ""
 
 
-def _check_keys(path, table: dict, allowed: Sequence[str], where: str = "") -> None:
+def _check_keys(
+    path, table: dict, allowed: Sequence[str], where: str = "", *, robot: bool = True
+) -> None:
+    """Refuse a key of ``table`` not in ``allowed``; a robot file's hint names its table."""
     for key in table:
         if key not in allowed:
+            hint = (_misplaced(key, where) if robot else "") or _suggest(key, allowed)
             raise _fail(
-                path,
-                f"unknown key '{where}{key}': {_suggest(key, allowed)}"
-                f"allowed keys are {', '.join(allowed)}",
+                path, f"unknown key '{where}{key}': {hint}allowed keys are {', '.join(allowed)}"
             )
+
+
+def _misplaced(key: str, where: str) -> str:
+    """A hint when a robot-file ``key`` belongs in another table than ``where``."""
+    home = table_of(key)
+    if home is None or home == where.rstrip("."):
+        return ""
+    if home:
+        return f"it belongs in the [{home}] table (write it under a [{home}] line); "
+    return (
+        f"it belongs at the top level, before any [table] line (a key after "
+        f"[{where.rstrip('.')}] is part of that table); "
+    )
 
 
 def _number(path, value: Any, key: str) -> float:
@@ -728,7 +788,7 @@ def _fixed_parameters(path, table: Any, names: Sequence[str], arm_name: str) -> 
     """``[identify] fixed = [...]`` or ``free = [...]`` as the list of fixed names."""
     if not isinstance(table, dict):
         raise _fail(path, "key 'identify': expected a table [identify]")
-    _check_keys(path, table, ["fixed", "free"], "identify.")
+    _check_keys(path, table, allowed_keys("identify"), "identify.")
     if "fixed" in table and "free" in table:
         raise _fail(
             path,
@@ -822,28 +882,14 @@ def load_robot(name_or_path: str | os.PathLike) -> RobotSpec:
     if key in BUILTIN_ROBOTS:
         return _builtin(key)
     path = Path(key)
-    if not path.exists():
+    if key != STDIO and not path.exists():
         raise InputError(
             f"{key}: robot is neither a built-in ({', '.join(BUILTIN_ROBOTS)}) "
-            "nor an existing file"
+            f"nor an existing file; {_suggest(key, list(BUILTIN_ROBOTS))}"
+            "give a built-in's name or the path of a robot TOML file"
         )
     data = _load_toml(path, "robot")
-    _check_keys(
-        path,
-        data,
-        [
-            "name",
-            "link_lengths_mm",
-            "joint_limits_deg",
-            "base_offset",
-            "joint_map",
-            "joint_offsets_deg",
-            "measurement",
-            "identify",
-            "targets",
-            "elastostatic",
-        ],
-    )
+    _check_keys(path, data, allowed_keys(""))
     if "link_lengths_mm" not in data:
         raise _fail(path, "missing key 'link_lengths_mm' (a list of link lengths in mm)")
     lengths = _numbers(path, data["link_lengths_mm"], "link_lengths_mm")
@@ -858,7 +904,7 @@ def load_robot(name_or_path: str | os.PathLike) -> RobotSpec:
                 f"{high:g} mm, got {length:g}; check the unit (mm)",
             )
     n = len(lengths)
-    name = data.get("name", path.stem)
+    name = data.get("name", "robot" if key == STDIO else path.stem)
     if not isinstance(name, str) or not name.strip():
         raise _fail(path, f"key 'name': expected a non-empty string, got {name!r}")
     warnings: list[ArmcalWarning] = []
@@ -888,12 +934,7 @@ def load_robot(name_or_path: str | os.PathLike) -> RobotSpec:
         meas = data["measurement"]
         if not isinstance(meas, dict):
             raise _fail(path, "key 'measurement': expected a table [measurement]")
-        _check_keys(
-            path,
-            meas,
-            ["sigma_mm", "covariance_mm2", "joint_sigma_deg", "region", "gravity"],
-            "measurement.",
-        )
+        _check_keys(path, meas, allowed_keys("measurement"), "measurement.")
         if "gravity" in meas:
             gravity_3d = np.array(_numbers(path, meas["gravity"], "measurement.gravity", 3))
             if not np.any(gravity_3d):
@@ -941,19 +982,14 @@ def load_robot(name_or_path: str | os.PathLike) -> RobotSpec:
     except ValueError as exc:  # every value was checked above; this names what is left
         raise _fail(path, str(exc)) from None
     elastic = _elastostatic(path, data["elastostatic"], n) if "elastostatic" in data else None
-    return RobotSpec(arm, None, str(path), tuple(warnings), elastic, gravity_3d)
+    return RobotSpec(arm, None, key, tuple(warnings), elastic, gravity_3d)
 
 
 def _elastostatic(path, table: Any, n: int) -> Elastostatic:
     """``[elastostatic]``: ``gravity_xy``, ``link_masses_kg``, ``com_fraction``, ``payload_kg``."""
     if not isinstance(table, dict):
         raise _fail(path, "key 'elastostatic': expected a table [elastostatic]")
-    _check_keys(
-        path,
-        table,
-        ["gravity_xy", "link_masses_kg", "com_fraction", "payload_kg"],
-        "elastostatic.",
-    )
+    _check_keys(path, table, allowed_keys("elastostatic"), "elastostatic.")
     gravity = None
     if "gravity_xy" in table:
         gravity = _numbers(path, table["gravity_xy"], "elastostatic.gravity_xy", 2)
@@ -1029,7 +1065,7 @@ def load_truth(path: str | os.PathLike, arm: PlanarArm) -> np.ndarray:
         User deviations in mm and rad.
     """
     data = _load_toml(path, "truth")
-    _check_keys(path, data, ["dl_mm", "dq_deg", "base_mm", *COMPLIANCE_TRUTH_KEYS.values()])
+    _check_keys(path, data, allowed_keys("", TRUTH_KEYS), robot=False)
     n, k = arm.n_joints, arm.n_links
     counts = f"{n} numbers, one per joint" + (
         f", or {k}: one per link vector (the last link once per target)" if k != n else ""
@@ -1103,7 +1139,9 @@ class _Table:
     beyond: list[tuple[int, int, float, float]]  # (row index, joint, value deg, by deg)
 
 
-def _parse_number(path, where: str, name: str, field: str) -> float:
+def _parse_number(path, where: str, name: str, field: str, decimal_comma: bool = False) -> float:
+    if decimal_comma:
+        field = field.replace(",", ".", 1)
     try:
         value = float(field)
     except ValueError:
@@ -1117,6 +1155,41 @@ def _parse_number(path, where: str, name: str, field: str) -> float:
             "check the unit (mm, deg)",
         )
     return value
+
+
+def _delimiter(header: str) -> str:
+    """The separator of a CSV whose header line is ``header``: a comma, else ';' or a tab."""
+    if "," not in header:
+        for candidate in (";", "\t"):
+            if candidate in header:
+                return candidate
+    return ","
+
+
+def _unit_hint(name: str, allowed: Sequence[str]) -> str:
+    """What to do about an ``allowed`` column in another unit (``q1_rad``, ``x_m``), else ``""``.
+
+    A unit that is a typo of the right one (``q1_dge``) gets a did-you-mean instead.
+    """
+    match = _UNIT_COLUMN.match(name)
+    if match is None:
+        return ""
+    stem, unit = match.groups()
+    right = "deg" if stem.startswith("q") else "mm"
+    fixed = f"{stem}_{right}"
+    if fixed not in allowed and not (stem.startswith("q") and _JOINT_COLUMN.match(fixed)):
+        return ""
+    unit = unit.lower()
+    if unit not in _OTHER_UNITS and (
+        unit in ("degree", "degrees") or difflib.get_close_matches(unit, [right])
+    ):
+        return f"did you mean '{fixed}'? "
+    if right == "deg":
+        return (
+            f"joint angles are read in degrees: name the column {fixed} and give degrees "
+            "(deg = rad x 57.29578); "
+        )
+    return f"positions are read in mm: name the column {fixed} and give millimetres; "
 
 
 def _read_csv(
@@ -1138,11 +1211,21 @@ def _read_csv(
     extras = list(optional) + list(optional_numeric)
     layout = ",".join(expected) + "".join(f" [,{c}]" for c in extras)
     text = _read_text(path, what)
-    if not text.strip():
+    # Lines that start with '#' are comments (instrument exports often begin with some).
+    kept = [
+        (line, raw)
+        for line, raw in enumerate(text.splitlines(), start=1)
+        if not raw.lstrip().startswith("#")
+    ]
+    if not any(raw.strip() for _, raw in kept):
         raise _fail(path, f"file is empty; expected a header line {layout}")
+    header_raw = next(raw for _, raw in kept if raw.strip())
+    delimiter = _delimiter(header_raw)
     rows = [
         (line, row)
-        for line, row in enumerate(csv.reader(text.splitlines()), start=1)
+        for (line, _), row in zip(
+            kept, csv.reader([raw for _, raw in kept], delimiter=delimiter), strict=True
+        )
         if any(field.strip() for field in row)
     ]
     if not rows:
@@ -1154,22 +1237,27 @@ def _read_csv(
             raise _fail(path, f"line {header_line}: header column {col} is empty")
         if header.count(name) > 1:
             raise _fail(path, f"line {header_line}: duplicate column '{name}'; keep one")
+    for name in header:
+        if name not in expected and name not in extras and not _JOINT_COLUMN.match(name):
+            raise _fail(
+                path,
+                f"line {header_line}: unknown column '{name}': "
+                f"{_unit_hint(name, expected + extras) or _suggest(name, expected + extras)}"
+                f"expected {layout}",
+            )
     joints = sorted(int(m.group(1)) for h in header if (m := _JOINT_COLUMN.match(h)))
     if joints and joints != list(range(1, len(joints) + 1)):
-        raise _fail(path, f"joint columns must be q1_deg..qN_deg without gaps, got q{joints}_deg")
+        raise _fail(
+            path,
+            f"line {header_line}: joint columns must be q1_deg..qN_deg without gaps, got "
+            f"{', '.join(f'q{j}_deg' for j in joints)}",
+        )
     if joints and len(joints) != arm.n_joints:
         raise _fail(
             path,
             f"has {len(joints)} joint columns (q1_deg..q{len(joints)}_deg) but robot "
             f"{arm.name} has {arm.n_joints} joints; pass the matching --robot or fix the header",
         )
-    for name in header:
-        if name not in expected and name not in extras:
-            raise _fail(
-                path,
-                f"line {header_line}: unknown column '{name}': {_suggest(name, expected)}"
-                f"expected {layout}",
-            )
     for name in expected:
         if name not in header:
             raise _fail(path, f"line {header_line}: missing column '{name}'; expected {layout}")
@@ -1191,11 +1279,12 @@ def _read_csv(
                 f"{where} has {len(row)} fields but the header has {len(header)}; "
                 "give every column a value",
             )
+        comma = delimiter == ";"  # a semicolon file may write 1,5 for 1.5
         for c, name in enumerate(expected):
-            values[r - 1, c] = _parse_number(path, where, name, row[index[name]].strip())
+            values[r - 1, c] = _parse_number(path, where, name, row[index[name]].strip(), comma)
         for name in present:
             numbers[name][r - 1] = _parse_number(
-                path, where, name, row[header.index(name)].strip()
+                path, where, name, row[header.index(name)].strip(), comma
             )
         for name in texts:
             texts[name].append(row[header.index(name)].strip())

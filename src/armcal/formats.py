@@ -1,0 +1,351 @@
+"""The files armcal reads, as data: every robot-file key and every CSV column.
+
+One catalogue serves three readers: :mod:`armcal.io` takes the allowed keys
+of each robot-file table from it (so a key cannot be accepted without being
+documented) and its hints for a key written in the wrong table; ``armcal
+formats`` prints it; and each command's ``--help`` names the columns of the
+files it reads.
+
+Examples
+--------
+>>> [key.name for key in ROBOT_KEYS if key.table == "identify"]
+['fixed', 'free']
+>>> table_of("sigma_mm")
+'measurement'
+"""
+
+from __future__ import annotations
+
+import textwrap
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+__all__ = [
+    "COLUMNS",
+    "FILE_KINDS",
+    "ROBOT_KEYS",
+    "TRUTH_KEYS",
+    "Column",
+    "Key",
+    "allowed_keys",
+    "columns_line",
+    "format_reference",
+    "table_of",
+]
+
+
+@dataclass(frozen=True)
+class Key:
+    """One key of the robot TOML file.
+
+    Attributes
+    ----------
+    table : str
+        ``""`` for the top level, else the table (``measurement``, ...).
+    name : str
+        The key.
+    unit : str
+        Its unit or type.
+    default : str
+        What applies when it is absent.
+    meaning : str
+        What it sets.
+    """
+
+    table: str
+    name: str
+    unit: str
+    default: str
+    meaning: str
+
+
+ROBOT_KEYS: tuple[Key, ...] = (
+    Key("", "name", "text", "the file's stem", "name shown in reports and exports"),
+    Key("", "link_lengths_mm", "mm, one per link", "required", "nominal link lengths l1..ln"),
+    Key(
+        "",
+        "joint_limits_deg",
+        "deg, [lo, hi] per joint",
+        "[-180, 180] each",
+        "joint limits; every designed pose stays inside them",
+    ),
+    Key(
+        "",
+        "base_offset",
+        "true/false",
+        "false",
+        "data in the instrument's frame: also identify the base pose x0, y0, phi0",
+    ),
+    Key(
+        "",
+        "joint_map",
+        "n x n matrix",
+        "identity",
+        "coupled joints: link angles theta = M q from the controller's commands q",
+    ),
+    Key(
+        "",
+        "joint_offsets_deg",
+        "deg, one per joint",
+        "0 each",
+        "known zero offsets already in the controller (an exported calibration)",
+    ),
+    Key(
+        "measurement",
+        "sigma_mm",
+        "mm, one number or [sx, sy]",
+        "estimated from the residuals",
+        "instrument noise, 1 std per axis",
+    ),
+    Key(
+        "measurement",
+        "covariance_mm2",
+        "mm^2, [[a, b], [b, c]]",
+        "none",
+        "instrument noise as a full 2 x 2 covariance (instead of sigma_mm)",
+    ),
+    Key(
+        "measurement",
+        "joint_sigma_deg",
+        "deg, one number or one per joint",
+        "0",
+        "encoder noise, propagated through the Jacobian (needs sigma_mm)",
+    ),
+    Key(
+        "measurement",
+        "region",
+        'inline table: kind = "annulus" or "box"',
+        "none: anywhere",
+        "where the instrument sees the tool (annulus: center_mm, r_min_mm, r_max_mm; "
+        "box: x_mm = [lo, hi], y_mm = [lo, hi])",
+    ),
+    Key(
+        "measurement",
+        "gravity",
+        "direction [gx, gy, gz] in the instrument frame",
+        "none",
+        "gravity for 3-D data and [elastostatic]; projected into the fitted plane",
+    ),
+    Key(
+        "identify",
+        "fixed",
+        "list of parameter names",
+        "none: all free",
+        "parameters held at nominal (e.g. ['dl4', 'dq1'])",
+    ),
+    Key(
+        "identify",
+        "free",
+        "list of parameter names",
+        "all",
+        "the only parameters identified (instead of fixed)",
+    ),
+    Key(
+        "targets",
+        "LABEL",
+        "inline table: length_mm (mm), angle_deg (deg)",
+        "no targets: the tool point at the end of the last link",
+        "a reflector or tool point per label: distance from the last joint and angle from "
+        "the last link; measurements name it in a target column",
+    ),
+    Key(
+        "elastostatic",
+        "gravity_xy",
+        "direction [gx, gy] in the base frame",
+        "none: a horizontal arm",
+        "gravity in the plane of motion (size 9.80665 m/s^2)",
+    ),
+    Key(
+        "elastostatic",
+        "link_masses_kg",
+        "kg, one per link",
+        "none: the lumped mode (c1..cn)",
+        "link masses; with them the compliances k1..kn are identified",
+    ),
+    Key(
+        "elastostatic",
+        "com_fraction",
+        "0..1, one or one per link",
+        "0.5",
+        "centre of mass along each link (0 at its joint, 1 at the next)",
+    ),
+    Key(
+        "elastostatic",
+        "payload_kg",
+        "kg",
+        "0",
+        "payload at the tip for rows without a payload_kg column",
+    ),
+)
+
+TRUTH_KEYS: tuple[Key, ...] = (
+    Key("", "dl_mm", "mm, one per link", "required", "true length deviations"),
+    Key("", "dq_deg", "deg, one per joint", "required", "true joint zero offsets"),
+    Key(
+        "",
+        "base_mm",
+        "[x0 mm, y0 mm, phi0 deg]",
+        "0, 0, 0",
+        "true base pose (robots with base_offset)",
+    ),
+    Key(
+        "",
+        "k_urad_per_Nm",
+        "urad/(N*m), one per joint",
+        "0",
+        "true joint compliances (robots with link masses)",
+    ),
+    Key(
+        "",
+        "c_mdeg_per_m",
+        "mdeg/m, one per joint",
+        "0",
+        "true lumped compliances (robots without link masses)",
+    ),
+)
+
+
+@dataclass(frozen=True)
+class Column:
+    """One column of a CSV file armcal reads.
+
+    Attributes
+    ----------
+    name : str
+        The header name (``q1_deg..qn_deg`` stands for one per joint).
+    unit : str
+        Its unit.
+    required : bool
+        Whether every file of that kind has it.
+    meaning : str
+        What it holds.
+    """
+
+    name: str
+    unit: str
+    required: bool
+    meaning: str
+
+
+_JOINTS = Column("q1_deg..qn_deg", "deg", True, "joint commands, one column per joint")
+_POSE = Column("pose", "text", False, "pose label: rows with the same label are one pose")
+_TARGET = Column("target", "text", False, "the [targets] label of the point measured")
+_PAYLOAD = Column("payload_kg", "kg", False, "payload at the tip ([elastostatic] robots)")
+_FORCE = (
+    Column("fx_N", "N", False, "force at the tip, x ([elastostatic] robots)"),
+    Column("fy_N", "N", False, "force at the tip, y ([elastostatic] robots)"),
+)
+_MEASURED = (
+    Column("x_mm", "mm", True, "measured position, instrument frame"),
+    Column("y_mm", "mm", True, "measured position, instrument frame"),
+    Column("z_mm", "mm", False, "3-D data: the plane of motion is fitted"),
+    _POSE,
+    _TARGET,
+    Column("sigma_mm", "mm", False, "this row's instrument noise (1 std)"),
+    _PAYLOAD,
+    *_FORCE,
+)
+
+#: Columns of each CSV file kind, joint columns first.
+COLUMNS: dict[str, tuple[Column, ...]] = {
+    "plan": (_JOINTS, _PAYLOAD),
+    "measurements": (_JOINTS, *_MEASURED),
+    "program": (
+        _JOINTS,
+        _POSE,
+        Column("target", "text", False, "the [targets] label the command is for"),
+        _PAYLOAD,
+        *_FORCE,
+    ),
+}
+
+#: What each file kind is, for ``armcal formats``.
+FILE_KINDS: dict[str, str] = {
+    "robot": "robot TOML (--robot): the arm, its instrument and what to identify",
+    "truth": "truth TOML (--truth): the deviations of a virtual robot",
+    "plan": "plan CSV (--plan, --candidates, --test-poses): poses to visit",
+    "measurements": "measurements CSV (--measurements): poses and what the instrument read",
+    "program": "program CSV (--program): joint commands to correct",
+    "calibration": "calibration JSON (--calibration): written by identify -o",
+}
+
+_CSV_RULES = (
+    "CSV files: one header line, then one row per pose. Separators: comma; a semicolon "
+    "(with a decimal comma allowed, as European spreadsheets write) or a tab when the header "
+    "has no comma. Lines that start with # and blank lines are skipped; a UTF-8 byte-order "
+    "mark and CRLF line ends are accepted. '-' reads the file from stdin."
+)
+
+
+def allowed_keys(table: str, keys: tuple[Key, ...] = ROBOT_KEYS) -> list[str]:
+    """The keys allowed in ``table`` (``""`` the top level), tables included at the top."""
+    names = [k.name for k in keys if k.table == table]
+    if table == "":
+        names += list(dict.fromkeys(k.table for k in keys if k.table))
+    return names
+
+
+def table_of(key: str) -> str | None:
+    """The robot-file table that has ``key`` (``""`` the top level), or None.
+
+    >>> table_of("link_lengths_mm")
+    ''
+    >>> table_of("nonsense") is None
+    True
+    """
+    for entry in ROBOT_KEYS:
+        if entry.name == key and entry.name != "LABEL":
+            return entry.table
+    return None
+
+
+def columns_line(kind: str) -> str:
+    """The columns of a CSV ``kind`` in one line: required ones, then ``[,optional]``."""
+    cols = COLUMNS[kind]
+    return ",".join(c.name for c in cols if c.required) + "".join(
+        f" [,{c.name}]" for c in cols if not c.required
+    )
+
+
+def _entries(rows: Sequence[tuple[str, str]], names: int = 0, width: int = 100) -> list[str]:
+    """Two columns: a name (at least ``names`` wide), then its text wrapped beside it."""
+    indent = 4 + max(names, *(len(name) for name, _ in rows))
+    out = []
+    for name, text in rows:
+        wrapped = textwrap.wrap(text, width - indent) or [""]
+        out.append(f"  {name:<{indent - 4}}  {wrapped[0]}")
+        out.extend(" " * indent + more for more in wrapped[1:])
+    return out
+
+
+def _key_text(key: Key) -> str:
+    return f"{key.meaning}. Unit: {key.unit}. Default: {key.default}."
+
+
+def format_reference() -> str:
+    """Every file armcal reads: keys and columns with unit, default and meaning."""
+    lines = ["armcal file formats", "", FILE_KINDS["robot"] + ":"]
+    for table in dict.fromkeys(k.table for k in ROBOT_KEYS):
+        lines += ["", f"  [{table}]" if table else "  top level"]
+        rows = [(k.name, _key_text(k)) for k in ROBOT_KEYS if k.table == table]
+        lines += _entries(rows, max(len(k.name) for k in ROBOT_KEYS))
+    lines += ["", FILE_KINDS["truth"] + ":"]
+    lines += _entries([(k.name, _key_text(k)) for k in TRUTH_KEYS])
+    for kind, columns in COLUMNS.items():
+        lines += ["", FILE_KINDS[kind] + ":"]
+        lines += _entries(
+            [
+                (c.name, f"{'required' if c.required else 'optional'}, {c.unit}: {c.meaning}")
+                for c in columns
+            ]
+        )
+    lines += ["", *textwrap.wrap(_CSV_RULES, 100)]
+    lines += [
+        "",
+        *textwrap.wrap(
+            FILE_KINDS["calibration"] + ": JSON of format armcal-calibration/1, read back by "
+            "validate, compensate and export; its keys are in docs/reports.md.",
+            100,
+        ),
+    ]
+    return "\n".join(lines)
