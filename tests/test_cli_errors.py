@@ -10,6 +10,7 @@ no traceback, and no output or temporary file left behind.
 from __future__ import annotations
 
 import errno
+import functools
 import json
 import math
 import os
@@ -17,6 +18,7 @@ import signal
 import stat
 import subprocess
 import sys
+import tempfile
 import time
 from dataclasses import dataclass
 from pathlib import Path
@@ -100,6 +102,8 @@ TRUTH_TOML = "dl_mm = [1.5, -0.6, -0.4, 0.7]\ndq_deg = [0.5, -0.5, 0.7, -0.3]\n"
 
 #: Marks an input that is a folder rather than a file.
 FOLDER = object()
+#: Marks a valid calibration JSON of paper-4link (``identify`` on VALID_MEAS).
+CALIBRATION = object()
 #: Marks a FIFO (named pipe); never opened by these tests, since opening one blocks.
 FIFO = object()
 
@@ -127,9 +131,42 @@ IDENTIFY_ROBOT = ("identify", "--robot", "robot.toml", *IDENTIFY[1:])
 # --------------------------------------------------------------------------- helpers
 
 
+@functools.cache
+def _calibration_json() -> str:
+    """The calibration file ``identify`` writes for VALID_MEAS (made once per test process)."""
+    with tempfile.TemporaryDirectory() as folder:
+        root = Path(folder)
+        _write(root, {"meas.csv": VALID_MEAS})
+        result = run_cli(root, *IDENTIFY)
+        assert result.returncode == 0, result.stderr
+        return (root / "cal.json").read_text(encoding="utf-8")
+
+
+def _calibration_with(**changes: object) -> str:
+    """The valid calibration JSON with top-level keys replaced (None deletes one)."""
+    doc = json.loads(_calibration_json())
+    for key, value in changes.items():
+        if value is None:
+            del doc[key]
+        else:
+            doc[key] = value
+    return json.dumps(doc)
+
+
+class Derived:
+    """File content made when the case runs (the calibration needs a run of identify)."""
+
+    def __init__(self, make) -> None:
+        self.make = make
+
+
 def _write(root: Path, files: dict[str, object]) -> None:
     for name, content in files.items():
         path = root / name
+        if isinstance(content, Derived):
+            content = content.make()
+        if content is CALIBRATION:
+            content = _calibration_json()
         if content is FOLDER:
             path.mkdir()
         elif content is FIFO:
@@ -661,6 +698,436 @@ CASES = [
         {},
         ("poses-needed", "--length-std-mm", "1e-5", "--max-poses", "300", "-o", "plan.csv"),
         ("300 poses", "relax the target"),
+    ),
+]
+
+
+# --------------------------------------------------------------------------- more cases
+# The commands after identify, robot files with targets, coupled joints and compliance,
+# 3-D data, the calibration file, stdin and stdout.
+
+VALIDATE = ("validate", "--calibration", "cal.json", "--measurements", "test.csv")
+COMPENSATE = ("compensate", "--calibration", "cal.json", "--program", "prog.csv", "-o", "out.csv")
+EXPORT = ("export", "--calibration", "cal.json", "--robot-toml", "arm.toml")
+TARGETS_TOML = ROBOT_TOML + "[targets]\nA = { length_mm = 100.0 }\nB = { length_mm = 60.0 }\n"
+ELASTIC_TOML = ROBOT_TOML + "[elastostatic]\ngravity_xy = [0.0, -1.0]\n"
+#: The measurements with a target column naming A on every row (valid for TARGETS_TOML).
+TARGET_MEAS = _csv(MEAS_HEADER + ",target", [r + ",A" for r in MEAS_ROWS])
+#: The measurements with a z_mm column, points in the plane z = 0.
+MEAS_3D = _csv(MEAS_HEADER + ",z_mm", [r + ",0.0" for r in MEAS_ROWS])
+
+
+def _robot_with(text: str) -> dict[str, object]:
+    return {"robot.toml": text, "meas.csv": VALID_MEAS}
+
+
+CASES += [
+    # ---- columns: wrong unit, misspelled, long rows
+    case(
+        "meas-angles-in-radians-column",
+        {"meas.csv": VALID_MEAS.replace("q1_deg", "q1_rad", 1)},
+        IDENTIFY,
+        ("meas.csv", "line 1", "q1_rad", "degrees", "q1_deg"),
+    ),
+    case(
+        "meas-positions-in-metres-column",
+        {"meas.csv": VALID_MEAS.replace("x_mm", "x_m", 1)},
+        IDENTIFY,
+        ("meas.csv", "line 1", "x_m", "x_mm", "millimetres"),
+    ),
+    case(
+        "meas-misspelled-joint-column",
+        {"meas.csv": VALID_MEAS.replace("q2_deg", "q2_dge", 1)},
+        IDENTIFY,
+        ("meas.csv", "line 1", "q2_dge", "did you mean 'q2_deg'"),
+    ),
+    case(
+        "meas-long-row",
+        {"meas.csv": _csv(MEAS_HEADER, [*MEAS_ROWS[:4], MEAS_ROWS[4] + ",7", *MEAS_ROWS[5:]])},
+        IDENTIFY,
+        ("meas.csv", "row 5 (line 6)", "7 fields", "6"),
+    ),
+    case(
+        "meas-semicolon-file-with-text",
+        {"meas.csv": VALID_MEAS.replace(",", ";").replace("\n0;", "\nzero;", 1)},
+        IDENTIFY,
+        ("meas.csv", "row 1", "q1_deg", "zero"),
+    ),
+    case(
+        "meas-comment-lines-count-in-line-numbers",
+        {"meas.csv": "# tracker export\n# units mm\n" + _meas_with(2, "y_mm", "oops")},
+        IDENTIFY,
+        ("meas.csv", "row 2 (line 5)", "y_mm", "oops"),
+    ),
+    # ---- 3-D data, targets, loads
+    case(
+        "meas-3d-z-not-a-number",
+        {"meas.csv": MEAS_3D.replace(",0.0\n", ",n/a\n", 1)},
+        IDENTIFY,
+        ("meas.csv", "row 1", "z_mm", "n/a"),
+    ),
+    case(
+        "meas-empty-target-label",
+        {"robot.toml": TARGETS_TOML, "meas.csv": TARGET_MEAS.replace(",A\n", ",\n", 1)},
+        IDENTIFY_ROBOT,
+        ("meas.csv", "row 1", "target"),
+    ),
+    case(
+        "meas-unknown-target-label",
+        {"robot.toml": TARGETS_TOML, "meas.csv": TARGET_MEAS.replace(",A\n", ",C\n", 1)},
+        IDENTIFY_ROBOT,
+        ("meas.csv", "row 1", "target", "C"),
+    ),
+    case(
+        "meas-payload-text",
+        {
+            "robot.toml": ELASTIC_TOML,
+            "meas.csv": _csv(MEAS_HEADER + ",payload_kg", [r + ",ten" for r in MEAS_ROWS]),
+        },
+        IDENTIFY_ROBOT,
+        ("meas.csv", "row 1", "payload_kg", "ten"),
+    ),
+    case(
+        "meas-negative-payload",
+        {
+            "robot.toml": ELASTIC_TOML,
+            "meas.csv": _csv(MEAS_HEADER + ",payload_kg", [r + ",-5" for r in MEAS_ROWS]),
+        },
+        IDENTIFY_ROBOT,
+        ("meas.csv", "payload_kg", "-5"),
+    ),
+    # ---- robot files: misplaced keys, values, tables
+    case(
+        "robot-sigma-at-top-level",
+        _robot_with(ROBOT_TOML + "sigma_mm = 0.05\n"),
+        IDENTIFY_ROBOT,
+        ("robot.toml", "sigma_mm", "[measurement]"),
+    ),
+    case(
+        "robot-top-level-key-after-a-table",
+        _robot_with('name = "x"\n[measurement]\nsigma_mm = 0.05\nlink_lengths_mm = [1.0]\n'),
+        IDENTIFY_ROBOT,
+        ("robot.toml", "measurement.link_lengths_mm", "above the first [table]"),
+    ),
+    case(
+        "robot-misspelled-key",
+        _robot_with(ROBOT_TOML + "joint_limit_deg = [[-90, 90]]\n"),
+        IDENTIFY_ROBOT,
+        ("robot.toml", "joint_limit_deg", "did you mean 'joint_limits_deg'"),
+    ),
+    case(
+        "robot-zero-link-length",
+        _robot_with("link_lengths_mm = [260.0, 0.0, 120.0, 100.0]\n"),
+        IDENTIFY_ROBOT,
+        ("robot.toml", "link_lengths_mm[1]", "0"),
+    ),
+    case(
+        "robot-length-as-text",
+        _robot_with('link_lengths_mm = [260.0, "180", 120.0, 100.0]\n'),
+        IDENTIFY_ROBOT,
+        ("robot.toml", "link_lengths_mm[1]", "number"),
+    ),
+    case(
+        "robot-duplicate-key",
+        _robot_with(ROBOT_TOML + "link_lengths_mm = [1.0, 2.0, 3.0, 4.0]\n"),
+        IDENTIFY_ROBOT,
+        ("robot.toml", "invalid TOML"),
+    ),
+    case(
+        "robot-negative-sigma",
+        _robot_with(ROBOT_TOML + "[measurement]\nsigma_mm = -0.05\n"),
+        IDENTIFY_ROBOT,
+        ("robot.toml", "measurement.sigma_mm", "-0.05"),
+    ),
+    case(
+        "robot-covariance-not-symmetric",
+        _robot_with(ROBOT_TOML + "[measurement]\ncovariance_mm2 = [[1e-3, 1e-4], [0, 1e-3]]\n"),
+        IDENTIFY_ROBOT,
+        ("robot.toml", "covariance_mm2", "symmetric"),
+    ),
+    case(
+        "robot-region-unknown-kind",
+        _robot_with(ROBOT_TOML + '[measurement]\nregion = { kind = "circle" }\n'),
+        IDENTIFY_ROBOT,
+        ("robot.toml", "region.kind", "annulus"),
+    ),
+    case(
+        "robot-identify-fixed-and-free",
+        _robot_with(ROBOT_TOML + '[identify]\nfixed = ["dl1"]\nfree = ["dq1"]\n'),
+        IDENTIFY_ROBOT,
+        ("robot.toml", "identify.fixed", "identify.free", "keep one"),
+    ),
+    case(
+        "robot-joint-map-wrong-shape",
+        _robot_with(ROBOT_TOML + "joint_map = [[1, 0], [0, 1]]\n"),
+        IDENTIFY_ROBOT,
+        ("robot.toml", "joint_map", "4 rows"),
+    ),
+    case(
+        "robot-joint-map-singular",
+        _robot_with(
+            ROBOT_TOML + "joint_map = [[1, 0, 0, 0], [1, 0, 0, 0], [0, 0, 1, 0], [0, 0, 0, 1]]\n"
+        ),
+        IDENTIFY_ROBOT,
+        ("robot.toml", "joint_map", "invertible"),
+    ),
+    case(
+        "robot-target-negative-length",
+        _robot_with(ROBOT_TOML + "[targets]\nA = { length_mm = -10.0 }\n"),
+        IDENTIFY_ROBOT,
+        ("robot.toml", "targets.A.length_mm", "-10"),
+    ),
+    case(
+        "robot-target-unknown-key",
+        _robot_with(ROBOT_TOML + "[targets]\nA = { length_mm = 90.0, angle = 5.0 }\n"),
+        IDENTIFY_ROBOT,
+        ("robot.toml", "targets.A.angle", "did you mean 'angle_deg'"),
+    ),
+    case(
+        "robot-elastostatic-unknown-key",
+        _robot_with(ELASTIC_TOML + "masses_kg = [1, 1, 1, 1]\n"),
+        IDENTIFY_ROBOT,
+        ("robot.toml", "elastostatic.masses_kg", "link_masses_kg"),
+    ),
+    case(
+        "robot-elastostatic-negative-mass",
+        _robot_with(ELASTIC_TOML + "link_masses_kg = [5, -1, 1, 1]\n"),
+        IDENTIFY_ROBOT,
+        ("robot.toml", "elastostatic", "-1"),
+    ),
+    case(
+        "robot-elastostatic-com-beyond-link",
+        _robot_with(ELASTIC_TOML + "link_masses_kg = [5, 3, 1, 1]\ncom_fraction = 1.5\n"),
+        IDENTIFY_ROBOT,
+        ("robot.toml", "com_fraction", "1.5"),
+    ),
+    case(
+        "robot-measurement-gravity-zero",
+        _robot_with(ROBOT_TOML + "[measurement]\ngravity = [0, 0, 0]\n"),
+        IDENTIFY_ROBOT,
+        ("robot.toml", "measurement.gravity", "non-zero"),
+    ),
+    case(
+        "robot-builtin-name-typo",
+        {"meas.csv": VALID_MEAS},
+        ("identify", "--robot", "paper-4lnk", *IDENTIFY[1:]),
+        ("paper-4lnk", "did you mean 'paper-4link'"),
+    ),
+    case(
+        "truth-key-of-a-robot-file",
+        {"plan.csv": VALID_PLAN, "truth.toml": TRUTH_TOML + "sigma_mm = 0.1\n"},
+        ("synthesize", "--truth", "truth.toml", *SYNTHESIZE[1:]),
+        ("truth.toml", "sigma_mm", "dl_mm"),
+    ),
+    case(
+        "plan-payload-without-elastostatic",
+        {"plan.csv": _csv(PLAN_HEADER + ",payload_kg", [r + ",2" for r in PLAN_ROWS])},
+        SYNTHESIZE,
+        ("plan.csv", "payload_kg", "[elastostatic]"),
+    ),
+    case(
+        "plan-too-few-poses-to-evaluate",
+        {"plan.csv": _csv(PLAN_HEADER, PLAN_ROWS[:2])},
+        ("evaluate", "--plan", "plan.csv"),
+        ("plan.csv", "2 poses"),
+    ),
+    case(
+        "plan-identical-poses-to-simulate",
+        {"plan.csv": _csv(PLAN_HEADER, [PLAN_ROWS[5]] * 12)},
+        ("simulate", "--plan", "plan.csv", "--trials", "50"),
+        ("plan.csv", "cannot identify"),
+    ),
+    case(
+        "design-too-few-poses",
+        {},
+        ("design", "--poses", "3", "-o", "plan.csv"),
+        ("3 poses", "8 parameters", "--poses 4"),
+    ),
+    case(
+        "design-candidates-of-another-robot",
+        {"cand.csv": _drop_column(PLAN_HEADER, PLAN_ROWS, "q4_deg")},
+        ("design", "--poses", "8", "--candidates", "cand.csv", "-o", "plan.csv"),
+        ("cand.csv", "3 joint columns", "4 joints"),
+    ),
+    case(
+        "identify-fix-unknown-parameter",
+        {"meas.csv": VALID_MEAS},
+        (*IDENTIFY, "--fix", "dl9"),
+        ("dl9",),
+    ),
+    case(
+        "poses-needed-compliance-robot",
+        {"robot.toml": ELASTIC_TOML},
+        ("poses-needed", "--robot", "robot.toml", "--length-std-mm", "0.01"),
+        ("robot.toml", "design"),
+    ),
+    case(
+        "check-compliance-one-trial",
+        {},
+        ("check-compliance", "--trials", "1"),
+        ("--trials",),
+    ),
+    # ---- the calibration file
+    case(
+        "calibration-missing",
+        {"test.csv": VALID_MEAS},
+        VALIDATE,
+        ("cal.json", "not found"),
+    ),
+    case(
+        "calibration-is-a-csv",
+        {"cal.json": VALID_MEAS, "test.csv": VALID_MEAS},
+        VALIDATE,
+        ("cal.json", "not a calibration file", "JSON"),
+    ),
+    case(
+        "calibration-truncated",
+        {"cal.json": Derived(lambda: _calibration_json()[:200]), "test.csv": VALID_MEAS},
+        VALIDATE,
+        ("cal.json", "not a calibration file"),
+    ),
+    case(
+        "calibration-of-another-format",
+        {"cal.json": '{"format": "lmfit-result/2"}\n', "test.csv": VALID_MEAS},
+        VALIDATE,
+        ("cal.json", "lmfit-result/2", "armcal-calibration/1"),
+    ),
+    case(
+        "calibration-of-a-later-version",
+        {
+            "cal.json": Derived(lambda: _calibration_with(format="armcal-calibration/2")),
+            "test.csv": VALID_MEAS,
+        },
+        VALIDATE,
+        ("cal.json", "armcal-calibration/2", "armcal-calibration/1"),
+    ),
+    case(
+        "calibration-without-parameters",
+        {"cal.json": Derived(lambda: _calibration_with(parameters=None)), "prog.csv": VALID_PLAN},
+        COMPENSATE,
+        ("cal.json", "parameters"),
+    ),
+    case(
+        "calibration-is-a-robot-file",
+        {"cal.json": ROBOT_TOML},
+        EXPORT,
+        ("cal.json", "not a calibration file"),
+    ),
+    # ---- validate, compensate, export
+    case(
+        "validate-measurements-of-another-robot",
+        {"cal.json": CALIBRATION, "test.csv": _drop_column(MEAS_HEADER, MEAS_ROWS, "q4_deg")},
+        VALIDATE,
+        ("test.csv", "3 joint columns", "4 joints"),
+    ),
+    case(
+        "validate-plan-instead-of-measurements",
+        {"cal.json": CALIBRATION, "test.csv": VALID_PLAN},
+        VALIDATE,
+        ("test.csv", "missing column 'x_mm'"),
+    ),
+    case(
+        "validate-plot-folder-missing",
+        {"cal.json": CALIBRATION, "test.csv": VALID_MEAS},
+        (*VALIDATE, "--plot", "figs/errors.png"),
+        ("figs/errors.png", "does not exist"),
+    ),
+    case(
+        "compensate-measurements-instead-of-program",
+        {"cal.json": CALIBRATION, "prog.csv": VALID_MEAS},
+        COMPENSATE,
+        ("prog.csv", "line 1", "x_mm"),
+    ),
+    case(
+        "compensate-command-outside-limits",
+        {"cal.json": CALIBRATION, "prog.csv": _csv(PLAN_HEADER, ["0,0,0,0", "10,190,0,0"])},
+        COMPENSATE,
+        ("prog.csv", "row 2", "q2_deg", "190"),
+    ),
+    case(
+        "compensate-output-is-the-program",
+        {"cal.json": CALIBRATION, "prog.csv": VALID_PLAN},
+        (*COMPENSATE[:-1], "prog.csv"),
+        ("prog.csv", "input --program"),
+    ),
+    case(
+        "compensate-target-without-targets",
+        {"cal.json": CALIBRATION, "prog.csv": VALID_PLAN},
+        (*COMPENSATE, "--target", "A"),
+        ("A",),
+    ),
+    case(
+        "compensate-payload-without-compliance",
+        {"cal.json": CALIBRATION, "prog.csv": VALID_PLAN},
+        (*COMPENSATE, "--payload-kg", "5"),
+        ("--payload-kg",),
+    ),
+    case(
+        "compensate-negative-payload",
+        {"cal.json": CALIBRATION, "prog.csv": VALID_PLAN},
+        (*COMPENSATE, "--payload-kg", "-5"),
+        ("--payload-kg", "-5"),
+    ),
+    case(
+        "export-without-an-output",
+        {"cal.json": CALIBRATION},
+        ("export", "--calibration", "cal.json"),
+        ("--robot-toml", "--urdf"),
+    ),
+    case(
+        "export-same-file-twice",
+        {"cal.json": CALIBRATION},
+        (*EXPORT, "--urdf", "arm.toml"),
+        ("arm.toml", "two outputs"),
+    ),
+    case(
+        "export-over-the-calibration",
+        {"cal.json": CALIBRATION},
+        ("export", "--calibration", "cal.json", "--urdf", "./cal.json"),
+        ("cal.json", "input --calibration"),
+    ),
+    case(
+        "export-folder-missing",
+        {"cal.json": CALIBRATION},
+        ("export", "--calibration", "cal.json", "--urdf", "ros/arm.urdf"),
+        ("ros/arm.urdf", "does not exist", "create it first"),
+    ),
+    # ---- stdin and stdout
+    case(
+        "stdin-empty",
+        {},
+        ("identify", "--measurements", "-"),
+        ("<stdin>",),
+    ),
+    case(
+        "stdin-for-two-inputs",
+        {},
+        ("synthesize", "--plan", "-", "--truth", "-"),
+        ("--plan", "--truth", "stdin"),
+    ),
+    case(
+        "stdout-with-json",
+        {"meas.csv": VALID_MEAS},
+        ("identify", "--measurements", "meas.csv", "-o", "-", "--json"),
+        ("--json", "-o -", "stdout"),
+    ),
+    case(
+        "stdout-for-a-figure",
+        {},
+        ("design", "--poses", "12", "--plot", "-"),
+        ("--plot -", "PNG"),
+    ),
+    case(
+        "stdout-for-a-folder",
+        {},
+        ("demo", "-o", "-"),
+        ("-o -", "folder"),
+    ),
+    case(
+        "stdout-for-two-outputs",
+        {"cal.json": CALIBRATION},
+        ("export", "--calibration", "cal.json", "--robot-toml", "-", "--urdf", "-"),
+        ("--robot-toml", "--urdf", "stdout"),
     ),
 ]
 

@@ -53,7 +53,6 @@ import json
 import math
 import re
 import textwrap
-from xml.sax.saxutils import quoteattr
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -79,6 +78,22 @@ CALIBRATED_SUFFIX = "-calibrated"
 _MM_PER_M = 1000.0
 
 _BARE_KEY = re.compile(r"^[A-Za-z0-9_-]+$")
+
+
+def _quoteattr(text: str) -> str:
+    """``text`` as a double-quoted XML attribute value.
+
+    The job of ``xml.sax.saxutils.quoteattr``, whose import pulls in urllib and
+    http at every start of the program.
+
+    >>> _quoteattr('a "b" & <c>')
+    '"a &quot;b&quot; &amp; &lt;c&gt;"'
+    """
+    for raw, entity in (("&", "&amp;"), ("<", "&lt;"), (">", "&gt;"), ('"', "&quot;")):
+        text = text.replace(raw, entity)
+    for raw, entity in (("\n", "&#10;"), ("\r", "&#13;"), ("\t", "&#9;")):
+        text = text.replace(raw, entity)
+    return f'"{text}"'
 
 
 def folded_arm(cal: CalibratedArm) -> PlanarArm:
@@ -454,7 +469,7 @@ def _xml_comment(text: str) -> str:
 
 
 def _triple(x: float, y: float, z: float) -> str:
-    return quoteattr(f"{_num(x)} {_num(y)} {_num(z)}")
+    return _quoteattr(f"{_num(x)} {_num(y)} {_num(z)}")
 
 
 def urdf(cal: CalibratedArm) -> str:
@@ -535,14 +550,14 @@ def urdf(cal: CalibratedArm) -> str:
     for text in header:
         wrapped = textwrap.wrap(_one_line(text), width=92, break_on_hyphens=False)
         lines += [f"  {_xml_comment(line)}" for line in wrapped]
-    robot = f"<robot name={quoteattr(_xml_name(folded.name))}>"
+    robot = f"<robot name={_quoteattr(_xml_name(folded.name))}>"
     lines += ["-->", robot, '  <link name="base_link"/>']
     parent = "base_link"
     for j in range(n):
         x = 0.0 if j == 0 else lengths_m[j - 1]
         lines += [
             f'  <joint name="joint{j + 1}" type="revolute">',
-            f"    <parent link={quoteattr(parent)}/>",
+            f"    <parent link={_quoteattr(parent)}/>",
             f'    <child link="link{j + 1}"/>',
             f"    <origin xyz={_triple(x, 0.0, 0.0)} rpy={_triple(0.0, 0.0, yaw[j])}/>",
             f'    <axis xyz="0 0 {"-1" if signs[j] < 0 else "1"}"/>',
@@ -559,12 +574,12 @@ def urdf(cal: CalibratedArm) -> str:
     for frame, length_mm, angle in frames:
         x, y = (length_mm / _MM_PER_M) * math.cos(angle), (length_mm / _MM_PER_M) * math.sin(angle)
         lines += [
-            f'  <joint name={quoteattr(frame + "_joint")} type="fixed">',
-            f"    <parent link={quoteattr(parent)}/>",
-            f"    <child link={quoteattr(frame)}/>",
+            f'  <joint name={_quoteattr(frame + "_joint")} type="fixed">',
+            f"    <parent link={_quoteattr(parent)}/>",
+            f"    <child link={_quoteattr(frame)}/>",
             f"    <origin xyz={_triple(x, y, 0.0)} rpy={_triple(0.0, 0.0, angle)}/>",
             "  </joint>",
-            f"  <link name={quoteattr(frame)}/>",
+            f"  <link name={_quoteattr(frame)}/>",
         ]
     lines.append("</robot>")
     return "\n".join(lines) + "\n"

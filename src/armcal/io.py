@@ -891,7 +891,14 @@ def load_robot(name_or_path: str | os.PathLike) -> RobotSpec:
     data = _load_toml(path, "robot")
     _check_keys(path, data, allowed_keys(""))
     if "link_lengths_mm" not in data:
-        raise _fail(path, "missing key 'link_lengths_mm' (a list of link lengths in mm)")
+        inside = [k for k, v in data.items() if isinstance(v, dict) and "link_lengths_mm" in v]
+        where = (
+            f"; it is under [{inside[0]}] as {inside[0]}.link_lengths_mm: move it above the "
+            "first [table] line"
+            if inside
+            else ""
+        )
+        raise _fail(path, f"missing key 'link_lengths_mm' (a list of link lengths in mm){where}")
     lengths = _numbers(path, data["link_lengths_mm"], "link_lengths_mm")
     if not lengths:
         raise _fail(path, "key 'link_lengths_mm': needs at least one link")
@@ -1140,10 +1147,8 @@ class _Table:
 
 
 def _parse_number(path, where: str, name: str, field: str, decimal_comma: bool = False) -> float:
-    if decimal_comma:
-        field = field.replace(",", ".", 1)
     try:
-        value = float(field)
+        value = float(field.replace(",", ".", 1) if decimal_comma else field)
     except ValueError:
         raise _fail(path, f"{where}, column {name}: {field!r} is not a number") from None
     if not math.isfinite(value):
