@@ -1266,3 +1266,29 @@ def test_ctrl_c_exits_130_with_one_line(tmp_path: Path) -> None:
     assert stderr == "armcal: interrupted\n"
     assert stdout == ""
     assert _snapshot(tmp_path) == before
+
+
+def test_an_existing_output_file_is_replaced(tmp_path: Path) -> None:
+    """Scripts rerun commands: -o over an old file replaces it (no --force needed)."""
+    _write(tmp_path, {"meas.csv": VALID_MEAS, "cal.json": "an old calibration\n"})
+
+    result = run_cli(tmp_path, *IDENTIFY)
+
+    assert result.returncode == 0, result.stderr
+    doc = json.loads((tmp_path / "cal.json").read_text(encoding="utf-8"))
+    assert doc["format"] == "armcal-calibration/1"
+    assert sorted(_snapshot(tmp_path)) == ["cal.json", "meas.csv"]
+
+
+@pytest.mark.skipif(
+    not hasattr(os, "geteuid") or os.geteuid() == 0, reason="root can read any file"
+)
+def test_unreadable_input_exits_2(tmp_path: Path) -> None:
+    _write(tmp_path, {"meas.csv": VALID_MEAS})
+    (tmp_path / "meas.csv").chmod(0)
+
+    result = run_cli(tmp_path, *IDENTIFY)
+
+    assert result.returncode == 2, result.stderr
+    assert result.stderr.startswith("armcal: error: meas.csv: cannot read: Permission denied")
+    assert not (tmp_path / "cal.json").exists()
