@@ -1308,6 +1308,51 @@ def _outlier_warning(outliers: Sequence[Outlier], robust: bool) -> ArmcalWarning
     )
 
 
+#: Above this p-value the joint compliance does not lower the residual more than noise would.
+COMPLIANCE_UNSEEN_P = 0.05
+
+
+def _compliance_unseen_warning(
+    fit: ComplianceFit, geometry_residuals: np.ndarray, residuals: np.ndarray, dof: int
+) -> ArmcalWarning | None:
+    """A ``compliance-unseen`` warning when the data do not show the joint compliance.
+
+    The nested-model F test: with ``c`` compliance parameters and ``dof``
+    residual degrees of freedom of the full fit, ``F = ((RSS_geometry - RSS) / c)
+    / (RSS / dof)`` follows F(c, dof) when the joints do not deflect.  A p-value
+    above :data:`COMPLIANCE_UNSEEN_P` means the loads in the data are too small
+    (or the joints too stiff) to tell the compliance from noise: its values are
+    then undetermined, however finite.
+    """
+    from scipy import stats  # imported on use: `import armcal` stays light
+
+    c = fit.values.size
+    rss, rss_geometry = float(np.sum(residuals**2)), float(np.sum(geometry_residuals**2))
+    if dof <= 0 or c == 0 or rss <= 0:
+        return None
+    f_value = max(rss_geometry - rss, 0.0) / c / (rss / dof)
+    p_value = float(stats.f.sf(f_value, c, dof))
+    if p_value <= COMPLIANCE_UNSEEN_P:
+        return None
+    model = fit.model
+    std = np.sqrt(np.diag(fit.covariance)[-c:]) * model.display_scale
+    shown = ", ".join(
+        f"{name} = {v:.3g} ± {s:.3g} {unit}"
+        for name, unit, v, s in zip(
+            model.names, model.units, fit.values * model.display_scale, std, strict=True
+        )
+    )
+    m = residuals.shape[0]
+    return ArmcalWarning(
+        "compliance-unseen",
+        f"the data do not show the joint compliance: it lowers the residual RMS only from "
+        f"{np.sqrt(rss_geometry / (2 * m)):.4g} to {np.sqrt(rss / (2 * m)):.4g} mm, no more "
+        f"than noise would (F test p = {p_value:.2g}), and its values are undetermined "
+        f"({shown}); load the arm more (payload_kg) or fit the geometry alone "
+        "(--no-compliance)",
+    )
+
+
 def _fit_warning(
     fit: GoodnessOfFit, sigma: float, suggested: float, flagged: int
 ) -> ArmcalWarning:
@@ -1566,6 +1611,11 @@ def identify(
             float(np.sqrt(np.mean((xy[used] - geometry_only) ** 2))),
             np.max(np.abs(bent), axis=0),
         )
+        unseen = _compliance_unseen_warning(
+            compliance, xy[used] - geometry_only, fit.residuals[used], dof
+        )
+        if unseen is not None and conditioning is None:
+            warnings.append(unseen)
     return Calibration(
         arm=arm,
         method=method,

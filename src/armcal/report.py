@@ -140,11 +140,22 @@ def _identified(arm: PlanarArm) -> str:
     return f"{arm.n_free} of {arm.n_params} parameters identified"
 
 
+def _small(value: float, digits: int) -> str:
+    """``value`` with ``digits`` decimals, or in e-notation where they would show < 2 digits.
+
+    >>> _small(0.0224, 5), _small(2.236e-7, 5), _small(0.0, 5)
+    ('0.02240', '2.24e-07', '0.00000')
+    """
+    if value != 0 and abs(value) < 10.0 ** (1 - digits):
+        return f"{value:.2e}"
+    return f"{value:.{digits}f}"
+
+
 def _std_cell(arm: PlanarArm, name: str, value: float, width: int, digits: int) -> str:
     """A std column: the number, or ``fixed`` for a fixed parameter."""
     if name in arm.fixed:
         return f"{'fixed':>{width}}"
-    return f"{value:>{width}.{digits}f}"
+    return f"{_small(value, digits):>{width}}"
 
 
 def _efficiency_label(arm: PlanarArm) -> str:
@@ -169,6 +180,7 @@ def format_quality(arm: PlanarArm, quality: PlanQuality) -> str:
     """Human-readable report of :func:`evaluate_plan`: criteria, std table, accuracy."""
     eff = quality.efficiencies
     obs = quality.observability
+    det_c = f"{float(quality.dstar.det_c):.4f}".replace("-0.0000", "0.0000")
     lines = [
         f"{quality.n_poses} poses of {arm.name}, {_identified(arm)}, "
         f"sigma {quality.sigma_mm:g} mm",
@@ -176,8 +188,7 @@ def format_quality(arm: PlanarArm, quality: PlanQuality) -> str:
         f"{_efficiency_label(arm)}: D {eff['D']:.4f}  A {eff['A']:.4f}  E {eff['E']:.4f}",
         f"observability: O1 {obs['O1']:.4f}  O2 {obs['O2']:.4f}  O3 {obs['O3']:.4f}  "
         f"O4 {obs['O4']:.4f}",
-        f"paper D*: det C' {float(quality.dstar.det_c):.4f}  "
-        f"|det S'| {float(quality.dstar.abs_det_s):.3g}",
+        f"paper D*: det C' {det_c}  |det S'| {float(quality.dstar.abs_det_s):.3g}",
         _table1_line(quality),
     ]
     lines += ["", f"{'parameter':<10}{'predicted std':>14}  unit"]
@@ -298,7 +309,7 @@ def format_calibration(cal: Calibration, *, truth: np.ndarray | None = None) -> 
         if name in arm.fixed:
             line = f"{name:<10}{cal.values[i]:>12.5f}  {'fixed':<10}  {unit:<4}"
         else:
-            line = f"{name:<10}{cal.values[i]:>12.5f}  ± {cal.std[i]:<8.5f}  {unit:<4}"
+            line = f"{name:<10}{cal.values[i]:>12.5f}  ± {_small(cal.std[i], 5):<8}  {unit:<4}"
         if truth_display is not None:
             line += f"{truth_display[i]:>12.5f}"
             if name not in arm.fixed and cal.std[i] > 0:
@@ -520,7 +531,10 @@ def format_monte_carlo(result: MonteCarlo) -> str:
                 f"{name:<10}{t:>10.4f}{b:>11.2e}{'fixed':>15}{'fixed':>15}{'':>8}  {unit}"
             )
             continue
-        lines.append(f"{name:<10}{t:>10.4f}{b:>11.2e}{s:>15.5f}{ps:>15.5f}{s / ps:>8.3f}  {unit}")
+        lines.append(
+            f"{name:<10}{t:>10.4f}{b:>11.2e}{_small(s, 5):>15}{_small(ps, 5):>15}"
+            f"{s / ps:>8.3f}  {unit}"
+        )
     flagged = [
         name
         for name, b, limit in zip(result.names, result.bias, result.bias_limit, strict=True)

@@ -39,11 +39,16 @@ from .criteria import (
     std_from_covariance,
 )
 from .doe.plans import random_plan
-from .elastostatic import Compliance, Loads, check_compliance_identifiable
+from .elastostatic import (
+    Compliance,
+    Loads,
+    barely_identifiable_warning,
+    check_compliance_identifiable,
+)
 from .errors import ArmcalError, ArmcalWarning
 from .identification import METHODS, solve_compliant
 from .noise import NoiseModel
-from .observability import check_identifiable, plan_rows, plan_svd
+from .observability import check_identifiable, conditioning_warning, plan_rows, plan_svd
 from .progress import ProgressCallback
 
 __all__ = [
@@ -517,7 +522,7 @@ def monte_carlo(
     model = arm.replace(noise=noise)
     reference = float(sigma) if sigma is not None else noise.sigma_mm
     svd = plan_svd(model, q)
-    check_identifiable(model, q, svd=svd)
+    conditioning = conditioning_warning(model, check_identifiable(model, q, svd=svd))
     rng = np.random.default_rng(rng)
     inverse, ok = inverse_information_batch(model, q, truth, svd=svd)
     if not ok:
@@ -564,8 +569,12 @@ def monte_carlo(
         position=None if positions is None else positions.result(),
         not_converged=not_converged,
         seconds=seconds,
-        warnings=_fixed_truth_warning(model, truth),
+        warnings=(*_found(conditioning), *_fixed_truth_warning(model, truth)),
     )
+
+
+def _found(warning: ArmcalWarning | None) -> tuple[ArmcalWarning, ...]:
+    return () if warning is None else (warning,)
 
 
 def _check_runs(trials: int, sigma: float | None) -> None:
@@ -594,7 +603,8 @@ def _monte_carlo_compliant(
     noise = simulated_noise(arm, sigma)
     model = Compliance(arm.replace(noise=noise), compliance.elastic, compliance.known_loads)
     reference = float(sigma) if sigma is not None else noise.sigma_mm
-    check_compliance_identifiable(model, q, loads)
+    info, _ = check_compliance_identifiable(model, q, loads)
+    conditioning = barely_identifiable_warning(info)
     predicted, ok = model.covariance(q, loads, reference, truth)
     if not ok:
         raise ArmcalError("the plan cannot identify every parameter at the given truth")
@@ -630,7 +640,10 @@ def _monte_carlo_compliant(
         position=None,
         not_converged=not_converged,
         seconds=time.perf_counter() - start,
-        warnings=_fixed_truth_warning(model.arm, truth[: arm.n_params]),
+        warnings=(
+            *_found(conditioning),
+            *_fixed_truth_warning(model.arm, truth[: arm.n_params]),
+        ),
         compliance=model,
     )
 

@@ -196,7 +196,8 @@ def poses_needed(
             )
         failed = m
         # 1/sqrt(m) law from here; an unidentifiable m (inf) just doubles.
-        jump = m * (value / goal) ** 2 if math.isfinite(value) else 2 * m
+        # std falls as 1/sqrt(m); the ratio is capped so a vanishing goal cannot overflow.
+        jump = m * min(value / goal, 1e6) ** 2 if math.isfinite(value) else 2 * m
         m = min(max_poses, max(m + 1, math.ceil(jump * (1 - 1e-12))))
     # The jump usually lands on the answer, so try one pose less first; if that
     # reaches too, bisect between a size that fails and one that reaches: O(log m)
