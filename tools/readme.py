@@ -95,8 +95,8 @@ def render(text: str, name: str = "README.md") -> tuple[str, Path]:
         kind, body = match.group(1), match.group(2)
         pieces.append(text[last : match.start()])
         if kind == "toml" and body.startswith("# "):
-            name = body.splitlines()[0][2:].strip()
-            (work / name).write_text(body, encoding="utf-8")
+            filename = body.splitlines()[0][2:].strip()
+            (work / filename).write_text(body, encoding="utf-8")
         elif kind == "console":
             body = _console(body, work)
         elif kind == "python" and ">>>" in body:

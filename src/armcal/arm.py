@@ -358,16 +358,15 @@ class PlanarArm:
         if "sigma" in changes:
             kwargs.pop("noise")
         kwargs.update(changes)
-        if "fixed" not in changes:
-            # Carry over the fixed parameters that still exist; the joint offset held
-            # only because of the base rotation is decided anew.
+        if "fixed" not in changes and _STRUCTURE & set(changes):
+            # The parameter names may change: carry over the fixed parameters that still
+            # exist; the joint offset held only because of the base rotation is decided
+            # anew.  (Without such a change every fixed parameter stays as it is.)
             carried = [
                 f for f in self.fixed if not (self.base_rotation and f == self.rotation_partner)
             ]
-            if _STRUCTURE & set(changes):  # the parameter names may change
-                names = PlanarArm(**{**kwargs, "fixed": ()}).param_names
-                carried = [f for f in carried if f in names]
-            kwargs["fixed"] = tuple(carried)
+            names = PlanarArm(**{**kwargs, "fixed": ()}).param_names
+            kwargs["fixed"] = tuple(f for f in carried if f in names)
         return PlanarArm(**kwargs)
 
     @property

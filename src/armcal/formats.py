@@ -74,13 +74,14 @@ ROBOT_KEYS: tuple[Key, ...] = (
         "base_offset",
         "true/false",
         "false",
-        "data in the instrument's frame: also identify the base pose x0, y0, phi0",
+        "data in the instrument's frame: also identify the base position x0, y0 (3-D data "
+        "add the base rotation phi0 in the fitted plane)",
     ),
     Key(
         "",
         "joint_map",
         "n x n matrix",
-        "identity",
+        "lower-triangular ones (each reading is a relative joint angle, as in the paper)",
         "coupled joints: link angles theta = M q from the controller's commands q",
     ),
     Key(
@@ -184,8 +185,8 @@ TRUTH_KEYS: tuple[Key, ...] = (
     Key(
         "",
         "base_mm",
-        "[x0 mm, y0 mm, phi0 deg]",
-        "0, 0, 0",
+        "[x0 mm, y0 mm]",
+        "0, 0",
         "true base pose (robots with base_offset)",
     ),
     Key(

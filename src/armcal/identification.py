@@ -482,7 +482,9 @@ def solve_model(
         Gauss-Newton's starting point (see the module notes for the default).
     method : {"auto", "closed-form", "gauss-newton"}
         ``"auto"``: the weighted closed form when every parameter is free, else
-        Gauss-Newton.  ``"gauss-newton"`` starts from ``start`` or zero.
+        Gauss-Newton.  ``"gauss-newton"`` starts from ``start``, else (with fixed
+        parameters) from the closed form of the model with every parameter free, projected
+        onto the free ones, or zero.
     tol, max_iter
         A set has converged when its largest step moves the tip by less than
         ``tol`` times the reach (mm); iteration cap.
@@ -558,12 +560,17 @@ def solve_model(
     else:
         if start is not None:
             params[:] = np.broadcast_to(np.asarray(start, dtype=float), params.shape)
-        elif method != "gauss-newton":
+        elif method != "gauss-newton" or not all_free:
+            # The closed form of the model with every parameter free, projected onto the
+            # free ones: from zero, a far-turned base (3-D data) can lead Gauss-Newton to
+            # the mirrored arm (-L, dq + 180 deg), which fits as well.
             full = arm.replace(fixed=())
             if plan_svd(full, q[used], _rows_of(target, used)).full_rank:
                 w = _whitening(full, q, None, row_sigma, pose_weights, target)
                 params, _ = _weighted_closed_form(full, q, sets, w, target)
                 params = _onto_free(arm, full, params)
+            elif arm.base_rotation:
+                params = _base_start(arm, q[used], sets[:, used], _rows_of(target, used))
         params = params * arm.free
         params, iterations, converged = _gauss_newton_model(
             arm, q, sets, params, row_sigma, pose_weights, threshold, max_iter, target
@@ -653,6 +660,33 @@ def _gauss_newton_model(
 def _rows_of(target: np.ndarray | None, used: np.ndarray) -> np.ndarray | None:
     """The targets of the rows ``used`` (None stays None)."""
     return None if target is None else target[used]
+
+
+def _base_start(
+    arm: PlanarArm, q: np.ndarray, sets: np.ndarray, target: np.ndarray | None
+) -> np.ndarray:
+    """A start ``(N, p)`` that turns (and moves) the nominal arm onto each set of points.
+
+    The rotation that best maps the nominal tips onto the measured ones, about
+    their centroids when the base offset is free (the 2-D Procrustes solution),
+    so that Gauss-Newton starts in the right basin however far the fitted plane's
+    axes turn the base.
+    """
+    names = arm.param_names
+    params = np.zeros((sets.shape[0], arm.n_params))
+    nominal = forward_kinematics(arm, q, np.zeros(arm.n_params), target=target)
+    a, b = nominal[:, 0] + 1j * nominal[:, 1], sets[..., 0] + 1j * sets[..., 1]
+    if arm.base_offset:
+        a, b = a - a.mean(), b - b.mean(axis=-1, keepdims=True)
+    turn = np.angle(np.sum(np.conj(a) * b, axis=-1))
+    if "phi0" in names and "phi0" not in arm.fixed:
+        params[:, names.index("phi0")] = turn
+    if arm.base_offset and "x0" not in arm.fixed and "y0" not in arm.fixed:
+        shift = (sets[..., 0] + 1j * sets[..., 1]).mean(axis=-1) - np.exp(1j * turn) * (
+            nominal[:, 0] + 1j * nominal[:, 1]
+        ).mean()
+        params[:, names.index("x0")], params[:, names.index("y0")] = shift.real, shift.imag
+    return params
 
 
 def _onto_free(arm: PlanarArm, full: PlanarArm, params: np.ndarray) -> np.ndarray:
@@ -1119,12 +1153,13 @@ class _Problem:
             if self.method == "closed-form":
                 return _closed_form_params(arm, v)[0], 1, True
             fitted, steps, done = _gauss_newton(arm, v, tol=self.tol, max_iter=self.max_iter)
-            return fitted[0], int(steps[0]), bool(done[0])
+            # a held parameter is 0 by the model; the link-angle round trip leaves ~1e-15
+            return fitted[0] * arm.free, int(steps[0]), bool(done[0])
         if weights is None and start is None and self.plain:
             if self.method == "closed-form":
                 return solve_closed_form(arm, q, xy, target=target), 1, True
             params, steps, done = solve_gauss_newton(arm, q, xy, **kwargs)
-            return params, int(steps), bool(done)
+            return params * arm.free, int(steps), bool(done)
         method = self.method if start is None else "gauss-newton"
         if start is not None and arm.complete and method == "gauss-newton":
             method = "auto" if self.method == "closed-form" else method

@@ -127,9 +127,9 @@ PathArg = str | os.PathLike[str]
 #: Optional columns of static loads: payload (kg) and a force at the tip (N).
 LOAD_COLUMNS = ("payload_kg", "fx_N", "fy_N")
 
-_JOINT_COLUMN = re.compile(r"^q([1-9][0-9]*)_deg$")
+_JOINT_COLUMN = re.compile(r"^q([1-9][0-9]{0,3})_deg$")  # up to 9999 joints
 #: A column with a known stem and another unit suffix (``q1_rad``, ``x_m``).
-_UNIT_COLUMN = re.compile(r"^(q[1-9][0-9]*|x|y|z|sigma)_([A-Za-z]+)$")
+_UNIT_COLUMN = re.compile(r"^(q[1-9][0-9]{0,3}|x|y|z|sigma)_([A-Za-z]+)$")
 
 #: Units a column may be written in that armcal does not read (a unit hint, not a typo).
 _OTHER_UNITS = frozenset(
@@ -651,7 +651,7 @@ def _load_toml(path, what: str) -> dict:
     text = _read_text(path, what)
     try:
         return tomllib.loads(text)
-    except tomllib.TOMLDecodeError as exc:
+    except (ValueError, RecursionError) as exc:  # TOMLDecodeError, or digits/nesting limits
         raise _fail(path, f"invalid TOML: {exc}") from None
 
 
@@ -1162,6 +1162,29 @@ def _parse_number(path, where: str, name: str, field: str, decimal_comma: bool =
     return value
 
 
+def _records(path, kept: list[tuple[int, str]], delimiter: str) -> list[tuple[int, list[str]]]:
+    """CSV records of the ``(file line, text)`` lines kept, each with the file line it starts on.
+
+    A quoted field may span lines; a record is numbered by its first line.
+    """
+    reader = csv.reader((raw + "\n" for _, raw in kept), delimiter=delimiter)
+    records = []
+    start = 0  # index in ``kept`` of the next record's first line
+    try:
+        for row in reader:
+            records.append((kept[start][0], row))
+            start = reader.line_num
+    except csv.Error as exc:  # a field beyond the csv module's size limit, a NUL byte
+        line = kept[min(start, len(kept) - 1)][0]
+        raise _fail(path, f"line {line}: not a CSV row ({exc}); check the file") from None
+    return records
+
+
+def _shown(text: str, limit: int = 40) -> str:
+    """``text`` quoted for a message, cut to ``limit`` characters."""
+    return repr(text if len(text) <= limit else text[:limit] + "...")
+
+
 def _delimiter(header: str) -> str:
     """The separator of a CSV whose header line is ``header``: a comma, else ';' or a tab."""
     if "," not in header:
@@ -1227,11 +1250,7 @@ def _read_csv(
     header_raw = next(raw for _, raw in kept if raw.strip())
     delimiter = _delimiter(header_raw)
     rows = [
-        (line, row)
-        for (line, _), row in zip(
-            kept, csv.reader([raw for _, raw in kept], delimiter=delimiter), strict=True
-        )
-        if any(field.strip() for field in row)
+        (line, row) for line, row in _records(path, kept, delimiter) if any(f.strip() for f in row)
     ]
     if not rows:
         raise _fail(path, f"file has no header, only empty fields; expected {layout}")
@@ -1246,7 +1265,7 @@ def _read_csv(
         if name not in expected and name not in extras and not _JOINT_COLUMN.match(name):
             raise _fail(
                 path,
-                f"line {header_line}: unknown column '{name}': "
+                f"line {header_line}: unknown column {_shown(name)}: "
                 f"{_unit_hint(name, expected + extras) or _suggest(name, expected + extras)}"
                 f"expected {layout}",
             )
@@ -1752,7 +1771,7 @@ def read_calibration(path: str | os.PathLike) -> CalibratedArm:
     text = _read_text(path, "calibration")
     try:
         doc = json.loads(text)
-    except json.JSONDecodeError as exc:
+    except (ValueError, RecursionError) as exc:  # JSONDecodeError, or digits/nesting limits
         raise _fail(path, f"not a calibration file: invalid JSON ({exc})") from None
     if not isinstance(doc, dict) or "format" not in doc:
         raise _fail(
@@ -1799,10 +1818,15 @@ def read_calibration(path: str | os.PathLike) -> CalibratedArm:
         params, covariance = values[:p], full[:p, :p]
         key = "sigma_mm"
         sigma = float(doc["sigma_mm"])
+        if not (sigma > 0 and math.isfinite(sigma)):
+            raise ValueError(f"expected a positive noise std in mm, got {sigma}")
         key = "plane"
         plane = None if doc.get("plane") is None else Plane.from_dict(doc["plane"])
-    except (KeyError, TypeError, ValueError, InputError) as exc:
+    except (KeyError, TypeError, ValueError, AttributeError, OverflowError, InputError) as exc:
+        # AttributeError: a section of the wrong JSON type ("robot": [] has no .get)
         what = f"missing key {exc}" if isinstance(exc, KeyError) else str(exc)
+        if isinstance(exc, AttributeError):
+            what = "a section of the wrong type"
         raise _fail(
             path, f"key '{key}': {what}; write the calibration again with armcal identify -o"
         ) from None

@@ -23,6 +23,18 @@ __all__ = [
 ]
 
 
+def _wrap_readings(arm: PlanarArm, q: np.ndarray) -> np.ndarray:
+    """Joint readings wrapped into ``(-pi, pi]`` where that keeps every link angle.
+
+    A whole turn of reading ``j`` turns the link angles by ``2 pi M[:, j]``: whole
+    turns too when the joint map is integer, otherwise (a gear ratio) not, and then
+    the readings are left as solved.
+    """
+    if np.array_equal(arm.joint_map, np.round(arm.joint_map)):
+        return wrap_angle(q)
+    return q
+
+
 def orthogonal_plan(arm: PlanarArm, m: int, *, q1: float = 0.0) -> np.ndarray:
     """A plan that meets the paper's optimality conditions (21) / Table I exactly.
 
@@ -67,7 +79,7 @@ def orthogonal_plan(arm: PlanarArm, m: int, *, q1: float = 0.0) -> np.ndarray:
         q[:, 0] = q1
     if not arm.paper_structure:  # the same link angles, read through the arm's joint map
         q = np.linalg.solve(arm.joint_map, np.cumsum(q, axis=1).T).T - arm.joint_offsets
-    return wrap_angle(q)
+    return _wrap_readings(arm, q)
 
 
 def random_plan(
@@ -408,7 +420,7 @@ def _mapped_analytic_plan(arm: PlanarArm, m: int, *, turn_joint1: bool) -> np.nd
         return r * signs
     r = analytic_plan(plain.replace(joint_limits=None), m, turn_joint1=turn_joint1)
     q = np.linalg.solve(arm.joint_map, np.cumsum(r, axis=1).T).T
-    q = wrap_angle(q)
+    q = _wrap_readings(arm, q)
     if not np.all(feasible(arm, q)):
         raise ArmcalError(
             f"the closed-form orthogonal {m}-pose plan (the paper's Table I family), read "
