@@ -75,3 +75,23 @@ def test_a_limited_multi_target_design_is_certified():
     from armcal import d_efficiency
 
     assert float(d_efficiency(arm, result.q)) >= float(d_efficiency(arm, plain.q)) - 1e-9
+
+
+@pytest.mark.parametrize(("target", "prefix"), [("angle_std_deg", "dq"), ("length_std_mm", "dl")])
+def test_poses_needed_counts_every_target_parameter(target: str, prefix: str) -> None:
+    """The goal holds for every dl (dq) of the model, the targets' dl3@T (dq3@T) included."""
+    from armcal import poses_needed, predicted_std
+
+    arm = PlanarArm(
+        [300.0, 200.0, 100.0],
+        targets=(Target("A", 100.0), Target("B", 60.0, 0.5), Target("C", 140.0, -0.4)),
+    )
+    sigma = 0.02
+    goal = 0.002 if prefix == "dq" else 0.006
+    found = poses_needed(arm, target, goal, sigma=sigma, rng=0)
+    std = predicted_std(arm, found.plan, sigma)
+    picked = [i for i, name in enumerate(arm.param_names) if name.startswith(prefix)]
+    assert any("@" in arm.param_names[i] for i in picked)
+    assert std[picked].max() <= goal * (1 + 1e-9)
+    smaller = design(arm, found.poses - 1, rng=0).q
+    assert predicted_std(arm, smaller, sigma)[picked].max() > goal

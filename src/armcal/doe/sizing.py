@@ -49,9 +49,11 @@ def accuracy_metric(
     if target == "position_rms_mm":
         inverse, ok = inverse_information_batch(arm, q)
         return float(position_rms(arm, inverse, test_q, sigma)) if ok else math.inf
-    n = arm.n_joints
     std = predicted_std(arm, q, sigma)  # inf when the plan is singular
-    return float(std[:n].max() if target == "length_std_mm" else std[n : 2 * n].max())
+    # every dl (or dq) parameter, targets' dl_n@T and dq_n@T included
+    kind = "dl" if target == "length_std_mm" else "dq"
+    picked = [i for i, name in enumerate(arm.param_names) if name.startswith(kind)]
+    return float(std[picked].max())
 
 
 @dataclass(frozen=True, eq=False)
