@@ -426,6 +426,7 @@ def test_twelve_joints_ten_thousand_poses(tmp_path):
 # ------------------------------------------------------------------ 2. 10^4 poses
 
 
+@pytest.mark.slow
 def test_ten_thousand_poses_four_links(tmp_path):
     sigma, m, n = 0.05, 10_000, 4
     plan, meas, cal = tmp_path / "plan.csv", tmp_path / "meas.csv", tmp_path / "cal.json"
@@ -465,6 +466,7 @@ def test_ten_thousand_poses_four_links(tmp_path):
     assert validated["rms_after_mm"] == pytest.approx(sigma * math.sqrt(2 + 2 * n / m), rel=0.03)
 
 
+@pytest.mark.slow
 def test_ten_thousand_poses_other_fits_agree(tmp_path):
     """Gauss-Newton and the robust fit on 10^4 clean poses reach the least-squares answer."""
     sigma, m, n = 0.05, 10_000, 4
