@@ -484,3 +484,12 @@ def test_robot_file_quotes_names_and_labels_that_need_it(tmp_path):
         "target_nest.1",
         "target_ü-2",
     ]
+
+
+def test_joint_limits_in_degrees_survive_a_round_trip() -> None:
+    """120 deg read as radians is written back as 120, not 119.99999999999999."""
+    from armcal.io import robot_to_dict
+
+    arm = PlanarArm([300.0, 250.0], joint_limits=np.radians([[-90.0, 90.0], [-120.0, 120.0]]))
+    assert np.degrees(arm.joint_limits)[1, 1] != 120.0  # the round-off this guards against
+    assert robot_to_dict(arm)["joint_limits_deg"] == [[-90.0, 90.0], [-120.0, 120.0]]

@@ -30,6 +30,11 @@ import sys
 import tempfile
 from pathlib import Path
 
+# One BLAS thread, as `make test` runs: an optimizer's last digits depend on how the
+# BLAS splits its sums, and a page must print the same digits wherever it is checked.
+SERIAL = {"OPENBLAS_NUM_THREADS": "1", "OMP_NUM_THREADS": "1", "MKL_NUM_THREADS": "1"}
+os.environ.update(SERIAL)  # before any doctest imports numpy
+
 ROOT = Path(__file__).resolve().parent.parent
 README = ROOT / "README.md"
 #: Every document whose examples are run: the README, then every guide in docs/.

@@ -370,6 +370,12 @@ class PlanarArm:
         return PlanarArm(**kwargs)
 
     @property
+    def joint_limits_deg(self) -> np.ndarray:
+        """The joint limits in degrees, rounded to 1e-9 deg so that a limit written as
+        120 in a file is written back as 120, not 119.99999999999999."""
+        return np.round(np.degrees(self.joint_limits), 9)
+
+    @property
     def sigma(self) -> float | None:
         """Reference instrument noise (1 std, mm) of :attr:`noise`, or None."""
         return None if self.noise is None else self.noise.sigma_mm

@@ -358,9 +358,7 @@ def robot_toml(cal: CalibratedArm) -> str:
     lines += [
         f"name = {_toml_string(folded.name)}",
         f"link_lengths_mm = {_nums(folded.link_lengths)}",
-        "joint_limits_deg = ["
-        + ", ".join(_nums(pair) for pair in np.degrees(folded.joint_limits))
-        + "]",
+        "joint_limits_deg = [" + ", ".join(_nums(pair) for pair in folded.joint_limits_deg) + "]",
         f"base_offset = {'true' if folded.base_offset else 'false'}",
     ]
     if not np.array_equal(folded.joint_map, standard_joint_map(folded.n_joints)):

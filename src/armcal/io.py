@@ -1715,7 +1715,7 @@ def robot_to_dict(arm: PlanarArm) -> dict[str, Any]:
     return {
         "name": arm.name,
         "link_lengths_mm": arm.link_lengths.tolist(),
-        "joint_limits_deg": np.degrees(arm.joint_limits).tolist(),
+        "joint_limits_deg": arm.joint_limits_deg.tolist(),
         "base_offset": arm.base_offset,
         "base_rotation": arm.base_rotation,
         "joint_map": arm.joint_map.tolist(),
