@@ -1016,7 +1016,7 @@ def build_parser() -> argparse.ArgumentParser:
         "--measurements",
         required=True,
         metavar="CSV",
-        help="held-out measurements: q1_deg..qn_deg,x_mm,y_mm[,z_mm][,target][,pose][,sigma_mm]",
+        help="held-out measurements CSV (columns under reads: above)",
     )
     sub.add_argument("--per-pose", action="store_true", help="a table of every pose's errors")
     sub.add_argument("--plot", metavar="PNG", help="draw the error vectors on the workspace")
@@ -1028,7 +1028,7 @@ def build_parser() -> argparse.ArgumentParser:
         "--program",
         required=True,
         metavar="CSV",
-        help="joint commands q1_deg..qn_deg[,pose][,target]",
+        help="program CSV of joint commands (columns under reads: above)",
     )
     sub.add_argument("--target", metavar="LABEL", help="the target the program is for")
     sub.add_argument(

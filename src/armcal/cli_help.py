@@ -12,6 +12,7 @@ import textwrap
 from dataclasses import dataclass
 
 from .formats import columns_line
+from .paper import BUILTIN_ROBOTS
 
 __all__ = ["COMMANDS", "OUTPUTS_EPILOG", "CommandHelp", "description", "epilog"]
 
@@ -28,7 +29,7 @@ OUTPUTS_EPILOG = (
 )
 
 _ROBOT = (
-    "robot: a built-in name (paper-2link, paper-3link, paper-4link) or a robot TOML file "
+    f"robot: a built-in name ({', '.join(BUILTIN_ROBOTS)}) or a robot TOML file "
     "(link_lengths_mm, joint_limits_deg, [measurement] sigma_mm, ...; every key: armcal formats)"
 )
 _TRUTH = "truth TOML: dl_mm = [...], dq_deg = [...] (base_mm, k_urad_per_Nm, c_mdeg_per_m)"

@@ -30,6 +30,7 @@ __all__ = [
     "allowed_keys",
     "columns_line",
     "format_reference",
+    "reader_columns",
     "table_of",
 ]
 
@@ -300,11 +301,32 @@ def table_of(key: str) -> str | None:
     return None
 
 
+def reader_columns(kind: str) -> tuple[list[str], list[str], list[str]]:
+    """The columns of a CSV ``kind`` besides the joints, as its reader takes them.
+
+    Returns the required (numeric) ones, the optional text ones and the optional
+    numeric ones.
+
+    >>> reader_columns("program")
+    ([], ['pose', 'target'], ['payload_kg', 'fx_N', 'fy_N'])
+    """
+    cols = COLUMNS[kind][1:]  # the joint columns first
+    return (
+        [c.name for c in cols if c.required],
+        [c.name for c in cols if not c.required and c.unit == "text"],
+        [c.name for c in cols if not c.required and c.unit != "text"],
+    )
+
+
 def columns_line(kind: str) -> str:
-    """The columns of a CSV ``kind`` in one line: required ones, then ``[,optional]``."""
-    cols = COLUMNS[kind]
-    return ",".join(c.name for c in cols if c.required) + "".join(
-        f" [,{c.name}]" for c in cols if not c.required
+    """The columns of a CSV ``kind`` in one line: required ones, then ``[,optional]``.
+
+    >>> columns_line("plan")
+    'q1_deg..qn_deg [,payload_kg]'
+    """
+    required, text, numeric = reader_columns(kind)
+    return ",".join([COLUMNS[kind][0].name, *required]) + "".join(
+        f" [,{name}]" for name in text + numeric
     )
 
 

@@ -1153,13 +1153,12 @@ class _Problem:
             if self.method == "closed-form":
                 return _closed_form_params(arm, v)[0], 1, True
             fitted, steps, done = _gauss_newton(arm, v, tol=self.tol, max_iter=self.max_iter)
-            # a held parameter is 0 by the model; the link-angle round trip leaves ~1e-15
-            return fitted[0] * arm.free, int(steps[0]), bool(done[0])
+            return fitted[0], int(steps[0]), bool(done[0])
         if weights is None and start is None and self.plain:
             if self.method == "closed-form":
                 return solve_closed_form(arm, q, xy, target=target), 1, True
             params, steps, done = solve_gauss_newton(arm, q, xy, **kwargs)
-            return params * arm.free, int(steps), bool(done)
+            return params, int(steps), bool(done)
         method = self.method if start is None else "gauss-newton"
         if start is not None and arm.complete and method == "gauss-newton":
             method = "auto" if self.method == "closed-form" else method
@@ -1377,11 +1376,10 @@ def _compliance_unseen_warning(
             model.names, model.units, fit.values * model.display_scale, std, strict=True
         )
     )
-    m = residuals.shape[0]
     return ArmcalWarning(
         "compliance-unseen",
         f"the data do not show the joint compliance: it lowers the residual RMS only from "
-        f"{np.sqrt(rss_geometry / (2 * m)):.4g} to {np.sqrt(rss / (2 * m)):.4g} mm, no more "
+        f"{fit.geometry_only_rms_mm:.4g} to {np.sqrt(rss / residuals.size):.4g} mm, no more "
         f"than noise would (F test p = {p_value:.2g}), and its values are undetermined "
         f"({shown}); load the arm more (payload_kg) or fit the geometry alone "
         "(--no-compliance)",

@@ -36,7 +36,7 @@ from .arm import Annulus, Box, PlanarArm, Region, Target
 from .calibrated import CalibratedArm
 from .elastostatic import Compliance, Elastostatic, Loads
 from .errors import ArmcalError, ArmcalWarning, InputError
-from .formats import TRUTH_KEYS, allowed_keys, table_of
+from .formats import TRUTH_KEYS, allowed_keys, reader_columns, table_of
 from .noise import NoiseModel
 from .paper import BUILTIN_ROBOTS, paper_arm
 from .plane import Plane
@@ -124,8 +124,6 @@ MAX_ABS_VALUE = 1e9
 #: A file path as the functions here take it.
 PathArg = str | os.PathLike[str]
 
-#: Optional columns of static loads: payload (kg) and a force at the tip (N).
-LOAD_COLUMNS = ("payload_kg", "fx_N", "fy_N")
 
 _JOINT_COLUMN = re.compile(r"^q([1-9][0-9]{0,3})_deg$")  # up to 9999 joints
 #: A column with a known stem and another unit suffix (``q1_rad``, ``x_m``).
@@ -622,7 +620,7 @@ def _misplaced(key: str, where: str) -> str:
     if home:
         return f"it belongs in the [{home}] table (write it under a [{home}] line); "
     return (
-        f"it belongs at the top level, before any [table] line (a key after "
+        f"it belongs at the top level: move it above the first [table] line (a key after "
         f"[{where.rstrip('.')}] is part of that table); "
     )
 
@@ -788,7 +786,6 @@ def _fixed_parameters(path, table: Any, names: Sequence[str], arm_name: str) -> 
     """``[identify] fixed = [...]`` or ``free = [...]`` as the list of fixed names."""
     if not isinstance(table, dict):
         raise _fail(path, "key 'identify': expected a table [identify]")
-    _check_keys(path, table, allowed_keys("identify"), "identify.")
     if "fixed" in table and "free" in table:
         raise _fail(
             path,
@@ -890,15 +887,11 @@ def load_robot(name_or_path: str | os.PathLike) -> RobotSpec:
         )
     data = _load_toml(path, "robot")
     _check_keys(path, data, allowed_keys(""))
+    for table in ("measurement", "identify", "elastostatic"):  # [targets] holds labels
+        if isinstance(data.get(table), dict):
+            _check_keys(path, data[table], allowed_keys(table), f"{table}.")
     if "link_lengths_mm" not in data:
-        inside = [k for k, v in data.items() if isinstance(v, dict) and "link_lengths_mm" in v]
-        where = (
-            f"; it is under [{inside[0]}] as {inside[0]}.link_lengths_mm: move it above the "
-            "first [table] line"
-            if inside
-            else ""
-        )
-        raise _fail(path, f"missing key 'link_lengths_mm' (a list of link lengths in mm){where}")
+        raise _fail(path, "missing key 'link_lengths_mm' (a list of link lengths in mm)")
     lengths = _numbers(path, data["link_lengths_mm"], "link_lengths_mm")
     if not lengths:
         raise _fail(path, "key 'link_lengths_mm': needs at least one link")
@@ -941,7 +934,6 @@ def load_robot(name_or_path: str | os.PathLike) -> RobotSpec:
         meas = data["measurement"]
         if not isinstance(meas, dict):
             raise _fail(path, "key 'measurement': expected a table [measurement]")
-        _check_keys(path, meas, allowed_keys("measurement"), "measurement.")
         if "gravity" in meas:
             gravity_3d = np.array(_numbers(path, meas["gravity"], "measurement.gravity", 3))
             if not np.any(gravity_3d):
@@ -996,7 +988,6 @@ def _elastostatic(path, table: Any, n: int) -> Elastostatic:
     """``[elastostatic]``: ``gravity_xy``, ``link_masses_kg``, ``com_fraction``, ``payload_kg``."""
     if not isinstance(table, dict):
         raise _fail(path, "key 'elastostatic': expected a table [elastostatic]")
-    _check_keys(path, table, allowed_keys("elastostatic"), "elastostatic.")
     gravity = None
     if "gravity_xy" in table:
         gravity = _numbers(path, table["gravity_xy"], "elastostatic.gravity_xy", 2)
@@ -1220,21 +1211,14 @@ def _unit_hint(name: str, allowed: Sequence[str]) -> str:
     return f"positions are read in mm: name the column {fixed} and give millimetres; "
 
 
-def _read_csv(
-    path,
-    arm: PlanarArm,
-    what: str,
-    numeric: Sequence[str],
-    optional: Sequence[str] = (),
-    optional_numeric: Sequence[str] = (),
-    limit_tol_deg: float = 0.0,
-) -> _Table:
-    """Validate a CSV with joint columns plus ``numeric`` ones.
+def _read_csv(path, arm: PlanarArm, what: str, limit_tol_deg: float = 0.0) -> _Table:
+    """Validate a CSV of kind ``what`` (a key of :data:`armcal.formats.COLUMNS`).
 
-    ``optional`` text and ``optional_numeric`` columns may be present.  A joint
-    angle beyond its limit by at most ``limit_tol_deg`` is accepted and listed in
-    ``beyond``; farther is an error.
+    Its joint columns and required columns must be there; its optional text and
+    numeric columns may be.  A joint angle beyond its limit by at most
+    ``limit_tol_deg`` is accepted and listed in ``beyond``; farther is an error.
     """
+    numeric, optional, optional_numeric = reader_columns(what)
     expected = _joint_names(arm.n_joints) + list(numeric)
     extras = list(optional) + list(optional_numeric)
     layout = ",".join(expected) + "".join(f" [,{c}]" for c in extras)
@@ -1370,7 +1354,7 @@ def read_loaded_plan(
     payload : ndarray, shape (m,), or None
         The payload of every pose (kg), when the column is there.
     """
-    table = _read_csv(path, arm, "plan", [], (), ("payload_kg",))
+    table = _read_csv(path, arm, "plan")
     payload, _ = _load_columns(path, table)
     return np.radians(table.values), payload
 
@@ -1404,7 +1388,7 @@ def read_program(path: str | os.PathLike, arm: PlanarArm) -> Program:
     InputError
         For a malformed file, a command outside the joint limits or an unknown target.
     """
-    table = _read_csv(path, arm, "program", [], ["pose", "target"], LOAD_COLUMNS)
+    table = _read_csv(path, arm, "program")
     targets = table.texts.get("target")
     if targets is not None:
         if not arm.targets:
@@ -1519,15 +1503,7 @@ def read_measurements(path: str | os.PathLike, arm: PlanarArm) -> Measurements:
         :data:`SIGMA_RANGE_MM`; a point no arm of this geometry can reach
         (:data:`REACH_MARGIN`).
     """
-    table = _read_csv(
-        path,
-        arm,
-        "measurements",
-        ["x_mm", "y_mm"],
-        ["pose", "target"],
-        ["z_mm", "sigma_mm", *LOAD_COLUMNS],
-        limit_tol_deg=LIMIT_TOLERANCE_DEG,
-    )
+    table = _read_csv(path, arm, "measurements", limit_tol_deg=LIMIT_TOLERANCE_DEG)
     n = arm.n_joints
     values = table.values
     m = values.shape[0]
