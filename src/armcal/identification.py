@@ -1347,21 +1347,29 @@ COMPLIANCE_UNSEEN_P = 0.05
 
 
 def _compliance_unseen_warning(
-    fit: ComplianceFit, geometry_residuals: np.ndarray, residuals: np.ndarray, dof: int
+    fit: ComplianceFit,
+    geometry_whitened: np.ndarray,
+    whitened: np.ndarray,
+    residuals: np.ndarray,
+    dof: int,
 ) -> ArmcalWarning | None:
     """A ``compliance-unseen`` warning when the data do not show the joint compliance.
 
     The nested-model F test: with ``c`` compliance parameters and ``dof``
     residual degrees of freedom of the full fit, ``F = ((RSS_geometry - RSS) / c)
-    / (RSS / dof)`` follows F(c, dof) when the joints do not deflect.  A p-value
-    above :data:`COMPLIANCE_UNSEEN_P` means the loads in the data are too small
-    (or the joints too stiff) to tell the compliance from noise: its values are
-    then undetermined, however finite.
+    / (RSS / dof)`` follows F(c, dof) when the joints do not deflect.  Both sums
+    are of the *whitened* residuals (``W_i e_i``), the quantity each weighted
+    fit minimised: with per-row sigma or another noise model, unweighted sums
+    would be dominated by the noisiest rows and say nothing about the fit.  A
+    p-value above :data:`COMPLIANCE_UNSEEN_P` means the loads in the data are too
+    small (or the joints too stiff) to tell the compliance from noise: its values
+    are then undetermined, however finite.  ``residuals`` (unweighted, mm) give
+    the RMS the message shows.
     """
     from scipy import stats  # imported on use: `import armcal` stays light
 
     c = fit.values.size
-    rss, rss_geometry = float(np.sum(residuals**2)), float(np.sum(geometry_residuals**2))
+    rss, rss_geometry = float(np.sum(whitened**2)), float(np.sum(geometry_whitened**2))
     if dof <= 0 or c == 0 or rss <= 0:
         return None
     f_value = max(rss_geometry - rss, 0.0) / c / (rss / dof)
@@ -1379,7 +1387,7 @@ def _compliance_unseen_warning(
     return ArmcalWarning(
         "compliance-unseen",
         f"the data do not show the joint compliance: it lowers the residual RMS only from "
-        f"{fit.geometry_only_rms_mm:.4g} to {np.sqrt(rss / residuals.size):.4g} mm, no more "
+        f"{fit.geometry_only_rms_mm:.4g} to {np.sqrt(np.mean(residuals**2)):.4g} mm, no more "
         f"than noise would (F test p = {p_value:.2g}), and its values are undetermined "
         f"({shown}); load the arm more (payload_kg) or fit the geometry alone "
         "(--no-compliance)",
@@ -1634,18 +1642,21 @@ def identify(
     p = arm.n_params
     compliance = None
     if model is not None:
-        geometry_only = forward_kinematics(arm, q[used], solve_model(arm, q[used], xy[used])[0])
+        # The geometry alone, fitted as the compliant model was: weighted by the same
+        # noise model and per-row sigma, on the same poses, so that the F test compares
+        # the sums of squares each fit minimised (whitened residuals, in one unit).
+        geometry = _Problem(arm, q, xy, row_sigma, "auto", tol, max_iter).fit(used)
         assert loads is not None
         bent = model.deflection(q, fit.params[:p], fit.params[p:], loads)
         compliance = ComplianceFit(
             model,
             fit.params[p:],
             covariance,
-            float(np.sqrt(np.mean((xy[used] - geometry_only) ** 2))),
+            float(np.sqrt(np.mean(geometry.residuals[used] ** 2))),
             np.max(np.abs(bent), axis=0),
         )
         unseen = _compliance_unseen_warning(
-            compliance, xy[used] - geometry_only, fit.residuals[used], dof
+            compliance, geometry.whitened[used], fit.whitened[used], fit.residuals[used], dof
         )
         if unseen is not None and conditioning is None:
             warnings.append(unseen)

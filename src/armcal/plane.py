@@ -113,6 +113,25 @@ class Plane:
         return cls(origin, axes, offsets, () if labels == ("",) else labels, rms, largest)
 
 
+def _in_plane_axis(normal: np.ndarray) -> np.ndarray:
+    """The plane's first axis ``u``: the instrument's ``x`` axis projected onto the plane.
+
+    A rule, not the data's largest spread: a singular vector's sign (and, for data that
+    spread alike in two directions, its direction) depends on the order of the rows and
+    on the LAPACK build, and would turn the base rotation ``phi0`` by up to 180 deg.
+    Where the normal lies within 30 deg of ``x`` (``x`` nearly normal to the plane), the
+    instrument's ``y`` axis is projected instead.
+    """
+    for axis in np.eye(3)[:2]:
+        projected = axis - (axis @ normal) * normal
+        norm = float(np.linalg.norm(projected))
+        if norm >= 0.5:  # the axis is at least 30 deg from the normal
+            return projected / norm
+    # Only a normal within 30 deg of both x and y gets here: impossible, as x and y
+    # are 90 deg apart.
+    raise AssertionError("no instrument axis lies in the plane")
+
+
 def fit_plane(
     xyz: np.ndarray,
     target: np.ndarray | None = None,
@@ -132,7 +151,8 @@ def fit_plane(
     Returns
     -------
     Plane
-        ``u`` along the points' largest spread, ``n`` the least-squares normal,
+        ``u`` the instrument's ``x`` axis projected onto the plane (its ``y`` axis
+        for a plane nearly normal to ``x``), ``n`` the least-squares normal,
         its sign such that ``n`` points to the instrument's ``+z`` side (or
         ``+x``, ``+y`` if the plane is vertical); :func:`identify_3d` then picks
         the side the arm explains.
@@ -172,7 +192,7 @@ def fit_plane(
     lead = next(c for c in (2, 0, 1) if abs(normal[c]) > 1e-12)
     if normal[lead] < 0:
         normal = -normal
-    u = vt[0]
+    u = _in_plane_axis(normal)
     v = np.cross(normal, u)
     origin = xyz.mean(axis=0)
     offsets = (centroids - origin) @ normal
