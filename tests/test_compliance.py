@@ -15,21 +15,22 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from armcal.arm import PlanarArm, forward_kinematics
 from armcal.compensate import compensate
 from armcal.compliance_check import check_compliance, virtual_vertical_arm
 from armcal.doe.compliance import design_compliant
-from armcal.elastostatic import (
-    STANDARD_GRAVITY,
-    Compliance,
-    Elastostatic,
-    Loads,
-    check_compliance_identifiable,
-)
 from armcal.errors import ArmcalError, NotIdentifiableError
 from armcal.identification import identify, solve_compliant
 from armcal.instrument import identify_3d
 from armcal.io import read_calibration
+from armcal.models import (
+    STANDARD_GRAVITY,
+    Compliance,
+    Elastostatic,
+    Loads,
+    PlanarArm,
+    check_compliance_identifiable,
+    forward_kinematics,
+)
 from armcal.simulate import synthesize_measurements
 
 G = STANDARD_GRAVITY

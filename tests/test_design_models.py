@@ -25,8 +25,8 @@ from armcal.doe.model import (
     unit_trace,
 )
 from armcal.doe.optimizer import _criterion_value_and_gradient
+from armcal.models import model_columns
 from armcal.noise import NoiseModel
-from armcal.observability import model_columns
 
 PAPER_LENGTHS = [260.0, 180.0, 120.0, 100.0]
 LIMITS_60 = np.radians([[-180, 180], [-60, 60], [-60, 60], [-60, 60]])

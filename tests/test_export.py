@@ -10,12 +10,11 @@ import pytest
 from numpy.testing import assert_allclose
 
 from armcal import PlanarArm, forward_kinematics, identify, load_robot
-from armcal.arm import Annulus, Box, Target, tool_angles
-from armcal.calibrated import CalibratedArm
 from armcal.cli import main
 from armcal.doe import random_plan
 from armcal.export import folded_arm, robot_toml, urdf, urdf_joint_values
 from armcal.io import read_calibration
+from armcal.models import Annulus, Box, CalibratedArm, Target, tool_angles
 from armcal.noise import NoiseModel
 from armcal.report import calibration_to_dict, to_json
 from helpers import run_cli

@@ -12,11 +12,10 @@ import pytest
 from numpy.testing import assert_allclose
 
 from armcal import PlanarArm, identify
-from armcal.arm import Target, forward_kinematics, tool_angles
-from armcal.calibrated import CalibratedArm
 from armcal.cli import main
 from armcal.compensate import compensate, cross_validate, validate
 from armcal.io import format_measurements_csv, read_calibration
+from armcal.models import CalibratedArm, Target, forward_kinematics, tool_angles
 
 SIGMA = 0.02  # mm, the instrument noise of every coordinate (issue 10)
 #: A controller that counts joint 2 the other way round and reports joint 3 from the

@@ -11,7 +11,9 @@ import pytest
 from numpy.testing import assert_allclose
 
 from armcal import PlanarArm, identify
-from armcal.arm import (
+from armcal.errors import NotIdentifiableError
+from armcal.identification import solve_closed_form, solve_gauss_newton, solve_model
+from armcal.models import (
     Target,
     forward_kinematics,
     jacobian,
@@ -19,8 +21,6 @@ from armcal.arm import (
     paper_from_user,
     tool_angles,
 )
-from armcal.errors import NotIdentifiableError
-from armcal.identification import solve_closed_form, solve_gauss_newton, solve_model
 
 #: Joint maps of real controllers, 3 joints: the default, joint 2 counted the other
 #: way round, joint 3 reported from the horizon (coupled), and both at once.

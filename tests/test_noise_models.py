@@ -23,8 +23,8 @@ from armcal import simulate as sim
 from armcal.criteria import predicted_std
 from armcal.doe import random_plan
 from armcal.errors import ArmcalError
+from armcal.models import scaled_jacobian
 from armcal.noise import NoiseModel
-from armcal.observability import scaled_jacobian
 
 #: sigma_y of the issue's anisotropic case and the isotropic sigma of the others (mm).
 SIGMA = 0.02
@@ -235,7 +235,7 @@ def test_encoder_noise_moves_the_tip_by_j_q_sigma_q_j_q_t(arm4, paper_truth4):
         arm4.link_lengths, q, paper_truth4, SIGMA**2 * np.eye(2), JOINT_SIGMA
     )
     # The reference is the library's pose covariance too, where it is linearized.
-    assert_allclose(arm.noise.pose_covariances(arm, q, paper_truth4), expected, rtol=1e-12)
+    assert_allclose(arm.pose_covariances(q, paper_truth4), expected, rtol=1e-12)
     assert np.all(np.trace(expected, axis1=1, axis2=2) > 4 * 2 * SIGMA**2)  # encoder dominates
     errors = xy - forward_kinematics(arm4, q, paper_truth4)  # (trials, m, 2)
     for i in range(q.shape[0]):

@@ -40,7 +40,6 @@ from armcal import (
     orthogonal_plan,
     synthesize_measurements,
 )
-from armcal.arm import paper_from_user, wrap_angle
 from armcal.criteria import efficiencies, scaled_information
 from armcal.doe import analytic_plan
 from armcal.io import (
@@ -51,8 +50,8 @@ from armcal.io import (
     read_plan,
     read_program,
 )
+from armcal.models import every_target, paper_from_user, wrap_angle
 from armcal.noise import NoiseModel
-from armcal.observability import every_target
 from armcal.report import calibration_to_dict, to_json
 
 #: Unit round-off of double precision (2.2e-16).

@@ -19,9 +19,9 @@ from armcal import (
     solve_closed_form,
 )
 from armcal import simulate as sim
-from armcal.arm import link_phasors
 from armcal.criteria import d_efficiency, position_accuracy, predicted_std
 from armcal.doe import orthogonal_plan, random_plan
+from armcal.models import link_phasors
 from armcal.progress import ProgressBar
 from helpers import random_arm, random_truth
 

@@ -9,11 +9,11 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from armcal.arm import PlanarArm, forward_kinematics, jacobian
 from armcal.diagnostics import FEW_DOF, OUTLIER_ALPHA, studentized_test
 from armcal.doe import random_plan
 from armcal.errors import ArmcalError
 from armcal.identification import HUBER_K, identify, solve_model
+from armcal.models import PlanarArm, forward_kinematics, jacobian
 from armcal.noise import NoiseModel
 from armcal.paper import paper_arm
 from armcal.simulate import synthesize_measurements
@@ -210,7 +210,9 @@ def test_weighted_fit_recovers_noiseless_data_and_has_the_gls_covariance(noise):
     q = random_plan(arm, 25, rng=9)
     cal = identify(arm, q, forward_kinematics(arm, q, truth))
     np.testing.assert_allclose(cal.params, truth, rtol=0, atol=1e-11)
-    reference = _gls_covariance(arm, q, cal.params, noise.pose_covariances(arm, q, cal.params))
+    reference = _gls_covariance(
+        arm, q, cal.params, arm.pose_covariances(q, cal.params, noise=noise)
+    )
     _assert_covariance(cal.covariance, reference)
     assert cal.sigma_source == "given"
 

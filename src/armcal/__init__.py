@@ -23,19 +23,6 @@ nor scipy.
 """
 
 from ._version import __version__
-from .arm import (
-    Annulus,
-    Box,
-    PlanarArm,
-    Target,
-    forward_kinematics,
-    jacobian,
-    joint_jacobian,
-    link_angles,
-    paper_from_user_matrix,
-    wrap_angle,
-)
-from .calibrated import CalibratedArm
 from .compensate import (
     Compensation,
     CrossValidation,
@@ -74,9 +61,25 @@ from .identification import (
 )
 from .instrument import identify_3d
 from .io import load_robot, load_truth, read_calibration, read_measurements, read_plan
+from .models import (
+    Annulus,
+    Box,
+    CalibratedArm,
+    Identifiability,
+    PlanarArm,
+    Plane,
+    Target,
+    check_identifiable,
+    fit_plane,
+    forward_kinematics,
+    identifiability,
+    jacobian,
+    joint_jacobian,
+    link_angles,
+    paper_from_user_matrix,
+    wrap_angle,
+)
 from .noise import NoiseModel
-from .observability import Identifiability, check_identifiable, identifiability
-from .plane import Plane, fit_plane
 from .report import format_calibration
 from .simulate import (
     MonteCarlo,

@@ -22,7 +22,6 @@ from typing import Any
 import numpy as np
 
 from ._version import __version__
-from .arm import PlanarArm
 from .cli_help import COMMANDS, OUTPUTS_EPILOG
 from .cli_help import description as help_description
 from .cli_help import epilog as help_epilog
@@ -32,7 +31,6 @@ from .demo import DEMO_FILES, run_demo
 from .doe import DISTINCT_TOLERANCE, ORDERS, TARGETS, design, feasible, poses_needed, random_plan
 from .doe import METHODS as DESIGN_METHODS
 from .doe.compliance import design_compliant
-from .elastostatic import Compliance, Loads, check_compliance_identifiable
 from .errors import ArmcalError, ArmcalWarning, InputError, NotIdentifiableError
 from .export import robot_toml, urdf, urdf_joints_are_readings
 from .formats import format_reference
@@ -64,8 +62,8 @@ from .io import (
     unknown_parameter,
     write_folder,
 )
+from .models import Compliance, Loads, PlanarArm, check_compliance_identifiable, every_target
 from .noise import NoiseModel
-from .observability import every_target
 from .plausibility import deviation_warning, explain, suspicious
 from .progress import ProgressBar
 from .report import (

@@ -30,7 +30,12 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .arm import (
+from .errors import ArmcalError, NotIdentifiableError
+from .identification import identify
+from .models import (
+    CalibratedArm,
+    Elastostatic,
+    Loads,
     PlanarArm,
     check_target,
     forward_kinematics,
@@ -39,10 +44,6 @@ from .arm import (
     tool_angles,
     wrap_angle,
 )
-from .calibrated import CalibratedArm
-from .elastostatic import Elastostatic, Loads
-from .errors import ArmcalError, NotIdentifiableError
-from .identification import identify
 from .noise import NoiseModel
 
 __all__ = [
@@ -141,7 +142,7 @@ def predicted_errors(
     q = np.asarray(q, dtype=float)
     j, covariance = cal.position_jacobian(q, loads=loads, target=target)  # (m, 2, p)
     model = np.einsum("mia,ab,mib->m", j, covariance, j)
-    noise = _noise(cal).pose_covariances(cal.arm, q, cal.params, row_sigma, target=target)
+    noise = cal.arm.pose_covariances(q, cal.params, row_sigma, target=target, noise=_noise(cal))
     total = model + np.trace(noise, axis1=-2, axis2=-1)
     return np.sqrt(np.clip(model, 0.0, None)), np.sqrt(np.clip(total, 0.0, None))
 

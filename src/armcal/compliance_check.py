@@ -24,12 +24,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .arm import PlanarArm, forward_kinematics
 from .compensate import validate
 from .doe.compliance import CompliantDesign, design_compliant
 from .doe.plans import feasible_poses
-from .elastostatic import Compliance, Elastostatic, Loads
 from .identification import Calibration, identify
+from .models import Compliance, Elastostatic, Loads, PlanarArm, forward_kinematics
 from .simulate import MonteCarlo, monte_carlo, synthesize_measurements
 
 __all__ = [

@@ -49,13 +49,12 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .arm import PlanarArm, jacobian
 from .errors import ArmcalWarning
-from .noise import NoiseModel
-from .numerics import COND_WARN, RANK_RTOL, ScaledSVD, scaled_svd, spd_inverse
-from .observability import (
+from .models import (
+    PlanarArm,
     check_identifiable,
     conditioning_warning,
+    jacobian,
     model_basis,
     model_columns,
     plan_rows,
@@ -64,6 +63,8 @@ from .observability import (
     target_weights,
     user_from_scaled,
 )
+from .noise import NoiseModel
+from .numerics import COND_WARN, RANK_RTOL, ScaledSVD, scaled_svd, spd_inverse
 
 __all__ = [
     "COND_WARN",
@@ -185,7 +186,7 @@ def weighted_user_jacobian(
     noise = arm.noise
     if row_sigma is not None or (noise is not None and not noise.isotropic_iid):
         model = noise if noise is not None else NoiseModel.isotropic(1.0)
-        jac = model.whitening(arm, q, params, row_sigma, target=target) @ jac
+        jac = arm.whitening(q, params, row_sigma, target=target, noise=model) @ jac
     jac = jac[..., arm.free]
     return jac.reshape(*jac.shape[:-3], -1, arm.n_free)
 

@@ -14,13 +14,13 @@ from pathlib import Path
 
 import numpy as np
 
-from .arm import PlanarArm, forward_kinematics
 from .compensate import compensate, validate
 from .doe import design, random_plan
 from .errors import ArmcalWarning
 from .export import robot_toml, urdf
 from .identification import identify
 from .io import format_measurements_csv, format_plan_csv, format_program_csv
+from .models import PlanarArm, forward_kinematics
 from .report import calibration_to_dict, format_calibration, to_json
 from .simulate import synthesize_measurements
 

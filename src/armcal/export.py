@@ -58,8 +58,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from ._version import __version__
-from .arm import Annulus, Box, PlanarArm, Target, standard_joint_map
-from .calibrated import BASE_POSE, CalibratedArm
+from .models import BASE_POSE, Annulus, Box, CalibratedArm, PlanarArm, Target, standard_joint_map
 from .noise import NoiseModel
 
 __all__ = [

@@ -53,15 +53,6 @@ from typing import Any, Literal, cast
 
 import numpy as np
 
-from .arm import (
-    PlanarArm,
-    check_target,
-    forward_kinematics,
-    jacobian,
-    paper_from_user,
-    wrap_angle,
-)
-from .calibrated import CalibratedArm
 from .criteria import covariance_factor
 from .diagnostics import (
     FEW_DOF,
@@ -72,15 +63,29 @@ from .diagnostics import (
     goodness_of_fit,
     studentized_test,
 )
-from .elastostatic import (
+from .errors import ArmcalError, ArmcalWarning
+from .models import (
+    CalibratedArm,
     Compliance,
     Elastostatic,
     Loads,
+    PlanarArm,
+    Plane,
     barely_identifiable_warning,
     check_compliance_identifiable,
+    check_identifiable,
+    check_target,
     compliance_identifiability,
+    conditioning_warning,
+    forward_kinematics,
+    jacobian,
+    listing,
+    paper_from_user,
+    plan_svd,
+    scaled_columns,
+    scaled_jacobian,
+    wrap_angle,
 )
-from .errors import ArmcalError, ArmcalWarning
 from .noise import NoiseModel
 from .numerics import (
     LinearLeastSquares,
@@ -88,15 +93,6 @@ from .numerics import (
     scaled_svd,
     solve_least_squares,
 )
-from .observability import (
-    check_identifiable,
-    conditioning_warning,
-    listing,
-    plan_svd,
-    scaled_columns,
-    scaled_jacobian,
-)
-from .plane import Plane
 
 __all__ = [
     "HUBER_K",
@@ -378,7 +374,7 @@ def _whitening(
         w = None
     else:
         at = params if noise.joint_sigma is not None else None
-        w = noise.whitening(arm, q, at, row_sigma, target=target)
+        w = arm.whitening(q, at, row_sigma, target=target, noise=noise)
     if pose_weights is None:
         return w
     root = np.sqrt(pose_weights)[..., None, None]

@@ -29,11 +29,9 @@ from typing import Any
 
 import numpy as np
 
-from .arm import PlanarArm, forward_kinematics
-from .elastostatic import STANDARD_GRAVITY, Elastostatic
 from .errors import ArmcalError, ArmcalWarning
 from .identification import Calibration, identify, solve_model
-from .plane import Plane, fit_plane
+from .models import STANDARD_GRAVITY, Elastostatic, PlanarArm, Plane, fit_plane, forward_kinematics
 
 __all__ = [
     "PLANARITY_ALPHA",

@@ -32,14 +32,22 @@ from typing import Any, BinaryIO
 
 import numpy as np
 
-from .arm import Annulus, Box, PlanarArm, Region, Target
-from .calibrated import CalibratedArm
-from .elastostatic import Compliance, Elastostatic, Loads
 from .errors import ArmcalError, ArmcalWarning, InputError
 from .formats import TRUTH_KEYS, allowed_keys, reader_columns, table_of
+from .models import (
+    Annulus,
+    Box,
+    CalibratedArm,
+    Compliance,
+    Elastostatic,
+    Loads,
+    PlanarArm,
+    Plane,
+    Region,
+    Target,
+)
 from .noise import NoiseModel
 from .paper import BUILTIN_ROBOTS, paper_arm
-from .plane import Plane
 
 if sys.version_info >= (3, 11):
     import tomllib

@@ -13,7 +13,9 @@ with ``J_q = d tip / d q`` at the current deviations (the user Jacobian's
 An instrument that reports each point's uncertainty replaces ``Sigma_meas`` by
 ``s_i^2 I`` row by row.
 
-Everything downstream sees the noise through one *relative whitening*
+The noise knows nothing of arms: the model gives ``J_q`` (its joint Jacobian)
+where the encoder term is needed.  Everything downstream sees the noise
+through one *relative whitening*
 ``W_i`` (:meth:`NoiseModel.whitening`) with ``W_i^T W_i = sigma_ref^2 Sigma_i^-1``:
 weighted least squares is ordinary least squares on ``W_i`` times the rows, and
 ``cov = sigma_ref^2 (J_w^T J_w)^-1`` is the generalized-least-squares covariance.
@@ -26,13 +28,9 @@ of the isotropic model is unchanged.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
 
 import numpy as np
 from numpy.typing import ArrayLike
-
-if TYPE_CHECKING:
-    from .arm import PlanarArm
 
 __all__ = [
     "NoiseModel",
@@ -62,7 +60,7 @@ class NoiseModel:
     >>> noise = NoiseModel.per_axis(0.08, 0.02)
     >>> round(noise.sigma_mm, 6), noise.isotropic_iid
     (0.02744, False)
-    >>> (NoiseModel.isotropic(0.1).whitening(None, np.zeros((1, 2))) + 0.0).tolist()  # no -0.0
+    >>> (NoiseModel.isotropic(0.1).whitening((1,)) + 0.0).tolist()  # no -0.0
     [[[1.0, 0.0], [0.0, 1.0]]]
     """
 
@@ -132,52 +130,43 @@ class NoiseModel:
 
     def pose_covariances(
         self,
-        arm: PlanarArm | None,
-        q: np.ndarray,
-        params: np.ndarray | None = None,
-        row_sigma: np.ndarray | None = None,
+        shape: tuple[int, ...],
         *,
-        target: np.ndarray | None = None,
+        joint_jacobian: np.ndarray | None = None,
+        row_sigma: np.ndarray | None = None,
     ) -> np.ndarray:
-        """``Sigma_i`` ``(..., m, 2, 2)`` in mm^2 of every pose of ``q`` ``(..., m, n)``.
+        """``Sigma_i`` ``(..., m, 2, 2)`` in mm^2 of measurements of shape ``(..., m)``.
 
-        ``params`` (user deviations, ``(p,)`` or ``(..., p)``) is where the encoder
-        term is linearized (nominal when omitted); ``row_sigma`` ``(m,)`` (mm)
-        replaces the instrument covariance row by row; ``target`` ``(m,)`` is
-        every row's target on an arm with several.
+        ``joint_jacobian`` ``(..., m, 2, n)`` (mm/rad) is ``d tip / d q`` where the
+        encoder term is linearized: the model's (:meth:`armcal.models.planar.PlanarArm.
+        pose_covariances` gives it); without it, or without encoder noise, only the
+        instrument's covariance counts.  ``row_sigma`` ``(m,)`` (mm) replaces the
+        instrument covariance row by row.
         """
-        q = np.asarray(q, dtype=float)
-        shape = q.shape[:-1]
         if row_sigma is None:
             base = np.broadcast_to(self.covariance_mm2, (*shape, 2, 2))
         else:
             base = np.asarray(row_sigma, dtype=float)[..., None, None] ** 2 * np.eye(2)
-        if self.joint_sigma is None:
+        if self.joint_sigma is None or joint_jacobian is None:
             return np.broadcast_to(base, (*np.broadcast_shapes(shape, base.shape[:-2]), 2, 2))
-        from .arm import joint_jacobian  # imported here: the arm module imports this one
-
-        assert arm is not None, "encoder noise needs the arm's Jacobian"
-
-        n = q.shape[-1]
-        j_q = joint_jacobian(arm, q, params, target=target)  # d tip / d q_j, (..., m, 2, n)
-        scaled = j_q * np.broadcast_to(self.joint_sigma, (n,))
+        n = joint_jacobian.shape[-1]
+        scaled = joint_jacobian * np.broadcast_to(self.joint_sigma, (n,))
         return base + scaled @ np.swapaxes(scaled, -1, -2)
 
     def whitening(
         self,
-        arm: PlanarArm | None,
-        q: np.ndarray,
-        params: np.ndarray | None = None,
-        row_sigma: np.ndarray | None = None,
+        shape: tuple[int, ...],
         *,
-        target: np.ndarray | None = None,
+        joint_jacobian: np.ndarray | None = None,
+        row_sigma: np.ndarray | None = None,
     ) -> np.ndarray:
         """Relative whitening ``W_i`` ``(..., m, 2, 2)``: ``W_i^T W_i = sigma_ref^2 Sigma_i^-1``.
 
         ``W_i = sigma_ref L_i^-1`` for the Cholesky factor ``Sigma_i = L_i L_i^T``,
         in closed form (lower triangular).  The identity for isotropic noise.
+        Arguments as for :meth:`pose_covariances`.
         """
-        cov = self.pose_covariances(arm, q, params, row_sigma, target=target)
+        cov = self.pose_covariances(shape, joint_jacobian=joint_jacobian, row_sigma=row_sigma)
         return whitening_from_covariance(cov, self.sigma_mm)
 
     def to_dict(self) -> dict[str, object]:
@@ -209,7 +198,7 @@ def complex_whitening(w: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """``(alpha, beta)`` ``(...)`` with ``W (x, y) = alpha z + beta conj(z)`` for ``z = x + i y``.
 
     Every real-linear map of the plane acts on complex numbers this way, which
-    keeps the complex-column form of the Jacobian (:mod:`armcal.observability`)
+    keeps the complex-column form of the Jacobian (:mod:`armcal.models.planar_information`)
     for weighted models.
 
     Examples

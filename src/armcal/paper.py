@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .arm import PlanarArm
+from .models import PlanarArm
 
 __all__ = [
     "BUILTIN_ROBOTS",

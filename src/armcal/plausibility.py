@@ -47,9 +47,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .arm import PlanarArm, forward_kinematics
 from .errors import ArmcalError, ArmcalWarning
 from .identification import Calibration, solve_model
+from .models import PlanarArm, forward_kinematics
 
 __all__ = [
     "IMPROVEMENT",

@@ -21,8 +21,8 @@ from matplotlib.lines import Line2D
 from matplotlib.patches import Circle, Patch, Rectangle, Wedge
 from matplotlib.ticker import FuncFormatter, MaxNLocator, NullFormatter
 
-from .arm import Annulus, PlanarArm
 from .io import atomic_write
+from .models import Annulus, PlanarArm
 
 __all__ = [
     "plot_accuracy_curves",

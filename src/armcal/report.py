@@ -9,19 +9,16 @@ from collections.abc import Sequence
 import numpy as np
 
 from ._version import __version__
-from .arm import PlanarArm
-from .calibrated import CalibratedArm
 from .compensate import Compensation, Validation
 from .criteria import PlanQuality
 from .doe.compliance import CompliantDesign, d_efficiency_compliant
 from .doe.designer import Design
 from .doe.model import unit_trace
 from .doe.sizing import TARGETS, PosesNeeded
-from .elastostatic import Compliance, Loads
 from .errors import ArmcalWarning
 from .identification import Calibration
 from .io import CALIBRATION_FORMAT, Measurements, Program, robot_to_dict
-from .observability import combination
+from .models import CalibratedArm, Compliance, Loads, PlanarArm, combination
 from .paper import PAPER_DIGIT
 from .reproduction.compute import TABLE_COLUMNS, Reproduction
 from .simulate import MonteCarlo

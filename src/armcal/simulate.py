@@ -29,7 +29,6 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .arm import PlanarArm, forward_kinematics, jacobian, link_phasors, link_units
 from .criteria import (
     CRITERIA,
     dstar,
@@ -39,16 +38,24 @@ from .criteria import (
     std_from_covariance,
 )
 from .doe.plans import random_plan
-from .elastostatic import (
-    Compliance,
-    Loads,
-    barely_identifiable_warning,
-    check_compliance_identifiable,
-)
 from .errors import ArmcalError, ArmcalWarning
 from .identification import METHODS, solve_compliant
+from .models import (
+    Compliance,
+    Loads,
+    PlanarArm,
+    barely_identifiable_warning,
+    check_compliance_identifiable,
+    check_identifiable,
+    conditioning_warning,
+    forward_kinematics,
+    jacobian,
+    link_phasors,
+    link_units,
+    plan_rows,
+    plan_svd,
+)
 from .noise import NoiseModel
-from .observability import check_identifiable, conditioning_warning, plan_rows, plan_svd
 from .progress import ProgressCallback
 
 __all__ = [

@@ -6,9 +6,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..arm import PlanarArm
+from ..models import PlanarArm, check_identifiable, plan_svd
 from ..numerics import ScaledSVD, scaled_svd, spd_inverse
-from ..observability import check_identifiable, plan_svd
 from .exchange import _blocks
 from .model import (
     attains_unit_bound,

@@ -32,9 +32,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..arm import PlanarArm
-from ..elastostatic import Compliance, Elastostatic, Loads, check_compliance_identifiable
 from ..errors import ArmcalError
+from ..models import Compliance, Elastostatic, Loads, PlanarArm, check_compliance_identifiable
 from ..numerics import scaled_svd
 from .certificate import _weights_multiplicative
 from .exchange import exchange_indices

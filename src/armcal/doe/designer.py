@@ -7,9 +7,9 @@ from typing import Literal
 
 import numpy as np
 
-from ..arm import PlanarArm
 from ..criteria import CRITERIA, d_efficiency, efficiencies
 from ..errors import ArmcalError
+from ..models import PlanarArm
 from .certificate import Certificate, certify
 from .exchange import exchange_plan
 from .model import attains_unit_bound, model_description, rotation_invariant

@@ -4,9 +4,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..arm import PlanarArm
 from ..errors import ArmcalError
-from ..observability import model_columns
+from ..models import PlanarArm, model_columns
 from .plans import repeated_poses
 
 __all__ = [

@@ -52,11 +52,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..arm import PlanarArm
 from ..criteria import d_efficiency
 from ..errors import ArmcalError
+from ..models import PlanarArm, model_basis, model_columns, scaled_columns
 from ..noise import complex_whitening
-from ..observability import model_basis, model_columns, scaled_columns
 
 __all__ = [
     "PoseModel",
@@ -212,7 +211,7 @@ def pose_model(arm: PlanarArm, q: np.ndarray) -> PoseModel:
     # optimizer's hot loop); tests hold the columns equal to model_columns'.
     full = scaled_columns(arm, q)
     basis = None if arm.free.all() else model_basis(arm)[0]
-    w = noise.whitening(arm, q)
+    w = arm.whitening(q)
     alpha, beta = complex_whitening(w)
     unwhitened = full if basis is None else full @ basis
     columns = alpha[..., None] * unwhitened + beta[..., None] * unwhitened.conj()

@@ -4,10 +4,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..arm import PlanarArm, forward_kinematics, joint_jacobian
 from ..criteria import CRITERIA, weighted_information
 from ..errors import ArmcalError
-from ..observability import every_target
+from ..models import PlanarArm, every_target, forward_kinematics, joint_jacobian
 from .model import information_gradient, pose_model
 from .model import q_from_theta_gradient as _q_from_theta_gradient
 from .plans import feasible, feasible_poses, random_plan

@@ -6,9 +6,8 @@ import math
 
 import numpy as np
 
-from ..arm import PlanarArm, forward_kinematics, wrap_angle
 from ..errors import ArmcalError
-from ..observability import plan_rows
+from ..models import PlanarArm, forward_kinematics, plan_rows, wrap_angle
 
 __all__ = [
     "DISTINCT_TOLERANCE",

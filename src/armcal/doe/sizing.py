@@ -8,9 +8,9 @@ from typing import Literal
 
 import numpy as np
 
-from ..arm import PlanarArm
 from ..criteria import inverse_information_batch, position_rms, predicted_std
 from ..errors import ArmcalError
+from ..models import PlanarArm
 from .designer import design
 from .order import order_poses
 from .plans import random_plan

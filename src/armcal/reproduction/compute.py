@@ -8,7 +8,6 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..arm import PlanarArm
 from ..criteria import (
     CRITERIA,
     information_matrix,
@@ -20,7 +19,7 @@ from ..criteria import (
 )
 from ..doe.plans import orthogonal_plan, random_plan
 from ..errors import ArmcalError
-from ..observability import identifiability
+from ..models import PlanarArm, identifiability
 from ..paper import (
     PAPER_100_POSE_ANGLES_DEG,
     PAPER_DIGIT,

@@ -17,12 +17,17 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..arm import PlanarArm, forward_kinematics, link_angles, paper_from_user_matrix
 from ..criteria import d_efficiency, dstar, information_matrix, inverse_information
 from ..doe.plans import orthogonal_plan, random_plan
 from ..errors import ArmcalError
 from ..identification import solve_gauss_newton
-from ..observability import identifiability
+from ..models import (
+    PlanarArm,
+    forward_kinematics,
+    identifiability,
+    link_angles,
+    paper_from_user_matrix,
+)
 from ..paper import PAPER_FIGURE1_POSES, PAPER_RANGE_POSES, PAPER_TABLE3, paper_arm
 from .catalogue import (
     DERIVATIVE_LABELS,

@@ -18,8 +18,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .arm import PlanarArm, forward_kinematics, jacobian
-from .elastostatic import Compliance, Loads
+from .compliance import Compliance, Loads
+from .planar import PlanarArm
+from .planar_kinematics import forward_kinematics, jacobian
 from .plane import Plane
 
 __all__ = [

@@ -15,7 +15,7 @@ from typing import Any
 
 import numpy as np
 
-from .errors import ArmcalError
+from ..errors import ArmcalError
 
 __all__ = [
     "Plane",

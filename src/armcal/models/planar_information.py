@@ -18,9 +18,12 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .arm import PlanarArm, link_units, paper_from_user, split_params
-from .errors import ArmcalWarning, NotIdentifiableError
-from .numerics import COND_WARN, RANK_RTOL, ScaledSVD, scaled_svd
+from ..errors import ArmcalWarning, NotIdentifiableError
+from ..noise import complex_whitening
+from ..numerics import COND_WARN, RANK_RTOL, ScaledSVD, scaled_svd
+from .planar import PlanarArm
+from .planar_geometry import paper_from_user, split_params
+from .planar_kinematics import link_units
 
 __all__ = [
     "Identifiability",
@@ -189,12 +192,10 @@ def model_columns(arm: PlanarArm, q: np.ndarray, target: np.ndarray | None = Non
     columns, q, target = _plan_columns(arm, q, target)
     if arm.standard:
         return columns
-    from .noise import complex_whitening
-
     if not arm.complete:
         columns = columns @ model_basis(arm)[0]
     if arm.noise is not None and not arm.noise.isotropic_iid:
-        w = arm.noise.whitening(arm, np.asarray(q, dtype=float), target=target)
+        w = arm.whitening(np.asarray(q, dtype=float), target=target)
         alpha, beta = complex_whitening(w)
         columns = alpha[..., None] * columns + beta[..., None] * columns.conj()
     return columns

@@ -43,10 +43,11 @@ from functools import cached_property
 import numpy as np
 from numpy.typing import ArrayLike
 
-from .arm import PlanarArm, forward_kinematics, jacobian, link_vectors
-from .errors import ArmcalError, ArmcalWarning, NotIdentifiableError
-from .numerics import COND_WARN, RANK_RTOL, ScaledSVD, scaled_svd
-from .observability import Identifiability, combination, listing, row_echelon
+from ..errors import ArmcalError, ArmcalWarning, NotIdentifiableError
+from ..numerics import COND_WARN, RANK_RTOL, ScaledSVD, scaled_svd
+from .planar import PlanarArm
+from .planar_information import Identifiability, combination, listing, row_echelon
+from .planar_kinematics import forward_kinematics, jacobian, link_vectors
 
 __all__ = [
     "STANDARD_GRAVITY",
@@ -400,7 +401,7 @@ class Compliance:
         if noise is None or noise.isotropic_iid:
             return jac
         geometry = at[..., : self.arm.n_params] if noise.joint_sigma is not None else None
-        return noise.whitening(self.arm, q, geometry) @ jac
+        return self.arm.whitening(q, geometry) @ jac
 
     def covariance(
         self,
