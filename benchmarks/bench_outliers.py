@@ -26,11 +26,11 @@ import time
 
 import numpy as np
 
-from armcal.diagnostics import FIT_ALPHA, OUTLIER_ALPHA
 from armcal.doe import random_plan
 from armcal.identification import identify
+from armcal.identification.judgement import FIT_ALPHA, OUTLIER_ALPHA
 from armcal.paper import paper_arm
-from armcal.simulate import synthesize_measurements
+from armcal.synthesis import synthesize_measurements
 
 SIGMA = 0.02
 POSES = 30

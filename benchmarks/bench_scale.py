@@ -72,9 +72,10 @@ from baselines import numpy_gauss_newton
 
 from armcal import PlanarArm, forward_kinematics, identify, load_robot
 from armcal.doe import orthogonal_plan, random_plan
-from armcal.identification import solve_closed_form
 from armcal.io import format_measurements_csv
-from armcal.simulate import monte_carlo, synthesize_measurements
+from armcal.models.planar_closed_form import solve_closed_form
+from armcal.simulate import monte_carlo
+from armcal.synthesis import synthesize_measurements
 
 RESULTS = Path(__file__).with_name("RESULTS.md")
 

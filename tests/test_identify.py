@@ -16,8 +16,8 @@ from armcal import (
     random_plan,
     solve_closed_form,
 )
-from armcal.identification import solve_gauss_newton
 from armcal.report import format_calibration as format_report
+from armcal.reproduction.algorithm import solve_gauss_newton
 from helpers import random_arm, random_truth
 
 SOLVERS = ["closed-form", "gauss-newton"]

@@ -13,9 +13,10 @@ from numpy.testing import assert_allclose
 
 from armcal import PlanarArm, identify
 from armcal.cli import main
-from armcal.compensate import compensate, cross_validate, validate
+from armcal.compensation import compensate
 from armcal.io import format_measurements_csv, read_calibration
 from armcal.models import CalibratedArm, Target, forward_kinematics, tool_angles
+from armcal.validation import cross_validate, validate
 
 SIGMA = 0.02  # mm, the instrument noise of every coordinate (issue 10)
 #: A controller that counts joint 2 the other way round and reports joint 3 from the

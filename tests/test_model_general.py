@@ -12,7 +12,7 @@ from numpy.testing import assert_allclose
 
 from armcal import PlanarArm, identify
 from armcal.errors import NotIdentifiableError
-from armcal.identification import solve_closed_form, solve_gauss_newton, solve_model
+from armcal.identification import solve
 from armcal.models import (
     Target,
     forward_kinematics,
@@ -21,6 +21,8 @@ from armcal.models import (
     paper_from_user,
     tool_angles,
 )
+from armcal.models.planar_closed_form import solve_closed_form
+from armcal.reproduction.algorithm import solve_gauss_newton
 
 #: Joint maps of real controllers, 3 joints: the default, joint 2 counted the other
 #: way round, joint 3 reported from the horizon (coupled), and both at once.
@@ -196,7 +198,8 @@ def test_reduced_general_models_are_recovered(fixed, rng):
     target = np.arange(m) % 3
     truth = _truth(arm, rng)
     xy = forward_kinematics(arm, q, truth, target=target)
-    est, _, converged = solve_model(arm, q, xy, target=target)
+    found = solve(arm, arm.conditions(q, target=target), xy)
+    est, converged = found.params[0], found.converged[0]
     assert bool(converged)
     assert_allclose(est, truth, rtol=0, atol=1e-8)
 

@@ -22,6 +22,7 @@ from armcal import PlanarArm, forward_kinematics
 from armcal import simulate as sim
 from armcal.criteria import predicted_std
 from armcal.doe import random_plan
+from armcal.doe.study import random_plan_study
 from armcal.errors import ArmcalError
 from armcal.models import scaled_jacobian
 from armcal.noise import NoiseModel
@@ -172,7 +173,7 @@ def test_predicted_std_is_the_gls_reference(arm4, paper_truth4, name, at_truth):
 def test_random_plan_study_predicts_like_the_reference(arm4, name):
     """Every plan of a random-plan study gets the model's GLS std and weighted det."""
     arm, cov_meas, joint_sigma = _models(arm4)[name]
-    study = sim.random_plan_study(arm, 12, 40, rng=3, test_q=random_plan(arm4, 50, rng=4))
+    study = random_plan_study(arm, 12, 40, rng=3, test_q=random_plan(arm4, 50, rng=4))
     assert study.sigma_mm == arm.sigma and study.arm.noise is arm.noise
     plans = random_plan(arm4, 12 * 40, rng=np.random.default_rng(3)).reshape(40, 12, 4)
     for k in (0, 21, 39):
@@ -235,7 +236,7 @@ def test_encoder_noise_moves_the_tip_by_j_q_sigma_q_j_q_t(arm4, paper_truth4):
         arm4.link_lengths, q, paper_truth4, SIGMA**2 * np.eye(2), JOINT_SIGMA
     )
     # The reference is the library's pose covariance too, where it is linearized.
-    assert_allclose(arm.pose_covariances(q, paper_truth4), expected, rtol=1e-12)
+    assert_allclose(arm.covariances_at(q, paper_truth4), expected, rtol=1e-12)
     assert np.all(np.trace(expected, axis1=1, axis2=2) > 4 * 2 * SIGMA**2)  # encoder dominates
     errors = xy - forward_kinematics(arm4, q, paper_truth4)  # (trials, m, 2)
     for i in range(q.shape[0]):

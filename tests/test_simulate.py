@@ -21,6 +21,7 @@ from armcal import (
 from armcal import simulate as sim
 from armcal.criteria import d_efficiency, position_accuracy, predicted_std
 from armcal.doe import orthogonal_plan, random_plan
+from armcal.doe.study import random_plan_study
 from armcal.models import link_phasors
 from armcal.progress import ProgressBar
 from helpers import random_arm, random_truth
@@ -241,7 +242,7 @@ def test_report_says_where_the_quantiles_come_from(arm4, paper_truth4, trials, e
 
 def test_random_plan_study_matches_plan_by_plan_evaluation(arm4):
     test_q = random_plan(arm4, 100, rng=1)
-    study = sim.random_plan_study(arm4, 10, 300, sigma=0.1, rng=21, test_q=test_q)
+    study = random_plan_study(arm4, 10, 300, sigma=0.1, rng=21, test_q=test_q)
     plans = random_plan(arm4, 3000, rng=np.random.default_rng(21)).reshape(300, 10, 4)
     for k in (0, 17, 299):
         assert_allclose(study.det_d[k], d_efficiency(arm4, plans[k]) ** 8, rtol=1e-9)
@@ -255,7 +256,7 @@ def test_random_plan_study_matches_plan_by_plan_evaluation(arm4):
 
 def test_det_s_vanishes_for_odd_n_and_optimum_is_one(rng):
     arm3 = random_arm(3, rng)
-    study = sim.random_plan_study(arm3, 10, 200, sigma=0.1, rng=rng)
+    study = random_plan_study(arm3, 10, 200, sigma=0.1, rng=rng)
     # S is antisymmetric, so det S = 0 for odd n whatever the plan.
     assert np.max(study.abs_det_s) < 1e-12
 

@@ -9,14 +9,15 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from armcal.diagnostics import FEW_DOF, OUTLIER_ALPHA, studentized_test
+from armcal.cli import CLI_ACTIONS
 from armcal.doe import random_plan
 from armcal.errors import ArmcalError
-from armcal.identification import HUBER_K, identify, solve_model
+from armcal.identification import HUBER_K, identify, solve
+from armcal.identification.judgement import FEW_DOF, OUTLIER_ALPHA, studentized_test
 from armcal.models import PlanarArm, forward_kinematics, jacobian
 from armcal.noise import NoiseModel
 from armcal.paper import paper_arm
-from armcal.simulate import synthesize_measurements
+from armcal.synthesis import synthesize_measurements
 
 SIGMA = 0.02  # mm, a laser tracker
 
@@ -129,7 +130,9 @@ def test_plain_fit_warns_about_the_same_poses_and_keeps_them():
     assert cal.n_used == 30
     (warning,) = [w for w in cal.warnings if w.code == "outlier"]
     assert all(f"row {r} " in warning.message for r in rows)
-    assert "--robust" in warning.message
+    # the library's words name the option, the command line's the flag
+    assert "robust=True" in warning.message
+    assert "--robust" in warning.render(CLI_ACTIONS)
 
 
 def test_robust_fit_with_estimated_sigma_finds_them_too():
@@ -210,9 +213,7 @@ def test_weighted_fit_recovers_noiseless_data_and_has_the_gls_covariance(noise):
     q = random_plan(arm, 25, rng=9)
     cal = identify(arm, q, forward_kinematics(arm, q, truth))
     np.testing.assert_allclose(cal.params, truth, rtol=0, atol=1e-11)
-    reference = _gls_covariance(
-        arm, q, cal.params, arm.pose_covariances(q, cal.params, noise=noise)
-    )
+    reference = _gls_covariance(arm, q, cal.params, arm.covariances_at(q, cal.params, noise=noise))
     _assert_covariance(cal.covariance, reference)
     assert cal.sigma_source == "given"
 
@@ -275,7 +276,8 @@ def test_fixed_parameters_with_noise_give_unbiased_estimates():
     truth = truth * arm.free
     q = random_plan(arm, 20, rng=15)
     xy = synthesize_measurements(arm, q, truth, SIGMA, rng=16, trials=400)
-    est, _, converged = solve_model(arm, q, xy)
+    found = solve(arm, arm.conditions(q), xy)
+    est, converged = found.params, found.converged
     assert np.all(converged) and np.all(est[:, [3, 4]] == 0)
     cal = identify(arm, q, xy[0])
     # The mean of 400 fits is within 4 standard errors (std / sqrt(400)) of the truth.

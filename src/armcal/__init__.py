@@ -2,18 +2,21 @@
 
 The public API, by concern (each module's docstring says more):
 
-* :mod:`armcal.arm` -- :class:`PlanarArm`, forward kinematics, Jacobians, regions;
-* :mod:`armcal.criteria` -- information matrix, design criteria (:data:`CRITERIA`),
-  identifiability, predicted accuracy, :func:`evaluate_plan`;
+* :mod:`armcal.models` -- the fit-model interface every family of arm implements
+  (:class:`FitModel`), the planar arm (:class:`PlanarArm`: forward kinematics,
+  Jacobians, regions), joint compliance (:class:`CompliantArm`), the calibrated
+  arm (:class:`CalibratedArm`);
+* :mod:`armcal.criteria` -- design criteria (:data:`CRITERIA`), predicted accuracy,
+  :func:`evaluate_plan`;
 * :mod:`armcal.doe` -- plans: :func:`design`, :func:`certify`, :func:`poses_needed`;
 * :mod:`armcal.identification` -- :func:`identify` and its :class:`Calibration`;
 * :mod:`armcal.instrument` -- 3-D instrument data: :func:`identify_3d` in the fitted
-  :class:`~armcal.plane.Plane`;
-* :mod:`armcal.compensate` -- :func:`validate` on held-out poses, :func:`cross_validate`,
-  :func:`compensate` a program, from a :class:`CalibratedArm`;
+  :class:`Plane`;
+* :mod:`armcal.validation` -- :func:`validate` on held-out poses, :func:`cross_validate`;
+* :mod:`armcal.compensation` -- :func:`compensate` a program;
 * :mod:`armcal.export` -- :func:`robot_toml` and :func:`urdf` of a calibrated arm;
-* :mod:`armcal.simulate` -- :func:`synthesize_measurements`, batched
-  :func:`monte_carlo`, :func:`random_plan_study`;
+* :mod:`armcal.synthesis` and :mod:`armcal.simulate` -- :func:`synthesize_measurements`,
+  batched :func:`monte_carlo`;
 * :mod:`armcal.reproduction` -- the paper's tables and figures recomputed;
 * :mod:`armcal.report` -- every result as text and as JSON;
 * :mod:`armcal.io` -- robot, truth, plan and measurement files.
@@ -23,14 +26,7 @@ nor scipy.
 """
 
 from ._version import __version__
-from .compensate import (
-    Compensation,
-    CrossValidation,
-    Validation,
-    compensate,
-    cross_validate,
-    validate,
-)
+from .compensation import Compensation, compensate
 from .criteria import (
     CRITERIA,
     PlanQuality,
@@ -39,7 +35,6 @@ from .criteria import (
     position_accuracy,
     predicted_std,
 )
-from .diagnostics import GoodnessOfFit, Outlier
 from .doe import (
     Certificate,
     Design,
@@ -50,22 +45,22 @@ from .doe import (
     poses_needed,
     random_plan,
 )
-from .errors import ArmcalError, InputError, NotIdentifiableError
+from .doe.study import PlanStudy, random_plan_study
+from .errors import ArmcalError, ArmcalWarning, InputError, NotIdentifiableError
 from .export import robot_toml, urdf
-from .identification import (
-    Calibration,
-    identify,
-    solve_closed_form,
-    solve_gauss_newton,
-    solve_model,
-)
+from .identification import Calibration, Estimate, GoodnessOfFit, Outlier, identify, solve
 from .instrument import identify_3d
 from .io import load_robot, load_truth, read_calibration, read_measurements, read_plan
 from .models import (
     Annulus,
     Box,
     CalibratedArm,
+    CompliantArm,
+    Conditions,
+    Elastostatic,
+    FitModel,
     Identifiability,
+    Loads,
     PlanarArm,
     Plane,
     Target,
@@ -79,30 +74,35 @@ from .models import (
     paper_from_user_matrix,
     wrap_angle,
 )
+from .models.planar_closed_form import solve_closed_form
 from .noise import NoiseModel
 from .report import format_calibration
-from .simulate import (
-    MonteCarlo,
-    PlanStudy,
-    monte_carlo,
-    random_plan_study,
-    synthesize_measurements,
-)
+from .reproduction.algorithm import solve_gauss_newton
+from .simulate import MonteCarlo, monte_carlo
+from .synthesis import synthesize_measurements
+from .validation import CrossValidation, Validation, cross_validate, validate
 
 __all__ = [
     "CRITERIA",
     "Annulus",
     "ArmcalError",
+    "ArmcalWarning",
     "Box",
     "CalibratedArm",
     "Calibration",
     "Certificate",
     "Compensation",
+    "CompliantArm",
+    "Conditions",
     "CrossValidation",
     "Design",
+    "Elastostatic",
+    "Estimate",
+    "FitModel",
     "GoodnessOfFit",
     "Identifiability",
     "InputError",
+    "Loads",
     "MonteCarlo",
     "NoiseModel",
     "NotIdentifiableError",
@@ -145,9 +145,9 @@ __all__ = [
     "read_measurements",
     "read_plan",
     "robot_toml",
+    "solve",
     "solve_closed_form",
     "solve_gauss_newton",
-    "solve_model",
     "synthesize_measurements",
     "urdf",
     "validate",

@@ -25,7 +25,7 @@ from ._version import __version__
 from .cli_help import COMMANDS, OUTPUTS_EPILOG
 from .cli_help import description as help_description
 from .cli_help import epilog as help_epilog
-from .compensate import compensate, cross_validate, validate
+from .compensation import compensate
 from .criteria import CRITERIA, evaluate_plan
 from .demo import DEMO_FILES, run_demo
 from .doe import DISTINCT_TOLERANCE, ORDERS, TARGETS, design, feasible, poses_needed, random_plan
@@ -62,7 +62,7 @@ from .io import (
     unknown_parameter,
     write_folder,
 )
-from .models import Compliance, Loads, PlanarArm, check_compliance_identifiable, every_target
+from .models import CompliantArm, FitModel, Loads, PlanarArm, every_target
 from .noise import NoiseModel
 from .plausibility import deviation_warning, explain, suspicious
 from .progress import ProgressBar
@@ -71,7 +71,6 @@ from .report import (
     compensation_report,
     compliant_design_summary,
     compliant_quality,
-    cross_validation_warning,
     design_summary,
     format_calibration,
     format_cross_validation,
@@ -88,9 +87,20 @@ from .report import (
     validation_warnings,
 )
 from .reproduction import TABLE_COLUMNS, reproduce
-from .simulate import monte_carlo, synthesize_measurements
+from .simulate import monte_carlo
+from .synthesis import synthesize_measurements
+from .validation import cross_validate, cross_validation_warning, validate
 
 __all__ = ["main"]
+
+#: The command line's words for the advice of warnings (:data:`armcal.errors.ACTIONS`).
+CLI_ACTIONS = {
+    "refit-robust": "rerun with --robust to fit without them",
+    "try-robust": "try --robust",
+    "try-closed-form": "try --method closed-form",
+    "geometry-alone": "fit the geometry alone (--no-compliance)",
+    "design": "(armcal design)",
+}
 
 #: Noise assumed for design and simulation when neither --sigma nor the robot file gives it.
 DEFAULT_SIGMA_MM = 0.1
@@ -279,7 +289,7 @@ def _emit(
     stderr say the same.
     """
     warnings = _unique(warnings)
-    document["warnings"] = [w.to_dict() for w in warnings]
+    document["warnings"] = [w.to_dict(CLI_ACTIONS) for w in warnings]
     _print_warnings(warnings)
     if getattr(args, "stdout_taken", False):  # `-o -`: the file is the command's output
         return
@@ -297,9 +307,7 @@ def _synthesize(args: argparse.Namespace) -> None:
     if spec.elastic is not None:  # a robot whose joints deflect under load
         q, loads, model = _loaded_plan(args.plan, spec, spec.arm)
         truth = _compliance_truth(args, spec, model)
-        xy = synthesize_measurements(
-            spec.arm, q, truth, sigma, rng=args.seed, compliance=model, loads=loads
-        )
+        xy = synthesize_measurements(model, q, truth, sigma, rng=args.seed, loads=loads)
         text = format_measurements_csv(q, xy, payload_kg=loads.payload_kg)
         what = " with joint compliance"
     else:
@@ -368,16 +376,17 @@ def _identify_file(
         "robust": robust,
         "target": _row_targets(arm, meas),
     }
-    if elastic is not None:
-        kwargs["elastic"] = elastic
-        kwargs["loads"] = meas.loads(elastic.payload_kg)
+    model: FitModel = arm
     try:
+        if elastic is not None:
+            kwargs["loads"] = meas.loads(elastic.payload_kg)
+            model = CompliantArm.for_loads(arm, elastic, kwargs["loads"])
         if meas.z is not None:
             if elastic is not None:
                 kwargs["gravity_3d"] = None if spec is None else spec.gravity_3d
-            cal = identify_3d(arm, meas.q, meas.xyz, **kwargs)
+            cal = identify_3d(model, meas.q, meas.xyz, **kwargs)
         else:
-            cal = identify(arm, meas.q, meas.xy, **kwargs)
+            cal = identify(model, meas.q, meas.xy, **kwargs)
     except NotIdentifiableError as exc:
         # Angles in radians read as degrees put every pose near the stretched arm.
         unit = _explained(path, arm, meas) if plain else None
@@ -396,7 +405,7 @@ def _identify_file(
 def _print_warnings(warnings: Sequence[ArmcalWarning]) -> None:
     """Each warning as one ``armcal: warning: ...`` line on stderr."""
     for warning in warnings:
-        print(f"armcal: warning: {warning.message}", file=sys.stderr)
+        print(f"armcal: warning: {warning.render(CLI_ACTIONS)}", file=sys.stderr)
 
 
 def _measured_arm(args: argparse.Namespace, spec: RobotSpec, meas: Measurements) -> PlanarArm:
@@ -420,7 +429,7 @@ def _identify(args: argparse.Namespace) -> None:
         arm, args.measurements, meas, method=args.method, robust=args.robust, spec=spec
     )
     warnings = [*spec.warnings, *meas.warnings, *_ignored_loads(args, spec, meas), *cal.warnings]
-    large = deviation_warning(cal.arm, cal.params)
+    large = deviation_warning(cal.arm, cal.model.arm_params(cal.params))
     if large is not None and all(w.code != large.code for w in warnings):
         warnings.append(large)
     text = format_calibration(cal)
@@ -428,8 +437,9 @@ def _identify(args: argparse.Namespace) -> None:
     if args.cross_validate is not None:
         xy = meas.xy if cal.plane is None else cal.plane.to_plane(meas.xyz)
         groups = None if meas.targets is None else np.array(meas.labels)
+        conditions = cal.conditions
         result = cross_validate(
-            arm,
+            cal.model,
             meas.q,
             xy,
             args.cross_validate,
@@ -438,17 +448,17 @@ def _identify(args: argparse.Namespace) -> None:
             sigma=args.sigma,
             row_sigma=meas.row_sigma,
             rng=args.seed,
-            elastic=None if cal.compliance is None else cal.compliance.model.elastic,
-            loads=cal.loads,
+            loads=None if conditions is None else conditions.loads,
         )
         summary = result.summary()
         extra["cross_validation"] = summary
         text += "\n" + format_cross_validation(summary)
-        warning = cross_validation_warning(summary, meas.q.shape[0])
+        warning = cross_validation_warning(result)
         if warning is not None:
             warnings.append(warning)
     warnings = _unique(warnings)
     document = calibration_to_dict(cal, warnings=warnings)
+    document["warnings"] = [w.to_dict(CLI_ACTIONS) for w in warnings]
     document.update(extra)
     if args.output is not None:
         atomic_write(args.output, to_json(document))
@@ -490,7 +500,8 @@ def _validate(args: argparse.Namespace) -> None:
             "of every row"
         )
     points = meas.xy if meas.z is None else meas.xyz
-    loads = None if cal.compliance is None else meas.loads(cal.compliance.elastic.payload_kg)
+    model = cal.model
+    loads = meas.loads(model.elastic.payload_kg) if isinstance(model, CompliantArm) else None
     try:
         result = validate(
             cal,
@@ -535,8 +546,8 @@ def _compensate(args: argparse.Namespace) -> None:
         )
     target = None if labels is None or not arm.targets else arm.target_index(labels)
     loads = None
-    if cal.compliance is not None:
-        payload: float | np.ndarray = cal.compliance.elastic.payload_kg
+    if isinstance(cal.model, CompliantArm):
+        payload: float | np.ndarray = cal.model.elastic.payload_kg
         if args.payload_kg is not None:
             if program.payload_kg is not None:
                 raise ArmcalError("--payload-kg: the program has a payload_kg column already")
@@ -590,19 +601,21 @@ def _quality_report(args: argparse.Namespace, spec: RobotSpec, arm: PlanarArm, q
 
 def _loaded_plan(
     path: str, spec: RobotSpec, arm: PlanarArm
-) -> tuple[np.ndarray, Loads, Compliance]:
+) -> tuple[np.ndarray, Loads, CompliantArm]:
     """A plan of a robot with ``[elastostatic]``: poses, payloads and the compliance model."""
     assert spec.elastic is not None
     q, payload = read_loaded_plan(path, spec.arm)
     loads = Loads.create(q.shape[0], spec.elastic.payload_kg if payload is None else payload)
     try:
-        model = Compliance.for_loads(arm, spec.elastic, loads)
+        model = CompliantArm.for_loads(arm, spec.elastic, loads)
     except ArmcalError as exc:
         raise ArmcalError(f"{spec.source}: {exc}") from None
     return q, loads, model
 
 
-def _compliance_truth(args: argparse.Namespace, spec: RobotSpec, model: Compliance) -> np.ndarray:
+def _compliance_truth(
+    args: argparse.Namespace, spec: RobotSpec, model: CompliantArm
+) -> np.ndarray:
     """The deviations and the compliance of the virtual robot (``--truth`` is required)."""
     if args.truth is None:
         keys = ", ".join(COMPLIANCE_TRUTH_KEYS[k] for k in dict.fromkeys(model.kinds))
@@ -704,7 +717,7 @@ def _evaluate(args: argparse.Namespace) -> None:
     if spec.elastic is not None:
         q, loads, model = _loaded_plan(args.plan, spec, arm)
         try:
-            check_compliance_identifiable(model, q, loads)
+            model.check_identifiable(model.conditions(q, loads=loads))
         except NotIdentifiableError as exc:
             raise NotIdentifiableError(f"{args.plan}: {exc}", exc.combinations) from None
         document, report = compliant_quality(model, q, loads, _design_sigma(arm))
@@ -733,14 +746,13 @@ def _simulate_compliant(args: argparse.Namespace, spec: RobotSpec, arm: PlanarAr
     truth = _compliance_truth(args, spec, model)
     try:
         result = monte_carlo(
-            arm,
+            model,
             q,
             truth,
             None if arm.noise is not None else DEFAULT_SIGMA_MM,
             args.trials,
             rng=np.random.default_rng(args.seed),
             progress=ProgressBar("simulate"),
-            compliance=model,
             loads=loads,
         )
     except NotIdentifiableError as exc:
@@ -882,13 +894,15 @@ def _export(args: argparse.Namespace) -> None:
                     "convert them before publishing joint_states (see the file's comment)",
                 )
             )
-    if cal.compliance is not None and cal.compliance_values is not None:
+    if isinstance(cal.model, CompliantArm):
+        model = cal.model
+        p = model.arm.n_params
         values = ", ".join(
             f"{name} = {v:.4g} {unit}"
             for name, unit, v in zip(
-                cal.compliance.names,
-                cal.compliance.units,
-                cal.compliance_values * cal.compliance.display_scale,
+                model.compliance_names,
+                model.compliance_units,
+                cal.params[p:] * model.compliance_scale,
                 strict=True,
             )
         )

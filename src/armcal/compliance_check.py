@@ -24,12 +24,14 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .compensate import validate
 from .doe.compliance import CompliantDesign, design_compliant
 from .doe.plans import feasible_poses
 from .identification import Calibration, identify
-from .models import Compliance, Elastostatic, Loads, PlanarArm, forward_kinematics
-from .simulate import MonteCarlo, monte_carlo, synthesize_measurements
+from .models import CompliantArm, Elastostatic, Loads, PlanarArm, forward_kinematics
+from .models.information import display_std, predicted_covariance
+from .simulate import MonteCarlo, monte_carlo
+from .synthesis import synthesize_measurements
+from .validation import validate
 
 __all__ = [
     "ComplianceCheck",
@@ -80,9 +82,8 @@ class ComplianceCheck:
     @property
     def errors_in_std(self) -> np.ndarray:
         """``(estimate - truth) / std`` of the fit with compliance, every parameter."""
-        est = np.concatenate([self.compliant.params, self.compliant.compliance.values])  # type: ignore[union-attr]
         std = self.compliant.std / self.compliant.display_scale
-        return (est - self.truth) / std
+        return (self.compliant.params - self.truth) / std
 
     @property
     def rigid_length_bias_in_std(self) -> np.ndarray:
@@ -131,25 +132,24 @@ def check_compliance(*, seed: int = 0, trials: int = 4000, poses: int = 40) -> C
     arm, elastic, truth = virtual_vertical_arm()
     q = feasible_poses(arm, poses, rng=rng)
     loads = Loads.create(poses, np.where(np.arange(poses) % 2 == 1, PAYLOAD_KG, 0.0))
-    model = Compliance.for_loads(arm, elastic, loads)
-    clean = model.tip(q, truth, loads)
+    model = CompliantArm.for_loads(arm, elastic, loads)
+    rows = model.conditions(q, loads=loads)
+    clean = model.positions(rows, truth)
     deflection = np.linalg.norm(clean - forward_kinematics(arm, q, truth[: arm.n_params]), axis=1)
-    xy = synthesize_measurements(arm, q, truth, SIGMA_MM, rng=rng, compliance=model, loads=loads)
+    xy = synthesize_measurements(model, q, truth, SIGMA_MM, rng=rng, loads=loads)
     rigid = identify(arm, q, xy, sigma=SIGMA_MM)
-    compliant = identify(arm, q, xy, sigma=SIGMA_MM, elastic=elastic, loads=loads)
+    compliant = identify(model, q, xy, sigma=SIGMA_MM, loads=loads)
     held = 200
     q_test = feasible_poses(arm, held, rng=rng)
     test_loads = Loads.create(held, rng.choice([0.0, PAYLOAD_KG], held))
-    xy_test = synthesize_measurements(
-        arm, q_test, truth, SIGMA_MM, rng=rng, compliance=model, loads=test_loads
-    )
+    xy_test = synthesize_measurements(model, q_test, truth, SIGMA_MM, rng=rng, loads=test_loads)
     checked = validate(compliant.calibrated(), q_test, xy_test, loads=test_loads)
     rigid_check = validate(rigid.calibrated(), q_test, xy_test)
-    mc = monte_carlo(arm, q, truth, SIGMA_MM, trials, rng=rng, compliance=model, loads=loads)
+    mc = monte_carlo(model, q, truth, SIGMA_MM, trials, rng=rng, loads=loads)
     plan = design_compliant(
         arm, elastic, poses, payloads=(0.0, PAYLOAD_KG), sigma=SIGMA_MM, rng=rng
     )
-    random_covariance, _ = model.covariance(q, loads, SIGMA_MM)
+    random_covariance, _ = predicted_covariance(model, rows, SIGMA_MM)
     return ComplianceCheck(
         truth=truth,
         max_deflection_mm=float(deflection.max()),
@@ -160,7 +160,7 @@ def check_compliance(*, seed: int = 0, trials: int = 4000, poses: int = 40) -> C
         validation_rigid_mm=rigid_check.summary()["rms_after_mm"],
         monte_carlo=mc,
         design=plan,
-        random_std=model.std(random_covariance),
+        random_std=display_std(model, random_covariance),
     )
 
 

@@ -54,17 +54,15 @@ from .models import (
     PlanarArm,
     check_identifiable,
     conditioning_warning,
+    covariance_factor,
     jacobian,
-    model_basis,
     model_columns,
     plan_rows,
     plan_svd,
     scaled_jacobian,
-    target_weights,
-    user_from_scaled,
+    weighted_user_jacobian,
 )
-from .noise import NoiseModel
-from .numerics import COND_WARN, RANK_RTOL, ScaledSVD, scaled_svd, spd_inverse
+from .numerics import COND_WARN, RANK_RTOL, ScaledSVD, spd_inverse
 
 __all__ = [
     "COND_WARN",
@@ -121,74 +119,6 @@ def scaled_information(arm: PlanarArm, q: np.ndarray) -> np.ndarray:
     """Hadamard-normalized information ``Fs = D F D`` ``(..., p, p)`` with unit diagonal."""
     columns = model_columns(arm, np.asarray(q, dtype=float))
     return weighted_information(columns, np.full(columns.shape[:-1], 1 / columns.shape[-2]))
-
-
-def covariance_factor(
-    arm: PlanarArm,
-    q: np.ndarray,
-    params: np.ndarray | None,
-    svd: ScaledSVD | None = None,
-    target: np.ndarray | None = None,
-) -> tuple[np.ndarray, np.ndarray]:
-    """``G`` ``(..., p, p)`` with ``(J^T J)^-1 = G G^T`` (user parametrization) and the ok mask.
-
-    ``target`` ``(m,)``: the rows' targets (measurements); without it a plan of
-    an arm with several targets is measured at every target of every pose.
-    """
-    q = np.asarray(q, dtype=float)
-    every = target is None and arm.n_target_links > 1  # measured at every target
-    rows = q.shape[-2] * (arm.n_target_links if every else 1)
-    if not arm.standard and (params is not None or every):
-        at = np.zeros(arm.n_params) if params is None else params
-        return _covariance_factor_at(arm, q, at, target)
-    factor, ok = (plan_svd(arm, q) if svd is None else svd).inverse_gram_factor()
-    to_user = user_from_scaled(arm, params) if arm.standard else model_basis(arm)[1]
-    if every:  # the targets' columns were weighted (observability.target_weights)
-        to_user = to_user * target_weights(arm)[: to_user.shape[-1]]
-    with np.errstate(invalid="ignore", over="ignore"):
-        g = to_user @ np.where(ok[..., None, None], factor, 0.0) / np.sqrt(rows)
-    ok = ok & np.all(np.isfinite(g), axis=(-2, -1))
-    return np.where(ok[..., None, None], g, np.inf), ok
-
-
-def _covariance_factor_at(
-    arm: PlanarArm, q: np.ndarray, params: np.ndarray, target: np.ndarray | None = None
-) -> tuple[np.ndarray, np.ndarray]:
-    """:func:`covariance_factor` of a weighted or reduced model at deviations ``params``.
-
-    The free columns of the user Jacobian at ``params``, each pose whitened at
-    ``params`` (:meth:`armcal.noise.NoiseModel.whitening`), through the rank
-    policy's SVD: ``G`` ``(..., p, p_f)`` with zero rows for fixed parameters.
-    """
-    jac = weighted_user_jacobian(arm, q, params, target=target)
-    factor, ok = scaled_svd(jac).inverse_gram_factor()
-    g = np.eye(arm.n_params)[:, arm.free] @ np.where(ok[..., None, None], factor, 0.0)
-    ok = ok & np.all(np.isfinite(g), axis=(-2, -1))
-    return np.where(ok[..., None, None], g, np.inf), ok
-
-
-def weighted_user_jacobian(
-    arm: PlanarArm,
-    q: np.ndarray,
-    params: np.ndarray | None = None,
-    row_sigma: np.ndarray | None = None,
-    *,
-    target: np.ndarray | None = None,
-) -> np.ndarray:
-    """Whitened free columns of the user Jacobian ``(..., 2m, p_f)`` at ``params``.
-
-    Rows are ``W_i J_i`` (:meth:`armcal.noise.NoiseModel.whitening` at ``params``,
-    the identity for isotropic iid noise), so ``sigma_ref^2 (J_w^T J_w)^-1`` is
-    the generalized-least-squares covariance of the free parameters.
-    """
-    q, target, _ = plan_rows(arm, q, target)
-    jac = jacobian(arm, q, params, target=target)  # (..., m, 2, p)
-    noise = arm.noise
-    if row_sigma is not None or (noise is not None and not noise.isotropic_iid):
-        model = noise if noise is not None else NoiseModel.isotropic(1.0)
-        jac = arm.whitening(q, params, row_sigma, target=target, noise=model) @ jac
-    jac = jac[..., arm.free]
-    return jac.reshape(*jac.shape[:-3], -1, arm.n_free)
 
 
 def inverse_information_batch(

@@ -14,7 +14,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .compensate import compensate, validate
+from .compensation import compensate
 from .doe import design, random_plan
 from .errors import ArmcalWarning
 from .export import robot_toml, urdf
@@ -22,7 +22,8 @@ from .identification import identify
 from .io import format_measurements_csv, format_plan_csv, format_program_csv
 from .models import PlanarArm, forward_kinematics
 from .report import calibration_to_dict, format_calibration, to_json
-from .simulate import synthesize_measurements
+from .synthesis import synthesize_measurements
+from .validation import validate
 
 __all__ = [
     "DEMO_FILES",

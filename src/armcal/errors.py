@@ -8,13 +8,54 @@ subclasses.  The command line turns these into exit status 2 and a single line
 A result that is computed but suspicious carries :class:`ArmcalWarning` records
 (code and message); the command line prints each as ``armcal: warning: ...``
 and the JSON lists them under ``warnings``.
+
+A warning says what to try in neutral words: "try a robust fit".  Where such
+advice is an option of the library or a flag of the command line, the text
+holds a reference to an *action* (:func:`action`), which the library renders
+in its own words (:data:`ACTIONS`) and the command line in its flags
+(:meth:`ArmcalWarning.render`).
 """
 
 from __future__ import annotations
 
+import re
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 
-__all__ = ["ArmcalError", "ArmcalWarning", "InputError", "NotIdentifiableError"]
+__all__ = [
+    "ACTIONS",
+    "ArmcalError",
+    "ArmcalWarning",
+    "InputError",
+    "NotIdentifiableError",
+    "action",
+    "unique_warnings",
+]
+
+#: What a warning can advise, by key, in the library's words (the command line has
+#: its flags for the same, :mod:`armcal.cli`).
+ACTIONS: dict[str, str] = {
+    "refit-robust": "fit robustly (identify(..., robust=True)) to leave them out",
+    "try-robust": "try a robust fit (robust=True)",
+    "try-closed-form": 'try the closed form (method="closed-form")',
+    "geometry-alone": "fit the geometry alone (the model without compliance)",
+    "design": "(armcal.design)",
+}
+
+_ACTION = re.compile(r"\u27e6([a-z][a-z-]*)\u27e7")
+
+
+def action(key: str) -> str:
+    """A reference to the advice ``key`` of :data:`ACTIONS`, for a warning's text.
+
+    Examples
+    --------
+    >>> ArmcalWarning("outlier", f"2 outliers; {action('try-robust')}").message
+    '2 outliers; try a robust fit (robust=True)'
+    """
+    if key not in ACTIONS:
+        raise KeyError(f"unknown action {key!r}")
+    return f"\u27e6{key}\u27e7"
 
 
 class ArmcalError(ValueError):
@@ -52,8 +93,10 @@ class ArmcalWarning:
     ----------
     code : str
         A stable, machine-readable key (``"ill-conditioned"``, ``"not-converged"``).
-    message : str
-        One line that says what is suspicious and what to try.
+    text : str
+        One line that says what is suspicious and what to try; advice that is an
+        option refers to an :func:`action`, rendered by :attr:`message` (the
+        library's words) or :meth:`render` (another vocabulary: the command line's).
 
     Examples
     --------
@@ -62,8 +105,28 @@ class ArmcalWarning:
     """
 
     code: str
-    message: str
+    text: str
 
-    def to_dict(self) -> dict[str, str]:
-        """The JSON form ``{code, message}``."""
-        return {"code": self.code, "message": self.message}
+    @property
+    def message(self) -> str:
+        """The text in the library's words."""
+        return self.render(ACTIONS)
+
+    def render(self, words: Mapping[str, str]) -> str:
+        """The text with every action in ``words`` (the library's for keys ``words`` lacks)."""
+        return _ACTION.sub(lambda m: words.get(m.group(1), ACTIONS[m.group(1)]), self.text)
+
+    def to_dict(self, words: Mapping[str, str] | None = None) -> dict[str, str]:
+        """The JSON form ``{code, message}`` (in ``words``, default the library's)."""
+        return {"code": self.code, "message": self.render(words or ACTIONS)}
+
+
+def unique_warnings(warnings: Sequence[ArmcalWarning]) -> list[ArmcalWarning]:
+    """Each warning once, in order."""
+    seen: set[tuple[str, str]] = set()
+    kept = []
+    for warning in warnings:
+        if (warning.code, warning.text) not in seen:
+            seen.add((warning.code, warning.text))
+            kept.append(warning)
+    return kept

@@ -1,7 +1,7 @@
 """Export a calibrated arm: as a robot file every command accepts, or as URDF for ROS.
 
-Both exports describe the arm in its own frame (:meth:`CalibratedArm.robot_params
-<armcal.calibrated.CalibratedArm.robot_params>`): the base pose ``x0, y0, phi0``
+Both exports describe the arm in its own frame (:meth:`CalibratedArm.in_robot_frame
+<armcal.models.calibrated.CalibratedArm.in_robot_frame>`): the base pose ``x0, y0, phi0``
 places the arm in the instrument's frame during calibration, so it belongs to the
 instrument, not to the robot, and is written only as a comment.
 
@@ -58,7 +58,15 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from ._version import __version__
-from .models import BASE_POSE, Annulus, Box, CalibratedArm, PlanarArm, Target, standard_joint_map
+from .models import (
+    INSTRUMENT_PARAMS,
+    Annulus,
+    Box,
+    CalibratedArm,
+    PlanarArm,
+    Target,
+    standard_joint_map,
+)
 from .noise import NoiseModel
 
 __all__ = [
@@ -107,7 +115,7 @@ def folded_arm(cal: CalibratedArm) -> PlanarArm:
     -------
     PlanarArm
         An arm whose nominal forward kinematics (no deviations) are those of
-        ``cal.arm`` with ``cal.robot_params()``, in the robot's own frame.  Its
+        ``cal.arm`` with its calibrated deviations in the robot's own frame.  Its
         name has ``-calibrated`` appended; joint limits, joint map, base offset,
         noise model and region are kept; it has no base rotation, and its fixed
         parameters are the calibration's minus the joint offset held only
@@ -130,7 +138,7 @@ def folded_arm(cal: CalibratedArm) -> PlanarArm:
 
     Without targets the last link is link ``n`` and ``o' = o + dq``.  A base
     rotation ``phi0`` turns every link vector alike; it is the instrument's and
-    :meth:`~armcal.calibrated.CalibratedArm.robot_params` drops it.
+    :meth:`~armcal.models.calibrated.CalibratedArm.in_robot_frame` drops it.
 
     Examples
     --------
@@ -255,11 +263,12 @@ def _base_pose_text(cal: CalibratedArm) -> str | None:
     """The base pose in the instrument frame, for a comment; None without one."""
     arm = cal.arm
     parts = []
-    for name in BASE_POSE:
+    params = cal.arm_params
+    for name in INSTRUMENT_PARAMS:
         if name in arm.param_names:
             i = arm.param_names.index(name)
             unit = arm.param_units[i]
-            parts.append(f"{name} = {_num(cal.params[i] * arm.display_scale[i])} {unit}")
+            parts.append(f"{name} = {_num(params[i] * arm.display_scale[i])} {unit}")
     return ", ".join(parts) if parts else None
 
 
@@ -279,15 +288,15 @@ def _deviations_text(cal: CalibratedArm) -> list[str]:
     arm = cal.arm
     shown = [
         f"{name} = {_num(value * scale)} {unit}"
-        for name, value, scale, unit, robot in zip(
+        for name, value, scale, unit, instrument in zip(
             arm.param_names,
-            cal.params,
+            cal.arm_params,
             arm.display_scale,
             arm.param_units,
-            cal.robot_mask,
+            arm.instrument_params,
             strict=True,
         )
-        if robot
+        if not instrument
     ]
     return _pack(shown)
 
@@ -314,7 +323,7 @@ def robot_toml(cal: CalibratedArm) -> str:
     Notes
     -----
     The file's nominal forward kinematics equal the calibrated ones in the robot
-    frame, ``forward_kinematics(cal.arm, q, cal.robot_params())``, to round-off
+    frame (the deviations with the base pose at 0), to round-off
     (the derivation is in :func:`folded_arm`).  With several targets the first
     target's last-joint offset becomes joint ``n``'s, and the others' differences
     move their ``angle_deg``.
@@ -495,8 +504,8 @@ def urdf(cal: CalibratedArm) -> str:
     Composing ``Trans(origin xyz) Rz(origin yaw) Rz(s_i v_i)`` from
     ``base_link`` (``s_i`` the axis sign, ``v_i`` the joint value of
     :func:`urdf_joint_values`) places every target frame where
-    ``forward_kinematics(cal.arm, q, cal.robot_params())`` puts the target, with
-    the yaw of :func:`~armcal.arm.tool_angles`.  The module docstring says why
+    the calibrated arm in its own frame puts the target, with the yaw of
+    :func:`~armcal.models.planar_kinematics.tool_angles`.  The module docstring says why
     the offsets are in ``<origin>`` and not in ``<calibration>``.
 
     Examples

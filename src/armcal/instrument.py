@@ -30,8 +30,8 @@ from typing import Any
 import numpy as np
 
 from .errors import ArmcalError, ArmcalWarning
-from .identification import Calibration, identify, solve_model
-from .models import STANDARD_GRAVITY, Elastostatic, PlanarArm, Plane, fit_plane, forward_kinematics
+from .identification import Calibration, identify, solve
+from .models import STANDARD_GRAVITY, Conditions, FitModel, Plane, fit_plane
 
 __all__ = [
     "PLANARITY_ALPHA",
@@ -47,22 +47,21 @@ PLANARITY_ALPHA = 1e-3
 MIRROR_MARGIN = 4.0
 
 
-def _rss(arm: PlanarArm, q, xy, target, row_sigma) -> float:
-    """Residual sum of squares (mm^2) of the arm's weighted least-squares fit to in-plane data."""
-    params, _, _ = solve_model(arm, q, xy, target=target, row_sigma=row_sigma)
-    residual = xy - forward_kinematics(arm, q, params, target=target)
+def _rss(model: FitModel, conditions: Conditions, xy: np.ndarray) -> float:
+    """Residual sum of squares (mm^2) of the weighted least-squares fit to in-plane data."""
+    params = solve(model, conditions, xy).params[0]
+    residual = xy - model.positions(conditions, params)
     return float(np.sum(residual**2))
 
 
 def identify_3d(
-    arm: PlanarArm,
+    model: FitModel,
     q: np.ndarray,
     xyz: np.ndarray,
     *,
     target: np.ndarray | None = None,
     sigma: float | None = None,
     row_sigma: np.ndarray | None = None,
-    elastic: Elastostatic | None = None,
     gravity_3d: np.ndarray | None = None,
     **kwargs: Any,
 ) -> Calibration:
@@ -70,9 +69,10 @@ def identify_3d(
 
     Parameters
     ----------
-    arm : PlanarArm
-        With ``base_offset`` and ``base_rotation`` (the base pose in the fitted
-        plane is unknown); see :func:`armcal.io.arm_for_measurements`.
+    model : PlanarArm or CompliantArm
+        A planar arm with ``base_offset`` and ``base_rotation`` (the base pose in
+        the fitted plane is unknown; :func:`armcal.files.arm_for_measurements`
+        sets both), or a model of its joint compliance.
     q : ndarray, shape (m, n)
         Joint angles, rad.
     xyz : ndarray, shape (m, 3)
@@ -82,12 +82,10 @@ def identify_3d(
     sigma, row_sigma, **kwargs
         As for :func:`armcal.identification.identify` (``sigma`` the noise of
         every coordinate, in the plane as out of it).
-    elastic : Elastostatic, optional
-        Identify joint compliance too (:mod:`armcal.elastostatic`); gravity then
-        comes from ``gravity_3d``.
     gravity_3d : ndarray, shape (3,), optional
-        Gravity's direction in the instrument frame (``[measurement] gravity``);
-        its component in the plane of motion loads the joints.
+        Gravity's direction in the instrument frame (``[measurement] gravity``),
+        for a model whose points depend on it (joint compliance): its component
+        in the plane of motion loads the joints.
 
     Returns
     -------
@@ -95,27 +93,29 @@ def identify_3d(
         In the plane's coordinates, with :attr:`~Calibration.plane` set and the
         planarity warnings (``non-planar``, ``mirror-ambiguous``) added.
     """
+    arm = model.arm
     if not (arm.base_offset and arm.base_rotation):
         raise ArmcalError(
             "3-D data need the base pose in the plane: identify with base_offset and "
-            "base_rotation (armcal.io.arm_for_measurements sets both)"
+            "base_rotation (armcal.files.arm_for_measurements sets both)"
         )
     xyz = np.asarray(xyz, dtype=float)
-    plane = fit_plane(xyz, target, arm.target_labels)
+    rigid = arm.conditions(q, target=target, sigma_mm=row_sigma)
+    arm.check_identifiable(rigid)
+    plane = fit_plane(xyz, rigid.target, arm.target_labels)
     sides = [plane, plane.mirrored()]
-    rss = [_rss(arm, q, side.to_plane(xyz), target, row_sigma) for side in sides]
+    rss = [_rss(arm, rigid, side.to_plane(xyz)) for side in sides]
     best = int(np.argmin(rss))
     chosen = sides[best]
-    if elastic is not None:
-        elastic = elastic.with_gravity(_gravity_in_plane(chosen, gravity_3d))
+    if model.uses_gravity:
+        model = model.with_gravity(_gravity_in_plane(chosen, gravity_3d))
     cal = identify(
-        arm,
+        model,
         q,
         chosen.to_plane(xyz),
         target=target,
         sigma=sigma,
         row_sigma=row_sigma,
-        elastic=elastic,
         **kwargs,
     )
     warnings = list(cal.warnings)

@@ -38,8 +38,9 @@ from .models import (
     Annulus,
     Box,
     CalibratedArm,
-    Compliance,
+    CompliantArm,
     Elastostatic,
+    FitModel,
     Loads,
     PlanarArm,
     Plane,
@@ -1104,13 +1105,13 @@ def load_truth(path: str | os.PathLike, arm: PlanarArm) -> np.ndarray:
 COMPLIANCE_TRUTH_KEYS = {"k": "k_urad_per_Nm", "c": "c_mdeg_per_m"}
 
 
-def load_compliance_truth(path: str | os.PathLike, model: Compliance) -> np.ndarray:
+def load_compliance_truth(path: str | os.PathLike, model: CompliantArm) -> np.ndarray:
     """The compliance of a truth TOML (``k_urad_per_Nm``, ``c_mdeg_per_m``), internal units.
 
     Returns
     -------
     ndarray, shape (P,)
-        In the order of ``model.names``: rad/(N m) for ``k``, rad/m for ``c``.
+        In the order of ``model.compliance_names``: rad/(N m) for ``k``, rad/m for ``c``.
     """
     data = _load_toml(path, "truth")
     n = model.arm.n_joints
@@ -1121,10 +1122,10 @@ def load_compliance_truth(path: str | os.PathLike, model: Compliance) -> np.ndar
             raise _fail(
                 path,
                 f"missing key '{key}' ({n} numbers): the robot's [elastostatic] model has "
-                f"parameters {', '.join(model.names)}",
+                f"parameters {', '.join(model.compliance_names)}",
             )
         values += _numbers(path, data[key], key, n)
-    return np.array(values) / model.display_scale
+    return np.array(values) / model.compliance_scale
 
 
 # --------------------------------------------------------------------------- CSV
@@ -1779,18 +1780,18 @@ def read_calibration(path: str | os.PathLike) -> CalibratedArm:
             )
         key = "robot"
         arm = _arm_from_dict(doc["robot"], noise, list(doc.get("fixed", [])))
-        model = None
+        model: FitModel = arm
         if doc.get("elastostatic") is not None:
             key = "elastostatic"
             model = _compliance_from_dict(arm, doc["elastostatic"])
         key = "parameters"
         names = [entry["name"] for entry in doc["parameters"]]
-        expected = arm.param_names if model is None else model.all_names
+        expected = model.param_names
         if tuple(names) != expected:
             raise ValueError(
                 f"parameters {', '.join(names)} do not match the robot's {', '.join(expected)}"
             )
-        scale = arm.display_scale if model is None else model.all_scale
+        scale = model.display_scale
         values = np.array([float(entry["value"]) for entry in doc["parameters"]]) / scale
         key = "covariance"
         if list(doc["covariance"]["names"]) != names:
@@ -1798,8 +1799,6 @@ def read_calibration(path: str | os.PathLike) -> CalibratedArm:
         full = np.array(doc["covariance"]["matrix"], dtype=float) / np.outer(scale, scale)
         if full.shape != (len(names), len(names)):
             raise ValueError(f"expected a {len(names)} x {len(names)} matrix")
-        p = arm.n_params
-        params, covariance = values[:p], full[:p, :p]
         key = "sigma_mm"
         sigma = float(doc["sigma_mm"])
         if not (sigma > 0 and math.isfinite(sigma)):
@@ -1814,16 +1813,14 @@ def read_calibration(path: str | os.PathLike) -> CalibratedArm:
         raise _fail(
             path, f"key '{key}': {what}; write the calibration again with armcal identify -o"
         ) from None
-    if not (np.all(np.isfinite(params)) and np.all(np.isfinite(covariance))):
+    if not (np.all(np.isfinite(values)) and np.all(np.isfinite(full))):
         raise _fail(path, "key 'parameters': values must be finite numbers")
     if plane is None and arm.base_rotation:
         raise _fail(path, "key 'plane': a calibration from 3-D data must record its plane")
-    if model is None:
-        return CalibratedArm(arm, params, covariance, sigma, plane)
-    return CalibratedArm(arm, params, covariance, sigma, plane, model, values[p:], full)
+    return CalibratedArm(model, values, full, sigma, plane)
 
 
-def _compliance_from_dict(arm: PlanarArm, data: dict[str, Any]) -> Compliance:
+def _compliance_from_dict(arm: PlanarArm, data: dict[str, Any]) -> CompliantArm:
     """The compliance model of a calibration file's ``elastostatic`` section."""
     gravity = data["gravity_mps2"]
     masses = data["link_masses_kg"]
@@ -1833,7 +1830,7 @@ def _compliance_from_dict(arm: PlanarArm, data: dict[str, Any]) -> Compliance:
         np.array(data["com_fraction"], dtype=float).reshape(arm.n_joints),
         float(data["payload_kg"]),
     )
-    model = Compliance(arm, elastic, bool(data["known_loads"]))
-    if list(data.get("parameters", model.names)) != list(model.names):
-        raise ValueError(f"compliance parameters do not match {', '.join(model.names)}")
+    model = CompliantArm(arm, elastic, bool(data["known_loads"]))
+    if list(data.get("parameters", model.compliance_names)) != list(model.compliance_names):
+        raise ValueError(f"compliance parameters do not match {', '.join(model.compliance_names)}")
     return model

@@ -34,6 +34,7 @@ from numpy.typing import ArrayLike
 
 __all__ = [
     "NoiseModel",
+    "instrument_override",
 ]
 
 
@@ -212,3 +213,23 @@ def complex_whitening(w: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     alpha = ((w11 + w22) + 1j * (w21 - w12)) / 2
     beta = ((w11 - w22) + 1j * (w21 + w12)) / 2
     return alpha, beta
+
+
+def instrument_override(noise: NoiseModel | None, sigma_mm: float) -> NoiseModel:
+    """The noise model with ``sigma_mm`` as the instrument's isotropic noise: what ``--sigma``
+    means, in one place.
+
+    The instrument covariance becomes ``sigma_mm^2 I`` and any encoder noise of
+    ``noise`` stays; without a noise model, isotropic noise of ``sigma_mm``.
+
+    Examples
+    --------
+    >>> noise = instrument_override(NoiseModel.per_axis(0.08, 0.02, joint_sigma=1e-4), 0.05)
+    >>> noise.covariance_mm2.round(6).tolist(), noise.joint_sigma.tolist()
+    ([[0.0025, 0.0], [0.0, 0.0025]], [0.0001])
+    >>> instrument_override(None, 0.1).isotropic_iid
+    True
+    """
+    if noise is None:
+        return NoiseModel.isotropic(sigma_mm)
+    return noise.with_instrument_sigma(sigma_mm)

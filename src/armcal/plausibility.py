@@ -48,7 +48,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .errors import ArmcalError, ArmcalWarning
-from .identification import Calibration, solve_model
+from .identification import Calibration, solve
 from .models import PlanarArm, forward_kinematics
 
 __all__ = [
@@ -135,8 +135,10 @@ def _fit(arm: PlanarArm, q: np.ndarray, xy: np.ndarray) -> _Fit | None:
     None when the plan cannot identify the free parameters or the fit fails.
     """
     plain = arm.replace(noise=None)
+    rows = plain.conditions(q)
     try:
-        params = solve_model(plain, q, xy)[0]  # the closed form, or Gauss-Newton if fixed
+        plain.check_identifiable(rows)
+        params = solve(plain, rows, xy).params[0]  # the closed form, or Gauss-Newton if fixed
     except ArmcalError:  # NotIdentifiableError among them: this reading tells nothing
         return None
     if not np.all(np.isfinite(params)):
@@ -241,7 +243,7 @@ def suspicious(cal: Calibration) -> bool:
     return (
         any(w.code == "fit-inconsistent" for w in cal.warnings)
         or cal.residual_rms > SUSPICIOUS_RMS_FRACTION * reach
-        or bool(large_deviations(cal.arm, cal.params))
+        or bool(large_deviations(cal.arm, cal.model.arm_params(cal.params)))
     )
 
 

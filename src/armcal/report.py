@@ -9,7 +9,7 @@ from collections.abc import Sequence
 import numpy as np
 
 from ._version import __version__
-from .compensate import Compensation, Validation
+from .compensation import Compensation
 from .criteria import PlanQuality
 from .doe.compliance import CompliantDesign, d_efficiency_compliant
 from .doe.designer import Design
@@ -18,10 +18,12 @@ from .doe.sizing import TARGETS, PosesNeeded
 from .errors import ArmcalWarning
 from .identification import Calibration
 from .io import CALIBRATION_FORMAT, Measurements, Program, robot_to_dict
-from .models import CalibratedArm, Compliance, Loads, PlanarArm, combination
+from .models import CalibratedArm, CompliantArm, Loads, PlanarArm, combination
+from .models.information import display_std, predicted_covariance
 from .paper import PAPER_DIGIT
 from .reproduction.compute import TABLE_COLUMNS, Reproduction
 from .simulate import MonteCarlo
+from .validation import Validation
 
 __all__ = [
     "CALIBRATION_FORMAT",
@@ -292,8 +294,8 @@ def format_calibration(cal: Calibration, *, truth: np.ndarray | None = None) -> 
         f"calibration of {arm.name}: {poses}, {_identified(arm)}"
         + (
             ""
-            if cal.compliance is None
-            else f" and {cal.compliance.model.n_params} of joint compliance"
+            if cal.nested is None
+            else f" and {len(cal.nested.names)} of {cal.nested.effect.name}"
         )
         + f", method {cal.method}"
         + (", robust" if cal.robust else ""),
@@ -350,24 +352,20 @@ def format_calibration(cal: Calibration, *, truth: np.ndarray | None = None) -> 
 
 
 def compliance_lines(cal: Calibration) -> list[str]:
-    """What the joint compliance explains: residuals without it and the deflections fitted."""
-    c = cal.compliance
-    if c is None:
+    """What the model's effect explains: residuals without it and the deflections fitted."""
+    nested = cal.nested
+    if nested is None:
         return []
-    model = c.model
-    mode = (
-        "lumped mode (masses unknown): c_j is joint j's deflection per metre of horizontal "
-        "lever arm to the tip"
-        if model.elastic.lumped
-        else "link masses known: k_j is joint j's compliance"
-    )
+    effect = nested.effect
     out = [
         "",
-        f"joint compliance, {mode}; geometry alone leaves {c.geometry_only_rms_mm:.4g} mm "
-        f"residual RMS, with compliance {cal.residual_rms:.4g} mm",
+        f"{effect.name}, {effect.description}; {effect.nested} alone leaves "
+        f"{nested.rms_per_coordinate_mm:.4g} mm residual RMS, with {effect.short} "
+        f"{cal.residual_rms:.4g} mm",
     ]
-    if c.max_deflection_rad is not None:
-        worst = np.degrees(c.max_deflection_rad) * 1e3
+    deflection = cal.details.get("max_deflection_rad")
+    if deflection is not None:
+        worst = np.degrees(deflection) * 1e3
         out.append(
             "largest fitted deflection per joint: "
             + ", ".join(f"joint {j + 1} {v:.4g} mdeg" for j, v in enumerate(worst))
@@ -382,11 +380,12 @@ def _finite_or_none(value: float | None) -> float | None:
     return float(value)
 
 
-def _elastostatic_dict(cal: Calibration) -> dict:
+def _elastostatic_dict(cal: Calibration) -> dict | None:
     """The loads model of a fit with compliance, enough to rebuild it (gravity in m/s^2)."""
-    c = cal.compliance
-    assert c is not None
-    elastic = c.model.elastic
+    model, nested = cal.model, cal.nested
+    if not isinstance(model, CompliantArm) or nested is None:
+        return None
+    elastic = model.elastic
     return {
         "gravity_mps2": None if elastic.gravity is None else elastic.gravity.tolist(),
         "link_masses_kg": None
@@ -394,9 +393,9 @@ def _elastostatic_dict(cal: Calibration) -> dict:
         else elastic.link_masses_kg.tolist(),
         "com_fraction": elastic.com_fraction.tolist(),
         "payload_kg": elastic.payload_kg,
-        "known_loads": c.model.known_loads,
-        "parameters": list(c.model.names),
-        "geometry_only_rms_mm": c.geometry_only_rms_mm,
+        "known_loads": model.known_loads,
+        "parameters": list(model.compliance_names),
+        "geometry_only_rms_mm": nested.rms_per_coordinate_mm,
     }
 
 
@@ -438,7 +437,7 @@ def calibration_to_dict(
         "sigma_mm": cal.sigma_mm,
         "sigma_source": cal.sigma_source,
         "noise": None if arm.noise is None else arm.noise.to_dict(),
-        "elastostatic": None if cal.compliance is None else _elastostatic_dict(cal),
+        "elastostatic": _elastostatic_dict(cal),
         "fixed": list(arm.fixed),
         "parameters": [
             {
@@ -801,7 +800,8 @@ def format_reproduction(result: Reproduction) -> str:
         "",
         "Each printed equation of Sections II-V, computed: model (1) from its printed double "
         "sum, Jacobians and gradients by central differences of it, information matrices "
-        "from those Jacobians, the algorithm with `armcal.identification.solve_gauss_newton`.",
+        "from those Jacobians, the algorithm with "
+        "`armcal.reproduction.algorithm.solve_gauss_newton`.",
         "",
     ]
     for i, check in enumerate(result.equations, start=1):
@@ -1082,7 +1082,7 @@ def compensation_report(
 
 
 def compliant_quality(
-    model: Compliance, q: np.ndarray, loads: Loads, sigma: float
+    model: CompliantArm, q: np.ndarray, loads: Loads, sigma: float
 ) -> tuple[dict, str]:
     """JSON keys and text of a plan's quality for geometry plus joint compliance.
 
@@ -1091,12 +1091,12 @@ def compliant_quality(
     (:func:`armcal.doe.compliance.d_efficiency_compliant`; compares plans of
     this model) and how many poses carry each payload.
     """
-    covariance, _ = model.covariance(q, loads, sigma)
-    std = model.std(covariance)
+    covariance, _ = predicted_covariance(model, model.conditions(q, loads=loads), sigma)
+    std = display_std(model, covariance)
     d_eff = d_efficiency_compliant(model, q, loads)
     values, counts = np.unique(loads.payload_kg, return_counts=True)
     payloads = {f"{v:g}": int(c) for v, c in zip(values, counts, strict=True)}
-    free = dict(zip(model.all_names, model.all_free, strict=True))
+    free = dict(zip(model.param_names, model.free, strict=True))
     document = {
         "poses": int(q.shape[0]),
         "sigma_mm": sigma,
@@ -1104,21 +1104,21 @@ def compliant_quality(
         "d_efficiency": d_eff,
         "predicted_std": {
             name: float(v) if free[name] else 0.0
-            for name, v in zip(model.all_names, std, strict=True)
+            for name, v in zip(model.param_names, std, strict=True)
         },
-        "units": dict(zip(model.all_names, model.all_units, strict=True)),
+        "units": dict(zip(model.param_names, model.param_units, strict=True)),
         "payload_counts": payloads,
-        "compliance": list(model.names),
+        "compliance": list(model.compliance_names),
     }
     lines = [
         f"{q.shape[0]} poses of {model.arm.name} with joint compliance "
-        f"({', '.join(model.names)}), sigma {sigma:g} mm",
+        f"({', '.join(model.compliance_names)}), sigma {sigma:g} mm",
         "payloads: " + ", ".join(f"{c} poses at {v} kg" for v, c in payloads.items()),
         f"D-efficiency (unit-norm columns, compares plans of this model): {d_eff:.4f}",
         "",
         f"{'parameter':<10}{'predicted std':>14}  unit",
     ]
-    for name, unit, value in zip(model.all_names, model.all_units, std, strict=True):
+    for name, unit, value in zip(model.param_names, model.param_units, std, strict=True):
         cell = f"{'fixed':>14}" if not free[name] else f"{value:>14.5g}"
         lines.append(f"{name:<10}{cell}  {unit}")
     return document, "\n".join(lines)

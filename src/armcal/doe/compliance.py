@@ -3,7 +3,7 @@
 A design point is a pose *and* the payload carried there, chosen among given
 values (e.g. 0 and the rated payload): which poses to load, and how many.  The
 information of a point is ``F^T F`` for the ``2 x p`` block ``F`` of the
-whitened free columns of :meth:`armcal.elastostatic.Compliance.jacobian` at the
+whitened free columns of :meth:`armcal.models.compliance.CompliantArm.jacobian` at the
 nominal arm, its columns scaled by their RMS over the candidates (D-efficiency
 ratios do not depend on that scale).
 
@@ -33,7 +33,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import ArmcalError
-from ..models import Compliance, Elastostatic, Loads, PlanarArm, check_compliance_identifiable
+from ..models import CompliantArm, Elastostatic, Loads, PlanarArm
+from ..models.information import display_std, predicted_covariance, whitened_blocks
 from ..numerics import scaled_svd
 from .certificate import _weights_multiplicative
 from .exchange import exchange_indices
@@ -63,7 +64,7 @@ class CompliantDesign:
 
     Attributes
     ----------
-    model : Compliance
+    model : CompliantArm
         The parameters designed for (the arm's free ones, then ``k``/``c``).
     q : ndarray, shape (m, n)
         Joint angles (rad).
@@ -86,7 +87,7 @@ class CompliantDesign:
     order : str
     """
 
-    model: Compliance
+    model: CompliantArm
     q: np.ndarray
     payload_kg: np.ndarray
     payloads: tuple[float, ...]
@@ -105,7 +106,7 @@ class CompliantDesign:
     @property
     def predicted_std(self) -> np.ndarray:
         """Predicted std of every parameter in display units (mm, deg, urad/(N*m), mdeg/m)."""
-        return self.model.std(self.covariance)
+        return display_std(self.model, self.covariance)
 
     def payload_counts(self) -> dict[float, int]:
         """How many poses carry each payload value."""
@@ -115,12 +116,12 @@ class CompliantDesign:
 class _Points:
     """Blocks ``(k, 2, p_f)`` of (pose, payload) points in the design's column scale."""
 
-    def __init__(self, model: Compliance, scale: np.ndarray) -> None:
+    def __init__(self, model: CompliantArm, scale: np.ndarray) -> None:
         self.model, self.scale = model, scale
 
     def blocks(self, q: np.ndarray, payload: np.ndarray) -> np.ndarray:
         loads = Loads.create(q.shape[0], payload)
-        jac = self.model.whitened_jacobian(q, loads)  # (k, 2, p_f)
+        jac = whitened_blocks(self.model, self.model.conditions(q, loads=loads))  # (k, 2, p_f)
         return jac / self.scale
 
     def variance(self, q: np.ndarray, payload: np.ndarray, m_inv: np.ndarray) -> np.ndarray:
@@ -307,18 +308,19 @@ def design_compliant(
         raise ArmcalError(f"unknown order {order!r}; choose one of {', '.join(ORDERS)}")
     rng = np.random.default_rng(rng)
     values = np.array(payload_values(elastic, payloads))
-    model = Compliance.for_loads(arm, elastic, Loads.create(values.size, values))
+    model = CompliantArm.for_loads(arm, elastic, Loads.create(values.size, values))
     p = model.n_free
     if 2 * m < p:
         raise ArmcalError(
             f"{m} poses give {2 * m} equations for {p} parameters "
-            f"({', '.join(model.all_names)}); design at least {-(-p // 2)} poses"
+            f"({', '.join(model.param_names)}); design at least {-(-p // 2)} poses"
         )
     pool = feasible_poses(arm, candidates, rng=rng)
     pool_q = np.repeat(pool, values.size, axis=0)
     pool_w = np.tile(values, pool.shape[0])
-    check_compliance_identifiable(model, pool_q, Loads.create(pool_w.size, pool_w))
-    raw = model.whitened_jacobian(pool_q, Loads.create(pool_w.size, pool_w))
+    pool_rows = model.conditions(pool_q, loads=Loads.create(pool_w.size, pool_w))
+    model.check_identifiable(pool_rows)
+    raw = whitened_blocks(model, pool_rows)
     scale = np.sqrt(np.mean(raw**2, axis=(0, 1)))
     scale = np.where(scale > 0, scale, 1.0)
     points = _Points(model, scale)
@@ -354,8 +356,9 @@ def design_compliant(
         q, w = q[perm], w[perm]
         travel = joint_travel(q)
     loads = Loads.create(m, w)
-    check_compliance_identifiable(model, q, loads)
-    covariance, _ = model.covariance(q, loads, sigma)
+    rows = model.conditions(q, loads=loads)
+    model.check_identifiable(rows)
+    covariance, _ = predicted_covariance(model, rows, sigma)
     return CompliantDesign(
         model=model,
         q=q,
@@ -371,14 +374,14 @@ def design_compliant(
     )
 
 
-def d_efficiency_compliant(model: Compliance, q: np.ndarray, loads: Loads) -> float:
+def d_efficiency_compliant(model: CompliantArm, q: np.ndarray, loads: Loads) -> float:
     """``det(M)^(1/p)`` of the plan's information with unit-norm columns (at most 1).
 
     Hadamard's bound makes 1 the value of a plan whose columns are orthogonal;
     the number compares plans of one model (the certificate of
     :func:`design_compliant` says how far a plan is from the best).
     """
-    jac = model.whitened_jacobian(q, loads)
+    jac = whitened_blocks(model, model.conditions(q, loads=loads))
     svd = scaled_svd(jac.reshape(-1, model.n_free))
     s = svd.truncated
     with np.errstate(divide="ignore"):

@@ -211,7 +211,7 @@ def pose_model(arm: PlanarArm, q: np.ndarray) -> PoseModel:
     # optimizer's hot loop); tests hold the columns equal to model_columns'.
     full = scaled_columns(arm, q)
     basis = None if arm.free.all() else model_basis(arm)[0]
-    w = arm.whitening(q)
+    w = arm.whitening_at(q)
     alpha, beta = complex_whitening(w)
     unwhitened = full if basis is None else full @ basis
     columns = alpha[..., None] * unwhitened + beta[..., None] * unwhitened.conj()

@@ -10,17 +10,18 @@
 * :mod:`~armcal.models.calibrated` -- an arm with its identified deviations.
 """
 
-from .calibrated import BASE_POSE, CalibratedArm
+from .calibrated import CalibratedArm
 from .compliance import (
     STANDARD_GRAVITY,
-    Compliance,
+    CompliantArm,
     Elastostatic,
-    Loads,
     barely_identifiable_warning,
     check_compliance_identifiable,
     compliance_identifiability,
 )
-from .planar import PlanarArm
+from .identifiability import Identifiability, combination, listing, row_echelon
+from .interface import ClosedForm, Conditions, Effect, FitModel, LinearPositions, Loads
+from .planar import INSTRUMENT_PARAMS, PlanarArm
 from .planar_geometry import (
     PlanarGeometry,
     Target,
@@ -32,22 +33,20 @@ from .planar_geometry import (
     wrap_angle,
 )
 from .planar_information import (
-    Identifiability,
     check_identifiable,
-    combination,
     conditioning_warning,
+    covariance_factor,
     every_target,
     identifiability,
-    listing,
     model_basis,
     model_columns,
     plan_rows,
     plan_svd,
-    row_echelon,
     scaled_columns,
     scaled_jacobian,
     target_weights,
     user_from_scaled,
+    weighted_user_jacobian,
 )
 from .planar_kinematics import (
     Parametrization,
@@ -64,14 +63,19 @@ from .plane import Plane, fit_plane
 from .regions import Annulus, Box, Region
 
 __all__ = [
-    "BASE_POSE",
+    "INSTRUMENT_PARAMS",
     "STANDARD_GRAVITY",
     "Annulus",
     "Box",
     "CalibratedArm",
-    "Compliance",
+    "ClosedForm",
+    "CompliantArm",
+    "Conditions",
+    "Effect",
     "Elastostatic",
+    "FitModel",
     "Identifiability",
+    "LinearPositions",
     "Loads",
     "Parametrization",
     "PlanarArm",
@@ -86,6 +90,7 @@ __all__ = [
     "combination",
     "compliance_identifiability",
     "conditioning_warning",
+    "covariance_factor",
     "every_target",
     "fit_plane",
     "forward_kinematics",
@@ -111,5 +116,6 @@ __all__ = [
     "target_weights",
     "tool_angles",
     "user_from_scaled",
+    "weighted_user_jacobian",
     "wrap_angle",
 ]

@@ -14,8 +14,8 @@ the tip on the deflected one: ``p = FK(q + dq, theta + cumsum(dtheta))``.
 The two differ from the exact equilibrium by terms of order ``dtheta^2``
 (about 1e-7 of the deflection for 1e-3 rad), far below any instrument.
 
-Parameters (:class:`Compliance`), in display units
---------------------------------------------------
+Parameters (:class:`CompliantArm`), in display units
+----------------------------------------------------
 
 * ``k1 .. kn`` [urad/(N*m)]: joint compliance, when the torque is known: the
   link masses are given (``link_masses_kg``), or the load is a known payload
@@ -33,27 +33,51 @@ What gravity alone cannot identify: a constant torque is a joint offset
 and a joint whose torque never changes is confounded with ``dq_j``); the
 masses, which only multiply ``k``; and, without a payload that varies, the
 split of ``c_j`` into compliance and weight.
+
+Several targets on the end effector (a nest of tracker reflectors) share the
+arm: the payload hangs at the end of the last link, whose direction is the one
+the first target's last link gives it, and every row's measured point is its
+own target's, turned by each joint's deflection about that joint.
+
+:class:`CompliantArm` is a :class:`~armcal.models.interface.FitModel`: the planar
+arm's deviations followed by the compliance, fitted, simulated, validated and
+compensated like any model; its :attr:`~CompliantArm.nested` model is the rigid
+arm, from whose fit a fit starts and against which it is judged.
 """
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
 from functools import cached_property
 
 import numpy as np
 from numpy.typing import ArrayLike
 
-from ..errors import ArmcalError, ArmcalWarning, NotIdentifiableError
+from ..errors import ArmcalError, ArmcalWarning, NotIdentifiableError, action
+from ..noise import NoiseModel
 from ..numerics import COND_WARN, RANK_RTOL, ScaledSVD, scaled_svd
+from .identifiability import Identifiability, combination, listing, row_echelon
+from .information import covariance_factor_from, whitened_free_jacobian
+from .interface import Conditions, Effect, LinearPositions, Loads
 from .planar import PlanarArm
-from .planar_information import Identifiability, combination, listing, row_echelon
-from .planar_kinematics import forward_kinematics, jacobian, link_vectors
+from .planar_kinematics import (
+    forward_kinematics,
+    jacobian,
+    joint_jacobian,
+    link_vectors,
+    tool_angles,
+)
 
 __all__ = [
+    "C_SCALE",
+    "C_UNIT",
+    "K_SCALE",
+    "K_UNIT",
     "STANDARD_GRAVITY",
-    "Compliance",
+    "CompliantArm",
     "Elastostatic",
-    "Loads",
+    "barely_identifiable_warning",
     "check_compliance_identifiable",
     "compliance_identifiability",
 ]
@@ -157,79 +181,34 @@ class Elastostatic:
 
 
 @dataclass(frozen=True, eq=False)
-class Loads:
-    """The known static loads of every row: payload (kg) and tip force (N).
-
-    Attributes
-    ----------
-    payload_kg : ndarray, shape (m,)
-    force_n : ndarray, shape (m, 2)
-        Force applied at the tip, in the measurement frame.
-    """
-
-    payload_kg: np.ndarray
-    force_n: np.ndarray
-
-    @classmethod
-    def create(
-        cls, m: int, payload_kg: ArrayLike = 0.0, force_n: ArrayLike | None = None
-    ) -> Loads:
-        """Loads of ``m`` rows (a scalar payload is every row's).
-
-        Examples
-        --------
-        >>> Loads.create(3, [0, 10, 0]).known
-        True
-        >>> Loads.create(2).known
-        False
-        """
-        payload = np.broadcast_to(np.asarray(payload_kg, dtype=float), (m,)).copy()
-        force = np.zeros((m, 2)) if force_n is None else np.asarray(force_n, dtype=float)
-        if force.shape != (m, 2):
-            raise ArmcalError(f"tip forces must have shape ({m}, 2) in N, got {force.shape}")
-        if not (np.all(np.isfinite(payload)) and np.all(np.isfinite(force))):
-            raise ArmcalError("payloads and tip forces must be finite")
-        if np.any(payload < 0):
-            raise ArmcalError("payloads must not be negative")
-        return cls(payload, force)
-
-    @property
-    def n_rows(self) -> int:
-        return int(self.payload_kg.shape[0])
-
-    @property
-    def known(self) -> bool:
-        """Whether any row carries a payload or a tip force."""
-        return bool(np.any(self.payload_kg != 0) or np.any(self.force_n != 0))
-
-    @property
-    def varying(self) -> bool:
-        """Whether the known loads differ between rows."""
-        if self.n_rows == 0:
-            return False
-        return bool(np.ptp(self.payload_kg) > 0 or np.any(np.ptp(self.force_n, axis=0) > 0))
-
-    def take(self, rows: np.ndarray) -> Loads:
-        """The loads of the rows ``rows`` (index or mask)."""
-        return Loads(self.payload_kg[rows], self.force_n[rows])
-
-
-@dataclass(frozen=True, eq=False)
-class Compliance:
-    """The compliance parameters of an arm under given loads, and the deflected model.
+class CompliantArm:
+    """A planar arm whose joints twist under load: geometry plus joint compliance.
 
     The parameter vector is the arm's user deviations followed by the
-    compliance parameters (:attr:`names`): ``k1..kn`` when the masses are
-    known; ``c1..cn`` in the lumped mode, followed by ``k1..kn`` when
-    ``known_loads`` (a payload or tip force that the torque can be computed
-    from).  Internal units: rad/(N m) for ``k``, rad/m for ``c``.
+    compliance parameters (:attr:`compliance_names`): ``k1..kn`` when the
+    masses are known; ``c1..cn`` in the lumped mode, followed by ``k1..kn``
+    when ``known_loads`` (a payload or tip force that the torque can be
+    computed from).  Internal units: rad/(N m) for ``k``, rad/m for ``c``.
+    The compliance parameters are always free.
 
     Attributes
     ----------
     arm : PlanarArm
+        The rigid arm: its geometry, limits, noise model and fixed parameters.
     elastic : Elastostatic
+        Gravity, the links' masses and the default payload.
     known_loads : bool
         Whether the data or design carry known loads (lumped mode only).
+
+    Examples
+    --------
+    >>> arm = PlanarArm([500.0, 300.0])
+    >>> elastic = Elastostatic.create(2, gravity_xy=[0, -1], link_masses_kg=[10.0, 4.0])
+    >>> model = CompliantArm.for_loads(arm, elastic, Loads.create(3, [0.0, 5.0, 0.0]))
+    >>> model.param_names
+    ('dl1', 'dl2', 'dq1', 'dq2', 'k1', 'k2')
+    >>> model.nested is arm, model.effect.name
+    (True, 'joint compliance')
     """
 
     arm: PlanarArm
@@ -237,11 +216,6 @@ class Compliance:
     known_loads: bool = False
 
     def __post_init__(self) -> None:
-        if self.arm.n_target_links > 1:
-            raise ArmcalError(
-                "joint compliance is modelled for one target on the end effector; "
-                "measure one target per pose, or leave out [elastostatic]"
-            )
         if self.elastic.gravity is None and not self.known_loads:
             raise ArmcalError(
                 "[elastostatic] has no gravity_xy and the data carry no payload or tip "
@@ -249,12 +223,18 @@ class Compliance:
                 "arm, or payload_kg/fx_N/fy_N"
             )
 
+    def __repr__(self) -> str:
+        mode = "lumped" if self.elastic.lumped else "masses known"
+        return f"CompliantArm({self.arm!r}, {mode}, compliance {', '.join(self.compliance_names)})"
+
     @classmethod
-    def for_loads(cls, arm: PlanarArm, elastic: Elastostatic, loads: Loads) -> Compliance:
+    def for_loads(cls, arm: PlanarArm, elastic: Elastostatic, loads: Loads) -> CompliantArm:
         """The model for data with ``loads``: in lumped mode, loads that vary add ``k1..kn``."""
         gravity_lumped = elastic.lumped and elastic.gravity is not None
         # A constant payload only adds to the lumped weight: k needs loads that vary.
         return cls(arm, elastic, known_loads=loads.varying if gravity_lumped else loads.known)
+
+    # -- the compliance parameters ------------------------------------------------------
 
     @cached_property
     def kinds(self) -> tuple[str, ...]:
@@ -273,49 +253,127 @@ class Compliance:
         return np.tile(np.arange(n), len(self.kinds) // n)
 
     @property
-    def n_params(self) -> int:
+    def n_compliance(self) -> int:
+        """Number of compliance parameters ``P``."""
         return len(self.kinds)
 
     @cached_property
-    def names(self) -> tuple[str, ...]:
+    def compliance_names(self) -> tuple[str, ...]:
+        """``k1..kn`` and/or ``c1..cn``."""
         return tuple(f"{k}{j + 1}" for k, j in zip(self.kinds, self.joints, strict=True))
 
     @cached_property
-    def units(self) -> tuple[str, ...]:
+    def compliance_units(self) -> tuple[str, ...]:
         return tuple(K_UNIT if k == "k" else C_UNIT for k in self.kinds)
 
     @cached_property
-    def display_scale(self) -> np.ndarray:
+    def compliance_scale(self) -> np.ndarray:
+        """Internal to display units of the compliance parameters."""
         return np.array([K_SCALE if k == "k" else C_SCALE for k in self.kinds])
-
-    @property
-    def all_names(self) -> tuple[str, ...]:
-        """The arm's parameter names, then the compliance parameters'."""
-        return self.arm.param_names + self.names
-
-    @property
-    def all_units(self) -> tuple[str, ...]:
-        return self.arm.param_units + self.units
-
-    @property
-    def all_scale(self) -> np.ndarray:
-        return np.concatenate([self.arm.display_scale, self.display_scale])
-
-    @property
-    def all_free(self) -> np.ndarray:
-        """Free mask over every parameter (compliance parameters are always free)."""
-        return np.concatenate([self.arm.free, np.ones(self.n_params, dtype=bool)])
-
-    @property
-    def n_free(self) -> int:
-        return self.arm.n_free + self.n_params
 
     def split(self, params: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Geometry ``(..., p)`` and compliance ``(..., P)`` of a full parameter vector."""
         p = self.arm.n_params
         return params[..., :p], params[..., p:]
 
-    def loads(self, q: np.ndarray, geometry: np.ndarray | None, loads: Loads | None) -> np.ndarray:
+    # -- parameters (FitModel) ----------------------------------------------------------
+
+    @property
+    def name(self) -> str:
+        return self.arm.name
+
+    @property
+    def param_names(self) -> tuple[str, ...]:
+        """The arm's parameter names, then the compliance parameters'."""
+        return self.arm.param_names + self.compliance_names
+
+    @property
+    def param_units(self) -> tuple[str, ...]:
+        return self.arm.param_units + self.compliance_units
+
+    @property
+    def display_scale(self) -> np.ndarray:
+        return np.concatenate([self.arm.display_scale, self.compliance_scale])
+
+    @property
+    def fixed(self) -> tuple[str, ...]:
+        return self.arm.fixed
+
+    @property
+    def free(self) -> np.ndarray:
+        """Free mask over every parameter (compliance parameters are always free)."""
+        return np.concatenate([self.arm.free, np.ones(self.n_compliance, dtype=bool)])
+
+    @property
+    def free_names(self) -> tuple[str, ...]:
+        return self.arm.free_names + self.compliance_names
+
+    @property
+    def n_params(self) -> int:
+        return self.arm.n_params + self.n_compliance
+
+    @property
+    def n_free(self) -> int:
+        return self.arm.n_free + self.n_compliance
+
+    @property
+    def angle_params(self) -> np.ndarray:
+        return np.concatenate([self.arm.angle_params, np.zeros(self.n_compliance, dtype=bool)])
+
+    @property
+    def instrument_params(self) -> np.ndarray:
+        extra = np.zeros(self.n_compliance, dtype=bool)
+        return np.concatenate([self.arm.instrument_params, extra])
+
+    @property
+    def noise(self) -> NoiseModel | None:
+        return self.arm.noise
+
+    @property
+    def n_joints(self) -> int:
+        return self.arm.n_joints
+
+    @property
+    def joint_limits(self) -> np.ndarray:
+        return self.arm.joint_limits
+
+    @property
+    def point_dim(self) -> int:
+        return self.arm.point_dim
+
+    @property
+    def reach_mm(self) -> float:
+        return self.arm.reach_mm
+
+    @property
+    def target_labels(self) -> tuple[str, ...]:
+        return self.arm.target_labels
+
+    def with_noise(self, noise: NoiseModel | None) -> CompliantArm:
+        return CompliantArm(self.arm.with_noise(noise), self.elastic, self.known_loads)
+
+    def with_fixed(self, fixed: Sequence[str]) -> CompliantArm:
+        """Other geometric parameters fixed (the compliance is always identified)."""
+        return CompliantArm(self.arm.with_fixed(fixed), self.elastic, self.known_loads)
+
+    @property
+    def uses_gravity(self) -> bool:
+        """The arm's weight twists the joints: gravity's direction matters."""
+        return True
+
+    def with_gravity(self, gravity: np.ndarray | None) -> CompliantArm:
+        """The same model with gravity (m/s^2) given in another frame."""
+        return CompliantArm(self.arm, self.elastic.with_gravity(gravity), self.known_loads)
+
+    # -- the deflected arm --------------------------------------------------------------
+
+    def default_loads(self, m: int) -> Loads:
+        """The robot file's payload on every one of ``m`` rows."""
+        return Loads.create(m, self.elastic.payload_kg)
+
+    def load_terms(
+        self, q: np.ndarray, geometry: np.ndarray | None, loads: Loads | None
+    ) -> np.ndarray:
         """The load ``(..., m, P)`` every compliance parameter multiplies, per row.
 
         The torque (N m) at the parameter's joint for ``k``, the horizontal lever
@@ -323,9 +381,9 @@ class Compliance:
         """
         arm, elastic = self.arm, self.elastic
         q = np.asarray(q, dtype=float)
-        terms = link_vectors(arm, q, geometry) / 1000.0  # (..., m, n) in metres
+        terms = _link_chain(arm, q, geometry) / 1000.0  # (..., m, n) in metres
         m = q.shape[-2]
-        loads = Loads.create(m, elastic.payload_kg) if loads is None else loads
+        loads = self.default_loads(m) if loads is None else loads
         before = np.cumsum(terms, axis=-1) - terms  # joint j relative to the base
         tip = np.sum(terms, axis=-1, keepdims=True)
         lever = tip - before  # (..., m, n): from joint j to the tip
@@ -361,77 +419,234 @@ class Compliance:
     ) -> np.ndarray:
         """Joint deflections ``(..., m, n)`` in rad (relative angles)."""
         if row_loads is None:
-            row_loads = self.loads(q, geometry, loads)
+            row_loads = self.load_terms(q, geometry, loads)
         per_param = row_loads * np.asarray(compliance, dtype=float)[..., None, :]
         n = self.arm.n_joints
         return per_param.reshape(*per_param.shape[:-1], -1, n).sum(axis=-2)
 
-    def tip(self, q: np.ndarray, params: np.ndarray, loads: Loads | None) -> np.ndarray:
-        """Measured positions ``(..., m, 2)`` (mm) of the full parameters ``(..., p + P)``."""
-        geometry, compliance = self.split(np.asarray(params, dtype=float))
-        deflection = self.deflection(q, geometry, compliance, loads)
-        return forward_kinematics(self.arm, q, geometry, deflection=deflection)
+    def _bent(self, conditions: Conditions, params: np.ndarray | None):
+        """Geometry, compliance, the rows' loads and the deflections at ``params``."""
+        full = np.zeros(self.n_params) if params is None else np.asarray(params, dtype=float)
+        geometry, compliance = self.split(full)
+        loads = conditions.loads
+        row_loads = self.load_terms(conditions.q, geometry, loads)
+        bend = self.deflection(conditions.q, geometry, compliance, loads, row_loads=row_loads)
+        return geometry, row_loads, bend
 
-    def jacobian(self, q: np.ndarray, params: np.ndarray, loads: Loads | None) -> np.ndarray:
+    # -- measurement (FitModel) ---------------------------------------------------------
+
+    def conditions(
+        self,
+        q: ArrayLike,
+        *,
+        target: ArrayLike | None = None,
+        loads: Loads | None = None,
+        sigma_mm: np.ndarray | None = None,
+    ) -> Conditions:
+        """The arm's checked conditions, each row loaded (default: the robot file's payload)."""
+        m = np.shape(q)[0] if np.ndim(q) == 2 else 0
+        loads = self.default_loads(m) if loads is None else loads
+        return self.arm.conditions(q, target=target, loads=loads, sigma_mm=sigma_mm)
+
+    def positions(self, conditions: Conditions, params: np.ndarray | None = None) -> np.ndarray:
+        """Measured points ``(..., m, 2)`` (mm): the arm deflected under the rows' loads."""
+        geometry, _, bend = self._bent(conditions, params)
+        return forward_kinematics(
+            self.arm, conditions.q, geometry, target=conditions.target, deflection=bend
+        )
+
+    def jacobian(self, conditions: Conditions, params: np.ndarray | None = None) -> np.ndarray:
         """``d(x, y) / d(params)`` ``(..., m, 2, p + P)`` (mm per internal unit).
 
         The geometric columns at the deflected pose; the compliance columns
-        ``load_p i (p - p_j)``.  The torques' own (tiny) dependence on the
-        geometry is left out: Gauss-Newton still converges to the exact fit,
-        and the covariance changes by the relative size of a deviation (1e-3).
+        ``load_p i (p - p_j)``, ``p`` the row's point.  The torques' own (tiny)
+        dependence on the geometry is left out: Gauss-Newton still converges to
+        the exact fit, and the covariance changes by the relative size of a
+        deviation (1e-3).
         """
-        geometry, compliance = self.split(np.asarray(params, dtype=float))
-        row_loads = self.loads(q, geometry, loads)
-        deflection = self.deflection(q, geometry, compliance, loads, row_loads=row_loads)
-        geo = jacobian(self.arm, q, geometry, deflection=deflection)
-        terms = link_vectors(self.arm, q, geometry, deflection=deflection)
+        q, target = conditions.q, conditions.target
+        geometry, row_loads, bend = self._bent(conditions, params)
+        geo = jacobian(self.arm, q, geometry, target=target, deflection=bend)
+        terms = link_vectors(self.arm, q, geometry, target=target, deflection=bend)
         turn = 1j * np.cumsum(terms[..., ::-1], axis=-1)[..., ::-1]  # i (p - p_j)
         columns = turn[..., self.joints] * row_loads
         comp = np.stack([columns.real, columns.imag], axis=-2)
         return np.concatenate([geo, comp], axis=-1)
 
-    def whitened_jacobian(
-        self, q: np.ndarray, loads: Loads | None, params: np.ndarray | None = None
+    def joint_jacobian(
+        self, conditions: Conditions, params: np.ndarray | None = None
     ) -> np.ndarray:
-        """Free columns ``(..., m, 2, p_f + P)`` whitened by the arm's noise model (if any)."""
-        total = self.arm.n_params + self.n_params
-        at = np.zeros(total) if params is None else np.asarray(params, dtype=float)
-        jac = self.jacobian(q, at, loads)[..., self.all_free]
-        noise = self.arm.noise
-        if noise is None or noise.isotropic_iid:
-            return jac
-        geometry = at[..., : self.arm.n_params] if noise.joint_sigma is not None else None
-        return self.arm.whitening(q, geometry) @ jac
+        """``d(x, y) / dq`` at the deflected pose (the deflection's own change with ``q``,
+        about 1e-3 of a step, left out)."""
+        geometry, _, bend = self._bent(conditions, params)
+        return joint_jacobian(
+            self.arm, conditions.q, geometry, target=conditions.target, deflection=bend
+        )
 
-    def covariance(
+    def pose_covariances(
         self,
-        q: np.ndarray,
-        loads: Loads | None,
-        sigma: float,
+        conditions: Conditions,
         params: np.ndarray | None = None,
-    ) -> tuple[np.ndarray, bool]:
-        """Predicted covariance ``(p + P, p + P)`` (internal units) and whether it exists.
+        *,
+        noise: NoiseModel | None = None,
+    ) -> np.ndarray:
+        geometry = None if params is None else self.split(np.asarray(params, dtype=float))[0]
+        return self.arm.pose_covariances(conditions, geometry, noise=noise)
 
-        ``sigma_ref^2 (J_w^T J_w)^-1`` over the free parameters, zero rows and
-        columns for fixed ones; ``inf`` where the poses cannot identify them.
-        """
-        jac = self.whitened_jacobian(q, loads, params)
-        svd = scaled_svd(jac.reshape(-1, self.n_free))
-        inverse, ok = svd.inverse_gram()
-        total = self.arm.n_params + self.n_params
-        full = np.zeros((total, total))
-        free = self.all_free
-        full[np.ix_(free, free)] = sigma**2 * inverse
-        return full, bool(ok)
+    def whitening(
+        self, conditions: Conditions, params: np.ndarray | None = None
+    ) -> np.ndarray | None:
+        geometry = None if params is None else self.split(np.asarray(params, dtype=float))[0]
+        return self.arm.whitening(conditions, geometry)
 
-    def std(self, covariance: np.ndarray) -> np.ndarray:
-        """Standard deviations ``(p + P,)`` in display units of a covariance."""
-        return np.sqrt(np.diagonal(covariance)) * self.all_scale
+    # -- fitting ------------------------------------------------------------------------
 
-    def typical_scale(self, q: np.ndarray, loads: Loads | None) -> np.ndarray:
-        """The RMS deflection (rad) per unit of every compliance parameter over the rows."""
-        row_loads = self.loads(q, None, loads)
-        return np.sqrt(np.mean(row_loads**2, axis=-2))
+    @property
+    def has_closed_form(self) -> bool:
+        return False
+
+    @property
+    def why_no_closed_form(self) -> str:
+        return (
+            "the closed form fits the geometry only; joint compliance needs --method "
+            "gauss-newton (or auto)"
+        )
+
+    def closed_form(self, conditions: Conditions) -> None:
+        return None
+
+    @property
+    def nested(self) -> PlanarArm:
+        """The rigid arm."""
+        return self.arm
+
+    @property
+    def effect(self) -> Effect:
+        mode = (
+            "lumped mode (masses unknown): c_j is joint j's deflection per metre of horizontal "
+            "lever arm to the tip"
+            if self.elastic.lumped
+            else "link masses known: k_j is joint j's compliance"
+        )
+        return Effect(
+            "joint compliance",
+            "compliance",
+            "geometry",
+            mode,
+            f"load the arm more (payload_kg) or {action('geometry-alone')}",
+        )
+
+    def lift(self, nested_params: np.ndarray) -> np.ndarray:
+        """The rigid arm's deviations with no compliance."""
+        shape = (*np.shape(nested_params)[:-1], self.n_compliance)
+        return np.concatenate([nested_params, np.zeros(shape)], axis=-1)
+
+    def start(
+        self, conditions: Conditions, points: np.ndarray, weights: np.ndarray | None = None
+    ) -> np.ndarray:
+        return np.zeros((points.shape[0], self.n_params))
+
+    def canonical(self, params: np.ndarray) -> np.ndarray:
+        """The arm's canonical geometry (the deflected points do not change), compliance kept."""
+        geometry, compliance = self.split(np.asarray(params, dtype=float))
+        return np.concatenate([self.arm.canonical(geometry), compliance], axis=-1)
+
+    def step_scale(self, conditions: Conditions) -> np.ndarray:
+        """The arm's, then the RMS tip motion per unit of every compliance parameter."""
+        row_loads = self.load_terms(conditions.q, None, conditions.loads)
+        per_unit = np.sqrt(np.mean(row_loads**2, axis=-2)) * float(np.sum(self.arm.link_lengths))
+        return np.concatenate([self.arm.step_scale(conditions), per_unit])
+
+    # -- analysis -----------------------------------------------------------------------
+
+    def identifiability(self, conditions: Conditions) -> tuple[Identifiability, ScaledSVD]:
+        return compliance_identifiability(self, conditions)
+
+    def check_identifiable(self, conditions: Conditions) -> Identifiability:
+        return check_compliance_identifiable(self, conditions)[0]
+
+    def conditioning_warning(self, info: Identifiability) -> ArmcalWarning | None:
+        return barely_identifiable_warning(info)
+
+    def covariance_factor(
+        self, conditions: Conditions, params: np.ndarray | None = None
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """From the SVD of the whitened free columns (:mod:`armcal.models.information`)."""
+        return covariance_factor_from(whitened_free_jacobian(self, conditions, params), self.free)
+
+    def fit_details(self, conditions: Conditions, params: np.ndarray) -> dict[str, np.ndarray]:
+        """``max_deflection_rad`` ``(n,)``: every joint's largest fitted deflection."""
+        _, _, bend = self._bent(conditions, params)
+        return {"max_deflection_rad": np.max(np.abs(bend), axis=0)}
+
+    def linear_positions(self, conditions: Conditions) -> LinearPositions | None:
+        """None: the deflected tip is not linear in any coordinates of the parameters."""
+        return None
+
+    def plan_conditions(self, q: np.ndarray, loads: Loads | None = None) -> Conditions:
+        """Every target measured at every pose, each row with its pose's load."""
+        loads = self.default_loads(np.shape(q)[-2]) if loads is None else loads
+        return self.arm.plan_conditions(q, loads)
+
+    # -- the tool -----------------------------------------------------------------------
+
+    @property
+    def orientation_dim(self) -> int:
+        return 1
+
+    @property
+    def angle_scale_mm(self) -> float:
+        return self.arm.angle_scale_mm
+
+    def orientation(self, conditions: Conditions, params: np.ndarray | None = None) -> np.ndarray:
+        """The tool's direction ``(..., m, 1)``: it turns with every joint's deflection."""
+        geometry, _, bend = self._bent(conditions, params)
+        angle = tool_angles(self.arm, conditions.q, geometry, target=conditions.target)
+        return (angle + np.sum(bend, axis=-1))[..., None]
+
+    def orientation_joint_jacobian(
+        self, conditions: Conditions, params: np.ndarray | None = None
+    ) -> np.ndarray:
+        return self.arm.orientation_joint_jacobian(conditions)
+
+    def orientation_jacobian(
+        self, conditions: Conditions, params: np.ndarray | None = None
+    ) -> np.ndarray:
+        """The arm's columns, then every compliance parameter's load (its deflection)."""
+        geometry, row_loads, _ = self._bent(conditions, params)
+        arm = self.arm.orientation_jacobian(conditions, geometry)
+        return np.concatenate([arm, row_loads[..., None, :]], axis=-1)
+
+    def in_robot_frame(self, params: np.ndarray) -> tuple[CompliantArm, np.ndarray]:
+        """The base pose set to 0, and gravity turned into the robot's frame (by ``-phi0``)."""
+        geometry, compliance = self.split(params)
+        robot = np.concatenate([self.arm.in_robot_frame(geometry)[1], compliance])
+        if not self.arm.base_rotation or self.elastic.gravity is None:
+            return self, robot
+        phi0 = float(params[self.arm.param_names.index("phi0")])
+        g = complex(*self.elastic.gravity) * np.exp(-1j * phi0)
+        return self.with_gravity(np.array([g.real, g.imag])), robot
+
+    def arm_params(self, params: np.ndarray) -> np.ndarray:
+        return self.split(params)[0]
+
+
+def _link_chain(arm: PlanarArm, q: np.ndarray, geometry: np.ndarray | None) -> np.ndarray:
+    """The arm's links ``(..., m, n)`` as complex numbers (mm), each row's up to the tool.
+
+    One target: the link vectors themselves.  Several: links ``1..n-1`` and the
+    last link of nominal length ``l_n`` in the direction the first target's last
+    link gives it (the tool's own link, which the payload hangs on, is the same
+    whichever target a row measures).
+    """
+    if arm.n_target_links == 1:
+        return link_vectors(arm, q, geometry)
+    n = arm.n_joints
+    first = np.zeros(np.shape(q)[-2], dtype=int)
+    vectors = link_vectors(arm, q, geometry, target=first)  # (..., m, K): target 0's rows
+    direction = vectors[..., n - 1] / np.abs(vectors[..., n - 1])
+    tool = arm.link_lengths[-1] * direction * np.exp(-1j * arm.targets[0].angle)
+    return np.concatenate([vectors[..., : n - 1], tool[..., None]], axis=-1)
 
 
 def _cross(r: np.ndarray, f: np.ndarray) -> np.ndarray:
@@ -440,25 +655,17 @@ def _cross(r: np.ndarray, f: np.ndarray) -> np.ndarray:
 
 
 def compliance_identifiability(
-    model: Compliance,
-    q: np.ndarray,
-    loads: Loads | None,
-    *,
-    whitening: np.ndarray | None = None,
+    model: CompliantArm, conditions: Conditions
 ) -> tuple[Identifiability, ScaledSVD]:
     """Rank analysis of geometry plus compliance at the nominal arm, on scaled columns.
 
-    The free columns of :meth:`Compliance.jacobian` at zero deviations (whitened
-    when given) decide through the one rank policy of :mod:`armcal.numerics`.
+    The free columns of :meth:`CompliantArm.jacobian` at zero deviations decide
+    through the one rank policy of :mod:`armcal.numerics`.
     """
-    q = np.asarray(q, dtype=float)
-    full = np.zeros(model.arm.n_params + model.n_params)
-    jac = model.jacobian(q, full, loads)[..., model.all_free]
-    if whitening is not None:
-        jac = whitening @ jac
+    jac = model.jacobian(conditions, np.zeros(model.n_params))[..., model.free]
     svd = scaled_svd(jac.reshape(-1, model.n_free))
-    names = tuple(n for n, f in zip(model.all_names, model.all_free, strict=True) if f)
-    scale = model.all_scale[model.all_free]
+    names = model.free_names
+    scale = model.display_scale[model.free]
     null = svd.directions(RANK_RTOL)
     weak = svd.directions(1.0 / COND_WARN)
     bad: tuple[str, ...] = ()
@@ -470,7 +677,7 @@ def compliance_identifiability(
 
     null_rows = row_echelon(null * scale)
     weak_rows = row_echelon(weak * scale, tol=1e-3)
-    m = q.shape[0]
+    m = conditions.m
     info = Identifiability(
         rank=int(svd.rank),
         n_params=model.n_free,
@@ -483,24 +690,20 @@ def compliance_identifiability(
 
 
 def check_compliance_identifiable(
-    model: Compliance,
-    q: np.ndarray,
-    loads: Loads | None,
-    *,
-    whitening: np.ndarray | None = None,
+    model: CompliantArm, conditions: Conditions
 ) -> tuple[Identifiability, ScaledSVD]:
     """Raise :class:`NotIdentifiableError` unless the poses and loads identify everything.
 
     The message names the parameters that cannot be identified and says what
     the compliance needs: torques that vary through the poses and the payloads.
     """
-    info, svd = compliance_identifiability(model, q, loads, whitening=whitening)
+    info, svd = compliance_identifiability(model, conditions)
     if info.identifiable:
         return info, svd
-    m = np.asarray(q).shape[0]
+    m = conditions.m
     p = model.n_free
     shown = "; ".join(info.combinations[:3])
-    compliant = [n for n in info.unidentifiable if n in model.names]
+    compliant = [n for n in info.unidentifiable if n in model.compliance_names]
     if 2 * m < p:
         why = f"{m} poses give {2 * m} equations for {p} parameters; measure more poses"
     elif compliant:

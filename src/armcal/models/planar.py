@@ -1,37 +1,62 @@
-"""The planar serial arm that armcal fits: geometry, joint limits, noise, fixed parameters.
+"""The planar arm as a fit model: :class:`PlanarArm`, the paper's family.
 
-:class:`PlanarArm` is the paper's arm (eq. 1) with the extensions of
-:mod:`armcal.models.planar_geometry` -- joint maps, several targets, a base pose --
-and what a calibration needs besides the geometry: the joint limits, the
-instrument's noise (:mod:`armcal.noise`), the parameters held fixed and the
-region where the instrument measures (:mod:`armcal.models.regions`).
+:class:`PlanarArm` is what users construct.  Its description -- geometry, joint
+limits, noise, fixed parameters, measuring region -- is
+:class:`~armcal.models.planar_arm.PlanarArmSpec`'s; this module adds the methods
+of :class:`~armcal.models.interface.FitModel`, each a thin call into the family's
+modules: kinematics (:mod:`~armcal.models.planar_kinematics`), the scaled
+Jacobian and identifiability (:mod:`~armcal.models.planar_information`) and the
+closed form (:mod:`~armcal.models.planar_closed_form`).
 """
 
 from __future__ import annotations
 
 from collections.abc import Sequence
-from dataclasses import dataclass
-from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike
 
+from ..errors import ArmcalWarning
 from ..noise import NoiseModel
-from .planar_geometry import PlanarGeometry, Target, checked_link_lengths
-from .planar_kinematics import joint_jacobian
-from .regions import Region
+from ..numerics import ScaledSVD
+from .identifiability import Identifiability
+from .interface import Conditions, LinearPositions, Loads
+from .planar_arm import PlanarArmSpec
+from .planar_closed_form import (
+    PlanarClosedForm,
+    projected_start,
+    shared_plan_factor,
+    user_from_links,
+)
+from .planar_geometry import split_params, wrap_angle
+from .planar_information import (
+    check_identifiable,
+    conditioning_warning,
+    covariance_factor,
+    identifiability,
+    plan_rows,
+    plan_svd,
+)
+from .planar_kinematics import (
+    check_target,
+    forward_kinematics,
+    jacobian,
+    joint_jacobian,
+    link_phasors,
+    link_units,
+    tool_angles,
+)
 
 __all__ = [
+    "INSTRUMENT_PARAMS",
     "PlanarArm",
 ]
 
+#: The parameters that place the arm in the instrument frame, not part of the robot.
+INSTRUMENT_PARAMS = ("x0", "y0", "phi0")
 
-#: Constructor arguments that decide the parameter names.
-_STRUCTURE = frozenset({"link_lengths", "base_offset", "targets", "base_rotation"})
 
-
-@dataclass(frozen=True, eq=False, init=False)
-class PlanarArm(PlanarGeometry):
+class PlanarArm(PlanarArmSpec):
     """Nominal geometry of a planar serial arm and what is identified.
 
     Attributes
@@ -86,6 +111,7 @@ class PlanarArm(PlanarGeometry):
 
     Examples
     --------
+    >>> from armcal.models import Target
     >>> arm = PlanarArm([260.0, 180.0])
     >>> arm.n_joints, arm.n_params, arm.param_names
     (2, 4, ('dl1', 'dl2', 'dq1', 'dq2'))
@@ -96,198 +122,272 @@ class PlanarArm(PlanarGeometry):
     ('dq1',)
     """
 
-    joint_limits: np.ndarray
-    noise: NoiseModel | None
-    region: Region | None
-    fixed: tuple[str, ...]
+    def __repr__(self) -> str:
+        lengths = ", ".join(f"{v:g}" for v in self.link_lengths)
+        extras = [f"fixed={list(self.fixed)}"] if self.fixed else []
+        if self.targets:
+            extras.append(f"targets={list(self.target_labels)}")
+        if self.noise is not None:
+            extras.append(f"sigma={self.noise.sigma_mm:g} mm")
+        more = "".join(f", {e}" for e in extras)
+        return f"PlanarArm({self.name!r}, links [{lengths}] mm, {self.n_params} parameters{more})"
 
-    def __init__(
+    # -- parameters --------------------------------------------------------------------
+
+    @property
+    def instrument_params(self) -> np.ndarray:
+        """Boolean ``(p,)``: ``x0, y0, phi0``, the base pose in the instrument frame."""
+        return np.array([name in INSTRUMENT_PARAMS for name in self.param_names])
+
+    @property
+    def point_dim(self) -> int:
+        """Measured points are in the plane: 2 coordinates."""
+        return 2
+
+    @property
+    def reach_mm(self) -> float:
+        """The sum of the link lengths, mm."""
+        return float(np.sum(self.link_lengths))
+
+    @property
+    def angle_scale_mm(self) -> float:
+        """The sum of the link vectors' lengths (every target's last link), mm."""
+        return float(np.sum(self.link_nominal))
+
+    @property
+    def arm(self) -> PlanarArm:
+        """The arm itself: a planar arm is a geometric model."""
+        return self
+
+    def with_noise(self, noise: NoiseModel | None) -> PlanarArm:
+        """The same arm with another noise model."""
+        return self.replace(noise=noise)
+
+    def with_fixed(self, fixed: Sequence[str]) -> PlanarArm:
+        """The same arm with other parameters held fixed."""
+        return self.replace(fixed=tuple(fixed))
+
+    @property
+    def uses_gravity(self) -> bool:
+        """A rigid arm's points do not depend on gravity."""
+        return False
+
+    def with_gravity(self, gravity: np.ndarray | None) -> PlanarArm:
+        return self
+
+    # -- measurement --------------------------------------------------------------------
+
+    def conditions(
         self,
-        link_lengths: ArrayLike,
-        joint_limits: ArrayLike | None = None,
+        q: ArrayLike,
         *,
-        base_offset: bool = False,
-        name: str = "arm",
-        sigma: float | None = None,
-        region: Region | None = None,
-        noise: NoiseModel | None = None,
-        fixed: Sequence[str] = (),
-        joint_map: ArrayLike | None = None,
-        targets: Sequence[Target] = (),
-        base_rotation: bool = False,
-        joint_offsets: ArrayLike | None = None,
-    ) -> None:
-        n = checked_link_lengths(link_lengths).size
-        if joint_limits is None:
-            limits = np.tile([-np.pi, np.pi], (n, 1))
-        else:
-            limits = np.array(joint_limits, dtype=float)
-        if limits.shape != (n, 2):
-            raise ValueError(f"joint_limits must have shape ({n}, 2), got {limits.shape}")
-        if not (np.all(np.isfinite(limits)) and np.all(limits[:, 0] < limits[:, 1])):
-            raise ValueError("joint_limits must be finite with lo < hi for every joint")
-        if sigma is not None:
-            if noise is not None:
-                raise ValueError("give sigma or noise, not both")
-            if not (np.isfinite(sigma) and sigma > 0):
-                raise ValueError(f"sigma must be positive and finite, got {sigma}")
-            noise = NoiseModel.isotropic(float(sigma))
-        if noise is not None:
-            noise.check_joints(n)
-        super().__init__(
-            link_lengths,
-            name=name,
-            base_offset=base_offset,
-            joint_map=joint_map,
-            targets=targets,
-            base_rotation=base_rotation,
-            joint_offsets=joint_offsets,
-        )
-        limits.flags.writeable = False
-        object.__setattr__(self, "joint_limits", limits)
-        object.__setattr__(self, "noise", noise)
-        object.__setattr__(self, "region", region)
-        names = self.param_names
-        unknown = [f for f in fixed if f not in names]
-        if unknown:
-            raise ValueError(
-                f"unknown parameter {unknown[0]!r} to fix; the parameters of this arm are "
-                f"{', '.join(names)}"
-            )
-        held = set(fixed)
-        if self.base_rotation and not any(
-            abs(self.rotation_direction[names.index(f)]) > 1e-12 for f in held
-        ):
-            held.add(self.rotation_partner)
-        if len(held) == len(names):
-            raise ValueError("every parameter is fixed: leave at least one free to identify")
-        object.__setattr__(self, "fixed", tuple(nm for nm in names if nm in held))
+        target: ArrayLike | None = None,
+        loads: Loads | None = None,
+        sigma_mm: np.ndarray | None = None,
+    ) -> Conditions:
+        """Checked conditions: ``q`` ``(m, n)``, every row's target on an arm with several."""
+        q = np.asarray(q, dtype=float)
+        if q.ndim != 2 or q.shape[1] != self.n_joints:
+            raise ValueError(f"q must have shape (m, {self.n_joints}) in rad, got {q.shape}")
+        m = q.shape[0]
+        if loads is not None and loads.n_rows != m:
+            raise ValueError(f"loads must have {m} rows, got {loads.n_rows}")
+        return Conditions(q, check_target(self, q, target), loads, sigma_mm)
 
-    def replace(self, **changes: Any) -> PlanarArm:
-        """A copy with some constructor arguments changed (``sigma=`` replaces ``noise``)."""
-        kwargs: dict[str, Any] = {
-            "link_lengths": self.link_lengths,
-            "joint_limits": self.joint_limits,
-            "base_offset": self.base_offset,
-            "name": self.name,
-            "noise": self.noise,
-            "region": self.region,
-            "fixed": self.fixed,
-            "joint_map": self.joint_map,
-            "targets": self.targets,
-            "base_rotation": self.base_rotation,
-            "joint_offsets": self.joint_offsets,
-        }
-        if "sigma" in changes:
-            kwargs.pop("noise")
-        kwargs.update(changes)
-        if "fixed" not in changes and _STRUCTURE & set(changes):
-            # The parameter names may change: carry over the fixed parameters that still
-            # exist; the joint offset held only because of the base rotation is decided
-            # anew.  (Without such a change every fixed parameter stays as it is.)
-            carried = [
-                f for f in self.fixed if not (self.base_rotation and f == self.rotation_partner)
-            ]
-            names = PlanarArm(**{**kwargs, "fixed": ()}).param_names
-            kwargs["fixed"] = tuple(f for f in carried if f in names)
-        return PlanarArm(**kwargs)
+    def positions(self, conditions: Conditions, params: np.ndarray | None = None) -> np.ndarray:
+        """The tip (or the row's target) ``(..., m, 2)`` in mm: paper eq. (1)."""
+        return forward_kinematics(self, conditions.q, params, target=conditions.target)
 
-    @property
-    def joint_limits_deg(self) -> np.ndarray:
-        """The joint limits in degrees, rounded to 1e-9 deg so that a limit written as
-        120 in a file is written back as 120, not 119.99999999999999."""
-        return np.round(np.degrees(self.joint_limits), 9)
+    def jacobian(self, conditions: Conditions, params: np.ndarray | None = None) -> np.ndarray:
+        """``d(x, y) / d(params)`` ``(..., m, 2, p)`` (paper eq. 7-8, user parametrization)."""
+        return jacobian(self, conditions.q, params, target=conditions.target)
 
-    @property
-    def sigma(self) -> float | None:
-        """Reference instrument noise (1 std, mm) of :attr:`noise`, or None."""
-        return None if self.noise is None else self.noise.sigma_mm
-
-    @property
-    def free(self) -> np.ndarray:
-        """Boolean mask ``(p,)`` of the identified (free) user parameters."""
-        return np.array([name not in self.fixed for name in self.param_names])
-
-    @property
-    def n_free(self) -> int:
-        """Number of identified parameters ``p_f`` (``p`` minus the fixed ones)."""
-        return self.n_params - len(self.fixed)
-
-    @property
-    def free_names(self) -> tuple[str, ...]:
-        """Names of the free parameters, in the order of :attr:`param_names`."""
-        return tuple(name for name in self.param_names if name not in self.fixed)
-
-    @property
-    def complete(self) -> bool:
-        """Whether the free parameters map one to one onto the link vectors and the base.
-
-        Then the model is linear in the link phasors over exactly the free
-        parameters (the closed form applies): every parameter free, or with a
-        base rotation, exactly the one joint offset that it replaces held.
-        """
-        if self.base_rotation:
-            return len(self.fixed) == 1 and self.fixed[0] in self.rotation_names()
-        return not self.fixed
-
-    @property
-    def standard(self) -> bool:
-        """Linear in the link phasors over the free parameters and isotropic iid noise.
-
-        The paper's model up to a constant reparametrization (joint map, targets,
-        base rotation): no weights, and the closed form is exact.
-        """
-        return self.complete and (self.noise is None or self.noise.isotropic_iid)
-
-    def within_limits(self, q: np.ndarray, *, tol: float = 1e-9) -> np.ndarray:
-        """Boolean mask ``(m, n)`` of joint angles ``q`` (rad) inside the joint limits."""
-        lo, hi = self.joint_limits[:, 0], self.joint_limits[:, 1]
-        return (q >= lo - tol) & (q <= hi + tol)
+    def joint_jacobian(
+        self, conditions: Conditions, params: np.ndarray | None = None
+    ) -> np.ndarray:
+        """``d(x, y) / dq`` ``(..., m, 2, n)`` in mm/rad."""
+        return joint_jacobian(self, conditions.q, params, target=conditions.target)
 
     def pose_covariances(
         self,
-        q: np.ndarray,
+        conditions: Conditions,
         params: np.ndarray | None = None,
-        row_sigma: np.ndarray | None = None,
         *,
-        target: np.ndarray | None = None,
         noise: NoiseModel | None = None,
     ) -> np.ndarray:
-        """``Sigma_i`` ``(..., m, 2, 2)`` in mm^2 of measurements at ``q`` ``(..., m, n)``.
-
-        The noise model ``noise`` (default: the arm's own) with its encoder term
-        linearized at the deviations ``params`` (``(p,)`` or ``(..., p)``; nominal
-        when omitted) through the joint Jacobian; ``row_sigma`` ``(m,)`` (mm)
-        replaces the instrument covariance row by row; ``target`` ``(m,)`` is every
-        row's target on an arm with several.
-        """
-        noise = self.noise if noise is None else noise
-        if noise is None:
-            raise ValueError(f"{self.name} has no noise model: give one")
-        q = np.asarray(q, dtype=float)
-        joint = (
-            None if noise.joint_sigma is None else joint_jacobian(self, q, params, target=target)
+        """Covariance ``(..., m, 2, 2)`` (mm^2) of every measured point (:mod:`armcal.noise`)."""
+        return self.covariances_at(
+            conditions.q, params, conditions.sigma_mm, target=conditions.target, noise=noise
         )
-        return noise.pose_covariances(q.shape[:-1], joint_jacobian=joint, row_sigma=row_sigma)
 
     def whitening(
-        self,
-        q: np.ndarray,
-        params: np.ndarray | None = None,
-        row_sigma: np.ndarray | None = None,
-        *,
-        target: np.ndarray | None = None,
-        noise: NoiseModel | None = None,
-    ) -> np.ndarray:
-        """Relative whitening ``W_i`` ``(..., m, 2, 2)`` of :meth:`pose_covariances`.
+        self, conditions: Conditions, params: np.ndarray | None = None
+    ) -> np.ndarray | None:
+        """Relative whitening ``(..., m, 2, 2)``, None for isotropic iid noise."""
+        return self.relative_whitening(conditions, params)
 
-        ``W_i^T W_i = sigma_ref^2 Sigma_i^-1`` (:meth:`armcal.noise.NoiseModel.whitening`).
-        """
-        noise = self.noise if noise is None else noise
-        if noise is None:
-            raise ValueError(f"{self.name} has no noise model: give one")
-        q = np.asarray(q, dtype=float)
-        joint = (
-            None if noise.joint_sigma is None else joint_jacobian(self, q, params, target=target)
+    # -- fitting ------------------------------------------------------------------------
+
+    @property
+    def has_closed_form(self) -> bool:
+        """Every parameter free (or only the base rotation's partner held): the model is
+        linear in the link phasors over its free parameters."""
+        return self.complete
+
+    @property
+    def why_no_closed_form(self) -> str:
+        held = ", ".join(self.fixed)
+        verb = "is" if len(self.fixed) == 1 else "are"
+        return (
+            f"the closed form needs every parameter free, but {held} {verb} fixed; "
+            "use --method gauss-newton or auto"
         )
-        return noise.whitening(q.shape[:-1], joint_jacobian=joint, row_sigma=row_sigma)
+
+    def closed_form(self, conditions: Conditions) -> PlanarClosedForm | None:
+        """The link-phasor least squares (:mod:`~armcal.models.planar_closed_form`)."""
+        return PlanarClosedForm(self, conditions) if self.complete else None
+
+    @property
+    def nested(self) -> None:
+        """A planar arm adds nothing to a simpler model."""
+        return None
+
+    @property
+    def effect(self) -> None:
+        return None
+
+    def lift(self, nested_params: np.ndarray) -> np.ndarray:
+        return nested_params
+
+    def start(
+        self, conditions: Conditions, points: np.ndarray, weights: np.ndarray | None = None
+    ) -> np.ndarray:
+        """Zero deviations, or the projected closed form with fixed parameters."""
+        return projected_start(self, conditions, points, weights)
+
+    def canonical(self, params: np.ndarray) -> np.ndarray:
+        """Angles wrapped into ``(-pi, pi]``; with every parameter free, a link whose length
+        came out negative is flipped: ``(L, dtheta)`` and ``(-L, dtheta + pi)`` are one link.
+
+        Gauss-Newton from zero deviations may reach either; the closed form and every
+        report give the positive length.
+        """
+        params = np.array(params, dtype=float)
+        angles = np.flatnonzero(self.angle_params)
+        params[..., angles] = wrap_angle(params[..., angles])
+        if not self.complete:
+            return params
+        dl, dtheta, base = split_params(self, params)
+        length = self.link_nominal + dl
+        flipped = length < 0
+        rows = np.any(flipped, axis=-1)
+        if not np.any(rows):
+            return params
+        turned = user_from_links(
+            self,
+            (np.abs(length) - self.link_nominal)[rows],
+            (dtheta + np.pi * flipped)[rows],
+            base[rows][:, : 2 if self.base_offset else 0],
+        )
+        params[rows] = turned
+        return params
+
+    def step_scale(self, conditions: Conditions) -> np.ndarray:
+        """A length per unit of every parameter: 1 for lengths and the base position; for a
+        joint offset the reach beyond the joint (what it turns), for ``phi0`` the whole arm."""
+        n = self.n_links
+        scale = np.ones(self.n_params)
+        if self.standard_map:
+            # dq_j moves every link from j outwards: the tip by up to the reach beyond joint j.
+            scale[n : 2 * n] = np.cumsum(self.link_lengths[::-1])[::-1]
+        else:  # dq_j turns link vector k by A_kj; phi0 turns them all
+            scale[n : 2 * n] = self.link_nominal @ np.abs(self.angle_map)
+            if self.base_rotation:
+                scale[-1] = float(np.sum(self.link_nominal))
+        return scale
+
+    # -- analysis -----------------------------------------------------------------------
+
+    def _plan_svd(self, conditions: Conditions) -> ScaledSVD:
+        """The plan's scaled SVD: the plain model's shared factorization, else its own."""
+        if self.standard and conditions.sigma_mm is None:
+            return shared_plan_factor(self, conditions).svd
+        return conditions.memo(
+            (self, "plan-svd"), lambda: plan_svd(self, conditions.q, conditions.target)
+        )
+
+    def identifiability(self, conditions: Conditions) -> tuple[Identifiability, ScaledSVD]:
+        """Rank of the plan's Hadamard-scaled Jacobian (``planar_information.identifiability``)."""
+        svd = self._plan_svd(conditions)
+        return identifiability(self, conditions.q, svd=svd, target=conditions.target), svd
+
+    def check_identifiable(self, conditions: Conditions) -> Identifiability:
+        return check_identifiable(
+            self, conditions.q, svd=self._plan_svd(conditions), target=conditions.target
+        )
+
+    def conditioning_warning(self, info: Identifiability) -> ArmcalWarning | None:
+        return conditioning_warning(self, info)
+
+    def covariance_factor(
+        self, conditions: Conditions, params: np.ndarray | None = None
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """``G`` with ``(J_w^T J_w)^-1 = G G^T`` (from the plan's SVD for the plain model)."""
+        svd = None if np.ndim(conditions.q) > 2 else self._plan_svd(conditions)
+        return covariance_factor(self, conditions.q, params, svd, target=conditions.target)
+
+    def fit_details(self, conditions: Conditions, params: np.ndarray) -> dict[str, np.ndarray]:
+        """Nothing beyond the parameters."""
+        return {}
+
+    def linear_positions(self, conditions: Conditions) -> LinearPositions:
+        """The tip is ``base + sum_k z_k u_k``: linear in the link phasors ``z`` (base last)."""
+        units = link_units(self, conditions.q, conditions.target)  # (k, K)
+        basis = np.concatenate([units, np.ones((units.shape[0], 1))], axis=1)
+        return LinearPositions(basis, lambda params: link_phasors(self, params))
+
+    def plan_conditions(self, q: np.ndarray, loads: Loads | None = None) -> Conditions:
+        """Every target measured at every pose (pose-major rows), with each pose's load."""
+        rows, target, every = plan_rows(self, q, None)
+        if loads is not None and every:
+            loads = loads.repeat(self.n_target_links)
+        return Conditions(rows, target, loads)
+
+    # -- the tool -----------------------------------------------------------------------
+
+    @property
+    def orientation_dim(self) -> int:
+        """The tool's direction in the plane: one angle."""
+        return 1
+
+    def orientation(self, conditions: Conditions, params: np.ndarray | None = None) -> np.ndarray:
+        """The direction ``(..., m, 1)`` of every row's last link vector, rad."""
+        return tool_angles(self, conditions.q, params, target=conditions.target)[..., None]
+
+    def orientation_joint_jacobian(
+        self, conditions: Conditions, params: np.ndarray | None = None
+    ) -> np.ndarray:
+        """The tool turns with the last link angle: row ``M[n]`` of the joint map."""
+        q = np.asarray(conditions.q)
+        return np.broadcast_to(self.joint_map[-1], (*q.shape[:-1], 1, self.n_joints))
+
+    def orientation_jacobian(
+        self, conditions: Conditions, params: np.ndarray | None = None
+    ) -> np.ndarray:
+        """``d tool angle / d params`` ``(m, 1, p)``: the last link vector's angle deviation."""
+        q = np.asarray(conditions.q)
+        k = self.n_links
+        target = conditions.target
+        last = k - self.n_target_links + (0 if target is None else target)
+        g = np.zeros((q.shape[-2], self.n_params))
+        g[:, k : 2 * k] = self.angle_map[last]
+        if self.base_rotation:
+            g[:, -1] = 1.0
+        return g[:, None, :]
+
+    def in_robot_frame(self, params: np.ndarray) -> tuple[PlanarArm, np.ndarray]:
+        """The base pose (``x0, y0, phi0``) set to 0: the calibrated arm in its own frame."""
+        return self, np.where(self.instrument_params, 0.0, params)
+
+    def arm_params(self, params: np.ndarray) -> np.ndarray:
+        return params

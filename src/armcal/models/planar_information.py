@@ -14,37 +14,36 @@ carry an ``ill-conditioned`` warning (:func:`conditioning_warning`).
 from __future__ import annotations
 
 from collections.abc import Sequence
-from dataclasses import dataclass
 
 import numpy as np
 
-from ..errors import ArmcalWarning, NotIdentifiableError
-from ..noise import complex_whitening
+from ..errors import ArmcalWarning, NotIdentifiableError, action
+from ..noise import NoiseModel, complex_whitening
 from ..numerics import COND_WARN, RANK_RTOL, ScaledSVD, scaled_svd
-from .planar import PlanarArm
+from .identifiability import Identifiability, combination, listing, row_echelon
+from .planar_arm import PlanarArmSpec
 from .planar_geometry import paper_from_user, split_params
-from .planar_kinematics import link_units
+from .planar_kinematics import jacobian, link_units
 
 __all__ = [
-    "Identifiability",
     "check_identifiable",
-    "combination",
     "conditioning_warning",
+    "covariance_factor",
     "every_target",
     "identifiability",
     "model_basis",
     "model_columns",
     "plan_rows",
     "plan_svd",
-    "row_echelon",
     "scaled_columns",
     "scaled_jacobian",
     "target_weights",
     "user_from_scaled",
+    "weighted_user_jacobian",
 ]
 
 
-def every_target(arm: PlanarArm, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def every_target(arm: PlanarArmSpec, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Every target measured at every pose: rows ``(..., m T, n)`` and their targets ``(m T,)``.
 
     Pose-major: pose ``i``'s targets are rows ``i T .. i T + T - 1``.
@@ -55,7 +54,7 @@ def every_target(arm: PlanarArm, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]
     return rows, np.tile(np.arange(count), q.shape[-2])
 
 
-def target_weights(arm: PlanarArm) -> np.ndarray:
+def target_weights(arm: PlanarArmSpec) -> np.ndarray:
     """Column weights ``(p,)`` of a plan measured at every target (:func:`scaled_columns`).
 
     A target's last link is in ``1 / T`` of the rows of such a plan, the shared
@@ -70,7 +69,7 @@ def target_weights(arm: PlanarArm) -> np.ndarray:
 
 
 def plan_rows(
-    arm: PlanarArm, q: np.ndarray, target: np.ndarray | None
+    arm: PlanarArmSpec, q: np.ndarray, target: np.ndarray | None
 ) -> tuple[np.ndarray, np.ndarray | None, bool]:
     """The rows a plan is measured in: ``(rows, target, every)``.
 
@@ -84,7 +83,9 @@ def plan_rows(
     return rows, index, True
 
 
-def scaled_columns(arm: PlanarArm, q: np.ndarray, target: np.ndarray | None = None) -> np.ndarray:
+def scaled_columns(
+    arm: PlanarArmSpec, q: np.ndarray, target: np.ndarray | None = None
+) -> np.ndarray:
     """Hadamard-scaled Jacobian columns ``(..., m, p)`` in the paper's order, as complex numbers.
 
     Row x of the real Jacobian is the real part, row y the imaginary part;
@@ -98,7 +99,7 @@ def scaled_columns(arm: PlanarArm, q: np.ndarray, target: np.ndarray | None = No
 
 
 def _plan_columns(
-    arm: PlanarArm, q: np.ndarray, target: np.ndarray | None
+    arm: PlanarArmSpec, q: np.ndarray, target: np.ndarray | None
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray | None]:
     """:func:`scaled_columns` with the rows and targets they were computed for."""
     q, target, every = plan_rows(arm, q, target)
@@ -111,7 +112,7 @@ def _plan_columns(
     return np.concatenate(cols, axis=-1), q, target
 
 
-def model_basis(arm: PlanarArm) -> tuple[np.ndarray, np.ndarray]:
+def model_basis(arm: PlanarArmSpec) -> tuple[np.ndarray, np.ndarray]:
     """The free parameters in the scaled paper coordinates: ``C`` and ``T`` ``(p, p_f)``.
 
     A change ``u`` ``(p_f,)`` of the model's coordinates moves the scaled paper
@@ -157,7 +158,7 @@ def model_basis(arm: PlanarArm) -> tuple[np.ndarray, np.ndarray]:
     return np.array(columns_c).T, np.array(columns_t).T
 
 
-def _scaled_from_user(arm: PlanarArm) -> np.ndarray:
+def _scaled_from_user(arm: PlanarArmSpec) -> np.ndarray:
     """``U`` ``(p_paper, p)``: scaled paper coordinates (``l_k dtheta_k``, ``dl_k``, base) of a
     change of the user parameters, at nominal."""
     scale = np.ones(arm.n_paper)
@@ -165,7 +166,7 @@ def _scaled_from_user(arm: PlanarArm) -> np.ndarray:
     return paper_from_user(arm) * scale[:, None]
 
 
-def _generic_basis(arm: PlanarArm) -> tuple[np.ndarray, np.ndarray]:
+def _generic_basis(arm: PlanarArmSpec) -> tuple[np.ndarray, np.ndarray]:
     """:func:`model_basis` of any arm: each free parameter's own column, unit norm.
 
     Column ``j`` of ``C`` is the change of the scaled paper coordinates per unit
@@ -179,14 +180,16 @@ def _generic_basis(arm: PlanarArm) -> tuple[np.ndarray, np.ndarray]:
     return u / norms, t
 
 
-def model_columns(arm: PlanarArm, q: np.ndarray, target: np.ndarray | None = None) -> np.ndarray:
+def model_columns(
+    arm: PlanarArmSpec, q: np.ndarray, target: np.ndarray | None = None
+) -> np.ndarray:
     """The model's scaled Jacobian ``(..., m, p_f)`` as complex columns, at nominal.
 
     :func:`scaled_columns` in the coordinates of :func:`model_basis` (the free
     parameters), each pose whitened by the noise model
     (:meth:`armcal.noise.NoiseModel.whitening`, as ``alpha c + beta conj(c)``):
     the information matrix of any model is ``sum_i Re(c_i^H c_i)`` over these
-    columns.  For the paper's model (:attr:`PlanarArm.standard`) it is
+    columns.  For the paper's model (:attr:`PlanarArmSpec.standard`) it is
     :func:`scaled_columns` itself.
     """
     columns, q, target = _plan_columns(arm, q, target)
@@ -195,13 +198,15 @@ def model_columns(arm: PlanarArm, q: np.ndarray, target: np.ndarray | None = Non
     if not arm.complete:
         columns = columns @ model_basis(arm)[0]
     if arm.noise is not None and not arm.noise.isotropic_iid:
-        w = arm.whitening(np.asarray(q, dtype=float), target=target)
+        w = arm.whitening_at(np.asarray(q, dtype=float), target=target)
         alpha, beta = complex_whitening(w)
         columns = alpha[..., None] * columns + beta[..., None] * columns.conj()
     return columns
 
 
-def scaled_jacobian(arm: PlanarArm, q: np.ndarray, target: np.ndarray | None = None) -> np.ndarray:
+def scaled_jacobian(
+    arm: PlanarArmSpec, q: np.ndarray, target: np.ndarray | None = None
+) -> np.ndarray:
     """The policy's matrix ``H`` ``(..., 2m, p_f)``: the Hadamard-normalized nominal Jacobian.
 
     The real form of :func:`model_columns` divided by ``sqrt(m)``: rows alternate
@@ -225,7 +230,7 @@ def scaled_jacobian(arm: PlanarArm, q: np.ndarray, target: np.ndarray | None = N
     return real.reshape(*q.shape[:-2], 2 * rows, columns.shape[-1])
 
 
-def plan_svd(arm: PlanarArm, q: np.ndarray, target: np.ndarray | None = None) -> ScaledSVD:
+def plan_svd(arm: PlanarArmSpec, q: np.ndarray, target: np.ndarray | None = None) -> ScaledSVD:
     """Singular values and right singular vectors of :func:`scaled_jacobian` (batched).
 
     Thin factorizations only (:func:`armcal.numerics.scaled_svd`): memory
@@ -234,7 +239,7 @@ def plan_svd(arm: PlanarArm, q: np.ndarray, target: np.ndarray | None = None) ->
     return scaled_svd(scaled_jacobian(arm, q, target))
 
 
-def user_from_scaled(arm: PlanarArm, params: np.ndarray | None) -> np.ndarray:
+def user_from_scaled(arm: PlanarArmSpec, params: np.ndarray | None) -> np.ndarray:
     """``T`` ``(..., p, p)``: user deviations ``= T u`` for a change ``u`` in ``H``'s coordinates.
 
     At deviations ``params`` the user Jacobian is ``sqrt(m) H T^-1``: with
@@ -279,82 +284,7 @@ def user_from_scaled(arm: PlanarArm, params: np.ndarray | None) -> np.ndarray:
     return user
 
 
-@dataclass(frozen=True)
-class Identifiability:
-    """Rank analysis of a plan's column-scaled Jacobian (:func:`scaled_jacobian`).
-
-    Attributes
-    ----------
-    rank : int
-        Numerical rank: singular values above ``RANK_RTOL`` times the largest
-        (:mod:`armcal.numerics`).
-    n_params : int
-        Number of parameters ``p``.
-    singular_values : ndarray, shape (p,)
-        Singular values of the Jacobian with unit-norm columns divided by
-        ``sqrt(m)``, descending (zeros when ``2m < p``); all 1 for an orthogonal plan.
-    unidentifiable : tuple of str
-        Parameters that have a component in the null space (cannot be identified).
-    combinations : tuple of str
-        A basis of the null space written as parameter combinations in display
-        units (mm, deg), each with leading coefficient 1: moving the parameters
-        along one of these changes no measured position to first order.
-    poorly_determined : tuple of str
-        The same for every direction whose relative singular value is at most
-        ``1 / COND_WARN`` (the null space included): what an ``ill-conditioned``
-        warning names.
-    joints_to_vary : tuple of int
-        Joints (1-based) whose angles the plan should vary more to see the
-        unseen or poorly determined combinations: for a combination of the
-        parameters of links ``a..b`` (the base counting as link 0), joints
-        ``a+1..b`` set their relative angles.
-    """
-
-    rank: int
-    n_params: int
-    singular_values: np.ndarray
-    unidentifiable: tuple[str, ...]
-    combinations: tuple[str, ...]
-    poorly_determined: tuple[str, ...] = ()
-    joints_to_vary: tuple[int, ...] = ()
-
-    @property
-    def identifiable(self) -> bool:
-        """True when the Jacobian has full column rank."""
-        return self.rank == self.n_params
-
-    @property
-    def condition_number(self) -> float:
-        """Ratio of largest to smallest singular value (inf when one is 0)."""
-        s = self.singular_values
-        if s.size < self.n_params or s[-1] == 0:
-            return float("inf")
-        return float(s[0] / s[-1])
-
-    @property
-    def ill_conditioned(self) -> bool:
-        """Identifiable, but with a condition number above ``COND_WARN``."""
-        return self.identifiable and self.condition_number > COND_WARN
-
-
-def combination(vector: np.ndarray, names: Sequence[str], *, drop: float = 1e-6) -> str:
-    """A direction ``(p,)`` written as a combination of ``names``, leading coefficient 1."""
-    # Leading coefficient 1 (the echelon pivot), so combinations read "dl1 - dl2";
-    # terms below `drop` times the leading one are left out.
-    leading = np.flatnonzero(np.abs(vector) > drop * np.max(np.abs(vector)))[0]
-    coeffs = vector / vector[leading]
-    terms = []
-    for c, name in zip(coeffs, names, strict=True):
-        if abs(c) < drop:
-            continue
-        mag = "" if abs(abs(c) - 1) < 1e-9 else f"{abs(c):.3g}*"
-        sign = "-" if c < 0 else "+"
-        terms.append(f"{sign} {mag}{name}")
-    text = " ".join(terms)
-    return text[2:] if text.startswith("+ ") else "-" + text[2:]
-
-
-def _scaled_from_user_nominal(arm: PlanarArm) -> np.ndarray:
+def _scaled_from_user_nominal(arm: PlanarArmSpec) -> np.ndarray:
     """``T0^-1`` ``(p_f, p_f)``: model coordinates of a change of the free user parameters.
 
     Every parameter free: ``u = diag(l, 1, [1, 1]) P user`` (explicit).  Otherwise
@@ -366,14 +296,14 @@ def _scaled_from_user_nominal(arm: PlanarArm) -> np.ndarray:
     return _scaled_from_user(arm)
 
 
-def _link_of(arm: PlanarArm) -> np.ndarray:
+def _link_of(arm: PlanarArmSpec) -> np.ndarray:
     """The link (1..n; 0 for the base) each user parameter belongs to."""
     links = arm.link_joint + 1
     base = [0, 0] if arm.base_offset else []
     return np.concatenate([links, links, base, [0] if arm.base_rotation else []]).astype(int)
 
 
-def _joints_to_vary(arm: PlanarArm, rows: np.ndarray, drop: float) -> tuple[int, ...]:
+def _joints_to_vary(arm: PlanarArmSpec, rows: np.ndarray, drop: float) -> tuple[int, ...]:
     joints: set[int] = set()
     link_of = _link_of(arm)
     for row in rows:
@@ -384,7 +314,7 @@ def _joints_to_vary(arm: PlanarArm, rows: np.ndarray, drop: float) -> tuple[int,
 
 
 def identifiability(
-    arm: PlanarArm,
+    arm: PlanarArmSpec,
     q: np.ndarray,
     *,
     svd: ScaledSVD | None = None,
@@ -394,7 +324,7 @@ def identifiability(
 
     Parameters
     ----------
-    arm : PlanarArm
+    arm : PlanarArmSpec
     q : ndarray, shape (m, n)
         Joint angles of the plan in rad.
     svd : ScaledSVD, optional
@@ -417,7 +347,7 @@ def identifiability(
 
     Examples
     --------
-    >>> arm = PlanarArm([2.0, 1.0])
+    >>> arm = PlanarArmSpec([2.0, 1.0])
     >>> info = identifiability(arm, np.zeros((3, 2)))   # three identical poses
     >>> info.rank, info.unidentifiable
     (2, ('dl1', 'dl2', 'dq1', 'dq2'))
@@ -462,43 +392,12 @@ def identifiability(
     )
 
 
-def row_echelon(basis: np.ndarray, *, tol: float = 1e-9) -> np.ndarray:
-    """Reduced row echelon form of a basis ``(k, p)``: the same span, sparse rows.
-
-    The SVD returns an arbitrary rotation of the null space; the echelon form
-    gives each unseen combination a parameter of its own (e.g. ``dl1 - dl2``
-    and ``dq1 - 3*dq2`` rather than two mixtures of all four).  Entries below
-    ``tol`` times the largest are not used as pivots.
-    """
-    rows = basis.copy()
-    scale = np.max(np.abs(rows)) if rows.size else 0.0
-    pivot_row = 0
-    for col in range(rows.shape[1]):
-        if pivot_row == rows.shape[0]:
-            break
-        best = pivot_row + int(np.argmax(np.abs(rows[pivot_row:, col])))
-        if abs(rows[best, col]) <= tol * scale:
-            continue
-        rows[[pivot_row, best]] = rows[[best, pivot_row]]
-        rows[pivot_row] /= rows[pivot_row, col]
-        others = np.arange(rows.shape[0]) != pivot_row
-        rows[others] -= np.outer(rows[others, col], rows[pivot_row])
-        pivot_row += 1
-    return rows
-
-
-def listing(items: Sequence[object]) -> str:
-    """``"a"``, ``"a and b"``, ``"a, b and c"``."""
-    words = [str(item) for item in items]
-    return words[0] if len(words) == 1 else ", ".join(words[:-1]) + " and " + words[-1]
-
-
 def _joints_phrase(joints: Sequence[int]) -> str:
     return ("joint " if len(joints) == 1 else "joints ") + listing(joints)
 
 
 def check_identifiable(
-    arm: PlanarArm,
+    arm: PlanarArmSpec,
     q: np.ndarray,
     *,
     svd: ScaledSVD | None = None,
@@ -538,7 +437,7 @@ def check_identifiable(
     )
 
 
-def conditioning_warning(arm: PlanarArm, info: Identifiability) -> ArmcalWarning | None:
+def conditioning_warning(arm: PlanarArmSpec, info: Identifiability) -> ArmcalWarning | None:
     """An ``ill-conditioned`` warning for a plan above ``COND_WARN``, else None.
 
     Names the poorly determined combinations (the right singular vectors of the
@@ -548,12 +447,12 @@ def conditioning_warning(arm: PlanarArm, info: Identifiability) -> ArmcalWarning
 
     Examples
     --------
-    >>> arm = PlanarArm([2.0, 1.0])
+    >>> arm = PlanarArmSpec([2.0, 1.0])
     >>> q = np.column_stack([np.linspace(-3, 3, 8), 1e-7 * np.arange(8)])  # q2 barely moves
     >>> text = conditioning_warning(arm, identifiability(arm, q)).message
     >>> text.startswith("the plan determines dl1 - dl2 and dq1 - 3*dq2 poorly")
     True
-    >>> text.endswith("measure poses in which joint 2 moves more (armcal design)")
+    >>> text.endswith("measure poses in which joint 2 moves more (armcal.design)")
     True
     """
     if not info.ill_conditioned:
@@ -571,5 +470,73 @@ def conditioning_warning(arm: PlanarArm, info: Identifiability) -> ArmcalWarning
         f"scaled Jacobian is {cond:.2g} (above {COND_WARN:.0e}), so these combinations are "
         f"up to {cond:.2g} times less precise than with an orthogonal plan, and round-off "
         f"alone can shift them by about {round_off:.1g} mm; measure poses in which "
-        f"{_joints_phrase(joints)} {verb} more (armcal design)",
+        f"{_joints_phrase(joints)} {verb} more {action('design')}",
     )
+
+
+def covariance_factor(
+    arm: PlanarArmSpec,
+    q: np.ndarray,
+    params: np.ndarray | None,
+    svd: ScaledSVD | None = None,
+    target: np.ndarray | None = None,
+) -> tuple[np.ndarray, np.ndarray]:
+    """``G`` ``(..., p, p)`` with ``(J^T J)^-1 = G G^T`` (user parametrization) and the ok mask.
+
+    ``target`` ``(m,)``: the rows' targets (measurements); without it a plan of
+    an arm with several targets is measured at every target of every pose.
+    """
+    q = np.asarray(q, dtype=float)
+    every = target is None and arm.n_target_links > 1  # measured at every target
+    rows = q.shape[-2] * (arm.n_target_links if every else 1)
+    if not arm.standard and (params is not None or every):
+        at = np.zeros(arm.n_params) if params is None else params
+        return _covariance_factor_at(arm, q, at, target)
+    factor, ok = (plan_svd(arm, q) if svd is None else svd).inverse_gram_factor()
+    to_user = user_from_scaled(arm, params) if arm.standard else model_basis(arm)[1]
+    if every:  # the targets' columns were weighted (observability.target_weights)
+        to_user = to_user * target_weights(arm)[: to_user.shape[-1]]
+    with np.errstate(invalid="ignore", over="ignore"):
+        g = to_user @ np.where(ok[..., None, None], factor, 0.0) / np.sqrt(rows)
+    ok = ok & np.all(np.isfinite(g), axis=(-2, -1))
+    return np.where(ok[..., None, None], g, np.inf), ok
+
+
+def _covariance_factor_at(
+    arm: PlanarArmSpec, q: np.ndarray, params: np.ndarray, target: np.ndarray | None = None
+) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`covariance_factor` of a weighted or reduced model at deviations ``params``.
+
+    The free columns of the user Jacobian at ``params``, each pose whitened at
+    ``params`` (:meth:`armcal.noise.NoiseModel.whitening`), through the rank
+    policy's SVD: ``G`` ``(..., p, p_f)`` with zero rows for fixed parameters.
+    """
+    jac = weighted_user_jacobian(arm, q, params, target=target)
+    factor, ok = scaled_svd(jac).inverse_gram_factor()
+    g = np.eye(arm.n_params)[:, arm.free] @ np.where(ok[..., None, None], factor, 0.0)
+    ok = ok & np.all(np.isfinite(g), axis=(-2, -1))
+    return np.where(ok[..., None, None], g, np.inf), ok
+
+
+def weighted_user_jacobian(
+    arm: PlanarArmSpec,
+    q: np.ndarray,
+    params: np.ndarray | None = None,
+    row_sigma: np.ndarray | None = None,
+    *,
+    target: np.ndarray | None = None,
+) -> np.ndarray:
+    """Whitened free columns of the user Jacobian ``(..., 2m, p_f)`` at ``params``.
+
+    Rows are ``W_i J_i`` (:meth:`armcal.noise.NoiseModel.whitening` at ``params``,
+    the identity for isotropic iid noise), so ``sigma_ref^2 (J_w^T J_w)^-1`` is
+    the generalized-least-squares covariance of the free parameters.
+    """
+    q, target, _ = plan_rows(arm, q, target)
+    jac = jacobian(arm, q, params, target=target)  # (..., m, 2, p)
+    noise = arm.noise
+    if row_sigma is not None or (noise is not None and not noise.isotropic_iid):
+        model = noise if noise is not None else NoiseModel.isotropic(1.0)
+        jac = arm.whitening_at(q, params, row_sigma, target=target, noise=model) @ jac
+    jac = jac[..., arm.free]
+    return jac.reshape(*jac.shape[:-3], -1, arm.n_free)

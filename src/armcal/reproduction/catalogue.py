@@ -347,10 +347,10 @@ EQUATIONS: dict[str, Entry] = {
         where="Section III, Steps 1-5 (links j = 1..n in Step 4)",
         paper="iterating (11) and correcting l_j, theta_j recovers the parameters exactly "
         "from error-free data",
-        computed="armcal.identification.solve_gauss_newton on noiseless data of the paper's "
-        "deviations, {plans} plans (Table III's identifiable ones and a random {poses}-pose "
-        "plan of the 4-link arm): {converged} of {plans} converged, within {iterations} "
-        "iterations; largest error {err_mm:.1e} mm, {err_deg:.1e} deg",
+        computed="armcal.reproduction.algorithm.solve_gauss_newton on noiseless data of the "
+        "paper's deviations, {plans} plans (Table III's identifiable ones and a random "
+        "{poses}-pose plan of the 4-link arm): {converged} of {plans} converged, within "
+        "{iterations} iterations; largest error {err_mm:.1e} mm, {err_deg:.1e} deg",
         cause="the iteration does not recover error-free data exactly",
     ),
     "algorithm_index": Entry(

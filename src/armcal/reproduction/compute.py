@@ -18,6 +18,7 @@ from ..criteria import (
     std_from_covariance,
 )
 from ..doe.plans import orthogonal_plan, random_plan
+from ..doe.study import PlanStudy, random_plan_study
 from ..errors import ArmcalError
 from ..models import PlanarArm, identifiability
 from ..paper import (
@@ -33,7 +34,7 @@ from ..paper import (
     paper_arm,
 )
 from ..progress import ProgressCallback
-from ..simulate import PlanStudy, monte_carlo, random_plan_study
+from ..simulate import monte_carlo
 from .catalogue import ROWS, Disagreement, EquationCheck, disagreement, fill
 from .equations import RANK_PLANS, SimulationEvidence, check_equations, max_random_rank
 

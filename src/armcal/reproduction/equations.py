@@ -20,7 +20,6 @@ import numpy as np
 from ..criteria import d_efficiency, dstar, information_matrix, inverse_information
 from ..doe.plans import orthogonal_plan, random_plan
 from ..errors import ArmcalError
-from ..identification import solve_gauss_newton
 from ..models import (
     PlanarArm,
     forward_kinematics,
@@ -29,6 +28,7 @@ from ..models import (
     paper_from_user_matrix,
 )
 from ..paper import PAPER_FIGURE1_POSES, PAPER_RANGE_POSES, PAPER_TABLE3, paper_arm
+from .algorithm import solve_gauss_newton
 from .catalogue import (
     DERIVATIVE_LABELS,
     READING_LABELS,

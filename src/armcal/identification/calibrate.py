@@ -1,0 +1,291 @@
+"""Identify a model from measured poses and judge the fit: :func:`identify`.
+
+The steps, for every family of arm (:class:`~armcal.models.interface.FitModel`):
+
+1. check that the poses identify every free parameter (the model's own rank
+   analysis, which names what they cannot separate);
+2. fit by least squares (:mod:`~armcal.identification.solvers`), or robustly
+   (:mod:`~armcal.identification.robust`);
+3. judge the fit (:mod:`~armcal.identification.judgement`): sigma given or
+   estimated, the chi-square test, the outlier test, conditioning, convergence,
+   and for a model with an effect (joint compliance) whether the data show it;
+4. the covariance ``sigma^2 (J_w^T J_w)^-1`` at the solution (paper eq. 16),
+   with ``sigma`` given by the user or estimated as ``s^2 = RSS / (d m - p)``.
+
+**Weighted models.**  With a noise model (:mod:`armcal.noise`) every pose's rows
+and residual are whitened by ``W_i`` (``W_i^T W_i = sigma_ref^2 Sigma_i^-1``),
+which turns weighted least squares into ordinary least squares; the
+covariance is then the generalized-least-squares one over the free parameters.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from typing import Literal
+
+import numpy as np
+from numpy.typing import ArrayLike
+
+from ..errors import ArmcalError, ArmcalWarning
+from ..models import FitModel, Loads
+from ..noise import instrument_override
+from .judgement import (
+    Outlier,
+    few_dof_warning,
+    goodness_of_fit,
+    inconsistent_fit_warning,
+    nested_test,
+    not_converged_warning,
+    outlier_warning,
+    unseen_warning,
+)
+from .problem import Problem, point_norms, reference_sigma
+from .result import Calibration, NestedFit
+from .robust import robust_fit
+from .solvers import resolve_method
+
+__all__ = [
+    "identify",
+]
+
+
+def identify(
+    model: FitModel,
+    q: ArrayLike,
+    points: ArrayLike,
+    *,
+    method: str = "auto",
+    sigma: float | None = None,
+    pose_labels: Sequence[str] | None = None,
+    rows: Sequence[int] | None = None,
+    row_sigma: ArrayLike | None = None,
+    robust: bool = False,
+    tol: float = 1e-12,
+    max_iter: int = 50,
+    target: ArrayLike | None = None,
+    loads: Loads | None = None,
+) -> Calibration:
+    """Identify the parameters of ``model`` from measured poses, and judge the fit.
+
+    Parameters
+    ----------
+    model : FitModel
+        The nominal model (a :class:`~armcal.models.planar.PlanarArm`, a
+        :class:`~armcal.models.compliance.CompliantArm`), with its noise model and
+        fixed parameters.
+    q : ndarray, shape (m, n)
+        Commanded joint angles in rad.
+    points : ndarray, shape (m, d)
+        Measured points in mm, in the instrument frame (``d = 2`` in the plane).
+    method : {"auto", "closed-form", "gauss-newton"}
+        ``"auto"`` is the closed form where the model has one (exact, see
+        :mod:`~armcal.models.planar_closed_form`), else Gauss-Newton
+        (:func:`~armcal.identification.solvers.resolve_method`).
+    sigma : float, optional
+        Instrument noise (1 std, mm), replacing the noise model's instrument
+        part (encoder noise stays; :func:`armcal.noise.instrument_override`).
+        Without it and without a noise model or ``row_sigma``, sigma is
+        estimated from the residuals, which needs ``d m > p_f``.
+    pose_labels : sequence of str, optional
+        Labels of the poses for reports; ``"1".."m"`` by default.
+    rows : sequence of int, optional
+        1-based data rows of the poses in their file, for reports; ``1..m`` by default.
+    row_sigma : ndarray, shape (m,), optional
+        Per-row instrument noise (mm), for instruments that report each point's
+        uncertainty; replaces the instrument covariance row by row.
+    robust : bool
+        Fit with Huber's M-estimator from the least-squares fit, flag outliers
+        by the studentized test (:mod:`~armcal.identification.judgement`), leave
+        them out and refit until the set is stable.
+    tol, max_iter
+        Gauss-Newton step tolerance (relative to the reach) and iteration cap.
+    target : ndarray of int, shape (m,), optional
+        Every pose's target (index into the model's targets), for a model with several.
+    loads : Loads, optional
+        Every pose's payload and tip force (a model of joint compliance; default:
+        the robot file's payload).
+
+    Returns
+    -------
+    Calibration
+
+    Raises
+    ------
+    NotIdentifiableError
+        If the poses cannot identify every free parameter (the rank policy of
+        :mod:`armcal.numerics`); the message names the unseen combinations.
+    ArmcalError
+        If ``sigma`` must be estimated but ``d m = p_f`` leaves no residual freedom.
+
+    Notes
+    -----
+    Without ``robust`` the fit is least squares on every pose, and the outlier
+    test still runs: flagged poses are listed and warned about, not removed.
+    Gross outliers pull a least-squares fit towards them and inflate every
+    residual, so the poses flagged are those the robust procedure would leave
+    out, judged against its fit.
+
+    Examples
+    --------
+    >>> from armcal.models import PlanarArm, forward_kinematics
+    >>> arm = PlanarArm([260.0, 180.0])
+    >>> q = np.radians([[0, 0], [0, 90], [0, 180], [0, -90]])
+    >>> truth = arm.params_from_display([1.5, -0.6], [0.5, -0.5])
+    >>> cal = identify(arm, q, forward_kinematics(arm, q, truth), sigma=0.1)
+    >>> cal.values.round(9).tolist(), cal.std.round(4).tolist()
+    ([1.5, -0.6, 0.5, -0.5], [0.05, 0.05, 0.011, 0.0194])
+    >>> cal.goodness_of_fit.dof, [w.code for w in cal.warnings]
+    (4, [])
+    >>> cal["dq2"]
+    dq2 = -0.5 ± 0.0194 deg
+    """
+    dim = model.point_dim
+    conditions = model.conditions(q, target=target, loads=loads)
+    q = conditions.q
+    m = conditions.m
+    points = np.asarray(points, dtype=float)
+    if points.shape != (m, dim):
+        raise ValueError(f"points must have shape ({m}, {dim}) in mm, got {points.shape}")
+    if not (np.all(np.isfinite(q)) and np.all(np.isfinite(points))):
+        raise ArmcalError("joint angles and positions must be finite")
+    if row_sigma is not None:
+        row_sigma = np.asarray(row_sigma, dtype=float)
+        if row_sigma.shape != (m,) or not np.all(np.isfinite(row_sigma) & (row_sigma > 0)):
+            raise ArmcalError("per-row sigma must be positive and finite, one value per pose")
+        conditions = model.conditions(
+            q, target=conditions.target, loads=conditions.loads, sigma_mm=row_sigma
+        )
+    method = resolve_method(model, method)
+    if sigma is not None:
+        model = model.with_noise(instrument_override(model.noise, sigma))
+    given = model.noise is not None or row_sigma is not None
+    problem = Problem(model, conditions, points, method, tol, max_iter)
+    info = model.check_identifiable(conditions)
+    n_free = model.n_free
+    if not given and dim * m - n_free <= 0:
+        raise ArmcalError(
+            f"{m} poses leave no residual to estimate sigma from ({dim * m} equations, "
+            f"{n_free} parameters); give the instrument noise with --sigma or measure "
+            "more poses"
+        )
+    reference = reference_sigma(model, row_sigma)
+    everyone = np.ones(m, dtype=bool)
+    extra: list[ArmcalWarning] = []
+    robust_sigma = reference if given else None
+    least_squares = problem.fit(everyone)
+    fit, used = least_squares, everyone
+    if robust:
+        fit, used, flagged, kept_warning = robust_fit(problem, robust_sigma, least_squares)
+        if kept_warning is not None:
+            extra.append(kept_warning)
+    dof = dim * int(np.count_nonzero(used)) - n_free
+    source: Literal["given", "estimated"]
+    if given:
+        sigma_value, source = reference, "given"
+    else:
+        sigma_value, source = fit.scale(max(dof, 1)), "estimated"
+    standardized = fit.whitened / sigma_value
+    test = fit.test(sigma_value, given=given)
+    if not robust:
+        flagged = test.flagged
+    if not robust and np.any(test.flagged):
+        # Gross outliers pull a least-squares fit towards them and inflate every
+        # residual, so the poses to flag are those the robust procedure would
+        # leave out, judged against its fit; this fit keeps them.
+        clean, kept, flagged, _ = robust_fit(problem, robust_sigma, least_squares)
+        clean_dof = dim * int(np.count_nonzero(kept)) - n_free
+        scale = reference if given else clean.scale(max(clean_dof, 1))
+        test = clean.test(scale, given=given)
+    labels = tuple(str(i) for i in range(1, m + 1)) if pose_labels is None else tuple(pose_labels)
+    row_numbers = tuple(range(1, m + 1)) if rows is None else tuple(int(r) for r in rows)
+    distance = point_norms(fit.residuals)
+    target_index = conditions.target
+    outliers = tuple(
+        Outlier(
+            index=int(i),
+            row=row_numbers[i],
+            pose=labels[i],
+            target=None if target_index is None else model.target_labels[target_index[i]],
+            residual_mm=float(distance[i]),
+            studentized=float(test.statistic[i]),
+            p_value=float(test.p_value[i]),
+            removed=not bool(used[i]),
+        )
+        for i in np.flatnonzero(flagged)
+    )
+    fit_test = goodness_of_fit(standardized[used], dof, sigma_given=given)
+    conditioning = model.conditioning_warning(info)
+    warnings = [w for w in (conditioning,) if w is not None]
+    if not fit.converged:
+        warnings.append(not_converged_warning(method, fit.iterations, model.has_closed_form))
+    if outliers:
+        warnings.append(outlier_warning(outliers, robust=robust))
+    warnings.extend(extra)
+    few = few_dof_warning(int(np.count_nonzero(used)), dof, n_free, dim) if given else None
+    if few is not None:
+        warnings.append(few)
+    if not fit_test.consistent:
+        suggested = sigma_value * float(np.sqrt((fit_test.chi2 or 0.0) / max(dof, 1)))
+        warnings.append(
+            inconsistent_fit_warning(
+                fit_test, sigma_value, suggested, int(np.count_nonzero(test.flagged))
+            )
+        )
+    g = np.zeros((model.n_params, n_free))
+    g[model.free] = fit.factor
+    covariance = sigma_value**2 * (g @ g.T)
+    nested = None
+    inner, effect_words = model.nested, model.effect
+    if inner is not None and effect_words is not None:
+        # The model without its effect, fitted as the model was: weighted by the same
+        # noise model and per-row sigma, on the same poses, so that the F test compares
+        # the sums of squares each fit minimised (whitened residuals, in one unit).
+        inner_fit = Problem(
+            inner, conditions, points, resolve_method(inner, "auto"), tol, max_iter
+        ).fit(used)
+        count = model.n_params - inner.n_params
+        p_value = nested_test(inner_fit.whitened[used], fit.whitened[used], count, dof)
+        nested = NestedFit(
+            effect_words,
+            model.param_names[inner.n_params :],
+            float(np.sqrt(np.mean(inner_fit.residuals[used] ** 2))),
+            p_value,
+        )
+        effect = slice(inner.n_params, None)
+        std = np.sqrt(np.diag(covariance)[effect]) * model.display_scale[effect]
+        shown = ", ".join(
+            f"{name} = {v:.3g} ± {s:.3g} {unit}"
+            for name, unit, v, s in zip(
+                nested.names,
+                model.param_units[effect],
+                fit.params[effect] * model.display_scale[effect],
+                std,
+                strict=True,
+            )
+        )
+        rms = float(np.sqrt(np.mean(fit.residuals[used] ** 2)))
+        unseen = unseen_warning(effect_words, shown, nested.rms_per_coordinate_mm, rms, p_value)
+        if unseen is not None and conditioning is None:
+            warnings.append(unseen)
+    return Calibration(
+        model=model,
+        method=method,
+        params=fit.params,
+        covariance=covariance,
+        sigma_mm=float(sigma_value),
+        sigma_source=source,
+        residuals=fit.residuals,
+        iterations=int(fit.iterations),
+        converged=bool(fit.converged),
+        pose_labels=labels,
+        warnings=tuple(warnings),
+        goodness_of_fit=fit_test,
+        standardized_residuals=standardized,
+        outliers=outliers,
+        used=used,
+        rows=row_numbers,
+        robust=bool(robust),
+        conditions=conditions,
+        nested=nested,
+        details=model.fit_details(conditions, fit.params),
+    )

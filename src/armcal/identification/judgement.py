@@ -1,0 +1,380 @@
+"""Is a fit consistent with its noise?  Goodness of fit, outliers, and the warnings they give.
+
+The judgement of a fit, for every model: the chi-square test of its residuals
+against sigma, the studentized outlier test, the nested-model F test of an
+effect the data may not show (:func:`nested_test`), and the warnings that say
+what each verdict means.  The warnings use neutral words; advice that is an
+option of the library or a flag of the command line is an
+:func:`~armcal.errors.action`, which each renders in its own words.
+
+Both tests work on *standardized* residuals ``r_i = W_i e_i / sigma_ref`` (the
+noise model's whitening, :mod:`armcal.noise`): under the model they are
+independent ``N(0, I_d)`` per pose (``d`` = 2 in the plane), up to the fit's
+own leverage.
+
+**Goodness of fit.**  With ``sigma`` given, ``chi2 = sum_i e_i^T Sigma_i^-1 e_i``
+over the poses in the fit follows a chi-square law with ``d m - p_f`` degrees
+of freedom; a p-value below :data:`FIT_ALPHA` says the data and the model (or
+``sigma``) disagree.
+
+**Outliers.**  A pose is an outlier when its residual is larger than the fit
+and the noise can explain.  With ``B_i = W_i J_i G`` (``G G^T = (J_w^T J_w)^-1``
+over the poses in the fit) the residual of a pose in the fit has covariance
+``sigma^2 (I - B_i B_i^T)`` and the prediction error of a pose left out
+``sigma^2 (I + B_i B_i^T)``, so ``t_i^2 = r_i^T V_i^-1 r_i`` is
+
+* ``chi2(d)`` when ``sigma`` is given;
+* with ``sigma`` estimated, ``d F(d, nu - d)`` for a pose in the fit with
+  ``sigma`` re-estimated without it (the externally studentized residual, an
+  exact law under normal noise), and ``d F(d, nu)`` for a pose left out.
+
+Every pose is tested, so the level is corrected for multiple testing
+(Bonferroni): a pose is flagged when its p-value is below
+``OUTLIER_ALPHA / m``.  On clean data the chance that *any* pose is flagged is
+then at most ``OUTLIER_ALPHA``.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..errors import ArmcalWarning, action
+from ..models import Effect, listing
+
+__all__ = [
+    "FEW_DOF",
+    "FIT_ALPHA",
+    "NESTED_UNSEEN_P",
+    "OUTLIER_ALPHA",
+    "GoodnessOfFit",
+    "Outlier",
+    "PoseTest",
+    "few_dof_warning",
+    "goodness_of_fit",
+    "inconsistent_fit_warning",
+    "nested_test",
+    "not_converged_warning",
+    "outlier_warning",
+    "studentized_test",
+    "unseen_warning",
+]
+
+#: A fit whose chi-square p-value is below this is inconsistent with sigma.
+FIT_ALPHA = 1e-3
+#: Family-wise false-alarm rate of the outlier test over all poses of a fit.
+OUTLIER_ALPHA = 1e-3
+#: Fewer residual degrees of freedom than this cannot judge a fit.
+FEW_DOF = 4
+
+
+@dataclass(frozen=True)
+class GoodnessOfFit:
+    """The chi-square test of a fit against its noise model.
+
+    Attributes
+    ----------
+    chi2 : float or None
+        ``sum_i e_i^T Sigma_i^-1 e_i`` over the poses in the fit; None when
+        ``sigma`` was estimated from the same residuals (then it equals ``dof``
+        by construction and tests nothing).
+    dof : int
+        ``2 m - p_f``: measured coordinates minus free parameters.
+    p_value : float or None
+        ``P(chi2_dof >= chi2)``; None when ``sigma`` was estimated or ``dof <= 0``.
+    """
+
+    chi2: float | None
+    dof: int
+    p_value: float | None
+
+    @property
+    def consistent(self) -> bool:
+        """False when the p-value is below :data:`FIT_ALPHA`."""
+        return self.p_value is None or self.p_value >= FIT_ALPHA
+
+    def to_dict(self) -> dict[str, float | int | None]:
+        """JSON form ``{chi2, dof, p_value}``."""
+        return {"chi2": self.chi2, "dof": self.dof, "p_value": self.p_value}
+
+
+def goodness_of_fit(standardized: np.ndarray, dof: int, *, sigma_given: bool) -> GoodnessOfFit:
+    """Chi-square test of standardized residuals ``(m_used, 2)`` on ``dof`` degrees of freedom.
+
+    Examples
+    --------
+    >>> fit = goodness_of_fit(np.ones((10, 2)), 16, sigma_given=True)
+    >>> fit.chi2, fit.dof, round(fit.p_value, 4)
+    (20.0, 16, 0.2202)
+    """
+    if not sigma_given:
+        return GoodnessOfFit(None, int(dof), None)
+    from scipy import stats  # imported on use: `import armcal` stays light
+
+    chi2 = float(np.sum(standardized**2))
+    p_value = float(stats.chi2.sf(chi2, dof)) if dof > 0 else None
+    return GoodnessOfFit(chi2, int(dof), p_value)
+
+
+@dataclass(frozen=True)
+class Outlier:
+    """A pose the studentized test flags.
+
+    Attributes
+    ----------
+    index : int
+        0-based index of the pose in the data.
+    row : int
+        1-based data row of the measurement file.
+    pose : str
+        Its label.
+    target : str or None
+        The target measured, when the data name one.
+    residual_mm : float
+        Euclidean residual of the pose against the final fit (mm).
+    studentized : float
+        ``t_i`` (see the module notes): about 1 for a typical pose.
+    p_value : float
+        The pose's own p-value (before the multiple-testing correction).
+    removed : bool
+        Whether the final fit leaves the pose out (robust fitting), or only flags it.
+    """
+
+    index: int
+    row: int
+    pose: str
+    target: str | None
+    residual_mm: float
+    studentized: float
+    p_value: float
+    removed: bool
+
+    def to_dict(self) -> dict[str, object]:
+        """JSON form ``{row, pose, target, residual_mm, studentized, p_value, removed}``."""
+        return {
+            "row": self.row,
+            "pose": self.pose,
+            "target": self.target,
+            "residual_mm": self.residual_mm,
+            "studentized": self.studentized,
+            "p_value": self.p_value,
+            "removed": self.removed,
+        }
+
+
+@dataclass(frozen=True, eq=False)
+class PoseTest:
+    """The studentized test of every pose of one fit.
+
+    Attributes
+    ----------
+    statistic : ndarray, shape (m,)
+        ``t_i`` (module notes).
+    p_value : ndarray, shape (m,)
+        Each pose's p-value.
+    flagged : ndarray of bool, shape (m,)
+        ``p_value < alpha / m`` (Bonferroni).
+    """
+
+    statistic: np.ndarray
+    p_value: np.ndarray
+    flagged: np.ndarray
+
+
+def studentized_test(
+    standardized: np.ndarray,
+    leverage: np.ndarray,
+    used: np.ndarray,
+    n_free: int,
+    *,
+    sigma_given: bool,
+    alpha: float = OUTLIER_ALPHA,
+) -> PoseTest:
+    """Studentized residual test of every pose (module notes).
+
+    Parameters
+    ----------
+    standardized : ndarray, shape (m, d)
+        ``W_i e_i / sigma_ref`` against the fit to the poses in ``used``.
+    leverage : ndarray, shape (m, d, d)
+        ``B_i B_i^T`` of every pose (``W_i J_i G``, the fit's inverse information).
+    used : ndarray of bool, shape (m,)
+        Poses in the fit.
+    n_free : int
+        Free parameters of the fit.
+    sigma_given : bool
+        Whether ``sigma_ref`` is known (chi-square) or was estimated (F).
+    alpha : float
+        Family-wise level over all ``m`` poses.
+
+    Returns
+    -------
+    PoseTest
+
+    Examples
+    --------
+    >>> r = np.zeros((20, 2)); r[3] = [6.0, 0.0]
+    >>> test = studentized_test(r, np.zeros((20, 2, 2)), np.ones(20, bool), 4, sigma_given=True)
+    >>> np.flatnonzero(test.flagged).tolist(), round(float(test.statistic[3]), 6)
+    ([3], 6.0)
+    """
+    m, dim = standardized.shape
+    quad = np.maximum(_quadratic_forms(standardized, leverage, used), 0.0)
+    nu = dim * int(np.count_nonzero(used)) - n_free
+    if sigma_given:
+        if dim == 2:
+            p_value = np.exp(-quad / 2)  # the chi-square survival function for 2 dof
+        else:
+            from scipy import stats  # imported on use: `import armcal` stays light
+
+            p_value = stats.chi2.sf(quad, dim)
+        statistic = np.sqrt(quad)
+    else:
+        from scipy import stats  # imported on use: `import armcal` stays light
+
+        rss = float(np.sum(standardized[used] ** 2))  # in units of the estimated sigma
+        # Leave-one-out scale for poses in the fit (d fewer equations), the fit's for others.
+        dof_i = np.where(used, nu - dim, nu)
+        rss_i = np.where(used, rss - quad, rss)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            scale2 = np.where(dof_i > 0, rss_i / np.maximum(dof_i, 1), np.nan)
+            f = np.where(scale2 > 0, quad / (dim * scale2), 0.0)
+        valid = (dof_i > 0) & np.isfinite(scale2) & (scale2 > 0)
+        p_value = np.where(valid, stats.f.sf(f, dim, np.maximum(dof_i, 1)), 1.0)
+        statistic = np.where(valid, np.sqrt(dim * f), 0.0)
+    flagged = p_value < alpha / max(m, 1)
+    return PoseTest(statistic, p_value, flagged)
+
+
+def _quadratic_forms(standardized: np.ndarray, leverage: np.ndarray, used: np.ndarray):
+    """``r_i^T V_i^-1 r_i`` ``(m,)`` with ``V_i = I -+ B_i B_i^T`` (in the fit or left out).
+
+    A pose that alone determines a direction (``V`` singular, leverage 1) has a
+    residual of 0 and carries no test: its form is 0.
+    """
+    dim = standardized.shape[1]
+    sign = np.where(used, -1.0, 1.0)[:, None, None]
+    v = np.eye(dim) + sign * leverage
+    if dim == 2:  # in closed form
+        a, b, d = v[:, 0, 0], v[:, 0, 1], v[:, 1, 1]
+        det = a * d - b * b
+        x, y = standardized[:, 0], standardized[:, 1]
+        with np.errstate(divide="ignore", invalid="ignore"):
+            return np.where(det > 1e-12, (d * x * x - 2 * b * x * y + a * y * y) / det, 0.0)
+    values, vectors = np.linalg.eigh(v)
+    safe = values > 1e-12
+    projected = np.einsum("mij,mi->mj", vectors, standardized)
+    inverse = np.where(safe, 1.0 / np.where(safe, values, 1.0), 0.0)
+    return np.where(np.all(safe, axis=1), np.sum(projected**2 * inverse, axis=1), 0.0)
+
+
+# --------------------------------------------------------------------------- warnings
+
+#: Above this p-value a model's effect lowers the residual no more than noise would.
+NESTED_UNSEEN_P = 0.05
+
+
+def outlier_warning(outliers: Sequence[Outlier], *, robust: bool) -> ArmcalWarning:
+    """``outlier``: the flagged poses, and what was done with them (or what to do)."""
+    shown = [
+        f"row {o.row} (pose {o.pose}: residual {o.residual_mm:.3g} mm, "
+        f"studentized {o.studentized:.3g})"
+        for o in outliers[:5]
+    ]
+    more = f" and {len(outliers) - 5} more" if len(outliers) > 5 else ""
+    what = "outlier" if len(outliers) == 1 else "outliers"
+    if robust:
+        then = "left out of the fit; check these measurements"
+    else:
+        then = f"{action('refit-robust')}, or check these measurements"
+    return ArmcalWarning(
+        "outlier",
+        f"{len(outliers)} {what} at the {OUTLIER_ALPHA:g} family-wise level: "
+        f"{listing(shown)}{more}; {then}",
+    )
+
+
+def inconsistent_fit_warning(
+    fit: GoodnessOfFit, sigma: float, suggested: float, flagged: int
+) -> ArmcalWarning:
+    """``fit-inconsistent``: the chi-square test failed, and the likely causes in order."""
+    try_robust = action("try-robust")
+    causes = (
+        f"outliers ({flagged} flagged; {try_robust})" if flagged else f"outliers ({try_robust})"
+    )
+    return ArmcalWarning(
+        "fit-inconsistent",
+        f"the fit is inconsistent with sigma = {sigma:.3g} mm: chi2 = {fit.chi2:.4g} on "
+        f"{fit.dof} degrees of freedom (p = {fit.p_value:.2g}); likely causes, in order: "
+        f"{causes}; a wrong unit (angles in radians, positions in metres); a model that "
+        "misses an effect (base offset, a wrong robot file, compliance under load); or sigma "
+        f"too small (the residuals suggest about {suggested:.3g} mm)",
+    )
+
+
+def few_dof_warning(poses: int, dof: int, n_free: int, per_pose: int) -> ArmcalWarning | None:
+    """``few-dof`` below :data:`FEW_DOF` residual degrees of freedom: how many poses to add."""
+    if dof >= FEW_DOF:
+        return None
+    more = -(-(FEW_DOF - dof) // per_pose)
+    return ArmcalWarning(
+        "few-dof",
+        f"{poses} poses leave {dof} degrees of freedom for {n_free} parameters: too few to "
+        f"judge the fit against sigma or to find outliers; measure at least {more} more "
+        f"{'pose' if more == 1 else 'poses'}",
+    )
+
+
+def not_converged_warning(method: str, iterations: int, closed_form: bool) -> ArmcalWarning:
+    """``not-converged``: the solver stopped at its iteration cap."""
+    advice = action("try-closed-form") if closed_form else "check the data and the robot file"
+    return ArmcalWarning(
+        "not-converged", f"{method} did not converge in {iterations} iterations; {advice}"
+    )
+
+
+def nested_test(
+    nested_whitened: np.ndarray, whitened: np.ndarray, extra: int, dof: int
+) -> float | None:
+    """The p-value of the nested-model F test: does an effect lower the residual beyond noise?
+
+    With ``extra`` parameters of the effect and ``dof`` residual degrees of freedom
+    of the full fit, ``F = ((RSS_nested - RSS) / extra) / (RSS / dof)`` follows
+    F(extra, dof) when the effect is absent.  Both sums are of *whitened*
+    residuals (``W_i e_i``), the quantity each weighted fit minimised: with
+    per-row sigma or another noise model, unweighted sums would be dominated by
+    the noisiest rows and say nothing about the fit.  None when there is nothing
+    to test (no degrees of freedom, no extra parameter, or an exact fit).
+    """
+    from scipy import stats  # imported on use: `import armcal` stays light
+
+    rss, rss_nested = float(np.sum(whitened**2)), float(np.sum(nested_whitened**2))
+    if dof <= 0 or extra == 0 or rss <= 0:
+        return None
+    f_value = max(rss_nested - rss, 0.0) / extra / (rss / dof)
+    return float(stats.f.sf(f_value, extra, dof))
+
+
+def unseen_warning(
+    effect: Effect,
+    shown: str,
+    nested_rms_mm: float,
+    rms_mm: float,
+    p_value: float | None,
+) -> ArmcalWarning | None:
+    """A ``{short}-unseen`` warning (``compliance-unseen``) above :data:`NESTED_UNSEEN_P`.
+
+    A p-value above it means the data cannot tell the effect from noise (for
+    joint compliance: loads too small, joints too stiff): its values are then
+    undetermined, however finite.  ``shown`` lists them with their std.
+    """
+    if p_value is None or p_value <= NESTED_UNSEEN_P:
+        return None
+    return ArmcalWarning(
+        f"{effect.short}-unseen",
+        f"the data do not show the {effect.name}: it lowers the residual RMS only from "
+        f"{nested_rms_mm:.4g} to {rms_mm:.4g} mm, no more than noise would (F test p = "
+        f"{p_value:.2g}), and its values are undetermined ({shown}); {effect.advice}",
+    )

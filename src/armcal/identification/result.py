@@ -1,0 +1,299 @@
+"""The result of an identification: :class:`Calibration`, and a parameter by name.
+
+A calibration holds the model it was made for, the estimate and its
+covariance, the residuals and the judgement of the fit (goodness of fit,
+outliers, warnings).  Internal units (mm, rad) in the arrays; the properties
+:attr:`~Calibration.values`, :attr:`~Calibration.std` and indexing by name
+(``cal["dl1"]``) give display units (mm, deg) with the unit.
+
+Two root-mean-squares of residuals are in use, and every name says which:
+*per coordinate* (``sqrt(mean(e_x^2, e_y^2, ...))``, comparable with sigma)
+and *per point* (``sqrt(mean |e_i|^2)``, the Euclidean error of a point,
+``sqrt(d)`` times larger for noise alike on every axis).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any, Literal
+
+import numpy as np
+
+from ..errors import ArmcalWarning
+from ..models import CalibratedArm, Conditions, Effect, FitModel, Plane
+from .judgement import GoodnessOfFit, Outlier
+
+__all__ = [
+    "Calibration",
+    "Estimate",
+    "NestedFit",
+]
+
+
+@dataclass(frozen=True)
+class Estimate:
+    """One identified parameter in display units.
+
+    Attributes
+    ----------
+    name : str
+    value : float
+    std : float
+        Its standard error (0 for a fixed parameter).
+    unit : str
+    fixed : bool
+        Held at its nominal value, not identified.
+
+    Examples
+    --------
+    >>> Estimate("dl1", 0.8031, 0.0167, "mm", False)
+    dl1 = 0.8031 ± 0.0167 mm
+    """
+
+    name: str
+    value: float
+    std: float
+    unit: str
+    fixed: bool = False
+
+    def __repr__(self) -> str:
+        spread = "fixed" if self.fixed else f"± {self.std:.3g}"
+        return f"{self.name} = {self.value:.6g} {spread} {self.unit}"
+
+
+@dataclass(frozen=True)
+class NestedFit:
+    """What a model's effect bought: the fit of the same data without it.
+
+    Attributes
+    ----------
+    effect : Effect
+        What the model adds to its nested model, in words.
+    names : tuple of str
+        The effect's parameters.
+    rms_per_coordinate_mm : float
+        Residual RMS per coordinate of the fit without the effect, on the same poses.
+    p_value : float or None
+        The nested-model F test (:func:`~armcal.identification.judgement.nested_test`):
+        small when the data show the effect; None when there is nothing to test.
+    """
+
+    effect: Effect
+    names: tuple[str, ...]
+    rms_per_coordinate_mm: float
+    p_value: float | None
+
+
+def _rms(values: np.ndarray) -> float:
+    return float(np.sqrt(np.mean(values**2))) if values.size else 0.0
+
+
+@dataclass(frozen=True, eq=False)
+class Calibration:
+    """Identified parameters with their uncertainty, the fit's residuals and its judgement.
+
+    Attributes
+    ----------
+    model : FitModel
+        The model calibrated, with the noise model and fixed parameters used.
+    method : str
+        Solver used: ``"closed-form"`` or ``"gauss-newton"``.
+    params : ndarray, shape (p,)
+        Parameters in internal units (mm, rad, ...); 0 for fixed ones.
+    covariance : ndarray, shape (p, p)
+        ``sigma^2 (J_w^T J_w)^-1`` over the free parameters in internal units,
+        zero rows and columns for fixed ones.
+    sigma_mm : float
+        Measurement noise (1 std, mm) used for ``covariance``: the noise model's
+        reference (:attr:`armcal.noise.NoiseModel.sigma_mm`), or estimated.
+    sigma_source : {"given", "estimated"}
+        Whether the noise was given (robot file, ``sigma``, per-row sigma) or
+        estimated as ``sqrt(RSS / (d m - p_f))``.
+    residuals : ndarray, shape (m, d)
+        Measured minus fitted points in mm, for every pose.
+    iterations : int
+        Linearized solves (1 for the closed form).
+    converged : bool
+        Whether the solver met its tolerance.
+    pose_labels : tuple of str
+        A label for every pose (the measurement file's ``pose`` column, or 1..m).
+    warnings : tuple of ArmcalWarning
+        What makes the result suspicious (codes ``fit-inconsistent``,
+        ``few-dof``, ``outlier``, ``ill-conditioned``, ``not-converged``, ...).
+    goodness_of_fit : GoodnessOfFit or None
+        The chi-square test over the poses in the fit.
+    standardized_residuals : ndarray, shape (m, d) or None
+        ``W_i e_i / sigma`` of every pose: ``N(0, I)`` under the noise model.
+    outliers : tuple of Outlier
+        Poses the studentized test flags, removed from the fit or not.
+    used : ndarray of bool, shape (m,) or None
+        Poses in the final fit (all unless a robust fit left outliers out).
+    rows : tuple of int
+        1-based data row of every pose in its file.
+    robust : bool
+        Whether the fit was robust (Huber, then the outlier test and a refit).
+    conditions : Conditions or None
+        The rows' joint readings, targets, loads and per-row noise.
+    plane : Plane or None
+        The plane of motion fitted to 3-D instrument data, in whose coordinates
+        ``residuals`` and the base pose are; None otherwise.
+    nested : NestedFit or None
+        For a model with an effect (joint compliance): the fit without it.
+    details : dict
+        What the model reports of the fit besides its parameters
+        (:meth:`~armcal.models.interface.FitModel.fit_details`).
+    """
+
+    model: FitModel
+    method: str
+    params: np.ndarray
+    covariance: np.ndarray
+    sigma_mm: float
+    sigma_source: Literal["given", "estimated"]
+    residuals: np.ndarray
+    iterations: int
+    converged: bool
+    pose_labels: tuple[str, ...]
+    warnings: tuple[ArmcalWarning, ...] = ()
+    goodness_of_fit: GoodnessOfFit | None = None
+    standardized_residuals: np.ndarray | None = None
+    outliers: tuple[Outlier, ...] = ()
+    used: np.ndarray | None = None
+    rows: tuple[int, ...] = ()
+    robust: bool = False
+    conditions: Conditions | None = None
+    plane: Plane | None = None
+    nested: NestedFit | None = None
+    details: dict[str, np.ndarray] = field(default_factory=dict)
+
+    def __repr__(self) -> str:
+        used = f"{self.n_used} of {self.n_poses}" if self.n_used < self.n_poses else self.n_poses
+        codes = f", warnings {[w.code for w in self.warnings]}" if self.warnings else ""
+        return (
+            f"Calibration({self.model.name}: {used} poses, {self.n_free} free parameters, "
+            f"{self.method}, sigma {self.sigma_mm:.4g} mm ({self.sigma_source}), residual RMS "
+            f"{self.residual_rms:.4g} mm per coordinate{codes})"
+        )
+
+    def calibrated(self) -> CalibratedArm:
+        """The model with these parameters, for validation, compensation and export."""
+        return CalibratedArm(self.model, self.params, self.covariance, self.sigma_mm, self.plane)
+
+    def __getitem__(self, name: str) -> Estimate:
+        """A parameter by name, in display units: ``cal["dl1"]``."""
+        names = self.names
+        if name not in names:
+            raise KeyError(f"no parameter {name!r}; the parameters are {', '.join(names)}")
+        i = names.index(name)
+        return Estimate(
+            name,
+            float(self.values[i]),
+            float(self.std[i]),
+            self.units[i],
+            name in self.model.fixed,
+        )
+
+    @property
+    def parameters(self) -> tuple[Estimate, ...]:
+        """Every parameter by name, value, std and unit (display units)."""
+        return tuple(self[name] for name in self.names)
+
+    @property
+    def arm(self) -> Any:
+        """The geometric arm of the model."""
+        return self.model.arm
+
+    @property
+    def target(self) -> np.ndarray | None:
+        """Every pose's target (index into the arm's targets), on an arm with several."""
+        return None if self.conditions is None else self.conditions.target
+
+    @property
+    def n_free(self) -> int:
+        """Free parameters of the fit."""
+        return self.model.n_free
+
+    @property
+    def n_poses(self) -> int:
+        """Number of measured poses ``m`` (including any left out of the fit)."""
+        return int(self.residuals.shape[0])
+
+    @property
+    def n_used(self) -> int:
+        """Number of poses in the final fit."""
+        return self.n_poses if self.used is None else int(np.count_nonzero(self.used))
+
+    @property
+    def dof(self) -> int:
+        """Residual degrees of freedom ``d m_used - p_f``."""
+        return self.residuals.shape[1] * self.n_used - self.n_free
+
+    @property
+    def names(self) -> tuple[str, ...]:
+        """Parameter names, e.g. ``dl1.., dq1.., (x0, y0)``, then any ``k1..``/``c1..``."""
+        return self.model.param_names
+
+    @property
+    def units(self) -> tuple[str, ...]:
+        """Display units of the parameters (``mm``, ``deg``, ``urad/(N*m)``, ``mdeg/m``)."""
+        return self.model.param_units
+
+    @property
+    def display_scale(self) -> np.ndarray:
+        """Internal to display units of every parameter in :attr:`names`."""
+        return self.model.display_scale
+
+    @property
+    def values(self) -> np.ndarray:
+        """Parameter values ``(p,)`` in display units (mm, deg)."""
+        return self.params * self.display_scale
+
+    @property
+    def covariance_display(self) -> np.ndarray:
+        """Covariance ``(p, p)`` in display units (mm, deg)."""
+        s = self.display_scale
+        return self.covariance * np.outer(s, s)
+
+    @property
+    def std(self) -> np.ndarray:
+        """Standard errors ``(p,)`` in display units (mm, deg); 0 for fixed parameters."""
+        return np.sqrt(np.diag(self.covariance_display))
+
+    @property
+    def correlation(self) -> np.ndarray:
+        """Correlation matrix ``(p, p)`` of the estimates (identity rows for fixed ones)."""
+        d = np.sqrt(np.diag(self.covariance))
+        safe = np.where(d > 0, d, 1.0)
+        corr = self.covariance / np.outer(safe, safe)
+        fixed = d == 0
+        corr[fixed, :] = 0.0
+        corr[:, fixed] = 0.0
+        corr[fixed, fixed] = 1.0
+        return corr
+
+    @property
+    def pose_residuals(self) -> np.ndarray:
+        """Euclidean residual of every pose ``(m,)`` in mm."""
+        if self.residuals.shape[1] == 2:
+            return np.hypot(self.residuals[:, 0], self.residuals[:, 1])
+        return np.linalg.norm(self.residuals, axis=1)
+
+    def _used_residuals(self) -> np.ndarray:
+        return self.residuals if self.used is None else self.residuals[self.used]
+
+    @property
+    def residual_rms(self) -> float:
+        """RMS of the residual coordinates of the poses in the fit (per coordinate), mm."""
+        return _rms(self._used_residuals())
+
+    @property
+    def residual_rms_per_point(self) -> float:
+        """RMS of the Euclidean residuals of the poses in the fit (per point), mm."""
+        kept = self.pose_residuals if self.used is None else self.pose_residuals[self.used]
+        return _rms(kept)
+
+    @property
+    def residual_max(self) -> float:
+        """Largest Euclidean residual of a pose in the fit, mm."""
+        kept = self.pose_residuals if self.used is None else self.pose_residuals[self.used]
+        return float(np.max(kept))

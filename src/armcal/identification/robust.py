@@ -1,0 +1,111 @@
+"""The robust fit: Huber's M-estimator, then the outlier test, leaving out and refitting.
+
+Why Huber: for the planar arm the model is linear in the link phasors, so
+Huber's objective is convex there -- one optimum, reached from the least-squares
+fit whatever the outliers -- and a pose's influence is bounded by its weight
+``min(1, k sigma / |r_i|)``, so gross outliers barely move the fit the test
+then judges; clean poses keep weight 1 (``k`` is the 95 % point of a clean
+pose's radial residual, :func:`huber_constant`).  The final estimate is
+ordinary (weighted) least squares on the poses kept, so its covariance is the
+usual one.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from ..errors import ArmcalWarning
+from .problem import Fit, Problem, point_norms
+
+__all__ = [
+    "HUBER_K",
+    "huber_constant",
+    "robust_fit",
+]
+
+
+def huber_constant(dim: int) -> float:
+    """Huber's tuning constant for the radial residual of a point with ``dim`` coordinates.
+
+    A clean point's standardized residual is below it with probability 0.95
+    (chi-square, ``dim`` dof), so clean data keep weight 1 almost everywhere and
+    the fit stays efficient.  In the plane, ``sqrt(-2 ln 0.05)``: the chi-square
+    law with 2 dof has survival function ``exp(-x / 2)``.
+    """
+    if dim == 2:
+        return float(np.sqrt(-2.0 * np.log(0.05)))
+    from scipy import stats  # imported on use: `import armcal` stays light
+
+    return float(np.sqrt(stats.chi2.isf(0.05, dim)))
+
+
+#: Huber's constant for a point in the plane (:func:`huber_constant` of 2).
+HUBER_K = huber_constant(2)
+
+
+def _median_chi2(dim: int) -> float:
+    """The median of chi-square with ``dim`` dof: ``2 ln 2`` for 2."""
+    if dim == 2:
+        return 2 * math.log(2)
+    from scipy import stats  # imported on use: `import armcal` stays light
+
+    return float(stats.chi2.median(dim))
+
+
+def robust_fit(
+    problem: Problem, sigma: float | None, fit: Fit
+) -> tuple[Fit, np.ndarray, np.ndarray, ArmcalWarning | None]:
+    """Huber IRLS from the least-squares ``fit`` to every pose, then test, leave out, refit.
+
+    Returns the final fit, the poses in it, the poses flagged as outliers, and a
+    warning when the outliers could not be left out without losing identifiability.
+    When most poses disagree with the fit, nothing is an outlier: the model, the
+    units or sigma are wrong, which the goodness of fit reports.  ``sigma`` is
+    the reference noise when given, None when it is estimated.
+    """
+    m = problem.m
+    dim = problem.model.point_dim
+    huber = huber_constant(dim)
+    everyone = np.ones(m, dtype=bool)
+    weights = np.ones(m)
+    for _ in range(100):
+        distance = point_norms(fit.whitened)
+        if sigma is None:  # a robust scale: the median squared distance of a clean point
+            scale = float(np.sqrt(np.median(distance**2) / _median_chi2(dim)))
+            scale = max(scale, np.finfo(float).tiny)
+        else:
+            scale = sigma
+        new = np.minimum(1.0, huber * scale / np.maximum(distance, np.finfo(float).tiny))
+        fit = problem.fit(everyone, weights=new, start=fit.params)
+        if np.max(np.abs(new - weights)) < 1e-9:
+            break
+        weights = new
+    # The core: poses Huber left at full weight, if they identify the model.
+    used = weights >= 1.0
+    if not problem.identifiable(used):
+        used = everyone
+    fit = problem.fit(used, start=fit.params)
+    n_free = problem.model.n_free
+    for _ in range(20):
+        dof = dim * int(np.count_nonzero(used)) - n_free
+        scale = sigma if sigma is not None else fit.scale(max(dof, 1))
+        test = fit.test(scale, given=sigma is not None)
+        keep = ~test.flagged
+        if np.array_equal(keep, used):
+            return fit, used, ~used, None
+        if 2 * np.count_nonzero(keep) < m:
+            everything = problem.fit(everyone, start=fit.params)
+            return everything, everyone, ~everyone, None
+        if not problem.identifiable(keep):
+            warning = ArmcalWarning(
+                "outliers-kept",
+                f"leaving out the {int(np.count_nonzero(~keep))} flagged poses would leave too "
+                "few poses to identify every parameter, so they stay in the fit; "
+                "measure more poses",
+            )
+            return problem.fit(everyone, start=fit.params), everyone, ~keep, warning
+        used = keep
+        fit = problem.fit(used, start=fit.params)
+    return fit, used, ~used, None

@@ -1,0 +1,156 @@
+"""What measurements tell of any model: the whitened Jacobian, its covariance, predicted errors.
+
+One place for each of these meanings, for every family of arm
+(:class:`~armcal.models.interface.FitModel`):
+
+* :func:`whitened_free_jacobian` -- ``W_i J_i`` over the free parameters, the
+  rows whose Gram matrix is the information (:mod:`armcal.noise`);
+* :func:`covariance_factor_from` -- ``G`` with ``(J_w^T J_w)^-1 = G G^T`` from
+  those rows, by the rank policy of :mod:`armcal.numerics` (never by inverting
+  ``J_w^T J_w``);
+* :func:`tip_variances` -- the variance ``tr(J(x) C J(x)^T)`` of a predicted
+  point at conditions ``x`` from a parameter covariance ``C``, and
+  :func:`mean_tip_variance`, its mean over many test rows for a stack of
+  covariances (from the test rows' Gram matrix, so many plans cost one pass).
+
+A family may compute these faster where its structure allows (the planar arm's
+covariance from its plan's own factorization); the numbers are the same.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..numerics import scaled_svd
+from .interface import Conditions, FitModel
+
+__all__ = [
+    "covariance_factor_from",
+    "display_std",
+    "mean_tip_variance",
+    "predicted_covariance",
+    "tip_variances",
+    "weighted_whitening",
+    "whitened_blocks",
+    "whitened_free_jacobian",
+]
+
+
+def whitened_blocks(
+    model: FitModel, conditions: Conditions, params: np.ndarray | None = None
+) -> np.ndarray:
+    """``W_i J_i`` over the free parameters, row by row ``(..., m, d, p_f)``, at ``params``.
+
+    ``J`` the model's Jacobian and ``W_i`` its relative whitening
+    (:meth:`~armcal.models.interface.FitModel.whitening`, the identity for isotropic
+    iid noise): ``(W_i J_i)^T W_i J_i`` is row ``i``'s information.
+    """
+    jac = model.jacobian(conditions, params)[..., model.free]  # (..., m, d, p_f)
+    w = model.whitening(conditions, params)
+    return jac if w is None else w @ jac
+
+
+def whitened_free_jacobian(
+    model: FitModel, conditions: Conditions, params: np.ndarray | None = None
+) -> np.ndarray:
+    """:func:`whitened_blocks` stacked ``(..., m d, p_f)``: ``sigma_ref^2 (J_w^T J_w)^-1`` is
+    the generalized least-squares covariance of the free parameters."""
+    jac = whitened_blocks(model, conditions, params)
+    return jac.reshape(*jac.shape[:-3], -1, model.n_free)
+
+
+def weighted_whitening(
+    whitening: np.ndarray | None, weights: np.ndarray | None, dim: int
+) -> np.ndarray | None:
+    """``sqrt(w_i) W_i`` ``(..., m, d, d)``: a whitening with extra weights per row.
+
+    ``weights`` ``(m,)`` or ``(N, m)`` (robust fitting; 0 leaves a row out) scale
+    the rows of ``whitening`` (None: the identity) of dimension ``dim``; None
+    when both are None.
+    """
+    if weights is None:
+        return whitening
+    root = np.sqrt(weights)[..., None, None]
+    return root * (np.eye(dim) if whitening is None else whitening)
+
+
+def covariance_factor_from(
+    whitened: np.ndarray, free: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """``G`` ``(..., p, p_f)`` with ``(J_w^T J_w)^-1 = G G^T``, and the full-rank mask ``(...)``.
+
+    Parameters
+    ----------
+    whitened : ndarray, shape (..., r, p_f)
+        Whitened rows over the free parameters (:func:`whitened_free_jacobian`).
+    free : ndarray of bool, shape (p,)
+        Which of the ``p`` parameters the columns are; fixed ones get zero rows.
+
+    Returns
+    -------
+    factor : ndarray, shape (..., p, p_f)
+        ``inf`` where the rank policy calls the rows singular.
+    ok : ndarray of bool, shape (...)
+
+    Examples
+    --------
+    >>> g, ok = covariance_factor_from(np.array([[2.0], [0.0]]), np.array([True, False]))
+    >>> (g @ g.T).tolist(), bool(ok)
+    ([[0.25, 0.0], [0.0, 0.0]], True)
+    """
+    factor, ok = scaled_svd(whitened).inverse_gram_factor()
+    p_f = whitened.shape[-1]
+    g = np.zeros((*factor.shape[:-2], free.size, p_f))
+    g[..., free, :] = np.where(ok[..., None, None], factor, 0.0)
+    ok = ok & np.all(np.isfinite(g), axis=(-2, -1))
+    return np.where(ok[..., None, None], g, np.inf), ok
+
+
+def predicted_covariance(
+    model: FitModel, conditions: Conditions, sigma_mm: float, params: np.ndarray | None = None
+) -> tuple[np.ndarray, bool]:
+    """``sigma^2 G G^T`` ``(p, p)``: the predicted covariance of the parameters, and whether
+    the rows identify them (:meth:`~armcal.models.interface.FitModel.covariance_factor`;
+    ``inf`` where not)."""
+    factor, ok = model.covariance_factor(conditions, params)
+    safe = np.where(ok, factor, 0.0)
+    covariance = sigma_mm**2 * (safe @ np.swapaxes(safe, -1, -2))
+    return np.where(ok, covariance, np.inf), bool(ok)
+
+
+def display_std(model: FitModel, covariance: np.ndarray) -> np.ndarray:
+    """Standard deviations ``(..., p)`` in display units of a covariance ``(..., p, p)``."""
+    return np.sqrt(np.diagonal(covariance, axis1=-2, axis2=-1)) * model.display_scale
+
+
+def tip_variances(jacobian: np.ndarray, covariance: np.ndarray) -> np.ndarray:
+    """``tr(J_i C J_i^T)`` ``(..., k)``: the variance of every predicted point, mm^2.
+
+    ``jacobian`` ``(..., k, d, p)`` of the points at ``k`` rows, ``covariance``
+    ``(..., p, p)`` of the parameters (internal units); clipped at 0 against
+    round-off.
+
+    Examples
+    --------
+    >>> tip_variances(np.array([[[1.0, 0.0], [0.0, 1.0]]]), np.eye(2) * 0.01).tolist()
+    [0.02]
+    """
+    variance = np.einsum("...kia,...ab,...kib->...k", jacobian, covariance, jacobian)
+    return np.clip(variance, 0.0, None)
+
+
+def mean_tip_variance(jacobian: np.ndarray, covariance: np.ndarray) -> np.ndarray:
+    """The mean of :func:`tip_variances` over the ``k`` test rows, for stacks of covariances.
+
+    ``jacobian`` ``(k, d, p)`` (one set of test rows), ``covariance`` ``(..., p, p)``:
+    ``mean_k tr(J_k C J_k^T) = tr(C G)`` with ``G = mean_k J_k^T J_k``, one
+    ``p x p`` product per covariance however many test rows.
+
+    Examples
+    --------
+    >>> j = np.array([[[1.0, 0.0], [0.0, 1.0]], [[2.0, 0.0], [0.0, 0.0]]])
+    >>> float(mean_tip_variance(j, np.eye(2)))   # (2 + 4) / 2
+    3.0
+    """
+    gram = np.einsum("kia,kib->ab", jacobian, jacobian) / jacobian.shape[0]
+    return np.clip(np.einsum("...ab,ba->...", covariance, gram), 0.0, None)

@@ -1,0 +1,522 @@
+"""The one interface every family of arm implements: :class:`FitModel`.
+
+Identification, design, Monte Carlo, validation and compensation see an arm
+only through this protocol, so a new family (a spatial serial arm, a model of
+joint compliance wrapped around a geometric one) plugs in by implementing it,
+without a branch in those modules.
+
+A model maps *conditions* -- what is known of every measured row besides the
+measured point: the joint readings, the target measured, the loads, the
+instrument's noise (:class:`Conditions`) -- and a parameter vector ``(p,)``
+(internal units: mm and rad) to the measured points ``(m, d)``, ``d = 2`` for a
+planar arm in its plane and 3 for a spatial one.  Everything is batched: a
+parameter stack ``(..., p)`` gives points ``(..., m, d)`` and Jacobians
+``(..., m, d, p)``.
+
+What a model provides, by use:
+
+* **parameters** -- names, units, the factors to display units, which are fixed
+  (held at their nominal value, 0 for a deviation) and which place the
+  instrument rather than the robot (:attr:`FitModel.instrument_params`);
+* **measurement** -- :meth:`~FitModel.positions`, the parameter Jacobian, the joint
+  Jacobian, and the noise of every row (:meth:`~FitModel.pose_covariances`,
+  :meth:`~FitModel.whitening`);
+* **fitting** -- the closed form where the family has one
+  (:meth:`~FitModel.closed_form`), a starting point for Gauss-Newton, the scale
+  of a step in mm, and a *nested* model (the same without an effect, e.g. the
+  geometry without compliance) with which a fit starts and is judged;
+* **analysis** -- identifiability on the model's own scaled Jacobian, the
+  words for a barely identifiable one, and the covariance factor of the free
+  parameters;
+* **the tool** -- its orientation and that orientation's Jacobians, for
+  compensation.
+
+The identifiable subset of an over-complete parameter set is the model's
+``fixed`` parameters: a family chooses them by a fixed rule (the planar arm
+holds the joint offset a base rotation replaces), and ``identifiability`` names
+what the rest cannot separate.  Nuisance parameters (the instrument's pose,
+the targets' positions) are ordinary parameters marked by
+:attr:`FitModel.instrument_params`: identified with the rest, left out of what
+compensation and export call the robot.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Hashable, Sequence
+from dataclasses import dataclass, field
+from typing import Any, Protocol
+
+import numpy as np
+from numpy.typing import ArrayLike
+
+from ..errors import ArmcalError, ArmcalWarning
+from ..noise import NoiseModel
+from ..numerics import ScaledSVD
+from .identifiability import Identifiability
+
+__all__ = [
+    "ClosedForm",
+    "Conditions",
+    "Effect",
+    "FitModel",
+    "LinearPositions",
+    "Loads",
+]
+
+
+@dataclass(frozen=True, eq=False)
+class Loads:
+    """The known static loads of every row: payload (kg) and tip force (N).
+
+    Attributes
+    ----------
+    payload_kg : ndarray, shape (m,)
+    force_n : ndarray, shape (m, 2)
+        Force applied at the tip, in the measurement frame.
+    """
+
+    payload_kg: np.ndarray
+    force_n: np.ndarray
+
+    @classmethod
+    def create(
+        cls, m: int, payload_kg: ArrayLike = 0.0, force_n: ArrayLike | None = None
+    ) -> Loads:
+        """Loads of ``m`` rows (a scalar payload is every row's).
+
+        Examples
+        --------
+        >>> Loads.create(3, [0, 10, 0]).known
+        True
+        >>> Loads.create(2).known
+        False
+        """
+        payload = np.broadcast_to(np.asarray(payload_kg, dtype=float), (m,)).copy()
+        force = np.zeros((m, 2)) if force_n is None else np.asarray(force_n, dtype=float)
+        if force.shape != (m, 2):
+            raise ArmcalError(f"tip forces must have shape ({m}, 2) in N, got {force.shape}")
+        if not (np.all(np.isfinite(payload)) and np.all(np.isfinite(force))):
+            raise ArmcalError("payloads and tip forces must be finite")
+        if np.any(payload < 0):
+            raise ArmcalError("payloads must not be negative")
+        return cls(payload, force)
+
+    @property
+    def n_rows(self) -> int:
+        return int(self.payload_kg.shape[0])
+
+    @property
+    def known(self) -> bool:
+        """Whether any row carries a payload or a tip force."""
+        return bool(np.any(self.payload_kg != 0) or np.any(self.force_n != 0))
+
+    @property
+    def varying(self) -> bool:
+        """Whether the known loads differ between rows."""
+        if self.n_rows == 0:
+            return False
+        return bool(np.ptp(self.payload_kg) > 0 or np.any(np.ptp(self.force_n, axis=0) > 0))
+
+    def take(self, rows: np.ndarray) -> Loads:
+        """The loads of the rows ``rows`` (index or mask)."""
+        return Loads(self.payload_kg[rows], self.force_n[rows])
+
+    def repeat(self, count: int) -> Loads:
+        """Every row ``count`` times in a row (a pose measured at each of its targets)."""
+        return Loads(np.repeat(self.payload_kg, count), np.repeat(self.force_n, count, axis=0))
+
+
+@dataclass(frozen=True, eq=False)
+class Conditions:
+    """What a model needs to know of measured rows besides the measured points.
+
+    Attributes
+    ----------
+    q : ndarray, shape (m, n) or (..., m, n)
+        Joint readings as the controller reports them, rad; leading axes batch
+        over plans where a function says so.
+    target : ndarray of int, shape (m,), or None
+        The target (reflector, marker) every row measures, as an index into the
+        model's targets; None when the model has one target.
+    loads : Loads or None
+        Every row's payload and tip force; None for the model's default load.
+    sigma_mm : ndarray, shape (m,), or None
+        Per-row instrument noise (1 std, mm), for instruments that report each
+        point's uncertainty; replaces the instrument covariance row by row.
+
+    Examples
+    --------
+    >>> cond = Conditions(np.zeros((4, 2)), sigma_mm=np.array([0.1, 0.1, 0.5, 0.1]))
+    >>> cond.m, cond.take(np.array([True, False, True, False])).sigma_mm.tolist()
+    (4, [0.1, 0.5])
+    """
+
+    q: np.ndarray
+    target: np.ndarray | None = None
+    loads: Loads | None = None
+    sigma_mm: np.ndarray | None = None
+    _memo: dict[Hashable, Any] = field(default_factory=dict, repr=False)
+
+    @property
+    def m(self) -> int:
+        """Number of rows."""
+        return int(np.shape(self.q)[-2])
+
+    def take(self, rows: np.ndarray) -> Conditions:
+        """The conditions of the rows ``rows`` (a mask or an index) of an unbatched ``q``."""
+        return Conditions(
+            np.asarray(self.q)[rows],
+            None if self.target is None else self.target[rows],
+            None if self.loads is None else self.loads.take(rows),
+            None if self.sigma_mm is None else self.sigma_mm[rows],
+        )
+
+    def memo(self, key: Hashable, compute: Callable[[], Any]) -> Any:
+        """``compute()`` once for these conditions: a factorization several steps share.
+
+        The conditions are immutable, so what is derived from them alone (with a
+        key that names the model it was derived for) never goes stale.
+        """
+        if key not in self._memo:
+            self._memo[key] = compute()
+        return self._memo[key]
+
+
+@dataclass(frozen=True)
+class Effect:
+    """What a model adds to its nested model, in words for reports and warnings.
+
+    Attributes
+    ----------
+    name : str
+        The effect ("joint compliance").
+    short : str
+        One word for it ("compliance"): the warning ``{short}-unseen``.
+    nested : str
+        What the nested model fits ("geometry").
+    description : str
+        How the model parametrizes it (a clause).
+    advice : str
+        What to do when the data do not show it (a clause; may hold
+        :func:`~armcal.errors.action` references).
+    """
+
+    name: str
+    short: str
+    nested: str
+    description: str
+    advice: str
+
+
+@dataclass(frozen=True, eq=False)
+class LinearPositions:
+    """Points in the plane that are linear in coordinates of the parameters.
+
+    ``x + i y = basis @ coordinates(params)`` at every row: the planar arm's tip
+    is linear in its link phasors, so the mean square error of many estimates at
+    many test rows follows from a small second-moment matrix
+    (:func:`armcal.simulate.monte_carlo`).
+
+    Attributes
+    ----------
+    basis : ndarray of complex, shape (k, L)
+    coordinates : callable
+        ``params (..., p) -> (..., L)`` complex.
+    """
+
+    basis: np.ndarray
+    coordinates: Callable[[np.ndarray], np.ndarray]
+
+
+class ClosedForm(Protocol):
+    """A model's exact least-squares solution for given conditions, where it has one."""
+
+    def solve(
+        self, points: np.ndarray, whitening: np.ndarray | None
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """Parameters ``(N, p)`` of point sets ``(N, m, d)`` and whether each fit is full rank.
+
+        ``whitening`` ``(m, d, d)`` or ``(N, m, d, d)`` weights every row (None:
+        unweighted); the solution is the weighted least-squares optimum.
+        """
+        ...
+
+
+class FitModel(Protocol):
+    """A family of arm as identification, design, simulation and validation see it.
+
+    Parameters are ``(p,)`` in internal units (mm, rad, and the family's own
+    for other effects); every method is batched over leading axes of ``params``.
+    See the module notes for what each group of members is for.
+    """
+
+    # -- what is identified -------------------------------------------------
+    @property
+    def name(self) -> str: ...
+    @property
+    def param_names(self) -> tuple[str, ...]: ...
+    @property
+    def param_units(self) -> tuple[str, ...]:
+        """Display units, e.g. ``mm``, ``deg``."""
+        ...
+
+    @property
+    def display_scale(self) -> np.ndarray:
+        """Factors ``(p,)`` from internal to display units."""
+        ...
+
+    @property
+    def fixed(self) -> tuple[str, ...]:
+        """Parameters held at their nominal value (0), not identified."""
+        ...
+
+    @property
+    def free(self) -> np.ndarray:
+        """Boolean ``(p,)``: the identified parameters."""
+        ...
+
+    @property
+    def free_names(self) -> tuple[str, ...]: ...
+    @property
+    def n_params(self) -> int: ...
+    @property
+    def n_free(self) -> int: ...
+    @property
+    def angle_params(self) -> np.ndarray:
+        """Boolean ``(p,)``: angles, wrapped into ``(-pi, pi]`` after a fit."""
+        ...
+
+    @property
+    def instrument_params(self) -> np.ndarray:
+        """Boolean ``(p,)``: the instrument's pose, not the robot's (nuisance parameters)."""
+        ...
+
+    @property
+    def noise(self) -> NoiseModel | None: ...
+    @property
+    def n_joints(self) -> int: ...
+    @property
+    def joint_limits(self) -> np.ndarray:
+        """``(n, 2)`` limits of the joint readings, rad."""
+        ...
+
+    @property
+    def point_dim(self) -> int:
+        """Coordinates of a measured point: 2 (in the plane) or 3."""
+        ...
+
+    @property
+    def reach_mm(self) -> float:
+        """A length scale of the arm (its stretched reach), for tolerances, mm."""
+        ...
+
+    @property
+    def target_labels(self) -> tuple[str, ...]:
+        """The targets' labels (empty for the single end-of-arm target)."""
+        ...
+
+    @property
+    def arm(self) -> Any:
+        """The geometric arm the model is of (the model itself for a geometric family)."""
+        ...
+
+    def with_noise(self, noise: NoiseModel | None) -> FitModel:
+        """The same model with another noise model."""
+        ...
+
+    def with_fixed(self, fixed: Sequence[str]) -> FitModel:
+        """The same model with another set of fixed parameters."""
+        ...
+
+    @property
+    def uses_gravity(self) -> bool:
+        """Whether the model's points depend on gravity's direction (joint compliance)."""
+        ...
+
+    def with_gravity(self, gravity: np.ndarray | None) -> FitModel:
+        """The same model with gravity (m/s^2) in the frame of the measurements."""
+        ...
+
+    # -- measurement --------------------------------------------------------
+    def conditions(
+        self,
+        q: ArrayLike,
+        *,
+        target: ArrayLike | None = None,
+        loads: Loads | None = None,
+        sigma_mm: np.ndarray | None = None,
+    ) -> Conditions:
+        """Checked conditions of measured rows (ValueError naming what is wrong).
+
+        ``q`` ``(m, n)`` rad; ``target`` ``(m,)`` target indices, needed when the
+        model has several; ``loads`` the rows' loads (default: the model's);
+        ``sigma_mm`` ``(m,)`` per-row instrument noise.
+        """
+        ...
+
+    def positions(self, conditions: Conditions, params: np.ndarray | None = None) -> np.ndarray:
+        """Measured points ``(..., m, d)`` in mm (nominal parameters when omitted)."""
+        ...
+
+    def jacobian(self, conditions: Conditions, params: np.ndarray | None = None) -> np.ndarray:
+        """``d points / d params`` ``(..., m, d, p)``: mm per internal unit."""
+        ...
+
+    def joint_jacobian(
+        self, conditions: Conditions, params: np.ndarray | None = None
+    ) -> np.ndarray:
+        """``d points / d q`` ``(..., m, d, n)``: mm per rad of every joint reading."""
+        ...
+
+    def pose_covariances(
+        self,
+        conditions: Conditions,
+        params: np.ndarray | None = None,
+        *,
+        noise: NoiseModel | None = None,
+    ) -> np.ndarray:
+        """Covariance ``(..., m, d, d)`` (mm^2) of every measured point under ``noise``.
+
+        Default: the model's own noise; encoder noise linearized at ``params``.
+        """
+        ...
+
+    def whitening(
+        self, conditions: Conditions, params: np.ndarray | None = None
+    ) -> np.ndarray | None:
+        """Relative whitening ``W_i`` ``(..., m, d, d)``, None where it is the identity.
+
+        ``W_i^T W_i = sigma_ref^2 Sigma_i^-1`` (:mod:`armcal.noise`), with the
+        rows' own sigma where the conditions give it.
+        """
+        ...
+
+    # -- fitting ------------------------------------------------------------
+    @property
+    def has_closed_form(self) -> bool:
+        """Whether :meth:`closed_form` exists for this model (the rule of ``method="auto"``)."""
+        ...
+
+    @property
+    def why_no_closed_form(self) -> str:
+        """Why a closed form was asked of a model without one (a sentence with the fix)."""
+        ...
+
+    def closed_form(self, conditions: Conditions) -> ClosedForm | None:
+        """The exact least-squares solver at these conditions, or None."""
+        ...
+
+    @property
+    def nested(self) -> FitModel | None:
+        """The model without its extra effect (the geometry without compliance), or None.
+
+        A fit starts from the nested model's (:meth:`lift`), and a fit whose effect
+        lowers the residual no more than noise would is said to be unseen.
+        """
+        ...
+
+    @property
+    def effect(self) -> Effect | None:
+        """What the model adds to :attr:`nested`, in words; None without a nested model."""
+        ...
+
+    def lift(self, nested_params: np.ndarray) -> np.ndarray:
+        """Parameters ``(..., p)``: the nested model's ``(..., p_nested)``, then the effect's at 0.
+
+        The nested model's parameters are the first ``p_nested`` of the model's.
+        """
+        ...
+
+    def start(
+        self, conditions: Conditions, points: np.ndarray, weights: np.ndarray | None = None
+    ) -> np.ndarray:
+        """Where Gauss-Newton starts ``(N, p)`` for point sets ``(N, m, d)``.
+
+        ``weights`` ``(m,)`` or ``(N, m)`` weight the rows (0 leaves one out).  Used
+        where the model has no :attr:`nested` model to start from.
+        """
+        ...
+
+    def canonical(self, params: np.ndarray) -> np.ndarray:
+        """The same points of the model ``(N, p)`` in canonical form: angles in ``(-pi, pi]``,
+        and one of the equivalent parameter sets chosen by a fixed rule (the planar arm's
+        positive link lengths: ``(L, dtheta)`` and ``(-L, dtheta + pi)`` are one link)."""
+        ...
+
+    def step_scale(self, conditions: Conditions) -> np.ndarray:
+        """``(p,)``: how far (mm) a unit step of each parameter moves the points at most."""
+        ...
+
+    # -- analysis -----------------------------------------------------------
+    def identifiability(self, conditions: Conditions) -> tuple[Identifiability, ScaledSVD]:
+        """Rank analysis of the model's scaled, whitened Jacobian at the nominal arm."""
+        ...
+
+    def check_identifiable(self, conditions: Conditions) -> Identifiability:
+        """:meth:`identifiability`, raising NotIdentifiableError (with why) when rank deficient."""
+        ...
+
+    def conditioning_warning(self, info: Identifiability) -> ArmcalWarning | None:
+        """An ``ill-conditioned`` warning for a barely identifiable model, else None."""
+        ...
+
+    def covariance_factor(
+        self, conditions: Conditions, params: np.ndarray | None = None
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """``G`` ``(..., p, p_f)`` with ``(J_w^T J_w)^-1 = G G^T`` and the full-rank mask.
+
+        ``J_w`` the whitened free columns at ``params`` (nominal when omitted);
+        zero rows for fixed parameters, ``inf`` where not identifiable.
+        """
+        ...
+
+    def fit_details(self, conditions: Conditions, params: np.ndarray) -> dict[str, np.ndarray]:
+        """What a report shows of a fit besides its parameters (e.g. the largest deflection)."""
+        ...
+
+    def linear_positions(self, conditions: Conditions) -> LinearPositions | None:
+        """The points as a linear map of coordinates of the parameters, where they are one."""
+        ...
+
+    def plan_conditions(self, q: np.ndarray, loads: Loads | None = None) -> Conditions:
+        """The rows a plan of poses ``q`` ``(m, n)`` is measured in: every target of every pose."""
+        ...
+
+    # -- the tool, for compensation -----------------------------------------
+    @property
+    def orientation_dim(self) -> int:
+        """Orientation coordinates of the tool: 1 in the plane, 3 in space."""
+        ...
+
+    @property
+    def angle_scale_mm(self) -> float:
+        """The distance (mm) at which a tool angle is counted as an arc, against positions."""
+        ...
+
+    def orientation(self, conditions: Conditions, params: np.ndarray | None = None) -> np.ndarray:
+        """The tool's orientation ``(..., m, k)`` (rad) at every row."""
+        ...
+
+    def orientation_joint_jacobian(
+        self, conditions: Conditions, params: np.ndarray | None = None
+    ) -> np.ndarray:
+        """``d orientation / d q`` ``(..., m, k, n)``."""
+        ...
+
+    def orientation_jacobian(
+        self, conditions: Conditions, params: np.ndarray | None = None
+    ) -> np.ndarray:
+        """``d orientation / d params`` ``(..., m, k, p)``."""
+        ...
+
+    def in_robot_frame(self, params: np.ndarray) -> tuple[FitModel, np.ndarray]:
+        """The model and parameters in the robot's own frame: the instrument's pose taken out.
+
+        The instrument parameters become 0, and whatever the model states in the
+        instrument's frame (gravity) is turned into the robot's.
+        """
+        ...
+
+    def arm_params(self, params: np.ndarray) -> np.ndarray:
+        """The parameters of :attr:`arm` within ``params`` ``(..., p)``."""
+        ...

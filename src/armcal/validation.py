@@ -1,0 +1,406 @@
+"""What a calibration predicts, checked: validation on held-out poses, cross-validation.
+
+**Validation** (:func:`validate`) compares measured positions with the nominal
+model and with the calibrated one.  Both are placed where the calibration put
+the arm in the instrument frame (its instrument parameters, the planar arm's
+base pose ``x0, y0, phi0``): the instrument's pose is not the robot's error, so
+"before" is the nominal geometry at the calibrated base pose.  Next to the
+measured errors it gives the error the calibration predicts for a measurement:
+``sqrt(tr(J C J^T) + tr(Sigma))``, the model's uncertainty at the pose (``J``
+the Jacobian in the parameters, ``C`` their covariance) plus the instrument's
+noise.  A calibrated error far above it means the model misses something
+(:func:`validation_warnings`).
+
+**Cross-validation** (:func:`cross_validate`) predicts every pose with a
+calibration made without it.
+
+Both work through :class:`~armcal.models.interface.FitModel`, for every family
+of arm.  Errors are of points: every RMS here is *per point* (the Euclidean
+error of a point), ``sqrt(d)`` times the per-coordinate RMS of noise alike on
+every axis.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import ArrayLike
+
+from .errors import ArmcalError, ArmcalWarning, NotIdentifiableError, action
+from .identification import identify
+from .models import CalibratedArm, Conditions, FitModel, Loads
+from .models.information import tip_variances
+from .noise import NoiseModel
+
+__all__ = [
+    "CrossValidation",
+    "Validation",
+    "cross_validate",
+    "cross_validation_warning",
+    "predicted_errors",
+    "validate",
+    "validation_warnings",
+]
+
+
+def _rms(values: np.ndarray) -> float:
+    return float(np.sqrt(np.mean(values**2))) if values.size else 0.0
+
+
+def _norms(points: np.ndarray) -> np.ndarray:
+    """Euclidean length ``(m,)`` of every point ``(m, d)`` (``hypot`` in the plane)."""
+    if points.shape[-1] == 2:
+        return np.hypot(points[:, 0], points[:, 1])
+    return np.linalg.norm(points, axis=-1)
+
+
+@dataclass(frozen=True, eq=False)
+class Validation:
+    """Positioning errors of the nominal and the calibrated model on held-out poses.
+
+    Attributes
+    ----------
+    before : ndarray, shape (m, d)
+        Measured minus nominal position (at the calibrated base pose), mm.
+    after : ndarray, shape (m, d)
+        Measured minus calibrated position, mm.
+    predicted_mm : ndarray, shape (m,)
+        The calibrated error a measurement is expected to show (RMS over the
+        noise and the calibration's uncertainty), mm.
+    model_mm : ndarray, shape (m,)
+        The calibrated model's own uncertainty at the pose (RMS), mm.
+    positions : ndarray, shape (m, d)
+        The measured positions (in the plane for 3-D data), mm.
+    out_of_plane_mm : ndarray, shape (m,), or None
+        For 3-D data of a planar arm: each point's distance from its target's plane, mm.
+    """
+
+    before: np.ndarray
+    after: np.ndarray
+    predicted_mm: np.ndarray
+    model_mm: np.ndarray
+    positions: np.ndarray
+    out_of_plane_mm: np.ndarray | None = None
+
+    def __repr__(self) -> str:
+        s = self.summary()
+        return (
+            f"Validation({self.after.shape[0]} poses: RMS per point {s['rms_before_mm']:.4g} mm "
+            f"before, {s['rms_after_mm']:.4g} mm after, {s['predicted_rms_after_mm']:.4g} mm "
+            "predicted)"
+        )
+
+    @property
+    def before_mm(self) -> np.ndarray:
+        """Euclidean error ``(m,)`` of the nominal model, mm."""
+        return _norms(self.before)
+
+    @property
+    def after_mm(self) -> np.ndarray:
+        """Euclidean error ``(m,)`` of the calibrated model, mm."""
+        return _norms(self.after)
+
+    def summary(self) -> dict[str, float]:
+        """RMS (per point), max and 95 % quantile before and after, and the predicted RMS (mm)."""
+        before, after = self.before_mm, self.after_mm
+        return {
+            "rms_before_mm": _rms(before),
+            "rms_after_mm": _rms(after),
+            "max_before_mm": float(np.max(before)),
+            "max_after_mm": float(np.max(after)),
+            "p95_before_mm": float(np.percentile(before, 95)),
+            "p95_after_mm": float(np.percentile(after, 95)),
+            "predicted_rms_after_mm": _rms(self.predicted_mm),
+            "model_rms_mm": _rms(self.model_mm),
+        }
+
+
+def _noise(cal: CalibratedArm) -> NoiseModel:
+    """The noise of one measurement: the model's, else isotropic at the calibration's sigma."""
+    noise = cal.model.noise
+    return noise if noise is not None else NoiseModel.isotropic(cal.sigma_mm)
+
+
+def predicted_errors(
+    cal: CalibratedArm,
+    q: ArrayLike,
+    *,
+    target: ArrayLike | None = None,
+    row_sigma: np.ndarray | None = None,
+    loads: Loads | None = None,
+) -> tuple[np.ndarray, np.ndarray]:
+    """The calibrated model's uncertainty and a measurement's expected error ``(m,)`` each, mm.
+
+    ``sqrt(tr(J C J^T))`` in the instrument frame (base pose included) and
+    ``sqrt(tr(J C J^T) + tr(Sigma_i))`` with the noise of the measurement
+    (:func:`armcal.models.information.tip_variances`).
+
+    Examples
+    --------
+    >>> from armcal.models import PlanarArm
+    >>> arm = PlanarArm([2.0, 1.0])
+    >>> cal = CalibratedArm(arm, np.zeros(4), np.zeros((4, 4)), 0.01)
+    >>> [v.round(6).tolist() for v in predicted_errors(cal, np.zeros((1, 2)))]
+    [[0.0], [0.014142]]
+    """
+    conditions = cal.model.conditions(q, target=target, loads=loads, sigma_mm=row_sigma)
+    return _predicted(cal, conditions)
+
+
+def _predicted(cal: CalibratedArm, conditions: Conditions) -> tuple[np.ndarray, np.ndarray]:
+    variance = tip_variances(cal.position_jacobian(conditions), cal.covariance)
+    noise = cal.model.pose_covariances(conditions, cal.params, noise=_noise(cal))
+    total = variance + np.trace(noise, axis1=-2, axis2=-1)
+    return np.sqrt(variance), np.sqrt(np.clip(total, 0.0, None))
+
+
+def validate(
+    cal: CalibratedArm,
+    q: ArrayLike,
+    points: ArrayLike,
+    *,
+    target: ArrayLike | None = None,
+    row_sigma: np.ndarray | None = None,
+    loads: Loads | None = None,
+) -> Validation:
+    """Positioning error before and after calibration on held-out measurements.
+
+    Parameters
+    ----------
+    cal : CalibratedArm
+    q : ndarray, shape (m, n)
+        Joint angles of the held-out poses, rad.
+    points : ndarray, shape (m, d) or (m, 3)
+        Measured positions in the instrument frame, mm: as the calibration's
+        data were (3-D points of a planar arm calibrated from 3-D data are
+        projected into its plane).
+    target : ndarray of int, shape (m,), optional
+        Every row's target, for an arm with several.
+    row_sigma : ndarray, shape (m,), optional
+        Per-row instrument noise (mm) for the predicted error.
+    loads : Loads, optional
+        Every row's payload and tip force, for a calibration with compliance
+        (default: the robot file's payload).  The nominal model has none.
+
+    Returns
+    -------
+    Validation
+
+    Raises
+    ------
+    ArmcalError
+        For 2-D points with a 3-D calibration or the other way round.
+
+    Examples
+    --------
+    >>> from armcal.models import PlanarArm, forward_kinematics
+    >>> arm = PlanarArm([2.0, 1.0])
+    >>> truth = arm.params_from_display([0.01, 0.0], [0.5, 0.0])
+    >>> cal = CalibratedArm(arm, truth, np.zeros((4, 4)), 0.001)
+    >>> q = np.radians([[0.0, 30.0], [45.0, -60.0]])
+    >>> v = validate(cal, q, forward_kinematics(arm, q, truth))
+    >>> bool(v.summary()["rms_before_mm"] > 0.02), float(v.summary()["rms_after_mm"])
+    (True, 0.0)
+    """
+    model = cal.model
+    conditions = model.conditions(q, target=target, loads=loads, sigma_mm=row_sigma)
+    points = np.asarray(points, dtype=float)
+    out_of_plane = None
+    if cal.plane is not None:
+        if points.shape[-1] != 3:
+            raise ArmcalError(
+                "the calibration was made from 3-D data: validate with x_mm, y_mm and z_mm"
+            )
+        out_of_plane = cal.plane.distance(points, conditions.target)
+        measured = cal.plane.to_plane(points)
+    else:
+        if points.shape[-1] != model.point_dim:
+            raise ArmcalError(
+                "the calibration was made from 2-D data: validate with x_mm and y_mm (no z_mm)"
+            )
+        measured = points
+    nominal = model.positions(conditions, cal.instrument_pose_params())
+    calibrated = cal.positions(conditions)
+    uncertainty, predicted = _predicted(cal, conditions)
+    return Validation(
+        measured - nominal, measured - calibrated, predicted, uncertainty, measured, out_of_plane
+    )
+
+
+def _too_large(measured: float, predicted: float, count: int) -> bool:
+    """Whether an RMS over ``count`` points is above its prediction beyond chance.
+
+    The mean square of ``2 count`` coordinates has relative std ``1/sqrt(count)``
+    (chi-square), so the RMS about ``1/(2 sqrt(count))``: 6 of them, and at least 20 %.
+    """
+    return measured > predicted * (1.0 + max(0.2, 3.0 / np.sqrt(max(count, 1))))
+
+
+def validation_warnings(result: Validation) -> list[ArmcalWarning]:
+    """``validation-error`` when the calibrated error exceeds its prediction beyond chance,
+    ``calibration-worse`` when the calibrated model misses the poses more than the nominal."""
+    s = result.summary()
+    warnings = []
+    count = result.after.shape[0]
+    if _too_large(s["rms_after_mm"], s["predicted_rms_after_mm"], count):
+        warnings.append(
+            ArmcalWarning(
+                "validation-error",
+                f"the calibrated model misses the held-out poses by RMS {s['rms_after_mm']:.3g} "
+                f"mm, more than the {s['predicted_rms_after_mm']:.3g} mm it predicts (noise and "
+                "its uncertainty): the model misses an effect, the poses lie outside the "
+                "calibrated range, the arm changed, or the measurements belong to another setup",
+            )
+        )
+    if s["rms_after_mm"] > s["rms_before_mm"]:
+        warnings.append(
+            ArmcalWarning(
+                "calibration-worse",
+                f"the calibrated model is worse than the nominal one on these poses "
+                f"({s['rms_after_mm']:.3g} against {s['rms_before_mm']:.3g} mm RMS): check that "
+                "the calibration and the measurements are of the same robot and instrument setup",
+            )
+        )
+    return warnings
+
+
+@dataclass(frozen=True, eq=False)
+class CrossValidation:
+    """K-fold prediction errors: every pose predicted by a calibration made without it.
+
+    Attributes
+    ----------
+    folds : int
+        Number of folds ``K``.
+    fold : ndarray of int, shape (m,)
+        The fold (0..K-1) every row was held out in.
+    errors : ndarray, shape (m, d)
+        Measured minus predicted position of every row, by the calibration of
+        the other folds, mm.
+    predicted_mm : ndarray, shape (m,)
+        The error that calibration predicts for the row (its uncertainty and
+        the instrument noise), mm.
+    """
+
+    folds: int
+    fold: np.ndarray
+    errors: np.ndarray
+    predicted_mm: np.ndarray
+
+    def __repr__(self) -> str:
+        s = self.summary()
+        return (
+            f"CrossValidation({self.folds} folds: prediction error RMS per point "
+            f"{s['rms_mm']:.4g} mm, predicted {s['predicted_rms_mm']:.4g} mm)"
+        )
+
+    @property
+    def errors_mm(self) -> np.ndarray:
+        """Euclidean prediction error ``(m,)`` of every row, mm."""
+        return _norms(self.errors)
+
+    def summary(self) -> dict[str, float | int]:
+        """``folds``, RMS (per point) and max prediction error and the predicted RMS (mm)."""
+        return {
+            "folds": self.folds,
+            "rms_mm": _rms(self.errors_mm),
+            "max_mm": float(np.max(self.errors_mm)),
+            "predicted_rms_mm": _rms(self.predicted_mm),
+        }
+
+
+def cross_validation_warning(result: CrossValidation) -> ArmcalWarning | None:
+    """``cross-validation`` when poses are predicted worse than the calibrations say."""
+    summary = result.summary()
+    if not _too_large(summary["rms_mm"], summary["predicted_rms_mm"], result.errors.shape[0]):
+        return None
+    return ArmcalWarning(
+        "cross-validation",
+        f"held-out poses are predicted with RMS {summary['rms_mm']:.3g} mm, more than the "
+        f"{summary['predicted_rms_mm']:.3g} mm the calibrations predict: the model misses an "
+        f"effect (compliance, a wrong joint map) or some poses are outliers "
+        f"({action('try-robust')})",
+    )
+
+
+def cross_validate(
+    model: FitModel,
+    q: ArrayLike,
+    points: ArrayLike,
+    folds: int,
+    *,
+    groups: np.ndarray | None = None,
+    target: ArrayLike | None = None,
+    sigma: float | None = None,
+    row_sigma: np.ndarray | None = None,
+    rng: np.random.Generator | int | None = None,
+    loads: Loads | None = None,
+) -> CrossValidation:
+    """K-fold cross-validation of the calibration of ``model``.
+
+    Parameters
+    ----------
+    model : FitModel
+        The model identified (noise model and fixed parameters included).
+    q : ndarray, shape (m, n)
+        Joint angles, rad.
+    points : ndarray, shape (m, d)
+        Measured positions in the frame identified in (the plane for 3-D data
+        of a planar arm), mm.
+    folds : int
+        ``K >= 2``: every fold is left out once and predicted by the others.
+    groups : ndarray, shape (m,), optional
+        Rows that belong together (the targets measured at one pose) stay in
+        one fold; every row its own group by default.
+    target, sigma, row_sigma, loads
+        As for :func:`armcal.identification.identify`.
+    rng : numpy.random.Generator or int or None
+        Shuffles the groups into folds.
+
+    Returns
+    -------
+    CrossValidation
+
+    Raises
+    ------
+    ArmcalError
+        If ``K`` is out of range or some fold's complement cannot identify the
+        parameters (too few poses for ``K`` folds).
+    """
+    rng = np.random.default_rng(rng)
+    conditions = model.conditions(q, target=target, loads=loads, sigma_mm=row_sigma)
+    points = np.asarray(points, dtype=float)
+    m = conditions.m
+    keys = np.arange(m) if groups is None else np.unique(groups, return_inverse=True)[1]
+    count = int(keys.max()) + 1
+    if not 2 <= folds <= count:
+        raise ArmcalError(f"--cross-validate needs 2 to {count} folds (the poses), got {folds}")
+    of_group = np.empty(count, dtype=int)
+    of_group[rng.permutation(count)] = np.arange(count) % folds
+    fold = of_group[keys]
+    errors = np.empty(points.shape)
+    predicted = np.empty(m)
+    for k in range(folds):
+        held = fold == k
+        train = conditions.take(~held)
+        try:
+            cal = identify(
+                model,
+                train.q,
+                points[~held],
+                sigma=sigma,
+                row_sigma=train.sigma_mm,
+                target=train.target,
+                loads=train.loads,
+            )
+        except NotIdentifiableError:
+            raise ArmcalError(
+                f"with {folds} folds, the poses left after holding out fold {k + 1} cannot "
+                "identify every parameter; use fewer folds or measure more poses"
+            ) from None
+        test = conditions.take(held)
+        fitted = cal.calibrated()
+        errors[held] = points[held] - fitted.positions(test)
+        predicted[held] = _predicted(fitted, test)[1]
+    return CrossValidation(folds, fold, errors, predicted)
