@@ -28,10 +28,12 @@ from armcal.models import (
     Elastostatic,
     Loads,
     PlanarArm,
+    Target,
     check_compliance_identifiable,
     forward_kinematics,
 )
 from armcal.synthesis import synthesize_measurements
+from armcal.validation import validate
 
 G = STANDARD_GRAVITY
 
@@ -349,3 +351,71 @@ def test_payloads_need_an_elastostatic_robot(tmp_path):
                                     "0,0,0,0,660,0,-1\n")  # fmt: skip
     run = _armcal("identify", "--measurements", "m.csv", cwd=tmp_path)
     assert run.returncode == 2 and "payload_kg" in run.stderr and "negative" in run.stderr
+
+
+def _nest_arm() -> tuple[PlanarArm, Elastostatic, np.ndarray]:
+    """The virtual vertical arm with a nest of three tracker reflectors on its last link."""
+    arm, elastic, truth = virtual_vertical_arm()
+    nest = arm.replace(
+        targets=[
+            Target("A", 200.0),
+            Target("B", 160.0, np.radians(25.0)),
+            Target("C", 160.0, np.radians(-25.0)),
+        ]
+    )
+    # dl and dq of links 1, 2, then each reflector's last link (3@A, 3@B, 3@C)
+    geometry = nest.params_from_display([1.0, -0.5, 0.8, 0.3, -0.4], [0.3, -0.2, 0.4, 0.25, 0.45])
+    return nest, elastic, np.concatenate([geometry, truth[arm.n_params :]])
+
+
+def test_compliance_with_a_nest_of_three_reflectors():
+    """Every pose measured at three reflectors: the compliance is recovered within 3 std,
+    the residual falls to the noise against the geometry alone, and validation and
+    compensation take the calibration (with each row's reflector and payload)."""
+    nest, elastic, truth = _nest_arm()
+    rng = np.random.default_rng(21)
+    poses = 40
+    q = rng.uniform(-2.5, 2.5, (poses, 3))
+    payload = np.where(np.arange(poses) % 2 == 1, 10.0, 0.0)
+    model = CompliantArm.for_loads(nest, elastic, Loads.create(poses, payload))
+    rows = model.plan_conditions(q, Loads.create(poses, payload))  # 3 rows per pose
+    assert rows.m == 3 * poses and rows.target.tolist()[:3] == [0, 1, 2]
+    sigma = 0.02
+    xy = synthesize_measurements(
+        model, rows.q, truth, sigma, rng=rng, target=rows.target, loads=rows.loads
+    )
+    cal = identify(model, rows.q, xy, sigma=sigma, target=rows.target, loads=rows.loads)
+    assert cal.names[-3:] == ("k1", "k2", "k3")
+    errors = (cal.params - truth) * cal.display_scale / cal.std
+    assert np.all(np.abs(errors) < 3), dict(zip(cal.names, errors.round(2), strict=True))
+    assert not cal.warnings, [w.code for w in cal.warnings]
+    # residual RMS per coordinate: at sigma with compliance, many sigma without it
+    assert cal.nested is not None
+    assert cal.residual_rms < 1.2 * sigma
+    assert cal.nested.rms_per_coordinate_mm > 5 * sigma
+    assert cal.nested.p_value is not None and cal.nested.p_value < 1e-12
+    # held-out poses, each reflector and payload: calibrated at the predicted error
+    q_test = rng.uniform(-2.5, 2.5, (60, 3))
+    test_loads = Loads.create(60, rng.choice([0.0, 10.0], 60))
+    test = model.plan_conditions(q_test, test_loads)
+    xy_test = synthesize_measurements(
+        model, test.q, truth, sigma, rng=rng, target=test.target, loads=test.loads
+    )
+    fitted = cal.calibrated()
+    check = validate(fitted, test.q, xy_test, target=test.target, loads=test.loads)
+    summary = check.summary()
+    assert summary["rms_after_mm"] < 1.2 * summary["predicted_rms_after_mm"]
+    assert summary["rms_before_mm"] > 10 * summary["rms_after_mm"]
+    # a program for reflector B under 10 kg: the true arm reaches where the nominal meant
+    program = rng.uniform(-1.5, 1.5, (10, 3))
+    target = np.full(10, 1)
+    program_loads = Loads.create(10, 10.0)
+    result = compensate(fitted, program, target=target, loads=program_loads)
+    assert result.corrected.all()
+    reached = model.positions(
+        model.conditions(result.q, target=target, loads=program_loads), truth
+    )
+    goal = forward_kinematics(nest, program, target=target)
+    # the calibration's error, a few sigma/sqrt(m), not the deflection (up to ~1 mm)
+    assert np.max(np.linalg.norm(reached - goal, axis=1)) < 0.05
+    assert np.max(result.position_before_mm) > 0.3
