@@ -72,7 +72,7 @@ from baselines import numpy_gauss_newton
 
 from armcal import PlanarArm, forward_kinematics, identify, load_robot
 from armcal.doe import orthogonal_plan, random_plan
-from armcal.io import format_measurements_csv
+from armcal.files import format_measurements_csv
 from armcal.models.planar_closed_form import solve_closed_form
 from armcal.simulate import monte_carlo
 from armcal.synthesis import synthesize_measurements

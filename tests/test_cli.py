@@ -245,3 +245,36 @@ def test_demo_report_shows_its_figures_and_the_story(tmp_path, capsys):
     # the bumped measurement (pose 7 of 20) is found and left out
     cal = json.loads((tmp_path / "calibration.json").read_text())
     assert [o["pose"] for o in cal["outliers"] if o["removed"]] == ["7"]
+
+
+def test_synthesize_a_robot_with_one_target_labels_every_row_and_round_trips(tmp_path, capsys):
+    """One [targets] entry: every row says which target it measured, and identify reads it.
+
+    The truth (dl3@A 0.3 mm, dq3@A 0.6 deg, all else 0) comes back noiselessly.
+    """
+    robot = tmp_path / "tool.toml"
+    robot.write_text(
+        'name = "tool"\nlink_lengths_mm = [260.0, 180.0, 120.0]\n'
+        "[targets]\nA = { length_mm = 150.0, angle_deg = 20.0 }\n"
+    )
+    truth = tmp_path / "truth.toml"
+    truth.write_text("dl_mm = [0, 0, 0.3]\ndq_deg = [0, 0, 0.6]\n")
+    plan = tmp_path / "plan.csv"
+    plan.write_text(
+        "q1_deg,q2_deg,q3_deg\n"
+        + "".join(f"{15 * k},{40 * k - 150},{75 * k % 360 - 170}\n" for k in range(8))
+    )
+    meas, cal = tmp_path / "meas.csv", tmp_path / "cal.json"
+    common = ["--robot", str(robot)]
+    synthesize = ["synthesize", *common, "--truth", str(truth), "--plan", str(plan)]
+    assert main([*synthesize, "--sigma", "0", "-o", str(meas)]) == 0
+    rows = meas.read_text().splitlines()
+    assert rows[0].split(",")[-1] == "target" and len(rows) == 9
+    assert all(row.endswith(",A") for row in rows[1:])
+    identify = ["identify", *common, "--measurements", str(meas), "--sigma", "0.05"]
+    assert main([*identify, "-o", str(cal)]) == 0
+    capsys.readouterr()
+    values = {p["name"]: p["value"] for p in json.loads(cal.read_text())["parameters"]}
+    assert_allclose(values["dl3@A"], 0.3, atol=1e-9)
+    assert_allclose(values["dq3@A"], 0.6, atol=1e-9)
+    assert_allclose([v for k, v in values.items() if not k.endswith("@A")], 0, atol=1e-9)

@@ -19,9 +19,9 @@ from armcal.compensation import compensate
 from armcal.compliance_check import check_compliance, virtual_vertical_arm
 from armcal.doe.compliance import design_compliant
 from armcal.errors import ArmcalError, NotIdentifiableError
+from armcal.files import read_calibration
 from armcal.identification import identify, solve
 from armcal.instrument import identify_3d
-from armcal.io import read_calibration
 from armcal.models import (
     STANDARD_GRAVITY,
     CompliantArm,

@@ -13,10 +13,9 @@ from armcal import PlanarArm, forward_kinematics, identify, load_robot
 from armcal.cli import main
 from armcal.doe import random_plan
 from armcal.export import folded_arm, robot_toml, urdf, urdf_joint_values
-from armcal.io import read_calibration
+from armcal.files import calibration_document, read_calibration, to_json
 from armcal.models import Annulus, Box, CalibratedArm, Target, tool_angles
 from armcal.noise import NoiseModel
-from armcal.report import calibration_to_dict, to_json
 from helpers import run_cli
 
 if sys.version_info >= (3, 11):
@@ -428,7 +427,7 @@ def test_cli_coupled_arm_round_trips_through_the_file_and_warns(tmp_path, capsys
     xy = forward_kinematics(truth.arm, q, truth.params, target=target)
     found = identify(truth.arm, q, xy, target=target)
     path, robot, model = tmp_path / "cal.json", tmp_path / "r.toml", tmp_path / "a.urdf"
-    path.write_text(to_json(calibration_to_dict(found)))
+    path.write_text(to_json(calibration_document(found)))
     args = ["export", "--calibration", str(path), "--robot-toml", str(robot), "--urdf", str(model)]
     assert main([*args, "--json"]) == 0
     out, err = capsys.readouterr()
@@ -487,7 +486,7 @@ def test_robot_file_quotes_names_and_labels_that_need_it(tmp_path):
 
 def test_joint_limits_in_degrees_survive_a_round_trip() -> None:
     """120 deg read as radians is written back as 120, not 119.99999999999999."""
-    from armcal.io import robot_to_dict
+    from armcal.files import robot_to_dict
 
     arm = PlanarArm([300.0, 250.0], joint_limits=np.radians([[-90.0, 90.0], [-120.0, 120.0]]))
     assert np.degrees(arm.joint_limits)[1, 1] != 120.0  # the round-off this guards against

@@ -19,9 +19,9 @@ import numpy as np
 import pytest
 
 from armcal.cli import build_parser
-from armcal.cli_help import COMMANDS
+from armcal.cli.help import COMMANDS
+from armcal.files import COMPLIANCE_TRUTH_KEYS, load_robot, read_measurements
 from armcal.formats import COLUMNS, ROBOT_KEYS, TRUTH_KEYS, columns_line, format_reference
-from armcal.io import COMPLIANCE_TRUTH_KEYS, load_robot, read_measurements
 from helpers import run_cli
 
 PAPER = load_robot("paper-4link").arm

@@ -17,9 +17,10 @@ from armcal import (
     identify,
     orthogonal_plan,
 )
-from armcal.io import (
+from armcal.files import (
     OutputFolder,
     atomic_write,
+    calibration_document,
     check_outputs,
     format_measurements_csv,
     format_plan_csv,
@@ -27,9 +28,9 @@ from armcal.io import (
     load_truth,
     read_measurements,
     read_plan,
+    to_json,
     write_folder,
 )
-from armcal.report import calibration_to_dict, to_json
 
 
 def test_builtin_robots_carry_the_paper_geometry_and_truth():
@@ -328,7 +329,7 @@ def test_measurement_errors_name_file_row_and_column(tmp_path, arm2, text, match
 def test_calibration_json_has_the_contract_keys(arm4, paper_truth4, rng):
     q = orthogonal_plan(arm4, 20)
     xy = forward_kinematics(arm4, q, paper_truth4) + rng.normal(0.0, 0.1, (20, 2))
-    document = json.loads(to_json(calibration_to_dict(identify(arm4, q, xy, sigma=0.1))))
+    document = json.loads(to_json(calibration_document(identify(arm4, q, xy, sigma=0.1))))
     assert document["format"] == "armcal-calibration/1"
     assert document["robot"]["link_lengths_mm"] == [260.0, 180.0, 120.0, 100.0]
     assert document["robot"]["base_offset"] is False

@@ -14,7 +14,7 @@ from numpy.testing import assert_allclose
 from armcal import PlanarArm, identify
 from armcal.cli import main
 from armcal.compensation import compensate
-from armcal.io import format_measurements_csv, read_calibration
+from armcal.files import format_measurements_csv, read_calibration
 from armcal.models import CalibratedArm, Target, forward_kinematics, tool_angles
 from armcal.validation import cross_validate, validate
 

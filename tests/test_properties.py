@@ -42,17 +42,18 @@ from armcal import (
 )
 from armcal.criteria import efficiencies, scaled_information
 from armcal.doe import analytic_plan
-from armcal.io import (
+from armcal.files import (
+    calibration_document,
     load_robot,
     load_truth,
     read_calibration,
     read_measurements,
     read_plan,
     read_program,
+    to_json,
 )
 from armcal.models import every_target, paper_from_user, wrap_angle
 from armcal.noise import NoiseModel
-from armcal.report import calibration_to_dict, to_json
 
 #: Unit round-off of double precision (2.2e-16).
 EPS = float(np.finfo(float).eps)
@@ -974,7 +975,7 @@ def calibration_documents() -> list[dict]:
     xy = forward_kinematics(tilted, q)
     xyz = np.column_stack([xy[:, 0], 0.6 * xy[:, 1], 0.8 * xy[:, 1]])  # a tilted plane
     cals.append(identify_3d(tilted, q, xyz, sigma=0.1))
-    _CALIBRATIONS.extend(json.loads(to_json(calibration_to_dict(cal))) for cal in cals)
+    _CALIBRATIONS.extend(json.loads(to_json(calibration_document(cal))) for cal in cals)
     return _CALIBRATIONS
 
 

@@ -22,6 +22,7 @@ from armcal import simulate as sim
 from armcal.criteria import d_efficiency, position_accuracy, predicted_std
 from armcal.doe import orthogonal_plan, random_plan
 from armcal.doe.study import random_plan_study
+from armcal.files import to_json
 from armcal.models import link_phasors
 from armcal.progress import ProgressBar
 from helpers import random_arm, random_truth
@@ -227,7 +228,7 @@ def test_report_says_where_the_quantiles_come_from(arm4, paper_truth4, trials, e
     result = sim.monte_carlo(arm4, q, paper_truth4, 0.1, trials, rng=1, test_q=test_q)
     assert result.position.exact_quantiles is exact
     text = report.format_monte_carlo(result)
-    document = json.loads(report.to_json(report.monte_carlo_to_dict(result)))
+    document = json.loads(to_json(report.monte_carlo_to_dict(result)))
     errors = document["position_error_mm"]
     assert errors["pairs"] == trials * 300
     assert errors["quantile_subsample"] == min(trials * 300, sim.POSITION_SUBSAMPLE)

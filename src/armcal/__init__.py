@@ -19,7 +19,7 @@ The public API, by concern (each module's docstring says more):
   batched :func:`monte_carlo`;
 * :mod:`armcal.reproduction` -- the paper's tables and figures recomputed;
 * :mod:`armcal.report` -- every result as text and as JSON;
-* :mod:`armcal.io` -- robot, truth, plan and measurement files.
+* :mod:`armcal.files` -- robot, truth, plan, measurement and calibration files.
 
 Importing armcal prints nothing, plots nothing and imports neither matplotlib
 nor scipy.
@@ -48,9 +48,9 @@ from .doe import (
 from .doe.study import PlanStudy, random_plan_study
 from .errors import ArmcalError, ArmcalWarning, InputError, NotIdentifiableError
 from .export import robot_toml, urdf
+from .files import load_robot, load_truth, read_calibration, read_measurements, read_plan
 from .identification import Calibration, Estimate, GoodnessOfFit, Outlier, identify, solve
 from .instrument import identify_3d
-from .io import load_robot, load_truth, read_calibration, read_measurements, read_plan
 from .models import (
     Annulus,
     Box,

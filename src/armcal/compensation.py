@@ -57,6 +57,8 @@ class Compensation:
         error left after compensation, as the calibration predicts it, mm.
     orientation_before_deg, orientation_after_deg : ndarray, shape (m,), or None
         The same for the tool's orientation (when it is kept), deg.
+    commanded : ndarray, shape (m, n)
+        The program's own commands, rad.
     """
 
     q: np.ndarray
@@ -66,6 +68,7 @@ class Compensation:
     position_after_mm: np.ndarray
     orientation_before_deg: np.ndarray | None
     orientation_after_deg: np.ndarray | None
+    commanded: np.ndarray
 
     def __repr__(self) -> str:
         s = self.summary()
@@ -74,6 +77,11 @@ class Compensation:
             f"corrected; predicted RMS per point {s['rms_before_mm']:.4g} mm before, "
             f"{s['rms_after_mm']:.4g} mm after)"
         )
+
+    @property
+    def largest_change_deg(self) -> float:
+        """The largest change of a joint command, deg."""
+        return float(np.max(np.degrees(np.abs(self.q - self.commanded)), initial=0.0))
 
     @property
     def uncorrectable(self) -> np.ndarray:
@@ -238,4 +246,4 @@ def compensate(
         turn_before = np.degrees(arcs / goal.scale)
         angles = model.orientation_jacobian(final, robot)  # (m, k, p)
         turn_after = np.degrees(np.sqrt(tip_variances(angles, covariance)))
-    return Compensation(q, done, tuple(reasons), before, after, turn_before, turn_after)
+    return Compensation(q, done, tuple(reasons), before, after, turn_before, turn_after, q0)

@@ -60,6 +60,7 @@ from .models import (
     plan_rows,
     plan_svd,
     scaled_jacobian,
+    unit_trace,
     weighted_user_jacobian,
 )
 from .numerics import COND_WARN, RANK_RTOL, ScaledSVD, spd_inverse
@@ -592,6 +593,10 @@ class PlanQuality:
     warnings : tuple of ArmcalWarning
         An ``ill-conditioned`` warning when the plan's condition number exceeds
         ``COND_WARN`` (see :func:`conditioning_warning`); empty otherwise.
+    normalized : bool
+        Whether the efficiencies are relative to an optimum of 1
+        (:func:`~armcal.models.planar_information.unit_trace`); otherwise they
+        are criteria of the weighted information, comparing plans of one model.
     """
 
     n_poses: int
@@ -603,6 +608,15 @@ class PlanQuality:
     predicted_std: np.ndarray
     position: PositionAccuracy
     warnings: tuple[ArmcalWarning, ...] = ()
+    normalized: bool = True
+
+    def __repr__(self) -> str:
+        eff = self.efficiencies
+        return (
+            f"PlanQuality({self.n_poses} poses, sigma {self.sigma_mm:g} mm: D {eff['D']:.4f}, "
+            f"A {eff['A']:.4f}, E {eff['E']:.4f}; predicted position RMS "
+            f"{self.position.rms_mm:.4g} mm)"
+        )
 
 
 def evaluate_plan(
@@ -641,4 +655,5 @@ def evaluate_plan(
         predicted_std=predicted_std(arm, q, sigma, svd=svd),
         position=position_accuracy(arm, q, test_q, sigma, svd=svd),
         warnings=() if warning is None else (warning,),
+        normalized=unit_trace(arm),
     )

@@ -18,10 +18,16 @@ from .compensation import compensate
 from .doe import design, random_plan
 from .errors import ArmcalWarning
 from .export import robot_toml, urdf
+from .files import (
+    calibration_document,
+    format_measurements_csv,
+    format_plan_csv,
+    format_program_csv,
+    to_json,
+)
 from .identification import identify
-from .io import format_measurements_csv, format_plan_csv, format_program_csv
 from .models import PlanarArm, forward_kinematics
-from .report import calibration_to_dict, format_calibration, to_json
+from .report import format_calibration
 from .synthesis import synthesize_measurements
 from .validation import validate
 
@@ -133,7 +139,7 @@ def run_demo(
     labels = [str(i + 1) for i in range(poses)]
     cal = identify(model, q, xy, robust=True, pose_labels=labels)
     calibrated = cal.calibrated()
-    document = calibration_to_dict(cal)
+    document = calibration_document(cal)
 
     q_test = random_plan(arm, VALIDATION_POSES, rng=rng)
     xy_test = synthesize_measurements(arm, q_test, truth, sigma, rng=rng)

@@ -39,6 +39,7 @@ ACTIONS: dict[str, str] = {
     "try-robust": "try a robust fit (robust=True)",
     "try-closed-form": 'try the closed form (method="closed-form")',
     "geometry-alone": "fit the geometry alone (the model without compliance)",
+    "geometry-only": "a fit without compliance (compliance=False) fits the geometry only",
     "design": "(armcal.design)",
 }
 

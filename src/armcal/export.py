@@ -302,7 +302,7 @@ def _deviations_text(cal: CalibratedArm) -> list[str]:
 
 
 def robot_toml(cal: CalibratedArm) -> str:
-    """The calibrated arm as a robot TOML file that :func:`armcal.io.load_robot` accepts.
+    """The calibrated arm as a robot TOML file that :func:`armcal.files.load_robot` accepts.
 
     Parameters
     ----------

@@ -1,6 +1,6 @@
 """The files armcal reads, as data: every robot-file key and every CSV column.
 
-One catalogue serves three readers: :mod:`armcal.io` takes the allowed keys
+One catalogue serves three readers: :mod:`armcal.files` takes the allowed keys
 of each robot-file table from it (so a key cannot be accepted without being
 documented) and its hints for a key written in the wrong table; ``armcal
 formats`` prints it; and each command's ``--help`` names the columns of the

@@ -21,7 +21,7 @@ from matplotlib.lines import Line2D
 from matplotlib.patches import Circle, Patch, Rectangle, Wedge
 from matplotlib.ticker import FuncFormatter, MaxNLocator, NullFormatter
 
-from .io import atomic_write
+from .files import atomic_write
 from .models import Annulus, PlanarArm
 
 __all__ = [
@@ -479,7 +479,7 @@ def save_figure(fig: Figure, path: str | os.PathLike) -> None:
     fig : matplotlib.figure.Figure
     path : str or os.PathLike
         Target file; its folder must exist.  An existing file is replaced; a
-        symbolic link is written through (see :func:`armcal.io.atomic_write`).
+        symbolic link is written through (see :func:`armcal.files.atomic_write`).
 
     Raises
     ------

@@ -350,6 +350,15 @@ class MonteCarlo:
         return np.sqrt(np.diagonal(self.predicted_covariance)) * self.display_scale
 
     @property
+    def biased(self) -> tuple[str, ...]:
+        """The parameters whose bias is beyond :attr:`bias_limit`."""
+        return tuple(
+            name
+            for name, b, limit in zip(self.names, self.bias, self.bias_limit, strict=True)
+            if abs(b) > limit
+        )
+
+    @property
     def bias_limit(self) -> np.ndarray:
         """``4 std / sqrt(N)`` ``(p,)``: a bias beyond it is significant at about 1e-4."""
         return 4.0 * self.predicted_std / math.sqrt(self.trials)

@@ -6,7 +6,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..models import PlanarArm, check_identifiable, plan_svd
+from ..models import PlanarArm, check_identifiable, plan_svd, unit_trace
 from ..numerics import ScaledSVD, scaled_svd, spd_inverse
 from .exchange import _blocks
 from .model import (
@@ -14,7 +14,6 @@ from .model import (
     information_gradient,
     pose_model,
     rotation_invariant,
-    unit_trace,
 )
 from .optimizer import (
     _adam_ascent,
@@ -51,7 +50,7 @@ class Certificate:
         ``(det M(xi*))^(1/p)`` of the best weighted design ``xi*`` found, in the
         normalization of :func:`armcal.criteria.d_efficiency` (Hadamard-normalized
         for the paper's model; at most 1 wherever
-        :func:`armcal.doe.model.unit_trace` holds).
+        :func:`armcal.models.planar_information.unit_trace` holds).
     max_variance : float
         ``max_x d(x, xi*)`` over the feasible poses searched (``>= p``; ``= p`` at
         the optimum).
@@ -195,7 +194,7 @@ def certify(
     certified against their own optimum, over their own columns.
 
     Where every pose's information has trace ``p``
-    (:func:`armcal.doe.model.unit_trace`: the paper's model, isotropic iid noise
+    (:func:`armcal.models.planar_information.unit_trace`: the paper's model, isotropic iid noise
     with only lengths, base or leading offsets fixed, or every parameter free
     without encoder noise) every design has ``tr M = p``, so ``det M* <= 1``
     (Hadamard's bound for the paper's unit diagonal; AM-GM in general) is a

@@ -43,7 +43,10 @@ from .plans import feasible, feasible_poses
 
 __all__ = [
     "CompliantDesign",
+    "CompliantQuality",
+    "d_efficiency_compliant",
     "design_compliant",
+    "evaluate_compliant",
     "payload_values",
 ]
 
@@ -306,6 +309,12 @@ def design_compliant(
     """
     if order not in ORDERS:
         raise ArmcalError(f"unknown order {order!r}; choose one of {', '.join(ORDERS)}")
+    if arm.n_target_links > 1:
+        raise ArmcalError(
+            f"{arm.name} has {arm.n_target_links} targets: plans for joint compliance are "
+            "designed for one target per pose (exchange weighs a pose by one point); design "
+            "for the target the tool carries, then measure every target at its poses"
+        )
     rng = np.random.default_rng(rng)
     values = np.array(payload_values(elastic, payloads))
     model = CompliantArm.for_loads(arm, elastic, Loads.create(values.size, values))
@@ -379,10 +388,59 @@ def d_efficiency_compliant(model: CompliantArm, q: np.ndarray, loads: Loads) -> 
 
     Hadamard's bound makes 1 the value of a plan whose columns are orthogonal;
     the number compares plans of one model (the certificate of
-    :func:`design_compliant` says how far a plan is from the best).
+    :func:`design_compliant` says how far a plan is from the best).  The plan is
+    measured at every target of every pose.
     """
-    jac = whitened_blocks(model, model.conditions(q, loads=loads))
+    jac = whitened_blocks(model, model.plan_conditions(q, loads))
     svd = scaled_svd(jac.reshape(-1, model.n_free))
     s = svd.truncated
     with np.errstate(divide="ignore"):
         return float(np.exp(2.0 * np.sum(np.log(s)) / model.n_free))
+
+
+@dataclass(frozen=True, eq=False)
+class CompliantQuality:
+    """A plan's quality for geometry plus joint compliance, before measuring.
+
+    Attributes
+    ----------
+    model : CompliantArm
+    n_poses : int
+    sigma_mm : float
+        Instrument noise assumed (mm).
+    predicted_std : ndarray, shape (p,)
+        Every parameter's predicted std in display units (0 for a fixed one).
+    d_efficiency : float
+        :func:`d_efficiency_compliant`: compares plans of this model.
+    payload_counts : dict of float to int
+        How many poses carry each payload (kg).
+    """
+
+    model: CompliantArm
+    n_poses: int
+    sigma_mm: float
+    predicted_std: np.ndarray
+    d_efficiency: float
+    payload_counts: dict[float, int]
+
+
+def evaluate_compliant(
+    model: CompliantArm, q: np.ndarray, loads: Loads, sigma: float
+) -> CompliantQuality:
+    """Predicted std and D-efficiency of plan ``q`` with payloads ``loads``, at noise ``sigma``.
+
+    Raises NotIdentifiableError when the poses and loads cannot identify every parameter.
+    """
+    rows = model.plan_conditions(q, loads)
+    model.check_identifiable(rows)
+    covariance, _ = predicted_covariance(model, rows, sigma)
+    std = np.where(model.free, display_std(model, covariance), 0.0)
+    values, counts = np.unique(loads.payload_kg, return_counts=True)
+    return CompliantQuality(
+        model,
+        int(q.shape[0]),
+        float(sigma),
+        std,
+        d_efficiency_compliant(model, q, loads),
+        {float(v): int(c) for v, c in zip(values, counts, strict=True)},
+    )

@@ -9,7 +9,7 @@ import numpy as np
 
 from ..criteria import CRITERIA, d_efficiency, efficiencies
 from ..errors import ArmcalError
-from ..models import PlanarArm
+from ..models import PlanarArm, unit_trace
 from .certificate import Certificate, certify
 from .exchange import exchange_plan
 from .model import attains_unit_bound, model_description, rotation_invariant
@@ -49,7 +49,7 @@ class Design:
     d_efficiency : float
         :func:`armcal.criteria.d_efficiency` on the arm's model.  For the paper's
         model ``(det F / det F_opt)^(1/p)``, relative to the unconstrained
-        optimum; wherever :func:`armcal.doe.model.unit_trace` holds at most 1,
+        optimum; wherever :func:`armcal.models.planar_information.unit_trace` holds at most 1,
         and 1 only for a plan with identity normalized information; for other
         models the weighted information's ``det^(1/p_f)``, which compares plans
         of that model only (the certificate says how far from its optimum).
@@ -71,6 +71,11 @@ class Design:
     distinct : bool
         Whether the plan was made of distinct poses (no two within
         :data:`armcal.doe.plans.DISTINCT_TOLERANCE` on every joint).
+    normalized : bool
+        Whether ``d_efficiency`` is relative to an optimum of 1
+        (:func:`~armcal.models.planar_information.unit_trace`); otherwise it is the
+        D-criterion of the weighted information, and only the certificate compares
+        the plan with the best one.
     """
 
     arm: PlanarArm
@@ -84,6 +89,20 @@ class Design:
     joint_travel: float
     joint_travel_unordered: float
     distinct: bool
+    normalized: bool = True
+
+    @property
+    def optimum_by_search(self) -> bool:
+        """Whether a search (not the closed form) found a plan at the optimum of 1."""
+        return self.normalized and self.method != "analytic" and self.d_efficiency >= 1 - 1e-9
+
+    def __repr__(self) -> str:
+        cert = self.certificate
+        certified = "" if cert is None else f", certified >= {cert.certified_d_efficiency:.4f}"
+        return (
+            f"Design({self.q.shape[0]} poses of {self.arm.name}, criterion {self.criterion}, "
+            f"{self.method}: D {self.d_efficiency:.4f}{certified})"
+        )
 
 
 def _closed_form_note(arm: PlanarArm, m: int) -> str:
@@ -227,7 +246,7 @@ def design(
     information over the free parameters.  The paper's orthogonal plans are
     optimal for its model -- isotropic iid noise, every parameter free -- by
     Hadamard's bound; ``auto`` takes a closed-form plan whenever the model keeps
-    that bound (:func:`armcal.doe.model.unit_trace`) and the plan reaches it,
+    that bound (:func:`armcal.models.planar_information.unit_trace`) and the plan reaches it,
     which covers fixed lengths, base coordinates or leading offsets under
     isotropic noise, and anisotropic instrument noise with every parameter free
     (joint 1 stepping too, ``m > 2 n``).  Otherwise -- encoder noise, a fixed
@@ -372,4 +391,5 @@ def design(
         joint_travel=joint_travel(q),
         joint_travel_unordered=travel_found,
         distinct=distinct,
+        normalized=unit_trace(arm),
     )

@@ -30,8 +30,8 @@ Hadamard's inequality: every column has unit modulus at every pose, so the
 normalized information has a unit diagonal and ``det <= 1``, with equality iff
 it is ``I`` (an orthogonal plan).  AM-GM on its eigenvalues gives the same
 bound whenever only the *trace* of every pose's information is ``p_f``
-(:func:`unit_trace`): ``tr M = p_f`` for every design, so ``det M <= 1``, and a
-plan with ``M = I`` is D-, A- and E-optimal.  That holds
+(:func:`~armcal.models.planar_information.unit_trace`): ``tr M = p_f`` for every
+design, so ``det M <= 1``, and a plan with ``M = I`` is D-, A- and E-optimal.  That holds
 
 * with isotropic iid noise when each free coordinate is one paper column (a
   fixed ``dl``, base coordinate or leading joint offset just drops columns);
@@ -54,7 +54,7 @@ import numpy as np
 
 from ..criteria import d_efficiency
 from ..errors import ArmcalError
-from ..models import PlanarArm, model_basis, model_columns, scaled_columns
+from ..models import PlanarArm, model_basis, model_columns, scaled_columns, unit_trace
 from ..noise import complex_whitening
 
 __all__ = [
@@ -64,39 +64,7 @@ __all__ = [
     "model_description",
     "pose_model",
     "rotation_invariant",
-    "unit_trace",
 ]
-
-
-def unit_trace(arm: PlanarArm) -> bool:
-    """Whether every pose's information over the free parameters has trace ``p_f``.
-
-    Then ``det M <= 1`` for the normalized information of every plan and
-    design, with equality iff ``M = I`` (module notes): isotropic iid noise
-    with only ``dl``, base or leading ``dq`` parameters fixed, or every
-    parameter free without encoder noise.
-
-    Examples
-    --------
-    >>> from armcal.noise import NoiseModel
-    >>> arm = PlanarArm([260.0, 180.0, 120.0, 100.0], sigma=0.02)
-    >>> unit_trace(arm), unit_trace(arm.replace(fixed=("dl4",)))
-    (True, True)
-    >>> unit_trace(arm.replace(fixed=("dq2",)))
-    False
-    >>> anisotropic = arm.replace(noise=NoiseModel.per_axis(0.08, 0.02))
-    >>> unit_trace(anisotropic), unit_trace(anisotropic.replace(fixed=("dl4",)))
-    (True, False)
-    """
-    noise = arm.noise
-    if noise is not None and noise.joint_sigma is not None:
-        return False
-    if arm.free.all():
-        return True
-    if noise is not None and not noise.isotropic_instrument:
-        return False
-    basis = model_basis(arm)[0]
-    return bool(np.all(np.count_nonzero(basis, axis=0) == 1))
 
 
 def attains_unit_bound(arm: PlanarArm, q: np.ndarray) -> bool:

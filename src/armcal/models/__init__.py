@@ -45,6 +45,7 @@ from .planar_information import (
     scaled_columns,
     scaled_jacobian,
     target_weights,
+    unit_trace,
     user_from_scaled,
     weighted_user_jacobian,
 )
@@ -115,6 +116,7 @@ __all__ = [
     "standard_joint_map",
     "target_weights",
     "tool_angles",
+    "unit_trace",
     "user_from_scaled",
     "weighted_user_jacobian",
     "wrap_angle",

@@ -357,6 +357,11 @@ class CompliantArm:
         return CompliantArm(self.arm.with_fixed(fixed), self.elastic, self.known_loads)
 
     @property
+    def default_payload_kg(self) -> float:
+        """The robot file's payload."""
+        return self.elastic.payload_kg
+
+    @property
     def uses_gravity(self) -> bool:
         """The arm's weight twists the joints: gravity's direction matters."""
         return True

@@ -329,6 +329,11 @@ class FitModel(Protocol):
         ...
 
     @property
+    def default_payload_kg(self) -> float | None:
+        """The payload (kg) of a row that gives none; None when loads do not move the points."""
+        ...
+
+    @property
     def uses_gravity(self) -> bool:
         """Whether the model's points depend on gravity's direction (joint compliance)."""
         ...

@@ -168,6 +168,11 @@ class PlanarArm(PlanarArmSpec):
         return self.replace(fixed=tuple(fixed))
 
     @property
+    def default_payload_kg(self) -> None:
+        """A rigid arm's points do not depend on its load."""
+        return None
+
+    @property
     def uses_gravity(self) -> bool:
         """A rigid arm's points do not depend on gravity."""
         return False

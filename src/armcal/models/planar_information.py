@@ -38,6 +38,7 @@ __all__ = [
     "scaled_columns",
     "scaled_jacobian",
     "target_weights",
+    "unit_trace",
     "user_from_scaled",
     "weighted_user_jacobian",
 ]
@@ -540,3 +541,35 @@ def weighted_user_jacobian(
         jac = arm.whitening_at(q, params, row_sigma, target=target, noise=model) @ jac
     jac = jac[..., arm.free]
     return jac.reshape(*jac.shape[:-3], -1, arm.n_free)
+
+
+def unit_trace(arm: PlanarArmSpec) -> bool:
+    """Whether every pose's information over the free parameters has trace ``p_f``.
+
+    Then ``det M <= 1`` for the normalized information of every plan and
+    design, with equality iff ``M = I`` (AM-GM on its eigenvalues, the paper's
+    Hadamard bound where the diagonal is 1): isotropic iid noise
+    with only ``dl``, base or leading ``dq`` parameters fixed, or every
+    parameter free without encoder noise.
+
+    Examples
+    --------
+    >>> from armcal.noise import NoiseModel
+    >>> arm = PlanarArmSpec([260.0, 180.0, 120.0, 100.0], sigma=0.02)
+    >>> unit_trace(arm), unit_trace(arm.replace(fixed=("dl4",)))
+    (True, True)
+    >>> unit_trace(arm.replace(fixed=("dq2",)))
+    False
+    >>> anisotropic = arm.replace(noise=NoiseModel.per_axis(0.08, 0.02))
+    >>> unit_trace(anisotropic), unit_trace(anisotropic.replace(fixed=("dl4",)))
+    (True, False)
+    """
+    noise = arm.noise
+    if noise is not None and noise.joint_sigma is not None:
+        return False
+    if arm.free.all():
+        return True
+    if noise is not None and not noise.isotropic_instrument:
+        return False
+    basis = model_basis(arm)[0]
+    return bool(np.all(np.count_nonzero(basis, axis=0) == 1))

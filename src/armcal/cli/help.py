@@ -11,8 +11,8 @@ from __future__ import annotations
 import textwrap
 from dataclasses import dataclass
 
-from .formats import columns_line
-from .paper import BUILTIN_ROBOTS
+from ..formats import columns_line
+from ..paper import BUILTIN_ROBOTS
 
 __all__ = ["COMMANDS", "OUTPUTS_EPILOG", "CommandHelp", "description", "epilog"]
 

@@ -1,0 +1,423 @@
+"""The ``armcal`` commands: read the files, call the library, write the files, print.
+
+Every command is thin: what it does beyond parsing arguments and writing files
+is a library call of :mod:`armcal.workflow`, and its output is a report of
+:mod:`armcal.report`.  Options that name a flag in an error keep the flag's
+name here.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from collections.abc import Callable
+from functools import partial
+from pathlib import Path
+
+import numpy as np
+
+from ..demo import run_demo
+from ..errors import ArmcalError
+from ..files import (
+    COMPLIANCE_TRUTH_KEYS,
+    STDIO,
+    RobotSpec,
+    atomic_write,
+    calibration_document,
+    format_measurements_csv,
+    format_plan_csv,
+    format_program_csv,
+    load_compliance_truth,
+    load_robot,
+    load_truth,
+    read_calibration,
+    read_loaded_plan,
+    read_measurements,
+    read_plan,
+    read_program,
+    to_json,
+    write_folder,
+)
+from ..formats import format_reference
+from ..models import CompliantArm, PlanarArm
+from ..progress import ProgressBar
+from ..report import (
+    compensation_report,
+    compliant_design_summary,
+    compliant_quality,
+    design_summary,
+    format_calibration,
+    format_cross_validation,
+    format_monte_carlo,
+    format_quality,
+    format_reproduction,
+    monte_carlo_to_dict,
+    poses_needed_summary,
+    quality_to_dict,
+    reproduction_summary,
+    table_csv,
+    validation_report,
+)
+from ..reproduction import TABLE_COLUMNS, reproduce
+from ..workflow import (
+    calibrate,
+    compensate_program,
+    design_plan,
+    design_sigma,
+    evaluate_file,
+    export_files,
+    fit_model,
+    model_arm,
+    simulate_plan,
+    simulation_sigma,
+    size_plan,
+    synthesize_plan,
+    test_poses,
+    validate_measurements,
+)
+from .output import CLI_ACTIONS, emit, print_warnings
+
+__all__ = [
+    "TARGET_OPTIONS",
+    "check_compliance",
+    "compensate",
+    "demo",
+    "design",
+    "evaluate",
+    "export",
+    "formats",
+    "identify",
+    "poses_needed",
+    "reproduce_paper",
+    "simulate",
+    "synthesize",
+    "validate",
+]
+
+#: The option of every accuracy requirement of poses-needed.
+TARGET_OPTIONS = {
+    "length_std_mm": "--length-std-mm",
+    "angle_std_deg": "--angle-std-deg",
+    "position_rms_mm": "--position-rms-mm",
+}
+
+
+def _model(args: argparse.Namespace, spec: RobotSpec) -> PlanarArm:
+    """The robot's arm with ``--fix`` (replacing the file's set) and ``--sigma`` applied."""
+    fixed = getattr(args, "fix", None)
+    try:
+        return model_arm(spec.arm, fixed=fixed, sigma=getattr(args, "sigma", None))
+    except ArmcalError as exc:
+        raise ArmcalError(f"--fix: {exc}") from None
+
+
+def _truth(args: argparse.Namespace, spec: RobotSpec) -> np.ndarray:
+    """The virtual robot's parameters: ``--truth`` (with compliance for [elastostatic])."""
+    if spec.elastic is not None:
+        model = fit_model(spec, spec.arm)
+        assert isinstance(model, CompliantArm)
+        if args.truth is None:
+            keys = ", ".join(COMPLIANCE_TRUTH_KEYS[k] for k in dict.fromkeys(model.kinds))
+            raise ArmcalError(
+                f"{spec.source}: a robot with [elastostatic] needs --truth truth.toml with the "
+                f"deviations and {keys}"
+            )
+        geometry = load_truth(args.truth, spec.arm)
+        return np.concatenate([geometry, load_compliance_truth(args.truth, model)])
+    if args.truth is not None:
+        return load_truth(args.truth, spec.arm)
+    if spec.default_truth is None:
+        raise ArmcalError(
+            f"{spec.source}: a robot file has no default truth; pass --truth truth.toml "
+            "(dl_mm, dq_deg and, with a base offset, base_mm)"
+        )
+    return spec.default_truth
+
+
+def _plan(path: str, spec: RobotSpec, arm: PlanarArm) -> tuple[np.ndarray, np.ndarray | None]:
+    """A plan file's poses (rad) and, for a robot with [elastostatic], its payload column."""
+    if spec.elastic is None:
+        return read_plan(path, arm), None
+    return read_loaded_plan(path, spec.arm)
+
+
+def _test_poses(args: argparse.Namespace, spec: RobotSpec) -> np.ndarray:
+    """``--test-poses``, else 1000 uniform poses within the limits."""
+    given = None if args.test_poses is None else read_plan(args.test_poses, spec.arm)
+    return test_poses(spec, args.seed, given)
+
+
+def _written(args: argparse.Namespace, *paths: str | None) -> list[str]:
+    return [f"wrote {path}" for path in paths if path is not None]
+
+
+# --------------------------------------------------------------------------- commands
+
+
+def synthesize(args: argparse.Namespace) -> None:
+    """``armcal synthesize``: measurements of a virtual robot."""
+    spec = load_robot(args.robot)
+    q, payload = _plan(args.plan, spec, spec.arm)
+    truth = _truth(args, spec)
+    made = synthesize_plan(
+        spec,
+        q,
+        truth,
+        sigma=simulation_sigma(spec, args.sigma),
+        seed=args.seed,
+        payload=payload,
+    )
+    text = format_measurements_csv(made.q, made.points, made.labels, made.targets, made.payload_kg)
+    if args.output is None or args.output == STDIO:
+        print_warnings(spec.warnings)
+        sys.stdout.write(text)
+        return
+    atomic_write(args.output, text)
+    what = f" with {made.effect}" if made.effect else ""
+    document = {"poses": int(made.q.shape[0]), "sigma_mm": made.sigma_mm, "output": args.output}
+    emit(
+        args,
+        document,
+        f"wrote {made.q.shape[0]} measurements of {spec.arm.name}{what} (sigma "
+        f"{made.sigma_mm:g} mm, seed {args.seed}) to {args.output}",
+        spec.warnings,
+    )
+
+
+def identify(args: argparse.Namespace) -> None:
+    """``armcal identify``: the calibration of a measurement file."""
+    spec = load_robot(args.robot)
+    meas = read_measurements(args.measurements, spec.arm)
+    try:
+        run = calibrate(
+            spec,
+            meas,
+            source=args.measurements,
+            fixed=args.fix,
+            sigma=args.sigma,
+            method=args.method,
+            robust=args.robust,
+            compliance=not args.no_compliance,
+            folds=args.cross_validate,
+            seed=args.seed,
+        )
+    except ArmcalError as exc:
+        if str(exc).startswith(("unknown parameter", "every parameter would be fixed")):
+            raise ArmcalError(f"--fix: {exc}") from None
+        raise
+    cal = run.calibration
+    text = format_calibration(cal)
+    document = calibration_document(cal, warnings=run.warnings, words=CLI_ACTIONS)
+    if run.cross_validation is not None:
+        summary = run.cross_validation.summary()
+        document["cross_validation"] = summary
+        text += "\n" + format_cross_validation(summary)
+    if args.output is not None:
+        atomic_write(args.output, to_json(document))
+    emit(args, document, text, run.warnings)
+
+
+def validate(args: argparse.Namespace) -> None:
+    """``armcal validate``: a calibration against held-out measurements."""
+    cal = read_calibration(args.calibration)
+    meas = read_measurements(args.measurements, cal.arm)
+    run = validate_measurements(cal, meas, source=args.measurements)
+    if args.plot is not None:
+        from ..plotting import plot_validation, save_figure  # matplotlib only when asked for
+
+        save_figure(plot_validation(cal.arm, meas.q, run.validation), args.plot)
+    document, text = validation_report(cal, run.validation, meas, per_pose=args.per_pose)
+    if args.plot is not None:
+        text += f"\nwrote {args.plot}"
+    emit(args, document, text, run.warnings)
+
+
+def compensate(args: argparse.Namespace) -> None:
+    """``armcal compensate``: a program's corrected commands."""
+    cal = read_calibration(args.calibration)
+    program = read_program(args.program, cal.arm)
+    run = compensate_program(
+        cal, program, target=args.target, payload_kg=args.payload_kg, source=args.program
+    )
+    result = run.compensation
+    atomic_write(
+        args.output, format_program_csv(result.q, result.corrected, program.labels, run.targets)
+    )
+    document, text = compensation_report(cal, result, program)
+    text += f"\nwrote {args.output}"
+    emit(args, document, text, run.warnings)
+
+
+def design(args: argparse.Namespace) -> None:
+    """``armcal design``: an optimal plan, its quality and its picture."""
+    spec = load_robot(args.robot)
+    arm = _model(args, spec)
+    candidates = None if args.candidates is None else read_plan(args.candidates, spec.arm)
+    run = design_plan(
+        spec,
+        arm,
+        args.poses,
+        criterion=args.criterion,
+        method=args.method,
+        seed=args.seed,
+        candidates=candidates,
+        candidates_source=args.candidates,
+        order=args.order,
+        distinct=args.distinct,
+        payloads=args.payloads,
+        test_q=_test_poses(args, spec) if spec.elastic is None else np.zeros((0, arm.n_joints)),
+    )
+    if run.design is not None and run.quality is not None:
+        document, report = quality_to_dict(arm, run.quality), format_quality(arm, run.quality)
+        extra, header = design_summary(run.design, run.seconds)
+    else:
+        assert run.compliant is not None and run.compliant_quality is not None
+        document, report = compliant_quality(run.compliant_quality)
+        extra, header = compliant_design_summary(run.compliant, run.seconds)
+    document.update(extra)
+    if args.plot is not None:  # first: drawing is what can fail, the plan CSV is text
+        from ..plotting import plot_plan, save_figure  # matplotlib only when a plot is asked for
+
+        save_figure(plot_plan(spec.arm, run.q), args.plot)
+    if args.output is not None:
+        atomic_write(args.output, format_plan_csv(run.q, run.payload_kg))
+    written = _written(args, args.output, args.plot)
+    text = "\n".join([*header, report, *([""] if written else []), *written])
+    emit(args, document, text, run.warnings)
+
+
+def evaluate(args: argparse.Namespace) -> None:
+    """``armcal evaluate``: a plan's quality."""
+    spec = load_robot(args.robot)
+    arm = _model(args, spec)
+    q, payload = _plan(args.plan, spec, arm)
+    test_q = _test_poses(args, spec) if spec.elastic is None else np.zeros((0, arm.n_joints))
+    run = evaluate_file(spec, arm, q, test_q=test_q, payload=payload, source=args.plan)
+    if run.quality is not None:
+        document, report = quality_to_dict(arm, run.quality), format_quality(arm, run.quality)
+    else:
+        assert run.compliant is not None
+        document, report = compliant_quality(run.compliant)
+    emit(args, document, report, run.warnings)
+
+
+def simulate(args: argparse.Namespace) -> None:
+    """``armcal simulate``: a Monte Carlo of a plan."""
+    spec = load_robot(args.robot)
+    arm = _model(args, spec)
+    q, payload = _plan(args.plan, spec, arm)
+    truth = _truth(args, spec)
+    result = simulate_plan(
+        spec,
+        arm,
+        q,
+        truth,
+        trials=args.trials,
+        method=args.method,
+        seed=args.seed,
+        test_q=_test_poses(args, spec) if spec.elastic is None else None,
+        payload=payload,
+        progress=ProgressBar("simulate"),
+        source=args.plan,
+    )
+    emit(
+        args,
+        monte_carlo_to_dict(result),
+        format_monte_carlo(result),
+        [*spec.warnings, *result.warnings],
+    )
+
+
+def poses_needed(args: argparse.Namespace) -> None:
+    """``armcal poses-needed``: the smallest plan that reaches an accuracy."""
+    spec = load_robot(args.robot)
+    arm = _model(args, spec) if spec.elastic is None else spec.arm
+    requirement = next(key for key in TARGET_OPTIONS if getattr(args, key) is not None)
+    found, seconds = size_plan(
+        spec,
+        arm,
+        requirement,
+        getattr(args, requirement),
+        seed=args.seed,
+        test_q=_test_poses(args, spec) if spec.elastic is None else np.zeros((0, arm.n_joints)),
+        max_poses=args.max_poses,
+    )
+    document, lines = poses_needed_summary(found, arm, seconds)
+    if args.output is not None:
+        atomic_write(args.output, format_plan_csv(found.plan))
+        lines.append(f"wrote {args.output}")
+    emit(args, document, "\n".join(lines), spec.warnings)
+
+
+def reproduce_paper(args: argparse.Namespace) -> None:
+    """``armcal reproduce``: the paper's tables and figures, recomputed."""
+    from ..plotting import plot_accuracy_curves, plot_random_plans, save_figure
+
+    result = reproduce(
+        trials=args.trials,
+        random_plans=args.random_plans,
+        seed=args.seed,
+        progress=ProgressBar("reproduce"),
+    )
+    study = result.figure1
+    title = f"paper-4link, sigma {result.sigma_mm:g} mm: accuracy against the number of poses"
+    tables = result.tables
+    figure1 = plot_random_plans(study.det_d, study.det_c, study.abs_det_s, poses=study.n_poses)
+    figure2 = plot_accuracy_curves(result.figure2, title=title)
+    outputs: dict[str, str | Callable[[Path], None]] = {
+        **{f"{name}.csv": table_csv(tables[name], cols) for name, cols in TABLE_COLUMNS.items()},
+        "figure1.png": partial(save_figure, figure1),
+        "figure2.png": partial(save_figure, figure2),
+        "report.md": format_reproduction(result),
+    }
+    folder = write_folder(args.output, outputs)
+    document, lines = reproduction_summary(result)
+    document["files"] = [str(folder / name) for name in outputs]
+    lines.append(f"wrote {', '.join(outputs)} to {folder}/")
+    emit(args, document, "\n".join(lines))
+
+
+def check_compliance(args: argparse.Namespace) -> None:
+    """``armcal check-compliance``: the elastostatic self-check."""
+    from ..compliance_check import check_compliance as run_check
+    from ..compliance_check import format_check
+
+    result = run_check(seed=args.seed, trials=args.trials)
+    emit(args, result.to_dict(), format_check(result))
+
+
+def demo(args: argparse.Namespace) -> None:
+    """``armcal demo``: the whole workflow on a built-in robot."""
+    spec = load_robot(args.robot)
+    truth = _truth(args, spec)
+    sigma = design_sigma(spec.arm) if args.sigma is None else args.sigma
+    result = run_demo(spec.arm, truth, poses=args.poses, sigma=sigma, seed=args.seed)
+    lines = [result.text]
+    if args.output is not None:
+        folder = write_folder(args.output, result.files)
+        lines += [
+            "",
+            f"wrote {len(result.files)} files to {folder}/: report.md, figures, "
+            "plan, measurements, calibration, program, robot file, URDF",
+        ]
+    emit(args, dict(result.document), "\n".join(lines), [*spec.warnings, *result.warnings])
+
+
+def export(args: argparse.Namespace) -> None:
+    """``armcal export``: the calibrated arm as a robot file or URDF."""
+    if args.robot_toml is None and args.urdf is None:
+        raise ArmcalError(
+            "export needs an output: give --robot-toml FILE, --urdf FILE or both "
+            "(see 'armcal export --help')"
+        )
+    cal = read_calibration(args.calibration)
+    run = export_files(cal, robot_toml_path=args.robot_toml, urdf_path=args.urdf)
+    for path, text in run.texts.items():
+        atomic_write(path, text)
+    document = {"robot_toml": args.robot_toml, "urdf": args.urdf}
+    emit(args, document, "\n".join(f"wrote {path}" for path in run.texts), run.warnings)
+
+
+def formats(args: argparse.Namespace) -> None:
+    """``armcal formats``: every key of the robot file and column of the CSV files."""
+    print(format_reference())

@@ -1,0 +1,93 @@
+"""The ``armcal`` program: parse the arguments, check every path, run the command.
+
+Exit status: 0 on success, 2 for bad input (one ``armcal: error: ...`` line on
+stderr, no traceback, no output file), 130 when interrupted (Ctrl-C; one
+``armcal: interrupted`` line), 1 for bugs.  Output paths are checked before any
+work (:func:`armcal.files.check_outputs`).
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from collections.abc import Callable, Sequence
+
+from ..errors import ArmcalError
+from ..files import BUILTIN_ROBOTS, STDIO, OutputFolder, check_outputs
+from .parser import build_parser
+
+__all__ = ["main"]
+
+
+def _option(dest: str) -> str:
+    return "-o" if dest == "output" else "--" + dest.replace("_", "-")
+
+
+def _check_stdio(args: argparse.Namespace, inputs: dict, outputs: dict) -> None:
+    """``-`` reads stdin (one input) and writes stdout (one file output, instead of the report)."""
+    piped = [option for option, path in inputs.items() if path == STDIO]
+    if len(piped) > 1:
+        raise ArmcalError(
+            f"{' and '.join(piped)} both read '-' (stdin); pipe in one of them and give the "
+            "other a file name"
+        )
+    to_stdout = [option for option, path in outputs.items() if path == STDIO]
+    if not to_stdout:
+        return
+    if getattr(args, "folder_files", ()):
+        raise ArmcalError(f"{to_stdout[0]} -: a folder cannot go to stdout; give a folder name")
+    if "--plot" in to_stdout:
+        raise ArmcalError("--plot -: a figure cannot go to stdout; give a PNG file name")
+    if len(to_stdout) > 1:
+        raise ArmcalError(
+            f"{' and '.join(to_stdout)} both write '-' (stdout); give all but one a file name"
+        )
+    if getattr(args, "json", False):
+        raise ArmcalError(
+            f"--json and {to_stdout[0]} - both write stdout; drop --json (the file is the "
+            "output) or give a file name"
+        )
+    args.stdout_taken = True
+
+
+def _check_paths(args: argparse.Namespace) -> None:
+    """Refuse the command's unusable output paths before it does any work."""
+    inputs = {_option(dest): getattr(args, dest) for dest in getattr(args, "inputs", ())}
+    if inputs.get("--robot") in BUILTIN_ROBOTS:
+        del inputs["--robot"]  # a name, not a file
+    folder_files = getattr(args, "folder_files", ())
+    outputs: dict[str, str | OutputFolder | None] = {}
+    for dest in getattr(args, "outputs", ()):
+        path = getattr(args, dest)
+        outputs[_option(dest)] = (
+            OutputFolder(path, folder_files)
+            if folder_files and path is not None and path != STDIO
+            else path
+        )
+    _check_stdio(args, inputs, outputs)
+    check_outputs(outputs, inputs)
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Run the ``armcal`` program; returns the exit status."""
+    try:
+        args = build_parser().parse_args(argv)
+        _check_paths(args)
+        run: Callable[[argparse.Namespace], None] = args.run
+        run(args)
+    except ArmcalError as exc:
+        print(f"armcal: error: {exc}", file=sys.stderr)
+        return 2
+    except KeyboardInterrupt:  # Ctrl-C: writers have removed their temporary files
+        if sys.stderr.isatty():
+            sys.stderr.write("\n")  # after a progress bar or the terminal's ^C
+        print("armcal: interrupted", file=sys.stderr)
+        return 130
+    except BrokenPipeError:  # e.g. `armcal synthesize ... | head`
+        sys.stderr.close()
+        return 0
+    return 0
+
+
+if __name__ == "__main__":  # pragma: no cover
+    sys.exit(main())

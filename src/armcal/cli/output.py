@@ -1,0 +1,61 @@
+"""What the command line prints: the result on stdout, every warning once on stderr.
+
+The library's warnings advise in neutral words; here they are said in the
+command line's, its flags (:data:`CLI_ACTIONS`).
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from collections.abc import Sequence
+
+from ..errors import ArmcalWarning, unique_warnings
+from ..files import to_json
+
+__all__ = [
+    "CLI_ACTIONS",
+    "emit",
+    "print_warnings",
+    "warning_dicts",
+]
+
+#: The command line's words for the advice of warnings (:data:`armcal.errors.ACTIONS`).
+CLI_ACTIONS = {
+    "refit-robust": "rerun with --robust to fit without them",
+    "try-robust": "try --robust",
+    "try-closed-form": "try --method closed-form",
+    "geometry-alone": "fit the geometry alone (--no-compliance)",
+    "geometry-only": "--no-compliance fits the geometry only",
+    "design": "(armcal design)",
+}
+
+
+def print_warnings(warnings: Sequence[ArmcalWarning]) -> None:
+    """Each warning as one ``armcal: warning: ...`` line on stderr, in the command line's words."""
+    for warning in warnings:
+        print(f"armcal: warning: {warning.render(CLI_ACTIONS)}", file=sys.stderr)
+
+
+def warning_dicts(warnings: Sequence[ArmcalWarning]) -> list[dict[str, str]]:
+    """The JSON form of warnings, in the command line's words."""
+    return [w.to_dict(CLI_ACTIONS) for w in warnings]
+
+
+def emit(
+    args: argparse.Namespace,
+    document: dict,
+    text: str,
+    warnings: Sequence[ArmcalWarning] = (),
+) -> None:
+    """Print the result, after every warning of the run (once each) on stderr.
+
+    The warnings also replace the document's ``warnings`` list, so the JSON and
+    stderr say the same.
+    """
+    warnings = unique_warnings(warnings)
+    document["warnings"] = warning_dicts(warnings)
+    print_warnings(warnings)
+    if getattr(args, "stdout_taken", False):  # `-o -`: the file is the command's output
+        return
+    print(to_json(document) if args.json else text, end="" if args.json else "\n")

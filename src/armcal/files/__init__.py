@@ -1,0 +1,84 @@
+"""Files in and out, by concern.
+
+* :mod:`~armcal.files.common` -- one error form, text from a file or stdin, TOML, numbers;
+* :mod:`~armcal.files.paths` -- output paths that destroy nothing, atomic writes;
+* :mod:`~armcal.files.robots` -- robot and truth TOML, the built-in robots;
+* :mod:`~armcal.files.tables` -- plan, measurement and program CSV;
+* :mod:`~armcal.files.calibration` -- the calibration JSON, written and read.
+"""
+
+from .calibration import (
+    CALIBRATION_FORMAT,
+    calibration_document,
+    read_calibration,
+    robot_to_dict,
+)
+from .common import STDIO, to_json
+from .paths import OutputFolder, atomic_write, check_outputs, write_folder
+from .robots import (
+    BUILTIN_ROBOTS,
+    COMPLIANCE_TRUTH_KEYS,
+    DEFAULT_ROBOT,
+    JOINT_SIGMA_MAX_DEG,
+    LINK_LENGTH_RANGE_MM,
+    RADIAN_LIMIT_BOUND,
+    SIGMA_RANGE_MM,
+    RobotSpec,
+    load_compliance_truth,
+    load_robot,
+    load_truth,
+    unknown_parameter,
+)
+from .tables import (
+    INSTRUMENT_RANGE,
+    LIMIT_TOLERANCE_DEG,
+    REACH_MARGIN,
+    Measurements,
+    Program,
+    arm_for_measurements,
+    format_measurements_csv,
+    format_plan_csv,
+    format_program_csv,
+    read_loaded_plan,
+    read_measurements,
+    read_plan,
+    read_program,
+)
+
+__all__ = [
+    "BUILTIN_ROBOTS",
+    "CALIBRATION_FORMAT",
+    "COMPLIANCE_TRUTH_KEYS",
+    "DEFAULT_ROBOT",
+    "INSTRUMENT_RANGE",
+    "JOINT_SIGMA_MAX_DEG",
+    "LIMIT_TOLERANCE_DEG",
+    "LINK_LENGTH_RANGE_MM",
+    "RADIAN_LIMIT_BOUND",
+    "REACH_MARGIN",
+    "SIGMA_RANGE_MM",
+    "STDIO",
+    "Measurements",
+    "OutputFolder",
+    "Program",
+    "RobotSpec",
+    "arm_for_measurements",
+    "atomic_write",
+    "calibration_document",
+    "check_outputs",
+    "format_measurements_csv",
+    "format_plan_csv",
+    "format_program_csv",
+    "load_compliance_truth",
+    "load_robot",
+    "load_truth",
+    "read_calibration",
+    "read_loaded_plan",
+    "read_measurements",
+    "read_plan",
+    "read_program",
+    "robot_to_dict",
+    "to_json",
+    "unknown_parameter",
+    "write_folder",
+]

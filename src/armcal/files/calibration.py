@@ -1,0 +1,337 @@
+"""The calibration file (``armcal-calibration/1``): written and read in one place.
+
+:func:`calibration_document` is the JSON document of a calibration (the file
+``identify -o`` writes and the document ``identify --json`` prints);
+:func:`read_calibration` rebuilds the calibrated model from it for
+``validate``, ``compensate`` and ``export``.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+from collections.abc import Mapping, Sequence
+from typing import Any
+
+import numpy as np
+
+from .._version import __version__
+from ..errors import ACTIONS, ArmcalWarning, InputError
+from ..identification import Calibration
+from ..models import (
+    Annulus,
+    Box,
+    CalibratedArm,
+    CompliantArm,
+    Elastostatic,
+    FitModel,
+    PlanarArm,
+    Plane,
+    Region,
+    Target,
+)
+from ..noise import NoiseModel
+from .common import fail, read_text
+from .robots import parse_region
+
+__all__ = [
+    "CALIBRATION_FORMAT",
+    "calibration_document",
+    "read_calibration",
+    "robot_to_dict",
+]
+
+# --------------------------------------------------------------------------- calibration JSON
+
+#: The format tag of calibration files (PRODUCT.md); other formats are refused.
+CALIBRATION_FORMAT = "armcal-calibration/1"
+
+
+def _region_to_dict(region: Region | None) -> dict[str, Any] | None:
+    if isinstance(region, Annulus):
+        return {
+            "kind": "annulus",
+            "center_mm": list(region.center),
+            "r_min_mm": region.r_min,
+            "r_max_mm": region.r_max,
+        }
+    if isinstance(region, Box):
+        return {"kind": "box", "x_mm": list(region.x), "y_mm": list(region.y)}
+    return None
+
+
+def robot_to_dict(arm: PlanarArm) -> dict[str, Any]:
+    """The ``robot`` section of a calibration file: everything needed to rebuild the arm.
+
+    ``name``, ``link_lengths_mm``, ``joint_limits_deg``, ``base_offset``,
+    ``base_rotation``, ``joint_map``, ``joint_offsets_deg``, ``targets``
+    (label to ``{length_mm, angle_deg}``) and ``region`` (or null); the noise
+    model and the fixed parameters are top-level keys of the document.
+    """
+    return {
+        "name": arm.name,
+        "link_lengths_mm": arm.link_lengths.tolist(),
+        "joint_limits_deg": arm.joint_limits_deg.tolist(),
+        "base_offset": arm.base_offset,
+        "base_rotation": arm.base_rotation,
+        "joint_map": arm.joint_map.tolist(),
+        "joint_offsets_deg": np.degrees(arm.joint_offsets).tolist(),
+        "targets": {
+            t.label: {"length_mm": t.length, "angle_deg": math.degrees(t.angle)}
+            for t in arm.targets
+        },
+        "region": _region_to_dict(arm.region),
+    }
+
+
+def _arm_from_dict(data: dict[str, Any], noise: NoiseModel | None, fixed: list[str]) -> PlanarArm:
+    region = None
+    if data.get("region") is not None:
+        region = parse_region("", data["region"])
+    targets = tuple(
+        Target(label, float(entry["length_mm"]), math.radians(float(entry["angle_deg"])))
+        for label, entry in data.get("targets", {}).items()
+    )
+    offsets = data.get("joint_offsets_deg")
+    return PlanarArm(
+        np.array(data["link_lengths_mm"], dtype=float),
+        np.radians(np.array(data["joint_limits_deg"], dtype=float)),
+        base_offset=bool(data["base_offset"]),
+        name=str(data["name"]),
+        noise=noise,
+        region=region,
+        fixed=fixed,
+        joint_map=data.get("joint_map"),
+        targets=targets,
+        base_rotation=bool(data.get("base_rotation", False)),
+        joint_offsets=None if offsets is None else np.radians(np.array(offsets, dtype=float)),
+    )
+
+
+def read_calibration(path: str | os.PathLike) -> CalibratedArm:
+    """Read a calibration file written by ``armcal identify`` (``armcal-calibration/1``).
+
+    Returns
+    -------
+    CalibratedArm
+        The arm rebuilt from the file's ``robot`` section, noise and fixed
+        parameters; the deviations and covariance in internal units (mm, rad);
+        the plane of 3-D data.
+
+    Raises
+    ------
+    InputError
+        For a file that is not JSON, of another format or version, or whose
+        parameters do not match its robot; the message names the file and key.
+    """
+    text = read_text(path, "calibration")
+    try:
+        doc = json.loads(text)
+    except (ValueError, RecursionError) as exc:  # JSONDecodeError, or digits/nesting limits
+        raise fail(path, f"not a calibration file: invalid JSON ({exc})") from None
+    if not isinstance(doc, dict) or "format" not in doc:
+        raise fail(
+            path, "not a calibration file: no 'format' key; write one with armcal identify -o"
+        )
+    if doc["format"] != CALIBRATION_FORMAT:
+        raise fail(
+            path,
+            f"format {doc['format']!r} is not {CALIBRATION_FORMAT!r}; write the calibration with "
+            "this version of armcal identify -o",
+        )
+    key = "robot"
+    try:
+        noise = None
+        if doc.get("noise") is not None:
+            key = "noise"
+            sigma_q = doc["noise"].get("joint_sigma_deg")
+            noise = NoiseModel(
+                np.array(doc["noise"]["covariance_mm2"], dtype=float),
+                None if sigma_q is None else np.radians(np.array(sigma_q, dtype=float)),
+            )
+        key = "robot"
+        arm = _arm_from_dict(doc["robot"], noise, list(doc.get("fixed", [])))
+        model: FitModel = arm
+        if doc.get("elastostatic") is not None:
+            key = "elastostatic"
+            model = _compliance_from_dict(arm, doc["elastostatic"])
+        key = "parameters"
+        names = [entry["name"] for entry in doc["parameters"]]
+        expected = model.param_names
+        if tuple(names) != expected:
+            raise ValueError(
+                f"parameters {', '.join(names)} do not match the robot's {', '.join(expected)}"
+            )
+        scale = model.display_scale
+        values = np.array([float(entry["value"]) for entry in doc["parameters"]]) / scale
+        key = "covariance"
+        if list(doc["covariance"]["names"]) != names:
+            raise ValueError("covariance names do not match the parameters")
+        full = np.array(doc["covariance"]["matrix"], dtype=float) / np.outer(scale, scale)
+        if full.shape != (len(names), len(names)):
+            raise ValueError(f"expected a {len(names)} x {len(names)} matrix")
+        key = "sigma_mm"
+        sigma = float(doc["sigma_mm"])
+        if not (sigma > 0 and math.isfinite(sigma)):
+            raise ValueError(f"expected a positive noise std in mm, got {sigma}")
+        key = "plane"
+        plane = None if doc.get("plane") is None else Plane.from_dict(doc["plane"])
+    except (KeyError, TypeError, ValueError, AttributeError, OverflowError, InputError) as exc:
+        # AttributeError: a section of the wrong JSON type ("robot": [] has no .get)
+        what = f"missing key {exc}" if isinstance(exc, KeyError) else str(exc)
+        if isinstance(exc, AttributeError):
+            what = "a section of the wrong type"
+        raise fail(
+            path, f"key '{key}': {what}; write the calibration again with armcal identify -o"
+        ) from None
+    if not (np.all(np.isfinite(values)) and np.all(np.isfinite(full))):
+        raise fail(path, "key 'parameters': values must be finite numbers")
+    if plane is None and arm.base_rotation:
+        raise fail(path, "key 'plane': a calibration from 3-D data must record its plane")
+    return CalibratedArm(model, values, full, sigma, plane)
+
+
+def _compliance_from_dict(arm: PlanarArm, data: dict[str, Any]) -> CompliantArm:
+    """The compliance model of a calibration file's ``elastostatic`` section."""
+    gravity = data["gravity_mps2"]
+    masses = data["link_masses_kg"]
+    elastic = Elastostatic(
+        None if gravity is None else np.array(gravity, dtype=float).reshape(2),
+        None if masses is None else np.array(masses, dtype=float).reshape(arm.n_joints),
+        np.array(data["com_fraction"], dtype=float).reshape(arm.n_joints),
+        float(data["payload_kg"]),
+    )
+    model = CompliantArm(arm, elastic, bool(data["known_loads"]))
+    if list(data.get("parameters", model.compliance_names)) != list(model.compliance_names):
+        raise ValueError(f"compliance parameters do not match {', '.join(model.compliance_names)}")
+    return model
+
+
+def _finite_or_none(value: float | None) -> float | None:
+    """A float for JSON: None for a missing or non-finite value (never NaN)."""
+    if value is None or not math.isfinite(value):
+        return None
+    return float(value)
+
+
+def _elastostatic_dict(cal: Calibration) -> dict | None:
+    """The loads model of a fit with compliance, enough to rebuild it (gravity in m/s^2)."""
+    model, nested = cal.model, cal.nested
+    if not isinstance(model, CompliantArm) or nested is None:
+        return None
+    elastic = model.elastic
+    return {
+        "gravity_mps2": None if elastic.gravity is None else elastic.gravity.tolist(),
+        "link_masses_kg": None
+        if elastic.link_masses_kg is None
+        else elastic.link_masses_kg.tolist(),
+        "com_fraction": elastic.com_fraction.tolist(),
+        "payload_kg": elastic.payload_kg,
+        "known_loads": model.known_loads,
+        "parameters": list(model.compliance_names),
+        "geometry_only_rms_mm": nested.rms_per_coordinate_mm,
+    }
+
+
+def calibration_document(
+    cal: Calibration,
+    *,
+    warnings: Sequence[ArmcalWarning] | None = None,
+    words: Mapping[str, str] = ACTIONS,
+) -> dict:
+    """The ``armcal-calibration/1`` document of a calibration (see PRODUCT.md).
+
+    Parameters
+    ----------
+    cal : Calibration
+    warnings : sequence of ArmcalWarning, optional
+        Every warning of the run (the robot file's, the measurement file's, the
+        plausibility checks', the calibration's); default ``cal.warnings``.
+    words : mapping, optional
+        The words of the warnings' advice (:meth:`armcal.errors.ArmcalWarning.render`);
+        default the library's.
+
+    Returns
+    -------
+    dict
+        The contract keys, plus ``goodness_of_fit`` ``{chi2, dof, p_value}``
+        (null chi2 and p-value when sigma was estimated), ``standardized_residuals``
+        per pose, ``outliers`` (``{row, pose, target, residual_mm, studentized,
+        removed}``), ``noise`` (the noise model or null), ``fixed`` (names; their
+        parameters carry ``"fixed": true`` and std 0).  No NaN anywhere.
+    """
+    arm = cal.arm
+    corr = cal.correlation
+    fit = cal.goodness_of_fit
+    rows = cal.rows or tuple(range(1, cal.n_poses + 1))
+    used = np.ones(cal.n_poses, dtype=bool) if cal.used is None else cal.used
+    standardized = cal.standardized_residuals
+    return {
+        "format": CALIBRATION_FORMAT,
+        "armcal_version": __version__,
+        "robot": robot_to_dict(arm),
+        "method": cal.method,
+        "robust": bool(cal.robust),
+        "poses": cal.n_poses,
+        "poses_used": cal.n_used,
+        "sigma_mm": cal.sigma_mm,
+        "sigma_source": cal.sigma_source,
+        "noise": None if arm.noise is None else arm.noise.to_dict(),
+        "elastostatic": _elastostatic_dict(cal),
+        "fixed": list(arm.fixed),
+        "parameters": [
+            {
+                "name": name,
+                "unit": unit,
+                "value": float(v),
+                "std": 0.0 if name in arm.fixed else float(s),
+                "fixed": name in arm.fixed,
+            }
+            for name, unit, v, s in zip(cal.names, cal.units, cal.values, cal.std, strict=True)
+        ],
+        "covariance": {"names": list(cal.names), "matrix": cal.covariance_display.tolist()},
+        "correlation": {"names": list(cal.names), "matrix": corr.tolist()},
+        "residual_rms_mm": cal.residual_rms,
+        "residual_max_mm": cal.residual_max,
+        "degrees_of_freedom": cal.dof,
+        "goodness_of_fit": {
+            "chi2": None if fit is None else _finite_or_none(fit.chi2),
+            "dof": cal.dof if fit is None else int(fit.dof),
+            "p_value": None if fit is None else _finite_or_none(fit.p_value),
+        },
+        "residuals": [
+            {
+                "row": int(row),
+                "pose": label,
+                "target": None if cal.target is None else arm.targets[cal.target[i]].label,
+                "dx_mm": float(r[0]),
+                "dy_mm": float(r[1]),
+                "used": bool(u),
+            }
+            for i, (row, label, r, u) in enumerate(
+                zip(rows, cal.pose_labels, cal.residuals, used, strict=True)
+            )
+        ],
+        "standardized_residuals": []
+        if standardized is None
+        else [
+            {"row": int(row), "pose": label, "x": float(z[0]), "y": float(z[1])}
+            for row, label, z in zip(rows, cal.pose_labels, standardized, strict=True)
+        ],
+        "outliers": [
+            {
+                "row": int(o.row),
+                "pose": o.pose,
+                "target": o.target,
+                "residual_mm": float(o.residual_mm),
+                "studentized": float(o.studentized),
+                "removed": bool(o.removed),
+            }
+            for o in cal.outliers
+        ],
+        "iterations": cal.iterations,
+        "converged": cal.converged,
+        "plane": None if cal.plane is None else cal.plane.to_dict(),
+        "warnings": [w.to_dict(words) for w in (cal.warnings if warnings is None else warnings)],
+    }

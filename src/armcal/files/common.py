@@ -1,0 +1,150 @@
+"""What every file reader shares: one error form, text from a file or stdin, TOML, keys, numbers.
+
+Every reader validates strictly and raises :class:`~armcal.errors.InputError`
+with a message that names the file, the row (data row and file line) and the
+column or key, and says how to fix it (:func:`fail`).
+"""
+
+from __future__ import annotations
+
+import difflib
+import json
+import math
+import os
+import sys
+from collections.abc import Sequence
+from pathlib import Path
+from typing import Any
+
+from ..errors import InputError
+from ..formats import table_of
+
+if sys.version_info >= (3, 11):
+    import tomllib
+else:  # pragma: no cover - exercised on Python 3.10 only
+    import tomli as tomllib
+
+__all__ = [
+    "MAX_ABS_VALUE",
+    "STDIO",
+    "PathArg",
+    "check_keys",
+    "fail",
+    "load_toml",
+    "number",
+    "numbers",
+    "read_text",
+    "suggest",
+    "to_json",
+]
+
+
+#: Largest magnitude accepted in a CSV field (1000 km in mm): larger values are unit
+#: mistakes or corrupt data, and their squares would overflow in the least squares.
+MAX_ABS_VALUE = 1e9
+
+#: A file path as the functions here take it.
+PathArg = str | os.PathLike[str]
+
+
+#: The path that means stdin for an input and stdout for an output file.
+STDIO = "-"
+#: stdin's text, once read (a second reader of ``-`` gets the same text).
+_stdin_text: list[str] = []
+
+
+def fail(path: str | os.PathLike, message: str) -> InputError:
+    name = os.fspath(path)
+    return InputError(f"{'<stdin>' if name == STDIO else name}: {message}")
+
+
+def read_stdin(what: str) -> str:
+    if not _stdin_text:
+        if sys.stdin is None or sys.stdin.isatty():
+            raise fail(STDIO, f"no {what} piped in; give a file name or pipe one into armcal")
+        data = sys.stdin.buffer.read()
+        try:
+            _stdin_text.append(data.decode("utf-8-sig"))
+        except UnicodeDecodeError:
+            raise fail(STDIO, f"is not UTF-8 text; expected a {what} file") from None
+    return _stdin_text[0]
+
+
+def read_text(path: str | os.PathLike, what: str) -> str:
+    if os.fspath(path) == STDIO:
+        return read_stdin(what)
+    try:
+        return Path(path).read_text(encoding="utf-8-sig")
+    except FileNotFoundError:
+        raise fail(path, f"{what} file not found") from None
+    except IsADirectoryError:
+        raise fail(path, f"is a directory, expected a {what} file") from None
+    except UnicodeDecodeError:
+        raise fail(path, f"is not UTF-8 text; expected a {what} file") from None
+    except OSError as exc:
+        raise fail(path, f"cannot read: {exc.strerror}") from None
+
+
+def suggest(key: str, allowed: Sequence[str]) -> str:
+    """``did you mean 'X'? `` for the closest of ``allowed`` (case aside), else ``""``."""
+    lower = {name.lower(): name for name in allowed}
+    close = difflib.get_close_matches(key.lower(), list(lower), n=1)
+    return f"did you mean '{lower[close[0]]}'? " if close else ""
+
+
+def check_keys(
+    path, table: dict, allowed: Sequence[str], where: str = "", *, robot: bool = True
+) -> None:
+    """Refuse a key of ``table`` not in ``allowed``; a robot file's hint names its table."""
+    for key in table:
+        if key not in allowed:
+            hint = (misplaced(key, where) if robot else "") or suggest(key, allowed)
+            raise fail(
+                path, f"unknown key '{where}{key}': {hint}allowed keys are {', '.join(allowed)}"
+            )
+
+
+def misplaced(key: str, where: str) -> str:
+    """A hint when a robot-file ``key`` belongs in another table than ``where``."""
+    home = table_of(key)
+    if home is None or home == where.rstrip("."):
+        return ""
+    if home:
+        return f"it belongs in the [{home}] table (write it under a [{home}] line); "
+    return (
+        f"it belongs at the top level: move it above the first [table] line (a key after "
+        f"[{where.rstrip('.')}] is part of that table); "
+    )
+
+
+def number(path, value: Any, key: str) -> float:
+    if isinstance(value, bool) or not isinstance(value, int | float):
+        raise fail(path, f"key '{key}': expected a number, got {value!r}")
+    try:
+        number = float(value)
+    except OverflowError:
+        number = math.inf
+    if not math.isfinite(number) or abs(number) > MAX_ABS_VALUE:
+        raise fail(path, f"key '{key}': expected a finite number within ±{MAX_ABS_VALUE:g}")
+    return number
+
+
+def numbers(path, value: Any, key: str, count: int | None = None) -> list[float]:
+    if not isinstance(value, list):
+        raise fail(path, f"key '{key}': expected a list of numbers, got {value!r}")
+    if count is not None and len(value) != count:
+        raise fail(path, f"key '{key}': expected {count} numbers, got {len(value)}")
+    return [number(path, v, f"{key}[{i}]") for i, v in enumerate(value)]
+
+
+def load_toml(path, what: str) -> dict:
+    text = read_text(path, what)
+    try:
+        return tomllib.loads(text)
+    except (ValueError, RecursionError) as exc:  # TOMLDecodeError, or digits/nesting limits
+        raise fail(path, f"invalid TOML: {exc}") from None
+
+
+def to_json(document: dict) -> str:
+    """Serialize a result document; refuses NaN and infinity rather than writing them."""
+    return json.dumps(document, indent=2, allow_nan=False) + "\n"

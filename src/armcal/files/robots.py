@@ -1,0 +1,565 @@
+"""Robot and truth files: a robot TOML (or a built-in name) as the arm armcal fits.
+
+Units: files use mm and degrees with the unit in every key name
+(``link_lengths_mm``, ``joint_limits_deg``); everything returned to the library
+is in mm and rad.  Every key lives in one catalogue (:mod:`armcal.formats`), so
+a misspelled or misplaced key gets a hint that names its table.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+from collections.abc import Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from ..errors import ArmcalError, ArmcalWarning, InputError
+from ..formats import TRUTH_KEYS, allowed_keys
+from ..models import (
+    Annulus,
+    Box,
+    CompliantArm,
+    Elastostatic,
+    PlanarArm,
+    Region,
+    Target,
+)
+from ..noise import NoiseModel
+from ..paper import BUILTIN_ROBOTS, paper_arm
+from .common import STDIO, check_keys, fail, load_toml, number, numbers, suggest
+
+__all__ = [
+    "BUILTIN_ROBOTS",
+    "COMPLIANCE_TRUTH_KEYS",
+    "DEFAULT_ROBOT",
+    "JOINT_SIGMA_MAX_DEG",
+    "LINK_LENGTH_RANGE_MM",
+    "RADIAN_LIMIT_BOUND",
+    "SIGMA_RANGE_MM",
+    "RobotSpec",
+    "load_compliance_truth",
+    "load_robot",
+    "load_truth",
+    "parse_region",
+    "unknown_parameter",
+]
+
+#: Instrument noise accepted (1 std, mm): from a nanometre to a metre.  Beyond it the
+#: value is a unit mistake, and its square under- or overflows in the covariance.
+SIGMA_RANGE_MM = (1e-6, 1e3)
+
+#: Link lengths accepted (mm): from a micrometre to 10 km.
+LINK_LENGTH_RANGE_MM = (1e-3, 1e7)
+
+#: Encoder noise accepted (1 std, deg): 0 to 10 deg.  An encoder that reads a joint
+#: worse than 10 deg is no encoder; such a value is a unit mistake (mdeg, arcsec).
+JOINT_SIGMA_MAX_DEG = 10.0
+
+#: Joint limits whose every value lies within this many "degrees" (2 pi, rounded up so
+#: that written-out radians such as 6.2832 count) look like radians: a real joint
+#: confined to +-6.3 deg cannot move enough to be calibrated, while radians limits of
+#: any revolute joint lie within +-2 pi.  Such limits give a ``limits-radians`` warning.
+RADIAN_LIMIT_BOUND = 6.3
+
+#: The robot used when a command is given none.
+DEFAULT_ROBOT = "paper-4link"
+
+
+@dataclass(frozen=True, eq=False)
+class RobotSpec:
+    """A robot as loaded from a built-in name or a TOML file.
+
+    Attributes
+    ----------
+    arm : PlanarArm
+        The arm, with the file's noise model (``[measurement]``) and fixed
+        parameters (``[identify]``).
+    default_truth : ndarray, shape (p,), or None
+        Deviations (mm, rad) of the built-in virtual robot; None for robot files.
+    source : str
+        The built-in name or the file path it came from.
+    warnings : tuple of ArmcalWarning
+        What in the file is accepted but suspicious (``limits-radians``); every
+        command prints these.
+    elastic : Elastostatic or None
+        The ``[elastostatic]`` table: gravity, masses and payload that twist the
+        joints (:mod:`armcal.elastostatic`); None for a rigid arm.
+    gravity_3d : ndarray, shape (3,), or None
+        ``[measurement] gravity``: gravity's direction in the instrument frame,
+        for 3-D data.
+    """
+
+    arm: PlanarArm
+    default_truth: np.ndarray | None
+    source: str
+    warnings: tuple[ArmcalWarning, ...] = ()
+    elastic: Elastostatic | None = None
+    gravity_3d: np.ndarray | None = None
+
+
+# --------------------------------------------------------------------------- robots
+
+
+def _builtin(name: str) -> RobotSpec:
+    arm, truth = paper_arm(BUILTIN_ROBOTS[name])
+    return RobotSpec(arm, truth, name)
+
+
+def parse_region(path, region: Any) -> Region:
+    key = "measurement.region"
+    if not isinstance(region, dict):
+        raise fail(path, f"key '{key}': expected a table such as {{ kind = \"annulus\", ... }}")
+    kind = region.get("kind")
+    if kind == "annulus":
+        check_keys(path, region, ["kind", "center_mm", "r_min_mm", "r_max_mm"], f"{key}.")
+        center = numbers(path, region.get("center_mm", [0.0, 0.0]), f"{key}.center_mm", 2)
+        r_min = number(path, region.get("r_min_mm", 0.0), f"{key}.r_min_mm")
+        if "r_max_mm" not in region:
+            raise fail(path, f"key '{key}': an annulus needs r_max_mm")
+        r_max = number(path, region["r_max_mm"], f"{key}.r_max_mm")
+        if not 0 <= r_min < r_max:
+            raise fail(path, f"key '{key}': need 0 <= r_min_mm < r_max_mm, got {r_min}, {r_max}")
+        return Annulus((center[0], center[1]), r_min, r_max)
+    if kind == "box":
+        check_keys(path, region, ["kind", "x_mm", "y_mm"], f"{key}.")
+        bounds = []
+        for axis in ("x_mm", "y_mm"):
+            if axis not in region:
+                raise fail(path, f"key '{key}': a box needs {axis} = [lo, hi]")
+            lo, hi = numbers(path, region[axis], f"{key}.{axis}", 2)
+            if not lo < hi:
+                raise fail(path, f"key '{key}.{axis}': need lo < hi, got [{lo}, {hi}]")
+            bounds.append((lo, hi))
+        return Box(bounds[0], bounds[1])
+    raise fail(path, f'key \'{key}.kind\': expected "annulus" or "box", got {kind!r}')
+
+
+def _sigma_value(path, value: Any, key: str) -> float:
+    """An instrument noise (1 std, mm) within :data:`SIGMA_RANGE_MM`."""
+    sigma = number(path, value, key)
+    low, high = SIGMA_RANGE_MM
+    if not low <= sigma <= high:
+        raise fail(
+            path,
+            f"key '{key}': must be between {low:g} and {high:g} mm, got {sigma:g}; "
+            "check the unit (mm)",
+        )
+    return sigma
+
+
+def _instrument_covariance(path, meas: dict) -> np.ndarray | None:
+    """``[measurement] sigma_mm`` (a number or ``[sx, sy]``) or ``covariance_mm2``, in mm^2."""
+    if "sigma_mm" in meas and "covariance_mm2" in meas:
+        raise fail(
+            path,
+            "keys 'measurement.sigma_mm' and 'measurement.covariance_mm2' both give the "
+            "instrument noise; keep one",
+        )
+    if "sigma_mm" in meas:
+        key = "measurement.sigma_mm"
+        raw = meas["sigma_mm"]
+        if isinstance(raw, list):
+            if len(raw) != 2:
+                raise fail(
+                    path,
+                    f"key '{key}': expected one number or two [sx, sy] (per instrument axis), "
+                    f"got {len(raw)} numbers",
+                )
+            sx, sy = (_sigma_value(path, v, f"{key}[{i}]") for i, v in enumerate(raw))
+            return np.diag([sx**2, sy**2])
+        return np.eye(2) * _sigma_value(path, raw, key) ** 2
+    if "covariance_mm2" in meas:
+        key = "measurement.covariance_mm2"
+        raw = meas["covariance_mm2"]
+        square = isinstance(raw, list) and len(raw) == 2
+        if not square or not all(isinstance(row, list) and len(row) == 2 for row in raw):
+            raise fail(
+                path, f"key '{key}': expected a 2 x 2 matrix [[a, b], [b, c]] in mm^2, got {raw!r}"
+            )
+        cov = np.array([numbers(path, row, f"{key}[{i}]", 2) for i, row in enumerate(raw)])
+        a, b, c, d = cov[0, 0], cov[0, 1], cov[1, 0], cov[1, 1]
+        if b != c:
+            raise fail(
+                path,
+                f"key '{key}': must be symmetric (b = c), got [[{a:g}, {b:g}], [{c:g}, {d:g}]]",
+            )
+        if not (a > 0 and d > 0 and a * d - b * c > 0):
+            raise fail(
+                path,
+                f"key '{key}': must be positive definite (a > 0, c > 0, a c > b^2), got "
+                f"[[{a:g}, {b:g}], [{c:g}, {d:g}]]",
+            )
+        low, high = SIGMA_RANGE_MM
+        for i in (0, 1):
+            if not low <= math.sqrt(cov[i, i]) <= high:
+                raise fail(
+                    path,
+                    f"key '{key}[{i}][{i}]': the std of axis {'xy'[i]} must be between {low:g} "
+                    f"and {high:g} mm, got {math.sqrt(cov[i, i]):g}; check the unit (mm^2)",
+                )
+        return cov
+    return None
+
+
+def _joint_sigma(path, meas: dict, n: int) -> np.ndarray | None:
+    """``[measurement] joint_sigma_deg``: one number or ``n``, in rad (None when absent)."""
+    if "joint_sigma_deg" not in meas:
+        return None
+    key = "measurement.joint_sigma_deg"
+    raw = meas["joint_sigma_deg"]
+    if isinstance(raw, list):
+        if len(raw) != n:
+            raise fail(
+                path, f"key '{key}': expected one number or {n} (one per joint), got {len(raw)}"
+            )
+        values = [number(path, v, f"{key}[{j}]") for j, v in enumerate(raw)]
+        names = [f"{key}[{j}]" for j in range(n)]
+    else:
+        values, names = [number(path, raw, key)], [key]
+    for name, value in zip(names, values, strict=True):
+        if not 0 <= value <= JOINT_SIGMA_MAX_DEG:
+            raise fail(
+                path,
+                f"key '{name}': encoder noise must be between 0 and {JOINT_SIGMA_MAX_DEG:g} deg, "
+                f"got {value:g}; check the unit (deg)",
+            )
+    return np.radians(values)
+
+
+def _fixed_parameters(path, table: Any, names: Sequence[str], arm_name: str) -> list[str]:
+    """``[identify] fixed = [...]`` or ``free = [...]`` as the list of fixed names."""
+    if not isinstance(table, dict):
+        raise fail(path, "key 'identify': expected a table [identify]")
+    if "fixed" in table and "free" in table:
+        raise fail(
+            path,
+            "keys 'identify.fixed' and 'identify.free' both say what is identified; keep one "
+            "(free = [...] fixes every other parameter)",
+        )
+    if not table:
+        return []
+    key = "fixed" if "fixed" in table else "free"
+    raw = table[key]
+    if not isinstance(raw, list) or not all(isinstance(v, str) for v in raw):
+        raise fail(path, f"key 'identify.{key}': expected a list of parameter names, got {raw!r}")
+    for name in raw:
+        if name not in names:
+            raise fail(path, f"key 'identify.{key}': {unknown_parameter(name, names, arm_name)}")
+    chosen = set(raw)
+    fixed = [nm for nm in names if (nm in chosen) == (key == "fixed")]
+    if len(fixed) == len(names):
+        raise fail(
+            path,
+            f"key 'identify.{key}': every parameter would be fixed; leave at least one free",
+        )
+    return fixed
+
+
+def unknown_parameter(name: str, names: Sequence[str], arm_name: str) -> str:
+    """The message for a parameter name the arm does not have: the valid names, and a hint.
+
+    Examples
+    --------
+    >>> unknown_parameter("x0", ("dl1", "dq1"), "arm")
+    "unknown parameter 'x0'; the parameters of arm are dl1, dq1 (x0 and y0 exist only with base_offset = true)"
+    """  # noqa: E501
+    hint = suggest(name, names)
+    message = (
+        f"unknown parameter '{name}'; {hint}the parameters of {arm_name} are {', '.join(names)}"
+    )
+    if name in ("x0", "y0"):
+        message += " (x0 and y0 exist only with base_offset = true)"
+    return message
+
+
+def _radian_limits_warning(path, raw_limits: list[tuple[float, float]]) -> ArmcalWarning | None:
+    """``limits-radians`` when every joint limit lies within :data:`RADIAN_LIMIT_BOUND`."""
+    if not all(abs(v) <= RADIAN_LIMIT_BOUND for pair in raw_limits for v in pair):
+        return None
+    shown = ", ".join(f"[{lo:g}, {hi:g}]" for lo, hi in raw_limits)
+    lo, hi = raw_limits[0]
+    return ArmcalWarning(
+        "limits-radians",
+        f"{os.fspath(path)}: key 'joint_limits_deg': every limit is within "
+        f"+-{RADIAN_LIMIT_BOUND:g} "
+        f"({shown}), which looks like radians; give the limits in degrees (e.g. "
+        f"[{math.degrees(lo):.1f}, {math.degrees(hi):.1f}] for [{lo:g}, {hi:g}] rad): as "
+        "written, every joint turns through a few degrees only",
+    )
+
+
+def load_robot(name_or_path: str | os.PathLike) -> RobotSpec:
+    """Load a built-in robot by name or a robot TOML file.
+
+    Parameters
+    ----------
+    name_or_path : str or path
+        ``paper-2link``, ``paper-3link``, ``paper-4link``, or a TOML file with
+        ``link_lengths_mm`` and the optional ``name``, ``joint_limits_deg``,
+        ``base_offset``, ``[measurement]`` (``sigma_mm`` as one number or per
+        axis ``[sx, sy]``, or ``covariance_mm2``; ``joint_sigma_deg``;
+        ``region``) and ``[identify]`` (``fixed`` or ``free``: lists of
+        parameter names).
+
+    Returns
+    -------
+    RobotSpec
+        The arm carries the noise model (:class:`~armcal.noise.NoiseModel`) and
+        the fixed parameters; ``warnings`` holds ``limits-radians`` when every
+        joint limit looks like radians.
+
+    Raises
+    ------
+    InputError
+        For a missing file, invalid TOML, an unknown key or parameter name, or an
+        invalid value; the message names the file and the key.
+
+    Examples
+    --------
+    >>> load_robot("paper-4link").arm.link_lengths.tolist()
+    [260.0, 180.0, 120.0, 100.0]
+    """
+    key = os.fspath(name_or_path)
+    if key in BUILTIN_ROBOTS:
+        return _builtin(key)
+    path = Path(key)
+    if key != STDIO and not path.exists():
+        raise InputError(
+            f"{key}: robot is neither a built-in ({', '.join(BUILTIN_ROBOTS)}) "
+            f"nor an existing file; {suggest(key, list(BUILTIN_ROBOTS))}"
+            "give a built-in's name or the path of a robot TOML file"
+        )
+    data = load_toml(path, "robot")
+    check_keys(path, data, allowed_keys(""))
+    for table in ("measurement", "identify", "elastostatic"):  # [targets] holds labels
+        if isinstance(data.get(table), dict):
+            check_keys(path, data[table], allowed_keys(table), f"{table}.")
+    if "link_lengths_mm" not in data:
+        raise fail(path, "missing key 'link_lengths_mm' (a list of link lengths in mm)")
+    lengths = numbers(path, data["link_lengths_mm"], "link_lengths_mm")
+    if not lengths:
+        raise fail(path, "key 'link_lengths_mm': needs at least one link")
+    low, high = LINK_LENGTH_RANGE_MM
+    for i, length in enumerate(lengths):
+        if not low <= length <= high:
+            raise fail(
+                path,
+                f"key 'link_lengths_mm[{i}]': link {i + 1} length must be between {low:g} and "
+                f"{high:g} mm, got {length:g}; check the unit (mm)",
+            )
+    n = len(lengths)
+    name = data.get("name", "robot" if key == STDIO else path.stem)
+    if not isinstance(name, str) or not name.strip():
+        raise fail(path, f"key 'name': expected a non-empty string, got {name!r}")
+    warnings: list[ArmcalWarning] = []
+    limits = None
+    if "joint_limits_deg" in data:
+        raw = data["joint_limits_deg"]
+        if not isinstance(raw, list) or len(raw) != n:
+            raise fail(
+                path,
+                f"key 'joint_limits_deg': expected {n} pairs [lo, hi], one per joint, got {raw!r}",
+            )
+        pairs = []
+        for j, pair in enumerate(raw):
+            lo, hi = numbers(path, pair, f"joint_limits_deg[{j}]", 2)
+            if not lo < hi:
+                raise fail(path, f"key 'joint_limits_deg[{j}]': need lo < hi, got [{lo}, {hi}]")
+            pairs.append((lo, hi))
+        limits = [(math.radians(lo), math.radians(hi)) for lo, hi in pairs]
+        radians = _radian_limits_warning(path, pairs)
+        if radians is not None:
+            warnings.append(radians)
+    base_offset = data.get("base_offset", False)
+    if not isinstance(base_offset, bool):
+        raise fail(path, f"key 'base_offset': expected true or false, got {base_offset!r}")
+    noise, region, gravity_3d = None, None, None
+    if "measurement" in data:
+        meas = data["measurement"]
+        if not isinstance(meas, dict):
+            raise fail(path, "key 'measurement': expected a table [measurement]")
+        if "gravity" in meas:
+            gravity_3d = np.array(numbers(path, meas["gravity"], "measurement.gravity", 3))
+            if not np.any(gravity_3d):
+                raise fail(
+                    path,
+                    "key 'measurement.gravity': needs a non-zero direction in the instrument "
+                    "frame, e.g. [0, 0, -1] for a levelled tracker",
+                )
+        covariance = _instrument_covariance(path, meas)
+        joint_sigma = _joint_sigma(path, meas, n)
+        if joint_sigma is not None and covariance is None:
+            raise fail(
+                path,
+                "key 'measurement.joint_sigma_deg': encoder noise needs the instrument noise "
+                "too; add sigma_mm (or covariance_mm2) to [measurement]",
+            )
+        if covariance is not None:
+            noise = NoiseModel(covariance, joint_sigma)
+        if "region" in meas:
+            region = parse_region(path, meas["region"])
+    mapping = _joint_map(path, data["joint_map"], n) if "joint_map" in data else None
+    offsets = None
+    if "joint_offsets_deg" in data:
+        offsets = np.radians(numbers(path, data["joint_offsets_deg"], "joint_offsets_deg", n))
+    targets = _targets(path, data["targets"], lengths[-1]) if "targets" in data else ()
+    try:
+        structure = PlanarArm(lengths, base_offset=base_offset, joint_map=mapping, targets=targets)
+    except ValueError as exc:
+        raise fail(path, str(exc)) from None
+    names = structure.param_names
+    fixed = _fixed_parameters(path, data["identify"], names, name) if "identify" in data else []
+    try:
+        arm = PlanarArm(
+            lengths,
+            limits,
+            base_offset=base_offset,
+            name=name,
+            noise=noise,
+            region=region,
+            fixed=fixed,
+            joint_map=mapping,
+            targets=targets,
+            joint_offsets=offsets,
+        )
+    except ValueError as exc:  # every value was checked above; this names what is left
+        raise fail(path, str(exc)) from None
+    elastic = _elastostatic(path, data["elastostatic"], n) if "elastostatic" in data else None
+    return RobotSpec(arm, None, key, tuple(warnings), elastic, gravity_3d)
+
+
+def _elastostatic(path, table: Any, n: int) -> Elastostatic:
+    """``[elastostatic]``: ``gravity_xy``, ``link_masses_kg``, ``com_fraction``, ``payload_kg``."""
+    if not isinstance(table, dict):
+        raise fail(path, "key 'elastostatic': expected a table [elastostatic]")
+    gravity = None
+    if "gravity_xy" in table:
+        gravity = numbers(path, table["gravity_xy"], "elastostatic.gravity_xy", 2)
+    masses = None
+    if "link_masses_kg" in table:
+        masses = numbers(path, table["link_masses_kg"], "elastostatic.link_masses_kg", n)
+    fraction: float | list[float] = 0.5
+    if "com_fraction" in table:
+        raw = table["com_fraction"]
+        key = "elastostatic.com_fraction"
+        fraction = numbers(path, raw, key, n) if isinstance(raw, list) else number(path, raw, key)
+    payload = 0.0
+    if "payload_kg" in table:
+        payload = number(path, table["payload_kg"], "elastostatic.payload_kg")
+    try:
+        return Elastostatic.create(
+            n, gravity_xy=gravity, link_masses_kg=masses, com_fraction=fraction, payload_kg=payload
+        )
+    except ArmcalError as exc:
+        raise fail(path, f"[elastostatic]: {exc}") from None
+
+
+def _joint_map(path, value: Any, n: int) -> np.ndarray:
+    """``joint_map``: ``n`` rows of ``n`` numbers, ``theta = M q``."""
+    if not isinstance(value, list) or len(value) != n:
+        raise fail(
+            path,
+            f"key 'joint_map': expected {n} rows of {n} numbers (theta = M q), got {value!r}",
+        )
+    rows = [numbers(path, row, f"joint_map[{i}]", n) for i, row in enumerate(value)]
+    return np.array(rows)  # PlanarArm judges it (invertible; the last column with targets)
+
+
+def _targets(path, table: Any, last_length: float) -> tuple[Target, ...]:
+    """``[targets]``: ``label = { length_mm = ..., angle_deg = ... }`` per target."""
+    if not isinstance(table, dict) or not table:
+        raise fail(
+            path,
+            "key 'targets': expected a table [targets] with one entry per target, e.g. "
+            "A = { length_mm = 100.0, angle_deg = 0.0 }",
+        )
+    targets = []
+    for label, entry in table.items():
+        key = f"targets.{label}"
+        if not isinstance(entry, dict):
+            raise fail(path, f"key '{key}': expected {{ length_mm = ..., angle_deg = ... }}")
+        check_keys(path, entry, ["length_mm", "angle_deg"], f"{key}.")
+        length = number(path, entry.get("length_mm", last_length), f"{key}.length_mm")
+        angle = number(path, entry.get("angle_deg", 0.0), f"{key}.angle_deg")
+        low, high = LINK_LENGTH_RANGE_MM
+        if not low <= length <= high:
+            raise fail(
+                path,
+                f"key '{key}.length_mm': the distance from the last joint to the target must be "
+                f"between {low:g} and {high:g} mm, got {length:g}",
+            )
+        try:
+            targets.append(Target(str(label), length, math.radians(angle)))
+            PlanarArm([1.0], targets=targets)  # label rules
+        except ValueError as exc:
+            raise fail(path, f"key '{key}': {exc}") from None
+    return tuple(targets)
+
+
+def load_truth(path: str | os.PathLike, arm: PlanarArm) -> np.ndarray:
+    """Read a truth TOML (``dl_mm``, ``dq_deg``, optional ``base_mm``) for ``arm``.
+
+    Returns
+    -------
+    ndarray, shape (p,)
+        User deviations in mm and rad.
+    """
+    data = load_toml(path, "truth")
+    check_keys(path, data, allowed_keys("", TRUTH_KEYS), robot=False)
+    n, k = arm.n_joints, arm.n_links
+    counts = f"{n} numbers, one per joint" + (
+        f", or {k}: one per link vector (the last link once per target)" if k != n else ""
+    )
+    for key in ("dl_mm", "dq_deg"):
+        if key not in data:
+            raise fail(path, f"missing key '{key}' ({counts})")
+    dl = numbers(path, data["dl_mm"], "dl_mm")
+    dq = numbers(path, data["dq_deg"], "dq_deg")
+    for key, values in (("dl_mm", dl), ("dq_deg", dq)):
+        if len(values) not in (n, k):
+            raise fail(path, f"key '{key}': expected {counts}, got {len(values)}")
+    base = None
+    if "base_mm" in data:
+        if not arm.base_offset:
+            raise fail(
+                path,
+                f"key 'base_mm': robot {arm.name} has base_offset = false; "
+                "set base_offset = true in the robot file or remove base_mm",
+            )
+        base = numbers(path, data["base_mm"], "base_mm", 2)
+    params = arm.params_from_display(dl, dq, base)
+    for i, v in enumerate(params[:k]):
+        if arm.link_nominal[i] + v <= 0:
+            raise fail(path, f"key 'dl_mm': link {arm.link_names[i]} would have length <= 0")
+    return params
+
+
+#: Truth keys of the compliance parameters (:mod:`armcal.elastostatic`), by kind.
+COMPLIANCE_TRUTH_KEYS = {"k": "k_urad_per_Nm", "c": "c_mdeg_per_m"}
+
+
+def load_compliance_truth(path: str | os.PathLike, model: CompliantArm) -> np.ndarray:
+    """The compliance of a truth TOML (``k_urad_per_Nm``, ``c_mdeg_per_m``), internal units.
+
+    Returns
+    -------
+    ndarray, shape (P,)
+        In the order of ``model.compliance_names``: rad/(N m) for ``k``, rad/m for ``c``.
+    """
+    data = load_toml(path, "truth")
+    n = model.arm.n_joints
+    values = []
+    for kind in dict.fromkeys(model.kinds):
+        key = COMPLIANCE_TRUTH_KEYS[kind]
+        if key not in data:
+            raise fail(
+                path,
+                f"missing key '{key}' ({n} numbers): the robot's [elastostatic] model has "
+                f"parameters {', '.join(model.compliance_names)}",
+            )
+        values += numbers(path, data[key], key, n)
+    return np.array(values) / model.compliance_scale

@@ -1,0 +1,680 @@
+"""CSV tables: plans, measurements and robot programs, read strictly and written exactly.
+
+A plan or program has a column per joint (``q1_deg..qn_deg``); measurements add
+the measured point (``x_mm, y_mm[, z_mm]``) and optional columns (``pose``,
+``target``, ``sigma_mm``, ``payload_kg``, ``fx_N``, ``fy_N``).  Readers accept
+the variants spreadsheets and instruments write (``#`` comments, ``;`` with a
+decimal comma, tabs) and name the file, row and column of any bad value.
+"""
+
+from __future__ import annotations
+
+import csv
+import difflib
+import math
+import os
+import re
+from collections.abc import Sequence
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from ..errors import ArmcalWarning, InputError
+from ..formats import reader_columns
+from ..models import (
+    Loads,
+    PlanarArm,
+    Target,
+)
+from .common import MAX_ABS_VALUE, fail, read_text, suggest
+from .robots import SIGMA_RANGE_MM
+
+__all__ = [
+    "INSTRUMENT_RANGE",
+    "LIMIT_TOLERANCE_DEG",
+    "REACH_MARGIN",
+    "Measurements",
+    "Program",
+    "arm_for_measurements",
+    "format_measurements_csv",
+    "format_plan_csv",
+    "format_program_csv",
+    "read_loaded_plan",
+    "read_measurements",
+    "read_plan",
+    "read_program",
+]
+
+
+#: How far (deg) a *measured* joint angle may lie beyond a joint limit and still be
+#: accepted, with a ``beyond-limits`` warning.  Limits constrain plans, not what the
+#: arm really did: a reading past a limit by encoder noise, overshoot or a soft limit
+#: set inside the hard stop is a few tenths of a degree.  Beyond 2 deg (twice the
+#: largest joint offset PRODUCT.md expects, about a degree) the file or the robot's
+#: limits are wrong, and the reading stays an error.
+LIMIT_TOLERANCE_DEG = 2.0
+
+#: A measured tip farther than ``(1 + REACH_MARGIN)`` times the arm's reach (the sum of
+#: its link lengths) from the base is an error: no arm whose links deviate by less than
+#: 10 % (the ``large-deviation`` bound of :mod:`armcal.plausibility`) gets there.
+REACH_MARGIN = 0.1
+
+#: An instrument sees an arm from at most this many reaches away (a laser tracker a
+#: few metres from a sub-metre arm): a point beyond the reach but within it may be
+#: instrument-frame data without a base offset, one farther is a wrong value or unit.
+INSTRUMENT_RANGE = 100.0
+
+
+_JOINT_COLUMN = re.compile(r"^q([1-9][0-9]{0,3})_deg$")  # up to 9999 joints
+#: A column with a known stem and another unit suffix (``q1_rad``, ``x_m``).
+_UNIT_COLUMN = re.compile(r"^(q[1-9][0-9]{0,3}|x|y|z|sigma)_([A-Za-z]+)$")
+
+#: Units a column may be written in that armcal does not read (a unit hint, not a typo).
+_OTHER_UNITS = frozenset(
+    ("m", "cm", "um", "in", "inch", "inches", "ft", "rad", "mrad", "urad", "grad", "rev")
+)
+
+
+@dataclass(frozen=True, eq=False)
+class Measurements:
+    """Measured poses read from a CSV file.
+
+    Attributes
+    ----------
+    q : ndarray, shape (m, n)
+        Commanded joint angles in rad.
+    xy : ndarray, shape (m, 2)
+        Measured positions in mm.
+    labels : tuple of str
+        The ``pose`` column, or ``"1".."m"`` when the file has none.
+    rows : tuple of int
+        The 1-based data row of every pose (blank lines and the header not counted),
+        as error and warning messages name them.
+    row_sigma : ndarray, shape (m,), or None
+        The optional ``sigma_mm`` column: each point's instrument uncertainty
+        (1 std, mm), for instruments that report it.
+    warnings : tuple of ArmcalWarning
+        What is accepted but suspicious: ``beyond-limits`` (measured angles
+        slightly beyond a joint limit).
+    targets : tuple of str, or None
+        The optional ``target`` column: which target every row measured.
+    z : ndarray, shape (m,), or None
+        The optional ``z_mm`` column of 3-D instrument data; then ``xy`` are the
+        instrument's x and y, not yet in the plane of motion.
+    payload_kg : ndarray, shape (m,), or None
+        The optional ``payload_kg`` column: the payload carried in every row.
+    force_n : ndarray, shape (m, 2), or None
+        The optional ``fx_N``, ``fy_N`` columns: a force applied at the tip (N).
+    """
+
+    q: np.ndarray
+    xy: np.ndarray
+    labels: tuple[str, ...]
+    rows: tuple[int, ...] = ()
+    row_sigma: np.ndarray | None = None
+    warnings: tuple[ArmcalWarning, ...] = ()
+    targets: tuple[str, ...] | None = None
+    z: np.ndarray | None = None
+    payload_kg: np.ndarray | None = None
+    force_n: np.ndarray | None = None
+
+    def loads(self, default_payload_kg: float = 0.0) -> Loads:
+        """Every row's payload (the file's default where there is no column) and tip force."""
+        m = self.q.shape[0]
+        payload = default_payload_kg if self.payload_kg is None else self.payload_kg
+        return Loads.create(m, payload, self.force_n)
+
+    @property
+    def has_loads(self) -> bool:
+        """Whether the file has a payload or force column."""
+        return self.payload_kg is not None or self.force_n is not None
+
+    @property
+    def xyz(self) -> np.ndarray:
+        """The 3-D points ``(m, 3)`` in mm (requires :attr:`z`)."""
+        if self.z is None:
+            raise ValueError("the measurements are 2-D: no z_mm column")
+        return np.column_stack([self.xy, self.z])
+
+
+# --------------------------------------------------------------------------- CSV
+
+
+def _joint_names(n: int) -> list[str]:
+    return [f"q{j}_deg" for j in range(1, n + 1)]
+
+
+@dataclass(frozen=True, eq=False)
+class _Table:
+    """A validated CSV: numbers in file units and the optional columns found."""
+
+    values: np.ndarray  # (m, n + len(numeric)): joint columns (deg), then the numeric ones
+    texts: dict[str, list[str]]  # optional text columns present
+    numbers: dict[str, np.ndarray]  # optional numeric columns present
+    lines: list[int]  # file line of every data row
+    beyond: list[tuple[int, int, float, float]]  # (row index, joint, value deg, by deg)
+
+
+def _parse_number(path, where: str, name: str, field: str, decimal_comma: bool = False) -> float:
+    try:
+        value = float(field.replace(",", ".", 1) if decimal_comma else field)
+    except ValueError:
+        raise fail(path, f"{where}, column {name}: {field!r} is not a number") from None
+    if not math.isfinite(value):
+        raise fail(path, f"{where}, column {name}: {field!r} is not a finite number")
+    if abs(value) > MAX_ABS_VALUE:
+        raise fail(
+            path,
+            f"{where}, column {name}: {field} is beyond ±{MAX_ABS_VALUE:g}; "
+            "check the unit (mm, deg)",
+        )
+    return value
+
+
+def _records(path, kept: list[tuple[int, str]], delimiter: str) -> list[tuple[int, list[str]]]:
+    """CSV records of the ``(file line, text)`` lines kept, each with the file line it starts on.
+
+    A quoted field may span lines; a record is numbered by its first line.
+    """
+    reader = csv.reader((raw + "\n" for _, raw in kept), delimiter=delimiter)
+    records = []
+    start = 0  # index in ``kept`` of the next record's first line
+    try:
+        for row in reader:
+            records.append((kept[start][0], row))
+            start = reader.line_num
+    except csv.Error as exc:  # a field beyond the csv module's size limit, a NUL byte
+        line = kept[min(start, len(kept) - 1)][0]
+        raise fail(path, f"line {line}: not a CSV row ({exc}); check the file") from None
+    return records
+
+
+def _shown(text: str, limit: int = 40) -> str:
+    """``text`` quoted for a message, cut to ``limit`` characters."""
+    return repr(text if len(text) <= limit else text[:limit] + "...")
+
+
+def _delimiter(header: str) -> str:
+    """The separator of a CSV whose header line is ``header``: a comma, else ';' or a tab."""
+    if "," not in header:
+        for candidate in (";", "\t"):
+            if candidate in header:
+                return candidate
+    return ","
+
+
+def _unit_hint(name: str, allowed: Sequence[str]) -> str:
+    """What to do about an ``allowed`` column in another unit (``q1_rad``, ``x_m``), else ``""``.
+
+    A unit that is a typo of the right one (``q1_dge``) gets a did-you-mean instead.
+    """
+    match = _UNIT_COLUMN.match(name)
+    if match is None:
+        return ""
+    stem, unit = match.groups()
+    right = "deg" if stem.startswith("q") else "mm"
+    fixed = f"{stem}_{right}"
+    if fixed not in allowed and not (stem.startswith("q") and _JOINT_COLUMN.match(fixed)):
+        return ""
+    unit = unit.lower()
+    if unit not in _OTHER_UNITS and (
+        unit in ("degree", "degrees") or difflib.get_close_matches(unit, [right])
+    ):
+        return f"did you mean '{fixed}'? "
+    if right == "deg":
+        return (
+            f"joint angles are read in degrees: name the column {fixed} and give degrees "
+            "(deg = rad x 57.29578); "
+        )
+    return f"positions are read in mm: name the column {fixed} and give millimetres; "
+
+
+def _read_csv(path, arm: PlanarArm, what: str, limit_tol_deg: float = 0.0) -> _Table:
+    """Validate a CSV of kind ``what`` (a key of :data:`armcal.formats.COLUMNS`).
+
+    Its joint columns and required columns must be there; its optional text and
+    numeric columns may be.  A joint angle beyond its limit by at most
+    ``limit_tol_deg`` is accepted and listed in ``beyond``; farther is an error.
+    """
+    numeric, optional, optional_numeric = reader_columns(what)
+    expected = _joint_names(arm.n_joints) + list(numeric)
+    extras = list(optional) + list(optional_numeric)
+    layout = ",".join(expected) + "".join(f" [,{c}]" for c in extras)
+    text = read_text(path, what)
+    # Lines that start with '#' are comments (instrument exports often begin with some).
+    kept = [
+        (line, raw)
+        for line, raw in enumerate(text.splitlines(), start=1)
+        if not raw.lstrip().startswith("#")
+    ]
+    if not any(raw.strip() for _, raw in kept):
+        raise fail(path, f"file is empty; expected a header line {layout}")
+    header_raw = next(raw for _, raw in kept if raw.strip())
+    delimiter = _delimiter(header_raw)
+    rows = [
+        (line, row) for line, row in _records(path, kept, delimiter) if any(f.strip() for f in row)
+    ]
+    if not rows:
+        raise fail(path, f"file has no header, only empty fields; expected {layout}")
+    header_line, header = rows[0]
+    header = [h.strip() for h in header]
+    for col, name in enumerate(header, start=1):
+        if not name:
+            raise fail(path, f"line {header_line}: header column {col} is empty")
+        if header.count(name) > 1:
+            raise fail(path, f"line {header_line}: duplicate column '{name}'; keep one")
+    for name in header:
+        if name not in expected and name not in extras and not _JOINT_COLUMN.match(name):
+            raise fail(
+                path,
+                f"line {header_line}: unknown column {_shown(name)}: "
+                f"{_unit_hint(name, expected + extras) or suggest(name, expected + extras)}"
+                f"expected {layout}",
+            )
+    joints = sorted(int(m.group(1)) for h in header if (m := _JOINT_COLUMN.match(h)))
+    if joints and joints != list(range(1, len(joints) + 1)):
+        raise fail(
+            path,
+            f"line {header_line}: joint columns must be q1_deg..qN_deg without gaps, got "
+            f"{', '.join(f'q{j}_deg' for j in joints)}",
+        )
+    if joints and len(joints) != arm.n_joints:
+        raise fail(
+            path,
+            f"has {len(joints)} joint columns (q1_deg..q{len(joints)}_deg) but robot "
+            f"{arm.name} has {arm.n_joints} joints; pass the matching --robot or fix the header",
+        )
+    for name in expected:
+        if name not in header:
+            raise fail(path, f"line {header_line}: missing column '{name}'; expected {layout}")
+    data_rows = rows[1:]
+    if not data_rows:
+        raise fail(
+            path, f"has a header but no poses; add one row per pose after line {header_line}"
+        )
+    index = {name: header.index(name) for name in expected}
+    values = np.empty((len(data_rows), len(expected)))
+    texts: dict[str, list[str]] = {name: [] for name in optional if name in header}
+    present = [name for name in optional_numeric if name in header]
+    numbers = {name: np.empty(len(data_rows)) for name in present}
+    for r, (line, row) in enumerate(data_rows, start=1):
+        where = f"row {r} (line {line})"
+        if len(row) != len(header):
+            raise fail(
+                path,
+                f"{where} has {len(row)} fields but the header has {len(header)}; "
+                "give every column a value",
+            )
+        comma = delimiter == ";"  # a semicolon file may write 1,5 for 1.5
+        for c, name in enumerate(expected):
+            values[r - 1, c] = _parse_number(path, where, name, row[index[name]].strip(), comma)
+        for name in present:
+            numbers[name][r - 1] = _parse_number(
+                path, where, name, row[header.index(name)].strip(), comma
+            )
+        for name in texts:
+            texts[name].append(row[header.index(name)].strip())
+    lines = [line for line, _ in data_rows]
+    q_deg = values[:, : arm.n_joints]
+    limits_deg = np.degrees(arm.joint_limits)
+    # Distance beyond the nearer limit (deg), 0 inside; the 1e-9 rad slack of
+    # PlanarArm.within_limits keeps a limit written out in the file inside.
+    by = np.maximum(limits_deg[:, 0] - q_deg, q_deg - limits_deg[:, 1])
+    outside = by > math.degrees(1e-9)
+    far = outside & (by > limit_tol_deg)
+    if far.any():
+        r, j = map(int, np.argwhere(far)[0])
+        lo, hi = limits_deg[j]
+        fix = "fix the pose or the robot's joint_limits_deg"
+        if limit_tol_deg > 0:
+            fix = (
+                f"readings up to {limit_tol_deg:g} deg beyond a limit are accepted; "
+                "check the robot file (joint_limits_deg) and the column"
+            )
+        raise fail(
+            path,
+            f"row {r + 1} (line {lines[r]}), column q{j + 1}_deg: "
+            f"{values[r, j]:g} deg is outside joint {j + 1}'s limits [{lo:g}, {hi:g}] deg; {fix}",
+        )
+    beyond = [
+        (int(r), int(j), float(values[r, j]), float(by[r, j])) for r, j in np.argwhere(outside)
+    ]
+    return _Table(values, texts, numbers, lines, beyond)
+
+
+def read_plan(path: str | os.PathLike, arm: PlanarArm) -> np.ndarray:
+    """Read a plan CSV (header ``q1_deg,...,qn_deg``) for ``arm``.
+
+    Returns
+    -------
+    ndarray, shape (m, n)
+        Joint angles in rad, each within the joint limits.
+    """
+    q, payload = read_loaded_plan(path, arm)
+    if payload is not None:
+        raise fail(
+            path,
+            f"has a payload_kg column but robot {arm.name} has no [elastostatic] table; "
+            "remove the column or add the table to the robot file",
+        )
+    return q
+
+
+def read_loaded_plan(
+    path: str | os.PathLike, arm: PlanarArm
+) -> tuple[np.ndarray, np.ndarray | None]:
+    """Read a plan CSV with an optional ``payload_kg`` column (designs with compliance).
+
+    Returns
+    -------
+    q : ndarray, shape (m, n)
+        Joint angles in rad.
+    payload : ndarray, shape (m,), or None
+        The payload of every pose (kg), when the column is there.
+    """
+    table = _read_csv(path, arm, "plan")
+    payload, _ = _load_columns(path, table)
+    return np.radians(table.values), payload
+
+
+@dataclass(frozen=True, eq=False)
+class Program:
+    """A robot program's joint commands read from a CSV file.
+
+    Attributes
+    ----------
+    q : ndarray, shape (m, n)
+        Joint commands in rad, within the joint limits.
+    labels : tuple of str, or None
+        The optional ``pose`` column.
+    targets : tuple of str, or None
+        The optional ``target`` column: the tool point each command is for.
+    """
+
+    q: np.ndarray
+    labels: tuple[str, ...] | None = None
+    targets: tuple[str, ...] | None = None
+    payload_kg: np.ndarray | None = None
+    force_n: np.ndarray | None = None
+
+
+def read_program(path: str | os.PathLike, arm: PlanarArm) -> Program:
+    """Read a program CSV: ``q1_deg..qn_deg``; optional ``pose``, ``target`` and load columns.
+
+    Raises
+    ------
+    InputError
+        For a malformed file, a command outside the joint limits or an unknown target.
+    """
+    table = _read_csv(path, arm, "program")
+    targets = table.texts.get("target")
+    if targets is not None:
+        if not arm.targets:
+            raise fail(
+                path,
+                f"has a target column but {arm.name} has no targets; remove the column",
+            )
+        _check_target_labels(path, arm, targets, table.lines)
+    labels = table.texts.get("pose")
+    payload, force = _load_columns(path, table)
+    return Program(
+        np.radians(table.values),
+        None if labels is None else tuple(labels),
+        None if targets is None else tuple(targets),
+        payload,
+        force,
+    )
+
+
+def format_program_csv(
+    q: np.ndarray,
+    corrected: np.ndarray,
+    labels: Sequence[str] | None = None,
+    targets: Sequence[str] | None = None,
+) -> str:
+    """Program CSV text: ``[pose,]q1_deg..qn_deg[,target],corrected`` (1 or 0 per row)."""
+    head = (["pose"] if labels is not None else []) + _joint_names(q.shape[1])
+    head += (["target"] if targets is not None else []) + ["corrected"]
+    lines = [",".join(head)]
+    for i, row in enumerate(q):
+        fields = [str(labels[i])] if labels is not None else []
+        fields += [_angle_text(v) for v in row]
+        fields += [str(targets[i])] if targets is not None else []
+        lines.append(",".join([*fields, "1" if corrected[i] else "0"]))
+    return "\n".join(lines) + "\n"
+
+
+def _beyond_limits_warning(path, arm: PlanarArm, beyond) -> ArmcalWarning:
+    limits_deg = np.degrees(arm.joint_limits)
+    shown = [
+        f"row {r + 1} q{j + 1}_deg = {value:g} "
+        f"([{limits_deg[j, 0]:g}, {limits_deg[j, 1]:g}], {by:.3g} deg beyond)"
+        for r, j, value, by in beyond[:5]
+    ]
+    more = f" and {len(beyond) - 5} more" if len(beyond) > 5 else ""
+    return ArmcalWarning(
+        "beyond-limits",
+        f"{os.fspath(path)}: {len(beyond)} measured joint angle(s) beyond the robot's limits by "
+        f"at most {LIMIT_TOLERANCE_DEG:g} deg, accepted (limits constrain plans, not what the "
+        f"arm did): {'; '.join(shown)}{more}; if the arm cannot go there, check the robot "
+        "file's joint_limits_deg",
+    )
+
+
+def _check_reach(path, arm: PlanarArm, xy: np.ndarray, lines: list[int]) -> None:
+    """Refuse a measured point no arm of this geometry can reach (see :data:`REACH_MARGIN`).
+
+    Without a base offset the base is the instrument's origin, and every tip lies
+    within ``reach`` of it.  With one, the base is unknown, but every tip lies
+    within ``reach`` of it, so within ``2 reach`` of the data's centroid.
+    """
+    reach = float(np.sum(arm.link_lengths[:-1]) + np.max(arm.link_nominal[arm.n_joints - 1 :]))
+    limit = (1 + REACH_MARGIN) * reach
+    if arm.base_offset or xy.shape[1] == 3:
+        center = np.mean(xy, axis=0)
+        limit *= 2
+        where = "from the centroid of the measured points"
+    else:
+        center = np.zeros(2)
+        where = "from the base (the instrument's origin; base_offset = false)"
+    distance = np.linalg.norm(xy - center, axis=1)
+    r = int(np.argmax(distance))
+    if distance[r] <= limit:
+        return
+    c = int(np.argmax(np.abs(xy[r] - center)))
+    column = ("x_mm", "y_mm", "z_mm")[c]
+    fix = "check the value and the unit (mm)"
+    if not arm.base_offset and distance[r] <= INSTRUMENT_RANGE * reach:
+        fix += (
+            "; if the instrument's origin is not at the arm's base (a laser tracker, a camera), "
+            "set base_offset = true in the robot file"
+        )
+    raise fail(
+        path,
+        f"row {r + 1} (line {lines[r]}), column {column}: {xy[r, c]:g} puts the tip "
+        f"{distance[r]:.4g} mm {where}, beyond the reach of {arm.name} ("
+        f"{'2 x ' if arm.base_offset else ''}{reach:g} mm, +{100 * REACH_MARGIN:g} % for "
+        f"deviations: {limit:.4g} mm); {fix}",
+    )
+
+
+def read_measurements(path: str | os.PathLike, arm: PlanarArm) -> Measurements:
+    """Read a measurements CSV: ``q1_deg..qn_deg,x_mm,y_mm``, optional ``pose`` and ``sigma_mm``.
+
+    Parameters
+    ----------
+    path : str or path
+    arm : PlanarArm
+        The robot measured: its joint count, limits, link lengths, base offset.
+
+    Returns
+    -------
+    Measurements
+        Angles in rad, positions in mm, the data rows, the ``sigma_mm`` column
+        (per-row instrument noise, mm) and the ``beyond-limits`` warning.
+
+    Raises
+    ------
+    InputError
+        Naming the file, row and column: a malformed file; a joint angle more
+        than :data:`LIMIT_TOLERANCE_DEG` beyond its limit; a ``sigma_mm`` outside
+        :data:`SIGMA_RANGE_MM`; a point no arm of this geometry can reach
+        (:data:`REACH_MARGIN`).
+    """
+    table = _read_csv(path, arm, "measurements", limit_tol_deg=LIMIT_TOLERANCE_DEG)
+    n = arm.n_joints
+    values = table.values
+    m = values.shape[0]
+    labels = table.texts.get("pose") or [str(i) for i in range(1, m + 1)]
+    row_sigma = table.numbers.get("sigma_mm")
+    if row_sigma is not None:
+        low, high = SIGMA_RANGE_MM
+        bad = np.flatnonzero((row_sigma < low) | (row_sigma > high))
+        if bad.size:
+            r = int(bad[0])
+            raise fail(
+                path,
+                f"row {r + 1} (line {table.lines[r]}), column sigma_mm: {row_sigma[r]:g} is not "
+                f"a noise std between {low:g} and {high:g} mm; check the unit (mm)",
+            )
+    xy = values[:, n:]
+    z = table.numbers.get("z_mm")
+    targets = table.texts.get("target")
+    if targets is not None:
+        _check_target_labels(path, arm, targets, table.lines)
+    if z is None:
+        _check_reach(path, arm, xy, table.lines)
+    else:
+        _check_reach(path, arm, np.column_stack([xy, z]), table.lines)
+    warnings = []
+    if table.beyond:
+        warnings.append(_beyond_limits_warning(path, arm, table.beyond))
+    payload, force = _load_columns(path, table)
+    return Measurements(
+        np.radians(values[:, :n]),
+        xy,
+        tuple(labels),
+        rows=tuple(range(1, m + 1)),
+        row_sigma=row_sigma,
+        warnings=tuple(warnings),
+        targets=None if targets is None else tuple(targets),
+        z=z,
+        payload_kg=payload,
+        force_n=force,
+    )
+
+
+def _load_columns(path, table: _Table) -> tuple[np.ndarray | None, np.ndarray | None]:
+    """The ``payload_kg`` column (not negative) and the tip force ``(m, 2)`` (a missing axis 0)."""
+    payload = table.numbers.get("payload_kg")
+    if payload is not None and np.any(payload < 0):
+        r = int(np.flatnonzero(payload < 0)[0])
+        raise fail(
+            path,
+            f"row {r + 1} (line {table.lines[r]}), column payload_kg: {payload[r]:g} kg is "
+            "negative; give the mass carried (0 for none)",
+        )
+    fx, fy = table.numbers.get("fx_N"), table.numbers.get("fy_N")
+    force = None
+    if fx is not None or fy is not None:
+        m = table.values.shape[0]
+        force = np.column_stack(
+            [np.zeros(m) if fx is None else fx, np.zeros(m) if fy is None else fy]
+        )
+    return payload, force
+
+
+def _check_target_labels(path, arm: PlanarArm, labels: list[str], lines: list[int]) -> None:
+    """Every row names a target, one of the robot file's ``[targets]`` when it has them."""
+    known = arm.target_labels
+    for r, label in enumerate(labels):
+        if not label:
+            raise fail(
+                path,
+                f"row {r + 1} (line {lines[r]}), column target: empty; name the target "
+                "(reflector, marker) every row measured",
+            )
+        if known and label not in known:
+            raise fail(
+                path,
+                f"row {r + 1} (line {lines[r]}), column target: {label!r} is not a target of "
+                f"{arm.name}: {suggest(label, known)}the robot file's [targets] has "
+                f"{', '.join(known)}",
+            )
+
+
+def arm_for_measurements(arm: PlanarArm, meas: Measurements) -> PlanarArm:
+    """The arm to identify from ``meas``: its targets are those measured.
+
+    With a ``target`` column, the targets are the labels measured, in the order
+    of the robot file's ``[targets]`` (nominal last link from there) or, without
+    one, in the order they first appear (nominal: the last link's length, angle
+    0).  With a ``z_mm`` column the base pose in the fitted plane is identified:
+    base offset and base rotation (:mod:`armcal.instrument`).
+    """
+    changes: dict[str, Any] = {}
+    if meas.targets is not None:
+        seen = list(dict.fromkeys(meas.targets))
+        if arm.targets:
+            targets = tuple(t for t in arm.targets if t.label in seen)
+        else:
+            targets = tuple(Target(label, float(arm.link_lengths[-1])) for label in seen)
+        if targets != arm.targets:
+            changes["targets"] = targets
+    elif arm.targets:
+        raise InputError(
+            f"{arm.name} has targets ({', '.join(arm.target_labels)}) but the measurements have "
+            "no target column; add a column 'target' naming the target of every row"
+        )
+    if meas.z is not None:
+        changes.update(base_offset=True, base_rotation=True)
+    if not changes:
+        return arm
+    try:  # the fixed parameters that still exist are carried over
+        return arm.replace(**changes)
+    except ValueError as exc:
+        raise InputError(f"{arm.name}: {exc}") from None
+
+
+def _angle_text(q_rad: float) -> str:
+    # Rounded to 1e-12 deg so an exact 90 deg is written "90.0", not "89.99999999999999".
+    return repr(round(math.degrees(q_rad), 12) + 0.0)
+
+
+def format_plan_csv(q: np.ndarray, payload_kg: np.ndarray | None = None) -> str:
+    """Plan CSV text for joint angles ``q`` ``(m, n)`` in rad (and every pose's payload)."""
+    head = _joint_names(q.shape[1]) + (["payload_kg"] if payload_kg is not None else [])
+    lines = [",".join(head)]
+    for i, row in enumerate(q):
+        fields = [_angle_text(v) for v in row]
+        if payload_kg is not None:
+            fields.append(repr(float(payload_kg[i])))
+        lines.append(",".join(fields))
+    return "\n".join(lines) + "\n"
+
+
+def format_measurements_csv(
+    q: np.ndarray,
+    xy: np.ndarray,
+    labels: Sequence[str] | None = None,
+    targets: Sequence[str] | None = None,
+    payload_kg: np.ndarray | None = None,
+) -> str:
+    """Measurements CSV text; positions are written with full round-trip precision.
+
+    ``xy`` of shape ``(m, 3)`` writes 3-D points (``z_mm``); ``targets`` adds the
+    ``target`` column, ``payload_kg`` the payload of every row.
+    """
+    head = ["pose"] if labels is not None else []
+    head += _joint_names(q.shape[1]) + ["x_mm", "y_mm", "z_mm"][: xy.shape[1]]
+    head += ["target"] if targets is not None else []
+    head += ["payload_kg"] if payload_kg is not None else []
+    lines = [",".join(head)]
+    for i, (row, point) in enumerate(zip(q, xy, strict=True)):
+        fields = [str(labels[i])] if labels is not None else []
+        fields += [_angle_text(v) for v in row] + [repr(float(v)) for v in point]
+        fields += [str(targets[i])] if targets is not None else []
+        fields += [repr(float(payload_kg[i]))] if payload_kg is not None else []
+        lines.append(",".join(fields))
+    return "\n".join(lines) + "\n"

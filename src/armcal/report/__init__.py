@@ -1,0 +1,41 @@
+"""Every result as text and JSON: pure functions, one module per result, no numerics.
+
+* :mod:`~armcal.report.common` -- the model in words, number cells, tables;
+* :mod:`~armcal.report.calibration` -- a calibration, cross-validation;
+* :mod:`~armcal.report.quality` -- a plan's quality (geometric, or with compliance);
+* :mod:`~armcal.report.design` -- a design, a sizing;
+* :mod:`~armcal.report.monte_carlo` -- a Monte Carlo;
+* :mod:`~armcal.report.validation` -- validation and compensation;
+* :mod:`~armcal.report.reproduction` -- the paper recomputed.
+
+The calibration *file* is written and read by :mod:`armcal.files.calibration`.
+"""
+
+from .calibration import effect_lines, format_calibration, format_cross_validation
+from .common import model_lines, model_to_dict, table_csv
+from .design import compliant_design_summary, design_summary, poses_needed_summary
+from .monte_carlo import format_monte_carlo, monte_carlo_to_dict
+from .quality import compliant_quality, format_quality, quality_to_dict
+from .reproduction import format_reproduction, reproduction_summary
+from .validation import compensation_report, validation_report
+
+__all__ = [
+    "compensation_report",
+    "compliant_design_summary",
+    "compliant_quality",
+    "design_summary",
+    "effect_lines",
+    "format_calibration",
+    "format_cross_validation",
+    "format_monte_carlo",
+    "format_quality",
+    "format_reproduction",
+    "model_lines",
+    "model_to_dict",
+    "monte_carlo_to_dict",
+    "poses_needed_summary",
+    "quality_to_dict",
+    "reproduction_summary",
+    "table_csv",
+    "validation_report",
+]

@@ -1,0 +1,162 @@
+"""A calibration as text: values with their std and units, the fit, outliers, the effect."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..identification import Calibration
+from .common import identified, model_lines, small
+
+__all__ = [
+    "effect_lines",
+    "format_calibration",
+    "format_cross_validation",
+]
+
+
+def _fit_line(cal: Calibration) -> str:
+    """The goodness of fit in words: chi-square, dof and p-value, or why there is no test."""
+    fit = cal.goodness_of_fit
+    dof = cal.dof if fit is None else fit.dof
+    if fit is None or fit.chi2 is None:
+        return f"goodness of fit: sigma estimated from the residuals, no test ({dof} dof)"
+    if fit.p_value is None:
+        return f"goodness of fit: chi2 = {fit.chi2:.4g} on {dof} dof: no test without dof"
+    verdict = "consistent with sigma" if fit.p_value >= 1e-3 else "INCONSISTENT with sigma"
+    return (
+        f"goodness of fit: chi2 = {fit.chi2:.4g} on {dof} dof "
+        f"(chi2/dof {fit.chi2 / max(dof, 1):.3g}), p = {fit.p_value:.3g}: {verdict}"
+    )
+
+
+def _outlier_lines(cal: Calibration) -> list[str]:
+    if not cal.outliers:
+        return []
+    lines = [
+        "",
+        f"outliers (studentized residual test, family-wise; {len(cal.outliers)}):",
+        f"{'row':>6}  {'pose':<10}{'residual mm':>12}{'studentized':>13}  status",
+    ]
+    for o in cal.outliers:
+        status = "removed from the fit" if o.removed else "flagged, kept in the fit"
+        lines.append(
+            f"{o.row:>6}  {o.pose:<10}{o.residual_mm:>12.4g}{o.studentized:>13.3g}  {status}"
+        )
+    return lines
+
+
+def format_calibration(cal: Calibration, *, truth: np.ndarray | None = None) -> str:
+    """Human-readable table of a calibration: value ± std with units, and a fit summary.
+
+    Parameters
+    ----------
+    cal : Calibration
+    truth : ndarray, shape (p,), optional
+        Known deviations (internal units) of a virtual robot; adds columns with the
+        truth and the error in standard errors.
+
+    Returns
+    -------
+    str
+        Lines without a trailing newline: the model (fixed parameters, a noise
+        model that is not isotropic iid), the parameters (fixed ones marked
+        ``fixed``), sigma and residuals, the goodness of fit, the outliers.
+    """
+    arm = cal.arm
+    header = f"{'parameter':<10}{'value':>12}  {'± std':>10}  unit"
+    if truth is not None:
+        header += f"{'truth':>12}{'error/std':>11}"
+    used = cal.n_used
+    poses = f"{cal.n_poses} poses" + (
+        f" ({cal.n_poses - used} left out of the fit)" if used < cal.n_poses else ""
+    )
+    lines = [
+        f"calibration of {arm.name}: {poses}, {identified(arm)}"
+        + (
+            ""
+            if cal.nested is None
+            else f" and {len(cal.nested.names)} of {cal.nested.effect.name}"
+        )
+        + f", method {cal.method}"
+        + (", robust" if cal.robust else ""),
+        *model_lines(arm, plan=False),
+        "",
+        header,
+    ]
+    truth_display = None if truth is None else np.asarray(truth) * cal.display_scale
+    for i, (name, unit) in enumerate(zip(cal.names, cal.units, strict=True)):
+        if name in arm.fixed:
+            line = f"{name:<10}{cal.values[i]:>12.5f}  {'fixed':<10}  {unit:<4}"
+        else:
+            line = f"{name:<10}{cal.values[i]:>12.5f}  ± {small(cal.std[i], 5):<8}  {unit:<4}"
+        if truth_display is not None:
+            line += f"{truth_display[i]:>12.5f}"
+            if name not in arm.fixed and cal.std[i] > 0:
+                line += f"{(cal.values[i] - truth_display[i]) / cal.std[i]:>+11.2f}"
+        lines.append(line.rstrip())
+    kept = cal.pose_residuals if cal.used is None else np.where(cal.used, cal.pose_residuals, -1)
+    worst = int(np.argmax(kept))
+    lines += [
+        "",
+        f"sigma {cal.sigma_mm:.4g} mm ({cal.sigma_source}); "
+        f"residual RMS {cal.residual_rms:.4g} mm per coordinate, "
+        f"max {cal.residual_max:.4g} mm at pose {cal.pose_labels[worst]}; "
+        f"{cal.dof} degrees of freedom",
+        _fit_line(cal),
+        f"{cal.method}: {cal.iterations} iteration(s), "
+        + ("converged" if cal.converged else "NOT converged: the estimate may be off"),
+    ]
+    corr = np.abs(cal.correlation - np.eye(len(cal.names)))
+    strong = [
+        f"{cal.names[i]}/{cal.names[j]} {cal.correlation[i, j]:+.2f}"
+        for i, j in zip(*np.nonzero(np.triu(corr > 0.9)), strict=True)
+    ]
+    if strong:
+        lines.append("strongly correlated (|r| > 0.9): " + ", ".join(strong))
+    lines += _outlier_lines(cal)
+    if cal.plane is not None:
+        plane = cal.plane
+        offsets = ", ".join(
+            f"{label or 'all'} {d:+.4g}"
+            for label, d in zip(plane.labels or ("",), plane.offsets, strict=True)
+        )
+        normal = ", ".join(f"{v:.4f}" for v in plane.normal)
+        lines += [
+            "",
+            f"3-D data: plane of motion fitted with normal ({normal}) in the instrument frame; "
+            f"out of plane RMS {plane.rms_mm:.4g} mm, max {plane.max_mm:.4g} mm; target "
+            f"planes at {offsets} mm; x0, y0, phi0 are the base pose in the plane's axes",
+        ]
+    lines += effect_lines(cal)
+    return "\n".join(lines)
+
+
+def effect_lines(cal: Calibration) -> list[str]:
+    """What the model's effect explains: residuals without it and the deflections fitted."""
+    nested = cal.nested
+    if nested is None:
+        return []
+    effect = nested.effect
+    out = [
+        "",
+        f"{effect.name}, {effect.description}; {effect.nested} alone leaves "
+        f"{nested.rms_per_coordinate_mm:.4g} mm residual RMS, with {effect.short} "
+        f"{cal.residual_rms:.4g} mm",
+    ]
+    deflection = cal.details.get("max_deflection_rad")
+    if deflection is not None:
+        worst = np.degrees(deflection) * 1e3
+        out.append(
+            "largest fitted deflection per joint: "
+            + ", ".join(f"joint {j + 1} {v:.4g} mdeg" for j, v in enumerate(worst))
+        )
+    return out
+
+
+def format_cross_validation(summary: dict) -> str:
+    """One line: the K-fold prediction error against what the calibrations predict."""
+    return (
+        f"cross-validation ({summary['folds']} folds): prediction error RMS "
+        f"{summary['rms_mm']:.4g} mm (max {summary['max_mm']:.4g} mm); predicted "
+        f"{summary['predicted_rms_mm']:.4g} mm"
+    )

@@ -1,0 +1,155 @@
+"""What every report shares: the model in words, numbers in their columns, tables.
+
+Reports are pure: every function turns a result into text or a JSON-ready dict,
+with no numerics and no decisions (those are the library's; the warnings come
+with the results).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from ..models import PlanarArm, combination
+
+__all__ = [
+    "identified",
+    "markdown",
+    "model_lines",
+    "model_to_dict",
+    "small",
+    "std_cell",
+    "table_csv",
+]
+
+
+def _noise_text(arm: PlanarArm) -> str | None:
+    """The noise model in words when it is not isotropic iid (None when it is or is unknown)."""
+    noise = arm.noise
+    if noise is None or noise.isotropic_iid:
+        return None
+    cov = noise.covariance_mm2
+    if noise.isotropic_instrument:
+        parts = [f"instrument isotropic, sigma {math.sqrt(cov[0, 0]):.4g} mm"]
+    elif cov[0, 1] == 0:
+        parts = [
+            f"instrument per axis, sigma_x {math.sqrt(cov[0, 0]):.4g} mm, "
+            f"sigma_y {math.sqrt(cov[1, 1]):.4g} mm"
+        ]
+    else:
+        parts = [
+            f"instrument covariance [[{cov[0, 0]:.4g}, {cov[0, 1]:.4g}], "
+            f"[{cov[1, 0]:.4g}, {cov[1, 1]:.4g}]] mm^2"
+        ]
+    if noise.joint_sigma is not None:
+        joints = np.degrees(np.broadcast_to(noise.joint_sigma, (arm.n_joints,)))
+        if np.all(joints == joints[0]):
+            parts.append(f"encoder noise {joints[0]:.4g} deg on every joint")
+        else:
+            parts.append("encoder noise " + ", ".join(f"{v:.4g}" for v in joints) + " deg")
+    return "; ".join(parts) + f" (reference sigma {noise.sigma_mm:.4g} mm)"
+
+
+def model_lines(arm: PlanarArm, *, plan: bool = True) -> list[str]:
+    """Lines naming the fixed parameters and a noise model that is not isotropic iid.
+
+    Empty for the paper's model (every parameter free, isotropic iid noise).
+    ``plan`` adds, for a noise model that is not isotropic iid, that the paper's
+    D*, Table I and analytic plans assume one (what changes the answer for a plan).
+
+    Examples
+    --------
+    >>> model_lines(PlanarArm([260.0, 180.0], fixed=["dl2"]))
+    ['fixed (held at nominal, not identified): dl2']
+    """
+    lines = []
+    if not np.array_equal(arm.joint_map, np.tril(np.ones((arm.n_joints, arm.n_joints)))):
+        rows = "; ".join(" ".join(f"{v:g}" for v in row) for row in arm.joint_map)
+        lines.append(f"joint map: link angles theta = M q with M = [{rows}]")
+    if arm.targets:
+        shown = ", ".join(
+            f"{t.label} ({t.length:g} mm, {math.degrees(t.angle):g} deg)" for t in arm.targets
+        )
+        lines.append(f"targets (nominal last link from joint {arm.n_joints}): {shown}")
+    if arm.fixed:
+        lines.append(f"fixed (held at nominal, not identified): {', '.join(arm.fixed)}")
+    if arm.base_rotation and arm.rotation_partner in arm.fixed:
+        lines.append(
+            f"base rotation phi0 identified, {arm.rotation_partner} held: a rotation of the base "
+            f"turns every link vector like the joint offsets {_rotation_words(arm)}, so the data "
+            f"cannot tell them apart (--fix phi0 identifies {arm.rotation_partner} instead)"
+        )
+    noise = _noise_text(arm)
+    if noise is not None:
+        line = f"noise model: {noise}; not isotropic iid: weighted least squares"
+        if plan:
+            line += (
+                " and the weighted information matrix (the paper's D*, Table I and the "
+                "analytic plans assume isotropic iid noise)"
+            )
+        lines.append(line)
+    return lines
+
+
+def _rotation_words(arm: PlanarArm) -> str:
+    """The joint-offset direction a base rotation cannot be told from, e.g. ``dq1 - dq3@A``."""
+    k = arm.n_links
+    return combination(-arm.rotation_direction[k : 2 * k], arm.param_names[k : 2 * k])
+
+
+def model_to_dict(arm: PlanarArm) -> dict:
+    """JSON keys of the model: ``fixed`` (names), ``noise`` (or null), ``noise_isotropic_iid``."""
+    return {
+        "fixed": list(arm.fixed),
+        "noise": None if arm.noise is None else arm.noise.to_dict(),
+        "noise_isotropic_iid": arm.noise is None or arm.noise.isotropic_iid,
+    }
+
+
+def identified(arm: PlanarArm) -> str:
+    """``8 parameters``, or ``7 of 8 parameters identified`` when some are fixed."""
+    if not arm.fixed:
+        return f"{arm.n_params} parameters"
+    return f"{arm.n_free} of {arm.n_params} parameters identified"
+
+
+def small(value: float, digits: int) -> str:
+    """``value`` with ``digits`` decimals, or in e-notation where they would show < 2 digits.
+
+    >>> small(0.0224, 5), small(2.236e-7, 5), small(0.0, 5)
+    ('0.02240', '2.24e-07', '0.00000')
+    """
+    if value != 0 and abs(value) < 10.0 ** (1 - digits):
+        return f"{value:.2e}"
+    return f"{value:.{digits}f}"
+
+
+def std_cell(arm: PlanarArm, name: str, value: float, width: int, digits: int) -> str:
+    """A std column: the number, or ``fixed`` for a fixed parameter."""
+    if name in arm.fixed:
+        return f"{'fixed':>{width}}"
+    return f"{small(value, digits):>{width}}"
+
+
+def _cell(value) -> str:
+    if value is None:
+        return ""
+    if isinstance(value, float):
+        return f"{value:.6g}"
+    text = str(value)
+    return f'"{text}"' if any(c in text for c in ',"\n') else text
+
+
+def table_csv(rows: list[dict], columns: tuple[str, ...]) -> str:
+    """CSV text of ``rows`` (header ``columns``; empty cell for None, 6 significant digits)."""
+    lines = [",".join(columns)]
+    lines += [",".join(_cell(row[c]) for c in columns) for row in rows]
+    return "\n".join(lines) + "\n"
+
+
+def markdown(rows: list[dict], columns: tuple[str, ...]) -> list[str]:
+    out = ["| " + " | ".join(columns) + " |", "|" + "---|" * len(columns)]
+    for row in rows:
+        out.append("| " + " | ".join(_cell(row[c]).strip('"') for c in columns) + " |")
+    return out

@@ -1,0 +1,168 @@
+"""A design and a sizing as text and JSON: the method, the certificate, the order."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from ..doe.compliance import CompliantDesign
+from ..doe.designer import Design
+from ..doe.sizing import TARGETS, PosesNeeded
+from ..models import PlanarArm
+from .common import model_lines, model_to_dict
+
+__all__ = [
+    "compliant_design_summary",
+    "design_summary",
+    "poses_needed_summary",
+]
+
+
+def design_summary(result: Design, seconds: float) -> tuple[dict, list[str]]:
+    """JSON keys and header lines of ``armcal design`` (before the plan's quality report).
+
+    Parameters
+    ----------
+    result : Design
+    seconds : float
+        Wall time of the design.
+
+    Returns
+    -------
+    document : dict
+        ``criterion``, ``method``, the certificate's bounds (None without one),
+        ``notes``, ``seconds``, ``order``, ``distinct`` and the joint travel in
+        the plan's order and in the order the method found
+        (``joint_travel_deg``, ``joint_travel_unordered_deg``).
+    lines : list of str
+        The method, the notes (why the closed-form plans were not used), the
+        D-efficiency against the unconstrained optimum and the certificate, the
+        joint travel, and an empty line.
+    """
+    cert = result.certificate
+    document = {
+        "criterion": result.criterion,
+        "method": result.method,
+        "certified_d_efficiency": None if cert is None else cert.certified_d_efficiency,
+        "plan_only_bound": None if cert is None else cert.plan_only_bound,
+        "best_weighted_design_d_efficiency": None if cert is None else cert.reference_d_efficiency,
+        "notes": list(result.notes),
+        "seconds": seconds,
+        "order": result.order,
+        "distinct": result.distinct,
+        "joint_travel_deg": math.degrees(result.joint_travel),
+        "joint_travel_unordered_deg": math.degrees(result.joint_travel_unordered),
+    }
+    if result.normalized:
+        efficiency = f"D-efficiency {result.d_efficiency:.4f} of the unconstrained optimum"
+    else:  # no closed-form optimum: only the certificate compares with the best plan
+        efficiency = f"D-criterion {result.d_efficiency:.4f} on this model"
+    if result.optimum_by_search:
+        # The note ruled out only the closed-form family: say that the search met the optimum.
+        efficiency += " (an orthogonal plan, found by search)"
+    if cert is not None:
+        efficiency += (
+            f"; certified >= {cert.certified_d_efficiency:.4f} of the best plan within the "
+            f"constraints (plan-only bound {cert.plan_only_bound:.4f})"
+        )
+    lines = [
+        f"design: {result.q.shape[0]} poses, criterion {result.criterion}, method {result.method} "
+        f"({seconds:.2f} s)",
+        *(f"note: {note}" for note in result.notes),
+        efficiency,
+        _travel_line(result),
+        "",
+    ]
+    return document, lines
+
+
+def _travel_line(result: Design) -> str:
+    """``order: joint travel 1234 deg after ordering (5678 deg in the order found, 22 %)``."""
+    after = math.degrees(result.joint_travel)
+    found = math.degrees(result.joint_travel_unordered)
+    if result.order == "none":
+        return f"order: joint travel {after:.0f} deg in the order found (not reordered)"
+    share = f", {100 * after / found:.0f} %" if found > 0 else ""
+    return (
+        f"order: joint travel {after:.0f} deg after ordering "
+        f"({found:.0f} deg in the order found{share})"
+    )
+
+
+def compliant_design_summary(result: CompliantDesign, seconds: float) -> tuple[dict, list[str]]:
+    """JSON keys and header lines of ``armcal design`` for a model with joint compliance."""
+    document = {
+        "criterion": "D",
+        "method": "exchange+polish",
+        "certified_d_efficiency": result.certified_d_efficiency,
+        "plan_only_bound": result.plan_only_bound,
+        "max_variance": result.max_variance,
+        "payloads_allowed": list(result.payloads),
+        "seconds": seconds,
+        "order": result.order,
+        "joint_travel_deg": float(np.degrees(result.joint_travel)),
+    }
+    lines = [
+        f"design: D-optimal for geometry and joint compliance, poses and payloads "
+        f"(from {', '.join(f'{v:g}' for v in result.payloads)} kg) chosen together "
+        f"({seconds:.1f} s)",
+        f"certified D-efficiency >= {result.certified_d_efficiency:.4f} of the best plan "
+        f"within the limits and region (max d = {result.max_variance:.3f} for "
+        f"p = {result.model.n_free})",
+        "",
+    ]
+    return document, lines
+
+
+def poses_needed_summary(
+    found: PosesNeeded, arm: PlanarArm, seconds: float
+) -> tuple[dict, list[str]]:
+    """The JSON document and the text lines of ``armcal poses-needed``.
+
+    Parameters
+    ----------
+    found : PosesNeeded
+    arm : PlanarArm
+        The arm the plans were designed for (its name is printed).
+    seconds : float
+        Wall time of the search.
+
+    Returns
+    -------
+    document : dict
+        ``poses`` (PRODUCT.md), ``target``, ``goal``, ``achieved``,
+        ``with_one_pose_less`` (null when fewer poses cannot identify every
+        parameter), ``sigma_mm``, ``method``, ``evaluated`` (m -> accuracy of the
+        best m-pose plan, identifiable ones only) and ``seconds``.
+    lines : list of str
+        The answer and how it was found; the caller adds the file it wrote.
+    """
+    unit = "deg" if found.target == "angle_std_deg" else "mm"
+    finite_previous = math.isfinite(found.previous)
+    document = {
+        "poses": found.poses,
+        "target": found.target,
+        "goal": found.goal,
+        "achieved": found.achieved,
+        "with_one_pose_less": found.previous if finite_previous else None,
+        "sigma_mm": found.sigma_mm,
+        "method": found.method,
+        "evaluated": {str(m): v for m, v in found.evaluated.items() if math.isfinite(v)},
+        "seconds": seconds,
+        **model_to_dict(arm),
+    }
+    less = (
+        f"{found.poses - 1} poses give {found.previous:.6g} {unit}"
+        if finite_previous
+        else f"{found.poses - 1} poses cannot identify every parameter"
+    )
+    lines = [
+        f"{found.poses} poses: the best {found.poses}-pose plan of {arm.name} "
+        f"({found.method}) reaches {found.achieved:.6g} {unit} against a target of "
+        f"{found.goal:g} {unit}; {less}",
+        f"({TARGETS[found.target]}; sigma {found.sigma_mm:g} mm; {len(found.evaluated)} plan "
+        f"sizes tried in {seconds:.2f} s)",
+        *model_lines(arm),
+    ]
+    return document, lines

@@ -1,0 +1,106 @@
+"""Validation and compensation as text and JSON: errors before and after, per pose."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..compensation import Compensation
+from ..files import Measurements, Program
+from ..models import CalibratedArm
+from ..validation import Validation
+
+__all__ = [
+    "compensation_report",
+    "validation_report",
+]
+
+
+def validation_report(
+    cal: CalibratedArm, result: Validation, meas: Measurements, *, per_pose: bool = False
+) -> tuple[dict, str]:
+    """The ``validate`` document and text: errors before and after, predicted, per pose."""
+    s = result.summary()
+    m = result.after.shape[0]
+    lines = [
+        f"validation of {cal.arm.name} on {m} held-out poses"
+        + (" (3-D, projected into the calibration's plane)" if cal.plane is not None else ""),
+        "",
+        f"{'position error (mm)':<24}{'RMS':>10}{'95 %':>10}{'max':>10}",
+        f"{'nominal model':<24}{s['rms_before_mm']:>10.4g}{s['p95_before_mm']:>10.4g}"
+        f"{s['max_before_mm']:>10.4g}",
+        f"{'calibrated model':<24}{s['rms_after_mm']:>10.4g}{s['p95_after_mm']:>10.4g}"
+        f"{s['max_after_mm']:>10.4g}",
+        f"{'predicted (calibrated)':<24}{s['predicted_rms_after_mm']:>10.4g}",
+        "",
+        f"predicted = the noise of a measurement and the calibration's own uncertainty "
+        f"({s['model_rms_mm']:.3g} mm RMS at these poses)",
+    ]
+    document: dict = {"poses": m, **s}
+    if result.out_of_plane_mm is not None:
+        oop = result.out_of_plane_mm
+        document["out_of_plane_rms_mm"] = float(np.sqrt(np.mean(oop**2)))
+        document["out_of_plane_max_mm"] = float(np.max(np.abs(oop)))
+        lines.append(
+            f"out of the calibration's plane: RMS {document['out_of_plane_rms_mm']:.3g} mm, "
+            f"max {document['out_of_plane_max_mm']:.3g} mm"
+        )
+    if per_pose:
+        targets = meas.targets
+        lines += [
+            "",
+            f"{'row':>5}  {'pose':<8}{'target':<8}{'before mm':>11}{'after mm':>10}"
+            f"{'predicted':>11}",
+        ]
+        rows = []
+        for i in range(m):
+            target = "" if targets is None else targets[i]
+            rows.append(
+                {
+                    "row": int(meas.rows[i]),
+                    "pose": meas.labels[i],
+                    "target": None if targets is None else target,
+                    "before_mm": float(result.before_mm[i]),
+                    "after_mm": float(result.after_mm[i]),
+                    "predicted_mm": float(result.predicted_mm[i]),
+                }
+            )
+            lines.append(
+                f"{meas.rows[i]:>5}  {meas.labels[i]:<8}{target:<8}"
+                f"{result.before_mm[i]:>11.4g}{result.after_mm[i]:>10.4g}"
+                f"{result.predicted_mm[i]:>11.4g}"
+            )
+        document["per_pose"] = rows
+    return document, "\n".join(lines)
+
+
+def compensation_report(
+    cal: CalibratedArm, result: Compensation, program: Program
+) -> tuple[dict, str]:
+    """The ``compensate`` document and text."""
+    s = result.summary()
+    m = result.q.shape[0]
+    bad = result.uncorrectable
+    lines = [
+        f"compensated {m - bad.size} of {m} poses for {cal.arm.name} (robot frame; the "
+        "instrument's pose is not corrected)",
+        f"predicted position error: RMS {s['rms_before_mm']:.4g} mm before, "
+        f"{s['rms_after_mm']:.4g} mm after (the calibration's uncertainty)",
+    ]
+    if s["orientation_rms_before_deg"] is not None:
+        lines.append(
+            f"predicted tool orientation error: RMS {s['orientation_rms_before_deg']:.4g} deg "
+            f"before, {s['orientation_rms_after_deg']:.4g} deg after"
+        )
+    lines.append(f"largest joint change: {result.largest_change_deg:.4g} deg")
+    labels = program.labels or tuple(str(i + 1) for i in range(m))
+    uncorrectable = [
+        {"row": int(i) + 1, "pose": labels[i], "reason": result.reasons[i]} for i in bad
+    ]
+    document = {
+        "poses": m,
+        **s,
+        "corrected": int(m - bad.size),
+        "uncorrectable": uncorrectable,
+        "largest_joint_change_deg": result.largest_change_deg,
+    }
+    return document, "\n".join(lines)

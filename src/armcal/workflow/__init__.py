@@ -1,0 +1,68 @@
+"""What every command does beyond parsing arguments and writing files, as library calls.
+
+A Python user gets the same checks and warnings as the command line:
+
+* :mod:`~armcal.workflow.setup` -- the model a robot file and the options describe
+  (``--fix``, ``--sigma``, ``[elastostatic]``), default noise and test poses;
+* :mod:`~armcal.workflow.calibrate` -- identify from a measurement file (unit
+  mistakes, 3-D data, cross-validation), validate, compensate a program;
+* :mod:`~armcal.workflow.plan` -- design, evaluate, size, simulate, synthesize.
+"""
+
+from .calibrate import (
+    CalibrationRun,
+    CompensationRun,
+    ExportRun,
+    ValidationRun,
+    calibrate,
+    compensate_program,
+    export_files,
+    measured_arm,
+    validate_measurements,
+)
+from .plan import (
+    DesignRun,
+    EvaluationRun,
+    Synthesis,
+    design_plan,
+    evaluate_file,
+    simulate_plan,
+    size_plan,
+    synthesize_plan,
+)
+from .setup import (
+    DEFAULT_SIGMA_MM,
+    design_sigma,
+    fit_model,
+    model_arm,
+    simulation_sigma,
+    test_poses,
+    with_fixed,
+)
+
+__all__ = [
+    "DEFAULT_SIGMA_MM",
+    "CalibrationRun",
+    "CompensationRun",
+    "DesignRun",
+    "EvaluationRun",
+    "ExportRun",
+    "Synthesis",
+    "ValidationRun",
+    "calibrate",
+    "compensate_program",
+    "design_plan",
+    "design_sigma",
+    "evaluate_file",
+    "export_files",
+    "fit_model",
+    "measured_arm",
+    "model_arm",
+    "simulate_plan",
+    "simulation_sigma",
+    "size_plan",
+    "synthesize_plan",
+    "test_poses",
+    "validate_measurements",
+    "with_fixed",
+]

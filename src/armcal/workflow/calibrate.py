@@ -1,0 +1,454 @@
+"""Calibrating from measurement files, and what a calibration buys, as library calls.
+
+What ``identify``, ``validate`` and ``compensate`` do beyond reading and writing
+files: the model the data need (targets, the base pose of 3-D data), the checks
+that turn a unit mistake into an error instead of a calibration
+(:mod:`armcal.plausibility`), the 3-D path (:func:`armcal.instrument.identify_3d`),
+cross-validation, and every warning of the run, once each.  A Python user gets
+the same checks and warnings as the command line.
+
+Errors name the file they concern (``source``).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, replace
+from typing import Any
+
+import numpy as np
+
+from ..compensation import Compensation, compensate
+from ..errors import (
+    ArmcalError,
+    ArmcalWarning,
+    InputError,
+    NotIdentifiableError,
+    action,
+    unique_warnings,
+)
+from ..export import robot_toml, urdf, urdf_joints_are_readings
+from ..files import Measurements, Program, RobotSpec
+from ..identification import Calibration, identify
+from ..instrument import identify_3d
+from ..models import CalibratedArm, FitModel, Loads, PlanarArm, Target
+from ..plausibility import deviation_warning, explain, suspicious
+from ..validation import (
+    CrossValidation,
+    Validation,
+    cross_validate,
+    cross_validation_warning,
+    validate,
+    validation_warnings,
+)
+from .setup import fit_model, model_arm
+
+__all__ = [
+    "CalibrationRun",
+    "CompensationRun",
+    "ExportRun",
+    "ValidationRun",
+    "calibrate",
+    "compensate_program",
+    "export_files",
+    "measured_arm",
+    "validate_measurements",
+]
+
+
+@dataclass(frozen=True, eq=False)
+class CalibrationRun:
+    """A calibration from a measurement file, with every warning of the run.
+
+    Attributes
+    ----------
+    calibration : Calibration
+    warnings : tuple of ArmcalWarning
+        The robot file's, the measurement file's, the plausibility checks' and
+        the calibration's, once each.
+    cross_validation : CrossValidation or None
+        With ``folds``: every pose predicted by a calibration made without it.
+    """
+
+    calibration: Calibration
+    warnings: tuple[ArmcalWarning, ...]
+    cross_validation: CrossValidation | None = None
+
+
+def measured_arm(arm: PlanarArm, meas: Measurements) -> PlanarArm:
+    """The arm to identify from ``meas``: its targets are those measured.
+
+    With a ``target`` column, the targets are the labels measured, in the order
+    of the robot file's ``[targets]`` (nominal last link from there) or, without
+    one, in the order they first appear (nominal: the last link's length, angle
+    0).  With a ``z_mm`` column the base pose in the fitted plane is identified:
+    base offset and base rotation (:mod:`armcal.instrument`).
+
+    Raises
+    ------
+    InputError
+        For an arm with targets and data without a target column.
+    """
+    changes: dict[str, Any] = {}
+    if meas.targets is not None:
+        seen = list(dict.fromkeys(meas.targets))
+        if arm.targets:
+            targets = tuple(t for t in arm.targets if t.label in seen)
+        else:
+            targets = tuple(Target(label, float(arm.link_lengths[-1])) for label in seen)
+        if targets != arm.targets:
+            changes["targets"] = targets
+    elif arm.targets:
+        raise InputError(
+            f"{arm.name} has targets ({', '.join(arm.target_labels)}) but the measurements have "
+            "no target column; add a column 'target' naming the target of every row"
+        )
+    if meas.z is not None:
+        changes.update(base_offset=True, base_rotation=True)
+    if not changes:
+        return arm
+    try:  # the fixed parameters that still exist are carried over
+        return arm.replace(**changes)
+    except ValueError as exc:
+        raise InputError(f"{arm.name}: {exc}") from None
+
+
+def _row_targets(arm: PlanarArm, meas: Measurements) -> np.ndarray | None:
+    """Every row's target index, for an arm with targets (None without)."""
+    if meas.targets is None or not arm.targets:
+        return None
+    return arm.target_index(meas.targets)
+
+
+def row_loads(model: FitModel, meas: Measurements) -> Loads | None:
+    """The rows' loads for a model they move (payload column or the model's default)."""
+    default = model.default_payload_kg
+    return None if default is None else meas.loads(default)
+
+
+def _explained(source: str, arm: PlanarArm, meas: Measurements) -> InputError | None:
+    """The error for data that another reading fits far better (:mod:`armcal.plausibility`)."""
+    found = explain(arm, meas.q, meas.xy)
+    return None if found is None else InputError(f"{source}: {found.message}")
+
+
+def _identify_file(
+    spec: RobotSpec, arm: PlanarArm, source: str, meas: Measurements, **options: Any
+) -> Calibration:
+    """Identify from a measurement file; data that look like a unit mistake are an error.
+
+    3-D data (a ``z_mm`` column) are fitted with their plane first.  The unit
+    checks refit the plain 2-D model; they are skipped for data with several
+    targets, in 3-D or with compliance, whose reach check stays.
+    """
+    elastic = spec.elastic
+    plain = meas.z is None and arm.n_target_links == 1 and not arm.targets and elastic is None
+    options.update(
+        pose_labels=meas.labels,
+        rows=meas.rows,
+        row_sigma=meas.row_sigma,
+        target=_row_targets(arm, meas),
+    )
+    try:
+        model = fit_model(spec, arm, None if elastic is None else meas.loads(elastic.payload_kg))
+        options["loads"] = row_loads(model, meas)
+        if meas.z is not None:
+            options["gravity_3d"] = spec.gravity_3d
+            cal = identify_3d(model, meas.q, meas.xyz, **options)
+        else:
+            cal = identify(model, meas.q, meas.xy, **options)
+    except NotIdentifiableError as exc:
+        # Angles in radians read as degrees put every pose near the stretched arm.
+        unit = _explained(source, arm, meas) if plain else None
+        if unit is not None:
+            raise unit from None
+        raise NotIdentifiableError(f"{source}: {exc}", exc.combinations) from None
+    except ArmcalError as exc:
+        raise ArmcalError(f"{source}: {exc}") from None
+    if plain and suspicious(cal):
+        unit = _explained(source, arm, meas)
+        if unit is not None:
+            raise unit
+    return cal
+
+
+def _ignored_loads(
+    spec: RobotSpec, meas: Measurements, source: str, compliance: bool
+) -> list[ArmcalWarning]:
+    """A warning when the data carry loads that a rigid model cannot use."""
+    if (spec.elastic is not None and compliance) or not meas.has_loads:
+        return []
+    why = (
+        action("geometry-only")
+        if spec.elastic is not None
+        else "the robot file has no [elastostatic] table"
+    )
+    return [
+        ArmcalWarning(
+            "loads-ignored",
+            f"{source}: the payload_kg/fx_N/fy_N columns are not used: {why}; "
+            "add [elastostatic] to the robot file to fit the joints' compliance",
+        )
+    ]
+
+
+def calibrate(
+    spec: RobotSpec,
+    meas: Measurements,
+    *,
+    source: str = "measurements",
+    fixed: tuple[str, ...] | None = None,
+    sigma: float | None = None,
+    method: str = "auto",
+    robust: bool = False,
+    compliance: bool = True,
+    folds: int | None = None,
+    seed: int | np.random.Generator | None = 0,
+) -> CalibrationRun:
+    """Calibrate the robot of ``spec`` from measurements, with every check and warning.
+
+    Parameters
+    ----------
+    spec : RobotSpec
+        The robot file (:func:`armcal.files.load_robot`).
+    meas : Measurements
+        The measurement file (:func:`armcal.files.read_measurements`).
+    source : str
+        The measurement file's name, for error messages.
+    fixed : tuple of str, optional
+        Parameters held at nominal, replacing the robot file's set.
+    sigma : float, optional
+        Isotropic instrument noise (mm), replacing the robot file's and any
+        ``sigma_mm`` column.
+    method, robust
+        As for :func:`armcal.identification.identify`.
+    compliance : bool
+        Fit the joint compliance of a robot file with ``[elastostatic]`` (False:
+        the geometry alone).
+    folds : int, optional
+        K-fold cross-validation.
+    seed
+        Shuffles the folds.
+
+    Returns
+    -------
+    CalibrationRun
+
+    Raises
+    ------
+    InputError
+        For data the robot does not fit: a missing target column, or data that
+        another reading (a unit mistake, a missing base offset) fits far better.
+    NotIdentifiableError
+        If the poses cannot identify every free parameter.
+    """
+    try:
+        structure = measured_arm(spec.arm, meas)
+    except InputError as exc:
+        raise InputError(f"{source}: {exc}") from None
+    arm = model_arm(structure, fixed=fixed, sigma=sigma)
+    if sigma is not None:  # the given noise replaces the file's sigma_mm column too
+        meas = replace(meas, row_sigma=None)
+    ignored = _ignored_loads(spec, meas, source, compliance)
+    if not compliance:
+        spec = replace(spec, elastic=None)
+    cal = _identify_file(spec, arm, source, meas, method=method, robust=robust)
+    warnings = [*spec.warnings, *meas.warnings, *ignored, *cal.warnings]
+    large = deviation_warning(cal.arm, cal.model.arm_params(cal.params))
+    if large is not None and all(w.code != large.code for w in warnings):
+        warnings.append(large)
+    checked = None
+    if folds is not None:
+        points = meas.xy if cal.plane is None else cal.plane.to_plane(meas.xyz)
+        conditions = cal.conditions
+        checked = cross_validate(
+            cal.model,
+            meas.q,
+            points,
+            folds,
+            groups=None if meas.targets is None else np.array(meas.labels),
+            target=cal.target,
+            sigma=sigma,
+            row_sigma=meas.row_sigma,
+            rng=seed,
+            loads=None if conditions is None else conditions.loads,
+        )
+        warning = cross_validation_warning(checked)
+        if warning is not None:
+            warnings.append(warning)
+    return CalibrationRun(cal, tuple(unique_warnings(warnings)), checked)
+
+
+@dataclass(frozen=True, eq=False)
+class ValidationRun:
+    """Held-out measurements against a calibration, and what they say."""
+
+    validation: Validation
+    warnings: tuple[ArmcalWarning, ...]
+
+
+def validate_measurements(
+    cal: CalibratedArm, meas: Measurements, *, source: str = "measurements"
+) -> ValidationRun:
+    """:func:`armcal.validation.validate` on a measurement file, with its warnings.
+
+    Raises InputError, naming ``source``, for a target column the calibration
+    does not have or lacks, or points of the other dimension.
+    """
+    arm = cal.arm
+    if meas.targets is not None and not arm.targets:
+        raise InputError(
+            f"{source}: has a target column but the calibration has no targets; remove the column"
+        )
+    if arm.targets and meas.targets is None:
+        raise InputError(
+            f"{source}: the calibration has targets ({', '.join(arm.target_labels)}); add a "
+            "column 'target' naming the target of every row"
+        )
+    points = meas.xy if meas.z is None else meas.xyz
+    try:
+        result = validate(
+            cal,
+            meas.q,
+            points,
+            target=_row_targets(arm, meas),
+            row_sigma=meas.row_sigma,
+            loads=row_loads(cal.model, meas),
+        )
+    except ArmcalError as exc:
+        raise ArmcalError(f"{source}: {exc}") from None
+    return ValidationRun(result, (*meas.warnings, *validation_warnings(result)))
+
+
+@dataclass(frozen=True, eq=False)
+class CompensationRun:
+    """A compensated program, the target label of every row, and the warnings."""
+
+    compensation: Compensation
+    targets: tuple[str, ...] | None
+    warnings: tuple[ArmcalWarning, ...]
+
+
+def compensate_program(
+    cal: CalibratedArm,
+    program: Program,
+    *,
+    target: str | None = None,
+    payload_kg: float | None = None,
+    source: str = "program",
+) -> CompensationRun:
+    """:func:`armcal.compensation.compensate` a program file.
+
+    ``target`` is the target every row is for when the program has no target
+    column; ``payload_kg`` its payload when it has no payload column (default:
+    the robot file's).
+
+    Raises
+    ------
+    ArmcalError
+        For a target or payload the calibration cannot use, or a program of an
+        arm with several targets that says none.
+    """
+    arm = cal.arm
+    labels = program.targets
+    if labels is None and target is not None:
+        labels = (target,) * program.q.shape[0]
+    if labels is not None:
+        if target is not None and program.targets is not None:
+            raise ArmcalError("--target: the program has a target column already; give one")
+        if target is not None and target not in arm.target_labels:
+            raise ArmcalError(
+                f"--target: {target!r} is not a target of the calibration "
+                f"({', '.join(arm.target_labels) or 'none'})"
+            )
+    elif arm.n_target_links > 1:
+        raise ArmcalError(
+            f"{source}: the calibration has targets {', '.join(arm.target_labels)}; "
+            "add a column 'target' or pass --target LABEL for the tool point of the program"
+        )
+    index = None if labels is None or not arm.targets else arm.target_index(labels)
+    default = cal.model.default_payload_kg
+    loads = None
+    if default is not None:
+        payload: float | np.ndarray = default
+        if payload_kg is not None:
+            if program.payload_kg is not None:
+                raise ArmcalError("--payload-kg: the program has a payload_kg column already")
+            payload = payload_kg
+        if program.payload_kg is not None:
+            payload = program.payload_kg
+        loads = Loads.create(program.q.shape[0], payload, program.force_n)
+    elif payload_kg is not None or program.payload_kg is not None:
+        raise ArmcalError(
+            "--payload-kg/payload_kg: the calibration has no joint compliance, so a payload "
+            "changes nothing; calibrate with [elastostatic] in the robot file"
+        )
+    result = compensate(cal, program.q, target=index, loads=loads)
+    bad = result.uncorrectable
+    warnings = []
+    if bad.size:
+        m = program.q.shape[0]
+        shown = "; ".join(f"row {int(i) + 1}: {result.reasons[i]}" for i in bad[:5])
+        more = f" and {bad.size - 5} more" if bad.size > 5 else ""
+        warnings.append(
+            ArmcalWarning(
+                "uncorrectable",
+                f"{bad.size} of {m} poses cannot be corrected and keep their commands "
+                f"(corrected = 0 in the output): {shown}{more}",
+            )
+        )
+    return CompensationRun(result, labels, tuple(warnings))
+
+
+@dataclass(frozen=True, eq=False)
+class ExportRun:
+    """The texts of the files to write (made before any is written), and the warnings."""
+
+    texts: dict[str, str]
+    warnings: tuple[ArmcalWarning, ...]
+
+
+def export_files(
+    cal: CalibratedArm, *, robot_toml_path: str | None = None, urdf_path: str | None = None
+) -> ExportRun:
+    """The calibrated arm as a robot TOML and/or a URDF, with what they leave out.
+
+    ``urdf-joint-values`` when the URDF's joint values are not the controller's
+    readings (coupled axes), and a warning that a model's effect (joint
+    compliance) is in neither file.
+    """
+    texts: dict[str, str] = {}
+    if robot_toml_path is not None:
+        texts[robot_toml_path] = robot_toml(cal)
+    warnings = []
+    if urdf_path is not None:
+        texts[urdf_path] = urdf(cal)
+        if not urdf_joints_are_readings(cal.arm):
+            warnings.append(
+                ArmcalWarning(
+                    "urdf-joint-values",
+                    f"{urdf_path}: {cal.arm.name} has coupled axes (joint_map): the URDF's joint "
+                    "values are the relative link angles D M q, not the controller's readings; "
+                    "convert them before publishing joint_states (see the file's comment)",
+                )
+            )
+    model, effect, inner = cal.model, cal.model.effect, cal.model.nested
+    if effect is not None and inner is not None:
+        extra = slice(inner.n_params, None)
+        values = ", ".join(
+            f"{name} = {v:.4g} {unit}"
+            for name, unit, v in zip(
+                model.param_names[extra],
+                model.param_units[extra],
+                cal.params[extra] * model.display_scale[extra],
+                strict=True,
+            )
+        )
+        warnings.append(
+            ArmcalWarning(
+                f"{effect.short}-not-exported",
+                f"the exported {effect.nested} is rigid: the {effect.name} ({values}) is not "
+                "part of a robot file or URDF; compensate programs with armcal compensate, "
+                "which uses it",
+            )
+        )
+    return ExportRun(texts, tuple(warnings))

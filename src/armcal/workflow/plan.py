@@ -1,0 +1,341 @@
+"""Planning an experiment, as library calls: design, evaluate, size, simulate, synthesize.
+
+What ``design``, ``evaluate``, ``poses-needed``, ``simulate`` and ``synthesize``
+do beyond reading and writing files, for the model a robot file describes
+(:func:`armcal.workflow.setup.fit_model`): a plan within the joint limits and
+region, its quality and the warnings it deserves (a pose outside the region,
+an ill-conditioned plan, solver trouble), virtual measurements of every target
+of every pose.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..criteria import PlanQuality, evaluate_plan
+from ..doe import PosesNeeded, design, feasible, poses_needed
+from ..doe.compliance import (
+    CompliantDesign,
+    CompliantQuality,
+    design_compliant,
+    evaluate_compliant,
+)
+from ..doe.designer import Design
+from ..errors import ArmcalError, ArmcalWarning, NotIdentifiableError
+from ..files import RobotSpec
+from ..models import CompliantArm, Loads, PlanarArm
+from ..progress import ProgressCallback
+from ..simulate import MonteCarlo, monte_carlo
+from ..synthesis import synthesize_measurements
+from .setup import DEFAULT_SIGMA_MM, design_sigma, fit_model
+
+__all__ = [
+    "DesignRun",
+    "EvaluationRun",
+    "Synthesis",
+    "design_plan",
+    "evaluate_file",
+    "simulate_plan",
+    "size_plan",
+    "synthesize_plan",
+]
+
+
+def _prefixed(source: str, exc: NotIdentifiableError) -> NotIdentifiableError:
+    return NotIdentifiableError(f"{source}: {exc}", exc.combinations)
+
+
+def _loads(spec: RobotSpec, m: int, payload: np.ndarray | None) -> Loads | None:
+    """A plan's loads for a robot with ``[elastostatic]``: its payload column, else the file's."""
+    if spec.elastic is None:
+        return None
+    return Loads.create(m, spec.elastic.payload_kg if payload is None else payload)
+
+
+@dataclass(frozen=True, eq=False)
+class Synthesis:
+    """Virtual measurements: every target of every pose, with the rows' labels and loads.
+
+    Attributes
+    ----------
+    q : ndarray, shape (r, n)
+        The rows' joint angles (rad): each pose once per target.
+    points : ndarray, shape (r, d)
+        Measured points, mm.
+    labels, targets : tuple of str or None
+        Every row's pose label and target label, for an arm with several targets.
+    payload_kg : ndarray, shape (r,), or None
+        Every row's payload, for a model of joint compliance.
+    sigma_mm : float
+        The instrument noise drawn (mm; the noise model's reference when not given).
+    effect : str
+        What the virtual robot adds to its geometry ("joint compliance"), or "".
+    """
+
+    q: np.ndarray
+    points: np.ndarray
+    labels: tuple[str, ...] | None
+    targets: tuple[str, ...] | None
+    payload_kg: np.ndarray | None
+    sigma_mm: float
+    effect: str
+
+
+def synthesize_plan(
+    spec: RobotSpec,
+    q: np.ndarray,
+    truth: np.ndarray,
+    *,
+    sigma: float | None,
+    seed: int,
+    payload: np.ndarray | None = None,
+) -> Synthesis:
+    """Measurements of the robot of ``spec`` at ``truth``, every target of every pose.
+
+    ``payload`` ``(m,)`` (kg) loads a robot with ``[elastostatic]`` (default: the
+    robot file's payload); ``sigma`` as for
+    :func:`armcal.synthesis.synthesize_measurements`.
+    """
+    arm = spec.arm
+    loads = _loads(spec, q.shape[0], payload)
+    model = fit_model(spec, arm, loads)
+    rows = model.plan_conditions(q, loads)
+    points = synthesize_measurements(
+        model, rows.q, truth, sigma, rng=seed, target=rows.target, loads=rows.loads
+    )
+    labels = targets = None
+    if arm.targets:  # every target measured at every pose, one row each
+        count = len(arm.targets)
+        labels = tuple(str(i // count + 1) for i in range(rows.m))
+        index = np.zeros(rows.m, dtype=int) if rows.target is None else rows.target
+        targets = tuple(arm.targets[t].label for t in index)
+    shown = sigma if sigma is not None else float(arm.sigma or 0.0)
+    effect = "" if model.effect is None else model.effect.name
+    payload_kg = None if rows.loads is None else rows.loads.payload_kg
+    return Synthesis(rows.q, points, labels, targets, payload_kg, shown, effect)
+
+
+@dataclass(frozen=True, eq=False)
+class EvaluationRun:
+    """A plan's quality: the geometric model's, or with joint compliance the compliant one's."""
+
+    quality: PlanQuality | None
+    compliant: CompliantQuality | None
+    warnings: tuple[ArmcalWarning, ...]
+
+
+def evaluate_file(
+    spec: RobotSpec,
+    arm: PlanarArm,
+    q: np.ndarray,
+    *,
+    test_q: np.ndarray,
+    payload: np.ndarray | None = None,
+    source: str = "plan",
+) -> EvaluationRun:
+    """The quality of plan ``q`` for the model of ``spec`` (``arm`` with --fix and --sigma).
+
+    Raises NotIdentifiableError, naming ``source``, for a plan that cannot identify
+    every parameter (it has no finite quality).
+    """
+    sigma = design_sigma(arm)
+    loads = _loads(spec, q.shape[0], payload)
+    model = fit_model(spec, arm, loads)
+    try:
+        if isinstance(model, CompliantArm):  # the robot file's [elastostatic]
+            assert loads is not None
+            compliant = evaluate_compliant(model, q, loads, sigma)
+            return EvaluationRun(None, compliant, tuple(spec.warnings))
+        quality = evaluate_plan(arm, q, sigma=sigma, test_q=test_q)
+    except NotIdentifiableError as exc:  # PRODUCT.md: an error, exit 2, one line
+        raise _prefixed(source, exc) from None
+    warnings = [*spec.warnings, *quality.warnings]
+    outside = np.flatnonzero(~feasible(spec.arm, q))
+    if outside.size:
+        poses = ", ".join(map(str, outside + 1))
+        warnings.append(
+            ArmcalWarning(
+                "outside-region",
+                f"{source}: the tip of pose(s) {poses} is outside the measurement region",
+            )
+        )
+    return EvaluationRun(quality, None, tuple(warnings))
+
+
+@dataclass(frozen=True, eq=False)
+class DesignRun:
+    """A designed plan, its quality, the wall time and the warnings."""
+
+    design: Design | None
+    compliant: CompliantDesign | None
+    quality: PlanQuality | None
+    compliant_quality: CompliantQuality | None
+    seconds: float
+    warnings: tuple[ArmcalWarning, ...]
+
+    @property
+    def q(self) -> np.ndarray:
+        """The plan (rad), in the order to measure it."""
+        made = self.design if self.design is not None else self.compliant
+        assert made is not None
+        return made.q
+
+    @property
+    def payload_kg(self) -> np.ndarray | None:
+        """The payload of every pose, for a design with joint compliance."""
+        return None if self.compliant is None else self.compliant.payload_kg
+
+
+def design_plan(
+    spec: RobotSpec,
+    arm: PlanarArm,
+    poses: int,
+    *,
+    criterion: str = "D",
+    method: str = "auto",
+    seed: int = 0,
+    candidates: np.ndarray | None = None,
+    candidates_source: str = "candidates",
+    order: str = "travel",
+    distinct: bool = False,
+    payloads: tuple[float, ...] | None = None,
+    test_q: np.ndarray,
+) -> DesignRun:
+    """An optimal plan for the model of ``spec`` (``arm`` with --fix and --sigma).
+
+    With ``[elastostatic]`` the poses and their payloads are designed together
+    for geometry plus joint compliance (D-optimal by exchange and polish).
+
+    Raises
+    ------
+    ArmcalError
+        For options the model cannot use: payloads without compliance, a
+        criterion or method other than D by exchange with it, candidates
+        outside the measurement region.
+    """
+    rng = np.random.default_rng(seed)
+    if spec.elastic is not None:
+        if criterion != "D" or method not in ("auto", "exchange"):
+            raise ArmcalError(
+                "a robot with [elastostatic] is designed D-optimal by exchange and polish; "
+                "leave --criterion and --method at their defaults"
+            )
+        if candidates is not None or distinct:
+            raise ArmcalError(
+                "--candidates and --distinct are not supported with [elastostatic] yet"
+            )
+        start = time.perf_counter()
+        made = design_compliant(
+            arm,
+            spec.elastic,
+            poses,
+            payloads=payloads,
+            sigma=design_sigma(arm),
+            rng=rng,
+            order=order,
+        )
+        seconds = time.perf_counter() - start
+        checked = evaluate_compliant(made.model, made.q, made.loads, made.sigma_mm)
+        return DesignRun(None, made, None, checked, seconds, tuple(spec.warnings))
+    if payloads is not None:
+        raise ArmcalError(
+            f"--payloads: robot {spec.arm.name} has no [elastostatic] table, so a payload "
+            "changes nothing; add the table to the robot file"
+        )
+    if candidates is not None and not np.all(feasible(spec.arm, candidates)):
+        row = int(np.flatnonzero(~feasible(spec.arm, candidates))[0]) + 1
+        raise ArmcalError(
+            f"{candidates_source}: row {row}: the tip is outside the measurement region; "
+            "remove the pose or widen the region"
+        )
+    start = time.perf_counter()
+    result = design(
+        arm,
+        poses,
+        criterion=criterion,
+        method=method,  # type: ignore[arg-type]  # checked by design
+        rng=rng,
+        candidates=candidates,
+        order=order,  # type: ignore[arg-type]  # checked by design
+        distinct=distinct,
+    )
+    seconds = time.perf_counter() - start
+    quality = evaluate_plan(arm, result.q, sigma=design_sigma(arm), test_q=test_q)
+    warnings = (*spec.warnings, *quality.warnings)
+    return DesignRun(result, None, quality, None, seconds, warnings)
+
+
+def simulate_plan(
+    spec: RobotSpec,
+    arm: PlanarArm,
+    q: np.ndarray,
+    truth: np.ndarray,
+    *,
+    trials: int,
+    method: str = "auto",
+    seed: int = 0,
+    test_q: np.ndarray | None = None,
+    payload: np.ndarray | None = None,
+    progress: ProgressCallback | None = None,
+    source: str = "plan",
+) -> MonteCarlo:
+    """A Monte Carlo of plan ``q`` on the model of ``spec`` (``arm`` with --fix and --sigma).
+
+    The noise is the model's as it is (:data:`~armcal.workflow.setup.DEFAULT_SIGMA_MM`
+    when the robot file gives none).  Raises NotIdentifiableError, naming ``source``,
+    for a plan that cannot identify every parameter.
+    """
+    loads = _loads(spec, q.shape[0], payload)
+    model = fit_model(spec, arm, loads)
+    try:
+        return monte_carlo(
+            model,
+            q,
+            truth,
+            None if arm.noise is not None else DEFAULT_SIGMA_MM,
+            trials,
+            method=method,
+            rng=np.random.default_rng(seed),
+            test_q=test_q,
+            progress=progress,
+            loads=loads,
+        )
+    except NotIdentifiableError as exc:
+        raise _prefixed(source, exc) from None
+
+
+def size_plan(
+    spec: RobotSpec,
+    arm: PlanarArm,
+    requirement: str,
+    goal: float,
+    *,
+    seed: int = 0,
+    test_q: np.ndarray,
+    max_poses: int = 5000,
+) -> tuple[PosesNeeded, float]:
+    """The smallest number of poses whose best plan reaches ``goal`` (and the wall time).
+
+    Raises ArmcalError for a robot with ``[elastostatic]``: sizing is for the
+    geometric model.
+    """
+    if spec.elastic is not None:
+        raise ArmcalError(
+            f"{spec.source}: poses-needed sizes plans of the geometric model only, and this "
+            "robot has [elastostatic]; compare the predicted std of armcal design --poses M at "
+            "a few sizes M (std falls like 1/sqrt(M))"
+        )
+    start = time.perf_counter()
+    found = poses_needed(
+        arm,
+        requirement,
+        goal,
+        sigma=design_sigma(arm),
+        rng=np.random.default_rng(seed),
+        test_q=test_q,
+        max_poses=max_poses,
+    )
+    return found, time.perf_counter() - start

@@ -1,0 +1,92 @@
+"""What a robot file and the options make of the model a command works on.
+
+The robot file gives the arm and, with ``[elastostatic]``, its joint
+compliance; the options hold parameters fixed and override the instrument's
+noise.  Every command goes through these, so ``--fix`` and ``--sigma`` mean the
+same everywhere (and :func:`armcal.noise.instrument_override` is the one place
+``--sigma`` is applied).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+import numpy as np
+
+from ..doe import random_plan
+from ..errors import ArmcalError
+from ..files import RobotSpec, unknown_parameter
+from ..models import CompliantArm, FitModel, Loads, PlanarArm
+from ..noise import instrument_override
+
+__all__ = [
+    "DEFAULT_SIGMA_MM",
+    "design_sigma",
+    "fit_model",
+    "model_arm",
+    "simulation_sigma",
+    "test_poses",
+    "with_fixed",
+]
+
+#: Noise assumed for design and simulation when neither --sigma nor the robot file gives it.
+DEFAULT_SIGMA_MM = 0.1
+
+
+def with_fixed(arm: PlanarArm, fixed: Sequence[str]) -> PlanarArm:
+    """The arm with ``fixed`` held (replacing the robot file's set); ArmcalError for a name
+    the arm does not have or when nothing would be left to identify."""
+    for name in fixed:
+        if name not in arm.param_names:
+            raise ArmcalError(unknown_parameter(name, arm.param_names, arm.name))
+    if len(set(fixed)) == arm.n_params:
+        raise ArmcalError("every parameter would be fixed; leave at least one free")
+    return arm.replace(fixed=tuple(fixed))
+
+
+def model_arm(
+    arm: PlanarArm, *, fixed: Sequence[str] | None = None, sigma: float | None = None
+) -> PlanarArm:
+    """The arm with ``fixed`` parameters (None: the robot file's) and instrument noise
+    ``sigma`` (mm; None or 0: the robot file's), its encoder noise kept."""
+    if fixed is not None:
+        arm = with_fixed(arm, fixed)
+    if sigma:  # 0 (noiseless synthesis) is no noise model
+        arm = arm.replace(noise=instrument_override(arm.noise, sigma))
+    return arm
+
+
+def simulation_sigma(spec: RobotSpec, sigma: float | None) -> float | None:
+    """The noise a simulation draws: ``sigma``, else None (the robot file's whole noise
+    model, shape and encoders), else :data:`DEFAULT_SIGMA_MM`."""
+    if sigma is not None:
+        return sigma
+    return None if spec.arm.noise is not None else DEFAULT_SIGMA_MM
+
+
+def design_sigma(arm: PlanarArm) -> float:
+    """The reference noise of a model arm (:func:`model_arm`), else :data:`DEFAULT_SIGMA_MM`."""
+    return arm.sigma if arm.sigma is not None else DEFAULT_SIGMA_MM
+
+
+def fit_model(spec: RobotSpec, arm: PlanarArm, loads: Loads | None = None) -> FitModel:
+    """The model a robot file describes: the arm, or with ``[elastostatic]`` its compliant
+    arm for data with ``loads`` (the robot file's payload when omitted): the one place
+    the family of a robot file is chosen.
+
+    Raises ArmcalError, naming the robot file, when nothing would twist the joints.
+    """
+    if spec.elastic is None:
+        return arm
+    loads = Loads.create(1, spec.elastic.payload_kg) if loads is None else loads
+    try:
+        return CompliantArm.for_loads(arm, spec.elastic, loads)
+    except ArmcalError as exc:
+        raise ArmcalError(f"{spec.source}: {exc}") from None
+
+
+def test_poses(spec: RobotSpec, seed: int, given: np.ndarray | None = None) -> np.ndarray:
+    """Poses where positioning accuracy matters: ``given``, else 1000 uniform in the limits."""
+    if given is not None:
+        return given
+    return random_plan(spec.arm, 1000, rng=np.random.default_rng(seed))
