@@ -15,16 +15,14 @@ from armcal import (
 from armcal.criteria import (
     CRITERIA,
     d_efficiency,
-    dstar,
     efficiencies,
     evaluate_plan,
-    information_matrix,
     observability_indices,
-    optimality_sums,
     position_accuracy,
     predicted_std,
 )
 from armcal.doe.optimizer import _criterion_value_and_gradient
+from armcal.models.planar_criteria import dstar, information_matrix, optimality_sums
 from helpers import random_arm
 
 

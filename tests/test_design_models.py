@@ -2,7 +2,7 @@
 
 A model is the arm's noise model (anisotropic, correlated, encoder noise) and its
 fixed parameters; design, exchange and certificates work on its information
-(:mod:`armcal.doe.model`).  Optima are derived in each test's comments.
+(:mod:`armcal.models.planar_design`).  Optima are derived in each test's comments.
 """
 
 import math
@@ -16,16 +16,15 @@ from armcal import ArmcalError, PlanarArm, jacobian, random_plan
 from armcal.criteria import CRITERIA, d_efficiency, efficiencies, predicted_std
 from armcal.doe import analytic_plan, certify, design, exchange_plan, optimize_plan, poses_needed
 from armcal.doe.certificate import _variance_function
-from armcal.doe.exchange import _blocks, _swap_ratios
-from armcal.doe.model import (
+from armcal.doe.exchange import _swap_ratios
+from armcal.doe.optimizer import _criterion_value_and_gradient
+from armcal.models import model_columns, unit_trace
+from armcal.models.planar_design import (
     information_gradient,
     model_description,
     pose_model,
     rotation_invariant,
-    unit_trace,
 )
-from armcal.doe.optimizer import _criterion_value_and_gradient
-from armcal.models import model_columns
 from armcal.noise import NoiseModel
 
 PAPER_LENGTHS = [260.0, 180.0, 120.0, 100.0]
@@ -329,14 +328,14 @@ def test_exchange_on_a_weighted_model_leaves_no_improving_swap(rng):
     start = random_plan(arm, 8, rng=rng)
     plan = exchange_plan(arm, 8, candidates, start=start)
     assert d_efficiency(arm, plan) > d_efficiency(arm, start)
-    blocks = _blocks(arm, plan)
+    blocks = arm.plan_information(plan).blocks()
     assert blocks.shape == (8, 2, arm.n_free)
     info = np.einsum("iap,iaq->pq", blocks, blocks)
     columns = model_columns(arm, plan)
     model_info = np.einsum("ia,ib->ab", columns.conj(), columns).real
     assert_allclose(info, model_info, rtol=1e-13)  # the blocks are the model's information
     logdet = np.linalg.slogdet(info)[1]
-    cand_blocks = _blocks(arm, candidates)
+    cand_blocks = arm.plan_information(candidates).blocks()
     for i in range(8):
         for x in range(0, 50, 7):
             swapped = info - blocks[i].T @ blocks[i] + cand_blocks[x].T @ cand_blocks[x]
@@ -347,7 +346,7 @@ def test_swap_ratios_are_the_4_by_4_determinants(rng):
     # det M' / det M = det [[I + a_xx, a_xi], [-a_xi^T, I - a_ii]] (rank-2 updates, twice),
     # here by LU for random blocks of a real model, against the closed-form Schur route.
     arm = PlanarArm([2.0, 1.5, 1.0], noise=ANISOTROPIC, fixed=("dq2",))
-    blocks = _blocks(arm, random_plan(arm, 30, rng=rng))
+    blocks = arm.plan_information(random_plan(arm, 30, rng=rng)).blocks()
     plan = blocks[:7]
     m_inv = np.linalg.inv(np.einsum("iap,iaq->pq", plan, plan))
     a_xx = blocks @ m_inv @ np.swapaxes(blocks, -1, -2)

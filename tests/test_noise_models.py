@@ -22,10 +22,10 @@ from armcal import PlanarArm, forward_kinematics
 from armcal import simulate as sim
 from armcal.criteria import predicted_std
 from armcal.doe import random_plan
-from armcal.doe.study import random_plan_study
 from armcal.errors import ArmcalError
 from armcal.models import scaled_jacobian
 from armcal.noise import NoiseModel
+from armcal.reproduction.study import random_plan_study
 
 #: sigma_y of the issue's anisotropic case and the isotropic sigma of the others (mm).
 SIGMA = 0.02

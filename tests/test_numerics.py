@@ -41,13 +41,8 @@ from armcal import (
     solve_closed_form,
     solve_gauss_newton,
 )
-from armcal.criteria import (
-    CRITERIA,
-    efficiencies,
-    inverse_information,
-    observability_indices,
-    scaled_information,
-)
+from armcal.criteria import CRITERIA, efficiencies, observability_indices
+from armcal.models.planar_criteria import inverse_information, scaled_information
 from armcal.numerics import (
     COND_WARN,
     RANK_RTOL,

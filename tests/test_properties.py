@@ -40,7 +40,7 @@ from armcal import (
     orthogonal_plan,
     synthesize_measurements,
 )
-from armcal.criteria import efficiencies, scaled_information
+from armcal.criteria import efficiencies
 from armcal.doe import analytic_plan
 from armcal.files import (
     calibration_document,
@@ -53,6 +53,7 @@ from armcal.files import (
     to_json,
 )
 from armcal.models import every_target, paper_from_user, wrap_angle
+from armcal.models.planar_criteria import scaled_information
 from armcal.noise import NoiseModel
 
 #: Unit round-off of double precision (2.2e-16).

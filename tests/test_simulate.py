@@ -21,10 +21,10 @@ from armcal import (
 from armcal import simulate as sim
 from armcal.criteria import d_efficiency, position_accuracy, predicted_std
 from armcal.doe import orthogonal_plan, random_plan
-from armcal.doe.study import random_plan_study
 from armcal.files import to_json
 from armcal.models import link_phasors
 from armcal.progress import ProgressBar
+from armcal.reproduction.study import random_plan_study
 from helpers import random_arm, random_truth
 
 
@@ -321,7 +321,7 @@ def test_poses_needed_searches_under_joint_limits():
 def test_poses_needed_gives_up_with_a_reason(arm4):
     with pytest.raises(ValueError, match="relax the target"):
         doe.poses_needed(arm4, "length_std_mm", 1e-4, sigma=0.1, max_poses=500)
-    with pytest.raises(ValueError, match="unknown target"):
+    with pytest.raises(ValueError, match="unknown requirement"):
         doe.poses_needed(arm4, "speed", 1.0, sigma=0.1)
 
 

@@ -5,9 +5,9 @@ import pytest
 from numpy.testing import assert_allclose
 
 from armcal import PlanarArm, Target, design, evaluate_plan, orthogonal_plan, random_plan
-from armcal.doe.model import information_gradient, pose_model
 from armcal.models import every_target, forward_kinematics
 from armcal.models.planar_closed_form import solve_closed_form
+from armcal.models.planar_design import information_gradient, pose_model
 
 NEST = (Target("A", 100.0, 0.0), Target("B", 80.0, 0.7), Target("C", 120.0, -0.5))
 

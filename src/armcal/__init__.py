@@ -45,7 +45,6 @@ from .doe import (
     poses_needed,
     random_plan,
 )
-from .doe.study import PlanStudy, random_plan_study
 from .errors import ArmcalError, ArmcalWarning, InputError, NotIdentifiableError
 from .export import robot_toml, urdf
 from .files import load_robot, load_truth, read_calibration, read_measurements, read_plan
@@ -78,6 +77,7 @@ from .models.planar_closed_form import solve_closed_form
 from .noise import NoiseModel
 from .report import format_calibration
 from .reproduction.algorithm import solve_gauss_newton
+from .reproduction.study import PlanStudy, random_plan_study
 from .simulate import MonteCarlo, monte_carlo
 from .synthesis import synthesize_measurements
 from .validation import CrossValidation, Validation, cross_validate, validate

@@ -43,8 +43,6 @@ from ..models import CompliantArm, PlanarArm
 from ..progress import ProgressBar
 from ..report import (
     compensation_report,
-    compliant_design_summary,
-    compliant_quality,
     design_summary,
     format_calibration,
     format_cross_validation,
@@ -78,7 +76,7 @@ from ..workflow import (
 from .output import CLI_ACTIONS, emit, print_warnings
 
 __all__ = [
-    "TARGET_OPTIONS",
+    "REQUIREMENT_OPTIONS",
     "check_compliance",
     "compensate",
     "demo",
@@ -95,7 +93,7 @@ __all__ = [
 ]
 
 #: The option of every accuracy requirement of poses-needed.
-TARGET_OPTIONS = {
+REQUIREMENT_OPTIONS = {
     "length_std_mm": "--length-std-mm",
     "angle_std_deg": "--angle-std-deg",
     "position_rms_mm": "--position-rms-mm",
@@ -267,13 +265,8 @@ def design(args: argparse.Namespace) -> None:
         payloads=args.payloads,
         test_q=_test_poses(args, spec) if spec.elastic is None else np.zeros((0, arm.n_joints)),
     )
-    if run.design is not None and run.quality is not None:
-        document, report = quality_to_dict(arm, run.quality), format_quality(arm, run.quality)
-        extra, header = design_summary(run.design, run.seconds)
-    else:
-        assert run.compliant is not None and run.compliant_quality is not None
-        document, report = compliant_quality(run.compliant_quality)
-        extra, header = compliant_design_summary(run.compliant, run.seconds)
+    document, report = quality_to_dict(run.quality), format_quality(run.quality)
+    extra, header = design_summary(run.design, run.seconds)
     document.update(extra)
     if args.plot is not None:  # first: drawing is what can fail, the plan CSV is text
         from ..plotting import plot_plan, save_figure  # matplotlib only when a plot is asked for
@@ -293,12 +286,7 @@ def evaluate(args: argparse.Namespace) -> None:
     q, payload = _plan(args.plan, spec, arm)
     test_q = _test_poses(args, spec) if spec.elastic is None else np.zeros((0, arm.n_joints))
     run = evaluate_file(spec, arm, q, test_q=test_q, payload=payload, source=args.plan)
-    if run.quality is not None:
-        document, report = quality_to_dict(arm, run.quality), format_quality(arm, run.quality)
-    else:
-        assert run.compliant is not None
-        document, report = compliant_quality(run.compliant)
-    emit(args, document, report, run.warnings)
+    emit(args, quality_to_dict(run.quality), format_quality(run.quality), run.warnings)
 
 
 def simulate(args: argparse.Namespace) -> None:
@@ -332,7 +320,7 @@ def poses_needed(args: argparse.Namespace) -> None:
     """``armcal poses-needed``: the smallest plan that reaches an accuracy."""
     spec = load_robot(args.robot)
     arm = _model(args, spec) if spec.elastic is None else spec.arm
-    requirement = next(key for key in TARGET_OPTIONS if getattr(args, key) is not None)
+    requirement = next(key for key in REQUIREMENT_OPTIONS if getattr(args, key) is not None)
     found, seconds = size_plan(
         spec,
         arm,

@@ -14,7 +14,7 @@ from typing import Any
 from .._version import __version__
 from ..criteria import CRITERIA
 from ..demo import DEMO_FILES
-from ..doe import DISTINCT_TOLERANCE, ORDERS, TARGETS
+from ..doe import DISTINCT_TOLERANCE, ORDERS, REQUIREMENTS
 from ..doe import METHODS as DESIGN_METHODS
 from ..errors import ArmcalError
 from ..files import DEFAULT_ROBOT
@@ -262,9 +262,13 @@ def build_parser() -> argparse.ArgumentParser:
 
     sub = _command(subs, "poses-needed")
     group = sub.add_mutually_exclusive_group(required=True)
-    for key, option in commands.TARGET_OPTIONS.items():
+    for key, option in commands.REQUIREMENT_OPTIONS.items():
         group.add_argument(
-            option, dest=key, type=options.positive, metavar="A", help=TARGETS[key] + " to reach"
+            option,
+            dest=key,
+            type=options.positive,
+            metavar="A",
+            help=REQUIREMENTS[key] + " to reach",
         )
     sub.add_argument("--sigma", type=options.sigma, metavar="MM", help=sigma_help)
     sub.add_argument("--test-poses", metavar="PLAN_CSV", help=test_help)

@@ -1,16 +1,16 @@
 """Design of calibration experiments: which poses to measure, and how many.
 
-A plan is an array of joint angles of shape ``(m, n)`` in rad.  Plans are
-judged by the criteria of :mod:`armcal.criteria` on the information of the
-arm's model -- its noise model and fixed parameters: the Hadamard-normalized
-``Fs`` of the paper (1 for its orthogonal plans) when every parameter is free
-and the noise isotropic iid, the weighted information over the free
-parameters otherwise.
+A plan is an array of joint angles of shape ``(m, n)`` in rad.  Every function
+here works on any family of arm through its
+:class:`~armcal.models.interface.FitModel`: plans are judged by the criteria of
+:mod:`armcal.criteria` on the information of the model
+(:meth:`~armcal.models.interface.FitModel.plan_information`) -- its noise model
+and fixed parameters; for the planar arm the Hadamard-normalized ``Fs`` of the
+paper (1 for its orthogonal plans) when every parameter is free and the noise
+isotropic iid, the weighted information over the free parameters otherwise.
 
-* :mod:`~armcal.doe.model` -- a plan's information in the model, its
-  gradient, and where the paper's bound ``det <= 1`` still holds;
-* :mod:`~armcal.doe.plans` -- orthogonal (Table I), analytic (placed within the
-  limits and region) and random plans; feasibility of poses;
+* :mod:`~armcal.doe.plans` -- random plans, feasible poses, distinct poses;
+* :mod:`~armcal.doe.ascent` -- ascent within the joint limits and the view;
 * :mod:`~armcal.doe.optimizer` -- batched gradient ascent on a criterion,
   polished by L-BFGS-B / SLSQP;
 * :mod:`~armcal.doe.exchange` -- modified Fedorov exchange over candidates;
@@ -18,32 +18,33 @@ parameters otherwise.
   to the model's best plan within the constraints (Kiefer-Wolfowitz);
 * :mod:`~armcal.doe.order` -- :func:`order_poses`: the order of a plan's poses
   with short joint travel (:func:`joint_travel`) for the shop floor;
-* :mod:`~armcal.doe.designer` -- :func:`design`: all of the above in one call;
+* :mod:`~armcal.doe.designer` -- :func:`design`: the family's closed-form plans
+  where they are optimal, else all of the above, in one call;
+* :mod:`~armcal.doe.loads` -- :func:`design_with_loads`: poses and their payloads
+  chosen together, for a model whose points depend on the load;
 * :mod:`~armcal.doe.sizing` -- :func:`poses_needed`: the smallest ``m`` whose
-  best plan reaches a target accuracy.
+  best plan reaches an accuracy requirement.
+
+The planar family's closed-form plans (:func:`orthogonal_plan`,
+:func:`analytic_plan`, :mod:`armcal.models.planar_plans`) are exported here too,
+beside the other plans.
 """
 
+from ..models.planar_plans import analytic_plan, orthogonal_plan
 from .certificate import Certificate, certify
 from .designer import METHODS, Design, design
 from .exchange import exchange_plan
+from .loads import design_with_loads
 from .optimizer import optimize_plan
 from .order import ORDERS, joint_travel, order_poses
-from .plans import (
-    DISTINCT_TOLERANCE,
-    analytic_plan,
-    feasible,
-    feasible_poses,
-    orthogonal_plan,
-    random_plan,
-    repeated_poses,
-)
-from .sizing import TARGETS, PosesNeeded, accuracy_metric, poses_needed
+from .plans import DISTINCT_TOLERANCE, feasible, feasible_poses, random_plan, repeated_poses
+from .sizing import REQUIREMENTS, PosesNeeded, accuracy_metric, poses_needed
 
 __all__ = [
     "DISTINCT_TOLERANCE",
     "METHODS",
     "ORDERS",
-    "TARGETS",
+    "REQUIREMENTS",
     "Certificate",
     "Design",
     "PosesNeeded",
@@ -51,6 +52,7 @@ __all__ = [
     "analytic_plan",
     "certify",
     "design",
+    "design_with_loads",
     "exchange_plan",
     "feasible",
     "feasible_poses",

@@ -6,28 +6,16 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..models import PlanarArm, check_identifiable, plan_svd, unit_trace
+from ..criteria import attains_unit_bound
+from ..models import FitModel
 from ..numerics import ScaledSVD, scaled_svd, spd_inverse
-from .exchange import _blocks
-from .model import (
-    attains_unit_bound,
-    information_gradient,
-    pose_model,
-    rotation_invariant,
-)
-from .optimizer import (
-    _adam_ascent,
-    _penalty_weight,
-    _region_constraints,
-    _region_penalty,
-    _to_q,
-    _to_u,
-)
-from .plans import feasible, feasible_poses
+from .ascent import adam_ascent, penalty_weight, to_q, to_u, view_penalty
+from .plans import feasible_poses
 
 __all__ = [
     "Certificate",
     "certify",
+    "multiplicative_weights",
 ]
 
 
@@ -35,9 +23,10 @@ __all__ = [
 class Certificate:
     """A lower bound on a plan's D-efficiency relative to the best possible plan.
 
-    Everything is in the arm's model (:mod:`armcal.doe.model`): ``p`` is the
+    Everything is in the model's design coordinates
+    (:meth:`~armcal.models.interface.FitModel.plan_information`): ``p`` is the
     number of free parameters and ``M`` the normalized information of the
-    whitened free-parameter columns -- the paper's ``Fs`` for the standard model.
+    whitened free-parameter columns -- the paper's ``Fs`` for its model.
 
     Attributes
     ----------
@@ -50,7 +39,7 @@ class Certificate:
         ``(det M(xi*))^(1/p)`` of the best weighted design ``xi*`` found, in the
         normalization of :func:`armcal.criteria.d_efficiency` (Hadamard-normalized
         for the paper's model; at most 1 wherever
-        :func:`armcal.models.planar_information.unit_trace` holds).
+        :attr:`~armcal.models.interface.FitModel.information_bound` holds).
     max_variance : float
         ``max_x d(x, xi*)`` over the feasible poses searched (``>= p``; ``= p`` at
         the optimum).
@@ -68,51 +57,47 @@ class Certificate:
     weights: np.ndarray
 
 
-def _variance_function(arm: PlanarArm, q: np.ndarray, m_inv: np.ndarray):
+def _variance_function(model: FitModel, q: np.ndarray, m_inv: np.ndarray):
     """``d(x) = tr(M^-1 I(x))`` ``(k,)`` of poses ``q`` ``(k, n)`` and its gradient ``(k, n)``."""
-    model = pose_model(arm, q[:, None, :])  # one pose per "plan" (its targets' rows)
-    columns = model.columns
-    # A pose's information is the mean over its targets' rows, as the plan's is over
-    # all its rows (the scaled Jacobian divides by the number of rows).
-    value = np.einsum("kma,ab,kmb->k", columns.conj(), m_inv, columns).real / model.targets
-    grad = information_gradient(arm, model, m_inv)[:, 0, :] / model.targets
-    return value, grad
+    return model.plan_information(q).pose_variance(m_inv)
 
 
-def _pose_blocks(arm: PlanarArm, q: np.ndarray) -> np.ndarray:
-    """Every pose's real blocks ``(k, 2T, p_f)`` scaled to its information per row (``/ T``)."""
-    return _blocks(arm, q) / np.sqrt(arm.n_target_links)
+def _pose_blocks(model: FitModel, q: np.ndarray) -> np.ndarray:
+    """Every pose's real blocks ``(k, r, p_f)`` scaled to its information per row (``/ T``)."""
+    info = model.plan_information(q)
+    return info.blocks() / np.sqrt(info.rows_per_pose)
 
 
 def _maximize_variance(
-    arm: PlanarArm, m_inv: np.ndarray, starts: np.ndarray, *, steps: int = 150
+    model: FitModel, m_inv: np.ndarray, starts: np.ndarray, *, steps: int = 150
 ) -> np.ndarray:
-    """Batched ascent of ``d(x)`` from ``starts (k, n)`` within the limits (near the region)."""
+    """Batched ascent of ``d(x)`` from ``starts (k, n)`` within the limits (near the view)."""
 
     def objective(u: np.ndarray, step: int):
-        q, dq_du = _to_q(arm, u)
-        value, grad = _variance_function(arm, q, m_inv)
-        penalty, grad_pen = _region_penalty(arm, q[:, None, :])
-        weight = _penalty_weight(arm, step / steps) * 1e3
+        q, dq_du = to_q(model, u)
+        value, grad = _variance_function(model, q, m_inv)
+        penalty, grad_pen = view_penalty(model, q[:, None, :])
+        weight = penalty_weight(model, step / steps) * 1e3
         return value - weight * penalty, (grad - weight * grad_pen[:, 0]) * dq_du
 
-    u, _ = _adam_ascent(objective, _to_u(arm, starts), steps=steps, learning_rate=0.05)
-    return _to_q(arm, u)[0]
+    u, _ = adam_ascent(objective, to_u(model, starts), steps=steps, learning_rate=0.05)
+    return to_q(model, u)[0]
 
 
-def _corner_poses(arm: PlanarArm, rng: np.random.Generator) -> np.ndarray:
+def _corner_poses(model: FitModel, rng: np.random.Generator) -> np.ndarray:
     """Poses with every joint at a limit (joint 1 random where its angle does not matter)."""
-    n = arm.n_joints
+    n = model.n_joints
     if n > 10:
         return np.empty((0, n))
     grid = np.array(np.meshgrid(*[[0, 1]] * n, indexing="ij")).reshape(n, -1).T
-    corners = arm.joint_limits[np.arange(n), grid]
-    if rotation_invariant(arm):
-        corners[:, 0] = rng.uniform(arm.joint_limits[0, 0], arm.joint_limits[0, 1], len(corners))
-    return corners[feasible(arm, corners[:, None, :])[:, 0]]
+    limits = model.joint_limits
+    corners = limits[np.arange(n), grid]
+    if model.rotation_invariant:
+        corners[:, 0] = rng.uniform(limits[0, 0], limits[0, 1], len(corners))
+    return corners[model.feasible(corners[:, None, :])[:, 0]]
 
 
-def _weights_multiplicative(blocks: np.ndarray, weights: np.ndarray, iterations: int):
+def multiplicative_weights(blocks: np.ndarray, weights: np.ndarray, iterations: int):
     """Multiplicative algorithm for D-optimal weights (Titterington 1976; Silvey et al. 1978).
 
     ``M(xi)`` stays positive definite: the pool holds the (identifiable) plan's
@@ -130,19 +115,19 @@ def _weights_multiplicative(blocks: np.ndarray, weights: np.ndarray, iterations:
     return weights
 
 
-def _weighted_svd(arm: PlanarArm, poses: np.ndarray, weights: np.ndarray) -> ScaledSVD:
+def _weighted_svd(model: FitModel, poses: np.ndarray, weights: np.ndarray) -> ScaledSVD:
     """The rank policy's SVD of ``M(xi) = sum_x w_x I(x)``, from its square-root factor.
 
     Rows ``sqrt(w_x) F_x`` (``F_x`` the scaled ``2 x p`` blocks) have Gram matrix
     ``M(xi)``: its inverse and ``log det`` come from singular values, not from
     inverting ``M``.
     """
-    blocks = _pose_blocks(arm, poses) * np.sqrt(weights)[:, None, None]
-    return scaled_svd(blocks.reshape(-1, arm.n_free))
+    blocks = _pose_blocks(model, poses) * np.sqrt(weights)[:, None, None]
+    return scaled_svd(blocks.reshape(-1, model.n_free))
 
 
 def certify(
-    arm: PlanarArm,
+    model: FitModel,
     q: np.ndarray,
     *,
     rng: np.random.Generator | int | None = None,
@@ -154,7 +139,7 @@ def certify(
 
     Parameters
     ----------
-    arm : PlanarArm
+    model : FitModel
     q : ndarray, shape (m, n)
         The plan (rad); must identify every parameter.
     rng : numpy.random.Generator or int or None
@@ -194,8 +179,9 @@ def certify(
     certified against their own optimum, over their own columns.
 
     Where every pose's information has trace ``p``
-    (:func:`armcal.models.planar_information.unit_trace`: the paper's model, isotropic iid noise
-    with only lengths, base or leading offsets fixed, or every parameter free
+    (:attr:`~armcal.models.interface.FitModel.information_bound`; for a planar
+    arm :func:`~armcal.models.planar_information.unit_trace`: the paper's model,
+    isotropic iid noise with only lengths, base or leading offsets fixed, or every parameter free
     without encoder noise) every design has ``tr M = p``, so ``det M* <= 1``
     (Hadamard's bound for the paper's unit diagonal; AM-GM in general) is a
     certificate too: the result is then never below the plan's own
@@ -204,30 +190,33 @@ def certify(
     """
     rng = np.random.default_rng(rng)
     q = np.asarray(q, dtype=float)
-    p = arm.n_free
-    plan = plan_svd(arm, q)
-    check_identifiable(arm, q, svd=plan)
-    bounded = unit_trace(arm)
+    p = model.n_free
+    plan_information = model.plan_information(q)
+    plan = plan_information.svd()
+    plan_information.check_identifiable()
+    bounded = model.information_bound
     # Round-off of the m-term sums in Fs grows like m eps: attains_unit_bound allows
     # it, or a large orthogonal plan would miss this shortcut and run the whole search.
-    if attains_unit_bound(arm, q):
+    if attains_unit_bound(model, q):
         # M = I: the bound det M <= 1 is attained, and d(x) = tr(I(x)) = p at every pose.
         return Certificate(1.0, 1.0, 1.0, float(p), q, np.full(q.shape[0], 1.0 / q.shape[0]))
-    pool = np.concatenate([q, _corner_poses(arm, rng), feasible_poses(arm, candidates, rng=rng)])
+    pool = np.concatenate(
+        [q, _corner_poses(model, rng), feasible_poses(model, candidates, rng=rng)]
+    )
     weights = np.full(pool.shape[0], 1.0 / pool.shape[0])
     for _ in range(rounds):
-        weights = _weights_multiplicative(_pose_blocks(arm, pool), weights, 300)
-        m_inv, _ = _weighted_svd(arm, pool, weights).inverse_gram()
+        weights = multiplicative_weights(_pose_blocks(model, pool), weights, 300)
+        m_inv, _ = _weighted_svd(model, pool, weights).inverse_gram()
         # Ascend d from its largest values in the pool and in fresh random poses: the
         # maximizers of a weighted model (encoder noise) can lie in narrow regions
         # that the first candidates missed.
-        fresh = feasible_poses(arm, candidates, rng=rng)
+        fresh = feasible_poses(model, candidates, rng=rng)
         starts = []
         for poses in (pool, fresh):
-            d, _ = _variance_function(arm, poses, m_inv)
+            d, _ = _variance_function(model, poses, m_inv)
             starts.append(poses[np.argsort(-d)[: 4 * p]])
-        found = _maximize_variance(arm, m_inv, np.concatenate(starts))
-        found = found[feasible(arm, found[:, None, :])[:, 0]]
+        found = _maximize_variance(model, m_inv, np.concatenate(starts))
+        found = found[model.feasible(found[:, None, :])[:, 0]]
         keep = weights > 1e-6 / pool.shape[0]
         pool = np.concatenate([pool[keep], found])
         # New points start at the mean weight: the multiplicative algorithm grows a
@@ -235,19 +224,19 @@ def certify(
         mean_weight = weights[keep].sum() / np.count_nonzero(keep)
         weights = np.concatenate([weights[keep], np.full(found.shape[0], mean_weight)])
         weights /= weights.sum()
-    weights = _weights_multiplicative(_pose_blocks(arm, pool), weights, 1000)
+    weights = multiplicative_weights(_pose_blocks(model, pool), weights, 1000)
     support_mask = weights > 1e-6
     support, support_w = pool[support_mask], weights[support_mask] / weights[support_mask].sum()
-    star = _weighted_svd(arm, support, support_w)
+    star = _weighted_svd(model, support, support_w)
     # Fs = H^T H with H the plan's scaled Jacobian: inverses and log dets from SVDs.
     star_inverse, star_ok = star.inverse_gram()
     plan_inverse, _ = plan.inverse_gram()
     if bool(star_ok):
-        max_star = _max_variance(arm, star_inverse, support, rng, search)
+        max_star = _max_variance(model, star_inverse, support, rng, search)
         logdet_star = float(star.log_det_gram())
     else:  # not expected (xi* is near D-optimal); the other bounds still hold
         max_star, logdet_star = np.inf, -np.inf
-    max_plan = _max_variance(arm, plan_inverse, q, rng, search)
+    max_plan = _max_variance(model, plan_inverse, q, rng, search)
     logdet_plan = float(plan.log_det_gram())
     kw = np.exp((logdet_plan - logdet_star) / p + 1.0 - max_star / p) if bool(star_ok) else 0.0
     plan_only = np.exp(1.0 - max_plan / p)
@@ -263,15 +252,17 @@ def certify(
 
 
 def _max_variance(
-    arm: PlanarArm, m_inv: np.ndarray, seeds: np.ndarray, rng: np.random.Generator, search: int
+    model: FitModel, m_inv: np.ndarray, seeds: np.ndarray, rng: np.random.Generator, search: int
 ) -> float:
     """A thorough ``max_x d(x)`` over feasible poses: random search, then multistart ascent."""
-    sample = np.concatenate([seeds, _corner_poses(arm, rng), feasible_poses(arm, search, rng=rng)])
-    d, _ = _variance_function(arm, sample, m_inv)
+    sample = np.concatenate(
+        [seeds, _corner_poses(model, rng), feasible_poses(model, search, rng=rng)]
+    )
+    d, _ = _variance_function(model, sample, m_inv)
     starts = sample[np.argsort(-d)[:64]]
-    found = _maximize_variance(arm, m_inv, starts, steps=300)
-    d_found, _ = _variance_function(arm, found, m_inv)
-    if arm.region is not None:  # count iterates that stray outside only a little
-        g, _ = _region_constraints(arm, found[:, None, :])
-        d_found = np.where(g.min(axis=(-2, -1)) > -1e-3, d_found, -np.inf)
+    found = _maximize_variance(model, m_inv, starts, steps=300)
+    d_found, _ = _variance_function(model, found, m_inv)
+    constraints = model.view_constraints(found[:, None, :])
+    if constraints is not None:  # count iterates that stray outside only a little
+        d_found = np.where(constraints[0].min(axis=(-2, -1)) > -1e-3, d_found, -np.inf)
     return float(max(d.max(), d_found.max()))

@@ -7,15 +7,14 @@ from typing import Literal
 
 import numpy as np
 
-from ..criteria import CRITERIA, d_efficiency, efficiencies
+from ..criteria import CRITERIA, attains_unit_bound, d_efficiency, efficiencies
 from ..errors import ArmcalError
-from ..models import PlanarArm, unit_trace
+from ..models import ClosedFormPlan, ClosedFormPlans, FitModel
 from .certificate import Certificate, certify
 from .exchange import exchange_plan
-from .model import attains_unit_bound, model_description, rotation_invariant
 from .optimizer import optimize_plan
 from .order import ORDERS, Order, joint_travel, order_poses
-from .plans import DISTINCT_TOLERANCE, analytic_plan, feasible_poses, repeated_poses
+from .plans import DISTINCT_TOLERANCE, feasible_poses, repeated_poses
 
 __all__ = [
     "METHODS",
@@ -36,9 +35,9 @@ class Design:
 
     Attributes
     ----------
-    arm : PlanarArm
-        The arm and the model designed for: its noise model and fixed
-        parameters (:mod:`armcal.doe.model`).
+    model : FitModel
+        The model designed for: its noise model and fixed parameters, and the
+        loads it identifies with.
     q : ndarray, shape (m, n)
         The plan's joint angles in rad.
     criterion : str
@@ -47,12 +46,13 @@ class Design:
         How the plan was made: ``analytic``, ``optimize``, ``optimize+exchange`` or
         ``exchange``.
     d_efficiency : float
-        :func:`armcal.criteria.d_efficiency` on the arm's model.  For the paper's
+        :func:`armcal.criteria.d_efficiency` on the model.  For the paper's
         model ``(det F / det F_opt)^(1/p)``, relative to the unconstrained
-        optimum; wherever :func:`armcal.models.planar_information.unit_trace` holds at most 1,
-        and 1 only for a plan with identity normalized information; for other
-        models the weighted information's ``det^(1/p_f)``, which compares plans
-        of that model only (the certificate says how far from its optimum).
+        optimum; wherever :attr:`~armcal.models.interface.FitModel.information_bound`
+        holds at most 1, and 1 only for a plan with identity normalized
+        information; for other models the weighted information's
+        ``det^(1/p_f)``, which compares plans of that model only (the
+        certificate says how far from its optimum).
     certificate : Certificate or None
         Lower bound relative to the best plan within the constraints (None when
         not asked for).
@@ -73,12 +73,17 @@ class Design:
         :data:`armcal.doe.plans.DISTINCT_TOLERANCE` on every joint).
     normalized : bool
         Whether ``d_efficiency`` is relative to an optimum of 1
-        (:func:`~armcal.models.planar_information.unit_trace`); otherwise it is the
-        D-criterion of the weighted information, and only the certificate compares
-        the plan with the best one.
+        (:attr:`~armcal.models.interface.FitModel.information_bound`); otherwise it
+        is the D-criterion of the weighted information, and only the certificate
+        compares the plan with the best one.
+    payload_kg : ndarray, shape (m,), or None
+        Every pose's payload, for a design that chose them
+        (:func:`armcal.doe.loads.design_with_loads`).
+    payloads : tuple of float
+        The payload values the design could choose from (empty otherwise).
     """
 
-    arm: PlanarArm
+    model: FitModel
     q: np.ndarray
     criterion: str
     method: str
@@ -90,6 +95,8 @@ class Design:
     joint_travel_unordered: float
     distinct: bool
     normalized: bool = True
+    payload_kg: np.ndarray | None = None
+    payloads: tuple[float, ...] = ()
 
     @property
     def optimum_by_search(self) -> bool:
@@ -100,92 +107,24 @@ class Design:
         cert = self.certificate
         certified = "" if cert is None else f", certified >= {cert.certified_d_efficiency:.4f}"
         return (
-            f"Design({self.q.shape[0]} poses of {self.arm.name}, criterion {self.criterion}, "
+            f"Design({self.q.shape[0]} poses of {self.model.name}, criterion {self.criterion}, "
             f"{self.method}: D {self.d_efficiency:.4f}{certified})"
         )
 
 
-def _closed_form_note(arm: PlanarArm, m: int) -> str:
-    """Why the closed-form plans were not used -- only they, not orthogonal plans in general."""
-    where = "joint limits" if arm.region is None else "joint limits and measurement region"
-    first = 1 if arm.base_offset else 2  # joint 1 steps too when the base is identified
-    return (
-        f"the closed-form orthogonal plans (the paper's Table I family: joints "
-        f"{first}..{arm.n_joints} at {m} angles {360 / m:g} deg apart"
-        + (", placed for the largest joint-limit margin" if arm.region is not None else "")
-        + f") do not fit the {where} of {arm.name}; the optimizer searched all plans within "
-        f"the {where} instead"
-    )
+def _score(model: FitModel, q: np.ndarray, criterion: str) -> float:
+    """The efficiency ``criterion`` of plan ``q`` on the model."""
+    return float(efficiencies(model, q)[criterion])
 
 
-_PAPER_ASSUMES = (
-    "the paper's orthogonal plans and its D* criterion assume isotropic iid noise and every "
-    "parameter free"
-)
-
-
-@dataclass(frozen=True)
-class _ClosedForm:
-    """A closed-form orthogonal plan that fits, and its D-criterion on the model."""
-
-    q: np.ndarray
-    turns_joint1: bool
-    d_efficiency: float
-
-
-def _closed_form_plans(arm: PlanarArm, m: int) -> tuple[list[_ClosedForm], ArmcalError | None]:
-    """The closed-form orthogonal plans that fit, and why the paper's own does not (or None).
-
-    Besides the paper's family, the one with joint 1 stepping too when the
-    model is not invariant to turning joint 1 (anisotropic instrument noise):
-    for ``m > 2 n`` it is D-optimal there (:func:`analytic_plan`).
-    """
-    plans: list[_ClosedForm] = []
-    failure: ArmcalError | None = None
-    variants = [False] + ([True] if not (rotation_invariant(arm) or arm.base_offset) else [])
-    for turns in variants:
-        try:
-            q = analytic_plan(arm, m, turn_joint1=turns)
-        except ArmcalError as error:
-            failure = failure if turns else error
-            continue
-        plans.append(_ClosedForm(q, turns, float(d_efficiency(arm, q))))
-    return plans, failure
-
-
-def _closed_form_would_be_optimal(arm: PlanarArm, m: int) -> bool:
-    """Whether a closed-form plan would be D-optimal for the model without limits or region."""
-    free = arm.replace(joint_limits=None, region=None)
-    return any(attains_unit_bound(free, plan.q) for plan in _closed_form_plans(free, m)[0])
-
-
-def _optimal_closed_form_note(arm: PlanarArm, chosen: _ClosedForm, paper_d: float | None) -> str:
-    """Why a closed-form plan is D-optimal for a model that is not the paper's.
-
-    ``paper_d`` is the D-criterion of the paper's plan (joint 1 held still), None
-    when it does not fit.
-    """
-    how = "this closed-form orthogonal plan reaches it"
-    if chosen.turns_joint1:
-        paper = "does not fit" if paper_d is None else f"reaches only {paper_d:.4f}"
-        how = (
-            "the closed-form orthogonal plan with joint 1 stepping too reaches it (the paper's, "
-            f"with joint 1 held still, {paper})"
-        )
-    return (
-        f"{model_description(arm)}: every pose's information over the {arm.n_free} free "
-        f"parameters still has trace {arm.n_free}, so no plan has a larger D-criterion than 1, "
-        f"and {how}: it is D-optimal for this model"
-    )
-
-
-def _score(arm: PlanarArm, q: np.ndarray, criterion: str) -> float:
-    """The efficiency ``criterion`` of plan ``q`` on the arm's model."""
-    return float(efficiencies(arm, q)[criterion])
+def _would_be_optimal(family: ClosedFormPlans) -> bool:
+    """Whether a closed-form plan would be D-optimal for the model without limits and view."""
+    free = family.unconstrained()
+    return any(attains_unit_bound(free.model, plan.q) for plan in free.plans)
 
 
 def design(
-    arm: PlanarArm,
+    model: FitModel,
     m: int,
     *,
     criterion: str = "D",
@@ -200,8 +139,10 @@ def design(
 
     Parameters
     ----------
-    arm : PlanarArm
-        The arm, with the noise model and fixed parameters to design for.
+    model : FitModel
+        The model to design for: the arm with its noise model and fixed
+        parameters (a model whose points depend on the load is designed with
+        the payloads by :func:`armcal.doe.loads.design_with_loads`).
     m : int
         Number of poses; at least ``ceil(p_f / 2)`` for ``p_f`` free parameters.
     criterion : {"D", "A", "E"}
@@ -275,96 +216,82 @@ def design(
         raise ArmcalError(f"unknown method {method!r}; choose one of {', '.join(METHODS)}")
     if order not in ORDERS:
         raise ArmcalError(f"unknown order {order!r}; choose one of {', '.join(ORDERS)}")
-    p = arm.n_free
+    p = model.n_free
     min_poses = -(-p // 2)
     if m < min_poses:
-        free = "" if p == arm.n_params else " free"
+        free = "" if p == model.n_params else " free"
         raise ArmcalError(
-            f"{m} poses give {2 * m} equations for the {p}{free} parameters of {arm.name}; "
+            f"{m} poses give {2 * m} equations for the {p}{free} parameters of {model.name}; "
             f"use --poses {min_poses} or more"
         )
     rng = np.random.default_rng(rng)
     notes: list[str] = []
     q: np.ndarray | None = None
     used: str = method
-    closed: list[_ClosedForm] = []
+    family = model.closed_form_plans(m)  # placed only where asked for: auto, analytic
+    closed: list[ClosedFormPlan] = []
     repeats, found = 0, 0.0  # the optimizer's repeated poses and its plan's D-criterion
-    if method in ("auto", "analytic"):
-        closed, failure = _closed_form_plans(arm, m)
+    if method == "analytic" and family is None:
+        raise ArmcalError(
+            f"{model.name} has no closed-form plans; use --method auto, optimize or exchange"
+        )
+    if family is not None and method in ("auto", "analytic"):
+        closed = list(family.plans)
         if not closed:
             if method == "analytic":
-                assert failure is not None
-                raise failure
-            notes.append(_closed_form_note(arm, m))
+                assert family.failure is not None
+                raise family.failure
+            notes.append(family.unfit_note())
         elif distinct and all(repeated_poses(plan.q).any() for plan in closed):
             if method == "analytic":
-                raise ArmcalError(
-                    f"the closed-form {m}-pose plan of {arm.name} repeats one pose (its one "
-                    "joint is held still); distinct poses need --method optimize or exchange"
-                )
-            notes.append(
-                f"the closed-form plan of {arm.name} repeats one pose {m} times (its one joint "
-                "is held still); for distinct poses the optimizer searched other plans"
-            )
+                raise ArmcalError(family.repeats_message(refused=True))
+            notes.append(family.repeats_message(refused=False))
             closed = []
         elif distinct:
             closed = [plan for plan in closed if not repeated_poses(plan.q).any()]
-    best = max(closed, key=lambda plan: plan.d_efficiency) if closed else None
-    optimal_closed = best is not None and attains_unit_bound(arm, best.q)
-    paper_d = closed[0].d_efficiency if closed and not closed[0].turns_joint1 else None
+    d_closed = {plan.label: float(d_efficiency(model, plan.q)) for plan in closed}
+    best = max(closed, key=lambda plan: d_closed[plan.label]) if closed else None
+    optimal_closed = best is not None and attains_unit_bound(model, best.q)
     if method == "analytic" or (method == "auto" and optimal_closed):
-        assert best is not None  # analytic_plan raised above otherwise
+        assert best is not None and family is not None  # raised above otherwise
         q, used = best.q, "analytic"
-        if not arm.standard:
-            notes.append(
-                _optimal_closed_form_note(arm, best, paper_d)
-                if optimal_closed
-                else f"{model_description(arm)}: {_PAPER_ASSUMES}; the closed-form plan is not "
-                f"D-optimal for this model (D-criterion {best.d_efficiency:.4f}); --method auto "
-                "optimizes for it"
-            )
+        note = family.choice_note(best, d_closed, optimal_closed)
+        if note is not None:
+            notes.append(note)
     elif method == "exchange":
-        pool = feasible_poses(arm, 4000, rng=rng) if candidates is None else candidates
-        q = exchange_plan(arm, m, pool, rng=rng, distinct=distinct)
+        pool = feasible_poses(model, 4000, rng=rng) if candidates is None else candidates
+        q = exchange_plan(model, m, pool, rng=rng, distinct=distinct)
         if criterion != "D":
             notes.append("exchange maximizes D; the plan was not tuned for " + criterion)
     else:
         initial = np.stack([plan.q for plan in closed]) if closed else None
-        q = optimize_plan(arm, m, criterion=criterion, rng=rng, initial=initial)
+        q = optimize_plan(model, m, criterion=criterion, rng=rng, initial=initial)
         used = "optimize"
         repeats = int(np.count_nonzero(repeated_poses(q))) if distinct else 0
-        found = float(d_efficiency(arm, q))
-        single = arm.n_target_links == 1  # exchange evaluates one point per pose
+        found = float(d_efficiency(model, q))
+        single = len(model.target_labels) <= 1  # exchange evaluates one point per pose
         if criterion == "D" and single:
-            pool = feasible_poses(arm, 4000, rng=rng) if candidates is None else candidates
-            polished = exchange_plan(arm, m, pool, start=q, rng=rng, distinct=distinct)
-            if repeats or float(d_efficiency(arm, polished)) > found * (1 + 1e-12):
+            pool = feasible_poses(model, 4000, rng=rng) if candidates is None else candidates
+            polished = exchange_plan(model, m, pool, start=q, rng=rng, distinct=distinct)
+            if repeats or float(d_efficiency(model, polished)) > found * (1 + 1e-12):
                 q, used = polished, "optimize+exchange"
         elif repeats and single:  # replace the repeats, without exchanges that tune for D
-            pool = feasible_poses(arm, 4000, rng=rng) if candidates is None else candidates
-            q = exchange_plan(arm, m, pool, start=q, rng=rng, max_swaps=0, distinct=True)
-        if best is not None and _score(arm, best.q, criterion) > _score(arm, q, criterion):
+            pool = feasible_poses(model, 4000, rng=rng) if candidates is None else candidates
+            q = exchange_plan(model, m, pool, start=q, rng=rng, max_swaps=0, distinct=True)
+        if best is not None and _score(model, best.q, criterion) > _score(model, q, criterion):
             q, used = best.q, "analytic"  # not expected: the optimizer starts from it
-        if arm.standard:
-            pass  # the paper's model: the note above says why its closed form was not used
-        elif best is not None:
-            notes.append(
-                f"{model_description(arm)}: {_PAPER_ASSUMES}; they are not D-optimal for this "
-                f"model (the closed-form plan reaches D-criterion {best.d_efficiency:.4f}, "
-                f"this plan {float(d_efficiency(arm, q)):.4f}), so the plan was optimized for it"
+        if family is not None:
+            chosen = q
+            note = family.search_note(
+                None if best is None else d_closed[best.label],
+                float(d_efficiency(model, chosen)),
+                method,
+                lambda: _would_be_optimal(family),
             )
-        elif method == "auto" and not _closed_form_would_be_optimal(arm, m):
-            notes.append(
-                f"{model_description(arm)}: {_PAPER_ASSUMES}; even where they fit they are "
-                "not D-optimal for this model, which the plan was optimized for"
-            )
-        else:
-            notes.append(
-                f"{model_description(arm)}: the plan was optimized for this model "
-                f"({p} free parameters)"
-            )
+            if note is not None:
+                notes.append(note)
     q = np.asarray(q, dtype=float)
-    efficiency = float(d_efficiency(arm, q))
+    efficiency = float(d_efficiency(model, q))
     if distinct:
         assert not repeated_poses(q).any(), "a distinct plan repeats a pose"
         if repeats and used != "analytic":
@@ -375,12 +302,12 @@ def design(
                 f"{efficiency:.4f}); poses count as one within {DISTINCT_TOLERANCE:g} rad on "
                 "every joint"
             )
-    certificate = certify(arm, q, rng=rng) if with_certificate else None
+    certificate = certify(model, q, rng=rng) if with_certificate else None
     travel_found = joint_travel(q)
     if order == "travel":
         q = q[order_poses(q)]
     return Design(
-        arm=arm,
+        model=model,
         q=q,
         criterion=criterion,
         method=used,
@@ -391,5 +318,5 @@ def design(
         joint_travel=joint_travel(q),
         joint_travel_unordered=travel_found,
         distinct=distinct,
-        normalized=unit_trace(arm),
+        normalized=model.information_bound,
     )

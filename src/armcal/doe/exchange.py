@@ -5,24 +5,13 @@ from __future__ import annotations
 import numpy as np
 
 from ..errors import ArmcalError
-from ..models import PlanarArm, model_columns
+from ..models import FitModel
 from .plans import repeated_poses
 
 __all__ = [
     "exchange_indices",
     "exchange_plan",
 ]
-
-
-def _blocks(arm: PlanarArm, q: np.ndarray) -> np.ndarray:
-    """Real blocks ``(k, 2, p_f)`` of the model's columns of poses ``q`` ``(k, n)``.
-
-    ``F_x^T F_x`` is the information of pose ``x`` in the model
-    (:func:`armcal.observability.model_columns`: whitened, free parameters).
-    """
-    columns = model_columns(arm, q)  # every target of every pose: T rows per pose
-    blocks = np.stack([columns.real, columns.imag], axis=-2)
-    return blocks.reshape(np.shape(q)[0], -1, columns.shape[-1])
 
 
 def _swap_ratios(a_xx: np.ndarray, a_xi: np.ndarray, a_ii: np.ndarray) -> np.ndarray:
@@ -78,7 +67,7 @@ def _add_most_informative(
 
 
 def exchange_plan(
-    arm: PlanarArm,
+    model: FitModel,
     m: int,
     candidates: np.ndarray,
     *,
@@ -89,12 +78,12 @@ def exchange_plan(
 ) -> np.ndarray:
     """Modified Fedorov exchange for the D-criterion of the arm's model over a candidate set.
 
-    One point per pose (its swaps are evaluated from ``2 x 2`` blocks in closed
-    form): an arm with several targets is designed by :func:`optimize_plan`.
+    One planar point per pose (its swaps are evaluated from ``2 x 2`` blocks in
+    closed form): an arm with several targets is designed by :func:`optimize_plan`.
 
     Parameters
     ----------
-    arm : PlanarArm
+    model : FitModel
     m : int
         Number of poses.
     candidates : ndarray, shape (N, n)
@@ -135,10 +124,11 @@ def exchange_plan(
     information (largest ``det(I_2 + F_x M^-1 F_x^T)``), and a swap only takes a
     candidate the plan does not hold.
     """
-    if arm.n_target_links > 1:
+    targets = len(model.target_labels)
+    if targets > 1:
         raise ArmcalError(
-            f"exchange evaluates one point per pose, and {arm.name} has "
-            f"{arm.n_target_links} targets; use --method optimize (or auto)"
+            f"exchange evaluates one point per pose, and {model.name} has "
+            f"{targets} targets; use --method optimize (or auto)"
         )
     rng = np.random.default_rng(rng)
     candidates = np.asarray(candidates, dtype=float)
@@ -156,7 +146,7 @@ def exchange_plan(
         index = rng.choice(candidates.shape[0], size=m, replace=candidates.shape[0] < m)
     else:  # the start's poses, less its repeated ones (replaced below)
         index = np.arange(m)[~repeated[:m]]
-    blocks = _blocks(arm, candidates)  # (N, 2, p)
+    blocks = model.plan_information(candidates).blocks()  # (N, 2, p_f): a pose's information
     index = exchange_indices(blocks, index, m, max_swaps=max_swaps, distinct=distinct)
     return candidates[index]
 
@@ -172,10 +162,16 @@ def exchange_indices(
     """Modified Fedorov exchange over candidates given by their real blocks ``(N, 2, p)``.
 
     ``index`` holds the starting candidates (fewer than ``m`` are filled up with
-    the most informative ones); returns the ``m`` chosen indices.  The engine of
+    the most informative ones); returns the ``m`` chosen indices.  Every block has
+    2 rows (one planar point; :func:`_swap_ratios` writes out the ``2 x 2`` blocks).  The engine of
     :func:`exchange_plan`, for any model whose candidates carry ``2 x p``
     information blocks (e.g. poses with a payload, :mod:`armcal.doe.compliance`).
     """
+    if blocks.shape[-2] != 2:
+        raise ArmcalError(
+            f"exchange evaluates one point in the plane per pose (2 rows), got {blocks.shape[-2]} "
+            "rows per pose; use --method optimize (or auto)"
+        )
     p = blocks.shape[-1]
     ridge = 1e-10 * np.eye(p)
     if index.size < m:

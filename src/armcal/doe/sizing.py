@@ -1,4 +1,4 @@
-"""How many poses a target accuracy needs: a search over m of the best plans."""
+"""How many poses an accuracy requirement needs: a search over m of the best plans."""
 
 from __future__ import annotations
 
@@ -8,62 +8,68 @@ from typing import Literal
 
 import numpy as np
 
-from ..criteria import inverse_information_batch, position_rms, predicted_std
+from ..criteria import position_rms, predicted_std
 from ..errors import ArmcalError
-from ..models import PlanarArm
+from ..models import FitModel
 from .designer import design
 from .order import order_poses
 from .plans import random_plan
 
 __all__ = [
-    "TARGETS",
-    "TARGET_RTOL",
+    "REQUIREMENTS",
+    "REQUIREMENT_RTOL",
     "PosesNeeded",
+    "Requirement",
     "accuracy_metric",
     "poses_needed",
 ]
 
 
-Target = Literal["length_std_mm", "angle_std_deg", "position_rms_mm"]
+Requirement = Literal["length_std_mm", "angle_std_deg", "position_rms_mm"]
 
 
-#: Accuracy targets: what each measures, in which unit.
-TARGETS: dict[str, str] = {
+#: Accuracy requirements: what each measures, in which unit.
+REQUIREMENTS: dict[str, str] = {
     "length_std_mm": "largest std of a link-length deviation dl (mm)",
     "angle_std_deg": "largest std of a joint-offset deviation dq (deg)",
     "position_rms_mm": "predicted RMS tip error after calibration at the test poses (mm)",
 }
 
 
-#: Relative slack when comparing an accuracy with its target, so that a plan
+#: Relative slack when comparing an accuracy with its requirement, so that a plan
 #: reaching it exactly (sigma / sqrt(100) = 0.01) is not rejected by round-off.
-TARGET_RTOL = 1e-9
+REQUIREMENT_RTOL = 1e-9
+
+
+def _check_requirement(requirement: str) -> None:
+    if requirement not in REQUIREMENTS:
+        raise ArmcalError(
+            f"unknown requirement {requirement!r}; choose one of {', '.join(REQUIREMENTS)}"
+        )  # a library caller's mistake: the command line offers only these
 
 
 def accuracy_metric(
-    arm: PlanarArm, q: np.ndarray, target: str, sigma: float, test_q: np.ndarray
+    model: FitModel, q: np.ndarray, requirement: str, sigma: float, test_q: np.ndarray
 ) -> float:
-    """Accuracy ``target`` (a key of :data:`TARGETS`) of plan ``q``; inf if it is singular."""
-    if target not in TARGETS:
-        raise ArmcalError(f"unknown target {target!r}; choose one of {', '.join(TARGETS)}")
-    if target == "position_rms_mm":
-        inverse, ok = inverse_information_batch(arm, q)
-        return float(position_rms(arm, inverse, test_q, sigma)) if ok else math.inf
-    std = predicted_std(arm, q, sigma)  # inf when the plan is singular
+    """Accuracy ``requirement`` (a key of :data:`REQUIREMENTS`) of plan ``q``; inf if singular."""
+    _check_requirement(requirement)
+    if requirement == "position_rms_mm":
+        return position_rms(model, q, test_q, sigma)
+    std = predicted_std(model, q, sigma)  # inf when the plan is singular
     # every dl (or dq) parameter, targets' dl_n@T and dq_n@T included
-    kind = "dl" if target == "length_std_mm" else "dq"
-    picked = [i for i, name in enumerate(arm.param_names) if name.startswith(kind)]
+    kind = "dl" if requirement == "length_std_mm" else "dq"
+    picked = [i for i, name in enumerate(model.param_names) if name.startswith(kind)]
     return float(std[picked].max())
 
 
 @dataclass(frozen=True, eq=False)
 class PosesNeeded:
-    """The smallest number of poses whose best plan reaches an accuracy target.
+    """The smallest number of poses whose best plan reaches an accuracy requirement.
 
     Attributes
     ----------
-    target : str
-        Key of :data:`TARGETS`.
+    requirement : str
+        Key of :data:`REQUIREMENTS`.
     goal : float
         The accuracy asked for (mm or deg).
     sigma_mm : float
@@ -84,7 +90,7 @@ class PosesNeeded:
         Every ``m`` tried and the accuracy of its best plan.
     """
 
-    target: str
+    requirement: str
     goal: float
     sigma_mm: float
     poses: int
@@ -96,8 +102,8 @@ class PosesNeeded:
 
 
 def poses_needed(
-    arm: PlanarArm,
-    target: str,
+    model: FitModel,
+    requirement: str,
     goal: float,
     *,
     sigma: float,
@@ -109,9 +115,9 @@ def poses_needed(
 
     Parameters
     ----------
-    arm : PlanarArm
-    target : {"length_std_mm", "angle_std_deg", "position_rms_mm"}
-        What must reach ``goal`` (see :data:`TARGETS`).
+    model : FitModel
+    requirement : {"length_std_mm", "angle_std_deg", "position_rms_mm"}
+        What must reach ``goal`` (see :data:`REQUIREMENTS`).
     goal : float
         Accuracy asked for, in mm (lengths, position) or deg (joint offsets).
     sigma : float
@@ -131,7 +137,7 @@ def poses_needed(
     ------
     ArmcalError
         If even ``max_poses`` poses do not reach ``goal``, or every parameter the
-        target measures is fixed.
+        requirement measures is fixed.
 
     Notes
     -----
@@ -141,9 +147,9 @@ def poses_needed(
     against one pose less and, if that reaches too, bisected against the last
     size that failed (a few designs, not one per pose when a jump overshoots):
     the result ``m`` reaches the goal and ``m - 1`` does not.
-    Plans are designed for the arm's model (its noise model and fixed
-    parameters, :func:`armcal.doe.design`), and ``sigma`` is its reference noise
-    (``arm.sigma``); fixed parameters have standard error 0 and do not count.
+    Plans are designed for the model (its noise model and fixed parameters,
+    :func:`armcal.doe.design`), and ``sigma`` is its reference noise; fixed
+    parameters have standard error 0 and do not count.
     For the paper's model on arms without binding limits the best plans are
     orthogonal and the answers are the closed forms ``ceil((sigma / goal)^2)`` for lengths,
     ``ceil((sigma / (goal l))^2)`` for a single joint offset and
@@ -152,42 +158,47 @@ def poses_needed(
 
     Examples
     --------
+    >>> from armcal.models import PlanarArm
     >>> arm = PlanarArm([260.0, 180.0, 120.0, 100.0])
     >>> poses_needed(arm, "length_std_mm", 0.01, sigma=0.1).poses
     100
     >>> poses_needed(arm, "position_rms_mm", 0.02, sigma=0.1).poses
     200
     """
-    if target not in TARGETS:
-        raise ArmcalError(f"unknown target {target!r}; choose one of {', '.join(TARGETS)}")
+    _check_requirement(requirement)
     if not (goal > 0 and math.isfinite(goal)):
         raise ArmcalError(f"the target accuracy must be a positive number, got {goal}")
-    n = arm.n_joints
+    n = model.n_joints
     measured = {
         "length_std_mm": [f"dl{k}" for k in range(1, n + 1)],
         "angle_std_deg": [f"dq{k}" for k in range(1, n + 1)],
-    }.get(target)
-    if measured is not None and not set(measured) - set(arm.fixed):
+    }.get(requirement)
+    if measured is not None and not set(measured) - set(model.fixed):
         raise ArmcalError(
-            f"every parameter the target {target} measures ({', '.join(measured)}) is fixed for "
-            f"{arm.name}; choose a target on the free parameters ({', '.join(arm.free_names)})"
+            f"every parameter the target {requirement} measures ({', '.join(measured)}) is fixed "
+            f"for {model.name}; choose a target on the free parameters "
+            f"({', '.join(model.free_names)})"
         )
     rng = np.random.default_rng(rng)
     if test_q is None:
-        test_q = random_plan(arm, 1000, rng=rng)
-    min_poses = -(-arm.n_free // 2)
+        test_q = random_plan(model, 1000, rng=rng)
+    min_poses = -(-model.n_free // 2)
     plans: dict[int, tuple[np.ndarray, str, float]] = {}
 
     def best(m: int) -> float:
         if m not in plans:
-            made = design(arm, m, rng=rng, with_certificate=False, order="none")
-            plans[m] = (made.q, made.method, accuracy_metric(arm, made.q, target, sigma, test_q))
+            made = design(model, m, rng=rng, with_certificate=False, order="none")
+            plans[m] = (
+                made.q,
+                made.method,
+                accuracy_metric(model, made.q, requirement, sigma, test_q),
+            )
         return plans[m][2]
 
     def reaches(m: int) -> bool:
-        return best(m) <= goal * (1 + TARGET_RTOL)
+        return best(m) <= goal * (1 + REQUIREMENT_RTOL)
 
-    m = max(min_poses, 2 * arm.n_joints)
+    m = max(min_poses, 2 * model.n_joints)
     failed = min_poses - 1  # largest m known not to reach the goal
     while not reaches(m):
         value = best(m)
@@ -214,7 +225,7 @@ def poses_needed(
         middle = (low + m) // 2
     q, method, achieved = plans[m]
     return PosesNeeded(
-        target=target,
+        requirement=requirement,
         goal=float(goal),
         sigma_mm=float(sigma),
         poses=m,

@@ -5,6 +5,9 @@
   :mod:`~armcal.models.planar` -- the paper's planar arm (:class:`PlanarArm`);
 * :mod:`~armcal.models.planar_information` -- the planar arm's scaled Jacobian,
   identifiability and its words;
+* :mod:`~armcal.models.planar_design`, :mod:`~armcal.models.planar_plans`,
+  :mod:`~armcal.models.planar_criteria` -- the planar arm's design view, the
+  paper's closed-form plans and its own criteria (D*, Table I);
 * :mod:`~armcal.models.compliance` -- joint compliance under gravity and load;
 * :mod:`~armcal.models.plane` -- the plane of motion of 3-D data;
 * :mod:`~armcal.models.calibrated` -- an arm with its identified deviations.
@@ -20,7 +23,18 @@ from .compliance import (
     compliance_identifiability,
 )
 from .identifiability import Identifiability, combination, listing, row_echelon
-from .interface import ClosedForm, Conditions, Effect, FitModel, LinearPositions, Loads
+from .interface import (
+    ClosedForm,
+    ClosedFormPlan,
+    ClosedFormPlans,
+    Conditions,
+    Effect,
+    FitModel,
+    LinearPositions,
+    Loads,
+    PaperCriteria,
+    PlanInformation,
+)
 from .planar import INSTRUMENT_PARAMS, PlanarArm
 from .planar_geometry import (
     PlanarGeometry,
@@ -70,6 +84,8 @@ __all__ = [
     "Box",
     "CalibratedArm",
     "ClosedForm",
+    "ClosedFormPlan",
+    "ClosedFormPlans",
     "CompliantArm",
     "Conditions",
     "Effect",
@@ -78,7 +94,9 @@ __all__ = [
     "Identifiability",
     "LinearPositions",
     "Loads",
+    "PaperCriteria",
     "Parametrization",
+    "PlanInformation",
     "PlanarArm",
     "PlanarGeometry",
     "Plane",

@@ -58,7 +58,7 @@ from ..errors import ArmcalError, ArmcalWarning, NotIdentifiableError, action
 from ..noise import NoiseModel
 from ..numerics import COND_WARN, RANK_RTOL, ScaledSVD, scaled_svd
 from .identifiability import Identifiability, combination, listing, row_echelon
-from .information import covariance_factor_from, whitened_free_jacobian
+from .information import BlockInformation, covariance_factor_from, whitened_free_jacobian
 from .interface import Conditions, Effect, LinearPositions, Loads
 from .planar import PlanarArm
 from .planar_kinematics import (
@@ -80,6 +80,7 @@ __all__ = [
     "barely_identifiable_warning",
     "check_compliance_identifiable",
     "compliance_identifiability",
+    "payload_values",
 ]
 
 #: Standard gravity (m/s^2), the magnitude of ``gravity_xy`` (a direction).
@@ -593,6 +594,44 @@ class CompliantArm:
         loads = self.default_loads(np.shape(q)[-2]) if loads is None else loads
         return self.arm.plan_conditions(q, loads)
 
+    # -- design -------------------------------------------------------------------------
+
+    def feasible(self, q: np.ndarray, *, tol: float = 1e-9) -> np.ndarray:
+        return self.arm.feasible(q, tol=tol)
+
+    def view_constraints(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray] | None:
+        return self.arm.view_constraints(q)
+
+    @property
+    def rotation_invariant(self) -> bool:
+        """Gravity has a direction: turning joint 1 changes every deflection."""
+        return self.elastic.gravity is None and self.arm.rotation_invariant
+
+    @property
+    def information_bound(self) -> bool:
+        """No bound on the information of a pose with compliance parameters."""
+        return False
+
+    def plan_information(self, q: np.ndarray, loads: Loads | None = None) -> BlockInformation:
+        """From the whitened Jacobian.  The criteria's singular values are those of unit-norm
+        columns: no design coordinates are fixed in advance for the compliance parameters,
+        so the D-criterion compares how orthogonal a plan's columns are."""
+        return BlockInformation(self, q, loads, unit_columns=True)
+
+    def closed_form_plans(self, m: int) -> None:
+        return None
+
+    def paper_criteria(self, q: np.ndarray) -> None:
+        return None
+
+    def design_loads(self, payloads: Sequence[float] | None) -> tuple[CompliantArm, np.ndarray]:
+        """The model of a plan whose poses carry ``payloads`` (kg; default 0 and the robot
+        file's payload): in lumped mode, loads that vary add ``k1..kn``."""
+        values = np.array(payload_values(self.elastic, payloads))
+        return CompliantArm.for_loads(
+            self.arm, self.elastic, Loads.create(values.size, values)
+        ), values
+
     # -- the tool -----------------------------------------------------------------------
 
     @property
@@ -744,3 +783,13 @@ def barely_identifiable_warning(info: Identifiability) -> ArmcalWarning | None:
         f"{info.condition_number:.3g}); poorly determined: "
         f"{'; '.join(info.poorly_determined[:3])}; vary the torques more (poses, payloads)",
     )
+
+
+def payload_values(elastic: Elastostatic, given: Sequence[float] | None) -> tuple[float, ...]:
+    """The payloads a design may use: ``given``, else 0 and the robot file's payload."""
+    if given is not None:
+        values = sorted({float(v) for v in given})
+        if not values or any(not np.isfinite(v) or v < 0 for v in values):
+            raise ArmcalError(f"payloads must be finite and not negative (kg), got {list(given)}")
+        return tuple(values)
+    return (0.0, elastic.payload_kg) if elastic.payload_kg > 0 else (0.0,)

@@ -11,7 +11,9 @@ One place for each of these meanings, for every family of arm
 * :func:`tip_variances` -- the variance ``tr(J(x) C J(x)^T)`` of a predicted
   point at conditions ``x`` from a parameter covariance ``C``, and
   :func:`mean_tip_variance`, its mean over many test rows for a stack of
-  covariances (from the test rows' Gram matrix, so many plans cost one pass).
+  covariances (from the test rows' Gram matrix, so many plans cost one pass);
+* :class:`BlockInformation` -- what plans tell about the free parameters, for
+  design and its criteria, from those rows.
 
 A family may compute these faster where its structure allows (the planar arm's
 covariance from its plan's own factorization); the numbers are the same.
@@ -19,12 +21,16 @@ covariance from its plan's own factorization); the numbers are the same.
 
 from __future__ import annotations
 
+from functools import cached_property
+
 import numpy as np
 
-from ..numerics import scaled_svd
-from .interface import Conditions, FitModel
+from ..numerics import ScaledSVD, scaled_svd
+from .identifiability import Identifiability
+from .interface import Conditions, FitModel, Loads
 
 __all__ = [
+    "BlockInformation",
     "covariance_factor_from",
     "display_std",
     "mean_tip_variance",
@@ -154,3 +160,130 @@ def mean_tip_variance(jacobian: np.ndarray, covariance: np.ndarray) -> np.ndarra
     """
     gram = np.einsum("kia,kib->ab", jacobian, jacobian) / jacobian.shape[0]
     return np.clip(np.einsum("...ab,ba->...", covariance, gram), 0.0, None)
+
+
+class BlockInformation:
+    """The :class:`~armcal.models.interface.PlanInformation` of any model, from its Jacobian.
+
+    A pose's information is the Gram matrix of its whitened free rows
+    (:func:`whitened_blocks`, every target of the pose) with the columns divided
+    by ``scale`` ``(p_f,)``: the design coordinates (default: the free parameters
+    in internal units).  Gradients in the poses are central differences of step
+    ``step`` rad, one pair of evaluations per joint for every pose at once (a
+    pose's rows depend on that pose only); a family with an analytic gradient
+    provides its own plan information.
+
+    Parameters
+    ----------
+    model : FitModel
+    q : ndarray, shape (..., m, n)
+        Plans (rad); leading axes batch over plans.
+    loads : Loads, optional
+        Every pose's loads ``(m,)`` (default: the model's).
+    scale : ndarray, shape (p_f,), optional
+        The design coordinates' column scale.
+    unit_columns : bool
+        The criteria's singular values with unit-norm columns per plan (how
+        orthogonal the columns are), not those of the design coordinates.
+    """
+
+    def __init__(
+        self,
+        model: FitModel,
+        q: np.ndarray,
+        loads: Loads | None = None,
+        *,
+        scale: np.ndarray | None = None,
+        unit_columns: bool = False,
+        step: float = 1e-6,
+    ) -> None:
+        self.model = model
+        self.q = np.asarray(q, dtype=float)
+        self.loads = loads
+        self.scale = np.ones(model.n_free) if scale is None else np.asarray(scale, dtype=float)
+        self.unit_columns = unit_columns
+        self.step = step
+
+    @property
+    def rows_per_pose(self) -> int:
+        return max(1, len(self.model.target_labels))
+
+    def _conditions(self, q: np.ndarray) -> Conditions:
+        """Every target of every pose of ``q`` ``(..., m, n)``, plan after plan."""
+        flat = q.reshape(-1, q.shape[-1])
+        loads = self.loads
+        if loads is not None and flat.shape[0] != loads.n_rows:  # the same loads in every plan
+            plans = flat.shape[0] // loads.n_rows
+            loads = Loads(np.tile(loads.payload_kg, plans), np.tile(loads.force_n, (plans, 1)))
+        return self.model.plan_conditions(flat, loads)
+
+    def _blocks_at(self, q: np.ndarray) -> np.ndarray:
+        blocks = whitened_blocks(self.model, self._conditions(q)) / self.scale
+        return blocks.reshape(*q.shape[:-1], -1, self.model.n_free)
+
+    @cached_property
+    def _blocks(self) -> np.ndarray:
+        return self._blocks_at(self.q)
+
+    def blocks(self) -> np.ndarray:
+        return self._blocks
+
+    def information(self) -> np.ndarray:
+        f = self._blocks
+        rows = f.shape[-3] * self.rows_per_pose
+        return np.einsum("...mrp,...mrq->...pq", f, f) / rows
+
+    def _central_difference(self, value) -> np.ndarray:
+        """``d value(F_i) / d q_i`` ``(..., m, n)`` of a per-pose function of the blocks."""
+        grad = np.empty(self.q.shape)
+        for j in range(self.q.shape[-1]):
+            shift = np.zeros(self.q.shape[-1])
+            shift[j] = self.step
+            up = value(self._blocks_at(self.q + shift))
+            down = value(self._blocks_at(self.q - shift))
+            grad[..., j] = (up - down) / (2 * self.step)
+        return grad
+
+    def gradient(self, phi: np.ndarray) -> np.ndarray:
+        phi = np.asarray(phi, dtype=float)
+        weight = phi if phi.ndim == 2 else phi[..., None, :, :]
+
+        def per_pose(f: np.ndarray) -> np.ndarray:
+            return np.einsum("...rp,...pq,...rq->...", f, weight, f)
+
+        return self._central_difference(per_pose)
+
+    def pose_variance(self, m_inv: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        count = self.rows_per_pose
+
+        def per_pose(f: np.ndarray) -> np.ndarray:
+            return np.einsum("krp,pq,krq->k", f, m_inv, f) / count
+
+        return per_pose(self._blocks), self._central_difference(per_pose)
+
+    @cached_property
+    def _svd(self) -> ScaledSVD:
+        f = self._blocks
+        rows = f.shape[-3] * self.rows_per_pose
+        stacked = f.reshape(*f.shape[:-3], -1, f.shape[-1]) / np.sqrt(rows)
+        return scaled_svd(stacked)
+
+    def svd(self) -> ScaledSVD:
+        return self._svd
+
+    def singular_values(self) -> np.ndarray:
+        if self.unit_columns:
+            return self._svd.truncated
+        f = self._blocks
+        rows = f.shape[-3] * self.rows_per_pose
+        stacked = f.reshape(*f.shape[:-3], -1, f.shape[-1]) / np.sqrt(rows)
+        return np.where(self._svd.kept, np.linalg.svd(stacked, compute_uv=False), 0.0)
+
+    def identifiability(self) -> Identifiability:
+        return self.model.identifiability(self._conditions(self.q))[0]
+
+    def check_identifiable(self) -> Identifiability:
+        return self.model.check_identifiable(self._conditions(self.q))
+
+    def covariance_factor(self, params: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+        return self.model.covariance_factor(self._conditions(self.q), params)

@@ -28,6 +28,12 @@ What a model provides, by use:
 * **analysis** -- identifiability on the model's own scaled Jacobian, the
   words for a barely identifiable one, and the covariance factor of the free
   parameters;
+* **design** -- the poses a plan may hold (:meth:`~FitModel.feasible`, the
+  instrument's view as smooth constraints), what a plan tells about the free
+  parameters in the family's design coordinates (:meth:`~FitModel.plan_information`,
+  a :class:`PlanInformation`), whether every design has ``det M <= 1``, the
+  family's closed-form plans where it has them (:class:`ClosedFormPlans`), and
+  the loads a design may choose;
 * **the tool** -- its orientation and that orientation's Jacobians, for
   compensation.
 
@@ -42,7 +48,7 @@ compensation and export call the robot.
 
 from __future__ import annotations
 
-from collections.abc import Callable, Hashable, Sequence
+from collections.abc import Callable, Hashable, Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any, Protocol
 
@@ -56,11 +62,15 @@ from .identifiability import Identifiability
 
 __all__ = [
     "ClosedForm",
+    "ClosedFormPlan",
+    "ClosedFormPlans",
     "Conditions",
     "Effect",
     "FitModel",
     "LinearPositions",
     "Loads",
+    "PaperCriteria",
+    "PlanInformation",
 ]
 
 
@@ -240,6 +250,139 @@ class ClosedForm(Protocol):
         unweighted); the solution is the weighted least-squares optimum.
         """
         ...
+
+
+class PlanInformation(Protocol):
+    """What plans of poses tell about a model's free parameters, in its design coordinates.
+
+    For plans ``q`` ``(..., m, n)`` every pose ``i`` has an information ``I_i``
+    ``(p_f, p_f)``: the Gram matrix of its whitened rows (every target it is
+    measured at) in the family's *design coordinates* of the free parameters,
+    scaled so that the criteria compare plans (the planar arm's are the paper's
+    Hadamard-normalized columns).  The plan's normalized information is
+    ``M = sum_i I_i / R`` over its ``R = m T`` rows.  Design (the optimizer, the
+    exchange, the certificate) and the criteria see a plan only through this.
+    """
+
+    @property
+    def rows_per_pose(self) -> int:
+        """``T``: the rows every pose is measured in (one per target)."""
+        ...
+
+    def information(self) -> np.ndarray:
+        """``M`` ``(..., p_f, p_f)``."""
+        ...
+
+    def gradient(self, phi: np.ndarray) -> np.ndarray:
+        """``d/dq_i <phi, I_i>`` ``(..., m, n)`` for a symmetric ``phi`` ``(p_f, p_f)``
+        (or one per plan ``(..., p_f, p_f)``)."""
+        ...
+
+    def pose_variance(self, m_inv: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """``d(x_i) = tr(m_inv I_i) / T`` ``(k,)`` of every pose of ``q`` ``(k, n)``, and
+        its gradient ``(k, n)``: the variance function of the equivalence theorem."""
+        ...
+
+    def blocks(self) -> np.ndarray:
+        """Real factors ``F_i`` ``(..., m, r, p_f)`` with ``I_i = F_i^T F_i``."""
+        ...
+
+    def svd(self) -> ScaledSVD:
+        """The rank policy's SVD of the stacked rows divided by ``sqrt(R)`` (``H^T H = M``)."""
+        ...
+
+    def singular_values(self) -> np.ndarray:
+        """``(..., p_f)``: what the criteria are computed on, those the policy drops 0."""
+        ...
+
+    def identifiability(self) -> Identifiability:
+        """Which parameter combinations the plan (one, ``(m, n)``) cannot separate."""
+        ...
+
+    def check_identifiable(self) -> Identifiability:
+        """:meth:`identifiability`, raising NotIdentifiableError (with why) when deficient."""
+        ...
+
+    def covariance_factor(self, params: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+        """``G`` ``(..., p, p_f)`` with ``(J_w^T J_w)^-1 = G G^T`` over the plan's rows
+        (internal units, unit noise), and the full-rank mask; ``inf`` where singular."""
+        ...
+
+
+@dataclass(frozen=True, eq=False)
+class ClosedFormPlan:
+    """A family's closed-form plan that fits the constraints, and which of its kind it is."""
+
+    q: np.ndarray
+    label: str
+
+
+class ClosedFormPlans(Protocol):
+    """A family's closed-form ``m``-pose plans (the paper's orthogonal plans for planar arms).
+
+    The designer takes one where the criteria say it is optimal for the model,
+    starts its search from them otherwise, and reports the notes these give.
+    """
+
+    @property
+    def model(self) -> FitModel:
+        """The model the plans are for."""
+        ...
+
+    @property
+    def plans(self) -> tuple[ClosedFormPlan, ...]:
+        """The closed-form plans that fit the joint limits and view."""
+        ...
+
+    @property
+    def failure(self) -> ArmcalError | None:
+        """Why the family's own plan does not fit, or None."""
+        ...
+
+    def unconstrained(self) -> ClosedFormPlans:
+        """The same plans for the model without joint limits and view."""
+        ...
+
+    def unfit_note(self) -> str:
+        """Why no closed-form plan fits the constraints."""
+        ...
+
+    def repeats_message(self, *, refused: bool) -> str:
+        """Every closed-form plan repeats a pose: the error (``refused``) or the note."""
+        ...
+
+    def choice_note(
+        self, chosen: ClosedFormPlan, d_criteria: Mapping[str, float], optimal: bool
+    ) -> str | None:
+        """Why the chosen plan is (or is not) optimal for the model; None when nothing to say."""
+        ...
+
+    def search_note(
+        self,
+        closed_d: float | None,
+        plan_d: float,
+        method: str,
+        would_be_optimal: Callable[[], bool],
+    ) -> str | None:
+        """What a searched plan is against the closed-form plans; None when nothing to say."""
+        ...
+
+
+@dataclass(frozen=True)
+class PaperCriteria:
+    """The paper's own criteria of a plan, for the arms its theory covers (planar).
+
+    Attributes
+    ----------
+    det_c, abs_det_s : float
+        The D* pair ``det C'`` and ``|det S'|`` (paper eq. 20, ``C' = C / m``).
+    optimality_sums : dict of str to float
+        Every sum of the optimality conditions (21) / Table I, by name.
+    """
+
+    det_c: float
+    abs_det_s: float
+    optimality_sums: dict[str, float]
 
 
 class FitModel(Protocol):
@@ -485,6 +628,46 @@ class FitModel(Protocol):
 
     def plan_conditions(self, q: np.ndarray, loads: Loads | None = None) -> Conditions:
         """The rows a plan of poses ``q`` ``(m, n)`` is measured in: every target of every pose."""
+        ...
+
+    # -- design ---------------------------------------------------------------
+    def feasible(self, q: np.ndarray, *, tol: float = 1e-9) -> np.ndarray:
+        """Mask ``(..., m)`` of poses within the joint limits and the instrument's view."""
+        ...
+
+    def view_constraints(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray] | None:
+        """The instrument's view as smooth constraints of poses ``q`` ``(..., m, n)``:
+        values ``g`` ``(..., m, k)`` (>= 0 inside) and ``dg/dq`` ``(..., m, k, n)``; None
+        when every pose within the limits is seen."""
+        ...
+
+    @property
+    def rotation_invariant(self) -> bool:
+        """Whether turning joint 1 leaves every pose's information unchanged."""
+        ...
+
+    @property
+    def information_bound(self) -> bool:
+        """Whether every pose's information has trace ``p_f``, so that every design has
+        ``det M <= 1`` with equality iff ``M = I`` (the criteria are then efficiencies)."""
+        ...
+
+    def plan_information(self, q: np.ndarray, loads: Loads | None = None) -> PlanInformation:
+        """What plans ``q`` ``(..., m, n)`` (with ``loads``) tell about the free parameters."""
+        ...
+
+    def closed_form_plans(self, m: int) -> ClosedFormPlans | None:
+        """The family's closed-form ``m``-pose plans, None for a family without them."""
+        ...
+
+    def paper_criteria(self, q: np.ndarray) -> PaperCriteria | None:
+        """The paper's D* and Table I sums of plan ``q``, None outside the paper's theory."""
+        ...
+
+    def design_loads(self, payloads: Sequence[float] | None) -> tuple[FitModel, np.ndarray] | None:
+        """The model a design that chooses every pose's payload identifies, and the payloads
+        (kg) it may choose (``payloads``, else the family's default); None where loads do
+        not move the points."""
         ...
 
     # -- the tool, for compensation -----------------------------------------

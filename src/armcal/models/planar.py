@@ -19,8 +19,9 @@ from numpy.typing import ArrayLike
 from ..errors import ArmcalWarning
 from ..noise import NoiseModel
 from ..numerics import ScaledSVD
+from . import planar_design
 from .identifiability import Identifiability
-from .interface import Conditions, LinearPositions, Loads
+from .interface import Conditions, LinearPositions, Loads, PaperCriteria
 from .planar_arm import PlanarArmSpec
 from .planar_closed_form import (
     PlanarClosedForm,
@@ -28,6 +29,8 @@ from .planar_closed_form import (
     shared_plan_factor,
     user_from_links,
 )
+from .planar_criteria import dstar, optimality_sums
+from .planar_design import PlanarPlanInformation
 from .planar_geometry import split_params, wrap_angle
 from .planar_information import (
     check_identifiable,
@@ -36,6 +39,7 @@ from .planar_information import (
     identifiability,
     plan_rows,
     plan_svd,
+    unit_trace,
 )
 from .planar_kinematics import (
     check_target,
@@ -46,6 +50,7 @@ from .planar_kinematics import (
     link_units,
     tool_angles,
 )
+from .planar_plans import PaperPlans
 
 __all__ = [
     "INSTRUMENT_PARAMS",
@@ -357,6 +362,44 @@ class PlanarArm(PlanarArmSpec):
         if loads is not None and every:
             loads = loads.repeat(self.n_target_links)
         return Conditions(rows, target, loads)
+
+    # -- design -------------------------------------------------------------------------
+
+    def feasible(self, q: np.ndarray, *, tol: float = 1e-9) -> np.ndarray:
+        """Poses within the joint limits whose every target is in the measurement region."""
+        return planar_design.feasible(self, q, tol=tol)
+
+    def view_constraints(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray] | None:
+        """The measurement region's constraints on every target's point, None without one."""
+        return planar_design.region_constraints(self, q)
+
+    @property
+    def rotation_invariant(self) -> bool:
+        """No base offset and no direction in the instrument noise (see
+        :func:`~armcal.models.planar_design.rotation_invariant`)."""
+        return planar_design.rotation_invariant(self)
+
+    @property
+    def information_bound(self) -> bool:
+        """:func:`~armcal.models.planar_information.unit_trace`: the paper's bound holds."""
+        return unit_trace(self)
+
+    def plan_information(self, q: np.ndarray, loads: Loads | None = None) -> PlanarPlanInformation:
+        """The complex-column information of the paper (loads move nothing of a rigid arm)."""
+        return PlanarPlanInformation(self, q)
+
+    def closed_form_plans(self, m: int) -> PaperPlans:
+        """The paper's orthogonal plans, placed within the limits and region."""
+        return PaperPlans(self, m)
+
+    def paper_criteria(self, q: np.ndarray) -> PaperCriteria:
+        """The paper's D* pair and Table I sums of plan ``q``."""
+        pair = dstar(self, q)
+        return PaperCriteria(float(pair.det_c), float(pair.abs_det_s), optimality_sums(self, q))
+
+    def design_loads(self, payloads: Sequence[float] | None) -> None:
+        """A rigid arm's points do not depend on its payload."""
+        return None
 
     # -- the tool -----------------------------------------------------------------------
 

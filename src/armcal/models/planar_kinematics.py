@@ -27,6 +27,7 @@ __all__ = [
     "forward_kinematics",
     "jacobian",
     "joint_jacobian",
+    "link_jacobian",
     "link_phasors",
     "link_units",
     "link_vectors",
@@ -285,10 +286,32 @@ def joint_jacobian(
     >>> (joint_jacobian(arm, np.zeros((1, 2)))[0] + 0.0).tolist()
     [[0.0, 0.0], [3.0, 1.0]]
     """
+    jc = link_jacobian(arm, q, params, target=target, deflection=deflection)
+    jc = jc @ arm.joint_map[arm.link_joint]
+    return np.stack([jc.real, jc.imag], axis=-2)
+
+
+def link_jacobian(
+    arm: PlanarGeometry,
+    q: np.ndarray,
+    params: np.ndarray | None = None,
+    *,
+    target: ArrayLike | None = None,
+    deflection: np.ndarray | None = None,
+) -> np.ndarray:
+    """``d tip / d theta_k`` ``(..., m, K)`` as complex numbers: the tip's motion as link
+    vector ``k`` turns (mm/rad), ``i z_k u_k``; :func:`joint_jacobian` is it through the
+    joint map.
+
+    Examples
+    --------
+    >>> arm = PlanarGeometry([2.0, 1.0])
+    >>> (link_jacobian(arm, np.zeros((1, 2)))[0] + 0.0).tolist()
+    [2j, 1j]
+    """
     q = _check_q(arm, q)
     terms, _, _ = _tip_terms(arm, q, params, target, deflection)
-    jc = (1j * terms) @ arm.joint_map[arm.link_joint]
-    return np.stack([jc.real, jc.imag], axis=-2)
+    return 1j * terms
 
 
 def tool_angles(

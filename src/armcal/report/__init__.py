@@ -2,7 +2,7 @@
 
 * :mod:`~armcal.report.common` -- the model in words, number cells, tables;
 * :mod:`~armcal.report.calibration` -- a calibration, cross-validation;
-* :mod:`~armcal.report.quality` -- a plan's quality (geometric, or with compliance);
+* :mod:`~armcal.report.quality` -- a plan's quality (with the payloads where they count);
 * :mod:`~armcal.report.design` -- a design, a sizing;
 * :mod:`~armcal.report.monte_carlo` -- a Monte Carlo;
 * :mod:`~armcal.report.validation` -- validation and compensation;
@@ -13,16 +13,14 @@ The calibration *file* is written and read by :mod:`armcal.files.calibration`.
 
 from .calibration import effect_lines, format_calibration, format_cross_validation
 from .common import model_lines, model_to_dict, table_csv
-from .design import compliant_design_summary, design_summary, poses_needed_summary
+from .design import design_summary, poses_needed_summary
 from .monte_carlo import format_monte_carlo, monte_carlo_to_dict
-from .quality import compliant_quality, format_quality, quality_to_dict
+from .quality import format_quality, quality_to_dict
 from .reproduction import format_reproduction, reproduction_summary
 from .validation import compensation_report, validation_report
 
 __all__ = [
     "compensation_report",
-    "compliant_design_summary",
-    "compliant_quality",
     "design_summary",
     "effect_lines",
     "format_calibration",

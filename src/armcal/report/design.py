@@ -6,14 +6,12 @@ import math
 
 import numpy as np
 
-from ..doe.compliance import CompliantDesign
 from ..doe.designer import Design
-from ..doe.sizing import TARGETS, PosesNeeded
-from ..models import PlanarArm
+from ..doe.sizing import REQUIREMENTS, PosesNeeded
+from ..models import FitModel
 from .common import model_lines, model_to_dict
 
 __all__ = [
-    "compliant_design_summary",
     "design_summary",
     "poses_needed_summary",
 ]
@@ -40,6 +38,8 @@ def design_summary(result: Design, seconds: float) -> tuple[dict, list[str]]:
         D-efficiency against the unconstrained optimum and the certificate, the
         joint travel, and an empty line.
     """
+    if result.payload_kg is not None:
+        return _loaded_design_summary(result, seconds)
     cert = result.certificate
     document = {
         "criterion": result.criterion,
@@ -90,25 +90,29 @@ def _travel_line(result: Design) -> str:
     )
 
 
-def compliant_design_summary(result: CompliantDesign, seconds: float) -> tuple[dict, list[str]]:
-    """JSON keys and header lines of ``armcal design`` for a model with joint compliance."""
+def _loaded_design_summary(result: Design, seconds: float) -> tuple[dict, list[str]]:
+    """JSON keys and header lines of ``armcal design`` for poses chosen with their payloads."""
+    cert = result.certificate
+    assert cert is not None  # a design with loads is always certified
+    effect = result.model.effect
+    what = "geometry" if effect is None else f"geometry and {effect.name}"
     document = {
-        "criterion": "D",
-        "method": "exchange+polish",
-        "certified_d_efficiency": result.certified_d_efficiency,
-        "plan_only_bound": result.plan_only_bound,
-        "max_variance": result.max_variance,
+        "criterion": result.criterion,
+        "method": result.method,
+        "certified_d_efficiency": cert.certified_d_efficiency,
+        "plan_only_bound": cert.plan_only_bound,
+        "max_variance": cert.max_variance,
         "payloads_allowed": list(result.payloads),
         "seconds": seconds,
         "order": result.order,
         "joint_travel_deg": float(np.degrees(result.joint_travel)),
     }
     lines = [
-        f"design: D-optimal for geometry and joint compliance, poses and payloads "
+        f"design: D-optimal for {what}, poses and payloads "
         f"(from {', '.join(f'{v:g}' for v in result.payloads)} kg) chosen together "
         f"({seconds:.1f} s)",
-        f"certified D-efficiency >= {result.certified_d_efficiency:.4f} of the best plan "
-        f"within the limits and region (max d = {result.max_variance:.3f} for "
+        f"certified D-efficiency >= {cert.certified_d_efficiency:.4f} of the best plan "
+        f"within the limits and region (max d = {cert.max_variance:.3f} for "
         f"p = {result.model.n_free})",
         "",
     ]
@@ -116,33 +120,34 @@ def compliant_design_summary(result: CompliantDesign, seconds: float) -> tuple[d
 
 
 def poses_needed_summary(
-    found: PosesNeeded, arm: PlanarArm, seconds: float
+    found: PosesNeeded, model: FitModel, seconds: float
 ) -> tuple[dict, list[str]]:
     """The JSON document and the text lines of ``armcal poses-needed``.
 
     Parameters
     ----------
     found : PosesNeeded
-    arm : PlanarArm
-        The arm the plans were designed for (its name is printed).
+    model : FitModel
+        The model the plans were designed for (its name is printed).
     seconds : float
         Wall time of the search.
 
     Returns
     -------
     document : dict
-        ``poses`` (PRODUCT.md), ``target``, ``goal``, ``achieved``,
+        ``poses`` (PRODUCT.md), ``requirement``, ``goal``, ``achieved``,
         ``with_one_pose_less`` (null when fewer poses cannot identify every
         parameter), ``sigma_mm``, ``method``, ``evaluated`` (m -> accuracy of the
         best m-pose plan, identifiable ones only) and ``seconds``.
     lines : list of str
         The answer and how it was found; the caller adds the file it wrote.
     """
-    unit = "deg" if found.target == "angle_std_deg" else "mm"
+    unit = "deg" if found.requirement == "angle_std_deg" else "mm"
+    arm = model.arm
     finite_previous = math.isfinite(found.previous)
     document = {
         "poses": found.poses,
-        "target": found.target,
+        "requirement": found.requirement,
         "goal": found.goal,
         "achieved": found.achieved,
         "with_one_pose_less": found.previous if finite_previous else None,
@@ -161,8 +166,8 @@ def poses_needed_summary(
         f"{found.poses} poses: the best {found.poses}-pose plan of {arm.name} "
         f"({found.method}) reaches {found.achieved:.6g} {unit} against a target of "
         f"{found.goal:g} {unit}; {less}",
-        f"({TARGETS[found.target]}; sigma {found.sigma_mm:g} mm; {len(found.evaluated)} plan "
-        f"sizes tried in {seconds:.2f} s)",
+        f"({REQUIREMENTS[found.requirement]}; sigma {found.sigma_mm:g} mm; "
+        f"{len(found.evaluated)} plan sizes tried in {seconds:.2f} s)",
         *model_lines(arm),
     ]
     return document, lines

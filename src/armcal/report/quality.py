@@ -3,12 +3,9 @@
 from __future__ import annotations
 
 from ..criteria import PlanQuality
-from ..doe.compliance import CompliantQuality
-from ..models import PlanarArm
 from .common import identified, model_lines, model_to_dict, std_cell
 
 __all__ = [
-    "compliant_quality",
     "format_quality",
     "quality_to_dict",
 ]
@@ -23,7 +20,8 @@ def _efficiency_label(quality: PlanQuality) -> str:
 
 def _table1_line(quality: PlanQuality) -> str:
     """The largest of the paper's Table I sums, or that a one-link arm has none."""
-    sums = [abs(v) for v in quality.optimality_sums.values()]
+    assert quality.paper is not None
+    sums = [abs(v) for v in quality.paper.optimality_sums.values()]
     if not sums:
         return "Table I sums: none (one link, no base offset: no optimality condition)"
     return (
@@ -32,45 +30,56 @@ def _table1_line(quality: PlanQuality) -> str:
     )
 
 
-def format_quality(arm: PlanarArm, quality: PlanQuality) -> str:
+def format_quality(quality: PlanQuality) -> str:
     """Human-readable report of :func:`evaluate_plan`: criteria, std table, accuracy."""
+    if quality.payload_counts is not None:
+        return _loaded_quality(quality)[1]
+    arm = quality.model.arm  # the geometric model, described in words
     eff = quality.efficiencies
     obs = quality.observability
-    det_c = f"{float(quality.dstar.det_c):.4f}".replace("-0.0000", "0.0000")
     lines = [
         f"{quality.n_poses} poses of {arm.name}, {identified(arm)}, sigma {quality.sigma_mm:g} mm",
         *model_lines(arm),
         f"{_efficiency_label(quality)}: D {eff['D']:.4f}  A {eff['A']:.4f}  E {eff['E']:.4f}",
         f"observability: O1 {obs['O1']:.4f}  O2 {obs['O2']:.4f}  O3 {obs['O3']:.4f}  "
         f"O4 {obs['O4']:.4f}",
-        f"paper D*: det C' {det_c}  |det S'| {float(quality.dstar.abs_det_s):.3g}",
-        _table1_line(quality),
     ]
+    if quality.paper is not None:
+        det_c = f"{quality.paper.det_c:.4f}".replace("-0.0000", "0.0000")
+        lines += [
+            f"paper D*: det C' {det_c}  |det S'| {quality.paper.abs_det_s:.3g}",
+            _table1_line(quality),
+        ]
     lines += ["", f"{'parameter':<10}{'predicted std':>14}  unit"]
     for name, unit, std in zip(
         arm.param_names, arm.param_units, quality.predicted_std, strict=True
     ):
         lines.append(f"{name:<10}{std_cell(arm, name, std, 14, 5)}  {unit}")
     pos = quality.position
-    lines += [
-        "",
-        f"predicted position error after calibration: RMS {pos.rms_mm:.4g} mm, "
-        f"max {pos.max_mm:.4g} mm over {pos.per_pose_mm.size} test poses",
-    ]
+    if pos is not None:
+        lines += [
+            "",
+            f"predicted position error after calibration: RMS {pos.rms_mm:.4g} mm, "
+            f"max {pos.max_mm:.4g} mm over {pos.per_pose_mm.size} test poses",
+        ]
     return "\n".join(lines)
 
 
-def quality_to_dict(arm: PlanarArm, quality: PlanQuality) -> dict:
+def quality_to_dict(quality: PlanQuality) -> dict:
     """JSON document of :func:`evaluate_plan` (keys of PRODUCT.md plus details).
 
     Only identifiable plans have a quality (:func:`~armcal.criteria.evaluate_plan`
     raises otherwise), so every value is finite.
     """
+    if quality.payload_counts is not None:
+        return _loaded_quality(quality)[0]
+    arm = quality.model.arm
     std = {
         name: 0.0 if name in arm.fixed else float(v)
         for name, v in zip(arm.param_names, quality.predicted_std, strict=True)
     }
     pos = quality.position
+    paper = quality.paper
     return {
         "poses": quality.n_poses,
         "sigma_mm": quality.sigma_mm,
@@ -79,48 +88,57 @@ def quality_to_dict(arm: PlanarArm, quality: PlanQuality) -> dict:
         "a_efficiency": quality.efficiencies["A"],
         "e_efficiency": quality.efficiencies["E"],
         "observability": quality.observability,
-        "det_c_prime": float(quality.dstar.det_c),
-        "abs_det_s_prime": float(quality.dstar.abs_det_s),
-        "optimality_sums": quality.optimality_sums,
+        **(
+            {}
+            if paper is None
+            else {
+                "det_c_prime": paper.det_c,
+                "abs_det_s_prime": paper.abs_det_s,
+                "optimality_sums": paper.optimality_sums,
+            }
+        ),
         "predicted_std": std,
-        "predicted_position_rms_mm": pos.rms_mm,
-        "predicted_position_max_mm": pos.max_mm,
+        "predicted_position_rms_mm": None if pos is None else pos.rms_mm,
+        "predicted_position_max_mm": None if pos is None else pos.max_mm,
         **model_to_dict(arm),
         "warnings": [w.to_dict() for w in quality.warnings],
     }
 
 
-def compliant_quality(quality: CompliantQuality) -> tuple[dict, str]:
-    """JSON keys and text of a plan's quality for geometry plus joint compliance.
+def _loaded_quality(quality: PlanQuality) -> tuple[dict, str]:
+    """JSON keys and text of the quality of a plan whose poses carry payloads (compliance).
 
     The predicted std of every parameter (display units), the D-efficiency of
-    the normalized information on unit-norm columns
-    (:func:`armcal.doe.compliance.d_efficiency_compliant`; compares plans of
-    this model) and how many poses carry each payload.
+    the normalized information on unit-norm columns (compares plans of this
+    model) and how many poses carry each payload.
     """
     model = quality.model
+    assert quality.payload_counts is not None
     payloads = {f"{v:g}": c for v, c in quality.payload_counts.items()}
     free = dict(zip(model.param_names, model.free, strict=True))
     std = quality.predicted_std
+    effect = model.effect
+    extra = [] if effect is None else list(model.param_names[model.arm.n_params :])
     document = {
         "poses": quality.n_poses,
         "sigma_mm": quality.sigma_mm,
         "identifiable": True,
-        "d_efficiency": quality.d_efficiency,
+        "d_efficiency": quality.efficiencies["D"],
         "predicted_std": {
             name: float(v) if free[name] else 0.0
             for name, v in zip(model.param_names, std, strict=True)
         },
         "units": dict(zip(model.param_names, model.param_units, strict=True)),
         "payload_counts": payloads,
-        "compliance": list(model.compliance_names),
+        "compliance": extra,
+        "warnings": [w.to_dict() for w in quality.warnings],
     }
+    what = "" if effect is None else f" with {effect.name} ({', '.join(extra)})"
     lines = [
-        f"{quality.n_poses} poses of {model.arm.name} with joint compliance "
-        f"({', '.join(model.compliance_names)}), sigma {quality.sigma_mm:g} mm",
+        f"{quality.n_poses} poses of {model.arm.name}{what}, sigma {quality.sigma_mm:g} mm",
         "payloads: " + ", ".join(f"{c} poses at {v} kg" for v, c in payloads.items()),
         f"D-efficiency (unit-norm columns, compares plans of this model): "
-        f"{quality.d_efficiency:.4f}",
+        f"{quality.efficiencies['D']:.4f}",
         "",
         f"{'parameter':<10}{'predicted std':>14}  unit",
     ]

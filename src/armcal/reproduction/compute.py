@@ -8,19 +8,18 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..criteria import (
-    CRITERIA,
+from ..criteria import CRITERIA, predicted_std
+from ..doe.plans import random_plan
+from ..errors import ArmcalError
+from ..models import PlanarArm, identifiability
+from ..models.information import display_std
+from ..models.planar_criteria import (
     information_matrix,
     inverse_information,
     optimality_sums,
-    predicted_std,
     scaled_information,
-    std_from_covariance,
 )
-from ..doe.plans import orthogonal_plan, random_plan
-from ..doe.study import PlanStudy, random_plan_study
-from ..errors import ArmcalError
-from ..models import PlanarArm, identifiability
+from ..models.planar_plans import orthogonal_plan
 from ..paper import (
     PAPER_100_POSE_ANGLES_DEG,
     PAPER_DIGIT,
@@ -37,6 +36,7 @@ from ..progress import ProgressCallback
 from ..simulate import monte_carlo
 from .catalogue import ROWS, Disagreement, EquationCheck, disagreement, fill
 from .equations import RANK_PLANS, SimulationEvidence, check_equations, max_random_rank
+from .study import PlanStudy, random_plan_study
 
 __all__ = [
     "TABLE_COLUMNS",
@@ -315,7 +315,7 @@ def _table3(
         inverse = inverse_information(arm, q)
         assert inverse is not None  # _identifying_plan checked the rank
         predicted = sigma**2 * inverse
-        analytic = std_from_covariance(arm, predicted)
+        analytic = display_std(arm, predicted)
         exact = ROWS["note_exact"] if 2 * m == arm.n_params else ""
         notes = [exact] * n + [
             fill(ROWS["note_dq1" if k == 0 else "note_dq"], {"k": k + 1}) for k in range(n)

@@ -17,8 +17,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..criteria import d_efficiency, dstar, information_matrix, inverse_information
-from ..doe.plans import orthogonal_plan, random_plan
+from ..criteria import d_efficiency
+from ..doe.plans import random_plan
 from ..errors import ArmcalError
 from ..models import (
     PlanarArm,
@@ -27,6 +27,8 @@ from ..models import (
     link_angles,
     paper_from_user_matrix,
 )
+from ..models.planar_criteria import dstar, information_matrix, inverse_information
+from ..models.planar_plans import orthogonal_plan
 from ..paper import PAPER_FIGURE1_POSES, PAPER_RANGE_POSES, PAPER_TABLE3, paper_arm
 from .algorithm import solve_gauss_newton
 from .catalogue import (

@@ -16,17 +16,10 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..criteria import PlanQuality, evaluate_plan
-from ..doe import PosesNeeded, design, feasible, poses_needed
-from ..doe.compliance import (
-    CompliantDesign,
-    CompliantQuality,
-    design_compliant,
-    evaluate_compliant,
-)
-from ..doe.designer import Design
+from ..doe import Design, PosesNeeded, design, design_with_loads, poses_needed
 from ..errors import ArmcalError, ArmcalWarning, NotIdentifiableError
 from ..files import RobotSpec
-from ..models import CompliantArm, Loads, PlanarArm
+from ..models import Loads, PlanarArm
 from ..progress import ProgressCallback
 from ..simulate import MonteCarlo, monte_carlo
 from ..synthesis import synthesize_measurements
@@ -120,11 +113,22 @@ def synthesize_plan(
 
 @dataclass(frozen=True, eq=False)
 class EvaluationRun:
-    """A plan's quality: the geometric model's, or with joint compliance the compliant one's."""
+    """A plan's quality for the model of a robot file, and the warnings it deserves."""
 
-    quality: PlanQuality | None
-    compliant: CompliantQuality | None
+    quality: PlanQuality
     warnings: tuple[ArmcalWarning, ...]
+
+
+def _outside_warning(spec: RobotSpec, q: np.ndarray, source: str) -> ArmcalWarning | None:
+    """``outside-region`` for the poses of ``q`` the instrument cannot see, or None."""
+    outside = np.flatnonzero(~spec.arm.feasible(q))
+    if not outside.size:
+        return None
+    poses = ", ".join(map(str, outside + 1))
+    return ArmcalWarning(
+        "outside-region",
+        f"{source}: the tip of pose(s) {poses} is outside the measurement region",
+    )
 
 
 def evaluate_file(
@@ -138,55 +142,40 @@ def evaluate_file(
 ) -> EvaluationRun:
     """The quality of plan ``q`` for the model of ``spec`` (``arm`` with --fix and --sigma).
 
-    Raises NotIdentifiableError, naming ``source``, for a plan that cannot identify
-    every parameter (it has no finite quality).
+    ``payload`` ``(m,)`` (kg) loads a model whose points depend on the load
+    (default: the robot file's payload).  Raises NotIdentifiableError, naming
+    ``source``, for a plan that cannot identify every parameter (it has no
+    finite quality).
     """
-    sigma = design_sigma(arm)
     loads = _loads(spec, q.shape[0], payload)
     model = fit_model(spec, arm, loads)
     try:
-        if isinstance(model, CompliantArm):  # the robot file's [elastostatic]
-            assert loads is not None
-            compliant = evaluate_compliant(model, q, loads, sigma)
-            return EvaluationRun(None, compliant, tuple(spec.warnings))
-        quality = evaluate_plan(arm, q, sigma=sigma, test_q=test_q)
+        quality = evaluate_plan(model, q, sigma=design_sigma(arm), test_q=test_q, loads=loads)
     except NotIdentifiableError as exc:  # PRODUCT.md: an error, exit 2, one line
         raise _prefixed(source, exc) from None
-    warnings = [*spec.warnings, *quality.warnings]
-    outside = np.flatnonzero(~feasible(spec.arm, q))
-    if outside.size:
-        poses = ", ".join(map(str, outside + 1))
-        warnings.append(
-            ArmcalWarning(
-                "outside-region",
-                f"{source}: the tip of pose(s) {poses} is outside the measurement region",
-            )
-        )
-    return EvaluationRun(quality, None, tuple(warnings))
+    outside = _outside_warning(spec, q, source)
+    extra = () if outside is None else (outside,)
+    return EvaluationRun(quality, (*spec.warnings, *quality.warnings, *extra))
 
 
 @dataclass(frozen=True, eq=False)
 class DesignRun:
     """A designed plan, its quality, the wall time and the warnings."""
 
-    design: Design | None
-    compliant: CompliantDesign | None
-    quality: PlanQuality | None
-    compliant_quality: CompliantQuality | None
+    design: Design
+    quality: PlanQuality
     seconds: float
     warnings: tuple[ArmcalWarning, ...]
 
     @property
     def q(self) -> np.ndarray:
         """The plan (rad), in the order to measure it."""
-        made = self.design if self.design is not None else self.compliant
-        assert made is not None
-        return made.q
+        return self.design.q
 
     @property
     def payload_kg(self) -> np.ndarray | None:
-        """The payload of every pose, for a design with joint compliance."""
-        return None if self.compliant is None else self.compliant.payload_kg
+        """The payload of every pose, for a design that chose them."""
+        return self.design.payload_kg
 
 
 def design_plan(
@@ -206,18 +195,22 @@ def design_plan(
 ) -> DesignRun:
     """An optimal plan for the model of ``spec`` (``arm`` with --fix and --sigma).
 
-    With ``[elastostatic]`` the poses and their payloads are designed together
-    for geometry plus joint compliance (D-optimal by exchange and polish).
+    Where the model's points depend on the load (``[elastostatic]``) the poses
+    and their payloads are designed together (D-optimal by exchange and polish,
+    :func:`armcal.doe.design_with_loads`).
 
     Raises
     ------
     ArmcalError
-        For options the model cannot use: payloads without compliance, a
-        criterion or method other than D by exchange with it, candidates
-        outside the measurement region.
+        For options the model cannot use: payloads where the load moves
+        nothing, a criterion or method other than D by exchange with loads,
+        candidates outside the measurement region.
     """
     rng = np.random.default_rng(seed)
-    if spec.elastic is not None:
+    model = fit_model(spec, arm)
+    sigma = design_sigma(arm)
+    start = time.perf_counter()
+    if model.design_loads(payloads) is not None:
         if criterion != "D" or method not in ("auto", "exchange"):
             raise ArmcalError(
                 "a robot with [elastostatic] is designed D-optimal by exchange and polish; "
@@ -227,45 +220,35 @@ def design_plan(
             raise ArmcalError(
                 "--candidates and --distinct are not supported with [elastostatic] yet"
             )
-        start = time.perf_counter()
-        made = design_compliant(
-            arm,
-            spec.elastic,
+        made = design_with_loads(model, poses, payloads=payloads, rng=rng, order=order)
+        assert made.payload_kg is not None
+        loads: Loads | None = Loads.create(poses, made.payload_kg)
+    else:
+        if payloads is not None:
+            raise ArmcalError(
+                f"--payloads: robot {spec.arm.name} has no [elastostatic] table, so a payload "
+                "changes nothing; add the table to the robot file"
+            )
+        if candidates is not None and not np.all(spec.arm.feasible(candidates)):
+            row = int(np.flatnonzero(~spec.arm.feasible(candidates))[0]) + 1
+            raise ArmcalError(
+                f"{candidates_source}: row {row}: the tip is outside the measurement region; "
+                "remove the pose or widen the region"
+            )
+        made = design(
+            model,
             poses,
-            payloads=payloads,
-            sigma=design_sigma(arm),
+            criterion=criterion,
+            method=method,  # type: ignore[arg-type]  # checked by design
             rng=rng,
-            order=order,
+            candidates=candidates,
+            order=order,  # type: ignore[arg-type]  # checked by design
+            distinct=distinct,
         )
-        seconds = time.perf_counter() - start
-        checked = evaluate_compliant(made.model, made.q, made.loads, made.sigma_mm)
-        return DesignRun(None, made, None, checked, seconds, tuple(spec.warnings))
-    if payloads is not None:
-        raise ArmcalError(
-            f"--payloads: robot {spec.arm.name} has no [elastostatic] table, so a payload "
-            "changes nothing; add the table to the robot file"
-        )
-    if candidates is not None and not np.all(feasible(spec.arm, candidates)):
-        row = int(np.flatnonzero(~feasible(spec.arm, candidates))[0]) + 1
-        raise ArmcalError(
-            f"{candidates_source}: row {row}: the tip is outside the measurement region; "
-            "remove the pose or widen the region"
-        )
-    start = time.perf_counter()
-    result = design(
-        arm,
-        poses,
-        criterion=criterion,
-        method=method,  # type: ignore[arg-type]  # checked by design
-        rng=rng,
-        candidates=candidates,
-        order=order,  # type: ignore[arg-type]  # checked by design
-        distinct=distinct,
-    )
+        loads = None
     seconds = time.perf_counter() - start
-    quality = evaluate_plan(arm, result.q, sigma=design_sigma(arm), test_q=test_q)
-    warnings = (*spec.warnings, *quality.warnings)
-    return DesignRun(result, None, quality, None, seconds, warnings)
+    quality = evaluate_plan(made.model, made.q, sigma=sigma, test_q=test_q, loads=loads)
+    return DesignRun(made, quality, seconds, (*spec.warnings, *quality.warnings))
 
 
 def simulate_plan(

@@ -1,9 +1,11 @@
-"""The model a plan is designed for: its per-pose information and that information's gradient.
+"""The planar arm's design view: a plan's information, its gradient, the poses it may hold.
 
-Every design function (optimizer, exchange, certificate) sees a plan through
-the columns of :func:`armcal.observability.model_columns`: the paper's scaled
-columns ``c`` (:func:`~armcal.observability.scaled_columns`) in the free
-coordinates ``C`` of :func:`~armcal.observability.model_basis` and whitened
+:class:`PlanarPlanInformation` is the planar family's
+:class:`~armcal.models.interface.PlanInformation`: every design function
+(optimizer, exchange, certificate, criteria) sees a plan of a planar arm through
+the columns of :func:`~armcal.models.planar_information.model_columns`: the paper's scaled
+columns ``c`` (:func:`~armcal.models.planar_information.scaled_columns`) in the free
+coordinates ``C`` of :func:`~armcal.models.planar_information.model_basis` and whitened
 per pose.  Pose ``i`` contributes ``I_i = A_i^T P_i A_i`` to the information,
 ``A_i`` the real ``2 x p_f`` form of ``u_i = c_i C`` and
 ``P_i = W_i^T W_i = sigma_ref^2 Sigma_i^-1`` its relative precision
@@ -49,37 +51,42 @@ certificate (:func:`armcal.doe.certify`) says how far a plan is from their optim
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
 
-from ..criteria import d_efficiency
 from ..errors import ArmcalError
-from ..models import PlanarArm, model_basis, model_columns, scaled_columns, unit_trace
 from ..noise import complex_whitening
+from ..numerics import ScaledSVD
+from .identifiability import Identifiability
+from .planar_arm import PlanarArmSpec
+from .planar_criteria import model_singular_values, weighted_information
+from .planar_information import (
+    check_identifiable,
+    covariance_factor,
+    identifiability,
+    model_basis,
+    model_columns,
+    plan_rows,
+    plan_svd,
+    scaled_columns,
+)
+from .planar_kinematics import forward_kinematics, link_jacobian
 
 __all__ = [
+    "PlanarPlanInformation",
     "PoseModel",
-    "attains_unit_bound",
+    "feasible",
     "information_gradient",
     "model_description",
     "pose_model",
+    "q_from_theta_gradient",
+    "region_constraints",
     "rotation_invariant",
 ]
 
 
-def attains_unit_bound(arm: PlanarArm, q: np.ndarray) -> bool:
-    """Whether plan ``q`` ``(m, n)`` is provably D-optimal: :func:`unit_trace` and ``M = I``.
-
-    ``M = I`` is judged on the D-efficiency, to the round-off of its ``m``-term
-    sums (``m eps``).
-    """
-    if not unit_trace(arm):
-        return False
-    tol = 1e-12 + np.shape(q)[-2] * np.finfo(float).eps
-    return float(d_efficiency(arm, q)) >= 1.0 - tol
-
-
-def rotation_invariant(arm: PlanarArm) -> bool:
+def rotation_invariant(arm: PlanarArmSpec) -> bool:
     """Whether turning joint 1 leaves every pose's information unchanged.
 
     Without a base offset the columns turn together with joint 1 and only
@@ -96,12 +103,12 @@ def _names(names: tuple[str, ...]) -> str:
     return ", ".join(names)
 
 
-def model_description(arm: PlanarArm) -> str:
+def model_description(arm: PlanarArmSpec) -> str:
     """What makes the model differ from the paper's, in words for design notes.
 
     Examples
     --------
-    >>> arm = PlanarArm([260.0, 180.0], fixed=("dl1", "dl2"))
+    >>> arm = PlanarArmSpec([260.0, 180.0], fixed=("dl1", "dl2"))
     >>> model_description(arm)
     'joint offsets only (dl1, dl2 fixed)'
     """
@@ -137,12 +144,12 @@ class PoseModel:
     Attributes
     ----------
     columns : ndarray, shape (..., m, p_f)
-        :func:`~armcal.observability.model_columns`: ``sum_i Re(c_i^H c_i)`` is
+        :func:`~armcal.models.planar_information.model_columns`: ``sum_i Re(c_i^H c_i)`` is
         the information.
     full : ndarray, shape (..., m, p)
         The paper's scaled columns (before the basis and the whitening).
     basis : ndarray, shape (p, p_f), or None
-        ``C`` of :func:`~armcal.observability.model_basis`; None when every
+        ``C`` of :func:`~armcal.models.planar_information.model_basis`; None when every
         parameter is free.
     precision : ndarray, shape (..., m, 2, 2), or None
         ``P_i = W_i^T W_i`` (dimensionless); None for isotropic iid noise.
@@ -151,8 +158,8 @@ class PoseModel:
     targets : int
         Rows per pose: every target of the arm is measured at every pose, so
         the row axis of the arrays above has ``m T`` rows, pose-major
-        (:func:`armcal.observability.every_target`), the targets' columns
-        weighted by :func:`armcal.observability.target_weights`.
+        (:func:`~armcal.models.planar_information.every_target`), the targets'
+        columns weighted by :func:`~armcal.models.planar_information.target_weights`.
     """
 
     columns: np.ndarray
@@ -163,7 +170,7 @@ class PoseModel:
     targets: int = 1
 
 
-def pose_model(arm: PlanarArm, q: np.ndarray) -> PoseModel:
+def pose_model(arm: PlanarArmSpec, q: np.ndarray) -> PoseModel:
     """:class:`PoseModel` of poses ``q`` ``(..., m, n)`` (rad) at the nominal parameters."""
     q = np.asarray(q, dtype=float)
     _check_designable(arm)
@@ -191,7 +198,7 @@ def pose_model(arm: PlanarArm, q: np.ndarray) -> PoseModel:
     return PoseModel(columns, full, basis, precision, joint_jacobian)
 
 
-def _check_designable(arm: PlanarArm) -> None:
+def _check_designable(arm: PlanarArmSpec) -> None:
     """Several targets are designed for with isotropic iid instrument noise."""
     noise = arm.noise
     if arm.n_target_links > 1 and not (noise is None or noise.isotropic_iid):
@@ -207,7 +214,7 @@ def _real_pair(z: np.ndarray) -> np.ndarray:
     return np.stack([z.real, z.imag], axis=-2)
 
 
-def q_from_theta_gradient(arm: PlanarArm, grad_theta: np.ndarray) -> np.ndarray:
+def q_from_theta_gradient(arm: PlanarArmSpec, grad_theta: np.ndarray) -> np.ndarray:
     """``d/dq = M^T d/dtheta`` ``(..., n)`` for ``theta = M q`` (the arm's joint map).
 
     For the default map ``theta_j = q_1 + ... + q_j``: d/dq_a = sum over j >= a
@@ -218,7 +225,7 @@ def q_from_theta_gradient(arm: PlanarArm, grad_theta: np.ndarray) -> np.ndarray:
     return grad_theta @ arm.joint_map
 
 
-def information_gradient(arm: PlanarArm, model: PoseModel, phi: np.ndarray) -> np.ndarray:
+def information_gradient(arm: PlanarArmSpec, model: PoseModel, phi: np.ndarray) -> np.ndarray:
     """``d/dq_i <Phi, I_i>`` ``(..., m, n)`` for every pose of ``model`` (see the module notes).
 
     ``phi`` ``(p_f, p_f)`` or one per plan ``(..., p_f, p_f)``, real symmetric
@@ -253,7 +260,7 @@ def information_gradient(arm: PlanarArm, model: PoseModel, phi: np.ndarray) -> n
 
 
 def _encoder_gradient(
-    arm: PlanarArm, model: PoseModel, u: np.ndarray, v: np.ndarray
+    arm: PlanarArmSpec, model: PoseModel, u: np.ndarray, v: np.ndarray
 ) -> np.ndarray:
     """The part of the theta gradient through ``P_i(q)``: encoder noise (module notes)."""
     assert arm.noise is not None and arm.noise.joint_sigma is not None
@@ -271,3 +278,103 @@ def _encoder_gradient(
     # d J_q[:, j] / d theta_k = -l_k e^(i theta_k) (k >= j); the dl columns are e^(i theta_k).
     turn = -arm.link_lengths * model.full[..., n : 2 * n]
     return r[..., 0, :] * turn.real + r[..., 1, :] * turn.imag
+
+
+def feasible(arm: PlanarArmSpec, q: np.ndarray, *, tol: float = 1e-9) -> np.ndarray:
+    """Mask ``(..., m)`` of poses inside the joint limits and (if any) the measurement region.
+
+    With several targets every target's point must lie in the region.
+    """
+    ok = np.all(arm.within_limits(q, tol=tol), axis=-1)
+    if arm.region is not None:
+        rows, target, _ = plan_rows(arm, q, None)  # every target of every pose
+        inside = arm.region.contains(forward_kinematics(arm, rows, target=target), tol=tol)
+        ok &= np.all(inside.reshape(*np.shape(q)[:-1], arm.n_target_links), axis=-1)
+    return ok
+
+
+def region_constraints(arm: PlanarArmSpec, q: np.ndarray) -> tuple[np.ndarray, np.ndarray] | None:
+    """Region constraint values ``g (..., m, k)`` (>= 0 inside) and ``dg/dq (..., m, k, n)``.
+
+    None without a measurement region.  Every target's point gives its own
+    constraints (``k`` is the region's count times the targets): the point from
+    the forward kinematics, its derivative through the link angles
+    (:func:`~armcal.models.planar_kinematics.link_jacobian`), then the joint map.
+    """
+    if arm.region is None:
+        return None
+    q = np.asarray(q, dtype=float)
+    rows, target, _ = plan_rows(arm, q, None)  # every target of every pose
+    g, dg = arm.region.constraints(forward_kinematics(arm, rows, target=target))
+    d_tip = link_jacobian(arm, rows, target=target)  # (..., m T, K) complex
+    grad_link = dg[..., :1] * d_tip.real[..., None, :] + dg[..., 1:] * d_tip.imag[..., None, :]
+    if arm.n_target_links == 1:  # a link per joint
+        grad = q_from_theta_gradient(arm, grad_link)
+    else:  # every target's last link turns with joint n
+        grad = grad_link @ arm.joint_map[arm.link_joint]
+    shape = (*q.shape[:-1], arm.n_target_links * g.shape[-1])
+    return g.reshape(shape), grad.reshape(*shape, arm.n_joints)
+
+
+class PlanarPlanInformation:
+    """What plans ``q`` ``(..., m, n)`` of a planar arm tell about its free parameters.
+
+    The planar family's :class:`~armcal.models.interface.PlanInformation`, on the
+    complex columns of :func:`~armcal.models.planar_information.model_columns`:
+    the Hadamard-normalized information of the paper for its model, the weighted
+    information over the free parameters otherwise (module notes).  Every target
+    of every pose is measured.
+    """
+
+    def __init__(self, arm: PlanarArmSpec, q: np.ndarray) -> None:
+        self.arm = arm
+        self.q = np.asarray(q, dtype=float)
+
+    @property
+    def rows_per_pose(self) -> int:
+        return self.arm.n_target_links
+
+    @cached_property
+    def _model(self) -> PoseModel:
+        return pose_model(self.arm, self.q)
+
+    @cached_property
+    def _svd(self) -> ScaledSVD:
+        return plan_svd(self.arm, self.q)
+
+    def information(self) -> np.ndarray:
+        columns = self._model.columns
+        rows = columns.shape[-2]  # every target of every pose
+        return weighted_information(columns, np.full(columns.shape[:-1], 1.0 / rows))
+
+    def gradient(self, phi: np.ndarray) -> np.ndarray:
+        return information_gradient(self.arm, self._model, phi)
+
+    def pose_variance(self, m_inv: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        # Every pose as a plan of its own (its targets' rows); a pose's information is
+        # the mean over its rows, as the plan's is over all its rows.
+        model = pose_model(self.arm, self.q[:, None, :])  # q: (k, n) poses
+        columns = model.columns
+        value = np.einsum("kma,ab,kmb->k", columns.conj(), m_inv, columns).real
+        grad = information_gradient(self.arm, model, m_inv)[:, 0, :]
+        return value / model.targets, grad / model.targets
+
+    def blocks(self) -> np.ndarray:
+        columns = model_columns(self.arm, self.q)  # every target of every pose: T rows per pose
+        blocks = np.stack([columns.real, columns.imag], axis=-2)
+        return blocks.reshape(*self.q.shape[:-1], -1, columns.shape[-1])
+
+    def svd(self) -> ScaledSVD:
+        return self._svd
+
+    def singular_values(self) -> np.ndarray:
+        return model_singular_values(self.arm, self.q, self._svd)
+
+    def identifiability(self) -> Identifiability:
+        return identifiability(self.arm, self.q, svd=self._svd)
+
+    def check_identifiable(self) -> Identifiability:
+        return check_identifiable(self.arm, self.q, svd=self._svd)
+
+    def covariance_factor(self, params: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+        return covariance_factor(self.arm, self.q, params, self._svd)

@@ -11,18 +11,18 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..criteria import (
-    CRITERIA,
+from ..criteria import CRITERIA
+from ..doe.plans import random_plan
+from ..models import PlanarArm, plan_svd
+from ..models.information import display_std
+from ..models.planar_criteria import (
     dstar,
     inverse_information_batch,
     model_singular_values,
     position_rms,
-    std_from_covariance,
 )
-from ..models import PlanarArm, plan_svd
 from ..progress import ProgressCallback
 from ..synthesis import simulated_noise
-from .plans import random_plan
 
 __all__ = [
     "CHUNK_BYTES",
@@ -154,7 +154,7 @@ def random_plan_study(
         parts["c"].append(star.det_c)
         parts["s"].append(star.abs_det_s)
         inverse, _ = inverse_information_batch(model, q, svd=svd)
-        parts["std"].append(std_from_covariance(model, reference**2 * inverse))
+        parts["std"].append(display_std(model, reference**2 * inverse))
         parts["pos"].append(position_rms(model, inverse, test_q, reference))
         done += size
         if progress is not None:

@@ -1,0 +1,329 @@
+"""D-optimal designs whose poses also choose their payload: geometry plus joint compliance.
+
+A design point is a pose *and* the payload carried there, chosen among given
+values (e.g. 0 and the rated payload): which poses to load, and how many.  The
+model says which loads matter and which parameters a plan of them identifies
+(:meth:`~armcal.models.interface.FitModel.design_loads`).  The information of a
+point is ``F^T F`` for the block ``F`` of the whitened free columns
+(:meth:`~armcal.models.interface.FitModel.plan_information`) at the nominal
+model, its columns scaled by their RMS over the candidates (D-efficiency ratios
+do not depend on that scale).
+
+How a plan is made (:func:`design_with_loads`):
+
+1. Random feasible poses (joint limits and the instrument's view) times every
+   payload make the candidates; the multiplicative algorithm gives the
+   D-optimal weights on them.
+2. Greedy selection from the weights' support and the modified Fedorov exchange
+   (:func:`armcal.doe.exchange.exchange_indices`) pick ``m`` points.
+3. A continuous polish moves every pose uphill in ``log det M`` (the gradient
+   of ``log det`` in pose ``i`` is that of ``d_i(x) = tr(M^-1 F_x^T F_x)`` with
+   ``M`` held), within the limits and the view; the payloads stay.
+
+The certificate is the Kiefer-Wolfowitz bound of :mod:`armcal.doe.certificate`
+for this model: for a near-optimal weighted design ``xi*`` (multiplicative
+algorithm on the candidates and the maximizers of its variance function found
+by ascent), the plan's D-efficiency relative to every design over the feasible
+poses and the given payloads is at least
+``(det M_plan / det M(xi*))^(1/p) exp(1 - max_x d(x, xi*) / p)``.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+import numpy as np
+
+from ..criteria import d_efficiency
+from ..errors import ArmcalError
+from ..models import FitModel, Loads
+from .certificate import Certificate, multiplicative_weights
+from .designer import Design
+from .exchange import exchange_indices
+from .order import ORDERS, joint_travel, order_poses
+from .plans import feasible_poses
+
+__all__ = [
+    "design_with_loads",
+]
+
+
+class _Points:
+    """Blocks ``(k, r, p_f)`` of (pose, payload) points in the design's column scale."""
+
+    def __init__(self, model: FitModel, scale: np.ndarray) -> None:
+        self.model, self.scale = model, scale
+
+    def blocks(self, q: np.ndarray, payload: np.ndarray) -> np.ndarray:
+        loads = Loads.create(q.shape[0], payload)
+        return self.model.plan_information(q, loads).blocks() / self.scale
+
+    def variance(self, q: np.ndarray, payload: np.ndarray, m_inv: np.ndarray) -> np.ndarray:
+        """``d(x) = tr(M^-1 F_x^T F_x)`` ``(k,)``."""
+        f = self.blocks(q, payload)
+        return np.einsum("kap,pq,kaq->k", f, m_inv, f)
+
+    def gradient(
+        self, q: np.ndarray, payload: np.ndarray, m_inv: np.ndarray, h: float = 1e-6
+    ) -> np.ndarray:
+        """Central-difference gradient ``(k, n)`` of ``d`` in every joint (rad)."""
+        n = q.shape[1]
+        grad = np.empty(q.shape)
+        for j in range(n):
+            step = np.zeros(n)
+            step[j] = h
+            grad[:, j] = (
+                self.variance(q + step, payload, m_inv) - self.variance(q - step, payload, m_inv)
+            ) / (2 * h)
+        return grad
+
+
+def _ascend(
+    points: _Points,
+    model: FitModel,
+    q: np.ndarray,
+    payload: np.ndarray,
+    m_inv: np.ndarray,
+    *,
+    steps: int = 60,
+    step0: float = 0.2,
+) -> np.ndarray:
+    """Hill-climb ``d(x)`` from every start within the limits and the region (k, n)."""
+    q = q.copy()
+    lo, hi = model.joint_limits[:, 0], model.joint_limits[:, 1]
+    value = points.variance(q, payload, m_inv)
+    size = np.full(q.shape[0], step0)
+    for _ in range(steps):
+        grad = points.gradient(q, payload, m_inv)
+        norm = np.linalg.norm(grad, axis=1, keepdims=True)
+        trial = np.clip(q + size[:, None] * grad / np.where(norm > 0, norm, 1.0), lo, hi)
+        new = points.variance(trial, payload, m_inv)
+        ok = (new > value) & model.feasible(trial[:, None, :])[:, 0]
+        q[ok], value[ok] = trial[ok], new[ok]
+        size = np.where(ok, size * 1.5, size * 0.5)
+        if np.all(size < 1e-6):
+            break
+    return q
+
+
+def _information(blocks: np.ndarray, weights: np.ndarray) -> np.ndarray:
+    return np.einsum("x,xap,xaq->pq", weights, blocks, blocks)
+
+
+def _logdet(matrix: np.ndarray) -> float:
+    sign, value = np.linalg.slogdet(matrix)
+    return float(value) if sign > 0 else -np.inf
+
+
+def _polish(
+    points: _Points, model: FitModel, q: np.ndarray, payload: np.ndarray, *, rounds: int = 40
+) -> np.ndarray:
+    """Move every pose uphill in ``log det M`` of the plan (payloads fixed)."""
+    m = q.shape[0]
+    lo, hi = model.joint_limits[:, 0], model.joint_limits[:, 1]
+    info = _information(points.blocks(q, payload), np.full(m, 1.0 / m))
+    best = _logdet(info)
+    size = 0.05
+    for _ in range(rounds):
+        m_inv = np.linalg.inv(info)
+        grad = points.gradient(q, payload, m_inv)
+        norm = np.linalg.norm(grad, axis=1, keepdims=True)
+        trial = np.clip(q + size * grad / np.where(norm > 0, norm, 1.0), lo, hi)
+        inside = model.feasible(trial[:, None, :])[:, 0]
+        trial[~inside] = q[~inside]
+        new_info = _information(points.blocks(trial, payload), np.full(m, 1.0 / m))
+        value = _logdet(new_info)
+        if value > best + 1e-12:
+            q, info, best = trial, new_info, value
+            size *= 1.5
+        else:
+            size *= 0.5
+            if size < 1e-7:
+                break
+    return q
+
+
+def _reference_design(
+    points: _Points,
+    model: FitModel,
+    pool_q: np.ndarray,
+    pool_w: np.ndarray,
+    rounds: int,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """A near-D-optimal weighted design: its points, payloads, weights and ``M^-1``."""
+    p = points.model.n_free
+    q, w = pool_q, pool_w
+    weights = np.full(q.shape[0], 1.0 / q.shape[0])
+    for _ in range(rounds):
+        weights = multiplicative_weights(points.blocks(q, w), weights, 300)
+        m_inv = np.linalg.inv(_information(points.blocks(q, w), weights))
+        d = points.variance(q, w, m_inv)
+        starts = np.argsort(-d)[: 4 * p]
+        found = _ascend(points, model, q[starts], w[starts], m_inv)
+        keep = weights > 1e-6 / q.shape[0]
+        mean = weights[keep].sum() / np.count_nonzero(keep)
+        q = np.concatenate([q[keep], found])
+        w = np.concatenate([w[keep], w[starts]])
+        weights = np.concatenate([weights[keep], np.full(found.shape[0], mean)])
+        weights /= weights.sum()
+    weights = multiplicative_weights(points.blocks(q, w), weights, 1000)
+    keep = weights > 1e-6
+    q, w, weights = q[keep], w[keep], weights[keep] / weights[keep].sum()
+    m_inv = np.linalg.inv(_information(points.blocks(q, w), weights))
+    return q, w, weights, m_inv
+
+
+def _max_variance(
+    points: _Points,
+    model: FitModel,
+    m_inv: np.ndarray,
+    seeds_q: np.ndarray,
+    seeds_w: np.ndarray,
+    values: np.ndarray,
+    rng: np.random.Generator,
+    search: int,
+) -> float:
+    """A thorough ``max_x d(x)`` over feasible poses and every payload: search, then ascent."""
+    sample = feasible_poses(model, search, rng=rng)
+    q = np.concatenate([seeds_q, np.repeat(sample, values.size, axis=0)])
+    w = np.concatenate([seeds_w, np.tile(values, sample.shape[0])])
+    d = points.variance(q, w, m_inv)
+    starts = np.argsort(-d)[:64]
+    found = _ascend(points, model, q[starts], w[starts], m_inv, steps=100)
+    return float(max(d.max(), points.variance(found, w[starts], m_inv).max()))
+
+
+def design_with_loads(
+    model: FitModel,
+    m: int,
+    *,
+    payloads: Sequence[float] | None = None,
+    rng: np.random.Generator | int | None = None,
+    candidates: int = 3000,
+    rounds: int = 3,
+    search: int = 20000,
+    order: str = "travel",
+) -> Design:
+    """A D-optimal plan of ``m`` poses and their payloads for a model whose points depend on
+    the load (joint compliance).
+
+    Parameters
+    ----------
+    model : FitModel
+        With its limits, view, noise model and fixed parameters; its
+        :meth:`~armcal.models.interface.FitModel.design_loads` says which
+        parameters a plan of these payloads identifies.
+    m : int
+        Number of poses.
+    payloads : sequence of float, optional
+        Payloads (kg) a pose may carry; default 0 and the robot file's payload.
+    rng : numpy.random.Generator or int or None
+    candidates, rounds, search
+        Random feasible poses of the candidate pool; rounds of adding the
+        variance function's maximizers to the reference design; random poses
+        the final search of ``max d`` starts from.
+    order : {"travel", "none"}
+        Order the poses for short joint travel (:func:`armcal.doe.order.order_poses`).
+
+    Returns
+    -------
+    Design
+        With ``payload_kg`` (every pose's) and ``payloads`` (the choices), the
+        model the plan identifies (:attr:`Design.model`) and the certificate.
+
+    Raises
+    ------
+    ArmcalError
+        If the model's points do not depend on the load, or it has several
+        targets.
+    NotIdentifiableError
+        If no plan of these poses and payloads can identify every parameter
+        (e.g. ``k`` and ``c`` with a single payload in the lumped mode).
+    """
+    if order not in ORDERS:
+        raise ArmcalError(f"unknown order {order!r}; choose one of {', '.join(ORDERS)}")
+    targets = len(model.target_labels)
+    if targets > 1:
+        raise ArmcalError(
+            f"{model.name} has {targets} targets: plans for joint compliance are "
+            "designed for one target per pose (exchange weighs a pose by one point); design "
+            "for the target the tool carries, then measure every target at its poses"
+        )
+    chosen = model.design_loads(payloads)
+    if chosen is None:
+        raise ArmcalError(f"the points of {model.name} do not depend on the load: use design()")
+    rng = np.random.default_rng(rng)
+    design_model, values = chosen
+    p = design_model.n_free
+    if 2 * m < p:
+        raise ArmcalError(
+            f"{m} poses give {2 * m} equations for {p} parameters "
+            f"({', '.join(design_model.param_names)}); design at least {-(-p // 2)} poses"
+        )
+    pool = feasible_poses(model, candidates, rng=rng)
+    pool_q = np.repeat(pool, values.size, axis=0)
+    pool_w = np.tile(values, pool.shape[0])
+    pool_information = design_model.plan_information(pool_q, Loads.create(pool_w.size, pool_w))
+    pool_information.check_identifiable()
+    raw = pool_information.blocks()
+    scale = np.sqrt(np.mean(raw**2, axis=(0, 1)))
+    scale = np.where(scale > 0, scale, 1.0)
+    points = _Points(design_model, scale)
+    # The reference design first: its support seeds the exact plan.
+    ref_q, ref_w, ref_weights, ref_inv = _reference_design(points, model, pool_q, pool_w, rounds)
+    cand_q = np.concatenate([ref_q, pool_q])
+    cand_w = np.concatenate([ref_w, pool_w])
+    blocks = points.blocks(cand_q, cand_w)
+    counts = np.floor(ref_weights * m).astype(int)
+    start = np.repeat(np.arange(ref_q.shape[0]), counts)[:m]
+    index = exchange_indices(blocks, start, m)
+    q, w = cand_q[index], cand_w[index]
+    q = _polish(points, model, q, w)
+    plan_blocks = points.blocks(q, w)
+    plan_info = _information(plan_blocks, np.full(m, 1.0 / m))
+    # The certificate, against the reference design refined once more with the plan.
+    ref_q, ref_w, ref_weights, ref_inv = _reference_design(
+        points,
+        model,
+        np.concatenate([ref_q, q]),
+        np.concatenate([ref_w, w]),
+        1,
+    )
+    star_info = _information(points.blocks(ref_q, ref_w), ref_weights)
+    max_star = _max_variance(points, model, ref_inv, ref_q, ref_w, values, rng, search)
+    max_plan = _max_variance(
+        points, model, np.linalg.inv(plan_info), q, w, values, rng, search // 4
+    )
+    kw = np.exp((_logdet(plan_info) - _logdet(star_info)) / p + 1.0 - max_star / p)
+    plan_only = float(np.exp(1.0 - max_plan / p))
+    certified = float(min(1.0, max(kw, plan_only)))
+    travel_found = joint_travel(q)
+    if order == "travel":
+        perm = order_poses(q)
+        q, w = q[perm], w[perm]
+    loads = Loads.create(m, w)
+    design_model.plan_information(q, loads).check_identifiable()
+    certificate = Certificate(
+        certified_d_efficiency=certified,
+        plan_only_bound=plan_only,
+        reference_d_efficiency=float(np.exp(_logdet(star_info) / p)),
+        max_variance=float(max_star),
+        support=ref_q,
+        weights=ref_weights,
+    )
+    return Design(
+        model=design_model,
+        q=q,
+        criterion="D",
+        method="exchange+polish",
+        d_efficiency=float(d_efficiency(design_model, q, loads)),
+        certificate=certificate,
+        notes=(),
+        order=order,
+        joint_travel=joint_travel(q),
+        joint_travel_unordered=travel_found,
+        distinct=False,
+        normalized=design_model.information_bound,
+        payload_kg=w,
+        payloads=tuple(float(v) for v in values),
+    )
