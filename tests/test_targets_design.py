@@ -5,7 +5,7 @@ import pytest
 from numpy.testing import assert_allclose
 
 from armcal import PlanarArm, Target, design, evaluate_plan, orthogonal_plan, random_plan
-from armcal.models import every_target, forward_kinematics
+from armcal.models import Annulus, every_target, forward_kinematics, plan_rows
 from armcal.models.planar_closed_form import solve_closed_form
 from armcal.models.planar_design import information_gradient, pose_model
 
@@ -94,3 +94,31 @@ def test_poses_needed_counts_every_target_parameter(target: str, prefix: str) ->
     assert std[picked].max() <= goal * (1 + 1e-9)
     smaller = design(arm, found.poses - 1, rng=0).q
     assert predicted_std(arm, smaller, sigma)[picked].max() > goal
+
+
+@pytest.mark.parametrize(
+    "targets", [(), (Target("A", 150.0, 0.6),), NEST], ids=["tip", "one target", "nest"]
+)
+def test_region_constraints_hold_every_target_and_their_gradient_is_exact(targets, rng):
+    """The view's constraints are the region's at every target's point (forward
+    kinematics), and their joint gradient matches central differences.
+
+    With one target at 0.6 rad and 150 mm the target is not the end of link 3
+    (the constraint there differs by up to the 150 mm lever), which the region
+    must see.
+    """
+    region = Annulus((100.0, 50.0), 150.0, 500.0)
+    arm = PlanarArm([260.0, 180.0, 100.0], targets=targets, region=region)
+    q = random_plan(arm, 5, rng=rng)
+    g, dg = arm.view_constraints(q)
+    rows, target, _ = plan_rows(arm, q, None)
+    expected, _ = region.constraints(forward_kinematics(arm, rows, target=target))
+    assert_allclose(g, expected.reshape(g.shape), rtol=0, atol=1e-12)
+    h = 1e-6
+    for j in range(3):
+        step = np.zeros(3)
+        step[j] = h
+        numeric = (arm.view_constraints(q + step)[0] - arm.view_constraints(q - step)[0]) / (2 * h)
+        # g is O(100) mm with O(500) mm/rad^2 curvature: truncation ~h^2 500, round-off
+        # ~1e-13 / h: 1e-6 mm/rad is far above both and far below the O(100) gradient.
+        assert_allclose(dg[..., j], numeric, rtol=0, atol=1e-6)
