@@ -4,7 +4,16 @@ import numpy as np
 import pytest
 from numpy.testing import assert_allclose
 
-from armcal import PlanarArm, Target, design, evaluate_plan, orthogonal_plan, random_plan
+from armcal import (
+    ArmcalError,
+    PlanarArm,
+    Target,
+    design,
+    evaluate_plan,
+    orthogonal_plan,
+    random_plan,
+)
+from armcal.doe import analytic_plan
 from armcal.models import Annulus, every_target, forward_kinematics, plan_rows
 from armcal.models.planar_closed_form import solve_closed_form
 from armcal.models.planar_design import information_gradient, pose_model
@@ -122,3 +131,19 @@ def test_region_constraints_hold_every_target_and_their_gradient_is_exact(target
         # g is O(100) mm with O(500) mm/rad^2 curvature: truncation ~h^2 500, round-off
         # ~1e-13 / h: 1e-6 mm/rad is far above both and far below the O(100) gradient.
         assert_allclose(dg[..., j], numeric, rtol=0, atol=1e-6)
+
+
+@pytest.mark.parametrize("m", [6, 8, 12])
+@pytest.mark.parametrize("count", [1, 2])
+def test_a_closed_form_plan_never_puts_a_target_outside_the_region(m, count):
+    """The closed form is placed for the end of link n; a target 150 mm off at 1 rad can
+    fall outside the annulus (it did at 6 of these 10 placements): such a plan is refused,
+    and design searches instead.  Whatever comes back has every target inside."""
+    targets = (Target("A", 150.0, 1.0), Target("B", 100.0, -0.8))[:count]
+    region = Annulus((60.0, 0.0), 200.0, 520.0)
+    arm = PlanarArm([260.0, 180.0, 90.0], targets=targets, region=region)
+    try:
+        q = analytic_plan(arm, m)
+    except ArmcalError:
+        q = design(arm, m, rng=0, with_certificate=False).q
+    assert np.all(arm.feasible(q))

@@ -22,7 +22,7 @@ from matplotlib.patches import Circle, Patch, Rectangle, Wedge
 from matplotlib.ticker import FuncFormatter, MaxNLocator, NullFormatter
 
 from .files import atomic_write
-from .models import Annulus, PlanarArm
+from .models import Annulus, PlanarArm, link_vectors
 
 __all__ = [
     "plot_accuracy_curves",
@@ -39,7 +39,8 @@ _CMAP = "viridis"
 
 def _joint_positions(arm: PlanarArm, q: np.ndarray) -> np.ndarray:
     """Base and joint positions ``(m, n + 1, 2)`` in mm at the nominal geometry."""
-    steps = arm.link_lengths * np.exp(1j * arm.link_angles(q))
+    first = None if not arm.targets else np.zeros(q.shape[0], dtype=int)  # the first target's
+    steps = link_vectors(arm, q, target=first)[..., : arm.n_joints]
     points = np.concatenate([np.zeros((q.shape[0], 1)), np.cumsum(steps, axis=1)], axis=1)
     return np.stack([points.real, points.imag], axis=-1)
 

@@ -15,8 +15,8 @@ import numpy as np
 
 from ..errors import ArmcalError
 from ..models import Conditions, FitModel
+from ..models.information import covariance_factor_from
 from ..noise import NoiseModel
-from ..numerics import scaled_svd
 from .judgement import PoseTest, studentized_test
 from .solvers import solve
 
@@ -106,8 +106,9 @@ class Fit:
             factor, ok = model.covariance_factor(problem.conditions, self.params)
             factor = factor[..., model.free, :]
         else:
-            svd = scaled_svd(self.jacobian[self.used].reshape(-1, model.n_free))
-            factor, ok = svd.inverse_gram_factor()
+            rows = self.jacobian[self.used].reshape(-1, model.n_free)
+            factor, ok = covariance_factor_from(rows, model.free)
+            factor = factor[..., model.free, :]
         if not bool(ok):  # identifiable at nominal, so only for absurd deviations
             raise ArmcalError("the Jacobian is singular at the estimate; check the data")
         return factor

@@ -193,7 +193,7 @@ def pose_model(arm: PlanarArmSpec, q: np.ndarray) -> PoseModel:
     precision = np.swapaxes(w, -1, -2) @ w
     joint_jacobian = None
     if noise.joint_sigma is not None:
-        turn = 1j * arm.link_lengths * np.exp(1j * arm.link_angles(q))  # d tip / d theta_k
+        turn = link_jacobian(arm, q)  # d tip / d theta_k
         joint_jacobian = q_from_theta_gradient(arm, turn)  # d tip / d q_j
     return PoseModel(columns, full, basis, precision, joint_jacobian)
 

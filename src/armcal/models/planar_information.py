@@ -21,6 +21,7 @@ from ..errors import ArmcalWarning, NotIdentifiableError, action
 from ..noise import NoiseModel, complex_whitening
 from ..numerics import COND_WARN, RANK_RTOL, ScaledSVD, scaled_svd
 from .identifiability import Identifiability, combination, listing, row_echelon
+from .information import covariance_factor_from
 from .planar_arm import PlanarArmSpec
 from .planar_geometry import paper_from_user, split_params
 from .planar_kinematics import jacobian, link_units
@@ -512,11 +513,7 @@ def _covariance_factor_at(
     ``params`` (:meth:`armcal.noise.NoiseModel.whitening`), through the rank
     policy's SVD: ``G`` ``(..., p, p_f)`` with zero rows for fixed parameters.
     """
-    jac = weighted_user_jacobian(arm, q, params, target=target)
-    factor, ok = scaled_svd(jac).inverse_gram_factor()
-    g = np.eye(arm.n_params)[:, arm.free] @ np.where(ok[..., None, None], factor, 0.0)
-    ok = ok & np.all(np.isfinite(g), axis=(-2, -1))
-    return np.where(ok[..., None, None], g, np.inf), ok
+    return covariance_factor_from(weighted_user_jacobian(arm, q, params, target=target), arm.free)
 
 
 def weighted_user_jacobian(

@@ -22,6 +22,8 @@ from .interface import ClosedFormPlan, FitModel
 from .planar_arm import PlanarArmSpec
 from .planar_design import feasible, model_description, rotation_invariant
 from .planar_geometry import wrap_angle
+from .planar_information import plan_rows
+from .planar_kinematics import forward_kinematics
 
 __all__ = [
     "BYTES_PER_CANDIDATE_POSE",
@@ -329,20 +331,23 @@ def _mapped_analytic_plan(arm: PlanarArmSpec, m: int, *, turn_joint1: bool) -> n
     n = arm.n_joints
     relative = np.diff(arm.joint_map, axis=0, prepend=0.0)  # r = D M q
     signs = np.diag(relative)
+    # The plain arm places the end of link n; the targets' points are checked below.
     plain = arm.replace(joint_map=None, targets=(), base_rotation=False, fixed=())
     if np.array_equal(relative, np.diag(signs)) and np.all(np.abs(signs) == 1):
         lo, hi = (arm.joint_limits * signs[:, None]).T
         limits = np.column_stack([np.minimum(lo, hi), np.maximum(lo, hi)])
-        r = analytic_plan(plain.replace(joint_limits=limits), m, turn_joint1=turn_joint1)
-        return r * signs
-    r = analytic_plan(plain.replace(joint_limits=None), m, turn_joint1=turn_joint1)
-    q = np.linalg.solve(arm.joint_map, np.cumsum(r, axis=1).T).T
-    q = _wrap_readings(arm, q)
+        q = analytic_plan(plain.replace(joint_limits=limits), m, turn_joint1=turn_joint1)
+        q = q * signs
+    else:
+        r = analytic_plan(plain.replace(joint_limits=None), m, turn_joint1=turn_joint1)
+        q = np.linalg.solve(arm.joint_map, np.cumsum(r, axis=1).T).T
+        q = _wrap_readings(arm, q)
     if not np.all(feasible(arm, q)):
         raise ArmcalError(
             f"the closed-form orthogonal {m}-pose plan (the paper's Table I family), read "
-            f"through the joint map of {arm.name}, leaves the joint limits or the region of "
-            f"joints 1..{n}; other plans may still be optimal (--method optimize)"
+            f"through the joint map and targets of {arm.name}, leaves the joint limits of "
+            f"joints 1..{n} or puts a target outside the measurement region; other plans may "
+            "still be optimal (--method optimize)"
         )
     return q
 
@@ -351,16 +356,22 @@ def _reach(arm: PlanarArmSpec) -> float:
     return float(np.sum(arm.link_lengths))
 
 
-def _chunks(m: int, candidates: int):
+def _chunks(m: int, candidates: int, targets: int = 1):
     """Slices of poses whose candidate scores fit in :data:`PLACEMENT_CHUNK_BYTES`."""
-    size = max(1, PLACEMENT_CHUNK_BYTES // (BYTES_PER_CANDIDATE_POSE * candidates))
+    size = max(1, PLACEMENT_CHUNK_BYTES // (BYTES_PER_CANDIDATE_POSE * candidates * targets))
     return (slice(i, min(i + size, m)) for i in range(0, m, size))
 
 
 def _tip_after_joint1(arm: PlanarArmSpec, q_rest: np.ndarray) -> np.ndarray:
-    """Tip ``(k,)`` as a complex number with joint 1 at 0: the tip is ``exp(i q1)`` times it."""
-    relative = np.cumsum(np.concatenate([np.zeros((q_rest.shape[0], 1)), q_rest], axis=1), axis=1)
-    return np.exp(1j * relative) @ arm.link_lengths
+    """Every target's point ``(k, T)`` as complex numbers with joint 1 at 0.
+
+    Joint 1 turns the whole arm about the base (the arm's link angles are
+    ``cumsum(q)`` here): the points at ``q1`` are ``exp(i q1)`` times these.
+    """
+    q = np.concatenate([np.zeros((q_rest.shape[0], 1)), q_rest], axis=1)
+    rows, target, _ = plan_rows(arm, q, None)  # every target of every pose
+    tip = forward_kinematics(arm, rows, target=target)
+    return (tip[:, 0] + 1j * tip[:, 1]).reshape(q.shape[0], arm.n_target_links)
 
 
 def _region_margin(arm: PlanarArmSpec, tip: np.ndarray) -> np.ndarray:
@@ -380,9 +391,11 @@ def _joint1_in_region(arm: PlanarArmSpec, q: np.ndarray, lo: float, hi: float) -
     rotation = np.exp(1j * candidates)[:, None]
     reach = _reach(arm)
     q1 = np.empty(q.shape[0])
-    for part in _chunks(q.shape[0], candidates.size):
-        tip = rotation * _tip_after_joint1(arm, q[part, 1:])[None, :]  # (candidates, chunk)
-        score = np.minimum(limit_margin, _region_margin(arm, tip) / reach)
+    for part in _chunks(q.shape[0], candidates.size, arm.n_target_links):
+        # (candidates, chunk, T): every target of every pose at every candidate
+        tip = rotation[..., None] * _tip_after_joint1(arm, q[part, 1:])[None, :, :]
+        region = _region_margin(arm, tip).min(axis=-1)
+        score = np.minimum(limit_margin, region / reach)
         best = np.argmax(score, axis=0)
         if np.any(score[best, np.arange(best.size)] < 0):
             raise ArmcalError(
@@ -401,11 +414,11 @@ def _best_rotation_in_region(
     candidates = beta + 2 * np.pi * np.arange(PLACEMENT_CANDIDATES) / PLACEMENT_CANDIDATES
     rotation = np.exp(1j * candidates)[:, None]
     region = np.full(PLACEMENT_CANDIDATES, np.inf)
-    for part in _chunks(m, candidates.size):
+    for part in _chunks(m, candidates.size, arm.n_target_links):
         # Pose k turns joint 1 by beta + 2 pi k / m.
         steps = np.exp(2j * np.pi * np.arange(m)[part] / m)
-        tip = rotation * (steps * _tip_after_joint1(arm, q[part, 1:]))[None, :]
-        region = np.minimum(region, _region_margin(arm, tip).min(axis=1))
+        tip = rotation[..., None] * (steps[:, None] * _tip_after_joint1(arm, q[part, 1:]))[None]
+        region = np.minimum(region, _region_margin(arm, tip).min(axis=(1, 2)))
     score = np.minimum(_shift_margin(candidates, lo, hi, m), region / _reach(arm))
     best = int(np.argmax(score))
     if score[best] < 0:
