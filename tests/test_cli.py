@@ -278,3 +278,75 @@ def test_synthesize_a_robot_with_one_target_labels_every_row_and_round_trips(tmp
     assert_allclose(values["dl3@A"], 0.3, atol=1e-9)
     assert_allclose(values["dq3@A"], 0.6, atol=1e-9)
     assert_allclose([v for k, v in values.items() if not k.endswith("@A")], 0, atol=1e-9)
+
+
+#: The PRODUCT.md names of RMS figures, kept for scripts; each has a twin that says which.
+RMS_ALIASES = {
+    "residual_rms_mm": "residual_rms_per_coordinate_mm",
+    "rms_before_mm": "rms_before_per_point_mm",
+    "rms_after_mm": "rms_after_per_point_mm",
+    "predicted_position_rms_mm": "predicted_position_rms_per_point_mm",
+}
+
+
+def _rms_keys(document, path=""):
+    """Every (path, key, value) of a JSON document whose key names an RMS."""
+    if isinstance(document, dict):
+        for key, value in document.items():
+            if "rms" in key:
+                yield path, key, value, document
+            yield from _rms_keys(value, f"{path}/{key}")
+    elif isinstance(document, list):
+        for item in document:
+            yield from _rms_keys(item, path)
+
+
+def test_every_rms_key_says_per_point_or_per_coordinate(tmp_path, capsys):
+    """RMS per point (Euclidean errors) and per coordinate differ by sqrt(2) in the plane:
+    every key of every command's JSON says which, but for the PRODUCT.md names kept for
+    scripts, whose twin says it and holds the same number."""
+    assert main(["demo", "-o", str(tmp_path)]) == 0
+    robot = tmp_path / "robot_calibrated.toml"
+    commands = [
+        [
+            "identify",
+            "--measurements",
+            str(tmp_path / "measurements.csv"),
+            "--cross-validate",
+            "4",
+        ],
+        [
+            "validate",
+            "--calibration",
+            str(tmp_path / "calibration.json"),
+            "--measurements",
+            str(tmp_path / "measurements.csv"),
+        ],
+        [
+            "compensate",
+            "--calibration",
+            str(tmp_path / "calibration.json"),
+            "--program",
+            str(tmp_path / "program.csv"),
+            "-o",
+            str(tmp_path / "corrected.csv"),
+        ],
+        ["evaluate", "--plan", str(tmp_path / "plan.csv")],
+        ["simulate", "--plan", str(tmp_path / "plan.csv"), "--trials", "50"],
+    ]
+    seen = set()
+    for command in commands:
+        capsys.readouterr()
+        assert main([*command, "--json"]) == 0, command
+        document = json.loads(capsys.readouterr().out)
+        for path, key, value, parent in _rms_keys(document):
+            seen.add(key)
+            if key in RMS_ALIASES:
+                assert parent[RMS_ALIASES[key]] == value, (command[0], path, key)
+            else:
+                assert any(w in key for w in ("per_point", "per_coordinate", "per_pose")), (
+                    command[0],
+                    path,
+                    key,
+                )
+    assert robot.exists() and set(RMS_ALIASES) <= seen

@@ -139,7 +139,7 @@ def test_tracker_calibration_in_3d_with_targets_and_a_coupled_map(tracker_setup,
     assert doc["residual_rms_mm"] == pytest.approx(expected, rel=0.1)
     # the planarity is reported: out-of-plane RMS of noise 0.02 mm along the
     # normal, over 120 points (RMS std ~6.5 %), within 20 %
-    assert doc["plane"]["out_of_plane_rms_mm"] == pytest.approx(SIGMA, rel=0.2)
+    assert doc["plane"]["out_of_plane_rms_per_point_mm"] == pytest.approx(SIGMA, rel=0.2)
     assert set(doc["plane"]["offsets_mm"]) == set(NEST)
     # validate on held-out poses: the calibrated error near the noise
     status = main(
@@ -156,10 +156,14 @@ def test_tracker_calibration_in_3d_with_targets_and_a_coupled_map(tracker_setup,
     report = json.loads(capsys.readouterr().out)
     # a measured point's in-plane error: noise sigma per coordinate, so RMS
     # sigma sqrt(2) = 0.028 mm, plus the calibration's own uncertainty
-    assert report["predicted_rms_after_mm"] == pytest.approx(SIGMA * np.sqrt(2), rel=0.25)
-    assert report["rms_after_mm"] == pytest.approx(report["predicted_rms_after_mm"], rel=0.2)
+    assert report["predicted_rms_after_per_point_mm"] == pytest.approx(
+        SIGMA * np.sqrt(2), rel=0.25
+    )
+    assert report["rms_after_mm"] == pytest.approx(
+        report["predicted_rms_after_per_point_mm"], rel=0.2
+    )
     assert report["rms_before_mm"] > 10 * report["rms_after_mm"]
-    assert report["out_of_plane_rms_mm"] == pytest.approx(SIGMA, rel=0.25)
+    assert report["out_of_plane_rms_per_point_mm"] == pytest.approx(SIGMA, rel=0.25)
     assert report["warnings"] == []
 
 
@@ -196,9 +200,9 @@ def test_held_out_validation_of_a_5_link_arm_with_a_base_offset(rng):
     xy_test = forward_kinematics(arm, q_test, truth) + 0.05 * rng.standard_normal((200, 2))
     s = validate(cal, q_test, xy_test).summary()
     assert s["rms_before_mm"] > 1.0
-    assert s["rms_after_mm"] < 3 * s["predicted_rms_after_mm"]
+    assert s["rms_after_mm"] < 3 * s["predicted_rms_after_per_point_mm"]
     # and, for a model that holds, near it: 400 coordinates give the RMS a 3.5 % std
-    assert s["rms_after_mm"] == pytest.approx(s["predicted_rms_after_mm"], rel=0.15)
+    assert s["rms_after_mm"] == pytest.approx(s["predicted_rms_after_per_point_mm"], rel=0.15)
 
 
 def test_cross_validation_predicts_like_a_held_out_set(rng):
@@ -208,7 +212,9 @@ def test_cross_validation_predicts_like_a_held_out_set(rng):
     xy = forward_kinematics(arm, q, truth) + 0.05 * rng.standard_normal((80, 2))
     result = cross_validate(arm, q, xy, 5, rng=0).summary()
     # 160 coordinates: the RMS has a 5.6 % std; 20 % is over 3 of them
-    assert result["rms_mm"] == pytest.approx(result["predicted_rms_mm"], rel=0.2)
+    assert result["rms_per_point_mm"] == pytest.approx(
+        result["predicted_rms_per_point_mm"], rel=0.2
+    )
     assert result["folds"] == 5
 
 
@@ -387,7 +393,7 @@ def test_identify_cross_validates_from_the_command_line(tmp_path, capsys, rng):
     cv = doc["cross_validation"]
     assert cv["folds"] == 5
     # 80 coordinates: the RMS has a 8 % std; 30 % is over 3 of them
-    assert cv["rms_mm"] == pytest.approx(cv["predicted_rms_mm"], rel=0.3)
+    assert cv["rms_per_point_mm"] == pytest.approx(cv["predicted_rms_per_point_mm"], rel=0.3)
     assert main([*args, "--cross-validate", "1"]) == 2
 
 

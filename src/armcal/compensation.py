@@ -26,15 +26,12 @@ from numpy.typing import ArrayLike
 
 from .models import CalibratedArm, Conditions, FitModel, Loads, wrap_angle
 from .models.information import tip_variances
+from .numerics import rms
 
 __all__ = [
     "Compensation",
     "compensate",
 ]
-
-
-def _rms(values: np.ndarray) -> float:
-    return float(np.sqrt(np.mean(values**2))) if values.size else 0.0
 
 
 @dataclass(frozen=True, eq=False)
@@ -89,17 +86,25 @@ class Compensation:
         return np.flatnonzero(~self.corrected)
 
     def summary(self) -> dict[str, float | None]:
-        """RMS (per point) of the predicted errors before and after (mm, deg), corrected poses."""
+        """RMS of the predicted errors before and after over the corrected poses.
+
+        Positions per point (both coordinates together, mm; ``rms_before_mm`` and
+        ``rms_after_mm`` are the same under their PRODUCT.md names), the tool's
+        orientation per pose (its angle, deg; None without one).
+        """
         ok = self.corrected
+        before, after = rms(self.position_before_mm[ok]), rms(self.position_after_mm[ok])
         out: dict[str, float | None] = {
-            "rms_before_mm": _rms(self.position_before_mm[ok]),
-            "rms_after_mm": _rms(self.position_after_mm[ok]),
-            "orientation_rms_before_deg": None,
-            "orientation_rms_after_deg": None,
+            "rms_before_mm": before,
+            "rms_after_mm": after,
+            "rms_before_per_point_mm": before,
+            "rms_after_per_point_mm": after,
+            "orientation_rms_before_per_pose_deg": None,
+            "orientation_rms_after_per_pose_deg": None,
         }
         if self.orientation_before_deg is not None and self.orientation_after_deg is not None:
-            out["orientation_rms_before_deg"] = _rms(self.orientation_before_deg[ok])
-            out["orientation_rms_after_deg"] = _rms(self.orientation_after_deg[ok])
+            out["orientation_rms_before_per_pose_deg"] = rms(self.orientation_before_deg[ok])
+            out["orientation_rms_after_per_pose_deg"] = rms(self.orientation_after_deg[ok])
         return out
 
 

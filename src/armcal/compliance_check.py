@@ -113,19 +113,19 @@ class ComplianceCheck:
             "sigma_mm": SIGMA_MM,
             "max_deflection_mm": self.max_deflection_mm,
             "geometry_only": {
-                "residual_rms_mm": self.rigid.residual_rms,
+                "residual_rms_per_coordinate_mm": self.rigid.residual_rms,
                 "warnings": [w.code for w in self.rigid.warnings],
                 "length_bias_in_std": self.rigid_length_bias_in_std.tolist(),
             },
             "with_compliance": {
-                "residual_rms_mm": self.compliant.residual_rms,
+                "residual_rms_per_coordinate_mm": self.compliant.residual_rms,
                 "warnings": [w.code for w in self.compliant.warnings],
                 "values": dict(zip(names, self.compliant.values.tolist(), strict=True)),
                 "std": dict(zip(names, self.compliant.std.tolist(), strict=True)),
                 "error_in_std": dict(zip(names, self.errors_in_std.tolist(), strict=True)),
-                "validation_rms_mm": self.validation_rms_mm,
-                "validation_predicted_mm": self.validation_predicted_mm,
-                "validation_geometry_only_mm": self.validation_rigid_mm,
+                "validation_rms_per_point_mm": self.validation_rms_mm,
+                "validation_predicted_rms_per_point_mm": self.validation_predicted_mm,
+                "validation_geometry_only_rms_per_point_mm": self.validation_rigid_mm,
             },
             "monte_carlo": {
                 "trials": mc.trials,
@@ -177,9 +177,9 @@ def check_compliance(*, seed: int = 0, trials: int = 4000, poses: int = 40) -> C
         max_deflection_mm=float(deflection.max()),
         rigid=rigid,
         compliant=compliant,
-        validation_rms_mm=checked.summary()["rms_after_mm"],
-        validation_predicted_mm=checked.summary()["predicted_rms_after_mm"],
-        validation_rigid_mm=rigid_check.summary()["rms_after_mm"],
+        validation_rms_mm=checked.summary()["rms_after_per_point_mm"],
+        validation_predicted_mm=checked.summary()["predicted_rms_after_per_point_mm"],
+        validation_rigid_mm=rigid_check.summary()["rms_after_per_point_mm"],
         monte_carlo=mc,
         design=plan,
         design_quality=plan_quality,
@@ -196,16 +196,16 @@ def format_check(check: ComplianceCheck) -> str:
         f"payload {PAYLOAD_KG:g} kg on every other pose), sigma {SIGMA_MM} mm, "
         f"{fit.n_poses} random poses; tip deflection up to {check.max_deflection_mm:.3f} mm",
         "",
-        f"geometry only: residual RMS {rigid.residual_rms:.4f} mm "
+        f"geometry only: residual RMS {rigid.residual_rms:.4f} mm per coordinate "
         f"({rigid.residual_rms / SIGMA_MM:.1f} sigma); warnings: "
         f"{', '.join(w.code for w in rigid.warnings) or 'none'}",
         "  length errors in std: "
         + ", ".join(f"{v:+.1f}" for v in check.rigid_length_bias_in_std),
-        f"with compliance: residual RMS {fit.residual_rms:.4f} mm "
+        f"with compliance: residual RMS {fit.residual_rms:.4f} mm per coordinate "
         f"({fit.residual_rms / SIGMA_MM:.3f} sigma); warnings: "
         f"{', '.join(w.code for w in fit.warnings) or 'none'}",
         f"held-out poses (200, payload 0 or {PAYLOAD_KG:g} kg): "
-        f"RMS {check.validation_rms_mm:.4f} mm "
+        f"RMS {check.validation_rms_mm:.4f} mm per point "
         f"with compliance (predicted {check.validation_predicted_mm:.4f} mm), "
         f"{check.validation_rigid_mm:.4f} mm with the geometry-only fit",
         "",

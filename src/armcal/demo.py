@@ -27,6 +27,7 @@ from .files import (
 )
 from .identification import identify
 from .models import PlanarArm, forward_kinematics
+from .numerics import rms
 from .report import format_calibration
 from .synthesis import synthesize_measurements
 from .validation import validate
@@ -85,10 +86,6 @@ class Demo:
     files: dict[str, str | Callable[[Path], None]]
     document: dict
     warnings: tuple[ArmcalWarning, ...]
-
-
-def _rms(values: np.ndarray) -> float:
-    return float(np.sqrt(np.mean(np.asarray(values) ** 2)))
 
 
 def _figure_writer(make: Callable[[], object]) -> Callable[[Path], None]:
@@ -179,12 +176,14 @@ def run_demo(
         "",
         format_calibration(cal, truth=truth),
         "",
-        f"4. validate on {VALIDATION_POSES} fresh poses: position error RMS "
-        f"{check['rms_before_mm']:.3g} mm nominal, {check['rms_after_mm']:.3g} mm calibrated "
-        f"(predicted {check['predicted_rms_after_mm']:.3g} mm with the noise)",
+        f"4. validate on {VALIDATION_POSES} fresh poses: position error RMS per point "
+        f"{check['rms_before_per_point_mm']:.3g} mm nominal, "
+        f"{check['rms_after_per_point_mm']:.3g} mm calibrated "
+        f"(predicted {check['predicted_rms_after_per_point_mm']:.3g} mm with the noise)",
         f"5. compensate a {PROGRAM_POSES}-pose program: {int(comp.corrected.sum())} corrected; "
-        f"true error RMS {_rms(true_before):.3g} mm before, {_rms(true_after):.3g} mm after "
-        f"(predicted {predicted['rms_before_mm']:.3g} and {predicted['rms_after_mm']:.3g} mm)",
+        f"true error RMS per point {rms(true_before):.3g} mm before, "
+        f"{rms(true_after):.3g} mm after (predicted {predicted['rms_before_per_point_mm']:.3g} "
+        f"and {predicted['rms_after_per_point_mm']:.3g} mm)",
         "6. export: robot_calibrated.toml (a robot file with the deviations folded in), "
         "arm.urdf (ROS)",
     ]
@@ -261,8 +260,9 @@ def _report(arm: PlanarArm, text: str, before: np.ndarray, after: np.ndarray) ->
             "",
             "## Error over the workspace",
             "",
-            f"The true position error of the nominal model (RMS {_rms(before):.3g} mm) and of "
-            f"the calibrated one (RMS {_rms(after):.3g} mm) at {before.size} random poses.",
+            f"The true position error of the nominal model (RMS {rms(before):.3g} mm per point) "
+            f"and of the calibrated one (RMS {rms(after):.3g} mm per point) at {before.size} "
+            "random poses.",
             "",
             "![error map](error_map.png)",
             "",

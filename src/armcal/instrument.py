@@ -180,10 +180,11 @@ def _planarity_warning(
     else:
         if plane.rms_mm <= 3.0 * cal.residual_rms:
             return None
-        stated = f"three times the in-plane residual RMS {cal.residual_rms:.3g} mm"
+        stated = f"three times the in-plane residual RMS {cal.residual_rms:.3g} mm per coordinate"
     return ArmcalWarning(
         "non-planar",
-        f"the points lie off their plane by {plane.rms_mm:.3g} mm RMS (max {plane.max_mm:.3g} "
+        f"the points lie off their plane by {plane.rms_mm:.3g} mm RMS per point (max "
+        f"{plane.max_mm:.3g} "
         f"mm), more than {stated}: the motion is not planar (a tilted joint axis, a loose "
         "target) or the noise is larger than stated; the in-plane fit ignores that part",
     )

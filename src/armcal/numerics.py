@@ -38,6 +38,7 @@ __all__ = [
     "LinearLeastSquares",
     "ScaledSVD",
     "factor_least_squares",
+    "rms",
     "scaled_svd",
     "solve_least_squares",
     "spd_inverse",
@@ -388,3 +389,20 @@ def spd_inverse(matrix: np.ndarray) -> np.ndarray:
     floor = np.maximum(p * np.finfo(float).eps * values[..., -1:], 1e-290)
     values = np.maximum(values, floor)
     return (vectors / values[..., None, :]) @ np.swapaxes(vectors, -1, -2)
+
+
+def rms(values: np.ndarray) -> float:
+    """The root mean square of ``values`` (0 for none).
+
+    Of the points' error lengths it is the RMS *per point*; of their coordinates,
+    the RMS *per coordinate*, ``1 / sqrt(d)`` of it for isotropic errors in ``d``
+    dimensions.  Every RMS armcal reports says which.
+
+    Examples
+    --------
+    >>> errors = np.array([[3.0, 4.0], [0.0, 0.0]])
+    >>> rms(np.hypot(*errors.T)), rms(errors)   # per point, per coordinate
+    (3.5355339059327378, 2.5)
+    """
+    values = np.asarray(values, dtype=float)
+    return float(np.sqrt(np.mean(values**2))) if values.size else 0.0

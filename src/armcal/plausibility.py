@@ -336,7 +336,8 @@ def explain(
             Explanation(
                 "angles-in-radians",
                 f"the joint angles in {columns} look like radians: the fit improves "
-                f"{_fold(ratio)} if they are (residual RMS {_describe(original, m)} -> "
+                f"{_fold(ratio)} if they are (residual RMS per coordinate "
+                f"{_describe(original, m)} -> "
                 f"{_rms(radians, m):.3g} mm); convert them to degrees",
                 ratio,
                 radians.params,
@@ -353,7 +354,7 @@ def explain(
                     "missing-base-offset",
                     f"the positions look measured in an instrument frame away from the arm's "
                     f"base: with a base offset (x0, y0 = {x0:.4g}, {y0:.4g} mm) the fit improves "
-                    f"{_fold(ratio)} (residual RMS {_describe(original, m)} -> "
+                    f"{_fold(ratio)} (residual RMS per coordinate {_describe(original, m)} -> "
                     f"{_rms(based, m):.3g} mm); set base_offset = true in the robot file",
                     ratio,
                     based.params,

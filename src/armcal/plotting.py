@@ -23,6 +23,7 @@ from matplotlib.ticker import FuncFormatter, MaxNLocator, NullFormatter
 
 from .files import atomic_write
 from .models import Annulus, PlanarArm, link_vectors
+from .numerics import rms
 
 __all__ = [
     "plot_accuracy_curves",
@@ -273,7 +274,7 @@ def plot_accuracy_curves(curves: dict[str, np.ndarray], *, title: str | None = N
     panels = (
         ("length", "length deviation std (mm)"),
         ("angle", "worst joint-offset std (deg)"),
-        ("position", "RMS tip error after calibration (mm)"),
+        ("position", "RMS tip error per point after calibration (mm)"),
     )
     for ax, (key, label) in zip(axes, panels, strict=True):
         ax.plot(poses, curves[f"analytic_{key}"], color="tab:blue", label="1: analytic, optimal")
@@ -381,7 +382,9 @@ def plot_validation(arm: PlanarArm, q: np.ndarray, result, *, title: str | None 
     index = np.arange(1, positions.shape[0] + 1)
     ax_err.semilogy(index, result.before_mm, "o", color="0.55", ms=3, label="nominal model")
     ax_err.semilogy(index, result.after_mm, "o", color="tab:red", ms=3, label="calibrated")
-    ax_err.semilogy(index, result.predicted_mm, "-", color="k", lw=1, label="predicted (RMS)")
+    ax_err.semilogy(
+        index, result.predicted_mm, "-", color="k", lw=1, label="predicted (RMS per point)"
+    )
     ax_err.set_xlabel("held-out pose")
     ax_err.set_ylabel("position error [mm]")
     ax_err.legend(fontsize=8, frameon=False)
@@ -464,7 +467,7 @@ def plot_error_map(
         )
         ax.plot([0], [0], "k+", ms=10)
         ax.set_aspect("equal", adjustable="datalim")
-        ax.set_title(f"{name}: RMS {np.sqrt(np.mean(values**2)):.3g} mm")
+        ax.set_title(f"{name}: RMS {rms(values):.3g} mm per point")
         ax.set_xlabel("x [mm]")
     axes[0].set_ylabel("y [mm]")
     fig.colorbar(image, ax=list(axes), label="position error [mm]")

@@ -32,6 +32,7 @@ from .identification import identify
 from .models import CalibratedArm, Conditions, FitModel, Loads
 from .models.information import tip_variances
 from .noise import NoiseModel
+from .numerics import rms
 
 __all__ = [
     "CrossValidation",
@@ -42,10 +43,6 @@ __all__ = [
     "validate",
     "validation_warnings",
 ]
-
-
-def _rms(values: np.ndarray) -> float:
-    return float(np.sqrt(np.mean(values**2))) if values.size else 0.0
 
 
 def _norms(points: np.ndarray) -> np.ndarray:
@@ -86,9 +83,9 @@ class Validation:
     def __repr__(self) -> str:
         s = self.summary()
         return (
-            f"Validation({self.after.shape[0]} poses: RMS per point {s['rms_before_mm']:.4g} mm "
-            f"before, {s['rms_after_mm']:.4g} mm after, {s['predicted_rms_after_mm']:.4g} mm "
-            "predicted)"
+            f"Validation({self.after.shape[0]} poses: RMS per point "
+            f"{s['rms_before_per_point_mm']:.4g} mm before, {s['rms_after_per_point_mm']:.4g} mm "
+            f"after, {s['predicted_rms_after_per_point_mm']:.4g} mm predicted)"
         )
 
     @property
@@ -102,18 +99,31 @@ class Validation:
         return _norms(self.after)
 
     def summary(self) -> dict[str, float]:
-        """RMS (per point), max and 95 % quantile before and after, and the predicted RMS (mm)."""
+        """RMS, max and 95 % quantile before and after, and the predicted RMS (mm).
+
+        Every figure is of the points' Euclidean errors (per point, both
+        coordinates together; a coordinate's RMS is ``1 / sqrt(d)`` of it for
+        isotropic errors); ``rms_before_mm`` and ``rms_after_mm`` are the
+        per-point RMS under their PRODUCT.md names.  For 3-D data of a planar
+        arm also the RMS and max distance of the points from their plane.
+        """
         before, after = self.before_mm, self.after_mm
-        return {
-            "rms_before_mm": _rms(before),
-            "rms_after_mm": _rms(after),
+        out = {
+            "rms_before_mm": rms(before),
+            "rms_after_mm": rms(after),
+            "rms_before_per_point_mm": rms(before),
+            "rms_after_per_point_mm": rms(after),
             "max_before_mm": float(np.max(before)),
             "max_after_mm": float(np.max(after)),
             "p95_before_mm": float(np.percentile(before, 95)),
             "p95_after_mm": float(np.percentile(after, 95)),
-            "predicted_rms_after_mm": _rms(self.predicted_mm),
-            "model_rms_mm": _rms(self.model_mm),
+            "predicted_rms_after_per_point_mm": rms(self.predicted_mm),
+            "model_rms_per_point_mm": rms(self.model_mm),
         }
+        if self.out_of_plane_mm is not None:
+            out["out_of_plane_rms_per_point_mm"] = rms(self.out_of_plane_mm)
+            out["out_of_plane_max_mm"] = float(np.max(np.abs(self.out_of_plane_mm)))
+        return out
 
 
 def _noise(cal: CalibratedArm) -> NoiseModel:
@@ -243,22 +253,24 @@ def validation_warnings(result: Validation) -> list[ArmcalWarning]:
     s = result.summary()
     warnings = []
     count = result.after.shape[0]
-    if _too_large(s["rms_after_mm"], s["predicted_rms_after_mm"], count):
+    if _too_large(s["rms_after_per_point_mm"], s["predicted_rms_after_per_point_mm"], count):
         warnings.append(
             ArmcalWarning(
                 "validation-error",
-                f"the calibrated model misses the held-out poses by RMS {s['rms_after_mm']:.3g} "
-                f"mm, more than the {s['predicted_rms_after_mm']:.3g} mm it predicts (noise and "
+                "the calibrated model misses the held-out poses by RMS "
+                f"{s['rms_after_per_point_mm']:.3g} mm per point, more than the "
+                f"{s['predicted_rms_after_per_point_mm']:.3g} mm it predicts (noise and "
                 "its uncertainty): the model misses an effect, the poses lie outside the "
                 "calibrated range, the arm changed, or the measurements belong to another setup",
             )
         )
-    if s["rms_after_mm"] > s["rms_before_mm"]:
+    if s["rms_after_per_point_mm"] > s["rms_before_per_point_mm"]:
         warnings.append(
             ArmcalWarning(
                 "calibration-worse",
                 f"the calibrated model is worse than the nominal one on these poses "
-                f"({s['rms_after_mm']:.3g} against {s['rms_before_mm']:.3g} mm RMS): check that "
+                f"({s['rms_after_per_point_mm']:.3g} against "
+                f"{s['rms_before_per_point_mm']:.3g} mm RMS per point): check that "
                 "the calibration and the measurements are of the same robot and instrument setup",
             )
         )
@@ -292,7 +304,7 @@ class CrossValidation:
         s = self.summary()
         return (
             f"CrossValidation({self.folds} folds: prediction error RMS per point "
-            f"{s['rms_mm']:.4g} mm, predicted {s['predicted_rms_mm']:.4g} mm)"
+            f"{s['rms_per_point_mm']:.4g} mm, predicted {s['predicted_rms_per_point_mm']:.4g} mm)"
         )
 
     @property
@@ -301,24 +313,25 @@ class CrossValidation:
         return _norms(self.errors)
 
     def summary(self) -> dict[str, float | int]:
-        """``folds``, RMS (per point) and max prediction error and the predicted RMS (mm)."""
+        """``folds``, RMS and max prediction error and the predicted RMS (mm), per point."""
         return {
             "folds": self.folds,
-            "rms_mm": _rms(self.errors_mm),
+            "rms_per_point_mm": rms(self.errors_mm),
             "max_mm": float(np.max(self.errors_mm)),
-            "predicted_rms_mm": _rms(self.predicted_mm),
+            "predicted_rms_per_point_mm": rms(self.predicted_mm),
         }
 
 
 def cross_validation_warning(result: CrossValidation) -> ArmcalWarning | None:
     """``cross-validation`` when poses are predicted worse than the calibrations say."""
     summary = result.summary()
-    if not _too_large(summary["rms_mm"], summary["predicted_rms_mm"], result.errors.shape[0]):
+    rms, predicted = summary["rms_per_point_mm"], summary["predicted_rms_per_point_mm"]
+    if not _too_large(rms, predicted, result.errors.shape[0]):
         return None
     return ArmcalWarning(
         "cross-validation",
-        f"held-out poses are predicted with RMS {summary['rms_mm']:.3g} mm, more than the "
-        f"{summary['predicted_rms_mm']:.3g} mm the calibrations predict: the model misses an "
+        f"held-out poses are predicted with RMS {rms:.3g} mm per point, more than the "
+        f"{predicted:.3g} mm the calibrations predict: the model misses an "
         f"effect (compliance, a wrong joint map) or some poses are outliers "
         f"({action('try-robust')})",
     )

@@ -32,7 +32,9 @@ Requirement = Literal["length_std_mm", "angle_std_deg", "position_rms_mm"]
 REQUIREMENTS: dict[str, str] = {
     "length_std_mm": "largest std of a link-length deviation dl (mm)",
     "angle_std_deg": "largest std of a joint-offset deviation dq (deg)",
-    "position_rms_mm": "predicted RMS tip error after calibration at the test poses (mm)",
+    "position_rms_mm": (
+        "predicted RMS tip error per point after calibration at the test poses (mm)"
+    ),
 }
 
 

@@ -230,7 +230,7 @@ def _elastostatic_dict(cal: Calibration) -> dict | None:
         "payload_kg": elastic.payload_kg,
         "known_loads": model.known_loads,
         "parameters": list(model.compliance_names),
-        "geometry_only_rms_mm": nested.rms_per_coordinate_mm,
+        "geometry_only_rms_per_coordinate_mm": nested.rms_per_coordinate_mm,
     }
 
 
@@ -293,6 +293,7 @@ def calibration_document(
         "covariance": {"names": list(cal.names), "matrix": cal.covariance_display.tolist()},
         "correlation": {"names": list(cal.names), "matrix": corr.tolist()},
         "residual_rms_mm": cal.residual_rms,
+        "residual_rms_per_coordinate_mm": cal.residual_rms,
         "residual_max_mm": cal.residual_max,
         "degrees_of_freedom": cal.dof,
         "goodness_of_fit": {

@@ -374,7 +374,8 @@ def unseen_warning(
         return None
     return ArmcalWarning(
         f"{effect.short}-unseen",
-        f"the data do not show the {effect.name}: it lowers the residual RMS only from "
+        f"the data do not show the {effect.name}: it lowers the residual RMS per coordinate "
+        "only from "
         f"{nested_rms_mm:.4g} to {rms_mm:.4g} mm, no more than noise would (F test p = "
         f"{p_value:.2g}), and its values are undetermined ({shown}); {effect.advice}",
     )

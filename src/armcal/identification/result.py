@@ -21,6 +21,7 @@ import numpy as np
 
 from ..errors import ArmcalWarning
 from ..models import CalibratedArm, Conditions, Effect, FitModel, Plane
+from ..numerics import rms
 from .judgement import GoodnessOfFit, Outlier
 
 __all__ = [
@@ -82,10 +83,6 @@ class NestedFit:
     names: tuple[str, ...]
     rms_per_coordinate_mm: float
     p_value: float | None
-
-
-def _rms(values: np.ndarray) -> float:
-    return float(np.sqrt(np.mean(values**2))) if values.size else 0.0
 
 
 @dataclass(frozen=True, eq=False)
@@ -284,13 +281,13 @@ class Calibration:
     @property
     def residual_rms(self) -> float:
         """RMS of the residual coordinates of the poses in the fit (per coordinate), mm."""
-        return _rms(self._used_residuals())
+        return rms(self._used_residuals())
 
     @property
     def residual_rms_per_point(self) -> float:
         """RMS of the Euclidean residuals of the poses in the fit (per point), mm."""
         kept = self.pose_residuals if self.used is None else self.pose_residuals[self.used]
-        return _rms(kept)
+        return rms(kept)
 
     @property
     def residual_max(self) -> float:

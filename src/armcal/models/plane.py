@@ -91,7 +91,7 @@ class Plane:
                 label: float(d)
                 for label, d in zip(self.labels or ("",), self.offsets, strict=True)
             },
-            "out_of_plane_rms_mm": self.rms_mm,
+            "out_of_plane_rms_per_point_mm": self.rms_mm,
             "out_of_plane_max_mm": self.max_mm,
         }
 
@@ -108,7 +108,9 @@ class Plane:
             raise ValueError("plane: u, v, normal must be right-handed (u x v = normal)")
         labels = tuple(data["offsets_mm"])
         offsets = np.array([float(data["offsets_mm"][k]) for k in labels])
-        rms = float(data["out_of_plane_rms_mm"])
+        # the per-point RMS distance; files of armcal before 0.2 name it out_of_plane_rms_mm
+        key = "out_of_plane_rms_per_point_mm"
+        rms = float(data[key] if key in data else data["out_of_plane_rms_mm"])
         largest = float(data["out_of_plane_max_mm"])
         return cls(origin, axes, offsets, () if labels == ("",) else labels, rms, largest)
 

@@ -124,7 +124,7 @@ def format_calibration(cal: Calibration, *, truth: np.ndarray | None = None) -> 
         lines += [
             "",
             f"3-D data: plane of motion fitted with normal ({normal}) in the instrument frame; "
-            f"out of plane RMS {plane.rms_mm:.4g} mm, max {plane.max_mm:.4g} mm; target "
+            f"out of plane RMS {plane.rms_mm:.4g} mm per point, max {plane.max_mm:.4g} mm; target "
             f"planes at {offsets} mm; x0, y0, phi0 are the base pose in the plane's axes",
         ]
     lines += effect_lines(cal)
@@ -140,8 +140,8 @@ def effect_lines(cal: Calibration) -> list[str]:
     out = [
         "",
         f"{effect.name}, {effect.description}; {effect.nested} alone leaves "
-        f"{nested.rms_per_coordinate_mm:.4g} mm residual RMS, with {effect.short} "
-        f"{cal.residual_rms:.4g} mm",
+        f"{nested.rms_per_coordinate_mm:.4g} mm residual RMS per coordinate, with "
+        f"{effect.short} {cal.residual_rms:.4g} mm",
     ]
     deflection = cal.details.get("max_deflection_rad")
     if deflection is not None:
@@ -156,7 +156,7 @@ def effect_lines(cal: Calibration) -> list[str]:
 def format_cross_validation(summary: dict) -> str:
     """One line: the K-fold prediction error against what the calibrations predict."""
     return (
-        f"cross-validation ({summary['folds']} folds): prediction error RMS "
-        f"{summary['rms_mm']:.4g} mm (max {summary['max_mm']:.4g} mm); predicted "
-        f"{summary['predicted_rms_mm']:.4g} mm"
+        f"cross-validation ({summary['folds']} folds): prediction error RMS per point "
+        f"{summary['rms_per_point_mm']:.4g} mm (max {summary['max_mm']:.4g} mm); predicted "
+        f"{summary['predicted_rms_per_point_mm']:.4g} mm"
     )

@@ -69,7 +69,8 @@ def format_monte_carlo(result: MonteCarlo) -> str:
                 "pairs, with 95 % intervals"
             )
         lines += [
-            f"tip error of the calibrated model at test poses: RMS {pos.rms_mm:.4g} mm over all "
+            f"tip error of the calibrated model at test poses: RMS {pos.rms_mm:.4g} mm per point "
+            "over all "
             f"{pos.pairs} (trial, test pose) pairs (predicted {pos.predicted_rms_mm:.4g} mm)",
             f"quantiles (mm) from {source}: {quantiles}",
         ]
@@ -104,8 +105,8 @@ def monte_carlo_to_dict(result: MonteCarlo) -> dict:
     if result.position is not None:
         pos = result.position
         document["position_error_mm"] = {
-            "rms": pos.rms_mm,
-            "predicted_rms": pos.predicted_rms_mm,
+            "rms_per_point": pos.rms_mm,
+            "predicted_rms_per_point": pos.predicted_rms_mm,
             "quantiles": pos.quantiles_mm,
             "quantile_intervals_95": {
                 key: list(bounds) for key, bounds in pos.quantile_intervals_mm.items()

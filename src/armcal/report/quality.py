@@ -59,7 +59,7 @@ def format_quality(quality: PlanQuality) -> str:
     if pos is not None:
         lines += [
             "",
-            f"predicted position error after calibration: RMS {pos.rms_mm:.4g} mm, "
+            f"predicted position error after calibration: RMS {pos.rms_mm:.4g} mm per point, "
             f"max {pos.max_mm:.4g} mm over {pos.per_pose_mm.size} test poses",
         ]
     return "\n".join(lines)
@@ -99,6 +99,7 @@ def quality_to_dict(quality: PlanQuality) -> dict:
         ),
         "predicted_std": std,
         "predicted_position_rms_mm": None if pos is None else pos.rms_mm,
+        "predicted_position_rms_per_point_mm": None if pos is None else pos.rms_mm,
         "predicted_position_max_mm": None if pos is None else pos.max_mm,
         **model_to_dict(arm),
         "warnings": [w.to_dict() for w in quality.warnings],

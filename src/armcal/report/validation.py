@@ -2,8 +2,6 @@
 
 from __future__ import annotations
 
-import numpy as np
-
 from ..compensation import Compensation
 from ..files import Measurements, Program
 from ..models import CalibratedArm
@@ -25,24 +23,21 @@ def validation_report(
         f"validation of {cal.arm.name} on {m} held-out poses"
         + (" (3-D, projected into the calibration's plane)" if cal.plane is not None else ""),
         "",
-        f"{'position error (mm)':<24}{'RMS':>10}{'95 %':>10}{'max':>10}",
-        f"{'nominal model':<24}{s['rms_before_mm']:>10.4g}{s['p95_before_mm']:>10.4g}"
-        f"{s['max_before_mm']:>10.4g}",
-        f"{'calibrated model':<24}{s['rms_after_mm']:>10.4g}{s['p95_after_mm']:>10.4g}"
-        f"{s['max_after_mm']:>10.4g}",
-        f"{'predicted (calibrated)':<24}{s['predicted_rms_after_mm']:>10.4g}",
+        f"{'position error (mm)':<24}{'RMS':>10}{'95 %':>10}{'max':>10}   (per point)",
+        f"{'nominal model':<24}{s['rms_before_per_point_mm']:>10.4g}"
+        f"{s['p95_before_mm']:>10.4g}{s['max_before_mm']:>10.4g}",
+        f"{'calibrated model':<24}{s['rms_after_per_point_mm']:>10.4g}"
+        f"{s['p95_after_mm']:>10.4g}{s['max_after_mm']:>10.4g}",
+        f"{'predicted (calibrated)':<24}{s['predicted_rms_after_per_point_mm']:>10.4g}",
         "",
         f"predicted = the noise of a measurement and the calibration's own uncertainty "
-        f"({s['model_rms_mm']:.3g} mm RMS at these poses)",
+        f"({s['model_rms_per_point_mm']:.3g} mm RMS per point at these poses)",
     ]
     document: dict = {"poses": m, **s}
-    if result.out_of_plane_mm is not None:
-        oop = result.out_of_plane_mm
-        document["out_of_plane_rms_mm"] = float(np.sqrt(np.mean(oop**2)))
-        document["out_of_plane_max_mm"] = float(np.max(np.abs(oop)))
+    if "out_of_plane_rms_per_point_mm" in s:
         lines.append(
-            f"out of the calibration's plane: RMS {document['out_of_plane_rms_mm']:.3g} mm, "
-            f"max {document['out_of_plane_max_mm']:.3g} mm"
+            f"out of the calibration's plane: RMS {s['out_of_plane_rms_per_point_mm']:.3g} mm "
+            f"per point, max {s['out_of_plane_max_mm']:.3g} mm"
         )
     if per_pose:
         targets = meas.targets
@@ -83,13 +78,17 @@ def compensation_report(
     lines = [
         f"compensated {m - bad.size} of {m} poses for {cal.arm.name} (robot frame; the "
         "instrument's pose is not corrected)",
-        f"predicted position error: RMS {s['rms_before_mm']:.4g} mm before, "
-        f"{s['rms_after_mm']:.4g} mm after (the calibration's uncertainty)",
+        f"predicted position error: RMS per point {s['rms_before_per_point_mm']:.4g} mm "
+        f"before, {s['rms_after_per_point_mm']:.4g} mm after (the calibration's uncertainty)",
     ]
-    if s["orientation_rms_before_deg"] is not None:
+    before, after = (
+        s["orientation_rms_before_per_pose_deg"],
+        s["orientation_rms_after_per_pose_deg"],
+    )
+    if before is not None and after is not None:
         lines.append(
-            f"predicted tool orientation error: RMS {s['orientation_rms_before_deg']:.4g} deg "
-            f"before, {s['orientation_rms_after_deg']:.4g} deg after"
+            f"predicted tool orientation error: RMS per pose {before:.4g} deg before, "
+            f"{after:.4g} deg after"
         )
     lines.append(f"largest joint change: {result.largest_change_deg:.4g} deg")
     labels = program.labels or tuple(str(i + 1) for i in range(m))
