@@ -49,8 +49,9 @@ types: $(VENV)/.installed-test
 # OpenBLAS's own thread pool on top of two workers oversubscribes them.
 TEST_ENV := OPENBLAS_NUM_THREADS=1 OMP_NUM_THREADS=1 MKL_NUM_THREADS=1
 
-# Many tests start the armcal program; compiling its modules once first saves each
-# start the ~0.3 s of compiling them again where PYTHONDONTWRITEBYTECODE is set.
+# A few tests start the armcal program as a real process (the rest run it
+# in-process); compiling its modules once first saves each start the ~0.3 s of
+# compiling them again where PYTHONDONTWRITEBYTECODE is set.
 COMPILE := $(BIN)/python -m compileall -q -j 0 src
 
 test: lint types

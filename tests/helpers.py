@@ -1,14 +1,20 @@
-"""Helpers shared by the tests: random arms and deviations, and the program in a subprocess."""
+"""Helpers shared by the tests: random arms and deviations, and the program run in-process
+or in a subprocess."""
 
+import contextlib
+import io
 import math
+import os
 import subprocess
 import sys
 from collections.abc import Sequence
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
 from armcal import PlanarArm
+from armcal.cli import main
 
 
 def random_arm(
@@ -29,11 +35,68 @@ def random_truth(arm: PlanarArm, rng: np.random.Generator) -> np.ndarray:
     return arm.params_from_display(dl, dq, base)
 
 
-def run_cli(cwd: Path, *args: str, timeout: float = 120) -> subprocess.CompletedProcess[str]:
-    """Run ``python -m armcal *args`` in the folder ``cwd``, capturing stdout and stderr."""
+@dataclass(frozen=True)
+class Run:
+    """What a run of the program gave: its exit status and its two streams."""
+
+    returncode: int
+    stdout: str
+    stderr: str
+
+
+def _text_stream(data: bytes = b"") -> io.TextIOWrapper:
+    """A text stream over bytes, with ``.buffer`` like the real ones (not a terminal)."""
+    return io.TextIOWrapper(io.BytesIO(data), encoding="utf-8", newline="")
+
+
+def run_cli(cwd: Path, *args: str, stdin: str = "") -> Run:
+    """Run ``armcal *args`` in-process (:func:`armcal.cli.main`) in the folder ``cwd``.
+
+    The program's streams are captured (stdin reads ``stdin``), as a subprocess
+    would see them, at a fiftieth of a subprocess's cost.  What only a real
+    process shows (a signal, the interpreter's own exit) is tested with
+    :func:`run_program`.
+    """
+    out, err, inp = _text_stream(), _text_stream(), _text_stream(stdin.encode("utf-8"))
+    here = os.getcwd()
+    os.chdir(cwd)
+    try:
+        with (
+            contextlib.redirect_stdout(out),
+            contextlib.redirect_stderr(err),
+            _redirect_stdin(inp),
+        ):
+            code = main(list(args))
+    finally:
+        os.chdir(here)
+    return Run(code, _read(out), _read(err))
+
+
+@contextlib.contextmanager
+def _redirect_stdin(stream: io.TextIOWrapper):
+    saved = sys.stdin
+    sys.stdin = stream
+    try:
+        yield
+    finally:
+        sys.stdin = saved
+
+
+def _read(stream: io.TextIOWrapper) -> str:
+    if stream.closed:  # the program closes stderr after a broken pipe
+        return ""
+    stream.flush()
+    return stream.buffer.getvalue().decode("utf-8")  # type: ignore[attr-defined]
+
+
+def run_program(
+    cwd: Path, *args: str, stdin: str | None = None, timeout: float = 120
+) -> subprocess.CompletedProcess[str]:
+    """Run ``python -m armcal *args`` as a real process in ``cwd``, capturing its streams."""
     return subprocess.run(
         [sys.executable, "-m", "armcal", *args],
         cwd=cwd,
+        input=stdin,
         capture_output=True,
         text=True,
         encoding="utf-8",

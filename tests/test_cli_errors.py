@@ -1,7 +1,9 @@
 """Bad input to the ``armcal`` program: exit 2, one ``armcal: error:`` line, no output.
 
-Every case runs the real program in a subprocess (``python -m armcal``) in an
-empty folder that holds only the case's input files, and checks the contract of
+Every case runs the program in-process (:func:`armcal.cli.main` with its streams
+captured, :func:`helpers.run_cli`) in an empty folder that holds only the
+case's input files -- a few run it as a real process too (exit status, one
+stderr line, a signal) -- and checks the contract of
 PRODUCT.md "Errors": exit status 2, exactly one stderr line that starts with
 ``armcal: error:`` and says what is wrong and where (file, row, column or key),
 no traceback, and no output or temporary file left behind.
@@ -25,7 +27,7 @@ from pathlib import Path
 
 import pytest
 
-from helpers import deviated_tip, run_cli
+from helpers import deviated_tip, run_cli, run_program
 
 # --------------------------------------------------------------------------- valid inputs
 
@@ -1188,6 +1190,27 @@ def test_valid_inputs_succeed(
     assert result.stderr == ""
     assert (tmp_path / output).is_file()
     assert sorted(p.name for p in tmp_path.iterdir()) == sorted({*files, output})
+
+
+#: Catalogue cases also run as a real process: the exit status and stderr the shell sees.
+REAL_PROCESS_CASES = ("meas-nan", "stdout-for-a-folder", "usage-unknown-subcommand")
+
+
+@pytest.mark.parametrize(
+    ("files", "argv", "expected"), [c for c in CASES if c.id in REAL_PROCESS_CASES]
+)
+def test_bad_input_in_a_real_process(
+    tmp_path: Path, files: dict[str, object], argv: tuple[str, ...], expected: tuple[str, ...]
+) -> None:
+    """The in-process catalogue's contract holds for ``python -m armcal`` itself."""
+    _write(tmp_path, files)
+    before = _snapshot(tmp_path)
+    result = run_program(tmp_path, *argv)
+    assert result.returncode == 2, result.stderr
+    assert len(result.stderr.splitlines()) == 1 and result.stderr.startswith("armcal: error:")
+    assert all(text in result.stderr for text in expected), result.stderr
+    assert result.stdout == ""
+    assert _snapshot(tmp_path) == before
 
 
 # --------------------------------------------------------------------------- outputs

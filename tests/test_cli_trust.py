@@ -1,6 +1,7 @@
 """The silent cases of issue 9, through the real program: each is a warning or exit 2.
 
-Every case runs ``python -m armcal`` in a subprocess on files written here.
+Every case runs the program (:func:`helpers.run_cli`, in-process, its streams
+captured) on files written here.
 Positions come from the model written out independently (paper eq. 1) with the
 paper's deviations and seeded noise, so every expected number is derived here,
 not taken from the program's output.

@@ -8,8 +8,6 @@ and the expected residual RMS of least squares, ``sigma sqrt(1 - p / (2 m))``.
 from __future__ import annotations
 
 import json
-import subprocess
-import sys
 from pathlib import Path
 
 import numpy as np
@@ -34,6 +32,7 @@ from armcal.models import (
 )
 from armcal.synthesis import synthesize_measurements
 from armcal.validation import validate
+from helpers import Run, run_cli
 
 G = STANDARD_GRAVITY
 
@@ -253,10 +252,8 @@ def test_3d_data_with_gravity_in_the_instrument_frame():
     np.testing.assert_allclose(k, [1.5, 3.0, 6.0], rtol=1e-6)
 
 
-def _armcal(*args: str, cwd: Path) -> subprocess.CompletedProcess:
-    return subprocess.run(
-        [sys.executable, "-m", "armcal", *args], cwd=cwd, capture_output=True, text=True
-    )
+def _armcal(*args: str, cwd: Path) -> Run:
+    return run_cli(cwd, *args)
 
 
 ROBOT = """
