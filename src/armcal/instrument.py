@@ -7,11 +7,11 @@ per target: the smallest right singular vector of the points, each centred on
 its own target's centroid, is the least-squares normal (total least squares,
 the same plane for every target up to its offset).  In-plane coordinates
 ``(u, v)``, with ``u`` the instrument's ``x`` axis projected onto the plane and
-``v = n x u`` (:func:`armcal.plane.fit_plane`):
+``v = n x u`` (:func:`armcal.models.plane.fit_plane`):
 
 * their rotation about ``n`` against the robot's axes is where the instrument
   stood, unknown, so the base *rotation* ``phi0`` is
-  identified with the base position (:attr:`armcal.arm.PlanarArm.base_rotation`),
+  identified with the base position (:attr:`armcal.models.PlanarArm.base_rotation`),
   and a joint-offset direction is held instead;
 * the sign of ``n`` is not: flipping it mirrors the plane, and a mirrored
   planar arm turns the other way round.  Both sides are fitted and the one the

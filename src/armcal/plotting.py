@@ -217,7 +217,7 @@ def plot_random_plans(
     ----------
     det_d, det_c, abs_det_s : ndarray, shape (N,)
         ``det D'``, ``det C'`` and ``|det S'|`` of ``N`` random plans
-        (:class:`armcal.simulate.PlanStudy`).
+        (:class:`armcal.reproduction.study.PlanStudy`).
     poses : int
         Poses per plan (for the labels).
     title : str, optional
@@ -347,7 +347,7 @@ def plot_validation(arm: PlanarArm, q: np.ndarray, result, *, title: str | None 
     arm : PlanarArm
     q : ndarray, shape (m, n)
         The held-out poses (rad).
-    result : armcal.compensate.Validation
+    result : armcal.validation.Validation
     title : str, optional
 
     Returns

@@ -183,7 +183,8 @@ def design(
 
     Notes
     -----
-    Every criterion is the model's (:mod:`armcal.doe.model`): the weighted
+    Every criterion is the model's
+    (:meth:`~armcal.models.interface.FitModel.plan_information`): the weighted
     information over the free parameters.  The paper's orthogonal plans are
     optimal for its model -- isotropic iid noise, every parameter free -- by
     Hadamard's bound; ``auto`` takes a closed-form plan whenever the model keeps

@@ -165,7 +165,7 @@ def exchange_indices(
     the most informative ones); returns the ``m`` chosen indices.  Every block has
     2 rows (one planar point; :func:`_swap_ratios` writes out the ``2 x 2`` blocks).  The engine of
     :func:`exchange_plan`, for any model whose candidates carry ``2 x p``
-    information blocks (e.g. poses with a payload, :mod:`armcal.doe.compliance`).
+    information blocks (e.g. poses with a payload, :mod:`armcal.doe.loads`).
     """
     if blocks.shape[-2] != 2:
         raise ArmcalError(

@@ -87,7 +87,7 @@ class RobotSpec:
         command prints these.
     elastic : Elastostatic or None
         The ``[elastostatic]`` table: gravity, masses and payload that twist the
-        joints (:mod:`armcal.elastostatic`); None for a rigid arm.
+        joints (:mod:`armcal.models.compliance`); None for a rigid arm.
     gravity_3d : ndarray, shape (3,), or None
         ``[measurement] gravity``: gravity's direction in the instrument frame,
         for 3-D data.
@@ -538,7 +538,7 @@ def load_truth(path: str | os.PathLike, arm: PlanarArm) -> np.ndarray:
     return params
 
 
-#: Truth keys of the compliance parameters (:mod:`armcal.elastostatic`), by kind.
+#: Truth keys of the compliance parameters (:mod:`armcal.models.compliance`), by kind.
 COMPLIANCE_TRUTH_KEYS = {"k": "k_urad_per_Nm", "c": "c_mdeg_per_m"}
 
 

@@ -1,7 +1,7 @@
 """A calibrated arm: a fit model, its identified parameters and their covariance.
 
 What ``identify`` hands on to ``validate``, ``compensate`` and ``export``,
-whether it comes from a :class:`~armcal.identify.Calibration` in memory or from
+whether it comes from a :class:`~armcal.identification.Calibration` in memory or from
 a calibration file (:func:`armcal.files.read_calibration`).  It works for every
 family of arm (:class:`~armcal.models.interface.FitModel`).
 

@@ -93,9 +93,9 @@ def scaled_columns(
     Row x of the real Jacobian is the real part, row y the imaginary part;
     column ``dtheta_k`` (``i l_k e^{i theta_k}``) is divided by ``l_k``.  With
     several targets, ``target`` ``(m,)`` says which one every row measures
-    (:func:`armcal.arm.link_units`); without it every target is measured at every
-    pose (``T`` rows per pose, :func:`plan_rows`) and the targets' columns are
-    weighted by :func:`target_weights`.
+    (:func:`~armcal.models.planar_kinematics.link_units`); without it every
+    target is measured at every pose (``T`` rows per pose, :func:`plan_rows`) and
+    the targets' columns are weighted by :func:`target_weights`.
     """
     return _plan_columns(arm, q, target)[0]
 

@@ -274,7 +274,7 @@ def analytic_plan(arm: PlanarArmSpec, m: int, *, turn_joint1: bool = False) -> n
     times the chunk's poses times :data:`BYTES_PER_CANDIDATE_POSE`) besides
     the O(m n) plan, and the time is O(m (n + PLACEMENT_CANDIDATES)).
 
-    With a joint map (:attr:`armcal.arm.PlanarArmSpec.joint_map`) the plan is the
+    With a joint map (:attr:`armcal.models.PlanarArm.joint_map`) the plan is the
     same in relative link angles ``r = D M q`` (``D`` the differences of
     consecutive link angles).  When ``D M`` is diagonal (joints that count the
     other way round: ``r_j = -q_j``) the limits are placed through it exactly;

@@ -119,7 +119,7 @@ def solve_gauss_newton(
 
     How Step 3 is solved.  The model is linear in the link phasors: the tip is
     ``A w`` with the plan-only regressor ``A = sqrt(m) H``
-    (:func:`armcal.criteria.scaled_jacobian`) and ``w = w(DeltaPi)``, so the
+    (:func:`armcal.models.scaled_jacobian`) and ``w = w(DeltaPi)``, so the
     Jacobian of a set at its estimate is ``J = A K`` with ``K = dw/dDeltaPi``
     ``(p x p)``.  Per link ``K`` is a rotation by ``dtheta_k`` times
     ``diag(L_k, 1)``: with unit-norm columns ``J D = A R`` for an orthogonal ``R``,

@@ -482,7 +482,7 @@ EQUATIONS: dict[str, Entry] = {
         where="Minimum number of poses (Table III's 3-pose column; Section VI's 'from 4 to 20')",
         paper="3 poses calibrate the 3- and 4-link arms (Table III); the 4-link study starts "
         "at 4 poses (Section VI)",
-        computed="smallest m of full Jacobian rank (armcal.criteria.identifiability, largest "
+        computed="smallest m of full Jacobian rank (armcal.models.identifiability, largest "
         "rank over {plans} random plans per m) and smallest m of an orthogonal plan "
         "(armcal.doe.orthogonal_plan, D-efficiency 1): {table}. Implied by the paper: "
         "{implied}",

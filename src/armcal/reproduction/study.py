@@ -55,7 +55,8 @@ class PlanStudy:
         (:func:`armcal.models.planar_information.scaled_jacobian`, ``p_f x p_f``), which
         compares plans of that model but is no longer at most 1.
     det_c : ndarray, shape (N,)
-        ``det C'`` with ``C' = C / m`` (eq. 20 corrected, see :class:`~armcal.criteria.DStar`).
+        ``det C'`` with ``C' = C / m`` (eq. 20 corrected, see
+        :class:`~armcal.models.planar_criteria.DStar`).
         The paper's D* assumes isotropic iid noise and every parameter free: it
         ignores the noise model and the fixed parameters.
     abs_det_s : ndarray, shape (N,)
