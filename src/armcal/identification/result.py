@@ -25,10 +25,14 @@ from ..numerics import rms
 from .judgement import GoodnessOfFit, Outlier
 
 __all__ = [
+    "STRONG_CORRELATION",
     "Calibration",
     "Estimate",
     "NestedFit",
 ]
+
+#: The correlation of two estimates beyond which a report names the pair (|r|).
+STRONG_CORRELATION = 0.9
 
 
 @dataclass(frozen=True)
@@ -294,3 +298,18 @@ class Calibration:
         """Largest Euclidean residual of a pose in the fit, mm."""
         kept = self.pose_residuals if self.used is None else self.pose_residuals[self.used]
         return float(np.max(kept))
+
+    @property
+    def worst_pose(self) -> int:
+        """Index of the pose in the fit with the largest Euclidean residual."""
+        kept = self.pose_residuals
+        return int(np.argmax(kept if self.used is None else np.where(self.used, kept, -1.0)))
+
+    def strong_correlations(
+        self, above: float = STRONG_CORRELATION
+    ) -> list[tuple[str, str, float]]:
+        """Pairs of parameters whose estimates correlate beyond ``above`` in magnitude."""
+        corr = self.correlation
+        off = np.abs(corr - np.eye(len(self.names)))
+        pairs = zip(*np.nonzero(np.triu(off > above)), strict=True)
+        return [(self.names[i], self.names[j], float(corr[i, j])) for i, j in pairs]

@@ -5,6 +5,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..identification import Calibration
+from ..identification.result import STRONG_CORRELATION
 from .common import identified, model_lines, small
 
 __all__ = [
@@ -94,8 +95,7 @@ def format_calibration(cal: Calibration, *, truth: np.ndarray | None = None) -> 
             if name not in arm.fixed and cal.std[i] > 0:
                 line += f"{(cal.values[i] - truth_display[i]) / cal.std[i]:>+11.2f}"
         lines.append(line.rstrip())
-    kept = cal.pose_residuals if cal.used is None else np.where(cal.used, cal.pose_residuals, -1)
-    worst = int(np.argmax(kept))
+    worst = cal.worst_pose
     lines += [
         "",
         f"sigma {cal.sigma_mm:.4g} mm ({cal.sigma_source}); "
@@ -106,13 +106,9 @@ def format_calibration(cal: Calibration, *, truth: np.ndarray | None = None) -> 
         f"{cal.method}: {cal.iterations} iteration(s), "
         + ("converged" if cal.converged else "NOT converged: the estimate may be off"),
     ]
-    corr = np.abs(cal.correlation - np.eye(len(cal.names)))
-    strong = [
-        f"{cal.names[i]}/{cal.names[j]} {cal.correlation[i, j]:+.2f}"
-        for i, j in zip(*np.nonzero(np.triu(corr > 0.9)), strict=True)
-    ]
+    strong = [f"{a}/{b} {r:+.2f}" for a, b, r in cal.strong_correlations()]
     if strong:
-        lines.append("strongly correlated (|r| > 0.9): " + ", ".join(strong))
+        lines.append(f"strongly correlated (|r| > {STRONG_CORRELATION:g}): " + ", ".join(strong))
     lines += _outlier_lines(cal)
     if cal.plane is not None:
         plane = cal.plane

@@ -2,10 +2,6 @@
 
 from __future__ import annotations
 
-import math
-
-import numpy as np
-
 from ..paper import PAPER_DIGIT
 from ..reproduction.compute import TABLE_COLUMNS, Reproduction
 from .common import markdown
@@ -44,8 +40,7 @@ def _equations_line(result: Reproduction) -> str:
 def format_reproduction(result: Reproduction) -> str:
     """``report.md``: set-up, Tables I-III, Figures 1-2, equations checked, disagreements."""
     t3 = result.tables["table3"]
-    judged = [r for r in t3 if r["analytic_std"] is not None and r["simulated_std"] is not None]
-    worst = max(abs(r["simulated_std"] / r["analytic_std"] - 1) for r in judged)
+    study = result.figure1.summary()
     lines = [
         "# The paper's Sections II-VI, recomputed by armcal",
         "",
@@ -73,9 +68,10 @@ def format_reproduction(result: Reproduction) -> str:
         f"{PAPER_DIGIT} (one unit of its last digit) of `analytic_std`; `computable` is no "
         "when no plan of that many poses identifies the parameters.",
         f"- Table III: {_counts_line(result)}.",
-        f"- Simulated and analytic std agree to within {100 * worst:.1f} % in every "
-        f"identifiable configuration (sampling error of a std from {result.trials} trials: "
-        f"{100 / math.sqrt(2 * result.trials):.1f} %).",
+        f"- Simulated and analytic std agree to within "
+        f"{100 * result.worst_std_disagreement:.1f} % in every identifiable configuration "
+        f"(sampling error of a std from {result.trials} trials: "
+        f"{100 * result.std_sampling_error:.1f} %).",
         f"- Equations: {_equations_line(result)} (section 'Equations checked').",
         "",
         "## Table I: optimality conditions on the generated plans (`table1.csv`)",
@@ -95,11 +91,11 @@ def format_reproduction(result: Reproduction) -> str:
         "![Figure 1](figure1.png)",
         "",
         f"det(D') = D-efficiency^p over {result.random_plans} random plans: median "
-        f"{np.median(result.figure1.det_d):.3g}, max {result.figure1.det_d.max():.3g} "
-        f"(orthogonal plan: 1); {100 * np.mean(result.figure1.det_d < 0.5):.1f} % of the "
+        f"{study['det_d_median']:.3g}, max {study['det_d_max']:.3g} "
+        f"(orthogonal plan: 1); {100 * study['det_d_below_half']:.1f} % of the "
         "plans are below 0.5. det(C') median "
-        f"{np.median(result.figure1.det_c):.3g} (optimum 1), |det(S')| median "
-        f"{np.median(result.figure1.abs_det_s):.3g} (optimum 0). This confirms the paper's "
+        f"{study['det_c_median']:.3g} (optimum 1), |det(S')| median "
+        f"{study['abs_det_s_median']:.3g} (optimum 0). This confirms the paper's "
         "qualitative claim that random plans are poor.",
         "",
         "## Figure 2: accuracy against the number of poses, 4-link arm (`figure2.png`)",

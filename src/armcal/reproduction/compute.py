@@ -132,6 +132,20 @@ class Reproduction:
     sigma_mm: float
     seconds: float
 
+    @property
+    def worst_std_disagreement(self) -> float:
+        """``max |simulated std / analytic std - 1|`` over Table III's identifiable rows."""
+        rows = self.tables["table3"]
+        judged = [
+            r for r in rows if r["analytic_std"] is not None and r["simulated_std"] is not None
+        ]
+        return max(abs(r["simulated_std"] / r["analytic_std"] - 1) for r in judged)
+
+    @property
+    def std_sampling_error(self) -> float:
+        """Relative std of a sample std from :attr:`trials` normal draws, ``1 / sqrt(2 N)``."""
+        return 1.0 / math.sqrt(2 * self.trials)
+
     def printed_values(self) -> dict[str, int]:
         """Table III's printed values, each counted once.
 

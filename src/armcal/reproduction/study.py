@@ -82,6 +82,17 @@ class PlanStudy:
     def identifiable(self) -> np.ndarray:
         return np.all(np.isfinite(self.std), axis=-1)
 
+    def summary(self) -> dict[str, float]:
+        """Medians of ``det D'``, ``det C'``, ``|det S'|``, the largest ``det D'`` and the
+        share of plans with ``det D' < 0.5`` (the paper's "random plans are poor")."""
+        return {
+            "det_d_median": float(np.median(self.det_d)),
+            "det_d_max": float(self.det_d.max()),
+            "det_d_below_half": float(np.mean(self.det_d < 0.5)),
+            "det_c_median": float(np.median(self.det_c)),
+            "abs_det_s_median": float(np.median(self.abs_det_s)),
+        }
+
 
 def random_plan_study(
     arm: PlanarArm,
