@@ -486,6 +486,28 @@ class PlanQuality:
             f"A {eff['A']:.4f}, E {eff['E']:.4f}{position})"
         )
 
+    def __getitem__(self, name: str) -> dict[str, float | str]:
+        """A parameter by name: its predicted std and unit (display units; 0 when fixed).
+
+        Examples
+        --------
+        >>> from armcal.models import PlanarArm
+        >>> from armcal.doe import orthogonal_plan
+        >>> arm = PlanarArm([260.0, 180.0])
+        >>> plan = orthogonal_plan(arm, 16)
+        >>> quality = evaluate_plan(arm, plan, sigma=0.1, test_q=np.zeros((0, 2)))
+        >>> round(quality["dl2"]["predicted_std"], 12), quality["dl2"]["unit"]  # sigma/sqrt(m)
+        (0.025, 'mm')
+        """
+        names = self.model.param_names
+        if name not in names:
+            raise KeyError(f"no parameter {name!r}; the parameters are {', '.join(names)}")
+        i = names.index(name)
+        return {
+            "predicted_std": float(self.predicted_std[i]),
+            "unit": self.model.param_units[i],
+        }
+
 
 def evaluate_plan(
     model: FitModel,
