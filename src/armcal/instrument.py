@@ -71,7 +71,7 @@ def identify_3d(
     ----------
     model : PlanarArm or CompliantArm
         A planar arm with ``base_offset`` and ``base_rotation`` (the base pose in
-        the fitted plane is unknown; :func:`armcal.files.arm_for_measurements`
+        the fitted plane is unknown; :func:`armcal.workflow.measured_arm`
         sets both), or a model of its joint compliance.
     q : ndarray, shape (m, n)
         Joint angles, rad.
@@ -97,7 +97,7 @@ def identify_3d(
     if not (arm.base_offset and arm.base_rotation):
         raise ArmcalError(
             "3-D data need the base pose in the plane: identify with base_offset and "
-            "base_rotation (armcal.files.arm_for_measurements sets both)"
+            "base_rotation (armcal.workflow.measured_arm sets both)"
         )
     xyz = np.asarray(xyz, dtype=float)
     rigid = arm.conditions(q, target=target, sigma_mm=row_sigma)

@@ -16,16 +16,14 @@ import os
 import re
 from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import Any
 
 import numpy as np
 
-from ..errors import ArmcalWarning, InputError
+from ..errors import ArmcalWarning
 from ..formats import reader_columns
 from ..models import (
     Loads,
     PlanarArm,
-    Target,
 )
 from .common import MAX_ABS_VALUE, fail, read_text, suggest
 from .robots import SIGMA_RANGE_MM
@@ -36,7 +34,6 @@ __all__ = [
     "REACH_MARGIN",
     "Measurements",
     "Program",
-    "arm_for_measurements",
     "format_measurements_csv",
     "format_plan_csv",
     "format_program_csv",
@@ -602,39 +599,6 @@ def _check_target_labels(path, arm: PlanarArm, labels: list[str], lines: list[in
                 f"{arm.name}: {suggest(label, known)}the robot file's [targets] has "
                 f"{', '.join(known)}",
             )
-
-
-def arm_for_measurements(arm: PlanarArm, meas: Measurements) -> PlanarArm:
-    """The arm to identify from ``meas``: its targets are those measured.
-
-    With a ``target`` column, the targets are the labels measured, in the order
-    of the robot file's ``[targets]`` (nominal last link from there) or, without
-    one, in the order they first appear (nominal: the last link's length, angle
-    0).  With a ``z_mm`` column the base pose in the fitted plane is identified:
-    base offset and base rotation (:mod:`armcal.instrument`).
-    """
-    changes: dict[str, Any] = {}
-    if meas.targets is not None:
-        seen = list(dict.fromkeys(meas.targets))
-        if arm.targets:
-            targets = tuple(t for t in arm.targets if t.label in seen)
-        else:
-            targets = tuple(Target(label, float(arm.link_lengths[-1])) for label in seen)
-        if targets != arm.targets:
-            changes["targets"] = targets
-    elif arm.targets:
-        raise InputError(
-            f"{arm.name} has targets ({', '.join(arm.target_labels)}) but the measurements have "
-            "no target column; add a column 'target' naming the target of every row"
-        )
-    if meas.z is not None:
-        changes.update(base_offset=True, base_rotation=True)
-    if not changes:
-        return arm
-    try:  # the fixed parameters that still exist are carried over
-        return arm.replace(**changes)
-    except ValueError as exc:
-        raise InputError(f"{arm.name}: {exc}") from None
 
 
 def _angle_text(q_rad: float) -> str:

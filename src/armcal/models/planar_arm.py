@@ -211,6 +211,18 @@ class PlanarArmSpec(PlanarGeometry):
         replaces the instrument covariance row by row; ``target`` ``(m,)`` is every
         row's target on an arm with several.
         """
+        noise, q, joint = self._noise_at(q, params, target, noise)
+        return noise.pose_covariances(q.shape[:-1], joint_jacobian=joint, row_sigma=row_sigma)
+
+    def _noise_at(
+        self,
+        q: np.ndarray,
+        params: np.ndarray | None,
+        target: np.ndarray | None,
+        noise: NoiseModel | None,
+    ) -> tuple[NoiseModel, np.ndarray, np.ndarray | None]:
+        """The noise model (``noise`` or the arm's), the rows, and the joint Jacobian its
+        encoder term needs (None without encoder noise)."""
         noise = self.noise if noise is None else noise
         if noise is None:
             raise ValueError(f"{self.name} has no noise model: give one")
@@ -218,7 +230,7 @@ class PlanarArmSpec(PlanarGeometry):
         joint = (
             None if noise.joint_sigma is None else joint_jacobian(self, q, params, target=target)
         )
-        return noise.pose_covariances(q.shape[:-1], joint_jacobian=joint, row_sigma=row_sigma)
+        return noise, q, joint
 
     def relative_whitening(
         self, conditions: Conditions, params: np.ndarray | None = None
@@ -251,11 +263,5 @@ class PlanarArmSpec(PlanarGeometry):
 
         ``W_i^T W_i = sigma_ref^2 Sigma_i^-1`` (:meth:`armcal.noise.NoiseModel.whitening`).
         """
-        noise = self.noise if noise is None else noise
-        if noise is None:
-            raise ValueError(f"{self.name} has no noise model: give one")
-        q = np.asarray(q, dtype=float)
-        joint = (
-            None if noise.joint_sigma is None else joint_jacobian(self, q, params, target=target)
-        )
+        noise, q, joint = self._noise_at(q, params, target, noise)
         return noise.whitening(q.shape[:-1], joint_jacobian=joint, row_sigma=row_sigma)
