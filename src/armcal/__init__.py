@@ -17,6 +17,8 @@ The public API, by concern (each module's docstring says more):
 * :mod:`armcal.export` -- :func:`robot_toml` and :func:`urdf` of a calibrated arm;
 * :mod:`armcal.synthesis` and :mod:`armcal.simulate` -- :func:`synthesize_measurements`,
   batched :func:`monte_carlo`;
+* :mod:`armcal.workflow` -- what each command does beyond its files, as library
+  calls with the command line's checks and warnings (:func:`~armcal.workflow.calibrate`);
 * :mod:`armcal.reproduction` -- the paper's tables and figures recomputed;
 * :mod:`armcal.report` -- every result as text and as JSON;
 * :mod:`armcal.files` -- robot, truth, plan, measurement and calibration files.
