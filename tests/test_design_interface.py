@@ -25,7 +25,7 @@ from numpy.testing import assert_allclose
 from armcal import PlanarArm, random_plan
 from armcal.criteria import d_efficiency, evaluate_plan, predicted_std
 from armcal.doe import certify, design, feasible_poses
-from armcal.models import Annulus, FitModel, Loads
+from armcal.models import Annulus, CompliantArm, Elastostatic, FitModel, Loads
 from armcal.models.information import BlockInformation
 from armcal.noise import NoiseModel
 
@@ -40,7 +40,7 @@ class ThroughJacobian:
         return getattr(self._arm, name)
 
     def plan_information(self, q: np.ndarray, loads: Loads | None = None) -> BlockInformation:
-        return BlockInformation(self._arm, q, loads)
+        return BlockInformation(self, q, loads)
 
     def closed_form_plans(self, m: int) -> None:
         return None
@@ -149,3 +149,48 @@ def test_a_family_without_closed_forms_gets_a_certified_design_in_a_region():
     assert made.certificate is not None and made.certificate.certified_d_efficiency >= 0.95
     assert d_efficiency(arm, reference.q) < 0.9  # the constraints bind
     assert d_efficiency(arm, made.q) / d_efficiency(arm, reference.q) >= 0.99
+
+
+class ThreeCoordinates(ThroughJacobian):
+    """A planar arm measured as points with a third coordinate ``z = 0.3 x``: a model of
+    ``d = 3`` whose blocks have three rows, as a spatial family's will."""
+
+    point_dim = 3
+
+    def jacobian(self, conditions, params=None):
+        jac = self._arm.jacobian(conditions, params)
+        return np.concatenate([jac, 0.3 * jac[..., :1, :]], axis=-2)
+
+    def whitening(self, conditions, params=None):
+        return None
+
+
+def test_a_model_of_three_coordinates_is_designed_and_certified():
+    """Exchange works on planar points only (2 x 2 blocks in closed form): the designer
+    then optimizes without it, and the certificate works on 3-row blocks."""
+    model = ThreeCoordinates(PlanarArm([300.0, 250.0, 150.0]))
+    assert model.plan_information(np.zeros((4, 3))).blocks().shape == (4, 3, 6)
+    made = design(model, 8, rng=0)
+    assert made.method == "optimize"
+    assert made.certificate is not None and made.certificate.certified_d_efficiency >= 0.9
+
+
+def test_batched_plans_keep_their_own_covariance(rng):
+    """Plans (B, m, n) through the generic information: one factor per plan, equal to the
+    plan's alone (a compliant arm, whose view is the generic one)."""
+    arm = PlanarArm([300.0, 250.0, 150.0], sigma=0.05)
+    model = CompliantArm(arm, Elastostatic.create(3, gravity_xy=[0, -1], payload_kg=10.0))
+    plans = rng.uniform(-2.0, 2.0, (3, 8, 3))
+    batched = predicted_std(model, plans, 0.05)
+    alone = np.stack([predicted_std(model, q, 0.05) for q in plans])
+    assert batched.shape == (3, model.n_params)
+    assert_allclose(batched, alone, rtol=1e-10)
+
+
+def test_loads_must_give_every_pose_one_row():
+    model = CompliantArm(
+        PlanarArm([300.0, 250.0, 150.0]),
+        Elastostatic.create(3, gravity_xy=[0, -1], payload_kg=10.0),
+    )
+    with pytest.raises(ValueError, match="one row per pose"):
+        model.plan_information(np.zeros((6, 3)), Loads.create(3, [0.0, 5.0, 10.0])).blocks()

@@ -270,7 +270,8 @@ def design(
         used = "optimize"
         repeats = int(np.count_nonzero(repeated_poses(q))) if distinct else 0
         found = float(d_efficiency(model, q))
-        single = len(model.target_labels) <= 1  # exchange evaluates one point per pose
+        # exchange evaluates one point in the plane per pose (2 x 2 blocks in closed form)
+        single = len(model.target_labels) <= 1 and model.point_dim == 2
         if criterion == "D" and single:
             pool = feasible_poses(model, 4000, rng=rng) if candidates is None else candidates
             polished = exchange_plan(model, m, pool, start=q, rng=rng, distinct=distinct)

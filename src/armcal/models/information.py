@@ -212,6 +212,10 @@ class BlockInformation:
         """Every target of every pose of ``q`` ``(..., m, n)``, plan after plan."""
         flat = q.reshape(-1, q.shape[-1])
         loads = self.loads
+        if loads is not None and loads.n_rows != q.shape[-2]:
+            raise ValueError(
+                f"loads must have one row per pose ({q.shape[-2]}), got {loads.n_rows}"
+            )
         if loads is not None and flat.shape[0] != loads.n_rows:  # the same loads in every plan
             plans = flat.shape[0] // loads.n_rows
             loads = Loads(np.tile(loads.payload_kg, plans), np.tile(loads.force_n, (plans, 1)))
@@ -286,4 +290,8 @@ class BlockInformation:
         return self.model.check_identifiable(self._conditions(self.q))
 
     def covariance_factor(self, params: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
-        return self.model.covariance_factor(self._conditions(self.q), params)
+        if self.q.ndim == 2:  # one plan: the model's own (its rank policy and weights)
+            return self.model.covariance_factor(self._conditions(self.q), params)
+        rows = whitened_blocks(self.model, self._conditions(self.q), params)  # plan after plan
+        stacked = rows.reshape(*self.q.shape[:-2], -1, self.model.n_free)
+        return covariance_factor_from(stacked, self.model.free)
