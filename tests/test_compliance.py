@@ -418,3 +418,33 @@ def test_compliance_with_a_nest_of_three_reflectors():
     # the calibration's error, a few sigma/sqrt(m), not the deflection (up to ~1 mm)
     assert np.max(np.linalg.norm(reached - goal, axis=1)) < 0.05
     assert np.max(result.position_before_mm) > 0.3
+
+
+LUMPED_ROBOT = ROBOT.replace("link_masses_kg = [20, 12, 6]\n", "")
+LUMPED_TRUTH = TRUTH + "c_mdeg_per_m = [0.5, 1.0, 2.0]\n"
+
+
+def test_a_lumped_robot_takes_the_truth_of_the_plans_loads(tmp_path):
+    """Masses unknown: with the robot file's payload alone only c1..c3 are seen, with a
+    payload column that varies k1..k3 too (12 parameters, not 9).  The truth is read for
+    the plan's model, so synthesize and simulate accept a truth with both."""
+    (tmp_path / "robot.toml").write_text(LUMPED_ROBOT)
+    (tmp_path / "truth.toml").write_text(LUMPED_TRUTH)
+    q = np.random.default_rng(5).uniform(-140, 140, (30, 3))
+    rows = [f"{a},{b},{c},{10 if i % 2 else 0}" for i, (a, b, c) in enumerate(q)]
+    (tmp_path / "plan.csv").write_text("\n".join(["q1_deg,q2_deg,q3_deg,payload_kg", *rows]))
+    common = ["--robot", "robot.toml", "--plan", "plan.csv", "--truth", "truth.toml"]
+    run = _armcal("synthesize", *common, "-o", "meas.csv", cwd=tmp_path)
+    assert run.returncode == 0, run.stderr
+    run = _armcal("simulate", *common, "--trials", "50", "--json", cwd=tmp_path)
+    assert run.returncode == 0, run.stderr
+    names = list(json.loads(run.stdout)["predicted_std"])
+    assert names[-6:] == ["c1", "c2", "c3", "k1", "k2", "k3"]
+
+
+def test_the_demo_of_a_robot_with_compliance_takes_a_geometric_truth(tmp_path):
+    """The demo calibrates the geometry: its truth file needs no compliance."""
+    (tmp_path / "robot.toml").write_text(ROBOT)
+    (tmp_path / "truth.toml").write_text("dl_mm = [1.0, -0.5, 0.8]\ndq_deg = [0.3, -0.2, 0.4]\n")
+    run = _armcal("demo", "--robot", "robot.toml", "--truth", "truth.toml", cwd=tmp_path)
+    assert run.returncode == 0, run.stderr

@@ -1,6 +1,6 @@
 """The ``armcal`` command line (``armcal COMMAND --help``; ``python -m armcal``).
 
-- :mod:`.main`: the program, its exit status and the paths it checks first;
+- :mod:`.program`: the program, its exit status and the paths it checks first;
 - :mod:`.parser` and :mod:`.options`: the commands, their options and types;
 - :mod:`.help`: every command's description, files and example;
 - :mod:`.commands`: each command, thin over :mod:`armcal.workflow`;
@@ -9,8 +9,8 @@
 
 from __future__ import annotations
 
-from .main import main
 from .output import CLI_ACTIONS
 from .parser import build_parser
+from .program import main
 
 __all__ = ["CLI_ACTIONS", "build_parser", "main"]

@@ -39,7 +39,7 @@ from ..files import (
     write_folder,
 )
 from ..formats import format_reference
-from ..models import CompliantArm, PlanarArm
+from ..models import CompliantArm, FitModel, PlanarArm
 from ..progress import ProgressBar
 from ..report import (
     compensation_report,
@@ -47,25 +47,25 @@ from ..report import (
     format_calibration,
     format_cross_validation,
     format_monte_carlo,
-    format_quality,
     format_reproduction,
     monte_carlo_to_dict,
     poses_needed_summary,
-    quality_to_dict,
+    quality_report,
     reproduction_summary,
     table_csv,
     validation_report,
 )
 from ..reproduction import TABLE_COLUMNS, reproduce
 from ..workflow import (
+    FixError,
     calibrate,
     compensate_program,
     design_plan,
     design_sigma,
     evaluate_file,
     export_files,
-    fit_model,
     model_arm,
+    plan_model,
     simulate_plan,
     simulation_sigma,
     size_plan,
@@ -105,22 +105,21 @@ def _model(args: argparse.Namespace, spec: RobotSpec) -> PlanarArm:
     fixed = getattr(args, "fix", None)
     try:
         return model_arm(spec.arm, fixed=fixed, sigma=getattr(args, "sigma", None))
-    except ArmcalError as exc:
+    except FixError as exc:
         raise ArmcalError(f"--fix: {exc}") from None
 
 
-def _truth(args: argparse.Namespace, spec: RobotSpec) -> np.ndarray:
-    """The virtual robot's parameters: ``--truth`` (with compliance for [elastostatic])."""
-    if spec.elastic is not None:
-        model = fit_model(spec, spec.arm)
-        assert isinstance(model, CompliantArm)
+def _truth(args: argparse.Namespace, spec: RobotSpec, model: FitModel) -> np.ndarray:
+    """The parameters of the virtual robot ``model`` (a plan's, with the plan's loads):
+    ``--truth``, with compliance for a model of joint compliance, else the built-in's."""
+    if isinstance(model, CompliantArm):
         if args.truth is None:
             keys = ", ".join(COMPLIANCE_TRUTH_KEYS[k] for k in dict.fromkeys(model.kinds))
             raise ArmcalError(
                 f"{spec.source}: a robot with [elastostatic] needs --truth truth.toml with the "
                 f"deviations and {keys}"
             )
-        geometry = load_truth(args.truth, spec.arm)
+        geometry = load_truth(args.truth, model.arm)
         return np.concatenate([geometry, load_compliance_truth(args.truth, model)])
     if args.truth is not None:
         return load_truth(args.truth, spec.arm)
@@ -132,20 +131,19 @@ def _truth(args: argparse.Namespace, spec: RobotSpec) -> np.ndarray:
     return spec.default_truth
 
 
-def _plan(path: str, spec: RobotSpec, arm: PlanarArm) -> tuple[np.ndarray, np.ndarray | None]:
+def _plan(path: str, spec: RobotSpec) -> tuple[np.ndarray, np.ndarray | None]:
     """A plan file's poses (rad) and, for a robot with [elastostatic], its payload column."""
     if spec.elastic is None:
-        return read_plan(path, arm), None
+        return read_plan(path, spec.arm), None
     return read_loaded_plan(path, spec.arm)
 
 
 def _test_poses(args: argparse.Namespace, spec: RobotSpec) -> np.ndarray:
-    """``--test-poses``, else 1000 uniform poses within the limits."""
-    given = None if args.test_poses is None else read_plan(args.test_poses, spec.arm)
-    return test_poses(spec, args.seed, given)
+    """``--test-poses``, else 1000 uniform poses within the limits (:func:`test_poses`)."""
+    return test_poses(spec, args.seed, args.test_poses)
 
 
-def _written(args: argparse.Namespace, *paths: str | None) -> list[str]:
+def _written(*paths: str | None) -> list[str]:
     return [f"wrote {path}" for path in paths if path is not None]
 
 
@@ -155,15 +153,11 @@ def _written(args: argparse.Namespace, *paths: str | None) -> list[str]:
 def synthesize(args: argparse.Namespace) -> None:
     """``armcal synthesize``: measurements of a virtual robot."""
     spec = load_robot(args.robot)
-    q, payload = _plan(args.plan, spec, spec.arm)
-    truth = _truth(args, spec)
+    q, payload = _plan(args.plan, spec)
+    model, loads = plan_model(spec, spec.arm, q.shape[0], payload)
+    truth = _truth(args, spec, model)
     made = synthesize_plan(
-        spec,
-        q,
-        truth,
-        sigma=simulation_sigma(spec, args.sigma),
-        seed=args.seed,
-        payload=payload,
+        model, q, truth, sigma=simulation_sigma(spec, args.sigma), seed=args.seed, loads=loads
     )
     text = format_measurements_csv(made.q, made.points, made.labels, made.targets, made.payload_kg)
     if args.output is None or args.output == STDIO:
@@ -199,10 +193,8 @@ def identify(args: argparse.Namespace) -> None:
             folds=args.cross_validate,
             seed=args.seed,
         )
-    except ArmcalError as exc:
-        if str(exc).startswith(("unknown parameter", "every parameter would be fixed")):
-            raise ArmcalError(f"--fix: {exc}") from None
-        raise
+    except FixError as exc:
+        raise ArmcalError(f"--fix: {exc}") from None
     cal = run.calibration
     text = format_calibration(cal)
     document = calibration_document(cal, warnings=run.warnings, words=CLI_ACTIONS)
@@ -263,9 +255,9 @@ def design(args: argparse.Namespace) -> None:
         order=args.order,
         distinct=args.distinct,
         payloads=args.payloads,
-        test_q=_test_poses(args, spec) if spec.elastic is None else np.zeros((0, arm.n_joints)),
+        test_q=_test_poses(args, spec),
     )
-    document, report = quality_to_dict(run.quality), format_quality(run.quality)
+    document, report = quality_report(run.quality)
     extra, header = design_summary(run.design, run.seconds)
     document.update(extra)
     if args.plot is not None:  # first: drawing is what can fail, the plan CSV is text
@@ -274,7 +266,7 @@ def design(args: argparse.Namespace) -> None:
         save_figure(plot_plan(spec.arm, run.q), args.plot)
     if args.output is not None:
         atomic_write(args.output, format_plan_csv(run.q, run.payload_kg))
-    written = _written(args, args.output, args.plot)
+    written = _written(args.output, args.plot)
     text = "\n".join([*header, report, *([""] if written else []), *written])
     emit(args, document, text, run.warnings)
 
@@ -283,28 +275,29 @@ def evaluate(args: argparse.Namespace) -> None:
     """``armcal evaluate``: a plan's quality."""
     spec = load_robot(args.robot)
     arm = _model(args, spec)
-    q, payload = _plan(args.plan, spec, arm)
-    test_q = _test_poses(args, spec) if spec.elastic is None else np.zeros((0, arm.n_joints))
-    run = evaluate_file(spec, arm, q, test_q=test_q, payload=payload, source=args.plan)
-    emit(args, quality_to_dict(run.quality), format_quality(run.quality), run.warnings)
+    q, payload = _plan(args.plan, spec)
+    run = evaluate_file(
+        spec, arm, q, test_q=_test_poses(args, spec), payload=payload, source=args.plan
+    )
+    emit(args, *quality_report(run.quality), run.warnings)
 
 
 def simulate(args: argparse.Namespace) -> None:
     """``armcal simulate``: a Monte Carlo of a plan."""
     spec = load_robot(args.robot)
     arm = _model(args, spec)
-    q, payload = _plan(args.plan, spec, arm)
-    truth = _truth(args, spec)
+    q, payload = _plan(args.plan, spec)
+    model, loads = plan_model(spec, arm, q.shape[0], payload)
+    truth = _truth(args, spec, model)
     result = simulate_plan(
-        spec,
-        arm,
+        model,
         q,
         truth,
         trials=args.trials,
         method=args.method,
         seed=args.seed,
-        test_q=_test_poses(args, spec) if spec.elastic is None else None,
-        payload=payload,
+        test_q=_test_poses(args, spec),
+        loads=loads,
         progress=ProgressBar("simulate"),
         source=args.plan,
     )
@@ -327,7 +320,7 @@ def poses_needed(args: argparse.Namespace) -> None:
         requirement,
         getattr(args, requirement),
         seed=args.seed,
-        test_q=_test_poses(args, spec) if spec.elastic is None else np.zeros((0, arm.n_joints)),
+        test_q=_test_poses(args, spec),
         max_poses=args.max_poses,
     )
     document, lines = poses_needed_summary(found, arm, seconds)
@@ -377,7 +370,7 @@ def check_compliance(args: argparse.Namespace) -> None:
 def demo(args: argparse.Namespace) -> None:
     """``armcal demo``: the whole workflow on a built-in robot."""
     spec = load_robot(args.robot)
-    truth = _truth(args, spec)
+    truth = _truth(args, spec, spec.arm)  # the demo calibrates the geometry
     sigma = design_sigma(spec.arm) if args.sigma is None else args.sigma
     result = run_demo(spec.arm, truth, poses=args.poses, sigma=sigma, seed=args.seed)
     lines = [result.text]

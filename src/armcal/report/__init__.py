@@ -15,7 +15,7 @@ from .calibration import effect_lines, format_calibration, format_cross_validati
 from .common import model_lines, model_to_dict, table_csv
 from .design import design_summary, poses_needed_summary
 from .monte_carlo import format_monte_carlo, monte_carlo_to_dict
-from .quality import format_quality, quality_to_dict
+from .quality import format_quality, quality_report, quality_to_dict
 from .reproduction import format_reproduction, reproduction_summary
 from .validation import compensation_report, validation_report
 
@@ -32,6 +32,7 @@ __all__ = [
     "model_to_dict",
     "monte_carlo_to_dict",
     "poses_needed_summary",
+    "quality_report",
     "quality_to_dict",
     "reproduction_summary",
     "table_csv",

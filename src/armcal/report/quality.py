@@ -7,6 +7,7 @@ from .common import identified, model_lines, model_to_dict, std_cell
 
 __all__ = [
     "format_quality",
+    "quality_report",
     "quality_to_dict",
 ]
 
@@ -30,10 +31,24 @@ def _table1_line(quality: PlanQuality) -> str:
     )
 
 
+def quality_report(quality: PlanQuality) -> tuple[dict, str]:
+    """The JSON document and the text of :func:`~armcal.criteria.evaluate_plan`."""
+    if quality.payload_counts is not None:
+        return _loaded_quality(quality)
+    return _document(quality), _text(quality)
+
+
 def format_quality(quality: PlanQuality) -> str:
     """Human-readable report of :func:`evaluate_plan`: criteria, std table, accuracy."""
-    if quality.payload_counts is not None:
-        return _loaded_quality(quality)[1]
+    return quality_report(quality)[1]
+
+
+def quality_to_dict(quality: PlanQuality) -> dict:
+    """JSON document of :func:`evaluate_plan` (keys of PRODUCT.md plus details)."""
+    return quality_report(quality)[0]
+
+
+def _text(quality: PlanQuality) -> str:
     arm = quality.model.arm  # the geometric model, described in words
     eff = quality.efficiencies
     obs = quality.observability
@@ -65,14 +80,9 @@ def format_quality(quality: PlanQuality) -> str:
     return "\n".join(lines)
 
 
-def quality_to_dict(quality: PlanQuality) -> dict:
-    """JSON document of :func:`evaluate_plan` (keys of PRODUCT.md plus details).
-
-    Only identifiable plans have a quality (:func:`~armcal.criteria.evaluate_plan`
-    raises otherwise), so every value is finite.
-    """
-    if quality.payload_counts is not None:
-        return _loaded_quality(quality)[0]
+def _document(quality: PlanQuality) -> dict:
+    """Only identifiable plans have a quality (:func:`~armcal.criteria.evaluate_plan`
+    raises otherwise), so every value is finite."""
     arm = quality.model.arm
     std = {
         name: 0.0 if name in arm.fixed else float(v)

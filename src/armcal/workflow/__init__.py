@@ -4,12 +4,12 @@ A Python user gets the same checks and warnings as the command line:
 
 * :mod:`~armcal.workflow.setup` -- the model a robot file and the options describe
   (``--fix``, ``--sigma``, ``[elastostatic]``), default noise and test poses;
-* :mod:`~armcal.workflow.calibrate` -- identify from a measurement file (unit
+* :mod:`~armcal.workflow.calibration` -- identify from a measurement file (unit
   mistakes, 3-D data, cross-validation), validate, compensate a program;
 * :mod:`~armcal.workflow.plan` -- design, evaluate, size, simulate, synthesize.
 """
 
-from .calibrate import (
+from .calibration import (
     CalibrationRun,
     CompensationRun,
     ExportRun,
@@ -32,9 +32,12 @@ from .plan import (
 )
 from .setup import (
     DEFAULT_SIGMA_MM,
+    FixError,
     design_sigma,
     fit_model,
     model_arm,
+    plan_model,
+    prefixed,
     simulation_sigma,
     test_poses,
     with_fixed,
@@ -47,6 +50,7 @@ __all__ = [
     "DesignRun",
     "EvaluationRun",
     "ExportRun",
+    "FixError",
     "Synthesis",
     "ValidationRun",
     "calibrate",
@@ -58,6 +62,8 @@ __all__ = [
     "fit_model",
     "measured_arm",
     "model_arm",
+    "plan_model",
+    "prefixed",
     "simulate_plan",
     "simulation_sigma",
     "size_plan",

@@ -19,11 +19,11 @@ from ..criteria import PlanQuality, evaluate_plan
 from ..doe import Design, PosesNeeded, design, design_with_loads, poses_needed
 from ..errors import ArmcalError, ArmcalWarning, NotIdentifiableError
 from ..files import RobotSpec
-from ..models import Loads, PlanarArm
+from ..models import FitModel, Loads, PlanarArm
 from ..progress import ProgressCallback
 from ..simulate import MonteCarlo, monte_carlo
 from ..synthesis import synthesize_measurements
-from .setup import DEFAULT_SIGMA_MM, design_sigma, fit_model
+from .setup import DEFAULT_SIGMA_MM, design_sigma, fit_model, plan_model, prefixed
 
 __all__ = [
     "DesignRun",
@@ -35,17 +35,6 @@ __all__ = [
     "size_plan",
     "synthesize_plan",
 ]
-
-
-def _prefixed(source: str, exc: NotIdentifiableError) -> NotIdentifiableError:
-    return NotIdentifiableError(f"{source}: {exc}", exc.combinations)
-
-
-def _loads(spec: RobotSpec, m: int, payload: np.ndarray | None) -> Loads | None:
-    """A plan's loads for a robot with ``[elastostatic]``: its payload column, else the file's."""
-    if spec.elastic is None:
-        return None
-    return Loads.create(m, spec.elastic.payload_kg if payload is None else payload)
 
 
 @dataclass(frozen=True, eq=False)
@@ -78,23 +67,19 @@ class Synthesis:
 
 
 def synthesize_plan(
-    spec: RobotSpec,
+    model: FitModel,
     q: np.ndarray,
     truth: np.ndarray,
     *,
     sigma: float | None,
     seed: int,
-    payload: np.ndarray | None = None,
+    loads: Loads | None = None,
 ) -> Synthesis:
-    """Measurements of the robot of ``spec`` at ``truth``, every target of every pose.
-
-    ``payload`` ``(m,)`` (kg) loads a robot with ``[elastostatic]`` (default: the
-    robot file's payload); ``sigma`` as for
+    """Measurements of ``model`` (a plan's, :func:`~armcal.workflow.setup.plan_model`) at
+    ``truth``, every target of every pose, each pose with its ``loads``; ``sigma`` as for
     :func:`armcal.synthesis.synthesize_measurements`.
     """
-    arm = spec.arm
-    loads = _loads(spec, q.shape[0], payload)
-    model = fit_model(spec, arm, loads)
+    arm = model.arm
     rows = model.plan_conditions(q, loads)
     points = synthesize_measurements(
         model, rows.q, truth, sigma, rng=seed, target=rows.target, loads=rows.loads
@@ -147,12 +132,11 @@ def evaluate_file(
     ``source``, for a plan that cannot identify every parameter (it has no
     finite quality).
     """
-    loads = _loads(spec, q.shape[0], payload)
-    model = fit_model(spec, arm, loads)
+    model, loads = plan_model(spec, arm, q.shape[0], payload)
     try:
         quality = evaluate_plan(model, q, sigma=design_sigma(arm), test_q=test_q, loads=loads)
     except NotIdentifiableError as exc:  # PRODUCT.md: an error, exit 2, one line
-        raise _prefixed(source, exc) from None
+        raise prefixed(source, exc) from None
     outside = _outside_warning(spec, q, source)
     extra = () if outside is None else (outside,)
     return EvaluationRun(quality, (*spec.warnings, *quality.warnings, *extra))
@@ -210,7 +194,7 @@ def design_plan(
     model = fit_model(spec, arm)
     sigma = design_sigma(arm)
     start = time.perf_counter()
-    if model.design_loads(payloads) is not None:
+    if spec.elastic is not None:  # the poses carry payloads, chosen by the design
         if criterion != "D" or method not in ("auto", "exchange"):
             raise ArmcalError(
                 "a robot with [elastostatic] is designed D-optimal by exchange and polish; "
@@ -252,8 +236,7 @@ def design_plan(
 
 
 def simulate_plan(
-    spec: RobotSpec,
-    arm: PlanarArm,
+    model: FitModel,
     q: np.ndarray,
     truth: np.ndarray,
     *,
@@ -261,24 +244,26 @@ def simulate_plan(
     method: str = "auto",
     seed: int = 0,
     test_q: np.ndarray | None = None,
-    payload: np.ndarray | None = None,
+    loads: Loads | None = None,
     progress: ProgressCallback | None = None,
     source: str = "plan",
 ) -> MonteCarlo:
-    """A Monte Carlo of plan ``q`` on the model of ``spec`` (``arm`` with --fix and --sigma).
+    """A Monte Carlo of plan ``q`` on ``model`` (a plan's,
+    :func:`~armcal.workflow.setup.plan_model`), each pose with its ``loads``.
 
     The noise is the model's as it is (:data:`~armcal.workflow.setup.DEFAULT_SIGMA_MM`
-    when the robot file gives none).  Raises NotIdentifiableError, naming ``source``,
-    for a plan that cannot identify every parameter.
+    when the robot file gives none); no test poses (None or none) give no position
+    figures.  Raises NotIdentifiableError, naming ``source``, for a plan that cannot
+    identify every parameter.
     """
-    loads = _loads(spec, q.shape[0], payload)
-    model = fit_model(spec, arm, loads)
+    if test_q is not None and not len(test_q):
+        test_q = None
     try:
         return monte_carlo(
             model,
             q,
             truth,
-            None if arm.noise is not None else DEFAULT_SIGMA_MM,
+            None if model.noise is not None else DEFAULT_SIGMA_MM,
             trials,
             method=method,
             rng=np.random.default_rng(seed),
@@ -287,7 +272,7 @@ def simulate_plan(
             loads=loads,
         )
     except NotIdentifiableError as exc:
-        raise _prefixed(source, exc) from None
+        raise prefixed(source, exc) from None
 
 
 def size_plan(

@@ -14,16 +14,19 @@ from collections.abc import Sequence
 import numpy as np
 
 from ..doe import random_plan
-from ..errors import ArmcalError
-from ..files import RobotSpec, unknown_parameter
+from ..errors import ArmcalError, NotIdentifiableError
+from ..files import RobotSpec, read_plan, unknown_parameter
 from ..models import CompliantArm, FitModel, Loads, PlanarArm
 from ..noise import instrument_override
 
 __all__ = [
     "DEFAULT_SIGMA_MM",
+    "FixError",
     "design_sigma",
     "fit_model",
     "model_arm",
+    "plan_model",
+    "prefixed",
     "simulation_sigma",
     "test_poses",
     "with_fixed",
@@ -33,14 +36,25 @@ __all__ = [
 DEFAULT_SIGMA_MM = 0.1
 
 
+class FixError(ArmcalError):
+    """Parameters to hold that the arm cannot hold (the command line's ``--fix``)."""
+
+
+def prefixed(source: str, exc: ArmcalError) -> ArmcalError:
+    """``exc`` of the same kind (and, unidentifiable, with its combinations) naming ``source``."""
+    if isinstance(exc, NotIdentifiableError):
+        return NotIdentifiableError(f"{source}: {exc}", exc.combinations)
+    return type(exc)(f"{source}: {exc}")
+
+
 def with_fixed(arm: PlanarArm, fixed: Sequence[str]) -> PlanarArm:
-    """The arm with ``fixed`` held (replacing the robot file's set); ArmcalError for a name
+    """The arm with ``fixed`` held (replacing the robot file's set); FixError for a name
     the arm does not have or when nothing would be left to identify."""
     for name in fixed:
         if name not in arm.param_names:
-            raise ArmcalError(unknown_parameter(name, arm.param_names, arm.name))
+            raise FixError(unknown_parameter(name, arm.param_names, arm.name))
     if len(set(fixed)) == arm.n_params:
-        raise ArmcalError("every parameter would be fixed; leave at least one free")
+        raise FixError("every parameter would be fixed; leave at least one free")
     return arm.replace(fixed=tuple(fixed))
 
 
@@ -82,11 +96,30 @@ def fit_model(spec: RobotSpec, arm: PlanarArm, loads: Loads | None = None) -> Fi
     try:
         return CompliantArm.for_loads(arm, spec.elastic, loads)
     except ArmcalError as exc:
-        raise ArmcalError(f"{spec.source}: {exc}") from None
+        raise prefixed(spec.source, exc) from None
 
 
-def test_poses(spec: RobotSpec, seed: int, given: np.ndarray | None = None) -> np.ndarray:
-    """Poses where positioning accuracy matters: ``given``, else 1000 uniform in the limits."""
-    if given is not None:
-        return given
+def plan_model(
+    spec: RobotSpec, arm: PlanarArm, m: int, payload: np.ndarray | None = None
+) -> tuple[FitModel, Loads | None]:
+    """The model of a plan of ``m`` poses and the plan's loads: with ``[elastostatic]``
+    its payload column ``payload`` (kg), else the robot file's payload; no loads without."""
+    if spec.elastic is None:
+        return arm, None
+    loads = Loads.create(m, spec.elastic.payload_kg if payload is None else payload)
+    return fit_model(spec, arm, loads), loads
+
+
+def test_poses(spec: RobotSpec, seed: int, path: str | None = None) -> np.ndarray:
+    """Poses where positioning accuracy matters: the plan file ``path``, else 1000 uniform
+    in the limits (seeded by ``seed``).
+
+    None, shape ``(0, n)``, for a robot with ``[elastostatic]`` (the file is not read):
+    its plans are judged by the predicted std of the parameters, not by the position
+    error at test poses.
+    """
+    if spec.elastic is not None:
+        return np.zeros((0, spec.arm.n_joints))
+    if path is not None:
+        return read_plan(path, spec.arm)
     return random_plan(spec.arm, 1000, rng=np.random.default_rng(seed))

@@ -40,7 +40,7 @@ from ..validation import (
     validate,
     validation_warnings,
 )
-from .setup import fit_model, model_arm
+from .setup import fit_model, model_arm, prefixed
 
 __all__ = [
     "CalibrationRun",
@@ -149,8 +149,9 @@ def _identify_file(
         target=_row_targets(arm, meas),
     )
     try:
-        model = fit_model(spec, arm, None if elastic is None else meas.loads(elastic.payload_kg))
-        options["loads"] = row_loads(model, meas)
+        loads = None if elastic is None else meas.loads(elastic.payload_kg)
+        model = fit_model(spec, arm, loads)
+        options["loads"] = loads
         if meas.z is not None:
             options["gravity_3d"] = spec.gravity_3d
             cal = identify_3d(model, meas.q, meas.xyz, **options)
@@ -161,9 +162,9 @@ def _identify_file(
         unit = _explained(source, arm, meas) if plain else None
         if unit is not None:
             raise unit from None
-        raise NotIdentifiableError(f"{source}: {exc}", exc.combinations) from None
+        raise prefixed(source, exc) from None
     except ArmcalError as exc:
-        raise ArmcalError(f"{source}: {exc}") from None
+        raise prefixed(source, exc) from None
     if plain and suspicious(cal):
         unit = _explained(source, arm, meas)
         if unit is not None:
@@ -244,7 +245,7 @@ def calibrate(
     try:
         structure = measured_arm(spec.arm, meas)
     except InputError as exc:
-        raise InputError(f"{source}: {exc}") from None
+        raise prefixed(source, exc) from None
     arm = model_arm(structure, fixed=fixed, sigma=sigma)
     if sigma is not None:  # the given noise replaces the file's sigma_mm column too
         meas = replace(meas, row_sigma=None)
@@ -315,7 +316,7 @@ def validate_measurements(
             loads=row_loads(cal.model, meas),
         )
     except ArmcalError as exc:
-        raise ArmcalError(f"{source}: {exc}") from None
+        raise prefixed(source, exc) from None
     return ValidationRun(result, (*meas.warnings, *validation_warnings(result)))
 
 
