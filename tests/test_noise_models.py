@@ -411,7 +411,7 @@ def test_weighted_monte_carlo_is_chunked_without_changing_it(arm4, paper_truth4,
     q = random_plan(arm4, 20, rng=5)
     whole = sim.monte_carlo(arm, q, truth, None, 1500, rng=4)
     monkeypatch.setattr(sim, "CHUNK_BYTES", 2 * 2**20)
-    chunk = sim._chunk_size(sim._floats_per_trial(arm, 20, "gauss-newton"), 10**9)
+    chunk = sim.chunk_size(sim._floats_per_trial(arm, 20, "gauss-newton"), 10**9)
     assert chunk < 1500 // 10
     calls: list[tuple[int, int]] = []
     chunked = sim.monte_carlo(

@@ -231,7 +231,7 @@ def compensate(
         for ok in done
     ]
     limits = model.joint_limits
-    inside = (q >= limits[:, 0] - 1e-9) & (q <= limits[:, 1] + 1e-9)
+    inside = model.within_limits(q)
     for i in np.flatnonzero(done & ~np.all(inside, axis=1)):
         j = int(np.flatnonzero(~inside[i])[0])
         lo, hi = np.degrees(limits[j])

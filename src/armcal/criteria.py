@@ -52,7 +52,7 @@ import numpy as np
 from .errors import ArmcalWarning
 from .models import FitModel, Loads, PaperCriteria, PlanInformation
 from .models.information import display_std, mean_tip_variance, tip_variances
-from .numerics import COND_WARN, RANK_RTOL, spd_inverse
+from .numerics import COND_WARN, RANK_RTOL, gram_of_factor, log_det, spd_inverse
 
 __all__ = [
     "COND_WARN",
@@ -70,11 +70,6 @@ __all__ = [
     "position_rms",
     "predicted_std",
 ]
-
-
-def _logdet(fs: np.ndarray) -> np.ndarray:
-    sign, logdet = np.linalg.slogdet(fs)  # LU-based: never raises for a finite matrix
-    return np.where(sign > 0, logdet, -np.inf)
 
 
 def _eigvalsh(fs: np.ndarray) -> np.ndarray:
@@ -118,7 +113,7 @@ class Criterion:
 
 
 def _d_eff(fs: np.ndarray) -> np.ndarray:
-    return np.exp(_logdet(fs) / fs.shape[-1])
+    return np.exp(log_det(fs) / fs.shape[-1])
 
 
 def _d_grad(fs: np.ndarray) -> np.ndarray:
@@ -241,17 +236,19 @@ def d_efficiency(
     return CRITERIA["D"].from_singular_values(s)
 
 
-def attains_unit_bound(model: FitModel, q: np.ndarray) -> bool:
+def attains_unit_bound(model: FitModel, q: np.ndarray, efficiency: float | None = None) -> bool:
     """Whether plan ``q`` ``(m, n)`` is provably D-optimal: the bound ``det M <= 1`` holds
     (:attr:`~armcal.models.interface.FitModel.information_bound`) and ``M = I``.
 
-    ``M = I`` is judged on the D-efficiency, to the round-off of its ``m``-term
-    sums (``m eps``).
+    ``M = I`` is judged on the D-efficiency (``efficiency`` when the caller has it),
+    to the round-off of its ``m``-term sums (``m eps``).
     """
     if not model.information_bound:
         return False
     tol = 1e-12 + np.shape(q)[-2] * np.finfo(float).eps
-    return float(d_efficiency(model, q)) >= 1.0 - tol
+    if efficiency is None:
+        efficiency = float(d_efficiency(model, q))
+    return efficiency >= 1.0 - tol
 
 
 def observability_indices(
@@ -289,9 +286,7 @@ def _covariance(info: PlanInformation, sigma: float, params: np.ndarray | None =
     """``sigma^2 (J_w^T J_w)^-1`` ``(..., p, p)`` of the plans (internal units), ``inf``
     where singular, and the identifiable mask."""
     g, ok = info.covariance_factor(params)
-    safe = np.where(ok[..., None, None], g, 0.0)
-    inverse = safe @ np.swapaxes(safe, -1, -2)
-    return sigma**2 * np.where(ok[..., None, None], inverse, np.inf), ok
+    return sigma**2 * gram_of_factor(g, ok), ok
 
 
 def predicted_std(
@@ -422,7 +417,7 @@ def position_rms(
     g, ok = _information(model, q, loads, info).covariance_factor()
     if not bool(ok):
         return math.inf
-    inverse = g @ np.swapaxes(g, -1, -2)
+    inverse = gram_of_factor(g, ok)
     j0 = model.jacobian(model.plan_conditions(np.asarray(test_q, dtype=float)))
     return float(sigma * np.sqrt(mean_tip_variance(j0, inverse)))
 
@@ -450,11 +445,6 @@ class PlanQuality:
     warnings : tuple of ArmcalWarning
         An ``ill-conditioned`` warning when the plan's condition number exceeds
         ``COND_WARN``; empty otherwise.
-    normalized : bool
-        Whether the efficiencies are relative to an optimum of 1
-        (:attr:`~armcal.models.interface.FitModel.information_bound`); otherwise
-        they are criteria of the weighted information, comparing plans of one
-        model.
     paper : PaperCriteria or None
         The paper's D* and Table I sums, for the arms its theory covers.
     payload_counts : dict of float to int or None
@@ -470,9 +460,15 @@ class PlanQuality:
     predicted_std: np.ndarray
     position: PositionAccuracy | None
     warnings: tuple[ArmcalWarning, ...] = ()
-    normalized: bool = True
     paper: PaperCriteria | None = None
     payload_counts: dict[float, int] | None = None
+
+    @property
+    def normalized(self) -> bool:
+        """Whether the efficiencies are relative to an optimum of 1
+        (:attr:`~armcal.models.interface.FitModel.information_bound`); otherwise they
+        are criteria of the weighted information, comparing plans of one model."""
+        return self.model.information_bound
 
     def __repr__(self) -> str:
         eff = self.efficiencies
@@ -562,7 +558,6 @@ def evaluate_plan(
             position_accuracy(model, q, test_q, sigma, info=info) if test_q.shape[0] else None
         ),
         warnings=() if warning is None else (warning,),
-        normalized=model.information_bound,
         paper=model.paper_criteria(q),
         payload_counts=counts,
     )

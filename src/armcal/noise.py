@@ -35,6 +35,7 @@ from numpy.typing import ArrayLike
 __all__ = [
     "NoiseModel",
     "instrument_override",
+    "relative_noise",
 ]
 
 
@@ -233,3 +234,9 @@ def instrument_override(noise: NoiseModel | None, sigma_mm: float) -> NoiseModel
     if noise is None:
         return NoiseModel.isotropic(sigma_mm)
     return noise.with_instrument_sigma(sigma_mm)
+
+
+def relative_noise(noise: NoiseModel | None) -> NoiseModel:
+    """The noise that relative weights are taken from: ``noise``, or unit isotropic noise
+    where there is none (every row then weighs the same)."""
+    return noise if noise is not None else NoiseModel.isotropic(1.0)

@@ -38,6 +38,9 @@ __all__ = [
     "LinearLeastSquares",
     "ScaledSVD",
     "factor_least_squares",
+    "gram_of_factor",
+    "log_det",
+    "point_norms",
     "rms",
     "scaled_svd",
     "solve_least_squares",
@@ -174,9 +177,7 @@ class ScaledSVD:
     def inverse_gram(self) -> tuple[np.ndarray, np.ndarray]:
         """``(A^T A)^-1`` ``(..., p, p)`` (``inf`` where singular) and the full-rank mask."""
         factor, ok = self.inverse_gram_factor()
-        safe = np.where(ok[..., None, None], factor, 0.0)
-        inverse = safe @ np.swapaxes(safe, -1, -2)
-        return np.where(ok[..., None, None], inverse, np.inf), ok
+        return gram_of_factor(factor, ok), ok
 
     def log_det_gram(self) -> np.ndarray:
         """``log det(A^T A)`` ``(...)`` from the singular values; ``-inf`` where singular."""
@@ -406,3 +407,27 @@ def rms(values: np.ndarray) -> float:
     """
     values = np.asarray(values, dtype=float)
     return float(np.sqrt(np.mean(values**2))) if values.size else 0.0
+
+
+def log_det(matrix: np.ndarray) -> np.ndarray:
+    """``log det`` ``(...)`` of (stacks of) symmetric matrices; ``-inf`` where not positive.
+
+    LU-based (:func:`numpy.linalg.slogdet`): never raises for a finite matrix.
+    """
+    sign, value = np.linalg.slogdet(matrix)
+    return np.where(sign > 0, value, -np.inf)
+
+
+def gram_of_factor(factor: np.ndarray, ok: np.ndarray) -> np.ndarray:
+    """``G G^T`` ``(..., p, p)`` of factors ``G`` ``(..., p, k)``, ``inf`` where ``ok`` is
+    false: a covariance from its factor (:meth:`ScaledSVD.inverse_gram_factor`)."""
+    ok = np.asarray(ok)
+    safe = np.where(ok[..., None, None], factor, 0.0)
+    return np.where(ok[..., None, None], safe @ np.swapaxes(safe, -1, -2), np.inf)
+
+
+def point_norms(points: np.ndarray) -> np.ndarray:
+    """Euclidean length ``(...)`` of every point ``(..., d)`` (``hypot`` in the plane)."""
+    if points.shape[-1] == 2:
+        return np.hypot(points[..., 0], points[..., 1])
+    return np.linalg.norm(points, axis=-1)

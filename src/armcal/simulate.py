@@ -28,7 +28,7 @@ from numpy.typing import ArrayLike
 from .errors import ArmcalError, ArmcalWarning
 from .identification import resolve_method, solve
 from .models import Conditions, FitModel, LinearPositions, Loads
-from .models.information import tip_variances
+from .models.information import predicted_covariance, tip_variances
 from .progress import ProgressCallback
 from .synthesis import checked_truth, simulated_noise, synthesize_measurements
 
@@ -37,6 +37,7 @@ __all__ = [
     "POSITION_QUANTILES",
     "MonteCarlo",
     "PositionErrors",
+    "chunk_size",
     "monte_carlo",
 ]
 
@@ -65,7 +66,9 @@ _PAIR_BLOCK = 2048
 _Z95 = 1.959963984540054
 
 
-def _chunk_size(per_item_floats: int, total: int) -> int:
+def chunk_size(per_item_floats: int, total: int) -> int:
+    """Items per chunk whose working arrays of ``per_item_floats`` doubles each fit in
+    :data:`CHUNK_BYTES` (at least 1, at most ``total``)."""
     return int(max(1, min(total, CHUNK_BYTES // (8 * max(per_item_floats, 1)))))
 
 
@@ -525,13 +528,11 @@ def monte_carlo(
     rows = model.plan_conditions(q, loads)  # every target of every pose
     conditioning = model.conditioning_warning(model.check_identifiable(rows))
     rng = np.random.default_rng(rng)
-    factor, ok = model.covariance_factor(rows, truth)
+    predicted, ok = predicted_covariance(model, rows, reference, truth)
     if not ok:
         raise ArmcalError("the plan cannot identify every parameter at the given truth")
-    safe = np.where(ok, factor, 0.0)
-    predicted = reference**2 * (safe @ safe.T)
     m, p = rows.m, model.n_params
-    chunk = _chunk_size(_floats_per_trial(model, m, method), trials)
+    chunk = chunk_size(_floats_per_trial(model, m, method), trials)
     moments = _Moments(p)
     # Moments about the truth keep round-off small; a fixed parameter is 0 in every
     # estimate, so about 0 its mean and scatter are exactly 0 even when the truth moves it.

@@ -32,7 +32,7 @@ from .identification import identify
 from .models import CalibratedArm, Conditions, FitModel, Loads
 from .models.information import tip_variances
 from .noise import NoiseModel
-from .numerics import rms
+from .numerics import point_norms, rms
 
 __all__ = [
     "CrossValidation",
@@ -43,13 +43,6 @@ __all__ = [
     "validate",
     "validation_warnings",
 ]
-
-
-def _norms(points: np.ndarray) -> np.ndarray:
-    """Euclidean length ``(m,)`` of every point ``(m, d)`` (``hypot`` in the plane)."""
-    if points.shape[-1] == 2:
-        return np.hypot(points[:, 0], points[:, 1])
-    return np.linalg.norm(points, axis=-1)
 
 
 @dataclass(frozen=True, eq=False)
@@ -91,12 +84,12 @@ class Validation:
     @property
     def before_mm(self) -> np.ndarray:
         """Euclidean error ``(m,)`` of the nominal model, mm."""
-        return _norms(self.before)
+        return point_norms(self.before)
 
     @property
     def after_mm(self) -> np.ndarray:
         """Euclidean error ``(m,)`` of the calibrated model, mm."""
-        return _norms(self.after)
+        return point_norms(self.after)
 
     def summary(self) -> dict[str, float]:
         """RMS, max and 95 % quantile before and after, and the predicted RMS (mm).
@@ -310,7 +303,7 @@ class CrossValidation:
     @property
     def errors_mm(self) -> np.ndarray:
         """Euclidean prediction error ``(m,)`` of every row, mm."""
-        return _norms(self.errors)
+        return point_norms(self.errors)
 
     def summary(self) -> dict[str, float | int]:
         """``folds``, RMS and max prediction error and the predicted RMS (mm), per point."""

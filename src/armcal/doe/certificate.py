@@ -6,7 +6,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..criteria import attains_unit_bound
+from ..criteria import attains_unit_bound, d_efficiency
 from ..models import FitModel
 from ..numerics import ScaledSVD, scaled_svd, spd_inverse
 from .ascent import adam_ascent, penalty_weight, to_q, to_u, view_penalty
@@ -115,15 +115,15 @@ def multiplicative_weights(blocks: np.ndarray, weights: np.ndarray, iterations: 
     return weights
 
 
-def _weighted_svd(model: FitModel, poses: np.ndarray, weights: np.ndarray) -> ScaledSVD:
+def _weighted_svd(blocks: np.ndarray, weights: np.ndarray) -> ScaledSVD:
     """The rank policy's SVD of ``M(xi) = sum_x w_x I(x)``, from its square-root factor.
 
-    Rows ``sqrt(w_x) F_x`` (``F_x`` the scaled ``2 x p`` blocks) have Gram matrix
-    ``M(xi)``: its inverse and ``log det`` come from singular values, not from
-    inverting ``M``.
+    Rows ``sqrt(w_x) F_x`` (``F_x`` the poses' scaled blocks, :func:`_pose_blocks`) have
+    Gram matrix ``M(xi)``: its inverse and ``log det`` come from singular values, not
+    from inverting ``M``.
     """
-    blocks = _pose_blocks(model, poses) * np.sqrt(weights)[:, None, None]
-    return scaled_svd(blocks.reshape(-1, model.n_free))
+    weighted = blocks * np.sqrt(weights)[:, None, None]
+    return scaled_svd(weighted.reshape(-1, blocks.shape[-1]))
 
 
 def certify(
@@ -197,7 +197,9 @@ def certify(
     bounded = model.information_bound
     # Round-off of the m-term sums in Fs grows like m eps: attains_unit_bound allows
     # it, or a large orthogonal plan would miss this shortcut and run the whole search.
-    if attains_unit_bound(model, q):
+    if bounded and attains_unit_bound(
+        model, q, float(d_efficiency(model, q, info=plan_information))
+    ):
         # M = I: the bound det M <= 1 is attained, and d(x) = tr(I(x)) = p at every pose.
         return Certificate(1.0, 1.0, 1.0, float(p), q, np.full(q.shape[0], 1.0 / q.shape[0]))
     pool = np.concatenate(
@@ -205,8 +207,9 @@ def certify(
     )
     weights = np.full(pool.shape[0], 1.0 / pool.shape[0])
     for _ in range(rounds):
-        weights = multiplicative_weights(_pose_blocks(model, pool), weights, 300)
-        m_inv, _ = _weighted_svd(model, pool, weights).inverse_gram()
+        blocks = _pose_blocks(model, pool)
+        weights = multiplicative_weights(blocks, weights, 300)
+        m_inv, _ = _weighted_svd(blocks, weights).inverse_gram()
         # Ascend d from its largest values in the pool and in fresh random poses: the
         # maximizers of a weighted model (encoder noise) can lie in narrow regions
         # that the first candidates missed.
@@ -227,7 +230,7 @@ def certify(
     weights = multiplicative_weights(_pose_blocks(model, pool), weights, 1000)
     support_mask = weights > 1e-6
     support, support_w = pool[support_mask], weights[support_mask] / weights[support_mask].sum()
-    star = _weighted_svd(model, support, support_w)
+    star = _weighted_svd(_pose_blocks(model, support), support_w)
     # Fs = H^T H with H the plan's scaled Jacobian: inverses and log dets from SVDs.
     star_inverse, star_ok = star.inverse_gram()
     plan_inverse, _ = plan.inverse_gram()

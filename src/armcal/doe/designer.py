@@ -71,11 +71,6 @@ class Design:
     distinct : bool
         Whether the plan was made of distinct poses (no two within
         :data:`armcal.doe.plans.DISTINCT_TOLERANCE` on every joint).
-    normalized : bool
-        Whether ``d_efficiency`` is relative to an optimum of 1
-        (:attr:`~armcal.models.interface.FitModel.information_bound`); otherwise it
-        is the D-criterion of the weighted information, and only the certificate
-        compares the plan with the best one.
     payload_kg : ndarray, shape (m,), or None
         Every pose's payload, for a design that chose them
         (:func:`armcal.doe.loads.design_with_loads`).
@@ -94,9 +89,16 @@ class Design:
     joint_travel: float
     joint_travel_unordered: float
     distinct: bool
-    normalized: bool = True
     payload_kg: np.ndarray | None = None
     payloads: tuple[float, ...] = ()
+
+    @property
+    def normalized(self) -> bool:
+        """Whether ``d_efficiency`` is relative to an optimum of 1
+        (:attr:`~armcal.models.interface.FitModel.information_bound`); otherwise it is
+        the D-criterion of the weighted information, and only the certificate compares
+        the plan with the best one."""
+        return self.model.information_bound
 
     @property
     def optimum_by_search(self) -> bool:
@@ -232,6 +234,7 @@ def design(
     family = model.closed_form_plans(m)  # placed only where asked for: auto, analytic
     closed: list[ClosedFormPlan] = []
     repeats, found = 0, 0.0  # the optimizer's repeated poses and its plan's D-criterion
+    searched = False  # whether the optimizer searched (its note comes after)
     if method == "analytic" and family is None:
         raise ArmcalError(
             f"{model.name} has no closed-form plans; use --method auto, optimize or exchange"
@@ -252,7 +255,7 @@ def design(
             closed = [plan for plan in closed if not repeated_poses(plan.q).any()]
     d_closed = {plan.label: float(d_efficiency(model, plan.q)) for plan in closed}
     best = max(closed, key=lambda plan: d_closed[plan.label]) if closed else None
-    optimal_closed = best is not None and attains_unit_bound(model, best.q)
+    optimal_closed = best is not None and attains_unit_bound(model, best.q, d_closed[best.label])
     if method == "analytic" or (method == "auto" and optimal_closed):
         assert best is not None and family is not None  # raised above otherwise
         q, used = best.q, "analytic"
@@ -265,6 +268,7 @@ def design(
         if criterion != "D":
             notes.append("exchange maximizes D; the plan was not tuned for " + criterion)
     else:
+        searched = True
         initial = np.stack([plan.q for plan in closed]) if closed else None
         q = optimize_plan(model, m, criterion=criterion, rng=rng, initial=initial)
         used = "optimize"
@@ -282,18 +286,17 @@ def design(
             q = exchange_plan(model, m, pool, start=q, rng=rng, max_swaps=0, distinct=True)
         if best is not None and _score(model, best.q, criterion) > _score(model, q, criterion):
             q, used = best.q, "analytic"  # not expected: the optimizer starts from it
-        if family is not None:
-            chosen = q
-            note = family.search_note(
-                None if best is None else d_closed[best.label],
-                float(d_efficiency(model, chosen)),
-                method,
-                lambda: _would_be_optimal(family),
-            )
-            if note is not None:
-                notes.append(note)
     q = np.asarray(q, dtype=float)
     efficiency = float(d_efficiency(model, q))
+    if searched and family is not None:
+        note = family.search_note(
+            None if best is None else d_closed[best.label],
+            efficiency,
+            method,
+            lambda: _would_be_optimal(family),
+        )
+        if note is not None:
+            notes.append(note)
     if distinct:
         assert not repeated_poses(q).any(), "a distinct plan repeats a pose"
         if repeats and used != "analytic":
@@ -320,5 +323,4 @@ def design(
         joint_travel=joint_travel(q),
         joint_travel_unordered=travel_found,
         distinct=distinct,
-        normalized=model.information_bound,
     )

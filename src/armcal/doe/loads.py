@@ -37,6 +37,8 @@ import numpy as np
 from ..criteria import d_efficiency
 from ..errors import ArmcalError
 from ..models import FitModel, Loads
+from ..models.information import BlockInformation, pose_derivative
+from ..numerics import log_det
 from .certificate import Certificate, multiplicative_weights
 from .designer import Design
 from .exchange import exchange_indices
@@ -48,34 +50,30 @@ __all__ = [
 ]
 
 
+def _variance(blocks: np.ndarray, m_inv: np.ndarray) -> np.ndarray:
+    """``d(x) = tr(M^-1 F_x^T F_x)`` ``(k,)`` of points given by their blocks ``(k, r, p_f)``."""
+    return np.einsum("kap,pq,kaq->k", blocks, m_inv, blocks)
+
+
 class _Points:
-    """Blocks ``(k, r, p_f)`` of (pose, payload) points in the design's column scale."""
+    """(pose, payload) points of a model: their blocks ``(k, r, p_f)`` in the design's
+    column scale (:class:`~armcal.models.information.BlockInformation`) and their
+    variance function."""
 
     def __init__(self, model: FitModel, scale: np.ndarray) -> None:
         self.model, self.scale = model, scale
 
     def blocks(self, q: np.ndarray, payload: np.ndarray) -> np.ndarray:
         loads = Loads.create(q.shape[0], payload)
-        return self.model.plan_information(q, loads).blocks() / self.scale
+        return BlockInformation(self.model, q, loads, scale=self.scale).blocks()
 
     def variance(self, q: np.ndarray, payload: np.ndarray, m_inv: np.ndarray) -> np.ndarray:
         """``d(x) = tr(M^-1 F_x^T F_x)`` ``(k,)``."""
-        f = self.blocks(q, payload)
-        return np.einsum("kap,pq,kaq->k", f, m_inv, f)
+        return _variance(self.blocks(q, payload), m_inv)
 
-    def gradient(
-        self, q: np.ndarray, payload: np.ndarray, m_inv: np.ndarray, h: float = 1e-6
-    ) -> np.ndarray:
+    def gradient(self, q: np.ndarray, payload: np.ndarray, m_inv: np.ndarray) -> np.ndarray:
         """Central-difference gradient ``(k, n)`` of ``d`` in every joint (rad)."""
-        n = q.shape[1]
-        grad = np.empty(q.shape)
-        for j in range(n):
-            step = np.zeros(n)
-            step[j] = h
-            grad[:, j] = (
-                self.variance(q + step, payload, m_inv) - self.variance(q - step, payload, m_inv)
-            ) / (2 * h)
-        return grad
+        return pose_derivative(lambda x: self.variance(x, payload, m_inv), q)
 
 
 def _ascend(
@@ -110,11 +108,6 @@ def _information(blocks: np.ndarray, weights: np.ndarray) -> np.ndarray:
     return np.einsum("x,xap,xaq->pq", weights, blocks, blocks)
 
 
-def _logdet(matrix: np.ndarray) -> float:
-    sign, value = np.linalg.slogdet(matrix)
-    return float(value) if sign > 0 else -np.inf
-
-
 def _polish(
     points: _Points, model: FitModel, q: np.ndarray, payload: np.ndarray, *, rounds: int = 40
 ) -> np.ndarray:
@@ -122,7 +115,7 @@ def _polish(
     m = q.shape[0]
     lo, hi = model.joint_limits[:, 0], model.joint_limits[:, 1]
     info = _information(points.blocks(q, payload), np.full(m, 1.0 / m))
-    best = _logdet(info)
+    best = float(log_det(info))
     size = 0.05
     for _ in range(rounds):
         m_inv = np.linalg.inv(info)
@@ -132,7 +125,7 @@ def _polish(
         inside = model.feasible(trial[:, None, :])[:, 0]
         trial[~inside] = q[~inside]
         new_info = _information(points.blocks(trial, payload), np.full(m, 1.0 / m))
-        value = _logdet(new_info)
+        value = float(log_det(new_info))
         if value > best + 1e-12:
             q, info, best = trial, new_info, value
             size *= 1.5
@@ -150,14 +143,15 @@ def _reference_design(
     pool_w: np.ndarray,
     rounds: int,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """A near-D-optimal weighted design: its points, payloads, weights and ``M^-1``."""
+    """A near-D-optimal weighted design: its points, payloads, weights and information."""
     p = points.model.n_free
     q, w = pool_q, pool_w
     weights = np.full(q.shape[0], 1.0 / q.shape[0])
     for _ in range(rounds):
-        weights = multiplicative_weights(points.blocks(q, w), weights, 300)
-        m_inv = np.linalg.inv(_information(points.blocks(q, w), weights))
-        d = points.variance(q, w, m_inv)
+        blocks = points.blocks(q, w)
+        weights = multiplicative_weights(blocks, weights, 300)
+        m_inv = np.linalg.inv(_information(blocks, weights))
+        d = _variance(blocks, m_inv)
         starts = np.argsort(-d)[: 4 * p]
         found = _ascend(points, model, q[starts], w[starts], m_inv)
         keep = weights > 1e-6 / q.shape[0]
@@ -166,11 +160,12 @@ def _reference_design(
         w = np.concatenate([w[keep], w[starts]])
         weights = np.concatenate([weights[keep], np.full(found.shape[0], mean)])
         weights /= weights.sum()
-    weights = multiplicative_weights(points.blocks(q, w), weights, 1000)
+    blocks = points.blocks(q, w)
+    weights = multiplicative_weights(blocks, weights, 1000)
     keep = weights > 1e-6
     q, w, weights = q[keep], w[keep], weights[keep] / weights[keep].sum()
-    m_inv = np.linalg.inv(_information(points.blocks(q, w), weights))
-    return q, w, weights, m_inv
+    info = _information(blocks[keep], weights)  # a point's block is its own: slice, not redo
+    return q, w, weights, info
 
 
 def _max_variance(
@@ -268,9 +263,9 @@ def design_with_loads(
     raw = pool_information.blocks()
     scale = np.sqrt(np.mean(raw**2, axis=(0, 1)))
     scale = np.where(scale > 0, scale, 1.0)
-    points = _Points(design_model, scale)
+    points = _Points(design_model, scale)  # pool blocks: raw / scale
     # The reference design first: its support seeds the exact plan.
-    ref_q, ref_w, ref_weights, ref_inv = _reference_design(points, model, pool_q, pool_w, rounds)
+    ref_q, ref_w, ref_weights, _ = _reference_design(points, model, pool_q, pool_w, rounds)
     cand_q = np.concatenate([ref_q, pool_q])
     cand_w = np.concatenate([ref_w, pool_w])
     blocks = points.blocks(cand_q, cand_w)
@@ -282,19 +277,19 @@ def design_with_loads(
     plan_blocks = points.blocks(q, w)
     plan_info = _information(plan_blocks, np.full(m, 1.0 / m))
     # The certificate, against the reference design refined once more with the plan.
-    ref_q, ref_w, ref_weights, ref_inv = _reference_design(
+    ref_q, ref_w, ref_weights, star_info = _reference_design(
         points,
         model,
         np.concatenate([ref_q, q]),
         np.concatenate([ref_w, w]),
         1,
     )
-    star_info = _information(points.blocks(ref_q, ref_w), ref_weights)
+    ref_inv = np.linalg.inv(star_info)
     max_star = _max_variance(points, model, ref_inv, ref_q, ref_w, values, rng, search)
     max_plan = _max_variance(
         points, model, np.linalg.inv(plan_info), q, w, values, rng, search // 4
     )
-    kw = np.exp((_logdet(plan_info) - _logdet(star_info)) / p + 1.0 - max_star / p)
+    kw = np.exp((log_det(plan_info) - log_det(star_info)) / p + 1.0 - max_star / p)
     plan_only = float(np.exp(1.0 - max_plan / p))
     certified = float(min(1.0, max(kw, plan_only)))
     travel_found = joint_travel(q)
@@ -302,11 +297,12 @@ def design_with_loads(
         perm = order_poses(q)
         q, w = q[perm], w[perm]
     loads = Loads.create(m, w)
-    design_model.plan_information(q, loads).check_identifiable()
+    plan_information = design_model.plan_information(q, loads)
+    plan_information.check_identifiable()
     certificate = Certificate(
         certified_d_efficiency=certified,
         plan_only_bound=plan_only,
-        reference_d_efficiency=float(np.exp(_logdet(star_info) / p)),
+        reference_d_efficiency=float(np.exp(log_det(star_info) / p)),
         max_variance=float(max_star),
         support=ref_q,
         weights=ref_weights,
@@ -316,14 +312,13 @@ def design_with_loads(
         q=q,
         criterion="D",
         method="exchange+polish",
-        d_efficiency=float(d_efficiency(design_model, q, loads)),
+        d_efficiency=float(d_efficiency(design_model, q, info=plan_information)),
         certificate=certificate,
         notes=(),
         order=order,
         joint_travel=joint_travel(q),
         joint_travel_unordered=travel_found,
         distinct=False,
-        normalized=design_model.information_bound,
         payload_kg=w,
         payloads=tuple(float(v) for v in values),
     )

@@ -87,7 +87,7 @@ def optimize_plan(
         raise ArmcalError(f"unknown criterion {criterion!r}; choose one of {', '.join(CRITERIA)}")
     rng = np.random.default_rng(rng)
     n = model.n_joints
-    viewed = model.view_constraints(np.zeros((1, n))) is not None  # the view constrains poses
+    viewed = model.has_view
     q0 = np.stack([random_plan(model, m, rng=rng) for _ in range(starts)])
     if viewed:
         q0[:, :, :] = feasible_poses(model, starts * m, rng=rng).reshape(starts, m, n)
@@ -101,11 +101,10 @@ def optimize_plan(
         weight = penalty_weight(model, step / steps)
         return value - weight * penalty, (grad - weight * grad_pen) * dq_du
 
-    u, _ = adam_ascent(objective, to_u(model, q0), steps=steps, learning_rate=0.05)
+    # The ascent's last value is the score at its end, with the penalty's full weight.
+    u, score = adam_ascent(objective, to_u(model, q0), steps=steps, learning_rate=0.05)
     q_final, _ = to_q(model, u)
-    value, _ = _criterion_value_and_gradient(model, q_final, criterion)
-    penalty, _ = view_penalty(model, q_final)
-    order = np.argsort(-(value - penalty_weight(model, 1.0) * penalty), kind="stable")
+    order = np.argsort(-score, kind="stable")
     best_q, best_value = None, -np.inf
     for index in order[:polish]:
         q = _polish(model, q_final[index], criterion, viewed)

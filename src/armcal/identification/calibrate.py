@@ -28,7 +28,9 @@ from numpy.typing import ArrayLike
 
 from ..errors import ArmcalError, ArmcalWarning
 from ..models import FitModel, Loads
+from ..models.information import display_std
 from ..noise import instrument_override
+from ..numerics import point_norms, rms
 from .judgement import (
     Outlier,
     few_dof_warning,
@@ -39,7 +41,7 @@ from .judgement import (
     outlier_warning,
     unseen_warning,
 )
-from .problem import Problem, point_norms, reference_sigma
+from .problem import Problem, reference_sigma
 from .result import Calibration, NestedFit
 from .robust import robust_fit
 from .solvers import resolve_method
@@ -172,7 +174,18 @@ def identify(
     everyone = np.ones(m, dtype=bool)
     extra: list[ArmcalWarning] = []
     robust_sigma = reference if given else None
-    least_squares = problem.fit(everyone)
+    inner, effect_words = model.nested, model.effect
+    nested_problem = inner_all = None
+    start = None
+    if inner is not None and effect_words is not None:
+        # The model without its effect, fitted as the model is (same noise model, per-row
+        # sigma and poses): where the fit starts, and what the F test compares it with.
+        nested_problem = Problem(
+            inner, conditions, points, resolve_method(inner, "auto"), tol, max_iter
+        )
+        inner_all = nested_problem.fit(everyone)
+        start = model.lift(inner_all.params)
+    least_squares = problem.fit(everyone, start=start)
     fit, used = least_squares, everyone
     if robust:
         fit, used, flagged, kept_warning = robust_fit(problem, robust_sigma, least_squares)
@@ -235,24 +248,21 @@ def identify(
     g[model.free] = fit.factor
     covariance = sigma_value**2 * (g @ g.T)
     nested = None
-    inner, effect_words = model.nested, model.effect
-    if inner is not None and effect_words is not None:
-        # The model without its effect, fitted as the model was: weighted by the same
-        # noise model and per-row sigma, on the same poses, so that the F test compares
-        # the sums of squares each fit minimised (whitened residuals, in one unit).
-        inner_fit = Problem(
-            inner, conditions, points, resolve_method(inner, "auto"), tol, max_iter
-        ).fit(used)
+    if nested_problem is not None and inner is not None and effect_words is not None:
+        # On the same poses as the fit, so that the F test compares the sums of squares
+        # each fit minimised (whitened residuals, in one unit).
+        inner_fit = inner_all if used.all() else nested_problem.fit(used)
+        assert inner_fit is not None
         count = model.n_params - inner.n_params
         p_value = nested_test(inner_fit.whitened[used], fit.whitened[used], count, dof)
         nested = NestedFit(
             effect_words,
             model.param_names[inner.n_params :],
-            float(np.sqrt(np.mean(inner_fit.residuals[used] ** 2))),
+            rms(inner_fit.residuals[used]),
             p_value,
         )
         effect = slice(inner.n_params, None)
-        std = np.sqrt(np.diag(covariance)[effect]) * model.display_scale[effect]
+        std = display_std(model, covariance)[effect]
         shown = ", ".join(
             f"{name} = {v:.3g} ± {s:.3g} {unit}"
             for name, unit, v, s in zip(
@@ -263,8 +273,9 @@ def identify(
                 strict=True,
             )
         )
-        rms = float(np.sqrt(np.mean(fit.residuals[used] ** 2)))
-        unseen = unseen_warning(effect_words, shown, nested.rms_per_coordinate_mm, rms, p_value)
+        unseen = unseen_warning(
+            effect_words, shown, nested.rms_per_coordinate_mm, rms(fit.residuals[used]), p_value
+        )
         if unseen is not None and conditioning is None:
             warnings.append(unseen)
     return Calibration(

@@ -16,14 +16,13 @@ import numpy as np
 from ..errors import ArmcalError
 from ..models import Conditions, FitModel
 from ..models.information import covariance_factor_from
-from ..noise import NoiseModel
+from ..noise import NoiseModel, relative_noise
 from .judgement import PoseTest, studentized_test
 from .solvers import solve
 
 __all__ = [
     "Fit",
     "Problem",
-    "point_norms",
     "reference_sigma",
 ]
 
@@ -41,14 +40,7 @@ def reference_sigma(model: FitModel, row_sigma: np.ndarray | None) -> float:
 
 def _noise(model: FitModel) -> NoiseModel:
     """The model's noise model, or unit isotropic noise (weights are relative)."""
-    return model.noise if model.noise is not None else NoiseModel.isotropic(1.0)
-
-
-def point_norms(points: np.ndarray) -> np.ndarray:
-    """Euclidean length ``(...)`` of every point ``(..., d)`` (``hypot`` in the plane)."""
-    if points.shape[-1] == 2:
-        return np.hypot(points[..., 0], points[..., 1])
-    return np.linalg.norm(points, axis=-1)
+    return relative_noise(model.noise)
 
 
 class Fit:
@@ -104,14 +96,12 @@ class Fit:
         model = problem.model
         if self._w is None and self.used.all():
             factor, ok = model.covariance_factor(problem.conditions, self.params)
-            factor = factor[..., model.free, :]
         else:
             rows = self.jacobian[self.used].reshape(-1, model.n_free)
             factor, ok = covariance_factor_from(rows, model.free)
-            factor = factor[..., model.free, :]
         if not bool(ok):  # identifiable at nominal, so only for absurd deviations
             raise ArmcalError("the Jacobian is singular at the estimate; check the data")
-        return factor
+        return factor[..., model.free, :]
 
     @cached_property
     def leverage(self) -> np.ndarray:
@@ -161,17 +151,28 @@ class Problem:
     ) -> None:
         self.model, self.conditions, self.points = model, conditions, points
         self.method, self.tol, self.max_iter = method, tol, max_iter
+        self._subsets: dict[bytes, Conditions] = {}
 
     @property
     def m(self) -> int:
         return self.conditions.m
+
+    def rows(self, used: np.ndarray) -> Conditions:
+        """The conditions of the poses ``used``, one object per subset: what one fit or
+        check of a subset factors (:meth:`Conditions.memo`), the next reuses."""
+        if used.all():
+            return self.conditions
+        key = used.tobytes()
+        if key not in self._subsets:
+            self._subsets[key] = self.conditions.take(used)
+        return self._subsets[key]
 
     def identifiable(self, used: np.ndarray) -> bool:
         """Whether the poses ``used`` identify every free parameter."""
         model = self.model
         if model.point_dim * int(np.count_nonzero(used)) < model.n_free:
             return False
-        return model.identifiability(self.conditions.take(used))[0].identifiable
+        return model.identifiability(self.rows(used))[0].identifiable
 
     def fit(
         self,
@@ -181,11 +182,9 @@ class Problem:
         start: np.ndarray | None = None,
     ) -> Fit:
         """The fit to the poses ``used`` (times ``weights``, from ``start`` if given)."""
-        everyone = bool(used.all())
-        conditions = self.conditions if everyone else self.conditions.take(used)
         found = solve(
             self.model,
-            conditions,
+            self.rows(used),
             self.points[used],
             method=self.method,
             weights=None if weights is None else weights[used],

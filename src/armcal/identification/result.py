@@ -21,7 +21,7 @@ import numpy as np
 
 from ..errors import ArmcalWarning
 from ..models import CalibratedArm, Conditions, Effect, FitModel, Plane
-from ..numerics import rms
+from ..numerics import point_norms, rms
 from .judgement import GoodnessOfFit, Outlier
 
 __all__ = [
@@ -275,9 +275,7 @@ class Calibration:
     @property
     def pose_residuals(self) -> np.ndarray:
         """Euclidean residual of every pose ``(m,)`` in mm."""
-        if self.residuals.shape[1] == 2:
-            return np.hypot(self.residuals[:, 0], self.residuals[:, 1])
-        return np.linalg.norm(self.residuals, axis=1)
+        return point_norms(self.residuals)
 
     def _used_residuals(self) -> np.ndarray:
         return self.residuals if self.used is None else self.residuals[self.used]
@@ -286,12 +284,6 @@ class Calibration:
     def residual_rms(self) -> float:
         """RMS of the residual coordinates of the poses in the fit (per coordinate), mm."""
         return rms(self._used_residuals())
-
-    @property
-    def residual_rms_per_point(self) -> float:
-        """RMS of the Euclidean residuals of the poses in the fit (per point), mm."""
-        kept = self.pose_residuals if self.used is None else self.pose_residuals[self.used]
-        return rms(kept)
 
     @property
     def residual_max(self) -> float:

@@ -17,7 +17,8 @@ import math
 import numpy as np
 
 from ..errors import ArmcalWarning
-from .problem import Fit, Problem, point_norms
+from ..numerics import point_norms
+from .problem import Fit, Problem
 
 __all__ = [
     "HUBER_K",

@@ -338,6 +338,9 @@ class CompliantArm:
     def joint_limits(self) -> np.ndarray:
         return self.arm.joint_limits
 
+    def within_limits(self, q: np.ndarray, *, tol: float = 1e-9) -> np.ndarray:
+        return self.arm.within_limits(q, tol=tol)
+
     @property
     def point_dim(self) -> int:
         return self.arm.point_dim
@@ -414,18 +417,9 @@ class CompliantArm:
             out.append(torque)
         return np.concatenate(out, axis=-1)
 
-    def deflection(
-        self,
-        q: np.ndarray,
-        geometry: np.ndarray | None,
-        compliance: np.ndarray,
-        loads: Loads | None,
-        *,
-        row_loads: np.ndarray | None = None,
-    ) -> np.ndarray:
-        """Joint deflections ``(..., m, n)`` in rad (relative angles)."""
-        if row_loads is None:
-            row_loads = self.load_terms(q, geometry, loads)
+    def deflection(self, row_loads: np.ndarray, compliance: np.ndarray) -> np.ndarray:
+        """Joint deflections ``(..., m, n)`` in rad (relative angles) of the rows' load terms
+        (:meth:`load_terms`) under ``compliance``."""
         per_param = row_loads * np.asarray(compliance, dtype=float)[..., None, :]
         n = self.arm.n_joints
         return per_param.reshape(*per_param.shape[:-1], -1, n).sum(axis=-2)
@@ -436,7 +430,7 @@ class CompliantArm:
         geometry, compliance = self.split(full)
         loads = conditions.loads
         row_loads = self.load_terms(conditions.q, geometry, loads)
-        bend = self.deflection(conditions.q, geometry, compliance, loads, row_loads=row_loads)
+        bend = self.deflection(row_loads, compliance)
         return geometry, row_loads, bend
 
     # -- measurement (FitModel) ---------------------------------------------------------
@@ -598,6 +592,10 @@ class CompliantArm:
 
     def feasible(self, q: np.ndarray, *, tol: float = 1e-9) -> np.ndarray:
         return self.arm.feasible(q, tol=tol)
+
+    @property
+    def has_view(self) -> bool:
+        return self.arm.has_view
 
     def view_constraints(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray] | None:
         return self.arm.view_constraints(q)

@@ -21,11 +21,12 @@ covariance from its plan's own factorization); the numbers are the same.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from functools import cached_property
 
 import numpy as np
 
-from ..numerics import ScaledSVD, scaled_svd
+from ..numerics import ScaledSVD, gram_of_factor, scaled_svd
 from .identifiability import Identifiability
 from .interface import Conditions, FitModel, Loads
 
@@ -34,6 +35,7 @@ __all__ = [
     "covariance_factor_from",
     "display_std",
     "mean_tip_variance",
+    "pose_derivative",
     "predicted_covariance",
     "tip_variances",
     "weighted_whitening",
@@ -119,9 +121,7 @@ def predicted_covariance(
     the rows identify them (:meth:`~armcal.models.interface.FitModel.covariance_factor`;
     ``inf`` where not)."""
     factor, ok = model.covariance_factor(conditions, params)
-    safe = np.where(ok, factor, 0.0)
-    covariance = sigma_mm**2 * (safe @ np.swapaxes(safe, -1, -2))
-    return np.where(ok, covariance, np.inf), bool(ok)
+    return sigma_mm**2 * gram_of_factor(factor, ok), bool(ok)
 
 
 def display_std(model: FitModel, covariance: np.ndarray) -> np.ndarray:
@@ -162,16 +162,32 @@ def mean_tip_variance(jacobian: np.ndarray, covariance: np.ndarray) -> np.ndarra
     return np.clip(np.einsum("...ab,ba->...", covariance, gram), 0.0, None)
 
 
+def pose_derivative(
+    value_at: Callable[[np.ndarray], np.ndarray], q: np.ndarray, step: float = 1e-6
+) -> np.ndarray:
+    """``d value_i / d q_i`` ``(..., m, n)`` by central differences of step ``step`` (rad).
+
+    ``value_at`` maps poses ``(..., m, n)`` to one value per pose ``(..., m)`` that
+    depends on that pose only, so one pair of evaluations per joint moves every pose
+    at once.
+    """
+    grad = np.empty(q.shape)
+    for j in range(q.shape[-1]):
+        shift = np.zeros(q.shape[-1])
+        shift[j] = step
+        grad[..., j] = (value_at(q + shift) - value_at(q - shift)) / (2 * step)
+    return grad
+
+
 class BlockInformation:
     """The :class:`~armcal.models.interface.PlanInformation` of any model, from its Jacobian.
 
     A pose's information is the Gram matrix of its whitened free rows
     (:func:`whitened_blocks`, every target of the pose) with the columns divided
     by ``scale`` ``(p_f,)``: the design coordinates (default: the free parameters
-    in internal units).  Gradients in the poses are central differences of step
-    ``step`` rad, one pair of evaluations per joint for every pose at once (a
-    pose's rows depend on that pose only); a family with an analytic gradient
-    provides its own plan information.
+    in internal units).  Gradients in the poses are central differences
+    (:func:`pose_derivative`); a family with an analytic gradient provides its own
+    plan information.
 
     Parameters
     ----------
@@ -195,14 +211,12 @@ class BlockInformation:
         *,
         scale: np.ndarray | None = None,
         unit_columns: bool = False,
-        step: float = 1e-6,
     ) -> None:
         self.model = model
         self.q = np.asarray(q, dtype=float)
         self.loads = loads
         self.scale = np.ones(model.n_free) if scale is None else np.asarray(scale, dtype=float)
         self.unit_columns = unit_columns
-        self.step = step
 
     @property
     def rows_per_pose(self) -> int:
@@ -221,13 +235,19 @@ class BlockInformation:
             loads = Loads(np.tile(loads.payload_kg, plans), np.tile(loads.force_n, (plans, 1)))
         return self.model.plan_conditions(flat, loads)
 
-    def _blocks_at(self, q: np.ndarray) -> np.ndarray:
-        blocks = whitened_blocks(self.model, self._conditions(q)) / self.scale
+    def _blocks_at(self, q: np.ndarray, rows: Conditions | None = None) -> np.ndarray:
+        rows = self._conditions(q) if rows is None else rows
+        blocks = whitened_blocks(self.model, rows) / self.scale
         return blocks.reshape(*q.shape[:-1], -1, self.model.n_free)
 
     @cached_property
+    def _rows(self) -> Conditions:
+        """The rows of the plans themselves (every target of every pose)."""
+        return self._conditions(self.q)
+
+    @cached_property
     def _blocks(self) -> np.ndarray:
-        return self._blocks_at(self.q)
+        return self._blocks_at(self.q, self._rows)
 
     def blocks(self) -> np.ndarray:
         return self._blocks
@@ -239,14 +259,7 @@ class BlockInformation:
 
     def _central_difference(self, value) -> np.ndarray:
         """``d value(F_i) / d q_i`` ``(..., m, n)`` of a per-pose function of the blocks."""
-        grad = np.empty(self.q.shape)
-        for j in range(self.q.shape[-1]):
-            shift = np.zeros(self.q.shape[-1])
-            shift[j] = self.step
-            up = value(self._blocks_at(self.q + shift))
-            down = value(self._blocks_at(self.q - shift))
-            grad[..., j] = (up - down) / (2 * self.step)
-        return grad
+        return pose_derivative(lambda q: value(self._blocks_at(q)), self.q)
 
     def gradient(self, phi: np.ndarray) -> np.ndarray:
         phi = np.asarray(phi, dtype=float)
@@ -283,15 +296,23 @@ class BlockInformation:
         stacked = f.reshape(*f.shape[:-3], -1, f.shape[-1]) / np.sqrt(rows)
         return np.where(self._svd.kept, np.linalg.svd(stacked, compute_uv=False), 0.0)
 
-    def identifiability(self) -> Identifiability:
-        return self.model.identifiability(self._conditions(self.q))[0]
+    @cached_property
+    def _identified(self) -> Identifiability:
+        return self.model.check_identifiable(self._rows)  # raises: nothing cached
 
     def check_identifiable(self) -> Identifiability:
-        return self.model.check_identifiable(self._conditions(self.q))
+        return self._identified
+
+    @cached_property
+    def _nominal_factor(self) -> tuple[np.ndarray, np.ndarray]:
+        return self._factor(None)
 
     def covariance_factor(self, params: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+        return self._nominal_factor if params is None else self._factor(params)
+
+    def _factor(self, params: np.ndarray | None) -> tuple[np.ndarray, np.ndarray]:
         if self.q.ndim == 2:  # one plan: the model's own (its rank policy and weights)
-            return self.model.covariance_factor(self._conditions(self.q), params)
-        rows = whitened_blocks(self.model, self._conditions(self.q), params)  # plan after plan
+            return self.model.covariance_factor(self._rows, params)
+        rows = whitened_blocks(self.model, self._rows, params)  # plan after plan
         stacked = rows.reshape(*self.q.shape[:-2], -1, self.model.n_free)
         return covariance_factor_from(stacked, self.model.free)

@@ -295,12 +295,9 @@ class PlanInformation(Protocol):
         """``(..., p_f)``: what the criteria are computed on, those the policy drops 0."""
         ...
 
-    def identifiability(self) -> Identifiability:
-        """Which parameter combinations the plan (one, ``(m, n)``) cannot separate."""
-        ...
-
     def check_identifiable(self) -> Identifiability:
-        """:meth:`identifiability`, raising NotIdentifiableError (with why) when deficient."""
+        """Which parameter combinations the plan (one, ``(m, n)``) cannot separate; raises
+        NotIdentifiableError (with why) when it cannot identify every parameter."""
         ...
 
     def covariance_factor(self, params: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
@@ -441,6 +438,10 @@ class FitModel(Protocol):
     @property
     def joint_limits(self) -> np.ndarray:
         """``(n, 2)`` limits of the joint readings, rad."""
+        ...
+
+    def within_limits(self, q: np.ndarray, *, tol: float = 1e-9) -> np.ndarray:
+        """Boolean ``(..., m, n)``: every joint reading of ``q`` (rad) within its limits."""
         ...
 
     @property
@@ -633,6 +634,11 @@ class FitModel(Protocol):
     # -- design ---------------------------------------------------------------
     def feasible(self, q: np.ndarray, *, tol: float = 1e-9) -> np.ndarray:
         """Mask ``(..., m)`` of poses within the joint limits and the instrument's view."""
+        ...
+
+    @property
+    def has_view(self) -> bool:
+        """Whether the instrument's view constrains the poses (:meth:`view_constraints`)."""
         ...
 
     def view_constraints(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray] | None:

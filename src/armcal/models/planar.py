@@ -369,6 +369,11 @@ class PlanarArm(PlanarArmSpec):
         """Poses within the joint limits whose every target is in the measurement region."""
         return planar_design.feasible(self, q, tol=tol)
 
+    @property
+    def has_view(self) -> bool:
+        """A measurement region constrains the poses."""
+        return self.region is not None
+
     def view_constraints(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray] | None:
         """The measurement region's constraints on every target's point, None without one."""
         return planar_design.region_constraints(self, q)

@@ -20,7 +20,7 @@ from typing import Any, TypeVar
 import numpy as np
 from numpy.typing import ArrayLike
 
-from ..noise import NoiseModel
+from ..noise import NoiseModel, relative_noise
 from .interface import Conditions
 from .planar_geometry import PlanarGeometry, Target, checked_link_lengths
 from .planar_kinematics import joint_jacobian
@@ -242,7 +242,7 @@ class PlanarArmSpec(PlanarGeometry):
         where the conditions give it; None for isotropic iid noise and no per-row
         sigma, where every row weighs the same.
         """
-        noise = self.noise if self.noise is not None else NoiseModel.isotropic(1.0)
+        noise = relative_noise(self.noise)
         if noise.isotropic_iid and conditions.sigma_mm is None:
             return None
         at = params if noise.joint_sigma is not None else None

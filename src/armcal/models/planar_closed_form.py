@@ -62,14 +62,11 @@ def shared_plan_factor(arm: PlanarArmSpec, conditions: Conditions) -> LinearLeas
     )
 
 
-def plan_factor(
-    arm: PlanarArmSpec, q: np.ndarray, target: np.ndarray | None = None
-) -> LinearLeastSquares:
-    """The plan's factorization; raises :class:`NotIdentifiableError` for a singular plan."""
-    factor = factor_least_squares(scaled_jacobian(arm, q, target))
-    if not bool(factor.svd.full_rank):
-        # raises, naming the unseen combinations
-        check_identifiable(arm, q, svd=factor.svd, target=target)
+def plan_factor(arm: PlanarArmSpec, conditions: Conditions) -> LinearLeastSquares:
+    """:func:`shared_plan_factor`, raising :class:`NotIdentifiableError` for a singular plan."""
+    factor = shared_plan_factor(arm, conditions)
+    if not bool(factor.svd.full_rank):  # raises, naming the unseen combinations
+        check_identifiable(arm, conditions.q, svd=factor.svd, target=conditions.target)
     return factor
 
 
@@ -175,7 +172,7 @@ def solve_closed_form(
     """
     batched = np.ndim(xy) == 3
     q, sets = as_sets(arm, q, xy)
-    params = params_from_phasors(arm, link_phasors_fit(plan_factor(arm, q, target), sets))
+    params, _ = PlanarClosedForm(arm, Conditions(q, target)).solve(sets, None)
     return params if batched else params[0]
 
 
@@ -306,9 +303,6 @@ class PlanarClosedForm:
         """
         arm, cond = self.arm, self.conditions
         if whitening is None:
-            factor = shared_plan_factor(arm, cond)
-            if not bool(factor.svd.full_rank):  # raises, naming the unseen combinations
-                check_identifiable(arm, cond.q, svd=factor.svd, target=cond.target)
-            params = params_from_phasors(arm, link_phasors_fit(factor, points))
+            params = params_from_phasors(arm, link_phasors_fit(plan_factor(arm, cond), points))
             return params, np.ones(points.shape[0], dtype=bool)
         return weighted_closed_form(arm, cond.q, points, whitening, cond.target)

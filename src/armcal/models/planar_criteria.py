@@ -14,13 +14,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..numerics import ScaledSVD
-from .information import mean_tip_variance
+from ..numerics import ScaledSVD, gram_of_factor
 from .planar_arm import PlanarArmSpec
 from .planar_information import (
     covariance_factor,
     model_columns,
-    plan_rows,
     plan_svd,
     scaled_jacobian,
 )
@@ -34,7 +32,6 @@ __all__ = [
     "inverse_information_batch",
     "model_singular_values",
     "optimality_sums",
-    "position_rms",
     "scaled_information",
     "weighted_information",
 ]
@@ -105,9 +102,7 @@ def inverse_information_batch(
     of ``H``: accurate to ``cond(H) eps``, with no Gram matrix inverted.
     """
     g, ok = covariance_factor(arm, q, params, svd)
-    safe = np.where(ok[..., None, None], g, 0.0)
-    inverse = safe @ np.swapaxes(safe, -1, -2)
-    return np.where(ok[..., None, None], inverse, np.inf), ok
+    return gram_of_factor(g, ok), ok
 
 
 def inverse_information(
@@ -212,14 +207,3 @@ def optimality_sums(arm: PlanarArmSpec, q: np.ndarray) -> dict[str, float]:
             out[f"cos({label})"] = float(np.sum(np.cos(angle)))
             out[f"sin({label})"] = float(np.sum(np.sin(angle)))
     return out
-
-
-def position_rms(arm: PlanarArmSpec, inverse: np.ndarray, test_q: np.ndarray, sigma: float):
-    """Predicted RMS tip error ``(...)`` after calibration, from ``(J^T J)^-1`` ``(..., p, p)``.
-
-    ``sigma sqrt(tr(F^-1 G))`` with ``G = mean_x J(x)^T J(x)`` over the test poses:
-    the mean over test poses of ``sigma^2 tr(J(x) F^-1 J(x)^T)``.
-    """
-    rows, target, _ = plan_rows(arm, test_q, None)
-    j0 = jacobian(arm, rows, target=target)  # (k, 2, p), user parametrization like `inverse`
-    return sigma * np.sqrt(mean_tip_variance(j0, inverse))

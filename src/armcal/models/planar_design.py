@@ -64,7 +64,6 @@ from .planar_criteria import model_singular_values, weighted_information
 from .planar_information import (
     check_identifiable,
     covariance_factor,
-    identifiability,
     model_basis,
     model_columns,
     plan_rows,
@@ -367,14 +366,25 @@ class PlanarPlanInformation:
     def svd(self) -> ScaledSVD:
         return self._svd
 
-    def singular_values(self) -> np.ndarray:
+    @cached_property
+    def _singular_values(self) -> np.ndarray:
         return model_singular_values(self.arm, self.q, self._svd)
 
-    def identifiability(self) -> Identifiability:
-        return identifiability(self.arm, self.q, svd=self._svd)
+    def singular_values(self) -> np.ndarray:
+        return self._singular_values
+
+    @cached_property
+    def _identified(self) -> Identifiability:
+        return check_identifiable(self.arm, self.q, svd=self._svd)  # raises: nothing cached
 
     def check_identifiable(self) -> Identifiability:
-        return check_identifiable(self.arm, self.q, svd=self._svd)
+        return self._identified
+
+    @cached_property
+    def _nominal_factor(self) -> tuple[np.ndarray, np.ndarray]:
+        return covariance_factor(self.arm, self.q, None, self._svd)
 
     def covariance_factor(self, params: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+        if params is None:
+            return self._nominal_factor
         return covariance_factor(self.arm, self.q, params, self._svd)

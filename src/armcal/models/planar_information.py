@@ -18,7 +18,7 @@ from collections.abc import Sequence
 import numpy as np
 
 from ..errors import ArmcalWarning, NotIdentifiableError, action
-from ..noise import NoiseModel, complex_whitening
+from ..noise import complex_whitening, relative_noise
 from ..numerics import COND_WARN, RANK_RTOL, ScaledSVD, scaled_svd
 from .identifiability import Identifiability, combination, listing, row_echelon
 from .information import covariance_factor_from
@@ -534,8 +534,8 @@ def weighted_user_jacobian(
     jac = jacobian(arm, q, params, target=target)  # (..., m, 2, p)
     noise = arm.noise
     if row_sigma is not None or (noise is not None and not noise.isotropic_iid):
-        model = noise if noise is not None else NoiseModel.isotropic(1.0)
-        jac = arm.whitening_at(q, params, row_sigma, target=target, noise=model) @ jac
+        weights = relative_noise(noise)
+        jac = arm.whitening_at(q, params, row_sigma, target=target, noise=weights) @ jac
     jac = jac[..., arm.free]
     return jac.reshape(*jac.shape[:-3], -1, arm.n_free)
 

@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..models import PlanarArm, wrap_angle
+from ..models import Conditions, PlanarArm, wrap_angle
 from ..models.planar_closed_form import as_sets, link_phasors_fit, plan_factor, user_from_links
 
 __all__ = [
@@ -148,7 +148,7 @@ def solve_gauss_newton(
     """
     batched = np.ndim(xy) == 3
     q, sets = as_sets(arm, q, xy)
-    v = link_phasors_fit(plan_factor(arm, q, target), sets)
+    v = link_phasors_fit(plan_factor(arm, Conditions(q, target)), sets)
     params, iterations, converged = _gauss_newton(arm, v, tol=tol, max_iter=max_iter)
     if batched:
         return params, iterations, converged

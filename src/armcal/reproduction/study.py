@@ -14,24 +14,16 @@ import numpy as np
 from ..criteria import CRITERIA
 from ..doe.plans import random_plan
 from ..models import PlanarArm, plan_svd
-from ..models.information import display_std
-from ..models.planar_criteria import (
-    dstar,
-    inverse_information_batch,
-    model_singular_values,
-    position_rms,
-)
+from ..models.information import display_std, mean_tip_variance
+from ..models.planar_criteria import dstar, inverse_information_batch, model_singular_values
 from ..progress import ProgressCallback
+from ..simulate import chunk_size
 from ..synthesis import simulated_noise
 
 __all__ = [
-    "CHUNK_BYTES",
     "PlanStudy",
     "random_plan_study",
 ]
-
-#: Bytes of working arrays allowed per chunk of plans.
-CHUNK_BYTES = 32 * 2**20
 
 
 @dataclass(frozen=True, eq=False)
@@ -149,7 +141,8 @@ def random_plan_study(
     rng = np.random.default_rng(rng)
     test_q = random_plan(arm, 1000, rng=rng) if test_q is None else np.asarray(test_q, dtype=float)
     p = model.n_free
-    chunk = int(max(1, min(plans, CHUNK_BYTES // (8 * max(2 * poses * arm.n_params * 4, 1)))))
+    chunk = chunk_size(2 * poses * arm.n_params * 4, plans)
+    test = model.jacobian(model.plan_conditions(test_q))  # (k, 2, p): once for every chunk
     parts: dict[str, list[np.ndarray]] = {key: [] for key in ("d", "c", "s", "std", "pos")}
     done = 0
     while done < plans:
@@ -167,7 +160,7 @@ def random_plan_study(
         parts["s"].append(star.abs_det_s)
         inverse, _ = inverse_information_batch(model, q, svd=svd)
         parts["std"].append(display_std(model, reference**2 * inverse))
-        parts["pos"].append(position_rms(model, inverse, test_q, reference))
+        parts["pos"].append(reference * np.sqrt(mean_tip_variance(test, inverse)))
         done += size
         if progress is not None:
             progress(done, plans)
