@@ -588,6 +588,25 @@ CASES = [
         ("demo", "-o", "out"),
         ("out/plan.csv", "directory"),
     ),
+    # A folder output names none of its files: only files armcal wrote there are replaced.
+    case(
+        "demo-output-folder-holds-the-users-calibration",
+        {"out": FOLDER, "out/calibration.json": '{"mine": true}\n'},
+        ("demo", "-o", "out"),
+        ("out/calibration.json", "armcal did not write it", "move it away"),
+    ),
+    case(
+        "demo-output-dot-holds-the-users-plan",
+        {"plan.csv": VALID_PLAN},
+        ("demo", "-o", "."),
+        ("./plan.csv", "armcal did not write it", "give -o another folder"),
+    ),
+    case(
+        "reproduce-output-folder-holds-the-users-report",
+        {"out": FOLDER, "out/report.md": "# my notes\n"},
+        ("reproduce", "-o", "out"),
+        ("out/report.md", "armcal did not write it"),
+    ),
     # ---- command-line usage (no file to name; check the option is named)
     case(
         "usage-negative-sigma",
@@ -1156,7 +1175,7 @@ def test_bad_input_exits_2_with_one_error_line(
         assert text in message, f"{text!r} not in {message!r}"
     assert result.stdout == "", result.stdout
     out = _output(argv)
-    if out is not None and os.path.normpath(out) not in files:
+    if out is not None and os.path.normpath(out) not in {*files, "."}:
         assert not (tmp_path / out).exists(), f"{out} was written"
     assert _snapshot(tmp_path) == before, "files were written, changed or left behind"
 

@@ -1,5 +1,6 @@
 """Files: robot and truth TOML, plan and measurement CSV, calibration JSON."""
 
+import hashlib
 import json
 import os
 import stat
@@ -18,6 +19,7 @@ from armcal import (
     orthogonal_plan,
 )
 from armcal.files import (
+    MANIFEST,
     OutputFolder,
     atomic_write,
     calibration_document,
@@ -449,6 +451,8 @@ def test_check_outputs_folders(tmp_path):
         check_outputs(
             {"-o": OutputFolder(tmp_path, ("truth.toml",))}, {"--truth": tmp_path / "truth.toml"}
         )
+    with pytest.raises(InputError, match=r"afile: exists and armcal did not write it"):
+        check_outputs({"-o": OutputFolder(tmp_path, ("afile",))})  # the user's file
     check_outputs({"-o": OutputFolder(tmp_path / "new" / "deeper", files)})  # made when written
     with pytest.raises(InputError, match="output folder name is empty"):  # "" is not "."
         check_outputs({"-o": OutputFolder("", files)})
@@ -470,7 +474,12 @@ def test_write_folder_makes_a_new_folder_only_when_complete(tmp_path):
     for made in (tmp_path / "a", folder):  # as mkdir would make them, not mkdtemp's 0700
         assert _mode(made) == 0o777 & ~_umask()
     assert _mode(folder / "x.txt") == 0o666 & ~_umask()
-    assert sorted(p.name for p in tmp_path.rglob("*")) == ["a", "b", "x.txt", "y.bin"]
+    assert sorted(p.name for p in tmp_path.rglob("*")) == [MANIFEST, "a", "b", "x.txt", "y.bin"]
+    listed = (folder / MANIFEST).read_text().splitlines()  # sha256sum's format
+    assert listed == [
+        hashlib.sha256(b"text\n").hexdigest() + "  x.txt",
+        hashlib.sha256(b"\x00").hexdigest() + "  y.bin",
+    ]
 
 
 @pytest.mark.parametrize("error", [RuntimeError, KeyboardInterrupt])
@@ -502,4 +511,25 @@ def test_write_folder_into_an_existing_folder(tmp_path):
     assert (out / "x.txt").is_symlink() and (tmp_path / "real.txt").read_text() == "new\n"
     assert _mode(tmp_path / "real.txt") == 0o600
     assert (out / "other").read_text() == "keep\n" and (out / "y.txt").read_text() == "y\n"
-    assert sorted(p.name for p in out.iterdir()) == ["other", "x.txt", "y.txt"]
+    assert sorted(p.name for p in out.iterdir()) == [MANIFEST, "other", "x.txt", "y.txt"]
+
+
+def test_a_folder_output_replaces_only_the_files_armcal_wrote(tmp_path):
+    """demo/reproduce -o name no file: they replace their own earlier files, never the user's."""
+    out = tmp_path / "out"
+    folder = OutputFolder(out, ("cal.json", "plan.csv"))
+    check_outputs({"-o": folder})  # a new folder
+    write_folder(out, {"cal.json": "{}\n", "plan.csv": "q\n"})
+    check_outputs({"-o": folder})  # a second run replaces its own files
+    (out / "notes.txt").write_text("mine\n")  # other files are no concern
+    check_outputs({"-o": folder})
+    (out / "plan.csv").write_text("q\n1\n")  # the user edited it
+    with pytest.raises(InputError, match=r"out/plan\.csv: exists and armcal did not write it"):
+        check_outputs({"-o": folder})
+    (out / "plan.csv").unlink()
+    (out / "cal.json").unlink()
+    (out / "cal.json").write_text("{}\n")  # the same bytes, but the listing says so: ours
+    check_outputs({"-o": folder})
+    (out / MANIFEST).unlink()  # without the listing, nothing there is known to be ours
+    with pytest.raises(InputError, match=r"cal\.json: exists and armcal did not write it"):
+        check_outputs({"-o": folder})

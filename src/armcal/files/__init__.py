@@ -14,7 +14,7 @@ from .calibration import (
     robot_to_dict,
 )
 from .common import STDIO, to_json
-from .paths import OutputFolder, atomic_write, check_outputs, write_folder
+from .paths import MANIFEST, OutputFolder, atomic_write, check_outputs, write_folder
 from .robots import (
     BUILTIN_ROBOTS,
     COMPLIANCE_TRUTH_KEYS,
@@ -53,6 +53,7 @@ __all__ = [
     "JOINT_SIGMA_MAX_DEG",
     "LIMIT_TOLERANCE_DEG",
     "LINK_LENGTH_RANGE_MM",
+    "MANIFEST",
     "RADIAN_LIMIT_BOUND",
     "REACH_MARGIN",
     "SIGMA_RANGE_MM",

@@ -5,11 +5,18 @@ directory, a special file or a link it was not meant to follow; every writer
 writes a temporary file next to the target and renames it
 (:func:`atomic_write`), so a failed run never leaves half a file; and
 :func:`write_folder` makes an output folder only once all its files are complete.
+
+A command that writes several files into a folder (``demo -o``, ``reproduce
+-o``) names none of them on its command line, so it replaces only files it
+wrote itself: :data:`MANIFEST` in the folder records each file armcal wrote and
+a digest of its bytes, and a file of the same name that is not listed, or has
+changed since, is the user's and is refused before any work.
 """
 
 from __future__ import annotations
 
 import errno
+import hashlib
 import os
 import shutil
 import stat
@@ -24,11 +31,48 @@ from ..errors import InputError
 from .common import STDIO, PathArg, fail
 
 __all__ = [
+    "MANIFEST",
     "OutputFolder",
     "atomic_write",
     "check_outputs",
     "write_folder",
 ]
+
+
+#: The file in an output folder that lists the files armcal wrote there, one
+#: ``sha256  name`` line each (the format of ``sha256sum``, so ``sha256sum -c``
+#: checks it).
+MANIFEST = ".armcal-files"
+
+
+def _digest(path: Path) -> str:
+    """The SHA-256 of a file's bytes, as hex."""
+    digest = hashlib.sha256()
+    with path.open("rb") as handle:
+        for block in iter(lambda: handle.read(1 << 20), b""):
+            digest.update(block)
+    return digest.hexdigest()
+
+
+def _manifest(folder: Path) -> dict[str, str]:
+    """Name to digest of the files armcal wrote into ``folder`` (empty if none or unreadable)."""
+    try:
+        lines = (folder / MANIFEST).read_text(encoding="utf-8").splitlines()
+    except (OSError, UnicodeDecodeError):
+        return {}
+    entries = (line.split("  ", 1) for line in lines)
+    return {name: digest for digest, name, *_ in (e for e in entries if len(e) == 2)}
+
+
+def _ours(folder: Path, name: str, manifest: Mapping[str, str]) -> bool:
+    """Whether ``folder/name`` is a regular file armcal wrote there and nobody changed."""
+    path = folder / name
+    if name not in manifest or not path.is_file():  # a link: the file it points to
+        return False
+    try:
+        return _digest(path) == manifest[name]
+    except OSError:
+        return False
 
 
 def _umask() -> int:
@@ -177,8 +221,9 @@ def check_outputs(
         Naming the path, if an output file is a directory or a special file
         (FIFO, device, socket), is in a folder that is missing or not writable,
         is the same file as an input (compared through links, ``./`` and hard
-        links), or is given for two outputs; or if an output folder is a file
-        or cannot be made.
+        links), or is given for two outputs; if an output folder is a file
+        or cannot be made; or if it holds a file of one of the names it will
+        write that armcal did not write there (see :data:`MANIFEST`).
 
     Examples
     --------
@@ -187,22 +232,32 @@ def check_outputs(
     ...
     armcal.errors.InputError: .: is a directory, expected a file; give -o another file name
     """
-    # (option that writes it, path as given, resolved path, what to do if it clashes)
-    files: list[tuple[str, str, Path, str]] = []
+    # (option that writes it, path as given, resolved path, what to do if it clashes,
+    #  why it must not be replaced though it could be: a file the user named none of)
+    files: list[tuple[str, str, Path, str, str | None]] = []
     for option, output in outputs.items():
         if isinstance(output, OutputFolder):
             folder = _check_output_folder(output.path)
-            if folder.is_dir():  # files already there must be replaceable
+            if folder.is_dir():  # files already there must be replaceable, and ours
                 fix = f"move it away or give {option} another folder"
+                manifest = _manifest(folder)
                 for name in output.files:
                     path = os.path.join(os.fspath(output.path), name)
-                    files.append((option, path, _check_output_file(path, fix), fix))
+                    real = _check_output_file(path, fix)
+                    theirs = None
+                    if os.path.lexists(path) and not _ours(folder, name, manifest):
+                        theirs = (
+                            "exists and armcal did not write it (or it has changed since); "
+                            f"{option} {os.fspath(output.path)} would replace it; {fix} "
+                            "(a new or empty one)"
+                        )
+                    files.append((option, path, real, fix, theirs))
         elif output is not None and os.fspath(output) == STDIO:
             continue  # stdout: the command checks that it is the only one
         elif output is not None:
             fix = f"give {option} another file name"
-            files.append((option, os.fspath(output), _check_output_file(output, fix), fix))
-    for k, (option, path, real, fix) in enumerate(files):
+            files.append((option, os.fspath(output), _check_output_file(output, fix), fix, None))
+    for k, (option, path, real, fix, theirs) in enumerate(files):
         for input_option, source in (inputs or {}).items():
             if source is not None and _same_file(real, source):
                 raise fail(
@@ -210,13 +265,15 @@ def check_outputs(
                     f"is the input {input_option} {os.fspath(source)}; writing it would "
                     f"destroy the input; {fix}",
                 )
-        for other_option, other, other_real, _ in files[:k]:
+        for other_option, other, other_real, *_ in files[:k]:
             if other_real == real:
                 raise fail(
                     path,
                     f"given for two outputs ({other_option} {other} and {option} {path}); "
                     "give each its own file name",
                 )
+        if theirs is not None:
+            raise fail(path, theirs)
 
 
 def atomic_write(path: PathArg, content: str | bytes | Callable[[BinaryIO], None]) -> None:
@@ -318,6 +375,12 @@ def write_folder(path: PathArg, files: Mapping[str, str | Callable[[Path], None]
     InputError
         If ``path`` is a file or cannot be made, or holds a file of one of the
         names that must not be replaced (see :func:`check_outputs`).
+
+    Notes
+    -----
+    :data:`MANIFEST` in the folder lists every file written (and keeps the
+    entries of earlier runs for other names), so that a later run may replace
+    these files and no others.
     """
     folder = _check_output_folder(path)
     exists = folder.is_dir()
@@ -339,8 +402,12 @@ def write_folder(path: PathArg, files: Mapping[str, str | Callable[[Path], None]
                 atomic_write(inner / name, content)
             else:
                 content(inner / name)
+        manifest = _manifest(folder) if exists else {}
+        manifest.update({name: _digest(inner / name) for name in files})
+        listing = "".join(f"{digest}  {name}\n" for name, digest in sorted(manifest.items()))
+        atomic_write(inner / MANIFEST, listing)
         if exists:
-            for name in files:
+            for name in (*files, MANIFEST):
                 _move_into_place(inner / name, folder / name)
         else:
             os.chmod(stage, 0o777 & ~_umask())  # mkdtemp makes it 0700
