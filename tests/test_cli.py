@@ -38,7 +38,22 @@ def test_synthesize_identify_round_trip_noiseless(tmp_path, capsys):
     )
     meas, cal = tmp_path / "meas.csv", tmp_path / "cal.json"
     assert main(["synthesize", "--plan", str(plan), "--sigma", "0", "-o", str(meas)]) == 0
-    assert main(["identify", "--measurements", str(meas), "--sigma", "0.1", "-o", str(cal)]) == 0
+    assert (
+        main(
+            [
+                "identify",
+                "--robot",
+                "paper-4link",
+                "--measurements",
+                str(meas),
+                "--sigma",
+                "0.1",
+                "-o",
+                str(cal),
+            ]
+        )
+        == 0
+    )
     report = capsys.readouterr().out
     assert "dq4" in report and "± " in report
     document = json.loads(cal.read_text())
@@ -54,6 +69,8 @@ def test_identify_json_on_stdout_matches_file(tmp_path, capsys):
         main(
             [
                 "identify",
+                "--robot",
+                "paper-4link",
                 "--measurements",
                 str(meas),
                 "--json",
@@ -114,7 +131,18 @@ def test_robot_file_with_base_offset_and_truth(tmp_path, capsys):
     )
     capsys.readouterr()
     assert (
-        main(["identify", *common, "--measurements", str(meas), "--sigma", "0.1", "--json"]) == 0
+        main(
+            [
+                "identify",
+                *common,
+                "--measurements",
+                str(meas),
+                "--sigma",
+                "0.1",
+                "--json",
+            ]
+        )
+        == 0
     )
     document = json.loads(capsys.readouterr().out)
     values = {p["name"]: p["value"] for p in document["parameters"]}
@@ -271,7 +299,14 @@ def test_synthesize_a_robot_with_one_target_labels_every_row_and_round_trips(tmp
     rows = meas.read_text().splitlines()
     assert rows[0].split(",")[-1] == "target" and len(rows) == 9
     assert all(row.endswith(",A") for row in rows[1:])
-    identify = ["identify", *common, "--measurements", str(meas), "--sigma", "0.05"]
+    identify = [
+        "identify",
+        *common,
+        "--measurements",
+        str(meas),
+        "--sigma",
+        "0.05",
+    ]
     assert main([*identify, "-o", str(cal)]) == 0
     capsys.readouterr()
     values = {p["name"]: p["value"] for p in json.loads(cal.read_text())["parameters"]}
@@ -310,6 +345,8 @@ def test_every_rms_key_says_per_point_or_per_coordinate(tmp_path, capsys):
     commands = [
         [
             "identify",
+            "--robot",
+            "paper-4link",
             "--measurements",
             str(tmp_path / "measurements.csv"),
             "--cross-validate",

@@ -117,7 +117,7 @@ class Link:
     target: str
 
 
-IDENTIFY = ("identify", "--measurements", "meas.csv", "-o", "cal.json")
+IDENTIFY = ("identify", "--robot", "paper-4link", "--measurements", "meas.csv", "-o", "cal.json")
 SYNTHESIZE = ("synthesize", "--plan", "plan.csv", "-o", "meas.csv")
 SYNTHESIZE_ROBOT = (
     "synthesize",
@@ -127,7 +127,7 @@ SYNTHESIZE_ROBOT = (
     "truth.toml",
     *SYNTHESIZE[1:],
 )
-IDENTIFY_ROBOT = ("identify", "--robot", "robot.toml", *IDENTIFY[1:])
+IDENTIFY_ROBOT = ("identify", "--robot", "robot.toml", *IDENTIFY[3:])
 
 
 # --------------------------------------------------------------------------- helpers
@@ -486,7 +486,7 @@ CASES = [
     case(
         "robot-unknown-name",
         {"meas.csv": VALID_MEAS},
-        ("identify", "--robot", "paper-5link", *IDENTIFY[1:]),
+        ("identify", "--robot", "paper-5link", *IDENTIFY[3:]),
         ("paper-5link", "paper-4link"),
     ),
     # ---- truth TOML
@@ -512,13 +512,21 @@ CASES = [
     case(
         "output-folder-missing",
         {"meas.csv": VALID_MEAS},
-        ("identify", "--measurements", "meas.csv", "-o", "nodir/cal.json"),
+        (
+            "identify",
+            "--robot",
+            "paper-4link",
+            "--measurements",
+            "meas.csv",
+            "-o",
+            "nodir/cal.json",
+        ),
         ("nodir",),
     ),
     case(
         "output-is-a-folder",
         {"meas.csv": VALID_MEAS, "outdir": FOLDER},
-        ("identify", "--measurements", "meas.csv", "-o", "outdir"),
+        ("identify", "--robot", "paper-4link", "--measurements", "meas.csv", "-o", "outdir"),
         ("outdir",),
     ),
     case(
@@ -536,7 +544,7 @@ CASES = [
     case(
         "output-is-the-input-by-another-name",
         {"meas.csv": VALID_MEAS},
-        ("identify", "--measurements", "meas.csv", "-o", "./meas.csv"),
+        ("identify", "--robot", "paper-4link", "--measurements", "meas.csv", "-o", "./meas.csv"),
         ("./meas.csv", "--measurements meas.csv"),
     ),
     case(
@@ -588,6 +596,13 @@ CASES = [
         ("demo", "-o", "out"),
         ("out/plan.csv", "directory"),
     ),
+    # identify calibrates one arm: it has no default robot to fit the data to silently
+    case(
+        "identify-without-robot",
+        {"meas.csv": VALID_MEAS},
+        ("identify", "--measurements", "meas.csv", "-o", "cal.json"),
+        ("identify needs --robot", "your robot file", "paper-4link"),
+    ),
     # A folder output names none of its files: only files armcal wrote there are replaced.
     case(
         "demo-output-folder-holds-the-users-calibration",
@@ -611,13 +626,33 @@ CASES = [
     case(
         "usage-negative-sigma",
         {"meas.csv": VALID_MEAS},
-        ("identify", "--measurements", "meas.csv", "--sigma", "-1", "-o", "cal.json"),
+        (
+            "identify",
+            "--robot",
+            "paper-4link",
+            "--measurements",
+            "meas.csv",
+            "--sigma",
+            "-1",
+            "-o",
+            "cal.json",
+        ),
         ("--sigma",),
     ),
     case(
         "usage-zero-sigma",
         {"meas.csv": VALID_MEAS},
-        ("identify", "--measurements", "meas.csv", "--sigma", "0", "-o", "cal.json"),
+        (
+            "identify",
+            "--robot",
+            "paper-4link",
+            "--measurements",
+            "meas.csv",
+            "--sigma",
+            "0",
+            "-o",
+            "cal.json",
+        ),
         ("--sigma",),
     ),
     case(
@@ -635,7 +670,17 @@ CASES = [
     case(
         "usage-unknown-method",
         {"meas.csv": VALID_MEAS},
-        ("identify", "--measurements", "meas.csv", "--method", "bogus", "-o", "cal.json"),
+        (
+            "identify",
+            "--robot",
+            "paper-4link",
+            "--measurements",
+            "meas.csv",
+            "--method",
+            "bogus",
+            "-o",
+            "cal.json",
+        ),
         ("--method", "bogus"),
     ),
     case(
@@ -649,7 +694,7 @@ CASES = [
     case(
         "usage-missing-measurements",
         {},
-        ("identify", "-o", "cal.json"),
+        ("identify", "--robot", "paper-4link", "-o", "cal.json"),
         ("--measurements",),
     ),
     case(
@@ -931,7 +976,7 @@ CASES += [
     case(
         "robot-builtin-name-typo",
         {"meas.csv": VALID_MEAS},
-        ("identify", "--robot", "paper-4lnk", *IDENTIFY[1:]),
+        ("identify", "--robot", "paper-4lnk", *IDENTIFY[3:]),
         ("paper-4lnk", "did you mean 'paper-4link'"),
     ),
     case(
@@ -1117,7 +1162,7 @@ CASES += [
     case(
         "stdin-empty",
         {},
-        ("identify", "--measurements", "-"),
+        ("identify", "--robot", "paper-4link", "--measurements", "-"),
         ("<stdin>",),
     ),
     case(
@@ -1129,7 +1174,7 @@ CASES += [
     case(
         "stdout-with-json",
         {"meas.csv": VALID_MEAS},
-        ("identify", "--measurements", "meas.csv", "-o", "-", "--json"),
+        ("identify", "--robot", "paper-4link", "--measurements", "meas.csv", "-o", "-", "--json"),
         ("--json", "-o -", "stdout"),
     ),
     case(

@@ -152,7 +152,7 @@ def test_two_outliers_robust_fit_leaves_them_out_and_stays_on_the_truth(tmp_path
 
 def _identify_error(tmp_path: Path, csv_text: str, robot: str | None = None):
     (tmp_path / "meas.csv").write_text(csv_text)
-    argv = ["identify", "--measurements", "meas.csv", "-o", "cal.json"]
+    argv = ["identify", "--robot", "paper-4link", "--measurements", "meas.csv", "-o", "cal.json"]
     if robot is not None:
         (tmp_path / "robot.toml").write_text(robot)
         argv += ["--robot", "robot.toml"]
@@ -285,7 +285,7 @@ def test_a_measured_angle_just_beyond_a_limit_is_accepted_with_a_warning(tmp_pat
 @pytest.mark.parametrize(
     "argv",
     [
-        ("identify", "--measurements", "meas.csv"),
+        ("identify", "--robot", "paper-4link", "--measurements", "meas.csv"),
         ("design", "--poses", "12"),
         ("evaluate", "--plan", "plan.csv"),
         ("simulate", "--plan", "plan.csv", "--trials", "10"),
@@ -374,7 +374,7 @@ def test_per_row_sigma_column_weights_the_fit(tmp_path):
     exact = np.array([_tip(q) for q in plan])
     xy = exact + np.random.default_rng(3).normal(0.0, 1.0, (30, 2)) * row_sigma[:, None]
     (tmp_path / "meas.csv").write_text(_csv(plan, xy, extra={"sigma_mm": list(row_sigma)}))
-    argv = ("identify", "--measurements", "meas.csv", "--json")
+    argv = ("identify", "--robot", "paper-4link", "--measurements", "meas.csv", "--json")
     result = run_cli(tmp_path, *argv)
 
     assert result.returncode == 0, result.stderr
@@ -389,7 +389,16 @@ def test_per_row_sigma_column_weights_the_fit(tmp_path):
 def test_standardized_residuals_are_the_residuals_over_sigma(tmp_path):
     plan = _plan(30)
     (tmp_path / "meas.csv").write_text(_csv(plan, _positions(plan)))
-    argv = ("identify", "--measurements", "meas.csv", "--sigma", "0.02", "--json")
+    argv = (
+        "identify",
+        "--robot",
+        "paper-4link",
+        "--measurements",
+        "meas.csv",
+        "--sigma",
+        "0.02",
+        "--json",
+    )
     document = _no_nan(run_cli(tmp_path, *argv).stdout)
     assert [r["row"] for r in document["standardized_residuals"]] == list(range(1, 31))
     for r, z in zip(document["residuals"], document["standardized_residuals"], strict=True):

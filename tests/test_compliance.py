@@ -348,7 +348,7 @@ def test_payloads_need_an_elastostatic_robot(tmp_path):
     assert run.returncode == 2 and "no [elastostatic]" in run.stderr
     (tmp_path / "m.csv").write_text("q1_deg,q2_deg,q3_deg,q4_deg,x_mm,y_mm,payload_kg\n"
                                     "0,0,0,0,660,0,-1\n")  # fmt: skip
-    run = _armcal("identify", "--measurements", "m.csv", cwd=tmp_path)
+    run = _armcal("identify", "--robot", "paper-4link", "--measurements", "m.csv", cwd=tmp_path)
     assert run.returncode == 2 and "payload_kg" in run.stderr and "negative" in run.stderr
 
 

@@ -374,7 +374,22 @@ def calibration_file(tmp_path_factory):
     plan, meas, cal = folder / "plan.csv", folder / "meas.csv", folder / "cal.json"
     assert main(["design", "--poses", "12", "-o", str(plan)]) == 0
     assert main(["synthesize", "--plan", str(plan), "--sigma", "0", "-o", str(meas)]) == 0
-    assert main(["identify", "--measurements", str(meas), "--sigma", "0.1", "-o", str(cal)]) == 0
+    assert (
+        main(
+            [
+                "identify",
+                "--robot",
+                "paper-4link",
+                "--measurements",
+                str(meas),
+                "--sigma",
+                "0.1",
+                "-o",
+                str(cal),
+            ]
+        )
+        == 0
+    )
     return cal
 
 

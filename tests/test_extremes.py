@@ -433,7 +433,18 @@ def test_ten_thousand_poses_four_links(tmp_path):
     check(cli("design", "--poses", m, "-o", plan), 0, plan)
     assert numbers(plan).shape == (m, n)
     check(cli("synthesize", "--plan", plan, "--sigma", sigma, "--seed", 3, "-o", meas), 0, meas)
-    run = cli("identify", "--measurements", meas, "--sigma", sigma, "--json", "-o", cal)
+    run = cli(
+        "identify",
+        "--robot",
+        "paper-4link",
+        "--measurements",
+        meas,
+        "--sigma",
+        sigma,
+        "--json",
+        "-o",
+        cal,
+    )
     printed = check(run, 0, cal)
     document = load_json(run.out)
     same_warnings(document, printed)
@@ -474,14 +485,26 @@ def test_ten_thousand_poses_other_fits_agree(tmp_path):
     plan = write_plan(tmp_path / "plan.csv", rng.uniform(-180, 180, (m, n)))
     meas = tmp_path / "meas.csv"
     check(cli("synthesize", "--plan", plan, "--sigma", sigma, "--seed", 6, "-o", meas), 0, meas)
-    run = cli("identify", "--measurements", meas, "--sigma", sigma, "--json")
+    run = cli(
+        "identify", "--robot", "paper-4link", "--measurements", meas, "--sigma", sigma, "--json"
+    )
     check(run, 0)
     reference, std = parameters(load_json(run.out))
     # uniform random angles: Table I's sums vanish in expectation, so for m = 10^4 the
     # plan is orthogonal to O(1/sqrt(m)) = 1 %, and the std follow the closed form to 5 %
     assert_allclose([std[k] for k in names(n)], orthogonal_std(PAPER_LINKS, sigma, m), rtol=0.05)
     for option in (("--method", "gauss-newton"), ("--robust",)):
-        run = cli("identify", "--measurements", meas, "--sigma", sigma, "--json", *option)
+        run = cli(
+            "identify",
+            "--robot",
+            "paper-4link",
+            "--measurements",
+            meas,
+            "--sigma",
+            sigma,
+            "--json",
+            *option,
+        )
         printed = check(run, 0)
         document = load_json(run.out)
         same_warnings(document, printed)
@@ -821,7 +844,9 @@ def test_sigma_at_the_ends_of_its_range(tmp_path, sigma):
         assert_allclose(empirical, orthogonal_std(PAPER_LINKS, sigma, m), rtol=0.2)
 
     check(cli("synthesize", "--plan", plan, "--sigma", sigma, "--seed", 4, "-o", meas), 0, meas)
-    run = cli("identify", "--measurements", meas, "--sigma", sigma, "--json")
+    run = cli(
+        "identify", "--robot", "paper-4link", "--measurements", meas, "--sigma", sigma, "--json"
+    )
     if sigma > 1:
         # 1 m of noise on a 660 mm arm puts points beyond any reach: refused, row named
         line = error_line(run)
@@ -863,7 +888,7 @@ def test_tiny_sigma_text_tables_show_the_std(tmp_path, command):
     check(cli("synthesize", "--plan", plan, "--sigma", sigma, "--seed", 4, "-o", meas), 0, meas)
     expected = sigma / math.sqrt(m)  # std(dl1) of an orthogonal plan, 2.2e-7 mm
     if command == "identify":
-        run = cli("identify", "--measurements", meas, "--sigma", sigma)
+        run = cli("identify", "--robot", "paper-4link", "--measurements", meas, "--sigma", sigma)
         shown = _table_std(run.out, "dl1", r"\S+\s+±\s+(\S+)")
     elif command == "evaluate":
         run = cli("evaluate", "--plan", plan, "--sigma", sigma)

@@ -151,10 +151,22 @@ def test_a_pipeline_through_stdin_and_stdout(tmp_path: Path) -> None:
     assert plan.stdout.startswith("q1_deg,q2_deg,q3_deg,q4_deg\n")
     meas = _armcal(tmp_path, "synthesize", "--plan", "-", "--sigma", "0", stdin=plan.stdout)
     assert meas.returncode == 0, meas.stderr
-    piped = _armcal(tmp_path, "identify", "--measurements", "-", "-o", "-", stdin=meas.stdout)
+    piped = _armcal(
+        tmp_path,
+        "identify",
+        "--robot",
+        "paper-4link",
+        "--measurements",
+        "-",
+        "-o",
+        "-",
+        stdin=meas.stdout,
+    )
     assert piped.returncode == 0, piped.stderr
     (tmp_path / "meas.csv").write_text(meas.stdout, encoding="utf-8")
-    filed = _armcal(tmp_path, "identify", "--measurements", "meas.csv", "--json")
+    filed = _armcal(
+        tmp_path, "identify", "--robot", "paper-4link", "--measurements", "meas.csv", "--json"
+    )
     assert filed.returncode == 0, filed.stderr
     from_pipe, from_file = json.loads(piped.stdout), json.loads(filed.stdout)
     assert from_pipe["parameters"] == from_file["parameters"]

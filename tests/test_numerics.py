@@ -155,8 +155,8 @@ def test_ill_conditioned_plan_identifies_with_a_warning(tmp_path, method):
     header = "q1_deg,q2_deg,q3_deg,q4_deg,x_mm,y_mm"
     _write_csv(tmp_path / "meas.csv", header, np.hstack([q_deg, _positions(q_deg)]))
 
-    result = run_cli(tmp_path, "identify", "--measurements", "meas.csv", "--method", method,
-                  "--sigma", "0.1", "--json")  # fmt: skip
+    result = run_cli(tmp_path, "identify", "--robot", "paper-4link", "--measurements", "meas.csv",
+                     "--method", method, "--sigma", "0.1", "--json")  # fmt: skip
 
     assert result.returncode == 0, result.stderr
     assert "Traceback" not in result.stderr

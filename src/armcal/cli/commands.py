@@ -19,6 +19,7 @@ import numpy as np
 from ..demo import run_demo
 from ..errors import ArmcalError
 from ..files import (
+    BUILTIN_ROBOTS,
     COMPLIANCE_TRUTH_KEYS,
     STDIO,
     RobotSpec,
@@ -178,6 +179,12 @@ def synthesize(args: argparse.Namespace) -> None:
 
 def identify(args: argparse.Namespace) -> None:
     """``armcal identify``: the calibration of a measurement file."""
+    if args.robot is None:
+        raise ArmcalError(
+            "identify needs --robot: the measurements are of one arm, and a fit to another "
+            "arm's model is a wrong calibration; give your robot file (armcal formats lists "
+            f"its keys) or a built-in name ({', '.join(BUILTIN_ROBOTS)})"
+        )
     spec = load_robot(args.robot)
     meas = read_measurements(args.measurements, spec.arm)
     try:

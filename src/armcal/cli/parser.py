@@ -46,13 +46,27 @@ _REPRODUCE_FILES = (
 
 
 def _add_common(
-    sub: argparse.ArgumentParser, *, seed: bool = False, output: str | None = None
+    sub: argparse.ArgumentParser,
+    *,
+    seed: bool = False,
+    output: str | None = None,
+    robot_required: bool = False,
 ) -> None:
+    """--robot, --seed, --json and -o.
+
+    ``robot_required``: the command calibrates a real arm's data, so it has no
+    default robot (fitting a user's measurements to the paper's arm would give a
+    wrong calibration without a word); commands that design, simulate or
+    explore default to :data:`DEFAULT_ROBOT` and name it in their report.
+    """
     sub.add_argument(
         "--robot",
-        default=DEFAULT_ROBOT,
+        default=None if robot_required else DEFAULT_ROBOT,
         metavar="NAME_OR_FILE",
-        help=f"built-in robot name or robot TOML file (default {DEFAULT_ROBOT})",
+        help="your robot's TOML file, or a built-in name (required: the measurements are of "
+        "one arm)"
+        if robot_required
+        else f"built-in robot name or robot TOML file (default {DEFAULT_ROBOT})",
     )
     if seed:
         sub.add_argument(
@@ -141,7 +155,7 @@ def build_parser() -> argparse.ArgumentParser:
         "the joints' compliance explains)",
     )
     _add_fix(sub)
-    _add_common(sub, seed=True, output="calibration JSON to write")
+    _add_common(sub, seed=True, output="calibration JSON to write", robot_required=True)
     sub.set_defaults(run=commands.identify, inputs=("robot", "measurements"), outputs=("output",))
 
     sub = _command(subs, "validate")
