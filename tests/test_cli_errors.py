@@ -98,6 +98,17 @@ def _drop_column(header: str, rows: list[str], column: str) -> str:
 
 
 VALID_PLAN = _csv(PLAN_HEADER, PLAN_ROWS)
+#: The valid plan in radians under the q*_deg columns (a unit mistake).
+RADIANS_PLAN = _csv(PLAN_HEADER, [",".join(f"{math.radians(v):.6f}" for v in p) for p in POSES])
+
+
+def _turned(row: str) -> str:
+    """A measurement row as a controller reading 0..360 writes it: negative angles + 360."""
+    fields = row.split(",")
+    fields[:4] = [f"{float(v) + 360:g}" if float(v) < 0 else v for v in fields[:4]]
+    return ",".join(fields)
+
+
 VALID_MEAS = _csv(MEAS_HEADER, MEAS_ROWS)
 ROBOT_TOML = 'name = "my-scara"\nlink_lengths_mm = [260.0, 180.0, 120.0, 100.0]\n'
 TRUTH_TOML = "dl_mm = [1.5, -0.6, -0.4, 0.7]\ndq_deg = [0.5, -0.5, 0.7, -0.3]\n"
@@ -303,6 +314,12 @@ CASES = [
         {"meas.csv": _meas_with(3, "q2_deg", "200")},
         IDENTIFY,
         ("meas.csv", "row 3", "q2_deg", "200"),
+    ),
+    case(  # a controller that reads 0..360: -162 deg (pose 12) read as 198
+        "meas-readings-in-0-to-360",
+        {"meas.csv": _csv(MEAS_HEADER, [_turned(r) for r in MEAS_ROWS])},
+        IDENTIFY,
+        ("meas.csv", "row 12", "q2_deg", "198 is -162 + 360", "subtract or add 360"),
     ),
     case(
         "meas-pose-outside-robot-file-limits",
@@ -1109,6 +1126,19 @@ CASES += [
         {"cal.json": CALIBRATION, "prog.csv": _csv(PLAN_HEADER, ["0,0,0,0", "10,190,0,0"])},
         COMPENSATE,
         ("prog.csv", "row 2", "q2_deg", "190"),
+    ),
+    # Radians under q*_deg: the plan's or program's range is the evidence (2 pi)
+    case(
+        "compensate-program-in-radians",
+        {"cal.json": CALIBRATION, "prog.csv": RADIANS_PLAN},
+        COMPENSATE,
+        ("prog.csv", "looks like radians", "convert the angles to degrees"),
+    ),
+    case(
+        "evaluate-plan-in-radians",
+        {"plan.csv": RADIANS_PLAN},
+        ("evaluate", "--plan", "plan.csv"),
+        ("plan.csv", "20 plan rows", "looks like radians"),
     ),
     case(
         "compensate-output-is-the-program",

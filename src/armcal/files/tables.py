@@ -26,7 +26,7 @@ from ..models import (
     PlanarArm,
 )
 from .common import MAX_ABS_VALUE, fail, read_text, suggest
-from .robots import SIGMA_RANGE_MM
+from .robots import RADIAN_LIMIT_BOUND, SIGMA_RANGE_MM
 
 __all__ = [
     "INSTRUMENT_RANGE",
@@ -329,6 +329,13 @@ def _read_csv(path, arm: PlanarArm, what: str, limit_tol_deg: float = 0.0) -> _T
                 f"readings up to {limit_tol_deg:g} deg beyond a limit are accepted; "
                 "check the robot file (joint_limits_deg) and the column"
             )
+        wrapped = _wrapped_into(q_deg[:, j], lo, hi)
+        if wrapped is not None:  # a controller that reads 0..360
+            fix = (
+                f"{values[r, j]:g} is {values[r, j] + wrapped:g} {'+' if wrapped < 0 else '-'} "
+                f"360: the column reads turns in 0..360 (or -360..0); subtract or add 360 "
+                f"where a value exceeds the limit, or give joint_limits_deg in that range"
+            )
         raise fail(
             path,
             f"row {r + 1} (line {lines[r]}), column q{j + 1}_deg: "
@@ -337,7 +344,49 @@ def _read_csv(path, arm: PlanarArm, what: str, limit_tol_deg: float = 0.0) -> _T
     beyond = [
         (int(r), int(j), float(values[r, j]), float(by[r, j])) for r, j in np.argwhere(outside)
     ]
+    if what in ("plan", "program"):
+        _refuse_radians(path, what, q_deg, limits_deg)
     return _Table(values, texts, numbers, lines, beyond)
+
+
+def _wrapped_into(q_deg: np.ndarray, lo: float, hi: float) -> float | None:
+    """The turn (-360 or +360) that brings every one of a column's angles within [lo, hi].
+
+    None when no single turn does.
+    """
+    for turn in (-360.0, 360.0):
+        shifted = np.where((q_deg < lo) | (q_deg > hi), q_deg + turn, q_deg)
+        if np.all((shifted >= lo) & (shifted <= hi)):
+            return turn
+    return None
+
+
+#: Fewest poses whose angles all lie within :data:`RADIAN_LIMIT_BOUND` before a
+#: plan or a program is refused as radians: one or two poses near zero are a
+#: home position, not a unit mistake.
+RADIAN_MIN_POSES = 3
+
+
+def _refuse_radians(path, what: str, q_deg: np.ndarray, limits_deg: np.ndarray) -> None:
+    """InputError when a plan's or program's angles look like radians under ``q*_deg``.
+
+    Every angle within :data:`RADIAN_LIMIT_BOUND` (2 pi, rounded up) over at
+    least :data:`RADIAN_MIN_POSES` poses, while the joints may turn farther: an
+    arm calibrated or corrected there would move a few degrees in all, whereas
+    radians of any pose lie within 2 pi.  ``identify`` catches the same mistake
+    by fitting both readings (:mod:`armcal.plausibility`); a plan or a program
+    has no positions to fit, so its range is the evidence.
+    """
+    span = np.abs(q_deg).max(initial=0.0)
+    may_turn = np.maximum(-limits_deg[:, 0], limits_deg[:, 1]).max() > RADIAN_LIMIT_BOUND
+    if len(q_deg) < RADIAN_MIN_POSES or span == 0.0 or span > RADIAN_LIMIT_BOUND or not may_turn:
+        return
+    raise fail(
+        path,
+        f"every joint angle of the {len(q_deg)} {what} rows is within +-{span:.3g}, which "
+        f"looks like radians under the q*_deg columns (the joints may turn to "
+        f"{np.abs(limits_deg).max():g} deg); convert the angles to degrees (x 180/pi)",
+    )
 
 
 def read_plan(path: str | os.PathLike, arm: PlanarArm) -> np.ndarray:
