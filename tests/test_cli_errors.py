@@ -582,11 +582,17 @@ CASES = [
         ("synthesize", "--plan", "plan.csv", "-o", "plan.csv"),
         ("plan.csv", "--plan plan.csv"),
     ),
+    case(  # the suffix names the figure's format: a .pdf holds a PDF, never PNG bytes
+        "design-plot-suffix-not-a-figure-format",
+        {},
+        ("design", "--poses", "12", "--plot", "plan.jpg"),
+        ("--plot plan.jpg", "'.jpg' is not a figure format", ".pdf"),
+    ),
     case(
         "design-same-file-for-plan-and-plot",
         {},
-        ("design", "--poses", "12", "--plot", "plan.csv", "-o", "plan.csv"),
-        ("plan.csv", "two outputs"),
+        ("design", "--poses", "12", "--plot", "plan.png", "-o", "plan.png"),
+        ("plan.png", "two outputs"),
     ),
     # Checked before any work: no plan.csv is written, and no optimizing is done first.
     case(
@@ -1211,7 +1217,7 @@ CASES += [
         "stdout-for-a-figure",
         {},
         ("design", "--poses", "12", "--plot", "-"),
-        ("--plot -", "PNG"),
+        ("--plot -", ".png, .pdf"),
     ),
     case(
         "stdout-for-a-folder",

@@ -15,6 +15,7 @@ from numpy.testing import assert_allclose
 
 from armcal import Annulus, Box, InputError, PlanarArm, load_robot, orthogonal_plan, random_plan
 from armcal.plotting import plot_plan, save_figure
+from helpers import run_cli
 
 
 def _pose_lines(ax) -> LineCollection:
@@ -134,3 +135,29 @@ def test_import_armcal_does_not_import_matplotlib():
     code = "import sys, armcal; print('matplotlib' in sys.modules)"
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
     assert out.stdout.strip() == "False"
+
+
+@pytest.mark.parametrize(
+    ("name", "magic"),
+    [
+        ("plan.png", b"\x89PNG"),
+        ("plan.pdf", b"%PDF"),
+        ("plan.svg", b"<?xml"),
+        ("plan.eps", b"%!PS"),
+    ],
+)
+def test_a_figure_is_written_in_the_format_its_suffix_names(tmp_path, name, magic):
+    """--plot plan.pdf once wrote PNG bytes under a .pdf name (issue 20)."""
+    run = run_cli(tmp_path, "design", "--poses", "6", "--plot", name)
+    assert run.returncode == 0, run.stderr
+    assert (tmp_path / name).read_bytes().startswith(magic)
+    assert f"wrote {name}" in run.stdout
+
+
+@pytest.mark.parametrize("name", ["plan.jpg", "plan", "plan.PNG.txt"])
+def test_a_figure_suffix_armcal_cannot_write_is_refused_before_any_work(tmp_path, name):
+    run = run_cli(tmp_path, "design", "--poses", "6", "--plot", name)
+    assert run.returncode == 2
+    assert run.stderr.startswith(f"armcal: error: --plot {name}:")
+    assert ".png, .pdf, .svg, .eps" in run.stderr
+    assert list(tmp_path.iterdir()) == []

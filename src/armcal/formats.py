@@ -22,6 +22,7 @@ from dataclasses import dataclass
 
 __all__ = [
     "COLUMNS",
+    "FIGURE_FORMATS",
     "FILE_KINDS",
     "ROBOT_KEYS",
     "TRUTH_KEYS",
@@ -262,6 +263,10 @@ COLUMNS: dict[str, tuple[Column, ...]] = {
 }
 
 #: What each file kind is, for ``armcal formats``.
+#: Figure file suffix to the format written (matplotlib's name): the suffix
+#: decides, so a ``.pdf`` file holds a PDF and never PNG bytes.
+FIGURE_FORMATS: dict[str, str] = {".png": "png", ".pdf": "pdf", ".svg": "svg", ".eps": "eps"}
+
 FILE_KINDS: dict[str, str] = {
     "robot": "robot TOML (--robot): the arm, its instrument and what to identify",
     "truth": "truth TOML (--truth): the deviations of a virtual robot",

@@ -22,6 +22,7 @@ from matplotlib.patches import Circle, Patch, Rectangle, Wedge
 from matplotlib.ticker import FuncFormatter, MaxNLocator, NullFormatter
 
 from .files import atomic_write
+from .formats import FIGURE_FORMATS
 from .models import Annulus, PlanarArm, link_vectors
 from .numerics import rms
 
@@ -476,7 +477,10 @@ def plot_error_map(
 
 
 def save_figure(fig: Figure, path: str | os.PathLike) -> None:
-    """Write ``fig`` to ``path`` as PNG (120 dpi) through a temporary file and a rename.
+    """Write ``fig`` to ``path`` in the format its suffix names, through a temporary file.
+
+    PNG at 120 dpi; ``.pdf``, ``.svg`` and ``.eps`` as vector files
+    (:data:`armcal.formats.FIGURE_FORMATS`); any other suffix is PNG.
 
     Parameters
     ----------
@@ -492,4 +496,5 @@ def save_figure(fig: Figure, path: str | os.PathLike) -> None:
         directory or a special file (FIFO, device, socket).
     """
     FigureCanvasAgg(fig)  # attach the Agg canvas: no GUI backend is ever involved
-    atomic_write(path, lambda handle: fig.savefig(handle, format="png", dpi=120))
+    kind = FIGURE_FORMATS.get(os.path.splitext(os.fspath(path))[1].lower(), "png")
+    atomic_write(path, lambda handle: fig.savefig(handle, format=kind, dpi=120))

@@ -167,7 +167,11 @@ def build_parser() -> argparse.ArgumentParser:
         help="held-out measurements CSV (columns under reads: above)",
     )
     sub.add_argument("--per-pose", action="store_true", help="a table of every pose's errors")
-    sub.add_argument("--plot", metavar="PNG", help="draw the error vectors on the workspace")
+    sub.add_argument(
+        "--plot",
+        metavar="FIGURE",
+        help="draw the error vectors on the workspace (.png, .pdf, .svg or .eps)",
+    )
     sub.set_defaults(
         run=commands.validate, inputs=("calibration", "measurements"), outputs=("plot",)
     )
@@ -236,7 +240,11 @@ def build_parser() -> argparse.ArgumentParser:
         f"{DISTINCT_TOLERANCE:g} rad on every joint): exchange takes each candidate pose once "
         "and the optimizer's repeated poses are replaced; a note says what that cost",
     )
-    sub.add_argument("--plot", metavar="PNG", help="draw the plan's poses as stick arms")
+    sub.add_argument(
+        "--plot",
+        metavar="FIGURE",
+        help="draw the plan's poses as stick arms (.png, .pdf, .svg or .eps)",
+    )
     sub.add_argument("--sigma", type=options.sigma, metavar="MM", help=sigma_help)
     sub.add_argument("--test-poses", metavar="PLAN_CSV", help=test_help)
     _add_fix(sub)

@@ -9,11 +9,13 @@ work (:func:`armcal.files.check_outputs`).
 from __future__ import annotations
 
 import argparse
+import os
 import sys
 from collections.abc import Callable, Sequence
 
 from ..errors import ArmcalError
 from ..files import BUILTIN_ROBOTS, STDIO, OutputFolder, check_outputs
+from ..formats import FIGURE_FORMATS
 from .parser import build_parser
 
 __all__ = ["main"]
@@ -37,7 +39,10 @@ def _check_stdio(args: argparse.Namespace, inputs: dict, outputs: dict) -> None:
     if getattr(args, "folder_files", ()):
         raise ArmcalError(f"{to_stdout[0]} -: a folder cannot go to stdout; give a folder name")
     if "--plot" in to_stdout:
-        raise ArmcalError("--plot -: a figure cannot go to stdout; give a PNG file name")
+        raise ArmcalError(
+            "--plot -: a figure cannot go to stdout; give a file name ending in "
+            + ", ".join(FIGURE_FORMATS)
+        )
     if len(to_stdout) > 1:
         raise ArmcalError(
             f"{' and '.join(to_stdout)} both write '-' (stdout); give all but one a file name"
@@ -50,8 +55,23 @@ def _check_stdio(args: argparse.Namespace, inputs: dict, outputs: dict) -> None:
     args.stdout_taken = True
 
 
+def _check_figure(path: str | None) -> None:
+    """A figure's format is its suffix's (:data:`FIGURE_FORMATS`); any other suffix is refused."""
+    if path is None or path == STDIO:
+        return
+    suffix = os.path.splitext(path)[1].lower()
+    if suffix not in FIGURE_FORMATS:
+        known = ", ".join(FIGURE_FORMATS)
+        raise ArmcalError(
+            f"--plot {path}: "
+            + (f"'{suffix}' is not a figure format armcal writes" if suffix else "no suffix")
+            + f"; the suffix names the format: give a name ending in {known}"
+        )
+
+
 def _check_paths(args: argparse.Namespace) -> None:
     """Refuse the command's unusable output paths before it does any work."""
+    _check_figure(getattr(args, "plot", None))
     inputs = {_option(dest): getattr(args, dest) for dest in getattr(args, "inputs", ())}
     if inputs.get("--robot") in BUILTIN_ROBOTS:
         del inputs["--robot"]  # a name, not a file
