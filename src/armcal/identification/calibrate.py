@@ -51,6 +51,41 @@ __all__ = [
 ]
 
 
+#: How many times a fit with the fixed parameters freed must lower chi-square for
+#: the fixed values to be named as the cause of a misfit: the planar closed form
+#: and every fit here are exact least squares, so freeing k parameters lowers
+#: chi-square by about k on a consistent model; a 10-fold drop of a chi-square that
+#: already failed the test is no chance.
+FREED_IMPROVEMENT = 10.0
+
+
+def _freed_fit(
+    problem: Problem, used: np.ndarray, sigma: float, chi2: float
+) -> tuple[float, int] | None:
+    """Chi-square and dof of the fit with the fixed parameters free, if it explains the misfit.
+
+    None when the model has none fixed, when the poses ``used`` cannot identify
+    them, or when freeing them lowers chi-square less than
+    :data:`FREED_IMPROVEMENT` times.
+    """
+    model = problem.model
+    if not model.fixed:
+        return None
+    freed = model.with_fixed(())
+    conditions = problem.conditions if used.all() else problem.conditions.take(used)
+    if not freed.identifiability(conditions)[0].identifiable:
+        return None
+    points = problem.points[used]
+    method = resolve_method(freed, "auto")
+    fit = Problem(freed, conditions, points, method, problem.tol, problem.max_iter).fit(
+        np.ones(len(points), dtype=bool)
+    )
+    freed_chi2 = float(np.sum(fit.whitened**2)) / sigma**2
+    if freed_chi2 * FREED_IMPROVEMENT > chi2:
+        return None
+    return freed_chi2, model.point_dim * len(points) - freed.n_free
+
+
 def identify(
     model: FitModel,
     q: ArrayLike,
@@ -239,9 +274,16 @@ def identify(
         warnings.append(few)
     if not fit_test.consistent:
         suggested = sigma_value * float(np.sqrt((fit_test.chi2 or 0.0) / max(dof, 1)))
+        freed = _freed_fit(problem, used, sigma_value, fit_test.chi2 or 0.0)
         warnings.append(
             inconsistent_fit_warning(
-                fit_test, sigma_value, suggested, int(np.count_nonzero(test.flagged))
+                fit_test,
+                sigma_value,
+                suggested,
+                int(np.count_nonzero(test.flagged)),
+                poses=m,
+                held=model.fixed,
+                freed=freed,
             )
         )
     g = np.zeros((model.n_params, n_free))

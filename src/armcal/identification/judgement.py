@@ -297,20 +297,53 @@ def outlier_warning(outliers: Sequence[Outlier], *, robust: bool) -> ArmcalWarni
 
 
 def inconsistent_fit_warning(
-    fit: GoodnessOfFit, sigma: float, suggested: float, flagged: int
+    fit: GoodnessOfFit,
+    sigma: float,
+    suggested: float,
+    flagged: int,
+    *,
+    poses: int,
+    held: Sequence[str] = (),
+    freed: tuple[float, int] | None = None,
 ) -> ArmcalWarning:
-    """``fit-inconsistent``: the chi-square test failed, and the likely causes in order."""
-    try_robust = action("try-robust")
-    causes = (
-        f"outliers ({flagged} flagged; {try_robust})" if flagged else f"outliers ({try_robust})"
-    )
+    """``fit-inconsistent``: the chi-square test failed, and the likely causes in order.
+
+    ``flagged`` poses fail the outlier test; when they are at least half of the
+    ``poses``, they are no outliers and a robust fit cannot help, so the
+    message says so instead of advising one.  ``held`` are the fixed
+    parameters' names; ``freed`` is the chi-square and its degrees of freedom of the same fit with
+    them free, given when freeing them explains the misfit: it is then the
+    first cause.
+    """
+    causes = []
+    if freed is not None:
+        chi2, dof = freed
+        one = len(held) == 1
+        causes.append(
+            f"the fixed {'parameter' if one else 'parameters'} {', '.join(held)} "
+            f"{'is' if one else 'are'} not at nominal: with {'it' if one else 'them'} free, "
+            f"chi2 = {chi2:.4g} on {dof} degrees of freedom; free {'it' if one else 'them'} "
+            "(--fix or the robot file's [identify])"
+        )
+    if 2 * flagged >= poses:
+        causes.append(
+            f"not outliers: {flagged} of {poses} poses disagree with the fit, so a robust fit "
+            "cannot help"
+        )
+    else:
+        robust = action("try-robust")
+        causes.append(f"outliers ({f'{flagged} flagged; ' if flagged else ''}{robust})")
+    causes.append("a wrong unit (angles in radians, positions in metres)")
+    model = "a model that misses an effect (base offset, a wrong robot file, compliance under load"
+    if freed is None and held:
+        model += f", a wrong fixed value of {', '.join(held)}"
+    causes.append(model + ")")
+    causes.append(f"or sigma too small (the residuals suggest about {suggested:.3g} mm)")
     return ArmcalWarning(
         "fit-inconsistent",
         f"the fit is inconsistent with sigma = {sigma:.3g} mm: chi2 = {fit.chi2:.4g} on "
         f"{fit.dof} degrees of freedom (p = {fit.p_value:.2g}); likely causes, in order: "
-        f"{causes}; a wrong unit (angles in radians, positions in metres); a model that "
-        "misses an effect (base offset, a wrong robot file, compliance under load); or sigma "
-        f"too small (the residuals suggest about {suggested:.3g} mm)",
+        + "; ".join(causes),
     )
 
 

@@ -23,6 +23,7 @@ from .problem import Fit, Problem
 __all__ = [
     "HUBER_K",
     "huber_constant",
+    "misfit_warning",
     "robust_fit",
 ]
 
@@ -55,19 +56,41 @@ def _median_chi2(dim: int) -> float:
     return float(stats.chi2.median(dim))
 
 
+def misfit_warning(problem: Problem, disagreeing: int) -> ArmcalWarning:
+    """``model-misfit``: most poses disagree with any fit, so none is an outlier."""
+    held = problem.model.fixed
+    first = f"the fixed {'parameter' if len(held) == 1 else 'parameters'} {', '.join(held)}, "
+    first = first if held else ""
+    return ArmcalWarning(
+        "model-misfit",
+        f"{disagreeing} of {problem.m} poses disagree with the fit: that is a model problem, "
+        f"not outliers, so the robust fit leaves none out; check, in order: {first}a unit, the "
+        "robot file (base offset, link lengths, targets), compliance under load",
+    )
+
+
+def _most(count: int, m: int) -> bool:
+    """Whether ``count`` poses are at least half of ``m``: too many to be outliers."""
+    return 2 * count >= m
+
+
 def robust_fit(
     problem: Problem, sigma: float | None, fit: Fit
 ) -> tuple[Fit, np.ndarray, np.ndarray, ArmcalWarning | None]:
     """Huber IRLS from the least-squares ``fit`` to every pose, then test, leave out, refit.
 
     Returns the final fit, the poses in it, the poses flagged as outliers, and a
-    warning when the outliers could not be left out without losing identifiability.
-    When most poses disagree with the fit, nothing is an outlier: the model, the
-    units or sigma are wrong, which the goodness of fit reports.  ``sigma`` is
-    the reference noise when given, None when it is estimated.
+    warning when nothing was left out though the test flagged poses:
+    ``outliers-kept`` when leaving them out would lose identifiability or every
+    residual degree of freedom, ``model-misfit`` when at least half of the
+    poses disagree with the fit -- then nothing is an outlier: the model, the
+    units or sigma are wrong, and a fit to the few poses left would be a fit to
+    a handful of points, not a calibration.  ``sigma`` is the reference noise
+    when given, None when it is estimated.
     """
     m = problem.m
     dim = problem.model.point_dim
+    n_free = problem.model.n_free
     huber = huber_constant(dim)
     everyone = np.ones(m, dtype=bool)
     weights = np.ones(m)
@@ -85,28 +108,30 @@ def robust_fit(
         weights = new
     # The core: poses Huber left at full weight, if they identify the model.
     used = weights >= 1.0
-    if not problem.identifiable(used):
+    if not problem.identifiable(used) or _most(m - int(np.count_nonzero(used)), m):
         used = everyone
     fit = problem.fit(used, start=fit.params)
-    n_free = problem.model.n_free
+
+    def everything(flagged: np.ndarray, warning: ArmcalWarning) -> tuple:
+        return problem.fit(everyone, start=fit.params), everyone, flagged, warning
+
     for _ in range(20):
         dof = dim * int(np.count_nonzero(used)) - n_free
         scale = sigma if sigma is not None else fit.scale(max(dof, 1))
         test = fit.test(scale, given=sigma is not None)
         keep = ~test.flagged
+        if _most(int(np.count_nonzero(~keep)), m):
+            return everything(~everyone, misfit_warning(problem, int(np.count_nonzero(~keep))))
         if np.array_equal(keep, used):
             return fit, used, ~used, None
-        if 2 * np.count_nonzero(keep) < m:
-            everything = problem.fit(everyone, start=fit.params)
-            return everything, everyone, ~everyone, None
-        if not problem.identifiable(keep):
+        if not problem.identifiable(keep) or dim * int(np.count_nonzero(keep)) <= n_free:
             warning = ArmcalWarning(
                 "outliers-kept",
                 f"leaving out the {int(np.count_nonzero(~keep))} flagged poses would leave too "
-                "few poses to identify every parameter, so they stay in the fit; "
-                "measure more poses",
+                "few poses to identify every parameter and judge the fit, so they stay in the "
+                "fit; measure more poses",
             )
-            return problem.fit(everyone, start=fit.params), everyone, ~keep, warning
+            return everything(~keep, warning)
         used = keep
         fit = problem.fit(used, start=fit.params)
     return fit, used, ~used, None
