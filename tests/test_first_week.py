@@ -71,6 +71,7 @@ def test_a_wrong_fix_is_named_as_the_cause_not_outliers(held_wrong: Path) -> Non
     assert chi2 < 3 * 24
     assert "try --robust" not in message
     assert "not outliers" in message
+    assert json.loads(run.stdout)["outliers"] == []  # the list agrees: none is an outlier
 
 
 def test_a_robust_fit_never_drops_most_of_the_data(held_wrong: Path) -> None:
@@ -86,3 +87,97 @@ def test_a_robust_fit_never_drops_most_of_the_data(held_wrong: Path) -> None:
     assert document["poses_used"] == 15
     assert document["degrees_of_freedom"] == 2 * 15 - 4  # 4 free parameters
     assert "armcal: warning: 15 of 15 poses disagree" in run.stderr
+
+
+# --------------------------------------------------------------------------- lumped compliance
+
+LUMPED_ROBOT = """name = "vertical-lumped"
+link_lengths_mm = [400.0, 300.0, 200.0]
+joint_limits_deg = [[-170, 170], [-150, 150], [-150, 150]]
+base_offset = true
+[measurement]
+sigma_mm = 0.02
+[elastostatic]
+gravity_xy = [0, -1]
+payload_kg = 10
+"""
+LUMPED_TRUTH = """dl_mm = [0.5, -0.3, 0.2]
+dq_deg = [0.1, -0.2, 0.15]
+base_mm = [100.0, -50.0]
+c_mdeg_per_m = [20.0, 15.0, 8.0]
+k_urad_per_Nm = [3.0, 5.0, 8.0]
+"""
+
+
+def _loaded_plan(path: Path, q_deg: np.ndarray, payload: np.ndarray) -> None:
+    rows = [
+        ",".join(f"{v:.6f}" for v in pose) + f",{p:g}"
+        for pose, p in zip(q_deg, payload, strict=True)
+    ]
+    path.write_text("q1_deg,q2_deg,q3_deg,payload_kg\n" + "\n".join(rows) + "\n")
+
+
+def _points(path: Path) -> np.ndarray:
+    return np.loadtxt(path, delimiter=",", skiprows=1, usecols=(3, 4))
+
+
+@pytest.fixture
+def lumped(tmp_path: Path) -> Path:
+    (tmp_path / "robot.toml").write_text(LUMPED_ROBOT)
+    (tmp_path / "truth.toml").write_text(LUMPED_TRUTH)
+    return tmp_path
+
+
+def test_a_constant_payload_bends_a_lumped_virtual_arm(lumped: Path) -> None:
+    """A pose at 10 kg lands where the same pose at 10 kg lands in a mixed plan (sigma 0).
+
+    With one payload a fit merges it into c1..cn, but the virtual arm must still bend
+    under it: synthesize once put every 10 kg pose where the 0 kg pose lands.
+    """
+    q = np.random.default_rng(1).uniform([-160, -140, -140], [160, 140, 140], (12, 3))
+    _loaded_plan(lumped / "constant.csv", q, np.full(12, 10.0))
+    _loaded_plan(lumped / "mixed.csv", q, np.tile([10.0, 0.0], 6))
+    _loaded_plan(lumped / "empty.csv", q, np.zeros(12))
+    for name in ("constant", "mixed", "empty"):
+        run = run_cli(lumped, "synthesize", "--robot", "robot.toml", "--truth", "truth.toml",
+                      "--plan", f"{name}.csv", "--sigma", "0", "-o", f"m_{name}.csv")  # fmt: skip
+        assert run.returncode == 0, run.stderr
+    constant, mixed, empty = (
+        _points(lumped / f"m_{n}.csv") for n in ("constant", "mixed", "empty")
+    )
+    np.testing.assert_allclose(constant[::2], mixed[::2], atol=1e-9)  # the 10 kg rows
+    np.testing.assert_allclose(empty[1::2], mixed[1::2], atol=1e-9)  # the 0 kg rows
+    # 10 kg on a lever of up to 0.9 m with k of 3..8 urad/(N m) moves the tip ~0.1 mm.
+    assert np.max(np.linalg.norm(constant - empty, axis=1)) > 0.05
+
+
+def test_a_one_payload_lumped_calibration_holds_at_its_payload_and_says_so_elsewhere(
+    lumped: Path,
+) -> None:
+    rng = np.random.default_rng(2)
+    limits = ([-160, -140, -140], [160, 140, 140])
+    _loaded_plan(lumped / "plan.csv", rng.uniform(*limits, (40, 3)), np.full(40, 10.0))
+    _loaded_plan(lumped / "held10.csv", rng.uniform(*limits, (40, 3)), np.full(40, 10.0))
+    _loaded_plan(lumped / "held0.csv", rng.uniform(*limits, (40, 3)), np.zeros(40))
+    for seed, name in enumerate(("plan", "held10", "held0")):
+        run = run_cli(lumped, "synthesize", "--robot", "robot.toml", "--truth", "truth.toml",
+                      "--plan", f"{name}.csv", "--seed", str(seed),
+                      "-o", f"m_{name}.csv")  # fmt: skip
+        assert run.returncode == 0, run.stderr
+    run = run_cli(lumped, "identify", "--robot", "robot.toml", "--measurements", "m_plan.csv",
+                  "-o", "cal.json")  # fmt: skip
+    assert run.returncode == 0 and run.stderr == "", run.stderr
+    assert json.loads((lumped / "cal.json").read_text())["elastostatic"]["payload_kg"] == 10.0
+    # At its payload the calibration predicts the held-out poses: no warning.
+    run = run_cli(lumped, "validate", "--calibration", "cal.json", "--measurements",
+                  "m_held10.csv", "--json")  # fmt: skip
+    assert run.returncode == 0 and run.stderr == "", run.stderr
+    # At 0 kg the payload's deflection is missing, and the warning says why.
+    run = run_cli(lumped, "validate", "--calibration", "cal.json", "--measurements",
+                  "m_held0.csv", "--json")  # fmt: skip
+    assert "loads-unpredicted" in _warnings(run)
+    assert "one payload, 10 kg" in _warnings(run)["loads-unpredicted"]
+    (lumped / "prog.csv").write_text("q1_deg,q2_deg,q3_deg\n10,20,30\n40,-50,60\n")
+    run = run_cli(lumped, "compensate", "--calibration", "cal.json", "--program", "prog.csv",
+                  "--payload-kg", "0", "-o", "out.csv", "--json")  # fmt: skip
+    assert "loads-unpredicted" in _warnings(run)

@@ -155,7 +155,7 @@ def synthesize(args: argparse.Namespace) -> None:
     """``armcal synthesize``: measurements of a virtual robot."""
     spec = load_robot(args.robot)
     q, payload = _plan(args.plan, spec)
-    model, loads = plan_model(spec, spec.arm, q.shape[0], payload)
+    model, loads = plan_model(spec, spec.arm, q.shape[0], payload, virtual=True)
     truth = _truth(args, spec, model)
     made = synthesize_plan(
         model, q, truth, sigma=simulation_sigma(spec, args.sigma), seed=args.seed, loads=loads

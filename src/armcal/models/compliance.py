@@ -48,7 +48,7 @@ arm, from whose fit a fit starts and against which it is judged.
 from __future__ import annotations
 
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from functools import cached_property
 
 import numpy as np
@@ -232,8 +232,13 @@ class CompliantArm:
     def for_loads(cls, arm: PlanarArm, elastic: Elastostatic, loads: Loads) -> CompliantArm:
         """The model for data with ``loads``: in lumped mode, loads that vary add ``k1..kn``."""
         gravity_lumped = elastic.lumped and elastic.gravity is not None
-        # A constant payload only adds to the lumped weight: k needs loads that vary.
-        return cls(arm, elastic, known_loads=loads.varying if gravity_lumped else loads.known)
+        if gravity_lumped and not loads.varying and loads.n_rows:
+            # A constant payload only adds to the lumped weight (k needs loads that
+            # vary): c1..cn then hold the deflection under that payload, which the
+            # model records as its payload (see unpredicted_loads).
+            elastic = replace(elastic, payload_kg=float(loads.payload_kg[0]))
+            return cls(arm, elastic, known_loads=False)
+        return cls(arm, elastic, known_loads=loads.known)
 
     # -- the compliance parameters ------------------------------------------------------
 
@@ -364,6 +369,30 @@ class CompliantArm:
     def default_payload_kg(self) -> float:
         """The robot file's payload."""
         return self.elastic.payload_kg
+
+    def unpredicted_loads(self, loads: Loads) -> str | None:
+        """In lumped mode without ``k1..kn``, any payload but the one ``c1..cn`` hold.
+
+        Such a model was identified from data with one payload, which it records
+        (:meth:`for_loads`): its ``c`` are the deflection under the arm's weight
+        *and* that payload, so under another payload the difference is not
+        predicted.
+        """
+        if not self.elastic.lumped or self.known_loads or self.elastic.gravity is None:
+            return None
+        held = self.elastic.payload_kg
+        other = np.unique(loads.payload_kg[loads.payload_kg != held])
+        forced = bool(np.any(loads.force_n != 0))
+        if not other.size and not forced:
+            return None
+        shown = ", ".join(f"{v:g}" for v in other[:4]) + (", ..." if other.size > 4 else "")
+        what = f"payloads of {shown} kg" if other.size else "tip forces"
+        return (
+            f"the calibration's {', '.join(self.compliance_names)} hold the deflection under "
+            f"its data's one payload, {held:g} kg (lumped mode: with one payload the "
+            f"compliance k cannot be told from the weight), so the deflection under {what} "
+            "is not predicted; calibrate with poses at two payloads or more to identify k"
+        )
 
     @property
     def uses_gravity(self) -> bool:

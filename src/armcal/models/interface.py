@@ -477,6 +477,15 @@ class FitModel(Protocol):
         """The payload (kg) of a row that gives none; None when loads do not move the points."""
         ...
 
+    def unpredicted_loads(self, loads: Loads) -> str | None:
+        """What of ``loads`` this model cannot predict, in words; None when it predicts all.
+
+        A calibration is applied (validation, compensation) under other loads than
+        it was identified under; a model that saw one payload only and merged it
+        into other parameters says so here, and the caller warns.
+        """
+        ...
+
     @property
     def uses_gravity(self) -> bool:
         """Whether the model's points depend on gravity's direction (joint compliance)."""

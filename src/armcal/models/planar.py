@@ -177,6 +177,10 @@ class PlanarArm(PlanarArmSpec):
         """A rigid arm's points do not depend on its load."""
         return None
 
+    def unpredicted_loads(self, loads: Loads) -> None:
+        """A rigid arm's points do not depend on its load: nothing to predict."""
+        return None
+
     @property
     def uses_gravity(self) -> bool:
         """A rigid arm's points do not depend on gravity."""

@@ -306,6 +306,7 @@ def validate_measurements(
             "column 'target' naming the target of every row"
         )
     points = meas.xy if meas.z is None else meas.xyz
+    loads = row_loads(cal.model, meas)
     try:
         result = validate(
             cal,
@@ -313,11 +314,18 @@ def validate_measurements(
             points,
             target=_row_targets(arm, meas),
             row_sigma=meas.row_sigma,
-            loads=row_loads(cal.model, meas),
+            loads=loads,
         )
     except ArmcalError as exc:
         raise prefixed(source, exc) from None
-    return ValidationRun(result, (*meas.warnings, *validation_warnings(result)))
+    unpredicted = _unpredicted(cal, loads, source)
+    return ValidationRun(result, (*meas.warnings, *unpredicted, *validation_warnings(result)))
+
+
+def _unpredicted(cal: CalibratedArm, loads: Loads | None, source: str) -> list[ArmcalWarning]:
+    """``loads-unpredicted`` when the calibration cannot predict the deflection of ``loads``."""
+    words = None if loads is None else cal.model.unpredicted_loads(loads)
+    return [] if words is None else [ArmcalWarning("loads-unpredicted", f"{source}: {words}")]
 
 
 @dataclass(frozen=True, eq=False)
@@ -385,7 +393,7 @@ def compensate_program(
         )
     result = compensate(cal, program.q, target=index, loads=loads)
     bad = result.uncorrectable
-    warnings = []
+    warnings = _unpredicted(cal, loads, source)
     if bad.size:
         m = program.q.shape[0]
         shown = "; ".join(f"row {int(i) + 1}: {result.reasons[i]}" for i in bad[:5])

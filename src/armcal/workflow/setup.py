@@ -29,6 +29,7 @@ __all__ = [
     "prefixed",
     "simulation_sigma",
     "test_poses",
+    "virtual_model",
     "with_fixed",
 ]
 
@@ -100,14 +101,46 @@ def fit_model(spec: RobotSpec, arm: PlanarArm, loads: Loads | None = None) -> Fi
 
 
 def plan_model(
-    spec: RobotSpec, arm: PlanarArm, m: int, payload: np.ndarray | None = None
+    spec: RobotSpec,
+    arm: PlanarArm,
+    m: int,
+    payload: np.ndarray | None = None,
+    *,
+    virtual: bool = False,
 ) -> tuple[FitModel, Loads | None]:
     """The model of a plan of ``m`` poses and the plan's loads: with ``[elastostatic]``
-    its payload column ``payload`` (kg), else the robot file's payload; no loads without."""
+    its payload column ``payload`` (kg), else the robot file's payload; no loads without.
+
+    ``virtual``: the model of a virtual robot to measure (:func:`virtual_model`)
+    rather than the one a fit of its data would use.
+    """
     if spec.elastic is None:
         return arm, None
     loads = Loads.create(m, spec.elastic.payload_kg if payload is None else payload)
-    return fit_model(spec, arm, loads), loads
+    return (virtual_model if virtual else fit_model)(spec, arm, loads), loads
+
+
+def virtual_model(spec: RobotSpec, arm: PlanarArm, loads: Loads | None) -> FitModel:
+    """The model of a virtual robot measured under ``loads``: every effect of the loads,
+    whether or not a fit of such data could identify it.
+
+    It differs from :func:`fit_model` in one case: a lumped ``[elastostatic]`` arm
+    (masses unknown) whose plan carries one constant payload.  A fit of such data
+    sees the payload's deflection only merged into ``c1..cn`` (the payload is one
+    more weight at the tip), so its model has no ``k1..kn``; but the payload still
+    bends the real arm, by ``k`` times its torque, and a virtual arm must bend as
+    the real one does -- else a pose at 10 kg lands where the 0 kg pose does.
+    """
+    model = fit_model(spec, arm, loads)
+    if (
+        isinstance(model, CompliantArm)
+        and spec.elastic is not None
+        and loads is not None
+        and loads.known
+        and not model.known_loads
+    ):
+        return CompliantArm(arm, spec.elastic, known_loads=True)
+    return model
 
 
 def test_poses(spec: RobotSpec, seed: int, path: str | None = None) -> np.ndarray:
