@@ -170,10 +170,10 @@ def _planarity_warning(
     stated = ""
     if cal.sigma_source == "given" and dof > 0:
         s = row_sigma if row_sigma is not None else (sigma or cal.sigma_mm)
-        from scipy import stats  # imported on use: `import armcal` stays light
+        from scipy import special  # on use, and not scipy.stats (3x slower to import)
 
         chi2 = float(np.sum((d / s) ** 2))
-        p_value = float(stats.chi2.sf(chi2, dof))
+        p_value = float(special.chdtrc(dof, chi2))
         if p_value >= PLANARITY_ALPHA:
             return None
         stated = f"sigma {cal.sigma_mm:.3g} mm (chi2 = {chi2:.4g} on {dof} dof, p = {p_value:.2g})"

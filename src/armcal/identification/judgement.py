@@ -111,10 +111,10 @@ def goodness_of_fit(standardized: np.ndarray, dof: int, *, sigma_given: bool) ->
     """
     if not sigma_given:
         return GoodnessOfFit(None, int(dof), None)
-    from scipy import stats  # imported on use: `import armcal` stays light
+    from scipy import special  # on use, and not scipy.stats (3x slower to import)
 
     chi2 = float(np.sum(standardized**2))
-    p_value = float(stats.chi2.sf(chi2, dof)) if dof > 0 else None
+    p_value = float(special.chdtrc(dof, chi2)) if dof > 0 else None
     return GoodnessOfFit(chi2, int(dof), p_value)
 
 
@@ -227,12 +227,12 @@ def studentized_test(
         if dim == 2:
             p_value = np.exp(-quad / 2)  # the chi-square survival function for 2 dof
         else:
-            from scipy import stats  # imported on use: `import armcal` stays light
+            from scipy import special  # on use, and not scipy.stats (3x slower to import)
 
-            p_value = stats.chi2.sf(quad, dim)
+            p_value = special.chdtrc(dim, quad)
         statistic = np.sqrt(quad)
     else:
-        from scipy import stats  # imported on use: `import armcal` stays light
+        from scipy import special  # on use, and not scipy.stats (3x slower to import)
 
         rss = float(np.sum(standardized[used] ** 2))  # in units of the estimated sigma
         # Leave-one-out scale for poses in the fit (d fewer equations), the fit's for others.
@@ -242,7 +242,7 @@ def studentized_test(
             scale2 = np.where(dof_i > 0, rss_i / np.maximum(dof_i, 1), np.nan)
             f = np.where(scale2 > 0, quad / (dim * scale2), 0.0)
         valid = (dof_i > 0) & np.isfinite(scale2) & (scale2 > 0)
-        p_value = np.where(valid, stats.f.sf(f, dim, np.maximum(dof_i, 1)), 1.0)
+        p_value = np.where(valid, special.fdtrc(dim, np.maximum(dof_i, 1), f), 1.0)
         statistic = np.where(valid, np.sqrt(dim * f), 0.0)
     flagged = p_value < alpha / max(m, 1)
     return PoseTest(statistic, p_value, flagged)
@@ -381,13 +381,13 @@ def nested_test(
     the noisiest rows and say nothing about the fit.  None when there is nothing
     to test (no degrees of freedom, no extra parameter, or an exact fit).
     """
-    from scipy import stats  # imported on use: `import armcal` stays light
+    from scipy import special  # on use, and not scipy.stats (3x slower to import)
 
     rss, rss_nested = float(np.sum(whitened**2)), float(np.sum(nested_whitened**2))
     if dof <= 0 or extra == 0 or rss <= 0:
         return None
     f_value = max(rss_nested - rss, 0.0) / extra / (rss / dof)
-    return float(stats.f.sf(f_value, extra, dof))
+    return float(special.fdtrc(extra, dof, f_value))
 
 
 def unseen_warning(

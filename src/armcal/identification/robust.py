@@ -38,9 +38,9 @@ def huber_constant(dim: int) -> float:
     """
     if dim == 2:
         return float(np.sqrt(-2.0 * np.log(0.05)))
-    from scipy import stats  # imported on use: `import armcal` stays light
+    from scipy import special  # on use, and not scipy.stats (3x slower to import)
 
-    return float(np.sqrt(stats.chi2.isf(0.05, dim)))
+    return float(np.sqrt(special.chdtri(dim, 0.05)))
 
 
 #: Huber's constant for a point in the plane (:func:`huber_constant` of 2).
@@ -51,9 +51,9 @@ def _median_chi2(dim: int) -> float:
     """The median of chi-square with ``dim`` dof: ``2 ln 2`` for 2."""
     if dim == 2:
         return 2 * math.log(2)
-    from scipy import stats  # imported on use: `import armcal` stays light
+    from scipy import special  # on use, and not scipy.stats (3x slower to import)
 
-    return float(stats.chi2.median(dim))
+    return float(special.chdtri(dim, 0.5))
 
 
 def misfit_warning(problem: Problem, disagreeing: int) -> ArmcalWarning:
