@@ -533,3 +533,17 @@ def test_a_folder_output_replaces_only_the_files_armcal_wrote(tmp_path):
     (out / MANIFEST).unlink()  # without the listing, nothing there is known to be ours
     with pytest.raises(InputError, match=r"cal\.json: exists and armcal did not write it"):
         check_outputs({"-o": folder})
+
+
+def test_to_json_indents_objects_and_keeps_number_tables_on_one_line():
+    """The fast layout (issue 20): objects indented, a list of numbers one line; the text
+    parses back to the same document, and NaN is still refused."""
+    rows = np.arange(20000.0).reshape(-1, 2).tolist()
+    document = {"a": {"b": [1, 2], "c": None}, "rows": rows, "list": [{"x": 1}, {"y": [2]}]}
+    text = to_json(document)
+    assert json.loads(text) == document
+    lines = text.splitlines()
+    assert len(lines) == 13  # {; a {; b; c; }; rows; list [; {x}; {; y; }; ]; }
+    assert lines[5].startswith('  "rows": [[0.0, 1.0], [2.0, 3.0]')
+    with pytest.raises(ValueError):
+        to_json({"x": [float("nan")]})
