@@ -14,7 +14,7 @@ import difflib
 import math
 import os
 import re
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -169,6 +169,76 @@ def _parse_number(path, where: str, name: str, field: str, decimal_comma: bool =
     return value
 
 
+def _split(
+    path, kept: list[tuple[int, str]], delimiter: str, layout: str
+) -> tuple[int, list[str], list[int], Callable[[int], list[str]]]:
+    """A CSV's header (its file line and fields), its data rows' file lines, and its columns.
+
+    Returns ``(header_line, header, lines, fields)`` where ``fields(c)`` lists
+    column ``c`` of every data row.  A row of empty fields only is skipped, and
+    every data row must have the header's number of fields.  A file without
+    quotes (what instruments and armcal write) is split as one string, so that a
+    10^5-row file makes no Python object per row; a quoted field (which may hold
+    the separator or span lines) goes through the ``csv`` module.
+    """
+    rows: list[tuple[int, str]] | list[tuple[int, list[str]]]
+    if any('"' in raw for _, raw in kept):
+        records = _records(path, kept, delimiter)
+        rows = [(line, row) for line, row in records if "".join(row).strip()]
+    else:
+        rows = [(line, raw) for line, raw in kept if raw.replace(delimiter, "").strip()]
+    if not rows:
+        raise fail(path, f"file has no header, only empty fields; expected {layout}")
+    header_line, first = rows[0]
+    header = first.split(delimiter) if isinstance(first, str) else first
+    data = rows[1:]
+    lines = [line for line, _ in data]
+    width = len(header)
+    flat: list[str] = []
+    if data and isinstance(data[0][1], str):
+        flat = delimiter.join(raw for _, raw in data).split(delimiter)
+    if len(flat) != width * len(data):  # quoted, or a row of another width: row by row
+        split = [row if isinstance(row, list) else row.split(delimiter) for _, row in data]
+        for r, (line, row) in enumerate(zip(lines, split, strict=True), start=1):
+            if len(row) != width:
+                raise fail(
+                    path,
+                    f"row {r} (line {line}) has {len(row)} fields but the header has "
+                    f"{width}; give every column a value",
+                )
+        return header_line, header, lines, lambda c: [row[c] for row in split]
+    return header_line, header, lines, lambda c: flat[c::width]
+
+
+def _numbers(
+    path, lines: list[int], names: list[str], columns: list[list[str]], delimiter: str
+) -> np.ndarray:
+    """The numeric ``columns`` (one list of fields each) as ``(m, len(columns))``, checked.
+
+    NumPy parses each column at once (as ``float`` does, surrounding spaces
+    allowed); only a block that fails -- a field that is not a number, not
+    finite or beyond :data:`MAX_ABS_VALUE` -- is read again field by field, to
+    name the first bad one in file order.  A semicolon file may write 1,5 for 1.5.
+    """
+    comma = delimiter == ";"
+    values = np.empty((len(lines), len(columns)))
+    try:
+        if comma:
+            raise ValueError("decimal commas: field by field")
+        for c, fields in enumerate(columns):
+            values[:, c] = np.array(fields, dtype=float)
+    except ValueError:
+        pass
+    else:
+        if np.all(np.abs(values) <= MAX_ABS_VALUE):  # NaN fails it too
+            return values
+    for r, line in enumerate(lines):  # row by row: the first bad field in file order
+        where = f"row {r + 1} (line {line})"
+        for c, name in enumerate(names):
+            values[r, c] = _parse_number(path, where, name, columns[c][r].strip(), comma)
+    return values
+
+
 def _records(path, kept: list[tuple[int, str]], delimiter: str) -> list[tuple[int, list[str]]]:
     """CSV records of the ``(file line, text)`` lines kept, each with the file line it starts on.
 
@@ -240,21 +310,17 @@ def _read_csv(path, arm: PlanarArm, what: str, limit_tol_deg: float = 0.0) -> _T
     layout = ",".join(expected) + "".join(f" [,{c}]" for c in extras)
     text = read_text(path, what)
     # Lines that start with '#' are comments (instrument exports often begin with some).
-    kept = [
-        (line, raw)
-        for line, raw in enumerate(text.splitlines(), start=1)
-        if not raw.lstrip().startswith("#")
-    ]
+    numbered = enumerate(text.splitlines(), start=1)
+    kept = (
+        [(line, raw) for line, raw in numbered if not raw.lstrip().startswith("#")]
+        if "#" in text
+        else list(numbered)
+    )
     if not any(raw.strip() for _, raw in kept):
         raise fail(path, f"file is empty; expected a header line {layout}")
     header_raw = next(raw for _, raw in kept if raw.strip())
     delimiter = _delimiter(header_raw)
-    rows = [
-        (line, row) for line, row in _records(path, kept, delimiter) if any(f.strip() for f in row)
-    ]
-    if not rows:
-        raise fail(path, f"file has no header, only empty fields; expected {layout}")
-    header_line, header = rows[0]
+    header_line, header, lines, fields = _split(path, kept, delimiter, layout)
     header = [h.strip() for h in header]
     for col, name in enumerate(header, start=1):
         if not name:
@@ -285,34 +351,21 @@ def _read_csv(path, arm: PlanarArm, what: str, limit_tol_deg: float = 0.0) -> _T
     for name in expected:
         if name not in header:
             raise fail(path, f"line {header_line}: missing column '{name}'; expected {layout}")
-    data_rows = rows[1:]
-    if not data_rows:
+    if not lines:
         raise fail(
             path, f"has a header but no poses; add one row per pose after line {header_line}"
         )
     index = {name: header.index(name) for name in expected}
-    values = np.empty((len(data_rows), len(expected)))
-    texts: dict[str, list[str]] = {name: [] for name in optional if name in header}
     present = [name for name in optional_numeric if name in header]
-    numbers = {name: np.empty(len(data_rows)) for name in present}
-    for r, (line, row) in enumerate(data_rows, start=1):
-        where = f"row {r} (line {line})"
-        if len(row) != len(header):
-            raise fail(
-                path,
-                f"{where} has {len(row)} fields but the header has {len(header)}; "
-                "give every column a value",
-            )
-        comma = delimiter == ";"  # a semicolon file may write 1,5 for 1.5
-        for c, name in enumerate(expected):
-            values[r - 1, c] = _parse_number(path, where, name, row[index[name]].strip(), comma)
-        for name in present:
-            numbers[name][r - 1] = _parse_number(
-                path, where, name, row[header.index(name)].strip(), comma
-            )
-        for name in texts:
-            texts[name].append(row[header.index(name)].strip())
-    lines = [line for line, _ in data_rows]
+    columns = [index[name] for name in expected] + [header.index(name) for name in present]
+    block = _numbers(path, lines, [*expected, *present], [fields(c) for c in columns], delimiter)
+    values = block[:, : len(expected)]
+    numbers = {name: block[:, len(expected) + k] for k, name in enumerate(present)}
+    texts = {
+        name: [field.strip() for field in fields(header.index(name))]
+        for name in optional
+        if name in header
+    }
     q_deg = values[:, : arm.n_joints]
     limits_deg = np.degrees(arm.joint_limits)
     # Distance beyond the nearer limit (deg), 0 inside; the 1e-9 rad slack of
