@@ -344,3 +344,23 @@ def test_progress_bar_appears_only_after_the_delay():
     bar(4, 4)
     text = stream.getvalue()
     assert "simulate [" in text and " 50%" in text and "100%" in text and text.endswith("\n")
+
+
+def test_the_arm_is_evaluated_once_however_many_chunks(arm4, paper_truth4, monkeypatch):
+    """Only the noise differs between chunks of trials: the noiseless points are computed
+    once, so the cost stays linear in the plan's size (issue 20: at 1e5 poses a chunk held
+    ~6 trials, and every chunk redid the forward kinematics)."""
+    q = orthogonal_plan(arm4, 20)
+    monkeypatch.setattr(sim, "CHUNK_BYTES", 8 * (6 * 20 + 4 * 8) * 37)  # 37 trials a chunk
+    calls = []
+    real = type(arm4).positions
+
+    def counted(self, *args, **kwargs):
+        calls.append(1)
+        return real(self, *args, **kwargs)
+
+    monkeypatch.setattr(type(arm4), "positions", counted)
+    chunks = []
+    sim.monte_carlo(arm4, q, paper_truth4, 0.1, 2000, rng=1, progress=lambda *a: chunks.append(a))
+    assert len(chunks) == -(-2000 // 37)
+    assert len(calls) == 1
