@@ -196,3 +196,25 @@ def test_same_seed_gives_the_same_plan_file(tmp_path):
         assert main([*args, "-o", str(out)]) == 0
         files.append(out.read_bytes())
     assert files[0] == files[1]
+
+
+def test_a_large_searched_plan_is_a_smaller_optimal_plan_repeated():
+    """Issue 20: design --poses 10000 with limits ran 325 s and took 15.5 GB.  Above
+    REPLICATE_ABOVE poses the plan is the best plan of m // k poses taken k times (and
+    a few of its poses once more): its normalized information is the base plan's."""
+    from armcal.doe import designer as designer_module
+
+    arm = PlanarArm([260.0, 180.0, 120.0, 100.0], np.radians([[-170, 170]] + [[-150, 150]] * 3))
+    m = 2 * designer_module.REPLICATE_ABOVE + 7  # 3 copies of 82 poses and 1 more
+    found = designer_module.design(arm, m, rng=1, with_certificate=True, order="none")
+    copies, size = 3, m // 3
+    base = found.q[:size]
+    np.testing.assert_array_equal(found.q[: copies * size], np.tile(base, (copies, 1)))
+    np.testing.assert_array_equal(found.q[copies * size :], base[: m - copies * size])
+    assert any(f"the optimal {size}-pose plan taken {copies} times" in n for n in found.notes)
+    # Normalized (per pose) information: a repeated plan's D-efficiency is its base's.
+    np.testing.assert_allclose(
+        d_efficiency(arm, np.tile(base, (copies, 1))), d_efficiency(arm, base), rtol=1e-12
+    )
+    assert found.d_efficiency > 0.99
+    assert found.certificate is not None and found.certificate.certified_d_efficiency > 0.99

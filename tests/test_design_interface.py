@@ -194,3 +194,22 @@ def test_loads_must_give_every_pose_one_row():
     )
     with pytest.raises(ValueError, match="one row per pose"):
         model.plan_information(np.zeros((6, 3)), Loads.create(3, [0.0, 5.0, 10.0])).blocks()
+
+
+def test_multiplicative_weights_match_the_textbook_update():
+    """The certificate's weights by matrix products equal the update written out
+    (Titterington 1976): w <- w d(x) / p with d(x) = tr(M^-1 I(x)), M = sum w I(x)."""
+    from armcal.doe.certificate import multiplicative_weights
+
+    rng = np.random.default_rng(3)
+    blocks = rng.normal(size=(40, 2, 5))
+    weights = rng.uniform(0.5, 1.5, 40)
+    weights /= weights.sum()
+    expected = weights.copy()
+    for _ in range(7):
+        info = sum(w * b.T @ b for w, b in zip(expected, blocks, strict=True))
+        inverse = np.linalg.inv(info)
+        d = np.array([np.trace(inverse @ b.T @ b) for b in blocks])
+        expected = expected * d / 5
+        expected /= expected.sum()
+    np.testing.assert_allclose(multiplicative_weights(blocks, weights, 7), expected, rtol=1e-10)

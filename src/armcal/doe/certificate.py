@@ -106,10 +106,12 @@ def multiplicative_weights(blocks: np.ndarray, weights: np.ndarray, iterations: 
     :func:`~armcal.numerics.spd_inverse`, which cannot raise whatever round-off does.
     """
     p = blocks.shape[-1]
-    info = np.einsum("xap,xaq->xpq", blocks, blocks)  # (N, p, p)
+    rows = blocks.reshape(-1, p)  # (N r, p): matrix products, not three-operand einsums
+    per_pose = blocks.shape[1]
     for _ in range(iterations):
-        m_inv = spd_inverse(np.einsum("x,xpq->pq", weights, info))
-        d = np.einsum("xap,pq,xaq->x", blocks, m_inv, blocks)
+        weighted = rows * np.repeat(weights, per_pose)[:, None]
+        m_inv = spd_inverse(rows.T @ weighted)  # sum_x w_x F_x^T F_x
+        d = np.sum((rows @ m_inv) * rows, axis=1).reshape(-1, per_pose).sum(axis=1)
         weights = weights * d / p
         weights /= weights.sum()
     return weights
@@ -202,8 +204,14 @@ def certify(
     ):
         # M = I: the bound det M <= 1 is attained, and d(x) = tr(I(x)) = p at every pose.
         return Certificate(1.0, 1.0, 1.0, float(p), q, np.full(q.shape[0], 1.0 / q.shape[0]))
+    # The plan's distinct poses: a large plan is a smaller one repeated (designer), and
+    # the pool's cost is per pose.
     pool = np.concatenate(
-        [q, _corner_poses(model, rng), feasible_poses(model, candidates, rng=rng)]
+        [
+            np.unique(q, axis=0),
+            _corner_poses(model, rng),
+            feasible_poses(model, candidates, rng=rng),
+        ]
     )
     weights = np.full(pool.shape[0], 1.0 / pool.shape[0])
     for _ in range(rounds):
@@ -239,7 +247,7 @@ def certify(
         logdet_star = float(star.log_det_gram())
     else:  # not expected (xi* is near D-optimal); the other bounds still hold
         max_star, logdet_star = np.inf, -np.inf
-    max_plan = _max_variance(model, plan_inverse, q, rng, search)
+    max_plan = _max_variance(model, plan_inverse, np.unique(q, axis=0), rng, search)
     logdet_plan = float(plan.log_det_gram())
     kw = np.exp((logdet_plan - logdet_star) / p + 1.0 - max_star / p) if bool(star_ok) else 0.0
     plan_only = np.exp(1.0 - max_plan / p)

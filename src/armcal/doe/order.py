@@ -496,7 +496,9 @@ def order_poses(
     of 4 joints it found the shortest order for 99 % of them and was at most
     1.6 % longer for the others; on 10^5 random poses its path is about 6 %
     shorter than the plain nearest-neighbour path (``make bench``).  Equal
-    poses are no trouble: the greedy start joins them first (0 travel).
+    poses are visited in a row (0 travel), in the plan's order: only the
+    distinct poses are ordered, so a large plan that repeats a smaller one
+    (:data:`armcal.doe.designer.REPLICATE_ABOVE`) costs what the smaller one does.
 
     Examples
     --------
@@ -516,6 +518,15 @@ def order_poses(
     k = min(int(neighbours), m - 1)
     if k < 1:
         raise ArmcalError(f"neighbours must be at least 1, got {neighbours}")
+    distinct, first, which = np.unique(plan, axis=0, return_index=True, return_inverse=True)
+    if distinct.shape[0] < m:  # equal poses in a row (0 travel): order the distinct ones
+        by_first = np.argsort(first)  # the distinct poses in the plan's order
+        rank = np.empty(distinct.shape[0], dtype=np.intp)  # a distinct pose's place in it
+        rank[by_first] = np.arange(distinct.shape[0])
+        visit = order_poses(distinct[by_first], neighbours=neighbours, max_rounds=max_rounds)
+        position = np.empty_like(visit)
+        position[visit] = np.arange(visit.size)
+        return np.argsort(position[rank[which.ravel()]], kind="stable")
     near, distances = _neighbour_lists(plan, k)
     paths = [_greedy_path(plan, near, distances)]
     if m <= MULTI_START_POSES:
