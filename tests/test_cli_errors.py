@@ -582,6 +582,12 @@ CASES = [
         ("synthesize", "--plan", "plan.csv", "-o", "plan.csv"),
         ("plan.csv", "--plan plan.csv"),
     ),
+    case(  # 10^12 poses need about 10^15 bytes: refused at once on any machine
+        "design-poses-beyond-the-machine",
+        {},
+        ("design", "--poses", "1000000000000", "-o", "plan.csv"),
+        ("--poses 1000000000000", "GB", "design fewer and repeat them"),
+    ),
     case(  # the suffix names the figure's format: a .pdf holds a PDF, never PNG bytes
         "design-plot-suffix-not-a-figure-format",
         {},

@@ -218,3 +218,14 @@ def test_a_large_searched_plan_is_a_smaller_optimal_plan_repeated():
     )
     assert found.d_efficiency > 0.99
     assert found.certificate is not None and found.certificate.certified_d_efficiency > 0.99
+
+
+def test_design_reports_its_progress():
+    """The command line draws a bar from these calls on a terminal after 2 s (issue 20)."""
+    from armcal.doe import designer as designer_module
+
+    calls = []
+    designer_module.design(
+        PlanarArm([260.0, 180.0]), 6, rng=0, progress=lambda *a: calls.append(a)
+    )
+    assert calls == [(1, 3), (2, 3), (3, 3)]

@@ -181,3 +181,13 @@ def test_a_one_payload_lumped_calibration_holds_at_its_payload_and_says_so_elsew
     run = run_cli(lumped, "compensate", "--calibration", "cal.json", "--program", "prog.csv",
                   "--payload-kg", "0", "-o", "out.csv", "--json")  # fmt: skip
     assert "loads-unpredicted" in _warnings(run)
+
+
+def test_plan_size_guard_uses_half_the_machine():
+    from armcal.errors import ArmcalError
+    from armcal.workflow.setup import BYTES_PER_DESIGNED_POSE, check_plan_size
+
+    memory = 8 * 10**9
+    check_plan_size(memory // (2 * BYTES_PER_DESIGNED_POSE), memory)  # exactly half: fine
+    with pytest.raises(ArmcalError, match="more than half of this machine's 8 GB"):
+        check_plan_size(memory // (2 * BYTES_PER_DESIGNED_POSE) + 1, memory)

@@ -263,6 +263,7 @@ def design(args: argparse.Namespace) -> None:
         distinct=args.distinct,
         payloads=args.payloads,
         test_q=_test_poses(args, spec),
+        progress=ProgressBar("design"),
     )
     document, report = quality_report(run.quality)
     extra, header = design_summary(run.design, run.seconds)

@@ -10,6 +10,7 @@ import numpy as np
 from ..criteria import CRITERIA, attains_unit_bound, d_efficiency, efficiencies
 from ..errors import ArmcalError
 from ..models import ClosedFormPlan, ClosedFormPlans, FitModel
+from ..progress import ProgressCallback
 from .certificate import Certificate, certify
 from .exchange import exchange_plan
 from .optimizer import optimize_plan
@@ -148,6 +149,7 @@ def design(
     with_certificate: bool = True,
     order: Order = "travel",
     distinct: bool = False,
+    progress: ProgressCallback | None = None,
 ) -> Design:
     """An optimal ``m``-pose plan for the arm's model, within its joint limits and region.
 
@@ -182,6 +184,8 @@ def design(
         Make every pose distinct: no two poses within
         :data:`armcal.doe.plans.DISTINCT_TOLERANCE` rad on every joint (see
         Notes).  Off by default: an optimal exact plan may repeat a pose.
+    progress : callable, optional
+        ``progress(done, 3)`` once the plan is found, certified and ordered.
 
     Returns
     -------
@@ -337,10 +341,14 @@ def design(
                 f"{efficiency:.4f}); poses count as one within {DISTINCT_TOLERANCE:g} rad on "
                 "every joint"
             )
+    tick = progress if progress is not None else (lambda done, total: None)
+    tick(1, 3)
     certificate = certify(model, q, rng=rng) if with_certificate else None
+    tick(2, 3)
     travel_found = joint_travel(q)
     if order == "travel":
         q = q[order_poses(q)]
+    tick(3, 3)
     return Design(
         model=model,
         q=q,

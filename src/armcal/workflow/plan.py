@@ -23,7 +23,7 @@ from ..models import FitModel, Loads, PlanarArm
 from ..progress import ProgressCallback
 from ..simulate import MonteCarlo, monte_carlo
 from ..synthesis import synthesize_measurements
-from .setup import DEFAULT_SIGMA_MM, design_sigma, fit_model, plan_model, prefixed
+from .setup import DEFAULT_SIGMA_MM, check_plan_size, design_sigma, fit_model, plan_model, prefixed
 
 __all__ = [
     "DesignRun",
@@ -176,6 +176,7 @@ def design_plan(
     distinct: bool = False,
     payloads: tuple[float, ...] | None = None,
     test_q: np.ndarray,
+    progress: ProgressCallback | None = None,
 ) -> DesignRun:
     """An optimal plan for the model of ``spec`` (``arm`` with --fix and --sigma).
 
@@ -190,6 +191,7 @@ def design_plan(
         nothing, a criterion or method other than D by exchange with loads,
         candidates outside the measurement region.
     """
+    check_plan_size(poses)
     rng = np.random.default_rng(seed)
     model = fit_model(spec, arm)
     sigma = design_sigma(arm)
@@ -228,6 +230,7 @@ def design_plan(
             candidates=candidates,
             order=order,  # type: ignore[arg-type]  # checked by design
             distinct=distinct,
+            progress=progress,
         )
         loads = None
     seconds = time.perf_counter() - start
