@@ -582,6 +582,12 @@ CASES = [
         ("synthesize", "--plan", "plan.csv", "-o", "plan.csv"),
         ("plan.csv", "--plan plan.csv"),
     ),
+    case(  # sigma 0.1 mm: 0.0001 mm needs ~10^6 times the poses of 0.1 mm; refused at once
+        "poses-needed-target-far-beyond-reach",
+        {},
+        ("poses-needed", "--position-rms", "0.0001"),
+        ("target of 0.0001", "needs about", "beyond the 5000 searched"),
+    ),
     case(  # 10^12 poses need about 10^15 bytes: refused at once on any machine
         "design-poses-beyond-the-machine",
         {},
@@ -792,7 +798,7 @@ CASES = [
         "poses-needed-out-of-reach",
         {},
         ("poses-needed", "--length-std-mm", "1e-5", "--max-poses", "300", "-o", "plan.csv"),
-        ("300 poses", "relax the target"),
+        ("the 300 searched", "relax the target"),
     ),
 ]
 

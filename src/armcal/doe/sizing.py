@@ -18,6 +18,7 @@ from .plans import random_plan
 __all__ = [
     "REQUIREMENTS",
     "REQUIREMENT_RTOL",
+    "UNREACHABLE_MARGIN",
     "PosesNeeded",
     "Requirement",
     "accuracy_metric",
@@ -41,6 +42,11 @@ REQUIREMENTS: dict[str, str] = {
 #: Relative slack when comparing an accuracy with its requirement, so that a plan
 #: reaching it exactly (sigma / sqrt(100) = 0.01) is not rejected by round-off.
 REQUIREMENT_RTOL = 1e-9
+
+#: How many times more poses than searched the 1/sqrt(m) law must ask for before a
+#: target is refused at once, without designing the largest plan: a plan's
+#: information per pose would have to grow this much with its size.
+UNREACHABLE_MARGIN = 4
 
 
 def _check_requirement(requirement: str) -> None:
@@ -213,6 +219,15 @@ def poses_needed(
         # 1/sqrt(m) law from here; an unidentifiable m (inf) just doubles.
         # std falls as 1/sqrt(m); the ratio is capped so a vanishing goal cannot overflow.
         jump = m * min(value / goal, 1e6) ** 2 if math.isfinite(value) else 2 * m
+        if jump > UNREACHABLE_MARGIN * max_poses:
+            # A larger plan gains at least 1/sqrt(m) per pose, hardly more: a plan's
+            # information per pose grows only while its poses are few, and not 4-fold.
+            raise ArmcalError(
+                f"{m} poses reach {value:.4g} against a target of {goal:g}; as accuracy "
+                f"grows like sqrt(poses), the target needs about {jump:.3g} poses, beyond "
+                f"the {max_poses} searched; relax the target or measure with a better "
+                "instrument (smaller --sigma)"
+            )
         m = min(max_poses, max(m + 1, math.ceil(jump * (1 - 1e-12))))
     # The jump usually lands on the answer, so try one pose less first; if that
     # reaches too, bisect between a size that fails and one that reaches: O(log m)
