@@ -18,6 +18,7 @@ from armcal import (
     orthogonal_plan,
 )
 from armcal.cli import main
+from armcal.files import MANIFEST
 from armcal.paper import PAPER_DIGIT, PAPER_SIGMA_MM, PAPER_TABLE3, paper_arm
 from armcal.report import design_summary, reproduction_summary, table_csv
 from armcal.report import format_reproduction as format_report
@@ -341,7 +342,7 @@ def test_reproduce_command_writes_every_file(tmp_path, capsys):
     assert main(argv) == 0
     document = json.loads(capsys.readouterr().out)
     names = {"table1.csv", "table2.csv", "table3.csv", "figure1.png", "figure2.png", "report.md"}
-    assert {p.name for p in out.iterdir()} == names
+    assert {p.name for p in out.iterdir()} == {*names, MANIFEST}  # what armcal wrote there
     printed = sum(len(p["dl"]) + len(p["dq"]) for p in PAPER_TABLE3.values())
     assert document["trials"] == 500 and document["table3_rows"] == printed
     with (out / "table3.csv").open() as handle:
