@@ -547,3 +547,13 @@ def test_to_json_indents_objects_and_keeps_number_tables_on_one_line():
     assert lines[5].startswith('  "rows": [[0.0, 1.0], [2.0, 3.0]')
     with pytest.raises(ValueError):
         to_json({"x": [float("nan")]})
+
+
+def test_a_read_plan_is_c_ordered(tmp_path):
+    """The column-wise CSV parser must hand on C-ordered arrays: the fits' round-off
+    follows the memory layout, and the docs print full-precision results."""
+    path = tmp_path / "plan.csv"
+    path.write_text("q1_deg,q2_deg\n0,10\n20,30\n40,50\n")
+    q = read_plan(path, PlanarArm([2.0, 1.0]))
+    assert q.flags.c_contiguous
+    assert_allclose(np.degrees(q), [[0, 10], [20, 30], [40, 50]])

@@ -262,11 +262,11 @@ COLUMNS: dict[str, tuple[Column, ...]] = {
     ),
 }
 
-#: What each file kind is, for ``armcal formats``.
 #: Figure file suffix to the format written (matplotlib's name): the suffix
 #: decides, so a ``.pdf`` file holds a PDF and never PNG bytes.
 FIGURE_FORMATS: dict[str, str] = {".png": "png", ".pdf": "pdf", ".svg": "svg", ".eps": "eps"}
 
+#: What each file kind is, for ``armcal formats``.
 FILE_KINDS: dict[str, str] = {
     "robot": "robot TOML (--robot): the arm, its instrument and what to identify",
     "truth": "truth TOML (--truth): the deviations of a virtual robot",

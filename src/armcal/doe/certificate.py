@@ -205,10 +205,11 @@ def certify(
         # M = I: the bound det M <= 1 is attained, and d(x) = tr(I(x)) = p at every pose.
         return Certificate(1.0, 1.0, 1.0, float(p), q, np.full(q.shape[0], 1.0 / q.shape[0]))
     # The plan's distinct poses: a large plan is a smaller one repeated (designer), and
-    # the pool's cost is per pose.
+    # the pool's and the search's costs are per pose.
+    distinct = np.unique(q, axis=0)
     pool = np.concatenate(
         [
-            np.unique(q, axis=0),
+            distinct,
             _corner_poses(model, rng),
             feasible_poses(model, candidates, rng=rng),
         ]
@@ -247,7 +248,7 @@ def certify(
         logdet_star = float(star.log_det_gram())
     else:  # not expected (xi* is near D-optimal); the other bounds still hold
         max_star, logdet_star = np.inf, -np.inf
-    max_plan = _max_variance(model, plan_inverse, np.unique(q, axis=0), rng, search)
+    max_plan = _max_variance(model, plan_inverse, distinct, rng, search)
     logdet_plan = float(plan.log_det_gram())
     kw = np.exp((logdet_plan - logdet_star) / p + 1.0 - max_star / p) if bool(star_ok) else 0.0
     plan_only = np.exp(1.0 - max_plan / p)

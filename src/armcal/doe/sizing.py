@@ -48,6 +48,8 @@ REQUIREMENT_RTOL = 1e-9
 #: information per pose would have to grow this much with its size.
 UNREACHABLE_MARGIN = 4
 
+_RELAX = "relax the target or measure with a better instrument (smaller --sigma)"
+
 
 def _check_requirement(requirement: str) -> None:
     if requirement not in REQUIREMENTS:
@@ -212,8 +214,7 @@ def poses_needed(
         value = best(m)
         if m >= max_poses:
             raise ArmcalError(
-                f"{max_poses} poses reach only {value:.4g} against a target of {goal:g}; "
-                "relax the target or measure with a better instrument (smaller --sigma)"
+                f"{max_poses} poses reach only {value:.4g} against a target of {goal:g}; {_RELAX}"
             )
         failed = m
         # 1/sqrt(m) law from here; an unidentifiable m (inf) just doubles.
@@ -225,8 +226,7 @@ def poses_needed(
             raise ArmcalError(
                 f"{m} poses reach {value:.4g} against a target of {goal:g}; as accuracy "
                 f"grows like sqrt(poses), the target needs about {jump:.3g} poses, beyond "
-                f"the {max_poses} searched; relax the target or measure with a better "
-                "instrument (smaller --sigma)"
+                f"the {max_poses} searched; {_RELAX}"
             )
         m = min(max_poses, max(m + 1, math.ceil(jump * (1 - 1e-12))))
     # The jump usually lands on the answer, so try one pose less first; if that

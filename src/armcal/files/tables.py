@@ -181,33 +181,29 @@ def _split(
     10^5-row file makes no Python object per row; a quoted field (which may hold
     the separator or span lines) goes through the ``csv`` module.
     """
-    rows: list[tuple[int, str]] | list[tuple[int, list[str]]]
     if any('"' in raw for _, raw in kept):
         records = _records(path, kept, delimiter)
         rows = [(line, row) for line, row in records if "".join(row).strip()]
     else:
-        rows = [(line, raw) for line, raw in kept if raw.replace(delimiter, "").strip()]
+        texts = [(line, raw) for line, raw in kept if raw.replace(delimiter, "").strip()]
+        rows = [(line, raw.split(delimiter)) for line, raw in texts[:1]]
+        flat = delimiter.join(raw for _, raw in texts[1:]).split(delimiter)
+        width = len(rows[0][1]) if rows else 0
+        if len(flat) == width * (len(texts) - 1):  # every row as wide as the header
+            lines = [line for line, _ in texts[1:]]
+            return rows[0][0], rows[0][1], lines, lambda c: flat[c::width]
+        rows += [(line, raw.split(delimiter)) for line, raw in texts[1:]]
     if not rows:
         raise fail(path, f"file has no header, only empty fields; expected {layout}")
-    header_line, first = rows[0]
-    header = first.split(delimiter) if isinstance(first, str) else first
-    data = rows[1:]
-    lines = [line for line, _ in data]
-    width = len(header)
-    flat: list[str] = []
-    if data and isinstance(data[0][1], str):
-        flat = delimiter.join(raw for _, raw in data).split(delimiter)
-    if len(flat) != width * len(data):  # quoted, or a row of another width: row by row
-        split = [row if isinstance(row, list) else row.split(delimiter) for _, row in data]
-        for r, (line, row) in enumerate(zip(lines, split, strict=True), start=1):
-            if len(row) != width:
-                raise fail(
-                    path,
-                    f"row {r} (line {line}) has {len(row)} fields but the header has "
-                    f"{width}; give every column a value",
-                )
-        return header_line, header, lines, lambda c: [row[c] for row in split]
-    return header_line, header, lines, lambda c: flat[c::width]
+    (header_line, header), data = rows[0], rows[1:]
+    for r, (line, row) in enumerate(data, start=1):
+        if len(row) != len(header):
+            raise fail(
+                path,
+                f"row {r} (line {line}) has {len(row)} fields but the header has "
+                f"{len(header)}; give every column a value",
+            )
+    return header_line, header, [line for line, _ in data], lambda c: [row[c] for _, row in data]
 
 
 def _numbers(
@@ -221,17 +217,16 @@ def _numbers(
     name the first bad one in file order.  A semicolon file may write 1,5 for 1.5.
     """
     comma = delimiter == ";"
+    if not comma:
+        try:
+            # C order, as every reader gives: the fits' round-off follows the layout.
+            values = np.ascontiguousarray(np.array(columns, dtype=float).reshape(-1, len(lines)).T)
+        except ValueError:  # a field that is not a number: found below
+            pass
+        else:
+            if np.all(np.abs(values) <= MAX_ABS_VALUE):  # NaN fails it too
+                return values
     values = np.empty((len(lines), len(columns)))
-    try:
-        if comma:
-            raise ValueError("decimal commas: field by field")
-        for c, fields in enumerate(columns):
-            values[:, c] = np.array(fields, dtype=float)
-    except ValueError:
-        pass
-    else:
-        if np.all(np.abs(values) <= MAX_ABS_VALUE):  # NaN fails it too
-            return values
     for r, line in enumerate(lines):  # row by row: the first bad field in file order
         where = f"row {r + 1} (line {line})"
         for c, name in enumerate(names):

@@ -296,6 +296,17 @@ def outlier_warning(outliers: Sequence[Outlier], *, robust: bool) -> ArmcalWarni
     )
 
 
+def most_disagree(flagged: int, poses: int) -> bool:
+    """Whether ``flagged`` poses are at least half of ``poses``: too many to be outliers
+    (the model, a unit or sigma is wrong, and a robust fit cannot help)."""
+    return 2 * flagged >= poses
+
+
+def fixed_parameters(held: Sequence[str]) -> str:
+    """``"the fixed parameter dl1"`` or ``"the fixed parameters dl3, dq3"``."""
+    return f"the fixed parameter{'' if len(held) == 1 else 's'} {', '.join(held)}"
+
+
 def inconsistent_fit_warning(
     fit: GoodnessOfFit,
     sigma: float,
@@ -320,12 +331,11 @@ def inconsistent_fit_warning(
         chi2, dof = freed
         one = len(held) == 1
         causes.append(
-            f"the fixed {'parameter' if one else 'parameters'} {', '.join(held)} "
-            f"{'is' if one else 'are'} not at nominal: with {'it' if one else 'them'} free, "
-            f"chi2 = {chi2:.4g} on {dof} degrees of freedom; free {'it' if one else 'them'} "
-            "(--fix or the robot file's [identify])"
+            f"{fixed_parameters(held)} {'is' if one else 'are'} not at nominal: with "
+            f"{'it' if one else 'them'} free, chi2 = {chi2:.4g} on {dof} degrees of freedom; "
+            f"free {'it' if one else 'them'} (--fix or the robot file's [identify])"
         )
-    if 2 * flagged >= poses:
+    if most_disagree(flagged, poses):
         causes.append(
             f"not outliers: {flagged} of {poses} poses disagree with the fit, so a robust fit "
             "cannot help"

@@ -18,6 +18,7 @@ import numpy as np
 
 from ..errors import ArmcalWarning
 from ..numerics import point_norms
+from .judgement import fixed_parameters, most_disagree
 from .problem import Fit, Problem
 
 __all__ = [
@@ -59,19 +60,13 @@ def _median_chi2(dim: int) -> float:
 def misfit_warning(problem: Problem, disagreeing: int) -> ArmcalWarning:
     """``model-misfit``: most poses disagree with any fit, so none is an outlier."""
     held = problem.model.fixed
-    first = f"the fixed {'parameter' if len(held) == 1 else 'parameters'} {', '.join(held)}, "
-    first = first if held else ""
+    first = f"{fixed_parameters(held)}, " if held else ""
     return ArmcalWarning(
         "model-misfit",
         f"{disagreeing} of {problem.m} poses disagree with the fit: that is a model problem, "
         f"not outliers, so the robust fit leaves none out; check, in order: {first}a unit, the "
         "robot file (base offset, link lengths, targets), compliance under load",
     )
-
-
-def _most(count: int, m: int) -> bool:
-    """Whether ``count`` poses are at least half of ``m``: too many to be outliers."""
-    return 2 * count >= m
 
 
 def robust_fit(
@@ -108,7 +103,7 @@ def robust_fit(
         weights = new
     # The core: poses Huber left at full weight, if they identify the model.
     used = weights >= 1.0
-    if not problem.identifiable(used) or _most(m - int(np.count_nonzero(used)), m):
+    if not problem.identifiable(used) or most_disagree(m - int(np.count_nonzero(used)), m):
         used = everyone
     fit = problem.fit(used, start=fit.params)
 
@@ -120,7 +115,7 @@ def robust_fit(
         scale = sigma if sigma is not None else fit.scale(max(dof, 1))
         test = fit.test(scale, given=sigma is not None)
         keep = ~test.flagged
-        if _most(int(np.count_nonzero(~keep)), m):
+        if most_disagree(int(np.count_nonzero(~keep)), m):
             return everything(~everyone, misfit_warning(problem, int(np.count_nonzero(~keep))))
         if np.array_equal(keep, used):
             return fit, used, ~used, None

@@ -229,10 +229,17 @@ class CompliantArm:
         return f"CompliantArm({self.arm!r}, {mode}, compliance {', '.join(self.compliance_names)})"
 
     @classmethod
-    def for_loads(cls, arm: PlanarArm, elastic: Elastostatic, loads: Loads) -> CompliantArm:
-        """The model for data with ``loads``: in lumped mode, loads that vary add ``k1..kn``."""
+    def for_loads(
+        cls, arm: PlanarArm, elastic: Elastostatic, loads: Loads, *, virtual: bool = False
+    ) -> CompliantArm:
+        """The model for data with ``loads``: in lumped mode, loads that vary add ``k1..kn``.
+
+        ``virtual``: the model of a virtual robot measured under ``loads``, which
+        every known load bends (by ``k`` times its torque) whether or not a fit
+        of such data could tell ``k`` from the weight.
+        """
         gravity_lumped = elastic.lumped and elastic.gravity is not None
-        if gravity_lumped and not loads.varying and loads.n_rows:
+        if gravity_lumped and not virtual and not loads.varying and loads.n_rows:
             # A constant payload only adds to the lumped weight (k needs loads that
             # vary): c1..cn then hold the deflection under that payload, which the
             # model records as its payload (see unpredicted_loads).

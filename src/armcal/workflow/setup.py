@@ -32,7 +32,6 @@ __all__ = [
     "prefixed",
     "simulation_sigma",
     "test_poses",
-    "virtual_model",
     "with_fixed",
 ]
 
@@ -87,10 +86,17 @@ def design_sigma(arm: PlanarArm) -> float:
     return arm.sigma if arm.sigma is not None else DEFAULT_SIGMA_MM
 
 
-def fit_model(spec: RobotSpec, arm: PlanarArm, loads: Loads | None = None) -> FitModel:
+def fit_model(
+    spec: RobotSpec, arm: PlanarArm, loads: Loads | None = None, *, virtual: bool = False
+) -> FitModel:
     """The model a robot file describes: the arm, or with ``[elastostatic]`` its compliant
     arm for data with ``loads`` (the robot file's payload when omitted): the one place
     the family of a robot file is chosen.
+
+    ``virtual``: the model of a virtual robot to measure under ``loads`` rather
+    than the one a fit of its data would use; they differ for a lumped arm under
+    one constant payload, which a fit merges into ``c1..cn`` but which still
+    bends the arm (:meth:`~armcal.models.compliance.CompliantArm.for_loads`).
 
     Raises ArmcalError, naming the robot file, when nothing would twist the joints.
     """
@@ -98,7 +104,7 @@ def fit_model(spec: RobotSpec, arm: PlanarArm, loads: Loads | None = None) -> Fi
         return arm
     loads = Loads.create(1, spec.elastic.payload_kg) if loads is None else loads
     try:
-        return CompliantArm.for_loads(arm, spec.elastic, loads)
+        return CompliantArm.for_loads(arm, spec.elastic, loads, virtual=virtual)
     except ArmcalError as exc:
         raise prefixed(spec.source, exc) from None
 
@@ -114,13 +120,12 @@ def plan_model(
     """The model of a plan of ``m`` poses and the plan's loads: with ``[elastostatic]``
     its payload column ``payload`` (kg), else the robot file's payload; no loads without.
 
-    ``virtual``: the model of a virtual robot to measure (:func:`virtual_model`)
-    rather than the one a fit of its data would use.
+    ``virtual``: the model of a virtual robot to measure (:func:`fit_model`).
     """
     if spec.elastic is None:
         return arm, None
     loads = Loads.create(m, spec.elastic.payload_kg if payload is None else payload)
-    return (virtual_model if virtual else fit_model)(spec, arm, loads), loads
+    return fit_model(spec, arm, loads, virtual=virtual), loads
 
 
 #: Memory a designed pose costs at its peak (bytes): the plan, its checks and its CSV
@@ -152,29 +157,6 @@ def check_plan_size(poses: int, memory: int | None = None) -> None:
         "after a few hundred poses, so design fewer and repeat them (the plan of m poses "
         "taken k times is as good per pose)"
     )
-
-
-def virtual_model(spec: RobotSpec, arm: PlanarArm, loads: Loads | None) -> FitModel:
-    """The model of a virtual robot measured under ``loads``: every effect of the loads,
-    whether or not a fit of such data could identify it.
-
-    It differs from :func:`fit_model` in one case: a lumped ``[elastostatic]`` arm
-    (masses unknown) whose plan carries one constant payload.  A fit of such data
-    sees the payload's deflection only merged into ``c1..cn`` (the payload is one
-    more weight at the tip), so its model has no ``k1..kn``; but the payload still
-    bends the real arm, by ``k`` times its torque, and a virtual arm must bend as
-    the real one does -- else a pose at 10 kg lands where the 0 kg pose does.
-    """
-    model = fit_model(spec, arm, loads)
-    if (
-        isinstance(model, CompliantArm)
-        and spec.elastic is not None
-        and loads is not None
-        and loads.known
-        and not model.known_loads
-    ):
-        return CompliantArm(arm, spec.elastic, known_loads=True)
-    return model
 
 
 def test_poses(spec: RobotSpec, seed: int, path: str | None = None) -> np.ndarray:
