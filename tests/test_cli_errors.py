@@ -110,6 +110,16 @@ def _turned(row: str) -> str:
 
 
 VALID_MEAS = _csv(MEAS_HEADER, MEAS_ROWS)
+
+
+def _scaled_rows(factor: float) -> list[str]:
+    """The measurement rows of an arm ``factor`` times as large (same angles)."""
+    return [
+        ",".join([*(f"{v:g}" for v in pose), *(repr(factor * v) for v in _position(pose, k))])
+        for k, pose in enumerate(POSES)
+    ]
+
+
 ROBOT_TOML = 'name = "my-scara"\nlink_lengths_mm = [260.0, 180.0, 120.0, 100.0]\n'
 TRUTH_TOML = "dl_mm = [1.5, -0.6, -0.4, 0.7]\ndq_deg = [0.5, -0.5, 0.7, -0.3]\n"
 
@@ -432,7 +442,49 @@ CASES = [
         "robot-invalid-toml",
         {"robot.toml": ROBOT_TOML.replace("100.0]", "100.0"), "meas.csv": VALID_MEAS},
         IDENTIFY_ROBOT,
-        ("robot.toml", "invalid TOML"),
+        ("robot.toml", "invalid TOML", "at end of document", "close it"),
+    ),
+    case(  # issue 20: the parser's own text had no fix
+        "robot-is-a-measurements-csv",
+        {"meas.csv": VALID_MEAS},
+        ("identify", "--robot", "meas.csv", "--measurements", "meas.csv"),
+        ("meas.csv", "line 1", "looks like a CSV table", "--robot takes a built-in robot's name"),
+    ),
+    case(
+        "robot-duplicate-key",
+        {"robot.toml": ROBOT_TOML + "link_lengths_mm = [1.0]\n", "meas.csv": VALID_MEAS},
+        IDENTIFY_ROBOT,
+        ("robot.toml", "line 3", "'link_lengths_mm' is given twice (first on line 2)", "keep one"),
+    ),
+    case(
+        "robot-duplicate-table",
+        {
+            "robot.toml": ROBOT_TOML + "[measurement]\nsigma_mm = 0.1\n[measurement]\n",
+            "meas.csv": VALID_MEAS,
+        },
+        IDENTIFY_ROBOT,
+        ("robot.toml", "line 5", "[measurement] is declared twice (first on line 3)"),
+    ),
+    case(
+        "robot-non-ascii-bare-key",
+        {"robot.toml": ROBOT_TOML + "länge = 3\n", "meas.csv": VALID_MEAS},
+        IDENTIFY_ROBOT,
+        ("robot.toml", "line 3", 'quoted ("länge" = ...)'),
+    ),
+    case(
+        "robot-number-without-leading-zero",
+        {"robot.toml": ROBOT_TOML.replace("100.0]", ".1]"), "meas.csv": VALID_MEAS},
+        IDENTIFY_ROBOT,
+        ("robot.toml", "line 2", "write 0.1"),
+    ),
+    case(  # link lengths in metres: blame the robot file, not the measurements
+        "robot-link-lengths-in-metres",
+        {
+            "robot.toml": ROBOT_TOML.replace("260.0, 180.0, 120.0, 100.0", "0.26,0.18,0.12,0.1"),
+            "meas.csv": VALID_MEAS,
+        },
+        IDENTIFY_ROBOT,
+        ("meas.csv", "links add up to 0.66 mm", "link_lengths_mm are in metres, write them in mm"),
     ),
     case(
         "robot-joint-limits-wrong-count",
@@ -725,7 +777,6 @@ CASES = [
         ("--seed",),
     ),
     case("usage-unknown-subcommand", {}, ("frobnicate", "-o", "out.csv"), ("frobnicate",)),
-    case("usage-no-subcommand", {}, (), ()),
     case(
         "usage-missing-measurements",
         {},
@@ -1119,7 +1170,29 @@ CASES += [
         "validate-measurements-of-another-robot",
         {"cal.json": CALIBRATION, "test.csv": _drop_column(MEAS_HEADER, MEAS_ROWS, "q4_deg")},
         VALIDATE,
-        ("test.csv", "3 joint columns", "4 joints"),
+        (
+            "test.csv",
+            "3 joint columns",
+            "4 joints",
+            "of the calibration cal.json",
+            "pass a calibration of the robot measured",
+        ),
+    ),
+    case(  # a 3x larger arm: its points lie beyond paper-4link's reach (issue 20)
+        "validate-measurements-of-a-larger-robot",
+        {"cal.json": CALIBRATION, "test.csv": _csv(MEAS_HEADER, _scaled_rows(3.0))},
+        VALIDATE,
+        (
+            "test.csv",
+            "beyond the reach of paper-4link of the calibration cal.json",
+            "is the calibration cal.json of the arm measured?",
+        ),
+    ),
+    case(
+        "compensate-program-of-another-robot",
+        {"cal.json": CALIBRATION, "prog.csv": _drop_column(PLAN_HEADER, PLAN_ROWS, "q4_deg")},
+        COMPENSATE,
+        ("prog.csv", "of the calibration cal.json", "pass a calibration of the robot measured"),
     ),
     case(
         "validate-plan-instead-of-measurements",

@@ -191,3 +191,170 @@ def test_plan_size_guard_uses_half_the_machine():
     check_plan_size(memory // (2 * BYTES_PER_DESIGNED_POSE), memory)  # exactly half: fine
     with pytest.raises(ArmcalError, match="more than half of this machine's 8 GB"):
         check_plan_size(memory // (2 * BYTES_PER_DESIGNED_POSE) + 1, memory)
+
+
+# --------------------------------------------------------------------------- hints
+
+
+def _paper_measurements(m: int, sigma: float, seed: int) -> tuple[np.ndarray, np.ndarray]:
+    """paper-4link at ``m`` random poses with the paper's deviations, noise ``sigma`` (mm)."""
+    spec = load_robot("paper-4link")
+    q = random_plan(spec.arm, m, rng=np.random.default_rng(seed))
+    xy = synthesize_measurements(
+        spec.arm, q, spec.default_truth, sigma=sigma, rng=np.random.default_rng(seed + 1)
+    )
+    return q, xy
+
+
+@pytest.mark.parametrize(
+    ("mirror", "order", "signs"),
+    [("swapped", [1, 0], [1.0, 1.0]), ("flipped", [0, 1], [1.0, -1.0])],
+)
+def test_mirrored_measurements_are_named_not_outliers(
+    tmp_path: Path, mirror: str, order: list[int], signs: list[float]
+) -> None:
+    """x and y swapped, or y flipped (a camera's image y down): say so, not "try --robust".
+
+    Undone, the mirror leaves the noise: chi2 on 2*20 - 8 = 32 dof stays below 3 x 32
+    (probability about 1e-8 under the model).  In the plane with the base at the
+    instrument's origin, dq1 takes up any rotation, so a swap is a flip turned 90 deg:
+    the message names both.
+    """
+    q, xy = _paper_measurements(20, 0.1, 3)
+    (tmp_path / "meas.csv").write_text(format_measurements_csv(q, xy[:, order] * signs))
+    run = run_cli(tmp_path, "identify", "--robot", "paper-4link", "--measurements", "meas.csv",
+                  "--sigma", "0.1", "--json")  # fmt: skip
+    message = _warnings(run)["fit-inconsistent"]
+    first = message.split("likely causes, in order: ")[1]
+    assert first.startswith(
+        "the measurements are mirrored: x and y are swapped, or one axis is flipped"
+    )
+    assert float(first.split("chi2 = ")[1].split(" ")[0]) < 3 * 32
+    assert "try --robust" not in message
+
+
+def test_a_good_fit_is_never_called_mirrored(tmp_path: Path) -> None:
+    """Control: the same data unmirrored give no fit-inconsistent warning at all."""
+    q, xy = _paper_measurements(20, 0.1, 3)
+    (tmp_path / "meas.csv").write_text(format_measurements_csv(q, xy))
+    run = run_cli(tmp_path, "identify", "--robot", "paper-4link", "--measurements", "meas.csv",
+                  "--sigma", "0.1", "--json")  # fmt: skip
+    assert run.returncode == 0 and "fit-inconsistent" not in _warnings(run)
+
+
+COUPLED_ROBOT = """name = "coupled"
+link_lengths_mm = [260.0, 180.0, 120.0]
+base_offset = true
+joint_map = [[1, 0, 0], [0, 1, 0], [0, 0, 1]]
+[measurement]
+sigma_mm = 0.05
+"""
+COUPLED_TRUTH = "dl_mm = [0.5, -0.3, 0.2]\ndq_deg = [0.3, -0.2, 0.4]\nbase_mm = [400.0, -150.0]\n"
+
+
+@pytest.fixture
+def coupled(tmp_path: Path) -> Path:
+    """The coupled arm measured at 12 random poses, its data turned 40 deg in the plane.
+
+    Every joint is read from the horizon (joint map I), so a turn of the whole arm is
+    dq1 + dq2 + dq3 together, and the 40 deg turn of the instrument's axes lands there.
+    """
+    (tmp_path / "robot.toml").write_text(COUPLED_ROBOT)
+    (tmp_path / "truth.toml").write_text(COUPLED_TRUTH)
+    spec = load_robot(tmp_path / "robot.toml")
+    q = random_plan(spec.arm, 12, rng=np.random.default_rng(4))
+    (tmp_path / "plan.csv").write_text(
+        "q1_deg,q2_deg,q3_deg\n" + "".join(",".join(f"{v:.9f}" for v in np.degrees(p)) + "\n"
+                                           for p in q)
+    )  # fmt: skip
+    run = run_cli(tmp_path, "synthesize", "--robot", "robot.toml", "--truth", "truth.toml",
+                  "--plan", "plan.csv", "--seed", "5", "-o", "flat.csv")  # fmt: skip
+    assert run.returncode == 0, run.stderr
+    data = np.loadtxt(tmp_path / "flat.csv", delimiter=",", skiprows=1)
+    turn = np.radians(40.0)
+    rotation = np.array([[np.cos(turn), -np.sin(turn)], [np.sin(turn), np.cos(turn)]])
+    turned = data[:, 3:5] @ rotation.T
+    angles = np.radians(data[:, :3])
+    (tmp_path / "turned.csv").write_text(format_measurements_csv(angles, turned))
+    flat3d = np.column_stack([turned, np.full(len(turned), 250.0)])
+    (tmp_path / "turned3d.csv").write_text(format_measurements_csv(angles, flat3d))
+    return tmp_path
+
+
+def test_the_large_deviation_remark_names_the_offsets_of_the_joint_map(coupled: Path) -> None:
+    """In 2-D the 40 deg turn is in dq1 + dq2 + dq3 under this map, not in dq1 alone."""
+    run = run_cli(coupled, "identify", "--robot", "robot.toml", "--measurements", "turned.csv",
+                  "--json")  # fmt: skip
+    message = _warnings(run)["large-deviation"]
+    assert "with a base offset, dq1 + dq2 + dq3 also take up any rotation" in message
+
+
+def test_the_3d_report_keeps_phi0_free_and_its_advice_works(coupled: Path) -> None:
+    """--fix phi0 would put the tracker's 40 deg turn into the offsets; the report offers
+    another offset to hold instead, and following that advice gives calibration-sized
+    offsets (no large-deviation warning)."""
+    base = ("identify", "--robot", "robot.toml", "--measurements", "turned3d.csv")
+    run = run_cli(coupled, *base)
+    assert run.returncode == 0, run.stderr
+    line = next(x for x in run.stdout.splitlines() if x.startswith("base rotation phi0"))
+    assert "--fix phi0" not in line
+    assert "keep phi0 free" in line
+    advice = line.split("--fix ")[1].rstrip(")")
+    assert advice == "dq2"  # the next offset on the turn's direction dq1 + dq2 + dq3
+    followed = run_cli(coupled, *base, "--fix", advice, "--json")
+    assert followed.returncode == 0 and "large-deviation" not in _warnings(followed)
+    held = run_cli(coupled, *base, "--fix", "phi0", "--json")
+    assert "large-deviation" in _warnings(held)  # why phi0 is not to be held
+
+
+def test_no_compliance_does_not_ask_for_the_table_the_file_has(lumped: Path) -> None:
+    rng = np.random.default_rng(6)
+    payload = np.tile([0.0, 10.0], 10)
+    _loaded_plan(lumped / "plan.csv", rng.uniform([-160, -140, -140], [160, 140, 140], (20, 3)),
+                 payload)  # fmt: skip
+    run = run_cli(lumped, "synthesize", "--robot", "robot.toml", "--truth", "truth.toml",
+                  "--plan", "plan.csv", "-o", "meas.csv")  # fmt: skip
+    assert run.returncode == 0, run.stderr
+    run = run_cli(lumped, "identify", "--robot", "robot.toml", "--measurements", "meas.csv",
+                  "--no-compliance", "--json")  # fmt: skip
+    message = _warnings(run)["loads-ignored"]
+    assert "--no-compliance fits the geometry only; leave it out" in message
+    assert "add [elastostatic]" not in message
+
+
+def test_no_arguments_lists_the_commands(tmp_path: Path) -> None:
+    """A first try, ``armcal`` alone: the commands on stdout, one error line, exit 2."""
+    from armcal.cli.help import COMMANDS
+
+    run = run_cli(tmp_path)
+    assert run.returncode == 2
+    for command in COMMANDS:
+        assert f"    {command}" in run.stdout
+    assert run.stderr == "armcal: error: no command given; pick one of the commands above\n"
+
+
+def test_several_reflectors_count_poses_not_rows(tmp_path: Path) -> None:
+    """8 poses at 2 targets are 8 poses and 16 measurements, not "16 poses"."""
+    (tmp_path / "robot.toml").write_text(
+        'name = "two-reflectors"\nlink_lengths_mm = [260.0, 180.0, 120.0]\n'
+        "[measurement]\nsigma_mm = 0.05\n"
+        "[targets]\nA = { length_mm = 100.0 }\nB = { length_mm = 60.0, angle_deg = 30.0 }\n"
+    )
+    (tmp_path / "truth.toml").write_text("dl_mm = [0.5, -0.3, 0.2]\ndq_deg = [0.3, -0.2, 0.4]\n")
+    for argv in (
+        ("design", "--robot", "robot.toml", "--poses", "8", "-o", "plan.csv"),
+        ("synthesize", "--robot", "robot.toml", "--truth", "truth.toml", "--plan", "plan.csv",
+         "-o", "meas.csv"),
+    ):  # fmt: skip
+        assert run_cli(tmp_path, *argv).returncode == 0
+    run = run_cli(tmp_path, "identify", "--robot", "robot.toml", "--measurements", "meas.csv")
+    assert run.stdout.startswith("calibration of two-reflectors: 8 poses (16 measurements of 2 ")
+
+
+def test_a_robot_file_in_metres_is_named_on_every_command(tmp_path: Path) -> None:
+    (tmp_path / "robot.toml").write_text("link_lengths_mm = [0.26, 0.18, 0.12]\n")
+    run = run_cli(tmp_path, "design", "--robot", "robot.toml", "--poses", "6", "--json")
+    assert run.returncode == 0, run.stderr
+    message = _warnings(run)["lengths-in-metres"]
+    assert "the links add up to 0.56 mm, which looks like metres" in message
+    assert "[260, 180, 120]" in message

@@ -36,9 +36,10 @@ far from what a unit mistake gives (``-99.9 %`` or ``-90 %`` of every link,
 tens of degrees): any bound between a few percent and 90 % separates the two,
 and 10 % leaves a factor of about 3 to 10 on either side.  Such a deviation in
 a calibration is reported as a ``large-deviation`` warning.  With a base
-offset, ``dq1`` also takes up any rotation of the instrument's axes about the
-base, which may be anything: it is left out of the plausibility of the
-alternatives (not of the warning, which says so).
+offset, the joint offsets ``A^-1 (1, ..., 1)`` (``dq1`` for the default joint
+map) also take up any rotation of the instrument's axes about the base, which
+may be anything: they are left out of the plausibility of the alternatives
+(not of the warning, which names them).
 """
 
 from __future__ import annotations
@@ -49,7 +50,7 @@ import numpy as np
 
 from .errors import ArmcalError, ArmcalWarning
 from .identification import Calibration, solve
-from .models import PlanarArm, forward_kinematics
+from .models import PlanarArm, combination, forward_kinematics
 
 __all__ = [
     "IMPROVEMENT",
@@ -147,6 +148,16 @@ def _fit(arm: PlanarArm, q: np.ndarray, xy: np.ndarray) -> _Fit | None:
     return _Fit(plain, params, float(np.sum(residuals**2)), 2 * q.shape[0] - plain.n_free)
 
 
+def _turn(arm: PlanarArm) -> np.ndarray:
+    """The joint offsets ``(k,)`` that take up a turn of the instrument's axes.
+
+    A turn turns every link vector alike: the offsets ``A^-1 (1, ..., 1)`` of the
+    joint map (``dq1`` alone for the default map); round-off set to 0.
+    """
+    turn = np.linalg.solve(arm.angle_map, np.ones(arm.n_links))
+    return np.where(np.abs(turn) > 1e-9, turn, 0.0)
+
+
 def large_deviations(
     arm: PlanarArm, params: np.ndarray, *, rotation_free: bool = False
 ) -> list[str]:
@@ -158,8 +169,8 @@ def large_deviations(
     params : ndarray, shape (p,)
         User deviations (mm, rad).
     rotation_free : bool
-        Leave ``dq1`` out (with a base offset it also takes up the rotation of
-        the instrument's axes, which may be anything).
+        Leave out the offsets that take up a turn of the instrument's axes
+        (with a base offset; ``dq1`` for the default joint map), which may be anything.
 
     Returns
     -------
@@ -185,10 +196,11 @@ def large_deviations(
         for i in range(k)
         if abs(dl[i]) > LARGE_LENGTH_FRACTION * nominal[i]
     ]
+    turned = _turn(arm) != 0 if rotation_free else np.zeros(k, dtype=bool)
     found += [
         f"{names[k + i]} = {dq[i]:.4g} deg"
-        for i in range(1 if rotation_free else 0, k)
-        if abs(dq[i]) > LARGE_ANGLE_DEG
+        for i in range(k)
+        if abs(dq[i]) > LARGE_ANGLE_DEG and not turned[i]
     ]
     return found
 
@@ -220,8 +232,15 @@ def deviation_warning(arm: PlanarArm, params: np.ndarray) -> ArmcalWarning | Non
     if not found:
         return None
     rotation = ""
-    if arm.base_offset and any(item.startswith("dq1 ") for item in found):
-        rotation = " (with a base offset, dq1 also takes up any rotation of the instrument's axes)"
+    k = arm.n_links
+    turn = _turn(arm)
+    turned = [arm.param_names[k + i] for i in np.flatnonzero(turn)]
+    if arm.base_offset and any(item.split(" ")[0] in turned for item in found):
+        offsets = combination(turn, arm.param_names[k : 2 * k])
+        rotation = (
+            f" (with a base offset, {offsets} also take{'s' if len(turned) == 1 else ''} up "
+            "any rotation of the instrument's axes)"
+        )
     return ArmcalWarning(
         "large-deviation",
         f"identified deviations are a large part of a link: {', '.join(found)}{rotation}; "

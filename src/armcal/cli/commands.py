@@ -217,7 +217,9 @@ def identify(args: argparse.Namespace) -> None:
 def validate(args: argparse.Namespace) -> None:
     """``armcal validate``: a calibration against held-out measurements."""
     cal = read_calibration(args.calibration)
-    meas = read_measurements(args.measurements, cal.arm)
+    meas = read_measurements(
+        args.measurements, cal.arm, arm_from=f"the calibration {args.calibration}"
+    )
     run = validate_measurements(cal, meas, source=args.measurements)
     if args.plot is not None:
         from ..plotting import plot_validation, save_figure  # matplotlib only when asked for
@@ -232,7 +234,7 @@ def validate(args: argparse.Namespace) -> None:
 def compensate(args: argparse.Namespace) -> None:
     """``armcal compensate``: a program's corrected commands."""
     cal = read_calibration(args.calibration)
-    program = read_program(args.program, cal.arm)
+    program = read_program(args.program, cal.arm, arm_from=f"the calibration {args.calibration}")
     run = compensate_program(
         cal, program, target=args.target, payload_kg=args.payload_kg, source=args.program
     )

@@ -90,6 +90,11 @@ def _check_paths(args: argparse.Namespace) -> None:
 
 def main(argv: Sequence[str] | None = None) -> int:
     """Run the ``armcal`` program; returns the exit status."""
+    argv = sys.argv[1:] if argv is None else list(argv)
+    if not argv:  # a first try: the commands, then why nothing ran (exit 2 for scripts)
+        build_parser().print_help()
+        print("armcal: error: no command given; pick one of the commands above", file=sys.stderr)
+        return 2
     try:
         args = build_parser().parse_args(argv)
         _check_paths(args)

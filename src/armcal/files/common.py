@@ -11,6 +11,7 @@ import difflib
 import json
 import math
 import os
+import re
 import sys
 from collections.abc import Sequence
 from pathlib import Path
@@ -138,11 +139,66 @@ def numbers(path, value: Any, key: str, count: int | None = None) -> list[float]
 
 
 def load_toml(path, what: str) -> dict:
+    """A TOML file's table; an error names the line, shows it and says how to fix it."""
     text = read_text(path, what)
     try:
         return tomllib.loads(text)
     except (ValueError, RecursionError) as exc:  # TOMLDecodeError, or digits/nesting limits
-        raise fail(path, f"invalid TOML: {exc}") from None
+        raise fail(path, f"invalid TOML: {_toml_advice(text, str(exc), what)}") from None
+
+
+_TOML_AT = re.compile(r"^(?P<what>.*) \(at line (?P<line>\d+), column (?P<column>\d+)\)$")
+_BARE_DECIMAL = re.compile(r"(?<![\w.])[-+]?(\.\d+)")
+_BARE_KEY = re.compile(r"^\s*\[*\s*(?P<key>[^=\[\]]*?)\s*(=|\]|$)")
+
+
+def _toml_advice(text: str, message: str, what: str) -> str:
+    """The TOML parser's ``message`` with the line it names and a fix for the common cases."""
+    lines = text.splitlines()
+    found = _TOML_AT.match(message)
+    if found is None:
+        if message.endswith("(at end of document)"):
+            return f"{message}; the file ends inside a bracket or a quote: close it"
+        return f"{message}; check the brackets and quotes"
+    number = int(found["line"])
+    shown = lines[number - 1].strip() if 0 < number <= len(lines) else ""
+    if len(shown) > 60:
+        shown = shown[:57] + "..."
+    where = f"line {number}, column {found['column']}: {shown!r}: {found['what']}"
+    first = lines[0] if lines else ""
+    if first.count(",") >= 1 and "=" not in first:
+        return f"{where}; this looks like a CSV table, not a {what} TOML file; " + (
+            "--robot takes a built-in robot's name or a robot .toml file"
+            if what == "robot"
+            else f"pass the {what} .toml file"
+        )
+    key = _BARE_KEY.match(shown)
+    name = "" if key is None else key["key"]
+    if found["what"].startswith("Cannot overwrite a value") or found["what"].startswith(
+        "Cannot declare"
+    ):
+        headers = [i for i in range(number - 1) if lines[i].lstrip().startswith("[")]
+        table = shown.startswith("[")
+        # A table's first declaration is a header; a key's is within the same table.
+        look = headers if table else range(headers[-1] + 1 if headers else 0, number - 1)
+        before = [
+            i + 1
+            for i in look
+            if (m := _BARE_KEY.match(lines[i].strip())) is not None and m["key"] == name
+        ]
+        again = f" (first on line {before[0]})" if before and name else ""
+        if table:
+            return f"{where}; table [{name}] is declared twice{again}: merge the two"
+        return f"{where}; key {name!r} is given twice{again}: keep one"
+    if name and not name.isascii() and not name.startswith(('"', "'")):
+        return (
+            f"{where}; a key with characters beyond A-Z, a-z, 0-9, '_' and '-' must be "
+            f'quoted ("{name}" = ...)'
+        )
+    bare = _BARE_DECIMAL.search(shown)
+    if found["what"] == "Invalid value" and bare is not None:
+        return f"{where}; TOML numbers need a digit before the point: write 0{bare[1]}"
+    return f"{where}; check the brackets, quotes and '=' on that line"
 
 
 def to_json(document: dict) -> str:

@@ -55,6 +55,10 @@ SIGMA_RANGE_MM = (1e-6, 1e3)
 #: Link lengths accepted (mm): from a micrometre to 10 km.
 LINK_LENGTH_RANGE_MM = (1e-3, 1e7)
 
+#: A robot arm whose links add up to less than this (mm) was almost surely written in
+#: metres (a 0.66 m arm as 0.66 mm): the smallest desktop arms reach about 10 cm.
+METRE_REACH_MM = 10.0
+
 #: Encoder noise accepted (1 std, deg): 0 to 10 deg.  An encoder that reads a joint
 #: worse than 10 deg is no encoder; such a value is a unit mistake (mdeg, arcsec).
 JOINT_SIGMA_MAX_DEG = 10.0
@@ -276,6 +280,20 @@ def unknown_parameter(name: str, names: Sequence[str], arm_name: str) -> str:
     return message
 
 
+def _metre_lengths_warning(path, lengths: list[float]) -> ArmcalWarning | None:
+    """``lengths-in-metres`` when the links add up to less than :data:`METRE_REACH_MM`."""
+    reach = sum(lengths)
+    if reach >= METRE_REACH_MM:
+        return None
+    shown = ", ".join(f"{1000 * v:g}" for v in lengths)
+    return ArmcalWarning(
+        "lengths-in-metres",
+        f"{os.fspath(path)}: key 'link_lengths_mm': the links add up to {reach:g} mm, which "
+        f"looks like metres; give the lengths in mm (e.g. [{shown}]): as written, the arm "
+        f"reaches {reach:g} mm and every measured point in mm lies far beyond it",
+    )
+
+
 def _radian_limits_warning(path, raw_limits: list[tuple[float, float]]) -> ArmcalWarning | None:
     """``limits-radians`` when every joint limit lies within :data:`RADIAN_LIMIT_BOUND`."""
     if not all(abs(v) <= RADIAN_LIMIT_BOUND for pair in raw_limits for v in pair):
@@ -355,7 +373,8 @@ def load_robot(name_or_path: str | os.PathLike) -> RobotSpec:
     name = data.get("name", "robot" if key == STDIO else path.stem)
     if not isinstance(name, str) or not name.strip():
         raise fail(path, f"key 'name': expected a non-empty string, got {name!r}")
-    warnings: list[ArmcalWarning] = []
+    metres = _metre_lengths_warning(path, lengths)
+    warnings: list[ArmcalWarning] = [] if metres is None else [metres]
     limits = None
     if "joint_limits_deg" in data:
         raw = data["joint_limits_deg"]

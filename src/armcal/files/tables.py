@@ -26,7 +26,7 @@ from ..models import (
     PlanarArm,
 )
 from .common import MAX_ABS_VALUE, fail, read_text, suggest
-from .robots import RADIAN_LIMIT_BOUND, SIGMA_RANGE_MM
+from .robots import METRE_REACH_MM, RADIAN_LIMIT_BOUND, SIGMA_RANGE_MM
 
 __all__ = [
     "INSTRUMENT_RANGE",
@@ -292,8 +292,25 @@ def _unit_hint(name: str, allowed: Sequence[str]) -> str:
     return f"positions are read in mm: name the column {fixed} and give millimetres; "
 
 
-def _read_csv(path, arm: PlanarArm, what: str, limit_tol_deg: float = 0.0) -> _Table:
+def _from(arm_from: str | None) -> str:
+    """`` of the calibration cal.json``, or nothing for an arm from ``--robot``."""
+    return "" if arm_from is None else f" of {arm_from}"
+
+
+def _other_robot(arm_from: str | None) -> str:
+    """How to give the robot measured, where the arm came from ``arm_from``."""
+    if arm_from is None:
+        return "pass the matching --robot"
+    return f"pass a calibration of the robot measured ({arm_from} is of another arm)"
+
+
+def _read_csv(
+    path, arm: PlanarArm, what: str, limit_tol_deg: float = 0.0, arm_from: str | None = None
+) -> _Table:
     """Validate a CSV of kind ``what`` (a key of :data:`armcal.formats.COLUMNS`).
+
+    ``arm_from`` names where the arm came from when not from ``--robot`` (``"the
+    calibration cal.json"``), for the errors that blame a wrong robot.
 
     Its joint columns and required columns must be there; its optional text and
     numeric columns may be.  A joint angle beyond its limit by at most
@@ -341,7 +358,8 @@ def _read_csv(path, arm: PlanarArm, what: str, limit_tol_deg: float = 0.0) -> _T
         raise fail(
             path,
             f"has {len(joints)} joint columns (q1_deg..q{len(joints)}_deg) but robot "
-            f"{arm.name} has {arm.n_joints} joints; pass the matching --robot or fix the header",
+            f"{arm.name}{_from(arm_from)} has {arm.n_joints} joints; {_other_robot(arm_from)} "
+            "or fix the header",
         )
     for name in expected:
         if name not in header:
@@ -493,15 +511,20 @@ class Program:
     force_n: np.ndarray | None = None
 
 
-def read_program(path: str | os.PathLike, arm: PlanarArm) -> Program:
+def read_program(
+    path: str | os.PathLike, arm: PlanarArm, *, arm_from: str | None = None
+) -> Program:
     """Read a program CSV: ``q1_deg..qn_deg``; optional ``pose``, ``target`` and load columns.
+
+    ``arm_from`` names where ``arm`` came from when not from ``--robot`` (``"the
+    calibration cal.json"``), for the errors that blame a wrong robot.
 
     Raises
     ------
     InputError
         For a malformed file, a command outside the joint limits or an unknown target.
     """
-    table = _read_csv(path, arm, "program")
+    table = _read_csv(path, arm, "program", arm_from=arm_from)
     targets = table.texts.get("target")
     if targets is not None:
         if not arm.targets:
@@ -556,7 +579,9 @@ def _beyond_limits_warning(path, arm: PlanarArm, beyond) -> ArmcalWarning:
     )
 
 
-def _check_reach(path, arm: PlanarArm, xy: np.ndarray, lines: list[int]) -> None:
+def _check_reach(
+    path, arm: PlanarArm, xy: np.ndarray, lines: list[int], arm_from: str | None
+) -> None:
     """Refuse a measured point no arm of this geometry can reach (see :data:`REACH_MARGIN`).
 
     Without a base offset the base is the instrument's origin, and every tip lies
@@ -579,7 +604,14 @@ def _check_reach(path, arm: PlanarArm, xy: np.ndarray, lines: list[int]) -> None
     c = int(np.argmax(np.abs(xy[r] - center)))
     column = ("x_mm", "y_mm", "z_mm")[c]
     fix = "check the value and the unit (mm)"
-    if not arm.base_offset and distance[r] <= INSTRUMENT_RANGE * reach:
+    if arm_from is not None:
+        fix = f"is {arm_from} of the arm measured? If so, {fix}"
+    elif distance[r] <= 1000 * limit and reach < METRE_REACH_MM:
+        fix = (
+            f"the robot's links add up to {reach:g} mm: if the robot file's link_lengths_mm "
+            "are in metres, write them in mm"
+        )
+    elif not arm.base_offset and distance[r] <= INSTRUMENT_RANGE * reach:
         fix += (
             "; if the instrument's origin is not at the arm's base (a laser tracker, a camera), "
             "set base_offset = true in the robot file"
@@ -587,13 +619,15 @@ def _check_reach(path, arm: PlanarArm, xy: np.ndarray, lines: list[int]) -> None
     raise fail(
         path,
         f"row {r + 1} (line {lines[r]}), column {column}: {xy[r, c]:g} puts the tip "
-        f"{distance[r]:.4g} mm {where}, beyond the reach of {arm.name} ("
+        f"{distance[r]:.4g} mm {where}, beyond the reach of {arm.name}{_from(arm_from)} ("
         f"{'2 x ' if arm.base_offset else ''}{reach:g} mm, +{100 * REACH_MARGIN:g} % for "
         f"deviations: {limit:.4g} mm); {fix}",
     )
 
 
-def read_measurements(path: str | os.PathLike, arm: PlanarArm) -> Measurements:
+def read_measurements(
+    path: str | os.PathLike, arm: PlanarArm, *, arm_from: str | None = None
+) -> Measurements:
     """Read a measurements CSV: ``q1_deg..qn_deg,x_mm,y_mm``, optional ``pose`` and ``sigma_mm``.
 
     Parameters
@@ -601,6 +635,9 @@ def read_measurements(path: str | os.PathLike, arm: PlanarArm) -> Measurements:
     path : str or path
     arm : PlanarArm
         The robot measured: its joint count, limits, link lengths, base offset.
+    arm_from : str, optional
+        Where ``arm`` came from when not from ``--robot`` (``"the calibration
+        cal.json"``), for the errors that blame a wrong robot.
 
     Returns
     -------
@@ -616,7 +653,9 @@ def read_measurements(path: str | os.PathLike, arm: PlanarArm) -> Measurements:
         :data:`SIGMA_RANGE_MM`; a point no arm of this geometry can reach
         (:data:`REACH_MARGIN`).
     """
-    table = _read_csv(path, arm, "measurements", limit_tol_deg=LIMIT_TOLERANCE_DEG)
+    table = _read_csv(
+        path, arm, "measurements", limit_tol_deg=LIMIT_TOLERANCE_DEG, arm_from=arm_from
+    )
     n = arm.n_joints
     values = table.values
     m = values.shape[0]
@@ -638,9 +677,9 @@ def read_measurements(path: str | os.PathLike, arm: PlanarArm) -> Measurements:
     if targets is not None:
         _check_target_labels(path, arm, targets, table.lines)
     if z is None:
-        _check_reach(path, arm, xy, table.lines)
+        _check_reach(path, arm, xy, table.lines, arm_from)
     else:
-        _check_reach(path, arm, np.column_stack([xy, z]), table.lines)
+        _check_reach(path, arm, np.column_stack([xy, z]), table.lines, arm_from)
     warnings = []
     if table.beyond:
         warnings.append(_beyond_limits_warning(path, arm, table.beyond))

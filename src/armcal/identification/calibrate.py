@@ -36,9 +36,11 @@ from .judgement import (
     few_dof_warning,
     goodness_of_fit,
     inconsistent_fit_warning,
+    most_disagree,
     nested_test,
     not_converged_warning,
     outlier_warning,
+    row_noun,
     unseen_warning,
 )
 from .problem import Problem, reference_sigma
@@ -84,6 +86,45 @@ def _freed_fit(
     if freed_chi2 * FREED_IMPROVEMENT > chi2:
         return None
     return freed_chi2, model.point_dim * len(points) - freed.n_free
+
+
+#: The mirror images of measured points an instrument's set-up commonly produces,
+#: as (what happened, the point columns that undo it, their signs): x and y columns
+#: swapped, and the y axis flipped (a camera's image y points down).  In a frame
+#: the fit registers (a rotation), the two are the same mirror.
+MIRRORS = (
+    ("x and y are swapped", (1, 0), (1.0, 1.0)),
+    ("the y axis is flipped (a camera's image y points down)", (0, 1), (1.0, -1.0)),
+)
+
+
+def _mirrored_fit(
+    problem: Problem, used: np.ndarray, sigma: float, chi2: float
+) -> tuple[str, float, int] | None:
+    """What mirrors the points, with chi-square and dof of the fit to them mirrored back.
+
+    Tried when most poses disagree: a mirrored frame moves every point.  None
+    unless undoing a mirror of :data:`MIRRORS` lowers chi-square
+    :data:`FREED_IMPROVEMENT` times; the best one is named (both, when the fit's
+    registration makes them the same, to within a factor 2).
+    """
+    model = problem.model
+    dim = model.point_dim
+    conditions = problem.rows(used)
+    points = problem.points[used]
+    found = []
+    for what, order, signs in MIRRORS:
+        mirrored = points.copy()
+        mirrored[:, :2] = points[:, order] * np.asarray(signs)
+        fit = Problem(model, conditions, mirrored, problem.method, problem.tol, problem.max_iter)
+        whitened = fit.fit(np.ones(len(points), dtype=bool)).whitened
+        found.append((float(np.sum(whitened**2)) / sigma**2, what))
+    best, what = min(found)
+    if best * FREED_IMPROVEMENT > chi2:
+        return None
+    if all(c <= 2 * best for c, _ in found):
+        what = "x and y are swapped, or one axis is flipped (a camera's image y points down)"
+    return what, best, dim * len(points) - model.n_free
 
 
 def identify(
@@ -269,21 +310,36 @@ def identify(
     if outliers:
         warnings.append(outlier_warning(outliers, robust=robust))
     warnings.extend(extra)
-    few = few_dof_warning(int(np.count_nonzero(used)), dof, n_free, dim) if given else None
+    noun = row_noun(conditions.target)
+    per_pose = dim * max(len(model.target_labels), 1)
+    few = (
+        few_dof_warning(int(np.count_nonzero(used)), dof, n_free, per_pose, noun)
+        if given
+        else None
+    )
     if few is not None:
         warnings.append(few)
     if not fit_test.consistent:
         suggested = sigma_value * float(np.sqrt((fit_test.chi2 or 0.0) / max(dof, 1)))
-        freed = _freed_fit(problem, used, sigma_value, fit_test.chi2 or 0.0)
+        chi2 = fit_test.chi2 or 0.0
+        freed = _freed_fit(problem, used, sigma_value, chi2)
+        flagged_count = int(np.count_nonzero(test.flagged))
+        mirrored = (
+            _mirrored_fit(problem, used, sigma_value, chi2)
+            if freed is None and most_disagree(flagged_count, m)
+            else None
+        )
         warnings.append(
             inconsistent_fit_warning(
                 fit_test,
                 sigma_value,
                 suggested,
-                int(np.count_nonzero(test.flagged)),
+                flagged_count,
                 poses=m,
                 held=model.fixed,
                 freed=freed,
+                mirrored=mirrored,
+                rows=noun,
             )
         )
     g = np.zeros((model.n_params, n_free))

@@ -316,17 +316,27 @@ def inconsistent_fit_warning(
     poses: int,
     held: Sequence[str] = (),
     freed: tuple[float, int] | None = None,
+    mirrored: tuple[str, float, int] | None = None,
+    rows: str = "poses",
 ) -> ArmcalWarning:
     """``fit-inconsistent``: the chi-square test failed, and the likely causes in order.
 
-    ``flagged`` poses fail the outlier test; when they are at least half of the
-    ``poses``, they are no outliers and a robust fit cannot help, so the
-    message says so instead of advising one.  ``held`` are the fixed
-    parameters' names; ``freed`` is the chi-square and its degrees of freedom of the same fit with
-    them free, given when freeing them explains the misfit: it is then the
-    first cause.
+    ``flagged`` of the ``poses`` data rows (which are ``rows``: :func:`row_noun`) fail
+    the outlier test; when they are at least half, they are no outliers and a
+    robust fit cannot help, so the message says so instead of advising one.
+    ``held`` are the fixed parameters' names; ``freed`` is the chi-square and its
+    degrees of freedom of the same fit with them free, given when freeing them
+    explains the misfit: it is then the first cause.  ``mirrored`` is what mirrors
+    the measured points, with the chi-square and dof of the fit with that undone:
+    it is then the first cause.
     """
     causes = []
+    if mirrored is not None:
+        what, chi2, dof = mirrored
+        causes.append(
+            f"the measurements are mirrored: {what}; undone, chi2 = {chi2:.4g} on {dof} "
+            "degrees of freedom; fix the instrument's export or its columns (x_mm, y_mm)"
+        )
     if freed is not None:
         chi2, dof = freed
         one = len(held) == 1
@@ -337,7 +347,7 @@ def inconsistent_fit_warning(
         )
     if most_disagree(flagged, poses):
         causes.append(
-            f"not outliers: {flagged} of {poses} poses disagree with the fit, so a robust fit "
+            f"not outliers: {flagged} of {poses} {rows} disagree with the fit, so a robust fit "
             "cannot help"
         )
     else:
@@ -357,14 +367,25 @@ def inconsistent_fit_warning(
     )
 
 
-def few_dof_warning(poses: int, dof: int, n_free: int, per_pose: int) -> ArmcalWarning | None:
-    """``few-dof`` below :data:`FEW_DOF` residual degrees of freedom: how many poses to add."""
+def row_noun(target: np.ndarray | None) -> str:
+    """What a data row is: a pose, or with several targets one target's point of a pose."""
+    return "poses" if target is None else "measurements"
+
+
+def few_dof_warning(
+    poses: int, dof: int, n_free: int, per_pose: int, rows: str = "poses"
+) -> ArmcalWarning | None:
+    """``few-dof`` below :data:`FEW_DOF` residual degrees of freedom: how many poses to add.
+
+    ``poses`` counts data rows, which are ``rows`` (:func:`row_noun`); ``per_pose`` is
+    the equations one more pose gives.
+    """
     if dof >= FEW_DOF:
         return None
     more = -(-(FEW_DOF - dof) // per_pose)
     return ArmcalWarning(
         "few-dof",
-        f"{poses} poses leave {dof} degrees of freedom for {n_free} parameters: too few to "
+        f"{poses} {rows} leave {dof} degrees of freedom for {n_free} parameters: too few to "
         f"judge the fit against sigma or to find outliers; measure at least {more} more "
         f"{'pose' if more == 1 else 'poses'}",
     )

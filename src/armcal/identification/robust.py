@@ -18,7 +18,7 @@ import numpy as np
 
 from ..errors import ArmcalWarning
 from ..numerics import point_norms
-from .judgement import fixed_parameters, most_disagree
+from .judgement import fixed_parameters, most_disagree, row_noun
 from .problem import Fit, Problem
 
 __all__ = [
@@ -63,7 +63,8 @@ def misfit_warning(problem: Problem, disagreeing: int) -> ArmcalWarning:
     first = f"{fixed_parameters(held)}, " if held else ""
     return ArmcalWarning(
         "model-misfit",
-        f"{disagreeing} of {problem.m} poses disagree with the fit: that is a model problem, "
+        f"{disagreeing} of {problem.m} {row_noun(problem.conditions.target)} disagree with the "
+        "fit: that is a model problem, "
         f"not outliers, so the robust fit leaves none out; check, in order: {first}a unit, the "
         "robot file (base offset, link lengths, targets), compliance under load",
     )

@@ -68,9 +68,17 @@ def format_calibration(cal: Calibration, *, truth: np.ndarray | None = None) -> 
     if truth is not None:
         header += f"{'truth':>12}{'error/std':>11}"
     used = cal.n_used
-    poses = f"{cal.n_poses} poses" + (
-        f" ({cal.n_poses - used} left out of the fit)" if used < cal.n_poses else ""
-    )
+    if cal.target is None:
+        poses = f"{cal.n_poses} poses"
+    else:  # a row is one target's point of a pose
+        targets = len(arm.targets)
+        poses = (
+            f"{len(set(cal.pose_labels))} poses ({cal.n_poses} measurements of "
+            f"{targets} target{'s' if targets > 1 else ''})"
+        )
+    if used < cal.n_poses:
+        rows = "" if cal.target is None else " measurements"
+        poses += f" ({cal.n_poses - used}{rows} left out of the fit)"
     lines = [
         f"calibration of {arm.name}: {poses}, {identified(arm)}"
         + (

@@ -78,7 +78,8 @@ def model_lines(arm: PlanarArm, *, plan: bool = True) -> list[str]:
         lines.append(
             f"base rotation phi0 identified, {arm.rotation_partner} held: a rotation of the base "
             f"turns every link vector like the joint offsets {_rotation_words(arm)}, so the data "
-            f"cannot tell them apart (--fix phi0 identifies {arm.rotation_partner} instead)"
+            f"cannot tell them apart; keep phi0 free, as it also holds the turn of the "
+            f"instrument's axes{_other_zero(arm)}"
         )
     noise = _noise_text(arm)
     if noise is not None:
@@ -90,6 +91,17 @@ def model_lines(arm: PlanarArm, *, plan: bool = True) -> list[str]:
             )
         lines.append(line)
     return lines
+
+
+def _other_zero(arm: PlanarArm) -> str:
+    """How to take another joint offset's zero as the arm's frame, where the map has one."""
+    k = arm.n_links
+    on = arm.rotation_direction[k : 2 * k] != 0
+    names = [n for n, o in zip(arm.param_names[k : 2 * k], on, strict=True) if o]
+    others = [n for n in names if n != arm.rotation_partner]
+    if not others:
+        return ""
+    return f" (to take {others[0]}'s zero as the arm's instead, --fix {others[0]})"
 
 
 def _rotation_words(arm: PlanarArm) -> str:

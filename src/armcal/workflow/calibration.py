@@ -178,16 +178,13 @@ def _ignored_loads(
     """A warning when the data carry loads that a rigid model cannot use."""
     if (spec.elastic is not None and compliance) or not meas.has_loads:
         return []
-    why = (
-        action("geometry-only")
-        if spec.elastic is not None
-        else "the robot file has no [elastostatic] table"
-    )
+    if spec.elastic is not None:
+        why = f"{action('geometry-only')}; leave it out to fit the joints' compliance"
+    else:
+        why = "the robot file has no [elastostatic] table; add one to fit the joints' compliance"
     return [
         ArmcalWarning(
-            "loads-ignored",
-            f"{source}: the payload_kg/fx_N/fy_N columns are not used: {why}; "
-            "add [elastostatic] to the robot file to fit the joints' compliance",
+            "loads-ignored", f"{source}: the payload_kg/fx_N/fy_N columns are not used: {why}"
         )
     ]
 
