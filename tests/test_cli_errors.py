@@ -783,6 +783,24 @@ CASES = [
         ("identify", "--robot", "paper-4link", "-o", "cal.json"),
         ("--measurements",),
     ),
+    case(  # synthesize's data are CSV: --json alone once printed CSV
+        "usage-synthesize-json-without-output",
+        {"plan.csv": VALID_PLAN},
+        ("synthesize", "--plan", "plan.csv", "--json"),
+        ("synthesize --json", "give -o meas.csv"),
+    ),
+    case(
+        "synthesize-output-named-json",
+        {"plan.csv": VALID_PLAN},
+        ("synthesize", "--plan", "plan.csv", "-o", "meas.json"),
+        ("-o meas.json", "CSV table", "ending in .csv"),
+    ),
+    case(  # 2 targets: 4 equations per pose, not 2
+        "design-too-few-poses-with-targets",
+        {"robot.toml": ROBOT_TOML + "[targets]\nA = { length_mm = 100 }\nB = {length_mm = 60}\n"},
+        ("design", "--robot", "robot.toml", "--poses", "2"),
+        ("2 poses give 8 equations for the 10 parameters", "--poses 3"),
+    ),
     case(
         "usage-synthesize-sigma-nan",
         {"plan.csv": VALID_PLAN},
@@ -1108,12 +1126,6 @@ CASES += [
         ("dl9",),
     ),
     case(
-        "poses-needed-compliance-robot",
-        {"robot.toml": ELASTIC_TOML},
-        ("poses-needed", "--robot", "robot.toml", "--length-std-mm", "0.01"),
-        ("robot.toml", "design"),
-    ),
-    case(
         "check-compliance-one-trial",
         {},
         ("check-compliance", "--trials", "1"),
@@ -1187,6 +1199,12 @@ CASES += [
             "beyond the reach of paper-4link of the calibration cal.json",
             "is the calibration cal.json of the arm measured?",
         ),
+    ),
+    case(  # the last link's parameter splits into one per target: name them, not dl3
+        "fix-last-link-with-targets",
+        {"robot.toml": TARGETS_TOML, "meas.csv": TARGET_MEAS},
+        (*IDENTIFY_ROBOT, "--fix", "dl4"),
+        ("with targets it is one per target (dl4@A)", "--fix dl4@A;"),  # only A is measured
     ),
     case(
         "compensate-program-of-another-robot",

@@ -358,3 +358,40 @@ def test_a_robot_file_in_metres_is_named_on_every_command(tmp_path: Path) -> Non
     message = _warnings(run)["lengths-in-metres"]
     assert "the links add up to 0.56 mm, which looks like metres" in message
     assert "[260, 180, 120]" in message
+
+
+@pytest.mark.slow  # four designs of poses and payloads, about 10 s
+def test_poses_needed_sizes_a_robot_with_compliance(lumped: Path) -> None:
+    """Once refused; now plans of poses and payloads, checked by evaluate's own std."""
+    run = run_cli(lumped, "poses-needed", "--robot", "robot.toml", "--length-std-mm", "0.008",
+                  "-o", "plan.csv", "--json")  # fmt: skip
+    assert run.returncode == 0, run.stderr
+    found = json.loads(run.stdout)
+    header = (lumped / "plan.csv").read_text().splitlines()[0]
+    assert header == "q1_deg,q2_deg,q3_deg,payload_kg"
+    checked = run_cli(lumped, "evaluate", "--robot", "robot.toml", "--plan", "plan.csv", "--json")
+    assert checked.returncode == 0, checked.stderr
+    quality = json.loads(checked.stdout)
+    largest = max(v for k, v in quality["predicted_std"].items() if k.startswith("dl"))
+    assert largest <= 0.008 * (1 + 1e-9)
+    assert found["with_one_pose_less"] > 0.008  # one pose fewer does not reach it
+    assert found["poses"] == len((lumped / "plan.csv").read_text().splitlines()) - 1
+
+
+def test_check_compliance_with_few_trials_says_the_ratios_mean_little(tmp_path: Path) -> None:
+    """--trials 2 was accepted in silence; an empirical std of N trials is known to
+    about 1/sqrt(2 (N - 1)): 100 % at N = 3."""
+    run = run_cli(tmp_path, "check-compliance", "--trials", "3", "--json")
+    assert run.returncode == 0, run.stderr
+    assert "known to about +-50 %" in _warnings(run)["few-trials"]
+
+
+def test_a_robot_file_may_not_hold_phi0(tmp_path: Path) -> None:
+    """The policy: phi0 belongs to the set-up; the file says so, --fix phi0 stays."""
+    (tmp_path / "robot.toml").write_text(
+        'link_lengths_mm = [260.0, 180.0]\n[identify]\nfixed = ["phi0"]\n'
+    )
+    run = run_cli(tmp_path, "design", "--robot", "robot.toml", "--poses", "4")
+    assert run.returncode == 2
+    assert "belongs to the set-up, not the robot" in run.stderr
+    assert "use --fix phi0" in run.stderr

@@ -382,7 +382,7 @@ def test_a_fixed_parameter_the_truth_moves_is_a_warning(arm4, paper_truth4):
     """dl4 fixed but the virtual robot's dl4 = 0.7 mm: misspecified, and said so."""
     arm = arm4.replace(sigma=SIGMA, fixed=("dl4",))
     q = random_plan(arm4, 20, rng=5)
-    result = sim.monte_carlo(arm, q, paper_truth4, None, 50, rng=1)
+    result = sim.monte_carlo(arm, q, paper_truth4, None, 100, rng=1)
     assert [w.code for w in result.warnings] == ["fixed-not-nominal"]
     assert "dl4 = 0.7 mm" in result.warnings[0].message
     assert result.bias[3] == pytest.approx(-0.7, rel=1e-12)

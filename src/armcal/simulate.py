@@ -46,6 +46,11 @@ __all__ = [
 CHUNK_BYTES = 32 * 2**20
 
 
+#: Below this many trials a Monte Carlo warns ``few-trials``: an empirical std of N
+#: normal trials has a relative standard error of about ``1 / sqrt(2 (N - 1))``, 7 %
+#: at 100, so a std ratio then shows only a gross disagreement with the prediction.
+FEW_TRIALS = 100
+
 #: Quantiles of the positioning error reported by :class:`PositionErrors`.
 POSITION_QUANTILES = (0.5, 0.95, 0.99)
 
@@ -574,6 +579,16 @@ def monte_carlo(
     seconds = time.perf_counter() - start
     warnings: list[ArmcalWarning] = [] if conditioning is None else [conditioning]
     warnings.extend(_fixed_truth_warning(model, truth))
+    if trials < FEW_TRIALS:
+        spread = 100 / np.sqrt(2 * (trials - 1))
+        warnings.append(
+            ArmcalWarning(
+                "few-trials",
+                f"with {trials} trials each empirical std is known to about +-{spread:.0f} % "
+                f"(1 std), so a std ratio far from 1 may be chance; use --trials 1000 or more "
+                f"(+-{100 / np.sqrt(2 * 999):.1f} %)",
+            )
+        )
     if not_converged:
         warnings.append(
             ArmcalWarning(

@@ -153,6 +153,16 @@ def _written(*paths: str | None) -> list[str]:
 
 def synthesize(args: argparse.Namespace) -> None:
     """``armcal synthesize``: measurements of a virtual robot."""
+    if args.json and args.output in (None, STDIO):
+        raise ArmcalError(
+            "synthesize --json: without -o the measurements (a CSV table) are the output on "
+            "stdout; give -o meas.csv, and --json prints the summary as JSON"
+        )
+    if args.output is not None and args.output.lower().endswith(".json"):
+        raise ArmcalError(
+            f"-o {args.output}: synthesize writes measurements as a CSV table (--json changes "
+            "only the summary on stdout); give a name ending in .csv"
+        )
     spec = load_robot(args.robot)
     q, payload = _plan(args.plan, spec)
     model, loads = plan_model(spec, spec.arm, q.shape[0], payload, virtual=True)
@@ -332,10 +342,11 @@ def poses_needed(args: argparse.Namespace) -> None:
         seed=args.seed,
         test_q=_test_poses(args, spec),
         max_poses=args.max_poses,
+        progress=ProgressBar("poses-needed"),
     )
     document, lines = poses_needed_summary(found, arm, seconds)
     if args.output is not None:
-        atomic_write(args.output, format_plan_csv(found.plan))
+        atomic_write(args.output, format_plan_csv(found.plan, found.payload_kg))
         lines.append(f"wrote {args.output}")
     emit(args, document, "\n".join(lines), spec.warnings)
 
@@ -374,7 +385,7 @@ def check_compliance(args: argparse.Namespace) -> None:
     from ..compliance_check import format_check
 
     result = run_check(seed=args.seed, trials=args.trials)
-    emit(args, result.to_dict(), format_check(result))
+    emit(args, result.to_dict(), format_check(result), result.monte_carlo.warnings)
 
 
 def demo(args: argparse.Namespace) -> None:

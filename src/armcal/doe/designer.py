@@ -236,12 +236,13 @@ def design(
     if order not in ORDERS:
         raise ArmcalError(f"unknown order {order!r}; choose one of {', '.join(ORDERS)}")
     p = model.n_free
-    min_poses = -(-p // 2)
+    per_pose = model.point_dim * max(len(model.target_labels), 1)  # every target measured
+    min_poses = -(-p // per_pose)
     if m < min_poses:
         free = "" if p == model.n_params else " free"
         raise ArmcalError(
-            f"{m} poses give {2 * m} equations for the {p}{free} parameters of {model.name}; "
-            f"use --poses {min_poses} or more"
+            f"{m} poses give {per_pose * m} equations for the {p}{free} parameters of "
+            f"{model.name}; use --poses {min_poses} or more"
         )
     rng = np.random.default_rng(rng)
     notes: list[str] = []

@@ -250,10 +250,11 @@ def design_with_loads(
     rng = np.random.default_rng(rng)
     design_model, values = chosen
     p = design_model.n_free
-    if 2 * m < p:
+    per_pose = design_model.point_dim * max(len(design_model.target_labels), 1)
+    if per_pose * m < p:
         raise ArmcalError(
-            f"{m} poses give {2 * m} equations for {p} parameters "
-            f"({', '.join(design_model.param_names)}); design at least {-(-p // 2)} poses"
+            f"{m} poses give {per_pose * m} equations for {p} parameters "
+            f"({', '.join(design_model.param_names)}); design at least {-(-p // per_pose)} poses"
         )
     pool = feasible_poses(model, candidates, rng=rng)
     pool_q = np.repeat(pool, values.size, axis=0)

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Literal
 
@@ -10,8 +11,10 @@ import numpy as np
 
 from ..criteria import position_rms, predicted_std
 from ..errors import ArmcalError
-from ..models import FitModel
-from .designer import design
+from ..models import FitModel, Loads
+from ..progress import ProgressCallback
+from .designer import Design, design
+from .loads import design_with_loads
 from .order import order_poses
 from .plans import random_plan
 
@@ -59,13 +62,20 @@ def _check_requirement(requirement: str) -> None:
 
 
 def accuracy_metric(
-    model: FitModel, q: np.ndarray, requirement: str, sigma: float, test_q: np.ndarray
+    model: FitModel,
+    q: np.ndarray,
+    requirement: str,
+    sigma: float,
+    test_q: np.ndarray,
+    *,
+    loads: Loads | None = None,
 ) -> float:
-    """Accuracy ``requirement`` (a key of :data:`REQUIREMENTS`) of plan ``q``; inf if singular."""
+    """Accuracy ``requirement`` (a key of :data:`REQUIREMENTS`) of plan ``q`` under its
+    ``loads``; inf if singular."""
     _check_requirement(requirement)
     if requirement == "position_rms_mm":
-        return position_rms(model, q, test_q, sigma)
-    std = predicted_std(model, q, sigma)  # inf when the plan is singular
+        return position_rms(model, q, test_q, sigma, loads=loads)
+    std = predicted_std(model, q, sigma, loads=loads)  # inf when the plan is singular
     # every dl (or dq) parameter, targets' dl_n@T and dq_n@T included
     kind = "dl" if requirement == "length_std_mm" else "dq"
     picked = [i for i, name in enumerate(model.param_names) if name.startswith(kind)]
@@ -98,6 +108,9 @@ class PosesNeeded:
         (:func:`armcal.doe.order.order_poses`).
     evaluated : dict of int to float
         Every ``m`` tried and the accuracy of its best plan.
+    payload_kg : ndarray, shape (poses,), optional
+        Every pose's payload, for a model whose points depend on the load (the
+        design chooses them with the poses, :func:`armcal.doe.design_with_loads`).
     """
 
     requirement: str
@@ -109,6 +122,18 @@ class PosesNeeded:
     method: str
     plan: np.ndarray
     evaluated: dict[int, float]
+    payload_kg: np.ndarray | None = None
+
+
+def _best_plan(
+    model: FitModel, m: int, rng: np.random.Generator, payloads: Sequence[float] | None
+) -> tuple[Design, Loads | None]:
+    """The best ``m``-pose plan, and its loads where the design chooses the payloads."""
+    if model.design_loads(payloads) is None:
+        return design(model, m, rng=rng, with_certificate=False, order="none"), None
+    made = design_with_loads(model, m, payloads=payloads, rng=rng, order="none")
+    assert made.payload_kg is not None
+    return made, Loads.create(m, made.payload_kg)
 
 
 def poses_needed(
@@ -120,6 +145,8 @@ def poses_needed(
     rng: np.random.Generator | int | None = None,
     test_q: np.ndarray | None = None,
     max_poses: int = 5000,
+    payloads: Sequence[float] | None = None,
+    progress: ProgressCallback | None = None,
 ) -> PosesNeeded:
     """The smallest ``m`` whose best plan (:func:`armcal.doe.design`) reaches ``goal``.
 
@@ -138,6 +165,15 @@ def poses_needed(
         Poses for ``position_rms_mm`` (default: 1000 uniform within the limits).
     max_poses : int
         Give up beyond this many poses.
+    payloads : sequence of float, optional
+        For a model whose points depend on the load (joint compliance): the
+        payloads (kg) a pose may carry, chosen with the poses
+        (:func:`armcal.doe.design_with_loads`); default 0 and the model's payload.
+    progress : callable, optional
+        Called after each size is designed with ``(done, 1000)``: thousandths of
+        ``tried / (tried + left)``, never decreasing, ``left`` the designs the
+        search still expects (2 while it jumps, then the bisection's ``log2`` of
+        the sizes left).
 
     Returns
     -------
@@ -192,18 +228,24 @@ def poses_needed(
     rng = np.random.default_rng(rng)
     if test_q is None:
         test_q = random_plan(model, 1000, rng=rng)
-    min_poses = -(-model.n_free // 2)
-    plans: dict[int, tuple[np.ndarray, str, float]] = {}
+    chosen = model.design_loads(payloads)
+    fitted = model if chosen is None else chosen[0]  # what a plan of poses and loads fits
+    min_poses = -(-fitted.n_free // (model.point_dim * max(len(model.target_labels), 1)))
+    plans: dict[int, tuple[Design, float]] = {}
+
+    bracket = [0, 0]  # a size known to fail and one known to reach, once known
+    shown = [0]
 
     def best(m: int) -> float:
         if m not in plans:
-            made = design(model, m, rng=rng, with_certificate=False, order="none")
-            plans[m] = (
-                made.q,
-                made.method,
-                accuracy_metric(model, made.q, requirement, sigma, test_q),
-            )
-        return plans[m][2]
+            made, loads = _best_plan(model, m, rng, payloads)
+            value = accuracy_metric(made.model, made.q, requirement, sigma, test_q, loads=loads)
+            plans[m] = (made, value)
+            if progress is not None:  # in thousandths, never going back
+                left = max(bracket[1] - bracket[0] - 1, 1).bit_length() if bracket[1] else 2
+                shown[0] = max(shown[0], 1000 * len(plans) // (len(plans) + left))
+                progress(shown[0], 1000)
+        return plans[m][1]
 
     def reaches(m: int) -> bool:
         return best(m) <= goal * (1 + REQUIREMENT_RTOL)
@@ -234,13 +276,18 @@ def poses_needed(
     # designs, not one per pose below an overshooting jump.
     low = failed
     middle = m - 1
+    bracket[:] = [low, m]
     while m - low > 1:
         if reaches(middle):
             m = middle
         else:
             low = middle
         middle = (low + m) // 2
-    q, method, achieved = plans[m]
+        bracket[:] = [low, m]
+    if progress is not None:
+        progress(len(plans), len(plans))
+    made, achieved = plans[m]
+    order = order_poses(made.q)  # only the plan kept is ordered: the order changes no accuracy
     return PosesNeeded(
         requirement=requirement,
         goal=float(goal),
@@ -248,7 +295,8 @@ def poses_needed(
         poses=m,
         achieved=achieved,
         previous=best(m - 1) if m > min_poses else math.inf,
-        method=method,
-        plan=q[order_poses(q)],  # only the plan kept is ordered: the order changes no accuracy
-        evaluated={key: value[2] for key, value in sorted(plans.items())},
+        method=made.method,
+        plan=made.q[order],
+        evaluated={key: value[1] for key, value in sorted(plans.items())},
+        payload_kg=None if made.payload_kg is None else made.payload_kg[order],
     )

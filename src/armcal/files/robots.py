@@ -251,6 +251,14 @@ def _fixed_parameters(path, table: Any, names: Sequence[str], arm_name: str) -> 
     if not isinstance(raw, list) or not all(isinstance(v, str) for v in raw):
         raise fail(path, f"key 'identify.{key}': expected a list of parameter names, got {raw!r}")
     for name in raw:
+        if name == "phi0":  # a policy: the robot file describes the robot, not a set-up
+            raise fail(
+                path,
+                f"key 'identify.{key}': phi0 is the base's turn in the instrument's axes, "
+                "which exists only with 3-D data and belongs to the set-up, not the robot; "
+                "leave it out (held, it would put the instrument's turn into the joint "
+                "offsets); to hold it for one fit, use --fix phi0",
+            )
         if name not in names:
             raise fail(path, f"key 'identify.{key}': {unknown_parameter(name, names, arm_name)}")
     chosen = set(raw)
@@ -271,7 +279,14 @@ def unknown_parameter(name: str, names: Sequence[str], arm_name: str) -> str:
     >>> unknown_parameter("x0", ("dl1", "dq1"), "arm")
     "unknown parameter 'x0'; the parameters of arm are dl1, dq1 (x0 and y0 exist only with base_offset = true)"
     """  # noqa: E501
-    hint = suggest(name, names)
+    per_target = [n for n in names if n.startswith(f"{name}@")]
+    if per_target:  # the last link's parameter, which targets split into one per target
+        hint = (
+            f"with targets it is one per target ({', '.join(per_target)}): the last link and "
+            f"each target are one vector; hold them all with --fix {','.join(per_target)}; "
+        )
+    else:
+        hint = suggest(name, names)
     message = (
         f"unknown parameter '{name}'; {hint}the parameters of {arm_name} are {', '.join(names)}"
     )

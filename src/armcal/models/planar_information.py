@@ -414,7 +414,9 @@ def check_identifiable(
     q = np.asarray(q, dtype=float)
     m = q.shape[0]
     p = arm.n_free
-    min_poses = -(-p // 2)
+    # Rows with a target each are one point; plain poses are measured at every target.
+    per_pose = 2 * (len(arm.targets) if target is None and arm.targets else 1)
+    min_poses = -(-p // per_pose)
     info = identifiability(arm, q, svd=svd, target=target)
     if info.identifiable:
         return info
@@ -422,8 +424,9 @@ def check_identifiable(
     more = f" (and {len(info.combinations) - 3} more)" if len(info.combinations) > 3 else ""
     if m < min_poses:
         why = (
-            f"{m} poses give {2 * m} equations for {p} parameters; "
-            f"measure at least {min_poses} poses"
+            f"{m} {'poses' if target is None else 'measurements'} give {per_pose * m} "
+            f"equations for {p} parameters; measure at least {min_poses} "
+            f"{'poses' if target is None else 'measurements'}"
         )
     else:
         joints = info.joints_to_vary

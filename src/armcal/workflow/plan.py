@@ -287,26 +287,23 @@ def size_plan(
     seed: int = 0,
     test_q: np.ndarray,
     max_poses: int = 5000,
+    progress: ProgressCallback | None = None,
 ) -> tuple[PosesNeeded, float]:
     """The smallest number of poses whose best plan reaches ``goal`` (and the wall time).
 
-    Raises ArmcalError for a robot with ``[elastostatic]``: sizing is for the
-    geometric model.
+    For a robot with ``[elastostatic]`` the plans are of poses and payloads,
+    designed together (:func:`armcal.doe.design_with_loads`), and the accuracy is
+    of the model with compliance.
     """
-    if spec.elastic is not None:
-        raise ArmcalError(
-            f"{spec.source}: poses-needed sizes plans of the geometric model only, and this "
-            "robot has [elastostatic]; compare the predicted std of armcal design --poses M at "
-            "a few sizes M (std falls like 1/sqrt(M))"
-        )
     start = time.perf_counter()
     found = poses_needed(
-        arm,
+        fit_model(spec, arm),
         requirement,
         goal,
         sigma=design_sigma(arm),
         rng=np.random.default_rng(seed),
         test_q=test_q,
         max_poses=max_poses,
+        progress=progress,
     )
     return found, time.perf_counter() - start
