@@ -1,4 +1,4 @@
-"""Plan figures: structure of the two panels, regions, atomic PNG output, lazy import."""
+"""Figures: plan and validation panels, what they draw and label, atomic output, lazy import."""
 
 import os
 import stat
@@ -11,10 +11,23 @@ from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.collections import LineCollection
 from matplotlib.figure import Figure
 from matplotlib.patches import Rectangle, Wedge
+from matplotlib.text import Text
 from numpy.testing import assert_allclose
 
-from armcal import Annulus, Box, InputError, PlanarArm, load_robot, orthogonal_plan, random_plan
-from armcal.plotting import plot_plan, save_figure
+from armcal import (
+    Annulus,
+    Box,
+    InputError,
+    PlanarArm,
+    load_robot,
+    orthogonal_plan,
+    random_plan,
+)
+from armcal.plotting import (
+    NUMBERED_POSES_MAX,
+    plot_plan,
+    save_figure,
+)
 from helpers import run_cli
 
 
@@ -40,8 +53,8 @@ def test_plot_plan_builtin_arm(plan):
     # each polyline runs base -> joints -> tip: n + 1 vertices
     assert all(s.shape == (arm.n_joints + 1, 2) for s in segments)
     assert_allclose([s[0] for s in segments], 0.0, atol=1e-12)
-    assert workspace.get_xlabel() == "x [mm]"
-    assert workspace.get_ylabel() == "y [mm]"
+    assert workspace.get_xlabel() == "x in base frame [mm]"
+    assert workspace.get_ylabel() == "y in base frame [mm]"
     assert not _region_patches(workspace)
     assert joint_space.get_ylabel() == "joint angle [deg]"
     labels = [t.get_text() for t in joint_space.get_xticklabels()]
@@ -90,6 +103,187 @@ def test_plot_plan_sizes_render(n, m):
 def test_plot_plan_rejects_bad_shape(shape):
     with pytest.raises(ValueError, match=r"shape \(m, 2\)"):
         plot_plan(PlanarArm([2.0, 1.0]), np.zeros(shape))
+
+
+def _texts(ax, gid: str) -> list:
+    return [t for t in ax.texts if t.get_gid() == gid]
+
+
+def _corners(text, renderer) -> np.ndarray:
+    """The four corners ``(4, 2)`` of a text's box as drawn (pixels), turned with the text.
+
+    Its window extent is the upright box round the turned text, far larger than
+    the text when the text is turned: measure it upright, then turn it about
+    its anchor (rotation_mode "anchor").  The text alone: an annotation's own
+    extent holds its leader line.
+    """
+    angle = text.get_rotation()
+    text.set_rotation(0.0)
+    box = Text.get_window_extent(text, renderer)
+    text.set_rotation(angle)
+    anchor = text.axes.transData.transform(text.xyann)
+    c, s = np.cos(np.radians(angle)), np.sin(np.radians(angle))
+    corners = np.array([[box.x0, box.y0], [box.x1, box.y0], [box.x1, box.y1], [box.x0, box.y1]])
+    return anchor + (corners - anchor) @ np.array([[c, s], [-s, c]])
+
+
+def _overlapping(texts, renderer) -> list[tuple[str, str]]:
+    """Pairs of texts whose turned boxes overlap: no edge of either separates them."""
+    boxes = [_corners(t, renderer) for t in texts]
+
+    def apart(a: np.ndarray, b: np.ndarray) -> bool:
+        for edge in (*np.diff(a[:3], axis=0), *np.diff(b[:3], axis=0)):
+            normal = np.array([-edge[1], edge[0]])
+            pa, pb = a @ normal, b @ normal
+            if pa.max() <= pb.min() or pb.max() <= pa.min():
+                return True
+        return False
+
+    return [
+        (texts[i].get_text(), texts[j].get_text())
+        for i in range(len(texts))
+        for j in range(i)
+        if not apart(boxes[i], boxes[j])
+    ]
+
+
+def _tip(lengths, q_row) -> np.ndarray:
+    """The nominal tip of a planar arm, summed link by link (mm)."""
+    angles = np.cumsum(q_row)
+    return np.array([np.sum(lengths * np.cos(angles)), np.sum(lengths * np.sin(angles))])
+
+
+def test_a_repeated_pose_is_drawn_once_and_numbered_with_its_multiplicity():
+    """design repeats a smaller plan above 120 poses; each copy was drawn on top of the last."""
+    arm = PlanarArm([2.0, 1.0])
+    a, b, c = [0.0, 0.5], [1.0, -0.5], [-1.0, 1.5]
+    q = np.array([a, b, b, b, c, a])  # pose a again at the end, b three times in a row
+    workspace = plot_plan(arm, q).axes[0]
+    segments = _pose_lines(workspace).get_segments()
+    assert len(segments) == 3
+    labels = {t.get_text(): t for t in _texts(workspace, "pose number")}
+    assert set(labels) == {"1 ×2", "2 ×3", "5"}  # numbered by the row each first appears in
+    for text, row in (("1 ×2", a), ("2 ×3", b), ("5", c)):
+        assert_allclose(labels[text].xy, _tip(np.array([2.0, 1.0]), row), atol=1e-12)
+
+
+@pytest.mark.parametrize("copies", [1, 3])
+def test_pose_numbers_keep_clear_of_each_other_and_of_the_base(copies):
+    """The demo's numbers overlapped where folded poses put their tips close to the base."""
+    arm = load_robot("paper-4link").arm
+    q = np.repeat(orthogonal_plan(arm, 20), copies, axis=0)
+    fig = plot_plan(arm, q, numbers=True)
+    renderer = FigureCanvasAgg(fig).get_renderer()
+    fig.draw(renderer)
+    labels = _texts(fig.axes[0], "pose number")
+    suffix = f" ×{copies}" if copies > 1 else ""
+    assert [t.get_text() for t in labels] == [f"{copies * i + 1}{suffix}" for i in range(20)]
+    reach = arm.link_lengths.sum()
+    assert all(np.hypot(*t.xyann) >= reach for t in labels)  # outside the arm's reach
+    assert not _overlapping(labels, renderer)
+
+
+def test_the_most_poses_numbered_keep_clear_even_with_long_labels():
+    arm = PlanarArm([300.0, 200.0, 100.0])
+    q = np.repeat(random_plan(arm, NUMBERED_POSES_MAX, rng=3), 12, axis=0)
+    fig = plot_plan(arm, q)
+    renderer = FigureCanvasAgg(fig).get_renderer()
+    fig.draw(renderer)
+    labels = _texts(fig.axes[0], "pose number")
+    assert len(labels) == NUMBERED_POSES_MAX and labels[-1].get_text() == f"{q.shape[0] - 11} ×12"
+    assert not _overlapping(labels, renderer)
+
+
+def test_a_plan_of_many_distinct_poses_is_not_numbered_and_says_so():
+    arm = PlanarArm([300.0, 200.0])
+    m = NUMBERED_POSES_MAX + 1
+    workspace = plot_plan(arm, random_plan(arm, m, rng=4)).axes[0]
+    assert not _texts(workspace, "pose number")
+    assert f"{m} distinct poses, too many to number" in workspace.get_title()
+
+
+def test_a_large_plan_of_repeated_poses_is_numbered_by_its_distinct_poses():
+    arm = PlanarArm([300.0, 200.0])
+    q = np.tile(random_plan(arm, 30, rng=5), (1000, 1))  # 30 000 rows, 30 poses
+    workspace = plot_plan(arm, q).axes[0]
+    assert len(_pose_lines(workspace).get_segments()) == 30
+    labels = [t.get_text() for t in _texts(workspace, "pose number")]
+    assert labels == [f"{i + 1} ×1000" for i in range(30)]
+
+
+def test_gravity_is_an_arrow_along_its_direction():
+    arm = PlanarArm([300.0, 200.0])
+    q = random_plan(arm, 5, rng=6)
+    assert not _texts(plot_plan(arm, q).axes[0], "gravity")
+    (arrow,) = _texts(plot_plan(arm, q, gravity=np.array([3.0, -4.0])).axes[0], "gravity")
+    direction = np.subtract(arrow.xy, arrow.xyann)
+    assert_allclose(direction / np.hypot(*direction), [0.6, -0.8], atol=1e-12)
+
+
+def test_poses_that_carry_a_payload_are_ringed_one_size_per_payload():
+    arm = PlanarArm([2.0, 1.0])
+    q = np.array([[0.0, 0.5], [1.0, -0.5], [1.0, -0.5], [-1.0, 1.5], [0.0, 0.5]])
+    payload = np.array([0.0, 10.0, 0.0, 5.0, 10.0])  # the same joints at 0 and 10 kg: two poses
+    workspace = plot_plan(arm, q, payload_kg=payload).axes[0]
+    rings = {c.get_label(): c for c in workspace.collections if c.get_gid() == "payload"}
+    assert set(rings) == {"payload 5 kg", "payload 10 kg"}
+    lengths = np.array([2.0, 1.0])
+    assert_allclose(rings["payload 5 kg"].get_offsets(), [_tip(lengths, q[3])], atol=1e-12)
+    assert_allclose(
+        rings["payload 10 kg"].get_offsets(),
+        [_tip(lengths, q[1]), _tip(lengths, q[4])],
+        atol=1e-12,
+    )
+    assert rings["payload 10 kg"].get_sizes()[0] > rings["payload 5 kg"].get_sizes()[0]
+    assert len(_pose_lines(workspace).get_segments()) == 5  # rows 1 and 5 differ in payload
+    labels = {t.get_text() for t in _texts(workspace, "pose number")}
+    assert labels == {"1", "2", "3", "4", "5"}
+
+
+@pytest.mark.parametrize("bad", [{"payload_kg": np.zeros(3)}, {"gravity": np.zeros(3)}])
+def test_plot_plan_rejects_loads_of_the_wrong_shape(bad):
+    with pytest.raises(ValueError, match="shape"):
+        plot_plan(PlanarArm([2.0, 1.0]), np.zeros((2, 2)), **bad)
+
+
+VERTICAL_TOML = """name = "vertical"
+link_lengths_mm = [600.0, 450.0, 200.0]
+joint_limits_deg = [[-170, 170], [-150, 150], [-150, 150]]
+[measurement]
+sigma_mm = 0.02
+[elastostatic]
+gravity_xy = [1, -1]
+link_masses_kg = [20, 12, 6]
+payload_kg = 10
+"""
+
+
+def _captured_figures(monkeypatch) -> list:
+    """The figures the program saves, kept instead of written (the program runs in-process)."""
+    import armcal.plotting
+
+    figures = []
+    monkeypatch.setattr(armcal.plotting, "save_figure", lambda fig, path: figures.append(fig))
+    return figures
+
+
+def test_design_plot_of_a_vertical_arm_shows_gravity_and_the_payloads(tmp_path, monkeypatch):
+    (tmp_path / "robot.toml").write_text(VERTICAL_TOML)
+    figures = _captured_figures(monkeypatch)
+    args = ["--robot", "robot.toml", "--poses", "12", "--payloads", "0,10", "--seed", "1"]
+    run = run_cli(tmp_path, "design", *args, "-o", "plan.csv", "--plot", "plan.png")
+    assert run.returncode == 0, run.stderr
+    (workspace, _) = figures[0].axes
+    (arrow,) = _texts(workspace, "gravity")
+    direction = np.subtract(arrow.xy, arrow.xyann)
+    assert_allclose(
+        direction / np.hypot(*direction), np.array([1.0, -1.0]) / np.sqrt(2), atol=1e-9
+    )
+    header, *rows = (tmp_path / "plan.csv").read_text().splitlines()
+    assert header.split(",")[-1] == "payload_kg"
+    loaded = len({row for row in rows if float(row.split(",")[-1]) == 10.0})  # distinct poses
+    (ring,) = [c for c in workspace.collections if c.get_gid() == "payload"]
+    assert ring.get_label() == "payload 10 kg" and len(ring.get_offsets()) == loaded
 
 
 def test_save_figure_writes_png_atomically(tmp_path):
