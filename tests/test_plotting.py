@@ -11,6 +11,7 @@ from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.collections import LineCollection
 from matplotlib.figure import Figure
 from matplotlib.patches import Rectangle, Wedge
+from matplotlib.quiver import Quiver, QuiverKey
 from matplotlib.text import Text
 from numpy.testing import assert_allclose
 
@@ -19,13 +20,16 @@ from armcal import (
     Box,
     InputError,
     PlanarArm,
+    Validation,
     load_robot,
     orthogonal_plan,
     random_plan,
 )
 from armcal.plotting import (
     NUMBERED_POSES_MAX,
+    plot_error_map,
     plot_plan,
+    plot_validation,
     save_figure,
 )
 from helpers import run_cli
@@ -284,6 +288,111 @@ def test_design_plot_of_a_vertical_arm_shows_gravity_and_the_payloads(tmp_path, 
     loaded = len({row for row in rows if float(row.split(",")[-1]) == 10.0})  # distinct poses
     (ring,) = [c for c in workspace.collections if c.get_gid() == "payload"]
     assert ring.get_label() == "payload 10 kg" and len(ring.get_offsets()) == loaded
+
+
+def _validation(rows: int, rng: np.random.Generator, *, plane: bool = False) -> Validation:
+    """Errors of about 1 mm before and 0.01 mm after at points spread over 1000 mm."""
+    positions = rng.uniform(-500.0, 500.0, (rows, 2))
+    before = rng.normal(0.0, 1.0, (rows, 2))
+    after = rng.normal(0.0, 0.01, (rows, 2))
+    predicted = rng.uniform(0.01, 0.02, rows)
+    out_of_plane = rng.normal(0.0, 0.01, rows) if plane else None
+    return Validation(before, after, predicted, predicted / 2, positions, out_of_plane)
+
+
+def test_validation_draws_each_model_at_one_scale_with_a_key_in_mm():
+    """Nominal arrows x10 and calibrated x100 shared one axes: the calibrated were unreadable."""
+    result = _validation(30, np.random.default_rng(7))
+    fig = plot_validation(PlanarArm([300.0, 200.0]), np.zeros((30, 2)), result)
+    spread = np.ptp(result.positions, axis=0).max()
+    drawn = [ax for ax in fig.axes if any(isinstance(c, Quiver) for c in ax.collections)]
+    assert len(drawn) == 2
+    for ax, errors in zip(drawn, (result.before, result.after), strict=True):
+        (arrows,) = [c for c in ax.collections if isinstance(c, Quiver)]
+        assert_allclose(np.column_stack([arrows.U, arrows.V]), errors)  # the errors, in mm
+        magnification = 1.0 / arrows.scale  # scale_units "xy": an error e is drawn e / scale long
+        assert f"×{magnification:g}" in ax.get_title(loc="left")
+        longest = np.hypot(*errors.T).max() * magnification
+        assert 0.04 * spread <= longest <= 0.1 * spread  # a tenth of the spread, 1-2-5 rounded
+        (key,) = [a for a in ax.artists if isinstance(a, QuiverKey)]
+        assert key.Q is arrows and key.text.get_text() == f"{key.U:g} mm"
+        assert key.U <= np.hypot(*errors.T).max() < 2.5 * key.U
+    assert drawn[0].get_xlim() == drawn[1].get_xlim()  # the same points, side by side
+
+
+def test_validation_counts_poses_not_rows_when_a_pose_has_several_targets():
+    """With 3 reflectors the per-pose axis ran to 3 times the poses."""
+    rows, targets = 12, 3
+    result = _validation(rows, np.random.default_rng(8))
+    labels = np.repeat(["p7", "p2", "p9", "p4"], targets)  # labels in the file's order
+    fig = plot_validation(PlanarArm([300.0, 200.0]), np.zeros((rows, 2)), result, pose=labels)
+    ax = fig.axes[-1]
+    for line in ax.get_lines():
+        if line.get_gid() == "predicted":
+            assert_allclose(line.get_xdata(), [1, 2, 3, 4])
+            per_pose = result.predicted_mm.reshape(4, targets)
+            assert_allclose(line.get_ydata(), np.sqrt(np.mean(per_pose**2, axis=1)))
+        else:
+            x = np.asarray(line.get_xdata())
+            assert_allclose(np.round(x), np.repeat([1, 2, 3, 4], targets))
+            assert np.all(np.abs(x - np.round(x)) <= 0.3 + 1e-12)
+    assert fig.get_suptitle().endswith("validation on 4 held-out poses (12 points)")
+    single = plot_validation(PlanarArm([300.0, 200.0]), np.zeros((rows, 2)), result)
+    assert_allclose(single.axes[-1].get_lines()[0].get_xdata(), np.arange(1, rows + 1))
+
+
+def test_validation_pose_labels_must_cover_every_row():
+    result = _validation(4, np.random.default_rng(9))
+    with pytest.raises(ValueError, match=r"one label per row, shape \(4,\)"):
+        plot_validation(PlanarArm([300.0, 200.0]), np.zeros((4, 2)), result, pose=["1", "2"])
+
+
+@pytest.mark.parametrize(("plane", "x_label"), [
+    (False, "x in instrument frame [mm]"),
+    (True, "u in instrument's plane of motion [mm]"),
+])  # fmt: skip
+def test_validation_axes_name_the_instrument_frame(plane, x_label):
+    result = _validation(6, np.random.default_rng(10), plane=plane)
+    fig = plot_validation(PlanarArm([300.0, 200.0]), np.zeros((6, 2)), result)
+    assert [ax.get_xlabel() for ax in fig.axes[:2]] == [x_label, x_label]
+    assert fig.axes[0].get_ylabel() == x_label.replace("x in", "y in").replace("u in", "v in")
+
+
+def test_error_map_axes_name_the_base_frame():
+    positions = np.random.default_rng(11).uniform(-400.0, 400.0, (20, 2))
+    errors = np.linspace(0.1, 2.0, 20)
+    fig = plot_error_map(
+        PlanarArm([300.0, 200.0]), np.zeros((20, 2)), errors, errors / 10, positions
+    )
+    assert [ax.get_xlabel() for ax in fig.axes[:2]] == ["x in base frame [mm]"] * 2
+    assert fig.axes[0].get_ylabel() == "y in base frame [mm]"
+
+
+def test_validate_plot_groups_a_poses_targets(tmp_path, monkeypatch):
+    """armcal validate --plot on an arm with two targets: the per-pose axis counts poses."""
+    (tmp_path / "robot.toml").write_text(
+        'name = "tool"\nlink_lengths_mm = [260.0, 180.0, 120.0]\n[measurement]\nsigma_mm = 0.02\n'
+        "[targets]\nA = { length_mm = 150.0, angle_deg = 20.0 }\nB = { length_mm = 100.0 }\n"
+    )
+    (tmp_path / "truth.toml").write_text(
+        "dl_mm = [0.2, -0.1, 0.3, 0.1]\ndq_deg = [0, 0.2, 0.6, -0.3]\n"
+    )
+    rows = [f"{15 * k},{40 * k - 150},{75 * k % 360 - 170}" for k in range(9)]
+    (tmp_path / "plan.csv").write_text("q1_deg,q2_deg,q3_deg\n" + "\n".join(rows) + "\n")
+    (tmp_path / "test.csv").write_text("q1_deg,q2_deg,q3_deg\n" + "\n".join(rows[::2]) + "\n")
+    robot = ["--robot", "robot.toml"]
+    for plan, out, seed in (("plan.csv", "meas.csv", "1"), ("test.csv", "held.csv", "2")):
+        run = run_cli(tmp_path, "synthesize", *robot, "--truth", "truth.toml", "--plan", plan,
+                      "--seed", seed, "-o", out)  # fmt: skip
+        assert run.returncode == 0, run.stderr
+    run = run_cli(tmp_path, "identify", *robot, "--measurements", "meas.csv", "-o", "cal.json")
+    assert run.returncode == 0, run.stderr
+    figures = _captured_figures(monkeypatch)
+    run = run_cli(tmp_path, "validate", "--calibration", "cal.json", "--measurements", "held.csv",
+                  "--plot", "v.png")  # fmt: skip
+    assert run.returncode == 0, run.stderr
+    (predicted,) = [ln for ln in figures[0].axes[-1].get_lines() if ln.get_gid() == "predicted"]
+    assert_allclose(predicted.get_xdata(), [1, 2, 3, 4, 5])  # 5 poses, 10 rows (2 targets)
 
 
 def test_save_figure_writes_png_atomically(tmp_path):

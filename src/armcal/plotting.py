@@ -9,6 +9,7 @@ module, so ``import armcal`` does not import matplotlib.
 from __future__ import annotations
 
 import os
+from collections.abc import Sequence
 from typing import Any
 
 import numpy as np
@@ -489,19 +490,10 @@ def plot_accuracy_curves(curves: dict[str, np.ndarray], *, title: str | None = N
     return fig
 
 
-def _error_arrows(ax, positions: np.ndarray, errors: np.ndarray, scale: float, **style) -> None:
-    """Arrows from each position along its error, drawn ``scale`` times longer (mm)."""
-    ax.quiver(
-        positions[:, 0],
-        positions[:, 1],
-        errors[:, 0] * scale,
-        errors[:, 1] * scale,
-        angles="xy",
-        scale_units="xy",
-        scale=1.0,
-        width=0.004,
-        **style,
-    )
+def _nice_below(value: float) -> float:
+    """The largest of 1, 2, 5 times a power of ten not above ``value`` (> 0)."""
+    power = 10.0 ** np.floor(np.log10(value))
+    return float(max(step * power for step in (1.0, 2.0, 5.0) if step * power <= value * 1.000001))
 
 
 def _arrow_scale(positions: np.ndarray, errors: np.ndarray) -> float:
@@ -510,60 +502,131 @@ def _arrow_scale(positions: np.ndarray, errors: np.ndarray) -> float:
     largest = float(np.max(np.hypot(errors[:, 0], errors[:, 1]), initial=0.0))
     if largest <= 0 or spread <= 0:
         return 1.0
-    raw = 0.1 * spread / largest
-    return float(10 ** np.floor(np.log10(raw)))
+    return _nice_below(0.1 * spread / largest)
 
 
-def plot_validation(arm: PlanarArm, q: np.ndarray, result, *, title: str | None = None) -> Figure:
-    """Error vectors on the workspace and every pose's error against its prediction.
+def _error_arrows(ax, positions: np.ndarray, errors: np.ndarray, name: str, colour: str) -> None:
+    """One model's errors as arrows at one stated magnification, with a key arrow in mm.
+
+    The arrows are the errors themselves (mm) drawn ``scale`` times longer: one
+    quiver per axes, so that no two magnifications ever share one.
+    """
+    scale = _arrow_scale(positions, errors)
+    ax.plot(positions[:, 0], positions[:, 1], ".", color="0.3", ms=3)
+    arrows = ax.quiver(
+        positions[:, 0],
+        positions[:, 1],
+        errors[:, 0],
+        errors[:, 1],
+        angles="xy",
+        scale_units="xy",
+        scale=1.0 / scale,
+        width=0.005,
+        color=colour,
+        gid=name,
+    )
+    largest = float(np.max(np.hypot(errors[:, 0], errors[:, 1]), initial=0.0))
+    key = _nice_below(largest) if largest > 0 else 1.0  # about as long as the longest arrow
+    label = f"{key:g} mm"
+    ax.quiverkey(arrows, 0.8, 1.03, key, label, labelpos="E", fontproperties={"size": 8})
+    ax.set_title(f"{name}: errors ×{scale:g}", loc="left", fontsize="medium")
+
+
+def _pose_of_rows(pose: Sequence[str] | np.ndarray | None, rows: int) -> np.ndarray:
+    """Every row's pose ``(rows,)``, numbered from 0 in the order the poses first appear."""
+    if pose is None:
+        return np.arange(rows)
+    labels = np.asarray(pose)
+    if labels.shape != (rows,):
+        raise ValueError(f"pose must give one label per row, shape ({rows},); got {labels.shape}")
+    _, first, which = np.unique(labels, return_index=True, return_inverse=True)
+    rank = np.empty(first.size, dtype=int)
+    rank[np.argsort(first)] = np.arange(first.size)
+    return rank[which.ravel()]
+
+
+def _side_by_side(of_pose: np.ndarray) -> np.ndarray:
+    """Every row's x ``(rows,)``: its pose's number (from 1), a pose's rows spread over +-0.3."""
+    count = np.bincount(of_pose)
+    order = np.argsort(of_pose, kind="stable")
+    rank = np.empty(of_pose.size)
+    rank[order] = np.arange(of_pose.size) - np.repeat(np.cumsum(count) - count, count)
+    size = count[of_pose]
+    return of_pose + 1.0 + np.where(size > 1, 0.6 * rank / np.maximum(size - 1, 1) - 0.3, 0.0)
+
+
+def plot_validation(
+    arm: PlanarArm,
+    q: np.ndarray,
+    result,
+    *,
+    pose: Sequence[str] | np.ndarray | None = None,
+    title: str | None = None,
+) -> Figure:
+    """Error vectors in the instrument frame and every pose's error against its prediction.
 
     Parameters
     ----------
     arm : PlanarArm
     q : ndarray, shape (m, n)
-        The held-out poses (rad).
+        The held-out rows' joint angles (rad).
     result : armcal.validation.Validation
+    pose : sequence of str, shape (m,), optional
+        Every row's pose label, when a pose has several rows (one per target):
+        the rows of a pose share it.  Default: every row is a pose.
     title : str, optional
 
     Returns
     -------
     matplotlib.figure.Figure
-        Left: the measured positions with their errors before (grey) and after
-        (red) calibration as arrows, magnified by a stated factor.  Right: every
-        pose's error before and after, and the error the calibration predicts.
+        Top: the measured positions in the instrument frame (for 3-D data, the
+        plane of motion fitted in it) with the errors of the nominal model
+        (left) and the calibrated one (right) as arrows, each panel at one
+        stated magnification with a key arrow in mm.  Bottom: every row's
+        error before and after, and the error the calibration predicts (RMS
+        over a pose's rows), against the pose; a pose's rows side by side.
+
+    Raises
+    ------
+    ValueError
+        If ``pose`` does not give one label per row.
     """
-    fig = Figure(figsize=(11, 4.8), layout="constrained")
-    ax_ws, ax_err = fig.subplots(1, 2)
     positions = result.positions
-    scale = _arrow_scale(positions, result.before)
-    scale_after = _arrow_scale(positions, result.after)
-    ax_ws.plot(positions[:, 0], positions[:, 1], ".", color="0.3", ms=3)
-    _error_arrows(
-        ax_ws, positions, result.before, scale, color="0.55", label=f"nominal model, x{scale:g}"
-    )
-    _error_arrows(
-        ax_ws,
-        positions,
-        result.after,
-        scale_after,
-        color="tab:red",
-        label=f"calibrated, x{scale_after:g}",
-    )
-    ax_ws.set_aspect("equal", adjustable="datalim")
-    ax_ws.set_xlabel("x [mm]")
-    ax_ws.set_ylabel("y [mm]")
-    ax_ws.set_title("position errors (arrows magnified)")
-    ax_ws.legend(fontsize=8, frameon=False, loc="best")
-    index = np.arange(1, positions.shape[0] + 1)
-    ax_err.semilogy(index, result.before_mm, "o", color="0.55", ms=3, label="nominal model")
-    ax_err.semilogy(index, result.after_mm, "o", color="tab:red", ms=3, label="calibrated")
-    ax_err.semilogy(
-        index, result.predicted_mm, "-", color="k", lw=1, label="predicted (RMS per point)"
-    )
-    ax_err.set_xlabel("held-out pose")
+    rows = positions.shape[0]
+    of_pose = _pose_of_rows(pose, rows)
+    fig = Figure(figsize=(11, 8.4), layout="constrained")
+    grid = fig.add_gridspec(2, 2, height_ratios=[1.25, 1.0])
+    ax_before = fig.add_subplot(grid[0, 0])
+    ax_after = fig.add_subplot(grid[0, 1], sharex=ax_before, sharey=ax_before)
+    ax_err = fig.add_subplot(grid[1, :])
+    x_name, y_name, frame = ("x", "y", "instrument frame")
+    if result.out_of_plane_mm is not None:  # 3-D data: the plane fitted in the instrument frame
+        x_name, y_name, frame = ("u", "v", "instrument's plane of motion")
+    _error_arrows(ax_before, positions, result.before, "nominal model", "0.45")
+    _error_arrows(ax_after, positions, result.after, "calibrated", "tab:red")
+    lo, hi = positions.min(axis=0), positions.max(axis=0)
+    pad = 0.12 * max(float(np.max(hi - lo)), 1.0)  # the longest arrow is a tenth of the spread
+    ax_before.set(xlim=(lo[0] - pad, hi[0] + pad), ylim=(lo[1] - pad, hi[1] + pad))
+    for ax in (ax_before, ax_after):
+        ax.set_aspect("equal", adjustable="box")
+        ax.set_xlabel(f"{x_name} in {frame} [mm]")
+    ax_before.set_ylabel(f"{y_name} in {frame} [mm]")
+    x = _side_by_side(of_pose)
+    ax_err.semilogy(x, result.before_mm, "o", color="0.45", ms=3, label="nominal model")
+    ax_err.semilogy(x, result.after_mm, "o", color="tab:red", ms=3, label="calibrated")
+    count = np.bincount(of_pose)
+    predicted = np.sqrt(np.bincount(of_pose, result.predicted_mm**2) / count)
+    number = np.arange(1, count.size + 1)
+    label = "predicted (RMS per point)"
+    ax_err.semilogy(number, predicted, "-", color="k", lw=1, label=label, gid="predicted")
+    ax_err.xaxis.set_major_locator(MaxNLocator(integer=True))
+    several = count.size < rows
+    ax_err.set_xlabel("held-out pose" + (" (its points side by side)" if several else ""))
     ax_err.set_ylabel("position error [mm]")
-    ax_err.legend(fontsize=8, frameon=False)
-    fig.suptitle(title if title is not None else f"{arm.name}: validation on held-out poses")
+    ax_err.legend(fontsize=8, frameon=False, ncols=3, loc="lower left", bbox_to_anchor=(0, 1))
+    points = f" ({rows} points)" if several else ""
+    default = f"{arm.name}: validation on {count.size} held-out poses{points}"
+    fig.suptitle(title if title is not None else default)
     return fig
 
 
@@ -624,8 +687,8 @@ def plot_error_map(
 ) -> Figure:
     """The positioning error over the workspace before and after calibration (two panels).
 
-    ``positions`` ``(k, 2)`` are the tips of the poses ``q`` (mm); the errors
-    ``(k,)`` colour them on one shared logarithmic scale.
+    ``positions`` ``(k, 2)`` are the tips of the poses ``q`` in the base frame
+    (mm); the errors ``(k,)`` colour them on one shared logarithmic scale.
     """
     from matplotlib.colors import LogNorm
 
@@ -643,8 +706,8 @@ def plot_error_map(
         ax.plot([0], [0], "k+", ms=10)
         ax.set_aspect("equal", adjustable="datalim")
         ax.set_title(f"{name}: RMS {rms(values):.3g} mm per point")
-        ax.set_xlabel("x [mm]")
-    axes[0].set_ylabel("y [mm]")
+        ax.set_xlabel(f"x in {BASE_FRAME} [mm]")
+    axes[0].set_ylabel(f"y in {BASE_FRAME} [mm]")
     fig.colorbar(image, ax=list(axes), label="position error [mm]")
     fig.suptitle(title if title is not None else f"{arm.name}: error over the workspace")
     return fig

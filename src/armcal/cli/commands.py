@@ -222,7 +222,8 @@ def validate(args: argparse.Namespace) -> None:
     if args.plot is not None:
         from ..plotting import plot_validation, save_figure  # matplotlib only when asked for
 
-        save_figure(plot_validation(cal.arm, meas.q, run.validation), args.plot)
+        pose = None if meas.targets is None else meas.labels  # a pose's rows share its label
+        save_figure(plot_validation(cal.arm, meas.q, run.validation, pose=pose), args.plot)
     document, text = validation_report(cal, run.validation, meas, per_pose=args.per_pose)
     if args.plot is not None:
         text += f"\nwrote {args.plot}"
