@@ -234,7 +234,8 @@ def validate(args: argparse.Namespace) -> None:
     if args.plot is not None:
         from ..plotting import plot_validation, save_figure  # matplotlib only when asked for
 
-        save_figure(plot_validation(cal.arm, meas.q, run.validation), args.plot)
+        pose = None if meas.targets is None else meas.labels  # a pose's rows share its label
+        save_figure(plot_validation(cal.arm, meas.q, run.validation, pose=pose), args.plot)
     document, text = validation_report(cal, run.validation, meas, per_pose=args.per_pose)
     if args.plot is not None:
         text += f"\nwrote {args.plot}"
@@ -283,7 +284,9 @@ def design(args: argparse.Namespace) -> None:
     if args.plot is not None:  # first: drawing is what can fail, the plan CSV is text
         from ..plotting import plot_plan, save_figure  # matplotlib only when a plot is asked for
 
-        save_figure(plot_plan(spec.arm, run.q), args.plot)
+        gravity = None if spec.elastic is None else spec.elastic.gravity
+        figure = plot_plan(spec.arm, run.q, payload_kg=run.payload_kg, gravity=gravity)
+        save_figure(figure, args.plot)
     if args.output is not None:
         atomic_write(args.output, format_plan_csv(run.q, run.payload_kg))
     written = _written(args.output, args.plot)
