@@ -19,8 +19,12 @@ def validation_report(
     """The ``validate`` document and text: errors before and after, predicted, per pose."""
     s = result.summary()
     m = result.after.shape[0]
+    if meas.targets is None:
+        held = f"{m} held-out poses"
+    else:  # a row is one target's point of a pose
+        held = f"{len(set(meas.labels))} held-out poses ({m} points)"
     lines = [
-        f"validation of {cal.arm.name} on {m} held-out poses"
+        f"validation of {cal.arm.name} on {held}"
         + (" (3-D, projected into the calibration's plane)" if cal.plane is not None else ""),
         "",
         f"{'position error (mm)':<24}{'RMS':>10}{'95 %':>10}{'max':>10}   (per point)",
