@@ -26,6 +26,7 @@ from ..models import (
     PlanarArm,
 )
 from .common import MAX_ABS_VALUE, fail, read_text, suggest
+from .csv_text import csv_text, degrees, floats
 from .robots import RADIAN_LIMIT_BOUND, SIGMA_RANGE_MM
 
 __all__ = [
@@ -530,13 +531,11 @@ def format_program_csv(
     """Program CSV text: ``[pose,]q1_deg..qn_deg[,target],corrected`` (1 or 0 per row)."""
     head = (["pose"] if labels is not None else []) + _joint_names(q.shape[1])
     head += (["target"] if targets is not None else []) + ["corrected"]
-    lines = [",".join(head)]
-    for i, row in enumerate(q):
-        fields = [str(labels[i])] if labels is not None else []
-        fields += [_angle_text(v) for v in row]
-        fields += [str(targets[i])] if targets is not None else []
-        lines.append(",".join([*fields, "1" if corrected[i] else "0"]))
-    return "\n".join(lines) + "\n"
+    columns: list = [[str(label) for label in labels]] if labels is not None else []
+    columns.append(degrees(q))
+    columns += [[str(target) for target in targets]] if targets is not None else []
+    columns.append(["1" if c else "0" for c in np.asarray(corrected, dtype=bool).tolist()])
+    return csv_text(head, columns)
 
 
 def _beyond_limits_warning(path, arm: PlanarArm, beyond) -> ArmcalWarning:
@@ -698,21 +697,13 @@ def _check_target_labels(path, arm: PlanarArm, labels: list[str], lines: list[in
             )
 
 
-def _angle_text(q_rad: float) -> str:
-    # Rounded to 1e-12 deg so an exact 90 deg is written "90.0", not "89.99999999999999".
-    return repr(round(math.degrees(q_rad), 12) + 0.0)
-
-
 def format_plan_csv(q: np.ndarray, payload_kg: np.ndarray | None = None) -> str:
     """Plan CSV text for joint angles ``q`` ``(m, n)`` in rad (and every pose's payload)."""
     head = _joint_names(q.shape[1]) + (["payload_kg"] if payload_kg is not None else [])
-    lines = [",".join(head)]
-    for i, row in enumerate(q):
-        fields = [_angle_text(v) for v in row]
-        if payload_kg is not None:
-            fields.append(repr(float(payload_kg[i])))
-        lines.append(",".join(fields))
-    return "\n".join(lines) + "\n"
+    columns = [degrees(q)]
+    if payload_kg is not None:
+        columns.append(floats(payload_kg))
+    return csv_text(head, columns)
 
 
 def format_measurements_csv(
@@ -731,11 +722,11 @@ def format_measurements_csv(
     head += _joint_names(q.shape[1]) + ["x_mm", "y_mm", "z_mm"][: xy.shape[1]]
     head += ["target"] if targets is not None else []
     head += ["payload_kg"] if payload_kg is not None else []
-    lines = [",".join(head)]
-    for i, (row, point) in enumerate(zip(q, xy, strict=True)):
-        fields = [str(labels[i])] if labels is not None else []
-        fields += [_angle_text(v) for v in row] + [repr(float(v)) for v in point]
-        fields += [str(targets[i])] if targets is not None else []
-        fields += [repr(float(payload_kg[i]))] if payload_kg is not None else []
-        lines.append(",".join(fields))
-    return "\n".join(lines) + "\n"
+    if xy.shape[0] != q.shape[0]:
+        raise ValueError(f"q has {q.shape[0]} rows but xy has {xy.shape[0]}")
+    columns: list = [[str(label) for label in labels]] if labels is not None else []
+    columns += [degrees(q), floats(xy)]
+    columns += [[str(target) for target in targets]] if targets is not None else []
+    if payload_kg is not None:
+        columns.append(floats(payload_kg))
+    return csv_text(head, columns)
