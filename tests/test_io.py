@@ -560,6 +560,46 @@ def test_a_read_plan_is_c_ordered(tmp_path):
     assert_allclose(np.degrees(q), [[0, 10], [20, 30], [40, 50]])
 
 
+@pytest.mark.parametrize("delimiter", [",", "\t"])
+def test_a_plain_numeric_file_reads_as_one_with_a_comment_does(tmp_path, delimiter):
+    """NumPy's reader takes plain files of numbers; a comment line sends the same rows
+    through the general reader. Both give the same numbers, bit for bit."""
+    rng = np.random.default_rng(25)
+    q = rng.uniform(-170.0, 170.0, (300, 2))
+    xy = rng.uniform(-250.0, 250.0, (300, 2))  # within the reach of 440 mm
+    sigma = rng.uniform(0.01, 0.1, 300)
+    header = delimiter.join(["q1_deg", "q2_deg", "x_mm", "y_mm", "sigma_mm"])
+    rows = [
+        delimiter.join([f" {a!r}", f"{b:.6f} ", repr(x), f"{y:.17g}", f"{s:.3e}"])
+        for (a, b), (x, y), s in zip(q.tolist(), xy.tolist(), sigma.tolist(), strict=True)
+    ]
+    body = header + "\n" + "\n".join(rows)
+    (tmp_path / "plain.csv").write_text("\n" + body + "\n")  # a blank line before the header
+    (tmp_path / "commented.csv").write_text("# from the tracker\n" + body)
+    arm = PlanarArm([260.0, 180.0])
+    plain = read_measurements(tmp_path / "plain.csv", arm)
+    general = read_measurements(tmp_path / "commented.csv", arm)
+    for a, b in (
+        (plain.q, general.q),
+        (plain.xy, general.xy),
+        (plain.row_sigma, general.row_sigma),
+    ):
+        assert np.array_equal(a, b)
+    assert plain.q.flags.c_contiguous
+    assert plain.rows == general.rows == tuple(range(1, 301))
+    assert_allclose(np.degrees(plain.q[:, 0]), q[:, 0], rtol=1e-15)
+
+
+def test_a_plain_file_with_a_bad_row_names_its_line(tmp_path):
+    path = tmp_path / "plan.csv"
+    path.write_text("\nq1_deg,q2_deg\n0,10\n20,3O\n40,50\n")
+    with pytest.raises(InputError, match=r"row 2 \(line 4\), column q2_deg: '3O' is not a number"):
+        read_plan(path, PlanarArm([2.0, 1.0]))
+    path.write_text("q1_deg,q2_deg\n0,10\n20,30,5\n")
+    with pytest.raises(InputError, match=r"row 2 \(line 3\) has 3 fields but the header has 2"):
+        read_plan(path, PlanarArm([2.0, 1.0]))
+
+
 def _one_dumps_per_object(rows: list, pad: str) -> str:
     """A list of flat objects as to_json wrote it before its columns were encoded at once."""
     lines = [pad + "  " + json.dumps(r, allow_nan=False, separators=(", ", ": ")) for r in rows]
