@@ -68,6 +68,7 @@ bench: $(VENV)/.installed
 	$(BIN)/python benchmarks/bench_simulate.py
 	$(BIN)/python benchmarks/bench_scale.py
 	$(BIN)/python benchmarks/bench_outliers.py
+	$(BIN)/python benchmarks/bench_floor.py
 
 # Run every example of README.md and write its real output into it (and docs/img/).
 readme: $(VENV)/.installed

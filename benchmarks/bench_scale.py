@@ -56,11 +56,8 @@ from __future__ import annotations
 
 import argparse
 import datetime
-import json
 import os
 import platform
-import subprocess
-import sys
 import tempfile
 import time
 from collections.abc import Callable
@@ -69,6 +66,7 @@ from pathlib import Path
 
 import numpy as np
 from baselines import numpy_gauss_newton
+from measure import armcal_argv, measure
 
 from armcal import PlanarArm, forward_kinematics, identify, load_robot
 from armcal.doe import orthogonal_plan, random_plan
@@ -105,39 +103,15 @@ def best_times(
     return best
 
 
-#: Runs a command and reports its wall time and peak resident memory.  It runs in a
-#: fresh, small Python process: Linux carries a parent's peak RSS over into a
-#: forked child's ``ru_maxrss``, so measuring from this (large) process would
-#: report this process's peak instead.
-_MEASURE = """
-import json, os, subprocess, sys, time
-start = time.perf_counter()
-child = subprocess.Popen(sys.argv[1:], stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)
-stderr = child.stderr.read()
-_, status, usage = os.wait4(child.pid, 0)
-seconds = time.perf_counter() - start
-code = os.waitstatus_to_exitcode(status)
-report = {"seconds": seconds, "status": code, "maxrss_kib": usage.ru_maxrss}
-print(json.dumps({**report, "stderr": stderr.decode()[-500:]}))
-"""
-
-
 def run_command(args: list[str], *, runs: int = 1) -> tuple[float, float]:
     """Least wall seconds and largest peak memory (MB) of ``python -m armcal ARGS`` over runs.
 
-    Each run is a fresh child of a fresh measuring process (see ``_MEASURE``).
+    Each run is a fresh child of a fresh measuring process (:mod:`measure`).
     """
-    command = [sys.executable, "-m", "armcal", *args]
     seconds, peak = float("inf"), 0.0
     for _ in range(runs):
-        out = subprocess.run(
-            [sys.executable, "-c", _MEASURE, *command], capture_output=True, text=True, check=True
-        )
-        report = json.loads(out.stdout)
-        if report["status"] != 0:
-            raise RuntimeError(f"armcal {' '.join(args)} failed: {report['stderr']}")
-        seconds = min(seconds, report["seconds"])
-        peak = max(peak, report["maxrss_kib"] / 1024)  # Linux reports KiB
+        run_seconds, run_peak = measure(armcal_argv(args))
+        seconds, peak = min(seconds, run_seconds), max(peak, run_peak)
     return seconds, peak
 
 

@@ -32,6 +32,7 @@ from armcal.files import (
     read_plan,
     to_json,
     write_folder,
+    write_json,
 )
 
 
@@ -557,3 +558,87 @@ def test_a_read_plan_is_c_ordered(tmp_path):
     q = read_plan(path, PlanarArm([2.0, 1.0]))
     assert q.flags.c_contiguous
     assert_allclose(np.degrees(q), [[0, 10], [20, 30], [40, 50]])
+
+
+@pytest.mark.parametrize("delimiter", [",", "\t"])
+def test_a_plain_numeric_file_reads_as_one_with_a_comment_does(tmp_path, delimiter):
+    """NumPy's reader takes plain files of numbers; a comment line sends the same rows
+    through the general reader. Both give the same numbers, bit for bit."""
+    rng = np.random.default_rng(25)
+    q = rng.uniform(-170.0, 170.0, (300, 2))
+    xy = rng.uniform(-250.0, 250.0, (300, 2))  # within the reach of 440 mm
+    sigma = rng.uniform(0.01, 0.1, 300)
+    header = delimiter.join(["q1_deg", "q2_deg", "x_mm", "y_mm", "sigma_mm"])
+    rows = [
+        delimiter.join([f" {a!r}", f"{b:.6f} ", repr(x), f"{y:.17g}", f"{s:.3e}"])
+        for (a, b), (x, y), s in zip(q.tolist(), xy.tolist(), sigma.tolist(), strict=True)
+    ]
+    body = header + "\n" + "\n".join(rows)
+    (tmp_path / "plain.csv").write_text("\n" + body + "\n")  # a blank line before the header
+    (tmp_path / "commented.csv").write_text("# from the tracker\n" + body)
+    arm = PlanarArm([260.0, 180.0])
+    plain = read_measurements(tmp_path / "plain.csv", arm)
+    general = read_measurements(tmp_path / "commented.csv", arm)
+    for a, b in (
+        (plain.q, general.q),
+        (plain.xy, general.xy),
+        (plain.row_sigma, general.row_sigma),
+    ):
+        assert np.array_equal(a, b)
+    assert plain.q.flags.c_contiguous
+    assert plain.rows == general.rows == tuple(range(1, 301))
+    assert_allclose(np.degrees(plain.q[:, 0]), q[:, 0], rtol=1e-15)
+
+
+def test_a_plain_file_with_a_bad_row_names_its_line(tmp_path):
+    path = tmp_path / "plan.csv"
+    path.write_text("\nq1_deg,q2_deg\n0,10\n20,3O\n40,50\n")
+    with pytest.raises(InputError, match=r"row 2 \(line 4\), column q2_deg: '3O' is not a number"):
+        read_plan(path, PlanarArm([2.0, 1.0]))
+    path.write_text("q1_deg,q2_deg\n0,10\n20,30,5\n")
+    with pytest.raises(InputError, match=r"row 2 \(line 3\) has 3 fields but the header has 2"):
+        read_plan(path, PlanarArm([2.0, 1.0]))
+
+
+def _one_dumps_per_object(rows: list, pad: str) -> str:
+    """A list of flat objects as to_json wrote it before its columns were encoded at once."""
+    lines = [pad + "  " + json.dumps(r, allow_nan=False, separators=(", ", ": ")) for r in rows]
+    return "[\n" + ",\n".join(lines) + f"\n{pad}]"
+
+
+def test_to_json_encodes_a_table_of_objects_as_one_dumps_per_object_would():
+    rows = [
+        {"row": 1, "pose": "1", "target": None, "dx_mm": -0.0, "used": True, "50%": 1e22},
+        {"row": 2, "pose": 'p"é\n', "target": "tcp", "dx_mm": 1e-300, "used": False, "50%": 3},
+        {"row": 3, "pose": "x", "target": "left", "dx_mm": 0.1, "used": True, "50%": None},
+    ]
+    text = to_json({"residuals": rows})
+    assert text == '{\n  "residuals": ' + _one_dumps_per_object(rows, "  ") + "\n}\n"
+    assert json.loads(text) == {"residuals": rows}
+
+
+def test_to_json_keeps_the_object_by_object_path_for_other_lists():
+    mixed = [{"a": 1}, {"b": 2}, {"a": np.float64(0.5)}]  # other keys; a numpy float
+    assert (
+        to_json({"t": mixed})
+        == '{\n  "t": [\n    {"a": 1},\n    {"b": 2},\n    {"a": 0.5}\n  ]\n}\n'
+    )
+    with pytest.raises(ValueError):
+        to_json({"t": [{"x": 1.0}, {"x": float("inf")}]})
+    with pytest.raises(ValueError):
+        to_json({"t": [{"x": float("nan")}, {"x": 1.0}]})
+
+
+def test_write_json_writes_to_jsons_text_in_pieces(monkeypatch):
+    import io
+
+    import armcal.files.common as common
+
+    monkeypatch.setattr(common, "WRITE_BATCH", 10)  # many pieces
+    monkeypatch.setattr(common, "RECORD_CHUNK", 3)  # tables in several chunks
+    rows = [{"row": i, "pose": f"p{i}", "dx_mm": i / 7, "used": i % 2 == 0} for i in range(10)]
+    document = {"a": [1.5, 2.0], "residuals": rows, "other": [{"x": {"y": 1}}, {"z": None}]}
+    handle = io.BytesIO()
+    write_json(document, handle)
+    assert handle.getvalue().decode() == to_json(document)
+    assert json.loads(to_json(document)) == document

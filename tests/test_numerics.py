@@ -378,6 +378,23 @@ def test_least_squares_matches_lstsq_and_drops_unseen_directions(rng):
     assert_allclose(x @ singular.T, best @ singular.T, rtol=0, atol=1e-12)
 
 
+@pytest.mark.parametrize("rows", [90, 151])  # blocks of 20 rows: 4 and 7 blocks, the last longer
+def test_least_squares_in_blocks_of_rows_is_the_same_factorization(rng, monkeypatch, rows):
+    import armcal.numerics as numerics
+
+    a = rng.normal(size=(rows, 4)) * [1.0, 1e3, 1e-3, 5.0]
+    b = rng.normal(size=(3, rows))
+    whole = factor_least_squares(a)
+    monkeypatch.setattr(numerics, "QR_BLOCK_ROWS", 20)
+    blocked = factor_least_squares(a)
+    assert blocked.basis.shape == (rows, 4)
+    assert_allclose(blocked.basis.T @ blocked.basis, np.eye(4), rtol=0, atol=1e-14)
+    assert_allclose(blocked.svd.singular_values, whole.svd.singular_values, rtol=1e-13)
+    assert_allclose(blocked.solve(b), whole.solve(b), rtol=1e-12)
+    singular = np.column_stack([a[:, :3], a[:, 0] - 2.0 * a[:, 1]])
+    assert not factor_least_squares(singular).svd.full_rank
+
+
 def test_spd_inverse_never_raises():
     assert_allclose(spd_inverse(np.diag([2.0, 4.0])), np.diag([0.5, 0.25]), rtol=1e-15)
     inverse = spd_inverse(np.ones((3, 3)))  # rank 1: np.linalg.inv raises on it

@@ -116,6 +116,8 @@ def identify_3d(
         target=target,
         sigma=sigma,
         row_sigma=row_sigma,
+        # The sides were fitted on these conditions: the plan's factorization is shared.
+        conditions=rigid if model is arm else None,
         **kwargs,
     )
     warnings = list(cal.warnings)

@@ -305,9 +305,38 @@ def factor_least_squares(matrix: np.ndarray) -> LinearLeastSquares:
     p = matrix.shape[1]
     norms = np.linalg.norm(matrix, axis=0)
     norms = np.where(norms > 0, norms, 1.0)
-    basis, triangle = np.linalg.qr(matrix / norms, mode="reduced")
+    basis, triangle = _thin_qr(matrix, norms)
     left, s, vt = np.linalg.svd(triangle, full_matrices=True)
     return LinearLeastSquares(basis, left, ScaledSVD(_padded(s, p), vt, norms))
+
+
+#: Rows of a block of the tall-skinny QR (:func:`_thin_qr`).
+QR_BLOCK_ROWS = 1 << 15
+
+
+def _thin_qr(matrix: np.ndarray, norms: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Thin QR of ``matrix / norms`` ``(r, p)``, block of rows by block (TSQR).
+
+    Every block ``A_i = Q_i R_i``, then the QR of the stacked triangles
+    ``[R_1; R_2; ...] = Q' R`` gives ``R`` and ``Q = diag(Q_i) Q'``: as stable
+    as one Householder QR, but beside its result it holds one block, not the
+    copies of the whole matrix NumPy's QR makes (4 of them at 10^5 rows: the
+    largest arrays of an identification).
+    """
+    r, p = matrix.shape
+    if r <= 2 * QR_BLOCK_ROWS or r <= 2 * p:
+        return np.linalg.qr(matrix / norms, mode="reduced")
+    starts = list(range(0, r - QR_BLOCK_ROWS, QR_BLOCK_ROWS))  # the last block is the longest
+    blocks = [slice(a, b) for a, b in zip(starts, [*starts[1:], r], strict=True)]
+    basis = np.empty((r, p))
+    triangles = []
+    for rows in blocks:
+        basis[rows], triangle = np.linalg.qr(matrix[rows] / norms, mode="reduced")
+        triangles.append(triangle)
+    mixing, triangle = np.linalg.qr(np.concatenate(triangles), mode="reduced")
+    for i, rows in enumerate(blocks):
+        basis[rows] = basis[rows] @ mixing[i * p : (i + 1) * p]
+    return basis, triangle
 
 
 def solve_least_squares(

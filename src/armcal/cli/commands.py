@@ -36,8 +36,8 @@ from ..files import (
     read_measurements,
     read_plan,
     read_program,
-    to_json,
     write_folder,
+    write_json,
 )
 from ..formats import format_reference
 from ..models import CompliantArm, FitModel, PlanarArm
@@ -220,7 +220,7 @@ def identify(args: argparse.Namespace) -> None:
         document["cross_validation"] = summary
         text += "\n" + format_cross_validation(summary)
     if args.output is not None:
-        atomic_write(args.output, to_json(document))
+        atomic_write(args.output, partial(write_json, document))
     emit(args, document, text, run.warnings)
 
 

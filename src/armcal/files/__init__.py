@@ -13,7 +13,7 @@ from .calibration import (
     read_calibration,
     robot_to_dict,
 )
-from .common import STDIO, to_json
+from .common import STDIO, to_json, write_json
 from .paths import MANIFEST, OutputFolder, atomic_write, check_outputs, write_folder
 from .robots import (
     BUILTIN_ROBOTS,
@@ -80,4 +80,5 @@ __all__ = [
     "to_json",
     "unknown_parameter",
     "write_folder",
+    "write_json",
 ]

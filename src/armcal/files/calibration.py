@@ -264,8 +264,13 @@ def calibration_document(
     arm = cal.arm
     corr = cal.correlation
     fit = cal.goodness_of_fit
-    rows = cal.rows or tuple(range(1, cal.n_poses + 1))
-    used = np.ones(cal.n_poses, dtype=bool) if cal.used is None else cal.used
+    # Python numbers, column by column (a 10^5-row table indexed row by row in numpy is slow).
+    rows = [int(r) for r in cal.rows] if cal.rows else list(range(1, cal.n_poses + 1))
+    used = [True] * cal.n_poses if cal.used is None else np.asarray(cal.used, bool).tolist()
+    labels = [t.label for t in arm.targets]
+    targets = (
+        [None] * cal.n_poses if cal.target is None else [labels[t] for t in cal.target.tolist()]
+    )
     standardized = cal.standardized_residuals
     return {
         "format": CALIBRATION_FORMAT,
@@ -302,23 +307,18 @@ def calibration_document(
             "p_value": None if fit is None else _finite_or_none(fit.p_value),
         },
         "residuals": [
-            {
-                "row": int(row),
-                "pose": label,
-                "target": None if cal.target is None else arm.targets[cal.target[i]].label,
-                "dx_mm": float(r[0]),
-                "dy_mm": float(r[1]),
-                "used": bool(u),
-            }
-            for i, (row, label, r, u) in enumerate(
-                zip(rows, cal.pose_labels, cal.residuals, used, strict=True)
+            {"row": row, "pose": label, "target": t, "dx_mm": x, "dy_mm": y, "used": u}
+            for row, label, t, x, y, u in zip(
+                rows, cal.pose_labels, targets, *cal.residuals.T.tolist(), used, strict=True
             )
         ],
         "standardized_residuals": []
         if standardized is None
         else [
-            {"row": int(row), "pose": label, "x": float(z[0]), "y": float(z[1])}
-            for row, label, z in zip(rows, cal.pose_labels, standardized, strict=True)
+            {"row": row, "pose": label, "x": x, "y": y}
+            for row, label, x, y in zip(
+                rows, cal.pose_labels, *standardized.T.tolist(), strict=True
+            )
         ],
         "outliers": [
             {

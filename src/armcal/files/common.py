@@ -13,9 +13,9 @@ import math
 import os
 import re
 import sys
-from collections.abc import Sequence
+from collections.abc import Iterator, Sequence
 from pathlib import Path
-from typing import Any
+from typing import Any, BinaryIO
 
 from ..errors import InputError
 from ..formats import table_of
@@ -37,6 +37,7 @@ __all__ = [
     "read_text",
     "suggest",
     "to_json",
+    "write_json",
 ]
 
 
@@ -210,25 +211,121 @@ def to_json(document: dict) -> str:
     a covariance) is one line.  ``json.dumps`` with
     ``indent`` would put every number of a 10^5-row residual table on a line of
     its own and switch off the C encoder, three times slower than this (issue
-    20); the text parses to the same document.
+    20); the text parses to the same document.  A list of flat objects with the
+    same keys (a residual table) is encoded a column at a time
+    (:func:`_record_lines`), the same text as one ``json.dumps`` per object in a
+    tenth of the time.  :func:`write_json` writes the same text to a file
+    without holding it.
     """
-    return _json_value(document, "") + "\n"
+    return "".join(_json_pieces(document, "")) + "\n"
 
 
-def _json_value(value: Any, pad: str) -> str:
-    """``value`` as JSON text, continuing lines indented by ``pad`` (see :func:`to_json`)."""
+def write_json(document: dict, handle: BinaryIO) -> None:
+    """Write :func:`to_json`'s text of ``document`` to a binary ``handle`` (UTF-8), in pieces.
+
+    A 10^5-row calibration is tens of MB of text: written as it is made, it is
+    never held whole (for :func:`~armcal.files.atomic_write`).
+    """
+    batch: list[str] = []
+    size = 0
+    for piece in _json_pieces(document, ""):
+        batch.append(piece)
+        size += len(piece)
+        if size > WRITE_BATCH:
+            handle.write("".join(batch).encode("utf-8"))
+            batch, size = [], 0
+    batch.append("\n")
+    handle.write("".join(batch).encode("utf-8"))
+
+
+#: Characters :func:`write_json` gathers before it encodes and writes them.
+WRITE_BATCH = 1 << 20
+
+
+def _json_pieces(value: Any, pad: str) -> Iterator[str]:
+    """``value``'s JSON text in pieces, lines continued at ``pad`` (see :func:`to_json`)."""
     inner = pad + "  "
     if isinstance(value, dict) and value:
-        items = (f"{inner}{json.dumps(str(k))}: {_json_value(v, inner)}" for k, v in value.items())
-        return "{\n" + ",\n".join(items) + f"\n{pad}}}"
-    if isinstance(value, list | tuple) and any(isinstance(v, dict) for v in value):
-        items = (inner + (_json_value(v, inner) if _nested(v) else _json_line(v)) for v in value)
-        return "[\n" + ",\n".join(items) + f"\n{pad}]"
-    return _json_line(value)
+        yield "{\n"
+        for i, (key, item) in enumerate(value.items()):
+            yield (",\n" + inner if i else inner) + json.dumps(str(key)) + ": "
+            yield from _json_pieces(item, inner)
+        yield f"\n{pad}}}"
+    elif isinstance(value, list | tuple) and any(isinstance(v, dict) for v in value):
+        records = _record_lines(value)
+        separator = ",\n" + inner
+        yield "[\n" + inner
+        if records is not None:
+            for i, lines in enumerate(records):
+                yield (separator if i else "") + separator.join(lines)
+        else:
+            for i, item in enumerate(value):
+                if i:
+                    yield separator
+                if _nested(item):
+                    yield from _json_pieces(item, inner)
+                else:
+                    yield _json_line(item)
+        yield f"\n{pad}]"
+    else:
+        yield _json_line(value)
 
 
 def _json_line(value: Any) -> str:
     return json.dumps(value, allow_nan=False, separators=(", ", ": "))
+
+
+def _finite_floats(values: list[float]) -> list[str]:
+    if not all(map(math.isfinite, values)):
+        raise ValueError("Out of range float values are not JSON compliant")
+    return list(map(float.__repr__, values))
+
+
+#: JSON texts of a list of scalars of one exact type, as ``json.dumps`` writes each.
+_SCALARS: dict[type, Any] = {
+    float: _finite_floats,
+    int: lambda values: list(map(int.__repr__, values)),
+    bool: lambda values: ["true" if v else "false" for v in values],
+    str: lambda values: list(map(json.encoder.encode_basestring_ascii, values)),
+    type(None): lambda values: ["null"] * len(values),
+}
+
+#: Objects of a table whose texts are made at once (:func:`_record_lines`).
+RECORD_CHUNK = 1 << 14
+
+
+def _record_lines(rows: Sequence[Any]) -> Iterator[list[str]] | None:
+    """The lines of ``rows``, chunk by chunk, if they are objects of scalars with the same keys.
+
+    Each key's values are encoded together (one ``map`` of their type's
+    encoder, value by value where a column mixes types); None for any other
+    list.  Keys and types are checked before the first line is made.
+    """
+    first = rows[0]
+    if type(first) is not dict or not first:
+        return None
+    keys = tuple(first)
+    if not all(type(row) is dict and tuple(row) == keys for row in rows):
+        return None
+    if not all(set(map(type, (row[key] for row in rows))) <= _SCALARS.keys() for key in keys):
+        return None
+    names = (json.dumps(str(k)).replace("%", "%%") for k in keys)
+    template = "{" + ", ".join(f"{name}: %s" for name in names) + "}"
+    return _lines(rows, keys, template)
+
+
+def _lines(rows: Sequence[dict], keys: tuple, template: str) -> Iterator[list[str]]:
+    for start in range(0, len(rows), RECORD_CHUNK):
+        chunk = rows[start : start + RECORD_CHUNK]
+        columns = []
+        for key in keys:
+            values = [row[key] for row in chunk]
+            kinds = set(map(type, values))
+            if len(kinds) == 1:
+                columns.append(_SCALARS[kinds.pop()](values))
+            else:
+                columns.append([_SCALARS[type(v)]([v])[0] for v in values])
+        yield [template % fields for fields in zip(*columns, strict=True)]
 
 
 def _nested(value: Any) -> bool:

@@ -276,6 +276,10 @@ def check_outputs(
             raise fail(path, theirs)
 
 
+#: Characters of a text encoded and written at once (:func:`atomic_write`).
+WRITE_CHUNK = 1 << 20
+
+
 def atomic_write(path: PathArg, content: str | bytes | Callable[[BinaryIO], None]) -> None:
     """Write ``content`` to ``path`` through a temporary file and a rename.
 
@@ -323,7 +327,9 @@ def atomic_write(path: PathArg, content: str | bytes | Callable[[BinaryIO], None
     try:
         with os.fdopen(fd, "wb") as handle:
             if isinstance(content, str):
-                handle.write(content.encode("utf-8"))
+                # In pieces: a 10^5-row file encoded at once is a second copy of it.
+                for start in range(0, len(content), WRITE_CHUNK):
+                    handle.write(content[start : start + WRITE_CHUNK].encode("utf-8"))
             elif isinstance(content, bytes):
                 handle.write(content)
             else:

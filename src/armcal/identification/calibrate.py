@@ -27,7 +27,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from ..errors import ArmcalError, ArmcalWarning
-from ..models import FitModel, Loads
+from ..models import Conditions, FitModel, Loads
 from ..models.information import display_std
 from ..noise import instrument_override
 from ..numerics import point_norms, rms
@@ -142,6 +142,7 @@ def identify(
     max_iter: int = 50,
     target: ArrayLike | None = None,
     loads: Loads | None = None,
+    conditions: Conditions | None = None,
 ) -> Calibration:
     """Identify the parameters of ``model`` from measured poses, and judge the fit.
 
@@ -182,6 +183,11 @@ def identify(
     loads : Loads, optional
         Every pose's payload and tip force (a model of joint compliance; default:
         the robot file's payload).
+    conditions : Conditions, optional
+        The rows' conditions, already made by ``model.conditions`` from these
+        ``q``, ``target``, ``loads`` and ``row_sigma``: the factorizations
+        memoized on them are shared, not computed again (3-D data have fitted
+        both sides of their plane on them, :func:`armcal.instrument.identify_3d`).
 
     Returns
     -------
@@ -218,7 +224,11 @@ def identify(
     dq2 = -0.5 ± 0.0194 deg
     """
     dim = model.point_dim
-    conditions = model.conditions(q, target=target, loads=loads)
+    given_conditions = conditions
+    if conditions is None:
+        conditions = model.conditions(q, target=target, loads=loads)
+    elif not np.array_equal(conditions.q, np.asarray(q, dtype=float)):
+        raise ValueError("conditions must be those of q")
     q = conditions.q
     m = conditions.m
     points = np.asarray(points, dtype=float)
@@ -230,9 +240,10 @@ def identify(
         row_sigma = np.asarray(row_sigma, dtype=float)
         if row_sigma.shape != (m,) or not np.all(np.isfinite(row_sigma) & (row_sigma > 0)):
             raise ArmcalError("per-row sigma must be positive and finite, one value per pose")
-        conditions = model.conditions(
-            q, target=conditions.target, loads=conditions.loads, sigma_mm=row_sigma
-        )
+        if given_conditions is None:
+            conditions = model.conditions(
+                q, target=conditions.target, loads=conditions.loads, sigma_mm=row_sigma
+            )
     method = resolve_method(model, method)
     if sigma is not None:
         model = model.with_noise(instrument_override(model.noise, sigma))

@@ -43,6 +43,14 @@ def _noise(model: FitModel) -> NoiseModel:
     return relative_noise(model.noise)
 
 
+#: Rows whose Jacobian is made at once where only per-row products of it are kept.
+ROW_CHUNK = 1 << 14
+
+
+def _row_chunks(m: int) -> list[slice]:
+    return [slice(start, min(start + ROW_CHUNK, m)) for start in range(0, m, ROW_CHUNK)]
+
+
 class Fit:
     """One least-squares fit of a :class:`Problem` and what the judgement needs, all m poses.
 
@@ -105,9 +113,27 @@ class Fit:
 
     @cached_property
     def leverage(self) -> np.ndarray:
-        """``B_i B_i^T`` ``(m, d, d)`` with ``B_i = W_i J_i G``: each pose's hat block."""
-        b = self.jacobian @ self.factor
-        return b @ np.swapaxes(b, -1, -2)
+        """``B_i B_i^T`` ``(m, d, d)`` with ``B_i = W_i J_i G``: each pose's hat block.
+
+        A chunk of rows at a time (unless the whole Jacobian is at hand already):
+        the Jacobian ``(m, d, p)`` and its products would be the largest arrays of
+        an identification at 10^5 rows, for blocks of ``d x d``.
+        """
+        factor = self.factor
+        m = self.residuals.shape[0]
+        whole = "jacobian" in self.__dict__
+        out = np.empty((m, self.residuals.shape[1], self.residuals.shape[1]))
+        for rows in [slice(0, m)] if whole else _row_chunks(m):
+            b = (self.jacobian if whole else self._jacobian_rows(rows)) @ factor
+            out[rows] = b @ np.swapaxes(b, -1, -2)
+        return out
+
+    def _jacobian_rows(self, rows: slice) -> np.ndarray:
+        """:attr:`jacobian` of the rows ``rows`` alone."""
+        problem = self._problem
+        model = problem.model
+        jac = model.jacobian(problem.conditions.take(rows), self.params)[..., model.free]
+        return jac if self._w is None else self._w[rows] @ jac
 
     def scale(self, dof: int) -> float:
         """``sqrt(RSS_w / dof)`` over the poses in the fit (mm of the reference noise)."""

@@ -127,8 +127,8 @@ class Loads:
             return False
         return bool(np.ptp(self.payload_kg) > 0 or np.any(np.ptp(self.force_n, axis=0) > 0))
 
-    def take(self, rows: np.ndarray) -> Loads:
-        """The loads of the rows ``rows`` (index or mask)."""
+    def take(self, rows: np.ndarray | slice) -> Loads:
+        """The loads of the rows ``rows`` (index, mask or slice)."""
         return Loads(self.payload_kg[rows], self.force_n[rows])
 
     def repeat(self, count: int) -> Loads:
@@ -172,8 +172,8 @@ class Conditions:
         """Number of rows."""
         return int(np.shape(self.q)[-2])
 
-    def take(self, rows: np.ndarray) -> Conditions:
-        """The conditions of the rows ``rows`` (a mask or an index) of an unbatched ``q``."""
+    def take(self, rows: np.ndarray | slice) -> Conditions:
+        """The conditions of the rows ``rows`` (mask, index or slice) of an unbatched ``q``."""
         return Conditions(
             np.asarray(self.q)[rows],
             None if self.target is None else self.target[rows],
