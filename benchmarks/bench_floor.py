@@ -169,6 +169,7 @@ def write_inputs(folder: Path, poses: int, seed: int) -> None:
         ("plan-small", poses // 10),
         ("test", poses),
         ("prog", poses),
+        ("pool", poses),
     ):
         q = rng.uniform(-170.0, 170.0, (m, 4))
         np.savetxt(
@@ -352,6 +353,20 @@ def cases(folder: Path, poses: int) -> list[Case]:
             "design --order none",
             ["design", *robot, "--poses", str(poses), "--order", "none", "-o", f"{f}/design.csv"],
             ["design", arm4, str(poses), f"{f}/floor-design.csv"],
+        ),
+        Case(
+            "design --candidates (20 of the pool)",
+            [
+                "design",
+                *robot,
+                "--candidates",
+                f"{f}/pool.csv",
+                "--poses",
+                "20",
+                "-o",
+                f"{f}/design-pool.csv",
+            ],
+            ["design-pool", arm4, f"{f}/pool.csv", "20", f"{f}/floor-design-pool.csv"],
         ),
         Case(
             "export",

@@ -383,6 +383,30 @@ def design(cfg: Config, poses: str, out: str) -> None:
     np.savetxt(out, np.degrees(q), fmt="%.12g", delimiter=",", header=header, comments="")
 
 
+def design_pool(cfg: Config, pool: str, poses: str, out: str) -> None:
+    """The convex relaxation of picking ``poses`` from a pool (the pool method of issue 22):
+    D-optimal weights on the pool by the multiplicative algorithm (Titterington's
+    ``w_i <- w_i d_i / p``) until ``max d <= p (1 + 1e-3)``, then the poses of the largest
+    weights, their quality, written out."""
+    m = int(poses)
+    q = _plan(pool)
+    k = cfg.nominal.size
+    blocks = jacobian_user(cfg, q, None, np.zeros(k), np.zeros(k))  # (N, 2, p)
+    p = blocks.shape[2]
+    w = np.full(q.shape[0], 1.0 / q.shape[0])
+    for _ in range(10_000):
+        information = np.einsum("i,idp,idr->pr", w, blocks, blocks, optimize=True)
+        half = np.linalg.cholesky(np.linalg.inv(information))
+        d = np.sum((blocks @ half) ** 2, axis=(1, 2))  # tr(M^-1 I_i)
+        if d.max() <= p * (1 + 1e-3):
+            break
+        w *= d / p
+    chosen = q[np.argsort(w)[-m:]]
+    _quality(cfg, chosen)
+    header = ",".join(f"q{j}_deg" for j in range(1, cfg.n + 1))
+    np.savetxt(out, np.degrees(chosen), fmt="%.12g", delimiter=",", header=header, comments="")
+
+
 def synthesize(cfg: Config, plan: str, seed: str, out: str) -> None:
     """Measurements of the true arm at a plan's poses with noise of sigma, written out."""
     q = _plan(plan)
@@ -465,6 +489,7 @@ FLOORS = {
     "compensate": compensate,
     "evaluate": evaluate,
     "design": design,
+    "design-pool": design_pool,
     "synthesize": synthesize,
     "simulate": simulate,
     "export": export,
