@@ -64,17 +64,14 @@ Usage::
 from __future__ import annotations
 
 import argparse
-import datetime
 import json
-import os
-import platform
 import sys
 import tempfile
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
-from measure import armcal_argv, measure
+from measure import armcal_argv, at_end, machine_and_date, measure
 
 RESULTS = Path(__file__).with_name("RESULTS_FLOOR.md")
 FLOORS = str(Path(__file__).with_name("floors.py"))
@@ -445,13 +442,7 @@ def main() -> None:
     parser.add_argument("--no-write", action="store_true", help=f"do not write {RESULTS.name}")
     args = parser.parse_args()
 
-    load = os.getloadavg()
-    machine = (
-        f"{platform.node()}: nproc {os.cpu_count()}, {platform.machine()}, "
-        f"python {platform.python_version()}, numpy {np.__version__}; "
-        f"load average (1, 5, 15 min) at start {load[0]:.2f} {load[1]:.2f} {load[2]:.2f}"
-    )
-    date = datetime.datetime.now().astimezone().strftime("%Y-%m-%d %H:%M %Z")
+    machine, date = machine_and_date()
     print(f"armcal floor benchmark, {date}, {args.poses:,} poses\n{machine}\n", flush=True)
     rows = []
     with tempfile.TemporaryDirectory(prefix="armcal-floor-") as tmp:
@@ -468,8 +459,7 @@ def main() -> None:
                 flush=True,
             )
         checks = agreement(folder) if not args.only else []
-    load = os.getloadavg()
-    machine += f", at end {load[0]:.2f} {load[1]:.2f} {load[2]:.2f}"
+    machine = at_end(machine)
     lines = table(rows, args.poses) if not args.only else []
     notes = [f"- {r.name}: {extra(r.name)}" for r in rows if r.ratio > 2]
     print("\n".join(["", *checks, machine, *lines, *notes]))

@@ -55,9 +55,6 @@ Usage::
 from __future__ import annotations
 
 import argparse
-import datetime
-import os
-import platform
 import tempfile
 import time
 from collections.abc import Callable
@@ -66,7 +63,7 @@ from pathlib import Path
 
 import numpy as np
 from baselines import numpy_gauss_newton
-from measure import armcal_argv, measure
+from measure import armcal_argv, at_end, machine_and_date, measure
 
 from armcal import PlanarArm, forward_kinematics, identify, load_robot
 from armcal.doe import orthogonal_plan, random_plan
@@ -375,13 +372,7 @@ def main() -> None:
     parser.add_argument("--no-write", action="store_true", help="do not write RESULTS.md")
     args = parser.parse_args()
 
-    load = os.getloadavg()
-    machine = (
-        f"{platform.node()}: nproc {os.cpu_count()}, {platform.machine()}, "
-        f"python {platform.python_version()}, numpy {np.__version__}; "
-        f"load average (1, 5, 15 min) at start {load[0]:.2f} {load[1]:.2f} {load[2]:.2f}"
-    )
-    date = datetime.datetime.now().astimezone().strftime("%Y-%m-%d %H:%M %Z")
+    machine, date = machine_and_date()
     print(f"armcal scale benchmark, {date}\n{machine}\n")
     with tempfile.TemporaryDirectory(prefix="armcal-bench-") as tmp:
         folder = Path(tmp)
@@ -392,8 +383,7 @@ def main() -> None:
         if not args.quick:
             rows += bench_reproduce(folder)
     lines = table(rows)
-    load = os.getloadavg()
-    machine += f", at end {load[0]:.2f} {load[1]:.2f} {load[2]:.2f}"
+    machine = at_end(machine)
     print(f"\n{machine}")
     print("\n".join(lines))
     if not args.no_write:

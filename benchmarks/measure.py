@@ -8,9 +8,14 @@ a benchmark's own (large) process would report that process's peak instead.
 
 from __future__ import annotations
 
+import datetime
 import json
+import os
+import platform
 import subprocess
 import sys
+
+import numpy as np
 
 #: Runs argv[1:] and prints its wall time, exit status, peak RSS and stderr's tail.
 _MEASURE = """
@@ -38,6 +43,26 @@ def measure(argv: list[str]) -> tuple[float, float]:
     if report["status"] != 0:
         raise RuntimeError(f"{' '.join(argv)} failed: {report['stderr']}")
     return report["seconds"], report["maxrss_kib"] / 1024  # Linux reports KiB
+
+
+def _load() -> str:
+    one, five, fifteen = os.getloadavg()
+    return f"{one:.2f} {five:.2f} {fifteen:.2f}"
+
+
+def machine_and_date() -> tuple[str, str]:
+    """The machine (name, cores, interpreter, numpy, load average now) and the date."""
+    machine = (
+        f"{platform.node()}: nproc {os.cpu_count()}, {platform.machine()}, "
+        f"python {platform.python_version()}, numpy {np.__version__}; "
+        f"load average (1, 5, 15 min) at start {_load()}"
+    )
+    return machine, datetime.datetime.now().astimezone().strftime("%Y-%m-%d %H:%M %Z")
+
+
+def at_end(machine: str) -> str:
+    """``machine`` with the load average at the end of the run."""
+    return f"{machine}, at end {_load()}"
 
 
 def armcal_argv(args: list[str]) -> list[str]:

@@ -148,16 +148,6 @@ def _fit(arm: PlanarArm, q: np.ndarray, xy: np.ndarray) -> _Fit | None:
     return _Fit(plain, params, float(np.sum(residuals**2)), 2 * q.shape[0] - plain.n_free)
 
 
-def _turn(arm: PlanarArm) -> np.ndarray:
-    """The joint offsets ``(k,)`` that take up a turn of the instrument's axes.
-
-    A turn turns every link vector alike: the offsets ``A^-1 (1, ..., 1)`` of the
-    joint map (``dq1`` alone for the default map); round-off set to 0.
-    """
-    turn = np.linalg.solve(arm.angle_map, np.ones(arm.n_links))
-    return np.where(np.abs(turn) > 1e-9, turn, 0.0)
-
-
 def large_deviations(
     arm: PlanarArm, params: np.ndarray, *, rotation_free: bool = False
 ) -> list[str]:
@@ -196,7 +186,7 @@ def large_deviations(
         for i in range(k)
         if abs(dl[i]) > LARGE_LENGTH_FRACTION * nominal[i]
     ]
-    turned = _turn(arm) != 0 if rotation_free else np.zeros(k, dtype=bool)
+    turned = arm.turn_offsets != 0 if rotation_free else np.zeros(k, dtype=bool)
     found += [
         f"{names[k + i]} = {dq[i]:.4g} deg"
         for i in range(k)
@@ -233,7 +223,7 @@ def deviation_warning(arm: PlanarArm, params: np.ndarray) -> ArmcalWarning | Non
         return None
     rotation = ""
     k = arm.n_links
-    turn = _turn(arm)
+    turn = arm.turn_offsets
     turned = [arm.param_names[k + i] for i in np.flatnonzero(turn)]
     if arm.base_offset and any(item.split(" ")[0] in turned for item in found):
         offsets = combination(turn, arm.param_names[k : 2 * k])

@@ -9,7 +9,7 @@ import numpy as np
 
 from ..criteria import CRITERIA, attains_unit_bound, d_efficiency, efficiencies
 from ..errors import ArmcalError
-from ..models import ClosedFormPlan, ClosedFormPlans, FitModel
+from ..models import ClosedFormPlan, ClosedFormPlans, FitModel, equations_per_pose
 from ..progress import ProgressCallback
 from .certificate import Certificate, certify
 from .exchange import exchange_plan
@@ -236,7 +236,7 @@ def design(
     if order not in ORDERS:
         raise ArmcalError(f"unknown order {order!r}; choose one of {', '.join(ORDERS)}")
     p = model.n_free
-    per_pose = model.point_dim * max(len(model.target_labels), 1)  # every target measured
+    per_pose = equations_per_pose(model)
     min_poses = -(-p // per_pose)
     if m < min_poses:
         free = "" if p == model.n_params else " free"

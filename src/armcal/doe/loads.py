@@ -36,7 +36,7 @@ import numpy as np
 
 from ..criteria import d_efficiency
 from ..errors import ArmcalError
-from ..models import FitModel, Loads
+from ..models import FitModel, Loads, equations_per_pose
 from ..models.information import BlockInformation, pose_derivative
 from ..numerics import log_det
 from .certificate import Certificate, multiplicative_weights
@@ -250,7 +250,7 @@ def design_with_loads(
     rng = np.random.default_rng(rng)
     design_model, values = chosen
     p = design_model.n_free
-    per_pose = design_model.point_dim * max(len(design_model.target_labels), 1)
+    per_pose = equations_per_pose(design_model)
     if per_pose * m < p:
         raise ArmcalError(
             f"{m} poses give {per_pose * m} equations for {p} parameters "

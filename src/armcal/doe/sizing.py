@@ -11,7 +11,7 @@ import numpy as np
 
 from ..criteria import position_rms, predicted_std
 from ..errors import ArmcalError
-from ..models import FitModel, Loads
+from ..models import FitModel, Loads, equations_per_pose
 from ..progress import ProgressCallback
 from .designer import Design, design
 from .loads import design_with_loads
@@ -230,25 +230,26 @@ def poses_needed(
         test_q = random_plan(model, 1000, rng=rng)
     chosen = model.design_loads(payloads)
     fitted = model if chosen is None else chosen[0]  # what a plan of poses and loads fits
-    min_poses = -(-fitted.n_free // (model.point_dim * max(len(model.target_labels), 1)))
+    min_poses = -(-fitted.n_free // equations_per_pose(model))
     plans: dict[int, tuple[Design, float]] = {}
 
-    bracket = [0, 0]  # a size known to fail and one known to reach, once known
-    shown = [0]
+    low: int | None = None  # while bisecting: the largest size known not to reach
+    shown = 0  # thousandths of the search reported, never going back
 
-    def best(m: int) -> float:
-        if m not in plans:
-            made, loads = _best_plan(model, m, rng, payloads)
+    def best(size: int) -> float:
+        nonlocal shown
+        if size not in plans:
+            made, loads = _best_plan(model, size, rng, payloads)
             value = accuracy_metric(made.model, made.q, requirement, sigma, test_q, loads=loads)
-            plans[m] = (made, value)
-            if progress is not None:  # in thousandths, never going back
-                left = max(bracket[1] - bracket[0] - 1, 1).bit_length() if bracket[1] else 2
-                shown[0] = max(shown[0], 1000 * len(plans) // (len(plans) + left))
-                progress(shown[0], 1000)
-        return plans[m][1]
+            plans[size] = (made, value)
+            if progress is not None:  # designs left: 2 while jumping, then log2 of the span
+                left = 2 if low is None else max(m - low - 1, 1).bit_length()
+                shown = max(shown, 1000 * len(plans) // (len(plans) + left))
+                progress(shown, 1000)
+        return plans[size][1]
 
-    def reaches(m: int) -> bool:
-        return best(m) <= goal * (1 + REQUIREMENT_RTOL)
+    def reaches(size: int) -> bool:
+        return best(size) <= goal * (1 + REQUIREMENT_RTOL)
 
     m = max(min_poses, 2 * model.n_joints)
     failed = min_poses - 1  # largest m known not to reach the goal
@@ -276,16 +277,14 @@ def poses_needed(
     # designs, not one per pose below an overshooting jump.
     low = failed
     middle = m - 1
-    bracket[:] = [low, m]
     while m - low > 1:
         if reaches(middle):
             m = middle
         else:
             low = middle
         middle = (low + m) // 2
-        bracket[:] = [low, m]
     if progress is not None:
-        progress(len(plans), len(plans))
+        progress(1000, 1000)
     made, achieved = plans[m]
     order = order_poses(made.q)  # only the plan kept is ordered: the order changes no accuracy
     return PosesNeeded(

@@ -27,7 +27,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from ..errors import ArmcalError, ArmcalWarning
-from ..models import Conditions, FitModel, Loads
+from ..models import Conditions, FitModel, Loads, equations_per_pose
 from ..models.information import display_std
 from ..noise import instrument_override
 from ..numerics import point_norms, rms
@@ -61,6 +61,15 @@ __all__ = [
 FREED_IMPROVEMENT = 10.0
 
 
+def _refit_chi2(
+    problem: Problem, model: FitModel, used: np.ndarray, points: np.ndarray, method: str
+) -> float:
+    """Chi-square (in the problem's whitened units) of ``model`` fitted to ``points``, the
+    measurements of the poses ``used``."""
+    refit = Problem(model, problem.rows(used), points, method, problem.tol, problem.max_iter)
+    return float(np.sum(refit.fit(np.ones(len(points), dtype=bool)).whitened ** 2))
+
+
 def _freed_fit(
     problem: Problem, used: np.ndarray, sigma: float, chi2: float
 ) -> tuple[float, int] | None:
@@ -74,15 +83,11 @@ def _freed_fit(
     if not model.fixed:
         return None
     freed = model.with_fixed(())
-    conditions = problem.conditions if used.all() else problem.conditions.take(used)
-    if not freed.identifiability(conditions)[0].identifiable:
+    if not freed.identifiability(problem.rows(used))[0].identifiable:
         return None
     points = problem.points[used]
-    method = resolve_method(freed, "auto")
-    fit = Problem(freed, conditions, points, method, problem.tol, problem.max_iter).fit(
-        np.ones(len(points), dtype=bool)
-    )
-    freed_chi2 = float(np.sum(fit.whitened**2)) / sigma**2
+    freed_chi2 = _refit_chi2(problem, freed, used, points, resolve_method(freed, "auto"))
+    freed_chi2 /= sigma**2
     if freed_chi2 * FREED_IMPROVEMENT > chi2:
         return None
     return freed_chi2, model.point_dim * len(points) - freed.n_free
@@ -109,22 +114,19 @@ def _mirrored_fit(
     registration makes them the same, to within a factor 2).
     """
     model = problem.model
-    dim = model.point_dim
-    conditions = problem.rows(used)
     points = problem.points[used]
     found = []
     for what, order, signs in MIRRORS:
         mirrored = points.copy()
         mirrored[:, :2] = points[:, order] * np.asarray(signs)
-        fit = Problem(model, conditions, mirrored, problem.method, problem.tol, problem.max_iter)
-        whitened = fit.fit(np.ones(len(points), dtype=bool)).whitened
-        found.append((float(np.sum(whitened**2)) / sigma**2, what))
+        refit = _refit_chi2(problem, model, used, mirrored, problem.method)
+        found.append((refit / sigma**2, what))
     best, what = min(found)
     if best * FREED_IMPROVEMENT > chi2:
         return None
     if all(c <= 2 * best for c, _ in found):
         what = "x and y are swapped, or one axis is flipped (a camera's image y points down)"
-    return what, best, dim * len(points) - model.n_free
+    return what, best, model.point_dim * len(points) - model.n_free
 
 
 def identify(
@@ -322,9 +324,8 @@ def identify(
         warnings.append(outlier_warning(outliers, robust=robust))
     warnings.extend(extra)
     noun = row_noun(conditions.target)
-    per_pose = dim * max(len(model.target_labels), 1)
     few = (
-        few_dof_warning(int(np.count_nonzero(used)), dof, n_free, per_pose, noun)
+        few_dof_warning(int(np.count_nonzero(used)), dof, n_free, equations_per_pose(model), noun)
         if given
         else None
     )

@@ -34,6 +34,7 @@ from .interface import (
     Loads,
     PaperCriteria,
     PlanInformation,
+    equations_per_pose,
 )
 from .planar import INSTRUMENT_PARAMS, PlanarArm
 from .planar_geometry import (
@@ -110,6 +111,7 @@ __all__ = [
     "compliance_identifiability",
     "conditioning_warning",
     "covariance_factor",
+    "equations_per_pose",
     "every_target",
     "fit_plane",
     "forward_kinematics",

@@ -71,6 +71,7 @@ __all__ = [
     "Loads",
     "PaperCriteria",
     "PlanInformation",
+    "equations_per_pose",
 ]
 
 
@@ -723,3 +724,8 @@ class FitModel(Protocol):
     def arm_params(self, params: np.ndarray) -> np.ndarray:
         """The parameters of :attr:`arm` within ``params`` ``(..., p)``."""
         ...
+
+
+def equations_per_pose(model: FitModel) -> int:
+    """Equations one pose measured at every target gives: ``point_dim`` per target."""
+    return model.point_dim * max(len(model.target_labels), 1)

@@ -318,6 +318,16 @@ class PlanarGeometry:
         return tuple(nm for nm, c in zip(self.param_names, d, strict=True) if abs(c) > 1e-12)
 
     @property
+    def turn_offsets(self) -> np.ndarray:
+        """The joint offsets ``(k,)`` that turn every link vector alike, by 1 rad:
+        ``A^-1 (1, ..., 1)`` (``dq1`` alone for the default map; round-off set to 0).
+
+        A turn of the instrument's axes, or of the base, is this direction.
+        """
+        turn = np.linalg.solve(self.angle_map, np.ones(self.n_links))
+        return np.where(np.abs(turn) > 1e-9, turn, 0.0)
+
+    @property
     def rotation_direction(self) -> np.ndarray:
         """The user direction ``(p,)`` a base rotation cannot be told from (zeros without one).
 
@@ -327,7 +337,7 @@ class PlanarGeometry:
         d = np.zeros(self.n_params)
         if self.base_rotation:
             k = self.n_links
-            d[k : 2 * k] = -np.linalg.solve(self.angle_map, np.ones(k))
+            d[k : 2 * k] = -self.turn_offsets
             d[-1] = 1.0
         return d
 

@@ -95,10 +95,7 @@ def model_lines(arm: PlanarArm, *, plan: bool = True) -> list[str]:
 
 def _other_zero(arm: PlanarArm) -> str:
     """How to take another joint offset's zero as the arm's frame, where the map has one."""
-    k = arm.n_links
-    on = arm.rotation_direction[k : 2 * k] != 0
-    names = [n for n, o in zip(arm.param_names[k : 2 * k], on, strict=True) if o]
-    others = [n for n in names if n != arm.rotation_partner]
+    others = [n for n in arm.rotation_names() if n not in (arm.rotation_partner, "phi0")]
     if not others:
         return ""
     return f" (to take {others[0]}'s zero as the arm's instead, --fix {others[0]})"
