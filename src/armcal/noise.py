@@ -39,11 +39,14 @@ __all__ = [
 ]
 
 
-def _spd2(matrix: np.ndarray) -> bool:
-    """Whether a ``2 x 2`` matrix is symmetric positive definite and finite."""
-    a, b, c, d = matrix[0, 0], matrix[0, 1], matrix[1, 0], matrix[1, 1]
-    finite = bool(np.all(np.isfinite(matrix)))
-    return finite and abs(b - c) <= 1e-12 * max(abs(a), abs(d)) and a > 0 and a * d - b * c > 0
+def _spd(matrix: np.ndarray) -> bool:
+    """Whether a square matrix is symmetric positive definite and finite."""
+    if not np.all(np.isfinite(matrix)):
+        return False
+    scale = np.max(np.abs(np.diagonal(matrix)))
+    if np.max(np.abs(matrix - matrix.T)) > 1e-12 * scale:
+        return False
+    return bool(np.all(np.linalg.eigvalsh((matrix + matrix.T) / 2) > 0))
 
 
 @dataclass(frozen=True, eq=False, init=False)
@@ -71,10 +74,10 @@ class NoiseModel:
 
     def __init__(self, covariance_mm2: ArrayLike, joint_sigma: ArrayLike | None = None) -> None:
         cov = np.array(covariance_mm2, dtype=float)
-        if cov.shape != (2, 2) or not _spd2(cov):
+        if cov.shape not in ((2, 2), (3, 3)) or not _spd(cov):
             raise ValueError(
-                "covariance_mm2 must be a symmetric positive definite 2 x 2 matrix, "
-                f"got {cov.tolist()}"
+                "covariance_mm2 must be a symmetric positive definite 2 x 2 (in the plane) or "
+                f"3 x 3 matrix, got {cov.tolist()}"
             )
         cov = (cov + cov.T) / 2
         cov.flags.writeable = False
@@ -91,9 +94,35 @@ class NoiseModel:
         object.__setattr__(self, "joint_sigma", js)
 
     @classmethod
-    def isotropic(cls, sigma_mm: float, joint_sigma: ArrayLike | None = None) -> NoiseModel:
-        """``sigma^2 I``: the same noise along every direction (the paper's model)."""
-        return cls(np.eye(2) * float(sigma_mm) ** 2, joint_sigma)
+    def isotropic(
+        cls, sigma_mm: float, joint_sigma: ArrayLike | None = None, *, dim: int = 2
+    ) -> NoiseModel:
+        """``sigma^2 I``: the same noise along every direction (the paper's model), in
+        ``dim`` coordinates (2 in the plane, 3 in space)."""
+        return cls(np.eye(dim) * float(sigma_mm) ** 2, joint_sigma)
+
+    @property
+    def dim(self) -> int:
+        """Coordinates of a measured point: 2 or 3."""
+        return int(self.covariance_mm2.shape[0])
+
+    def for_dim(self, dim: int) -> NoiseModel:
+        """The same noise for points of ``dim`` coordinates: an isotropic instrument's
+        sigma carries over; ValueError for an anisotropic one of another dimension.
+
+        Examples
+        --------
+        >>> NoiseModel.isotropic(0.05).for_dim(3).covariance_mm2.shape
+        (3, 3)
+        """
+        if dim == self.dim:
+            return self
+        if not self.isotropic_instrument:
+            raise ValueError(
+                f"the instrument's noise is given for {self.dim}-D points, the measurements "
+                f"are {dim}-D; give sigma_mm as one number or {dim} values"
+            )
+        return NoiseModel.isotropic(self.sigma_mm, self.joint_sigma, dim=dim)
 
     @classmethod
     def per_axis(
@@ -104,14 +133,14 @@ class NoiseModel:
 
     @property
     def sigma_mm(self) -> float:
-        """The reference noise ``sqrt(2 / tr(Sigma_meas^-1))`` (mm): ``sigma`` when isotropic."""
-        return float(np.sqrt(2.0 / np.trace(np.linalg.inv(self.covariance_mm2))))
+        """The reference noise ``sqrt(d / tr(Sigma_meas^-1))`` (mm): ``sigma`` when isotropic."""
+        return float(np.sqrt(self.dim / np.trace(np.linalg.inv(self.covariance_mm2))))
 
     @property
     def isotropic_instrument(self) -> bool:
         """Whether ``Sigma_meas`` is a multiple of the identity."""
         c = self.covariance_mm2
-        return bool(c[0, 1] == 0 and c[0, 0] == c[1, 1])
+        return bool(np.array_equal(c, c[0, 0] * np.eye(self.dim)))
 
     @property
     def isotropic_iid(self) -> bool:
@@ -120,7 +149,7 @@ class NoiseModel:
 
     def with_instrument_sigma(self, sigma_mm: float) -> NoiseModel:
         """The same encoder noise with isotropic instrument noise ``sigma_mm``."""
-        return NoiseModel.isotropic(sigma_mm, self.joint_sigma)
+        return NoiseModel.isotropic(sigma_mm, self.joint_sigma, dim=self.dim)
 
     def check_joints(self, n: int) -> None:
         """Raise ValueError unless ``joint_sigma`` fits an arm of ``n`` joints."""
@@ -145,12 +174,13 @@ class NoiseModel:
         instrument's covariance counts.  ``row_sigma`` ``(m,)`` (mm) replaces the
         instrument covariance row by row.
         """
+        d = self.dim
         if row_sigma is None:
-            base = np.broadcast_to(self.covariance_mm2, (*shape, 2, 2))
+            base = np.broadcast_to(self.covariance_mm2, (*shape, d, d))
         else:
-            base = np.asarray(row_sigma, dtype=float)[..., None, None] ** 2 * np.eye(2)
+            base = np.asarray(row_sigma, dtype=float)[..., None, None] ** 2 * np.eye(d)
         if self.joint_sigma is None or joint_jacobian is None:
-            return np.broadcast_to(base, (*np.broadcast_shapes(shape, base.shape[:-2]), 2, 2))
+            return np.broadcast_to(base, (*np.broadcast_shapes(shape, base.shape[:-2]), d, d))
         n = joint_jacobian.shape[-1]
         scaled = joint_jacobian * np.broadcast_to(self.joint_sigma, (n,))
         return base + scaled @ np.swapaxes(scaled, -1, -2)
@@ -182,7 +212,9 @@ class NoiseModel:
 
 
 def whitening_from_covariance(cov: np.ndarray, reference: float) -> np.ndarray:
-    """``reference * L^-1`` ``(..., 2, 2)`` for ``cov = L L^T`` (closed-form Cholesky)."""
+    """``reference * L^-1`` ``(..., d, d)`` for ``cov = L L^T`` (closed-form Cholesky in 2-D)."""
+    if cov.shape[-1] != 2:
+        return reference * np.linalg.inv(np.linalg.cholesky(cov))
     a = cov[..., 0, 0]
     b = cov[..., 1, 0]
     c = cov[..., 1, 1]

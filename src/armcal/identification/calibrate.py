@@ -249,6 +249,7 @@ def identify(
     method = resolve_method(model, method)
     if sigma is not None:
         model = model.with_noise(instrument_override(model.noise, sigma))
+    model = model.prepared(conditions, points)
     given = model.noise is not None or row_sigma is not None
     problem = Problem(model, conditions, points, method, tol, max_iter)
     info = model.check_identifiable(conditions)

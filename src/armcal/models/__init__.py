@@ -9,6 +9,10 @@
   :mod:`~armcal.models.planar_criteria` -- the planar arm's design view, the
   paper's closed-form plans and its own criteria (D*, Table I);
 * :mod:`~armcal.models.compliance` -- joint compliance under gravity and load;
+* :mod:`~armcal.models.spatial_chain`, :mod:`~armcal.models.spatial_kinematics`,
+  :mod:`~armcal.models.spatial_selection`, :mod:`~armcal.models.spatial_registration`,
+  :mod:`~armcal.models.spatial` -- a spatial serial arm (:class:`SpatialArm`)
+  from a URDF or a modified DH table;
 * :mod:`~armcal.models.plane` -- the plane of motion of 3-D data;
 * :mod:`~armcal.models.calibrated` -- an arm with its identified deviations.
 """
@@ -77,9 +81,14 @@ from .planar_kinematics import (
 )
 from .plane import Plane, fit_plane
 from .regions import Annulus, Box, Region
+from .spatial import SINGLE_TARGET, SpatialArm, default_targets
+from .spatial_chain import SerialChain, UrdfJoint, matrix_rpy, rpy_matrix
+from .spatial_kinematics import SpatialLayout
+from .spatial_selection import Selection
 
 __all__ = [
     "INSTRUMENT_PARAMS",
+    "SINGLE_TARGET",
     "STANDARD_GRAVITY",
     "Annulus",
     "Box",
@@ -102,7 +111,12 @@ __all__ = [
     "PlanarGeometry",
     "Plane",
     "Region",
+    "Selection",
+    "SerialChain",
+    "SpatialArm",
+    "SpatialLayout",
     "Target",
+    "UrdfJoint",
     "barely_identifiable_warning",
     "check_compliance_identifiable",
     "check_identifiable",
@@ -111,6 +125,7 @@ __all__ = [
     "compliance_identifiability",
     "conditioning_warning",
     "covariance_factor",
+    "default_targets",
     "equations_per_pose",
     "every_target",
     "fit_plane",
@@ -123,6 +138,7 @@ __all__ = [
     "link_units",
     "link_vectors",
     "listing",
+    "matrix_rpy",
     "model_basis",
     "model_columns",
     "paper_from_user",
@@ -130,6 +146,7 @@ __all__ = [
     "plan_rows",
     "plan_svd",
     "row_echelon",
+    "rpy_matrix",
     "scaled_columns",
     "scaled_jacobian",
     "split_params",

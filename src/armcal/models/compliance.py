@@ -56,9 +56,14 @@ from numpy.typing import ArrayLike
 
 from ..errors import ArmcalError, ArmcalWarning, NotIdentifiableError, action
 from ..noise import NoiseModel
-from ..numerics import COND_WARN, RANK_RTOL, ScaledSVD, scaled_svd
-from .identifiability import Identifiability, combination, listing, row_echelon
-from .information import BlockInformation, covariance_factor_from, whitened_free_jacobian
+from ..numerics import ScaledSVD
+from .identifiability import Identifiability, listing
+from .information import (
+    BlockInformation,
+    column_identifiability,
+    covariance_factor_from,
+    whitened_free_jacobian,
+)
 from .interface import Conditions, Effect, LinearPositions, Loads
 from .planar import PlanarArm
 from .planar_kinematics import (
@@ -595,6 +600,14 @@ class CompliantArm:
 
     # -- analysis -----------------------------------------------------------------------
 
+    def prepared(self, conditions: Conditions, points: np.ndarray | None = None) -> CompliantArm:
+        """Itself: its parameters are minimal and need no placing."""
+        return self
+
+    @property
+    def held_notes(self) -> tuple[str, ...]:
+        return ()
+
     def identifiability(self, conditions: Conditions) -> tuple[Identifiability, ScaledSVD]:
         return compliance_identifiability(self, conditions)
 
@@ -740,31 +753,7 @@ def compliance_identifiability(
     The free columns of :meth:`CompliantArm.jacobian` at zero deviations decide
     through the one rank policy of :mod:`armcal.numerics`.
     """
-    jac = model.jacobian(conditions, np.zeros(model.n_params))[..., model.free]
-    svd = scaled_svd(jac.reshape(-1, model.n_free))
-    names = model.free_names
-    scale = model.display_scale[model.free]
-    null = svd.directions(RANK_RTOL)
-    weak = svd.directions(1.0 / COND_WARN)
-    bad: tuple[str, ...] = ()
-    if null.shape[0]:
-        basis, _ = np.linalg.qr((null * svd.column_norms).T)
-        bad = tuple(
-            n for n, w in zip(names, np.linalg.norm(basis, axis=1), strict=True) if w > 1e-8
-        )
-
-    null_rows = row_echelon(null * scale)
-    weak_rows = row_echelon(weak * scale, tol=1e-3)
-    m = conditions.m
-    info = Identifiability(
-        rank=int(svd.rank),
-        n_params=model.n_free,
-        singular_values=svd.singular_values / np.sqrt(max(m, 1)),
-        unidentifiable=bad,
-        combinations=tuple(combination(v, names) for v in null_rows),
-        poorly_determined=tuple(combination(v, names, drop=1e-3) for v in weak_rows),
-    )
-    return info, svd
+    return column_identifiability(model, conditions, np.zeros(model.n_params))
 
 
 def check_compliance_identifiable(

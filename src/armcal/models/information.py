@@ -26,12 +26,13 @@ from functools import cached_property
 
 import numpy as np
 
-from ..numerics import ScaledSVD, gram_of_factor, scaled_svd
-from .identifiability import Identifiability
+from ..numerics import COND_WARN, RANK_RTOL, ScaledSVD, gram_of_factor, scaled_svd
+from .identifiability import Identifiability, combination, row_echelon
 from .interface import Conditions, FitModel, Loads
 
 __all__ = [
     "BlockInformation",
+    "column_identifiability",
     "covariance_factor_from",
     "display_std",
     "mean_tip_variance",
@@ -112,6 +113,39 @@ def covariance_factor_from(
     g[..., free, :] = np.where(ok[..., None, None], factor, 0.0)
     ok = ok & np.all(np.isfinite(g), axis=(-2, -1))
     return np.where(ok[..., None, None], g, np.inf), ok
+
+
+def column_identifiability(
+    model: FitModel, conditions: Conditions, params: np.ndarray
+) -> tuple[Identifiability, ScaledSVD]:
+    """Rank analysis of the free columns of ``model``'s Jacobian at ``params``.
+
+    The one rank policy of :mod:`armcal.numerics` on unit-norm columns; the null
+    and poorly determined directions in display units (mm, deg).
+    """
+    jac = model.jacobian(conditions, params)[..., model.free]
+    svd = scaled_svd(jac.reshape(-1, model.n_free))
+    names = model.free_names
+    scale = model.display_scale[model.free]
+    null = svd.directions(RANK_RTOL)
+    weak = svd.directions(1.0 / COND_WARN)
+    bad: tuple[str, ...] = ()
+    if null.shape[0]:
+        basis, _ = np.linalg.qr((null * svd.column_norms).T)
+        bad = tuple(
+            n for n, w in zip(names, np.linalg.norm(basis, axis=1), strict=True) if w > 1e-8
+        )
+    null_rows = row_echelon(null * scale)
+    weak_rows = row_echelon(weak * scale, tol=1e-3)
+    info = Identifiability(
+        rank=int(svd.rank),
+        n_params=model.n_free,
+        singular_values=svd.singular_values / np.sqrt(max(conditions.m, 1)),
+        unidentifiable=bad,
+        combinations=tuple(combination(v, names) for v in null_rows),
+        poorly_determined=tuple(combination(v, names, drop=1e-3) for v in weak_rows),
+    )
+    return info, svd
 
 
 def predicted_covariance(

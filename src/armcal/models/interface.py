@@ -607,6 +607,21 @@ class FitModel(Protocol):
         ...
 
     # -- analysis -----------------------------------------------------------
+    def prepared(self, conditions: Conditions, points: np.ndarray | None = None) -> FitModel:
+        """The model made ready for these rows: its nuisance parameters placed from the
+        measured ``points`` (when given) and its identifiable set chosen for them.
+
+        A family whose parameters are minimal returns itself; an over-complete one
+        (the spatial arm) holds what the rows cannot separate, by a fixed rule, and
+        says why in :attr:`held_notes`.
+        """
+        ...
+
+    @property
+    def held_notes(self) -> tuple[str, ...]:
+        """Why the parameters held by the family's rule are held: what each merges into."""
+        ...
+
     def identifiability(self, conditions: Conditions) -> tuple[Identifiability, ScaledSVD]:
         """Rank analysis of the model's scaled, whitened Jacobian at the nominal arm."""
         ...

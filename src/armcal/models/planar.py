@@ -330,6 +330,14 @@ class PlanarArm(PlanarArmSpec):
             (self, "plan-svd"), lambda: plan_svd(self, conditions.q, conditions.target)
         )
 
+    def prepared(self, conditions: Conditions, points: np.ndarray | None = None) -> PlanarArm:
+        """Itself: its parameters are minimal and need no placing."""
+        return self
+
+    @property
+    def held_notes(self) -> tuple[str, ...]:
+        return ()
+
     def identifiability(self, conditions: Conditions) -> tuple[Identifiability, ScaledSVD]:
         """Rank of the plan's Hadamard-scaled Jacobian (``planar_information.identifiability``)."""
         svd = self._plan_svd(conditions)

@@ -1,0 +1,604 @@
+"""A spatial serial arm as a fit model: :class:`SpatialArm`.
+
+The arm is a :class:`~armcal.models.spatial_chain.SerialChain` (from a URDF or a
+modified DH table) read through a joint map; its parameters are those of
+:mod:`~armcal.models.spatial_kinematics` (base pose, every joint's placement
+error and zero, every target's position), of which the measurements at hand
+identify a subset chosen by :mod:`~armcal.models.spatial_selection`
+(:meth:`SpatialArm.prepared`).  The base pose and the targets start where
+:mod:`~armcal.models.spatial_registration` puts them.  Every method of
+:class:`~armcal.models.interface.FitModel` is a thin call into those modules or
+into the generic ones of :mod:`~armcal.models.information`.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass, field, replace
+from functools import cached_property
+from typing import Any
+
+import numpy as np
+from numpy.typing import ArrayLike
+
+from ..errors import ArmcalError, ArmcalWarning, NotIdentifiableError
+from ..noise import NoiseModel, relative_noise
+from ..numerics import ScaledSVD
+from .identifiability import Identifiability, listing
+from .information import (
+    BlockInformation,
+    column_identifiability,
+    covariance_factor_from,
+    whitened_free_jacobian,
+)
+from .interface import Conditions, Effect, LinearPositions, Loads
+from .spatial_chain import SerialChain, matrix_rpy
+from .spatial_kinematics import ChainKinematics, SpatialLayout, kinematics
+from .spatial_registration import register
+from .spatial_selection import select
+
+__all__ = [
+    "SINGLE_TARGET",
+    "SpatialArm",
+    "default_targets",
+]
+
+#: The label of the one target of data without a target column.
+SINGLE_TARGET = "tool"
+
+#: Where targets without a nominal position are thought to be before any data: this
+#: far beyond the flange (mm), on a circle of this radius about the last joint's axis
+#: (a target on that axis would not see the joint turn).
+DEFAULT_TARGET_OFFSET_MM = (100.0, 50.0)
+
+
+def default_targets(count: int) -> np.ndarray:
+    """Nominal positions ``(count, 3)`` of targets the robot file does not place.
+
+    Examples
+    --------
+    >>> default_targets(1).tolist()
+    [[50.0, 0.0, 100.0]]
+    """
+    beyond, radius = DEFAULT_TARGET_OFFSET_MM
+    angle = 2 * np.pi * np.arange(count) / count
+    return np.column_stack(
+        [radius * np.cos(angle), radius * np.sin(angle), np.full(count, beyond)]
+    )
+
+
+@dataclass(frozen=True, eq=False)
+class SpatialArm:
+    """A spatial serial arm to calibrate.
+
+    Attributes
+    ----------
+    chain : SerialChain
+        The nominal kinematics.
+    name : str
+    joint_map : ndarray, shape (n, n)
+        ``u = M q``: the chain's joint values from the controller's readings.
+    limits : ndarray, shape (n, 2)
+        Limits of the readings ``q`` (rad, mm).
+    targets : tuple of str
+        Target labels (``("tool",)`` for data without a target column).
+    target_positions : ndarray, shape (k, 3)
+        Nominal positions of the targets in the tip frame (mm).
+    base_pose : ndarray, shape (6,)
+        Nominal base pose (mm, rad): identity until registered to data.
+    noise : NoiseModel or None
+        3-D instrument noise (and encoder noise).
+    user_fixed : tuple of str
+        Parameters the user holds.
+    held : tuple of str
+        Parameters left out by the identifiable-set rule for the measurements
+        at hand (:meth:`prepared`).
+    merges : tuple of str
+        Why they are left out, one sentence per group.
+    known_targets : bool
+        Whether the robot file gives the targets' positions.
+    """
+
+    chain: SerialChain
+    name: str = "arm"
+    joint_map: np.ndarray = field(default_factory=lambda: np.zeros((0, 0)))
+    limits: np.ndarray = field(default_factory=lambda: np.zeros((0, 2)))
+    targets: tuple[str, ...] = (SINGLE_TARGET,)
+    target_positions: np.ndarray = field(default_factory=lambda: np.zeros((0, 3)))
+    base_pose: np.ndarray = field(default_factory=lambda: np.zeros(6))
+    noise: NoiseModel | None = None
+    user_fixed: tuple[str, ...] = ()
+    held: tuple[str, ...] = ()
+    merges: tuple[str, ...] = ()
+    known_targets: bool = False
+
+    def __post_init__(self) -> None:
+        n = self.chain.n_joints
+        if self.joint_map.size == 0:
+            object.__setattr__(self, "joint_map", np.eye(n))
+        if self.joint_map.shape != (n, n) or abs(np.linalg.det(self.joint_map)) < 1e-12:
+            raise ValueError(f"joint_map must be an invertible {n} x {n} matrix")
+        if self.limits.size == 0:
+            object.__setattr__(self, "limits", self._limits_from_chain())
+        if self.limits.shape != (n, 2) or not np.all(self.limits[:, 0] < self.limits[:, 1]):
+            raise ValueError(f"joint limits must have shape ({n}, 2) with lo < hi")
+        if not self.targets or len(set(self.targets)) != len(self.targets):
+            raise ValueError("targets need distinct labels")
+        if self.target_positions.size == 0:
+            object.__setattr__(self, "target_positions", default_targets(len(self.targets)))
+        if self.target_positions.shape != (len(self.targets), 3):
+            raise ValueError("one nominal position (x, y, z) per target")
+        if self.noise is not None and self.noise.dim != 3:
+            object.__setattr__(self, "noise", self.noise.for_dim(3))
+        if self.noise is not None:
+            self.noise.check_joints(n)
+        unknown = [p for p in (*self.user_fixed, *self.held) if p not in self.layout.names]
+        if unknown:
+            raise ValueError(f"unknown parameters {unknown}; {self.name} has {self.layout.names}")
+
+    def _limits_from_chain(self) -> np.ndarray:
+        """Limits of ``q``: the chain's (of ``u``) for an identity map, else a turn each way;
+        a continuous joint turns a full turn each way."""
+        identity = np.array_equal(self.joint_map, np.eye(self.chain.n_joints))
+        base = self.chain.joint_limits if identity else np.full((self.chain.n_joints, 2), np.inf)
+        turn = np.where(self.chain.revolute, np.pi, 1000.0)[:, None] * np.array([-1.0, 1.0])
+        return np.where(np.isfinite(base), base, turn)
+
+    def replace(self, **changes: Any) -> SpatialArm:
+        """The same arm with fields changed."""
+        return replace(self, **changes)
+
+    @cached_property
+    def layout(self) -> SpatialLayout:
+        return SpatialLayout(self.chain.kinds, self.targets)
+
+    @cached_property
+    def nominal(self) -> np.ndarray:
+        """The nominal parameters ``(p,)``: base pose, zero errors, nominal targets."""
+        out = np.zeros(self.layout.n_params)
+        out[:6] = self.base_pose
+        out[self.layout.target_start :] = self.target_positions.ravel()
+        return out
+
+    def _params(self, params: np.ndarray | None) -> np.ndarray:
+        return self.nominal if params is None else np.asarray(params, dtype=float)
+
+    # -- what is identified ----------------------------------------------------------
+
+    @property
+    def param_names(self) -> tuple[str, ...]:
+        return self.layout.names
+
+    @property
+    def param_units(self) -> tuple[str, ...]:
+        return self.layout.units
+
+    @property
+    def display_scale(self) -> np.ndarray:
+        return self.layout.display_scale
+
+    @property
+    def fixed(self) -> tuple[str, ...]:
+        return tuple(n for n in self.layout.names if n in self.user_fixed or n in self.held)
+
+    @cached_property
+    def free(self) -> np.ndarray:
+        held = set(self.fixed)
+        return np.array([n not in held for n in self.layout.names])
+
+    @property
+    def free_names(self) -> tuple[str, ...]:
+        return tuple(n for n, f in zip(self.layout.names, self.free, strict=True) if f)
+
+    @property
+    def n_params(self) -> int:
+        return self.layout.n_params
+
+    @property
+    def n_free(self) -> int:
+        return int(np.sum(self.free))
+
+    @property
+    def angle_params(self) -> np.ndarray:
+        return self.layout.angles
+
+    @property
+    def instrument_params(self) -> np.ndarray:
+        return self.layout.instrument
+
+    @property
+    def n_joints(self) -> int:
+        return self.chain.n_joints
+
+    @property
+    def joint_limits(self) -> np.ndarray:
+        return self.limits
+
+    def within_limits(self, q: np.ndarray, *, tol: float = 1e-9) -> np.ndarray:
+        """Every reading within its limit and every joint value ``M q`` within the chain's."""
+        q = np.asarray(q, dtype=float)
+        ok = (q >= self.limits[:, 0] - tol) & (q <= self.limits[:, 1] + tol)
+        u = q @ self.joint_map.T
+        lo, hi = self.chain.joint_limits[:, 0], self.chain.joint_limits[:, 1]
+        return ok & (u >= lo - tol) & (u <= hi + tol)
+
+    @property
+    def point_dim(self) -> int:
+        return 3
+
+    @cached_property
+    def reach_mm(self) -> float:
+        """The sum of the joint origins' and the tip's offsets (an upper bound of the reach)."""
+        offsets = np.linalg.norm(self.chain.origins[:, :3, 3], axis=1)
+        return float(np.sum(offsets) + np.linalg.norm(self.chain.tip[:3, 3]) + 1.0)
+
+    @property
+    def target_labels(self) -> tuple[str, ...]:
+        return () if self.targets == (SINGLE_TARGET,) else self.targets
+
+    @property
+    def arm(self) -> SpatialArm:
+        return self
+
+    def with_noise(self, noise: NoiseModel | None) -> SpatialArm:
+        return replace(self, noise=noise)
+
+    def with_fixed(self, fixed: Sequence[str]) -> SpatialArm:
+        """The user's fixed set replaced; the rule's set is chosen again (:meth:`prepared`)."""
+        return replace(self, user_fixed=tuple(fixed), held=(), merges=())
+
+    @property
+    def default_payload_kg(self) -> None:
+        return None
+
+    def unpredicted_loads(self, loads: Loads) -> None:
+        return None
+
+    @property
+    def uses_gravity(self) -> bool:
+        return False
+
+    def with_gravity(self, gravity: np.ndarray | None) -> SpatialArm:
+        return self
+
+    def target_index(self, labels: Sequence[str]) -> np.ndarray:
+        """Indices of ``labels`` among the targets (ValueError for an unknown one)."""
+        lookup = {label: i for i, label in enumerate(self.targets)}
+        missing = sorted({str(x) for x in labels} - lookup.keys())
+        if missing:
+            raise ValueError(f"unknown targets {missing}; {self.name} has {list(self.targets)}")
+        return np.array([lookup[str(x)] for x in labels], dtype=int)
+
+    # -- measurement -------------------------------------------------------------------
+
+    def conditions(
+        self,
+        q: ArrayLike,
+        *,
+        target: ArrayLike | None = None,
+        loads: Loads | None = None,
+        sigma_mm: np.ndarray | None = None,
+    ) -> Conditions:
+        q = np.asarray(q, dtype=float)
+        if q.ndim < 2 or q.shape[-1] != self.n_joints:
+            raise ValueError(f"q must have shape (m, {self.n_joints}), got {q.shape}")
+        index = None
+        if target is not None:
+            index = np.asarray(target, dtype=int)
+            if index.shape != q.shape[-2:-1] or np.any((index < 0) | (index >= len(self.targets))):
+                raise ValueError(
+                    f"target must hold {q.shape[-2]} indices below {len(self.targets)}"
+                )
+        elif len(self.targets) > 1:
+            raise ValueError(f"{self.name} has several targets: say which one every row measures")
+        return Conditions(q, index, None, sigma_mm)
+
+    def _kinematics(
+        self, conditions: Conditions, params: np.ndarray | None, *, derivatives: bool = False
+    ) -> ChainKinematics:
+        return kinematics(
+            self.chain,
+            self.joint_map,
+            self.layout,
+            conditions.q,
+            conditions.target,
+            self._params(params),
+            derivatives=derivatives,
+        )
+
+    def positions(self, conditions: Conditions, params: np.ndarray | None = None) -> np.ndarray:
+        return self._kinematics(conditions, params).points
+
+    def jacobian(self, conditions: Conditions, params: np.ndarray | None = None) -> np.ndarray:
+        jac = self._kinematics(conditions, params, derivatives=True).jacobian
+        assert jac is not None
+        return jac
+
+    def joint_jacobian(
+        self, conditions: Conditions, params: np.ndarray | None = None
+    ) -> np.ndarray:
+        jac = self._kinematics(conditions, params, derivatives=True).joint_jacobian
+        assert jac is not None
+        return jac
+
+    def pose_covariances(
+        self,
+        conditions: Conditions,
+        params: np.ndarray | None = None,
+        *,
+        noise: NoiseModel | None = None,
+    ) -> np.ndarray:
+        noise = relative_noise(self.noise if noise is None else noise).for_dim(3)
+        joint_jac = None
+        if noise.joint_sigma is not None:
+            joint_jac = self.joint_jacobian(conditions, params)
+        shape = np.broadcast_shapes(
+            np.shape(conditions.q)[:-1], () if params is None else (*np.shape(params)[:-1], 1)
+        )
+        return noise.pose_covariances(
+            shape, joint_jacobian=joint_jac, row_sigma=conditions.sigma_mm
+        )
+
+    def whitening(
+        self, conditions: Conditions, params: np.ndarray | None = None
+    ) -> np.ndarray | None:
+        noise = self.noise
+        plain = noise is None or noise.isotropic_iid
+        if plain and conditions.sigma_mm is None:
+            return None
+        noise = relative_noise(noise).for_dim(3)
+        joint_jac = None
+        if noise.joint_sigma is not None:
+            joint_jac = self.joint_jacobian(conditions, params)
+        shape = np.broadcast_shapes(
+            np.shape(conditions.q)[:-1], () if params is None else (*np.shape(params)[:-1], 1)
+        )
+        return noise.whitening(shape, joint_jacobian=joint_jac, row_sigma=conditions.sigma_mm)
+
+    # -- fitting -----------------------------------------------------------------------
+
+    @property
+    def has_closed_form(self) -> bool:
+        return False
+
+    @property
+    def why_no_closed_form(self) -> str:
+        return (
+            f"{self.name} is a spatial arm, whose points are not linear in any coordinates "
+            "of its parameters; use --method gauss-newton (or auto)"
+        )
+
+    def closed_form(self, conditions: Conditions) -> None:
+        return None
+
+    @property
+    def nested(self) -> None:
+        return None
+
+    @property
+    def effect(self) -> Effect | None:
+        return None
+
+    def lift(self, nested_params: np.ndarray) -> np.ndarray:
+        return np.asarray(nested_params, dtype=float)
+
+    def registration(
+        self, conditions: Conditions, points: np.ndarray, weights: np.ndarray | None = None
+    ) -> np.ndarray:
+        """Parameters ``(p,)``: the nominal arm with its base pose and targets registered to
+        one point set ``(m, 3)`` (:mod:`~armcal.models.spatial_registration`)."""
+        frames = self._kinematics(conditions, self._unregistered()).rotation
+        tips = self._kinematics(conditions, self._at_tip()).points
+        target = (
+            np.zeros(conditions.m, dtype=int) if conditions.target is None else conditions.target
+        )
+        nominal = self.target_positions
+        rotation, translation, found = register(frames, tips, target, points, nominal, weights)
+        out = self.nominal.copy()
+        out[:3] = translation
+        out[3:6] = matrix_rpy(rotation)
+        if not self.known_targets:
+            measured = np.zeros(len(self.targets), dtype=bool)
+            measured[np.unique(target)] = True
+            positions = np.where(measured[:, None], found, nominal)
+            out[self.layout.target_start :] = positions.ravel()
+        return out
+
+    def _unregistered(self) -> np.ndarray:
+        out = self.nominal.copy()
+        out[:6] = 0.0
+        return out
+
+    def _at_tip(self) -> np.ndarray:
+        out = self._unregistered()
+        out[self.layout.target_start :] = 0.0
+        return out
+
+    def start(
+        self, conditions: Conditions, points: np.ndarray, weights: np.ndarray | None = None
+    ) -> np.ndarray:
+        """Every set's registration (module notes), the robot's errors at 0."""
+        points = np.asarray(points, dtype=float)
+        sets = points.reshape(-1, *points.shape[-2:])
+        w = None if weights is None else np.broadcast_to(weights, sets.shape[:2])
+        if w is None:  # sets of one experiment (Monte Carlo): their mean is registered once
+            out = np.tile(self.registration(conditions, sets.mean(axis=0)), (sets.shape[0], 1))
+        else:
+            out = np.array(
+                [self.registration(conditions, s, wi) for s, wi in zip(sets, w, strict=True)]
+            )
+        held = ~self.free
+        out[:, held] = self.nominal[held]  # what is held stays at its nominal value
+        return out
+
+    def canonical(self, params: np.ndarray) -> np.ndarray:
+        """Angles wrapped into ``(-pi, pi]``."""
+        params = np.array(params, dtype=float)
+        angles = self.layout.angles
+        params[..., angles] = np.pi - np.mod(np.pi - params[..., angles], 2 * np.pi)
+        return params
+
+    def step_scale(self, conditions: Conditions) -> np.ndarray:
+        """A millimetre per mm; the reach per radian."""
+        return np.where(self.layout.angles, self.reach_mm, 1.0)
+
+    # -- the identifiable set ------------------------------------------------------------
+
+    def prepared(self, conditions: Conditions, points: np.ndarray | None = None) -> SpatialArm:
+        """The arm for these rows: registered to ``points`` (when given) and reduced to the
+        parameters they identify, by the fixed rule of :mod:`~armcal.models.spatial_selection`.
+        """
+        arm = self
+        if points is not None:
+            registered = self.registration(conditions, np.asarray(points, dtype=float))
+            arm = replace(
+                self,
+                base_pose=registered[:6],
+                target_positions=self.layout.target_points(registered),
+            )
+        jac = arm.jacobian(conditions)
+        w = arm.whitening(conditions)
+        rows = jac if w is None else w @ jac
+        rows = rows.reshape(-1, arm.n_params)
+        u = np.asarray(conditions.q) @ arm.joint_map.T
+        still = [j for j in range(arm.n_joints) if np.ptp(u[..., j]) <= 1e-9]
+        columns = _column_space(rows)
+        chosen = select(arm.layout, arm.chain, columns, still=still, held=arm.user_fixed)
+        held = tuple(n for n, k in zip(arm.layout.names, chosen.kept, strict=True) if not k)
+        held = tuple(n for n in held if n not in arm.user_fixed)
+        return replace(arm, held=held, merges=chosen.merges)
+
+    @property
+    def held_notes(self) -> tuple[str, ...]:
+        return self.merges
+
+    def identifiability(self, conditions: Conditions) -> tuple[Identifiability, ScaledSVD]:
+        return column_identifiability(self, conditions, self.nominal)
+
+    def check_identifiable(self, conditions: Conditions) -> Identifiability:
+        info, _ = self.identifiability(conditions)
+        if info.identifiable:
+            return info
+        m, p = conditions.m, self.n_free
+        raise NotIdentifiableError(
+            f"the {m} rows cannot identify all {p} parameters of {self.name} (rank {info.rank} "
+            f"of {p}): not identifiable: {listing(info.unidentifiable) or '(none)'}; measure "
+            "poses in which every joint takes several different values",
+            list(info.combinations),
+        )
+
+    def conditioning_warning(self, info: Identifiability) -> ArmcalWarning | None:
+        if not info.ill_conditioned:
+            return None
+        return ArmcalWarning(
+            "ill-conditioned",
+            f"{self.name} is barely identifiable from these measurements (condition number "
+            f"{info.condition_number:.3g}); poorly determined: "
+            f"{'; '.join(info.poorly_determined[:3])}; measure poses that move every joint more",
+        )
+
+    def covariance_factor(
+        self, conditions: Conditions, params: np.ndarray | None = None
+    ) -> tuple[np.ndarray, np.ndarray]:
+        return covariance_factor_from(whitened_free_jacobian(self, conditions, params), self.free)
+
+    def fit_details(self, conditions: Conditions, params: np.ndarray) -> dict[str, np.ndarray]:
+        return {}
+
+    def linear_positions(self, conditions: Conditions) -> LinearPositions | None:
+        return None
+
+    def plan_conditions(self, q: np.ndarray, loads: Loads | None = None) -> Conditions:
+        """Every target measured at every pose."""
+        q = np.asarray(q, dtype=float)
+        k = len(self.targets)
+        if k == 1:
+            return self.conditions(q)
+        rows = np.repeat(q, k, axis=-2)
+        return self.conditions(rows, target=np.tile(np.arange(k), q.shape[-2]))
+
+    # -- design --------------------------------------------------------------------------
+
+    def feasible(self, q: np.ndarray, *, tol: float = 1e-9) -> np.ndarray:
+        return np.all(self.within_limits(q, tol=tol), axis=-1)
+
+    @property
+    def has_view(self) -> bool:
+        return False
+
+    def view_constraints(self, q: np.ndarray) -> None:
+        return None
+
+    @property
+    def rotation_invariant(self) -> bool:
+        return False
+
+    @property
+    def information_bound(self) -> bool:
+        return False
+
+    def plan_information(self, q: np.ndarray, loads: Loads | None = None) -> BlockInformation:
+        return BlockInformation(self, q, loads, unit_columns=True)
+
+    def closed_form_plans(self, m: int) -> None:
+        return None
+
+    def paper_criteria(self, q: np.ndarray) -> None:
+        return None
+
+    def design_loads(self, payloads: Sequence[float] | None) -> None:
+        return None
+
+    # -- the tool --------------------------------------------------------------------------
+
+    @property
+    def orientation_dim(self) -> int:
+        return 3
+
+    @property
+    def angle_scale_mm(self) -> float:
+        """The distance at which a tool angle counts like a position: 100 mm."""
+        return 100.0
+
+    def orientation(self, conditions: Conditions, params: np.ndarray | None = None) -> np.ndarray:
+        """The tip frame's roll, pitch and yaw ``(..., m, 3)`` in the instrument frame."""
+        return matrix_rpy(self._kinematics(conditions, params).rotation)
+
+    def tip_rotation(self, conditions: Conditions, params: np.ndarray | None = None) -> np.ndarray:
+        """The tip frame's rotation ``(..., m, 3, 3)`` in the instrument frame."""
+        return self._kinematics(conditions, params).rotation
+
+    def orientation_joint_jacobian(
+        self, conditions: Conditions, params: np.ndarray | None = None
+    ) -> np.ndarray:
+        """The tip frame's angular velocity per reading ``(..., m, 3, n)``."""
+        ang = self._kinematics(conditions, params, derivatives=True).tip_angular
+        assert ang is not None
+        return ang
+
+    def orientation_jacobian(
+        self, conditions: Conditions, params: np.ndarray | None = None
+    ) -> np.ndarray:
+        raise ArmcalError(
+            "the orientation Jacobian in the parameters is not used for spatial arms"
+        )
+
+    def in_robot_frame(self, params: np.ndarray) -> tuple[SpatialArm, np.ndarray]:
+        out = np.array(params, dtype=float)
+        out[..., :6] = 0.0
+        return self, out
+
+    def arm_params(self, params: np.ndarray) -> np.ndarray:
+        return np.asarray(params, dtype=float)
+
+
+def _column_space(rows: np.ndarray) -> np.ndarray:
+    """``R`` ``(p, p)`` of a thin QR of ``rows`` ``(r, p)``, chunked: the same column space
+    in ``O(p^2)`` memory beyond the rows."""
+    p = rows.shape[1]
+    r = np.zeros((0, p))
+    step = max(4 * p, 4096)
+    for start in range(0, rows.shape[0], step):
+        block = np.vstack([r, rows[start : start + step]])
+        r = np.linalg.qr(block).R
+    return r

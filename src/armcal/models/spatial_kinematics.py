@@ -1,0 +1,266 @@
+"""A spatial serial arm's parameters, its measured points and their analytic Jacobians.
+
+**Parameters** (:class:`SpatialLayout`), over-complete, in this order:
+
+* the base pose in the instrument's frame, ``base.x, base.y, base.z`` (mm) and
+  ``base.rx, base.ry, base.rz`` (URDF's roll, pitch, yaw: ``Rz Ry Rx``);
+* every joint's placement error, a small transform
+  ``E = T(x, y, z) Rx(rx) Ry(ry) Rz(rz)`` right after its nominal origin, in its
+  own frame (z = its axis): ``j{k}.x, .y, .z, .rx, .ry`` for a revolute joint
+  (a turn about its own axis is its zero) and ``j{k}.x, .y, .rx, .ry, .rz`` for a
+  prismatic one (a slide along its axis is its zero);
+* the zero error of every controller reading, ``dq{k}``: ``u = M (q + dq)``;
+* every target's position in the tip frame, ``{label}.x, .y, .z`` (mm).
+
+Every parameter acts at a point of the chain as a small screw, so the
+parametrization has no singularity where consecutive axes are parallel (a plain
+DH model's ``d`` runs off to infinity there).  Which of these the measurements
+identify is :mod:`~armcal.models.spatial_selection`'s job.
+
+**Kinematics** (:func:`kinematics`): batched over parameter stacks ``(..., p)``
+and rows ``(m,)``.  A parameter's column of the Jacobian is that of a screw with
+axis ``w`` through ``c`` or a translation ``v``: ``dp = w x (p - c) + v``,
+accumulated along the chain in one pass.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from functools import cached_property
+
+import numpy as np
+
+from .spatial_chain import SerialChain, elementary, rpy_matrix
+
+__all__ = [
+    "BASE_NAMES",
+    "ChainKinematics",
+    "SpatialLayout",
+    "kinematics",
+]
+
+#: The base pose's parameter names: translation (mm), then roll, pitch, yaw.
+BASE_NAMES = ("base.x", "base.y", "base.z", "base.rx", "base.ry", "base.rz")
+
+#: The placement error components of a joint by kind: indices into (x, y, z, rx, ry, rz).
+_PLACEMENT = {"R": (0, 1, 2, 3, 4), "P": (0, 1, 3, 4, 5)}
+_COMPONENT = ("x", "y", "z", "rx", "ry", "rz")
+
+
+@dataclass(frozen=True)
+class SpatialLayout:
+    """Where each parameter of a spatial arm lives in the parameter vector.
+
+    Attributes
+    ----------
+    kinds : tuple of str
+        The joints' kinds (``"R"``, ``"P"``).
+    targets : tuple of str
+        The targets' labels (``("tool",)`` for one unlabelled target).
+    """
+
+    kinds: tuple[str, ...]
+    targets: tuple[str, ...]
+
+    @property
+    def n_joints(self) -> int:
+        return len(self.kinds)
+
+    @property
+    def placement_start(self) -> int:
+        return 6
+
+    @property
+    def zero_start(self) -> int:
+        return 6 + 5 * self.n_joints
+
+    @property
+    def target_start(self) -> int:
+        return 6 + 6 * self.n_joints
+
+    @property
+    def n_params(self) -> int:
+        return self.target_start + 3 * len(self.targets)
+
+    @cached_property
+    def names(self) -> tuple[str, ...]:
+        joints = [
+            f"j{k + 1}.{_COMPONENT[c]}"
+            for k, kind in enumerate(self.kinds)
+            for c in _PLACEMENT[kind]
+        ]
+        zeros = [f"dq{k + 1}" for k in range(self.n_joints)]
+        targets = [f"{label}.{axis}" for label in self.targets for axis in "xyz"]
+        return (*BASE_NAMES, *joints, *zeros, *targets)
+
+    @cached_property
+    def angles(self) -> np.ndarray:
+        """Boolean ``(p,)``: parameters that are angles (rad inside, deg shown)."""
+        out = np.zeros(self.n_params, dtype=bool)
+        out[3:6] = True
+        for k, kind in enumerate(self.kinds):
+            start = 6 + 5 * k
+            for slot, c in enumerate(_PLACEMENT[kind]):
+                out[start + slot] = c >= 3
+            out[self.zero_start + k] = kind == "R"
+        return out
+
+    @cached_property
+    def units(self) -> tuple[str, ...]:
+        return tuple("deg" if a else "mm" for a in self.angles)
+
+    @cached_property
+    def display_scale(self) -> np.ndarray:
+        return np.where(self.angles, 180.0 / np.pi, 1.0)
+
+    @cached_property
+    def instrument(self) -> np.ndarray:
+        """Boolean ``(p,)``: the base pose and the targets, not the robot's geometry."""
+        out = np.zeros(self.n_params, dtype=bool)
+        out[:6] = True
+        out[self.target_start :] = True
+        return out
+
+    def joint_of(self, index: int) -> int | None:
+        """The 0-based joint a parameter belongs to (placement or zero), None otherwise."""
+        if self.placement_start <= index < self.zero_start:
+            return (index - self.placement_start) // 5
+        if self.zero_start <= index < self.target_start:
+            return index - self.zero_start
+        return None
+
+    def placement_errors(self, params: np.ndarray) -> np.ndarray:
+        """Every joint's error ``(x, y, z, rx, ry, rz)`` ``(..., n, 6)`` in ``params``."""
+        out = np.zeros((*params.shape[:-1], self.n_joints, 6))
+        for k, kind in enumerate(self.kinds):
+            start = 6 + 5 * k
+            out[..., k, list(_PLACEMENT[kind])] = params[..., start : start + 5]
+        return out
+
+    def target_points(self, params: np.ndarray) -> np.ndarray:
+        """The targets' positions ``(..., k, 3)`` in the tip frame (mm)."""
+        return params[..., self.target_start :].reshape(*params.shape[:-1], -1, 3)
+
+
+@dataclass(frozen=True, eq=False)
+class ChainKinematics:
+    """The measured points of rows and what the kinematics gives with them.
+
+    Attributes
+    ----------
+    points : ndarray, shape (..., m, 3)
+        Target positions in the instrument's frame, mm.
+    rotation : ndarray, shape (..., m, 3, 3)
+        The tip frame's orientation in the instrument's frame.
+    jacobian : ndarray, shape (..., m, 3, p), or None
+        ``d points / d params`` (mm per mm or rad).
+    joint_jacobian : ndarray, shape (..., m, 3, n), or None
+        ``d points / d q`` (mm per rad of the controller's readings).
+    tip_angular : ndarray, shape (..., m, 3, n), or None
+        The tip frame's angular velocity per unit of every reading.
+    """
+
+    points: np.ndarray
+    rotation: np.ndarray
+    jacobian: np.ndarray | None = None
+    joint_jacobian: np.ndarray | None = None
+    tip_angular: np.ndarray | None = None
+
+
+def kinematics(
+    chain: SerialChain,
+    joint_map: np.ndarray,
+    layout: SpatialLayout,
+    q: np.ndarray,
+    target: np.ndarray | None,
+    params: np.ndarray,
+    *,
+    derivatives: bool = False,
+) -> ChainKinematics:
+    """Points (and, with ``derivatives``, Jacobians) of rows ``q`` ``(..., m, n)``.
+
+    Parameters
+    ----------
+    chain : SerialChain
+    joint_map : ndarray, shape (n, n)
+        ``u = M (q + dq)``.
+    layout : SpatialLayout
+    q : ndarray, shape (..., m, n)
+        Controller readings (rad, mm).
+    target : ndarray of int, shape (m,), or None
+        Every row's target (None: target 0).
+    params : ndarray, shape (..., p)
+        Internal units (mm, rad).
+    derivatives : bool
+        Also the parameter and joint Jacobians.
+    """
+    params = np.asarray(params, dtype=float)[..., None, :]  # (..., 1, p)
+    q = np.asarray(q, dtype=float)
+    lead = np.broadcast_shapes(params.shape[:-1], q.shape[:-1])  # (..., m)
+    n, p = layout.n_joints, layout.n_params
+    zeros = params[..., layout.zero_start : layout.target_start]
+    u = (q + zeros) @ joint_map.T
+    errors = layout.placement_errors(params)  # (..., 1, n, 6)
+    base = params[..., :6]
+    rot = np.broadcast_to(rpy_matrix(base[..., 3:6]), (*lead, 3, 3)).copy()
+    pos = np.broadcast_to(base[..., :3], (*lead, 3)).copy()
+    if derivatives:
+        # Every parameter (and joint value) as a screw: axis w, moment v - w x c.
+        axis = np.zeros((*lead, p, 3))
+        moment = np.zeros((*lead, p, 3))
+        joint_axis = np.zeros((*lead, n, 3))
+        joint_moment = np.zeros((*lead, n, 3))
+        moment[..., 0:3, :] = np.eye(3)
+        yaw = elementary(2, base[..., 5])
+        axis[..., 3, :] = rot[..., :, 0]
+        axis[..., 4, :] = np.broadcast_to(yaw[..., :, 1], (*lead, 3))
+        axis[..., 5, :] = [0.0, 0.0, 1.0]
+        moment[..., 3:6, :] = -np.cross(axis[..., 3:6, :], pos[..., None, :])
+    for k, kind in enumerate(chain.kinds):
+        pos = pos + rot @ chain.origins[k, :3, 3]
+        rot = rot @ chain.origins[k, :3, :3]
+        err = errors[..., k, :]
+        start = 6 + 5 * k
+        slots = {c: start + slot for slot, c in enumerate(_PLACEMENT[kind])}
+        if derivatives:
+            for c in (0, 1, 2):
+                if c in slots:
+                    moment[..., slots[c], :] = rot[..., :, c]
+        pos = pos + np.einsum("...ij,...j->...i", rot, err[..., :3])
+        for c in (3, 4, 5):
+            if derivatives and c in slots:
+                w = rot[..., :, c - 3]
+                axis[..., slots[c], :] = w
+                moment[..., slots[c], :] = -np.cross(w, pos)
+            if c in slots:
+                rot = rot @ elementary(c - 3, err[..., c])
+        w = rot[..., :, 2]
+        if kind == "R":
+            if derivatives:
+                joint_axis[..., k, :] = w
+                joint_moment[..., k, :] = -np.cross(w, pos)
+            rot = rot @ elementary(2, u[..., k])
+        else:
+            if derivatives:
+                joint_moment[..., k, :] = w
+            pos = pos + w * u[..., k, None]
+    pos = pos + rot @ chain.tip[:3, 3]
+    rot = rot @ chain.tip[:3, :3]
+    points_tip = layout.target_points(params[..., 0, :])  # (..., k, 3)
+    index = np.zeros(lead[-1], dtype=int) if target is None else np.asarray(target)
+    local = np.take(points_tip, index, axis=-2)  # (..., m, 3)
+    points = pos + np.einsum("...ij,...j->...i", rot, local)
+    if not derivatives:
+        return ChainKinematics(points, rot)
+    # Zero errors: d/dq_i = sum_j M_ji d/du_j.
+    zero_axis = np.einsum("ji,...jc->...ic", joint_map, joint_axis)
+    zero_moment = np.einsum("ji,...jc->...ic", joint_map, joint_moment)
+    axis[..., layout.zero_start : layout.target_start, :] = zero_axis
+    moment[..., layout.zero_start : layout.target_start, :] = zero_moment
+    jac = np.cross(axis, points[..., None, :]) + moment  # (..., m, p, 3)
+    jac = np.swapaxes(jac, -1, -2).copy()  # (..., m, 3, p)
+    for t in range(len(layout.targets)):
+        cols = slice(layout.target_start + 3 * t, layout.target_start + 3 * t + 3)
+        jac[..., cols] = np.where((index == t)[:, None, None], rot, 0.0)
+    joint_jac = np.swapaxes(np.cross(zero_axis, points[..., None, :]) + zero_moment, -1, -2)
+    return ChainKinematics(points, rot, jac, joint_jac, np.swapaxes(zero_axis, -1, -2))

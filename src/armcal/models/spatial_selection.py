@@ -1,0 +1,259 @@
+"""Which of a spatial arm's parameters the measurements identify, chosen by a fixed rule.
+
+A spatial arm's parameters (:mod:`~armcal.models.spatial_kinematics`) are
+over-complete: an arm with ``R`` revolute and ``P`` prismatic joints measured at
+``k`` point targets by an instrument whose pose is unknown identifies
+``4R + 2P + 3k`` of them (Everett, Driels and Mooring's count ``4R + 2P + 6``
+for a full pose, less the tool's orientation a point cannot see, plus 3 for
+every further point).  :func:`select` keeps a set of that size:
+
+* **deterministically** -- the columns of the scaled, whitened Jacobian are
+  taken in a fixed priority order (:func:`priority`) and a column is kept when
+  its part outside the span of those kept before is more than
+  :data:`SELECT_RTOL` of its length.  Exact dependencies leave ``1e-13`` or
+  less, real ones far more, so the set is the same on every machine, BLAS and
+  row order;
+* **explained** -- every column left out is written as the kept parameters it
+  merges into, with the reason where the geometry gives one ("joints 2 and 3
+  are parallel").
+
+The priority: the base pose, the targets, every joint's zero (what a
+controller takes), then the joints' placement errors from the tip down, each
+joint's in the order ``x, y, rx, ry, z, rz``: a ``z`` error (along the axis)
+is the one that moves along parallel axes into the next joint's.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+from .identifiability import listing
+from .spatial_chain import SerialChain
+from .spatial_kinematics import SpatialLayout
+
+__all__ = [
+    "SELECT_RTOL",
+    "Selection",
+    "parallel_runs",
+    "priority",
+    "select",
+]
+
+#: A column whose part outside the span of the columns kept before it is at most
+#: this fraction of its length merges into them.  Exact (structural) dependencies
+#: leave round-off, ``1e-13`` and below on these well-scaled columns; a parameter
+#: the measurements see at a millionth of another's effect cannot be estimated
+#: anyway (its std would be 1e6 times the best one's).
+SELECT_RTOL = 1e-6
+
+#: Within a joint, the placement errors in order of priority (names' suffixes).
+_WITHIN_JOINT = ("x", "y", "rx", "ry", "z", "rz")
+
+
+@dataclass(frozen=True)
+class Selection:
+    """The identifiable set chosen, and why the others are left out.
+
+    Attributes
+    ----------
+    kept : ndarray of bool, shape (p,)
+        The parameters identified.
+    merges : tuple of str
+        One sentence per group of parameters left out: what they merge into and why.
+    still : tuple of int
+        1-based joints that do not move in the measurements.
+    """
+
+    kept: np.ndarray
+    merges: tuple[str, ...]
+    still: tuple[int, ...] = ()
+
+
+def priority(layout: SpatialLayout) -> np.ndarray:
+    """The order ``(p,)`` in which :func:`select` considers the parameters (module notes)."""
+    names = layout.names
+    index = {name: i for i, name in enumerate(names)}
+    order = list(range(6))
+    order += list(range(layout.target_start, layout.n_params))
+    order += list(range(layout.zero_start, layout.target_start))
+    for k in reversed(range(layout.n_joints)):
+        order += [index[f"j{k + 1}.{c}"] for c in _WITHIN_JOINT if f"j{k + 1}.{c}" in index]
+    return np.array(order)
+
+
+def parallel_runs(chain: SerialChain, tol: float = 1e-9) -> list[tuple[int, int]]:
+    """Runs ``(first, last)`` (0-based) of consecutive joints with parallel axes."""
+    runs: list[tuple[int, int]] = []
+    start = 0
+    for k in range(1, chain.n_joints + 1):
+        parallel = k < chain.n_joints and abs(abs(chain.origins[k, 2, 2]) - 1.0) < tol
+        if not parallel:
+            if k - 1 > start:
+                runs.append((start, k - 1))
+            start = k
+    return runs
+
+
+def _subject(names: Sequence[str], layout: SpatialLayout) -> str:
+    """The parameters left out, in words."""
+    words = []
+    for name in names:
+        if name.startswith("dq"):
+            words.append(f"the zero of joint {name[2:]} ({name})")
+        else:
+            words.append(name)
+    return listing(words)
+
+
+def _object(names: Sequence[str], layout: SpatialLayout) -> str:
+    """What they merge into, grouped: the base pose, the targets' positions, or by name."""
+    base = [n for n in names if n.startswith("base.")]
+    targets = sorted({n.split(".")[0] for n in names if n.split(".")[0] in layout.targets})
+    rest = [n for n in names if not n.startswith("base.") and n.split(".")[0] not in targets]
+    words = []
+    if base:
+        rotation = all(n[-2] == "r" for n in base)
+        position = not any(n[-2] == "r" for n in base)
+        words.append(
+            "the base rotation"
+            if rotation
+            else "the base position"
+            if position
+            else "the base pose"
+        )
+    if targets:
+        if targets == ["tool"]:
+            words.append("the target's position")
+        else:
+            words.append(f"the position{'s' if len(targets) > 1 else ''} of {listing(targets)}")
+    words += [f"the zero of joint {n[2:]} ({n})" if n.startswith("dq") else n for n in rest]
+    return listing(words)
+
+
+def _reason(
+    dropped: str, partners: Sequence[str], layout: SpatialLayout, chain: SerialChain
+) -> str | None:
+    """Why ``dropped`` merges into ``partners``, where the geometry says."""
+    last = layout.n_joints
+    into_base = all(p.startswith("base.") for p in partners)
+    into_targets = all(p.split(".")[0] in layout.targets for p in partners)
+    if dropped == "dq1" and into_base:
+        return "joint 1 turns the whole arm, as the base rotation does"
+    if dropped.startswith("j1.") and into_base:
+        return "joint 1's placement comes before any joint moves, like the base pose"
+    if dropped == f"dq{last}" and into_targets:
+        return f"a point target turns with joint {last}, so its zero only moves the targets"
+    if dropped == f"j{last}.z" and into_targets:
+        return f"a shift along joint {last}'s axis moves every target alike"
+    if not dropped.startswith("j"):
+        return None
+    k = int(dropped[1:].split(".")[0]) - 1
+    component = dropped.split(".")[1]
+    if component == "z":
+        for first, end in parallel_runs(chain):
+            if first <= k <= end:
+                joints = (
+                    f"{first + 1} and {end + 1}"
+                    if end == first + 1
+                    else f"{first + 1} to {end + 1}"
+                )
+                return f"joints {joints} are parallel: a shift along their axes passes them"
+        return f"a shift along joint {k + 1}'s axis is the same before and after it turns"
+    # An error about or along the previous joint's axis is that joint's zero, or passes it.
+    direction = chain.origins[k, :3, :3] @ np.eye(3)["xyz".index(component[-1])]
+    if k > 0 and abs(abs(direction[2]) - 1.0) < 1e-9:
+        if component.startswith("r"):
+            return f"it turns about joint {k}'s axis, as joint {k}'s zero does"
+        return f"it shifts along joint {k}'s axis, which is the same before and after it turns"
+    return None
+
+
+def select(
+    layout: SpatialLayout,
+    chain: SerialChain,
+    columns: np.ndarray,
+    *,
+    still: Sequence[int] = (),
+    held: Sequence[str] = (),
+) -> Selection:
+    """The identifiable set of a spatial arm from the scaled Jacobian's column space.
+
+    Parameters
+    ----------
+    layout : SpatialLayout
+    chain : SerialChain
+    columns : ndarray, shape (r, p)
+        A matrix with the column space of the whitened Jacobian (its triangular
+        factor, or ``S V^T`` of its SVD), any column scaling.
+    still : sequence of int
+        0-based joints that do not move in the measurements (named in the report).
+    held : sequence of str
+        Parameters the user holds (``--fix``): never kept, never explained.
+
+    Returns
+    -------
+    Selection
+    """
+    names = layout.names
+    norms = np.linalg.norm(columns, axis=0)
+    scale = np.max(norms) if norms.size else 0.0
+    basis = np.zeros((columns.shape[0], 0))
+    kept = np.zeros(layout.n_params, dtype=bool)
+    dropped: list[int] = []
+    for i in priority(layout):
+        if names[i] in held:
+            continue
+        col = columns[:, i]
+        if norms[i] <= SELECT_RTOL * scale:
+            dropped.append(i)
+            continue
+        rest = col - basis @ (basis.T @ col)
+        rest = rest - basis @ (basis.T @ rest)  # twice is enough (Kahan, Parlett)
+        if np.linalg.norm(rest) <= SELECT_RTOL * norms[i]:
+            dropped.append(i)
+            continue
+        basis = np.column_stack([basis, rest / np.linalg.norm(rest)])
+        kept[i] = True
+    merges = _explain(layout, chain, columns, kept, dropped, still)
+    return Selection(kept, merges, tuple(k + 1 for k in still))
+
+
+def _explain(
+    layout: SpatialLayout,
+    chain: SerialChain,
+    columns: np.ndarray,
+    kept: np.ndarray,
+    dropped: Sequence[int],
+    still: Sequence[int],
+) -> tuple[str, ...]:
+    """Sentences for the parameters left out, grouped by what they merge into and why."""
+    names = layout.names
+    keep = np.flatnonzero(kept)
+    unit = columns / np.maximum(np.linalg.norm(columns, axis=0), 1e-300)
+    groups: dict[tuple[str, str | None], list[str]] = {}
+    for i in dropped:
+        joint = layout.joint_of(i)
+        if joint is not None and joint in still:
+            key = ("", f"joint {joint + 1} does not move in these measurements")
+            groups.setdefault(key, []).append(names[i])
+            continue
+        if not np.any(unit[:, i]):
+            groups.setdefault(("", "it moves no measured point"), []).append(names[i])
+            continue
+        coef = np.linalg.lstsq(unit[:, keep], unit[:, i], rcond=None)[0]
+        big = np.abs(coef) >= 0.05 * np.max(np.abs(coef))
+        partners = [names[j] for j in keep[big]]
+        reason = _reason(names[i], partners, layout, chain)
+        groups.setdefault((_object(partners, layout), reason), []).append(names[i])
+    sentences = []
+    for (into, reason), members in groups.items():
+        verb = "merges" if len(members) == 1 else "merge"
+        if into:
+            text = f"{_subject(members, layout)} {verb} into {into}"
+        else:
+            text = f"{_subject(members, layout)} cannot be seen"
+        sentences.append(text + (f": {reason}" if reason else ""))
+    return tuple(sentences)

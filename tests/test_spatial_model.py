@@ -1,0 +1,245 @@
+"""The spatial serial arm as a model: kinematics, Jacobians, the identifiable set, recovery.
+
+Every constant is derived: the published nominal geometries are cited where
+they are written (the built-in robot files); the counts follow Everett, Driels
+and Mooring's ``4R + 2P + 6`` for a full pose, less the 3 orientation
+coordinates a point cannot see, plus 3 per further point: ``4R + 2P + 3k``.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from armcal.identification import identify
+from armcal.models import SerialChain, SpatialArm, UrdfJoint, matrix_rpy, rpy_matrix
+from armcal.noise import NoiseModel
+
+DEG = np.pi / 180
+
+
+def industrial() -> SpatialArm:
+    """A 6R arm with parallel J2/J3 and a spherical wrist; J3 read relative to the horizon."""
+    chain = SerialChain.from_mdh(
+        np.radians([0, -90, 180, -90, 90, -90]),
+        [0, 312, 1075, 225, 0, 0],
+        np.radians([0, -90, 0, 0, 0, 0]),
+        [0, 0, 0, -1280, 0, -215],
+    )
+    coupled = np.eye(6)
+    coupled[2, 1] = 1.0
+    return SpatialArm(chain, "industrial", coupled)
+
+
+def cobot() -> SpatialArm:
+    """A 6R arm with three parallel axes (2, 3, 4), as a UR5e."""
+    chain = SerialChain.from_mdh(
+        np.radians([0, 90, 0, 0, 90, -90]),
+        [0, 0, -425, -392.2, 0, 0],
+        np.zeros(6),
+        [162.5, 0, 0, 133.3, 99.7, 99.6],
+    )
+    return SpatialArm(chain, "cobot")
+
+
+def seven() -> SpatialArm:
+    """A 7R arm, as a Panda."""
+    chain = SerialChain.from_mdh(
+        np.radians([0, -90, 90, 90, -90, 90, 90]),
+        [0, 0, 0, 82.5, -82.5, 0, 88],
+        np.zeros(7),
+        [333, 0, 316, 0, 384, 0, 0],
+    )
+    return SpatialArm(chain, "seven")
+
+
+def with_slide() -> SpatialArm:
+    """A 4-joint arm with a prismatic third joint (a SCARA-like RRPR)."""
+    chain = SerialChain.from_mdh(
+        [0, 0, 0, 0], [0, 350, 300, 0], [0, 0, 0, 0], [400, 0, 0, 0], ("R", "R", "P", "R")
+    )
+    return SpatialArm(chain, "scara")
+
+
+ARMS = {"industrial": industrial, "cobot": cobot, "seven": seven, "scara": with_slide}
+
+
+def labelled(arm: SpatialArm, k: int) -> SpatialArm:
+    return arm.replace(targets=tuple("ABC"[:k]), target_positions=np.zeros((0, 3)))
+
+
+def random_truth(arm: SpatialArm, rng: np.random.Generator) -> np.ndarray:
+    """Every joint's placement and zero off by a few tenths of a mm or degree; the
+    instrument 4 m away, turned by 120 degrees; targets 100-200 mm from the flange."""
+    lay = arm.layout
+    truth = arm.nominal.copy()
+    errors = slice(6, lay.target_start)
+    truth[errors] = rng.normal(size=lay.target_start - 6) * np.where(
+        lay.angles[errors], 0.2 * DEG, 0.5
+    )
+    truth[:6] = [4000 * np.cos(0.4), 4000 * np.sin(0.4), -600, 0.01, -0.02, 120 * DEG]
+    k = len(arm.targets)
+    truth[lay.target_start :] = (rng.uniform(-100, 100, (k, 3)) + np.array([0, 0, 150])).ravel()
+    return truth
+
+
+def random_poses(arm: SpatialArm, m: int, rng: np.random.Generator) -> np.ndarray:
+    lo, hi = arm.limits[:, 0], arm.limits[:, 1]
+    span = np.minimum(hi - lo, np.where(arm.chain.revolute, 2.4, 200.0))
+    middle = np.clip(0.0, lo + span / 2, hi - span / 2)
+    return middle + (rng.uniform(size=(m, arm.n_joints)) - 0.5) * span
+
+
+@pytest.mark.parametrize("name", sorted(ARMS))
+def test_the_jacobians_agree_with_central_differences(name):
+    arm = labelled(ARMS[name](), 2)
+    rng = np.random.default_rng(1)
+    params = random_truth(arm, rng)
+    q = random_poses(arm, 6, rng)
+    cond = arm.conditions(q, target=np.array([0, 1, 0, 1, 1, 0]))
+    jac = arm.jacobian(cond, params)
+    h = 1e-6  # central differences err by h^2 |p'''| ~ 1e-12 * 1e4 mm; round-off 1e-16 * 4e3 / h
+    numeric = np.empty_like(jac)
+    for i in range(arm.n_params):
+        step = np.zeros(arm.n_params)
+        step[i] = h
+        numeric[..., i] = (
+            arm.positions(cond, params + step) - arm.positions(cond, params - step)
+        ) / (2 * h)
+    np.testing.assert_allclose(jac, numeric, rtol=0, atol=1e-5)
+    joint = arm.joint_jacobian(cond, params)
+    for j in range(arm.n_joints):
+        step = np.zeros(arm.n_joints)
+        step[j] = h
+        plus = arm.positions(arm.conditions(q + step, target=cond.target), params)
+        minus = arm.positions(arm.conditions(q - step, target=cond.target), params)
+        np.testing.assert_allclose(joint[..., j], (plus - minus) / (2 * h), rtol=0, atol=1e-5)
+
+
+def test_a_batch_of_parameter_sets_is_each_set_alone():
+    arm = labelled(industrial(), 3)
+    rng = np.random.default_rng(2)
+    stack = np.stack([random_truth(arm, rng) for _ in range(3)])
+    cond = arm.plan_conditions(random_poses(arm, 4, rng))
+    batched = arm.jacobian(cond, stack)
+    for i in range(3):
+        np.testing.assert_array_equal(batched[i], arm.jacobian(cond, stack[i]))
+
+
+def test_the_nominal_points_are_the_chain_s_forward_kinematics():
+    arm = cobot()
+    q = random_poses(arm, 5, np.random.default_rng(3))
+    frames = arm.chain.forward(q)
+    params = arm.nominal.copy()
+    params[arm.layout.target_start :] = 0.0  # the target at the flange
+    np.testing.assert_allclose(
+        arm.positions(arm.conditions(q), params), frames[:, :3, 3], rtol=0, atol=1e-9
+    )
+
+
+def test_a_urdf_chain_equals_its_dh_table():
+    """A URDF joint about y with an rpy origin, folded fixed joints, and the same arm as MDH."""
+    mdh = SerialChain.from_mdh(np.radians([0, -90]), [0, 100.0], [0, 0], [50.0, 0])
+    joints = [
+        UrdfJoint("mount", "fixed", (0, 0, 20.0), (0, 0, 0)),
+        UrdfJoint("j1", "revolute", (0, 0, 30.0), (0, 0, 0), (0, 0, 1)),
+        UrdfJoint("j2", "continuous", (100.0, 0, 0), (-np.pi / 2, 0, 0), (0, 0, 1)),
+        UrdfJoint("flange", "fixed", (0, 0, 0), (0, 0, 0)),
+    ]
+    urdf = SerialChain.from_joints(joints)
+    u = np.random.default_rng(4).uniform(-3, 3, (7, 2))
+    np.testing.assert_allclose(urdf.forward(u), mdh.forward(u), rtol=0, atol=1e-12)
+    # The same second joint described about -y in an unturned frame: the same points (the
+    # link frame itself is another one).
+    about_y = [*joints[:2], UrdfJoint("j2", "revolute", (100.0, 0, 0), (0, 0, 0), (0, -1, 0))]
+    np.testing.assert_allclose(
+        SerialChain.from_joints(about_y).forward(u)[..., :3, 3],
+        mdh.forward(u)[..., :3, 3],
+        rtol=0,
+        atol=1e-12,
+    )
+
+
+def test_roll_pitch_yaw_round_trips():
+    rpy = np.random.default_rng(5).uniform([-3, -1.5, -3], [3, 1.5, 3], (50, 3))
+    np.testing.assert_allclose(matrix_rpy(rpy_matrix(rpy)), rpy, rtol=0, atol=1e-12)
+
+
+@pytest.mark.parametrize("name", sorted(ARMS))
+@pytest.mark.parametrize("k", [1, 2, 3])
+def test_the_identifiable_count_is_4r_plus_2p_plus_3k(name, k):
+    arm = labelled(ARMS[name](), k)
+    rng = np.random.default_rng(6)
+    cond = arm.plan_conditions(random_poses(arm, 30, rng))
+    chosen = arm.prepared(cond)
+    revolute = int(np.sum(arm.chain.revolute))
+    prismatic = arm.n_joints - revolute
+    assert chosen.n_free == 4 * revolute + 2 * prismatic + 3 * k
+    assert chosen.check_identifiable(cond).identifiable
+
+
+def test_the_chosen_set_is_the_same_for_any_row_order_and_run():
+    arm = labelled(industrial(), 3)
+    rng = np.random.default_rng(7)
+    q = random_poses(arm, 25, rng)
+    truth = random_truth(arm, rng)
+    cond = arm.plan_conditions(q)
+    points = arm.positions(cond, truth)
+    first = arm.prepared(cond, points)
+    for seed in range(5):
+        order = np.random.default_rng(seed).permutation(cond.m)
+        shuffled = arm.conditions(cond.q[order], target=cond.target[order])
+        again = arm.prepared(shuffled, points[order])
+        assert again.free_names == first.free_names
+        assert again.merges == first.merges
+
+
+def test_the_report_names_what_merges_and_why():
+    arm = labelled(industrial(), 3)
+    cond = arm.plan_conditions(random_poses(arm, 30, np.random.default_rng(8)))
+    notes = "\n".join(arm.prepared(cond).merges)
+    assert "the zero of joint 1 (dq1) merges into the base rotation" in notes
+    assert "joints 2 and 3 are parallel" in notes
+    assert "the zero of joint 6 (dq6) merges into the positions of A, B and C" in notes
+
+
+def test_a_joint_that_never_moves_is_named():
+    arm = labelled(industrial(), 3)
+    q = random_poses(arm, 30, np.random.default_rng(9))
+    q[:, 3] = 0.2
+    chosen = arm.prepared(arm.plan_conditions(q))
+    assert chosen.n_free < 33
+    assert any("joint 4 does not move in these measurements" in s for s in chosen.merges)
+
+
+@pytest.mark.parametrize("name", ["industrial", "cobot", "seven"])
+def test_noiseless_data_are_recovered_to_round_off(name):
+    """The tracker 4 m away and turned by 120 degrees; no start given."""
+    arm = labelled(ARMS[name](), 3)
+    rng = np.random.default_rng(10)
+    truth = random_truth(arm, rng)
+    cond = arm.plan_conditions(random_poses(arm, 40, rng))
+    points = arm.positions(cond, truth)
+    cal = identify(arm, cond.q, points, target=cond.target)
+    assert cal.model.n_free == 4 * arm.n_joints + 9
+    held_out = arm.plan_conditions(random_poses(arm, 200, rng))
+    error = cal.model.positions(held_out, cal.params) - arm.positions(held_out, truth)
+    assert np.max(np.abs(error)) < 1e-9
+    # A truth within the chosen set is recovered parameter by parameter.
+    reduced = truth.copy()
+    reduced[~cal.model.free] = cal.model.nominal[~cal.model.free]
+    again = identify(cal.model, cond.q, cal.model.positions(cond, reduced), target=cond.target)
+    np.testing.assert_allclose(again.params, reduced, rtol=0, atol=1e-9)
+
+
+def test_noisy_estimates_lie_within_four_predicted_std():
+    arm = labelled(industrial(), 3).with_noise(NoiseModel.isotropic(0.05, dim=3))
+    rng = np.random.default_rng(11)
+    truth = random_truth(arm, rng)
+    cond = arm.plan_conditions(random_poses(arm, 60, rng))
+    exact = identify(arm, cond.q, arm.positions(cond, truth), target=cond.target)
+    noisy = arm.positions(cond, truth) + rng.normal(scale=0.05, size=(cond.m, 3))
+    cal = identify(arm, cond.q, noisy, target=cond.target)
+    free = cal.model.free
+    z = (cal.params - exact.params)[free] / (cal.std[free] / cal.model.display_scale[free])
+    assert np.max(np.abs(z)) < 4
