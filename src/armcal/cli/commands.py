@@ -28,8 +28,10 @@ from ..files import (
     format_measurements_csv,
     format_plan_csv,
     format_program_csv,
+    is_serial_robot,
     load_compliance_truth,
     load_robot,
+    load_serial_robot,
     load_truth,
     read_calibration,
     read_loaded_plan,
@@ -58,8 +60,10 @@ from ..report import (
 )
 from ..reproduction import TABLE_COLUMNS, reproduce
 from ..workflow import (
+    CalibrationRun,
     FixError,
     calibrate,
+    calibrate_serial,
     compensate_program,
     design_plan,
     design_sigma,
@@ -187,6 +191,24 @@ def synthesize(args: argparse.Namespace) -> None:
     )
 
 
+def _calibrate_planar(args: argparse.Namespace) -> CalibrationRun:
+    """A planar robot's calibration of ``--measurements``."""
+    spec = load_robot(args.robot)
+    meas = read_measurements(args.measurements, spec.arm)
+    return calibrate(
+        spec,
+        meas,
+        source=args.measurements,
+        fixed=args.fix,
+        sigma=args.sigma,
+        method=args.method,
+        robust=args.robust,
+        compliance=not args.no_compliance,
+        folds=args.cross_validate,
+        seed=args.seed,
+    )
+
+
 def identify(args: argparse.Namespace) -> None:
     """``armcal identify``: the calibration of a measurement file."""
     if args.robot is None:
@@ -195,21 +217,23 @@ def identify(args: argparse.Namespace) -> None:
             "arm's model is a wrong calibration; give your robot file (armcal formats lists "
             f"its keys) or a built-in name ({', '.join(BUILTIN_ROBOTS)})"
         )
-    spec = load_robot(args.robot)
-    meas = read_measurements(args.measurements, spec.arm)
     try:
-        run = calibrate(
-            spec,
-            meas,
-            source=args.measurements,
-            fixed=args.fix,
-            sigma=args.sigma,
-            method=args.method,
-            robust=args.robust,
-            compliance=not args.no_compliance,
-            folds=args.cross_validate,
-            seed=args.seed,
-        )
+        if is_serial_robot(args.robot):
+            serial = load_serial_robot(args.robot)
+            meas = read_measurements(args.measurements, serial.arm)
+            run = calibrate_serial(
+                serial,
+                meas,
+                source=args.measurements,
+                fixed=args.fix,
+                sigma=args.sigma,
+                method=args.method,
+                robust=args.robust,
+                folds=args.cross_validate,
+                seed=args.seed,
+            )
+        else:
+            run = _calibrate_planar(args)
     except FixError as exc:
         raise ArmcalError(f"--fix: {exc}") from None
     cal = run.calibration

@@ -29,6 +29,13 @@ from .robots import (
     load_truth,
     unknown_parameter,
 )
+from .serial import (
+    BUILTIN_SERIAL_ROBOTS,
+    SerialSpec,
+    is_serial_robot,
+    load_serial_robot,
+    load_serial_truth,
+)
 from .tables import (
     INSTRUMENT_RANGE,
     LIMIT_TOLERANCE_DEG,
@@ -46,6 +53,7 @@ from .tables import (
 
 __all__ = [
     "BUILTIN_ROBOTS",
+    "BUILTIN_SERIAL_ROBOTS",
     "CALIBRATION_FORMAT",
     "COMPLIANCE_TRUTH_KEYS",
     "DEFAULT_ROBOT",
@@ -62,14 +70,18 @@ __all__ = [
     "OutputFolder",
     "Program",
     "RobotSpec",
+    "SerialSpec",
     "atomic_write",
     "calibration_document",
     "check_outputs",
     "format_measurements_csv",
     "format_plan_csv",
     "format_program_csv",
+    "is_serial_robot",
     "load_compliance_truth",
     "load_robot",
+    "load_serial_robot",
+    "load_serial_truth",
     "load_truth",
     "read_calibration",
     "read_loaded_plan",

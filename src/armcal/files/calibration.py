@@ -29,6 +29,7 @@ from ..models import (
     PlanarArm,
     Plane,
     Region,
+    SpatialArm,
     Target,
 )
 from ..noise import NoiseModel
@@ -61,7 +62,30 @@ def _region_to_dict(region: Region | None) -> dict[str, Any] | None:
     return None
 
 
-def robot_to_dict(arm: PlanarArm) -> dict[str, Any]:
+def serial_robot_to_dict(arm: SpatialArm) -> dict[str, Any]:
+    """The ``robot`` section of a spatial arm's calibration: the chain as joint origins
+    (mm, rad: 4 x 4 transforms), the joint map and limits, the targets, and the
+    identifiable set with why the rest is held."""
+    return {
+        "name": arm.name,
+        "kind": "serial",
+        "joint_types": list(arm.chain.kinds),
+        "joint_names": list(arm.chain.joint_names),
+        "origins": arm.chain.origins.tolist(),
+        "tip": arm.chain.tip.tolist(),
+        "joint_map": arm.joint_map.tolist(),
+        "joint_limits": arm.limits.tolist(),
+        "chain_limits": np.where(
+            np.isfinite(arm.chain.joint_limits), arm.chain.joint_limits, 1e300
+        ).tolist(),
+        "targets": list(arm.targets),
+        "known_targets": arm.known_targets,
+        "held": list(arm.held),
+        "merges": list(arm.merges),
+    }
+
+
+def robot_to_dict(arm: PlanarArm | SpatialArm) -> dict[str, Any]:
     """The ``robot`` section of a calibration file: everything needed to rebuild the arm.
 
     ``name``, ``link_lengths_mm``, ``joint_limits_deg``, ``base_offset``,
@@ -69,6 +93,8 @@ def robot_to_dict(arm: PlanarArm) -> dict[str, Any]:
     (label to ``{length_mm, angle_deg}``) and ``region`` (or null); the noise
     model and the fixed parameters are top-level keys of the document.
     """
+    if isinstance(arm, SpatialArm):
+        return serial_robot_to_dict(arm)
     return {
         "name": arm.name,
         "link_lengths_mm": arm.link_lengths.tolist(),
@@ -267,10 +293,11 @@ def calibration_document(
     # Python numbers, column by column (a 10^5-row table indexed row by row in numpy is slow).
     rows = [int(r) for r in cal.rows] if cal.rows else list(range(1, cal.n_poses + 1))
     used = [True] * cal.n_poses if cal.used is None else np.asarray(cal.used, bool).tolist()
-    labels = [t.label for t in arm.targets]
+    labels = list(arm.target_labels)
     targets = (
         [None] * cal.n_poses if cal.target is None else [labels[t] for t in cal.target.tolist()]
     )
+    axes = ("dx_mm", "dy_mm", "dz_mm")[: cal.residuals.shape[1]]
     standardized = cal.standardized_residuals
     return {
         "format": CALIBRATION_FORMAT,
@@ -307,18 +334,16 @@ def calibration_document(
             "p_value": None if fit is None else _finite_or_none(fit.p_value),
         },
         "residuals": [
-            {"row": row, "pose": label, "target": t, "dx_mm": x, "dy_mm": y, "used": u}
-            for row, label, t, x, y, u in zip(
-                rows, cal.pose_labels, targets, *cal.residuals.T.tolist(), used, strict=True
+            {"row": row, "pose": label, "target": t, **dict(zip(axes, d, strict=True)), "used": u}
+            for row, label, t, d, u in zip(
+                rows, cal.pose_labels, targets, cal.residuals.tolist(), used, strict=True
             )
         ],
         "standardized_residuals": []
         if standardized is None
         else [
-            {"row": row, "pose": label, "x": x, "y": y}
-            for row, label, x, y in zip(
-                rows, cal.pose_labels, *standardized.T.tolist(), strict=True
-            )
+            {"row": row, "pose": label, **dict(zip("xyz", d, strict=False))}
+            for row, label, d in zip(rows, cal.pose_labels, standardized.tolist(), strict=True)
         ],
         "outliers": [
             {

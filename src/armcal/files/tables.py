@@ -26,6 +26,7 @@ from ..formats import reader_columns
 from ..models import (
     Loads,
     PlanarArm,
+    SpatialArm,
 )
 from .common import MAX_ABS_VALUE, fail, read_text, suggest
 from .csv_text import csv_text, degrees, floats
@@ -358,7 +359,11 @@ def _other_robot(arm_from: str | None) -> str:
 
 
 def _read_csv(
-    path, arm: PlanarArm, what: str, limit_tol_deg: float = 0.0, arm_from: str | None = None
+    path,
+    arm: PlanarArm | SpatialArm,
+    what: str,
+    limit_tol_deg: float = 0.0,
+    arm_from: str | None = None,
 ) -> _Table:
     """Validate a CSV of kind ``what`` (a key of :data:`armcal.formats.COLUMNS`).
 
@@ -623,7 +628,7 @@ def format_program_csv(
     return csv_text(head, columns)
 
 
-def _beyond_limits_warning(path, arm: PlanarArm, beyond) -> ArmcalWarning:
+def _beyond_limits_warning(path, arm: PlanarArm | SpatialArm, beyond) -> ArmcalWarning:
     limits_deg = np.degrees(arm.joint_limits)
     shown = [
         f"row {r + 1} q{j + 1}_deg = {value:g} "
@@ -641,7 +646,7 @@ def _beyond_limits_warning(path, arm: PlanarArm, beyond) -> ArmcalWarning:
 
 
 def _check_reach(
-    path, arm: PlanarArm, xy: np.ndarray, lines: list[int], arm_from: str | None
+    path, arm: PlanarArm | SpatialArm, xy: np.ndarray, lines: list[int], arm_from: str | None
 ) -> None:
     """Refuse a measured point no arm of this geometry can reach (see :data:`REACH_MARGIN`).
 
@@ -649,7 +654,7 @@ def _check_reach(
     within ``reach`` of it.  With one, the base is unknown, but every tip lies
     within ``reach`` of it, so within ``2 reach`` of the data's centroid.
     """
-    reach = float(np.sum(arm.link_lengths[:-1]) + np.max(arm.link_nominal[arm.n_joints - 1 :]))
+    reach = arm.tip_reach_mm
     limit = (1 + REACH_MARGIN) * reach
     if arm.base_offset or xy.shape[1] == 3:
         center = np.mean(xy, axis=0)
@@ -687,7 +692,7 @@ def _check_reach(
 
 
 def read_measurements(
-    path: str | os.PathLike, arm: PlanarArm, *, arm_from: str | None = None
+    path: str | os.PathLike, arm: PlanarArm | SpatialArm, *, arm_from: str | None = None
 ) -> Measurements:
     """Read a measurements CSV: ``q1_deg..qn_deg,x_mm,y_mm``, optional ``pose`` and ``sigma_mm``.
 
@@ -779,7 +784,9 @@ def _load_columns(path, table: _Table) -> tuple[np.ndarray | None, np.ndarray | 
     return payload, force
 
 
-def _check_target_labels(path, arm: PlanarArm, labels: list[str], lines: list[int]) -> None:
+def _check_target_labels(
+    path, arm: PlanarArm | SpatialArm, labels: list[str], lines: list[int]
+) -> None:
     """Every row names a target, one of the robot file's ``[targets]`` when it has them."""
     known = arm.target_labels
     for r, label in enumerate(labels):

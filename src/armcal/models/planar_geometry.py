@@ -219,6 +219,12 @@ class PlanarGeometry:
         return self.n_joints - 1 + self.n_target_links
 
     @property
+    def tip_reach_mm(self) -> float:
+        """How far from joint 1 a measured point can lie: the links to the farthest target."""
+        last = float(np.max(self.link_nominal[self.n_joints - 1 :]))
+        return float(np.sum(self.link_lengths[:-1])) + last
+
+    @property
     def target_labels(self) -> tuple[str, ...]:
         """Labels of the targets (empty for the single end-of-arm target)."""
         return tuple(t.label for t in self.targets)

@@ -32,7 +32,7 @@ from .information import (
     whitened_free_jacobian,
 )
 from .interface import Conditions, Effect, LinearPositions, Loads
-from .spatial_chain import SerialChain, matrix_rpy
+from .spatial_chain import SerialChain, elementary, joint_motion, matrix_rpy, transform
 from .spatial_kinematics import ChainKinematics, SpatialLayout, kinematics
 from .spatial_registration import register
 from .spatial_selection import select
@@ -163,6 +163,65 @@ class SpatialArm:
     def _params(self, params: np.ndarray | None) -> np.ndarray:
         return self.nominal if params is None else np.asarray(params, dtype=float)
 
+    def params_of(
+        self, chain: SerialChain, base_pose: np.ndarray, targets: np.ndarray
+    ) -> np.ndarray:
+        """This arm's parameters ``(p,)`` for the arm ``chain`` (same joints) with its base
+        at ``base_pose`` (mm, rad) and its targets at ``targets`` ``(k, 3)`` in its tip frame:
+        exact, whatever the two descriptions' frames.
+
+        Joint ``k``'s error is ``E_k = N_k^-1 T_k`` (nominal and true origins), split as
+        ``T(x, y, z) Rx Ry Rz``; the turn about (or slide along) its axis is its zero.
+        """
+        if chain.kinds != self.chain.kinds:
+            raise ValueError("the two descriptions must have the same joints")
+        lay = self.layout
+        out = np.zeros(lay.n_params)
+        out[:6] = base_pose
+        zero_u = np.zeros(self.n_joints)
+        for k, kind in enumerate(chain.kinds):
+            error = np.linalg.solve(self.chain.origins[k], chain.origins[k])
+            rot, shift = error[:3, :3], error[:3, 3]
+            ry = np.arcsin(np.clip(rot[0, 2], -1.0, 1.0))
+            rx = np.arctan2(-rot[1, 2], rot[2, 2])
+            rz = np.arctan2(-rot[0, 1], rot[0, 0])
+            start = 6 + 5 * k
+            if kind == "R":
+                out[start : start + 5] = [*shift, rx, ry]
+                zero_u[k] = rz
+            else:  # slide the origin along the axis until its z is 0: that is the zero
+                slide = shift[2] / rot[2, 2]
+                moved = shift - rot[:, 2] * slide
+                out[start : start + 5] = [moved[0], moved[1], rx, ry, rz]
+                zero_u[k] = slide
+        out[lay.zero_start : lay.target_start] = np.linalg.solve(self.joint_map, zero_u)
+        tip = np.linalg.solve(self.chain.tip, chain.tip)
+        local = np.asarray(targets, dtype=float) @ tip[:3, :3].T + tip[:3, 3]
+        out[lay.target_start :] = local.ravel()
+        return out
+
+    def calibrated_chain(self, params: np.ndarray) -> SerialChain:
+        """The chain whose joint origins carry ``params``' errors and zeros: its nominal
+        kinematics are this arm's at ``params`` (base pose and targets aside)."""
+        lay = self.layout
+        errors = lay.placement_errors(np.asarray(params, dtype=float))
+        zero_u = (
+            self.joint_map @ np.asarray(params, dtype=float)[lay.zero_start : lay.target_start]
+        )
+        origins = np.empty_like(self.chain.origins)
+        for k, kind in enumerate(self.chain.kinds):
+            x, y, z, rx, ry, rz = errors[k]
+            rot = elementary(0, rx) @ elementary(1, ry) @ elementary(2, rz)
+            error = transform(rot, [x, y, z]) @ joint_motion(kind, zero_u[k])
+            origins[k] = self.chain.origins[k] @ error
+        return SerialChain(
+            origins,
+            self.chain.kinds,
+            self.chain.tip,
+            self.chain.joint_names,
+            self.chain.joint_limits,
+        )
+
     # -- what is identified ----------------------------------------------------------
 
     @property
@@ -231,6 +290,18 @@ class SpatialArm:
         """The sum of the joint origins' and the tip's offsets (an upper bound of the reach)."""
         offsets = np.linalg.norm(self.chain.origins[:, :3, 3], axis=1)
         return float(np.sum(offsets) + np.linalg.norm(self.chain.tip[:3, 3]) + 1.0)
+
+    @property
+    def base_offset(self) -> bool:
+        """True: the base pose in the instrument's frame is always identified."""
+        return True
+
+    @property
+    def tip_reach_mm(self) -> float:
+        """How far from the base a measured point can lie: the reach and a target 0.5 m out
+        (targets found from the data may sit on a long tool)."""
+        targets = float(np.max(np.linalg.norm(self.target_positions, axis=1)))
+        return self.reach_mm + max(targets, 500.0)
 
     @property
     def target_labels(self) -> tuple[str, ...]:

@@ -37,6 +37,7 @@ __all__ = [
     "UrdfJoint",
     "axis_frame",
     "elementary",
+    "joint_motion",
     "matrix_rpy",
     "rpy_matrix",
     "transform",

@@ -6,6 +6,7 @@ import numpy as np
 
 from ..identification import Calibration
 from ..identification.result import STRONG_CORRELATION
+from ..models import SpatialArm
 from .common import identified, model_lines, small
 
 __all__ = [
@@ -93,7 +94,10 @@ def format_calibration(cal: Calibration, *, truth: np.ndarray | None = None) -> 
         header,
     ]
     truth_display = None if truth is None else np.asarray(truth) * cal.display_scale
+    merged = set(arm.held) if isinstance(arm, SpatialArm) else set()
     for i, (name, unit) in enumerate(zip(cal.names, cal.units, strict=True)):
+        if name in merged:
+            continue  # held by the identifiable-set rule: listed with why, above
         if name in arm.fixed:
             line = f"{name:<10}{cal.values[i]:>12.5f}  {'fixed':<10}  {unit:<4}"
         else:

@@ -11,7 +11,7 @@ import math
 
 import numpy as np
 
-from ..models import PlanarArm, combination
+from ..models import PlanarArm, SpatialArm, combination
 
 __all__ = [
     "identified",
@@ -24,7 +24,7 @@ __all__ = [
 ]
 
 
-def _noise_text(arm: PlanarArm) -> str | None:
+def _noise_text(arm: PlanarArm | SpatialArm) -> str | None:
     """The noise model in words when it is not isotropic iid (None when it is or is unknown)."""
     noise = arm.noise
     if noise is None or noise.isotropic_iid:
@@ -32,6 +32,14 @@ def _noise_text(arm: PlanarArm) -> str | None:
     cov = noise.covariance_mm2
     if noise.isotropic_instrument:
         parts = [f"instrument isotropic, sigma {math.sqrt(cov[0, 0]):.4g} mm"]
+    elif np.count_nonzero(cov - np.diag(np.diagonal(cov))) == 0 and cov.shape[0] == 3:
+        parts = [
+            "instrument per axis, sigma_x, _y, _z "
+            + ", ".join(f"{math.sqrt(v):.4g}" for v in np.diagonal(cov))
+            + " mm"
+        ]
+    elif cov.shape[0] == 3:
+        parts = ["instrument covariance (3 x 3) " + str(np.round(cov, 6).tolist()) + " mm^2"]
     elif cov[0, 1] == 0:
         parts = [
             f"instrument per axis, sigma_x {math.sqrt(cov[0, 0]):.4g} mm, "
@@ -51,7 +59,34 @@ def _noise_text(arm: PlanarArm) -> str | None:
     return "; ".join(parts) + f" (reference sigma {noise.sigma_mm:.4g} mm)"
 
 
-def model_lines(arm: PlanarArm, *, plan: bool = True) -> list[str]:
+def spatial_model_lines(arm: SpatialArm) -> list[str]:
+    """A spatial arm's model: joint map, targets, the identifiable set and what merges."""
+    lines = []
+    if not np.array_equal(arm.joint_map, np.eye(arm.n_joints)):
+        rows = "; ".join(" ".join(f"{v:g}" for v in row) for row in arm.joint_map)
+        lines.append(f"joint map: the arm's joint values u = M q with M = [{rows}]")
+    where = "from the robot file" if arm.known_targets else "found from the data"
+    lines.append(f"targets ({where}, positions in the tip frame): {', '.join(arm.targets)}")
+    revolute = int(np.sum(arm.chain.revolute))
+    prismatic = arm.n_joints - revolute
+    lines.append(
+        f"identifiable set: {arm.n_free} of {arm.n_params} parameters (theory for "
+        f"{revolute} revolute and {prismatic} prismatic joints and {len(arm.targets)} point "
+        f"target{'s' if len(arm.targets) > 1 else ''}: 4R + 2P + 3k = "
+        f"{4 * revolute + 2 * prismatic + 3 * len(arm.targets)})"
+    )
+    if arm.user_fixed:
+        lines.append(f"fixed (held at nominal, not identified): {', '.join(arm.user_fixed)}")
+    if arm.merges:
+        lines.append("held at nominal, because the measurements cannot separate them:")
+        lines += [f"  {sentence}" for sentence in arm.merges]
+    noise = _noise_text(arm)
+    if noise is not None:
+        lines.append(f"noise model: {noise}; not isotropic iid: weighted least squares")
+    return lines
+
+
+def model_lines(arm: PlanarArm | SpatialArm, *, plan: bool = True) -> list[str]:
     """Lines naming the fixed parameters and a noise model that is not isotropic iid.
 
     Empty for the paper's model (every parameter free, isotropic iid noise).
@@ -63,6 +98,8 @@ def model_lines(arm: PlanarArm, *, plan: bool = True) -> list[str]:
     >>> model_lines(PlanarArm([260.0, 180.0], fixed=["dl2"]))
     ['fixed (held at nominal, not identified): dl2']
     """
+    if isinstance(arm, SpatialArm):
+        return spatial_model_lines(arm)
     lines = []
     if not np.array_equal(arm.joint_map, np.tril(np.ones((arm.n_joints, arm.n_joints)))):
         rows = "; ".join(" ".join(f"{v:g}" for v in row) for row in arm.joint_map)

@@ -15,9 +15,11 @@ from .calibration import (
     ExportRun,
     ValidationRun,
     calibrate,
+    calibrate_serial,
     compensate_program,
     export_files,
     measured_arm,
+    serial_arm,
     validate_measurements,
 )
 from .plan import (
@@ -54,6 +56,7 @@ __all__ = [
     "Synthesis",
     "ValidationRun",
     "calibrate",
+    "calibrate_serial",
     "compensate_program",
     "design_plan",
     "design_sigma",
@@ -64,6 +67,7 @@ __all__ = [
     "model_arm",
     "plan_model",
     "prefixed",
+    "serial_arm",
     "simulate_plan",
     "simulation_sigma",
     "size_plan",

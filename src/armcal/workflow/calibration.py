@@ -27,10 +27,11 @@ from ..errors import (
     unique_warnings,
 )
 from ..export import robot_toml, urdf, urdf_joints_are_readings
-from ..files import Measurements, Program, RobotSpec
+from ..files import Measurements, Program, RobotSpec, SerialSpec, unknown_parameter
 from ..identification import Calibration, identify
 from ..instrument import identify_3d
-from ..models import CalibratedArm, FitModel, Loads, PlanarArm, Target
+from ..models import CalibratedArm, FitModel, Loads, PlanarArm, SpatialArm, Target
+from ..noise import instrument_override
 from ..plausibility import deviation_warning, explain, suspicious
 from ..validation import (
     CrossValidation,
@@ -40,7 +41,7 @@ from ..validation import (
     validate,
     validation_warnings,
 )
-from .setup import fit_model, model_arm, prefixed
+from .setup import FixError, fit_model, model_arm, prefixed
 
 __all__ = [
     "CalibrationRun",
@@ -48,9 +49,11 @@ __all__ = [
     "ExportRun",
     "ValidationRun",
     "calibrate",
+    "calibrate_serial",
     "compensate_program",
     "export_files",
     "measured_arm",
+    "serial_arm",
     "validate_measurements",
 ]
 
@@ -269,6 +272,97 @@ def calibrate(
             row_sigma=meas.row_sigma,
             rng=seed,
             loads=None if conditions is None else conditions.loads,
+        )
+        warning = cross_validation_warning(checked)
+        if warning is not None:
+            warnings.append(warning)
+    return CalibrationRun(cal, tuple(unique_warnings(warnings)), checked)
+
+
+def serial_arm(arm: SpatialArm, meas: Measurements) -> SpatialArm:
+    """The spatial arm to identify from ``meas``: its targets are those measured, in the
+    robot file's order (their nominal positions from there) or in the order they appear.
+
+    Raises InputError for data without ``z_mm`` or without the targets the robot file has.
+    """
+    if meas.z is None:
+        raise InputError(
+            f"{arm.name} is a spatial arm: its measurements need x_mm, y_mm and z_mm; add the "
+            "z_mm column the instrument reports"
+        )
+    if meas.targets is None:
+        if arm.target_labels:
+            raise InputError(
+                f"{arm.name} has targets ({', '.join(arm.target_labels)}) but the measurements "
+                "have no target column; add a column 'target' naming the target of every row"
+            )
+        return arm
+    seen = list(dict.fromkeys(meas.targets))
+    if arm.known_targets:
+        keep = [i for i, label in enumerate(arm.targets) if label in seen]
+        labels = tuple(arm.targets[i] for i in keep)
+        return arm.replace(targets=labels, target_positions=arm.target_positions[keep])
+    return arm.replace(targets=tuple(seen), target_positions=np.zeros((0, 3)))
+
+
+def calibrate_serial(
+    spec: SerialSpec,
+    meas: Measurements,
+    *,
+    source: str = "measurements",
+    fixed: tuple[str, ...] | None = None,
+    sigma: float | None = None,
+    method: str = "auto",
+    robust: bool = False,
+    folds: int | None = None,
+    seed: int | np.random.Generator | None = 0,
+) -> CalibrationRun:
+    """:func:`calibrate` for a spatial arm: the same options, checks and warnings.
+
+    The base pose and the targets are found from the data (no start from the
+    user); the identifiable set is chosen for these measurements and named.
+    """
+    try:
+        arm = serial_arm(spec.arm, meas)
+        if fixed is not None:
+            unknown = [name for name in fixed if name not in arm.param_names]
+            if unknown:
+                raise FixError(unknown_parameter(unknown[0], arm.param_names, arm.name))
+            arm = arm.with_fixed(fixed)
+        if sigma:
+            arm = arm.with_noise(instrument_override(arm.noise, sigma))
+            meas = replace(meas, row_sigma=None)
+        index = None if meas.targets is None else arm.target_index(meas.targets)
+        cal = identify(
+            arm,
+            meas.q,
+            meas.xyz,
+            method=method,
+            robust=robust,
+            pose_labels=meas.labels,
+            rows=meas.rows,
+            row_sigma=meas.row_sigma,
+            target=index,
+        )
+    except (InputError, FixError):
+        raise
+    except ArmcalError as exc:
+        raise prefixed(source, exc) from None
+    except ValueError as exc:
+        raise InputError(f"{source}: {exc}") from None
+    warnings = [*meas.warnings, *cal.warnings]
+    checked = None
+    if folds is not None:
+        checked = cross_validate(
+            cal.model,
+            meas.q,
+            meas.xyz,
+            folds,
+            groups=None if meas.targets is None else np.array(meas.labels),
+            target=cal.target,
+            sigma=sigma,
+            row_sigma=meas.row_sigma,
+            rng=seed,
         )
         warning = cross_validation_warning(checked)
         if warning is not None:

@@ -1,0 +1,368 @@
+"""Spatial robot files: a URDF, a robot TOML that points to one or gives a modified DH
+table, the built-in spatial robots, and the truth of a virtual spatial arm.
+
+A robot TOML of a spatial arm has ``urdf`` (a path relative to the file, with
+optional ``base_link`` and ``tip_link``) or an ``[mdh]`` table (``alpha_deg``,
+``a_mm``, ``theta_deg``, ``d_mm``, optional ``joint_types``), and optionally
+``name``, ``joint_map`` (URDF joint values ``u = M q`` from the controller's
+readings ``q``), ``joint_limits_deg`` (on ``q``; they replace the URDF's, which
+hold for ``u``), ``[measurement]`` (``sigma_mm``: one number or ``[sx, sy,
+sz]``), ``[targets]`` (``LABEL = { xyz_mm = [x, y, z] }`` in the tip frame)
+and ``[identify]`` (``fixed`` or ``free``).
+
+A truth TOML (``--truth``) of a virtual spatial arm gives the instrument's pose
+``base = { xyz_mm = [...], rpy_deg = [...] }``, ``[targets]`` as above, and the
+true arm: ``robot = "true.urdf"`` (another description of it, joint for joint),
+``[errors]`` (armcal's parameters in mm and deg: ``j2.x = 0.4``, ``dq3 = 0.05``),
+or both (the errors on top of that description).
+"""
+
+from __future__ import annotations
+
+import os
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from ..models import SerialChain, SpatialArm
+from ..noise import NoiseModel
+from .common import check_keys, fail, load_toml, number, numbers, suggest
+from .urdf import read_urdf
+
+__all__ = [
+    "BUILTIN_SERIAL_ROBOTS",
+    "SerialSpec",
+    "is_serial_robot",
+    "load_serial_robot",
+    "load_serial_truth",
+]
+
+#: The folder of the built-in spatial robots' files.
+ROBOT_FOLDER = Path(__file__).resolve().parents[1] / "robots"
+
+#: Built-in spatial robots by name: the robot file each is.
+BUILTIN_SERIAL_ROBOTS = {
+    "industrial-6r": ROBOT_FOLDER / "industrial-6r.toml",
+    "cobot-6r": ROBOT_FOLDER / "cobot-6r.toml",
+    "arm-7r": ROBOT_FOLDER / "arm-7r.toml",
+}
+
+_TOP_KEYS = ("name", "urdf", "base_link", "tip_link", "joint_map", "joint_limits_deg")
+_TABLES = ("mdh", "measurement", "targets", "identify")
+_MDH_KEYS = ("alpha_deg", "a_mm", "theta_deg", "d_mm", "joint_types")
+_TRUTH_KEYS = ("robot", "base", "errors", "targets")
+
+
+@dataclass(frozen=True, eq=False)
+class SerialSpec:
+    """A spatial robot as loaded from a built-in name, a URDF or a robot TOML.
+
+    Attributes
+    ----------
+    arm : SpatialArm
+    source : str
+        The built-in name or the file it came from.
+    default_truth : Path or None
+        The built-in robot's truth file (a virtual arm), None for robot files.
+    """
+
+    arm: SpatialArm
+    source: str
+    default_truth: Path | None = None
+
+
+def is_serial_robot(name_or_path: str | os.PathLike) -> bool:
+    """Whether ``name_or_path`` names a spatial robot: a built-in one, a URDF, or a robot
+    TOML with ``urdf`` or ``[mdh]``."""
+    key = os.fspath(name_or_path)
+    if key in BUILTIN_SERIAL_ROBOTS or key.lower().endswith(".urdf"):
+        return True
+    path = Path(key)
+    if path.suffix.lower() != ".toml" or not path.is_file():
+        return False
+    try:
+        text = path.read_text(encoding="utf-8")
+    except (OSError, UnicodeDecodeError):
+        return False
+    return any(line.strip().startswith(("urdf", "[mdh]")) for line in text.splitlines())
+
+
+def load_serial_robot(
+    name_or_path: str | os.PathLike, *, tip_link: str | None = None
+) -> SerialSpec:
+    """A spatial robot from a built-in name, a URDF or a robot TOML (module notes).
+
+    Raises
+    ------
+    InputError
+        Naming the file and the key (or the URDF's line).
+    """
+    key = os.fspath(name_or_path)
+    if key in BUILTIN_SERIAL_ROBOTS:
+        path = BUILTIN_SERIAL_ROBOTS[key]
+        truth = path.with_name(path.stem + "-truth.toml")
+        spec = _from_toml(path, key)
+        return SerialSpec(spec.arm, key, truth if truth.is_file() else None)
+    path = Path(key)
+    if path.suffix.lower() == ".urdf":
+        found = read_urdf(path, None, tip_link)
+        return SerialSpec(SpatialArm(found.chain, found.robot), key)
+    return _from_toml(path, None, tip_link)
+
+
+def _chain(path: Path, data: dict, tip_link: str | None) -> tuple[SerialChain, str]:
+    """The chain of a robot TOML: its URDF's or its ``[mdh]`` table's, and a default name."""
+    if "urdf" in data and "mdh" in data:
+        raise fail(path, "keys 'urdf' and [mdh] both describe the arm; keep one")
+    if "urdf" in data:
+        if not isinstance(data["urdf"], str):
+            raise fail(path, f"key 'urdf': expected a file name, got {data['urdf']!r}")
+        urdf = path.parent / data["urdf"]
+        if not urdf.is_file():
+            raise fail(
+                path,
+                f"key 'urdf': {urdf} does not exist; give the URDF's path relative to the "
+                "robot file",
+            )
+        links = {}
+        for name in ("base_link", "tip_link"):
+            if name in data and not isinstance(data[name], str):
+                raise fail(path, f"key '{name}': expected a link name, got {data[name]!r}")
+            links[name] = data.get(name)
+        found = read_urdf(urdf, links["base_link"], tip_link or links["tip_link"])
+        return found.chain, found.robot
+    if "mdh" not in data:
+        raise fail(path, "needs 'urdf' (a URDF file) or an [mdh] table to describe the arm")
+    table = data["mdh"]
+    if not isinstance(table, dict):
+        raise fail(path, "key 'mdh': expected a table [mdh]")
+    check_keys(path, table, list(_MDH_KEYS), "mdh.")
+    values = {}
+    for name in _MDH_KEYS[:4]:
+        if name not in table:
+            raise fail(path, f"missing key 'mdh.{name}': one value per joint")
+        values[name] = numbers(path, table[name], f"mdh.{name}")
+    n = len(values["alpha_deg"])
+    for name, column in values.items():
+        if len(column) != n or n == 0:
+            raise fail(
+                path,
+                f"key 'mdh.{name}': expected {n} values (one per joint, as alpha_deg), "
+                f"got {len(column)}",
+            )
+    kinds = table.get("joint_types", ["R"] * n)
+    if not isinstance(kinds, list) or len(kinds) != n or any(k not in ("R", "P") for k in kinds):
+        raise fail(path, f'key \'mdh.joint_types\': expected {n} of "R" or "P", got {kinds!r}')
+    chain = SerialChain.from_mdh(
+        np.radians(values["alpha_deg"]),
+        values["a_mm"],
+        np.radians(values["theta_deg"]),
+        values["d_mm"],
+        tuple(kinds),
+    )
+    return chain, path.stem
+
+
+def _from_toml(path: Path, builtin: str | None, tip_link: str | None = None) -> SerialSpec:
+    data = load_toml(path, "robot")
+    check_keys(path, data, [*_TOP_KEYS, *_TABLES])
+    chain, default_name = _chain(path, data, tip_link)
+    n = chain.n_joints
+    name = data.get("name", default_name)
+    if not isinstance(name, str) or not name.strip():
+        raise fail(path, f"key 'name': expected a non-empty string, got {name!r}")
+    mapping = np.eye(n)
+    if "joint_map" in data:
+        raw = data["joint_map"]
+        if not isinstance(raw, list) or len(raw) != n:
+            raise fail(
+                path, f"key 'joint_map': expected {n} rows of {n} numbers (the arm has {n} joints)"
+            )
+        mapping = np.array([numbers(path, row, f"joint_map[{i}]", n) for i, row in enumerate(raw)])
+        if abs(np.linalg.det(mapping)) < 1e-9:
+            raise fail(
+                path, "key 'joint_map': the matrix is singular; every joint value needs a reading"
+            )
+    limits = np.zeros((0, 2))
+    if "joint_limits_deg" in data:
+        raw = data["joint_limits_deg"]
+        if not isinstance(raw, list) or len(raw) != n:
+            raise fail(path, f"key 'joint_limits_deg': expected {n} pairs [lo, hi], one per joint")
+        pairs = np.array(
+            [numbers(path, p, f"joint_limits_deg[{j}]", 2) for j, p in enumerate(raw)]
+        )
+        for j, (lo, hi) in enumerate(pairs):
+            if not lo < hi:
+                raise fail(
+                    path, f"key 'joint_limits_deg[{j}]': need lo < hi, got [{lo:g}, {hi:g}]"
+                )
+        limits = np.where(chain.revolute[:, None], np.radians(pairs), pairs)
+    noise = _noise(path, data.get("measurement"))
+    labels, positions = _targets(path, data.get("targets"))
+    arm = SpatialArm(
+        chain,
+        name,
+        mapping,
+        limits,
+        targets=labels or ("tool",),
+        target_positions=positions,
+        noise=noise,
+        known_targets=bool(labels),
+    )
+    if "identify" in data:
+        arm = arm.with_fixed(_fixed(path, data["identify"], arm))
+    return SerialSpec(arm, builtin or os.fspath(path))
+
+
+def _noise(path: Path, table: Any) -> NoiseModel | None:
+    if table is None:
+        return None
+    if not isinstance(table, dict):
+        raise fail(path, "key 'measurement': expected a table [measurement]")
+    check_keys(path, table, ["sigma_mm", "covariance_mm2"], "measurement.")
+    if "sigma_mm" in table and "covariance_mm2" in table:
+        raise fail(
+            path,
+            "keys 'measurement.sigma_mm' and 'measurement.covariance_mm2' both give the noise; "
+            "keep one",
+        )
+    if "sigma_mm" in table:
+        raw = table["sigma_mm"]
+        values = (
+            numbers(path, raw, "measurement.sigma_mm", 3)
+            if isinstance(raw, list)
+            else [number(path, raw, "measurement.sigma_mm")] * 3
+        )
+        if not all(1e-6 <= v <= 1e3 for v in values):
+            raise fail(
+                path,
+                "key 'measurement.sigma_mm': must be between 1e-06 and 1000 mm; check the unit "
+                "(mm)",
+            )
+        return NoiseModel(np.diag(np.square(values)))
+    if "covariance_mm2" in table:
+        raw = table["covariance_mm2"]
+        if not isinstance(raw, list) or len(raw) != 3:
+            raise fail(path, "key 'measurement.covariance_mm2': expected a 3 x 3 matrix in mm^2")
+        cov = np.array(
+            [numbers(path, r, f"measurement.covariance_mm2[{i}]", 3) for i, r in enumerate(raw)]
+        )
+        try:
+            return NoiseModel(cov)
+        except ValueError as exc:
+            raise fail(path, f"key 'measurement.covariance_mm2': {exc}") from None
+    return None
+
+
+def _targets(path: Path, table: Any) -> tuple[tuple[str, ...], np.ndarray]:
+    if table is None:
+        return (), np.zeros((0, 3))
+    if not isinstance(table, dict) or not table:
+        raise fail(
+            path, "key 'targets': expected a table [targets] of LABEL = { xyz_mm = [x, y, z] }"
+        )
+    labels, positions = [], []
+    for label, entry in table.items():
+        if not isinstance(entry, dict) or set(entry) != {"xyz_mm"}:
+            raise fail(
+                path, f"key 'targets.{label}': expected {{ xyz_mm = [x, y, z] }} (mm, tip frame)"
+            )
+        labels.append(label)
+        positions.append(numbers(path, entry["xyz_mm"], f"targets.{label}.xyz_mm", 3))
+    return tuple(labels), np.array(positions)
+
+
+def _fixed(path: Path, table: Any, arm: SpatialArm) -> list[str]:
+    if not isinstance(table, dict) or len(table) != 1 or not set(table) <= {"fixed", "free"}:
+        raise fail(
+            path, "key 'identify': expected a table [identify] with fixed = [...] or free = [...]"
+        )
+    ((which, names),) = table.items()
+    if not isinstance(names, list) or not all(isinstance(x, str) for x in names):
+        raise fail(path, f"key 'identify.{which}': expected a list of parameter names")
+    for name in names:
+        if name not in arm.param_names:
+            raise fail(
+                path,
+                f"key 'identify.{which}': {name!r} is not a parameter of {arm.name}; "
+                f"{suggest(name, arm.param_names)}see armcal identify's report for the names",
+            )
+    if which == "fixed":
+        return list(names)
+    return [p for p in arm.param_names if p not in names]
+
+
+def load_serial_truth(path: str | os.PathLike, arm: SpatialArm) -> np.ndarray:
+    """The true parameters ``(p,)`` (mm, rad) of a virtual spatial arm (module notes).
+
+    The true arm's description, when given, is turned into ``arm``'s parameters
+    exactly (:meth:`~armcal.models.SpatialArm.params_of`).
+    """
+    path = Path(path)
+    data = load_toml(path, "truth")
+    check_keys(path, data, list(_TRUTH_KEYS))
+    base = np.zeros(6)
+    if "base" in data:
+        entry = data["base"]
+        if not isinstance(entry, dict) or not set(entry) <= {"xyz_mm", "rpy_deg"}:
+            raise fail(path, "key 'base': expected { xyz_mm = [x, y, z], rpy_deg = [r, p, y] }")
+        base[:3] = numbers(path, entry.get("xyz_mm", [0, 0, 0]), "base.xyz_mm", 3)
+        base[3:] = np.radians(numbers(path, entry.get("rpy_deg", [0, 0, 0]), "base.rpy_deg", 3))
+    labels, positions = _targets(path, data.get("targets"))
+    chain = arm.chain
+    if "robot" in data:
+        if not isinstance(data["robot"], str):
+            raise fail(path, "key 'robot': expected the true arm's robot file (URDF or TOML)")
+        other = path.parent / data["robot"]
+        if not other.is_file():
+            raise fail(
+                path,
+                f"key 'robot': {other} does not exist; give a path relative to the truth file",
+            )
+        chain = load_serial_robot(other).arm.chain
+        if chain.kinds != arm.chain.kinds:
+            raise fail(
+                path,
+                f"key 'robot': the true arm's joints ({''.join(chain.kinds)}) are not those of "
+                f"{arm.name} ({''.join(arm.chain.kinds)}); describe the same arm",
+            )
+    truth_targets = arm.target_positions.copy()
+    for label, position in zip(labels, positions, strict=True):
+        if label not in arm.targets:
+            raise fail(
+                path,
+                f"key 'targets.{label}': {arm.name} has no target {label!r}; "
+                f"{suggest(label, arm.targets)}",
+            )
+        truth_targets[arm.targets.index(label)] = position
+    params = arm.params_of(chain, base, truth_targets)
+    if "errors" in data:
+        params = params + _errors(path, data["errors"], arm)
+    return params
+
+
+def _errors(path: Path, table: Any, arm: SpatialArm) -> np.ndarray:
+    """``[errors]`` in display units as an internal parameter vector."""
+    if not isinstance(table, dict):
+        raise fail(path, "key 'errors': expected a table [errors] (j2.x = 0.4, dq3 = 0.05, ...)")
+    flat: dict[str, Any] = {}
+    for key, value in table.items():
+        if isinstance(value, dict):
+            flat.update({f"{key}.{k}": v for k, v in value.items()})
+        else:
+            flat[key] = value
+    out = np.zeros(arm.n_params)
+    robot = ~arm.instrument_params
+    names = [n for n, r in zip(arm.param_names, robot, strict=True) if r]
+    for key, value in flat.items():
+        if key not in names:
+            raise fail(
+                path,
+                f"key 'errors.{key}': not an error of {arm.name}; {suggest(key, names)}the "
+                f"errors are {', '.join(names)}",
+            )
+        i = arm.param_names.index(key)
+        out[i] = number(path, value, f"errors.{key}") / arm.display_scale[i]
+    return out

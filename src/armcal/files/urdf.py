@@ -1,0 +1,231 @@
+"""A URDF file as the serial chain armcal calibrates.
+
+Read with the standard library's XML parser: armcal needs a URDF's links and
+joints only (names, parents, ``<origin>``, ``<axis>``, ``<limit>``, ``<mimic>``),
+not its meshes, materials or transmissions, and the URDF libraries that parse
+those (urdfpy, yourdfpy) pull in trimesh, lxml and network-fetching resolvers
+for ``package://`` meshes.  Errors name the file, the line and the element.
+
+Units: a URDF is in metres and radians; the chain returned is in mm and rad
+(a prismatic joint's limits in mm).
+"""
+
+from __future__ import annotations
+
+import os
+import xml.etree.ElementTree as ET
+from dataclasses import dataclass
+from pathlib import Path
+
+from ..errors import InputError
+from ..models import SerialChain, UrdfJoint
+from .common import suggest
+
+__all__ = [
+    "UrdfChain",
+    "read_urdf",
+]
+
+_MOVING = ("revolute", "continuous", "prismatic")
+_KINDS = (*_MOVING, "fixed")
+
+
+@dataclass(frozen=True, eq=False)
+class UrdfChain:
+    """The chain of a URDF from a base link to a tip link.
+
+    Attributes
+    ----------
+    chain : SerialChain
+    robot : str
+        The URDF's ``<robot name>``.
+    base_link, tip_link : str
+    """
+
+    chain: SerialChain
+    robot: str
+    base_link: str
+    tip_link: str
+
+
+def _line_of(text: str, tag: str, name: str) -> int:
+    """The line of ``<tag name="name"`` in ``text`` (1-based; 0 when not found)."""
+    for quote in ('"', "'"):
+        at = text.find(f"name={quote}{name}{quote}")
+        while at >= 0:
+            start = text.rfind("<", 0, at)
+            if text[start + 1 : start + 1 + len(tag)] == tag:
+                return text.count("\n", 0, at) + 1
+            at = text.find(f"name={quote}{name}{quote}", at + 1)
+    return 0
+
+
+def _floats(path: Path, text: str, element: ET.Element, attr: str, count: int, where: str):
+    raw = element.get(attr)
+    if raw is None:
+        return None
+    parts = raw.split()
+    try:
+        values = tuple(float(v) for v in parts)
+    except ValueError:
+        values = ()
+    if len(values) != count or not all(abs(v) < float("inf") for v in values):
+        raise InputError(
+            f"{path}: {where}: {attr}={raw!r} is not {count} numbers; write "
+            f"{count} numbers separated by spaces (metres and radians)"
+        )
+    return values
+
+
+def read_urdf(
+    path: str | os.PathLike, base_link: str | None = None, tip_link: str | None = None
+) -> UrdfChain:
+    """The chain of the URDF at ``path`` from ``base_link`` (default: the root) to
+    ``tip_link`` (default: the one leaf beyond the base).
+
+    Raises
+    ------
+    InputError
+        Naming the file (and line): a missing or malformed file; a link that is
+        the child of two joints or a loop; an unknown base or tip link; several
+        leaves and no tip link; a mimic joint on the chain; a joint of an unknown
+        type or without a parent or child.
+    """
+    path = Path(path)
+    try:
+        text = path.read_text(encoding="utf-8")
+    except FileNotFoundError:
+        raise InputError(f"{path}: no such URDF file; check the path") from None
+    except (OSError, UnicodeDecodeError) as exc:
+        raise InputError(f"{path}: cannot read the URDF ({exc})") from None
+    try:
+        root = ET.fromstring(text)
+    except ET.ParseError as exc:
+        line, column = exc.position
+        raise InputError(
+            f"{path}: line {line}, column {column + 1}: not well-formed XML; fix the URDF"
+        ) from None
+    if root.tag != "robot":
+        raise InputError(f"{path}: the root element is <{root.tag}>, not <robot>; is it a URDF?")
+    links = [link.get("name", "") for link in root.findall("link")]
+    parent_joint: dict[str, ET.Element] = {}
+    children: dict[str, list[str]] = {name: [] for name in links}
+    for joint in root.findall("joint"):
+        name = joint.get("name", "")
+        line = _line_of(text, "joint", name)
+        where = f"line {line}, joint {name!r}"
+        kind = joint.get("type", "")
+        if kind not in _KINDS:
+            raise InputError(
+                f"{path}: {where}: type {kind!r} is not one armcal calibrates; a serial arm's "
+                f"joints are {', '.join(_KINDS)}"
+            )
+        parent, child = joint.find("parent"), joint.find("child")
+        if parent is None or child is None or not parent.get("link") or not child.get("link"):
+            raise InputError(f"{path}: {where}: needs <parent link=...> and <child link=...>")
+        for link in (parent.get("link", ""), child.get("link", "")):
+            if link not in children:
+                raise InputError(
+                    f"{path}: {where}: link {link!r} is not a <link> of the URDF; "
+                    f"{suggest(link, links)}declare it or correct the name"
+                )
+        child_name = child.get("link", "")
+        if child_name in parent_joint:
+            other = parent_joint[child_name].get("name")
+            raise InputError(
+                f"{path}: {where}: link {child_name!r} is already the child of joint {other!r}: "
+                "the URDF has a loop; a serial arm is a tree (close loops outside the URDF)"
+            )
+        parent_joint[child_name] = joint
+        children[parent.get("link", "")].append(child_name)
+    roots = [name for name in links if name not in parent_joint]
+    if len(roots) != 1:
+        raise InputError(
+            f"{path}: the URDF has {len(roots)} root links ({', '.join(roots) or 'none'}): "
+            "a loop or a detached link; a URDF is one tree"
+        )
+    base = roots[0] if base_link is None else base_link
+    ends: list[tuple[str, str | None]] = [("base_link", base), ("tip_link", tip_link)]
+    for role, end in ends:
+        if end is not None and end not in children:
+            raise InputError(
+                f"{path}: {role} {end!r} is not a link of the URDF; {suggest(end, links)}"
+                f"its links are {', '.join(links)}"
+            )
+    if tip_link is None:
+        leaves, stack = [], [base]
+        while stack:
+            link = stack.pop()
+            stack.extend(children[link])
+            if not children[link]:
+                leaves.append(link)
+        if len(leaves) != 1:
+            raise InputError(
+                f"{path}: {len(leaves)} links end chains beyond {base!r} "
+                f"({', '.join(sorted(leaves))}); "
+                "say which is the tip with --tip-link or tip_link in a robot TOML"
+            )
+        tip_link = leaves[0]
+    chain: list[ET.Element] = []
+    link = tip_link
+    while link != base:
+        if link not in parent_joint:
+            raise InputError(
+                f"{path}: tip_link {tip_link!r} does not lie beyond base_link {base!r}; "
+                "choose links on one chain"
+            )
+        joint = parent_joint[link]
+        chain.append(joint)
+        parent = joint.find("parent")
+        assert parent is not None
+        link = parent.get("link", "")
+    joints = [_joint(path, text, element) for element in reversed(chain)]
+    try:
+        serial = SerialChain.from_joints(joints)
+    except ValueError as exc:
+        raise InputError(f"{path}: the chain from {base!r} to {tip_link!r}: {exc}") from None
+    return UrdfChain(serial, root.get("name", path.stem), base, tip_link)
+
+
+def _joint(path: Path, text: str, element: ET.Element) -> UrdfJoint:
+    """One joint of the chain in mm and rad."""
+    name = element.get("name", "")
+    where = f"line {_line_of(text, 'joint', name)}, joint {name!r}"
+    kind = element.get("type", "")
+    if element.find("mimic") is not None and kind != "fixed":
+        raise InputError(
+            f"{path}: {where}: a mimic joint on the chain; armcal calibrates joints the "
+            "controller reads: model the coupling with joint_map in a robot TOML"
+        )
+    origin = element.find("origin")
+    xyz = rpy = None
+    if origin is not None:
+        xyz = _floats(path, text, origin, "xyz", 3, where)
+        rpy = _floats(path, text, origin, "rpy", 3, where)
+    axis_element = element.find("axis")
+    axis = (1.0, 0.0, 0.0)
+    if axis_element is not None:
+        given = _floats(path, text, axis_element, "xyz", 3, where)
+        if given is not None:
+            axis = given
+    if kind in _MOVING and sum(a * a for a in axis) < 1e-12:
+        raise InputError(f"{path}: {where}: <axis xyz> is zero; give the joint's axis")
+    limits = None
+    limit = element.find("limit")
+    if kind in ("revolute", "prismatic") and limit is not None:
+        lo = _floats(path, text, limit, "lower", 1, where)
+        hi = _floats(path, text, limit, "upper", 1, where)
+        if lo is not None and hi is not None:
+            scale = 1000.0 if kind == "prismatic" else 1.0
+            if not lo[0] < hi[0]:
+                raise InputError(f"{path}: {where}: <limit> needs lower < upper")
+            limits = (lo[0] * scale, hi[0] * scale)
+    mm = tuple(1000.0 * v for v in (xyz or (0.0, 0.0, 0.0)))
+    return UrdfJoint(
+        name,
+        kind,
+        (mm[0], mm[1], mm[2]),
+        rpy or (0.0, 0.0, 0.0),
+        (axis[0], axis[1], axis[2]),
+        limits,
+    )
