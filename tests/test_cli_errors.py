@@ -1337,6 +1337,126 @@ CASES += [
 ]
 
 
+# ---- spatial serial arms (URDF and robot TOML)
+
+
+def _urdf(joints: str, links: str = "base,l1,l2") -> str:
+    """A URDF of the given joints between links (metres, radians)."""
+    declared = "".join(f'<link name="{name}"/>' for name in links.split(","))
+    return f'<?xml version="1.0"?>\n<robot name="two">\n{declared}\n{joints}</robot>\n'
+
+
+def _joint(name: str, parent: str, child: str, extra: str = "") -> str:
+    return (
+        f'<joint name="{name}" type="revolute"><parent link="{parent}"/>'
+        f'<child link="{child}"/><origin xyz="0.3 0 0" rpy="0 0 0"/><axis xyz="0 0 1"/>'
+        f'<limit lower="-3" upper="3"/>{extra}</joint>\n'
+    )
+
+
+#: A valid 2R arm: two parallel joints 300 mm apart.
+URDF_2R = _urdf(_joint("j1", "base", "l1") + _joint("j2", "l1", "l2"))
+#: Its measurements: 6 poses of the point at the end of link 2, with z.
+SPATIAL_HEADER = "q1_deg,q2_deg,x_mm,y_mm,z_mm"
+SPATIAL_ROWS = [
+    f"{a},{b},{300 * (1 + math.cos(math.radians(a)) + math.cos(math.radians(a + b))):.6f},"
+    f"{300 * (math.sin(math.radians(a)) + math.sin(math.radians(a + b))):.6f},0.0"
+    for a, b in ((0, 10), (30, 40), (60, -20), (-45, 90), (90, 30), (120, -60))
+]
+SPATIAL_MEAS = _csv(SPATIAL_HEADER, SPATIAL_ROWS)
+IDENTIFY_URDF = ("identify", "--robot", "arm.urdf", "--measurements", "meas.csv", "-o", "cal.json")
+
+CASES += [
+    case(
+        "urdf-missing-file",
+        {"meas.csv": SPATIAL_MEAS},
+        IDENTIFY_URDF,
+        ("arm.urdf", "no such URDF file"),
+    ),
+    case(
+        "urdf-loop",
+        {
+            "arm.urdf": _urdf(
+                _joint("j1", "base", "l1") + _joint("j2", "l1", "l2") + _joint("j3", "base", "l2")
+            ),
+            "meas.csv": SPATIAL_MEAS,
+        },
+        IDENTIFY_URDF,
+        ("arm.urdf", "line", "'j3'", "loop"),
+    ),
+    case(
+        "urdf-mimic-on-the-chain",
+        {
+            "arm.urdf": _urdf(
+                _joint("j1", "base", "l1")
+                + _joint("j2", "l1", "l2", '<mimic joint="j1" multiplier="1"/>')
+            ),
+            "meas.csv": SPATIAL_MEAS,
+        },
+        IDENTIFY_URDF,
+        ("arm.urdf", "'j2'", "mimic", "joint_map"),
+    ),
+    case(
+        "urdf-unknown-link",
+        {
+            "arm.urdf": _urdf(_joint("j1", "base", "l1") + _joint("j2", "l1", "elbow")),
+            "meas.csv": SPATIAL_MEAS,
+        },
+        IDENTIFY_URDF,
+        ("arm.urdf", "'j2'", "'elbow'", "not a <link>"),
+    ),
+    case(
+        "urdf-not-xml",
+        {"arm.urdf": URDF_2R.replace("</robot>", ""), "meas.csv": SPATIAL_MEAS},
+        IDENTIFY_URDF,
+        ("arm.urdf", "line", "not well-formed"),
+    ),
+    case(
+        "robot-toml-urdf-missing",
+        {"robot.toml": 'urdf = "arm.urdf"\n', "meas.csv": SPATIAL_MEAS},
+        IDENTIFY_ROBOT,
+        ("robot.toml", "'urdf'", "arm.urdf", "does not exist"),
+    ),
+    case(
+        "robot-toml-tip-link-unknown",
+        {
+            "robot.toml": 'urdf = "arm.urdf"\ntip_link = "flange"\n',
+            "arm.urdf": URDF_2R,
+            "meas.csv": SPATIAL_MEAS,
+        },
+        IDENTIFY_ROBOT,
+        ("arm.urdf", "tip_link 'flange'", "not a link"),
+    ),
+    case(
+        "spatial-wrong-joint-count",
+        {"arm.urdf": URDF_2R, "meas.csv": _csv("q1_deg,x_mm,y_mm,z_mm", ["0,1,2,3"] * 6)},
+        IDENTIFY_URDF,
+        ("meas.csv", "2 joints"),
+    ),
+    case(
+        "spatial-without-z",
+        {
+            "arm.urdf": URDF_2R,
+            "meas.csv": _csv(
+                "q1_deg,q2_deg,x_mm,y_mm", [r.rsplit(",", 1)[0] for r in SPATIAL_ROWS]
+            ),
+        },
+        IDENTIFY_URDF,
+        ("z_mm",),
+    ),
+    case(
+        "mdh-wrong-length",
+        {
+            "robot.toml": "[mdh]\nalpha_deg = [0, 0]\na_mm = [0, 300]\ntheta_deg = [0]\n"
+            "d_mm = [0, 0]\n",
+            "meas.csv": SPATIAL_MEAS,
+        },
+        IDENTIFY_ROBOT,
+        ("robot.toml", "mdh.theta_deg", "expected 2"),
+    ),
+]
+
+
 # --------------------------------------------------------------------------- tests
 
 
@@ -1373,6 +1493,12 @@ def test_bad_input_exits_2_with_one_error_line(
             IDENTIFY_ROBOT,
             "cal.json",
             id="identify-robot-file",
+        ),
+        pytest.param(
+            {"arm.urdf": URDF_2R, "meas.csv": SPATIAL_MEAS},
+            IDENTIFY_URDF,
+            "cal.json",
+            id="identify-urdf",
         ),
         pytest.param({"plan.csv": VALID_PLAN}, SYNTHESIZE, "meas.csv", id="synthesize"),
         pytest.param(
