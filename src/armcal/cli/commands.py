@@ -13,6 +13,7 @@ import sys
 from collections.abc import Callable
 from functools import partial
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -60,7 +61,6 @@ from ..report import (
 )
 from ..reproduction import TABLE_COLUMNS, reproduce
 from ..workflow import (
-    CalibrationRun,
     FixError,
     calibrate,
     calibrate_serial,
@@ -191,22 +191,17 @@ def synthesize(args: argparse.Namespace) -> None:
     )
 
 
-def _calibrate_planar(args: argparse.Namespace) -> CalibrationRun:
-    """A planar robot's calibration of ``--measurements``."""
-    spec = load_robot(args.robot)
-    meas = read_measurements(args.measurements, spec.arm)
-    return calibrate(
-        spec,
-        meas,
-        source=args.measurements,
-        fixed=args.fix,
-        sigma=args.sigma,
-        method=args.method,
-        robust=args.robust,
-        compliance=not args.no_compliance,
-        folds=args.cross_validate,
-        seed=args.seed,
-    )
+def _options(args: argparse.Namespace) -> dict[str, Any]:
+    """The calibration options of ``identify``, the same for every family of arm."""
+    return {
+        "source": args.measurements,
+        "fixed": args.fix,
+        "sigma": args.sigma,
+        "method": args.method,
+        "robust": args.robust,
+        "folds": args.cross_validate,
+        "seed": args.seed,
+    }
 
 
 def identify(args: argparse.Namespace) -> None:
@@ -221,19 +216,11 @@ def identify(args: argparse.Namespace) -> None:
         if is_serial_robot(args.robot):
             serial = load_serial_robot(args.robot)
             meas = read_measurements(args.measurements, serial.arm)
-            run = calibrate_serial(
-                serial,
-                meas,
-                source=args.measurements,
-                fixed=args.fix,
-                sigma=args.sigma,
-                method=args.method,
-                robust=args.robust,
-                folds=args.cross_validate,
-                seed=args.seed,
-            )
+            run = calibrate_serial(serial, meas, **_options(args))
         else:
-            run = _calibrate_planar(args)
+            spec = load_robot(args.robot)
+            meas = read_measurements(args.measurements, spec.arm)
+            run = calibrate(spec, meas, compliance=not args.no_compliance, **_options(args))
     except FixError as exc:
         raise ArmcalError(f"--fix: {exc}") from None
     cal = run.calibration

@@ -41,6 +41,7 @@ __all__ = [
     "RADIAN_LIMIT_BOUND",
     "SIGMA_RANGE_MM",
     "RobotSpec",
+    "fixed_parameters",
     "load_compliance_truth",
     "load_robot",
     "load_truth",
@@ -234,7 +235,7 @@ def _joint_sigma(path, meas: dict, n: int) -> np.ndarray | None:
     return np.radians(values)
 
 
-def _fixed_parameters(path, table: Any, names: Sequence[str], arm_name: str) -> list[str]:
+def fixed_parameters(path, table: Any, names: Sequence[str], arm_name: str) -> list[str]:
     """``[identify] fixed = [...]`` or ``free = [...]`` as the list of fixed names."""
     if not isinstance(table, dict):
         raise fail(path, "key 'identify': expected a table [identify]")
@@ -446,7 +447,7 @@ def load_robot(name_or_path: str | os.PathLike) -> RobotSpec:
     except ValueError as exc:
         raise fail(path, str(exc)) from None
     names = structure.param_names
-    fixed = _fixed_parameters(path, data["identify"], names, name) if "identify" in data else []
+    fixed = fixed_parameters(path, data["identify"], names, name) if "identify" in data else []
     try:
         arm = PlanarArm(
             lengths,

@@ -26,9 +26,11 @@ from typing import Any
 
 import numpy as np
 
+from ..errors import InputError
 from ..models import SerialChain, SpatialArm
 from ..noise import NoiseModel
 from .common import check_keys, fail, load_toml, number, numbers, suggest
+from .robots import SIGMA_RANGE_MM, fixed_parameters
 from .urdf import read_urdf
 
 __all__ = [
@@ -83,10 +85,10 @@ def is_serial_robot(name_or_path: str | os.PathLike) -> bool:
     if path.suffix.lower() != ".toml" or not path.is_file():
         return False
     try:
-        text = path.read_text(encoding="utf-8")
-    except (OSError, UnicodeDecodeError):
+        data = load_toml(path, "robot")
+    except InputError:  # the robot loader reports it
         return False
-    return any(line.strip().startswith(("urdf", "[mdh]")) for line in text.splitlines())
+    return "urdf" in data or "mdh" in data
 
 
 def load_serial_robot(
@@ -212,7 +214,7 @@ def _from_toml(path: Path, builtin: str | None, tip_link: str | None = None) -> 
         known_targets=bool(labels),
     )
     if "identify" in data:
-        arm = arm.with_fixed(_fixed(path, data["identify"], arm))
+        arm = arm.with_fixed(fixed_parameters(path, data["identify"], arm.param_names, arm.name))
     return SerialSpec(arm, builtin or os.fspath(path))
 
 
@@ -235,11 +237,12 @@ def _noise(path: Path, table: Any) -> NoiseModel | None:
             if isinstance(raw, list)
             else [number(path, raw, "measurement.sigma_mm")] * 3
         )
-        if not all(1e-6 <= v <= 1e3 for v in values):
+        low, high = SIGMA_RANGE_MM
+        if not all(low <= v <= high for v in values):
             raise fail(
                 path,
-                "key 'measurement.sigma_mm': must be between 1e-06 and 1000 mm; check the unit "
-                "(mm)",
+                f"key 'measurement.sigma_mm': must be between {low:g} and {high:g} mm; check "
+                "the unit (mm)",
             )
         return NoiseModel(np.diag(np.square(values)))
     if "covariance_mm2" in table:
@@ -272,26 +275,6 @@ def _targets(path: Path, table: Any) -> tuple[tuple[str, ...], np.ndarray]:
         labels.append(label)
         positions.append(numbers(path, entry["xyz_mm"], f"targets.{label}.xyz_mm", 3))
     return tuple(labels), np.array(positions)
-
-
-def _fixed(path: Path, table: Any, arm: SpatialArm) -> list[str]:
-    if not isinstance(table, dict) or len(table) != 1 or not set(table) <= {"fixed", "free"}:
-        raise fail(
-            path, "key 'identify': expected a table [identify] with fixed = [...] or free = [...]"
-        )
-    ((which, names),) = table.items()
-    if not isinstance(names, list) or not all(isinstance(x, str) for x in names):
-        raise fail(path, f"key 'identify.{which}': expected a list of parameter names")
-    for name in names:
-        if name not in arm.param_names:
-            raise fail(
-                path,
-                f"key 'identify.{which}': {name!r} is not a parameter of {arm.name}; "
-                f"{suggest(name, arm.param_names)}see armcal identify's report for the names",
-            )
-    if which == "fixed":
-        return list(names)
-    return [p for p in arm.param_names if p not in names]
 
 
 def load_serial_truth(path: str | os.PathLike, arm: SpatialArm) -> np.ndarray:

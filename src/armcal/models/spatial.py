@@ -23,7 +23,7 @@ from numpy.typing import ArrayLike
 
 from ..errors import ArmcalError, ArmcalWarning, NotIdentifiableError
 from ..noise import NoiseModel, relative_noise
-from ..numerics import ScaledSVD
+from ..numerics import ScaledSVD, scaled_svd
 from .identifiability import Identifiability, listing
 from .information import (
     BlockInformation,
@@ -399,6 +399,16 @@ class SpatialArm:
         *,
         noise: NoiseModel | None = None,
     ) -> np.ndarray:
+        noise, shape, joint_jac = self._row_noise(conditions, params, noise)
+        return noise.pose_covariances(
+            shape, joint_jacobian=joint_jac, row_sigma=conditions.sigma_mm
+        )
+
+    def _row_noise(
+        self, conditions: Conditions, params: np.ndarray | None, noise: NoiseModel | None
+    ) -> tuple[NoiseModel, tuple[int, ...], np.ndarray | None]:
+        """The 3-D noise model (``noise``, else the arm's, else unit), the rows' shape over
+        parameter stacks, and the joint Jacobian where encoder noise needs it."""
         noise = relative_noise(self.noise if noise is None else noise).for_dim(3)
         joint_jac = None
         if noise.joint_sigma is not None:
@@ -406,24 +416,14 @@ class SpatialArm:
         shape = np.broadcast_shapes(
             np.shape(conditions.q)[:-1], () if params is None else (*np.shape(params)[:-1], 1)
         )
-        return noise.pose_covariances(
-            shape, joint_jacobian=joint_jac, row_sigma=conditions.sigma_mm
-        )
+        return noise, shape, joint_jac
 
     def whitening(
         self, conditions: Conditions, params: np.ndarray | None = None
     ) -> np.ndarray | None:
-        noise = self.noise
-        plain = noise is None or noise.isotropic_iid
-        if plain and conditions.sigma_mm is None:
+        if (self.noise is None or self.noise.isotropic_iid) and conditions.sigma_mm is None:
             return None
-        noise = relative_noise(noise).for_dim(3)
-        joint_jac = None
-        if noise.joint_sigma is not None:
-            joint_jac = self.joint_jacobian(conditions, params)
-        shape = np.broadcast_shapes(
-            np.shape(conditions.q)[:-1], () if params is None else (*np.shape(params)[:-1], 1)
-        )
+        noise, shape, joint_jac = self._row_noise(conditions, params, None)
         return noise.whitening(shape, joint_jacobian=joint_jac, row_sigma=conditions.sigma_mm)
 
     # -- fitting -----------------------------------------------------------------------
@@ -458,8 +458,8 @@ class SpatialArm:
     ) -> np.ndarray:
         """Parameters ``(p,)``: the nominal arm with its base pose and targets registered to
         one point set ``(m, 3)`` (:mod:`~armcal.models.spatial_registration`)."""
-        frames = self._kinematics(conditions, self._unregistered()).rotation
-        tips = self._kinematics(conditions, self._at_tip()).points
+        at_tip = self._kinematics(conditions, self._at_tip())  # targets at the tip frame
+        frames, tips = at_tip.rotation, at_tip.points
         target = (
             np.zeros(conditions.m, dtype=int) if conditions.target is None else conditions.target
         )
@@ -475,13 +475,10 @@ class SpatialArm:
             out[self.layout.target_start :] = positions.ravel()
         return out
 
-    def _unregistered(self) -> np.ndarray:
+    def _at_tip(self) -> np.ndarray:
+        """The nominal arm in its own base frame with every target at the tip frame's origin."""
         out = self.nominal.copy()
         out[:6] = 0.0
-        return out
-
-    def _at_tip(self) -> np.ndarray:
-        out = self._unregistered()
         out[self.layout.target_start :] = 0.0
         return out
 
@@ -530,13 +527,17 @@ class SpatialArm:
         jac = arm.jacobian(conditions)
         w = arm.whitening(conditions)
         rows = jac if w is None else w @ jac
-        rows = rows.reshape(-1, arm.n_params)
+        # S V^T diag(c) of the scaled rows has the rows' column space in p x p.
+        svd = scaled_svd(rows.reshape(-1, arm.n_params))
+        columns = svd.singular_values[:, None] * svd.vt * svd.column_norms
         u = np.asarray(conditions.q) @ arm.joint_map.T
         still = [j for j in range(arm.n_joints) if np.ptp(u[..., j]) <= 1e-9]
-        columns = _column_space(rows)
         chosen = select(arm.layout, arm.chain, columns, still=still, held=arm.user_fixed)
-        held = tuple(n for n, k in zip(arm.layout.names, chosen.kept, strict=True) if not k)
-        held = tuple(n for n in held if n not in arm.user_fixed)
+        held = tuple(
+            n
+            for n, kept in zip(arm.layout.names, chosen.kept, strict=True)
+            if not kept and n not in arm.user_fixed
+        )
         return replace(arm, held=held, merges=chosen.merges)
 
     @property
@@ -661,15 +662,3 @@ class SpatialArm:
 
     def arm_params(self, params: np.ndarray) -> np.ndarray:
         return np.asarray(params, dtype=float)
-
-
-def _column_space(rows: np.ndarray) -> np.ndarray:
-    """``R`` ``(p, p)`` of a thin QR of ``rows`` ``(r, p)``, chunked: the same column space
-    in ``O(p^2)`` memory beyond the rows."""
-    p = rows.shape[1]
-    r = np.zeros((0, p))
-    step = max(4 * p, 4096)
-    for start in range(0, rows.shape[0], step):
-        block = np.vstack([r, rows[start : start + step]])
-        r = np.linalg.qr(block).R
-    return r

@@ -97,7 +97,7 @@ def parallel_runs(chain: SerialChain, tol: float = 1e-9) -> list[tuple[int, int]
     return runs
 
 
-def _subject(names: Sequence[str], layout: SpatialLayout) -> str:
+def _subject(names: Sequence[str]) -> str:
     """The parameters left out, in words."""
     words = []
     for name in names:
@@ -252,8 +252,8 @@ def _explain(
     for (into, reason), members in groups.items():
         verb = "merges" if len(members) == 1 else "merge"
         if into:
-            text = f"{_subject(members, layout)} {verb} into {into}"
+            text = f"{_subject(members)} {verb} into {into}"
         else:
-            text = f"{_subject(members, layout)} cannot be seen"
+            text = f"{_subject(members)} cannot be seen"
         sentences.append(text + (f": {reason}" if reason else ""))
     return tuple(sentences)

@@ -27,11 +27,10 @@ from ..errors import (
     unique_warnings,
 )
 from ..export import robot_toml, urdf, urdf_joints_are_readings
-from ..files import Measurements, Program, RobotSpec, SerialSpec, unknown_parameter
+from ..files import Measurements, Program, RobotSpec, SerialSpec
 from ..identification import Calibration, identify
 from ..instrument import identify_3d
 from ..models import CalibratedArm, FitModel, Loads, PlanarArm, SpatialArm, Target
-from ..noise import instrument_override
 from ..plausibility import deviation_warning, explain, suspicious
 from ..validation import (
     CrossValidation,
@@ -260,23 +259,37 @@ def calibrate(
     checked = None
     if folds is not None:
         points = meas.xy if cal.plane is None else cal.plane.to_plane(meas.xyz)
-        conditions = cal.conditions
-        checked = cross_validate(
-            cal.model,
-            meas.q,
-            points,
-            folds,
-            groups=None if meas.targets is None else np.array(meas.labels),
-            target=cal.target,
-            sigma=sigma,
-            row_sigma=meas.row_sigma,
-            rng=seed,
-            loads=None if conditions is None else conditions.loads,
-        )
-        warning = cross_validation_warning(checked)
-        if warning is not None:
-            warnings.append(warning)
+        checked = _cross_validated(cal, meas, points, folds, sigma, seed, warnings)
     return CalibrationRun(cal, tuple(unique_warnings(warnings)), checked)
+
+
+def _cross_validated(
+    cal: Calibration,
+    meas: Measurements,
+    points: np.ndarray,
+    folds: int,
+    sigma: float | None,
+    seed: int | np.random.Generator | None,
+    warnings: list[ArmcalWarning],
+) -> CrossValidation:
+    """K-fold cross-validation of ``cal`` on its ``points``; its warning joins ``warnings``."""
+    conditions = cal.conditions
+    checked = cross_validate(
+        cal.model,
+        meas.q,
+        points,
+        folds,
+        groups=None if meas.targets is None else np.array(meas.labels),
+        target=cal.target,
+        sigma=sigma,
+        row_sigma=meas.row_sigma,
+        rng=seed,
+        loads=None if conditions is None else conditions.loads,
+    )
+    warning = cross_validation_warning(checked)
+    if warning is not None:
+        warnings.append(warning)
+    return checked
 
 
 def serial_arm(arm: SpatialArm, meas: Measurements) -> SpatialArm:
@@ -323,14 +336,8 @@ def calibrate_serial(
     user); the identifiable set is chosen for these measurements and named.
     """
     try:
-        arm = serial_arm(spec.arm, meas)
-        if fixed is not None:
-            unknown = [name for name in fixed if name not in arm.param_names]
-            if unknown:
-                raise FixError(unknown_parameter(unknown[0], arm.param_names, arm.name))
-            arm = arm.with_fixed(fixed)
-        if sigma:
-            arm = arm.with_noise(instrument_override(arm.noise, sigma))
+        arm = model_arm(serial_arm(spec.arm, meas), fixed=fixed, sigma=sigma)
+        if sigma:  # the given noise replaces the file's sigma_mm column too
             meas = replace(meas, row_sigma=None)
         index = None if meas.targets is None else arm.target_index(meas.targets)
         cal = identify(
@@ -353,20 +360,7 @@ def calibrate_serial(
     warnings = [*meas.warnings, *cal.warnings]
     checked = None
     if folds is not None:
-        checked = cross_validate(
-            cal.model,
-            meas.q,
-            meas.xyz,
-            folds,
-            groups=None if meas.targets is None else np.array(meas.labels),
-            target=cal.target,
-            sigma=sigma,
-            row_sigma=meas.row_sigma,
-            rng=seed,
-        )
-        warning = cross_validation_warning(checked)
-        if warning is not None:
-            warnings.append(warning)
+        checked = _cross_validated(cal, meas, meas.xyz, folds, sigma, seed, warnings)
     return CalibrationRun(cal, tuple(unique_warnings(warnings)), checked)
 
 

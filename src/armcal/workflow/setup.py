@@ -11,13 +11,14 @@ from __future__ import annotations
 
 import os
 from collections.abc import Sequence
+from typing import TypeVar
 
 import numpy as np
 
 from ..doe import random_plan
 from ..errors import ArmcalError, NotIdentifiableError
 from ..files import RobotSpec, read_plan, unknown_parameter
-from ..models import CompliantArm, FitModel, Loads, PlanarArm
+from ..models import CompliantArm, FitModel, Loads, PlanarArm, SpatialArm
 from ..noise import instrument_override
 
 __all__ = [
@@ -50,7 +51,11 @@ def prefixed(source: str, exc: ArmcalError) -> ArmcalError:
     return type(exc)(f"{source}: {exc}")
 
 
-def with_fixed(arm: PlanarArm, fixed: Sequence[str]) -> PlanarArm:
+#: A robot file's arm, of either family: what --fix and --sigma apply to.
+Arm = TypeVar("Arm", PlanarArm, SpatialArm)
+
+
+def with_fixed(arm: Arm, fixed: Sequence[str]) -> Arm:
     """The arm with ``fixed`` held (replacing the robot file's set); FixError for a name
     the arm does not have or when nothing would be left to identify."""
     for name in fixed:
@@ -58,18 +63,16 @@ def with_fixed(arm: PlanarArm, fixed: Sequence[str]) -> PlanarArm:
             raise FixError(unknown_parameter(name, arm.param_names, arm.name))
     if len(set(fixed)) == arm.n_params:
         raise FixError("every parameter would be fixed; leave at least one free")
-    return arm.replace(fixed=tuple(fixed))
+    return arm.with_fixed(tuple(fixed))
 
 
-def model_arm(
-    arm: PlanarArm, *, fixed: Sequence[str] | None = None, sigma: float | None = None
-) -> PlanarArm:
+def model_arm(arm: Arm, *, fixed: Sequence[str] | None = None, sigma: float | None = None) -> Arm:
     """The arm with ``fixed`` parameters (None: the robot file's) and instrument noise
     ``sigma`` (mm; None or 0: the robot file's), its encoder noise kept."""
     if fixed is not None:
         arm = with_fixed(arm, fixed)
     if sigma:  # 0 (noiseless synthesis) is no noise model
-        arm = arm.replace(noise=instrument_override(arm.noise, sigma))
+        arm = arm.with_noise(instrument_override(arm.noise, sigma))
     return arm
 
 
