@@ -24,7 +24,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike
 
-from .models import CalibratedArm, Conditions, FitModel, Loads, wrap_angle
+from .models import CalibratedArm, Conditions, FitModel, Loads
 from .models.information import tip_variances
 from .numerics import rms
 
@@ -119,8 +119,10 @@ class _Goal:
         orientation: bool,
     ) -> None:
         self.model, self.params, self.program = model, params, program
-        self.position = model.positions(program, np.zeros(model.n_params))
-        self.angle = model.orientation(program, np.zeros(model.n_params)) if orientation else None
+        # The nominal arm where the calibrated one stands (its targets, in its frame).
+        nominal = np.where(model.instrument_params, params, 0.0)
+        self.position = model.positions(program, nominal)
+        self.angle = model.orientation(program, nominal) if orientation else None
         self.scale = model.angle_scale_mm  # an angle counted as the arc at full reach
 
     def rows(self, q: np.ndarray, active: np.ndarray) -> Conditions:
@@ -134,8 +136,10 @@ class _Goal:
         r = self.model.positions(rows, self.params) - self.position[active]
         if self.angle is None:
             return r
-        turn = self.model.orientation(rows, self.params) - self.angle[active]
-        return np.concatenate([r, self.scale * wrap_angle(turn)], axis=1)
+        turn = self.model.orientation_error(
+            self.model.orientation(rows, self.params), self.angle[active]
+        )
+        return np.concatenate([r, self.scale * turn], axis=1)
 
     def jacobian(self, q: np.ndarray, active: np.ndarray) -> np.ndarray:
         """``d residual / dq`` ``(a, d [+ k], n)``, at the deflected pose under load.

@@ -51,13 +51,25 @@ from __future__ import annotations
 
 import json
 import math
-import re
 import textwrap
 
 import numpy as np
 from numpy.typing import ArrayLike
 
 from ._version import __version__
+from .export_text import (
+    deviations_text,
+    noise_toml,
+    num,
+    nums,
+    one_line,
+    pack,
+    quoteattr,
+    toml_key,
+    toml_string,
+    xml_comment,
+    xml_name,
+)
 from .models import (
     INSTRUMENT_PARAMS,
     Annulus,
@@ -67,7 +79,6 @@ from .models import (
     Target,
     standard_joint_map,
 )
-from .noise import NoiseModel
 
 __all__ = [
     "folded_arm",
@@ -83,24 +94,6 @@ CALIBRATED_SUFFIX = "-calibrated"
 
 #: URDF lengths are in metres, armcal's in mm.
 _MM_PER_M = 1000.0
-
-_BARE_KEY = re.compile(r"^[A-Za-z0-9_-]+$")
-
-
-def _quoteattr(text: str) -> str:
-    """``text`` as a double-quoted XML attribute value.
-
-    The job of ``xml.sax.saxutils.quoteattr``, whose import pulls in urllib and
-    http at every start of the program.
-
-    >>> _quoteattr('a "b" & <c>')
-    '"a &quot;b&quot; &amp; &lt;c&gt;"'
-    """
-    for raw, entity in (("&", "&amp;"), ("<", "&lt;"), (">", "&gt;"), ('"', "&quot;")):
-        text = text.replace(raw, entity)
-    for raw, entity in (("\n", "&#10;"), ("\r", "&#13;"), ("\t", "&#9;")):
-        text = text.replace(raw, entity)
-    return f'"{text}"'
 
 
 def folded_arm(cal: CalibratedArm) -> PlanarArm:
@@ -212,51 +205,13 @@ def _held_for_rotation(arm: PlanarArm) -> tuple[str, ...]:
 # --------------------------------------------------------------------------- robot TOML
 
 
-def _num(value: float) -> str:
-    """A float with full round-trip precision (``repr``), never ``-0.0``."""
-    return repr(float(value) + 0.0)
-
-
-def _nums(values: ArrayLike) -> str:
-    return "[" + ", ".join(_num(v) for v in np.ravel(values)) + "]"
-
-
-def _toml_string(text: str) -> str:
-    # A JSON string is a TOML basic string: the same escapes, \uXXXX for control characters
-    # (TOML also refuses a raw DEL, which JSON leaves as it is).
-    return json.dumps(text, ensure_ascii=False).replace("\x7f", "\\u007f")
-
-
-def _toml_key(key: str) -> str:
-    return key if _BARE_KEY.match(key) else _toml_string(key)
-
-
-def _one_line(text: str) -> str:
-    """``text`` safe inside a one-line comment: no line breaks or other control characters."""
-    return " ".join("".join(c if c.isprintable() else " " for c in text).split())
-
-
 def _region_toml(region: Annulus | Box) -> str:
     if isinstance(region, Annulus):
         return (
-            f'{{ kind = "annulus", center_mm = {_nums(region.center)}, '
-            f"r_min_mm = {_num(region.r_min)}, r_max_mm = {_num(region.r_max)} }}"
+            f'{{ kind = "annulus", center_mm = {nums(region.center)}, '
+            f"r_min_mm = {num(region.r_min)}, r_max_mm = {num(region.r_max)} }}"
         )
-    return f'{{ kind = "box", x_mm = {_nums(region.x)}, y_mm = {_nums(region.y)} }}'
-
-
-def _noise_toml(noise: NoiseModel) -> list[str]:
-    cov = noise.covariance_mm2
-    if cov[0, 1] == 0:
-        sx, sy = math.sqrt(cov[0, 0]), math.sqrt(cov[1, 1])
-        lines = [f"sigma_mm = {_num(sx) if sx == sy else _nums([sx, sy])}"]
-    else:
-        lines = [f"covariance_mm2 = [{_nums(cov[0])}, {_nums(cov[1])}]"]
-    if noise.joint_sigma is not None:
-        sigma_q = np.degrees(noise.joint_sigma)
-        shown = _num(sigma_q[0]) if sigma_q.size == 1 else _nums(sigma_q)
-        lines.append(f"joint_sigma_deg = {shown}")
-    return lines
+    return f'{{ kind = "box", x_mm = {nums(region.x)}, y_mm = {nums(region.y)} }}'
 
 
 def _base_pose_text(cal: CalibratedArm) -> str | None:
@@ -268,37 +223,8 @@ def _base_pose_text(cal: CalibratedArm) -> str | None:
         if name in arm.param_names:
             i = arm.param_names.index(name)
             unit = arm.param_units[i]
-            parts.append(f"{name} = {_num(params[i] * arm.display_scale[i])} {unit}")
+            parts.append(f"{name} = {num(params[i] * arm.display_scale[i])} {unit}")
     return ", ".join(parts) if parts else None
-
-
-def _pack(items: list[str], width: int = 90) -> list[str]:
-    """``items`` joined by ``", "`` into lines of at most ``width`` characters (items whole)."""
-    lines: list[str] = []
-    for item in items:
-        if lines and len(lines[-1]) + 2 + len(item) <= width:
-            lines[-1] += ", " + item
-        else:
-            lines.append(item)
-    return lines
-
-
-def _deviations_text(cal: CalibratedArm) -> list[str]:
-    """``name = value unit`` of every robot parameter, in lines for a comment."""
-    arm = cal.arm
-    shown = [
-        f"{name} = {_num(value * scale)} {unit}"
-        for name, value, scale, unit, instrument in zip(
-            arm.param_names,
-            cal.arm_params,
-            arm.display_scale,
-            arm.param_units,
-            arm.instrument_params,
-            strict=True,
-        )
-        if not instrument
-    ]
-    return _pack(shown)
 
 
 def robot_toml(cal: CalibratedArm) -> str:
@@ -344,10 +270,10 @@ def robot_toml(cal: CalibratedArm) -> str:
     arm = cal.arm
     folded = folded_arm(cal)
     lines = [
-        f"# {_one_line(folded.name)}: robot file written by armcal {__version__} export from "
-        f"the calibration of {_one_line(arm.name)}.",
+        f"# {one_line(folded.name)}: robot file written by armcal {__version__} export from "
+        f"the calibration of {one_line(arm.name)}.",
         "# The identified deviations are folded into the nominal values (robot frame):",
-        *(f"#   {line}" for line in _deviations_text(cal)),
+        *(f"#   {line}" for line in deviations_text(cal)),
         "# so this file's nominal model is the calibrated arm: a calibration against it",
         "# measures what has changed since.",
     ]
@@ -356,7 +282,7 @@ def robot_toml(cal: CalibratedArm) -> str:
         lines += [
             "# Base pose in the instrument frame during calibration (the instrument's, not",
             "# part of the robot):",
-            *(f"#   {line}" for line in _pack(base_pose.split(", "))),
+            *(f"#   {line}" for line in pack(base_pose.split(", "))),
         ]
     if arm.targets:
         lines.append(
@@ -364,27 +290,27 @@ def robot_toml(cal: CalibratedArm) -> str:
             "targets' differ in angle_deg."
         )
     lines += [
-        f"name = {_toml_string(folded.name)}",
-        f"link_lengths_mm = {_nums(folded.link_lengths)}",
-        "joint_limits_deg = [" + ", ".join(_nums(pair) for pair in folded.joint_limits_deg) + "]",
+        f"name = {toml_string(folded.name)}",
+        f"link_lengths_mm = {nums(folded.link_lengths)}",
+        "joint_limits_deg = [" + ", ".join(nums(pair) for pair in folded.joint_limits_deg) + "]",
         f"base_offset = {'true' if folded.base_offset else 'false'}",
     ]
     if not np.array_equal(folded.joint_map, standard_joint_map(folded.n_joints)):
-        lines.append("joint_map = [" + ", ".join(_nums(row) for row in folded.joint_map) + "]")
-    lines.append(f"joint_offsets_deg = {_nums(np.degrees(folded.joint_offsets))}")
-    measurement = [] if folded.noise is None else _noise_toml(folded.noise)
+        lines.append("joint_map = [" + ", ".join(nums(row) for row in folded.joint_map) + "]")
+    lines.append(f"joint_offsets_deg = {nums(np.degrees(folded.joint_offsets))}")
+    measurement = [] if folded.noise is None else noise_toml(folded.noise)
     if folded.region is not None:
         measurement.append(f"region = {_region_toml(folded.region)}")
     if measurement:
         lines += ["", "[measurement]", *measurement]
     if folded.fixed:
-        fixed = ", ".join(_toml_string(name) for name in folded.fixed)
+        fixed = ", ".join(toml_string(name) for name in folded.fixed)
         lines += ["", "[identify]", f"fixed = [{fixed}]"]
     if folded.targets:
         lines += ["", "[targets]"]
         lines += [
-            f"{_toml_key(t.label)} = {{ length_mm = {_num(t.length)}, "
-            f"angle_deg = {_num(math.degrees(t.angle))} }}"
+            f"{toml_key(t.label)} = {{ length_mm = {num(t.length)}, "
+            f"angle_deg = {num(math.degrees(t.angle))} }}"
             for t in folded.targets
         ]
     return "\n".join(lines) + "\n"
@@ -462,20 +388,8 @@ def _urdf_limits(arm: PlanarArm) -> np.ndarray:
     return np.column_stack([np.minimum(lo, hi).sum(axis=1), np.maximum(lo, hi).sum(axis=1)])
 
 
-def _xml_name(text: str) -> str:
-    """``text`` for an XML attribute: control characters (most invalid in XML 1.0) as ``_``."""
-    return "".join(c if c.isprintable() else "_" for c in text)
-
-
-def _xml_comment(text: str) -> str:
-    """``text`` safe inside an XML comment (no ``--``, no trailing ``-``)."""
-    while "--" in text:
-        text = text.replace("--", "- -")
-    return text + " " if text.endswith("-") else text
-
-
 def _triple(x: float, y: float, z: float) -> str:
-    return _quoteattr(f"{_num(x)} {_num(y)} {_num(z)}")
+    return quoteattr(f"{num(x)} {num(y)} {num(z)}")
 
 
 def urdf(cal: CalibratedArm) -> str:
@@ -531,7 +445,7 @@ def urdf(cal: CalibratedArm) -> str:
 
     header = [
         f"generated by armcal {__version__} export from the calibration of "
-        f"{_one_line(arm.name)}: the calibrated arm in the robot's frame (lengths in m, "
+        f"{one_line(arm.name)}: the calibrated arm in the robot's frame (lengths in m, "
         "angles in rad).",
         "Each joint's zero offset is folded into its origin's yaw (a rotation about the "
         "joint axis commutes with the joint's own); no <calibration> element is written.",
@@ -554,38 +468,38 @@ def urdf(cal: CalibratedArm) -> str:
     )
     lines = ['<?xml version="1.0"?>', "<!--"]
     for text in header:
-        wrapped = textwrap.wrap(_one_line(text), width=92, break_on_hyphens=False)
-        lines += [f"  {_xml_comment(line)}" for line in wrapped]
-    robot = f"<robot name={_quoteattr(_xml_name(folded.name))}>"
+        wrapped = textwrap.wrap(one_line(text), width=92, break_on_hyphens=False)
+        lines += [f"  {xml_comment(line)}" for line in wrapped]
+    robot = f"<robot name={quoteattr(xml_name(folded.name))}>"
     lines += ["-->", robot, '  <link name="base_link"/>']
     parent = "base_link"
     for j in range(n):
         x = 0.0 if j == 0 else lengths_m[j - 1]
         lines += [
             f'  <joint name="joint{j + 1}" type="revolute">',
-            f"    <parent link={_quoteattr(parent)}/>",
+            f"    <parent link={quoteattr(parent)}/>",
             f'    <child link="link{j + 1}"/>',
             f"    <origin xyz={_triple(x, 0.0, 0.0)} rpy={_triple(0.0, 0.0, yaw[j])}/>",
             f'    <axis xyz="0 0 {"-1" if signs[j] < 0 else "1"}"/>',
-            f'    <limit lower="{_num(limits[j, 0])}" upper="{_num(limits[j, 1])}" '
+            f'    <limit lower="{num(limits[j, 0])}" upper="{num(limits[j, 1])}" '
             'effort="0" velocity="0"/>',
             "  </joint>",
             f'  <link name="link{j + 1}"/>',
         ]
         parent = f"link{j + 1}"
     if folded.targets:
-        frames = [(f"target_{_xml_name(t.label)}", t.length, t.angle) for t in folded.targets]
+        frames = [(f"target_{xml_name(t.label)}", t.length, t.angle) for t in folded.targets]
     else:
         frames = [("tool0", float(folded.link_lengths[-1]), 0.0)]
     for frame, length_mm, angle in frames:
         x, y = (length_mm / _MM_PER_M) * math.cos(angle), (length_mm / _MM_PER_M) * math.sin(angle)
         lines += [
-            f'  <joint name={_quoteattr(frame + "_joint")} type="fixed">',
-            f"    <parent link={_quoteattr(parent)}/>",
-            f"    <child link={_quoteattr(frame)}/>",
+            f'  <joint name={quoteattr(frame + "_joint")} type="fixed">',
+            f"    <parent link={quoteattr(parent)}/>",
+            f"    <child link={quoteattr(frame)}/>",
             f"    <origin xyz={_triple(x, y, 0.0)} rpy={_triple(0.0, 0.0, angle)}/>",
             "  </joint>",
-            f"  <link name={_quoteattr(frame)}/>",
+            f"  <link name={quoteattr(frame)}/>",
         ]
     lines.append("</robot>")
     return "\n".join(lines) + "\n"

@@ -421,16 +421,25 @@ def demo(args: argparse.Namespace) -> None:
 
 def export(args: argparse.Namespace) -> None:
     """``armcal export``: the calibrated arm as a robot file or URDF."""
-    if args.robot_toml is None and args.urdf is None:
+    if args.robot_toml is None and args.urdf is None and args.joint_offsets is None:
         raise ArmcalError(
-            "export needs an output: give --robot-toml FILE, --urdf FILE or both "
-            "(see 'armcal export --help')"
+            "export needs an output: give --robot-toml FILE, --urdf FILE, --joint-offsets FILE "
+            "or several (see 'armcal export --help')"
         )
     cal = read_calibration(args.calibration)
-    run = export_files(cal, robot_toml_path=args.robot_toml, urdf_path=args.urdf)
+    run = export_files(
+        cal,
+        robot_toml_path=args.robot_toml,
+        urdf_path=args.urdf,
+        offsets_path=args.joint_offsets,
+    )
     for path, text in run.texts.items():
         atomic_write(path, text)
-    document = {"robot_toml": args.robot_toml, "urdf": args.urdf}
+    document = {
+        "robot_toml": args.robot_toml,
+        "urdf": args.urdf,
+        "joint_offsets": args.joint_offsets,
+    }
     emit(args, document, "\n".join(f"wrote {path}" for path in run.texts), run.warnings)
 
 

@@ -356,7 +356,16 @@ def build_parser() -> argparse.ArgumentParser:
     _add_calibration(sub)
     sub.add_argument("--robot-toml", metavar="PATH", help="robot TOML file to write")
     sub.add_argument("--urdf", metavar="PATH", help="URDF file to write")
-    sub.set_defaults(run=commands.export, inputs=("calibration",), outputs=("robot_toml", "urdf"))
+    sub.add_argument(
+        "--joint-offsets",
+        metavar="PATH",
+        help="CSV of every joint's zero offset (deg) for the controller",
+    )
+    sub.set_defaults(
+        run=commands.export,
+        inputs=("calibration",),
+        outputs=("robot_toml", "urdf", "joint_offsets"),
+    )
 
     sub = _command(subs, "formats")
     sub.set_defaults(run=commands.formats)

@@ -29,6 +29,7 @@ from ..models import (
     PlanarArm,
     Plane,
     Region,
+    SerialChain,
     SpatialArm,
     Target,
 )
@@ -75,14 +76,45 @@ def serial_robot_to_dict(arm: SpatialArm) -> dict[str, Any]:
         "tip": arm.chain.tip.tolist(),
         "joint_map": arm.joint_map.tolist(),
         "joint_limits": arm.limits.tolist(),
-        "chain_limits": np.where(
-            np.isfinite(arm.chain.joint_limits), arm.chain.joint_limits, 1e300
-        ).tolist(),
+        "chain_limits": np.clip(arm.chain.joint_limits, -1e300, 1e300).tolist(),  # JSON: no inf
         "targets": list(arm.targets),
+        "target_positions_mm": arm.target_positions.tolist(),
+        "base_pose": arm.base_pose.tolist(),
         "known_targets": arm.known_targets,
         "held": list(arm.held),
         "merges": list(arm.merges),
     }
+
+
+def _serial_from_dict(
+    data: dict[str, Any], noise: NoiseModel | None, fixed: list[str]
+) -> SpatialArm:
+    """The spatial arm of a calibration file's ``robot`` section (:func:`serial_robot_to_dict`)."""
+    kinds = tuple(str(k) for k in data["joint_types"])
+    n = len(kinds)
+    limits = np.array(data["chain_limits"], dtype=float).reshape(n, 2)
+    chain = SerialChain(
+        np.array(data["origins"], dtype=float).reshape(n, 4, 4),
+        kinds,
+        np.array(data["tip"], dtype=float).reshape(4, 4),
+        tuple(str(name) for name in data["joint_names"]),
+        np.where(np.abs(limits) >= 1e300, np.copysign(np.inf, limits), limits),
+    )
+    held = tuple(str(name) for name in data["held"])
+    return SpatialArm(
+        chain,
+        str(data["name"]),
+        np.array(data["joint_map"], dtype=float).reshape(n, n),
+        np.array(data["joint_limits"], dtype=float).reshape(n, 2),
+        targets=tuple(str(label) for label in data["targets"]),
+        target_positions=np.array(data["target_positions_mm"], dtype=float).reshape(-1, 3),
+        base_pose=np.array(data["base_pose"], dtype=float).reshape(6),
+        noise=noise,
+        user_fixed=tuple(name for name in fixed if name not in held),
+        held=held,
+        merges=tuple(str(text) for text in data["merges"]),
+        known_targets=bool(data["known_targets"]),
+    )
 
 
 def robot_to_dict(arm: PlanarArm | SpatialArm) -> dict[str, Any]:
@@ -177,9 +209,15 @@ def read_calibration(path: str | os.PathLike) -> CalibratedArm:
                 None if sigma_q is None else np.radians(np.array(sigma_q, dtype=float)),
             )
         key = "robot"
-        arm = _arm_from_dict(doc["robot"], noise, list(doc.get("fixed", [])))
+        fixed = list(doc.get("fixed", []))
+        serial = doc["robot"].get("kind") == "serial"
+        arm: PlanarArm | SpatialArm = (
+            _serial_from_dict(doc["robot"], noise, fixed)
+            if serial
+            else _arm_from_dict(doc["robot"], noise, fixed)
+        )
         model: FitModel = arm
-        if doc.get("elastostatic") is not None:
+        if doc.get("elastostatic") is not None and isinstance(arm, PlanarArm):
             key = "elastostatic"
             model = _compliance_from_dict(arm, doc["elastostatic"])
         key = "parameters"
@@ -213,7 +251,7 @@ def read_calibration(path: str | os.PathLike) -> CalibratedArm:
         ) from None
     if not (np.all(np.isfinite(values)) and np.all(np.isfinite(full))):
         raise fail(path, "key 'parameters': values must be finite numbers")
-    if plane is None and arm.base_rotation:
+    if plane is None and isinstance(arm, PlanarArm) and arm.base_rotation:
         raise fail(path, "key 'plane': a calibration from 3-D data must record its plane")
     return CalibratedArm(model, values, full, sigma, plane)
 

@@ -20,14 +20,14 @@ or both (the errors on top of that description).
 from __future__ import annotations
 
 import os
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
 from ..errors import InputError
-from ..models import SerialChain, SpatialArm
+from ..models import MdhTable, SerialChain, SpatialArm, rpy_matrix, transform
 from ..noise import NoiseModel
 from .common import check_keys, fail, load_toml, number, numbers, suggest
 from .robots import SIGMA_RANGE_MM, fixed_parameters
@@ -53,7 +53,8 @@ BUILTIN_SERIAL_ROBOTS = {
 
 _TOP_KEYS = ("name", "urdf", "base_link", "tip_link", "joint_map", "joint_limits_deg")
 _TABLES = ("mdh", "measurement", "targets", "identify")
-_MDH_KEYS = ("alpha_deg", "a_mm", "theta_deg", "d_mm", "joint_types")
+_MDH_KEYS = ("alpha_deg", "a_mm", "theta_deg", "d_mm", "beta_deg", "joint_types")
+_MDH_FRAMES = ("base_xyz_mm", "base_rpy_deg", "tip_xyz_mm", "tip_rpy_deg")
 _TRUTH_KEYS = ("robot", "base", "errors", "targets")
 
 
@@ -140,13 +141,14 @@ def _chain(path: Path, data: dict, tip_link: str | None) -> tuple[SerialChain, s
     table = data["mdh"]
     if not isinstance(table, dict):
         raise fail(path, "key 'mdh': expected a table [mdh]")
-    check_keys(path, table, list(_MDH_KEYS), "mdh.")
+    check_keys(path, table, [*_MDH_KEYS, *_MDH_FRAMES], "mdh.")
     values = {}
     for name in _MDH_KEYS[:4]:
         if name not in table:
             raise fail(path, f"missing key 'mdh.{name}': one value per joint")
         values[name] = numbers(path, table[name], f"mdh.{name}")
     n = len(values["alpha_deg"])
+    values["beta_deg"] = numbers(path, table.get("beta_deg", [0.0] * n), "mdh.beta_deg")
     for name, column in values.items():
         if len(column) != n or n == 0:
             raise fail(
@@ -157,13 +159,21 @@ def _chain(path: Path, data: dict, tip_link: str | None) -> tuple[SerialChain, s
     kinds = table.get("joint_types", ["R"] * n)
     if not isinstance(kinds, list) or len(kinds) != n or any(k not in ("R", "P") for k in kinds):
         raise fail(path, f'key \'mdh.joint_types\': expected {n} of "R" or "P", got {kinds!r}')
-    chain = SerialChain.from_mdh(
+    frames = {}
+    for where in ("base", "tip"):
+        xyz = numbers(path, table.get(f"{where}_xyz_mm", [0, 0, 0]), f"mdh.{where}_xyz_mm", 3)
+        rpy = numbers(path, table.get(f"{where}_rpy_deg", [0, 0, 0]), f"mdh.{where}_rpy_deg", 3)
+        frames[where] = transform(rpy_matrix(np.radians(rpy)), xyz)
+    chain = MdhTable(
         np.radians(values["alpha_deg"]),
-        values["a_mm"],
+        np.array(values["a_mm"]),
+        np.radians(values["beta_deg"]),
         np.radians(values["theta_deg"]),
-        values["d_mm"],
+        np.array(values["d_mm"]),
         tuple(kinds),
-    )
+        frames["base"],
+        frames["tip"],
+    ).chain()
     return chain, path.stem
 
 
@@ -201,6 +211,8 @@ def _from_toml(path: Path, builtin: str | None, tip_link: str | None = None) -> 
                     path, f"key 'joint_limits_deg[{j}]': need lo < hi, got [{lo:g}, {hi:g}]"
                 )
         limits = np.where(chain.revolute[:, None], np.radians(pairs), pairs)
+        # They replace the description's limits, which hold for the joint values M q.
+        chain = replace(chain, joint_limits=np.tile([-np.inf, np.inf], (n, 1)))
     noise = _noise(path, data.get("measurement"))
     labels, positions = _targets(path, data.get("targets"))
     arm = SpatialArm(

@@ -595,7 +595,7 @@ def read_program(
     table = _read_csv(path, arm, "program", arm_from=arm_from)
     targets = table.texts.get("target")
     if targets is not None:
-        if not arm.targets:
+        if not arm.target_labels:
             raise fail(
                 path,
                 f"has a target column but {arm.name} has no targets; remove the column",

@@ -9,10 +9,10 @@
   :mod:`~armcal.models.planar_criteria` -- the planar arm's design view, the
   paper's closed-form plans and its own criteria (D*, Table I);
 * :mod:`~armcal.models.compliance` -- joint compliance under gravity and load;
-* :mod:`~armcal.models.spatial_chain`, :mod:`~armcal.models.spatial_kinematics`,
-  :mod:`~armcal.models.spatial_selection`, :mod:`~armcal.models.spatial_registration`,
-  :mod:`~armcal.models.spatial` -- a spatial serial arm (:class:`SpatialArm`)
-  from a URDF or a modified DH table;
+* :mod:`~armcal.models.spatial_chain`, :mod:`~armcal.models.spatial_dh`,
+  :mod:`~armcal.models.spatial_kinematics`, :mod:`~armcal.models.spatial_selection`,
+  :mod:`~armcal.models.spatial_registration`, :mod:`~armcal.models.spatial` -- a spatial
+  serial arm (:class:`SpatialArm`) from a URDF or a modified DH table;
 * :mod:`~armcal.models.plane` -- the plane of motion of 3-D data;
 * :mod:`~armcal.models.calibrated` -- an arm with its identified deviations.
 """
@@ -82,7 +82,16 @@ from .planar_kinematics import (
 from .plane import Plane, fit_plane
 from .regions import Annulus, Box, Region
 from .spatial import SINGLE_TARGET, SpatialArm, default_targets
-from .spatial_chain import SerialChain, UrdfJoint, matrix_rpy, rpy_matrix
+from .spatial_chain import (
+    SerialChain,
+    UrdfJoint,
+    matrix_rpy,
+    rotation_vector,
+    rpy_matrix,
+    transform,
+    vector_rotation,
+)
+from .spatial_dh import MdhTable, mdh_table
 from .spatial_kinematics import SpatialLayout
 from .spatial_selection import Selection
 
@@ -104,6 +113,7 @@ __all__ = [
     "Identifiability",
     "LinearPositions",
     "Loads",
+    "MdhTable",
     "PaperCriteria",
     "Parametrization",
     "PlanInformation",
@@ -139,12 +149,14 @@ __all__ = [
     "link_vectors",
     "listing",
     "matrix_rpy",
+    "mdh_table",
     "model_basis",
     "model_columns",
     "paper_from_user",
     "paper_from_user_matrix",
     "plan_rows",
     "plan_svd",
+    "rotation_vector",
     "row_echelon",
     "rpy_matrix",
     "scaled_columns",
@@ -153,8 +165,10 @@ __all__ = [
     "standard_joint_map",
     "target_weights",
     "tool_angles",
+    "transform",
     "unit_trace",
     "user_from_scaled",
+    "vector_rotation",
     "weighted_user_jacobian",
     "wrap_angle",
 ]

@@ -66,6 +66,7 @@ from .information import (
 )
 from .interface import Conditions, Effect, LinearPositions, Loads
 from .planar import PlanarArm
+from .planar_geometry import wrap_angle
 from .planar_kinematics import (
     forward_kinematics,
     jacobian,
@@ -694,6 +695,10 @@ class CompliantArm:
         geometry, _, bend = self._bent(conditions, params)
         angle = tool_angles(self.arm, conditions.q, geometry, target=conditions.target)
         return (angle + np.sum(bend, axis=-1))[..., None]
+
+    def orientation_error(self, orientation: np.ndarray, reference: np.ndarray) -> np.ndarray:
+        """The difference of the tool's directions, wrapped into ``(-pi, pi]``."""
+        return wrap_angle(np.asarray(orientation) - np.asarray(reference))
 
     def orientation_joint_jacobian(
         self, conditions: Conditions, params: np.ndarray | None = None

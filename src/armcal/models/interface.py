@@ -716,6 +716,12 @@ class FitModel(Protocol):
         """The tool's orientation ``(..., m, k)`` (rad) at every row."""
         ...
 
+    def orientation_error(self, orientation: np.ndarray, reference: np.ndarray) -> np.ndarray:
+        """The small turn ``(..., m, k)`` (rad) from ``reference`` to ``orientation`` (both
+        as :meth:`orientation` gives them): what the two orientation Jacobians below
+        differentiate."""
+        ...
+
     def orientation_joint_jacobian(
         self, conditions: Conditions, params: np.ndarray | None = None
     ) -> np.ndarray:

@@ -429,6 +429,10 @@ class PlanarArm(PlanarArmSpec):
         """The direction ``(..., m, 1)`` of every row's last link vector, rad."""
         return tool_angles(self, conditions.q, params, target=conditions.target)[..., None]
 
+    def orientation_error(self, orientation: np.ndarray, reference: np.ndarray) -> np.ndarray:
+        """The difference of the tool's directions, wrapped into ``(-pi, pi]``."""
+        return wrap_angle(np.asarray(orientation) - np.asarray(reference))
+
     def orientation_joint_jacobian(
         self, conditions: Conditions, params: np.ndarray | None = None
     ) -> np.ndarray:

@@ -21,7 +21,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike
 
-from ..errors import ArmcalError, ArmcalWarning, NotIdentifiableError
+from ..errors import ArmcalWarning, NotIdentifiableError
 from ..noise import NoiseModel, relative_noise
 from ..numerics import ScaledSVD, scaled_svd
 from .identifiability import Identifiability, listing
@@ -32,7 +32,16 @@ from .information import (
     whitened_free_jacobian,
 )
 from .interface import Conditions, Effect, LinearPositions, Loads
-from .spatial_chain import SerialChain, elementary, joint_motion, matrix_rpy, transform
+from .spatial_chain import (
+    SerialChain,
+    elementary,
+    joint_motion,
+    matrix_rpy,
+    rotation_vector,
+    rpy_matrix,
+    transform,
+    vector_rotation,
+)
 from .spatial_kinematics import ChainKinematics, SpatialLayout, kinematics
 from .spatial_registration import register
 from .spatial_selection import select
@@ -141,7 +150,7 @@ class SpatialArm:
         a continuous joint turns a full turn each way."""
         identity = np.array_equal(self.joint_map, np.eye(self.chain.n_joints))
         base = self.chain.joint_limits if identity else np.full((self.chain.n_joints, 2), np.inf)
-        turn = np.where(self.chain.revolute, np.pi, 1000.0)[:, None] * np.array([-1.0, 1.0])
+        turn = np.where(self.chain.revolute, 2 * np.pi, 1000.0)[:, None] * np.array([-1.0, 1.0])
         return np.where(np.isfinite(base), base, turn)
 
     def replace(self, **changes: Any) -> SpatialArm:
@@ -524,9 +533,11 @@ class SpatialArm:
                 base_pose=registered[:6],
                 target_positions=self.layout.target_points(registered),
             )
-        jac = arm.jacobian(conditions)
+        # The columns in the robot's own frame: about the instrument's far-away origin a base
+        # turn looks like a shift, and the rule's tolerance would see a dependence there.
+        jac = replace(arm, base_pose=np.zeros(6)).jacobian(conditions)
         w = arm.whitening(conditions)
-        rows = jac if w is None else w @ jac
+        rows = jac if w is None else w @ rpy_matrix(arm.base_pose[3:]) @ jac
         # S V^T diag(c) of the scaled rows has the rows' column space in p x p.
         svd = scaled_svd(rows.reshape(-1, arm.n_params))
         columns = svd.singular_values[:, None] * svd.vt * svd.column_norms
@@ -633,8 +644,15 @@ class SpatialArm:
         return 100.0
 
     def orientation(self, conditions: Conditions, params: np.ndarray | None = None) -> np.ndarray:
-        """The tip frame's roll, pitch and yaw ``(..., m, 3)`` in the instrument frame."""
-        return matrix_rpy(self._kinematics(conditions, params).rotation)
+        """The tip frame's orientation ``(..., m, 3)`` in the instrument frame, as a rotation
+        vector (axis times angle, rad)."""
+        return rotation_vector(self._kinematics(conditions, params).rotation)
+
+    def orientation_error(self, orientation: np.ndarray, reference: np.ndarray) -> np.ndarray:
+        """The small turn ``(..., m, 3)`` (rad, instrument frame) from ``reference`` to
+        ``orientation``: the rotation vector of ``R R_ref^T``."""
+        turn = vector_rotation(orientation) @ np.swapaxes(vector_rotation(reference), -1, -2)
+        return rotation_vector(turn)
 
     def tip_rotation(self, conditions: Conditions, params: np.ndarray | None = None) -> np.ndarray:
         """The tip frame's rotation ``(..., m, 3, 3)`` in the instrument frame."""
@@ -651,9 +669,10 @@ class SpatialArm:
     def orientation_jacobian(
         self, conditions: Conditions, params: np.ndarray | None = None
     ) -> np.ndarray:
-        raise ArmcalError(
-            "the orientation Jacobian in the parameters is not used for spatial arms"
-        )
+        """The tip frame's angular velocity per parameter ``(..., m, 3, p)``."""
+        ang = self._kinematics(conditions, params, derivatives=True).angular
+        assert ang is not None
+        return ang
 
     def in_robot_frame(self, params: np.ndarray) -> tuple[SpatialArm, np.ndarray]:
         out = np.array(params, dtype=float)

@@ -39,8 +39,10 @@ __all__ = [
     "elementary",
     "joint_motion",
     "matrix_rpy",
+    "rotation_vector",
     "rpy_matrix",
     "transform",
+    "vector_rotation",
 ]
 
 #: The kinds of moving joint: revolute (an angle, rad) and prismatic (a length, mm).
@@ -93,6 +95,61 @@ def matrix_rpy(rotation: np.ndarray) -> np.ndarray:
         regular, np.arctan2(r[..., 1, 0], r[..., 0, 0]), np.arctan2(-r[..., 0, 1], r[..., 1, 1])
     )
     return np.stack([roll, pitch, yaw], axis=-1)
+
+
+def vector_rotation(vector: ArrayLike) -> np.ndarray:
+    """Rotations ``(..., 3, 3)`` of rotation vectors ``(..., 3)`` (axis times angle, rad):
+    Rodrigues' formula.
+
+    Examples
+    --------
+    >>> np.round(vector_rotation([0.0, 0.0, np.pi / 2]) @ [1.0, 0.0, 0.0], 12).tolist()
+    [0.0, 1.0, 0.0]
+    """
+    v = np.asarray(vector, dtype=float)
+    angle = np.linalg.norm(v, axis=-1)[..., None, None]
+    k = np.zeros((*v.shape[:-1], 3, 3))
+    k[..., 0, 1], k[..., 0, 2], k[..., 1, 2] = -v[..., 2], v[..., 1], -v[..., 0]
+    k = k - np.swapaxes(k, -1, -2)
+    small = angle < 1e-8  # the series to second order: exact to round-off there
+    safe = np.where(small, 1.0, angle)
+    a = np.where(small, 1.0 - angle**2 / 6, np.sin(safe) / safe)
+    b = np.where(small, 0.5 - angle**2 / 24, (1.0 - np.cos(safe)) / safe**2)
+    return np.eye(3) + a * k + b * (k @ k)
+
+
+def rotation_vector(rotation: np.ndarray) -> np.ndarray:
+    """Rotation vectors ``(..., 3)`` (axis times angle in ``[0, pi]``) of rotations
+    ``(..., 3, 3)``: :func:`vector_rotation` undone.
+
+    Near a half turn the axis comes from the symmetric part (the skew part
+    vanishes there), so the result is accurate at every angle.
+
+    Examples
+    --------
+    >>> np.round(rotation_vector(vector_rotation([0.3, -0.2, 0.1])), 12).tolist()
+    [0.3, -0.2, 0.1]
+    """
+    r = np.asarray(rotation, dtype=float)
+    skew = np.stack(
+        [r[..., 2, 1] - r[..., 1, 2], r[..., 0, 2] - r[..., 2, 0], r[..., 1, 0] - r[..., 0, 1]],
+        axis=-1,
+    )
+    sin2 = np.linalg.norm(skew, axis=-1)  # 2 sin(angle)
+    cos = np.clip((np.trace(r, axis1=-2, axis2=-1) - 1.0) / 2, -1.0, 1.0)
+    angle = np.arctan2(sin2 / 2, cos)
+    small = sin2 < 1e-12
+    scale = np.where(small, 0.5, angle / np.where(small, 1.0, sin2))
+    out = skew * scale[..., None]
+    wide = cos < -0.9  # beyond about 154 degrees: the axis from R + R^T
+    if np.any(wide):
+        sym = (r[wide] + np.swapaxes(r[wide], -1, -2)) / 2 - cos[wide][:, None, None] * np.eye(3)
+        column = np.argmax(np.diagonal(sym, axis1=-2, axis2=-1), axis=-1)
+        axis = np.take_along_axis(sym, column[:, None, None], axis=-1)[..., 0]
+        axis /= np.linalg.norm(axis, axis=-1, keepdims=True)
+        sign = np.where(np.einsum("...i,...i->...", axis, skew[wide]) < 0, -1.0, 1.0)
+        out[wide] = axis * (sign * angle[wide])[:, None]
+    return out
 
 
 def transform(

@@ -158,6 +158,8 @@ class ChainKinematics:
         ``d points / d q`` (mm per rad of the controller's readings).
     tip_angular : ndarray, shape (..., m, 3, n), or None
         The tip frame's angular velocity per unit of every reading.
+    angular : ndarray, shape (..., m, 3, p), or None
+        The tip frame's angular velocity per unit of every parameter.
     """
 
     points: np.ndarray
@@ -165,6 +167,7 @@ class ChainKinematics:
     jacobian: np.ndarray | None = None
     joint_jacobian: np.ndarray | None = None
     tip_angular: np.ndarray | None = None
+    angular: np.ndarray | None = None
 
 
 def kinematics(
@@ -263,4 +266,5 @@ def kinematics(
         cols = slice(layout.target_start + 3 * t, layout.target_start + 3 * t + 3)
         jac[..., cols] = np.where((index == t)[:, None, None], rot, 0.0)
     joint_jac = np.swapaxes(np.cross(zero_axis, points[..., None, :]) + zero_moment, -1, -2)
-    return ChainKinematics(points, rot, jac, joint_jac, np.swapaxes(zero_axis, -1, -2))
+    angular = np.swapaxes(axis, -1, -2)
+    return ChainKinematics(points, rot, jac, joint_jac, np.swapaxes(zero_axis, -1, -2), angular)

@@ -11,8 +11,9 @@ every further point).  :func:`select` keeps a set of that size:
   taken in a fixed priority order (:func:`priority`) and a column is kept when
   its part outside the span of those kept before is more than
   :data:`SELECT_RTOL` of its length.  Exact dependencies leave ``1e-13`` or
-  less, real ones far more, so the set is the same on every machine, BLAS and
-  row order;
+  less (a calibrated arm's small misalignments ``1e-3`` or less), real
+  effects far more, so the set is the same on every machine, BLAS and row
+  order, and for the nominal and the calibrated arm;
 * **explained** -- every column left out is written as the kept parameters it
   merges into, with the reason where the geometry gives one ("joints 2 and 3
   are parallel").
@@ -43,11 +44,18 @@ __all__ = [
 ]
 
 #: A column whose part outside the span of the columns kept before it is at most
-#: this fraction of its length merges into them.  Exact (structural) dependencies
-#: leave round-off, ``1e-13`` and below on these well-scaled columns; a parameter
-#: the measurements see at a millionth of another's effect cannot be estimated
-#: anyway (its std would be 1e6 times the best one's).
-SELECT_RTOL = 1e-6
+#: this fraction of its length merges into them.  Structural dependencies of the
+#: nominal geometry leave round-off (``1e-13`` and below on these well-scaled
+#: columns); on a calibrated arm (an exported robot file) the same dependencies
+#: are broken only by its small misalignments, ``1e-4`` to ``1e-3`` for errors of
+#: a few hundredths of a degree, and a parameter seen that faintly could not be
+#: estimated anyway (its std would be a hundred times or more another's).  Real
+#: independent effects of a plan that moves every joint leave ``5e-2`` and more.
+#: So the set does not change when the nominal model becomes the calibrated one.
+SELECT_RTOL = 1e-2
+
+#: A column this much shorter than the longest (in mm and rad) has no effect at all.
+_ZERO_RTOL = 1e-12
 
 #: Within a joint, the placement errors in order of priority (names' suffixes).
 _WITHIN_JOINT = ("x", "y", "rx", "ry", "z", "rz")
@@ -207,7 +215,7 @@ def select(
         if names[i] in held:
             continue
         col = columns[:, i]
-        if norms[i] <= SELECT_RTOL * scale:
+        if norms[i] <= _ZERO_RTOL * scale:  # no effect at all (a joint that does not move)
             dropped.append(i)
             continue
         rest = col - basis @ (basis.T @ col)

@@ -27,6 +27,7 @@ from ..errors import (
     unique_warnings,
 )
 from ..export import robot_toml, urdf, urdf_joints_are_readings
+from ..export_serial import joint_offsets_csv, serial_robot_toml, serial_urdf
 from ..files import Measurements, Program, RobotSpec, SerialSpec
 from ..identification import Calibration, identify
 from ..instrument import identify_3d
@@ -114,9 +115,9 @@ def measured_arm(arm: PlanarArm, meas: Measurements) -> PlanarArm:
         raise InputError(f"{arm.name}: {exc}") from None
 
 
-def _row_targets(arm: PlanarArm, meas: Measurements) -> np.ndarray | None:
+def _row_targets(arm: PlanarArm | SpatialArm, meas: Measurements) -> np.ndarray | None:
     """Every row's target index, for an arm with targets (None without)."""
-    if meas.targets is None or not arm.targets:
+    if meas.targets is None or not arm.target_labels:
         return None
     return arm.target_index(meas.targets)
 
@@ -381,11 +382,11 @@ def validate_measurements(
     does not have or lacks, or points of the other dimension.
     """
     arm = cal.arm
-    if meas.targets is not None and not arm.targets:
+    if meas.targets is not None and not arm.target_labels:
         raise InputError(
             f"{source}: has a target column but the calibration has no targets; remove the column"
         )
-    if arm.targets and meas.targets is None:
+    if arm.target_labels and meas.targets is None:
         raise InputError(
             f"{source}: the calibration has targets ({', '.join(arm.target_labels)}); add a "
             "column 'target' naming the target of every row"
@@ -454,12 +455,12 @@ def compensate_program(
                 f"--target: {target!r} is not a target of the calibration "
                 f"({', '.join(arm.target_labels) or 'none'})"
             )
-    elif arm.n_target_links > 1:
+    elif len(arm.target_labels) > 1:
         raise ArmcalError(
             f"{source}: the calibration has targets {', '.join(arm.target_labels)}; "
             "add a column 'target' or pass --target LABEL for the tool point of the program"
         )
-    index = None if labels is None or not arm.targets else arm.target_index(labels)
+    index = None if labels is None or not arm.target_labels else arm.target_index(labels)
     default = cal.model.default_payload_kg
     loads = None
     if default is not None:
@@ -502,27 +503,48 @@ class ExportRun:
 
 
 def export_files(
-    cal: CalibratedArm, *, robot_toml_path: str | None = None, urdf_path: str | None = None
+    cal: CalibratedArm,
+    *,
+    robot_toml_path: str | None = None,
+    urdf_path: str | None = None,
+    offsets_path: str | None = None,
 ) -> ExportRun:
-    """The calibrated arm as a robot TOML and/or a URDF, with what they leave out.
+    """The calibrated arm as a robot TOML, a URDF and/or the joint offsets, with what they
+    leave out.
 
     ``urdf-joint-values`` when the URDF's joint values are not the controller's
-    readings (coupled axes), and a warning that a model's effect (joint
-    compliance) is in neither file.
+    readings (coupled axes), ``offsets-only`` for the offsets (the geometry is not
+    in them), and a warning that a model's effect (joint compliance) is in no file.
     """
+    serial = isinstance(cal.arm, SpatialArm)  # the file formats differ by family
     texts: dict[str, str] = {}
     if robot_toml_path is not None:
-        texts[robot_toml_path] = robot_toml(cal)
+        texts[robot_toml_path] = serial_robot_toml(cal) if serial else robot_toml(cal)
     warnings = []
+    if offsets_path is not None:
+        texts[offsets_path] = joint_offsets_csv(cal)
+        warnings.append(
+            ArmcalWarning(
+                "offsets-only",
+                f"{offsets_path}: the joint zero offsets alone leave the controller with the "
+                "nominal link geometry; the URDF or robot TOML carries the whole calibration",
+            )
+        )
     if urdf_path is not None:
-        texts[urdf_path] = urdf(cal)
-        if not urdf_joints_are_readings(cal.arm):
+        texts[urdf_path] = serial_urdf(cal) if serial else urdf(cal)
+        coupled = (
+            not np.array_equal(cal.arm.joint_map, np.eye(cal.arm.n_joints))
+            if serial
+            else not urdf_joints_are_readings(cal.arm)
+        )
+        if coupled:
+            values = "M q" if serial else "the relative link angles D M q"
             warnings.append(
                 ArmcalWarning(
                     "urdf-joint-values",
                     f"{urdf_path}: {cal.arm.name} has coupled axes (joint_map): the URDF's joint "
-                    "values are the relative link angles D M q, not the controller's readings; "
-                    "convert them before publishing joint_states (see the file's comment)",
+                    f"values are {values}, not the controller's readings; convert them before "
+                    "publishing joint_states (see the file's comment)",
                 )
             )
     model, effect, inner = cal.model, cal.model.effect, cal.model.nested

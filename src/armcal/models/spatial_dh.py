@@ -1,0 +1,175 @@
+"""A serial chain as a modified DH table, exactly, even where consecutive axes are parallel.
+
+A row of the table (Craig's modified DH, with Hayati's extra angle ``beta``)
+places joint ``k``'s frame in joint ``k - 1``'s::
+
+    Rx(alpha) Tx(a) Ry(beta) Rz(theta) Tz(d)
+
+With ``beta = 0`` this is Craig's row.  For two axes far from parallel the x
+axis of joint ``k - 1``'s frame runs along their common normal and ``beta`` is 0.
+For nearly parallel axes the common normal runs off to infinity (a controller's
+DH ``d`` of hundreds of metres, and a table that rounds badly); there the
+frame's origin stays where it is, its x axis points to where the next axis
+crosses its xy plane, and ``beta`` takes the small tilt about y (Hayati and
+Mirmirani, "Improving the absolute positioning accuracy of robot manipulators",
+J. Robotic Systems 2(4), 1985).  So every row stays finite and well conditioned.
+
+A joint's frame may turn about and slide along its own axis without changing the
+kinematics (those commute with the joint's own turn or slide), which is the
+freedom the table uses: :func:`mdh_table` picks each frame's x axis and origin,
+and the first row and the tip absorb what is left (``base``, ``tip``), so
+:meth:`MdhTable.chain` gives back the same kinematics to round-off.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from .spatial_chain import SerialChain, elementary, transform
+
+__all__ = [
+    "PARALLEL_COS",
+    "MdhTable",
+    "mdh_table",
+    "mdh_transform",
+]
+
+#: Consecutive axes closer to parallel than 45 degrees get Hayati's row (module notes).
+PARALLEL_COS = np.cos(np.pi / 4)
+
+
+def mdh_transform(alpha: float, a: float, beta: float, theta: float, d: float) -> np.ndarray:
+    """``Rx(alpha) Tx(a) Ry(beta) Rz(theta) Tz(d)`` ``(4, 4)`` (rad, mm).
+
+    Examples
+    --------
+    >>> np.round(mdh_transform(0.0, 100.0, 0.0, np.pi / 2, 5.0)[:3, 3], 12).tolist()
+    [100.0, 0.0, 5.0]
+    """
+    rot = elementary(0, alpha) @ elementary(1, beta) @ elementary(2, theta)
+    return transform(rot, elementary(0, alpha) @ [a, 0.0, 0.0] + rot @ [0.0, 0.0, d])
+
+
+@dataclass(frozen=True)
+class MdhTable:
+    """A modified DH table (rad, mm), one entry per joint, with a base and a tip transform.
+
+    Attributes
+    ----------
+    alpha, a, beta, theta, d : ndarray, shape (n,)
+    kinds : tuple of str
+    base : ndarray, shape (4, 4)
+        Before the first row (the identity when the first axis is placed by a row).
+    tip : ndarray, shape (4, 4)
+        The tip frame in the last joint's frame.
+    """
+
+    alpha: np.ndarray
+    a: np.ndarray
+    beta: np.ndarray
+    theta: np.ndarray
+    d: np.ndarray
+    kinds: tuple[str, ...]
+    base: np.ndarray
+    tip: np.ndarray
+
+    def chain(self, joint_names: tuple[str, ...] | None = None) -> SerialChain:
+        """The chain of this table (joint values add to ``theta`` or ``d``)."""
+        n = len(self.kinds)
+        origins = np.array(
+            [
+                mdh_transform(self.alpha[k], self.a[k], self.beta[k], self.theta[k], self.d[k])
+                for k in range(n)
+            ]
+        )
+        origins[0] = self.base @ origins[0]
+        names = joint_names or tuple(f"joint {k + 1}" for k in range(n))
+        limits = np.tile([-np.inf, np.inf], (n, 1))
+        return SerialChain(origins, self.kinds, self.tip, names, limits)
+
+
+def _row(origin: np.ndarray) -> tuple[float, float, float, float, float, float]:
+    """``(alpha, a, beta, theta, d, miss)`` of a transform meant to be a row; ``miss`` is how
+    far (mm, rad) the row's transform is from it (0 for a transform of the row's form)."""
+    rot, t = origin[:3, :3], origin[:3, 3]
+    z = rot[:, 2]
+    beta = float(np.arcsin(np.clip(z[0], -1.0, 1.0)))
+    alpha = float(np.arctan2(-z[1], z[2]))
+    rest = (elementary(0, alpha) @ elementary(1, beta)).T @ rot
+    theta = float(np.arctan2(rest[1, 0], rest[0, 0]))
+    d = float((t[1] * z[1] + t[2] * z[2]) / max(z[1] ** 2 + z[2] ** 2, 1e-300))
+    a = float(t[0] - d * z[0])
+    miss = float(np.max(np.abs(mdh_transform(alpha, a, beta, theta, d) - origin)))
+    return alpha, a, beta, theta, d, miss
+
+
+def _screw(phi: float, s: float) -> np.ndarray:
+    """``Rz(phi) Tz(s)``: a turn about and a slide along a frame's own z axis."""
+    return transform(elementary(2, phi), [0.0, 0.0, s])
+
+
+def _choice(frame: np.ndarray, after: np.ndarray) -> tuple[np.ndarray, bool]:
+    """The turn and slide of ``frame`` (world, z its axis) that put its x axis along the
+    common normal to the axis of ``after`` (Craig), or, for nearly parallel axes, towards
+    where that axis crosses the frame's xy plane (Hayati); the x axis keeps the sign of
+    the frame's own.  Returns the screw and whether the row is Hayati's."""
+    rel = np.linalg.solve(frame, after)  # the next frame in this one
+    z, p = rel[:3, 2], rel[:3, 3]
+    if abs(z[2]) >= PARALLEL_COS:  # Hayati: origin stays, x towards the crossing point
+        crossing = p - z * (p[2] / z[2])
+        direction = crossing[:2]
+        slide = 0.0
+        hayati = True
+    else:  # Craig: the common normal, from the foot of it on this axis
+        normal = np.cross([0.0, 0.0, 1.0], z)
+        direction = normal[:2]
+        # The foot on this axis: the point (0, 0, s) closest to the line p + t z.
+        w = z[2]
+        denom = 1.0 - w**2
+        slide = float((p[2] - w * (p @ z)) / denom)
+        hayati = False
+    norm = np.linalg.norm(direction)
+    phi = 0.0 if norm < 1e-12 else float(np.arctan2(direction[1], direction[0]))
+    if np.cos(phi) < 0 or (np.cos(phi) == 0 and np.sin(phi) < 0):  # keep the frame's x side
+        phi = phi - np.pi if phi > 0 else phi + np.pi
+    return _screw(phi, slide), hayati
+
+
+def mdh_table(chain: SerialChain) -> MdhTable:
+    """The modified DH table of ``chain``, exact to round-off (module notes).
+
+    Examples
+    --------
+    >>> chain = SerialChain.from_mdh([0, -np.pi / 2, 0], [0, 100.0, 400.0], [0, 0.1, 0],
+    ...                              [300.0, 0, 20.0])
+    >>> table = mdh_table(chain)
+    >>> np.round(table.a, 9).tolist(), np.round(table.d, 9).tolist()
+    ([0.0, 100.0, 400.0], [300.0, 0.0, 20.0])
+    >>> u = np.array([0.3, -0.5, 1.1])
+    >>> bool(np.allclose(table.chain().forward(u), chain.forward(u), atol=1e-12))
+    True
+    """
+    n = chain.n_joints
+    world = [chain.origins[0]]
+    for k in range(1, n):
+        world.append(world[-1] @ chain.origins[k])
+    screws = [np.eye(4)] * n
+    hayati = [True] * n  # row k + 1's kind
+    for k in range(n - 1):
+        screws[k], hayati[k] = _choice(world[k], world[k + 1])
+    rows = np.zeros((n, 5))
+    base = np.eye(4)
+    for k in range(n):
+        before = np.eye(4) if k == 0 else np.linalg.inv(screws[k - 1])
+        origin = before @ chain.origins[k] @ screws[k]
+        *values, miss = _row(origin)
+        if k > 0 and not hayati[k - 1]:
+            values[2] = 0.0  # Craig's row: beta is 0 but for round-off
+        if k == 0 and miss > 1e-9:  # the first axis is placed by a base transform
+            base, values = origin, [0.0] * 5
+        rows[k] = values
+    tip = np.linalg.inv(screws[-1]) @ chain.tip
+    alpha, a, beta, theta, d = (rows[:, i].copy() for i in range(5))
+    return MdhTable(alpha, a, beta, theta, d, chain.kinds, base, tip)
