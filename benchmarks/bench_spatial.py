@@ -166,16 +166,16 @@ class SameResiduals:
 
     ``model`` is armcal's prepared arm (registered to the points, reduced to
     the identifiable set); ``start`` its registration with the held parameters
-    as the Gauss-Newton loop starts them (at 0: here every held one is a joint
-    error, 0 at nominal).  Noise is isotropic, so the residuals need no
-    whitening.
+    at their held values, as the Gauss-Newton loop starts them.  Noise is
+    isotropic, so the residuals need no whitening.
     """
 
     def __init__(self, model: SpatialArm, q: np.ndarray, target: np.ndarray, points: np.ndarray):
         self.model, self.points = model, points
         self.conditions: Conditions = model.conditions(q, target=target)
         self.free = model.free
-        self.start = model.start(self.conditions, points)[0] * self.free
+        start = model.start(self.conditions, points)[0]
+        self.start = np.where(self.free, start, model.held_values)
 
     def params(self, x: np.ndarray) -> np.ndarray:
         out = self.start.copy()

@@ -374,15 +374,17 @@ class MonteCarlo:
 
 def _fixed_truth_warning(model: FitModel, truth: np.ndarray) -> tuple[ArmcalWarning, ...]:
     moved = [
-        f"{name} = {value:g} {unit}"
-        for name, unit, value, free in zip(
+        f"{name} = {value * scale:g} {unit}"
+        for name, unit, value, held, scale, free in zip(
             model.param_names,
             model.param_units,
-            truth * model.display_scale,
+            truth,
+            model.held_values,
+            model.display_scale,
             model.free,
             strict=True,
         )
-        if not free and value != 0
+        if not free and value != held
     ]
     if not moved:
         return ()
@@ -390,9 +392,9 @@ def _fixed_truth_warning(model: FitModel, truth: np.ndarray) -> tuple[ArmcalWarn
         ArmcalWarning(
             "fixed-not-nominal",
             f"the truth has {', '.join(moved)}, but the model holds "
-            f"{'it' if len(moved) == 1 else 'them'} at 0: every fit is misspecified and the "
-            "bias shows the effect; to simulate a known parameter, put its value into the "
-            "nominal arm and give it 0 in the truth",
+            f"{'it' if len(moved) == 1 else 'them'} at its nominal value: every fit is "
+            "misspecified and the bias shows the effect; to simulate a known parameter, put "
+            "its value into the nominal arm and give it 0 in the truth",
         ),
     )
 
@@ -539,9 +541,10 @@ def monte_carlo(
     m, p = rows.m, model.n_params
     chunk = chunk_size(_floats_per_trial(model, m, method), trials)
     moments = _Moments(p)
-    # Moments about the truth keep round-off small; a fixed parameter is 0 in every
-    # estimate, so about 0 its mean and scatter are exactly 0 even when the truth moves it.
-    centre = truth * model.free
+    # Moments about the truth keep round-off small; a fixed parameter keeps its held value
+    # in every estimate, so about it its mean and scatter are exactly 0 even when the truth
+    # moves it.
+    centre = np.where(model.free, truth, model.held_values)
     positions = None
     if test_q is not None:
         test = model.plan_conditions(np.asarray(test_q, dtype=float))

@@ -24,15 +24,18 @@ from ..files import (
     COMPLIANCE_TRUTH_KEYS,
     STDIO,
     RobotSpec,
+    SerialSpec,
     atomic_write,
     calibration_document,
     format_measurements_csv,
     format_plan_csv,
     format_program_csv,
     is_serial_robot,
+    load_any_robot,
     load_compliance_truth,
     load_robot,
     load_serial_robot,
+    load_serial_truth,
     load_truth,
     read_calibration,
     read_loaded_plan,
@@ -43,7 +46,7 @@ from ..files import (
     write_json,
 )
 from ..formats import format_reference
-from ..models import CompliantArm, FitModel, PlanarArm
+from ..models import CompliantArm, FitModel, PlanarArm, SpatialArm
 from ..progress import ProgressBar
 from ..report import (
     compensation_report,
@@ -105,7 +108,7 @@ REQUIREMENT_OPTIONS = {
 }
 
 
-def _model(args: argparse.Namespace, spec: RobotSpec) -> PlanarArm:
+def _model(args: argparse.Namespace, spec: RobotSpec | SerialSpec) -> PlanarArm | SpatialArm:
     """The robot's arm with ``--fix`` (replacing the file's set) and ``--sigma`` applied."""
     fixed = getattr(args, "fix", None)
     try:
@@ -114,9 +117,18 @@ def _model(args: argparse.Namespace, spec: RobotSpec) -> PlanarArm:
         raise ArmcalError(f"--fix: {exc}") from None
 
 
-def _truth(args: argparse.Namespace, spec: RobotSpec, model: FitModel) -> np.ndarray:
+def _truth(args: argparse.Namespace, spec: RobotSpec | SerialSpec, model: FitModel) -> np.ndarray:
     """The parameters of the virtual robot ``model`` (a plan's, with the plan's loads):
     ``--truth``, with compliance for a model of joint compliance, else the built-in's."""
+    if isinstance(spec, SerialSpec):  # a truth file of the spatial family
+        path = args.truth if args.truth is not None else spec.default_truth
+        if path is None:
+            raise ArmcalError(
+                f"{spec.source}: a robot file has no default truth; pass --truth truth.toml "
+                "(robot = the true arm's file, base = the instrument's pose, [errors], "
+                "[targets]; armcal formats)"
+            )
+        return load_serial_truth(path, model.arm)
     if isinstance(model, CompliantArm):
         if args.truth is None:
             keys = ", ".join(COMPLIANCE_TRUTH_KEYS[k] for k in dict.fromkeys(model.kinds))
@@ -136,14 +148,14 @@ def _truth(args: argparse.Namespace, spec: RobotSpec, model: FitModel) -> np.nda
     return spec.default_truth
 
 
-def _plan(path: str, spec: RobotSpec) -> tuple[np.ndarray, np.ndarray | None]:
+def _plan(path: str, spec: RobotSpec | SerialSpec) -> tuple[np.ndarray, np.ndarray | None]:
     """A plan file's poses (rad) and, for a robot with [elastostatic], its payload column."""
     if spec.elastic is None:
         return read_plan(path, spec.arm), None
     return read_loaded_plan(path, spec.arm)
 
 
-def _test_poses(args: argparse.Namespace, spec: RobotSpec) -> np.ndarray:
+def _test_poses(args: argparse.Namespace, spec: RobotSpec | SerialSpec) -> np.ndarray:
     """``--test-poses``, else 1000 uniform poses within the limits (:func:`test_poses`)."""
     return test_poses(spec, args.seed, args.test_poses)
 
@@ -167,7 +179,7 @@ def synthesize(args: argparse.Namespace) -> None:
             f"-o {args.output}: synthesize writes measurements as a CSV table (--json changes "
             "only the summary on stdout); give a name ending in .csv"
         )
-    spec = load_robot(args.robot)
+    spec = load_any_robot(args.robot)
     q, payload = _plan(args.plan, spec)
     model, loads = plan_model(spec, spec.arm, q.shape[0], payload, virtual=True)
     truth = _truth(args, spec, model)
@@ -307,7 +319,7 @@ def design(args: argparse.Namespace) -> None:
 
 def evaluate(args: argparse.Namespace) -> None:
     """``armcal evaluate``: a plan's quality."""
-    spec = load_robot(args.robot)
+    spec = load_any_robot(args.robot)
     arm = _model(args, spec)
     q, payload = _plan(args.plan, spec)
     run = evaluate_file(
@@ -318,7 +330,7 @@ def evaluate(args: argparse.Namespace) -> None:
 
 def simulate(args: argparse.Namespace) -> None:
     """``armcal simulate``: a Monte Carlo of a plan."""
-    spec = load_robot(args.robot)
+    spec = load_any_robot(args.robot)
     arm = _model(args, spec)
     q, payload = _plan(args.plan, spec)
     model, loads = plan_model(spec, arm, q.shape[0], payload)
@@ -345,7 +357,7 @@ def simulate(args: argparse.Namespace) -> None:
 
 def poses_needed(args: argparse.Namespace) -> None:
     """``armcal poses-needed``: the smallest plan that reaches an accuracy."""
-    spec = load_robot(args.robot)
+    spec = load_any_robot(args.robot)
     arm = _model(args, spec) if spec.elastic is None else spec.arm
     requirement = next(key for key in REQUIREMENT_OPTIONS if getattr(args, key) is not None)
     found, seconds = size_plan(
@@ -358,7 +370,7 @@ def poses_needed(args: argparse.Namespace) -> None:
         max_poses=args.max_poses,
         progress=ProgressBar("poses-needed"),
     )
-    document, lines = poses_needed_summary(found, arm, seconds)
+    document, lines = poses_needed_summary(found, found.model or arm, seconds)
     if args.output is not None:
         atomic_write(args.output, format_plan_csv(found.plan, found.payload_kg))
         lines.append(f"wrote {args.output}")

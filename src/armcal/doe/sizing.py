@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from typing import Literal
 
@@ -13,7 +13,7 @@ from ..criteria import position_rms, predicted_std
 from ..errors import ArmcalError
 from ..models import FitModel, Loads, equations_per_pose
 from ..progress import ProgressCallback
-from .designer import Design, design
+from .designer import design
 from .loads import design_with_loads
 from .order import order_poses
 from .plans import random_plan
@@ -111,6 +111,8 @@ class PosesNeeded:
     payload_kg : ndarray, shape (poses,), optional
         Every pose's payload, for a model whose points depend on the load (the
         design chooses them with the poses, :func:`armcal.doe.design_with_loads`).
+    model : FitModel, optional
+        The model the plan fits (its identifiable set).
     """
 
     requirement: str
@@ -123,17 +125,45 @@ class PosesNeeded:
     plan: np.ndarray
     evaluated: dict[int, float]
     payload_kg: np.ndarray | None = None
+    model: FitModel | None = None
+
+
+#: Random plans drawn per size by ``plans="random"``; the most accurate is kept.
+RANDOM_PLANS = 20
+
+
+@dataclass(frozen=True, eq=False)
+class _Plan:
+    """A plan of one size: its poses, the model it fits, how it was made, its loads."""
+
+    q: np.ndarray
+    model: FitModel
+    method: str
+    payload_kg: np.ndarray | None = None
+    loads: Loads | None = None
 
 
 def _best_plan(
-    model: FitModel, m: int, rng: np.random.Generator, payloads: Sequence[float] | None
-) -> tuple[Design, Loads | None]:
-    """The best ``m``-pose plan, and its loads where the design chooses the payloads."""
+    model: FitModel,
+    m: int,
+    rng: np.random.Generator,
+    payloads: Sequence[float] | None,
+    metric: Callable[[FitModel, np.ndarray, Loads | None], float],
+    plans: str,
+) -> _Plan:
+    """The best ``m``-pose plan (designed, or the most accurate of :data:`RANDOM_PLANS`
+    uniform in the limits), with its loads where the design chooses the payloads."""
+    if plans == "random":
+        drawn = [random_plan(model, m, rng=rng) for _ in range(RANDOM_PLANS)]
+        best = min(drawn, key=lambda q: metric(model, q, None))
+        return _Plan(best, model, f"random (the best of {RANDOM_PLANS})")
     if model.design_loads(payloads) is None:
-        return design(model, m, rng=rng, with_certificate=False, order="none"), None
+        made = design(model, m, rng=rng, with_certificate=False, order="none")
+        return _Plan(made.q, made.model, made.method)
     made = design_with_loads(model, m, payloads=payloads, rng=rng, order="none")
     assert made.payload_kg is not None
-    return made, Loads.create(m, made.payload_kg)
+    loads = Loads.create(m, made.payload_kg)
+    return _Plan(made.q, made.model, made.method, made.payload_kg, loads)
 
 
 def poses_needed(
@@ -146,6 +176,7 @@ def poses_needed(
     test_q: np.ndarray | None = None,
     max_poses: int = 5000,
     payloads: Sequence[float] | None = None,
+    plans: Literal["designed", "random"] = "designed",
     progress: ProgressCallback | None = None,
 ) -> PosesNeeded:
     """The smallest ``m`` whose best plan (:func:`armcal.doe.design`) reaches ``goal``.
@@ -169,6 +200,10 @@ def poses_needed(
         For a model whose points depend on the load (joint compliance): the
         payloads (kg) a pose may carry, chosen with the poses
         (:func:`armcal.doe.design_with_loads`); default 0 and the model's payload.
+    plans : {"designed", "random"}
+        How the plan of each size is made: designed (:func:`armcal.doe.design`), or
+        the most accurate of :data:`RANDOM_PLANS` uniform in the limits (what
+        measuring random poses needs; the answer for a designed plan is at most it).
     progress : callable, optional
         Called after each size is designed with ``(done, 1000)``: thousandths of
         ``tried / (tried + left)``, never decreasing, ``left`` the designs the
@@ -231,22 +266,24 @@ def poses_needed(
     chosen = model.design_loads(payloads)
     fitted = model if chosen is None else chosen[0]  # what a plan of poses and loads fits
     min_poses = -(-fitted.n_free // equations_per_pose(model))
-    plans: dict[int, tuple[Design, float]] = {}
+    found: dict[int, tuple[_Plan, float]] = {}
+
+    def metric(fitted: FitModel, q: np.ndarray, loads: Loads | None) -> float:
+        return accuracy_metric(fitted, q, requirement, sigma, test_q, loads=loads)
 
     low: int | None = None  # while bisecting: the largest size known not to reach
     shown = 0  # thousandths of the search reported, never going back
 
     def best(size: int) -> float:
         nonlocal shown
-        if size not in plans:
-            made, loads = _best_plan(model, size, rng, payloads)
-            value = accuracy_metric(made.model, made.q, requirement, sigma, test_q, loads=loads)
-            plans[size] = (made, value)
+        if size not in found:
+            made = _best_plan(model, size, rng, payloads, metric, plans)
+            found[size] = (made, metric(made.model, made.q, made.loads))
             if progress is not None:  # designs left: 2 while jumping, then log2 of the span
                 left = 2 if low is None else max(m - low - 1, 1).bit_length()
-                shown = max(shown, 1000 * len(plans) // (len(plans) + left))
+                shown = max(shown, 1000 * len(found) // (len(found) + left))
                 progress(shown, 1000)
-        return plans[size][1]
+        return found[size][1]
 
     def reaches(size: int) -> bool:
         return best(size) <= goal * (1 + REQUIREMENT_RTOL)
@@ -285,7 +322,7 @@ def poses_needed(
         middle = (low + m) // 2
     if progress is not None:
         progress(1000, 1000)
-    made, achieved = plans[m]
+    made, achieved = found[m]
     order = order_poses(made.q)  # only the plan kept is ordered: the order changes no accuracy
     return PosesNeeded(
         requirement=requirement,
@@ -296,6 +333,7 @@ def poses_needed(
         previous=best(m - 1) if m > min_poses else math.inf,
         method=made.method,
         plan=made.q[order],
-        evaluated={key: value[1] for key, value in sorted(plans.items())},
+        evaluated={key: value[1] for key, value in sorted(found.items())},
         payload_kg=None if made.payload_kg is None else made.payload_kg[order],
+        model=made.model,
     )

@@ -33,6 +33,7 @@ from .serial import (
     BUILTIN_SERIAL_ROBOTS,
     SerialSpec,
     is_serial_robot,
+    load_any_robot,
     load_serial_robot,
     load_serial_truth,
 )
@@ -78,6 +79,7 @@ __all__ = [
     "format_plan_csv",
     "format_program_csv",
     "is_serial_robot",
+    "load_any_robot",
     "load_compliance_truth",
     "load_robot",
     "load_serial_robot",

@@ -26,17 +26,18 @@ from typing import Any
 
 import numpy as np
 
-from ..errors import InputError
+from ..errors import ArmcalWarning, InputError
 from ..models import MdhTable, SerialChain, SpatialArm, rpy_matrix, transform
 from ..noise import NoiseModel
 from .common import check_keys, fail, load_toml, number, numbers, suggest
-from .robots import SIGMA_RANGE_MM, fixed_parameters
+from .robots import SIGMA_RANGE_MM, RobotSpec, fixed_parameters, load_robot
 from .urdf import read_urdf
 
 __all__ = [
     "BUILTIN_SERIAL_ROBOTS",
     "SerialSpec",
     "is_serial_robot",
+    "load_any_robot",
     "load_serial_robot",
     "load_serial_truth",
 ]
@@ -69,11 +70,16 @@ class SerialSpec:
         The built-in name or the file it came from.
     default_truth : Path or None
         The built-in robot's truth file (a virtual arm), None for robot files.
+    warnings, elastic, gravity_3d
+        As :class:`~armcal.files.robots.RobotSpec`'s: none for a spatial arm.
     """
 
     arm: SpatialArm
     source: str
     default_truth: Path | None = None
+    warnings: tuple[ArmcalWarning, ...] = ()
+    elastic: None = None  # as RobotSpec's: no joint compliance for spatial arms yet
+    gravity_3d: None = None
 
 
 def is_serial_robot(name_or_path: str | os.PathLike) -> bool:
@@ -113,6 +119,14 @@ def load_serial_robot(
         found = read_urdf(path, None, tip_link)
         return SerialSpec(SpatialArm(found.chain, found.robot), key)
     return _from_toml(path, None, tip_link)
+
+
+def load_any_robot(name_or_path: str | os.PathLike) -> RobotSpec | SerialSpec:
+    """A planar robot (:func:`~armcal.files.robots.load_robot`) or a spatial one
+    (:func:`load_serial_robot`), whichever ``name_or_path`` names."""
+    if is_serial_robot(name_or_path):
+        return load_serial_robot(name_or_path)
+    return load_robot(name_or_path)
 
 
 def _chain(path: Path, data: dict, tip_link: str | None) -> tuple[SerialChain, str]:

@@ -523,7 +523,7 @@ def _refuse_radians(path, what: str, q_deg: np.ndarray, limits_deg: np.ndarray) 
     )
 
 
-def read_plan(path: str | os.PathLike, arm: PlanarArm) -> np.ndarray:
+def read_plan(path: str | os.PathLike, arm: PlanarArm | SpatialArm) -> np.ndarray:
     """Read a plan CSV (header ``q1_deg,...,qn_deg``) for ``arm``.
 
     Returns
@@ -542,7 +542,7 @@ def read_plan(path: str | os.PathLike, arm: PlanarArm) -> np.ndarray:
 
 
 def read_loaded_plan(
-    path: str | os.PathLike, arm: PlanarArm
+    path: str | os.PathLike, arm: PlanarArm | SpatialArm
 ) -> tuple[np.ndarray, np.ndarray | None]:
     """Read a plan CSV with an optional ``payload_kg`` column (designs with compliance).
 
@@ -580,7 +580,7 @@ class Program:
 
 
 def read_program(
-    path: str | os.PathLike, arm: PlanarArm, *, arm_from: str | None = None
+    path: str | os.PathLike, arm: PlanarArm | SpatialArm, *, arm_from: str | None = None
 ) -> Program:
     """Read a program CSV: ``q1_deg..qn_deg``; optional ``pose``, ``target`` and load columns.
 

@@ -200,7 +200,8 @@ def solve(
         params = _initial(model, conditions, sets, weights, tol, max_iter)
     else:
         params = np.broadcast_to(np.asarray(start, dtype=float), (sets.shape[0], model.n_params))
-    return gauss_newton(model, conditions, sets, params * model.free, weights, threshold, max_iter)
+    params = np.where(model.free, params, model.held_values)  # held ones where they are held
+    return gauss_newton(model, conditions, sets, params, weights, threshold, max_iter)
 
 
 def _initial(

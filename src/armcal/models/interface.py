@@ -417,6 +417,12 @@ class FitModel(Protocol):
         ...
 
     @property
+    def held_values(self) -> np.ndarray:
+        """``(p,)``: the values the parameters that are not free keep (0, a deviation, for
+        the planar families; the nominal base pose and targets for the spatial arm)."""
+        ...
+
+    @property
     def free_names(self) -> tuple[str, ...]: ...
     @property
     def n_params(self) -> int: ...
@@ -615,6 +621,13 @@ class FitModel(Protocol):
         (the spatial arm) holds what the rows cannot separate, by a fixed rule, and
         says why in :attr:`held_notes`.
         """
+        ...
+
+    def expressed(self, conditions: Conditions, params: np.ndarray) -> np.ndarray:
+        """Parameters of this (prepared) model that put the points of these rows where
+        ``params`` does, its held parameters included: a virtual arm's truth as a fit of
+        its measurements sees it.  A family whose parameters are minimal returns
+        ``params`` as they are."""
         ...
 
     @property

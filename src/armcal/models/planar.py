@@ -334,6 +334,15 @@ class PlanarArm(PlanarArmSpec):
         """Itself: its parameters are minimal and need no placing."""
         return self
 
+    def expressed(self, conditions: Conditions, params: np.ndarray) -> np.ndarray:
+        """``params``: its parameters are minimal."""
+        return np.asarray(params, dtype=float)
+
+    @property
+    def held_values(self) -> np.ndarray:
+        """Zeros: a held deviation is 0."""
+        return np.zeros(self.n_params)
+
     @property
     def held_notes(self) -> tuple[str, ...]:
         return ()

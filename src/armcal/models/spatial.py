@@ -55,6 +55,9 @@ __all__ = [
 #: The label of the one target of data without a target column.
 SINGLE_TARGET = "tool"
 
+#: Gauss-Newton steps at most of :meth:`SpatialArm.expressed` (it converges in a few).
+_EXPRESS_STEPS = 30
+
 #: Where targets without a nominal position are thought to be before any data: this
 #: far beyond the flange (mm), on a circle of this radius about the last joint's axis
 #: (a target on that axis would not see the joint turn).
@@ -293,6 +296,11 @@ class SpatialArm:
     @property
     def point_dim(self) -> int:
         return 3
+
+    @property
+    def sigma(self) -> float | None:
+        """Reference instrument noise (1 std, mm) of :attr:`noise`, or None."""
+        return None if self.noise is None else self.noise.sigma_mm
 
     @cached_property
     def reach_mm(self) -> float:
@@ -550,6 +558,28 @@ class SpatialArm:
             if not kept and n not in arm.user_fixed
         )
         return replace(arm, held=held, merges=chosen.merges)
+
+    def expressed(self, conditions: Conditions, params: np.ndarray) -> np.ndarray:
+        """The free parameters that reproduce ``params``' points at these rows, the held
+        ones at their nominal values: Gauss-Newton from ``params`` (each merge is an exact
+        symmetry of the kinematics, so the points are reproduced to round-off)."""
+        goal = self.positions(conditions, params)
+        free = self.free
+        out = np.where(free, np.asarray(params, dtype=float), self.nominal)
+        tol = 1e-12 * self.reach_mm
+        for _ in range(_EXPRESS_STEPS):
+            miss = (goal - self.positions(conditions, out)).reshape(-1)
+            jac = self.jacobian(conditions, out)[..., free].reshape(miss.size, -1)
+            step, *_ = np.linalg.lstsq(jac, miss, rcond=None)
+            out[free] += step
+            if np.max(np.abs(jac @ step), initial=0.0) <= tol:
+                break
+        return out
+
+    @property
+    def held_values(self) -> np.ndarray:
+        """The nominal parameters: held errors at 0, a held base or target where it is."""
+        return self.nominal
 
     @property
     def held_notes(self) -> tuple[str, ...]:

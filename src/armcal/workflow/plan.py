@@ -16,14 +16,17 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..criteria import PlanQuality, evaluate_plan
-from ..doe import Design, PosesNeeded, design, design_with_loads, poses_needed
+from ..doe import Design, PosesNeeded, design, design_with_loads, poses_needed, random_plan
 from ..errors import ArmcalError, ArmcalWarning, NotIdentifiableError
-from ..files import RobotSpec
-from ..models import FitModel, Loads, PlanarArm
+from ..files import RobotSpec, SerialSpec
+from ..models import FitModel, Loads, PlanarArm, SpatialArm
 from ..progress import ProgressCallback
 from ..simulate import MonteCarlo, monte_carlo
 from ..synthesis import synthesize_measurements
 from .setup import DEFAULT_SIGMA_MM, check_plan_size, design_sigma, fit_model, plan_model, prefixed
+
+#: Poses of the random plan on which a model's identifiable set is chosen for sizing.
+_SET_POSES = 200
 
 __all__ = [
     "DesignRun",
@@ -85,11 +88,12 @@ def synthesize_plan(
         model, rows.q, truth, sigma, rng=seed, target=rows.target, loads=rows.loads
     )
     labels = targets = None
-    if arm.targets:  # every target measured at every pose, one row each
-        count = len(arm.targets)
+    names = arm.target_labels
+    if names:  # every target measured at every pose, one row each
+        count = len(names)
         labels = tuple(str(i // count + 1) for i in range(rows.m))
         index = np.zeros(rows.m, dtype=int) if rows.target is None else rows.target
-        targets = tuple(arm.targets[t].label for t in index)
+        targets = tuple(names[t] for t in index)
     shown = sigma if sigma is not None else float(arm.sigma or 0.0)
     effect = "" if model.effect is None else model.effect.name
     payload_kg = None if rows.loads is None else rows.loads.payload_kg
@@ -104,7 +108,9 @@ class EvaluationRun:
     warnings: tuple[ArmcalWarning, ...]
 
 
-def _outside_warning(spec: RobotSpec, q: np.ndarray, source: str) -> ArmcalWarning | None:
+def _outside_warning(
+    spec: RobotSpec | SerialSpec, q: np.ndarray, source: str
+) -> ArmcalWarning | None:
     """``outside-region`` for the poses of ``q`` the instrument cannot see, or None."""
     outside = np.flatnonzero(~spec.arm.feasible(q))
     if not outside.size:
@@ -117,8 +123,8 @@ def _outside_warning(spec: RobotSpec, q: np.ndarray, source: str) -> ArmcalWarni
 
 
 def evaluate_file(
-    spec: RobotSpec,
-    arm: PlanarArm,
+    spec: RobotSpec | SerialSpec,
+    arm: PlanarArm | SpatialArm,
     q: np.ndarray,
     *,
     test_q: np.ndarray,
@@ -133,6 +139,7 @@ def evaluate_file(
     finite quality).
     """
     model, loads = plan_model(spec, arm, q.shape[0], payload)
+    model = model.prepared(model.plan_conditions(q, loads))
     try:
         quality = evaluate_plan(model, q, sigma=design_sigma(arm), test_q=test_q, loads=loads)
     except NotIdentifiableError as exc:  # PRODUCT.md: an error, exit 2, one line
@@ -163,8 +170,8 @@ class DesignRun:
 
 
 def design_plan(
-    spec: RobotSpec,
-    arm: PlanarArm,
+    spec: RobotSpec | SerialSpec,
+    arm: PlanarArm | SpatialArm,
     poses: int,
     *,
     criterion: str = "D",
@@ -261,6 +268,11 @@ def simulate_plan(
     """
     if test_q is not None and not len(test_q):
         test_q = None
+    # The model for this plan, and the truth as its fit sees it (the same for a family
+    # whose parameters are minimal).
+    rows = model.plan_conditions(q, loads)
+    model = model.prepared(rows, model.positions(rows, truth))
+    truth = model.expressed(rows, truth)
     try:
         return monte_carlo(
             model,
@@ -279,8 +291,8 @@ def simulate_plan(
 
 
 def size_plan(
-    spec: RobotSpec,
-    arm: PlanarArm,
+    spec: RobotSpec | SerialSpec,
+    arm: PlanarArm | SpatialArm,
     requirement: str,
     goal: float,
     *,
@@ -296,14 +308,21 @@ def size_plan(
     of the model with compliance.
     """
     start = time.perf_counter()
+    rng = np.random.default_rng(seed)
+    model = fit_model(spec, arm)
+    # The set a plan that moves every joint identifies (a family with minimal parameters
+    # is itself).
+    model = model.prepared(model.plan_conditions(random_plan(model, _SET_POSES, rng=rng)))
     found = poses_needed(
-        fit_model(spec, arm),
+        model,
         requirement,
         goal,
         sigma=design_sigma(arm),
-        rng=np.random.default_rng(seed),
+        rng=rng,
         test_q=test_q,
         max_poses=max_poses,
+        # Spatial plans are sized on random poses until their optimal design is fast.
+        plans="random" if isinstance(arm, SpatialArm) else "designed",
         progress=progress,
     )
     return found, time.perf_counter() - start

@@ -17,7 +17,7 @@ import numpy as np
 
 from ..doe import random_plan
 from ..errors import ArmcalError, NotIdentifiableError
-from ..files import RobotSpec, read_plan, unknown_parameter
+from ..files import RobotSpec, SerialSpec, read_plan, unknown_parameter
 from ..models import CompliantArm, FitModel, Loads, PlanarArm, SpatialArm
 from ..noise import instrument_override
 
@@ -52,7 +52,7 @@ def prefixed(source: str, exc: ArmcalError) -> ArmcalError:
 
 
 #: A robot file's arm, of either family: what --fix and --sigma apply to.
-Arm = TypeVar("Arm", PlanarArm, SpatialArm)
+Arm = TypeVar("Arm", PlanarArm, SpatialArm, PlanarArm | SpatialArm)
 
 
 def with_fixed(arm: Arm, fixed: Sequence[str]) -> Arm:
@@ -76,7 +76,7 @@ def model_arm(arm: Arm, *, fixed: Sequence[str] | None = None, sigma: float | No
     return arm
 
 
-def simulation_sigma(spec: RobotSpec, sigma: float | None) -> float | None:
+def simulation_sigma(spec: RobotSpec | SerialSpec, sigma: float | None) -> float | None:
     """The noise a simulation draws: ``sigma``, else None (the robot file's whole noise
     model, shape and encoders), else :data:`DEFAULT_SIGMA_MM`."""
     if sigma is not None:
@@ -84,13 +84,17 @@ def simulation_sigma(spec: RobotSpec, sigma: float | None) -> float | None:
     return None if spec.arm.noise is not None else DEFAULT_SIGMA_MM
 
 
-def design_sigma(arm: PlanarArm) -> float:
+def design_sigma(arm: PlanarArm | SpatialArm) -> float:
     """The reference noise of a model arm (:func:`model_arm`), else :data:`DEFAULT_SIGMA_MM`."""
     return arm.sigma if arm.sigma is not None else DEFAULT_SIGMA_MM
 
 
 def fit_model(
-    spec: RobotSpec, arm: PlanarArm, loads: Loads | None = None, *, virtual: bool = False
+    spec: RobotSpec | SerialSpec,
+    arm: PlanarArm | SpatialArm,
+    loads: Loads | None = None,
+    *,
+    virtual: bool = False,
 ) -> FitModel:
     """The model a robot file describes: the arm, or with ``[elastostatic]`` its compliant
     arm for data with ``loads`` (the robot file's payload when omitted): the one place
@@ -103,7 +107,7 @@ def fit_model(
 
     Raises ArmcalError, naming the robot file, when nothing would twist the joints.
     """
-    if spec.elastic is None:
+    if spec.elastic is None or not isinstance(arm, PlanarArm):
         return arm
     loads = Loads.create(1, spec.elastic.payload_kg) if loads is None else loads
     try:
@@ -113,8 +117,8 @@ def fit_model(
 
 
 def plan_model(
-    spec: RobotSpec,
-    arm: PlanarArm,
+    spec: RobotSpec | SerialSpec,
+    arm: PlanarArm | SpatialArm,
     m: int,
     payload: np.ndarray | None = None,
     *,
@@ -162,7 +166,7 @@ def check_plan_size(poses: int, memory: int | None = None) -> None:
     )
 
 
-def test_poses(spec: RobotSpec, seed: int, path: str | None = None) -> np.ndarray:
+def test_poses(spec: RobotSpec | SerialSpec, seed: int, path: str | None = None) -> np.ndarray:
     """Poses where positioning accuracy matters: the plan file ``path``, else 1000 uniform
     in the limits (seeded by ``seed``).
 

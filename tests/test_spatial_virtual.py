@@ -1,0 +1,135 @@
+"""Virtual spatial arms: synthesize, evaluate, simulate and poses-needed on the built-ins.
+
+The Monte Carlo criterion is the contract's (the issue: empirical std within 5 %
+of the predicted std at 2000 trials or more).  With N trials an empirical std has
+a relative standard error of ``1 / sqrt(2 (N - 1))``: 1.1 % at 4000 trials, so
+5 % is more than four standard errors and a correct prediction passes.
+"""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+from armcal.doe import random_plan
+from armcal.files import load_serial_robot, load_serial_truth
+from armcal.files.serial import ROBOT_FOLDER
+from armcal.identification import identify
+from armcal.workflow import simulate_plan
+from helpers import run_cli
+
+ROBOTS = ("industrial-6r", "cobot-6r", "arm-7r")
+
+
+def _plan_file(tmp_path, robot, m=30, seed=1):
+    arm = load_serial_robot(robot).arm
+    q = random_plan(arm, m, rng=seed)
+    head = ",".join(f"q{k + 1}_deg" for k in range(arm.n_joints))
+    rows = [",".join(repr(float(v)) for v in np.degrees(row)) for row in q]
+    (tmp_path / "plan.csv").write_text("\n".join([head, *rows]) + "\n", encoding="utf-8")
+    return arm, q
+
+
+@pytest.mark.parametrize("robot", ROBOTS)
+def test_the_built_in_truths_are_virtual_arms_with_every_error(robot):
+    spec = load_serial_robot(robot)
+    truth = load_serial_truth(spec.default_truth, spec.arm)
+    errors = truth[~spec.arm.instrument_params]
+    # Every placement error and zero is set, each 0.1-0.5 mm or 0.01-0.05 deg (the file).
+    shown = np.abs(errors * spec.arm.display_scale[~spec.arm.instrument_params])
+    assert np.all((shown >= 0.01) & (shown <= 0.5))
+    assert np.linalg.norm(truth[:3]) > 1000.0  # a tracker metres away
+
+
+def test_synthesize_then_identify_recovers_the_built_in_truth(tmp_path):
+    _plan_file(tmp_path, "cobot-6r")
+    result = run_cli(
+        tmp_path, "synthesize", "--robot", "cobot-6r", "--plan", "plan.csv", "--sigma", "0",
+        "-o", "meas.csv",
+    )  # fmt: skip
+    assert result.returncode == 0, result.stderr
+    result = run_cli(
+        tmp_path, "identify", "--robot", "cobot-6r", "--measurements", "meas.csv", "--json"
+    )
+    assert result.returncode == 0, result.stderr
+    document = json.loads(result.stdout)
+    # Noiseless: the fit reproduces the virtual arm's points to round-off (the file has
+    # 17 significant digits).
+    assert document["residual_rms_mm"] < 1e-9
+    assert document["poses"] == 30
+
+
+def test_evaluate_and_simulate_a_plan_from_the_command_line(tmp_path):
+    _plan_file(tmp_path, "industrial-6r", m=40)
+    result = run_cli(
+        tmp_path, "evaluate", "--robot", "industrial-6r", "--plan", "plan.csv", "--sigma",
+        "0.03", "--json",
+    )  # fmt: skip
+    assert result.returncode == 0, result.stderr
+    quality = json.loads(result.stdout)
+    assert 0.0 < quality["predicted_position_rms_mm"] < 0.03
+    result = run_cli(
+        tmp_path, "simulate", "--robot", "industrial-6r", "--plan", "plan.csv", "--sigma",
+        "0.03", "--trials", "300", "--json",
+    )  # fmt: skip
+    assert result.returncode == 0, result.stderr
+    sim = json.loads(result.stdout)
+    # The same set, and the robot's predicted std as evaluate's: they do not depend on
+    # where the instrument stands; the truth's errors (a few tenths of a mm against metres)
+    # change the Jacobian by 1e-3 or less.
+    assert sim["predicted_std"].keys() == quality["predicted_std"].keys()
+    for name, value in quality["predicted_std"].items():
+        if name.startswith(("j", "dq")):
+            assert sim["predicted_std"][name] == pytest.approx(value, rel=1e-2)
+
+
+def test_poses_needed_finds_the_smallest_random_plan_that_reaches(tmp_path):
+    result = run_cli(
+        tmp_path, "poses-needed", "--robot", "industrial-6r", "--position-rms-mm", "0.03",
+        "--sigma", "0.03", "--json", "-o", "plan.csv",
+    )  # fmt: skip
+    assert result.returncode == 0, result.stderr
+    found = json.loads(result.stdout)
+    m = found["poses"]
+    # At least the identifiable count's worth of equations (27 parameters, 3 per pose).
+    assert m >= 9
+    result = run_cli(
+        tmp_path, "evaluate", "--robot", "industrial-6r", "--plan", "plan.csv", "--sigma",
+        "0.03", "--json",
+    )  # fmt: skip
+    assert json.loads(result.stdout)["poses"] == m
+
+
+def test_a_held_reflector_keeps_the_robot_file_s_position(tmp_path):
+    """--fix A.z holds A at the robot file's 340 mm, not at 0."""
+    urdf = ROBOT_FOLDER / "industrial-6r.urdf"
+    robot = tmp_path / "robot.toml"
+    robot.write_text(
+        f"urdf = {json.dumps(str(urdf))}\n[targets]\nA = {{ xyz_mm = [0, 0, 340] }}\n",
+        encoding="utf-8",
+    )
+    arm = load_serial_robot(robot).arm
+    truth = arm.nominal.copy()
+    truth[:3] = [2500.0, 1000.0, -300.0]
+    cond = arm.plan_conditions(random_plan(arm, 30, rng=2))
+    points = arm.positions(cond, truth)
+    cal = identify(arm.with_fixed(["A.z"]), cond.q, points, target=cond.target)
+    assert cal.params[arm.param_names.index("A.z")] == pytest.approx(340.0, abs=1e-9)
+    assert cal.residual_rms < 1e-9
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("robot", ROBOTS)
+def test_monte_carlo_agrees_with_the_predicted_std(robot):
+    spec = load_serial_robot(robot)
+    arm = spec.arm.with_noise(None)
+    truth = load_serial_truth(spec.default_truth, arm)
+    q = random_plan(arm, 40, rng=5)
+    result = simulate_plan(arm, q, truth, trials=4000, seed=1)
+    free = result.model.free
+    ratio = result.std[free] / result.predicted_std[free]
+    assert np.all(np.abs(ratio - 1.0) < 0.05), ratio
+    # Unbiased to first order: every mean within 4 standard errors of the truth.
+    assert np.all(np.abs(result.bias[free]) <= result.bias_limit[free])
