@@ -79,6 +79,7 @@ from .models import (
     Target,
     standard_joint_map,
 )
+from .numerics import box_image
 
 __all__ = [
     "folded_arm",
@@ -382,10 +383,7 @@ def _urdf_limits(arm: PlanarArm) -> np.ndarray:
     """
     if urdf_joints_are_readings(arm):
         return np.array(arm.joint_limits)
-    relative = urdf_joint_matrix(arm)
-    lo = relative * arm.joint_limits[:, 0]
-    hi = relative * arm.joint_limits[:, 1]
-    return np.column_stack([np.minimum(lo, hi).sum(axis=1), np.maximum(lo, hi).sum(axis=1)])
+    return box_image(urdf_joint_matrix(arm), arm.joint_limits)
 
 
 def _triple(x: float, y: float, z: float) -> str:

@@ -51,6 +51,7 @@ from .export_text import (
     xml_name,
 )
 from .models import CalibratedArm, SpatialArm, matrix_rpy, mdh_table
+from .numerics import box_image
 
 __all__ = [
     "joint_offsets_csv",
@@ -102,10 +103,9 @@ def _comments(cal: CalibratedArm, what: str) -> list[str]:
 def _limits_on_values(arm: SpatialArm) -> np.ndarray:
     """Limits of the URDF's joint values ``u = M q``: the chain's, within the range of
     ``M q`` over the readings' limits."""
-    low = arm.joint_map * arm.limits[:, 0]
-    high = arm.joint_map * arm.limits[:, 1]
-    lo = np.maximum(arm.chain.joint_limits[:, 0], np.minimum(low, high).sum(axis=1))
-    hi = np.minimum(arm.chain.joint_limits[:, 1], np.maximum(low, high).sum(axis=1))
+    reached = box_image(arm.joint_map, arm.limits)
+    lo = np.maximum(arm.chain.joint_limits[:, 0], reached[:, 0])
+    hi = np.minimum(arm.chain.joint_limits[:, 1], reached[:, 1])
     return np.column_stack([lo, hi])
 
 

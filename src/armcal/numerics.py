@@ -37,6 +37,7 @@ __all__ = [
     "RANK_RTOL",
     "LinearLeastSquares",
     "ScaledSVD",
+    "box_image",
     "factor_least_squares",
     "gram_of_factor",
     "log_det",
@@ -460,3 +461,20 @@ def point_norms(points: np.ndarray) -> np.ndarray:
     if points.shape[-1] == 2:
         return np.hypot(points[..., 0], points[..., 1])
     return np.linalg.norm(points, axis=-1)
+
+
+def box_image(matrix: np.ndarray, box: np.ndarray) -> np.ndarray:
+    """``[lower, upper]`` ``(k, 2)`` of every ``(A x)_i`` over the box ``box`` ``(n, 2)``.
+
+    Each coordinate of a linear map is a sum of terms ``A_ij x_j``, each at its
+    smallest (largest) at one end of ``x_j``'s interval.
+
+    Examples
+    --------
+    >>> box_image(np.array([[1.0, 1.0], [0.0, -1.0]]), np.array([[-1.0, 2.0], [0.0, 3.0]]))
+    array([[-1.,  5.],
+           [-3.,  0.]])
+    """
+    low = matrix * box[:, 0]
+    high = matrix * box[:, 1]
+    return np.column_stack([np.minimum(low, high).sum(axis=1), np.maximum(low, high).sum(axis=1)])

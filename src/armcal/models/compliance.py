@@ -57,6 +57,7 @@ from numpy.typing import ArrayLike
 from ..errors import ArmcalError, ArmcalWarning, NotIdentifiableError, action
 from ..noise import NoiseModel
 from ..numerics import ScaledSVD
+from .defaults import MinimalPlanar
 from .identifiability import Identifiability, listing
 from .information import (
     BlockInformation,
@@ -66,7 +67,6 @@ from .information import (
 )
 from .interface import Conditions, Effect, LinearPositions, Loads
 from .planar import PlanarArm
-from .planar_geometry import wrap_angle
 from .planar_kinematics import (
     forward_kinematics,
     jacobian,
@@ -188,7 +188,7 @@ class Elastostatic:
 
 
 @dataclass(frozen=True, eq=False)
-class CompliantArm:
+class CompliantArm(MinimalPlanar):
     """A planar arm whose joints twist under load: geometry plus joint compliance.
 
     The parameter vector is the arm's user deviations followed by the
@@ -601,23 +601,6 @@ class CompliantArm:
 
     # -- analysis -----------------------------------------------------------------------
 
-    def prepared(self, conditions: Conditions, points: np.ndarray | None = None) -> CompliantArm:
-        """Itself: its parameters are minimal and need no placing."""
-        return self
-
-    def expressed(self, conditions: Conditions, params: np.ndarray) -> np.ndarray:
-        """``params``: its parameters are minimal."""
-        return np.asarray(params, dtype=float)
-
-    @property
-    def held_values(self) -> np.ndarray:
-        """Zeros: a held deviation is 0."""
-        return np.zeros(self.n_params)
-
-    @property
-    def held_notes(self) -> tuple[str, ...]:
-        return ()
-
     def identifiability(self, conditions: Conditions) -> tuple[Identifiability, ScaledSVD]:
         return compliance_identifiability(self, conditions)
 
@@ -704,10 +687,6 @@ class CompliantArm:
         geometry, _, bend = self._bent(conditions, params)
         angle = tool_angles(self.arm, conditions.q, geometry, target=conditions.target)
         return (angle + np.sum(bend, axis=-1))[..., None]
-
-    def orientation_error(self, orientation: np.ndarray, reference: np.ndarray) -> np.ndarray:
-        """The difference of the tool's directions, wrapped into ``(-pi, pi]``."""
-        return wrap_angle(np.asarray(orientation) - np.asarray(reference))
 
     def orientation_joint_jacobian(
         self, conditions: Conditions, params: np.ndarray | None = None

@@ -20,6 +20,7 @@ from ..errors import ArmcalWarning
 from ..noise import NoiseModel
 from ..numerics import ScaledSVD
 from . import planar_design
+from .defaults import MinimalPlanar, RigidLoads
 from .identifiability import Identifiability
 from .interface import Conditions, LinearPositions, Loads, PaperCriteria
 from .planar_arm import PlanarArmSpec
@@ -61,7 +62,7 @@ __all__ = [
 INSTRUMENT_PARAMS = ("x0", "y0", "phi0")
 
 
-class PlanarArm(PlanarArmSpec):
+class PlanarArm(RigidLoads, MinimalPlanar, PlanarArmSpec):
     """Nominal geometry of a planar serial arm and what is identified.
 
     Attributes
@@ -171,23 +172,6 @@ class PlanarArm(PlanarArmSpec):
     def with_fixed(self, fixed: Sequence[str]) -> PlanarArm:
         """The same arm with other parameters held fixed."""
         return self.replace(fixed=tuple(fixed))
-
-    @property
-    def default_payload_kg(self) -> None:
-        """A rigid arm's points do not depend on its load."""
-        return None
-
-    def unpredicted_loads(self, loads: Loads) -> None:
-        """A rigid arm's points do not depend on its load: nothing to predict."""
-        return None
-
-    @property
-    def uses_gravity(self) -> bool:
-        """A rigid arm's points do not depend on gravity."""
-        return False
-
-    def with_gravity(self, gravity: np.ndarray | None) -> PlanarArm:
-        return self
 
     # -- measurement --------------------------------------------------------------------
 
@@ -330,23 +314,6 @@ class PlanarArm(PlanarArmSpec):
             (self, "plan-svd"), lambda: plan_svd(self, conditions.q, conditions.target)
         )
 
-    def prepared(self, conditions: Conditions, points: np.ndarray | None = None) -> PlanarArm:
-        """Itself: its parameters are minimal and need no placing."""
-        return self
-
-    def expressed(self, conditions: Conditions, params: np.ndarray) -> np.ndarray:
-        """``params``: its parameters are minimal."""
-        return np.asarray(params, dtype=float)
-
-    @property
-    def held_values(self) -> np.ndarray:
-        """Zeros: a held deviation is 0."""
-        return np.zeros(self.n_params)
-
-    @property
-    def held_notes(self) -> tuple[str, ...]:
-        return ()
-
     def identifiability(self, conditions: Conditions) -> tuple[Identifiability, ScaledSVD]:
         """Rank of the plan's Hadamard-scaled Jacobian (``planar_information.identifiability``)."""
         svd = self._plan_svd(conditions)
@@ -437,10 +404,6 @@ class PlanarArm(PlanarArmSpec):
     def orientation(self, conditions: Conditions, params: np.ndarray | None = None) -> np.ndarray:
         """The direction ``(..., m, 1)`` of every row's last link vector, rad."""
         return tool_angles(self, conditions.q, params, target=conditions.target)[..., None]
-
-    def orientation_error(self, orientation: np.ndarray, reference: np.ndarray) -> np.ndarray:
-        """The difference of the tool's directions, wrapped into ``(-pi, pi]``."""
-        return wrap_angle(np.asarray(orientation) - np.asarray(reference))
 
     def orientation_joint_jacobian(
         self, conditions: Conditions, params: np.ndarray | None = None

@@ -24,6 +24,7 @@ from numpy.typing import ArrayLike
 from ..errors import ArmcalWarning, NotIdentifiableError
 from ..noise import NoiseModel, relative_noise
 from ..numerics import ScaledSVD, scaled_svd
+from .defaults import RigidLoads
 from .identifiability import Identifiability, listing
 from .information import (
     BlockInformation,
@@ -80,7 +81,7 @@ def default_targets(count: int) -> np.ndarray:
 
 
 @dataclass(frozen=True, eq=False)
-class SpatialArm:
+class SpatialArm(RigidLoads):
     """A spatial serial arm to calibrate.
 
     Attributes
@@ -335,20 +336,6 @@ class SpatialArm:
         """The user's fixed set replaced; the rule's set is chosen again (:meth:`prepared`)."""
         return replace(self, user_fixed=tuple(fixed), held=(), merges=())
 
-    @property
-    def default_payload_kg(self) -> None:
-        return None
-
-    def unpredicted_loads(self, loads: Loads) -> None:
-        return None
-
-    @property
-    def uses_gravity(self) -> bool:
-        return False
-
-    def with_gravity(self, gravity: np.ndarray | None) -> SpatialArm:
-        return self
-
     def target_index(self, labels: Sequence[str]) -> np.ndarray:
         """Indices of ``labels`` among the targets (ValueError for an unknown one)."""
         lookup = {label: i for i, label in enumerate(self.targets)}
@@ -397,17 +384,21 @@ class SpatialArm:
     def positions(self, conditions: Conditions, params: np.ndarray | None = None) -> np.ndarray:
         return self._kinematics(conditions, params).points
 
+    def _derivative(
+        self, conditions: Conditions, params: np.ndarray | None, name: str
+    ) -> np.ndarray:
+        """One of the derivatives of :class:`ChainKinematics` (``jacobian``, ...)."""
+        found = getattr(self._kinematics(conditions, params, derivatives=True), name)
+        assert found is not None
+        return found
+
     def jacobian(self, conditions: Conditions, params: np.ndarray | None = None) -> np.ndarray:
-        jac = self._kinematics(conditions, params, derivatives=True).jacobian
-        assert jac is not None
-        return jac
+        return self._derivative(conditions, params, "jacobian")
 
     def joint_jacobian(
         self, conditions: Conditions, params: np.ndarray | None = None
     ) -> np.ndarray:
-        jac = self._kinematics(conditions, params, derivatives=True).joint_jacobian
-        assert jac is not None
-        return jac
+        return self._derivative(conditions, params, "joint_jacobian")
 
     def pose_covariances(
         self,
@@ -692,17 +683,13 @@ class SpatialArm:
         self, conditions: Conditions, params: np.ndarray | None = None
     ) -> np.ndarray:
         """The tip frame's angular velocity per reading ``(..., m, 3, n)``."""
-        ang = self._kinematics(conditions, params, derivatives=True).tip_angular
-        assert ang is not None
-        return ang
+        return self._derivative(conditions, params, "tip_angular")
 
     def orientation_jacobian(
         self, conditions: Conditions, params: np.ndarray | None = None
     ) -> np.ndarray:
         """The tip frame's angular velocity per parameter ``(..., m, 3, p)``."""
-        ang = self._kinematics(conditions, params, derivatives=True).angular
-        assert ang is not None
-        return ang
+        return self._derivative(conditions, params, "angular")
 
     def in_robot_frame(self, params: np.ndarray) -> tuple[SpatialArm, np.ndarray]:
         out = np.array(params, dtype=float)
