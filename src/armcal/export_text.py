@@ -74,10 +74,13 @@ def one_line(text: str) -> str:
 
 
 def noise_toml(noise: NoiseModel) -> list[str]:
-    """The ``[measurement]`` lines of a noise model: ``sigma_mm`` (one value, or one per axis)
-    or ``covariance_mm2``, and ``joint_sigma_deg``."""
+    """The ``[measurement]`` lines of a noise model: ``sigma_mm`` (one value, or one per axis),
+    ``covariance_mm2`` or a laser ``tracker``'s terms, and ``joint_sigma_deg``."""
     cov = noise.covariance_mm2
-    if np.count_nonzero(cov - np.diag(np.diagonal(cov))) == 0:
+    if noise.tracker is not None:
+        terms = ", ".join(f"{k} = {num(v)}" for k, v in noise.tracker.to_dict().items())
+        lines = [f"tracker = {{ {terms} }}"]
+    elif np.count_nonzero(cov - np.diag(np.diagonal(cov))) == 0:
         sigma = np.sqrt(np.diagonal(cov))
         lines = [f"sigma_mm = {num(sigma[0]) if np.all(sigma == sigma[0]) else nums(sigma)}"]
     else:

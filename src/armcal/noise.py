@@ -11,7 +11,12 @@ joint encoders may add noise ``sigma_q`` (rad, per joint): the arm was really at
 with ``J_q = d tip / d q`` at the current deviations (the user Jacobian's
 ``dq`` columns: a joint offset and an encoder error move the tip alike).
 An instrument that reports each point's uncertainty replaces ``Sigma_meas`` by
-``s_i^2 I`` row by row.
+``s_i^2 I`` row by row.  A laser tracker's noise depends on where the point is
+(:class:`TrackerNoise`): along the line of sight from the tracker's origin its
+range uncertainty, across it its angular uncertainty times the distance, each
+of the data-sheet form "a constant plus a term per metre", so
+``Sigma_meas(p) = s_r(d)^2 u u^T + s_t(d)^2 (I - u u^T)`` with ``d = |p|`` and
+``u = p / d`` (``p`` in the instrument's frame).
 
 The noise knows nothing of arms: the model gives ``J_q`` (its joint Jacobian)
 where the encoder term is needed.  Everything downstream sees the noise
@@ -33,10 +38,76 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 __all__ = [
+    "TRACKER_REFERENCE_MM",
     "NoiseModel",
+    "TrackerNoise",
     "instrument_override",
     "relative_noise",
 ]
+
+
+#: The distance (mm) at which a laser tracker's reference noise (:attr:`NoiseModel.sigma_mm`)
+#: is stated: 1 m, the unit of the data sheets' distance terms.
+TRACKER_REFERENCE_MM = 1000.0
+
+
+@dataclass(frozen=True)
+class TrackerNoise:
+    """A laser tracker's noise, seen from its origin (1 std, mm).
+
+    Along the line of sight the range (ADM or interferometer) uncertainty
+    ``s_r = range_mm + range_mm_per_m * d``, across it the angular
+    encoders' ``s_t = transverse_mm + transverse_mm_per_m * d``, at distance
+    ``d`` (m) from the tracker: the form data sheets give.  Data sheets often
+    quote maximum permissible errors, about 2 std: halve them.
+
+    Examples
+    --------
+    >>> tracker = TrackerNoise(0.008, 0.0004, 0.010, 0.0025)
+    >>> cov = tracker.covariances(np.array([[0.0, 0.0, 4000.0]]))[0]
+    >>> np.sqrt(np.diagonal(cov)).round(6).tolist()  # across, across, along the sight
+    [0.02, 0.02, 0.0096]
+    """
+
+    range_mm: float
+    range_mm_per_m: float
+    transverse_mm: float
+    transverse_mm_per_m: float
+
+    def __post_init__(self) -> None:
+        values = [self.range_mm, self.range_mm_per_m, self.transverse_mm, self.transverse_mm_per_m]
+        if not all(np.isfinite(v) and v >= 0 for v in values) or min(values[0], values[2]) <= 0:
+            raise ValueError(
+                "a tracker's noise terms must be finite and >= 0, and its constant range and "
+                f"transverse terms > 0 (mm), got {values}"
+            )
+
+    def sigmas(self, distance_mm: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Range and transverse noise (1 std, mm) at ``distance_mm`` from the tracker."""
+        metres = np.asarray(distance_mm, dtype=float) / 1000.0
+        return (
+            self.range_mm + self.range_mm_per_m * metres,
+            self.transverse_mm + self.transverse_mm_per_m * metres,
+        )
+
+    def covariances(self, points: np.ndarray) -> np.ndarray:
+        """``Sigma_meas`` ``(..., 3, 3)`` (mm^2) of points ``(..., 3)`` in the tracker's frame."""
+        points = np.asarray(points, dtype=float)
+        distance = np.linalg.norm(points, axis=-1)
+        sight = points / np.maximum(distance, 1e-300)[..., None]  # 0 at the origin itself
+        along, across = self.sigmas(distance)
+        outer = sight[..., :, None] * sight[..., None, :]
+        return (along**2 - across**2)[..., None, None] * outer + across[..., None, None] ** 2 * (
+            np.eye(3)
+        )
+
+    def to_dict(self) -> dict[str, float]:
+        return {
+            "range_mm": self.range_mm,
+            "range_mm_per_m": self.range_mm_per_m,
+            "transverse_mm": self.transverse_mm,
+            "transverse_mm_per_m": self.transverse_mm_per_m,
+        }
 
 
 def _spd(matrix: np.ndarray) -> bool:
@@ -59,6 +130,10 @@ class NoiseModel:
         Covariance of a measured position in mm^2 (symmetric positive definite).
     joint_sigma : float or array_like of shape (n,), optional
         Encoder noise (1 std) in rad, one value for every joint or one per joint.
+    tracker : TrackerNoise, optional
+        A laser tracker's noise, which depends on where each point is; then
+        ``covariance_mm2`` is the isotropic noise with the same information at
+        :data:`TRACKER_REFERENCE_MM` (:meth:`laser_tracker` builds it).
 
     Examples
     --------
@@ -71,8 +146,15 @@ class NoiseModel:
 
     covariance_mm2: np.ndarray
     joint_sigma: np.ndarray | None
+    tracker: TrackerNoise | None
 
-    def __init__(self, covariance_mm2: ArrayLike, joint_sigma: ArrayLike | None = None) -> None:
+    def __init__(
+        self,
+        covariance_mm2: ArrayLike,
+        joint_sigma: ArrayLike | None = None,
+        *,
+        tracker: TrackerNoise | None = None,
+    ) -> None:
         cov = np.array(covariance_mm2, dtype=float)
         if cov.shape not in ((2, 2), (3, 3)) or not _spd(cov):
             raise ValueError(
@@ -90,8 +172,28 @@ class NoiseModel:
                 js = None
             else:
                 js.flags.writeable = False
+        if tracker is not None and cov.shape != (3, 3):
+            raise ValueError("a laser tracker measures 3-D points: covariance_mm2 must be 3 x 3")
         object.__setattr__(self, "covariance_mm2", cov)
         object.__setattr__(self, "joint_sigma", js)
+        object.__setattr__(self, "tracker", tracker)
+
+    @classmethod
+    def laser_tracker(
+        cls, tracker: TrackerNoise, joint_sigma: ArrayLike | None = None
+    ) -> NoiseModel:
+        """A laser tracker's noise (:class:`TrackerNoise`); the reference ``sigma_mm`` is
+        ``sqrt(3 / (1/s_r^2 + 2/s_t^2))`` at :data:`TRACKER_REFERENCE_MM` from it.
+
+        Examples
+        --------
+        >>> noise = NoiseModel.laser_tracker(TrackerNoise(0.01, 0.0, 0.01, 0.0))
+        >>> round(noise.sigma_mm, 12), noise.isotropic_instrument
+        (0.01, False)
+        """
+        along, across = tracker.sigmas(np.array(TRACKER_REFERENCE_MM))
+        reference = np.sqrt(3.0 / (1.0 / along**2 + 2.0 / across**2))
+        return cls(np.eye(3) * reference**2, joint_sigma, tracker=tracker)
 
     @classmethod
     def isotropic(
@@ -117,6 +219,10 @@ class NoiseModel:
         """
         if dim == self.dim:
             return self
+        if self.tracker is not None:
+            raise ValueError(
+                f"a laser tracker's noise model is for 3-D points, the measurements are {dim}-D"
+            )
         if not self.isotropic_instrument:
             raise ValueError(
                 f"the instrument's noise is given for {self.dim}-D points, the measurements "
@@ -138,7 +244,9 @@ class NoiseModel:
 
     @property
     def isotropic_instrument(self) -> bool:
-        """Whether ``Sigma_meas`` is a multiple of the identity."""
+        """Whether ``Sigma_meas`` is a multiple of the identity (never for a tracker)."""
+        if self.tracker is not None:
+            return False
         c = self.covariance_mm2
         return bool(np.array_equal(c, c[0, 0] * np.eye(self.dim)))
 
@@ -159,26 +267,44 @@ class NoiseModel:
                 f"got {self.joint_sigma.size}"
             )
 
+    def instrument_covariances(
+        self,
+        shape: tuple[int, ...],
+        *,
+        row_sigma: np.ndarray | None = None,
+        points: np.ndarray | None = None,
+    ) -> np.ndarray:
+        """The instrument's ``Sigma_meas`` ``(..., m, d, d)`` (mm^2) of measurements of shape
+        ``(..., m)``: ``row_sigma`` ``(m,)`` (mm) replaces it row by row; a tracker's
+        depends on the ``points`` ``(..., m, 3)`` (mm, instrument frame).
+        """
+        d = self.dim
+        if row_sigma is not None:
+            return np.asarray(row_sigma, dtype=float)[..., None, None] ** 2 * np.eye(d)
+        if self.tracker is not None:
+            if points is None:
+                raise ValueError("a laser tracker's noise depends on where the points are")
+            return self.tracker.covariances(points)
+        return np.broadcast_to(self.covariance_mm2, (*shape, d, d))
+
     def pose_covariances(
         self,
         shape: tuple[int, ...],
         *,
         joint_jacobian: np.ndarray | None = None,
         row_sigma: np.ndarray | None = None,
+        points: np.ndarray | None = None,
     ) -> np.ndarray:
-        """``Sigma_i`` ``(..., m, 2, 2)`` in mm^2 of measurements of shape ``(..., m)``.
+        """``Sigma_i`` ``(..., m, d, d)`` in mm^2 of measurements of shape ``(..., m)``.
 
-        ``joint_jacobian`` ``(..., m, 2, n)`` (mm/rad) is ``d tip / d q`` where the
+        ``joint_jacobian`` ``(..., m, d, n)`` (mm/rad) is ``d tip / d q`` where the
         encoder term is linearized: the model's (:meth:`armcal.models.planar.PlanarArm.
         pose_covariances` gives it); without it, or without encoder noise, only the
-        instrument's covariance counts.  ``row_sigma`` ``(m,)`` (mm) replaces the
-        instrument covariance row by row.
+        instrument's covariance counts.  ``row_sigma`` and ``points`` as for
+        :meth:`instrument_covariances`.
         """
         d = self.dim
-        if row_sigma is None:
-            base = np.broadcast_to(self.covariance_mm2, (*shape, d, d))
-        else:
-            base = np.asarray(row_sigma, dtype=float)[..., None, None] ** 2 * np.eye(d)
+        base = self.instrument_covariances(shape, row_sigma=row_sigma, points=points)
         if self.joint_sigma is None or joint_jacobian is None:
             return np.broadcast_to(base, (*np.broadcast_shapes(shape, base.shape[:-2]), d, d))
         n = joint_jacobian.shape[-1]
@@ -191,24 +317,31 @@ class NoiseModel:
         *,
         joint_jacobian: np.ndarray | None = None,
         row_sigma: np.ndarray | None = None,
+        points: np.ndarray | None = None,
     ) -> np.ndarray:
-        """Relative whitening ``W_i`` ``(..., m, 2, 2)``: ``W_i^T W_i = sigma_ref^2 Sigma_i^-1``.
+        """Relative whitening ``W_i`` ``(..., m, d, d)``: ``W_i^T W_i = sigma_ref^2 Sigma_i^-1``.
 
         ``W_i = sigma_ref L_i^-1`` for the Cholesky factor ``Sigma_i = L_i L_i^T``,
         in closed form (lower triangular).  The identity for isotropic noise.
         Arguments as for :meth:`pose_covariances`.
         """
-        cov = self.pose_covariances(shape, joint_jacobian=joint_jacobian, row_sigma=row_sigma)
+        cov = self.pose_covariances(
+            shape, joint_jacobian=joint_jacobian, row_sigma=row_sigma, points=points
+        )
         return whitening_from_covariance(cov, self.sigma_mm)
 
     def to_dict(self) -> dict[str, object]:
-        """JSON form: ``covariance_mm2`` and ``joint_sigma_deg`` (null without encoder noise)."""
-        return {
+        """JSON form: ``covariance_mm2``, ``joint_sigma_deg`` (null without encoder noise) and,
+        for a laser tracker, ``tracker`` (its four terms)."""
+        out: dict[str, object] = {
             "covariance_mm2": self.covariance_mm2.tolist(),
             "joint_sigma_deg": None
             if self.joint_sigma is None
             else np.degrees(self.joint_sigma).tolist(),
         }
+        if self.tracker is not None:
+            out["tracker"] = self.tracker.to_dict()
+        return out
 
 
 def whitening_from_covariance(cov: np.ndarray, reference: float) -> np.ndarray:

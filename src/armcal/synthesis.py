@@ -15,6 +15,7 @@ used as it is (:func:`simulated_noise`).
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -94,12 +95,18 @@ def checked_truth(model: FitModel, truth: ArrayLike) -> np.ndarray:
 
 
 def _instrument_factor(
-    model: FitModel, sigma: float | None, row_sigma: np.ndarray | None, m: int
+    model: FitModel,
+    sigma: float | None,
+    row_sigma: np.ndarray | None,
+    m: int,
+    clean: Callable[[], np.ndarray],
 ) -> float | np.ndarray:
     """What multiplies standard normal draws ``z`` ``(..., m, d)`` into instrument noise.
 
     A number ``s`` (isotropic: ``s z``), a lower-triangular ``L`` ``(d, d)`` with
-    ``L L^T = Sigma_meas`` (``L z`` per pose), or per-row ``s_i`` ``(m, 1)``.
+    ``L L^T = Sigma_meas`` (``L z`` per pose), per-row ``s_i`` ``(m, 1)``, or
+    per-row ``L_i`` ``(m, d, d)`` for a laser tracker, whose noise depends on
+    where the noiseless points ``clean()`` are.
     """
     if row_sigma is not None:
         rows = np.asarray(row_sigma, dtype=float)
@@ -114,6 +121,8 @@ def _instrument_factor(
             raise ArmcalError(f"the noise sigma must be finite and >= 0 (mm), got {sigma}")
         return float(sigma)  # exactly as given: the same draws give the same data as ever
     noise = simulated_noise(model, None)
+    if noise.tracker is not None:
+        return np.linalg.cholesky(noise.instrument_covariances((m,), points=clean()))
     if noise.isotropic_instrument:
         return float(np.sqrt(noise.covariance_mm2[0, 0]))
     return np.linalg.cholesky(noise.covariance_mm2)
@@ -129,6 +138,8 @@ def _scale_instrument(z: np.ndarray, factor: float | np.ndarray) -> None:
         z[..., 0] *= lower[0, 0]
     elif np.ndim(factor) == 2 and np.shape(factor)[0] == np.shape(factor)[1]:
         z[...] = z @ np.asarray(factor).T
+    elif np.ndim(factor) == 3:  # one factor per row
+        z[...] = np.einsum("mij,...mj->...mi", factor, z)
     else:
         z *= factor
 
@@ -228,11 +239,18 @@ def synthesize_measurements(
     truth = checked_truth(model, truth)
     conditions = model.conditions(plan, target=target, loads=loads)
     m = plan.shape[0]
-    factor = _instrument_factor(model, sigma, row_sigma, m)
+    known = [] if exact is None else [exact]
+
+    def noiseless() -> np.ndarray:
+        if not known:
+            known.append(model.positions(conditions, truth))
+        return known[0]
+
+    factor = _instrument_factor(model, sigma, row_sigma, m, noiseless)
     joint_sigma = None if model.noise is None else model.noise.joint_sigma
     sets = () if trials is None else (int(trials),)
     if joint_sigma is None:
-        clean = model.positions(conditions, truth) if exact is None else exact
+        clean = noiseless()
         noisy = rng.standard_normal((*sets, m, dim))
         _scale_instrument(noisy, factor)  # in place: the noise is a Monte Carlo's largest array
         noisy += clean

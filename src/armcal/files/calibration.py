@@ -33,7 +33,7 @@ from ..models import (
     SpatialArm,
     Target,
 )
-from ..noise import NoiseModel
+from ..noise import NoiseModel, TrackerNoise
 from .common import fail, read_text
 from .robots import parse_region
 
@@ -204,9 +204,11 @@ def read_calibration(path: str | os.PathLike) -> CalibratedArm:
         if doc.get("noise") is not None:
             key = "noise"
             sigma_q = doc["noise"].get("joint_sigma_deg")
+            tracker = doc["noise"].get("tracker")
             noise = NoiseModel(
                 np.array(doc["noise"]["covariance_mm2"], dtype=float),
                 None if sigma_q is None else np.radians(np.array(sigma_q, dtype=float)),
+                tracker=None if tracker is None else TrackerNoise(**tracker),
             )
         key = "robot"
         fixed = list(doc.get("fixed", []))

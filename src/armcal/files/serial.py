@@ -28,7 +28,7 @@ import numpy as np
 
 from ..errors import ArmcalWarning, InputError
 from ..models import MdhTable, SerialChain, SpatialArm, rpy_matrix, transform
-from ..noise import NoiseModel
+from ..noise import NoiseModel, TrackerNoise
 from .common import check_keys, fail, load_toml, number, numbers, suggest
 from .robots import SIGMA_RANGE_MM, RobotSpec, fixed_parameters, load_robot
 from .urdf import read_urdf
@@ -249,13 +249,16 @@ def _noise(path: Path, table: Any) -> NoiseModel | None:
         return None
     if not isinstance(table, dict):
         raise fail(path, "key 'measurement': expected a table [measurement]")
-    check_keys(path, table, ["sigma_mm", "covariance_mm2"], "measurement.")
-    if "sigma_mm" in table and "covariance_mm2" in table:
+    check_keys(path, table, ["sigma_mm", "covariance_mm2", "tracker"], "measurement.")
+    given = [key for key in ("sigma_mm", "covariance_mm2", "tracker") if key in table]
+    if len(given) > 1:
         raise fail(
             path,
-            "keys 'measurement.sigma_mm' and 'measurement.covariance_mm2' both give the noise; "
-            "keep one",
+            f"keys {' and '.join(f'measurement.{k}' for k in given)} all give the instrument's "
+            "noise; keep one",
         )
+    if "tracker" in table:
+        return NoiseModel.laser_tracker(_tracker(path, table["tracker"]))
     if "sigma_mm" in table:
         raw = table["sigma_mm"]
         values = (
@@ -283,6 +286,40 @@ def _noise(path: Path, table: Any) -> NoiseModel | None:
         except ValueError as exc:
             raise fail(path, f"key 'measurement.covariance_mm2': {exc}") from None
     return None
+
+
+def _tracker(path: Path, table: Any) -> TrackerNoise:
+    """``[measurement.tracker]``: the four terms of a laser tracker's noise (1 std)."""
+    keys = ["range_mm", "range_mm_per_m", "transverse_mm", "transverse_mm_per_m"]
+    if not isinstance(table, dict):
+        raise fail(
+            path,
+            "key 'measurement.tracker': expected a table { range_mm = a, range_mm_per_m = b, "
+            "transverse_mm = c, transverse_mm_per_m = d } (1 std: a + b per metre of distance)",
+        )
+    check_keys(path, table, keys, "measurement.tracker.")
+    missing = [k for k in keys if k not in table]
+    if missing:
+        raise fail(
+            path,
+            f"key 'measurement.tracker': missing {', '.join(missing)} (1 std in mm and mm per "
+            "metre of distance; 0 for a term the data sheet does not give)",
+        )
+    values = [number(path, table[k], f"measurement.tracker.{k}") for k in keys]
+    low, high = SIGMA_RANGE_MM
+    for key, value in zip(keys, values, strict=True):
+        if not (0 <= value <= high) or (value < low and not key.endswith("_per_m")):
+            bounds = (
+                f"between {low:g} and {high:g}"
+                if not key.endswith("_per_m")
+                else f"in [0, {high:g}]"
+            )
+            raise fail(
+                path,
+                f"key 'measurement.tracker.{key}': must be {bounds} mm; check the unit "
+                "(mm, 1 std; data sheets often quote 2 std)",
+            )
+    return TrackerNoise(*values)
 
 
 def _targets(path: Path, table: Any) -> tuple[tuple[str, ...], np.ndarray]:

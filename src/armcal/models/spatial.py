@@ -407,32 +407,39 @@ class SpatialArm(RigidLoads):
         *,
         noise: NoiseModel | None = None,
     ) -> np.ndarray:
-        noise, shape, joint_jac = self._row_noise(conditions, params, noise)
-        return noise.pose_covariances(
-            shape, joint_jacobian=joint_jac, row_sigma=conditions.sigma_mm
-        )
+        noise = self._noise_of(noise)
+        return noise.pose_covariances(**self._row_noise(conditions, params, noise))
+
+    def _noise_of(self, noise: NoiseModel | None) -> NoiseModel:
+        """The 3-D noise model: ``noise``, else the arm's, else unit."""
+        return relative_noise(self.noise if noise is None else noise).for_dim(3)
 
     def _row_noise(
-        self, conditions: Conditions, params: np.ndarray | None, noise: NoiseModel | None
-    ) -> tuple[NoiseModel, tuple[int, ...], np.ndarray | None]:
-        """The 3-D noise model (``noise``, else the arm's, else unit), the rows' shape over
-        parameter stacks, and the joint Jacobian where encoder noise needs it."""
-        noise = relative_noise(self.noise if noise is None else noise).for_dim(3)
-        joint_jac = None
-        if noise.joint_sigma is not None:
-            joint_jac = self.joint_jacobian(conditions, params)
+        self, conditions: Conditions, params: np.ndarray | None, noise: NoiseModel
+    ) -> dict[str, Any]:
+        """What ``noise`` needs of the rows: their shape over parameter stacks, the joint
+        Jacobian where encoder noise needs it, the rows' own sigmas, and the measured
+        points where a laser tracker's noise depends on them."""
+        kin = None
+        if noise.joint_sigma is not None or noise.tracker is not None:
+            kin = self._kinematics(conditions, params, derivatives=noise.joint_sigma is not None)
         shape = np.broadcast_shapes(
             np.shape(conditions.q)[:-1], () if params is None else (*np.shape(params)[:-1], 1)
         )
-        return noise, shape, joint_jac
+        return {
+            "shape": shape,
+            "joint_jacobian": None if kin is None else kin.joint_jacobian,
+            "row_sigma": conditions.sigma_mm,
+            "points": None if kin is None else kin.points,
+        }
 
     def whitening(
         self, conditions: Conditions, params: np.ndarray | None = None
     ) -> np.ndarray | None:
         if (self.noise is None or self.noise.isotropic_iid) and conditions.sigma_mm is None:
             return None
-        noise, shape, joint_jac = self._row_noise(conditions, params, None)
-        return noise.whitening(shape, joint_jacobian=joint_jac, row_sigma=conditions.sigma_mm)
+        noise = self._noise_of(None)
+        return noise.whitening(**self._row_noise(conditions, params, noise))
 
     # -- fitting -----------------------------------------------------------------------
 

@@ -30,7 +30,14 @@ def _noise_text(arm: PlanarArm | SpatialArm) -> str | None:
     if noise is None or noise.isotropic_iid:
         return None
     cov = noise.covariance_mm2
-    if noise.isotropic_instrument:
+    if noise.tracker is not None:
+        t = noise.tracker
+        parts = [
+            f"laser tracker, range {t.range_mm:.4g} mm + {t.range_mm_per_m:.4g} mm/m, "
+            f"transverse {t.transverse_mm:.4g} mm + {t.transverse_mm_per_m:.4g} mm/m of "
+            "distance"
+        ]
+    elif noise.isotropic_instrument:
         parts = [f"instrument isotropic, sigma {math.sqrt(cov[0, 0]):.4g} mm"]
     elif np.count_nonzero(cov - np.diag(np.diagonal(cov))) == 0 and cov.shape[0] == 3:
         parts = [
