@@ -1,11 +1,13 @@
 # Two entry points, each self-contained on a machine with python3 and make:
 #   make demo   set up .venv and run the calibration workflow on the built-in paper-4link arm
+#               and on the six-axis industrial-6r (a laser tracker, three reflectors)
 #   make test   set up .venv with the test extras and run lint, types and tests
 #   make test-slow   the few long end-to-end checks (CI runs them after make test)
 PYTHON ?= python3
 VENV   := .venv
 BIN    := $(VENV)/bin
 DEMO_DIR ?= demo-out
+DEMO_6R_DIR ?= demo-6r
 LINT_PATHS := src tests tools $(wildcard benchmarks)
 
 .PHONY: demo test test-slow lint types bench readme clean
@@ -37,6 +39,7 @@ $(VENV)/.installed-test: pyproject.toml | $(BIN)/python
 
 demo: $(VENV)/.installed
 	$(BIN)/armcal demo -o $(DEMO_DIR)
+	$(BIN)/armcal demo --robot industrial-6r -o $(DEMO_6R_DIR)
 
 lint: $(VENV)/.installed-test
 	$(BIN)/ruff check $(LINT_PATHS)

@@ -149,9 +149,7 @@ def test_the_robot_file_gives_the_tracker_and_the_calibration_keeps_it(tmp_path)
     assert "laser tracker, range 0.008 mm + 0.0004 mm/m" in result.stdout
     assert read_calibration(tmp_path / "cal.json").model.noise.tracker == TRACKER
     # The exported robot TOML keeps the instrument's noise model.
-    result = run_cli(
-        tmp_path, "export", "--calibration", "cal.json", "--robot-toml", "cal.toml"
-    )
+    result = run_cli(tmp_path, "export", "--calibration", "cal.json", "--robot-toml", "cal.toml")
     assert result.returncode == 0, result.stderr
     assert load_serial_robot(tmp_path / "cal.toml").arm.noise.tracker == TRACKER
 

@@ -13,6 +13,7 @@ import json
 import numpy as np
 import pytest
 
+from armcal.demo_serial import SERIAL_DEMO_FILES
 from armcal.doe import random_plan
 from armcal.files import load_serial_robot, load_serial_truth
 from armcal.files.serial import ROBOT_FOLDER
@@ -133,3 +134,41 @@ def test_monte_carlo_agrees_with_the_predicted_std(robot):
     assert np.all(np.abs(ratio - 1.0) < 0.05), ratio
     # Unbiased to first order: every mean within 4 standard errors of the truth.
     assert np.all(np.abs(result.bias[free]) <= result.bias_limit[free])
+
+
+def test_the_six_axis_demo_calibrates_compensates_and_exports(tmp_path):
+    """``armcal demo --robot industrial-6r``: three reflectors found from the data, a
+    tracker's noise, cross-validation, compensation and export, each usable by the CLI."""
+    result = run_cli(tmp_path, "demo", "--robot", "industrial-6r", "-o", "out", "--json")
+    assert result.returncode == 0, result.stderr
+    document = json.loads(result.stdout)
+    # 4R + 2P + 3k for 6 revolute joints and 3 reflectors.
+    assert sum(not p["fixed"] for p in document["parameters"]) == 33
+    story = result.stderr + (tmp_path / "out" / "report.md").read_text(encoding="utf-8")
+    assert "laser tracker" in story and "cross-validation (5 folds)" in story
+    after = float(story.split("true error RMS ")[1].split(" mm after")[0].split(", ")[1])
+    assert after < 0.01  # the reflector's true error, against errors of tenths of a mm
+    files = sorted(p.name for p in (tmp_path / "out").iterdir() if not p.name.startswith("."))
+    assert files == sorted(SERIAL_DEMO_FILES)
+    # The calibration and the files it goes with work with the other commands.
+    out = tmp_path / "out"
+    validated = run_cli(
+        out, "validate", "--calibration", "calibration.json", "--measurements",
+        "validation.csv", "--json",
+    )  # fmt: skip
+    assert validated.returncode == 0, validated.stderr
+    assert json.loads(validated.stdout)["rms_after_mm"] < 0.05
+    compensated = run_cli(
+        out, "compensate", "--calibration", "calibration.json", "--program", "program.csv",
+        "-o", "again.csv",
+    )  # fmt: skip
+    assert compensated.returncode == 0, compensated.stderr
+    # The same commands from the calibration file (its numbers round-trip to the last bit
+    # or so: 1e-9 deg is far below any controller's resolution).
+    again, demo = (
+        np.loadtxt(out / name, delimiter=",", skiprows=1, usecols=range(6))
+        for name in ("again.csv", "program_corrected.csv")
+    )
+    np.testing.assert_allclose(again, demo, rtol=0, atol=1e-9)
+    exported = load_serial_robot(out / "robot_calibrated.toml").arm
+    assert exported.n_joints == 6

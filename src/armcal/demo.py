@@ -35,12 +35,17 @@ from .validation import validate
 __all__ = [
     "DEMO_FILES",
     "OUTLIER_MM",
+    "PLANAR_DEMO_POSES",
     "Demo",
+    "figure_writer",
     "run_demo",
 ]
 
 #: The gross error put on one measurement (a bumped reflector), mm in x and y.
 OUTLIER_MM = (1.2, -0.9)
+
+#: Poses of the demo's designed plan.
+PLANAR_DEMO_POSES = 20
 
 #: Poses of the fresh validation set, of the program compensated, of the error map.
 VALIDATION_POSES, PROGRAM_POSES, MAP_POSES = 100, 12, 2000
@@ -88,7 +93,7 @@ class Demo:
     warnings: tuple[ArmcalWarning, ...]
 
 
-def _figure_writer(make: Callable[[], object]) -> Callable[[Path], None]:
+def figure_writer(make: Callable[[], object]) -> Callable[[Path], None]:
     """A writer that draws the figure only when the file is written (matplotlib is lazy)."""
 
     def write(path: Path) -> None:
@@ -103,7 +108,7 @@ def run_demo(
     arm: PlanarArm,
     truth: np.ndarray,
     *,
-    poses: int = 20,
+    poses: int = PLANAR_DEMO_POSES,
     sigma: float = 0.1,
     seed: int = 0,
 ) -> Demo:
@@ -218,10 +223,10 @@ def run_demo(
         "program_corrected.csv": format_program_csv(comp.q, comp.corrected),
         "robot_calibrated.toml": robot_toml(calibrated),
         "arm.urdf": urdf(calibrated),
-        "plan.png": _figure_writer(plot_plan_figure),
-        "residuals.png": _figure_writer(plot_residual_figure),
-        "validation.png": _figure_writer(plot_validation_figure),
-        "error_map.png": _figure_writer(plot_map_figure),
+        "plan.png": figure_writer(plot_plan_figure),
+        "residuals.png": figure_writer(plot_residual_figure),
+        "validation.png": figure_writer(plot_validation_figure),
+        "error_map.png": figure_writer(plot_map_figure),
     }
     report = _report(arm, text, map_before, map_after)
     files["report.md"] = report

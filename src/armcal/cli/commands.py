@@ -17,7 +17,8 @@ from typing import Any
 
 import numpy as np
 
-from ..demo import run_demo
+from ..demo import PLANAR_DEMO_POSES, run_demo
+from ..demo_serial import SERIAL_DEMO_POSES, run_serial_demo
 from ..errors import ArmcalError
 from ..files import (
     BUILTIN_ROBOTS,
@@ -416,18 +417,26 @@ def check_compliance(args: argparse.Namespace) -> None:
 
 def demo(args: argparse.Namespace) -> None:
     """``armcal demo``: the whole workflow on a built-in robot."""
-    spec = load_robot(args.robot)
-    truth = _truth(args, spec, spec.arm)  # the demo calibrates the geometry
-    sigma = design_sigma(spec.arm) if args.sigma is None else args.sigma
-    result = run_demo(spec.arm, truth, poses=args.poses, sigma=sigma, seed=args.seed)
+    spec = load_any_robot(args.robot)
+    if isinstance(spec, SerialSpec):  # the six-axis story: a tracker and three reflectors
+        result = run_serial_demo(
+            spec.arm,
+            lambda arm: _truth(args, spec, arm),
+            poses=SERIAL_DEMO_POSES if args.poses is None else args.poses,
+            sigma=args.sigma,
+            seed=args.seed,
+        )
+        kinds = "report.md, residuals, measurements, calibration, program, URDF, DH table, offsets"
+    else:
+        truth = _truth(args, spec, spec.arm)  # the demo calibrates the geometry
+        sigma = design_sigma(spec.arm) if args.sigma is None else args.sigma
+        poses = PLANAR_DEMO_POSES if args.poses is None else args.poses
+        result = run_demo(spec.arm, truth, poses=poses, sigma=sigma, seed=args.seed)
+        kinds = "report.md, figures, plan, measurements, calibration, program, robot file, URDF"
     lines = [result.text]
     if args.output is not None:
         folder = write_folder(args.output, result.files)
-        lines += [
-            "",
-            f"wrote {len(result.files)} files to {folder}/: report.md, figures, "
-            "plan, measurements, calibration, program, robot file, URDF",
-        ]
+        lines += ["", f"wrote {len(result.files)} files to {folder}/: {kinds}"]
     emit(args, dict(result.document), "\n".join(lines), [*spec.warnings, *result.warnings])
 
 

@@ -13,7 +13,8 @@ from typing import Any
 
 from .._version import __version__
 from ..criteria import CRITERIA
-from ..demo import DEMO_FILES
+from ..demo import DEMO_FILES, PLANAR_DEMO_POSES
+from ..demo_serial import SERIAL_DEMO_FILES, SERIAL_DEMO_POSES
 from ..doe import DISTINCT_TOLERANCE, ORDERS, REQUIREMENTS
 from ..doe import METHODS as DESIGN_METHODS
 from ..errors import ArmcalError
@@ -97,7 +98,9 @@ def build_parser() -> argparse.ArgumentParser:
     """The argument parser of the ``armcal`` program."""
     parser = _Parser(
         prog="armcal",
-        description="Design, run and evaluate calibration experiments for planar serial arms.",
+        description=(
+            "Design, run and evaluate calibration experiments for serial arms, planar and spatial."
+        ),
         epilog=textwrap.fill(_WORKFLOW, 79) + "\n\n" + textwrap.fill(OUTPUTS_EPILOG, 79),
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
@@ -343,13 +346,19 @@ def build_parser() -> argparse.ArgumentParser:
 
     sub = _command(subs, "demo")
     sub.add_argument(
-        "--poses", type=options.poses, default=20, help="number of poses (default 20)"
+        "--poses",
+        type=options.poses,
+        help=f"number of poses (default {PLANAR_DEMO_POSES}; {SERIAL_DEMO_POSES} for a "
+        "spatial arm)",
     )
     sub.add_argument("--truth", metavar="TRUTH_TOML", help="deviations (default: the built-in's)")
     sub.add_argument("--sigma", type=options.sigma, metavar="MM", help="noise std in mm")
     _add_common(sub, seed=True, output="folder for the report, figures and files")
     sub.set_defaults(
-        run=commands.demo, inputs=("robot", "truth"), outputs=("output",), folder_files=DEMO_FILES
+        run=commands.demo,
+        inputs=("robot", "truth"),
+        outputs=("output",),
+        folder_files=tuple(dict.fromkeys(DEMO_FILES + SERIAL_DEMO_FILES)),
     )
 
     sub = _command(subs, "export")

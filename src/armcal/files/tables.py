@@ -805,12 +805,20 @@ def _check_target_labels(
             )
 
 
-def format_plan_csv(q: np.ndarray, payload_kg: np.ndarray | None = None) -> str:
-    """Plan CSV text for joint angles ``q`` ``(m, n)`` in rad (and every pose's payload)."""
+def format_plan_csv(
+    q: np.ndarray,
+    payload_kg: np.ndarray | None = None,
+    targets: Sequence[str] | None = None,
+) -> str:
+    """Plan (or program) CSV text for joint angles ``q`` ``(m, n)`` in rad, and every pose's
+    payload or target where given."""
     head = _joint_names(q.shape[1]) + (["payload_kg"] if payload_kg is not None else [])
-    columns = [degrees(q)]
+    columns: list = [degrees(q)]
     if payload_kg is not None:
         columns.append(floats(payload_kg))
+    if targets is not None:
+        head.append("target")
+        columns.append([str(target) for target in targets])
     return csv_text(head, columns)
 
 
