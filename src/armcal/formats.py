@@ -25,6 +25,8 @@ __all__ = [
     "FIGURE_FORMATS",
     "FILE_KINDS",
     "ROBOT_KEYS",
+    "SERIAL_KEYS",
+    "SERIAL_TRUTH_KEYS",
     "TRUTH_KEYS",
     "Column",
     "Key",
@@ -208,6 +210,102 @@ TRUTH_KEYS: tuple[Key, ...] = (
 )
 
 
+#: A spatial serial arm's robot TOML: from a URDF, or a modified DH table (``[mdh]``).
+SERIAL_KEYS: tuple[Key, ...] = (
+    Key("", "name", "text", "the file's stem", "name shown in reports and exports"),
+    Key("", "urdf", "path, relative to this file", "none: give [mdh]", "the arm's URDF"),
+    Key("", "base_link", "URDF link name", "the URDF's root", "where the chain starts"),
+    Key("", "tip_link", "URDF link name", "the one leaf of the chain", "where the chain ends"),
+    Key(
+        "",
+        "joint_map",
+        "n x n matrix",
+        "identity",
+        "coupled joints: the URDF's joint values u = M q from the controller's readings q",
+    ),
+    Key(
+        "",
+        "joint_limits_deg",
+        "deg (mm for a prismatic joint), [lo, hi] per joint",
+        "the URDF's (on u); a full turn each way for continuous joints",
+        "limits on the controller's readings q; they replace the URDF's",
+    ),
+    Key("mdh", "alpha_deg", "deg, one per joint", "required", "Craig's alpha: Rx(alpha)"),
+    Key("mdh", "a_mm", "mm, one per joint", "required", "Craig's a: Tx(a)"),
+    Key("mdh", "theta_deg", "deg, one per joint", "required", "the joint's zero: Rz(theta)"),
+    Key("mdh", "d_mm", "mm, one per joint", "required", "Craig's d: Tz(d)"),
+    Key(
+        "mdh",
+        "beta_deg",
+        "deg, one per joint",
+        "0 each",
+        "Hayati's beta, Ry(beta) after Tx(a): nearly parallel consecutive axes",
+    ),
+    Key("mdh", "joint_types", '"R" or "P" per joint', '"R" each', "revolute or prismatic"),
+    Key("mdh", "base_xyz_mm", "mm, [x, y, z]", "0", "a base frame before the first row"),
+    Key("mdh", "base_rpy_deg", "deg, [roll, pitch, yaw]", "0", "its orientation"),
+    Key("mdh", "tip_xyz_mm", "mm, [x, y, z]", "0", "the flange after the last row"),
+    Key("mdh", "tip_rpy_deg", "deg, [roll, pitch, yaw]", "0", "its orientation"),
+    Key(
+        "measurement",
+        "sigma_mm",
+        "mm, one number or [sx, sy, sz]",
+        "estimated from the residuals",
+        "instrument noise, 1 std per axis of the instrument's frame",
+    ),
+    Key(
+        "measurement",
+        "covariance_mm2",
+        "mm^2, 3 x 3",
+        "none",
+        "instrument noise as a full covariance (instead of sigma_mm)",
+    ),
+    Key(
+        "measurement",
+        "tracker",
+        "table: range_mm, range_mm_per_m, transverse_mm, transverse_mm_per_m",
+        "none",
+        "a laser tracker's noise (1 std): along the line of sight and across it, each a "
+        "constant plus a term per metre of distance from the tracker (instead of sigma_mm)",
+    ),
+    Key(
+        "targets",
+        "LABEL",
+        "inline table: xyz_mm (mm, tip frame)",
+        "none: found from the data",
+        "a reflector's nominal position; measurements name it in a target column",
+    ),
+    Key("identify", "fixed", "list of parameter names", "none", "parameters held at nominal"),
+    Key("identify", "free", "list of parameter names", "all", "the only parameters identified"),
+)
+
+#: A spatial arm's truth TOML (virtual arms).
+SERIAL_TRUTH_KEYS: tuple[Key, ...] = (
+    Key("", "robot", "path to a URDF or robot TOML", "the nominal arm", "the true arm"),
+    Key(
+        "",
+        "base",
+        "inline table: xyz_mm (mm), rpy_deg (deg)",
+        "the identity",
+        "the arm's base pose in the instrument's frame",
+    ),
+    Key(
+        "",
+        "errors",
+        "table of parameter = value (mm, deg)",
+        "none",
+        "errors of the joints' placement and zeros (j2.x, dq3, ...)",
+    ),
+    Key(
+        "",
+        "targets",
+        "table of LABEL = { xyz_mm = [x, y, z] }",
+        "the robot file's",
+        "the reflectors' true positions in the tip frame",
+    ),
+)
+
+
 @dataclass(frozen=True)
 class Column:
     """One column of a CSV file armcal reads.
@@ -270,6 +368,8 @@ FIGURE_FORMATS: dict[str, str] = {".png": "png", ".pdf": "pdf", ".svg": "svg", "
 FILE_KINDS: dict[str, str] = {
     "robot": "robot TOML (--robot): the arm, its instrument and what to identify",
     "truth": "truth TOML (--truth): the deviations of a virtual robot",
+    "serial robot": "spatial robot TOML (--robot, or a URDF itself): a serial arm in 3-D",
+    "serial truth": "spatial truth TOML (--truth): the errors of a virtual spatial arm",
     "plan": "plan CSV (--plan, --candidates, --test-poses): poses to visit",
     "measurements": "measurements CSV (--measurements): poses and what the instrument read",
     "program": "program CSV (--program): joint commands to correct",
@@ -359,6 +459,13 @@ def format_reference() -> str:
         lines += _entries(rows, max(len(k.name) for k in ROBOT_KEYS))
     lines += ["", FILE_KINDS["truth"] + ":"]
     lines += _entries([(k.name, _key_text(k)) for k in TRUTH_KEYS])
+    lines += ["", FILE_KINDS["serial robot"] + ":"]
+    for table in dict.fromkeys(k.table for k in SERIAL_KEYS):
+        lines += ["", f"  [{table}]" if table else "  top level"]
+        rows = [(k.name, _key_text(k)) for k in SERIAL_KEYS if k.table == table]
+        lines += _entries(rows, max(len(k.name) for k in SERIAL_KEYS))
+    lines += ["", FILE_KINDS["serial truth"] + ":"]
+    lines += _entries([(k.name, _key_text(k)) for k in SERIAL_TRUTH_KEYS])
     for kind, columns in COLUMNS.items():
         lines += ["", FILE_KINDS[kind] + ":"]
         lines += _entries(

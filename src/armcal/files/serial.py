@@ -27,6 +27,7 @@ from typing import Any
 import numpy as np
 
 from ..errors import ArmcalWarning, InputError
+from ..formats import SERIAL_KEYS, SERIAL_TRUTH_KEYS, allowed_keys
 from ..models import MdhTable, SerialChain, SpatialArm, rpy_matrix, transform
 from ..noise import NoiseModel, TrackerNoise
 from .common import check_keys, fail, load_toml, number, numbers, suggest
@@ -52,11 +53,10 @@ BUILTIN_SERIAL_ROBOTS = {
     "arm-7r": ROBOT_FOLDER / "arm-7r.toml",
 }
 
-_TOP_KEYS = ("name", "urdf", "base_link", "tip_link", "joint_map", "joint_limits_deg")
-_TABLES = ("mdh", "measurement", "targets", "identify")
-_MDH_KEYS = ("alpha_deg", "a_mm", "theta_deg", "d_mm", "beta_deg", "joint_types")
-_MDH_FRAMES = ("base_xyz_mm", "base_rpy_deg", "tip_xyz_mm", "tip_rpy_deg")
-_TRUTH_KEYS = ("robot", "base", "errors", "targets")
+# The keys each table takes: the catalogue's (armcal formats prints it), so a key cannot be
+# accepted without being documented.
+_MDH_REQUIRED = ("alpha_deg", "a_mm", "theta_deg", "d_mm")
+_TRACKER_KEYS = ("range_mm", "range_mm_per_m", "transverse_mm", "transverse_mm_per_m")
 
 
 @dataclass(frozen=True, eq=False)
@@ -155,9 +155,9 @@ def _chain(path: Path, data: dict, tip_link: str | None) -> tuple[SerialChain, s
     table = data["mdh"]
     if not isinstance(table, dict):
         raise fail(path, "key 'mdh': expected a table [mdh]")
-    check_keys(path, table, [*_MDH_KEYS, *_MDH_FRAMES], "mdh.")
+    check_keys(path, table, allowed_keys("mdh", SERIAL_KEYS), "mdh.")
     values = {}
-    for name in _MDH_KEYS[:4]:
+    for name in _MDH_REQUIRED:
         if name not in table:
             raise fail(path, f"missing key 'mdh.{name}': one value per joint")
         values[name] = numbers(path, table[name], f"mdh.{name}")
@@ -193,7 +193,7 @@ def _chain(path: Path, data: dict, tip_link: str | None) -> tuple[SerialChain, s
 
 def _from_toml(path: Path, builtin: str | None, tip_link: str | None = None) -> SerialSpec:
     data = load_toml(path, "robot")
-    check_keys(path, data, [*_TOP_KEYS, *_TABLES])
+    check_keys(path, data, allowed_keys("", SERIAL_KEYS))
     chain, default_name = _chain(path, data, tip_link)
     n = chain.n_joints
     name = data.get("name", default_name)
@@ -249,7 +249,7 @@ def _noise(path: Path, table: Any) -> NoiseModel | None:
         return None
     if not isinstance(table, dict):
         raise fail(path, "key 'measurement': expected a table [measurement]")
-    check_keys(path, table, ["sigma_mm", "covariance_mm2", "tracker"], "measurement.")
+    check_keys(path, table, allowed_keys("measurement", SERIAL_KEYS), "measurement.")
     given = [key for key in ("sigma_mm", "covariance_mm2", "tracker") if key in table]
     if len(given) > 1:
         raise fail(
@@ -290,7 +290,7 @@ def _noise(path: Path, table: Any) -> NoiseModel | None:
 
 def _tracker(path: Path, table: Any) -> TrackerNoise:
     """``[measurement.tracker]``: the four terms of a laser tracker's noise (1 std)."""
-    keys = ["range_mm", "range_mm_per_m", "transverse_mm", "transverse_mm_per_m"]
+    keys = list(_TRACKER_KEYS)
     if not isinstance(table, dict):
         raise fail(
             path,
@@ -348,7 +348,7 @@ def load_serial_truth(path: str | os.PathLike, arm: SpatialArm) -> np.ndarray:
     """
     path = Path(path)
     data = load_toml(path, "truth")
-    check_keys(path, data, list(_TRUTH_KEYS))
+    check_keys(path, data, allowed_keys("", SERIAL_TRUTH_KEYS))
     base = np.zeros(6)
     if "base" in data:
         entry = data["base"]
