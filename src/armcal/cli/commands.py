@@ -195,10 +195,13 @@ def synthesize(args: argparse.Namespace) -> None:
     atomic_write(args.output, text)
     what = f" with {made.effect}" if made.effect else ""
     document = {"poses": int(made.q.shape[0]), "sigma_mm": made.sigma_mm, "output": args.output}
+    noise = spec.arm.noise
+    tracker = args.sigma is None and noise is not None and noise.tracker is not None
     emit(
         args,
         document,
-        f"wrote {made.q.shape[0]} measurements of {spec.arm.name}{what} (sigma "
+        f"wrote {made.q.shape[0]} measurements of {spec.arm.name}{what} ("
+        f"{'laser tracker noise, reference sigma' if tracker else 'sigma'} "
         f"{made.sigma_mm:g} mm, seed {args.seed}) to {args.output}",
         spec.warnings,
     )
