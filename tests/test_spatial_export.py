@@ -14,6 +14,7 @@ import json
 import numpy as np
 import pytest
 
+from armcal.compensation import MAX_AMPLIFICATION
 from armcal.files import load_serial_robot, read_calibration
 from armcal.models import (
     SpatialArm,
@@ -216,8 +217,17 @@ def test_a_spatial_calibration_validates_and_compensates(tmp_path):
     )
     assert result.returncode == 0, result.stderr
     rows = (tmp_path / "corrected.csv").read_text(encoding="utf-8").splitlines()[1:]
-    q1 = np.radians([[float(v) for v in row.split(",")[:6]] for row in rows])
-    assert all(row.endswith(",1") for row in rows)
+    # A wrist within asin(1 / MAX_AMPLIFICATION) (2.9 deg) of J5 = 0 would turn J4 and J6 by
+    # about 1 / sin(J5) times the tool's error to correct it (the compensation's bound):
+    # here one row, 0.22 deg from it; every other J5 is 13 deg or more from 0.
+    near = np.abs(np.sin(q0[:, 4])) < 1 / MAX_AMPLIFICATION
+    assert np.count_nonzero(near) == 1
+    assert [row.endswith(",0") for row in rows] == near.tolist()
+    refused = json.loads(result.stdout)["uncorrectable"]
+    assert [r["row"] - 1 for r in refused] == np.flatnonzero(near).tolist()
+    assert all(r["reason"].startswith("near a singularity") for r in refused)
+    q0 = q0[~near]
+    q1 = np.radians([[float(v) for v in row.split(",")[:6]] for row in rows])[~near]
     # The true arm at the corrected commands puts the reflector body (all three) where the
     # nominal arm, standing where the calibration found it, puts it at the program's commands.
     cal = read_calibration(tmp_path / "cal.json")

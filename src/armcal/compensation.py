@@ -6,11 +6,41 @@ arm puts its target where the nominal arm would have, ``p_cal(q) = p_nom(q0)``,
 in the robot's own frame (the instrument's pose is never "corrected",
 :meth:`~armcal.models.interface.FitModel.in_robot_frame`).  When the arm has
 joints to spare (``n >= d + k``: 3 in the plane) the tool's orientation is kept
-too.  Newton's method from ``q0`` with minimum-norm steps, the rest of the joint
-space pulled back towards ``q0`` (``dq = -J^+ r + (I - J^+ J)(q0 - q)``), so the
-remaining redundancy goes to the smallest joint change.  A pose the iteration
-cannot reach (out of reach, at a singularity) or whose correction leaves a
-joint limit is listed as uncorrectable and keeps its command: never clipped.
+too.  A pose the iteration cannot reach (out of reach, at a singularity), whose
+correction is not small (near a singularity) or whose correction leaves a joint
+limit is listed as uncorrectable and keeps its command: never clipped.
+
+**The iteration** is Levenberg-Marquardt in trust-region form (More 1978), all
+poses at once: each step minimises ``|r + J dq|`` within a radius ``|dq| <= D``
+(rad), taken from the SVD of the goal Jacobian ``J`` as
+``dq = -V diag(s / (s^2 + mu)) U^T r``, with ``mu = 0`` (Newton's step) when that
+step is within the radius and otherwise the ``mu`` that puts it on the radius
+(Hebden's iteration).  A step is kept when the residual falls by at least a
+small fraction of what the linear model promised; the radius shrinks
+after a poor step and grows back, up to the pose's bound, after a good one.
+Well-conditioned poses take Newton's steps undamped from the first iteration
+and converge quadratically to round-off; near a singularity the steps stay
+short, so the iteration cannot jump to another branch of the inverse
+kinematics.  Where the arm has joints to spare, the rest of the joint space is
+pulled back towards ``q0`` (``(I - V V^T)(q0 - q)``), so the redundancy goes to
+the smallest joint change.
+
+**The bound.**  A revolute joint turned by ``dq`` moves the tool by at most
+``dq R`` (``R`` the arm's reach) and turns it by at most ``dq``, so a pose whose
+tool misses by ``e`` mm and ``a`` rad has an error *as an angle*
+``eps = hypot(e / R, a)``; its correction moves some joint by at least
+``eps / n``, and a well-conditioned arm corrects it with joint changes of 1-4
+``eps`` (the median over random poses within the limits is 1.4-2.9 on the
+built-in arms, planar and spatial).  A correction that needs more
+than :data:`MAX_AMPLIFICATION` ``eps`` on a joint, five times the top of that
+range, is amplified by the arm's geometry: the goal Jacobian (in units of the
+reach) has a singular value below ``1 / MAX_AMPLIFICATION`` along the error,
+as at a wrist within about 3 deg of ``J5 = 0`` or a wrist centre near the axis
+of ``J1``.  Such a correction is not the calibration's (the calibration's
+errors are tenths of a mm and hundredths of a degree per joint) and is refused
+with the reason *near a singularity* and the joint change it needs.  The
+iteration stops a pose as soon as it leaves that bound (its steps are no longer
+than the bound either), so it never wanders off to another branch.
 
 A model of joint compliance also takes out the joints' deflection under the
 program's load; every family works through
@@ -26,12 +56,32 @@ from numpy.typing import ArrayLike
 
 from .models import CalibratedArm, Conditions, FitModel, Loads
 from .models.information import tip_variances
-from .numerics import rms
+from .numerics import RANK_RTOL, rms
 
 __all__ = [
+    "MAX_AMPLIFICATION",
     "Compensation",
     "compensate",
 ]
+
+#: The largest change of a joint a correction may make, in units of the pose's error
+#: as an angle (module notes): five times what a well-conditioned arm needs (1-4).
+MAX_AMPLIFICATION = 20.0
+
+#: A trust-region step is kept when the residual's squared norm falls by at least this
+#: fraction of the fall the linear model predicts (More 1978; Nocedal & Wright,
+#: Algorithm 4.1, eta): any real progress, but not an increase.
+_ACCEPT_RATIO = 1e-4
+
+#: Below this ratio of actual to predicted fall the linear model was poor over the step:
+#: the radius is quartered.  Above :data:`_GOOD_FIT` a step on the radius doubles it.
+_POOR_FIT = 0.25
+_GOOD_FIT = 0.75
+
+#: Hebden's iterations for the damping that puts a step on its radius: each is Newton's
+#: step on ``1 / |dq(mu)| - 1 / D``, nearly linear in ``mu``, so a few give the radius
+#: to a fraction of a percent; the step is then scaled onto the radius exactly.
+_HEBDEN_STEPS = 8
 
 
 @dataclass(frozen=True, eq=False)
@@ -56,6 +106,9 @@ class Compensation:
         The same for the tool's orientation (when it is kept), deg.
     commanded : ndarray, shape (m, n)
         The program's own commands, rad.
+    bound_deg : ndarray, shape (m,)
+        The largest change of a joint the correction of each pose may make:
+        :data:`MAX_AMPLIFICATION` times the pose's error as an angle, deg.
     """
 
     q: np.ndarray
@@ -66,6 +119,7 @@ class Compensation:
     orientation_before_deg: np.ndarray | None
     orientation_after_deg: np.ndarray | None
     commanded: np.ndarray
+    bound_deg: np.ndarray
 
     def __repr__(self) -> str:
         s = self.summary()
@@ -141,6 +195,18 @@ class _Goal:
         )
         return np.concatenate([r, self.scale * turn], axis=1)
 
+    def error_angle(self, residual: np.ndarray) -> np.ndarray:
+        """``(a,)``: a residual as one angle (rad), its position seen from the arm's reach.
+
+        A joint turned by ``dq`` moves the tool by at most ``dq`` times the reach and
+        turns it by at most ``dq``: this is the smallest joint change that could remove
+        the residual, give or take the number of joints.
+        """
+        dim = self.model.point_dim
+        shift = np.linalg.norm(residual[:, :dim], axis=1) / self.model.reach_mm
+        turn = np.linalg.norm(residual[:, dim:], axis=1) / self.scale
+        return np.hypot(shift, turn)
+
     def jacobian(self, q: np.ndarray, active: np.ndarray) -> np.ndarray:
         """``d residual / dq`` ``(a, d [+ k], n)``, at the deflected pose under load.
 
@@ -153,6 +219,118 @@ class _Goal:
             return jac
         turn = self.scale * self.model.orientation_joint_jacobian(rows, self.params)
         return np.concatenate([jac, turn], axis=1)
+
+
+@dataclass(frozen=True, eq=False)
+class _Step:
+    """A trust-region step of every active row and what the linear model promises.
+
+    Attributes
+    ----------
+    dq : ndarray, shape (a, n)
+        The step, rad: the damped least-squares step within the radius, plus the pull
+        of the joints the goal leaves free back towards ``q0``.
+    gain : ndarray, shape (a,)
+        ``|r|^2 - |r + J dq|^2``: the fall of the squared residual the linear model
+        predicts (mm^2).
+    on_radius : ndarray of bool, shape (a,)
+        Whether the step was damped onto its radius (Newton's step was longer).
+    """
+
+    dq: np.ndarray
+    gain: np.ndarray
+    on_radius: np.ndarray
+
+
+def _trust_region_step(
+    jac: np.ndarray, residual: np.ndarray, radius: np.ndarray, pull: np.ndarray
+) -> _Step:
+    """Levenberg-Marquardt steps ``(a, n)`` with ``|dq| <= radius`` (module notes).
+
+    ``jac`` ``(a, k, n)``, ``residual`` ``(a, k)``, ``radius`` ``(a,)`` (rad) and
+    ``pull`` ``(a, n)``, the way back to ``q0``.  Singular values at or below
+    :data:`~armcal.numerics.RANK_RTOL` of a row's largest count as zero: the step
+    does not move along them, and the pull may.
+    """
+    u, s, vt = np.linalg.svd(jac, full_matrices=False)  # (a, k, r), (a, r), (a, r, n)
+    kept = s > RANK_RTOL * s[:, :1]
+    s = np.where(kept, s, 0.0)
+    c = np.einsum("akr,ak->ar", u, residual)  # the residual in the range's basis
+    f = s * c
+    mu = np.zeros(s.shape[0])
+    on_radius = np.zeros(s.shape[0], dtype=bool)
+    for _ in range(_HEBDEN_STEPS):
+        denom = s**2 + mu[:, None]
+        w = np.divide(f, denom, out=np.zeros_like(f), where=kept)  # -dq in the basis vt
+        length = np.linalg.norm(w, axis=1)
+        long = length > radius
+        on_radius |= long
+        if not np.any(long):
+            break
+        # Newton's step on 1 / |w(mu)| - 1 / radius (d|w|^2/dmu = -2 tail).
+        tail = np.sum(np.divide(f**2, denom**3, out=np.zeros_like(f), where=kept), axis=1)
+        ratio = np.divide(length, radius, out=np.ones_like(length), where=long)
+        mu += np.divide(length**2 * (ratio - 1.0), tail, out=np.zeros_like(mu), where=long)
+    # Hebden's iterates approach the radius from outside: the last one goes onto it.
+    w *= np.minimum(1.0, radius / np.where(length > 0, length, 1.0))[:, None]
+    gain = np.sum(c**2 - (c - s * w) ** 2, axis=1)
+    back = np.einsum("arn,an->ar", vt, pull) * kept
+    free = pull - np.einsum("ar,arn->an", back, vt)
+    return _Step(free - np.einsum("ar,arn->an", w, vt), gain, on_radius)
+
+
+def _singular_reasons(
+    goal: _Goal,
+    q: np.ndarray,
+    failed: np.ndarray,
+    beyond: np.ndarray,
+    bound: np.ndarray,
+    at_program: np.ndarray,
+) -> list[str]:
+    """Why each pose of ``failed`` was not corrected ("" for the others).
+
+    A pose whose iteration left its bound needs more than the bound: the reason gives
+    what the linearized correction at the program's command needs where that is more.
+    A pose whose iteration stalled within its bound gives the condition number of the
+    goal Jacobian where it stopped (a pose out of reach stops at a singularity too).
+    """
+    reasons = [""] * q.shape[0]
+    q0 = goal.program.q
+    eps = np.degrees(goal.error_angle(at_program))
+    limit = np.degrees(bound)
+    rows = np.flatnonzero(failed & beyond)
+    if rows.size:
+        jac = goal.jacobian(q0[rows], rows)
+        linear = np.degrees(
+            np.abs(np.linalg.pinv(jac, rcond=RANK_RTOL) @ at_program[rows, :, None])
+        )
+        for i, need in zip(rows, linear[:, :, 0], strict=True):
+            k = int(np.argmax(need))
+            allowed = f"{MAX_AMPLIFICATION:g} times the tool's error as an angle, {eps[i]:.3g} deg"
+            if need[k] > limit[i]:
+                reasons[i] = (
+                    f"near a singularity: the linearized correction needs {need[k]:.4g} deg "
+                    f"on joint {k + 1}, more than the {limit[i]:.3g} deg allowed ({allowed})"
+                )
+            else:
+                k = int(np.argmax(np.abs(q[i] - q0[i])))
+                reasons[i] = (
+                    f"near a singularity: the correction needs more than {limit[i]:.3g} deg "
+                    f"on joint {k + 1} ({allowed})"
+                )
+    rows = np.flatnonzero(failed & ~beyond)
+    if rows.size:
+        s = np.linalg.svd(goal.jacobian(q[rows], rows), compute_uv=False)
+        condition = np.divide(
+            s[:, 0], s[:, -1], out=np.full(rows.size, np.inf), where=s[:, -1] > 0
+        )
+        for i, cond in zip(rows, condition, strict=True):
+            reasons[i] = (
+                f"near a singularity or out of reach: no command within {limit[i]:.3g} deg of "
+                f"the program's on every joint reaches it (the goal Jacobian's condition "
+                f"number there is {cond:.3g})"
+            )
+    return reasons
 
 
 def compensate(
@@ -181,7 +359,7 @@ def compensate(
         A pose is corrected when the calibrated arm reaches the goal within
         this distance (mm; the tool's angles counted as arcs at the reach).
     max_iter : int
-        Newton iterations at most.
+        Trust-region steps at most (Newton's steps on well-conditioned poses).
     loads : Loads, optional
         The program's payload and tip force per row, for a calibration with
         compliance (default: the robot file's payload): the corrected commands
@@ -190,6 +368,8 @@ def compensate(
     Returns
     -------
     Compensation
+        Every pose either corrected within its bound (``bound_deg``; module notes)
+        or kept, with the reason: near a singularity, out of reach, beyond a limit.
 
     Examples
     --------
@@ -215,25 +395,36 @@ def compensate(
     everyone = np.arange(q.shape[0])
     residual = goal.residual(q, everyone)
     at_program = residual.copy()  # where the program's own commands take the tool
-    done = np.zeros(q.shape[0], dtype=bool)
+    bound = MAX_AMPLIFICATION * goal.error_angle(at_program)  # rad, per pose
+    radius = bound.copy()  # the trust region's, for the step's 2-norm (rad)
+    beyond = np.zeros(q.shape[0], dtype=bool)  # left its bound: near a singularity
     for _ in range(max_iter):
-        done = np.linalg.norm(residual, axis=1) <= tol_mm
-        active = np.flatnonzero(~done)
+        norm2 = np.sum(residual**2, axis=1)
+        # A radius that moves the tool by less than tol_mm can no longer make progress.
+        moving = radius * model.reach_mm > tol_mm
+        active = np.flatnonzero((norm2 > tol_mm**2) & moving & ~beyond)
         if active.size == 0:
             break
-        jac = goal.jacobian(q[active], active)
-        pinv = np.linalg.pinv(jac, rcond=1e-10)  # (a, n, k)
-        step = -np.einsum("ank,ak->an", pinv, residual[active])
-        # Minimum-norm steps, and whatever the goal leaves free drifts back towards q0.
-        null = np.eye(n) - pinv @ jac
-        step += np.einsum("anm,am->an", null, q0[active] - q[active])
-        q[active] += step
-        residual[active] = goal.residual(q[active], active)
-    done = np.linalg.norm(residual, axis=1) <= tol_mm
-    reasons = [
-        "" if ok else "no joint command reaches it (out of reach or at a singularity)"
-        for ok in done
-    ]
+        step = _trust_region_step(
+            goal.jacobian(q[active], active), residual[active], radius[active],
+            q0[active] - q[active],
+        )  # fmt: skip
+        trial = q[active] + step.dq
+        after = goal.residual(trial, active)
+        fall = norm2[active] - np.sum(after**2, axis=1)
+        fit = np.divide(fall, step.gain, out=np.zeros_like(fall), where=step.gain > 0)
+        good = step.on_radius & (fit > _GOOD_FIT)
+        radius[active] = np.where(
+            fit < _POOR_FIT,
+            radius[active] / 4,
+            np.where(good, np.minimum(2 * radius[active], bound[active]), radius[active]),
+        )
+        taken = fit > _ACCEPT_RATIO
+        rows = active[taken]
+        q[rows], residual[rows] = trial[taken], after[taken]
+        beyond[rows] = np.max(np.abs(q[rows] - q0[rows]), axis=1) > bound[rows]
+    done = (np.linalg.norm(residual, axis=1) <= tol_mm) & ~beyond
+    reasons = _singular_reasons(goal, q, ~done, beyond, bound, at_program)
     limits = model.joint_limits
     inside = model.within_limits(q)
     for i in np.flatnonzero(done & ~np.all(inside, axis=1)):
@@ -255,4 +446,6 @@ def compensate(
         turn_before = np.degrees(arcs / goal.scale)
         angles = model.orientation_jacobian(final, robot)  # (m, k, p)
         turn_after = np.degrees(np.sqrt(tip_variances(angles, covariance)))
-    return Compensation(q, done, tuple(reasons), before, after, turn_before, turn_after, q0)
+    return Compensation(
+        q, done, tuple(reasons), before, after, turn_before, turn_after, q0, np.degrees(bound)
+    )
