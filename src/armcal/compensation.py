@@ -177,7 +177,7 @@ class _Goal:
         nominal = np.where(model.instrument_params, params, 0.0)
         self.position = model.positions(program, nominal)
         self.angle = model.orientation(program, nominal) if orientation else None
-        self.scale = model.angle_scale_mm  # an angle counted as the arc at full reach
+        self.scale = model.angle_scale_mm  # an angle counted as an arc of this radius (mm)
 
     def rows(self, q: np.ndarray, active: np.ndarray) -> Conditions:
         """The conditions of the rows ``active`` at commands ``q`` (their targets and loads)."""
