@@ -38,6 +38,7 @@ __all__ = [
     "PLANAR_DEMO_POSES",
     "Demo",
     "figure_writer",
+    "report_head",
     "run_demo",
 ]
 
@@ -233,19 +234,26 @@ def run_demo(
     return Demo(text, report, files, document, cal.warnings)
 
 
+def report_head(name: str, what: str, text: str) -> list[str]:
+    """The opening lines of a demo's ``report.md``: its title and the story as printed."""
+    return [
+        f"# armcal demo: calibrating {name}",
+        "",
+        f"{what} is calibrated as a real one would be. "
+        "Every number below was computed by this run (`armcal demo`).",
+        "",
+        "```text",
+        text,
+        "```",
+        "",
+    ]
+
+
 def _report(arm: PlanarArm, text: str, before: np.ndarray, after: np.ndarray) -> str:
     """``report.md``: the story, its figures and what every file is."""
     return "\n".join(
         [
-            f"# armcal demo: calibrating {arm.name}",
-            "",
-            "A virtual arm with known deviations is calibrated as a real one would be. "
-            "Every number below was computed by this run (`armcal demo`).",
-            "",
-            "```text",
-            text,
-            "```",
-            "",
+            *report_head(arm.name, "A virtual arm with known deviations", text),
             "## The plan",
             "",
             "Every pose drawn as the nominal arm, numbered in the order the file lists them.",

@@ -18,7 +18,7 @@ from pathlib import Path
 import numpy as np
 
 from .compensation import compensate
-from .demo import Demo, figure_writer
+from .demo import Demo, figure_writer, report_head
 from .doe import random_plan
 from .export_serial import joint_offsets_csv, serial_robot_toml, serial_urdf
 from .files import (
@@ -110,10 +110,14 @@ def run_serial_demo(
     """
     rng = np.random.default_rng(seed)
     labels = tuple(DEMO_REFLECTORS)
-    noise = NoiseModel.laser_tracker(DEMO_TRACKER) if sigma is None else None
+    noise = (
+        NoiseModel.laser_tracker(DEMO_TRACKER)
+        if sigma is None
+        else NoiseModel.isotropic(sigma, dim=3)
+    )
     model = arm.replace(
         targets=labels, target_positions=np.zeros((0, 3)), known_targets=False
-    ).with_noise(noise if sigma is None else NoiseModel.isotropic(sigma, dim=3))
+    ).with_noise(noise)
     truth = truth_of(model.replace(target_positions=np.array(list(DEMO_REFLECTORS.values()))))
 
     def measure(q: np.ndarray) -> tuple[Conditions, np.ndarray, list[str], list[str]]:
@@ -153,7 +157,7 @@ def run_serial_demo(
     before, after = true_error(program), true_error(comp.q)
 
     free = cal.model.free
-    error = (cal.params - seen)[free] / np.sqrt(np.diagonal(cal.covariance))[free]
+    error = (cal.params - seen)[free] / cal.std[free]
     lines = [
         f"armcal demo on {arm.name}: a virtual six-axis arm, a laser tracker "
         f"{np.linalg.norm(truth[:3]) / 1000:.1f} m away, three reflectors, seed {seed}",
@@ -184,9 +188,10 @@ def run_serial_demo(
 
         return plot_residuals(cal.residuals, cal.sigma_mm, used=cal.used)
 
+    document = calibration_document(cal)
     files: dict[str, str | Callable[[Path], None]] = {
         "measurements.csv": format_measurements_csv(rows.q, points, pose_labels, targets),
-        "calibration.json": to_json(calibration_document(cal)),
+        "calibration.json": to_json(document),
         "validation.csv": format_measurements_csv(
             test_rows.q, test_points, test_poses, test_targets
         ),
@@ -201,18 +206,10 @@ def run_serial_demo(
     }
     report = "\n".join(
         [
-            f"# armcal demo: calibrating {arm.name}",
-            "",
-            "A virtual six-axis arm with known errors is calibrated as a real one would be. "
-            "Every number below was computed by this run (`armcal demo`).",
-            "",
-            "```text",
-            text,
-            "```",
-            "",
+            *report_head(arm.name, "A virtual six-axis arm with known errors", text),
             "![residuals](residuals.png)",
             "",
         ]
     )
     files["report.md"] = report
-    return Demo(text, report, files, calibration_document(cal), cal.warnings)
+    return Demo(text, report, files, document, cal.warnings)

@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
+from functools import cache
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -239,12 +240,10 @@ def synthesize_measurements(
     truth = checked_truth(model, truth)
     conditions = model.conditions(plan, target=target, loads=loads)
     m = plan.shape[0]
-    known = [] if exact is None else [exact]
 
-    def noiseless() -> np.ndarray:
-        if not known:
-            known.append(model.positions(conditions, truth))
-        return known[0]
+    @cache
+    def noiseless() -> np.ndarray:  # evaluated once, and only where needed
+        return model.positions(conditions, truth) if exact is None else exact
 
     factor = _instrument_factor(model, sigma, row_sigma, m, noiseless)
     joint_sigma = None if model.noise is None else model.noise.joint_sigma
