@@ -248,9 +248,9 @@ CASES = [
     ),
     case(
         "meas-unknown-column",
-        {"meas.csv": _csv(MEAS_HEADER + ",rz_deg", [r + ",0.0" for r in MEAS_ROWS])},
+        {"meas.csv": _csv(MEAS_HEADER + ",temp_c", [r + ",0.0" for r in MEAS_ROWS])},
         IDENTIFY,
-        ("meas.csv", "line 1", "rz_deg"),
+        ("meas.csv", "line 1", "temp_c"),
     ),
     case(
         "meas-duplicate-column",

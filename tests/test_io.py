@@ -306,7 +306,10 @@ def test_points_beyond_any_arms_reach_are_an_error(tmp_path, arm2):
     [
         ("", "file is empty"),
         ("q1_deg,q2_deg,x_mm\n0,0,1\n", "missing column 'y_mm'"),
-        ("q1_deg,q2_deg,x_mm,y_mm,rz_deg\n0,0,1,2,3\n", "unknown column 'rz_deg'"),
+        (
+            "q1_deg,q2_deg,x_mm,y_mm,rz_deg\n0,0,1,2,3\n",
+            "line 1: has rz_deg but not rx_deg, ry_deg",
+        ),
         ("q1_deg,q2_deg,x_mm,x_mm,y_mm\n0,0,1,1,2\n", "duplicate column 'x_mm'"),
         ("q1_deg,q2_deg,x_mm,y_mm\n", "no poses"),
         ("q1_deg,q2_deg,x_mm,y_mm\n0,0,1\n", r"row 1 \(line 2\) has 3 fields"),

@@ -269,6 +269,14 @@ SERIAL_KEYS: tuple[Key, ...] = (
         "constant plus a term per metre of distance from the tracker (instead of sigma_mm)",
     ),
     Key(
+        "measurement",
+        "orientation_sigma_deg",
+        "deg",
+        "none",
+        "a 6-DoF instrument's orientation noise (1 std about each axis): needed for "
+        "measurements with rx_deg, ry_deg, rz_deg; plans are then evaluated for full poses",
+    ),
+    Key(
         "targets",
         "LABEL",
         "inline table: xyz_mm (mm, tip frame)",
@@ -343,6 +351,15 @@ _MEASURED = (
     _POSE,
     _TARGET,
     Column("sigma_mm", "mm", False, "this row's instrument noise (1 std)"),
+    Column(
+        "rx_deg",
+        "deg",
+        False,
+        "a 6-DoF instrument's orientation of the target: rotation vector (axis times angle, "
+        "instrument frame), x; with ry_deg and rz_deg (spatial arms)",
+    ),
+    Column("ry_deg", "deg", False, "the rotation vector, y"),
+    Column("rz_deg", "deg", False, "the rotation vector, z"),
     _PAYLOAD,
     *_FORCE,
 )

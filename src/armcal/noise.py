@@ -11,7 +11,10 @@ joint encoders may add noise ``sigma_q`` (rad, per joint): the arm was really at
 with ``J_q = d tip / d q`` at the current deviations (the user Jacobian's
 ``dq`` columns: a joint offset and an encoder error move the tip alike).
 An instrument that reports each point's uncertainty replaces ``Sigma_meas`` by
-``s_i^2 I`` row by row.  A laser tracker's noise depends on where the point is
+``s_i^2 I`` row by row.  A 6-DoF instrument also measures the target's
+orientation, with independent noise ``sigma_o`` (rad) about each axis; its rows
+are ``(x, y, z, turn)`` with the covariance ``diag(Sigma_meas, sigma_o^2 I)`` plus
+the encoder term of the six rows.  A laser tracker's noise depends on where the point is
 (:class:`TrackerNoise`): along the line of sight from the tracker's origin its
 range uncertainty, across it its angular uncertainty times the distance, each
 of the data-sheet form "a constant plus a term per metre", so
@@ -134,6 +137,8 @@ class NoiseModel:
         A laser tracker's noise, which depends on where each point is; then
         ``covariance_mm2`` is the isotropic noise with the same information at
         :data:`TRACKER_REFERENCE_MM` (:meth:`laser_tracker` builds it).
+    orientation_sigma : float, optional
+        A 6-DoF instrument's orientation noise (1 std about each axis, rad).
 
     Examples
     --------
@@ -147,6 +152,7 @@ class NoiseModel:
     covariance_mm2: np.ndarray
     joint_sigma: np.ndarray | None
     tracker: TrackerNoise | None
+    orientation_sigma: float | None
 
     def __init__(
         self,
@@ -154,6 +160,7 @@ class NoiseModel:
         joint_sigma: ArrayLike | None = None,
         *,
         tracker: TrackerNoise | None = None,
+        orientation_sigma: float | None = None,
     ) -> None:
         cov = np.array(covariance_mm2, dtype=float)
         if cov.shape not in ((2, 2), (3, 3)) or not _spd(cov):
@@ -177,6 +184,20 @@ class NoiseModel:
         object.__setattr__(self, "covariance_mm2", cov)
         object.__setattr__(self, "joint_sigma", js)
         object.__setattr__(self, "tracker", tracker)
+        if orientation_sigma is not None:
+            orientation_sigma = float(orientation_sigma)
+            if not (np.isfinite(orientation_sigma) and orientation_sigma > 0):
+                raise ValueError(f"orientation_sigma must be > 0 rad, got {orientation_sigma}")
+        object.__setattr__(self, "orientation_sigma", orientation_sigma)
+
+    def with_orientation(self, sigma_rad: float | None) -> NoiseModel:
+        """The same noise with a 6-DoF instrument's orientation noise ``sigma_rad`` (rad)."""
+        return NoiseModel(
+            self.covariance_mm2,
+            self.joint_sigma,
+            tracker=self.tracker,
+            orientation_sigma=sigma_rad,
+        )
 
     @classmethod
     def laser_tracker(
@@ -228,7 +249,8 @@ class NoiseModel:
                 f"the instrument's noise is given for {self.dim}-D points, the measurements "
                 f"are {dim}-D; give sigma_mm as one number or {dim} values"
             )
-        return NoiseModel.isotropic(self.sigma_mm, self.joint_sigma, dim=dim)
+        same = NoiseModel.isotropic(self.sigma_mm, self.joint_sigma, dim=dim)
+        return same.with_orientation(self.orientation_sigma)
 
     @classmethod
     def per_axis(
@@ -256,8 +278,10 @@ class NoiseModel:
         return self.isotropic_instrument and self.joint_sigma is None
 
     def with_instrument_sigma(self, sigma_mm: float) -> NoiseModel:
-        """The same encoder noise with isotropic instrument noise ``sigma_mm``."""
-        return NoiseModel.isotropic(sigma_mm, self.joint_sigma, dim=self.dim)
+        """The same encoder (and orientation) noise with isotropic instrument noise
+        ``sigma_mm``."""
+        same = NoiseModel.isotropic(sigma_mm, self.joint_sigma, dim=self.dim)
+        return same.with_orientation(self.orientation_sigma)
 
     def check_joints(self, n: int) -> None:
         """Raise ValueError unless ``joint_sigma`` fits an arm of ``n`` joints."""
@@ -273,19 +297,34 @@ class NoiseModel:
         *,
         row_sigma: np.ndarray | None = None,
         points: np.ndarray | None = None,
+        oriented: bool = False,
     ) -> np.ndarray:
         """The instrument's ``Sigma_meas`` ``(..., m, d, d)`` (mm^2) of measurements of shape
         ``(..., m)``: ``row_sigma`` ``(m,)`` (mm) replaces it row by row; a tracker's
-        depends on the ``points`` ``(..., m, 3)`` (mm, instrument frame).
+        depends on the ``points`` ``(..., m, 3)`` (mm, instrument frame).  ``oriented``
+        rows measure the orientation too: ``(..., m, d + 3, d + 3)``, block diagonal.
         """
         d = self.dim
         if row_sigma is not None:
-            return np.asarray(row_sigma, dtype=float)[..., None, None] ** 2 * np.eye(d)
-        if self.tracker is not None:
+            cov = np.asarray(row_sigma, dtype=float)[..., None, None] ** 2 * np.eye(d)
+        elif self.tracker is not None:
             if points is None:
                 raise ValueError("a laser tracker's noise depends on where the points are")
-            return self.tracker.covariances(points)
-        return np.broadcast_to(self.covariance_mm2, (*shape, d, d))
+            cov = self.tracker.covariances(points)
+        else:
+            cov = np.broadcast_to(self.covariance_mm2, (*shape, d, d))
+        if not oriented:
+            return cov
+        if self.orientation_sigma is None:
+            raise ValueError(
+                "the instrument measures orientations: its orientation noise is needed "
+                "(orientation_sigma_deg in the robot file's [measurement])"
+            )
+        lead = np.broadcast_shapes(shape, cov.shape[:-2])
+        out = np.zeros((*lead, d + 3, d + 3))
+        out[..., :d, :d] = cov
+        out[..., d:, d:] = self.orientation_sigma**2 * np.eye(3)
+        return out
 
     def pose_covariances(
         self,
@@ -294,17 +333,20 @@ class NoiseModel:
         joint_jacobian: np.ndarray | None = None,
         row_sigma: np.ndarray | None = None,
         points: np.ndarray | None = None,
+        oriented: bool = False,
     ) -> np.ndarray:
         """``Sigma_i`` ``(..., m, d, d)`` in mm^2 of measurements of shape ``(..., m)``.
 
         ``joint_jacobian`` ``(..., m, d, n)`` (mm/rad) is ``d tip / d q`` where the
         encoder term is linearized: the model's (:meth:`armcal.models.planar.PlanarArm.
         pose_covariances` gives it); without it, or without encoder noise, only the
-        instrument's covariance counts.  ``row_sigma`` and ``points`` as for
-        :meth:`instrument_covariances`.
+        instrument's covariance counts.  ``row_sigma``, ``points`` and ``oriented`` as
+        for :meth:`instrument_covariances` (``d`` is then ``dim + 3``).
         """
-        d = self.dim
-        base = self.instrument_covariances(shape, row_sigma=row_sigma, points=points)
+        base = self.instrument_covariances(
+            shape, row_sigma=row_sigma, points=points, oriented=oriented
+        )
+        d = base.shape[-1]
         if self.joint_sigma is None or joint_jacobian is None:
             return np.broadcast_to(base, (*np.broadcast_shapes(shape, base.shape[:-2]), d, d))
         n = joint_jacobian.shape[-1]
@@ -318,6 +360,7 @@ class NoiseModel:
         joint_jacobian: np.ndarray | None = None,
         row_sigma: np.ndarray | None = None,
         points: np.ndarray | None = None,
+        oriented: bool = False,
     ) -> np.ndarray:
         """Relative whitening ``W_i`` ``(..., m, d, d)``: ``W_i^T W_i = sigma_ref^2 Sigma_i^-1``.
 
@@ -326,7 +369,11 @@ class NoiseModel:
         Arguments as for :meth:`pose_covariances`.
         """
         cov = self.pose_covariances(
-            shape, joint_jacobian=joint_jacobian, row_sigma=row_sigma, points=points
+            shape,
+            joint_jacobian=joint_jacobian,
+            row_sigma=row_sigma,
+            points=points,
+            oriented=oriented,
         )
         return whitening_from_covariance(cov, self.sigma_mm)
 
@@ -341,6 +388,8 @@ class NoiseModel:
         }
         if self.tracker is not None:
             out["tracker"] = self.tracker.to_dict()
+        if self.orientation_sigma is not None:
+            out["orientation_sigma_deg"] = float(np.degrees(self.orientation_sigma))
         return out
 
 

@@ -43,14 +43,12 @@ from .tables import (
     REACH_MARGIN,
     Measurements,
     Program,
-    format_measurements_csv,
-    format_plan_csv,
-    format_program_csv,
     read_loaded_plan,
     read_measurements,
     read_plan,
     read_program,
 )
+from .writers import format_measurements_csv, format_plan_csv, format_program_csv
 
 __all__ = [
     "BUILTIN_ROBOTS",

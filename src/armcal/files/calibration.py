@@ -63,6 +63,10 @@ def _region_to_dict(region: Region | None) -> dict[str, Any] | None:
     return None
 
 
+#: The coordinates of a standardized residual: a point's, then a 6-DoF instrument's turn.
+_AXES = ("x", "y", "z", "rx", "ry", "rz")
+
+
 def serial_robot_to_dict(arm: SpatialArm) -> dict[str, Any]:
     """The ``robot`` section of a spatial arm's calibration: the chain as joint origins
     (mm, rad: 4 x 4 transforms), the joint map and limits, the targets, and the
@@ -81,6 +85,11 @@ def serial_robot_to_dict(arm: SpatialArm) -> dict[str, Any]:
         "target_positions_mm": arm.target_positions.tolist(),
         "base_pose": arm.base_pose.tolist(),
         "known_targets": arm.known_targets,
+        **(
+            {"oriented": True, "target_turns_rad": arm.target_turns.tolist()}
+            if arm.oriented
+            else {}
+        ),
         "held": list(arm.held),
         "merges": list(arm.merges),
     }
@@ -114,6 +123,8 @@ def _serial_from_dict(
         held=held,
         merges=tuple(str(text) for text in data["merges"]),
         known_targets=bool(data["known_targets"]),
+        oriented=bool(data.get("oriented", False)),
+        target_turns=np.array(data.get("target_turns_rad", []), dtype=float).reshape(-1, 3),
     )
 
 
@@ -205,10 +216,12 @@ def read_calibration(path: str | os.PathLike) -> CalibratedArm:
             key = "noise"
             sigma_q = doc["noise"].get("joint_sigma_deg")
             tracker = doc["noise"].get("tracker")
+            turn = doc["noise"].get("orientation_sigma_deg")
             noise = NoiseModel(
                 np.array(doc["noise"]["covariance_mm2"], dtype=float),
                 None if sigma_q is None else np.radians(np.array(sigma_q, dtype=float)),
                 tracker=None if tracker is None else TrackerNoise(**tracker),
+                orientation_sigma=None if turn is None else math.radians(float(turn)),
             )
         key = "robot"
         fixed = list(doc.get("fixed", []))
@@ -337,7 +350,10 @@ def calibration_document(
     targets = (
         [None] * cal.n_poses if cal.target is None else [labels[t] for t in cal.target.tolist()]
     )
-    axes = ("dx_mm", "dy_mm", "dz_mm")[: cal.residuals.shape[1]]
+    axes = ("dx_mm", "dy_mm", "dz_mm", "drx_deg", "dry_deg", "drz_deg")[: cal.residuals.shape[1]]
+    shown = np.array(cal.residuals, dtype=float)
+    shown[:, 3:] = np.degrees(shown[:, 3:])  # a 6-DoF instrument's turns, in degrees
+    turn_rms = cal.orientation_residual_rms_deg
     standardized = cal.standardized_residuals
     return {
         "format": CALIBRATION_FORMAT,
@@ -367,6 +383,7 @@ def calibration_document(
         "residual_rms_mm": cal.residual_rms,
         "residual_rms_per_coordinate_mm": cal.residual_rms,
         "residual_max_mm": cal.residual_max,
+        **({} if turn_rms is None else {"orientation_residual_rms_per_axis_deg": turn_rms}),
         "degrees_of_freedom": cal.dof,
         "goodness_of_fit": {
             "chi2": None if fit is None else _finite_or_none(fit.chi2),
@@ -376,13 +393,13 @@ def calibration_document(
         "residuals": [
             {"row": row, "pose": label, "target": t, **dict(zip(axes, d, strict=True)), "used": u}
             for row, label, t, d, u in zip(
-                rows, cal.pose_labels, targets, cal.residuals.tolist(), used, strict=True
+                rows, cal.pose_labels, targets, shown.tolist(), used, strict=True
             )
         ],
         "standardized_residuals": []
         if standardized is None
         else [
-            {"row": row, "pose": label, **dict(zip("xyz", d, strict=False))}
+            {"row": row, "pose": label, **dict(zip(_AXES, d, strict=False))}
             for row, label, d in zip(rows, cal.pose_labels, standardized.tolist(), strict=True)
         ],
         "outliers": [

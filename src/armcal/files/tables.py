@@ -29,8 +29,8 @@ from ..models import (
     SpatialArm,
 )
 from .common import MAX_ABS_VALUE, fail, read_text, suggest
-from .csv_text import csv_text, degrees, floats
 from .robots import METRE_REACH_MM, RADIAN_LIMIT_BOUND, SIGMA_RANGE_MM
+from .writers import ORIENTATION_COLUMNS, joint_names
 
 __all__ = [
     "INSTRUMENT_RANGE",
@@ -38,9 +38,6 @@ __all__ = [
     "REACH_MARGIN",
     "Measurements",
     "Program",
-    "format_measurements_csv",
-    "format_plan_csv",
-    "format_program_csv",
     "read_loaded_plan",
     "read_measurements",
     "read_plan",
@@ -69,7 +66,11 @@ INSTRUMENT_RANGE = 100.0
 
 _JOINT_COLUMN = re.compile(r"^q([1-9][0-9]{0,3})_deg$")  # up to 9999 joints
 #: A column with a known stem and another unit suffix (``q1_rad``, ``x_m``).
-_UNIT_COLUMN = re.compile(r"^(q[1-9][0-9]{0,3}|x|y|z|sigma)_([A-Za-z]+)$")
+_UNIT_COLUMN = re.compile(r"^(q[1-9][0-9]{0,3}|x|y|z|rx|ry|rz|sigma)_([A-Za-z]+)$")
+
+#: A rotation vector's angle is at most half a turn; up to a full turn is accepted (an
+#: instrument may not reduce it), beyond that the column is not degrees of a rotation vector.
+MAX_TURN_DEG = 360.0
 
 #: Units a column may be written in that armcal does not read (a unit hint, not a typo).
 _OTHER_UNITS = frozenset(
@@ -107,6 +108,9 @@ class Measurements:
         The optional ``payload_kg`` column: the payload carried in every row.
     force_n : ndarray, shape (m, 2), or None
         The optional ``fx_N``, ``fy_N`` columns: a force applied at the tip (N).
+    orientation : ndarray, shape (m, 3), or None
+        The optional ``rx_deg, ry_deg, rz_deg`` columns of a 6-DoF instrument: the
+        target's orientation as a rotation vector in the instrument's frame (rad).
     """
 
     q: np.ndarray
@@ -119,6 +123,7 @@ class Measurements:
     z: np.ndarray | None = None
     payload_kg: np.ndarray | None = None
     force_n: np.ndarray | None = None
+    orientation: np.ndarray | None = None
 
     def loads(self, default_payload_kg: float = 0.0) -> Loads:
         """Every row's payload (the file's default where there is no column) and tip force."""
@@ -138,12 +143,16 @@ class Measurements:
             raise ValueError("the measurements are 2-D: no z_mm column")
         return np.column_stack([self.xy, self.z])
 
+    @property
+    def instrument_points(self) -> np.ndarray:
+        """What the instrument read ``(m, 3)`` or ``(m, 6)``: the 3-D point (mm) and, from a
+        6-DoF instrument, the orientation's rotation vector (rad)."""
+        if self.orientation is None:
+            return self.xyz
+        return np.column_stack([self.xyz, self.orientation])
+
 
 # --------------------------------------------------------------------------- CSV
-
-
-def _joint_names(n: int) -> list[str]:
-    return [f"q{j}_deg" for j in range(1, n + 1)]
 
 
 @dataclass(frozen=True, eq=False)
@@ -155,6 +164,7 @@ class _Table:
     numbers: dict[str, np.ndarray]  # optional numeric columns present
     lines: list[int]  # file line of every data row
     beyond: list[tuple[int, int, float, float]]  # (row index, joint, value deg, by deg)
+    header_line: int = 1  # file line of the header
 
 
 def _parse_number(path, where: str, name: str, field: str, decimal_comma: bool = False) -> float:
@@ -375,7 +385,7 @@ def _read_csv(
     ``limit_tol_deg`` is accepted and listed in ``beyond``; farther is an error.
     """
     numeric, optional, optional_numeric = reader_columns(what)
-    expected = _joint_names(arm.n_joints) + list(numeric)
+    expected = joint_names(arm.n_joints) + list(numeric)
     extras = list(optional) + list(optional_numeric)
     layout = ",".join(expected) + "".join(f" [,{c}]" for c in extras)
     text = read_text(path, what)
@@ -480,7 +490,7 @@ def _read_csv(
     ]
     if what in ("plan", "program"):
         _refuse_radians(path, what, q_deg, limits_deg)
-    return _Table(values, texts, numbers, lines, beyond)
+    return _Table(values, texts, numbers, lines, beyond, header_line)
 
 
 def _wrapped_into(q_deg: np.ndarray, lo: float, hi: float) -> float | None:
@@ -612,22 +622,6 @@ def read_program(
     )
 
 
-def format_program_csv(
-    q: np.ndarray,
-    corrected: np.ndarray,
-    labels: Sequence[str] | None = None,
-    targets: Sequence[str] | None = None,
-) -> str:
-    """Program CSV text: ``[pose,]q1_deg..qn_deg[,target],corrected`` (1 or 0 per row)."""
-    head = (["pose"] if labels is not None else []) + _joint_names(q.shape[1])
-    head += (["target"] if targets is not None else []) + ["corrected"]
-    columns: list = [[str(label) for label in labels]] if labels is not None else []
-    columns.append(degrees(q))
-    columns += [[str(target) for target in targets]] if targets is not None else []
-    columns.append(["1" if c else "0" for c in np.asarray(corrected, dtype=bool).tolist()])
-    return csv_text(head, columns)
-
-
 def _beyond_limits_warning(path, arm: PlanarArm | SpatialArm, beyond) -> ArmcalWarning:
     limits_deg = np.degrees(arm.joint_limits)
     shown = [
@@ -750,6 +744,7 @@ def read_measurements(
     if table.beyond:
         warnings.append(_beyond_limits_warning(path, arm, table.beyond))
     payload, force = _load_columns(path, table)
+    orientation = _orientation_columns(path, arm, table)
     return Measurements(
         np.radians(values[:, :n]),
         xy,
@@ -761,7 +756,46 @@ def read_measurements(
         z=z,
         payload_kg=payload,
         force_n=force,
+        orientation=orientation,
     )
+
+
+def _orientation_columns(path, arm: PlanarArm | SpatialArm, table: _Table) -> np.ndarray | None:
+    """The rotation vectors ``(m, 3)`` (rad) of ``rx_deg, ry_deg, rz_deg``: all three or none,
+    of a spatial arm, each of at most :data:`MAX_TURN_DEG`."""
+    found = [table.numbers.get(name) for name in ORIENTATION_COLUMNS]
+    given = [
+        name for name, column in zip(ORIENTATION_COLUMNS, found, strict=True) if column is not None
+    ]
+    if not given:
+        return None
+    if len(given) < 3:
+        missing = [name for name in ORIENTATION_COLUMNS if name not in given]
+        raise fail(
+            path,
+            f"line {table.header_line}: has {', '.join(given)} but not {', '.join(missing)}: "
+            "a 6-DoF instrument's "
+            "orientation is a rotation vector rx_deg, ry_deg, rz_deg; add the missing "
+            "columns or remove the orientation",
+        )
+    if isinstance(arm, PlanarArm):
+        raise fail(
+            path,
+            f"has orientation columns ({', '.join(given)}) but {arm.name} is a planar arm, "
+            "whose tool orientation is not measured; remove them",
+        )
+    degrees_ = np.column_stack([column for column in found if column is not None])
+    angle = np.linalg.norm(degrees_, axis=1)
+    bad = np.flatnonzero(angle > MAX_TURN_DEG)
+    if bad.size:
+        r = int(bad[0])
+        raise fail(
+            path,
+            f"row {r + 1} (line {table.lines[r]}), columns rx_deg, ry_deg, rz_deg: a turn of "
+            f"{angle[r]:.6g} deg is more than {MAX_TURN_DEG:g}; give the orientation as a "
+            "rotation vector (axis times angle) in degrees",
+        )
+    return np.radians(degrees_)
 
 
 def _load_columns(path, table: _Table) -> tuple[np.ndarray | None, np.ndarray | None]:
@@ -803,46 +837,3 @@ def _check_target_labels(
                 f"{arm.name}: {suggest(label, known)}the robot file's [targets] has "
                 f"{', '.join(known)}",
             )
-
-
-def format_plan_csv(
-    q: np.ndarray,
-    payload_kg: np.ndarray | None = None,
-    targets: Sequence[str] | None = None,
-) -> str:
-    """Plan (or program) CSV text for joint angles ``q`` ``(m, n)`` in rad, and every pose's
-    payload or target where given."""
-    head = _joint_names(q.shape[1]) + (["payload_kg"] if payload_kg is not None else [])
-    columns: list = [degrees(q)]
-    if payload_kg is not None:
-        columns.append(floats(payload_kg))
-    if targets is not None:
-        head.append("target")
-        columns.append([str(target) for target in targets])
-    return csv_text(head, columns)
-
-
-def format_measurements_csv(
-    q: np.ndarray,
-    xy: np.ndarray,
-    labels: Sequence[str] | None = None,
-    targets: Sequence[str] | None = None,
-    payload_kg: np.ndarray | None = None,
-) -> str:
-    """Measurements CSV text; positions are written with full round-trip precision.
-
-    ``xy`` of shape ``(m, 3)`` writes 3-D points (``z_mm``); ``targets`` adds the
-    ``target`` column, ``payload_kg`` the payload of every row.
-    """
-    head = ["pose"] if labels is not None else []
-    head += _joint_names(q.shape[1]) + ["x_mm", "y_mm", "z_mm"][: xy.shape[1]]
-    head += ["target"] if targets is not None else []
-    head += ["payload_kg"] if payload_kg is not None else []
-    if xy.shape[0] != q.shape[0]:
-        raise ValueError(f"q has {q.shape[0]} rows but xy has {xy.shape[0]}")
-    columns: list = [[str(label) for label in labels]] if labels is not None else []
-    columns += [degrees(q), floats(xy)]
-    columns += [[str(target) for target in targets]] if targets is not None else []
-    if payload_kg is not None:
-        columns.append(floats(payload_kg))
-    return csv_text(head, columns)

@@ -246,6 +246,7 @@ def identify(
             conditions = model.conditions(
                 q, target=conditions.target, loads=conditions.loads, sigma_mm=row_sigma
             )
+    conditions, points = model.anchor(conditions, points)
     method = resolve_method(model, method)
     if sigma is not None:
         model = model.with_noise(instrument_override(model.noise, sigma))
@@ -301,7 +302,7 @@ def identify(
         test = clean.test(scale, given=given)
     labels = tuple(str(i) for i in range(1, m + 1)) if pose_labels is None else tuple(pose_labels)
     row_numbers = tuple(range(1, m + 1)) if rows is None else tuple(int(r) for r in rows)
-    distance = point_norms(fit.residuals)
+    distance = point_norms(fit.residuals[:, : model.position_dim])
     target_index = conditions.target
     outliers = tuple(
         Outlier(

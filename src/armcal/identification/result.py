@@ -274,16 +274,24 @@ class Calibration:
 
     @property
     def pose_residuals(self) -> np.ndarray:
-        """Euclidean residual of every pose ``(m,)`` in mm."""
-        return point_norms(self.residuals)
+        """Euclidean residual of every pose's position ``(m,)`` in mm."""
+        return point_norms(self.residuals[:, : self.model.position_dim])
 
     def _used_residuals(self) -> np.ndarray:
         return self.residuals if self.used is None else self.residuals[self.used]
 
     @property
     def residual_rms(self) -> float:
-        """RMS of the residual coordinates of the poses in the fit (per coordinate), mm."""
-        return rms(self._used_residuals())
+        """RMS of the residual position coordinates of the poses in the fit (per
+        coordinate), mm."""
+        return rms(self._used_residuals()[:, : self.model.position_dim])
+
+    @property
+    def orientation_residual_rms_deg(self) -> float | None:
+        """For a 6-DoF instrument, RMS of the residual turns' coordinates (per coordinate),
+        degrees; None for positions only."""
+        turns = self._used_residuals()[:, self.model.position_dim :]
+        return None if turns.shape[1] == 0 else float(np.degrees(rms(turns)))
 
     @property
     def residual_max(self) -> float:

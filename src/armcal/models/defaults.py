@@ -56,6 +56,19 @@ class MinimalPlanar:
         """Itself: its parameters are minimal and need no placing."""
         return self
 
+    @property
+    def position_dim(self) -> int:
+        """Every coordinate of its points is a position."""
+        return 2
+
+    def anchor(self, conditions: Conditions, points: np.ndarray) -> tuple[Conditions, np.ndarray]:
+        """The rows as they are: its points are positions only."""
+        return conditions, np.asarray(points, dtype=float)
+
+    def unanchor(self, conditions: Conditions, points: np.ndarray) -> np.ndarray:
+        """The points as they are: they are positions only."""
+        return np.asarray(points, dtype=float)
+
     def expressed(self, conditions: Conditions, params: np.ndarray) -> np.ndarray:
         """``params``: its parameters are minimal."""
         return np.asarray(params, dtype=float)

@@ -154,6 +154,11 @@ class Conditions:
     sigma_mm : ndarray, shape (m,), or None
         Per-row instrument noise (1 std, mm), for instruments that report each
         point's uncertainty; replaces the instrument covariance row by row.
+    frames : ndarray, shape (m, 3, 3), or None
+        For a model that measures orientations: every row's reference
+        orientation, about which the orientation part of a point is a rotation
+        vector (:meth:`FitModel.anchor` puts it at the measured orientation); None:
+        the instrument's axes.
 
     Examples
     --------
@@ -166,6 +171,7 @@ class Conditions:
     target: np.ndarray | None = None
     loads: Loads | None = None
     sigma_mm: np.ndarray | None = None
+    frames: np.ndarray | None = None
     _memo: dict[Hashable, Any] = field(default_factory=dict, repr=False)
 
     @property
@@ -180,7 +186,12 @@ class Conditions:
             None if self.target is None else self.target[rows],
             None if self.loads is None else self.loads.take(rows),
             None if self.sigma_mm is None else self.sigma_mm[rows],
+            None if self.frames is None else self.frames[rows],
         )
+
+    def with_frames(self, frames: np.ndarray | None) -> Conditions:
+        """The same rows with reference orientations ``frames`` ``(m, 3, 3)``."""
+        return Conditions(self.q, self.target, self.loads, self.sigma_mm, frames)
 
     def memo(self, key: Hashable, compute: Callable[[], Any]) -> Any:
         """``compute()`` once for these conditions: a factorization several steps share.
@@ -453,7 +464,28 @@ class FitModel(Protocol):
 
     @property
     def point_dim(self) -> int:
-        """Coordinates of a measured point: 2 (in the plane) or 3."""
+        """Coordinates of a measured point: 2 (in the plane) or 3, and 6 when the
+        instrument also measures the target's orientation (then the last three are a
+        rotation vector, rad)."""
+        ...
+
+    @property
+    def position_dim(self) -> int:
+        """The coordinates of a point that are a position (mm): the first ones.  Errors
+        and RMS in mm are of these; the rest (an orientation) are reported apart."""
+        ...
+
+    def anchor(self, conditions: Conditions, points: np.ndarray) -> tuple[Conditions, np.ndarray]:
+        """Measured rows as the fit compares them with :meth:`positions`: ``points``
+        ``(m, d)`` as the instrument gives them (an orientation as a rotation vector in
+        its frame); a model measuring orientations takes each as its row's reference
+        (:attr:`Conditions.frames`) and leaves a zero turn from it, so the fit's
+        orientation residuals are small rotation vectors at every orientation."""
+        ...
+
+    def unanchor(self, conditions: Conditions, points: np.ndarray) -> np.ndarray:
+        """:meth:`anchor` undone: ``points`` ``(..., m, d)`` of these conditions as the
+        instrument gives them."""
         ...
 
     @property

@@ -37,6 +37,7 @@ from .spatial_chain import (
     SerialChain,
     elementary,
     joint_motion,
+    left_jacobian_inverse,
     matrix_rpy,
     rotation_vector,
     rpy_matrix,
@@ -44,7 +45,7 @@ from .spatial_chain import (
     vector_rotation,
 )
 from .spatial_kinematics import ChainKinematics, SpatialLayout, kinematics
-from .spatial_registration import register
+from .spatial_registration import mean_rotation, register
 from .spatial_selection import select
 
 __all__ = [
@@ -110,6 +111,13 @@ class SpatialArm(RigidLoads):
         Why they are left out, one sentence per group.
     known_targets : bool
         Whether the robot file gives the targets' positions.
+    oriented : bool
+        Whether the instrument measures every target's orientation too (a 6-DoF
+        probe): a point is then ``(x, y, z)`` and a rotation vector, and every
+        target's orientation is a parameter.
+    target_turns : ndarray, shape (k, 3)
+        Nominal orientations of the targets in the tip frame (rotation vectors,
+        rad): zero until registered to data.
     """
 
     chain: SerialChain
@@ -124,6 +132,8 @@ class SpatialArm(RigidLoads):
     held: tuple[str, ...] = ()
     merges: tuple[str, ...] = ()
     known_targets: bool = False
+    oriented: bool = False
+    target_turns: np.ndarray = field(default_factory=lambda: np.zeros((0, 3)))
 
     def __post_init__(self) -> None:
         n = self.chain.n_joints
@@ -141,6 +151,10 @@ class SpatialArm(RigidLoads):
             object.__setattr__(self, "target_positions", default_targets(len(self.targets)))
         if self.target_positions.shape != (len(self.targets), 3):
             raise ValueError("one nominal position (x, y, z) per target")
+        if not np.any(self.target_turns):  # none given (or all zero for other targets)
+            object.__setattr__(self, "target_turns", np.zeros((len(self.targets), 3)))
+        if self.target_turns.shape != (len(self.targets), 3):
+            raise ValueError("one nominal orientation (a rotation vector) per target")
         if self.noise is not None and self.noise.dim != 3:
             object.__setattr__(self, "noise", self.noise.for_dim(3))
         if self.noise is not None:
@@ -163,25 +177,37 @@ class SpatialArm(RigidLoads):
 
     @cached_property
     def layout(self) -> SpatialLayout:
-        return SpatialLayout(self.chain.kinds, self.targets)
+        return SpatialLayout(self.chain.kinds, self.targets, self.oriented)
 
     @cached_property
     def nominal(self) -> np.ndarray:
         """The nominal parameters ``(p,)``: base pose, zero errors, nominal targets."""
         out = np.zeros(self.layout.n_params)
         out[:6] = self.base_pose
-        out[self.layout.target_start :] = self.target_positions.ravel()
+        out[self.layout.target_start :] = self._target_block(
+            self.target_positions, self.target_turns
+        )
         return out
+
+    def _target_block(self, positions: np.ndarray, turns: np.ndarray) -> np.ndarray:
+        """The targets' parameters ``(k * size,)`` from their positions and orientations."""
+        blocks = [positions, turns] if self.oriented else [positions]
+        return np.concatenate(blocks, axis=-1).ravel()
 
     def _params(self, params: np.ndarray | None) -> np.ndarray:
         return self.nominal if params is None else np.asarray(params, dtype=float)
 
     def params_of(
-        self, chain: SerialChain, base_pose: np.ndarray, targets: np.ndarray
+        self,
+        chain: SerialChain,
+        base_pose: np.ndarray,
+        targets: np.ndarray,
+        turns: np.ndarray | None = None,
     ) -> np.ndarray:
         """This arm's parameters ``(p,)`` for the arm ``chain`` (same joints) with its base
-        at ``base_pose`` (mm, rad) and its targets at ``targets`` ``(k, 3)`` in its tip frame:
-        exact, whatever the two descriptions' frames.
+        at ``base_pose`` (mm, rad) and its targets at ``targets`` ``(k, 3)`` in its tip frame,
+        turned by ``turns`` ``(k, 3)`` there (rotation vectors; default none): exact,
+        whatever the two descriptions' frames.
 
         Joint ``k``'s error is ``E_k = N_k^-1 T_k`` (nominal and true origins), split as
         ``T(x, y, z) Rx Ry Rz``; the turn about (or slide along) its axis is its zero.
@@ -210,7 +236,9 @@ class SpatialArm(RigidLoads):
         out[lay.zero_start : lay.target_start] = np.linalg.solve(self.joint_map, zero_u)
         tip = np.linalg.solve(self.chain.tip, chain.tip)
         local = np.asarray(targets, dtype=float) @ tip[:3, :3].T + tip[:3, 3]
-        out[lay.target_start :] = local.ravel()
+        turned = np.zeros_like(local) if turns is None else np.asarray(turns, dtype=float)
+        local_turns = rotation_vector(tip[:3, :3] @ vector_rotation(turned))
+        out[lay.target_start :] = self._target_block(local, local_turns)
         return out
 
     def calibrated_chain(self, params: np.ndarray) -> SerialChain:
@@ -296,6 +324,10 @@ class SpatialArm(RigidLoads):
 
     @property
     def point_dim(self) -> int:
+        return 6 if self.oriented else 3
+
+    @property
+    def position_dim(self) -> int:
         return 3
 
     @property
@@ -382,7 +414,37 @@ class SpatialArm(RigidLoads):
         )
 
     def positions(self, conditions: Conditions, params: np.ndarray | None = None) -> np.ndarray:
-        return self._kinematics(conditions, params).points
+        """The targets' positions ``(..., m, 3)`` (mm); for a 6-DoF instrument also their
+        orientations' turns from the rows' frames (rotation vectors, rad): ``(..., m, 6)``."""
+        kin = self._kinematics(conditions, params)
+        if not self.oriented:
+            return kin.points
+        return np.concatenate([kin.points, self._turn(kin, conditions)], axis=-1)
+
+    @staticmethod
+    def _turn(kin: ChainKinematics, conditions: Conditions) -> np.ndarray:
+        """The rotation vectors ``(..., m, 3)`` of the targets' orientations ``R`` from the
+        rows' frames ``F``: of ``R F^T``, the instrument's axes where there are none."""
+        assert kin.target_rotation is not None
+        if conditions.frames is None:
+            return rotation_vector(kin.target_rotation)
+        return rotation_vector(kin.target_rotation @ np.swapaxes(conditions.frames, -1, -2))
+
+    def _stacked(
+        self,
+        kin: ChainKinematics,
+        conditions: Conditions,
+        position: np.ndarray | None,
+        angular: np.ndarray | None,
+    ) -> np.ndarray:
+        """A Jacobian of the points: its position rows and, for a 6-DoF instrument, the
+        orientation rows, the angular velocities ``w`` as turns ``J_l(phi)^-1 w``."""
+        assert position is not None
+        if not self.oriented:
+            return position
+        assert angular is not None
+        chart = left_jacobian_inverse(self._turn(kin, conditions))
+        return np.concatenate([position, chart @ angular], axis=-2)
 
     def _derivative(
         self, conditions: Conditions, params: np.ndarray | None, name: str
@@ -393,12 +455,36 @@ class SpatialArm(RigidLoads):
         return found
 
     def jacobian(self, conditions: Conditions, params: np.ndarray | None = None) -> np.ndarray:
-        return self._derivative(conditions, params, "jacobian")
+        kin = self._kinematics(conditions, params, derivatives=True)
+        return self._stacked(kin, conditions, kin.jacobian, kin.target_angular)
 
     def joint_jacobian(
         self, conditions: Conditions, params: np.ndarray | None = None
     ) -> np.ndarray:
-        return self._derivative(conditions, params, "joint_jacobian")
+        kin = self._kinematics(conditions, params, derivatives=True)
+        return self._stacked(kin, conditions, kin.joint_jacobian, kin.tip_angular)
+
+    def anchor(self, conditions: Conditions, points: np.ndarray) -> tuple[Conditions, np.ndarray]:
+        """For a 6-DoF instrument, every row's measured orientation becomes its frame and
+        its turn from there zero (:meth:`~armcal.models.interface.FitModel.anchor`)."""
+        points = np.asarray(points, dtype=float)
+        if not self.oriented:
+            return conditions, points
+        measured = vector_rotation(points[..., 3:])
+        if conditions.frames is not None:
+            measured = measured @ conditions.frames
+        out = points.copy()
+        out[..., 3:] = 0.0
+        return conditions.with_frames(measured), out
+
+    def unanchor(self, conditions: Conditions, points: np.ndarray) -> np.ndarray:
+        """Orientations as rotation vectors in the instrument's frame again."""
+        points = np.asarray(points, dtype=float)
+        if not self.oriented or conditions.frames is None:
+            return points
+        out = points.copy()
+        out[..., 3:] = rotation_vector(vector_rotation(points[..., 3:]) @ conditions.frames)
+        return out
 
     def pose_covariances(
         self,
@@ -420,23 +506,27 @@ class SpatialArm(RigidLoads):
         """What ``noise`` needs of the rows: their shape over parameter stacks, the joint
         Jacobian where encoder noise needs it, the rows' own sigmas, and the measured
         points where a laser tracker's noise depends on them."""
-        kin = None
+        kin = joint = None
         if noise.joint_sigma is not None or noise.tracker is not None:
             kin = self._kinematics(conditions, params, derivatives=noise.joint_sigma is not None)
+            if kin.joint_jacobian is not None:
+                joint = self._stacked(kin, conditions, kin.joint_jacobian, kin.tip_angular)
         shape = np.broadcast_shapes(
             np.shape(conditions.q)[:-1], () if params is None else (*np.shape(params)[:-1], 1)
         )
         return {
             "shape": shape,
-            "joint_jacobian": None if kin is None else kin.joint_jacobian,
+            "joint_jacobian": joint,
             "row_sigma": conditions.sigma_mm,
             "points": None if kin is None else kin.points,
+            "oriented": self.oriented,
         }
 
     def whitening(
         self, conditions: Conditions, params: np.ndarray | None = None
     ) -> np.ndarray | None:
-        if (self.noise is None or self.noise.isotropic_iid) and conditions.sigma_mm is None:
+        plain = self.noise is None or self.noise.isotropic_iid
+        if plain and conditions.sigma_mm is None and not self.oriented:
             return None
         noise = self._noise_of(None)
         return noise.whitening(**self._row_noise(conditions, params, noise))
@@ -479,15 +569,28 @@ class SpatialArm(RigidLoads):
             np.zeros(conditions.m, dtype=int) if conditions.target is None else conditions.target
         )
         nominal = self.target_positions
-        rotation, translation, found = register(frames, tips, target, points, nominal, weights)
+        points = np.asarray(points, dtype=float)
+        rotation, translation, found = register(
+            frames, tips, target, points[:, :3], nominal, weights
+        )
         out = self.nominal.copy()
         out[:3] = translation
         out[3:6] = matrix_rpy(rotation)
+        measured = np.zeros(len(self.targets), dtype=bool)
+        measured[np.unique(target)] = True
+        positions = self.target_positions
         if not self.known_targets:
-            measured = np.zeros(len(self.targets), dtype=bool)
-            measured[np.unique(target)] = True
             positions = np.where(measured[:, None], found, nominal)
-            out[self.layout.target_start :] = positions.ravel()
+        turns = self.target_turns
+        if self.oriented:  # every target's mean orientation on the tip (Moakher 2002)
+            seen = vector_rotation(points[:, 3:])
+            if conditions.frames is not None:
+                seen = seen @ conditions.frames
+            local = np.swapaxes(rotation @ frames, -1, -2) @ seen
+            turns = turns.copy()
+            for t in np.flatnonzero(measured):
+                turns[t] = rotation_vector(mean_rotation(local[target == t]))
+        out[self.layout.target_start :] = self._target_block(positions, turns)
         return out
 
     def _at_tip(self) -> np.ndarray:
@@ -515,10 +618,22 @@ class SpatialArm(RigidLoads):
         return out
 
     def canonical(self, params: np.ndarray) -> np.ndarray:
-        """Angles wrapped into ``(-pi, pi]``."""
+        """Angles wrapped into ``(-pi, pi]``; a target's orientation to a turn of at most
+        half a turn."""
         params = np.array(params, dtype=float)
-        angles = self.layout.angles
+        lay = self.layout
+        turns = np.zeros(lay.n_params, dtype=bool)
+        for t in range(len(self.targets)):
+            turn_cols = lay.target_columns(t)[1]
+            if turn_cols is not None:
+                turns[turn_cols] = True
+        angles = lay.angles & ~turns
         params[..., angles] = np.pi - np.mod(np.pi - params[..., angles], 2 * np.pi)
+        if turns.any():
+            vectors = params[..., turns].reshape(*params.shape[:-1], -1, 3)
+            params[..., turns] = rotation_vector(vector_rotation(vectors)).reshape(
+                *params.shape[:-1], -1
+            )
         return params
 
     def step_scale(self, conditions: Conditions) -> np.ndarray:
@@ -538,12 +653,17 @@ class SpatialArm(RigidLoads):
                 self,
                 base_pose=registered[:6],
                 target_positions=self.layout.target_points(registered),
+                target_turns=self.layout.target_turns(registered),
             )
         # The columns in the robot's own frame: about the instrument's far-away origin a base
         # turn looks like a shift, and the rule's tolerance would see a dependence there.
-        jac = replace(arm, base_pose=np.zeros(6)).jacobian(conditions)
+        turn = rpy_matrix(arm.base_pose[3:])
+        local = conditions
+        if conditions.frames is not None:  # the frames turned back with the base
+            local = conditions.with_frames(turn.T @ conditions.frames)
+        jac = replace(arm, base_pose=np.zeros(6)).jacobian(local)
         w = arm.whitening(conditions)
-        rows = jac if w is None else w @ rpy_matrix(arm.base_pose[3:]) @ jac
+        rows = jac if w is None else w @ np.kron(np.eye(arm.point_dim // 3), turn) @ jac
         # S V^T diag(c) of the scaled rows has the rows' column space in p x p.
         svd = scaled_svd(rows.reshape(-1, arm.n_params))
         columns = svd.singular_values[:, None] * svd.vt * svd.column_norms
@@ -620,13 +740,20 @@ class SpatialArm(RigidLoads):
         return None
 
     def plan_conditions(self, q: np.ndarray, loads: Loads | None = None) -> Conditions:
-        """Every target measured at every pose."""
+        """Every target measured at every pose; a 6-DoF instrument's orientations about
+        where the nominal arm puts them."""
         q = np.asarray(q, dtype=float)
         k = len(self.targets)
         if k == 1:
-            return self.conditions(q)
-        rows = np.repeat(q, k, axis=-2)
-        return self.conditions(rows, target=np.tile(np.arange(k), q.shape[-2]))
+            rows = self.conditions(q)
+        else:
+            rows = self.conditions(
+                np.repeat(q, k, axis=-2), target=np.tile(np.arange(k), q.shape[-2])
+            )
+        if not self.oriented:
+            return rows
+        frames = self._kinematics(rows, None).target_rotation
+        return rows.with_frames(frames)
 
     # -- design --------------------------------------------------------------------------
 

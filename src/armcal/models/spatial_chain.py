@@ -38,6 +38,8 @@ __all__ = [
     "axis_frame",
     "elementary",
     "joint_motion",
+    "left_jacobian",
+    "left_jacobian_inverse",
     "matrix_rpy",
     "rotation_vector",
     "rpy_matrix",
@@ -108,9 +110,7 @@ def vector_rotation(vector: ArrayLike) -> np.ndarray:
     """
     v = np.asarray(vector, dtype=float)
     angle = np.linalg.norm(v, axis=-1)[..., None, None]
-    k = np.zeros((*v.shape[:-1], 3, 3))
-    k[..., 0, 1], k[..., 0, 2], k[..., 1, 2] = -v[..., 2], v[..., 1], -v[..., 0]
-    k = k - np.swapaxes(k, -1, -2)
+    k = _skew(v)
     small = angle < 1e-8  # the series to second order: exact to round-off there
     safe = np.where(small, 1.0, angle)
     a = np.where(small, 1.0 - angle**2 / 6, np.sin(safe) / safe)
@@ -150,6 +150,63 @@ def rotation_vector(rotation: np.ndarray) -> np.ndarray:
         sign = np.where(np.einsum("...i,...i->...", axis, skew[wide]) < 0, -1.0, 1.0)
         out[wide] = axis * (sign * angle[wide])[:, None]
     return out
+
+
+def _skew(v: np.ndarray) -> np.ndarray:
+    """``[v]_x`` ``(..., 3, 3)`` of vectors ``(..., 3)``."""
+    k = np.zeros((*v.shape[:-1], 3, 3))
+    k[..., 0, 1], k[..., 0, 2], k[..., 1, 2] = -v[..., 2], v[..., 1], -v[..., 0]
+    return k - np.swapaxes(k, -1, -2)
+
+
+def left_jacobian(vector: ArrayLike) -> np.ndarray:
+    """SO(3)'s left Jacobian ``J_l(v)`` ``(..., 3, 3)``: ``exp(v + dv) = exp(J_l dv) exp(v)``
+    to first order, so a rotation ``exp(v)`` turns with angular velocity ``J_l(v) dv``.
+
+    ``J_l = I + (1 - cos t)/t^2 [v] + (t - sin t)/t^3 [v]^2``, ``t = |v|`` (Chirikjian,
+    *Stochastic Models, Information Theory, and Lie Groups*, vol. 2, 2012, 10.6).
+
+    Examples
+    --------
+    >>> v, dv = np.array([0.4, -1.1, 0.7]), np.array([1e-7, 2e-7, -1e-7])
+    >>> turn = vector_rotation(v + dv) @ vector_rotation(v).T
+    >>> bool(np.allclose(rotation_vector(turn), left_jacobian(v) @ dv, atol=1e-13))
+    True
+    """
+    v = np.asarray(vector, dtype=float)
+    t = np.linalg.norm(v, axis=-1)[..., None, None]
+    k = _skew(v)
+    small = t < 1e-4  # the series to t^4: exact to round-off there
+    safe = np.where(small, 1.0, t)
+    a = np.where(small, 0.5 - t**2 / 24 + t**4 / 720, (1.0 - np.cos(safe)) / safe**2)
+    b = np.where(small, 1 / 6 - t**2 / 120 + t**4 / 5040, (safe - np.sin(safe)) / safe**3)
+    return np.eye(3) + a * k + b * (k @ k)
+
+
+def left_jacobian_inverse(vector: ArrayLike) -> np.ndarray:
+    """``J_l(v)^-1`` ``(..., 3, 3)``: how a rotation vector ``v`` changes when its rotation
+    turns by a small ``w``: ``dv = J_l(v)^-1 w``.
+
+    ``J_l^-1 = I - [v]/2 + (1/t^2 - (1 + cos t)/(2 t sin t)) [v]^2`` (same source as
+    :func:`left_jacobian`); singular at a full turn only, ``|v| < pi`` here.
+
+    Examples
+    --------
+    >>> v = np.array([0.4, -1.1, 2.7])
+    >>> bool(np.allclose(left_jacobian_inverse(v) @ left_jacobian(v), np.eye(3)))
+    True
+    """
+    v = np.asarray(vector, dtype=float)
+    t = np.linalg.norm(v, axis=-1)[..., None, None]
+    k = _skew(v)
+    small = t < 1e-4
+    safe = np.where(small, 1.0, t)
+    c = np.where(
+        small,
+        1 / 12 + t**2 / 720 + t**4 / 30240,
+        1.0 / safe**2 - (1.0 + np.cos(safe)) / (2.0 * safe * np.sin(safe)),
+    )
+    return np.eye(3) - 0.5 * k + c * (k @ k)
 
 
 def transform(

@@ -10,7 +10,11 @@
   (a turn about its own axis is its zero) and ``j{k}.x, .y, .rx, .ry, .rz`` for a
   prismatic one (a slide along its axis is its zero);
 * the zero error of every controller reading, ``dq{k}``: ``u = M (q + dq)``;
-* every target's position in the tip frame, ``{label}.x, .y, .z`` (mm).
+* every target's position in the tip frame, ``{label}.x, .y, .z`` (mm), and for
+  data of a 6-DoF instrument its orientation there, ``{label}.rx, .ry, .rz``: a
+  rotation vector (axis times angle), whose Jacobian (SO(3)'s left Jacobian) is
+  regular at every orientation, where roll, pitch and yaw are not at a pitch of
+  90 degrees (a probe turned square to the flange).
 
 Every parameter acts at a point of the chain as a small screw, so the
 parametrization has no singularity where consecutive axes are parallel (a plain
@@ -30,7 +34,7 @@ from functools import cached_property
 
 import numpy as np
 
-from .spatial_chain import SerialChain, elementary, rpy_matrix
+from .spatial_chain import SerialChain, elementary, left_jacobian, rpy_matrix, vector_rotation
 
 __all__ = [
     "BASE_NAMES",
@@ -57,10 +61,13 @@ class SpatialLayout:
         The joints' kinds (``"R"``, ``"P"``).
     targets : tuple of str
         The targets' labels (``("tool",)`` for one unlabelled target).
+    oriented : bool
+        Whether the targets' orientations are measured (and so are parameters).
     """
 
     kinds: tuple[str, ...]
     targets: tuple[str, ...]
+    oriented: bool = False
 
     @property
     def n_joints(self) -> int:
@@ -79,8 +86,13 @@ class SpatialLayout:
         return 6 + 6 * self.n_joints
 
     @property
+    def target_size(self) -> int:
+        """Parameters per target: its position, and its orientation when measured."""
+        return 6 if self.oriented else 3
+
+    @property
     def n_params(self) -> int:
-        return self.target_start + 3 * len(self.targets)
+        return self.target_start + self.target_size * len(self.targets)
 
     @cached_property
     def names(self) -> tuple[str, ...]:
@@ -90,7 +102,8 @@ class SpatialLayout:
             for c in _PLACEMENT[kind]
         ]
         zeros = [f"dq{k + 1}" for k in range(self.n_joints)]
-        targets = [f"{label}.{axis}" for label in self.targets for axis in "xyz"]
+        axes = _COMPONENT[: self.target_size]
+        targets = [f"{label}.{axis}" for label in self.targets for axis in axes]
         return (*BASE_NAMES, *joints, *zeros, *targets)
 
     @cached_property
@@ -103,6 +116,8 @@ class SpatialLayout:
             for slot, c in enumerate(_PLACEMENT[kind]):
                 out[start + slot] = c >= 3
             out[self.zero_start + k] = kind == "R"
+        if self.oriented:
+            out[self.target_start :] = np.tile([False] * 3 + [True] * 3, len(self.targets))
         return out
 
     @cached_property
@@ -139,7 +154,22 @@ class SpatialLayout:
 
     def target_points(self, params: np.ndarray) -> np.ndarray:
         """The targets' positions ``(..., k, 3)`` in the tip frame (mm)."""
-        return params[..., self.target_start :].reshape(*params.shape[:-1], -1, 3)
+        blocks = params[..., self.target_start :].reshape(*params.shape[:-1], -1, self.target_size)
+        return blocks[..., :3]
+
+    def target_turns(self, params: np.ndarray) -> np.ndarray:
+        """The targets' orientations ``(..., k, 3)`` in the tip frame (rotation vectors, rad);
+        zero where they are not measured."""
+        if not self.oriented:
+            return np.zeros((*params.shape[:-1], len(self.targets), 3))
+        blocks = params[..., self.target_start :].reshape(*params.shape[:-1], -1, 6)
+        return blocks[..., 3:]
+
+    def target_columns(self, t: int) -> tuple[slice, slice | None]:
+        """Target ``t``'s position columns and, when measured, its orientation columns."""
+        start = self.target_start + self.target_size * t
+        turn = slice(start + 3, start + 6) if self.oriented else None
+        return slice(start, start + 3), turn
 
 
 @dataclass(frozen=True, eq=False)
@@ -160,6 +190,10 @@ class ChainKinematics:
         The tip frame's angular velocity per unit of every reading.
     angular : ndarray, shape (..., m, 3, p), or None
         The tip frame's angular velocity per unit of every parameter.
+    target_rotation : ndarray, shape (..., m, 3, 3), or None
+        The row's target's orientation in the instrument's frame, where measured.
+    target_angular : ndarray, shape (..., m, 3, p), or None
+        Its angular velocity per unit of every parameter.
     """
 
     points: np.ndarray
@@ -168,6 +202,8 @@ class ChainKinematics:
     joint_jacobian: np.ndarray | None = None
     tip_angular: np.ndarray | None = None
     angular: np.ndarray | None = None
+    target_rotation: np.ndarray | None = None
+    target_angular: np.ndarray | None = None
 
 
 def kinematics(
@@ -253,8 +289,12 @@ def kinematics(
     index = np.zeros(lead[-1], dtype=int) if target is None else np.asarray(target)
     local = np.take(points_tip, index, axis=-2)  # (..., m, 3)
     points = pos + np.einsum("...ij,...j->...i", rot, local)
+    turn = target_rotation = None
+    if layout.oriented:
+        turn = np.take(layout.target_turns(params[..., 0, :]), index, axis=-2)  # (..., m, 3)
+        target_rotation = rot @ vector_rotation(turn)
     if not derivatives:
-        return ChainKinematics(points, rot)
+        return ChainKinematics(points, rot, target_rotation=target_rotation)
     # Zero errors: d/dq_i = sum_j M_ji d/du_j.
     zero_axis = np.einsum("ji,...jc->...ic", joint_map, joint_axis)
     zero_moment = np.einsum("ji,...jc->...ic", joint_map, joint_moment)
@@ -262,9 +302,26 @@ def kinematics(
     moment[..., layout.zero_start : layout.target_start, :] = zero_moment
     jac = np.cross(axis, points[..., None, :]) + moment  # (..., m, p, 3)
     jac = np.swapaxes(jac, -1, -2).copy()  # (..., m, 3, p)
-    for t in range(len(layout.targets)):
-        cols = slice(layout.target_start + 3 * t, layout.target_start + 3 * t + 3)
-        jac[..., cols] = np.where((index == t)[:, None, None], rot, 0.0)
-    joint_jac = np.swapaxes(np.cross(zero_axis, points[..., None, :]) + zero_moment, -1, -2)
+    target_angular = None
     angular = np.swapaxes(axis, -1, -2)
-    return ChainKinematics(points, rot, jac, joint_jac, np.swapaxes(zero_axis, -1, -2), angular)
+    if turn is not None:  # a target's turn exp(v) moves at rot J_l(v) dv (spatial_chain)
+        target_angular = angular.copy()
+        turning = rot @ left_jacobian(turn)
+    for t in range(len(layout.targets)):
+        cols, turn_cols = layout.target_columns(t)
+        mine = (index == t)[:, None, None]
+        jac[..., cols] = np.where(mine, rot, 0.0)
+        if target_angular is not None and turn_cols is not None:
+            jac[..., turn_cols] = 0.0
+            target_angular[..., turn_cols] = np.where(mine, turning, 0.0)
+    joint_jac = np.swapaxes(np.cross(zero_axis, points[..., None, :]) + zero_moment, -1, -2)
+    return ChainKinematics(
+        points,
+        rot,
+        jac,
+        joint_jac,
+        np.swapaxes(zero_axis, -1, -2),
+        angular,
+        target_rotation,
+        target_angular,
+    )

@@ -26,6 +26,7 @@ import numpy as np
 __all__ = [
     "REGISTER_ROWS",
     "best_rotation",
+    "mean_rotation",
     "register",
 ]
 
@@ -49,6 +50,19 @@ def best_rotation(source: np.ndarray, destination: np.ndarray) -> np.ndarray:
     s = source - source.mean(axis=0)
     d = destination - destination.mean(axis=0)
     return _polar(d.T @ s)
+
+
+def mean_rotation(rotations: np.ndarray) -> np.ndarray:
+    """The rotation ``(3, 3)`` nearest rotations ``(m, 3, 3)`` in the Frobenius norm: the
+    polar factor of their sum (Moakher 2002, the chordal mean).
+
+    Examples
+    --------
+    >>> turn = np.array([[0.0, -1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, 1.0]])
+    >>> bool(np.allclose(mean_rotation(np.stack([turn, turn])), turn))
+    True
+    """
+    return _polar(np.sum(rotations, axis=0))
 
 
 def _polar(matrix: np.ndarray) -> np.ndarray:

@@ -31,6 +31,12 @@ def _fit_line(cal: Calibration) -> str:
     )
 
 
+def _turn_residual(cal: Calibration) -> str:
+    """The orientation residual of a 6-DoF instrument's data, apart from the positions'."""
+    turn = cal.orientation_residual_rms_deg
+    return "" if turn is None else f"orientation residual RMS {turn:.4g} deg per axis; "
+
+
 def _outlier_lines(cal: Calibration) -> list[str]:
     if not cal.outliers:
         return []
@@ -113,7 +119,8 @@ def format_calibration(cal: Calibration, *, truth: np.ndarray | None = None) -> 
         f"sigma {cal.sigma_mm:.4g} mm ({cal.sigma_source}); "
         f"residual RMS {cal.residual_rms:.4g} mm per coordinate, "
         f"max {cal.residual_max:.4g} mm at pose {cal.pose_labels[worst]}; "
-        f"{cal.dof} degrees of freedom",
+        + _turn_residual(cal)
+        + f"{cal.dof} degrees of freedom",
         _fit_line(cal),
         f"{cal.method}: {cal.iterations} iteration(s), "
         + ("converged" if cal.converged else "NOT converged: the estimate may be off"),
