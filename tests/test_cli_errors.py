@@ -1366,6 +1366,13 @@ SPATIAL_ROWS = [
 SPATIAL_MEAS = _csv(SPATIAL_HEADER, SPATIAL_ROWS)
 IDENTIFY_URDF = ("identify", "--robot", "arm.urdf", "--measurements", "meas.csv", "-o", "cal.json")
 
+#: A 6-DoF instrument's data of the 2R arm: its orientation about z is q1 + q2.
+ORIENTED_HEADER = SPATIAL_HEADER + ",rx_deg,ry_deg,rz_deg"
+ORIENTED_ROWS = [
+    f"{row},0.0,0.0,{float(row.split(',')[0]) + float(row.split(',')[1])}" for row in SPATIAL_ROWS
+]
+ORIENTED_TOML = 'urdf = "arm.urdf"\n[measurement]\nsigma_mm = 0.02\norientation_sigma_deg = 0.01\n'
+
 CASES += [
     case(
         "urdf-missing-file",
@@ -1443,6 +1450,80 @@ CASES += [
         },
         IDENTIFY_URDF,
         ("z_mm",),
+    ),
+    case(
+        "orientation-not-a-number",
+        {
+            "robot.toml": ORIENTED_TOML,
+            "arm.urdf": URDF_2R,
+            "meas.csv": _csv(
+                ORIENTED_HEADER, _with_field(ORIENTED_ROWS, 3, "ry_deg", "12.5°", ORIENTED_HEADER)
+            ),
+        },
+        IDENTIFY_ROBOT,
+        ("meas.csv", "row 3", "ry_deg", "12.5°"),
+    ),
+    case(
+        "orientation-empty-field",
+        {
+            "robot.toml": ORIENTED_TOML,
+            "arm.urdf": URDF_2R,
+            "meas.csv": _csv(
+                ORIENTED_HEADER, _with_field(ORIENTED_ROWS, 2, "rz_deg", "", ORIENTED_HEADER)
+            ),
+        },
+        IDENTIFY_ROBOT,
+        ("meas.csv", "row 2", "rz_deg"),
+    ),
+    case(
+        "orientation-partial-columns",
+        {
+            "robot.toml": ORIENTED_TOML,
+            "arm.urdf": URDF_2R,
+            "meas.csv": _csv(
+                ORIENTED_HEADER.rsplit(",", 1)[0], [r.rsplit(",", 1)[0] for r in ORIENTED_ROWS]
+            ),
+        },
+        IDENTIFY_ROBOT,
+        ("meas.csv", "line 1", "rx_deg, ry_deg", "not rz_deg"),
+    ),
+    case(
+        "orientation-beyond-a-turn",
+        {
+            "robot.toml": ORIENTED_TOML,
+            "arm.urdf": URDF_2R,
+            "meas.csv": _csv(
+                ORIENTED_HEADER, _with_field(ORIENTED_ROWS, 4, "rx_deg", "400", ORIENTED_HEADER)
+            ),
+        },
+        IDENTIFY_ROBOT,
+        ("meas.csv", "row 4", "rx_deg", "more than 360", "rotation vector"),
+    ),
+    case(
+        "orientation-without-its-noise",
+        {"arm.urdf": URDF_2R, "meas.csv": _csv(ORIENTED_HEADER, ORIENTED_ROWS)},
+        IDENTIFY_URDF,
+        ("orientation_sigma_deg", "[measurement]"),
+    ),
+    case(
+        "orientation-of-a-planar-arm",
+        {
+            "meas.csv": _csv(
+                MEAS_HEADER + ",rx_deg,ry_deg,rz_deg", [r + ",0,0,0" for r in MEAS_ROWS]
+            )
+        },
+        IDENTIFY,
+        ("meas.csv", "planar arm", "remove them"),
+    ),
+    case(
+        "orientation-sigma-wrong-unit",
+        {
+            "robot.toml": ORIENTED_TOML.replace("0.01", "20"),
+            "arm.urdf": URDF_2R,
+            "meas.csv": _csv(ORIENTED_HEADER, ORIENTED_ROWS),
+        },
+        IDENTIFY_ROBOT,
+        ("robot.toml", "orientation_sigma_deg", "check the unit (deg)"),
     ),
     case(
         "mdh-wrong-length",

@@ -54,7 +54,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike
 
-from .models import CalibratedArm, Conditions, FitModel, Loads
+from .models import CalibratedArm, Conditions, FitModel, Loads, position_jacobian
 from .models.information import tip_variances
 from .numerics import RANK_RTOL, rms
 
@@ -175,7 +175,8 @@ class _Goal:
         self.model, self.params, self.program = model, params, program
         # The nominal arm where the calibrated one stands (its targets, in its frame).
         nominal = np.where(model.instrument_params, params, 0.0)
-        self.position = model.positions(program, nominal)
+        self.dim = model.position_dim  # a 6-DoF instrument's orientation rows aside
+        self.position = model.positions(program, nominal)[..., : self.dim]
         self.angle = model.orientation(program, nominal) if orientation else None
         self.scale = model.angle_scale_mm  # an angle counted as an arc of this radius (mm)
 
@@ -187,7 +188,7 @@ class _Goal:
     def residual(self, q: np.ndarray, active: np.ndarray) -> np.ndarray:
         """``(a, d [+ k])``: position (mm) and, keeping the orientation, its angles as arcs."""
         rows = self.rows(q, active)
-        r = self.model.positions(rows, self.params) - self.position[active]
+        r = self.model.positions(rows, self.params)[..., : self.dim] - self.position[active]
         if self.angle is None:
             return r
         turn = self.model.orientation_error(
@@ -202,7 +203,7 @@ class _Goal:
         turns it by at most ``dq``: this is the smallest joint change that could remove
         the residual, give or take the number of joints.
         """
-        dim = self.model.point_dim
+        dim = self.dim
         shift = np.linalg.norm(residual[:, :dim], axis=1) / self.model.reach_mm
         turn = np.linalg.norm(residual[:, dim:], axis=1) / self.scale
         return np.hypot(shift, turn)
@@ -214,7 +215,7 @@ class _Goal:
         Newton's convergence from quadratic to fast linear.
         """
         rows = self.rows(q, active)
-        jac = self.model.joint_jacobian(rows, self.params)
+        jac = self.model.joint_jacobian(rows, self.params)[..., : self.dim, :]
         if self.angle is None:
             return jac
         turn = self.scale * self.model.orientation_joint_jacobian(rows, self.params)
@@ -388,7 +389,7 @@ def compensate(
     model, robot = cal.in_robot_frame()
     program = model.conditions(q_program, target=target, loads=loads)
     q0 = program.q
-    n, dim = model.n_joints, model.point_dim
+    n, dim = model.n_joints, model.position_dim
     keep = n >= dim + model.orientation_dim if orientation is None else bool(orientation)
     goal = _Goal(model, robot, program, keep)
     q = q0.copy()
@@ -439,7 +440,7 @@ def compensate(
     final = goal.rows(q, everyone)
     covariance = cal.robot_covariance()
     before = np.linalg.norm(at_program[:, :dim], axis=1)
-    after = np.sqrt(tip_variances(model.jacobian(final, robot), covariance))
+    after = np.sqrt(tip_variances(position_jacobian(model, final, robot), covariance))
     turn_before = turn_after = None
     if keep:
         arcs = np.linalg.norm(at_program[:, dim:], axis=1)

@@ -50,7 +50,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .errors import ArmcalWarning
-from .models import FitModel, Loads, PaperCriteria, PlanInformation
+from .models import FitModel, Loads, PaperCriteria, PlanInformation, position_jacobian
 from .models.information import display_std, mean_tip_variance, tip_variances
 from .numerics import COND_WARN, RANK_RTOL, gram_of_factor, log_det, spd_inverse
 
@@ -391,7 +391,7 @@ def position_accuracy(
     info = _information(model, q, loads, info)
     info.check_identifiable()
     covariance, _ = _covariance(info, sigma)
-    j0 = model.jacobian(model.plan_conditions(np.asarray(test_q, dtype=float)))  # (k, d, p)
+    j0 = position_jacobian(model, model.plan_conditions(np.asarray(test_q, dtype=float)))
     per_pose = np.sqrt(tip_variances(j0, covariance))
     return PositionAccuracy(
         float(np.sqrt(np.mean(per_pose**2))), float(np.max(per_pose)), per_pose
@@ -418,7 +418,7 @@ def position_rms(
     if not bool(ok):
         return math.inf
     inverse = gram_of_factor(g, ok)
-    j0 = model.jacobian(model.plan_conditions(np.asarray(test_q, dtype=float)))
+    j0 = position_jacobian(model, model.plan_conditions(np.asarray(test_q, dtype=float)))
     return float(sigma * np.sqrt(mean_tip_variance(j0, inverse)))
 
 

@@ -75,7 +75,8 @@ def one_line(text: str) -> str:
 
 def noise_toml(noise: NoiseModel) -> list[str]:
     """The ``[measurement]`` lines of a noise model: ``sigma_mm`` (one value, or one per axis),
-    ``covariance_mm2`` or a laser ``tracker``'s terms, and ``joint_sigma_deg``."""
+    ``covariance_mm2`` or a laser ``tracker``'s terms, ``joint_sigma_deg`` and a 6-DoF
+    instrument's ``orientation_sigma_deg``."""
     cov = noise.covariance_mm2
     if noise.tracker is not None:
         terms = ", ".join(f"{k} = {num(v)}" for k, v in noise.tracker.to_dict().items())
@@ -89,6 +90,8 @@ def noise_toml(noise: NoiseModel) -> list[str]:
         sigma_q = np.degrees(noise.joint_sigma)
         shown = num(sigma_q[0]) if sigma_q.size == 1 else nums(sigma_q)
         lines.append(f"joint_sigma_deg = {shown}")
+    if noise.orientation_sigma is not None:  # a 6-DoF instrument (spatial robot files)
+        lines.append(f"orientation_sigma_deg = {num(np.degrees(noise.orientation_sigma))}")
     return lines
 
 

@@ -27,7 +27,7 @@ from numpy.typing import ArrayLike
 
 from .errors import ArmcalError, ArmcalWarning
 from .identification import resolve_method, solve
-from .models import Conditions, FitModel, LinearPositions, Loads
+from .models import Conditions, FitModel, LinearPositions, Loads, position_jacobian
 from .models.information import predicted_covariance, tip_variances
 from .progress import ProgressCallback
 from .synthesis import checked_truth, simulated_noise, synthesize_measurements
@@ -171,7 +171,7 @@ class _PositionAccumulator:
         self.basis = linear.basis  # u(x), (k, L)
         self.gram = self.basis.conj().T @ self.basis / self.basis.shape[0]  # G
         self.second_moment = np.zeros((self.truth.size, self.truth.size), dtype=complex)
-        variance = tip_variances(model.jacobian(test, truth), covariance)
+        variance = tip_variances(position_jacobian(model, test, truth), covariance)
         self.predicted_rms = float(np.sqrt(np.mean(variance)))
         self.trials, poses = trials, self.basis.shape[0]
         self.pairs = trials * poses
@@ -570,6 +570,7 @@ def monte_carlo(
             target=rows.target,
             loads=rows.loads,
             exact=exact,
+            frames=rows.frames,
         )
         found = solve(model, rows, xy, method=method, start=truth)
         not_converged += int(found.converged.size - np.count_nonzero(found.converged))

@@ -107,8 +107,11 @@ def _instrument_factor(
     A number ``s`` (isotropic: ``s z``), a lower-triangular ``L`` ``(d, d)`` with
     ``L L^T = Sigma_meas`` (``L z`` per pose), per-row ``s_i`` ``(m, 1)``, or
     per-row ``L_i`` ``(m, d, d)`` for a laser tracker, whose noise depends on
-    where the noiseless points ``clean()`` are.
+    where the noiseless points ``clean()`` are, and for a 6-DoF instrument, whose
+    orientation noise comes with the position's.
     """
+    oriented = model.point_dim > model.position_dim
+    rows = None
     if row_sigma is not None:
         rows = np.asarray(row_sigma, dtype=float)
         if rows.shape != (m,) or not np.all(np.isfinite(rows) & (rows > 0)):
@@ -116,12 +119,18 @@ def _instrument_factor(
                 f"row_sigma must hold one positive, finite sigma (mm) per pose, shape ({m},), "
                 f"got shape {rows.shape}"
             )
-        return rows[:, None]
-    if sigma is not None:
+        if not oriented:
+            return rows[:, None]
+    elif sigma is not None:
         if not (math.isfinite(sigma) and sigma >= 0):
             raise ArmcalError(f"the noise sigma must be finite and >= 0 (mm), got {sigma}")
-        return float(sigma)  # exactly as given: the same draws give the same data as ever
-    noise = simulated_noise(model, None)
+        if not oriented or sigma == 0:
+            return float(sigma)  # exactly as given: the same draws give the same data as ever
+    noise = simulated_noise(model, sigma if rows is None else None)
+    if oriented:
+        where = clean()[..., : model.position_dim] if noise.tracker is not None else None
+        cov = noise.instrument_covariances((m,), row_sigma=rows, points=where, oriented=True)
+        return np.linalg.cholesky(cov)
     if noise.tracker is not None:
         return np.linalg.cholesky(noise.instrument_covariances((m,), points=clean()))
     if noise.isotropic_instrument:
@@ -157,6 +166,7 @@ def synthesize_measurements(
     target: ArrayLike | None = None,
     loads: Loads | None = None,
     exact: np.ndarray | None = None,
+    frames: np.ndarray | None = None,
 ) -> np.ndarray:
     """Measurements of a virtual robot: points at ``truth`` drawn from the noise model.
 
@@ -196,6 +206,12 @@ def synthesize_measurements(
         Monte Carlo draws many chunks of trials of one plan, and evaluating the
         arm once instead of per chunk keeps its cost linear in the plan's size.
         Ignored with encoder noise, whose points are at ``q + dq``.
+    frames : ndarray, shape (m, 3, 3), optional
+        For a model that measures orientations (a 6-DoF instrument), the rows'
+        reference orientations (:attr:`armcal.models.Conditions.frames`): the
+        points' orientations are turns from them, and their noise is drawn as
+        such turns (the instrument's noise where the frames are the true
+        orientations, :meth:`armcal.models.FitModel.anchor`).
 
     Returns
     -------
@@ -238,7 +254,7 @@ def synthesize_measurements(
     if plan.ndim != 2 or plan.shape[1] != n:
         raise ArmcalError(f"the plan must have shape (m, {n}) in rad, got {plan.shape}")
     truth = checked_truth(model, truth)
-    conditions = model.conditions(plan, target=target, loads=loads)
+    conditions = model.conditions(plan, target=target, loads=loads).with_frames(frames)
     m = plan.shape[0]
 
     @cache
@@ -258,7 +274,8 @@ def synthesize_measurements(
     actual = draws[..., dim:]  # where the joints really were: q + dq
     actual *= np.broadcast_to(joint_sigma, (n,))
     actual += plan
-    positions = model.positions(Conditions(actual, conditions.target, conditions.loads), truth)
+    at = Conditions(actual, conditions.target, conditions.loads, None, conditions.frames)
+    positions = model.positions(at, truth)
     instrument = draws[..., :dim]
     _scale_instrument(instrument, factor)
     positions += instrument

@@ -17,7 +17,8 @@ calibration made without it.
 Both work through :class:`~armcal.models.interface.FitModel`, for every family
 of arm.  Errors are of points: every RMS here is *per point* (the Euclidean
 error of a point), ``sqrt(d)`` times the per-coordinate RMS of noise alike on
-every axis.
+every axis.  A 6-DoF instrument's orientations are checked apart, in degrees
+(the angle of the turn between measured and predicted), never mixed with mm.
 """
 
 from __future__ import annotations
@@ -36,6 +37,7 @@ from .numerics import point_norms, rms
 
 __all__ = [
     "CrossValidation",
+    "Turns",
     "Validation",
     "cross_validate",
     "cross_validation_warning",
@@ -64,6 +66,8 @@ class Validation:
         The measured positions (in the plane for 3-D data), mm.
     out_of_plane_mm : ndarray, shape (m,), or None
         For 3-D data of a planar arm: each point's distance from its target's plane, mm.
+    turns : Turns or None
+        For a 6-DoF instrument: the orientation errors before and after, and predicted.
     """
 
     before: np.ndarray
@@ -72,6 +76,7 @@ class Validation:
     model_mm: np.ndarray
     positions: np.ndarray
     out_of_plane_mm: np.ndarray | None = None
+    turns: Turns | None = None
 
     def __repr__(self) -> str:
         s = self.summary()
@@ -116,7 +121,38 @@ class Validation:
         if self.out_of_plane_mm is not None:
             out["out_of_plane_rms_per_point_mm"] = rms(self.out_of_plane_mm)
             out["out_of_plane_max_mm"] = float(np.max(np.abs(self.out_of_plane_mm)))
+        if self.turns is not None:
+            out.update(self.turns.summary())
         return out
+
+
+@dataclass(frozen=True, eq=False)
+class Turns:
+    """A 6-DoF instrument's orientation errors on held-out rows (rad, instrument frame).
+
+    Attributes
+    ----------
+    before, after : ndarray, shape (m, 3)
+        The turn from the nominal (calibrated) model's orientation to the measured one,
+        as rotation vectors.
+    predicted : ndarray, shape (m,)
+        The calibrated turn's expected size (its uncertainty and the noise), rad.
+    """
+
+    before: np.ndarray
+    after: np.ndarray
+    predicted: np.ndarray
+
+    def summary(self) -> dict[str, float]:
+        """RMS and max of the turns' angles before and after, and the predicted RMS (deg)."""
+        before = np.degrees(point_norms(self.before))
+        after = np.degrees(point_norms(self.after))
+        return {
+            "orientation_rms_before_deg": rms(before),
+            "orientation_rms_after_deg": rms(after),
+            "orientation_max_after_deg": float(np.max(after)),
+            "predicted_orientation_rms_after_deg": float(np.degrees(rms(self.predicted))),
+        }
 
 
 def _noise(cal: CalibratedArm) -> NoiseModel:
@@ -148,14 +184,34 @@ def predicted_errors(
     [[0.0], [0.014142]]
     """
     conditions = cal.model.conditions(q, target=target, loads=loads, sigma_mm=row_sigma)
-    return _predicted(cal, conditions)
+    return _predicted(cal, conditions)[:2]
 
 
-def _predicted(cal: CalibratedArm, conditions: Conditions) -> tuple[np.ndarray, np.ndarray]:
-    variance = tip_variances(cal.position_jacobian(conditions), cal.covariance)
-    noise = cal.model.pose_covariances(conditions, cal.params, noise=_noise(cal))
-    total = variance + np.trace(noise, axis1=-2, axis2=-1)
-    return np.sqrt(variance), np.sqrt(np.clip(total, 0.0, None))
+def _predicted(
+    cal: CalibratedArm, conditions: Conditions
+) -> tuple[np.ndarray, np.ndarray, np.ndarray | None]:
+    """The model's uncertainty and a measurement's expected error of the positions (mm),
+    and of a 6-DoF instrument's turns (rad; None without)."""
+    model, d = cal.model, cal.model.position_dim
+    jac = model.jacobian(conditions, cal.params)
+    noise = model.pose_covariances(conditions, cal.params, noise=_noise(cal))
+    variance = tip_variances(jac[..., :d, :], cal.covariance)
+    total = variance + np.trace(noise[..., :d, :d], axis1=-2, axis2=-1)
+    turn = None
+    if jac.shape[-2] > d:
+        turn_variance = tip_variances(jac[..., d:, :], cal.covariance)
+        turn = np.sqrt(turn_variance + np.trace(noise[..., d:, d:], axis1=-2, axis2=-1))
+    return np.sqrt(variance), np.sqrt(np.clip(total, 0.0, None)), turn
+
+
+def _turns(
+    model: FitModel, before: np.ndarray, after: np.ndarray, predicted: np.ndarray | None
+) -> Turns | None:
+    """The orientation part of the errors, for a 6-DoF instrument's rows."""
+    d = model.position_dim
+    if predicted is None:
+        return None
+    return Turns(before[:, d:], after[:, d:], predicted)
 
 
 def validate(
@@ -219,16 +275,36 @@ def validate(
         measured = cal.plane.to_plane(points)
     else:
         if points.shape[-1] != model.point_dim:
-            raise ArmcalError(
-                "the calibration was made from 2-D data: validate with x_mm and y_mm (no z_mm)"
-            )
-        measured = points
-    nominal = model.positions(conditions, cal.instrument_pose_params())
-    calibrated = cal.positions(conditions)
-    uncertainty, predicted = _predicted(cal, conditions)
+            raise ArmcalError(_other_data(model.point_dim))
+        conditions, measured = model.anchor(conditions, points)
+    before = measured - model.positions(conditions, cal.instrument_pose_params())
+    after = measured - cal.positions(conditions)
+    uncertainty, predicted, turn = _predicted(cal, conditions)
+    d = model.position_dim
     return Validation(
-        measured - nominal, measured - calibrated, predicted, uncertainty, measured, out_of_plane
+        before[:, :d],
+        after[:, :d],
+        predicted,
+        uncertainty,
+        measured[:, :d],
+        out_of_plane,
+        _turns(model, before, after, turn),
     )
+
+
+def _other_data(dim: int) -> str:
+    """What the held-out data lack (or have too much of) for a calibration of ``dim``."""
+    if dim == 6:
+        return (
+            "the calibration was made from 6-DoF data: validate with the orientation "
+            "columns rx_deg, ry_deg, rz_deg too"
+        )
+    if dim == 3:
+        return (
+            "the calibration was made from 3-D positions: validate with x_mm, y_mm and z_mm "
+            "(no orientation columns)"
+        )
+    return "the calibration was made from 2-D data: validate with x_mm and y_mm (no z_mm)"
 
 
 def _too_large(measured: float, predicted: float, count: int) -> bool:
@@ -257,6 +333,8 @@ def validation_warnings(result: Validation) -> list[ArmcalWarning]:
                 "calibrated range, the arm changed, or the measurements belong to another setup",
             )
         )
+    if result.turns is not None:
+        warnings += _turn_warnings(s, count)
     if s["rms_after_per_point_mm"] > s["rms_before_per_point_mm"]:
         warnings.append(
             ArmcalWarning(
@@ -268,6 +346,33 @@ def validation_warnings(result: Validation) -> list[ArmcalWarning]:
             )
         )
     return warnings
+
+
+def _turn_warnings(s: dict[str, float], count: int) -> list[ArmcalWarning]:
+    """The orientation's ``validation-error`` and ``calibration-worse``, in degrees."""
+    after, before = s["orientation_rms_after_deg"], s["orientation_rms_before_deg"]
+    predicted = s["predicted_orientation_rms_after_deg"]
+    out = []
+    if _too_large(after, predicted, count):
+        out.append(
+            ArmcalWarning(
+                "validation-error",
+                f"the calibrated model misses the held-out orientations by RMS {after:.3g} "
+                f"deg, more than the {predicted:.3g} deg it predicts (noise and its "
+                "uncertainty): the probe moved on the flange, or the orientation noise "
+                "(orientation_sigma_deg) is too small",
+            )
+        )
+    if after > before:
+        out.append(
+            ArmcalWarning(
+                "calibration-worse",
+                f"the calibrated model's orientations are worse than the nominal one's on "
+                f"these poses ({after:.3g} against {before:.3g} deg RMS): check that the "
+                "calibration and the measurements are of the same robot and instrument setup",
+            )
+        )
+    return out
 
 
 @dataclass(frozen=True, eq=False)
@@ -286,12 +391,16 @@ class CrossValidation:
     predicted_mm : ndarray, shape (m,)
         The error that calibration predicts for the row (its uncertainty and
         the instrument noise), mm.
+    turns : Turns or None
+        For a 6-DoF instrument: the predicted orientations' errors (``before``
+        unused: the same as ``after``).
     """
 
     folds: int
     fold: np.ndarray
     errors: np.ndarray
     predicted_mm: np.ndarray
+    turns: Turns | None = None
 
     def __repr__(self) -> str:
         s = self.summary()
@@ -306,13 +415,19 @@ class CrossValidation:
         return point_norms(self.errors)
 
     def summary(self) -> dict[str, float | int]:
-        """``folds``, RMS and max prediction error and the predicted RMS (mm), per point."""
-        return {
+        """``folds``, RMS and max prediction error and the predicted RMS (mm), per point;
+        for a 6-DoF instrument the orientations' RMS and predicted RMS (deg)."""
+        out: dict[str, float | int] = {
             "folds": self.folds,
             "rms_per_point_mm": rms(self.errors_mm),
             "max_mm": float(np.max(self.errors_mm)),
             "predicted_rms_per_point_mm": rms(self.predicted_mm),
         }
+        if self.turns is not None:
+            turns = self.turns.summary()
+            out["orientation_rms_deg"] = turns["orientation_rms_after_deg"]
+            out["predicted_orientation_rms_deg"] = turns["predicted_orientation_rms_after_deg"]
+        return out
 
 
 def cross_validation_warning(result: CrossValidation) -> ArmcalWarning | None:
@@ -376,7 +491,7 @@ def cross_validate(
     """
     rng = np.random.default_rng(rng)
     conditions = model.conditions(q, target=target, loads=loads, sigma_mm=row_sigma)
-    points = np.asarray(points, dtype=float)
+    conditions, points = model.anchor(conditions, np.asarray(points, dtype=float))
     m = conditions.m
     keys = np.arange(m) if groups is None else np.unique(groups, return_inverse=True)[1]
     count = int(keys.max()) + 1
@@ -387,6 +502,7 @@ def cross_validate(
     fold = of_group[keys]
     errors = np.empty(points.shape)
     predicted = np.empty(m)
+    turn_predicted = np.empty(m)
     for k in range(folds):
         held = fold == k
         train = conditions.take(~held)
@@ -399,6 +515,7 @@ def cross_validate(
                 row_sigma=train.sigma_mm,
                 target=train.target,
                 loads=train.loads,
+                conditions=train,
             )
         except NotIdentifiableError:
             raise ArmcalError(
@@ -408,5 +525,9 @@ def cross_validate(
         test = conditions.take(held)
         fitted = cal.calibrated()
         errors[held] = points[held] - fitted.positions(test)
-        predicted[held] = _predicted(fitted, test)[1]
-    return CrossValidation(folds, fold, errors, predicted)
+        _, predicted[held], turn = _predicted(fitted, test)
+        if turn is not None:
+            turn_predicted[held] = turn
+    d = model.position_dim
+    turns = _turns(model, errors, errors, turn_predicted if points.shape[1] > d else None)
+    return CrossValidation(folds, fold, errors[:, :d], predicted, turns)

@@ -238,18 +238,47 @@ def _from_toml(path: Path, builtin: str | None, tip_link: str | None = None) -> 
         target_positions=positions,
         noise=noise,
         known_targets=bool(labels),
+        oriented=noise is not None and noise.orientation_sigma is not None,
     )
     if "identify" in data:
         arm = arm.with_fixed(fixed_parameters(path, data["identify"], arm.param_names, arm.name))
     return SerialSpec(arm, builtin or os.fspath(path))
 
 
+#: A 6-DoF instrument's orientation noise (deg, 1 std) outside this range is a wrong unit:
+#: the probes on trackers and the optical trackers state 0.001-0.1 deg.
+ORIENTATION_SIGMA_RANGE_DEG = (1e-5, 5.0)
+
+
 def _noise(path: Path, table: Any) -> NoiseModel | None:
+    """``[measurement]``: the instrument's noise, and a 6-DoF instrument's orientation noise."""
     if table is None:
         return None
     if not isinstance(table, dict):
         raise fail(path, "key 'measurement': expected a table [measurement]")
     check_keys(path, table, allowed_keys("measurement", SERIAL_KEYS), "measurement.")
+    noise = _position_noise(path, table)
+    if "orientation_sigma_deg" not in table:
+        return noise
+    value = number(path, table["orientation_sigma_deg"], "measurement.orientation_sigma_deg")
+    low, high = ORIENTATION_SIGMA_RANGE_DEG
+    if not low <= value <= high:
+        raise fail(
+            path,
+            f"key 'measurement.orientation_sigma_deg': must be between {low:g} and {high:g} "
+            "deg; check the unit (deg)",
+        )
+    if noise is None:
+        raise fail(
+            path,
+            "key 'measurement.orientation_sigma_deg': give the instrument's position noise "
+            "too (sigma_mm, covariance_mm2 or tracker)",
+        )
+    return noise.with_orientation(np.radians(value))
+
+
+def _position_noise(path: Path, table: dict) -> NoiseModel | None:
+    """The instrument's position noise of ``[measurement]``, if it gives one."""
     given = [key for key in ("sigma_mm", "covariance_mm2", "tracker") if key in table]
     if len(given) > 1:
         raise fail(

@@ -39,6 +39,7 @@ from .interface import (
     PaperCriteria,
     PlanInformation,
     equations_per_pose,
+    position_jacobian,
 )
 from .planar import INSTRUMENT_PARAMS, PlanarArm
 from .planar_geometry import (
@@ -156,6 +157,7 @@ __all__ = [
     "paper_from_user_matrix",
     "plan_rows",
     "plan_svd",
+    "position_jacobian",
     "rotation_vector",
     "row_echelon",
     "rpy_matrix",

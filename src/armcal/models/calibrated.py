@@ -20,7 +20,7 @@ from typing import Any
 
 import numpy as np
 
-from .interface import Conditions, FitModel
+from .interface import Conditions, FitModel, position_jacobian
 from .plane import Plane
 
 __all__ = [
@@ -77,8 +77,8 @@ class CalibratedArm:
         return self.model.positions(conditions, self.params if params is None else params)
 
     def position_jacobian(self, conditions: Conditions) -> np.ndarray:
-        """Jacobian ``(m, d, p)`` of the points at the estimate."""
-        return self.model.jacobian(conditions, self.params)
+        """Jacobian ``(m, d, p)`` of the points' positions at the estimate."""
+        return position_jacobian(self.model, conditions, self.params)
 
     @property
     def robot_mask(self) -> np.ndarray:

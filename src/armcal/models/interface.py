@@ -72,6 +72,7 @@ __all__ = [
     "PaperCriteria",
     "PlanInformation",
     "equations_per_pose",
+    "position_jacobian",
 ]
 
 
@@ -790,6 +791,15 @@ class FitModel(Protocol):
     def arm_params(self, params: np.ndarray) -> np.ndarray:
         """The parameters of :attr:`arm` within ``params`` ``(..., p)``."""
         ...
+
+
+def position_jacobian(
+    model: FitModel, conditions: Conditions, params: np.ndarray | None = None
+) -> np.ndarray:
+    """The rows of ``model.jacobian`` that are positions ``(..., m, position_dim, p)`` (mm
+    per internal unit): what a predicted position error is made of, without a 6-DoF
+    instrument's orientation rows (rad)."""
+    return model.jacobian(conditions, params)[..., : model.position_dim, :]
 
 
 def equations_per_pose(model: FitModel) -> int:

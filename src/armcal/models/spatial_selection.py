@@ -5,7 +5,8 @@ over-complete: an arm with ``R`` revolute and ``P`` prismatic joints measured at
 ``k`` point targets by an instrument whose pose is unknown identifies
 ``4R + 2P + 3k`` of them (Everett, Driels and Mooring's count ``4R + 2P + 6``
 for a full pose, less the tool's orientation a point cannot see, plus 3 for
-every further point).  :func:`select` keeps a set of that size:
+every further point); measured in full pose by a 6-DoF instrument,
+``4R + 2P + 6k``.  :func:`select` keeps a set of that size:
 
 * **deterministically** -- the columns of the scaled, whitened Jacobian are
   taken in a fixed priority order (:func:`priority`) and a column is kept when
@@ -133,10 +134,11 @@ def _object(names: Sequence[str], layout: SpatialLayout) -> str:
             else "the base pose"
         )
     if targets:
+        what = "pose" if layout.oriented else "position"
         if targets == ["tool"]:
-            words.append("the target's position")
+            words.append(f"the target's {what}")
         else:
-            words.append(f"the position{'s' if len(targets) > 1 else ''} of {listing(targets)}")
+            words.append(f"the {what}{'s' if len(targets) > 1 else ''} of {listing(targets)}")
     words += [f"the zero of joint {n[2:]} ({n})" if n.startswith("dq") else n for n in rest]
     return listing(words)
 
@@ -153,6 +155,8 @@ def _reason(
     if dropped.startswith("j1.") and into_base:
         return "joint 1's placement comes before any joint moves, like the base pose"
     if dropped == f"dq{last}" and into_targets:
+        if layout.oriented:
+            return f"every target turns with joint {last}, so its zero only moves the targets"
         return f"a point target turns with joint {last}, so its zero only moves the targets"
     if dropped == f"j{last}.z" and into_targets:
         return f"a shift along joint {last}'s axis moves every target alike"

@@ -174,4 +174,10 @@ def format_cross_validation(summary: dict) -> str:
         f"cross-validation ({summary['folds']} folds): prediction error RMS per point "
         f"{summary['rms_per_point_mm']:.4g} mm (max {summary['max_mm']:.4g} mm); predicted "
         f"{summary['predicted_rms_per_point_mm']:.4g} mm"
+        + (
+            f"; orientation RMS {summary['orientation_rms_deg']:.4g} deg (predicted "
+            f"{summary['predicted_orientation_rms_deg']:.4g} deg)"
+            if "orientation_rms_deg" in summary
+            else ""
+        )
     )

@@ -63,6 +63,8 @@ def _noise_text(arm: PlanarArm | SpatialArm) -> str | None:
             parts.append(f"encoder noise {joints[0]:.4g} deg on every joint")
         else:
             parts.append("encoder noise " + ", ".join(f"{v:.4g}" for v in joints) + " deg")
+    if noise.orientation_sigma is not None:
+        parts.append(f"orientation {np.degrees(noise.orientation_sigma):.4g} deg about each axis")
     return "; ".join(parts) + f" (reference sigma {noise.sigma_mm:.4g} mm)"
 
 
@@ -73,14 +75,17 @@ def spatial_model_lines(arm: SpatialArm) -> list[str]:
         rows = "; ".join(" ".join(f"{v:g}" for v in row) for row in arm.joint_map)
         lines.append(f"joint map: the arm's joint values u = M q with M = [{rows}]")
     where = "from the robot file" if arm.known_targets else "found from the data"
-    lines.append(f"targets ({where}, positions in the tip frame): {', '.join(arm.targets)}")
+    what = "positions" if not arm.oriented else "positions and orientations, measured by a 6-DoF"
+    lines.append(f"targets ({where}, {what} in the tip frame): {', '.join(arm.targets)}")
     revolute = int(np.sum(arm.chain.revolute))
     prismatic = arm.n_joints - revolute
+    k = len(arm.targets)
+    kind, per = ("full-pose", 6) if arm.oriented else ("point", 3)
     lines.append(
         f"identifiable set: {arm.n_free} of {arm.n_params} parameters (theory for "
-        f"{revolute} revolute and {prismatic} prismatic joints and {len(arm.targets)} point "
-        f"target{'s' if len(arm.targets) > 1 else ''}: 4R + 2P + 3k = "
-        f"{4 * revolute + 2 * prismatic + 3 * len(arm.targets)})"
+        f"{revolute} revolute and {prismatic} prismatic joints and {k} {kind} "
+        f"target{'s' if k > 1 else ''}: 4R + 2P + {per}k = "
+        f"{4 * revolute + 2 * prismatic + per * k})"
     )
     if arm.user_fixed:
         lines.append(f"fixed (held at nominal, not identified): {', '.join(arm.user_fixed)}")

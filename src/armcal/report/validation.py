@@ -38,6 +38,15 @@ def validation_report(
         f"({s['model_rms_per_point_mm']:.3g} mm RMS per point at these poses)",
     ]
     document: dict = {"poses": m, **s}
+    if result.turns is not None:
+        lines[6:6] = [
+            "",
+            f"{'orientation error (deg)':<24}{'RMS':>10}{'':>10}{'max':>10}   (angle of the turn)",
+            f"{'nominal model':<24}{s['orientation_rms_before_deg']:>10.4g}",
+            f"{'calibrated model':<24}{s['orientation_rms_after_deg']:>10.4g}{'':>10}"
+            f"{s['orientation_max_after_deg']:>10.4g}",
+            f"{'predicted (calibrated)':<24}{s['predicted_orientation_rms_after_deg']:>10.4g}",
+        ]
     if "out_of_plane_rms_per_point_mm" in s:
         lines.append(
             f"out of the calibration's plane: RMS {s['out_of_plane_rms_per_point_mm']:.3g} mm "

@@ -304,6 +304,14 @@ def serial_arm(arm: SpatialArm, meas: Measurements) -> SpatialArm:
             f"{arm.name} is a spatial arm: its measurements need x_mm, y_mm and z_mm; add the "
             "z_mm column the instrument reports"
         )
+    oriented = meas.orientation is not None
+    if oriented and (arm.noise is None or arm.noise.orientation_sigma is None):
+        raise InputError(
+            f"the measurements have orientation columns (rx_deg, ry_deg, rz_deg) but "
+            f"{arm.name}'s robot file does not give their noise; add orientation_sigma_deg "
+            "(and the position noise) to its [measurement] table"
+        )
+    arm = arm.replace(oriented=oriented)
     if meas.targets is None:
         if arm.target_labels:
             raise InputError(
@@ -344,7 +352,7 @@ def calibrate_serial(
         cal = identify(
             arm,
             meas.q,
-            meas.xyz,
+            meas.instrument_points,
             method=method,
             robust=robust,
             pose_labels=meas.labels,
@@ -361,7 +369,7 @@ def calibrate_serial(
     warnings = [*meas.warnings, *cal.warnings]
     checked = None
     if folds is not None:
-        checked = _cross_validated(cal, meas, meas.xyz, folds, sigma, seed, warnings)
+        checked = _cross_validated(cal, meas, meas.instrument_points, folds, sigma, seed, warnings)
     return CalibrationRun(cal, tuple(unique_warnings(warnings)), checked)
 
 
@@ -391,7 +399,7 @@ def validate_measurements(
             f"{source}: the calibration has targets ({', '.join(arm.target_labels)}); add a "
             "column 'target' naming the target of every row"
         )
-    points = meas.xy if meas.z is None else meas.xyz
+    points = meas.xy if meas.z is None else meas.instrument_points
     loads = row_loads(cal.model, meas)
     try:
         result = validate(

@@ -83,10 +83,20 @@ def synthesize_plan(
     :func:`armcal.synthesis.synthesize_measurements`.
     """
     arm = model.arm
-    rows = model.plan_conditions(q, loads)
+    rows = model.plan_conditions(q, loads).with_frames(None)
+    # A 6-DoF instrument's noise turns the true orientations: drawn about them.
+    rows, _ = model.anchor(rows, model.positions(rows, truth))
     points = synthesize_measurements(
-        model, rows.q, truth, sigma, rng=seed, target=rows.target, loads=rows.loads
+        model,
+        rows.q,
+        truth,
+        sigma,
+        rng=seed,
+        target=rows.target,
+        loads=rows.loads,
+        frames=rows.frames,
     )
+    points = model.unanchor(rows, points)
     labels = targets = None
     names = arm.target_labels
     if names:  # every target measured at every pose, one row each
