@@ -32,8 +32,9 @@ from armcal.models.spatial_chain import (
 )
 from armcal.noise import NoiseModel
 from armcal.simulate import monte_carlo
-from helpers import run_cli
+from helpers import central_differences, run_cli
 from test_spatial_model import ARMS, labelled, random_poses, random_truth
+from test_spatial_virtual import plan_file
 
 DEG = np.pi / 180
 SIGMA_MM, SIGMA_DEG = 0.02, 0.005
@@ -74,14 +75,11 @@ def test_the_left_jacobian_and_its_inverse():
     v = rng.normal(size=(40, 3)) * np.repeat([1e-6, 1e-3, 0.5, 2.0, 3.1], 8)[:, None]
     product = left_jacobian_inverse(v) @ left_jacobian(v)
     np.testing.assert_allclose(product, np.broadcast_to(np.eye(3), product.shape), atol=1e-12)
-    h = 1e-6
     for vector in v[8:]:  # exp(v + dv) = exp(J_l dv) exp(v) to first order
-        numeric = np.empty((3, 3))
-        for i in range(3):
-            step = np.eye(3)[i] * h
-            plus = rotation_vector(vector_rotation(vector + step) @ vector_rotation(vector).T)
-            minus = rotation_vector(vector_rotation(vector - step) @ vector_rotation(vector).T)
-            numeric[:, i] = (plus - minus) / (2 * h)
+        back = vector_rotation(vector).T
+        numeric = central_differences(
+            lambda u, back=back: rotation_vector(vector_rotation(u) @ back), vector
+        )
         np.testing.assert_allclose(left_jacobian(vector), numeric, atol=1e-8)
 
 
@@ -99,27 +97,19 @@ def test_the_full_pose_jacobians_agree_with_central_differences(name):
     rows, _ = arm.anchor(rows, turned)
     jac = arm.jacobian(rows, params)
     assert jac.shape == (rows.m, 6, arm.n_params)
-    h = 1e-6  # errors: h^2 |p'''| (1e-12 x 1e4 mm, 1e-12 rad) and round-off 1e-16 x 4e3 / h
-    numeric = np.empty_like(jac)
-    for i in range(arm.n_params):
-        step = np.zeros(arm.n_params)
-        step[i] = h
-        numeric[..., i] = (
-            arm.positions(rows, params + step) - arm.positions(rows, params - step)
-        ) / (2 * h)
+    # Errors: h^2 |p'''| (1e-12 x 1e4 mm, 1e-12 rad) and round-off 1e-16 x 4e3 / h (h = 1e-6).
+    numeric = central_differences(lambda p: arm.positions(rows, p), params)
     np.testing.assert_allclose(jac[:, :3], numeric[:, :3], rtol=0, atol=1e-5)
     np.testing.assert_allclose(jac[:, 3:], numeric[:, 3:], rtol=0, atol=1e-8)
-    joint = arm.joint_jacobian(rows, params)
-    for j in range(arm.n_joints):
-        step = np.zeros(arm.n_joints)
-        step[j] = h
-        plus = arm.positions(
-            arm.conditions(rows.q + step, target=rows.target).with_frames(rows.frames), params
-        )
-        minus = arm.positions(
-            arm.conditions(rows.q - step, target=rows.target).with_frames(rows.frames), params
-        )
-        np.testing.assert_allclose(joint[..., j], (plus - minus) / (2 * h), rtol=0, atol=1e-5)
+
+    def at(q: np.ndarray) -> np.ndarray:
+        moved = arm.conditions(q.reshape(rows.q.shape), target=rows.target)
+        return arm.positions(moved.with_frames(rows.frames), params)
+
+    numeric = central_differences(at, rows.q.ravel())  # (m, 6, m n): each row its own
+    every = np.arange(rows.m)
+    blocks = numeric.reshape(rows.m, 6, rows.m, arm.n_joints)[every, :, every]
+    np.testing.assert_allclose(arm.joint_jacobian(rows, params), blocks, rtol=0, atol=1e-5)
 
 
 @pytest.mark.parametrize("name", sorted(ARMS))
@@ -227,7 +217,6 @@ orientation_sigma_deg = {sigma_deg}
 
 def test_a_six_dof_campaign_from_the_command_line(tmp_path):
     """synthesize -> identify --cross-validate -> validate -> export -> identify again."""
-    from armcal.doe import random_plan
     from armcal.files import load_serial_robot
     from armcal.files.serial import ROBOT_FOLDER
 
@@ -240,11 +229,8 @@ def test_a_six_dof_campaign_from_the_command_line(tmp_path):
     (tmp_path / "truth.toml").write_text('robot = "cell.toml"\n' + truth, encoding="utf-8")
     arm = load_serial_robot(tmp_path / "cell.toml").arm
     assert arm.oriented
-    for name, m, seed in (("plan.csv", 60, 1), ("test.csv", 40, 2)):
-        q = random_plan(arm, m, rng=seed)
-        head = ",".join(f"q{k + 1}_deg" for k in range(arm.n_joints))
-        rows = [",".join(repr(float(v)) for v in np.degrees(row)) for row in q]
-        (tmp_path / name).write_text("\n".join([head, *rows]) + "\n", encoding="utf-8")
+    plan_file(tmp_path, tmp_path / "cell.toml", 60, 1)
+    plan_file(tmp_path, tmp_path / "cell.toml", 40, 2, name="test.csv")
     for plan, out, seed in (("plan.csv", "meas.csv", "1"), ("test.csv", "held.csv", "2")):
         result = run_cli(
             tmp_path, "synthesize", "--robot", "cell.toml", "--truth", "truth.toml", "--plan",

@@ -24,12 +24,13 @@ from helpers import run_cli
 ROBOTS = ("industrial-6r", "cobot-6r", "arm-7r")
 
 
-def _plan_file(tmp_path, robot, m=30, seed=1):
+def plan_file(tmp_path, robot, m=30, seed=1, name="plan.csv"):
+    """A random plan of ``m`` poses within the robot's limits, written to ``name``."""
     arm = load_serial_robot(robot).arm
     q = random_plan(arm, m, rng=seed)
     head = ",".join(f"q{k + 1}_deg" for k in range(arm.n_joints))
     rows = [",".join(repr(float(v)) for v in np.degrees(row)) for row in q]
-    (tmp_path / "plan.csv").write_text("\n".join([head, *rows]) + "\n", encoding="utf-8")
+    (tmp_path / name).write_text("\n".join([head, *rows]) + "\n", encoding="utf-8")
     return arm, q
 
 
@@ -45,7 +46,7 @@ def test_the_built_in_truths_are_virtual_arms_with_every_error(robot):
 
 
 def test_synthesize_then_identify_recovers_the_built_in_truth(tmp_path):
-    _plan_file(tmp_path, "cobot-6r")
+    plan_file(tmp_path, "cobot-6r")
     result = run_cli(
         tmp_path, "synthesize", "--robot", "cobot-6r", "--plan", "plan.csv", "--sigma", "0",
         "-o", "meas.csv",
@@ -63,7 +64,7 @@ def test_synthesize_then_identify_recovers_the_built_in_truth(tmp_path):
 
 
 def test_evaluate_and_simulate_a_plan_from_the_command_line(tmp_path):
-    _plan_file(tmp_path, "industrial-6r", m=40)
+    plan_file(tmp_path, "industrial-6r", m=40)
     result = run_cli(
         tmp_path, "evaluate", "--robot", "industrial-6r", "--plan", "plan.csv", "--sigma",
         "0.03", "--json",

@@ -33,6 +33,7 @@ __all__ = [
     "fail",
     "load_toml",
     "number",
+    "number_within",
     "numbers",
     "read_text",
     "suggest",
@@ -129,6 +130,19 @@ def number(path, value: Any, key: str) -> float:
     if not math.isfinite(number) or abs(number) > MAX_ABS_VALUE:
         raise fail(path, f"key '{key}': expected a finite number within ±{MAX_ABS_VALUE:g}")
     return number
+
+
+def number_within(path, value: Any, key: str, bounds: tuple[float, float], unit: str) -> float:
+    """A number of ``unit`` within ``bounds``; outside them, most likely another unit."""
+    found = number(path, value, key)
+    low, high = bounds
+    if not low <= found <= high:
+        raise fail(
+            path,
+            f"key '{key}': must be between {low:g} and {high:g} {unit}, got {found:g}; "
+            f"check the unit ({unit})",
+        )
+    return found
 
 
 def numbers(path, value: Any, key: str, count: int | None = None) -> list[float]:

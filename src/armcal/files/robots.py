@@ -30,7 +30,7 @@ from ..models import (
 )
 from ..noise import NoiseModel
 from ..paper import BUILTIN_ROBOTS, paper_arm
-from .common import STDIO, check_keys, fail, load_toml, number, numbers, suggest
+from .common import STDIO, check_keys, fail, load_toml, number, number_within, numbers, suggest
 
 __all__ = [
     "BUILTIN_ROBOTS",
@@ -145,15 +145,7 @@ def parse_region(path, region: Any) -> Region:
 
 def _sigma_value(path, value: Any, key: str) -> float:
     """An instrument noise (1 std, mm) within :data:`SIGMA_RANGE_MM`."""
-    sigma = number(path, value, key)
-    low, high = SIGMA_RANGE_MM
-    if not low <= sigma <= high:
-        raise fail(
-            path,
-            f"key '{key}': must be between {low:g} and {high:g} mm, got {sigma:g}; "
-            "check the unit (mm)",
-        )
-    return sigma
+    return number_within(path, value, key, SIGMA_RANGE_MM, "mm")
 
 
 def _instrument_covariance(path, meas: dict) -> np.ndarray | None:

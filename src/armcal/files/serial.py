@@ -30,7 +30,7 @@ from ..errors import ArmcalWarning, InputError
 from ..formats import SERIAL_KEYS, SERIAL_TRUTH_KEYS, allowed_keys
 from ..models import MdhTable, SerialChain, SpatialArm, rpy_matrix, transform
 from ..noise import NoiseModel, TrackerNoise
-from .common import check_keys, fail, load_toml, number, numbers, suggest
+from .common import check_keys, fail, load_toml, number, number_within, numbers, suggest
 from .robots import SIGMA_RANGE_MM, RobotSpec, fixed_parameters, load_robot
 from .urdf import read_urdf
 
@@ -260,14 +260,13 @@ def _noise(path: Path, table: Any) -> NoiseModel | None:
     noise = _position_noise(path, table)
     if "orientation_sigma_deg" not in table:
         return noise
-    value = number(path, table["orientation_sigma_deg"], "measurement.orientation_sigma_deg")
-    low, high = ORIENTATION_SIGMA_RANGE_DEG
-    if not low <= value <= high:
-        raise fail(
-            path,
-            f"key 'measurement.orientation_sigma_deg': must be between {low:g} and {high:g} "
-            "deg; check the unit (deg)",
-        )
+    value = number_within(
+        path,
+        table["orientation_sigma_deg"],
+        "measurement.orientation_sigma_deg",
+        ORIENTATION_SIGMA_RANGE_DEG,
+        "deg",
+    )
     if noise is None:
         raise fail(
             path,
