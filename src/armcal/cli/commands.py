@@ -9,6 +9,7 @@ name here.
 from __future__ import annotations
 
 import argparse
+import math
 import sys
 from collections.abc import Callable
 from functools import partial
@@ -197,12 +198,16 @@ def synthesize(args: argparse.Namespace) -> None:
     document = {"poses": int(made.q.shape[0]), "sigma_mm": made.sigma_mm, "output": args.output}
     noise = spec.arm.noise
     tracker = args.sigma is None and noise is not None and noise.tracker is not None
+    turn_sigma = None if noise is None else noise.orientation_sigma
+    turn = ""
+    if made.points.shape[1] == 6 and turn_sigma is not None:  # a 6-DoF instrument
+        turn = f", orientation {math.degrees(turn_sigma):g} deg"
     emit(
         args,
         document,
         f"wrote {made.q.shape[0]} measurements of {spec.arm.name}{what} ("
         f"{'laser tracker noise, reference sigma' if tracker else 'sigma'} "
-        f"{made.sigma_mm:g} mm, seed {args.seed}) to {args.output}",
+        f"{made.sigma_mm:g} mm{turn}, seed {args.seed}) to {args.output}",
         spec.warnings,
     )
 
