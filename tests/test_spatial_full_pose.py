@@ -266,3 +266,27 @@ def test_a_six_dof_campaign_from_the_command_line(tmp_path):
         robot = not entry["name"].startswith(("base.", "tool."))
         if robot and not entry["fixed"]:
             assert abs(entry["value"]) < entry["std"], entry
+
+
+def test_a_probe_that_moved_on_the_flange_is_caught_by_cross_validation():
+    """Half the campaign with the probe turned by 0.05 deg (ten times its noise) about x:
+    the positions barely move, the orientations are predicted far worse than promised."""
+    from armcal.validation import cross_validate, cross_validation_warning
+
+    arm = oriented("industrial", 1)
+    rng = np.random.default_rng(15)
+    truth = oriented_truth(arm, rng)
+    rows, points = measured(arm, random_poses(arm, 60, rng), truth)
+    noisy = points.copy()
+    noisy[:, :3] += rng.normal(scale=SIGMA_MM, size=(rows.m, 3))
+    slip = np.where(np.arange(rows.m)[:, None] >= rows.m // 2, [0.05 * DEG, 0.0, 0.0], 0.0)
+    turn = rng.normal(scale=SIGMA_DEG * DEG, size=(rows.m, 3))
+    # The slip is in the probe's own frame: R = R_true exp(slip), then the instrument's noise.
+    noisy[:, 3:] = rotation_vector(
+        vector_rotation(turn) @ vector_rotation(points[:, 3:]) @ vector_rotation(slip)
+    )
+    checked = cross_validate(arm, rows.q, noisy, 5, rng=16)
+    warning = cross_validation_warning(checked)
+    assert warning is not None and "orientation RMS" in warning.message
+    summary = checked.summary()
+    assert summary["orientation_rms_deg"] > 2 * summary["predicted_orientation_rms_deg"]

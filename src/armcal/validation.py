@@ -433,15 +433,25 @@ class CrossValidation:
 def cross_validation_warning(result: CrossValidation) -> ArmcalWarning | None:
     """``cross-validation`` when poses are predicted worse than the calibrations say."""
     summary = result.summary()
+    count = result.errors.shape[0]
     rms, predicted = summary["rms_per_point_mm"], summary["predicted_rms_per_point_mm"]
-    if not _too_large(rms, predicted, result.errors.shape[0]):
+    found = []
+    if _too_large(rms, predicted, count):
+        found.append(f"RMS {rms:.3g} mm per point, more than the {predicted:.3g} mm")
+    if "orientation_rms_deg" in summary:  # a 6-DoF instrument's orientations
+        turn, turn_predicted = (
+            summary["orientation_rms_deg"],
+            summary["predicted_orientation_rms_deg"],
+        )
+        if _too_large(turn, turn_predicted, count):
+            found.append(f"orientation RMS {turn:.3g} deg, more than the {turn_predicted:.3g} deg")
+    if not found:
         return None
     return ArmcalWarning(
         "cross-validation",
-        f"held-out poses are predicted with RMS {rms:.3g} mm per point, more than the "
-        f"{predicted:.3g} mm the calibrations predict: the model misses an "
-        f"effect (compliance, a wrong joint map) or some poses are outliers "
-        f"({action('try-robust')})",
+        f"held-out poses are predicted with {' and '.join(found)} the calibrations "
+        f"predict: the model misses an effect (compliance, a wrong joint map, a probe "
+        f"that moved on the flange) or some poses are outliers ({action('try-robust')})",
     )
 
 
