@@ -219,9 +219,8 @@ class BlockInformation:
     A pose's information is the Gram matrix of its whitened free rows
     (:func:`whitened_blocks`, every target of the pose) with the columns divided
     by ``scale`` ``(p_f,)``: the design coordinates (default: the free parameters
-    in internal units).  Gradients in the poses are central differences
-    (:func:`pose_derivative`); a family with an analytic gradient provides its own
-    plan information.
+    in internal units).  Gradients in the poses come from ``block_derivative``
+    where the family gives it, else central differences (:func:`pose_derivative`).
 
     Parameters
     ----------
@@ -235,6 +234,10 @@ class BlockInformation:
     unit_columns : bool
         The criteria's singular values with unit-norm columns per plan (how
         orthogonal the columns are), not those of the design coordinates.
+    block_derivative : callable, optional
+        ``d (W J[:, free]) / d q`` ``(rows, d, p_f, n)`` of the rows' whitened
+        blocks in their own pose's readings, or None where the family has no
+        closed form for these rows.
     """
 
     def __init__(
@@ -245,12 +248,14 @@ class BlockInformation:
         *,
         scale: np.ndarray | None = None,
         unit_columns: bool = False,
+        block_derivative: Callable[[Conditions], np.ndarray | None] | None = None,
     ) -> None:
         self.model = model
         self.q = np.asarray(q, dtype=float)
         self.loads = loads
         self.scale = np.ones(model.n_free) if scale is None else np.asarray(scale, dtype=float)
         self.unit_columns = unit_columns
+        self.block_derivative = block_derivative
 
     @property
     def rows_per_pose(self) -> int:
@@ -295,22 +300,30 @@ class BlockInformation:
         """``d value(F_i) / d q_i`` ``(..., m, n)`` of a per-pose function of the blocks."""
         return pose_derivative(lambda q: value(self._blocks_at(q)), self.q)
 
+    def _quadratic_derivative(self, weight: np.ndarray) -> np.ndarray:
+        """``d (sum_r f_r^T A f_r) / d q_i`` ``(..., m, n)`` of every pose's blocks ``f``,
+        ``A`` = ``weight`` (broadcast over the plans' poses)."""
+        derivative = None
+        if self.block_derivative is not None:
+            derivative = self.block_derivative(self._rows)
+        if derivative is None:
+            return self._central_difference(
+                lambda f: np.einsum("...rp,...pq,...rq->...", f, weight, f)
+            )
+        f = self._blocks  # (..., m, r, p_f)
+        n = derivative.shape[-1]
+        d = (derivative / self.scale[:, None]).reshape(*f.shape[:-2], -1, n)  # (..., m, r p_f, n)
+        weighted = (f @ weight).reshape(*f.shape[:-2], 1, -1)  # (..., m, 1, r p_f)
+        return 2.0 * (weighted @ d)[..., 0, :]
+
     def gradient(self, phi: np.ndarray) -> np.ndarray:
         phi = np.asarray(phi, dtype=float)
-        weight = phi if phi.ndim == 2 else phi[..., None, :, :]
-
-        def per_pose(f: np.ndarray) -> np.ndarray:
-            return np.einsum("...rp,...pq,...rq->...", f, weight, f)
-
-        return self._central_difference(per_pose)
+        return self._quadratic_derivative(phi if phi.ndim == 2 else phi[..., None, :, :])
 
     def pose_variance(self, m_inv: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         count = self.rows_per_pose
-
-        def per_pose(f: np.ndarray) -> np.ndarray:
-            return np.einsum("krp,pq,krq->k", f, m_inv, f) / count
-
-        return per_pose(self._blocks), self._central_difference(per_pose)
+        value = np.einsum("krp,pq,krq->k", self._blocks, m_inv, self._blocks) / count
+        return value, self._quadratic_derivative(m_inv) / count
 
     @cached_property
     def _svd(self) -> ScaledSVD:

@@ -24,6 +24,7 @@ from numpy.typing import ArrayLike
 from ..errors import ArmcalWarning, NotIdentifiableError
 from ..noise import NoiseModel, relative_noise
 from ..numerics import ScaledSVD, scaled_svd
+from . import spatial_pose
 from .defaults import RigidLoads
 from .identifiability import Identifiability, listing
 from .information import (
@@ -37,14 +38,18 @@ from .spatial_chain import (
     SerialChain,
     elementary,
     joint_motion,
-    left_jacobian_inverse,
     matrix_rpy,
     rotation_vector,
     rpy_matrix,
     transform,
     vector_rotation,
 )
-from .spatial_kinematics import ChainKinematics, SpatialLayout, kinematics
+from .spatial_kinematics import (
+    ChainKinematics,
+    SpatialLayout,
+    jacobian_pose_derivative,
+    kinematics,
+)
 from .spatial_registration import mean_rotation, register
 from .spatial_selection import select
 
@@ -419,16 +424,9 @@ class SpatialArm(RigidLoads):
         kin = self._kinematics(conditions, params)
         if not self.oriented:
             return kin.points
-        return np.concatenate([kin.points, self._turn(kin, conditions)], axis=-1)
-
-    @staticmethod
-    def _turn(kin: ChainKinematics, conditions: Conditions) -> np.ndarray:
-        """The rotation vectors ``(..., m, 3)`` of the targets' orientations ``R`` from the
-        rows' frames ``F``: of ``R F^T``, the instrument's axes where there are none."""
         assert kin.target_rotation is not None
-        if conditions.frames is None:
-            return rotation_vector(kin.target_rotation)
-        return rotation_vector(kin.target_rotation @ np.swapaxes(conditions.frames, -1, -2))
+        turn = spatial_pose.turns(kin.target_rotation, conditions.frames)
+        return np.concatenate([kin.points, turn], axis=-1)
 
     def _stacked(
         self,
@@ -437,14 +435,14 @@ class SpatialArm(RigidLoads):
         position: np.ndarray | None,
         angular: np.ndarray | None,
     ) -> np.ndarray:
-        """A Jacobian of the points: its position rows and, for a 6-DoF instrument, the
-        orientation rows, the angular velocities ``w`` as turns ``J_l(phi)^-1 w``."""
+        """A Jacobian of the points: its position rows and, for a 6-DoF instrument, the turns'
+        rows from the target's angular velocities (:mod:`~armcal.models.spatial_pose`)."""
         assert position is not None
         if not self.oriented:
             return position
-        assert angular is not None
-        chart = left_jacobian_inverse(self._turn(kin, conditions))
-        return np.concatenate([position, chart @ angular], axis=-2)
+        assert angular is not None and kin.target_rotation is not None
+        turn = spatial_pose.turns(kin.target_rotation, conditions.frames)
+        return np.concatenate([position, spatial_pose.turn_rows(angular, turn)], axis=-2)
 
     def _derivative(
         self, conditions: Conditions, params: np.ndarray | None, name: str
@@ -465,26 +463,15 @@ class SpatialArm(RigidLoads):
         return self._stacked(kin, conditions, kin.joint_jacobian, kin.tip_angular)
 
     def anchor(self, conditions: Conditions, points: np.ndarray) -> tuple[Conditions, np.ndarray]:
-        """For a 6-DoF instrument, every row's measured orientation becomes its frame and
-        its turn from there zero (:meth:`~armcal.models.interface.FitModel.anchor`)."""
+        """A 6-DoF instrument's measured orientations become the rows' frames
+        (:func:`~armcal.models.spatial_pose.anchor`)."""
         points = np.asarray(points, dtype=float)
-        if not self.oriented:
-            return conditions, points
-        measured = vector_rotation(points[..., 3:])
-        if conditions.frames is not None:
-            measured = measured @ conditions.frames
-        out = points.copy()
-        out[..., 3:] = 0.0
-        return conditions.with_frames(measured), out
+        return spatial_pose.anchor(conditions, points) if self.oriented else (conditions, points)
 
     def unanchor(self, conditions: Conditions, points: np.ndarray) -> np.ndarray:
         """Orientations as rotation vectors in the instrument's frame again."""
         points = np.asarray(points, dtype=float)
-        if not self.oriented or conditions.frames is None:
-            return points
-        out = points.copy()
-        out[..., 3:] = rotation_vector(vector_rotation(points[..., 3:]) @ conditions.frames)
-        return out
+        return spatial_pose.unanchor(conditions, points) if self.oriented else points
 
     def pose_covariances(
         self,
@@ -776,7 +763,23 @@ class SpatialArm(RigidLoads):
         return False
 
     def plan_information(self, q: np.ndarray, loads: Loads | None = None) -> BlockInformation:
-        return BlockInformation(self, q, loads, unit_columns=True)
+        return BlockInformation(
+            self, q, loads, unit_columns=True, block_derivative=self.block_derivative
+        )
+
+    def block_derivative(self, conditions: Conditions) -> np.ndarray | None:
+        """``d (W J[:, free]) / d q`` ``(m, 3, p_f, n)`` at the nominal parameters, each row
+        in its own readings (:func:`~armcal.models.spatial_kinematics.jacobian_pose_derivative`),
+        where the whitening ``W`` does not change with the pose; None where it does (a
+        tracker's or encoder noise, a 6-DoF instrument's turns)."""
+        noise = self.noise
+        moving = noise is not None and (noise.tracker is not None or noise.joint_sigma is not None)
+        if moving or self.oriented or conditions.sigma_mm is not None:
+            return None
+        kin = self._kinematics(conditions, None, derivatives=True)
+        out = jacobian_pose_derivative(kin, self.layout, self.joint_map, np.flatnonzero(self.free))
+        w = self.whitening(conditions)
+        return out if w is None else np.einsum("...ij,...jpn->...ipn", w, out)
 
     def closed_form_plans(self, m: int) -> None:
         return None

@@ -40,7 +40,10 @@ __all__ = [
     "BASE_NAMES",
     "ChainKinematics",
     "SpatialLayout",
+    "cross",
+    "jacobian_pose_derivative",
     "kinematics",
+    "upstream_joints",
 ]
 
 #: The base pose's parameter names: translation (mm), then roll, pitch, yaw.
@@ -172,6 +175,14 @@ class SpatialLayout:
         return slice(start, start + 3), turn
 
 
+def cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """``a x b`` ``(..., 3)`` of broadcast vectors: ``numpy.cross`` without its general
+    axis handling, which costs more than the products on the small arrays here."""
+    a0, a1, a2 = a[..., 0], a[..., 1], a[..., 2]
+    b0, b1, b2 = b[..., 0], b[..., 1], b[..., 2]
+    return np.stack([a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0], axis=-1)
+
+
 @dataclass(frozen=True, eq=False)
 class ChainKinematics:
     """The measured points of rows and what the kinematics gives with them.
@@ -194,6 +205,10 @@ class ChainKinematics:
         The row's target's orientation in the instrument's frame, where measured.
     target_angular : ndarray, shape (..., m, 3, p), or None
         Its angular velocity per unit of every parameter.
+    joint_axes : ndarray, shape (..., m, n, 3), or None
+        Every joint's axis (0 for a prismatic joint) in the instrument's frame.
+    joint_velocities : ndarray, shape (..., m, n, 3), or None
+        The point's velocity per unit of every joint value ``u`` (not the readings).
     """
 
     points: np.ndarray
@@ -204,6 +219,8 @@ class ChainKinematics:
     angular: np.ndarray | None = None
     target_rotation: np.ndarray | None = None
     target_angular: np.ndarray | None = None
+    joint_axes: np.ndarray | None = None
+    joint_velocities: np.ndarray | None = None
 
 
 def kinematics(
@@ -254,7 +271,7 @@ def kinematics(
         axis[..., 3, :] = rot[..., :, 0]
         axis[..., 4, :] = np.broadcast_to(yaw[..., :, 1], (*lead, 3))
         axis[..., 5, :] = [0.0, 0.0, 1.0]
-        moment[..., 3:6, :] = -np.cross(axis[..., 3:6, :], pos[..., None, :])
+        moment[..., 3:6, :] = -cross(axis[..., 3:6, :], pos[..., None, :])
     for k, kind in enumerate(chain.kinds):
         pos = pos + rot @ chain.origins[k, :3, 3]
         rot = rot @ chain.origins[k, :3, :3]
@@ -270,14 +287,14 @@ def kinematics(
             if derivatives and c in slots:
                 w = rot[..., :, c - 3]
                 axis[..., slots[c], :] = w
-                moment[..., slots[c], :] = -np.cross(w, pos)
+                moment[..., slots[c], :] = -cross(w, pos)
             if c in slots:
                 rot = rot @ elementary(c - 3, err[..., c])
         w = rot[..., :, 2]
         if kind == "R":
             if derivatives:
                 joint_axis[..., k, :] = w
-                joint_moment[..., k, :] = -np.cross(w, pos)
+                joint_moment[..., k, :] = -cross(w, pos)
             rot = rot @ elementary(2, u[..., k])
         else:
             if derivatives:
@@ -300,7 +317,7 @@ def kinematics(
     zero_moment = np.einsum("ji,...jc->...ic", joint_map, joint_moment)
     axis[..., layout.zero_start : layout.target_start, :] = zero_axis
     moment[..., layout.zero_start : layout.target_start, :] = zero_moment
-    jac = np.cross(axis, points[..., None, :]) + moment  # (..., m, p, 3)
+    jac = cross(axis, points[..., None, :]) + moment  # (..., m, p, 3)
     jac = np.swapaxes(jac, -1, -2).copy()  # (..., m, 3, p)
     target_angular = None
     angular = np.swapaxes(axis, -1, -2)
@@ -314,7 +331,7 @@ def kinematics(
         if target_angular is not None and turn_cols is not None:
             jac[..., turn_cols] = 0.0
             target_angular[..., turn_cols] = np.where(mine, turning, 0.0)
-    joint_jac = np.swapaxes(np.cross(zero_axis, points[..., None, :]) + zero_moment, -1, -2)
+    joint_jac = np.swapaxes(cross(zero_axis, points[..., None, :]) + zero_moment, -1, -2)
     return ChainKinematics(
         points,
         rot,
@@ -324,4 +341,62 @@ def kinematics(
         angular,
         target_rotation,
         target_angular,
+        joint_axis,
+        cross(joint_axis, points[..., None, :]) + joint_moment,
     )
+
+
+def upstream_joints(layout: SpatialLayout) -> np.ndarray:
+    """How many joints come before each parameter in the chain ``(p,)``: 0 for the base,
+    ``k`` for joint ``k``'s placement (0-based), ``n`` for the targets; a zero error is
+    the joint's own turn and is handled apart (:func:`jacobian_pose_derivative`)."""
+    out = np.zeros(layout.n_params, dtype=int)
+    for k in range(layout.n_joints):
+        out[6 + 5 * k : 6 + 5 * k + 5] = k
+    out[layout.zero_start : layout.target_start] = -1
+    out[layout.target_start :] = layout.n_joints
+    return out
+
+
+def jacobian_pose_derivative(
+    kin: ChainKinematics, layout: SpatialLayout, joint_map: np.ndarray, columns: np.ndarray
+) -> np.ndarray:
+    """``d J[:, :, c] / d q`` ``(..., m, 3, len(columns), n)``: how the points' parameter
+    Jacobian (:func:`kinematics` with ``derivatives``) changes with the readings.
+
+    Every column is the velocity ``w_k x p + m_k`` of the point ``p`` under a screw
+    fixed in the chain.  A joint ``j`` before the screw moves both rigidly, so the
+    column turns with it: ``a_j x J_k``; a joint after it moves only the point:
+    ``w_k x V_j(p)`` (``a_j`` the joint's axis, ``V_j`` its velocity at ``p``).  A
+    joint's own turn does not move its axis: both rules agree there.  The zero
+    errors and the readings go through the joint map ``u = M (q + dq)``.
+    """
+    assert kin.jacobian is not None and kin.angular is not None
+    assert kin.joint_axes is not None and kin.joint_velocities is not None
+    jac = np.swapaxes(kin.jacobian, -1, -2)  # (..., m, p, 3)
+    axes = np.swapaxes(kin.angular, -1, -2)  # (..., m, p, 3): each parameter's screw axis
+    a, v = kin.joint_axes, kin.joint_velocities  # (..., m, n, 3)
+    n = layout.n_joints
+    before = upstream_joints(layout)
+    zeros = np.arange(layout.zero_start, layout.target_start)
+    # d V_j / d u_l: l before j turns it, l at or after j moves the point.
+    d_velocity = np.where(
+        (np.arange(n)[None, :] < np.arange(n)[:, None])[..., None],
+        cross(a[..., None, :, :], v[..., :, None, :]),  # [j, l] = a_l x V_j
+        cross(a[..., :, None, :], v[..., None, :, :]),  # [j, l] = a_j x V_l
+    )  # (..., m, n, n, 3)
+    plain = np.setdiff1d(columns, zeros)
+    out = np.empty((*jac.shape[:-2], len(columns), n, 3))
+    where_plain = np.isin(columns, plain)
+    if plain.size:
+        turned = cross(a[..., None, :, :], jac[..., plain, None, :])  # a_l x J_k
+        moved = cross(axes[..., plain, None, :], v[..., None, :, :])  # w_k x V_l
+        up = (np.arange(n)[None, :] < before[plain][:, None])[..., None]
+        out[..., where_plain, :, :] = np.where(up, turned, moved)
+    chosen_zeros = columns[~where_plain] - layout.zero_start
+    if chosen_zeros.size:  # J_dq_i = sum_j M_ji V_j
+        out[..., ~where_plain, :, :] = np.einsum(
+            "ji,...jlc->...ilc", joint_map[:, chosen_zeros], d_velocity
+        )
+    by_reading = np.swapaxes(np.swapaxes(out, -1, -2) @ joint_map, -1, -2)  # sum_l M_li d/du_l
+    return np.moveaxis(by_reading, -1, -3)  # (..., m, 3, c, n)

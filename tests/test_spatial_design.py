@@ -1,0 +1,78 @@
+"""Designing plans for spatial arms: the information's analytic gradient in the poses.
+
+The optimizer and the certificate climb per-pose quadratic forms of the
+whitened Jacobian blocks; for spatial arms their gradient comes from the
+Jacobian's derivative in the readings (the serial-chain Hessian: a joint before
+a screw turns its column, a joint after it moves the point).  Both are checked
+against central differences of step 1e-6 rad, whose error is about
+``h^2 |f'''| + eps |f| / h``: 1e-12 x 1e4 mm and 1e-16 x 1e3 / 1e-6, so 1e-6
+relative is a safe tolerance.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from armcal.models.information import BlockInformation
+from armcal.models.spatial_kinematics import jacobian_pose_derivative, kinematics
+from armcal.noise import NoiseModel
+from helpers import central_differences
+from test_spatial_model import ARMS, labelled, random_poses, random_truth
+
+
+@pytest.mark.parametrize("name", sorted(ARMS))
+def test_the_jacobian_s_derivative_in_the_readings_agrees_with_central_differences(name):
+    arm = labelled(ARMS[name](), 2)  # the industrial arm's coupled J2/J3 included
+    rng = np.random.default_rng(3)
+    params = random_truth(arm, rng)
+    q = random_poses(arm, 5, rng)
+    target = np.array([0, 1, 0, 1, 1])
+
+    def jacobian(flat: np.ndarray) -> np.ndarray:
+        reading = flat.reshape(q.shape)
+        found = kinematics(
+            arm.chain, arm.joint_map, arm.layout, reading, target, params, derivatives=True
+        )
+        return found.jacobian
+
+    kin = kinematics(arm.chain, arm.joint_map, arm.layout, q, target, params, derivatives=True)
+    found = jacobian_pose_derivative(kin, arm.layout, arm.joint_map, np.arange(arm.n_params))
+    numeric = central_differences(jacobian, q.ravel())  # (m, 3, p, m n)
+    every = np.arange(q.shape[0])
+    own = numeric.reshape(*numeric.shape[:-1], q.shape[0], arm.n_joints)[every, ..., every, :]
+    scale = np.max(np.abs(own))
+    np.testing.assert_allclose(found, own, rtol=0, atol=1e-6 * scale)
+
+
+@pytest.mark.parametrize(
+    "noise",
+    [NoiseModel.isotropic(0.03, dim=3), NoiseModel(np.diag([0.01, 0.02, 0.05]) ** 2)],
+    ids=["isotropic", "per-axis"],
+)
+def test_the_plan_information_s_gradient_is_exact(noise):
+    arm = labelled(ARMS["industrial"](), 3).with_noise(noise)
+    rng = np.random.default_rng(4)
+    model = arm.prepared(arm.plan_conditions(random_poses(arm, 40, rng)))
+    q = random_poses(model, 30, rng).reshape(3, 10, model.n_joints)
+    p = model.n_free
+    phi = rng.normal(size=(3, p, p))
+    phi = phi + np.swapaxes(phi, -1, -2)
+    analytic = model.plan_information(q).gradient(phi)
+    numeric = BlockInformation(model, q, unit_columns=True).gradient(phi)
+    np.testing.assert_allclose(analytic, numeric, rtol=0, atol=1e-6 * np.max(np.abs(numeric)))
+    m_inv = phi[0] @ phi[0].T
+    value, slope = model.plan_information(q[0]).pose_variance(m_inv)
+    again, numeric = BlockInformation(model, q[0], unit_columns=True).pose_variance(m_inv)
+    np.testing.assert_array_equal(value, again)
+    np.testing.assert_allclose(slope, numeric, rtol=0, atol=1e-6 * np.max(np.abs(numeric)))
+
+
+def test_a_tracker_s_gradient_falls_back_to_central_differences():
+    """The tracker's weights move with the pose: no closed form is claimed for them."""
+    from armcal.noise import TrackerNoise
+
+    noise = NoiseModel.laser_tracker(TrackerNoise(0.015, 0.006, 0.01, 0.005))
+    arm = labelled(ARMS["industrial"](), 1).with_noise(noise)
+    rows = arm.plan_conditions(random_poses(arm, 4, np.random.default_rng(5)))
+    assert arm.block_derivative(rows) is None
