@@ -133,9 +133,9 @@ def certify(
     q: np.ndarray,
     *,
     rng: np.random.Generator | int | None = None,
-    candidates: int = 3000,
-    rounds: int = 4,
-    search: int = 20000,
+    candidates: int | None = None,
+    rounds: int | None = None,
+    search: int | None = None,
 ) -> Certificate:
     """Certify a plan's D-efficiency against the best possible plan within the constraints.
 
@@ -146,12 +146,15 @@ def certify(
         The plan (rad); must identify every parameter.
     rng : numpy.random.Generator or int or None
         Seeds the random candidates and searches.
-    candidates : int
+    candidates : int, optional
         Random feasible poses for the weighted (approximate) design.
-    rounds : int
+    rounds : int, optional
         Rounds of adding the maximizer of the variance function to the candidates.
-    search : int
+    search : int, optional
         Random feasible poses from which the final maximization of ``d`` starts.
+
+        Each defaults to the model's
+        :attr:`~armcal.models.interface.FitModel.design_effort`.
 
     Returns
     -------
@@ -191,6 +194,10 @@ def certify(
     without a search.  Other models have no such bound; only the two above apply.
     """
     rng = np.random.default_rng(rng)
+    effort = model.design_effort
+    candidates = effort.candidates if candidates is None else candidates
+    rounds = effort.rounds if rounds is None else rounds
+    search = effort.search if search is None else search
     q = np.asarray(q, dtype=float)
     p = model.n_free
     plan_information = model.plan_information(q)

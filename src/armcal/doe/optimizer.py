@@ -43,8 +43,8 @@ def optimize_plan(
     *,
     criterion: str = "D",
     rng: np.random.Generator | int | None = None,
-    starts: int = 48,
-    steps: int = 400,
+    starts: int | None = None,
+    steps: int | None = None,
     polish: int = 3,
     initial: np.ndarray | None = None,
 ) -> np.ndarray:
@@ -59,10 +59,11 @@ def optimize_plan(
         Key of :data:`armcal.criteria.CRITERIA`.
     rng : numpy.random.Generator or int or None
         Seeds the random starts; the same seed gives the same plan.
-    starts : int
-        Random starting plans, optimized together (batched).
-    steps : int
-        Adam iterations of the batched ascent.
+    starts : int, optional
+        Random starting plans, optimized together (batched); default the model's
+        :attr:`~armcal.models.interface.FitModel.design_effort`.
+    steps : int, optional
+        Adam iterations of the batched ascent (default likewise).
     polish : int
         Best starts polished by a quasi-Newton solver with exact bounds
         (L-BFGS-B, or SLSQP with the region constraints).
@@ -86,6 +87,9 @@ def optimize_plan(
     if criterion not in CRITERIA:
         raise ArmcalError(f"unknown criterion {criterion!r}; choose one of {', '.join(CRITERIA)}")
     rng = np.random.default_rng(rng)
+    effort = model.design_effort
+    starts = effort.starts if starts is None else starts
+    steps = effort.steps if steps is None else steps
     n = model.n_joints
     viewed = model.has_view
     q0 = np.stack([random_plan(model, m, rng=rng) for _ in range(starts)])

@@ -14,7 +14,7 @@ from typing import TYPE_CHECKING, Self
 
 import numpy as np
 
-from .interface import Conditions, Loads
+from .interface import Conditions, DesignEffort, Loads
 from .planar_geometry import wrap_angle
 
 __all__ = [
@@ -55,6 +55,12 @@ class MinimalPlanar:
     def prepared(self, conditions: Conditions, points: np.ndarray | None = None) -> Self:
         """Itself: its parameters are minimal and need no placing."""
         return self
+
+    @property
+    def design_effort(self) -> DesignEffort:
+        """A planar start costs little and its criteria have many local optima: many
+        starts, long ascents."""
+        return DesignEffort()
 
     @property
     def position_dim(self) -> int:

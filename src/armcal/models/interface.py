@@ -65,6 +65,7 @@ __all__ = [
     "ClosedFormPlan",
     "ClosedFormPlans",
     "Conditions",
+    "DesignEffort",
     "Effect",
     "FitModel",
     "LinearPositions",
@@ -203,6 +204,28 @@ class Conditions:
         if key not in self._memo:
             self._memo[key] = compute()
         return self._memo[key]
+
+
+@dataclass(frozen=True)
+class DesignEffort:
+    """How hard a plan search works for a family: what a start costs against how many
+    local optima its criteria have.
+
+    Attributes
+    ----------
+    starts, steps : int
+        Random starting plans of the optimizer (batched) and its ascent's steps.
+    candidates, rounds, search : int
+        The certificate's random feasible poses for the weighted design, its rounds
+        of adding the variance function's maximizers, and the random poses its final
+        maximization starts from (:func:`armcal.doe.certify`).
+    """
+
+    starts: int = 48
+    steps: int = 400
+    candidates: int = 3000
+    rounds: int = 4
+    search: int = 20000
 
 
 @dataclass(frozen=True)
@@ -468,6 +491,11 @@ class FitModel(Protocol):
         """Coordinates of a measured point: 2 (in the plane) or 3, and 6 when the
         instrument also measures the target's orientation (then the last three are a
         rotation vector, rad)."""
+        ...
+
+    @property
+    def design_effort(self) -> DesignEffort:
+        """How hard the plan optimizer and the certificate search for this family."""
         ...
 
     @property

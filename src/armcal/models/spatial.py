@@ -33,7 +33,7 @@ from .information import (
     covariance_factor_from,
     whitened_free_jacobian,
 )
-from .interface import Conditions, Effect, LinearPositions, Loads
+from .interface import Conditions, DesignEffort, Effect, LinearPositions, Loads
 from .spatial_chain import (
     SerialChain,
     elementary,
@@ -608,13 +608,8 @@ class SpatialArm(RigidLoads):
         """Angles wrapped into ``(-pi, pi]``; a target's orientation to a turn of at most
         half a turn."""
         params = np.array(params, dtype=float)
-        lay = self.layout
-        turns = np.zeros(lay.n_params, dtype=bool)
-        for t in range(len(self.targets)):
-            turn_cols = lay.target_columns(t)[1]
-            if turn_cols is not None:
-                turns[turn_cols] = True
-        angles = lay.angles & ~turns
+        turns = self.layout.turns
+        angles = self.layout.angles & ~turns
         params[..., angles] = np.pi - np.mod(np.pi - params[..., angles], 2 * np.pi)
         if turns.any():
             vectors = params[..., turns].reshape(*params.shape[:-1], -1, 3)
@@ -743,6 +738,14 @@ class SpatialArm(RigidLoads):
         return rows.with_frames(frames)
 
     # -- design --------------------------------------------------------------------------
+
+    @property
+    def design_effort(self) -> DesignEffort:
+        """A start costs the chain's Jacobian and its derivative at every pose and target,
+        and starts agree (the industrial arm's 40-pose D-optimum: 4 starts of 100 steps
+        reach 0.7677702, 48 of 400 0.7677832); the certificate's search is sized likewise
+        (a bound of 0.9977 against 0.9984 with the planar defaults)."""
+        return DesignEffort(starts=4, steps=100, candidates=1000, rounds=2, search=3000)
 
     def feasible(self, q: np.ndarray, *, tol: float = 1e-9) -> np.ndarray:
         return np.all(self.within_limits(q, tol=tol), axis=-1)

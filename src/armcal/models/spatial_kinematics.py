@@ -119,9 +119,7 @@ class SpatialLayout:
             for slot, c in enumerate(_PLACEMENT[kind]):
                 out[start + slot] = c >= 3
             out[self.zero_start + k] = kind == "R"
-        if self.oriented:
-            out[self.target_start :] = np.tile([False] * 3 + [True] * 3, len(self.targets))
-        return out
+        return out | self.turns
 
     @cached_property
     def units(self) -> tuple[str, ...]:
@@ -137,6 +135,14 @@ class SpatialLayout:
         out = np.zeros(self.n_params, dtype=bool)
         out[:6] = True
         out[self.target_start :] = True
+        return out
+
+    @cached_property
+    def turns(self) -> np.ndarray:
+        """Boolean ``(p,)``: the targets' orientations (rotation vectors), where measured."""
+        out = np.zeros(self.n_params, dtype=bool)
+        if self.oriented:
+            out[self.target_start :] = np.tile([False] * 3 + [True] * 3, len(self.targets))
         return out
 
     def joint_of(self, index: int) -> int | None:

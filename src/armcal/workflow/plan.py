@@ -16,7 +16,15 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..criteria import PlanQuality, evaluate_plan
-from ..doe import Design, PosesNeeded, design, design_with_loads, poses_needed, random_plan
+from ..doe import (
+    Design,
+    PosesNeeded,
+    design,
+    design_with_loads,
+    feasible_poses,
+    poses_needed,
+    random_plan,
+)
 from ..errors import ArmcalError, ArmcalWarning, NotIdentifiableError
 from ..files import RobotSpec, SerialSpec
 from ..models import FitModel, Loads, PlanarArm, SpatialArm
@@ -211,6 +219,12 @@ def design_plan(
     check_plan_size(poses)
     rng = np.random.default_rng(seed)
     model = fit_model(spec, arm)
+    # The parameters a plan moving every joint identifies (every one, for a family with
+    # minimal parameters), from a stream of its own: the design's draws stay the same.
+    moving = feasible_poses(
+        model, max(poses, 4 * model.n_params), rng=np.random.default_rng([seed, 1])
+    )
+    model = model.prepared(model.plan_conditions(moving))
     sigma = design_sigma(arm)
     start = time.perf_counter()
     if spec.elastic is not None:  # the poses carry payloads, chosen by the design
