@@ -115,14 +115,14 @@ def test_unidentifiable_plan_is_an_error_not_numbers(rng):
 def test_criterion_gradient_matches_central_differences(criterion, base_offset, rng):
     arm = random_arm(3, rng, base_offset=base_offset)
     q = random_plan(arm, 7, rng=rng)
-    value, grad = _criterion_value_and_gradient(arm, q, criterion)
+    value, grad = _criterion_value_and_gradient(arm, q, CRITERIA[criterion])
     h = 1e-6
     numeric = np.zeros_like(q)
     for index in np.ndindex(q.shape):
         step = np.zeros_like(q)
         step[index] = h
-        plus, _ = _criterion_value_and_gradient(arm, q + step, criterion)
-        minus, _ = _criterion_value_and_gradient(arm, q - step, criterion)
+        plus, _ = _criterion_value_and_gradient(arm, q + step, CRITERIA[criterion])
+        minus, _ = _criterion_value_and_gradient(arm, q - step, CRITERIA[criterion])
         numeric[index] = (plus - minus) / (2 * h)
     # log-efficiencies are O(1) with O(1) curvature: truncation ~h^2, round-off ~1e-16/h.
     assert_allclose(grad, numeric, rtol=0, atol=1e-7)

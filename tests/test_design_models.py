@@ -91,8 +91,10 @@ def test_information_gradient_matches_central_differences(name, rng):
 def test_criterion_gradient_of_weighted_models_matches_central_differences(name, criterion, rng):
     arm = model_arm(name)
     q = random_plan(arm, 8, rng=rng)
-    value, grad = _criterion_value_and_gradient(arm, q, criterion)
-    numeric = central_differences(lambda x: _criterion_value_and_gradient(arm, x, criterion)[0], q)
+    value, grad = _criterion_value_and_gradient(arm, q, CRITERIA[criterion])
+    numeric = central_differences(
+        lambda x: _criterion_value_and_gradient(arm, x, CRITERIA[criterion])[0], q
+    )
     # log-efficiencies are O(1) with O(1) curvature: truncation ~h^2, round-off ~1e-16/h.
     assert_allclose(grad, numeric, rtol=0, atol=1e-7)
     assert value == pytest.approx(np.log(efficiencies(arm, q)[criterion]), abs=1e-12)

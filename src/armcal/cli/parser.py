@@ -15,7 +15,7 @@ from .._version import __version__
 from ..criteria import CRITERIA
 from ..demo import DEMO_FILES, PLANAR_DEMO_POSES
 from ..demo_serial import SERIAL_DEMO_FILES, SERIAL_DEMO_POSES
-from ..doe import DISTINCT_TOLERANCE, ORDERS, REQUIREMENTS
+from ..doe import DISTINCT_TOLERANCE, ORDERS, REQUIREMENTS, TASK_CRITERIA
 from ..doe import METHODS as DESIGN_METHODS
 from ..errors import ArmcalError
 from ..files import DEFAULT_ROBOT
@@ -212,7 +212,11 @@ def build_parser() -> argparse.ArgumentParser:
         "--poses", type=options.poses, required=True, metavar="M", help="number of poses"
     )
     sub.add_argument(
-        "--criterion", choices=list(CRITERIA), default="D", help="criterion (default D)"
+        "--criterion",
+        choices=[*CRITERIA, *TASK_CRITERIA],
+        default="D",
+        help="criterion (default D); I and G: the mean and the largest predicted position "
+        "error after calibration over the test poses (--test-poses)",
     )
     sub.add_argument(
         "--method",

@@ -14,6 +14,8 @@ isotropic iid, the weighted information over the free parameters otherwise.
 * :mod:`~armcal.doe.optimizer` -- batched gradient ascent on a criterion,
   polished by L-BFGS-B / SLSQP;
 * :mod:`~armcal.doe.exchange` -- modified Fedorov exchange over candidates;
+* :mod:`~armcal.doe.task` -- the task-aimed criteria I and G: the predicted
+  position variance after calibration over test poses;
 * :mod:`~armcal.doe.certificate` -- a lower bound on the D-efficiency relative
   to the model's best plan within the constraints (Kiefer-Wolfowitz);
 * :mod:`~armcal.doe.order` -- :func:`order_poses`: the order of a plan's poses
@@ -39,12 +41,14 @@ from .optimizer import optimize_plan
 from .order import ORDERS, joint_travel, order_poses
 from .plans import DISTINCT_TOLERANCE, feasible, feasible_poses, random_plan, repeated_poses
 from .sizing import REQUIREMENTS, PosesNeeded, accuracy_metric, poses_needed
+from .task import TASK_CRITERIA, task_criterion
 
 __all__ = [
     "DISTINCT_TOLERANCE",
     "METHODS",
     "ORDERS",
     "REQUIREMENTS",
+    "TASK_CRITERIA",
     "Certificate",
     "Design",
     "PosesNeeded",
@@ -63,4 +67,5 @@ __all__ = [
     "poses_needed",
     "random_plan",
     "repeated_poses",
+    "task_criterion",
 ]

@@ -7,7 +7,7 @@ from typing import Literal
 
 import numpy as np
 
-from ..criteria import CRITERIA, attains_unit_bound, d_efficiency, efficiencies
+from ..criteria import CRITERIA, Criterion, attains_unit_bound, d_efficiency, efficiencies
 from ..errors import ArmcalError
 from ..models import ClosedFormPlan, ClosedFormPlans, FitModel, equations_per_pose
 from ..progress import ProgressCallback
@@ -16,6 +16,7 @@ from .exchange import exchange_plan
 from .optimizer import optimize_plan
 from .order import ORDERS, Order, joint_travel, order_poses
 from .plans import DISTINCT_TOLERANCE, feasible_poses, repeated_poses
+from .task import TASK_CRITERIA, task_criterion
 
 __all__ = [
     "METHODS",
@@ -127,8 +128,10 @@ class Design:
         )
 
 
-def _score(model: FitModel, q: np.ndarray, criterion: str) -> float:
+def _score(model: FitModel, q: np.ndarray, criterion: str | Criterion) -> float:
     """The efficiency ``criterion`` of plan ``q`` on the model."""
+    if isinstance(criterion, Criterion):  # a task's: on the information itself
+        return float(criterion.efficiency(model.plan_information(q).information()))
     return float(efficiencies(model, q)[criterion])
 
 
@@ -150,6 +153,7 @@ def design(
     order: Order = "travel",
     distinct: bool = False,
     progress: ProgressCallback | None = None,
+    test_q: np.ndarray | None = None,
 ) -> Design:
     """An optimal ``m``-pose plan for the arm's model, within its joint limits and region.
 
@@ -161,8 +165,10 @@ def design(
         the payloads by :func:`armcal.doe.loads.design_with_loads`).
     m : int
         Number of poses; at least ``ceil(p_f / 2)`` for ``p_f`` free parameters.
-    criterion : {"D", "A", "E"}
-        Criterion to maximize (the certificate is always for D).
+    criterion : {"D", "A", "E", "I", "G"}
+        Criterion to maximize (the certificate is always for D); I and G are the
+        mean and the largest predicted position variance after calibration over
+        ``test_q`` (:mod:`armcal.doe.task`).
     method : {"auto", "analytic", "optimize", "exchange"}
         ``auto`` takes a closed-form orthogonal plan when it fits the constraints
         and is provably optimal for the model (below), else optimizes and (for
@@ -229,8 +235,14 @@ def design(
     **Order.**  The criteria and the certificate are computed for the plan as
     the method made it; ordering only permutes its poses.
     """
-    if criterion not in CRITERIA:
-        raise ArmcalError(f"unknown criterion {criterion!r}; choose one of {', '.join(CRITERIA)}")
+    names = [*CRITERIA, *TASK_CRITERIA]
+    if criterion not in names:
+        raise ArmcalError(f"unknown criterion {criterion!r}; choose one of {', '.join(names)}")
+    aim: str | Criterion = criterion
+    if criterion in TASK_CRITERIA:
+        if test_q is None or not len(test_q):
+            raise ArmcalError(f"the {criterion} criterion needs test poses (--test-poses)")
+        aim = task_criterion(criterion, model, test_q)
     if method not in METHODS:
         raise ArmcalError(f"unknown method {method!r}; choose one of {', '.join(METHODS)}")
     if order not in ORDERS:
@@ -273,7 +285,7 @@ def design(
     d_closed = {plan.label: float(d_efficiency(model, plan.q)) for plan in closed}
     best = max(closed, key=lambda plan: d_closed[plan.label]) if closed else None
     optimal_closed = best is not None and attains_unit_bound(model, best.q, d_closed[best.label])
-    if method == "analytic" or (method == "auto" and optimal_closed):
+    if method == "analytic" or (method == "auto" and optimal_closed and aim == criterion):
         assert best is not None and family is not None  # raised above otherwise
         q, used = best.q, "analytic"
         note = family.choice_note(best, d_closed, optimal_closed)
@@ -284,7 +296,7 @@ def design(
         size = m // copies
         base = design(
             model, size, criterion=criterion, method=method, rng=rng, candidates=candidates,
-            with_certificate=False, order="none",
+            with_certificate=False, order="none", test_q=test_q,
         )  # fmt: skip
         extra = m - copies * size
         q = np.concatenate([np.tile(base.q, (copies, 1)), base.q[:extra]])
@@ -305,7 +317,7 @@ def design(
     else:
         searched = True
         initial = np.stack([plan.q for plan in closed]) if closed else None
-        q = optimize_plan(model, m, criterion=criterion, rng=rng, initial=initial)
+        q = optimize_plan(model, m, criterion=aim, rng=rng, initial=initial)
         used = "optimize"
         repeats = int(np.count_nonzero(repeated_poses(q))) if distinct else 0
         found = float(d_efficiency(model, q))
@@ -319,7 +331,7 @@ def design(
         elif repeats and single:  # replace the repeats, without exchanges that tune for D
             pool = feasible_poses(model, 4000, rng=rng) if candidates is None else candidates
             q = exchange_plan(model, m, pool, start=q, rng=rng, max_swaps=0, distinct=True)
-        if best is not None and _score(model, best.q, criterion) > _score(model, q, criterion):
+        if best is not None and _score(model, best.q, aim) > _score(model, q, aim):
             q, used = best.q, "analytic"  # not expected: the optimizer starts from it
     q = np.asarray(q, dtype=float)
     efficiency = float(d_efficiency(model, q))

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..criteria import CRITERIA
+from ..criteria import CRITERIA, Criterion
 from ..errors import ArmcalError
 from ..models import FitModel
 from .ascent import adam_ascent, penalty_weight, to_q, to_u, view_penalty
@@ -16,7 +16,7 @@ __all__ = [
 
 
 def _criterion_value_and_gradient(
-    model: FitModel, q: np.ndarray, criterion: str
+    model: FitModel, q: np.ndarray, criterion: Criterion
 ) -> tuple[np.ndarray, np.ndarray]:
     """``log efficiency`` ``(...)`` of plans ``q`` ``(..., m, n)`` and its gradient in ``q``.
 
@@ -25,7 +25,7 @@ def _criterion_value_and_gradient(
     ``Fs`` for its model, the weighted information over the free parameters
     otherwise.
     """
-    crit = CRITERIA[criterion]
+    crit = criterion
     info = model.plan_information(q)
     m, p = q.shape[-2] * info.rows_per_pose, model.n_free  # rows: every target of every pose
     fs = info.information()
@@ -41,7 +41,7 @@ def optimize_plan(
     model: FitModel,
     m: int,
     *,
-    criterion: str = "D",
+    criterion: str | Criterion = "D",
     rng: np.random.Generator | int | None = None,
     starts: int | None = None,
     steps: int | None = None,
@@ -55,8 +55,9 @@ def optimize_plan(
     model : FitModel
     m : int
         Number of poses.
-    criterion : {"D", "A", "E"}
-        Key of :data:`armcal.criteria.CRITERIA`.
+    criterion : {"D", "A", "E"} or Criterion
+        Key of :data:`armcal.criteria.CRITERIA`, or a criterion made for the task
+        (:func:`armcal.doe.task.task_criterion`).
     rng : numpy.random.Generator or int or None
         Seeds the random starts; the same seed gives the same plan.
     starts : int, optional
@@ -84,8 +85,12 @@ def optimize_plan(
     ``d/dtheta_ij = 2 <J_i Phi, dJ_i/dtheta_ij>`` and ``dJ/dtheta`` just turns the
     two columns of link ``j`` by 90 degrees.
     """
-    if criterion not in CRITERIA:
-        raise ArmcalError(f"unknown criterion {criterion!r}; choose one of {', '.join(CRITERIA)}")
+    if isinstance(criterion, str):
+        if criterion not in CRITERIA:
+            raise ArmcalError(
+                f"unknown criterion {criterion!r}; choose one of {', '.join(CRITERIA)}"
+            )
+        criterion = CRITERIA[criterion]
     rng = np.random.default_rng(rng)
     effort = model.design_effort
     starts = effort.starts if starts is None else starts
@@ -125,7 +130,7 @@ def optimize_plan(
     return best_q
 
 
-def _polish(model: FitModel, q: np.ndarray, criterion: str, viewed: bool) -> np.ndarray:
+def _polish(model: FitModel, q: np.ndarray, criterion: Criterion, viewed: bool) -> np.ndarray:
     """Local refinement of one plan with exact bounds (and exact view constraints)."""
     from scipy.optimize import Bounds, minimize  # ~0.3 s to import: keep it off `import armcal`
 

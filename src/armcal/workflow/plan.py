@@ -221,9 +221,7 @@ def design_plan(
     model = fit_model(spec, arm)
     # The parameters a plan moving every joint identifies (every one, for a family with
     # minimal parameters), from a stream of its own: the design's draws stay the same.
-    moving = feasible_poses(
-        model, max(poses, 4 * model.n_params), rng=np.random.default_rng([seed, 1])
-    )
+    moving = feasible_poses(model, 4 * model.n_params + 20, rng=np.random.default_rng([seed, 1]))
     model = model.prepared(model.plan_conditions(moving))
     sigma = design_sigma(arm)
     start = time.perf_counter()
@@ -262,6 +260,7 @@ def design_plan(
             order=order,  # type: ignore[arg-type]  # checked by design
             distinct=distinct,
             progress=progress,
+            test_q=test_q,
         )
         loads = None
     seconds = time.perf_counter() - start
