@@ -1526,6 +1526,35 @@ CASES += [
         ("robot.toml", "orientation_sigma_deg", "check the unit (deg)"),
     ),
     case(
+        "instrument-acceptance-without-normals",
+        {
+            "robot.toml": 'urdf = "arm.urdf"\n[instrument]\nposition_mm = [2000, 0, 0]\n'
+            "acceptance_deg = 30\n[targets]\nA = { xyz_mm = [0, 0, 50] }\n",
+            "arm.urdf": URDF_2R,
+        },
+        ("design", "--robot", "robot.toml", "--poses", "10", "-o", "plan.csv"),
+        ("robot.toml", "instrument.acceptance_deg", "normal", "A"),
+    ),
+    case(
+        "instrument-range-without-position",
+        {
+            "robot.toml": 'urdf = "arm.urdf"\n[instrument]\nrange_mm = [1000, 5000]\n',
+            "arm.urdf": URDF_2R,
+        },
+        ("design", "--robot", "robot.toml", "--poses", "10", "-o", "plan.csv"),
+        ("robot.toml", "instrument.range_mm", "position_mm"),
+    ),
+    case(
+        "instrument-range-reversed",
+        {
+            "robot.toml": 'urdf = "arm.urdf"\n[instrument]\nposition_mm = [2000, 0, 0]\n'
+            "range_mm = [5000, 1000]\n",
+            "arm.urdf": URDF_2R,
+        },
+        ("design", "--robot", "robot.toml", "--poses", "10", "-o", "plan.csv"),
+        ("robot.toml", "instrument.range_mm", "least < greatest"),
+    ),
+    case(
         "mdh-wrong-length",
         {
             "robot.toml": "[mdh]\nalpha_deg = [0, 0]\na_mm = [0, 300]\ntheta_deg = [0]\n"

@@ -239,3 +239,100 @@ def test_the_task_criteria_s_gradients_in_the_information(name):
         h = 1e-5  # truncation h^2 ~ 1e-10, round-off eps / h ~ 1e-11 (times the scales)
         numeric = (objective(fs + h * direction) - objective(fs - h * direction)) / (2 * h)
         assert np.sum(analytic * direction) == pytest.approx(numeric, rel=1e-7, abs=1e-10)
+
+
+CELL = """name = "cell-6r"
+urdf = "{urdf}"
+base_link = "base_link"
+tip_link = "flange"
+joint_map = [[1, 0, 0, 0, 0, 0], [0, 1, 0, 0, 0, 0], [0, 1, 1, 0, 0, 0],
+             [0, 0, 0, 1, 0, 0], [0, 0, 0, 0, 1, 0], [0, 0, 0, 0, 0, 1]]
+joint_limits_deg = [[-185, 185], [-60, 76], [-132, 150], [-360, 360], [-125, 125], [-360, 360]]
+[measurement]
+sigma_mm = 0.03
+[instrument]
+position_mm = [3500.0, 0.0, 800.0]
+{volume}
+acceptance_deg = 30.0
+floor_z_mm = 100.0
+[targets]
+A = {{ xyz_mm = [100.0, 0.0, 150.0], normal = [0.3, 0.0, 1.0] }}
+B = {{ xyz_mm = [-50.0, 87.0, 150.0], normal = [-0.15, 0.26, 1.0] }}
+C = {{ xyz_mm = [-50.0, -87.0, 150.0], normal = [-0.15, -0.26, 1.0] }}
+"""
+
+#: A tracker's range, or a box that a camera sees (both in the robot's base frame).
+VOLUMES = {
+    "range": "range_mm = [1000.0, 6000.0]",
+    "box": "box_mm = [[-500.0, 2500.0], [-2000.0, 2000.0], [0.0, 2500.0]]",
+}
+
+
+def _cell(tmp_path, volume: str = "range"):
+    from armcal.files import load_serial_robot
+    from armcal.files.serial import ROBOT_FOLDER
+
+    urdf = (ROBOT_FOLDER / "industrial-6r.urdf").as_posix()
+    path = tmp_path / "cell.toml"
+    path.write_text(CELL.format(urdf=urdf, volume=VOLUMES[volume]), encoding="utf-8")
+    return load_serial_robot(path).arm
+
+
+@pytest.mark.parametrize("volume", sorted(VOLUMES))
+def test_the_view_s_constraints_have_exact_gradients(tmp_path, volume):
+    arm = _cell(tmp_path, volume)
+    q = random_poses(arm, 5, np.random.default_rng(8))
+    g, dg = arm.view_constraints(q)
+    # Per reflector: the volume (2 for a range, 6 for a box), acceptance, the floor for it
+    # and for the flange.
+    assert g.shape == (5, 3 * ((2 if volume == "range" else 6) + 3))
+    numeric = central_differences(lambda x: arm.view_constraints(x.reshape(q.shape))[0], q.ravel())
+    every = np.arange(5)
+    own = numeric.reshape(5, g.shape[1], 5, 6)[every, :, every, :]
+    np.testing.assert_allclose(dg, own, rtol=0, atol=1e-6 * np.max(np.abs(own)))
+
+
+def test_the_view_s_constraints_say_what_they_check(tmp_path):
+    """One pose's values by hand: the distance to the tracker, the normal's angle to it
+    and the height above the floor (the constraints' definitions, module notes)."""
+    from armcal.models.spatial_view import ACCEPTANCE_SCALE_MM
+
+    arm = _cell(tmp_path)
+    q = random_poses(arm, 1, np.random.default_rng(9))
+    rows = arm.plan_conditions(q)
+    params = arm.in_robot_frame(arm.nominal)[1]
+    points = arm.positions(rows, params)  # the three reflectors, robot frame
+    tip = arm.tip_rotation(rows, params)
+    g, _ = arm.view_constraints(q)
+    view = arm.view
+    per_target = g[0].reshape(3, 5)  # range (2), acceptance, floor, the flange's floor
+    distance = np.linalg.norm(points - view.position, axis=1)
+    low, high = view.range_mm
+    np.testing.assert_allclose(per_target[:, 0], (high**2 - distance**2) / (2 * high))
+    np.testing.assert_allclose(per_target[:, 1], (distance**2 - low**2) / (2 * high))
+    normals = np.einsum("tij,tj->ti", tip, view.normals)
+    cosine = np.sum(normals * (view.position - points), axis=1) / distance
+    np.testing.assert_allclose(
+        per_target[:, 2], ACCEPTANCE_SCALE_MM * (cosine - np.cos(np.radians(30.0)))
+    )
+    np.testing.assert_allclose(per_target[:, 3], points[:, 2] - 100.0)
+    flange = arm.positions(rows, np.where(arm.layout.instrument, 0.0, params))
+    np.testing.assert_allclose(per_target[:, 4], flange[:, 2] - 100.0)
+
+
+@pytest.mark.slow
+def test_a_constrained_design_keeps_every_pose_inside_every_constraint(tmp_path):
+    """Limits, the tracker's range, the reflectors' 30 degree acceptance and the floor:
+    random poses within the limits satisfy them about 1.5 % of the time."""
+    from armcal.criteria import d_efficiency
+    from armcal.doe import design, feasible_poses
+
+    arm = _cell(tmp_path)
+    model = arm.prepared(arm.plan_conditions(feasible_poses(arm, 200, rng=0)))
+    made = design(model, 40, rng=1)
+    assert np.all(model.within_limits(made.q))
+    g, _ = model.view_constraints(made.q)
+    assert np.min(g) >= 0.0
+    best = max(float(d_efficiency(model, feasible_poses(model, 40, rng=s))) for s in range(30))
+    assert made.d_efficiency > best
+    assert made.certificate is not None and made.certificate.certified_d_efficiency > 0.9

@@ -277,11 +277,50 @@ SERIAL_KEYS: tuple[Key, ...] = (
         "measurements with rx_deg, ry_deg, rz_deg; plans are then evaluated for full poses",
     ),
     Key(
+        "instrument",
+        "position_mm",
+        "mm, [x, y, z] in the robot's base frame",
+        "none",
+        "where the instrument stands, for plans: its range and the reflectors' acceptance "
+        "angle are seen from here",
+    ),
+    Key(
+        "instrument",
+        "range_mm",
+        "mm, [least, greatest]",
+        "none",
+        "the distances from position_mm the instrument measures; plans keep every target "
+        "within them",
+    ),
+    Key(
+        "instrument",
+        "box_mm",
+        "mm, [[x lo, x hi], [y lo, y hi], [z lo, z hi]] in the robot's base frame",
+        "none",
+        "a measuring volume (a camera's, a CMM's); plans keep every target inside",
+    ),
+    Key(
+        "instrument",
+        "acceptance_deg",
+        "deg",
+        "none",
+        "a reflector's half acceptance angle (an SMR: about 30); plans keep every target's "
+        "normal within it of the line to position_mm (needs every target's normal)",
+    ),
+    Key(
+        "instrument",
+        "floor_z_mm",
+        "mm, in the robot's base frame",
+        "none",
+        "a floor: plans keep every target and the flange above it",
+    ),
+    Key(
         "targets",
         "LABEL",
-        "inline table: xyz_mm (mm, tip frame)",
+        "inline table: xyz_mm (mm, tip frame), normal (a direction, tip frame)",
         "none: found from the data",
-        "a reflector's nominal position; measurements name it in a target column",
+        "a reflector's nominal position, and the way it faces (for acceptance_deg); "
+        "measurements name it in a target column",
     ),
     Key("identify", "fixed", "list of parameter names", "none", "parameters held at nominal"),
     Key("identify", "free", "list of parameter names", "all", "the only parameters identified"),

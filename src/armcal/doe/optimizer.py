@@ -11,7 +11,9 @@ from .ascent import adam_ascent, penalty_weight, to_q, to_u, view_penalty
 from .plans import feasible_poses, random_plan
 
 __all__ = [
+    "RESTORE_MARGIN",
     "optimize_plan",
+    "restore_view",
 ]
 
 
@@ -117,6 +119,8 @@ def optimize_plan(
     best_q, best_value = None, -np.inf
     for index in order[:polish]:
         q = _polish(model, q_final[index], criterion, viewed)
+        if viewed and not np.all(model.feasible(q)):  # SLSQP stopped outside: step back in
+            q = restore_view(model, q)
         if not np.all(model.feasible(q)):
             continue
         v = float(_criterion_value_and_gradient(model, q, criterion)[0])
@@ -128,6 +132,31 @@ def optimize_plan(
             "measurement region; widen the region or the joint limits"
         )
     return best_q
+
+
+#: Margin (in the constraints' units, mm) by which :func:`restore_view` steps inside.
+RESTORE_MARGIN = 1e-4
+
+
+def restore_view(model: FitModel, q: np.ndarray, *, iterations: int = 30) -> np.ndarray:
+    """Poses ``(m, n)`` moved back inside the view by the least joint change: Gauss-Newton
+    on each pose's violated constraints (the minimum-norm step of their linearization,
+    Fletcher 1987, 12.3), within the limits.  Poses already inside stay as they are."""
+    lower, upper = model.joint_limits[:, 0], model.joint_limits[:, 1]
+    q = np.array(q, dtype=float)
+    for _ in range(iterations):
+        found = model.view_constraints(q)
+        if found is None:
+            return q
+        g, dg = found  # (m, k), (m, k, n)
+        active = g < RESTORE_MARGIN
+        if not active.any():
+            break
+        rows = np.where(active[..., None], dg, 0.0)
+        need = np.where(active, 2 * RESTORE_MARGIN - g, 0.0)
+        step = np.linalg.pinv(rows, rcond=1e-10) @ need[..., None]  # (m, n, 1)
+        q = np.clip(q + step[..., 0], lower, upper)
+    return q
 
 
 def _polish(model: FitModel, q: np.ndarray, criterion: Criterion, viewed: bool) -> np.ndarray:

@@ -28,7 +28,7 @@ import numpy as np
 
 from ..errors import ArmcalWarning, InputError
 from ..formats import SERIAL_KEYS, SERIAL_TRUTH_KEYS, allowed_keys
-from ..models import MdhTable, SerialChain, SpatialArm, rpy_matrix, transform
+from ..models import MdhTable, SerialChain, SpatialArm, SpatialView, rpy_matrix, transform
 from ..noise import NoiseModel, TrackerNoise
 from .common import check_keys, fail, load_toml, number, number_within, numbers, suggest
 from .robots import SIGMA_RANGE_MM, RobotSpec, fixed_parameters, load_robot
@@ -228,7 +228,8 @@ def _from_toml(path: Path, builtin: str | None, tip_link: str | None = None) -> 
         # They replace the description's limits, which hold for the joint values M q.
         chain = replace(chain, joint_limits=np.tile([-np.inf, np.inf], (n, 1)))
     noise = _noise(path, data.get("measurement"))
-    labels, positions = _targets(path, data.get("targets"))
+    labels, positions, normals = _target_table(path, data.get("targets"))
+    view = _view(path, data.get("instrument"), labels, normals)
     arm = SpatialArm(
         chain,
         name,
@@ -239,6 +240,7 @@ def _from_toml(path: Path, builtin: str | None, tip_link: str | None = None) -> 
         noise=noise,
         known_targets=bool(labels),
         oriented=noise is not None and noise.orientation_sigma is not None,
+        view=view,
     )
     if "identify" in data:
         arm = arm.with_fixed(fixed_parameters(path, data["identify"], arm.param_names, arm.name))
@@ -351,21 +353,107 @@ def _tracker(path: Path, table: Any) -> TrackerNoise:
 
 
 def _targets(path: Path, table: Any) -> tuple[tuple[str, ...], np.ndarray]:
+    labels, positions, _ = _target_table(path, table)
+    return labels, positions
+
+
+def _target_table(
+    path: Path, table: Any
+) -> tuple[tuple[str, ...], np.ndarray, list[np.ndarray | None]]:
+    """``[targets]``: labels, positions ``(k, 3)`` and every target's unit normal (or None)."""
     if table is None:
-        return (), np.zeros((0, 3))
+        return (), np.zeros((0, 3)), []
     if not isinstance(table, dict) or not table:
         raise fail(
             path, "key 'targets': expected a table [targets] of LABEL = { xyz_mm = [x, y, z] }"
         )
-    labels, positions = [], []
+    labels, positions, normals = [], [], []
     for label, entry in table.items():
-        if not isinstance(entry, dict) or set(entry) != {"xyz_mm"}:
+        if (
+            not isinstance(entry, dict)
+            or "xyz_mm" not in entry
+            or set(entry) - {"xyz_mm", "normal"}
+        ):
             raise fail(
-                path, f"key 'targets.{label}': expected {{ xyz_mm = [x, y, z] }} (mm, tip frame)"
+                path,
+                f"key 'targets.{label}': expected {{ xyz_mm = [x, y, z] }} (mm, tip frame), "
+                "and optionally normal = [x, y, z]",
             )
         labels.append(label)
         positions.append(numbers(path, entry["xyz_mm"], f"targets.{label}.xyz_mm", 3))
-    return tuple(labels), np.array(positions)
+        normal = None
+        if "normal" in entry:
+            normal = np.array(numbers(path, entry["normal"], f"targets.{label}.normal", 3))
+            length = float(np.linalg.norm(normal))
+            if length == 0.0:
+                raise fail(path, f"key 'targets.{label}.normal': give a direction, not 0")
+            normal = normal / length
+        normals.append(normal)
+    return tuple(labels), np.array(positions), normals
+
+
+def _view(path: Path, table: Any, labels: tuple[str, ...], normals: list) -> SpatialView | None:
+    """``[instrument]``: where the instrument stands and what it reaches, for plans."""
+    if table is None:
+        return None
+    if not isinstance(table, dict):
+        raise fail(path, "key 'instrument': expected a table [instrument]")
+    check_keys(path, table, allowed_keys("instrument", SERIAL_KEYS), "instrument.")
+    needs_position = [key for key in ("range_mm", "acceptance_deg") if key in table]
+    if needs_position and "position_mm" not in table:
+        raise fail(
+            path,
+            f"key 'instrument.{needs_position[0]}': give instrument.position_mm too (mm, the "
+            "robot's base frame), where it is seen from",
+        )
+    position = np.array(
+        numbers(path, table.get("position_mm", [0, 0, 0]), "instrument.position_mm", 3)
+    )
+    reach = None
+    if "range_mm" in table:
+        low, high = numbers(path, table["range_mm"], "instrument.range_mm", 2)
+        if not 0 <= low < high:
+            raise fail(
+                path,
+                f"key 'instrument.range_mm': need 0 <= least < greatest, got [{low:g}, {high:g}]",
+            )
+        reach = (low, high)
+    box = None
+    if "box_mm" in table:
+        raw = table["box_mm"]
+        if not isinstance(raw, list) or len(raw) != 3:
+            raise fail(
+                path,
+                "key 'instrument.box_mm': expected [[x lo, x hi], [y lo, y hi], [z lo, z hi]]",
+            )
+        box = np.array([numbers(path, r, f"instrument.box_mm[{i}]", 2) for i, r in enumerate(raw)])
+        if not np.all(box[:, 0] < box[:, 1]):
+            raise fail(path, "key 'instrument.box_mm': need lo < hi on every axis")
+    acceptance = None
+    if "acceptance_deg" in table:
+        acceptance = number_within(
+            path, table["acceptance_deg"], "instrument.acceptance_deg", (1.0, 90.0), "deg"
+        )
+        missing = [label for label, n in zip(labels, normals, strict=True) if n is None]
+        if not labels or missing:
+            raise fail(
+                path,
+                "key 'instrument.acceptance_deg': every target needs its normal "
+                f"({', '.join(missing) or 'no [targets] given'}); add normal = [x, y, z] "
+                "(tip frame) to each in [targets]",
+            )
+        acceptance = np.radians(acceptance)
+    floor = None
+    if "floor_z_mm" in table:
+        floor = number(path, table["floor_z_mm"], "instrument.floor_z_mm")
+    return SpatialView(
+        position,
+        reach,
+        box,
+        acceptance,
+        None if acceptance is None else np.array(normals),
+        floor,
+    )
 
 
 def load_serial_truth(path: str | os.PathLike, arm: SpatialArm) -> np.ndarray:

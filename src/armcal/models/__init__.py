@@ -83,7 +83,7 @@ from .planar_kinematics import (
 )
 from .plane import Plane, fit_plane
 from .regions import Annulus, Box, Region
-from .spatial import SINGLE_TARGET, SpatialArm, default_targets
+from .spatial import SINGLE_TARGET, SpatialArm
 from .spatial_chain import (
     SerialChain,
     UrdfJoint,
@@ -94,8 +94,9 @@ from .spatial_chain import (
     vector_rotation,
 )
 from .spatial_dh import MdhTable, mdh_table
-from .spatial_kinematics import SpatialLayout
+from .spatial_kinematics import SpatialLayout, default_targets
 from .spatial_selection import Selection
+from .spatial_view import SpatialView
 
 __all__ = [
     "INSTRUMENT_PARAMS",
@@ -128,6 +129,7 @@ __all__ = [
     "SerialChain",
     "SpatialArm",
     "SpatialLayout",
+    "SpatialView",
     "Target",
     "UrdfJoint",
     "barely_identifiable_warning",

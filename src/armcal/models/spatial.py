@@ -47,16 +47,17 @@ from .spatial_chain import (
 from .spatial_kinematics import (
     ChainKinematics,
     SpatialLayout,
+    default_targets,
     jacobian_pose_derivative,
     kinematics,
 )
-from .spatial_registration import mean_rotation, register
+from .spatial_registration import register, register_turns
 from .spatial_selection import select
+from .spatial_view import SpatialView
 
 __all__ = [
     "SINGLE_TARGET",
     "SpatialArm",
-    "default_targets",
 ]
 
 #: The label of the one target of data without a target column.
@@ -64,26 +65,6 @@ SINGLE_TARGET = "tool"
 
 #: Gauss-Newton steps at most of :meth:`SpatialArm.expressed` (it converges in a few).
 _EXPRESS_STEPS = 30
-
-#: Where targets without a nominal position are thought to be before any data: this
-#: far beyond the flange (mm), on a circle of this radius about the last joint's axis
-#: (a target on that axis would not see the joint turn).
-DEFAULT_TARGET_OFFSET_MM = (100.0, 50.0)
-
-
-def default_targets(count: int) -> np.ndarray:
-    """Nominal positions ``(count, 3)`` of targets the robot file does not place.
-
-    Examples
-    --------
-    >>> default_targets(1).tolist()
-    [[50.0, 0.0, 100.0]]
-    """
-    beyond, radius = DEFAULT_TARGET_OFFSET_MM
-    angle = 2 * np.pi * np.arange(count) / count
-    return np.column_stack(
-        [radius * np.cos(angle), radius * np.sin(angle), np.full(count, beyond)]
-    )
 
 
 @dataclass(frozen=True, eq=False)
@@ -123,6 +104,8 @@ class SpatialArm(RigidLoads):
     target_turns : ndarray, shape (k, 3)
         Nominal orientations of the targets in the tip frame (rotation vectors,
         rad): zero until registered to data.
+    view : SpatialView or None
+        What the instrument can measure, for plans (:mod:`~armcal.models.spatial_view`).
     """
 
     chain: SerialChain
@@ -139,6 +122,7 @@ class SpatialArm(RigidLoads):
     known_targets: bool = False
     oriented: bool = False
     target_turns: np.ndarray = field(default_factory=lambda: np.zeros((0, 3)))
+    view: SpatialView | None = None
 
     def __post_init__(self) -> None:
         n = self.chain.n_joints
@@ -569,14 +553,10 @@ class SpatialArm(RigidLoads):
         if not self.known_targets:
             positions = np.where(measured[:, None], found, nominal)
         turns = self.target_turns
-        if self.oriented:  # every target's mean orientation on the tip (Moakher 2002)
+        if self.oriented:  # a 6-DoF instrument's orientations: the rows' own, in its frame
             seen = vector_rotation(points[:, 3:])
-            if conditions.frames is not None:
-                seen = seen @ conditions.frames
-            local = np.swapaxes(rotation @ frames, -1, -2) @ seen
-            turns = turns.copy()
-            for t in np.flatnonzero(measured):
-                turns[t] = rotation_vector(mean_rotation(local[target == t]))
+            seen = seen if conditions.frames is None else seen @ conditions.frames
+            turns = register_turns(rotation @ frames, seen, target, turns)
         out[self.layout.target_start :] = self._target_block(positions, turns)
         return out
 
@@ -748,14 +728,23 @@ class SpatialArm(RigidLoads):
         return DesignEffort(starts=4, steps=100, candidates=1000, rounds=2, search=3000)
 
     def feasible(self, q: np.ndarray, *, tol: float = 1e-9) -> np.ndarray:
-        return np.all(self.within_limits(q, tol=tol), axis=-1)
+        """Poses within the limits whose every target the instrument sees."""
+        ok = np.all(self.within_limits(q, tol=tol), axis=-1)
+        found = self.view_constraints(q)
+        return ok if found is None else ok & np.all(found[0] >= -tol, axis=-1)
 
     @property
     def has_view(self) -> bool:
-        return False
+        return self.view is not None
 
-    def view_constraints(self, q: np.ndarray) -> None:
-        return None
+    def view_constraints(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray] | None:
+        """The instrument's volume, acceptance angle and floor, in the robot's frame where the
+        robot file places the instrument (:mod:`~armcal.models.spatial_view`)."""
+        if self.view is None:
+            return None
+        rows = self.plan_conditions(np.asarray(q, dtype=float))
+        kin = self._kinematics(rows, self.in_robot_frame(self.nominal)[1], derivatives=True)
+        return self.view.of_rows(kin, self.target_positions, rows.target, len(self.targets))
 
     @property
     def rotation_invariant(self) -> bool:

@@ -41,6 +41,7 @@ __all__ = [
     "ChainKinematics",
     "SpatialLayout",
     "cross",
+    "default_targets",
     "jacobian_pose_derivative",
     "kinematics",
     "upstream_joints",
@@ -179,6 +180,27 @@ class SpatialLayout:
         start = self.target_start + self.target_size * t
         turn = slice(start + 3, start + 6) if self.oriented else None
         return slice(start, start + 3), turn
+
+
+#: Where targets without a nominal position are thought to be before any data: this
+#: far beyond the flange (mm), on a circle of this radius about the last joint's axis
+#: (a target on that axis would not see the joint turn).
+DEFAULT_TARGET_OFFSET_MM = (100.0, 50.0)
+
+
+def default_targets(count: int) -> np.ndarray:
+    """Nominal positions ``(count, 3)`` of targets the robot file does not place.
+
+    Examples
+    --------
+    >>> default_targets(1).tolist()
+    [[50.0, 0.0, 100.0]]
+    """
+    beyond, radius = DEFAULT_TARGET_OFFSET_MM
+    angle = 2 * np.pi * np.arange(count) / count
+    return np.column_stack(
+        [radius * np.cos(angle), radius * np.sin(angle), np.full(count, beyond)]
+    )
 
 
 def cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:

@@ -23,11 +23,14 @@ from __future__ import annotations
 
 import numpy as np
 
+from .spatial_chain import rotation_vector
+
 __all__ = [
     "REGISTER_ROWS",
     "best_rotation",
     "mean_rotation",
     "register",
+    "register_turns",
 ]
 
 #: Rows a registration uses at most, evenly spaced through the data: the start of a
@@ -63,6 +66,20 @@ def mean_rotation(rotations: np.ndarray) -> np.ndarray:
     True
     """
     return _polar(np.sum(rotations, axis=0))
+
+
+def register_turns(
+    tips: np.ndarray, seen: np.ndarray, target: np.ndarray, turns: np.ndarray
+) -> np.ndarray:
+    """Every measured target's orientation on the tip ``(k, 3)`` (rotation vectors): the
+    mean (:func:`mean_rotation`) of ``T_i^T R_i`` over its rows, ``T_i`` ``(m, 3, 3)`` the
+    tip frames and ``R_i`` the measured orientations, in the instrument's frame; the
+    others keep ``turns``."""
+    local = np.swapaxes(tips, -1, -2) @ seen
+    out = np.array(turns, dtype=float)
+    for t in np.unique(target):
+        out[t] = rotation_vector(mean_rotation(local[target == t]))
+    return out
 
 
 def _polar(matrix: np.ndarray) -> np.ndarray:

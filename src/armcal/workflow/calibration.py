@@ -311,7 +311,7 @@ def serial_arm(arm: SpatialArm, meas: Measurements) -> SpatialArm:
             f"{arm.name}'s robot file does not give their noise; add orientation_sigma_deg "
             "(and the position noise) to its [measurement] table"
         )
-    arm = arm.replace(oriented=oriented)
+    arm = arm.replace(oriented=oriented, view=None)  # the view is for plans, not data
     if meas.targets is None:
         if arm.target_labels:
             raise InputError(

@@ -21,7 +21,6 @@ from ..doe import (
     PosesNeeded,
     design,
     design_with_loads,
-    feasible_poses,
     poses_needed,
     random_plan,
 )
@@ -187,6 +186,14 @@ class DesignRun:
         return self.design.payload_kg
 
 
+def moving_set(model: FitModel, seed: int) -> FitModel:
+    """The model reduced to what a plan moving every joint identifies (a family with minimal
+    parameters is itself), from :data:`_SET_POSES` random poses of a stream of its own, so
+    that the seed's stream (the design's, the search's) stays the same."""
+    probe = random_plan(model, _SET_POSES, rng=np.random.default_rng([seed, 1]))
+    return model.prepared(model.plan_conditions(probe))
+
+
 def design_plan(
     spec: RobotSpec | SerialSpec,
     arm: PlanarArm | SpatialArm,
@@ -219,10 +226,7 @@ def design_plan(
     check_plan_size(poses)
     rng = np.random.default_rng(seed)
     model = fit_model(spec, arm)
-    # The parameters a plan moving every joint identifies (every one, for a family with
-    # minimal parameters), from a stream of its own: the design's draws stay the same.
-    moving = feasible_poses(model, 4 * model.n_params + 20, rng=np.random.default_rng([seed, 1]))
-    model = model.prepared(model.plan_conditions(moving))
+    model = moving_set(model, seed)
     sigma = design_sigma(arm)
     start = time.perf_counter()
     if spec.elastic is not None:  # the poses carry payloads, chosen by the design
@@ -333,10 +337,7 @@ def size_plan(
     start = time.perf_counter()
     rng = np.random.default_rng(seed)
     model = fit_model(spec, arm)
-    # The set a plan that moves every joint identifies (a family with minimal parameters
-    # is itself); its own stream, so the search's stays the seed's.
-    probe = random_plan(model, _SET_POSES, rng=np.random.default_rng([seed, 1]))
-    model = model.prepared(model.plan_conditions(probe))
+    model = moving_set(model, seed)
     found = poses_needed(
         model,
         requirement,
