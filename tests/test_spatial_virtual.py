@@ -87,7 +87,8 @@ def test_evaluate_and_simulate_a_plan_from_the_command_line(tmp_path):
             assert sim["predicted_std"][name] == pytest.approx(value, rel=1e-2)
 
 
-def test_poses_needed_finds_the_smallest_random_plan_that_reaches(tmp_path):
+def test_poses_needed_finds_the_smallest_designed_plan_that_reaches(tmp_path):
+    """The plan found reaches the goal, checked by evaluate, and one pose fewer does not."""
     result = run_cli(
         tmp_path, "poses-needed", "--robot", "industrial-6r", "--position-rms-mm", "0.03",
         "--sigma", "0.03", "--json", "-o", "plan.csv",
@@ -101,7 +102,11 @@ def test_poses_needed_finds_the_smallest_random_plan_that_reaches(tmp_path):
         tmp_path, "evaluate", "--robot", "industrial-6r", "--plan", "plan.csv", "--sigma",
         "0.03", "--json",
     )  # fmt: skip
-    assert json.loads(result.stdout)["poses"] == m
+    checked = json.loads(result.stdout)
+    assert checked["poses"] == m
+    assert checked["predicted_position_rms_mm"] <= 0.03
+    assert checked["predicted_position_rms_mm"] == pytest.approx(found["achieved"], rel=1e-9)
+    assert found["with_one_pose_less"] > 0.03
 
 
 def test_a_held_reflector_keeps_the_robot_file_s_position(tmp_path):

@@ -346,8 +346,7 @@ def size_plan(
         rng=rng,
         test_q=test_q,
         max_poses=max_poses,
-        # Spatial plans are sized on random poses until their optimal design is fast.
-        plans="random" if isinstance(arm, SpatialArm) else "designed",
+        plans="designed",
         progress=progress,
     )
     return found, time.perf_counter() - start
