@@ -336,3 +336,35 @@ def test_a_constrained_design_keeps_every_pose_inside_every_constraint(tmp_path)
     best = max(float(d_efficiency(model, feasible_poses(model, 40, rng=s))) for s in range(30))
     assert made.d_efficiency > best
     assert made.certificate is not None and made.certificate.certified_d_efficiency > 0.9
+
+
+def test_a_pool_plan_takes_every_pose_from_the_pool_and_beats_the_pool_method():
+    """The open tools' pool method (continuous D-optimal weights, the largest kept) is
+    where the exchange starts, and DETMAX never lowers det M: at equal m it is at least
+    as good."""
+    from armcal.doe import feasible_poses
+    from armcal.doe.pool import pool_plan, pool_weights_plan
+
+    model = _three_reflectors()
+    pool = feasible_poses(model, 800, rng=3)
+    for m in (15, 30):
+        baseline = pool_weights_plan(model, m, pool)
+        ours = pool_plan(model, m, pool)
+        assert ours.shape == (m,) and np.all((ours >= 0) & (ours < len(pool)))
+        # On det M, what both maximize and the certificate bounds (d_efficiency of a spatial
+        # arm normalizes each plan's columns: how orthogonal they are).
+        ours_det = np.linalg.slogdet(model.plan_information(pool[ours]).information())[1]
+        base_det = np.linalg.slogdet(model.plan_information(pool[baseline]).information())[1]
+        assert ours_det >= base_det - 1e-9
+
+
+@pytest.mark.slow
+def test_design_with_candidates_keeps_to_the_pool(tmp_path):
+    from armcal.doe import design, feasible_poses
+
+    model = _three_reflectors()
+    pool = feasible_poses(model, 1500, rng=3)
+    made = design(model, 40, candidates=pool, rng=1)
+    assert made.method == "pool"
+    assert np.all(np.any(np.all(pool[:, None, :] == made.q[None], axis=-1), axis=0))
+    assert made.certificate is not None and made.certificate.certified_d_efficiency > 0.9

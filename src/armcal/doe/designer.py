@@ -16,6 +16,7 @@ from .exchange import exchange_plan
 from .optimizer import optimize_plan
 from .order import ORDERS, Order, joint_travel, order_poses
 from .plans import DISTINCT_TOLERANCE, feasible_poses, repeated_poses
+from .pool import pool_plan
 from .task import TASK_CRITERIA, task_criterion
 
 __all__ = [
@@ -133,6 +134,12 @@ def _score(model: FitModel, q: np.ndarray, criterion: str | Criterion) -> float:
     if isinstance(criterion, Criterion):  # a task's: on the information itself
         return float(criterion.efficiency(model.plan_information(q).information()))
     return float(efficiencies(model, q)[criterion])
+
+
+def _planar_exchange(model: FitModel) -> bool:
+    """Whether the closed-form exchange applies: one point in the plane per pose (its swaps
+    are evaluated from ``2 x 2`` blocks, :mod:`armcal.doe.exchange`)."""
+    return len(model.target_labels) <= 1 and model.point_dim == 2
 
 
 def _would_be_optimal(family: ClosedFormPlans) -> bool:
@@ -309,6 +316,12 @@ def design(
             "than the best plan below, and searching every pose would cost time and memory "
             "in proportion"
         )
+    elif candidates is not None and not _planar_exchange(model):
+        # Every pose from the user's pool: the pool's D-optimal weights, then DETMAX.
+        q = np.asarray(candidates, dtype=float)[pool_plan(model, m, candidates)]
+        used = "pool"
+        if criterion != "D":
+            notes.append("a plan from a pool maximizes D; it was not tuned for " + criterion)
     elif method == "exchange":
         pool = feasible_poses(model, 4000, rng=rng) if candidates is None else candidates
         q = exchange_plan(model, m, pool, rng=rng, distinct=distinct)
@@ -321,8 +334,7 @@ def design(
         used = "optimize"
         repeats = int(np.count_nonzero(repeated_poses(q))) if distinct else 0
         found = float(d_efficiency(model, q))
-        # exchange evaluates one point in the plane per pose (2 x 2 blocks in closed form)
-        single = len(model.target_labels) <= 1 and model.point_dim == 2
+        single = _planar_exchange(model)
         if criterion == "D" and single:
             pool = feasible_poses(model, 4000, rng=rng) if candidates is None else candidates
             polished = exchange_plan(model, m, pool, start=q, rng=rng, distinct=distinct)

@@ -1,0 +1,89 @@
+"""D-optimal plans restricted to a pool of poses the user knows are safe.
+
+A cell's program often comes with poses known to be free of collision; a plan
+must then take its poses from that pool.  :func:`pool_plan` works for any family
+and any number of rows per pose, on the poses' information blocks:
+
+1. the continuous D-optimal weights on the pool (the multiplicative algorithm,
+   :func:`armcal.doe.certificate.multiplicative_weights`);
+2. the ``m`` poses of largest weight -- the plan of the open tools' pool method,
+   where it stops;
+3. an exchange from there that never lowers ``det M`` (Mitchell's DETMAX, 1974,
+   with excursions of one pose): add the pool pose of largest variance
+   ``d(x) = tr(M^-1 I(x))``, then drop the plan pose whose removal costs least,
+   ``det(I - F_i M'^-1 F_i^T)`` largest, until the pose added is the one dropped.
+
+Every pose of the result is a pool pose, so it satisfies whatever the pool
+satisfies.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..errors import ArmcalError
+from ..models import FitModel
+from ..numerics import spd_inverse
+from .certificate import multiplicative_weights
+
+__all__ = [
+    "pool_plan",
+    "pool_weights_plan",
+]
+
+#: Iterations of the multiplicative algorithm for the pool's continuous design.
+POOL_WEIGHT_ITERATIONS = 500
+
+#: Exchanges at most (each adds one pose and drops one).
+MAX_EXCHANGES = 2000
+
+
+def _blocks(model: FitModel, pool: np.ndarray) -> np.ndarray:
+    """Every pool pose's information blocks ``(N, r, p_f)``."""
+    return model.plan_information(pool).blocks()
+
+
+def pool_weights_plan(model: FitModel, m: int, pool: np.ndarray) -> np.ndarray:
+    """Indices ``(m,)`` of the ``m`` pool poses of largest continuous D-optimal weight: the
+    pool method of the open tools (a convex relaxation, then a threshold)."""
+    blocks = _blocks(model, pool)
+    weights = np.full(pool.shape[0], 1.0 / pool.shape[0])
+    weights = multiplicative_weights(blocks, weights, POOL_WEIGHT_ITERATIONS)
+    return np.argsort(-weights, kind="stable")[:m]
+
+
+def pool_plan(model: FitModel, m: int, pool: np.ndarray) -> np.ndarray:
+    """Indices ``(m,)`` into ``pool`` ``(N, n)`` of a D-optimal ``m``-pose plan from it
+    (module notes); poses may repeat where the exchange finds a repeat best.
+
+    Raises ArmcalError when the pool's poses cannot identify every free parameter.
+    """
+    pool = np.asarray(pool, dtype=float)
+    if pool.shape[0] < 1:
+        raise ArmcalError("the candidate pool is empty")
+    blocks = _blocks(model, pool)
+    p = blocks.shape[-1]
+    everything = np.einsum("krp,krq->pq", blocks, blocks)
+    if np.linalg.matrix_rank(everything) < p:
+        raise ArmcalError(
+            f"the {pool.shape[0]} candidate poses cannot identify the {p} free parameters "
+            "of " + model.name + " together; add poses that move every joint"
+        )
+    chosen = list(pool_weights_plan(model, m, pool))
+    for _ in range(MAX_EXCHANGES):
+        plan = blocks[chosen]
+        information = np.einsum("krp,krq->pq", plan, plan)
+        inverse = spd_inverse(information)
+        variance = np.einsum("krp,pq,krq->k", blocks, inverse, blocks)
+        added = int(np.argmax(variance))
+        grown = information + blocks[added].T @ blocks[added]
+        grown_inverse = spd_inverse(grown)
+        members = np.array([*chosen, added])
+        rows = blocks[members]  # (m + 1, r, p)
+        keep = np.eye(rows.shape[1]) - rows @ grown_inverse @ np.swapaxes(rows, -1, -2)
+        sign, logdet = np.linalg.slogdet(keep)
+        dropped = int(np.argmax(np.where(sign > 0, logdet, -np.inf)))
+        if dropped == m or members[dropped] == added:  # the pose added would leave again
+            break
+        chosen = [int(i) for j, i in enumerate(members) if j != dropped]
+    return np.array(chosen, dtype=int)
