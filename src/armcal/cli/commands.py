@@ -293,11 +293,6 @@ def compensate(args: argparse.Namespace) -> None:
 def design(args: argparse.Namespace) -> None:
     """``armcal design``: an optimal plan, its quality and its picture."""
     spec = load_any_robot(args.robot)
-    if isinstance(spec, SerialSpec) and args.plot is not None:
-        raise ArmcalError(
-            "--plot: pictures of a spatial arm's plan are not drawn yet; leave --plot out "
-            "(the plan CSV and its report are written)"
-        )
     arm = _model(args, spec)
     candidates = None if args.candidates is None else read_plan(args.candidates, spec.arm)
     run = design_plan(
@@ -321,9 +316,19 @@ def design(args: argparse.Namespace) -> None:
     if args.plot is not None:  # first: drawing is what can fail, the plan CSV is text
         from ..plotting import plot_plan, save_figure  # matplotlib only when a plot is asked for
 
-        gravity = None if spec.elastic is None else spec.elastic.gravity
-        assert isinstance(spec.arm, PlanarArm)  # refused above for a spatial arm
-        figure = plot_plan(spec.arm, run.q, payload_kg=run.payload_kg, gravity=gravity)
+        if isinstance(spec.arm, SpatialArm):
+            from ..plotting_spatial import plot_spatial_plan
+
+            figure = plot_spatial_plan(
+                run.design.model,
+                run.q,
+                sigma=run.quality.sigma_mm,
+                certificate=run.design.certificate,
+                rng=args.seed,
+            )
+        else:
+            gravity = None if spec.elastic is None else spec.elastic.gravity
+            figure = plot_plan(spec.arm, run.q, payload_kg=run.payload_kg, gravity=gravity)
         save_figure(figure, args.plot)
     if args.output is not None:
         atomic_write(args.output, format_plan_csv(run.q, run.payload_kg))

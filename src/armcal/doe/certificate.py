@@ -47,6 +47,9 @@ class Certificate:
         Support poses (rad) of the best weighted design ``xi*``.
     weights : ndarray, shape (k,)
         Their weights (sum 1).
+    max_pose : ndarray, shape (n,), or None
+        The pose (rad) where the search found ``max_variance``: where the best
+        weighted design is least informed (None for a certificate without a search).
     """
 
     certified_d_efficiency: float
@@ -55,6 +58,7 @@ class Certificate:
     max_variance: float
     support: np.ndarray
     weights: np.ndarray
+    max_pose: np.ndarray | None = None
 
 
 def _variance_function(model: FitModel, q: np.ndarray, m_inv: np.ndarray):
@@ -251,11 +255,11 @@ def certify(
     star_inverse, star_ok = star.inverse_gram()
     plan_inverse, _ = plan.inverse_gram()
     if bool(star_ok):
-        max_star = _max_variance(model, star_inverse, support, rng, search)
+        max_star, max_pose = _max_variance(model, star_inverse, support, rng, search)
         logdet_star = float(star.log_det_gram())
     else:  # not expected (xi* is near D-optimal); the other bounds still hold
-        max_star, logdet_star = np.inf, -np.inf
-    max_plan = _max_variance(model, plan_inverse, distinct, rng, search)
+        max_star, logdet_star, max_pose = np.inf, -np.inf, None
+    max_plan, _ = _max_variance(model, plan_inverse, distinct, rng, search)
     logdet_plan = float(plan.log_det_gram())
     kw = np.exp((logdet_plan - logdet_star) / p + 1.0 - max_star / p) if bool(star_ok) else 0.0
     plan_only = np.exp(1.0 - max_plan / p)
@@ -265,6 +269,7 @@ def certify(
         plan_only_bound=float(plan_only),
         reference_d_efficiency=float(np.exp(logdet_star / p)),
         max_variance=float(max_star),
+        max_pose=max_pose,
         support=support,
         weights=support_w,
     )
@@ -272,8 +277,9 @@ def certify(
 
 def _max_variance(
     model: FitModel, m_inv: np.ndarray, seeds: np.ndarray, rng: np.random.Generator, search: int
-) -> float:
-    """A thorough ``max_x d(x)`` over feasible poses: random search, then multistart ascent."""
+) -> tuple[float, np.ndarray]:
+    """A thorough ``max_x d(x)`` over feasible poses, and where: random search, then
+    multistart ascent."""
     sample = np.concatenate(
         [seeds, _corner_poses(model, rng), feasible_poses(model, search, rng=rng)]
     )
@@ -284,4 +290,6 @@ def _max_variance(
     constraints = model.view_constraints(found[:, None, :])
     if constraints is not None:  # count iterates that stray outside only a little
         d_found = np.where(constraints[0].min(axis=(-2, -1)) > -1e-3, d_found, -np.inf)
-    return float(max(d.max(), d_found.max()))
+    if d.max() >= d_found.max():
+        return float(d.max()), sample[int(np.argmax(d))]
+    return float(d_found.max()), found[int(np.argmax(d_found))]

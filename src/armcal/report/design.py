@@ -47,6 +47,10 @@ def design_summary(result: Design, seconds: float) -> tuple[dict, list[str]]:
         "certified_d_efficiency": None if cert is None else cert.certified_d_efficiency,
         "plan_only_bound": None if cert is None else cert.plan_only_bound,
         "best_weighted_design_d_efficiency": None if cert is None else cert.reference_d_efficiency,
+        "max_variance": None if cert is None else cert.max_variance,
+        "max_variance_pose_deg": None
+        if cert is None or cert.max_pose is None
+        else np.degrees(cert.max_pose).tolist(),
         "notes": list(result.notes),
         "seconds": seconds,
         "order": result.order,

@@ -1,0 +1,137 @@
+"""Pictures of a spatial arm's plan: the arm at its poses, its joints against their limits,
+the predicted error after calibration over the workspace, and the certificate's variance.
+
+Imported only when a picture is asked for (matplotlib is slow to import), like
+:mod:`armcal.plotting`, whose :func:`~armcal.plotting.save_figure` writes them.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from matplotlib.figure import Figure
+from matplotlib.layout_engine import ConstrainedLayoutEngine
+
+from .criteria import position_accuracy
+from .doe import Certificate, feasible_poses
+from .models import FitModel, SpatialArm
+
+__all__ = [
+    "plot_spatial_plan",
+]
+
+#: Random feasible poses over which the error map and the variance function are drawn.
+MAP_POSES = 2000
+
+
+def _chain_points(arm: SpatialArm, q: np.ndarray) -> np.ndarray:
+    """The joint origins and the flange ``(m, n + 2, 3)`` of poses ``q`` (robot frame, mm)."""
+    u = q @ arm.joint_map.T
+    frame = np.broadcast_to(np.eye(4), (q.shape[0], 4, 4)).copy()
+    points = [frame[:, :3, 3].copy()]
+    for k, kind in enumerate(arm.chain.kinds):
+        frame = frame @ arm.chain.origins[k]
+        points.append(frame[:, :3, 3].copy())
+        motion = np.broadcast_to(np.eye(4), (q.shape[0], 4, 4)).copy()
+        if kind == "R":
+            c, s = np.cos(u[:, k]), np.sin(u[:, k])
+            motion[:, 0, 0], motion[:, 0, 1], motion[:, 1, 0], motion[:, 1, 1] = c, -s, s, c
+        else:
+            motion[:, 2, 3] = u[:, k]
+        frame = frame @ motion
+    points.append((frame @ arm.chain.tip)[:, :3, 3])
+    return np.stack(points, axis=1)
+
+
+def _sticks(fig: Figure, spec, arm: SpatialArm, q: np.ndarray) -> None:
+    ax = fig.add_subplot(spec, projection="3d")
+    chain = _chain_points(arm, q)
+    for pose in chain:
+        ax.plot(pose[:, 0], pose[:, 1], pose[:, 2], color="0.4", lw=0.8, alpha=0.6)
+    ax.scatter(chain[:, -1, 0], chain[:, -1, 1], chain[:, -1, 2], s=8, color="C0", label="flange")
+    view = arm.view
+    if view is not None:
+        x, y, z = view.position
+        ax.scatter([x], [y], [z], marker="^", s=60, color="C3", label="instrument")
+    ax.set_title(f"{q.shape[0]} poses")
+    ax.set_xlabel("x (mm)")
+    ax.set_ylabel("y (mm)")
+    ax.set_zlabel("z (mm)")
+    ax.legend(loc="upper left", fontsize=7)
+
+
+def _joints(fig: Figure, spec, arm: SpatialArm, q: np.ndarray) -> None:
+    ax = fig.add_subplot(spec)
+    n = arm.n_joints
+    scale = np.where(arm.chain.revolute, 180.0 / np.pi, 1.0)
+    limits = arm.limits * scale[:, None]
+    for j in range(n):
+        ax.plot([j + 1, j + 1], limits[j], color="0.8", lw=8, solid_capstyle="butt")
+    jitter = np.linspace(-0.2, 0.2, q.shape[0])
+    for j in range(n):
+        ax.scatter(j + 1 + jitter, q[:, j] * scale[j], s=6, color="C0")
+    ax.set_xticks(range(1, n + 1))
+    ax.set_xlabel("joint")
+    ax.set_ylabel("reading (deg; mm for a slide)")
+    ax.set_title("joints against their limits")
+
+
+def _error_map(
+    fig: Figure, spec, model: FitModel, q: np.ndarray, sigma: float, poses: np.ndarray
+) -> None:
+    ax = fig.add_subplot(spec)
+    per_point = position_accuracy(model, q, poses, sigma).per_pose_mm  # every target's
+    error = np.sqrt(np.mean(per_point.reshape(poses.shape[0], -1) ** 2, axis=1))
+    arm = model.arm
+    assert isinstance(arm, SpatialArm)
+    flange = _chain_points(arm, poses)[:, -1]
+    shown = ax.scatter(flange[:, 0], flange[:, 1], c=error, s=4, cmap="viridis")
+    fig.colorbar(shown, ax=ax, label="predicted error after calibration (mm RMS per point)")
+    ax.set_aspect("equal")
+    ax.set_xlabel("flange x (mm)")
+    ax.set_ylabel("flange y (mm)")
+    ax.set_title("over the workspace, seen from above")
+
+
+def _variance(fig: Figure, spec, model: FitModel, certificate: Certificate, poses) -> None:
+    ax = fig.add_subplot(spec)
+    info = model.plan_information(certificate.support)
+    blocks = info.blocks()  # M = sum_x w_x B_x^T B_x / T (T targets a pose): the certificate's
+    weighted = blocks * np.sqrt(certificate.weights / info.rows_per_pose)[:, None, None]
+    flat = weighted.reshape(-1, blocks.shape[-1])
+    inverse = np.linalg.pinv(flat.T @ flat)
+    values, _ = model.plan_information(poses).pose_variance(inverse)
+    ax.plot(np.sort(values)[::-1], color="C0", label="d(x) at random feasible poses, sorted")
+    ax.axhline(model.n_free, color="C2", ls="--", label=f"p = {model.n_free}: the optimum's")
+    ax.axhline(certificate.max_variance, color="C3", ls=":", label="the maximum found")
+    ax.set_xscale("log")
+    ax.set_xlabel("pose (by rank)")
+    ax.set_ylabel("variance function d(x)")
+    ax.set_title(f"certified >= {certificate.certified_d_efficiency:.4f}")
+    ax.legend(fontsize=7)
+
+
+def plot_spatial_plan(
+    model: FitModel,
+    q: np.ndarray,
+    *,
+    sigma: float,
+    certificate: Certificate | None = None,
+    rng: int = 0,
+) -> Figure:
+    """A spatial arm's plan in four panels: the arm at every pose with the instrument, the
+    joints against their limits, the predicted position error after calibration at
+    :data:`MAP_POSES` random feasible poses (noise ``sigma`` mm), and the certificate's
+    variance function there against its premise (where a certificate is given)."""
+    arm = model.arm
+    assert isinstance(arm, SpatialArm)
+    poses = feasible_poses(model, MAP_POSES, rng=rng)
+    fig = Figure(figsize=(12, 9))
+    fig.set_layout_engine(ConstrainedLayoutEngine())
+    grid = fig.add_gridspec(2, 2)
+    _sticks(fig, grid[0, 0], arm, q)
+    _joints(fig, grid[0, 1], arm, q)
+    _error_map(fig, grid[1, 0], model, q, sigma, poses)
+    if certificate is not None:
+        _variance(fig, grid[1, 1], model, certificate, poses)
+    fig.suptitle(f"plan of {arm.name}")
+    return fig
