@@ -127,3 +127,15 @@ def deviated_tip(
         x += (length + d_length) * math.cos(angle)
         y += (length + d_length) * math.sin(angle)
     return x, y
+
+
+#: The head of a robot TOML for the built-in industrial 6R's URDF (``{urdf}``) under
+#: another ``{name}``: its coupled J2/J3 and its limits, as the built-in file has them.
+INDUSTRIAL_HEAD = """name = "{name}"
+urdf = "{urdf}"
+base_link = "base_link"
+tip_link = "flange"
+joint_map = [[1, 0, 0, 0, 0, 0], [0, 1, 0, 0, 0, 0], [0, 1, 1, 0, 0, 0],
+             [0, 0, 0, 1, 0, 0], [0, 0, 0, 0, 1, 0], [0, 0, 0, 0, 0, 1]]
+joint_limits_deg = [[-185, 185], [-60, 76], [-132, 150], [-360, 360], [-125, 125], [-360, 360]]
+"""

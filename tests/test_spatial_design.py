@@ -17,7 +17,7 @@ import pytest
 from armcal.models.information import BlockInformation
 from armcal.models.spatial_kinematics import jacobian_pose_derivative, kinematics
 from armcal.noise import NoiseModel
-from helpers import central_differences
+from helpers import INDUSTRIAL_HEAD, central_differences
 from test_spatial_model import ARMS, labelled, random_poses, random_truth
 
 
@@ -240,14 +240,7 @@ def test_the_task_criteria_s_gradients_in_the_information(name):
         assert np.sum(analytic * direction) == pytest.approx(numeric, rel=1e-7, abs=1e-10)
 
 
-CELL = """name = "cell-6r"
-urdf = "{urdf}"
-base_link = "base_link"
-tip_link = "flange"
-joint_map = [[1, 0, 0, 0, 0, 0], [0, 1, 0, 0, 0, 0], [0, 1, 1, 0, 0, 0],
-             [0, 0, 0, 1, 0, 0], [0, 0, 0, 0, 1, 0], [0, 0, 0, 0, 0, 1]]
-joint_limits_deg = [[-185, 185], [-60, 76], [-132, 150], [-360, 360], [-125, 125], [-360, 360]]
-[measurement]
+CELL = """[measurement]
 sigma_mm = 0.03
 [instrument]
 position_mm = [3500.0, 0.0, 800.0]
@@ -273,7 +266,8 @@ def _cell(tmp_path, volume: str = "range"):
 
     urdf = (ROBOT_FOLDER / "industrial-6r.urdf").as_posix()
     path = tmp_path / "cell.toml"
-    path.write_text(CELL.format(urdf=urdf, volume=VOLUMES[volume]), encoding="utf-8")
+    head = INDUSTRIAL_HEAD.format(name="cell-6r", urdf=urdf)
+    path.write_text(head + CELL.format(volume=VOLUMES[volume]), encoding="utf-8")
     return load_serial_robot(path).arm
 
 

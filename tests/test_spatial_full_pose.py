@@ -32,7 +32,7 @@ from armcal.models.spatial_chain import (
 )
 from armcal.noise import NoiseModel
 from armcal.simulate import monte_carlo
-from helpers import central_differences, run_cli
+from helpers import INDUSTRIAL_HEAD, central_differences, run_cli
 from test_spatial_model import ARMS, labelled, random_poses, random_truth
 from test_spatial_virtual import plan_file
 
@@ -202,14 +202,7 @@ def test_orientation_columns_round_trip_through_a_file(tmp_path):
     np.testing.assert_allclose(meas.instrument_points, points, rtol=0, atol=1e-12)
 
 
-ROBOT = """name = "probe-6r"
-urdf = "{urdf}"
-base_link = "base_link"
-tip_link = "flange"
-joint_map = [[1, 0, 0, 0, 0, 0], [0, 1, 0, 0, 0, 0], [0, 1, 1, 0, 0, 0],
-             [0, 0, 0, 1, 0, 0], [0, 0, 0, 0, 1, 0], [0, 0, 0, 0, 0, 1]]
-joint_limits_deg = [[-185, 185], [-60, 76], [-132, 150], [-360, 360], [-125, 125], [-360, 360]]
-[measurement]
+ROBOT = """[measurement]
 sigma_mm = {sigma_mm}
 orientation_sigma_deg = {sigma_deg}
 """
@@ -222,7 +215,9 @@ def test_a_six_dof_campaign_from_the_command_line(tmp_path):
 
     urdf = (ROBOT_FOLDER / "industrial-6r.urdf").as_posix()
     (tmp_path / "cell.toml").write_text(
-        ROBOT.format(urdf=urdf, sigma_mm=SIGMA_MM, sigma_deg=SIGMA_DEG), encoding="utf-8"
+        INDUSTRIAL_HEAD.format(name="probe-6r", urdf=urdf)
+        + ROBOT.format(sigma_mm=SIGMA_MM, sigma_deg=SIGMA_DEG),
+        encoding="utf-8",
     )
     truth = (ROBOT_FOLDER / "industrial-6r-truth.toml").read_text(encoding="utf-8")
     truth = "\n".join(line for line in truth.splitlines() if not line.startswith("robot"))
