@@ -322,11 +322,11 @@ def test_a_constrained_design_keeps_every_pose_inside_every_constraint(tmp_path)
 
     arm = _cell(tmp_path)
     model = arm.prepared(arm.plan_conditions(feasible_poses(arm, 200, rng=0)))
-    made = design(model, 40, rng=1)
+    made = design(model, 30, rng=1)
     assert np.all(model.within_limits(made.q))
     g, _ = model.view_constraints(made.q)
     assert np.min(g) >= 0.0
-    best = max(float(d_efficiency(model, feasible_poses(model, 40, rng=s))) for s in range(30))
+    best = max(float(d_efficiency(model, feasible_poses(model, 30, rng=s))) for s in range(30))
     assert made.d_efficiency > best
     assert made.certificate is not None and made.certificate.certified_d_efficiency > 0.9
 
