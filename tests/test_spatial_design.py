@@ -68,14 +68,29 @@ def test_the_plan_information_s_gradient_is_exact(noise):
     np.testing.assert_allclose(slope, numeric, rtol=0, atol=1e-6 * np.max(np.abs(numeric)))
 
 
-def test_a_tracker_s_gradient_falls_back_to_central_differences():
-    """The tracker's weights move with the pose: no closed form is claimed for them."""
+def test_a_tracker_s_gradient_is_exact_and_encoder_noise_falls_back():
+    """A tracker's weights move with the point (its metric ``W^T W`` enters the
+    derivative, noise module); encoder noise has no closed form here: central differences."""
     from armcal.noise import TrackerNoise
 
-    noise = NoiseModel.laser_tracker(TrackerNoise(0.015, 0.006, 0.01, 0.005))
-    arm = labelled(ARMS["industrial"](), 1).with_noise(noise)
-    rows = arm.plan_conditions(random_poses(arm, 4, np.random.default_rng(5)))
-    assert arm.block_derivative(rows) is None
+    noise = NoiseModel.laser_tracker(TrackerNoise(0.008, 0.0004, 0.010, 0.0025))
+    arm = labelled(ARMS["industrial"](), 3).with_noise(noise)
+    truth = arm.nominal.copy()
+    truth[:6] = [3000.0, -1500.0, -600.0, 0.01, -0.02, 2.0]  # a tracker 3.4 m away, turned
+    rng = np.random.default_rng(5)
+    model = arm.replace(base_pose=truth[:6]).prepared(
+        arm.plan_conditions(random_poses(arm, 40, rng))
+    )
+    q = random_poses(model, 20, rng).reshape(2, 10, model.n_joints)
+    p = model.n_free
+    phi = rng.normal(size=(2, p, p))
+    phi = phi + np.swapaxes(phi, -1, -2)
+    analytic = model.plan_information(q).gradient(phi)
+    numeric = BlockInformation(model, q, unit_columns=True).gradient(phi)
+    np.testing.assert_allclose(analytic, numeric, rtol=0, atol=1e-6 * np.max(np.abs(numeric)))
+    encoder = arm.with_noise(NoiseModel.isotropic(0.03, np.radians(0.001), dim=3))
+    rows = encoder.plan_conditions(random_poses(arm, 4, rng))
+    assert encoder.block_derivative(rows) is None
 
 
 def test_design_for_a_six_axis_arm_from_the_command_line(tmp_path):

@@ -762,16 +762,22 @@ class SpatialArm(RigidLoads):
     def block_derivative(self, conditions: Conditions) -> np.ndarray | None:
         """``d (W J[:, free]) / d q`` ``(m, 3, p_f, n)`` at the nominal parameters, each row
         in its own readings (:func:`~armcal.models.spatial_kinematics.jacobian_pose_derivative`),
-        where the whitening ``W`` does not change with the pose; None where it does (a
-        tracker's or encoder noise, a 6-DoF instrument's turns)."""
+        where the whitening ``W`` changes with the pose at most as a tracker's; None for
+        encoder noise and a 6-DoF instrument's turns.  A tracker's ``W^T W = s^2 Sigma^-1``
+        moves with the point: its change enters as ``W^-T d(W^T W) J / 2``, which gives every
+        quadratic form ``tr(A f^T f)`` of the blocks its exact derivative."""
         noise = self.noise
-        moving = noise is not None and (noise.tracker is not None or noise.joint_sigma is not None)
-        if moving or self.oriented or conditions.sigma_mm is not None:
+        encoder = noise is not None and noise.joint_sigma is not None
+        if self.oriented or encoder or conditions.sigma_mm is not None:
             return None
         kin = self._kinematics(conditions, None, derivatives=True)
         out = jacobian_pose_derivative(kin, self.layout, self.joint_map, np.flatnonzero(self.free))
         w = self.whitening(conditions)
-        return out if w is None else np.einsum("...ij,...jpn->...ipn", w, out)
+        if w is None or noise is None or kin.jacobian is None:
+            return out
+        out = np.einsum("...ij,...jpn->...ipn", w, out)
+        extra = noise.metric_term(w, kin.points, kin.joint_jacobian, kin.jacobian[..., self.free])
+        return out if extra is None else out + extra
 
     def closed_form_plans(self, m: int) -> None:
         return None
