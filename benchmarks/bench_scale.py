@@ -365,6 +365,32 @@ def table(rows: list[Row]) -> list[str]:
     ]
 
 
+def finish(
+    rows: list[Row],
+    machine: str,
+    date: str,
+    results: Path | None,
+    heading: str,
+    about: str,
+    settings: str,
+) -> None:
+    """Print the rows' table with the machine's load at the end, and write it to ``results``
+    (None: do not write) under ``# heading``, the paragraph ``about``, the date, the
+    machine and the run's ``settings`` (``seed: 0``)."""
+    lines = table(rows)
+    machine = at_end(machine)
+    print(f"\n{machine}")
+    print("\n".join(lines))
+    if results is None:
+        return
+    results.write_text(
+        f"# {heading}\n\n{about}\n\n- date: {date}\n- machine: {machine}\n- {settings}\n\n"
+        + "\n".join(lines)
+        + "\n"
+    )
+    print(f"\nwrote {results}")
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
@@ -382,22 +408,17 @@ def main() -> None:
         rows = bench_identify(args.seed, folder) + bench_design(folder) + simulate
         if not args.quick:
             rows += bench_reproduce(folder)
-    lines = table(rows)
-    machine = at_end(machine)
-    print(f"\n{machine}")
-    print("\n".join(lines))
-    if not args.no_write:
-        RESULTS.write_text(
-            "# Scale benchmark results\n\n"
-            "Written by `benchmarks/bench_scale.py` (`make bench`); see its docstring for what "
-            "each figure and baseline is. Times are the minimum over several runs; commands "
-            "run in a fresh process, peak memory is its maximum resident set size.\n\n"
-            f"- date: {date}\n- machine: {machine}\n- seed: {args.seed}"
-            f"{' (quick: no 10^6 trials, no reproduce)' if args.quick else ''}\n\n"
-            + "\n".join(lines)
-            + "\n"
-        )
-        print(f"\nwrote {RESULTS}")
+    finish(
+        rows,
+        machine,
+        date,
+        None if args.no_write else RESULTS,
+        "Scale benchmark results",
+        "Written by `benchmarks/bench_scale.py` (`make bench`); see its docstring for what "
+        "each figure and baseline is. Times are the minimum over several runs; commands "
+        "run in a fresh process, peak memory is its maximum resident set size.",
+        f"seed: {args.seed}{' (quick: no 10^6 trials, no reproduce)' if args.quick else ''}",
+    )
 
 
 if __name__ == "__main__":

@@ -81,8 +81,8 @@ from functools import partial
 from pathlib import Path
 
 import numpy as np
-from bench_scale import Row, best_times, run_command, table
-from measure import at_end, machine_and_date
+from bench_scale import Row, best_times, finish, run_command
+from measure import machine_and_date
 from scipy.optimize import least_squares
 
 from armcal.doe import random_plan
@@ -399,20 +399,17 @@ def main() -> None:
         # Last: identify at 10^5 rows allocates about 700 MB in this process.
         rows += bench_large(model, measurements(arm, truth, 100_000, rng), t_small)
     print(f"measured in {time.perf_counter() - start:.0f} s")
-    lines = table(rows)
-    machine = at_end(machine)
-    print(f"\n{machine}")
-    print("\n".join(lines))
-    if not args.no_write:
-        RESULTS.write_text(
-            "# Spatial identify benchmark results\n\n"
-            "Written by `benchmarks/bench_spatial.py` (`make bench`); see its docstring for "
-            "what each figure and baseline is. Times are the minimum over several runs; the "
-            "command runs in a fresh process, peak memory is its maximum resident set size.\n\n"
-            f"- date: {date}\n- machine: {machine}\n- seed: {args.seed}"
-            f"{' (quick: no m=10^5)' if args.quick else ''}\n\n" + "\n".join(lines) + "\n"
-        )
-        print(f"\nwrote {RESULTS}")
+    finish(
+        rows,
+        machine,
+        date,
+        None if args.no_write else RESULTS,
+        "Spatial identify benchmark results",
+        "Written by `benchmarks/bench_spatial.py` (`make bench`); see its docstring for "
+        "what each figure and baseline is. Times are the minimum over several runs; the "
+        "command runs in a fresh process, peak memory is its maximum resident set size.",
+        f"seed: {args.seed}{' (quick: no m=10^5)' if args.quick else ''}",
+    )
 
 
 if __name__ == "__main__":

@@ -41,8 +41,8 @@ import time
 from pathlib import Path
 
 import numpy as np
-from bench_scale import Row, table
-from measure import at_end, machine_and_date
+from bench_scale import Row, finish
+from measure import machine_and_date
 
 from armcal.criteria import position_accuracy
 from armcal.doe import design, feasible_poses, random_plan
@@ -198,20 +198,16 @@ def main() -> None:
             True,
         ),
     ]
-    lines = table(rows)
-    machine = at_end(machine)
-    print(f"\n{machine}")
-    print("\n".join(lines))
-    if not args.no_write:
-        RESULTS.write_text(
-            "# Spatial design benchmark results\n\n"
-            "Written by `benchmarks/bench_spatial_design.py` (`make bench`); see its docstring "
-            "for what each figure and baseline is.\n\n"
-            f"- date: {date}\n- machine: {machine}\n- seed: {args.seed}\n\n"
-            + "\n".join(lines)
-            + "\n"
-        )
-        print(f"\nwrote {RESULTS}")
+    finish(
+        rows,
+        machine,
+        date,
+        None if args.no_write else RESULTS,
+        "Spatial design benchmark results",
+        "Written by `benchmarks/bench_spatial_design.py` (`make bench`); see its docstring "
+        "for what each figure and baseline is.",
+        f"seed: {args.seed}",
+    )
 
 
 if __name__ == "__main__":

@@ -14,6 +14,7 @@ from matplotlib.layout_engine import ConstrainedLayoutEngine
 from .criteria import position_accuracy
 from .doe import Certificate, feasible_poses
 from .models import FitModel, SpatialArm
+from .models.spatial_chain import joint_motion
 
 __all__ = [
     "plot_spatial_plan",
@@ -31,13 +32,7 @@ def _chain_points(arm: SpatialArm, q: np.ndarray) -> np.ndarray:
     for k, kind in enumerate(arm.chain.kinds):
         frame = frame @ arm.chain.origins[k]
         points.append(frame[:, :3, 3].copy())
-        motion = np.broadcast_to(np.eye(4), (q.shape[0], 4, 4)).copy()
-        if kind == "R":
-            c, s = np.cos(u[:, k]), np.sin(u[:, k])
-            motion[:, 0, 0], motion[:, 0, 1], motion[:, 1, 0], motion[:, 1, 1] = c, -s, s, c
-        else:
-            motion[:, 2, 3] = u[:, k]
-        frame = frame @ motion
+        frame = frame @ joint_motion(kind, u[:, k])
     points.append((frame @ arm.chain.tip)[:, :3, 3])
     return np.stack(points, axis=1)
 

@@ -38,18 +38,18 @@ POOL_WEIGHT_ITERATIONS = 500
 MAX_EXCHANGES = 2000
 
 
-def _blocks(model: FitModel, pool: np.ndarray) -> np.ndarray:
-    """Every pool pose's information blocks ``(N, r, p_f)``."""
-    return model.plan_information(pool).blocks()
+def _largest_weights(blocks: np.ndarray, m: int) -> np.ndarray:
+    """Indices ``(m,)`` of the poses of largest continuous D-optimal weight, from the pool's
+    information blocks ``(N, r, p_f)``."""
+    weights = np.full(blocks.shape[0], 1.0 / blocks.shape[0])
+    weights = multiplicative_weights(blocks, weights, POOL_WEIGHT_ITERATIONS)
+    return np.argsort(-weights, kind="stable")[:m]
 
 
 def pool_weights_plan(model: FitModel, m: int, pool: np.ndarray) -> np.ndarray:
     """Indices ``(m,)`` of the ``m`` pool poses of largest continuous D-optimal weight: the
     pool method of the open tools (a convex relaxation, then a threshold)."""
-    blocks = _blocks(model, pool)
-    weights = np.full(pool.shape[0], 1.0 / pool.shape[0])
-    weights = multiplicative_weights(blocks, weights, POOL_WEIGHT_ITERATIONS)
-    return np.argsort(-weights, kind="stable")[:m]
+    return _largest_weights(model.plan_information(pool).blocks(), m)
 
 
 def pool_plan(model: FitModel, m: int, pool: np.ndarray) -> np.ndarray:
@@ -61,7 +61,7 @@ def pool_plan(model: FitModel, m: int, pool: np.ndarray) -> np.ndarray:
     pool = np.asarray(pool, dtype=float)
     if pool.shape[0] < 1:
         raise ArmcalError("the candidate pool is empty")
-    blocks = _blocks(model, pool)
+    blocks = model.plan_information(pool).blocks()  # once: the weights and the exchange
     p = blocks.shape[-1]
     everything = np.einsum("krp,krq->pq", blocks, blocks)
     if np.linalg.matrix_rank(everything) < p:
@@ -69,7 +69,7 @@ def pool_plan(model: FitModel, m: int, pool: np.ndarray) -> np.ndarray:
             f"the {pool.shape[0]} candidate poses cannot identify the {p} free parameters "
             "of " + model.name + " together; add poses that move every joint"
         )
-    chosen = list(pool_weights_plan(model, m, pool))
+    chosen = list(_largest_weights(blocks, m))
     for _ in range(MAX_EXCHANGES):
         plan = blocks[chosen]
         information = np.einsum("krp,krq->pq", plan, plan)

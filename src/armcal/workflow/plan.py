@@ -90,9 +90,10 @@ def synthesize_plan(
     :func:`armcal.synthesis.synthesize_measurements`.
     """
     arm = model.arm
-    rows = model.plan_conditions(q, loads).with_frames(None)
-    # A 6-DoF instrument's noise turns the true orientations: drawn about them.
-    rows, _ = model.anchor(rows, model.positions(rows, truth))
+    rows = model.plan_conditions(q, loads)
+    if model.point_dim > model.position_dim:  # a 6-DoF instrument's noise turns the true
+        rows = rows.with_frames(None)  # orientations: drawn about them
+        rows, _ = model.anchor(rows, model.positions(rows, truth))
     points = synthesize_measurements(
         model,
         rows.q,
