@@ -104,13 +104,17 @@ class TrackerNoise:
             np.eye(3)
         )
 
-    def precision_derivative(self, points: np.ndarray, velocity: np.ndarray) -> np.ndarray:
-        """``d Sigma_meas^-1 / d q`` ``(..., 3, 3, n)`` (mm^-2 per reading) of points ``(..., 3)``
-        moving at ``velocity`` ``(..., 3, n)`` (mm per reading).
+    def precision_pullback(
+        self, points: np.ndarray, velocity: np.ndarray, weight: np.ndarray
+    ) -> np.ndarray:
+        """``sum_jk S_jk d (Sigma_meas^-1)_jk / d q`` ``(..., n)`` (mm^-2 per reading) for
+        weights ``S`` ``(..., 3, 3)`` at points ``(..., 3)`` moving at ``velocity``
+        ``(..., 3, n)`` (mm per reading).
 
         ``Sigma^-1 = b I + (a - b) u u^T`` with ``a = s_r^-2``, ``b = s_t^-2`` at distance
         ``d = |p|`` and ``u = p / d``: ``dd = u . dp``, ``du = (dp - u dd) / d``, and
-        ``da = -2 a s_r' dd / s_r`` (``s_r'`` the term per metre, per mm).
+        ``da = -2 a s_r' dd / s_r`` (``s_r'`` the term per metre, per mm), so the sum is
+        ``db tr S + (da - db) u.S u + 2 (a - b) (S_sym u) . du``.
         """
         points = np.asarray(points, dtype=float)
         distance = np.linalg.norm(points, axis=-1)
@@ -118,17 +122,19 @@ class TrackerNoise:
         along, across = self.sigmas(distance)
         a, b = along**-2.0, across**-2.0
         d_distance = np.einsum("...i,...in->...n", sight, velocity)  # (..., n)
-        d_sight = (velocity - sight[..., :, None] * d_distance[..., None, :]) / distance[
-            ..., None, None
-        ]
         da = -2.0 * (a / along)[..., None] * (self.range_mm_per_m / 1000.0) * d_distance
         db = -2.0 * (b / across)[..., None] * (self.transverse_mm_per_m / 1000.0) * d_distance
-        outer = sight[..., :, None] * sight[..., None, :]
-        turn = sight[..., :, None, None] * d_sight[..., None, :, :]  # u du^T, (..., 3, 3, n)
+        sym = 0.5 * (weight + np.swapaxes(weight, -1, -2))
+        pulled = np.einsum("...ij,...j->...i", sym, sight)  # S_sym u
+        along_s = np.einsum("...i,...i->...", sight, pulled)  # u.S u
+        d_sight = (
+            np.einsum("...i,...in->...n", pulled, velocity) - along_s[..., None] * d_distance
+        ) / distance[..., None]  # (S_sym u) . du
+        trace = np.trace(weight, axis1=-2, axis2=-1)
         return (
-            db[..., None, None, :] * np.eye(3)[..., None]
-            + (da - db)[..., None, None, :] * outer[..., None]
-            + (a - b)[..., None, None, None] * (turn + np.swapaxes(turn, -2, -3))
+            db * trace[..., None]
+            + (da - db) * along_s[..., None]
+            + 2.0 * (a - b)[..., None] * d_sight
         )
 
     def to_dict(self) -> dict[str, float]:
@@ -404,23 +410,25 @@ class NoiseModel:
         )
         return whitening_from_covariance(cov, self.sigma_mm)
 
-    def metric_term(
+    def metric_pullback(
         self,
         whitening: np.ndarray,
         points: np.ndarray,
         velocity: np.ndarray | None,
         jacobian: np.ndarray | None,
+        cotangent: np.ndarray,
     ) -> np.ndarray | None:
-        """``W^-T (d(W^T W)/dq) J / 2`` ``(..., d, k, n)``: what a pose-dependent metric
-        ``W^T W = sigma_ref^2 Sigma^-1`` adds to ``d(W J)/dq`` in the derivative of every
-        quadratic form ``tr(A (W J)^T W J)``; None where the metric is constant (only a
-        tracker's moves, with the ``points`` and their ``velocity`` ``(..., 3, n)``)."""
+        """What a pose-dependent metric ``W^T W = sigma_ref^2 Sigma^-1`` adds to the derivative
+        ``<G, d(W J)/dq>`` ``(..., n)`` of a weighted sum of whitened blocks, ``G``
+        ``(..., d, k)`` = ``cotangent``: ``<W^-1 G J^T, d(W^T W)/dq> / 2``, exact for every
+        quadratic form ``tr(A (W J)^T W J)`` (``G = 2 W J A``); None where the metric is
+        constant (only a tracker's moves, with the ``points`` and their ``velocity``
+        ``(..., 3, n)``)."""
         if self.tracker is None:
             return None
         assert velocity is not None and jacobian is not None
-        metric = self.sigma_mm**2 * self.tracker.precision_derivative(points, velocity)
-        inverse = np.linalg.inv(whitening)
-        return 0.5 * np.einsum("...ji,...jkn,...kp->...ipn", inverse, metric, jacobian)
+        weight = np.linalg.solve(whitening, cotangent) @ np.swapaxes(jacobian, -1, -2)
+        return 0.5 * self.sigma_mm**2 * self.tracker.precision_pullback(points, velocity, weight)
 
     def to_dict(self) -> dict[str, object]:
         """JSON form: ``covariance_mm2``, ``joint_sigma_deg`` (null without encoder noise) and,

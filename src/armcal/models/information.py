@@ -22,6 +22,7 @@ covariance from its plan's own factorization); the numbers are the same.
 from __future__ import annotations
 
 from collections.abc import Callable
+from dataclasses import dataclass
 from functools import cached_property
 
 import numpy as np
@@ -32,6 +33,7 @@ from .interface import Conditions, FitModel, Loads
 
 __all__ = [
     "BlockInformation",
+    "Linearization",
     "column_identifiability",
     "covariance_factor_from",
     "display_std",
@@ -213,14 +215,33 @@ def pose_derivative(
     return grad
 
 
+@dataclass(frozen=True, eq=False)
+class Linearization:
+    """Rows' whitened blocks and, where the family has it in closed form, their pullback.
+
+    Attributes
+    ----------
+    blocks : ndarray, shape (rows, d, p_f)
+        ``W J[:, free]`` (:func:`whitened_blocks`).
+    pullback : callable or None
+        ``G -> <G, d blocks / d q>`` ``(rows, d, p_f) -> (rows, n)``, every row in
+        its own readings: the gradient of a weighted sum of the blocks, all the
+        design's criteria need; None where the family has no closed form for these
+        rows (central differences then).
+    """
+
+    blocks: np.ndarray
+    pullback: Callable[[np.ndarray], np.ndarray] | None
+
+
 class BlockInformation:
     """The :class:`~armcal.models.interface.PlanInformation` of any model, from its Jacobian.
 
     A pose's information is the Gram matrix of its whitened free rows
     (:func:`whitened_blocks`, every target of the pose) with the columns divided
     by ``scale`` ``(p_f,)``: the design coordinates (default: the free parameters
-    in internal units).  Gradients in the poses come from ``block_derivative``
-    where the family gives it, else central differences (:func:`pose_derivative`).
+    in internal units).  Gradients in the poses come from ``linearize`` where the
+    family gives a pullback, else central differences (:func:`pose_derivative`).
 
     Parameters
     ----------
@@ -234,10 +255,10 @@ class BlockInformation:
     unit_columns : bool
         The criteria's singular values with unit-norm columns per plan (how
         orthogonal the columns are), not those of the design coordinates.
-    block_derivative : callable, optional
-        ``d (W J[:, free]) / d q`` ``(rows, d, p_f, n)`` of the rows' whitened
-        blocks in their own pose's readings, or None where the family has no
-        closed form for these rows.
+    linearize : callable, optional
+        The family's :class:`Linearization` of rows: their blocks (the same as
+        :func:`whitened_blocks`) and the gradient's pullback, from one pass of
+        its kinematics.
     """
 
     def __init__(
@@ -248,14 +269,14 @@ class BlockInformation:
         *,
         scale: np.ndarray | None = None,
         unit_columns: bool = False,
-        block_derivative: Callable[[Conditions], np.ndarray | None] | None = None,
+        linearize: Callable[[Conditions], Linearization] | None = None,
     ) -> None:
         self.model = model
         self.q = np.asarray(q, dtype=float)
         self.loads = loads
         self.scale = np.ones(model.n_free) if scale is None else np.asarray(scale, dtype=float)
         self.unit_columns = unit_columns
-        self.block_derivative = block_derivative
+        self.linearize = linearize
 
     @property
     def rows_per_pose(self) -> int:
@@ -285,8 +306,15 @@ class BlockInformation:
         return self._conditions(self.q)
 
     @cached_property
+    def _linear(self) -> Linearization | None:
+        return None if self.linearize is None else self.linearize(self._rows)
+
+    @cached_property
     def _blocks(self) -> np.ndarray:
-        return self._blocks_at(self.q, self._rows)
+        if self._linear is None:
+            return self._blocks_at(self.q, self._rows)
+        blocks = self._linear.blocks / self.scale
+        return blocks.reshape(*self.q.shape[:-1], -1, self.model.n_free)
 
     def blocks(self) -> np.ndarray:
         return self._blocks
@@ -300,21 +328,21 @@ class BlockInformation:
         """``d value(F_i) / d q_i`` ``(..., m, n)`` of a per-pose function of the blocks."""
         return pose_derivative(lambda q: value(self._blocks_at(q)), self.q)
 
-    def _quadratic_derivative(self, weight: np.ndarray) -> np.ndarray:
+    def _quadratic_derivative(
+        self, weight: np.ndarray, weighted: np.ndarray | None = None
+    ) -> np.ndarray:
         """``d (sum_r f_r^T A f_r) / d q_i`` ``(..., m, n)`` of every pose's blocks ``f``,
-        ``A`` = ``weight`` (broadcast over the plans' poses)."""
-        derivative = None
-        if self.block_derivative is not None:
-            derivative = self.block_derivative(self._rows)
-        if derivative is None:
+        ``A`` = ``weight`` (broadcast over the plans' poses): ``<2 f A, d f / d q>``;
+        ``weighted`` is ``f A`` where the caller has it."""
+        linear = self._linear
+        if linear is None or linear.pullback is None:
             return self._central_difference(
                 lambda f: np.einsum("...rp,...pq,...rq->...", f, weight, f)
             )
-        f = self._blocks  # (..., m, r, p_f)
-        n = derivative.shape[-1]
-        d = (derivative / self.scale[:, None]).reshape(*f.shape[:-2], -1, n)  # (..., m, r p_f, n)
-        weighted = (f @ weight).reshape(*f.shape[:-2], 1, -1)  # (..., m, 1, r p_f)
-        return 2.0 * (weighted @ d)[..., 0, :]
+        f = self._blocks  # (..., m, r d, p_f)
+        cotangent = 2.0 * (f @ weight if weighted is None else weighted) / self.scale
+        rows = linear.pullback(cotangent.reshape(linear.blocks.shape))
+        return rows.reshape(*self.q.shape[:-1], -1, self.q.shape[-1]).sum(axis=-2)
 
     def gradient(self, phi: np.ndarray) -> np.ndarray:
         phi = np.asarray(phi, dtype=float)
@@ -322,8 +350,9 @@ class BlockInformation:
 
     def pose_variance(self, m_inv: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         count = self.rows_per_pose
-        value = np.einsum("krp,pq,krq->k", self._blocks, m_inv, self._blocks) / count
-        return value, self._quadratic_derivative(m_inv) / count
+        weighted = self._blocks @ m_inv
+        value = np.sum(weighted * self._blocks, axis=(-2, -1)) / count
+        return value, self._quadratic_derivative(m_inv, weighted) / count
 
     @cached_property
     def _svd(self) -> ScaledSVD:

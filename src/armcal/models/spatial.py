@@ -29,8 +29,10 @@ from .defaults import RigidLoads
 from .identifiability import Identifiability, listing
 from .information import (
     BlockInformation,
+    Linearization,
     column_identifiability,
     covariance_factor_from,
+    whitened_blocks,
     whitened_free_jacobian,
 )
 from .interface import Conditions, DesignEffort, Effect, LinearPositions, Loads
@@ -44,11 +46,11 @@ from .spatial_chain import (
     transform,
     vector_rotation,
 )
+from .spatial_gradient import linearization
 from .spatial_kinematics import (
     ChainKinematics,
     SpatialLayout,
     default_targets,
-    jacobian_pose_derivative,
     kinematics,
 )
 from .spatial_registration import register, register_turns
@@ -755,29 +757,19 @@ class SpatialArm(RigidLoads):
         return False
 
     def plan_information(self, q: np.ndarray, loads: Loads | None = None) -> BlockInformation:
-        return BlockInformation(
-            self, q, loads, unit_columns=True, block_derivative=self.block_derivative
-        )
+        return BlockInformation(self, q, loads, unit_columns=True, linearize=self.linearize)
 
-    def block_derivative(self, conditions: Conditions) -> np.ndarray | None:
-        """``d (W J[:, free]) / d q`` ``(m, 3, p_f, n)`` at the nominal parameters, each row
-        in its own readings (:func:`~armcal.models.spatial_kinematics.jacobian_pose_derivative`),
-        where the whitening ``W`` changes with the pose at most as a tracker's; None for
-        encoder noise and a 6-DoF instrument's turns.  A tracker's ``W^T W = s^2 Sigma^-1``
-        moves with the point: its change enters as ``W^-T d(W^T W) J / 2``, which gives every
-        quadratic form ``tr(A f^T f)`` of the blocks its exact derivative."""
+    def linearize(self, conditions: Conditions) -> Linearization:
+        """The rows' whitened blocks at the nominal parameters and their pullback from one
+        pass of the kinematics (:mod:`~armcal.models.spatial_gradient`); no pullback for
+        encoder noise, rows' own sigmas and a 6-DoF instrument's turns."""
         noise = self.noise
         encoder = noise is not None and noise.joint_sigma is not None
         if self.oriented or encoder or conditions.sigma_mm is not None:
-            return None
+            return Linearization(whitened_blocks(self, conditions), None)
         kin = self._kinematics(conditions, None, derivatives=True)
-        out = jacobian_pose_derivative(kin, self.layout, self.joint_map, np.flatnonzero(self.free))
-        w = self.whitening(conditions)
-        if w is None or noise is None or kin.jacobian is None:
-            return out
-        out = np.einsum("...ij,...jpn->...ipn", w, out)
-        extra = noise.metric_term(w, kin.points, kin.joint_jacobian, kin.jacobian[..., self.free])
-        return out if extra is None else out + extra
+        columns = np.flatnonzero(self.free)
+        return linearization(kin, self.layout, self.joint_map, columns, self._noise_of(None))
 
     def closed_form_plans(self, m: int) -> None:
         return None

@@ -42,9 +42,7 @@ __all__ = [
     "SpatialLayout",
     "cross",
     "default_targets",
-    "jacobian_pose_derivative",
     "kinematics",
-    "upstream_joints",
 ]
 
 #: The base pose's parameter names: translation (mm), then roll, pitch, yaw.
@@ -372,59 +370,3 @@ def kinematics(
         joint_axis,
         cross(joint_axis, points[..., None, :]) + joint_moment,
     )
-
-
-def upstream_joints(layout: SpatialLayout) -> np.ndarray:
-    """How many joints come before each parameter in the chain ``(p,)``: 0 for the base,
-    ``k`` for joint ``k``'s placement (0-based), ``n`` for the targets; a zero error is
-    the joint's own turn and is handled apart (:func:`jacobian_pose_derivative`)."""
-    out = np.zeros(layout.n_params, dtype=int)
-    for k in range(layout.n_joints):
-        out[6 + 5 * k : 6 + 5 * k + 5] = k
-    out[layout.zero_start : layout.target_start] = -1
-    out[layout.target_start :] = layout.n_joints
-    return out
-
-
-def jacobian_pose_derivative(
-    kin: ChainKinematics, layout: SpatialLayout, joint_map: np.ndarray, columns: np.ndarray
-) -> np.ndarray:
-    """``d J[:, :, c] / d q`` ``(..., m, 3, len(columns), n)``: how the points' parameter
-    Jacobian (:func:`kinematics` with ``derivatives``) changes with the readings.
-
-    Every column is the velocity ``w_k x p + m_k`` of the point ``p`` under a screw
-    fixed in the chain.  A joint ``j`` before the screw moves both rigidly, so the
-    column turns with it: ``a_j x J_k``; a joint after it moves only the point:
-    ``w_k x V_j(p)`` (``a_j`` the joint's axis, ``V_j`` its velocity at ``p``).  A
-    joint's own turn does not move its axis: both rules agree there.  The zero
-    errors and the readings go through the joint map ``u = M (q + dq)``.
-    """
-    assert kin.jacobian is not None and kin.angular is not None
-    assert kin.joint_axes is not None and kin.joint_velocities is not None
-    jac = np.swapaxes(kin.jacobian, -1, -2)  # (..., m, p, 3)
-    axes = np.swapaxes(kin.angular, -1, -2)  # (..., m, p, 3): each parameter's screw axis
-    a, v = kin.joint_axes, kin.joint_velocities  # (..., m, n, 3)
-    n = layout.n_joints
-    before = upstream_joints(layout)
-    zeros = np.arange(layout.zero_start, layout.target_start)
-    # d V_j / d u_l: l before j turns it, l at or after j moves the point.
-    d_velocity = np.where(
-        (np.arange(n)[None, :] < np.arange(n)[:, None])[..., None],
-        cross(a[..., None, :, :], v[..., :, None, :]),  # [j, l] = a_l x V_j
-        cross(a[..., :, None, :], v[..., None, :, :]),  # [j, l] = a_j x V_l
-    )  # (..., m, n, n, 3)
-    plain = np.setdiff1d(columns, zeros)
-    out = np.empty((*jac.shape[:-2], len(columns), n, 3))
-    where_plain = np.isin(columns, plain)
-    if plain.size:
-        turned = cross(a[..., None, :, :], jac[..., plain, None, :])  # a_l x J_k
-        moved = cross(axes[..., plain, None, :], v[..., None, :, :])  # w_k x V_l
-        up = (np.arange(n)[None, :] < before[plain][:, None])[..., None]
-        out[..., where_plain, :, :] = np.where(up, turned, moved)
-    chosen_zeros = columns[~where_plain] - layout.zero_start
-    if chosen_zeros.size:  # J_dq_i = sum_j M_ji V_j
-        out[..., ~where_plain, :, :] = np.einsum(
-            "ji,...jlc->...ilc", joint_map[:, chosen_zeros], d_velocity
-        )
-    by_reading = np.swapaxes(np.swapaxes(out, -1, -2) @ joint_map, -1, -2)  # sum_l M_li d/du_l
-    return np.moveaxis(by_reading, -1, -3)  # (..., m, 3, c, n)
