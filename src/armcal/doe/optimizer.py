@@ -118,7 +118,7 @@ def optimize_plan(
     order = np.argsort(-score, kind="stable")
     best_q, best_value = None, -np.inf
     for index in order[:polish]:
-        q = _polish(model, q_final[index], criterion, viewed)
+        q = _polish(model, q_final[index], criterion, viewed, effort.polish)
         if viewed and not np.all(model.feasible(q)):  # SLSQP stopped outside: step back in
             q = restore_view(model, q)
         if not np.all(model.feasible(q)):
@@ -159,7 +159,9 @@ def restore_view(model: FitModel, q: np.ndarray, *, iterations: int = 30) -> np.
     return q
 
 
-def _polish(model: FitModel, q: np.ndarray, criterion: Criterion, viewed: bool) -> np.ndarray:
+def _polish(
+    model: FitModel, q: np.ndarray, criterion: Criterion, viewed: bool, iterations: int
+) -> np.ndarray:
     """Local refinement of one plan with exact bounds (and exact view constraints)."""
     from scipy.optimize import Bounds, minimize  # ~0.3 s to import: keep it off `import armcal`
 
@@ -179,7 +181,7 @@ def _polish(model: FitModel, q: np.ndarray, criterion: Criterion, viewed: bool) 
             jac=True,
             method="L-BFGS-B",
             bounds=bounds,
-            options={"maxiter": 500, "ftol": 1e-15, "gtol": 1e-10},
+            options={"maxiter": iterations, "ftol": 1e-15, "gtol": 1e-10},
         )
         return result.x.reshape(m, n)
     margin = 1e-6  # mm inside the view, so that round-off never puts a point outside

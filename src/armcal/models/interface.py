@@ -215,6 +215,8 @@ class DesignEffort:
     ----------
     starts, steps : int
         Random starting plans of the optimizer (batched) and its ascent's steps.
+    polish : int
+        Iterations of the quasi-Newton polish of the best plans.
     candidates, rounds, search : int
         The certificate's random feasible poses for the weighted design, its rounds
         of adding the variance function's maximizers, and the random poses its final
@@ -223,6 +225,7 @@ class DesignEffort:
 
     starts: int = 48
     steps: int = 400
+    polish: int = 500
     candidates: int = 3000
     rounds: int = 4
     search: int = 20000

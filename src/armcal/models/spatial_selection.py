@@ -32,6 +32,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..numerics import scaled_svd
 from .identifiability import listing
 from .spatial_chain import SerialChain
 from .spatial_kinematics import SpatialLayout
@@ -42,6 +43,7 @@ __all__ = [
     "parallel_runs",
     "priority",
     "select",
+    "select_from_rows",
 ]
 
 #: A column whose part outside the span of the columns kept before it is at most
@@ -269,3 +271,22 @@ def _explain(
             text = f"{_subject(members)} cannot be seen"
         sentences.append(text + (f": {reason}" if reason else ""))
     return tuple(sentences)
+
+
+def select_from_rows(
+    layout: SpatialLayout,
+    chain: SerialChain,
+    rows: np.ndarray,
+    joints: np.ndarray,
+    held: Sequence[str] = (),
+) -> tuple[tuple[str, ...], tuple[str, ...]]:
+    """:func:`select` from the whitened Jacobian's ``rows`` ``(..., p)`` at joint values
+    ``joints`` ``(..., n)`` (the joint map applied): the parameters it holds beyond
+    ``held``, and its merge sentences."""
+    # S V^T diag(c) of the scaled rows has the rows' column space in p x p.
+    svd = scaled_svd(rows.reshape(-1, layout.n_params))
+    columns = svd.singular_values[:, None] * svd.vt * svd.column_norms
+    still = [j for j in range(layout.n_joints) if np.ptp(joints[..., j]) <= 1e-9]
+    chosen = select(layout, chain, columns, still=still, held=held)
+    left = zip(layout.names, chosen.kept, strict=True)
+    return tuple(n for n, kept in left if not kept and n not in held), chosen.merges

@@ -67,90 +67,85 @@ class SpatialView:
 
     def of_rows(
         self, kin: ChainKinematics, local: np.ndarray, target: np.ndarray | None, count: int
-    ) -> tuple[np.ndarray, np.ndarray]:
+    ) -> tuple[np.ndarray, np.ndarray | None]:
         """Every pose's constraints ``(..., m, c)`` and gradients ``(..., m, c, n)`` from the
-        kinematics (robot frame, with derivatives) of its ``count`` target rows, the
-        targets at ``local`` ``(k, 3)`` in the tip frame."""
-        assert kin.joint_jacobian is not None and kin.tip_angular is not None
+        kinematics (robot frame) of its ``count`` target rows, the targets at ``local``
+        ``(k, 3)`` in the tip frame; no gradients from kinematics without derivatives."""
         rows = kin.points.shape[-2]
         index = np.zeros(rows, dtype=int) if target is None else np.asarray(target)
         reach = np.einsum("...ij,...j->...i", kin.rotation, local[index])  # flange to target
-        turn = np.swapaxes(
-            np.cross(np.swapaxes(kin.tip_angular, -1, -2), reach[..., None, :]), -1, -2
-        )
-        g, dg = self.constraints(
-            kin.points,
-            kin.joint_jacobian,
-            kin.rotation,
-            kin.tip_angular,
-            index,
-            kin.points - reach,
-            kin.joint_jacobian - turn,
-        )
+        moving = None
+        if kin.joint_jacobian is not None and kin.tip_angular is not None:
+            turn = np.swapaxes(
+                np.cross(np.swapaxes(kin.tip_angular, -1, -2), reach[..., None, :]), -1, -2
+            )
+            moving = (kin.joint_jacobian, kin.tip_angular, kin.joint_jacobian - turn)
+        g, dg = self.constraints(kin.points, kin.rotation, index, kin.points - reach, moving)
         m = rows // count
-        return (
-            g.reshape(*g.shape[:-2], m, -1),
-            dg.reshape(*dg.shape[:-3], m, -1, dg.shape[-1]),
-        )
+        values = g.reshape(*g.shape[:-2], m, -1)
+        return values, None if dg is None else dg.reshape(*dg.shape[:-3], m, -1, dg.shape[-1])
 
     def constraints(
         self,
         points: np.ndarray,
-        point_jacobian: np.ndarray,
         rotation: np.ndarray,
-        angular: np.ndarray,
         target: np.ndarray,
         flange: np.ndarray,
-        flange_jacobian: np.ndarray,
-    ) -> tuple[np.ndarray, np.ndarray]:
+        moving: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None,
+    ) -> tuple[np.ndarray, np.ndarray | None]:
         """Values ``(..., m, k)`` and gradients ``(..., m, k, n)`` of every row's constraints.
 
         Parameters
         ----------
-        points, point_jacobian : ndarray, shape (..., m, 3) and (..., m, 3, n)
-            The rows' target points (robot frame) and their derivatives in the readings.
-        rotation, angular : ndarray, shape (..., m, 3, 3) and (..., m, 3, n)
-            The tip frame and its angular velocity per reading.
+        points : ndarray, shape (..., m, 3)
+            The rows' target points (robot frame).
+        rotation : ndarray, shape (..., m, 3, 3)
+            The tip frame.
         target : ndarray of int, shape (m,)
             Every row's target (for its normal).
-        flange, flange_jacobian : ndarray, shape (..., m, 3) and (..., m, 3, n)
-            The flange's origin and its derivative, for the floor.
+        flange : ndarray, shape (..., m, 3)
+            The flange's origin, for the floor.
+        moving : tuple of ndarray, each (..., m, 3, n), optional
+            The points' derivatives in the readings, the tip frame's angular
+            velocity per reading and the flange's derivative; without them, no
+            gradients (None).
         """
         values, grads = [], []
         offset = points - self.position
         if self.range_mm is not None:
             low, high = self.range_mm
             square = np.sum(offset**2, axis=-1)
-            d_square = 2.0 * np.einsum("...i,...in->...n", offset, point_jacobian)
             scale = 2.0 * high
             values += [(high**2 - square) / scale, (square - low**2) / scale]
-            grads += [-d_square / scale, d_square / scale]
+            if moving is not None:
+                d_square = 2.0 * np.einsum("...i,...in->...n", offset, moving[0])
+                grads += [-d_square / scale, d_square / scale]
         if self.box is not None:
             for axis in range(3):
                 lo, hi = self.box[axis]
                 values += [points[..., axis] - lo, hi - points[..., axis]]
-                grads += [point_jacobian[..., axis, :], -point_jacobian[..., axis, :]]
+                if moving is not None:
+                    grads += [moving[0][..., axis, :], -moving[0][..., axis, :]]
         if self.acceptance is not None and self.normals is not None:
-            local = self.normals[target]  # (m, 3)
-            normal = np.einsum("...ij,...j->...i", rotation, local)
-            to_instrument = -offset
-            distance = np.linalg.norm(to_instrument, axis=-1, keepdims=True)
-            sight = to_instrument / distance
+            normal = np.einsum("...ij,...j->...i", rotation, self.normals[target])
+            distance = np.linalg.norm(offset, axis=-1, keepdims=True)
+            sight = -offset / distance  # towards the instrument
             scale = ACCEPTANCE_SCALE_MM
             values.append(scale * (np.sum(normal * sight, axis=-1) - np.cos(self.acceptance)))
-            # d normal = w x normal; d sight = -(I - s s^T) dp / |c - p|
-            d_normal = np.cross(np.swapaxes(angular, -1, -2), normal[..., None, :])  # (..., n, 3)
-            project = np.eye(3) - sight[..., :, None] * sight[..., None, :]
-            d_sight = (
-                -np.einsum("...ij,...jn->...in", project, point_jacobian) / distance[..., None]
-            )
-            grads.append(
-                scale * np.einsum("...ni,...i->...n", d_normal, sight)
-                + scale * np.einsum("...i,...in->...n", normal, d_sight)
-            )
+            if moving is not None:  # d normal = w x normal; d sight = -(I - s s^T) dp / |c - p|
+                point_jacobian, angular = moving[0], moving[1]
+                d_normal = np.cross(np.swapaxes(angular, -1, -2), normal[..., None, :])
+                project = np.eye(3) - sight[..., :, None] * sight[..., None, :]
+                d_sight = (
+                    -np.einsum("...ij,...jn->...in", project, point_jacobian) / distance[..., None]
+                )
+                grads.append(
+                    scale * np.einsum("...ni,...i->...n", d_normal, sight)
+                    + scale * np.einsum("...i,...in->...n", normal, d_sight)
+                )
         if self.floor_z is not None:
-            values.append(points[..., 2] - self.floor_z)
-            grads.append(point_jacobian[..., 2, :])
-            values.append(flange[..., 2] - self.floor_z)
-            grads.append(flange_jacobian[..., 2, :])
-        return np.stack(values, axis=-1), np.stack(grads, axis=-2)
+            values += [points[..., 2] - self.floor_z, flange[..., 2] - self.floor_z]
+            if moving is not None:
+                grads += [moving[0][..., 2, :], moving[2][..., 2, :]]
+        found = np.stack(values, axis=-1)
+        return found, None if moving is None else np.stack(grads, axis=-2)
