@@ -392,3 +392,30 @@ def test_a_spatial_plan_s_picture_is_written(tmp_path):
     assert np.max(variance) <= certificate.max_variance * (1 + 1e-9)
     save_figure(figure, tmp_path / "plan.png")
     assert (tmp_path / "plan.png").stat().st_size > 10_000
+
+
+def test_a_plan_close_enough_to_the_optimum_is_its_own_reference(monkeypatch):
+    """When the plan's own variance function certifies CLOSE_ENOUGH, the plan is the
+    certificate's design: its distinct poses weighted by their counts, the bound
+    ``exp(1 - max d / p)``, and a dense random search finds no pose above that max.
+    (The threshold is lowered to 0.5 so that a short 20-pose plan takes this branch.)"""
+    from armcal.doe import certificate, feasible_poses, optimize_plan
+
+    arm = labelled(ARMS["industrial"](), 1).with_noise(NoiseModel.isotropic(0.03, dim=3))
+    model = arm.prepared(arm.plan_conditions(random_poses(arm, 60, np.random.default_rng(6))))
+    plan = optimize_plan(model, 20, rng=1)
+    q = np.concatenate([plan, plan[:5]])  # 5 poses measured twice
+    monkeypatch.setattr(certificate, "CLOSE_ENOUGH", 0.5)
+    found = certificate.certify(model, q, rng=2)
+    p = model.n_free
+    assert found.support.shape == (20, model.n_joints)
+    counts = np.array([np.sum(np.all(q == pose, axis=1)) for pose in found.support])
+    np.testing.assert_array_equal(found.weights, counts / 25)
+    assert found.certified_d_efficiency == pytest.approx(np.exp(1 - found.max_variance / p))
+    inverse = np.linalg.inv(model.plan_information(q).information())
+    variance, _ = model.plan_information(feasible_poses(model, 20_000, rng=3)).pose_variance(
+        inverse
+    )
+    assert variance.max() <= found.max_variance * (1 + 1e-9)
+    at, _ = model.plan_information(found.max_pose[None, :]).pose_variance(inverse)
+    assert at[0] == pytest.approx(found.max_variance, rel=1e-9)
