@@ -228,4 +228,22 @@ def test_design_reports_its_progress():
     designer_module.design(
         PlanarArm([260.0, 180.0]), 6, rng=0, progress=lambda *a: calls.append(a)
     )
-    assert calls == [(1, 3), (2, 3), (3, 3)]
+    assert calls[-3:] == [(500, 1000), (950, 1000), (1000, 1000)]
+    done = [d for d, total in calls]
+    assert all(total == 1000 for _, total in calls) and done == sorted(done)
+
+
+def test_a_spatial_design_reports_its_progress_as_it_goes():
+    """Its optimizer and certificate take seconds: the bar moves through both, not only at
+    their ends, and never backwards."""
+    from armcal.doe import designer as designer_module
+    from armcal.doe import feasible_poses
+    from armcal.files import load_serial_robot
+
+    arm = load_serial_robot("industrial-6r").arm
+    model = arm.prepared(arm.plan_conditions(feasible_poses(arm, 100, rng=0)))
+    calls = []
+    designer_module.design(model, 16, rng=0, progress=lambda *a: calls.append(a))
+    done = [d for d, _ in calls]
+    assert done == sorted(done) and done[-1] == 1000
+    assert sum(0 < d < 500 for d in done) >= 5 and sum(500 < d < 950 for d in done) >= 5

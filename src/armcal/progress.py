@@ -11,7 +11,7 @@ import time
 from collections.abc import Callable
 from typing import TextIO
 
-__all__ = ["ProgressBar", "ProgressCallback"]
+__all__ = ["ProgressBar", "ProgressCallback", "share"]
 
 #: ``progress(done, total)``, called as work advances.
 ProgressCallback = Callable[[int, int], None]
@@ -69,3 +69,26 @@ class ProgressBar:
         self.stream.write(f"\r{self.label} [{bar}] {fraction:4.0%} {elapsed:.1f} s{end}")
         self.stream.flush()
         self.shown = True
+
+
+def share(progress: ProgressCallback | None, start: float, stop: float) -> ProgressCallback | None:
+    """The callback for one part of a piece of work: the part's ``(done, total)`` drawn
+    between the fractions ``start`` and ``stop`` of the whole, reported out of 1000.
+
+    Examples
+    --------
+    >>> calls = []
+    >>> second_half = share(lambda *a: calls.append(a), 0.5, 1.0)
+    >>> second_half(1, 4); second_half(4, 4)
+    >>> calls
+    [(625, 1000), (1000, 1000)]
+    """
+    if progress is None:
+        return None
+    report = progress
+
+    def part(done: int, total: int) -> None:
+        fraction = min(max(done / total, 0.0), 1.0) if total > 0 else 1.0
+        report(round(1000 * (start + (stop - start) * fraction)), 1000)
+
+    return part

@@ -16,6 +16,7 @@ from collections.abc import Callable
 import numpy as np
 
 from ..models import FitModel
+from ..progress import ProgressCallback
 
 __all__ = [
     "adam_ascent",
@@ -56,8 +57,10 @@ def adam_ascent(
     *,
     steps: int,
     learning_rate: float,
+    progress: ProgressCallback | None = None,
 ) -> tuple[np.ndarray, np.ndarray]:
-    """Batched Adam ascent of ``objective(u, step) -> (value (S,), grad like u)``."""
+    """Batched Adam ascent of ``objective(u, step) -> (value (S,), grad like u)``;
+    ``progress(step, steps)`` every 10 steps."""
     first = np.zeros_like(u)
     second = np.zeros_like(u)
     beta1, beta2, eps = 0.9, 0.999, 1e-12
@@ -67,6 +70,8 @@ def adam_ascent(
         second = beta2 * second + (1 - beta2) * grad**2
         lr = learning_rate * (0.05 + 0.95 * (1 - step / steps))  # anneal to refine
         u = u + lr * (first / (1 - beta1**step)) / (np.sqrt(second / (1 - beta2**step)) + eps)
+        if progress is not None and step % 10 == 0:
+            progress(step, steps)
     value, _ = objective(u, steps)
     return u, value
 

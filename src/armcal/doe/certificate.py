@@ -9,6 +9,7 @@ import numpy as np
 from ..criteria import attains_unit_bound, d_efficiency
 from ..models import FitModel
 from ..numerics import ScaledSVD, scaled_svd, spd_inverse
+from ..progress import ProgressCallback, share
 from .ascent import adam_ascent, penalty_weight, to_q, to_u, view_penalty
 from .plans import feasible_poses
 
@@ -78,7 +79,12 @@ def _pose_blocks(model: FitModel, q: np.ndarray) -> np.ndarray:
 
 
 def _maximize_variance(
-    model: FitModel, m_inv: np.ndarray, starts: np.ndarray, *, steps: int = 150
+    model: FitModel,
+    m_inv: np.ndarray,
+    starts: np.ndarray,
+    *,
+    steps: int = 150,
+    progress: ProgressCallback | None = None,
 ) -> np.ndarray:
     """Batched ascent of ``d(x)`` from ``starts (k, n)`` within the limits (near the view)."""
 
@@ -89,7 +95,9 @@ def _maximize_variance(
         weight = penalty_weight(model, step / steps) * 1e3
         return value - weight * penalty, (grad - weight * grad_pen[:, 0]) * dq_du
 
-    u, _ = adam_ascent(objective, to_u(model, starts), steps=steps, learning_rate=0.05)
+    u, _ = adam_ascent(
+        objective, to_u(model, starts), steps=steps, learning_rate=0.05, progress=progress
+    )
     return to_q(model, u)[0]
 
 
@@ -149,6 +157,7 @@ def certify(
     candidates: int | None = None,
     rounds: int | None = None,
     search: int | None = None,
+    progress: ProgressCallback | None = None,
 ) -> Certificate:
     """Certify a plan's D-efficiency against the best possible plan within the constraints.
 
@@ -168,6 +177,8 @@ def certify(
 
         Each defaults to the model's
         :attr:`~armcal.models.interface.FitModel.design_effort`.
+    progress : callable, optional
+        ``progress(done, total)`` as the searches advance.
 
     Returns
     -------
@@ -232,7 +243,8 @@ def certify(
     # the pool's and the search's costs are per pose.
     distinct, counts = np.unique(q, axis=0, return_counts=True)
     plan_inverse, _ = plan.inverse_gram()
-    max_plan, plan_pose = _max_variance(model, plan_inverse, distinct, rng, search)
+    parts = [share(progress, k / (rounds + 2), (k + 1) / (rounds + 2)) for k in range(rounds + 2)]
+    max_plan, plan_pose = _max_variance(model, plan_inverse, distinct, rng, search, parts[0])
     logdet_plan = float(plan.log_det_gram())
     plan_only = np.exp(1.0 - max_plan / p)
     hadamard = np.exp(logdet_plan / p) if bounded else 0.0
@@ -254,7 +266,7 @@ def certify(
         ]
     )
     weights = np.full(pool.shape[0], 1.0 / pool.shape[0])
-    for _ in range(rounds):
+    for round_ in range(rounds):
         blocks = _pose_blocks(model, pool)
         weights = multiplicative_weights(blocks, weights, 150, power=2.0)
         m_inv, _ = _weighted_svd(blocks, weights).inverse_gram()
@@ -266,7 +278,9 @@ def certify(
         for poses in (pool, fresh):
             d, _ = _variance_function(model, poses, m_inv)
             starts.append(poses[np.argsort(-d)[: 4 * p]])
-        found = _maximize_variance(model, m_inv, np.concatenate(starts))
+        found = _maximize_variance(
+            model, m_inv, np.concatenate(starts), progress=parts[1 + round_]
+        )
         found = found[model.feasible(found[:, None, :])[:, 0]]
         keep = weights > 1e-6 / pool.shape[0]
         pool = np.concatenate([pool[keep], found])
@@ -282,7 +296,7 @@ def certify(
     # Fs = H^T H with H the plan's scaled Jacobian: inverses and log dets from SVDs.
     star_inverse, star_ok = star.inverse_gram()
     if bool(star_ok):
-        max_star, max_pose = _max_variance(model, star_inverse, support, rng, search)
+        max_star, max_pose = _max_variance(model, star_inverse, support, rng, search, parts[-1])
         logdet_star = float(star.log_det_gram())
     else:  # not expected (xi* is near D-optimal); the other bounds still hold
         max_star, logdet_star, max_pose = np.inf, -np.inf, None
@@ -299,7 +313,12 @@ def certify(
 
 
 def _max_variance(
-    model: FitModel, m_inv: np.ndarray, seeds: np.ndarray, rng: np.random.Generator, search: int
+    model: FitModel,
+    m_inv: np.ndarray,
+    seeds: np.ndarray,
+    rng: np.random.Generator,
+    search: int,
+    progress: ProgressCallback | None = None,
 ) -> tuple[float, np.ndarray]:
     """A thorough ``max_x d(x)`` over feasible poses, and where: random search, then
     multistart ascent."""
@@ -308,7 +327,7 @@ def _max_variance(
     )
     d, _ = _variance_function(model, sample, m_inv)
     starts = sample[np.argsort(-d)[:64]]
-    found = _maximize_variance(model, m_inv, starts, steps=300)
+    found = _maximize_variance(model, m_inv, starts, steps=300, progress=progress)
     d_found, _ = _variance_function(model, found, m_inv)
     constraints = model.view_constraints(found[:, None, :])
     if constraints is not None:  # count iterates that stray outside only a little

@@ -10,7 +10,7 @@ import numpy as np
 from ..criteria import CRITERIA, Criterion, attains_unit_bound, d_efficiency, efficiencies
 from ..errors import ArmcalError
 from ..models import ClosedFormPlan, ClosedFormPlans, FitModel, equations_per_pose
-from ..progress import ProgressCallback
+from ..progress import ProgressCallback, share
 from .certificate import Certificate, certify
 from .exchange import exchange_plan
 from .optimizer import optimize_plan
@@ -198,7 +198,8 @@ def design(
         :data:`armcal.doe.plans.DISTINCT_TOLERANCE` rad on every joint (see
         Notes).  Off by default: an optimal exact plan may repeat a pose.
     progress : callable, optional
-        ``progress(done, 3)`` once the plan is found, certified and ordered.
+        ``progress(done, 1000)`` as the optimizer and the certificate advance, and
+        once the plan is found (500), certified (950) and ordered (1000).
 
     Returns
     -------
@@ -330,7 +331,9 @@ def design(
     else:
         searched = True
         initial = np.stack([plan.q for plan in closed]) if closed else None
-        q = optimize_plan(model, m, criterion=aim, rng=rng, initial=initial)
+        q = optimize_plan(
+            model, m, criterion=aim, rng=rng, initial=initial, progress=share(progress, 0, 0.5)
+        )
         used = "optimize"
         repeats = int(np.count_nonzero(repeated_poses(q))) if distinct else 0
         found = float(d_efficiency(model, q))
@@ -367,13 +370,15 @@ def design(
                 "every joint"
             )
     tick = progress if progress is not None else (lambda done, total: None)
-    tick(1, 3)
-    certificate = certify(model, q, rng=rng) if with_certificate else None
-    tick(2, 3)
+    tick(500, 1000)
+    certificate = None
+    if with_certificate:
+        certificate = certify(model, q, rng=rng, progress=share(progress, 0.5, 0.95))
+    tick(950, 1000)
     travel_found = joint_travel(q)
     if order == "travel":
         q = q[order_poses(q)]
-    tick(3, 3)
+    tick(1000, 1000)
     return Design(
         model=model,
         q=q,

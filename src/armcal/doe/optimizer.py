@@ -7,6 +7,7 @@ import numpy as np
 from ..criteria import CRITERIA, Criterion
 from ..errors import ArmcalError
 from ..models import FitModel
+from ..progress import ProgressCallback, share
 from .ascent import adam_ascent, penalty_weight, to_q, to_u, view_penalty
 from .plans import feasible_poses, random_plan
 
@@ -49,6 +50,7 @@ def optimize_plan(
     steps: int | None = None,
     polish: int = 3,
     initial: np.ndarray | None = None,
+    progress: ProgressCallback | None = None,
 ) -> np.ndarray:
     """Maximize a criterion over the ``m x n`` joint angles within the limits and region.
 
@@ -72,6 +74,8 @@ def optimize_plan(
         (L-BFGS-B, or SLSQP with the region constraints).
     initial : ndarray, shape (k, m, n), optional
         Extra starting plans (e.g. an analytic plan that breaks a constraint).
+    progress : callable, optional
+        ``progress(done, total)`` as the ascent and the polish advance.
 
     Returns
     -------
@@ -113,12 +117,22 @@ def optimize_plan(
         return value - weight * penalty, (grad - weight * grad_pen) * dq_du
 
     # The ascent's last value is the score at its end, with the penalty's full weight.
-    u, score = adam_ascent(objective, to_u(model, q0), steps=steps, learning_rate=0.05)
+    u, score = adam_ascent(
+        objective,
+        to_u(model, q0),
+        steps=steps,
+        learning_rate=0.05,
+        progress=share(progress, 0.0, 0.5),
+    )
     q_final, _ = to_q(model, u)
     order = np.argsort(-score, kind="stable")
     best_q, best_value = None, -np.inf
-    for index in order[:polish]:
-        q = _polish(model, q_final[index], criterion, viewed, effort.polish)
+    chosen = order[:polish]
+    for rank, index in enumerate(chosen):
+        part = share(
+            progress, 0.5 + 0.5 * rank / len(chosen), 0.5 + 0.5 * (rank + 1) / len(chosen)
+        )
+        q = _polish(model, q_final[index], criterion, viewed, effort.polish, part)
         if viewed and not np.all(model.feasible(q)):  # SLSQP stopped outside: step back in
             q = restore_view(model, q)
         if not np.all(model.feasible(q)):
@@ -160,7 +174,12 @@ def restore_view(model: FitModel, q: np.ndarray, *, iterations: int = 30) -> np.
 
 
 def _polish(
-    model: FitModel, q: np.ndarray, criterion: Criterion, viewed: bool, iterations: int
+    model: FitModel,
+    q: np.ndarray,
+    criterion: Criterion,
+    viewed: bool,
+    iterations: int,
+    progress: ProgressCallback | None,
 ) -> np.ndarray:
     """Local refinement of one plan with exact bounds (and exact view constraints)."""
     from scipy.optimize import Bounds, minimize  # ~0.3 s to import: keep it off `import armcal`
@@ -169,7 +188,13 @@ def _polish(
     lower, upper = np.tile(model.joint_limits[:, 0], m), np.tile(model.joint_limits[:, 1], m)
     bounds = Bounds(lower, upper)
 
+    evaluations = 0
+
     def negative(x: np.ndarray):
+        nonlocal evaluations
+        evaluations += 1
+        if progress is not None and evaluations % 10 == 0:  # about one per iteration
+            progress(min(evaluations, iterations), iterations)
         value, grad = _criterion_value_and_gradient(model, x.reshape(m, n), criterion)
         return -float(value), -grad.ravel()
 
