@@ -116,6 +116,13 @@ def test_design_for_a_six_axis_arm_from_the_command_line(tmp_path):
     best = max(float(d_efficiency(model, random_plan(model, 30, rng=s))) for s in range(30))
     assert found > best
     assert 0.9 <= document["certified_d_efficiency"] <= 1.0
+    # det M against the certificate's best weighted design, as the report's first figure;
+    # with the variance function's maximum it is the Kiefer-Wolfowitz bound.
+    log_det = np.linalg.slogdet(model.plan_information(q).information())[1]
+    against = np.exp(log_det / 27) / document["best_weighted_design_d_efficiency"]
+    assert document["d_efficiency_vs_best_weighted_design"] == pytest.approx(against, rel=1e-9)
+    kiefer_wolfowitz = against * np.exp(1 - document["max_variance"] / 27)
+    assert document["certified_d_efficiency"] >= kiefer_wolfowitz * (1 - 1e-12)
     assert (tmp_path / "p.png").stat().st_size > 10_000  # the plan's four panels
 
 

@@ -65,9 +65,11 @@ class Design:
         model ``(det F / det F_opt)^(1/p)``, relative to the unconstrained
         optimum; wherever :attr:`~armcal.models.interface.FitModel.information_bound`
         holds at most 1, and 1 only for a plan with identity normalized
-        information; for other models the weighted information's
-        ``det^(1/p_f)``, which compares plans of that model only (the
-        certificate says how far from its optimum).
+        information; for other models the D-criterion of the weighted
+        information (with each plan's columns scaled to unit norm for the
+        spatial and compliant families: how orthogonal they are), which says
+        little across plans; :attr:`reference_efficiency` compares ``det M``
+        itself with the certificate's best weighted design.
     certificate : Certificate or None
         Lower bound relative to the best plan within the constraints (None when
         not asked for).
@@ -114,6 +116,18 @@ class Design:
         the D-criterion of the weighted information, and only the certificate compares
         the plan with the best one."""
         return self.model.information_bound
+
+    @property
+    def reference_efficiency(self) -> float | None:
+        """``(det M / det M(xi*))^(1/p_f)``: the plan against the best weighted design its
+        certificate found (:attr:`Certificate.reference_d_efficiency`, the same
+        coordinates), what the optimizer and the certificate compare; None without a
+        certificate.  At most about 1 (``xi*`` may be the plan itself)."""
+        cert = self.certificate
+        if cert is None:
+            return None
+        log_det = float(self.model.plan_information(self.q).svd().log_det_gram())
+        return float(np.exp(log_det / self.model.n_free) / cert.reference_d_efficiency)
 
     @property
     def optimum_by_search(self) -> bool:

@@ -47,6 +47,7 @@ def design_summary(result: Design, seconds: float) -> tuple[dict, list[str]]:
         "certified_d_efficiency": None if cert is None else cert.certified_d_efficiency,
         "plan_only_bound": None if cert is None else cert.plan_only_bound,
         "best_weighted_design_d_efficiency": None if cert is None else cert.reference_d_efficiency,
+        "d_efficiency_vs_best_weighted_design": result.reference_efficiency,
         "max_variance": None if cert is None else cert.max_variance,
         "max_variance_pose_deg": None
         if cert is None or cert.max_pose is None
@@ -60,8 +61,13 @@ def design_summary(result: Design, seconds: float) -> tuple[dict, list[str]]:
     }
     if result.normalized:
         efficiency = f"D-efficiency {result.d_efficiency:.4f} of the unconstrained optimum"
-    else:  # no closed-form optimum: only the certificate compares with the best plan
+    elif cert is None:  # no closed-form optimum: only a certificate compares with the best
         efficiency = f"D-criterion {result.d_efficiency:.4f} on this model"
+    else:
+        efficiency = (
+            f"D-efficiency {result.reference_efficiency:.4f} of the best weighted design found "
+            f"(D-criterion {result.d_efficiency:.4f} on this model)"
+        )
     if result.optimum_by_search:
         # The note ruled out only the closed-form family: say that the search met the optimum.
         efficiency += " (an orthogonal plan, found by search)"
