@@ -58,12 +58,17 @@ def test_the_jacobian_s_pullback_in_the_readings_agrees_with_central_differences
         NoiseModel.isotropic(0.03, dim=3),
         NoiseModel(np.diag([0.01, 0.02, 0.05]) ** 2),
         NoiseModel.laser_tracker(TrackerNoise(0.008, 0.0004, 0.010, 0.0025)),
+        NoiseModel(np.diag([0.01, 0.02, 0.05]) ** 2, np.radians([0.002, 0.001, 0.003] * 2)),
+        NoiseModel(
+            np.eye(3), np.radians(0.002), tracker=TrackerNoise(0.008, 0.0004, 0.010, 0.0025)
+        ),
     ],
-    ids=["isotropic", "per-axis", "tracker"],
+    ids=["isotropic", "per-axis", "tracker", "encoder", "tracker-and-encoder"],
 )
 def test_the_plan_information_s_gradient_is_exact(noise):
-    """A tracker's weights move with the point: its metric ``W^T W`` enters the derivative
-    (noise module).  The tracker 3.4 m away, turned, as in a cell."""
+    """A tracker's weights move with the point, encoder noise's with the joint Jacobian:
+    the metric ``W^T W`` enters the derivative (noise module).  The tracker 3.4 m away,
+    turned, as in a cell."""
     arm = labelled(ARMS["industrial"](), 3).with_noise(noise)
     arm = arm.replace(base_pose=np.array([3000.0, -1500.0, -600.0, 0.01, -0.02, 2.0]))
     rng = np.random.default_rng(4)
@@ -82,12 +87,13 @@ def test_the_plan_information_s_gradient_is_exact(noise):
     np.testing.assert_allclose(slope, numeric, rtol=0, atol=1e-6 * np.max(np.abs(numeric)))
 
 
-def test_encoder_noise_falls_back_to_central_differences():
-    """Encoder noise's weights follow the joint Jacobian: no closed form is claimed."""
-    arm = labelled(ARMS["industrial"](), 1)
-    encoder = arm.with_noise(NoiseModel.isotropic(0.03, np.radians(0.001), dim=3))
-    rows = encoder.plan_conditions(random_poses(arm, 4, np.random.default_rng(5)))
-    assert encoder.linearize(rows).pullback is None
+def test_a_6_dof_instrument_s_turns_fall_back_to_central_differences():
+    """The turns' rows go through the SO(3) chart of each row's frame: no closed form is
+    claimed for their derivative in the poses."""
+    noise = NoiseModel.isotropic(0.03, dim=3).with_orientation(np.radians(0.005))
+    arm = labelled(ARMS["industrial"](), 1).replace(oriented=True).with_noise(noise)
+    rows = arm.plan_conditions(random_poses(arm, 4, np.random.default_rng(5)))
+    assert arm.linearize(rows).pullback is None
 
 
 def test_design_for_a_six_axis_arm_from_the_command_line(tmp_path):

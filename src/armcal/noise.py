@@ -414,21 +414,44 @@ class NoiseModel:
         self,
         whitening: np.ndarray,
         points: np.ndarray,
-        velocity: np.ndarray | None,
-        jacobian: np.ndarray | None,
+        velocity: np.ndarray,
+        jacobian: np.ndarray,
         cotangent: np.ndarray,
-    ) -> np.ndarray | None:
+    ) -> tuple[np.ndarray | None, np.ndarray | None]:
         """What a pose-dependent metric ``W^T W = sigma_ref^2 Sigma^-1`` adds to the derivative
-        ``<G, d(W J)/dq>`` ``(..., n)`` of a weighted sum of whitened blocks, ``G``
-        ``(..., d, k)`` = ``cotangent``: ``<W^-1 G J^T, d(W^T W)/dq> / 2``, exact for every
-        quadratic form ``tr(A (W J)^T W J)`` (``G = 2 W J A``); None where the metric is
-        constant (only a tracker's moves, with the ``points`` and their ``velocity``
-        ``(..., 3, n)``)."""
-        if self.tracker is None:
-            return None
-        assert velocity is not None and jacobian is not None
+        ``<G, d(W J)/dq>`` of a weighted sum of whitened blocks, ``G`` ``(..., d, k)`` =
+        ``cotangent``: ``<S, d(W^T W)/dq> / 2`` with ``S = W^-1 G J^T``, exact for every
+        quadratic form ``tr(A (W J)^T W J)`` (``G = 2 W J A``).
+
+        With ``P = Sigma^-1``, ``d(W^T W) = -sigma_ref^2 P dSigma P``.  Returns two parts,
+        None where the metric does not move that way:
+
+        * a tracker's ``(..., n)``: ``Sigma_meas`` moves with the ``points`` at their
+          ``velocity`` ``(..., 3, n)`` (``d Sigma = -Sigma dSigma^-1 Sigma``, so it is
+          :meth:`TrackerNoise.precision_pullback` of ``Sigma_meas P S P Sigma_meas``);
+        * the encoder term's, as a cotangent ``(..., d, n)`` of the joint Jacobian
+          ``J_q`` = ``velocity``: ``Sigma = Sigma_meas + J_q D J_q^T`` (``D`` the
+          encoders' variances) gives ``-sigma_ref^2 P S_sym P J_q D``, which the
+          kinematics pulls back.
+        """
+        if self.tracker is None and self.joint_sigma is None:
+            return None, None
         weight = np.linalg.solve(whitening, cotangent) @ np.swapaxes(jacobian, -1, -2)
-        return 0.5 * self.sigma_mm**2 * self.tracker.precision_pullback(points, velocity, weight)
+        weight = 0.5 * (weight + np.swapaxes(weight, -1, -2))
+        reference = self.sigma_mm**2
+        precision = np.swapaxes(whitening, -1, -2) @ whitening / reference  # P
+        spread = precision @ weight @ precision
+        position = joint = None
+        if self.tracker is not None:
+            measured = self.tracker.covariances(points)
+            pulled = self.tracker.precision_pullback(
+                points, velocity, measured @ spread @ measured
+            )
+            position = 0.5 * reference * pulled
+        if self.joint_sigma is not None:
+            variances = np.broadcast_to(self.joint_sigma, (velocity.shape[-1],)) ** 2
+            joint = -reference * (spread @ velocity) * variances
+        return position, joint
 
     def to_dict(self) -> dict[str, object]:
         """JSON form: ``covariance_mm2``, ``joint_sigma_deg`` (null without encoder noise) and,

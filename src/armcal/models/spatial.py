@@ -765,10 +765,8 @@ class SpatialArm(RigidLoads):
     def linearize(self, conditions: Conditions) -> Linearization:
         """The rows' whitened blocks at the nominal parameters and their pullback from one
         pass of the kinematics (:mod:`~armcal.models.spatial_gradient`); no pullback for
-        encoder noise, rows' own sigmas and a 6-DoF instrument's turns."""
-        noise = self.noise
-        encoder = noise is not None and noise.joint_sigma is not None
-        if self.oriented or encoder or conditions.sigma_mm is not None:
+        rows' own sigmas and a 6-DoF instrument's turns."""
+        if self.oriented or conditions.sigma_mm is not None:
             return Linearization(whitened_blocks(self, conditions), None)
         kin = self._kinematics(conditions, None, derivatives=True)
         columns = np.flatnonzero(self.free)

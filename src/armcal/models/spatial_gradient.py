@@ -88,18 +88,28 @@ def linearization(
     noise: NoiseModel,
 ) -> Linearization:
     """Rows' whitened blocks ``W J[:, columns]`` and their pullback, from kinematics with
-    derivatives and a noise model whose whitening depends on the rows at most through
-    the points (isotropic, anisotropic or a tracker's: no encoder term, no row sigmas)."""
-    assert kin.jacobian is not None
+    derivatives and a noise model whose whitening depends on the rows through the points
+    and the joint Jacobian (isotropic, anisotropic, a tracker's, encoder noise; not rows'
+    own sigmas or orientations)."""
+    assert kin.jacobian is not None and kin.joint_jacobian is not None
     jac = kin.jacobian[..., columns]
-    w = None if noise.isotropic_iid else noise.whitening(kin.points.shape[:-1], points=kin.points)
+    velocity = kin.joint_jacobian
+    encoder = velocity if noise.joint_sigma is not None else None
+    w = None
+    if not noise.isotropic_iid:
+        w = noise.whitening(kin.points.shape[:-1], joint_jacobian=encoder, points=kin.points)
+    zeros = np.arange(layout.zero_start, layout.target_start)  # J_q's columns
 
     def pullback(cotangent: np.ndarray) -> np.ndarray:
         plain = cotangent if w is None else np.swapaxes(w, -1, -2) @ cotangent
         out = jacobian_pose_pullback(kin, layout, joint_map, columns, plain)
         if w is None:
             return out
-        extra = noise.metric_pullback(w, kin.points, kin.joint_jacobian, jac, cotangent)
-        return out if extra is None else out + extra
+        position, joint = noise.metric_pullback(w, kin.points, velocity, jac, cotangent)
+        if position is not None:
+            out = out + position
+        if joint is not None:
+            out = out + jacobian_pose_pullback(kin, layout, joint_map, zeros, joint)
+        return out
 
     return Linearization(jac if w is None else w @ jac, pullback)
