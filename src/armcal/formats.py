@@ -405,7 +405,17 @@ _MEASURED = (
 
 #: Columns of each CSV file kind, joint columns first.
 COLUMNS: dict[str, tuple[Column, ...]] = {
-    "plan": (_JOINTS, _PAYLOAD),
+    "plan": (
+        _JOINTS,
+        Column(
+            "pose",
+            "text",
+            False,
+            "pose label, which synthesize copies into the measurements (repeat a label to "
+            "measure a pose in several cycles: validate --iso9283)",
+        ),
+        _PAYLOAD,
+    ),
     "measurements": (_JOINTS, *_MEASURED),
     "program": (
         _JOINTS,
@@ -483,7 +493,7 @@ def columns_line(kind: str) -> str:
     """The columns of a CSV ``kind`` in one line: required ones, then ``[,optional]``.
 
     >>> columns_line("plan")
-    'q1_deg..qn_deg [,payload_kg]'
+    'q1_deg..qn_deg [,pose] [,payload_kg]'
     """
     required, text, numeric = reader_columns(kind)
     return ",".join([COLUMNS[kind][0].name, *required]) + "".join(

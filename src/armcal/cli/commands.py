@@ -40,6 +40,7 @@ from ..files import (
     load_serial_truth,
     load_truth,
     read_calibration,
+    read_labelled_plan,
     read_loaded_plan,
     read_measurements,
     read_plan,
@@ -51,6 +52,7 @@ from ..formats import format_reference
 from ..models import CompliantArm, FitModel, PlanarArm, SpatialArm
 from ..progress import ProgressBar
 from ..report import (
+    acceptance_report,
     compensation_report,
     design_summary,
     format_calibration,
@@ -152,8 +154,17 @@ def _truth(args: argparse.Namespace, spec: RobotSpec | SerialSpec, model: FitMod
 
 def _plan(path: str, spec: RobotSpec | SerialSpec) -> tuple[np.ndarray, np.ndarray | None]:
     """A plan file's poses (rad) and, for a robot with [elastostatic], its payload column."""
+    q, payload, _ = _labelled_plan(path, spec)
+    return q, payload
+
+
+def _labelled_plan(
+    path: str, spec: RobotSpec | SerialSpec
+) -> tuple[np.ndarray, np.ndarray | None, tuple[str, ...] | None]:
+    """:func:`_plan` and the plan's ``pose`` labels (None without the column)."""
     if spec.elastic is None:
-        return read_plan(path, spec.arm), None
+        q, labels = read_labelled_plan(path, spec.arm)
+        return q, None, labels
     return read_loaded_plan(path, spec.arm)
 
 
@@ -182,11 +193,17 @@ def synthesize(args: argparse.Namespace) -> None:
             "only the summary on stdout); give a name ending in .csv"
         )
     spec = load_any_robot(args.robot)
-    q, payload = _plan(args.plan, spec)
+    q, payload, labels = _labelled_plan(args.plan, spec)
     model, loads = plan_model(spec, spec.arm, q.shape[0], payload, virtual=True)
     truth = _truth(args, spec, model)
     made = synthesize_plan(
-        model, q, truth, sigma=simulation_sigma(spec, args.sigma), seed=args.seed, loads=loads
+        model,
+        q,
+        truth,
+        sigma=simulation_sigma(spec, args.sigma),
+        seed=args.seed,
+        loads=loads,
+        pose_labels=labels,
     )
     text = format_measurements_csv(made.q, made.points, made.labels, made.targets, made.payload_kg)
     if args.output is None or args.output == STDIO:
@@ -262,13 +279,22 @@ def validate(args: argparse.Namespace) -> None:
     meas = read_measurements(
         args.measurements, cal.arm, arm_from=f"the calibration {args.calibration}"
     )
-    run = validate_measurements(cal, meas, source=args.measurements)
+    run = validate_measurements(cal, meas, source=args.measurements, iso9283=args.iso9283)
     if args.plot is not None:
         from ..plotting import plot_validation, save_figure  # matplotlib only when asked for
 
-        pose = None if meas.targets is None else meas.labels  # a pose's rows share its label
-        save_figure(plot_validation(cal.arm, meas.q, run.validation, pose=pose), args.plot)
+        if run.acceptance is not None:
+            from ..plotting_acceptance import plot_acceptance
+
+            figure = plot_acceptance(run.acceptance)
+        else:
+            pose = None if meas.targets is None else meas.labels  # a pose's rows share its label
+            figure = plot_validation(cal.arm, meas.q, run.validation, pose=pose)
+        save_figure(figure, args.plot)
     document, text = validation_report(cal, run.validation, meas, per_pose=args.per_pose)
+    if run.acceptance is not None:
+        document["iso9283"], lines = acceptance_report(run.acceptance)
+        text += "\n" + "\n".join(lines)
     if args.plot is not None:
         text += f"\nwrote {args.plot}"
     emit(args, document, text, run.warnings)

@@ -171,9 +171,17 @@ def build_parser() -> argparse.ArgumentParser:
     )
     sub.add_argument("--per-pose", action="store_true", help="a table of every pose's errors")
     sub.add_argument(
+        "--iso9283",
+        action="store_true",
+        help="an acceptance test in the spirit of ISO 9283: pose accuracy (AP, before and "
+        "after calibration) and repeatability (RP) of every pose the 'pose' column repeats "
+        "over cycles",
+    )
+    sub.add_argument(
         "--plot",
         metavar="FIGURE",
-        help="draw the error vectors on the workspace (.png, .pdf, .svg or .eps)",
+        help="draw the error vectors on the workspace, or with --iso9283 every pose's AP and "
+        "RP (.png, .pdf, .svg or .eps)",
     )
     sub.set_defaults(
         run=commands.validate, inputs=("calibration", "measurements"), outputs=("plot",)

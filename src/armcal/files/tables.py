@@ -38,6 +38,7 @@ __all__ = [
     "REACH_MARGIN",
     "Measurements",
     "Program",
+    "read_labelled_plan",
     "read_loaded_plan",
     "read_measurements",
     "read_plan",
@@ -541,20 +542,28 @@ def read_plan(path: str | os.PathLike, arm: PlanarArm | SpatialArm) -> np.ndarra
     ndarray, shape (m, n)
         Joint angles in rad, each within the joint limits.
     """
-    q, payload = read_loaded_plan(path, arm)
+    return read_labelled_plan(path, arm)[0]
+
+
+def read_labelled_plan(
+    path: str | os.PathLike, arm: PlanarArm | SpatialArm
+) -> tuple[np.ndarray, tuple[str, ...] | None]:
+    """:func:`read_plan` and its optional ``pose`` labels (None without the column)."""
+    q, payload, labels = read_loaded_plan(path, arm)
     if payload is not None:
         raise fail(
             path,
             f"has a payload_kg column but robot {arm.name} has no [elastostatic] table; "
             "remove the column or add the table to the robot file",
         )
-    return q
+    return q, labels
 
 
 def read_loaded_plan(
     path: str | os.PathLike, arm: PlanarArm | SpatialArm
-) -> tuple[np.ndarray, np.ndarray | None]:
-    """Read a plan CSV with an optional ``payload_kg`` column (designs with compliance).
+) -> tuple[np.ndarray, np.ndarray | None, tuple[str, ...] | None]:
+    """Read a plan CSV with its optional ``payload_kg`` (designs with compliance) and
+    ``pose`` columns.
 
     Returns
     -------
@@ -562,10 +571,13 @@ def read_loaded_plan(
         Joint angles in rad.
     payload : ndarray, shape (m,), or None
         The payload of every pose (kg), when the column is there.
+    labels : tuple of str, or None
+        The ``pose`` column, when it is there.
     """
     table = _read_csv(path, arm, "plan")
     payload, _ = _load_columns(path, table)
-    return np.radians(table.values), payload
+    labels = table.texts.get("pose")
+    return np.radians(table.values), payload, None if labels is None else tuple(labels)
 
 
 @dataclass(frozen=True, eq=False)

@@ -17,9 +17,10 @@ from .design import design_summary, poses_needed_summary
 from .monte_carlo import format_monte_carlo, monte_carlo_to_dict
 from .quality import format_quality, quality_report, quality_to_dict
 from .reproduction import format_reproduction, reproduction_summary
-from .validation import compensation_report, validation_report
+from .validation import acceptance_report, compensation_report, validation_report
 
 __all__ = [
+    "acceptance_report",
     "compensation_report",
     "design_summary",
     "effect_lines",

@@ -2,12 +2,14 @@
 
 from __future__ import annotations
 
+from ..acceptance import ISO_CYCLES, PoseCharacteristics
 from ..compensation import Compensation
 from ..files import Measurements, Program
 from ..models import CalibratedArm
 from ..validation import Validation
 
 __all__ = [
+    "acceptance_report",
     "compensation_report",
     "validation_report",
 ]
@@ -79,6 +81,46 @@ def validation_report(
             )
         document["per_pose"] = rows
     return document, "\n".join(lines)
+
+
+def acceptance_report(found: PoseCharacteristics) -> tuple[dict, list[str]]:
+    """The ISO 9283 section of ``validate --iso9283``: every pose's cycles, pose accuracy
+    against the nominal and the calibrated model, and repeatability, and the worst pose."""
+    s = found.summary()
+    targets = found.targets
+    lines = [
+        "",
+        f"ISO 9283 pose characteristics (clause 7.2; {ISO_CYCLES} cycles per pose asked, 6.9)",
+        f"{'pose':<10}{'target':<8}{'cycles':>7}{'AP before':>11}{'AP after':>10}{'RP':>9}   (mm)",
+    ]
+    poses = []
+    for g, pose in enumerate(found.poses):
+        target = "" if targets is None else targets[g]
+        before, after = found.accuracy_before_mm[g], found.accuracy_after_mm[g]
+        rp = found.repeatability_mm[g]
+        lines.append(
+            f"{pose:<10}{target:<8}{found.cycles[g]:>7}{before:>11.4g}{after:>10.4g}{rp:>9.4g}"
+        )
+        poses.append(
+            {
+                "pose": pose,
+                "target": None if targets is None else target,
+                "cycles": int(found.cycles[g]),
+                "ap_before_mm": float(before),
+                "ap_after_mm": float(after),
+                "ap_before_xyz_mm": found.accuracy_before[g].tolist(),
+                "ap_after_xyz_mm": found.accuracy_after[g].tolist(),
+                "rp_mm": float(rp),
+                "barycentre_mm": found.barycentres[g].tolist(),
+            }
+        )
+    lines += [
+        f"{'worst pose':<25}{s['ap_before_mm']:>11.4g}{s['ap_after_mm']:>10.4g}{s['rp_mm']:>9.4g}",
+        "AP: from the command position (where the nominal, or the calibrated, model puts the "
+        "commanded joints) to the mean attained position (7.2.1); RP = lbar + 3 S_l of the "
+        "attained positions about their mean (7.2.2)",
+    ]
+    return {**s, "per_pose": poses}, lines
 
 
 def compensation_report(

@@ -17,6 +17,11 @@ from typing import Any
 
 import numpy as np
 
+from ..acceptance import (
+    PoseCharacteristics,
+    pose_characteristics,
+    pose_characteristics_warnings,
+)
 from ..compensation import Compensation, compensate
 from ..errors import (
     ArmcalError,
@@ -379,15 +384,19 @@ class ValidationRun:
 
     validation: Validation
     warnings: tuple[ArmcalWarning, ...]
+    acceptance: PoseCharacteristics | None = None
 
 
 def validate_measurements(
-    cal: CalibratedArm, meas: Measurements, *, source: str = "measurements"
+    cal: CalibratedArm, meas: Measurements, *, source: str = "measurements", iso9283: bool = False
 ) -> ValidationRun:
-    """:func:`armcal.validation.validate` on a measurement file, with its warnings.
+    """:func:`armcal.validation.validate` on a measurement file, with its warnings, and with
+    ``iso9283`` the pose accuracy and repeatability of its repeated poses
+    (:func:`armcal.acceptance.pose_characteristics`).
 
     Raises InputError, naming ``source``, for a target column the calibration
-    does not have or lacks, or points of the other dimension.
+    does not have or lacks, points of the other dimension, or (``iso9283``) poses
+    measured once or with different joint values from cycle to cycle.
     """
     arm = cal.arm
     if meas.targets is not None and not arm.target_labels:
@@ -412,8 +421,18 @@ def validate_measurements(
         )
     except ArmcalError as exc:
         raise prefixed(source, exc) from None
-    unpredicted = _unpredicted(cal, loads, source)
-    return ValidationRun(result, (*meas.warnings, *unpredicted, *validation_warnings(result)))
+    warnings = [*meas.warnings, *_unpredicted(cal, loads, source), *validation_warnings(result)]
+    acceptance = None
+    if iso9283:
+        try:
+            acceptance = pose_characteristics(
+                meas.q, result.positions, result.before, result.after, meas.labels,
+                meas.targets, meas.rows,
+            )  # fmt: skip
+        except ArmcalError as exc:
+            raise prefixed(source, exc) from None
+        warnings += pose_characteristics_warnings(acceptance)
+    return ValidationRun(result, tuple(warnings), acceptance)
 
 
 def _unpredicted(cal: CalibratedArm, loads: Loads | None, source: str) -> list[ArmcalWarning]:

@@ -84,10 +84,12 @@ def synthesize_plan(
     sigma: float | None,
     seed: int,
     loads: Loads | None = None,
+    pose_labels: tuple[str, ...] | None = None,
 ) -> Synthesis:
     """Measurements of ``model`` (a plan's, :func:`~armcal.workflow.setup.plan_model`) at
     ``truth``, every target of every pose, each pose with its ``loads``; ``sigma`` as for
-    :func:`armcal.synthesis.synthesize_measurements`.
+    :func:`armcal.synthesis.synthesize_measurements`.  The rows of a pose carry its label
+    from ``pose_labels`` (the plan's ``pose`` column), else its number.
     """
     arm = model.arm
     rows = model.plan_conditions(q, loads)
@@ -107,9 +109,13 @@ def synthesize_plan(
     points = model.unanchor(rows, points)
     labels = targets = None
     names = arm.target_labels
-    if names:  # every target measured at every pose, one row each
-        count = len(names)
-        labels = tuple(str(i // count + 1) for i in range(rows.m))
+    count = max(1, len(names))  # every target measured at every pose, one row each
+    if names or pose_labels is not None:
+        labels = tuple(
+            str(i // count + 1) if pose_labels is None else pose_labels[i // count]
+            for i in range(rows.m)
+        )
+    if names:
         index = np.zeros(rows.m, dtype=int) if rows.target is None else rows.target
         targets = tuple(names[t] for t in index)
     shown = sigma if sigma is not None else float(arm.sigma or 0.0)

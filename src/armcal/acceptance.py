@@ -1,0 +1,224 @@
+"""An acceptance test in the spirit of ISO 9283: pose accuracy and repeatability.
+
+ISO 9283:1998 (*Manipulating industrial robots -- Performance criteria and
+related test methods*) measures one commanded pose ``n`` times (30 cycles,
+clause 6.9) and reports, clause 7.2:
+
+* **pose accuracy** (7.2.1): the distance from the command position to the
+  barycentre of the attained positions,
+  ``AP_P = sqrt((xbar - x_c)^2 + (ybar - y_c)^2 + (zbar - z_c)^2)``, with its
+  components ``AP_x = xbar - x_c`` (and so on);
+* **pose repeatability** (7.2.2): the radius of the sphere about the barycentre
+  that holds the attained positions, ``RP_l = lbar + 3 S_l`` with
+  ``l_j = |x_j - xbar|``, ``lbar`` their mean and
+  ``S_l = sqrt(sum (l_j - lbar)^2 / (n - 1))``.
+
+A robot's command position lives in its controller's model; an instrument
+measures in its own frame.  Here the command position is where a model puts the
+commanded joints, in the instrument's frame with the calibration's instrument
+pose (registered once, as :func:`armcal.validation.validate` does): **before**
+calibration the nominal model, **after** it the calibrated one -- what a
+program compensated with the calibration would reach.  The attained positions
+are the measurements, so ``RP`` does not depend on any model.  Every cycle of a
+pose must repeat the same joint values (:data:`SAME_COMMAND_DEG`); then
+``AP`` is the norm of the mean error of its rows.
+
+The result is per pose and per target (a target's point is one measuring
+point); the test's figures are its worst pose.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from .errors import ArmcalError, ArmcalWarning
+
+__all__ = [
+    "ISO_CYCLES",
+    "SAME_COMMAND_DEG",
+    "PoseCharacteristics",
+    "pose_characteristics",
+    "pose_characteristics_warnings",
+]
+
+#: Cycles per pose that ISO 9283 prescribes for pose accuracy and repeatability (clause 6.9).
+ISO_CYCLES = 30
+
+#: The largest spread (deg, or mm for a prismatic joint) of a pose's joint values over its
+#: cycles: above it the rows are not one commanded pose.
+SAME_COMMAND_DEG = 1e-6
+
+
+@dataclass(frozen=True, eq=False)
+class PoseCharacteristics:
+    """Pose accuracy and repeatability of every measured pose (ISO 9283, 7.2).
+
+    Attributes
+    ----------
+    poses : tuple of str
+        The ``pose`` label of each group of cycles.
+    targets : tuple of str or None
+        Each group's target, for an arm with several.
+    cycles : ndarray of int, shape (k,)
+        How many times each pose was measured.
+    accuracy_before : ndarray, shape (k, d)
+        ``AP_x, AP_y, AP_z`` against the nominal model, mm (mean attained minus command).
+    accuracy_after : ndarray, shape (k, d)
+        The same against the calibrated model, mm.
+    repeatability_mm : ndarray, shape (k,)
+        ``RP_l = lbar + 3 S_l``, mm.
+    barycentres : ndarray, shape (k, d)
+        The mean attained positions, mm (instrument frame).
+    """
+
+    poses: tuple[str, ...]
+    targets: tuple[str, ...] | None
+    cycles: np.ndarray
+    accuracy_before: np.ndarray
+    accuracy_after: np.ndarray
+    repeatability_mm: np.ndarray
+    barycentres: np.ndarray
+
+    @property
+    def accuracy_before_mm(self) -> np.ndarray:
+        """``AP_P`` against the nominal model ``(k,)``, mm."""
+        return np.linalg.norm(self.accuracy_before, axis=-1)
+
+    @property
+    def accuracy_after_mm(self) -> np.ndarray:
+        """``AP_P`` against the calibrated model ``(k,)``, mm."""
+        return np.linalg.norm(self.accuracy_after, axis=-1)
+
+    def summary(self) -> dict[str, float | int]:
+        """The test's figures: the worst pose's ``AP_P`` before and after and ``RP_l`` (mm),
+        the number of poses and the fewest cycles of any pose."""
+        return {
+            "poses": len(self.poses),
+            "fewest_cycles": int(self.cycles.min()),
+            "ap_before_mm": float(self.accuracy_before_mm.max()),
+            "ap_after_mm": float(self.accuracy_after_mm.max()),
+            "rp_mm": float(self.repeatability_mm.max()),
+        }
+
+
+def pose_characteristics(
+    q: np.ndarray,
+    attained: np.ndarray,
+    before: np.ndarray,
+    after: np.ndarray,
+    poses: tuple[str, ...],
+    targets: tuple[str, ...] | None = None,
+    rows: tuple[int, ...] = (),
+) -> PoseCharacteristics:
+    """ISO 9283 pose accuracy and repeatability from repeated measurements.
+
+    Parameters
+    ----------
+    q : ndarray, shape (m, n)
+        Every row's commanded joint values (rad; mm for a prismatic joint).
+    attained : ndarray, shape (m, d)
+        The measured positions, mm.
+    before, after : ndarray, shape (m, d)
+        Measured minus the nominal and the calibrated model's position of the
+        row's command, mm (:class:`armcal.validation.Validation`).
+    poses : tuple of str
+        Every row's ``pose`` label; rows with the same label (and target) are the
+        cycles of one commanded pose, in the order their labels first appear.
+    targets : tuple of str, optional
+        Every row's target.
+    rows : tuple of int, optional
+        Every row's 1-based data row in its file, for messages.
+
+    Raises
+    ------
+    ArmcalError
+        If a pose has a single cycle, or its cycles' joint values differ.
+
+    Examples
+    --------
+    Three cycles of one pose, commanded at the origin (by hand: the barycentre
+    is (1, 0, 0), so ``AP = 1``; the distances to it are 1, 1 and 0, so
+    ``lbar = 2/3``, ``S_l = sqrt(1/3)`` and ``RP = 2/3 + sqrt(3)``):
+
+    >>> x = np.array([[0.0, 0, 0], [2.0, 0, 0], [1.0, 0, 0]])
+    >>> found = pose_characteristics(np.zeros((3, 1)), x, x, x, ("P1",) * 3)
+    >>> float(found.accuracy_before_mm[0])
+    1.0
+    >>> bool(np.isclose(found.repeatability_mm[0], 2 / 3 + np.sqrt(3), rtol=1e-15))
+    True
+    """
+    q = np.asarray(q, dtype=float)
+    keys = list(zip(poses, targets if targets is not None else [""] * len(poses), strict=True))
+    order = list(dict.fromkeys(keys))
+    index = np.array([order.index(key) for key in keys])
+    k = len(order)
+    cycles = np.bincount(index, minlength=k)
+    first = _first(index, k)
+
+    def where(group: int) -> str:
+        row = f"row {rows[first[group]]}, " if rows else ""
+        return f"{row}column 'pose': pose {order[group][0]}"
+
+    single = np.flatnonzero(cycles < 2)
+    if single.size:
+        raise ArmcalError(
+            f"{where(int(single[0]))} was measured once: ISO 9283 repeats every pose in "
+            f"several cycles ({ISO_CYCLES}); give the rows of one commanded pose the same label"
+        )
+    spread = np.zeros(k)
+    np.maximum.at(spread, index, np.max(np.abs(q - q[first][index]), axis=-1))
+    moved = np.flatnonzero(spread > np.radians(SAME_COMMAND_DEG))
+    if moved.size:
+        g = int(moved[0])
+        raise ArmcalError(
+            f"{where(g)} has cycles with different joint values (up to "
+            f"{np.degrees(spread[g]):.3g} deg apart): ISO 9283 repeats one commanded pose; "
+            "give its commanded joint values in every cycle, or different pose labels"
+        )
+
+    def mean(values: np.ndarray) -> np.ndarray:
+        sums = np.zeros((k, values.shape[-1]))
+        np.add.at(sums, index, values)
+        return sums / cycles[:, None]
+
+    centre = mean(attained)
+    distance = np.linalg.norm(attained - centre[index], axis=-1)
+    mean_distance = np.bincount(index, distance, minlength=k) / cycles
+    squares = np.bincount(index, (distance - mean_distance[index]) ** 2, minlength=k)
+    spread_l = np.sqrt(squares / (cycles - 1))
+    return PoseCharacteristics(
+        poses=tuple(key[0] for key in order),
+        targets=None if targets is None else tuple(key[1] for key in order),
+        cycles=cycles,
+        accuracy_before=mean(before),
+        accuracy_after=mean(after),
+        repeatability_mm=mean_distance + 3.0 * spread_l,
+        barycentres=centre,
+    )
+
+
+def _first(index: np.ndarray, k: int) -> np.ndarray:
+    """The first row of every group ``(k,)``."""
+    first = np.full(k, index.size)
+    np.minimum.at(first, index, np.arange(index.size))
+    return first
+
+
+def pose_characteristics_warnings(found: PoseCharacteristics) -> list[ArmcalWarning]:
+    """``iso9283-cycles`` when a pose has fewer cycles than the standard's 30: its ``RP``
+    rests on ``S_l`` from ``n - 1`` degrees of freedom (relative standard error about
+    ``1 / sqrt(2 (n - 1))``)."""
+    fewest = int(found.cycles.min())
+    if fewest >= ISO_CYCLES:
+        return []
+    error = 1.0 / np.sqrt(2.0 * (fewest - 1))
+    return [
+        ArmcalWarning(
+            "iso9283-cycles",
+            f"a pose has only {fewest} cycles where ISO 9283 asks for {ISO_CYCLES}: its "
+            f"repeatability's S_l is uncertain by about {100 * error:.0f} %; measure "
+            f"{ISO_CYCLES} cycles of every pose for an acceptance test",
+        )
+    ]
