@@ -33,8 +33,8 @@ def plot_acceptance(found: PoseCharacteristics) -> Figure:
     left.set_yscale("log")
     left.set_xticks(x, names, rotation=45 if len(names) > 8 else 0, ha="right")
     left.set_ylabel("mm")
-    left.set_title(f"ISO 9283 pose accuracy and repeatability ({int(found.cycles.min())}+ cycles)")
-    left.legend(fontsize="small")
+    left.set_title(f"ISO 9283, {int(found.cycles.min())} cycles or more per pose")
+    left.legend(fontsize="small", ncols=3, loc="lower center", bbox_to_anchor=(0.5, 1.08))
     d = found.accuracy_after.shape[-1]
     for axis, colour in zip(range(d), ("C0", "C1", "C2"), strict=False):
         right.plot(x, found.accuracy_after[:, axis], "o-", color=colour, label=f"AP_{'xyz'[axis]}")
@@ -42,5 +42,5 @@ def plot_acceptance(found: PoseCharacteristics) -> Figure:
     right.set_xticks(x, names, rotation=45 if len(names) > 8 else 0, ha="right")
     right.set_ylabel("mm (instrument frame)")
     right.set_title("AP components after calibration")
-    right.legend(fontsize="small")
+    right.legend(fontsize="small", ncols=3, loc="lower center", bbox_to_anchor=(0.5, 1.08))
     return fig
