@@ -213,7 +213,7 @@ TRUTH_KEYS: tuple[Key, ...] = (
 #: A spatial serial arm's robot TOML: from a URDF, or a modified DH table (``[mdh]``).
 SERIAL_KEYS: tuple[Key, ...] = (
     Key("", "name", "text", "the file's stem", "name shown in reports and exports"),
-    Key("", "urdf", "path, relative to this file", "none: give [mdh]", "the arm's URDF"),
+    Key("", "urdf", "path, relative to this file", "none: give [mdh] or [ur]", "the arm's URDF"),
     Key("", "base_link", "URDF link name", "the URDF's root", "where the chain starts"),
     Key("", "tip_link", "URDF link name", "the one leaf of the chain", "where the chain ends"),
     Key(
@@ -324,6 +324,22 @@ SERIAL_KEYS: tuple[Key, ...] = (
     ),
     Key("identify", "fixed", "list of parameter names", "none", "parameters held at nominal"),
     Key("identify", "free", "list of parameter names", "all", "the only parameters identified"),
+    Key(
+        "ur",
+        "model",
+        "ur3, ur5, ur10, ur3e, ur5e, ur10e or ur16e",
+        "none: give urdf or [mdh]",
+        "a Universal Robots arm: its nominal DH table, built in (metres and radians as the "
+        "controller's)",
+    ),
+    Key(
+        "ur",
+        "calibration",
+        "path, relative to this file",
+        "the nominal table",
+        "the controller's calibration.conf: its [mounting] deltas are added to the nominal "
+        "table, as the controller does",
+    ),
 )
 
 #: A spatial arm's truth TOML (virtual arms).

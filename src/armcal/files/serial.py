@@ -32,6 +32,7 @@ from ..models import MdhTable, SerialChain, SpatialArm, SpatialView, rpy_matrix,
 from ..noise import NoiseModel, TrackerNoise
 from .common import check_keys, fail, load_toml, number, number_within, numbers, suggest
 from .robots import SIGMA_RANGE_MM, RobotSpec, fixed_parameters, load_robot
+from .ur import UR_MODELS, read_ur_calibration, ur_calibration_warning, ur_chain, ur_nominal
 from .urdf import read_urdf
 
 __all__ = [
@@ -95,7 +96,11 @@ def is_serial_robot(name_or_path: str | os.PathLike) -> bool:
         data = load_toml(path, "robot")
     except InputError:  # the robot loader reports it
         return False
-    return "urdf" in data or "mdh" in data
+    return any(key in data for key in _DESCRIPTIONS)
+
+
+#: The keys that describe a spatial arm in a robot TOML (exactly one of them).
+_DESCRIPTIONS = ("urdf", "mdh", "ur")
 
 
 def load_serial_robot(
@@ -129,10 +134,45 @@ def load_any_robot(name_or_path: str | os.PathLike) -> RobotSpec | SerialSpec:
     return load_robot(name_or_path)
 
 
-def _chain(path: Path, data: dict, tip_link: str | None) -> tuple[SerialChain, str]:
-    """The chain of a robot TOML: its URDF's or its ``[mdh]`` table's, and a default name."""
-    if "urdf" in data and "mdh" in data:
-        raise fail(path, "keys 'urdf' and [mdh] both describe the arm; keep one")
+def _ur_chain(path: Path, table: Any) -> tuple[SerialChain, str, tuple[ArmcalWarning, ...]]:
+    """``[ur]``: a UR model's nominal DH table plus its controller's calibration deltas
+    (:mod:`~armcal.files.ur`), within the controller's +-360 degrees."""
+    if not isinstance(table, dict):
+        raise fail(path, "key 'ur': expected a table [ur] with 'model' (and 'calibration')")
+    check_keys(path, table, allowed_keys("ur", SERIAL_KEYS), "ur.")
+    model = table.get("model")
+    if model not in UR_MODELS:
+        raise fail(path, f"key 'ur.model': expected one of {', '.join(UR_MODELS)}, got {model!r}")
+    dh = ur_nominal(model)
+    warnings: tuple[ArmcalWarning, ...] = ()
+    if "calibration" in table:
+        if not isinstance(table["calibration"], str):
+            raise fail(path, "key 'ur.calibration': expected a file name (calibration.conf)")
+        conf = path.parent / table["calibration"]
+        if not conf.is_file():
+            raise fail(
+                path,
+                f"key 'ur.calibration': {conf} does not exist; give the controller's "
+                "calibration.conf relative to the robot file",
+            )
+        deltas = read_ur_calibration(conf)
+        dh = dh + deltas
+        far = ur_calibration_warning(conf, model, deltas)
+        warnings = () if far is None else (far,)
+    chain = replace(ur_chain(dh), joint_limits=np.tile([-2 * np.pi, 2 * np.pi], (6, 1)))
+    return chain, model, warnings
+
+
+def _chain(
+    path: Path, data: dict, tip_link: str | None
+) -> tuple[SerialChain, str, tuple[ArmcalWarning, ...]]:
+    """The chain of a robot TOML: its URDF's, its ``[mdh]`` table's or a UR's (``[ur]``),
+    a default name, and what reading it warns of."""
+    given = [key for key in _DESCRIPTIONS if key in data]
+    if len(given) > 1:
+        raise fail(path, f"keys {' and '.join(given)} all describe the arm; keep one")
+    if "ur" in data:
+        return _ur_chain(path, data["ur"])
     if "urdf" in data:
         if not isinstance(data["urdf"], str):
             raise fail(path, f"key 'urdf': expected a file name, got {data['urdf']!r}")
@@ -149,9 +189,11 @@ def _chain(path: Path, data: dict, tip_link: str | None) -> tuple[SerialChain, s
                 raise fail(path, f"key '{name}': expected a link name, got {data[name]!r}")
             links[name] = data.get(name)
         found = read_urdf(urdf, links["base_link"], tip_link or links["tip_link"])
-        return found.chain, found.robot
+        return found.chain, found.robot, ()
     if "mdh" not in data:
-        raise fail(path, "needs 'urdf' (a URDF file) or an [mdh] table to describe the arm")
+        raise fail(
+            path, "needs 'urdf' (a URDF file), an [mdh] table or a [ur] model to describe the arm"
+        )
     table = data["mdh"]
     if not isinstance(table, dict):
         raise fail(path, "key 'mdh': expected a table [mdh]")
@@ -188,13 +230,13 @@ def _chain(path: Path, data: dict, tip_link: str | None) -> tuple[SerialChain, s
         frames["base"],
         frames["tip"],
     ).chain()
-    return chain, path.stem
+    return chain, path.stem, ()
 
 
 def _from_toml(path: Path, builtin: str | None, tip_link: str | None = None) -> SerialSpec:
     data = load_toml(path, "robot")
     check_keys(path, data, allowed_keys("", SERIAL_KEYS))
-    chain, default_name = _chain(path, data, tip_link)
+    chain, default_name, read_warnings = _chain(path, data, tip_link)
     n = chain.n_joints
     name = data.get("name", default_name)
     if not isinstance(name, str) or not name.strip():
@@ -244,7 +286,7 @@ def _from_toml(path: Path, builtin: str | None, tip_link: str | None = None) -> 
     )
     if "identify" in data:
         arm = arm.with_fixed(fixed_parameters(path, data["identify"], arm.param_names, arm.name))
-    return SerialSpec(arm, builtin or os.fspath(path))
+    return SerialSpec(arm, builtin or os.fspath(path), warnings=read_warnings)
 
 
 #: A 6-DoF instrument's orientation noise (deg, 1 std) outside this range is a wrong unit:

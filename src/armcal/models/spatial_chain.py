@@ -352,6 +352,41 @@ class SerialChain:
         return cls(origins, kinds, tip, names, limits)
 
     @classmethod
+    def from_dh(
+        cls,
+        theta: ArrayLike,
+        d: ArrayLike,
+        a: ArrayLike,
+        alpha: ArrayLike,
+        names: Sequence[str] | None = None,
+    ) -> SerialChain:
+        """A chain of revolute joints from a standard (distal) DH table, as controllers give
+        it: joint ``k`` moves the frame by ``Rz(q_k + theta_k) Tz(d_k) Tx(a_k) Rx(alpha_k)``
+        (rad, mm).  Joint 1's axis is the base frame's z; each row after its joint's turn
+        becomes the next joint's origin, the last row the tip.  Rows of near-parallel axes
+        (a controller's ``d`` of hundreds of metres) cancel in the products to round-off
+        of their size: ``1e-16`` of 1e6 mm is 1e-10 mm.
+
+        Examples
+        --------
+        >>> chain = SerialChain.from_dh([0, 0], [0, 0], [100.0, 50.0], [0, 0])
+        >>> np.round(chain.forward([np.pi / 2, 0.0])[:3, 3], 9).tolist()
+        [0.0, 150.0, 0.0]
+        """
+        theta, d, a, alpha = (np.asarray(v, dtype=float).ravel() for v in (theta, d, a, alpha))
+        n = theta.size
+        if not (d.size == a.size == alpha.size == n):
+            raise ValueError("theta, d, a and alpha need one entry per joint")
+        rows = np.empty((n, 4, 4))
+        for j in range(n):
+            rotation = elementary(2, theta[j]) @ elementary(0, alpha[j])
+            offset = [a[j] * np.cos(theta[j]), a[j] * np.sin(theta[j]), d[j]]
+            rows[j] = transform(rotation, offset)
+        origins = np.concatenate([np.eye(4)[None], rows[:-1]])
+        names = tuple(names) if names is not None else tuple(f"joint {j + 1}" for j in range(n))
+        return cls(origins, ("R",) * n, rows[-1], names, np.tile([-np.inf, np.inf], (n, 1)))
+
+    @classmethod
     def from_joints(cls, joints: Sequence[UrdfJoint]) -> SerialChain:
         """A chain from a URDF's joints from the base link to the tip link, in order.
 

@@ -1,0 +1,200 @@
+"""Universal Robots' kinematics: the built-in nominal DH tables and the controller's
+calibration file.
+
+A UR controller describes the arm by a standard DH table (``Rz(q + theta) Tz(d)
+Tx(a) Rx(alpha)`` per joint, metres and radians).  The nominal table of each
+model is fixed (``urcontrol.conf``'s ``[DH]``; Universal Robots publishes it);
+each robot's factory calibration is kept apart as *deltas* added element-wise
+(``calibration.conf``, section ``[mounting]``: ``delta_theta``, ``delta_a``,
+``delta_d``, ``delta_alpha``, six values each, one line each)::
+
+    [mounting]
+    delta_theta = [ -1.4e-07, 0.673081443308028327, ...]
+    delta_d = [ 0.000247971363099203, 681.734313237237868, -696.406678436933362, ...]
+
+The controller's real kinematics -- what it reports as its DH table -- are
+nominal plus deltas.  The controller stores the twist ``pi/2`` as
+``1.570796327`` (:data:`UR_QUARTER_TURN`), and so does this table.
+
+**The trap.**  Joints 2, 3 and 4 of a UR are parallel by design; with real,
+slightly tilted axes the standard DH common normals run off to where the axes
+nearly meet, so ``delta_d`` of joints 2-4 holds hundreds or thousands of metres
+of opposite sign that cancel.  They are exact, not wrong: armcal builds the chain
+from the rows' transforms (:meth:`~armcal.models.SerialChain.from_dh`), where they
+cancel to 1e-10 mm, and identifies errors in its own continuous parametrization,
+never in ``d``.  A file whose calibrated flange lies far from the nominal model's
+(:data:`FAR_FROM_NOMINAL_MM`) is flagged: another model, or values not in
+metres and radians.
+"""
+
+from __future__ import annotations
+
+import os
+import re
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from ..errors import ArmcalWarning
+from ..models.spatial_chain import SerialChain
+from .common import fail, read_text
+
+__all__ = [
+    "FAR_FROM_NOMINAL_MM",
+    "UR_JOINTS",
+    "UR_MODELS",
+    "UR_QUARTER_TURN",
+    "UrDh",
+    "format_ur_calibration",
+    "read_ur_calibration",
+    "ur_calibration_warning",
+    "ur_chain",
+    "ur_nominal",
+]
+
+#: ``pi/2`` as the controller stores it (its twists and the ROS driver's defaults).
+UR_QUARTER_TURN = 1.570796327
+
+#: The joints, base to wrist, as the ROS driver names them.
+UR_JOINTS = ("shoulder_pan", "shoulder_lift", "elbow", "wrist_1", "wrist_2", "wrist_3")
+
+#: Nominal ``(d1, a2, a3, d4, d5, d6)`` (m) of each model: the published DH tables of
+#: Universal Robots (the same values as the ROS description's ``default_kinematics``);
+#: every other ``d`` and ``a`` and every ``theta`` is 0, and the twists are
+#: ``[q, 0, 0, q, -q, 0]`` with ``q`` = :data:`UR_QUARTER_TURN`.
+UR_MODELS: dict[str, tuple[float, float, float, float, float, float]] = {
+    "ur3": (0.1519, -0.24365, -0.21325, 0.11235, 0.08535, 0.0819),
+    "ur5": (0.089159, -0.425, -0.39225, 0.10915, 0.09465, 0.0823),
+    "ur10": (0.1273, -0.612, -0.5723, 0.163941, 0.1157, 0.0922),
+    "ur3e": (0.15185, -0.24355, -0.2132, 0.13105, 0.08535, 0.0921),
+    "ur5e": (0.1625, -0.425, -0.3922, 0.1333, 0.0997, 0.0996),
+    "ur10e": (0.1807, -0.6127, -0.57155, 0.17415, 0.11985, 0.11655),
+    "ur16e": (0.1807, -0.4784, -0.36, 0.17415, 0.11985, 0.11655),
+}
+
+#: A calibration that moves the flange farther than this from the nominal model's (over
+#: random poses) is not of this model, or not in metres and radians: real ones move it a
+#: few millimetres.
+FAR_FROM_NOMINAL_MM = 20.0
+
+_KEYS = ("delta_theta", "delta_a", "delta_d", "delta_alpha")
+
+
+@dataclass(frozen=True, eq=False)
+class UrDh:
+    """A standard DH table, or the deltas to one (metres and radians, six values each)."""
+
+    theta: np.ndarray
+    a: np.ndarray
+    d: np.ndarray
+    alpha: np.ndarray
+
+    def __add__(self, other: UrDh) -> UrDh:
+        return UrDh(
+            self.theta + other.theta, self.a + other.a, self.d + other.d, self.alpha + other.alpha
+        )
+
+
+def ur_nominal(model: str) -> UrDh:
+    """The nominal DH table of a UR model (a key of :data:`UR_MODELS`)."""
+    d1, a2, a3, d4, d5, d6 = UR_MODELS[model]
+    q = UR_QUARTER_TURN
+    return UrDh(
+        np.zeros(6),
+        np.array([0.0, a2, a3, 0.0, 0.0, 0.0]),
+        np.array([d1, 0.0, 0.0, d4, d5, d6]),
+        np.array([q, 0.0, 0.0, q, -q, 0.0]),
+    )
+
+
+def ur_chain(dh: UrDh) -> SerialChain:
+    """The chain of a UR's DH table (mm): the DH base frame to the flange."""
+    return SerialChain.from_dh(dh.theta, 1000.0 * dh.d, 1000.0 * dh.a, dh.alpha, UR_JOINTS)
+
+
+_LIST = re.compile(r"^\[(.*)\]$")
+
+
+def read_ur_calibration(path: str | os.PathLike) -> UrDh:
+    """The deltas of a UR controller's ``calibration.conf`` (module notes).
+
+    The other keys of the file (checksums, the calibration status, raw offsets)
+    are the controller's own and are not read.
+
+    Raises
+    ------
+    InputError
+        Naming the file, the line and the key, for a missing ``[mounting]``
+        section or delta, or a value that is not six numbers.
+    """
+    text = read_text(path, "UR calibration")
+    section, found, mounted = None, {}, False
+    for number, raw in enumerate(text.splitlines(), start=1):
+        line = raw.split("#", 1)[0].strip()
+        if not line:
+            continue
+        if line.startswith("[") and line.endswith("]") and "=" not in line:
+            section = line[1:-1].strip()
+            mounted = mounted or section == "mounting"
+            continue
+        if section != "mounting" or "=" not in line:
+            continue
+        key, value = (part.strip() for part in line.split("=", 1))
+        if key not in _KEYS:
+            continue
+        match = _LIST.match(value)
+        values = [] if match is None else [v.strip() for v in match.group(1).split(",")]
+        try:
+            numbers = [float(v) for v in values]
+        except ValueError:
+            numbers = []
+        if len(numbers) != 6 or not all(np.isfinite(numbers)):
+            raise fail(
+                path,
+                f"line {number}: key '{key}': expected six numbers as [ v1, ..., v6] (metres "
+                f"and radians, as the controller writes them), got {value!r}",
+            )
+        found[key] = np.array(numbers)
+    missing = [key for key in _KEYS if key not in found]
+    if missing:
+        where = "" if mounted else " and no [mounting] section"
+        raise fail(
+            path,
+            f"has no '{missing[0]}'{where}: a UR controller's calibration.conf has a "
+            f"[mounting] section with {', '.join(_KEYS)}; give that file",
+        )
+    return UrDh(found["delta_theta"], found["delta_a"], found["delta_d"], found["delta_alpha"])
+
+
+def format_ur_calibration(deltas: UrDh) -> str:
+    """The ``[mounting]`` deltas in the controller's text form: ``%.18g`` numbers, which
+    read back exactly (:func:`read_ur_calibration`)."""
+
+    def listed(values: np.ndarray) -> str:
+        return "[ " + ", ".join(format(float(v), ".18g") for v in values) + "]"
+
+    rows = [f"{key} = {listed(getattr(deltas, key[6:]))}" for key in _KEYS]
+    return "\n".join(["[mounting]", *rows]) + "\n"
+
+
+def ur_calibration_warning(
+    path: str | os.PathLike, model: str, deltas: UrDh, *, poses: int = 1000
+) -> ArmcalWarning | None:
+    """``ur-calibration-far`` when the calibrated flange lies farther than
+    :data:`FAR_FROM_NOMINAL_MM` from the nominal model's at ``poses`` random poses."""
+    nominal = ur_nominal(model)
+    q = np.random.default_rng(0).uniform(-np.pi, np.pi, (poses, 6))
+    moved = (
+        ur_chain(nominal + deltas).forward(q)[..., :3, 3]
+        - ur_chain(nominal).forward(q)[..., :3, 3]
+    )
+    largest = float(np.max(np.linalg.norm(moved, axis=-1)))
+    if largest <= FAR_FROM_NOMINAL_MM:
+        return None
+    return ArmcalWarning(
+        "ur-calibration-far",
+        f"{Path(path).name}: its deltas move the flange up to {largest:.4g} mm from the "
+        f"nominal {model}'s (a factory calibration moves it a few mm): check that the file is "
+        f"this {model}'s, and that its values are in metres and radians",
+    )
