@@ -192,3 +192,79 @@ def test_a_ur_robot_file_works_through_the_commands(tmp_path):
     assert result.returncode == 2 and not (tmp_path / "q.csv").exists()
     (line,) = result.stderr.strip().splitlines()
     assert line.startswith("armcal: error: ") and "line 4: key 'delta_d'" in line
+
+
+def test_a_calibrated_chain_becomes_deltas_that_read_back_to_it(tmp_path):
+    """Perturb every joint placement of a UR10e after joint 1 (0.3 mm, 1 mrad: axes 2-4
+    no longer parallel), write the deltas in the controller's text, read them back onto
+    the nominal table: the same kinematics within 1e-9 mm, although the deltas' d reach
+    hundreds of metres."""
+    from dataclasses import replace
+
+    from armcal.files.ur import ur_deltas
+    from armcal.models.spatial_chain import elementary, transform
+
+    rng = np.random.default_rng(2)
+    nominal = ur_chain(ur_nominal("ur10e"))
+    origins = nominal.origins.copy()
+    for k in range(1, 6):
+        turn = elementary(0, rng.normal(0, 1e-3)) @ elementary(1, rng.normal(0, 1e-3))
+        origins[k] = origins[k] @ transform(turn @ elementary(2, rng.normal(0, 1e-3)),
+                                            rng.normal(0, 0.3, 3))  # fmt: skip
+    calibrated = replace(nominal, origins=origins)
+    deltas = ur_deltas(calibrated, "ur10e")
+    assert np.max(np.abs(deltas.d)) > 10.0  # metres: the common normals of near-parallel axes
+    read = read_ur_calibration(_write(tmp_path, format_ur_calibration(deltas)))
+    again = ur_chain(ur_nominal("ur10e") + read)
+    q = rng.uniform(-2 * np.pi, 2 * np.pi, (300, 6))
+    found, expected = again.forward(q), calibrated.forward(q)
+    np.testing.assert_allclose(found[:, :3, 3], expected[:, :3, 3], rtol=0, atol=1e-9)
+    np.testing.assert_allclose(found[:, :3, :3], expected[:, :3, :3], rtol=0, atol=1e-12)
+    # The real UR10e's own deltas come back to themselves (to round-off of their metres).
+    real = read_ur_calibration(_write(tmp_path, UR10E_CALIBRATION))
+    back = ur_deltas(ur_chain(ur_nominal("ur10e") + real), "ur10e")
+    chain_back = ur_chain(ur_nominal("ur10e") + back).forward(q)[:, :3, 3]
+    chain_real = ur_chain(ur_nominal("ur10e") + real).forward(q)[:, :3, 3]
+    np.testing.assert_allclose(chain_back, chain_real, rtol=0, atol=1e-9)
+
+
+def test_a_ur_cell_calibrated_and_exported_for_its_controller(tmp_path):
+    """The UR10e of the robot file (its factory deltas) is measured as a virtual arm whose
+    truth moves joints 2-5 (0.2 mm, 0.02 deg); identify, export --ur-calibration, and a
+    robot file on the exported deltas is the calibrated arm: its flange agrees with the
+    calibration's chain within 1e-9 mm."""
+    import json
+
+    from armcal.files import read_calibration
+    from helpers import run_cli
+
+    _robot(tmp_path)
+    truth = tmp_path / "truth.toml"
+    truth.write_text(
+        'robot = "ur.toml"\nbase = { xyz_mm = [2500, -800, -400], rpy_deg = [0, 0, 30] }\n'
+        "[errors]\n"
+        + "".join(f"j{k}.x = 0.2\nj{k}.rx = 0.02\n" for k in (2, 3, 4, 5))
+        + "[targets]\ntool = { xyz_mm = [0, 0, 60] }\n",
+        encoding="utf-8",
+    )
+    steps = [
+        ("design", "--robot", "ur.toml", "--poses", "40", "-o", "plan.csv"),
+        ("synthesize", "--robot", "ur.toml", "--truth", "truth.toml", "--plan", "plan.csv",
+         "--sigma", "0", "-o", "meas.csv"),
+        ("identify", "--robot", "ur.toml", "--measurements", "meas.csv", "-o", "cal.json"),
+        ("export", "--calibration", "cal.json", "--ur-calibration", "out.conf", "--json"),
+    ]  # fmt: skip
+    for step in steps:
+        result = run_cli(tmp_path, *step)
+        assert result.returncode == 0, (step[0], result.stderr)
+    assert json.loads(result.stdout)["ur_calibration"] == "out.conf"
+    robot = tmp_path / "exported.toml"
+    robot.write_text('[ur]\nmodel = "ur10e"\ncalibration = "out.conf"\n', encoding="utf-8")
+    exported = load_serial_robot(robot)
+    assert exported.warnings == ()
+    cal = read_calibration(tmp_path / "cal.json")
+    chain = cal.arm.calibrated_chain(cal.arm_params)
+    q = np.random.default_rng(3).uniform(-np.pi, np.pi, (100, 6))
+    np.testing.assert_allclose(
+        exported.arm.chain.forward(q)[:, :3, 3], chain.forward(q)[:, :3, 3], rtol=0, atol=1e-9
+    )

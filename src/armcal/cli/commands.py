@@ -487,10 +487,11 @@ def demo(args: argparse.Namespace) -> None:
 
 def export(args: argparse.Namespace) -> None:
     """``armcal export``: the calibrated arm as a robot file or URDF."""
-    if args.robot_toml is None and args.urdf is None and args.joint_offsets is None:
+    outputs = (args.robot_toml, args.urdf, args.joint_offsets, args.ur_calibration)
+    if all(path is None for path in outputs):
         raise ArmcalError(
-            "export needs an output: give --robot-toml FILE, --urdf FILE, --joint-offsets FILE "
-            "or several (see 'armcal export --help')"
+            "export needs an output: give --robot-toml FILE, --urdf FILE, --joint-offsets FILE, "
+            "--ur-calibration FILE or several (see 'armcal export --help')"
         )
     cal = read_calibration(args.calibration)
     run = export_files(
@@ -498,6 +499,7 @@ def export(args: argparse.Namespace) -> None:
         robot_toml_path=args.robot_toml,
         urdf_path=args.urdf,
         offsets_path=args.joint_offsets,
+        ur_path=args.ur_calibration,
     )
     for path, text in run.texts.items():
         atomic_write(path, text)
@@ -505,6 +507,7 @@ def export(args: argparse.Namespace) -> None:
         "robot_toml": args.robot_toml,
         "urdf": args.urdf,
         "joint_offsets": args.joint_offsets,
+        "ur_calibration": args.ur_calibration,
     }
     emit(args, document, "\n".join(f"wrote {path}" for path in run.texts), run.warnings)
 

@@ -382,10 +382,16 @@ def build_parser() -> argparse.ArgumentParser:
         metavar="PATH",
         help="CSV of every joint's zero offset (deg) for the controller",
     )
+    sub.add_argument(
+        "--ur-calibration",
+        metavar="PATH",
+        help="a Universal Robots arm's [mounting] deltas, as the controller's calibration.conf "
+        "holds them (docs/controllers.md)",
+    )
     sub.set_defaults(
         run=commands.export,
         inputs=("calibration",),
-        outputs=("robot_toml", "urdf", "joint_offsets"),
+        outputs=("robot_toml", "urdf", "joint_offsets", "ur_calibration"),
     )
 
     sub = _command(subs, "formats")

@@ -38,6 +38,7 @@ import numpy as np
 
 from ..errors import ArmcalWarning
 from ..models.spatial_chain import SerialChain
+from ..models.spatial_dh import DhTable, dh_table
 from .common import fail, read_text
 
 __all__ = [
@@ -50,6 +51,8 @@ __all__ = [
     "read_ur_calibration",
     "ur_calibration_warning",
     "ur_chain",
+    "ur_deltas",
+    "ur_model_of",
     "ur_nominal",
 ]
 
@@ -111,6 +114,46 @@ def ur_nominal(model: str) -> UrDh:
 def ur_chain(dh: UrDh) -> SerialChain:
     """The chain of a UR's DH table (mm): the DH base frame to the flange."""
     return SerialChain.from_dh(dh.theta, 1000.0 * dh.d, 1000.0 * dh.a, dh.alpha, UR_JOINTS)
+
+
+def ur_deltas(chain: SerialChain, model: str) -> UrDh:
+    """The deltas to ``model``'s nominal table that give ``chain`` (the DH base frame to the
+    flange, mm): its exact standard DH table (:func:`~armcal.models.spatial_dh.dh_table`,
+    on the nominal table's branch) minus the nominal, in metres and radians, every angle
+    within half a turn.  Nearly parallel axes give ``d`` deltas of metres that cancel, as
+    the controller's own do."""
+    nominal = ur_nominal(model)
+    reference = DhTable(nominal.theta, 1000.0 * nominal.d, 1000.0 * nominal.a, nominal.alpha)
+    table = dh_table(chain, reference)
+
+    def turned(delta: np.ndarray) -> np.ndarray:
+        return (delta + np.pi) % (2 * np.pi) - np.pi
+
+    return UrDh(
+        turned(table.theta - nominal.theta),
+        table.a / 1000.0 - nominal.a,
+        table.d / 1000.0 - nominal.d,
+        turned(table.alpha - nominal.alpha),
+    )
+
+
+def ur_model_of(chain: SerialChain, *, poses: int = 200) -> tuple[str, float]:
+    """The UR model whose nominal flange lies nearest ``chain``'s over random poses, and
+    that largest distance (mm): models differ by centimetres, a calibration by millimetres."""
+    q = np.random.default_rng(0).uniform(-np.pi, np.pi, (poses, 6))
+    flange = chain.forward(q)[..., :3, 3]
+    distance = {
+        model: float(
+            np.max(
+                np.linalg.norm(
+                    ur_chain(ur_nominal(model)).forward(q)[..., :3, 3] - flange, axis=-1
+                )
+            )
+        )
+        for model in UR_MODELS
+    }
+    model = min(distance, key=distance.__getitem__)
+    return model, distance[model]
 
 
 _LIST = re.compile(r"^\[(.*)\]$")

@@ -363,9 +363,11 @@ class SerialChain:
         """A chain of revolute joints from a standard (distal) DH table, as controllers give
         it: joint ``k`` moves the frame by ``Rz(q_k + theta_k) Tz(d_k) Tx(a_k) Rx(alpha_k)``
         (rad, mm).  Joint 1's axis is the base frame's z; each row after its joint's turn
-        becomes the next joint's origin, the last row the tip.  Rows of near-parallel axes
-        (a controller's ``d`` of hundreds of metres) cancel in the products to round-off
-        of their size: ``1e-16`` of 1e6 mm is 1e-10 mm.
+        becomes the next joint's origin, the last row the tip, and each joint's frame then
+        slides along its own axis to the point nearest the frame before (the same
+        kinematics), so the metres of ``d`` of near-parallel axes (a controller's) cancel
+        here, to round-off of their size (``1e-16`` of 1e6 mm is 1e-10 mm), and nowhere
+        else.
 
         Examples
         --------
@@ -377,14 +379,20 @@ class SerialChain:
         n = theta.size
         if not (d.size == a.size == alpha.size == n):
             raise ValueError("theta, d, a and alpha need one entry per joint")
-        rows = np.empty((n, 4, 4))
-        for j in range(n):
-            rotation = elementary(2, theta[j]) @ elementary(0, alpha[j])
-            offset = [a[j] * np.cos(theta[j]), a[j] * np.sin(theta[j]), d[j]]
-            rows[j] = transform(rotation, offset)
-        origins = np.concatenate([np.eye(4)[None], rows[:-1]])
+        rows = np.array([dh_row(theta[j], d[j], a[j], alpha[j]) for j in range(n)])
+        origins = np.concatenate([np.eye(4)[None], rows[:-1], rows[-1:]])
+        # Slide every joint's frame along its own axis to the point nearest the frame
+        # before it (a slide along the axis commutes with the joint's turn: the same
+        # kinematics), so no frame sits the metres away where near-parallel axes' common
+        # normals meet them, and errors are placed at the joints themselves.
+        for j in range(1, n):
+            along = origins[j][:3, 2] @ origins[j][:3, 3]
+            slide = transform(translation=[0.0, 0.0, -along])
+            origins[j] = origins[j] @ slide
+            origins[j + 1] = np.linalg.inv(slide) @ origins[j + 1]
         names = tuple(names) if names is not None else tuple(f"joint {j + 1}" for j in range(n))
-        return cls(origins, ("R",) * n, rows[-1], names, np.tile([-np.inf, np.inf], (n, 1)))
+        limits = np.tile([-np.inf, np.inf], (n, 1))
+        return cls(origins[:n], ("R",) * n, origins[n], names, limits)
 
     @classmethod
     def from_joints(cls, joints: Sequence[UrdfJoint]) -> SerialChain:
@@ -424,6 +432,12 @@ class SerialChain:
         for j, kind in enumerate(self.kinds):
             frame = frame @ self.origins[j] @ joint_motion(kind, u[..., j])
         return frame @ self.tip
+
+
+def dh_row(theta: float, d: float, a: float, alpha: float) -> np.ndarray:
+    """``Rz(theta) Tz(d) Tx(a) Rx(alpha)`` ``(4, 4)``: a standard DH row (rad, mm)."""
+    rotation = elementary(2, theta) @ elementary(0, alpha)
+    return transform(rotation, [a * np.cos(theta), a * np.sin(theta), d])
 
 
 def joint_motion(kind: str, value: np.ndarray) -> np.ndarray:

@@ -27,11 +27,13 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .spatial_chain import SerialChain, elementary, transform
+from .spatial_chain import SerialChain, dh_row, elementary, transform
 
 __all__ = [
     "PARALLEL_COS",
+    "DhTable",
     "MdhTable",
+    "dh_table",
     "mdh_table",
     "mdh_transform",
 ]
@@ -173,3 +175,96 @@ def mdh_table(chain: SerialChain) -> MdhTable:
     tip = np.linalg.inv(screws[-1]) @ chain.tip
     alpha, a, beta, theta, d = (rows[:, i].copy() for i in range(5))
     return MdhTable(alpha, a, beta, theta, d, chain.kinds, base, tip)
+
+
+@dataclass(frozen=True, eq=False)
+class DhTable:
+    """A standard (distal) DH table, as controllers give it (rad, mm): joint ``k`` moves the
+    frame by ``Rz(q_k + theta_k) Tz(d_k) Tx(a_k) Rx(alpha_k)`` (:meth:`SerialChain.from_dh`)."""
+
+    theta: np.ndarray
+    d: np.ndarray
+    a: np.ndarray
+    alpha: np.ndarray
+
+    def chain(self, joint_names: tuple[str, ...] | None = None) -> SerialChain:
+        return SerialChain.from_dh(self.theta, self.d, self.a, self.alpha, joint_names)
+
+
+def _wrap(angle: float) -> float:
+    return float((angle + np.pi) % (2 * np.pi) - np.pi)
+
+
+def dh_table(chain: SerialChain, reference: DhTable, *, tol: float = 1e-9) -> DhTable:
+    """The standard DH table of a revolute ``chain``, exact to round-off, on the branch of
+    ``reference`` (its nominal table: every ``x`` axis on the side that keeps ``theta``
+    within a quarter turn of the reference's, so a calibration's table differs from the
+    nominal by small deltas).
+
+    Frame ``k`` has its z axis on joint ``k + 1``'s axis and its x axis along the common
+    normal from the axis before; for parallel axes the normal through the previous
+    frame's origin (``d = 0``), for nearly parallel ones the unique normal, far away (a
+    ``d`` of hundreds of metres, as controllers report).  Frame 0 is the chain's base,
+    whose z axis must be joint 1's; the last frame is the tip, whose z axis must lie on
+    the last joint's axis.
+
+    Raises
+    ------
+    ValueError
+        For a prismatic joint, a first axis off the base's z, or a tip off the last axis:
+        no standard DH table holds them.
+    """
+    if any(kind != "R" for kind in chain.kinds):
+        raise ValueError("a standard DH table of revolute joints cannot hold a prismatic joint")
+    n = chain.n_joints
+    lines = [chain.origins[0]]
+    for k in range(1, n):
+        lines.append(lines[-1] @ chain.origins[k])
+    lines.append(lines[-1] @ chain.tip)  # the tip: its z axis and its x axis are the last row's
+    first = lines[0]
+    reach = max(1.0, float(np.linalg.norm(first[:3, 3])))
+    if np.linalg.norm(first[:2, 2]) > tol or np.linalg.norm(first[:2, 3]) > tol * reach:
+        raise ValueError("joint 1's axis is not the base frame's z axis")
+    frame = np.eye(4)
+    rows = np.zeros((n, 4))
+    for k in range(n):
+        target = np.linalg.solve(frame, lines[k + 1])  # the next axis (or the tip) here
+        rows[k] = _dh_row_of(target, k == n - 1, reference.theta[k], tol)
+        frame = frame @ dh_row(*rows[k])
+    if np.max(np.abs(frame - lines[n])) > tol * max(1.0, np.max(np.abs(lines[n]))):
+        raise ValueError("the tip is not on the last joint's axis: no DH table holds it")
+    return DhTable(rows[:, 0], rows[:, 1], rows[:, 2], rows[:, 3])
+
+
+def _dh_row_of(target: np.ndarray, last: bool, theta_ref: float, tol: float) -> np.ndarray:
+    """``(theta, d, a, alpha)`` of the row that puts a frame's z axis on ``target``'s (the
+    next joint's frame, or the tip's when ``last``), in the current frame (module notes
+    of :func:`dh_table`)."""
+    z, p = target[:3, 2], target[:3, 3]
+    w = float(z[2])
+    normal = np.array([-z[1], z[0], 0.0])  # z_prev x z
+    if last:  # the tip lies on the last axis: its own x axis, no common normal
+        d, x, point = float(p[2]), target[:3, 0].copy(), np.array([0.0, 0.0, p[2]])
+    elif np.linalg.norm(normal) > tol:  # the common normal, between its feet
+        # t = (p_z w - p.z) / (1 - w^2), written without cancellation for nearly parallel
+        # axes (where the feet lie metres away and d is large).
+        t = -(p[0] * z[0] + p[1] * z[1]) / (z[0] ** 2 + z[1] ** 2)
+        d = float(p[2] + t * w)
+        point = p + t * z
+        x = point - [0.0, 0.0, d]
+        if np.linalg.norm(x) <= tol * max(1.0, abs(d)):  # intersecting axes
+            x = normal
+    else:  # parallel axes: the normal through this frame's origin (d = 0)
+        d = 0.0
+        point = p - z * (p[2] / w)
+        x = point.copy()
+        if np.linalg.norm(x) <= tol:  # the same axis: keep the reference's x
+            x = np.array([np.cos(theta_ref), np.sin(theta_ref), 0.0])
+    x = x / np.linalg.norm(x)
+    theta = float(np.arctan2(x[1], x[0]))
+    if not last and abs(_wrap(theta - theta_ref)) > np.pi / 2:  # the reference's side
+        x, theta = -x, _wrap(theta + np.pi)
+    y = np.cross([0.0, 0.0, 1.0], x)
+    alpha = float(np.arctan2(-(z @ y), z[2]))
+    a = float((point - [0.0, 0.0, d]) @ x)
+    return np.array([theta, d, a, alpha])

@@ -34,6 +34,7 @@ from ..errors import (
 from ..export import robot_toml, urdf, urdf_joints_are_readings
 from ..export_serial import joint_offsets_csv, serial_robot_toml, serial_urdf
 from ..files import Measurements, Program, RobotSpec, SerialSpec
+from ..files.ur import FAR_FROM_NOMINAL_MM, format_ur_calibration, ur_deltas, ur_model_of
 from ..identification import Calibration, identify
 from ..instrument import identify_3d
 from ..models import CalibratedArm, FitModel, Loads, PlanarArm, SpatialArm, Target
@@ -529,12 +530,31 @@ class ExportRun:
     warnings: tuple[ArmcalWarning, ...]
 
 
+def _ur_calibration(cal: CalibratedArm, path: str) -> str:
+    """The calibrated arm as a UR controller's ``[mounting]`` deltas, against the nominal table
+    of the UR model it is (:func:`armcal.files.ur.ur_model_of`)."""
+    arm = cal.arm
+    if not isinstance(arm, SpatialArm) or arm.n_joints != 6 or set(arm.chain.kinds) != {"R"}:
+        raise ArmcalError(
+            f"{path}: a UR calibration needs a six-axis revolute arm; {arm.name} is not"
+        )
+    chain = arm.calibrated_chain(cal.arm_params)
+    model, distance = ur_model_of(chain)
+    if distance > FAR_FROM_NOMINAL_MM:
+        raise ArmcalError(
+            f"{path}: {arm.name} is no UR model in its DH base frame (nearest {model}, "
+            f"{distance:.4g} mm away); describe the arm with a robot file's [ur] table"
+        )
+    return format_ur_calibration(ur_deltas(chain, model))
+
+
 def export_files(
     cal: CalibratedArm,
     *,
     robot_toml_path: str | None = None,
     urdf_path: str | None = None,
     offsets_path: str | None = None,
+    ur_path: str | None = None,
 ) -> ExportRun:
     """The calibrated arm as a robot TOML, a URDF and/or the joint offsets, with what they
     leave out.
@@ -545,6 +565,8 @@ def export_files(
     """
     serial = isinstance(cal.arm, SpatialArm)  # the file formats differ by family
     texts: dict[str, str] = {}
+    if ur_path is not None:
+        texts[ur_path] = _ur_calibration(cal, ur_path)
     if robot_toml_path is not None:
         texts[robot_toml_path] = serial_robot_toml(cal) if serial else robot_toml(cal)
     warnings = []
