@@ -252,7 +252,8 @@ def test_a_ur_cell_calibrated_and_exported_for_its_controller(tmp_path):
         ("synthesize", "--robot", "ur.toml", "--truth", "truth.toml", "--plan", "plan.csv",
          "--sigma", "0", "-o", "meas.csv"),
         ("identify", "--robot", "ur.toml", "--measurements", "meas.csv", "-o", "cal.json"),
-        ("export", "--calibration", "cal.json", "--ur-calibration", "out.conf", "--json"),
+        ("export", "--calibration", "cal.json", "--ur-calibration", "out.conf",
+         "--ros-calibration", "out.yaml", "--json"),
     ]  # fmt: skip
     for step in steps:
         result = run_cli(tmp_path, *step)
@@ -268,3 +269,78 @@ def test_a_ur_cell_calibrated_and_exported_for_its_controller(tmp_path):
     np.testing.assert_allclose(
         exported.arm.chain.forward(q)[:, :3, 3], chain.forward(q)[:, :3, 3], rtol=0, atol=1e-9
     )
+    robot.write_text('[ur]\nmodel = "ur10e"\ncalibration = "out.yaml"\n', encoding="utf-8")
+    ros = load_serial_robot(robot)  # the ROS driver's YAML: the joint frames themselves
+    assert ros.warnings == ()
+    np.testing.assert_allclose(
+        ros.arm.chain.forward(q)[:, :3, 3], chain.forward(q)[:, :3, 3], rtol=0, atol=1e-9
+    )
+
+
+#: The ROS description's nominal UR5e (Universal_Robots_ROS2_Description,
+#: config/ur5e/default_kinematics.yaml): the controller's DH table with its twist
+#: 1.570796327 as the driver's calibration tool writes it, R = Rx(roll) Ry(pitch) Rz(yaw).
+UR5E_DEFAULT_KINEMATICS = """kinematics:
+  shoulder:
+    x: 0
+    y: 0
+    z: 0.1625
+    roll: 0
+    pitch: 0
+    yaw: 0
+  upper_arm: {x: 0, y: 0, z: 0, roll: 1.570796327, pitch: 0, yaw: 0}
+  forearm:
+    x: -0.425
+    y: 0
+    z: 0
+    roll: 0
+    pitch: 0
+    yaw: 0
+  wrist_1:
+    x: -0.3922
+    y: 0
+    z: 0.1333
+    roll: 0
+    pitch: 0
+    yaw: 0
+  wrist_2:
+    x: 0
+    y: -0.0997
+    z: -2.044881182297852e-11
+    roll: 1.570796327
+    pitch: 0
+    yaw: 0
+  wrist_3:
+    x: 0
+    y: 0.09959999999999999
+    z: -2.042830148012698e-11
+    roll: 1.570796326589793
+    pitch: 3.141592653589793
+    yaw: 3.141592653589793
+  hash: calib_12788084448423163542
+"""
+
+
+def test_the_ros_description_s_nominal_ur5e_is_the_dh_table(tmp_path):
+    """Its YAML (block and flow entries) read in the driver's angle order is the nominal
+    UR5e table's kinematics within 1e-9 mm, flange frame included; written again and
+    read back, the same."""
+    from armcal.files.ur import format_ur_kinematics, read_ur_kinematics
+
+    chain = read_ur_kinematics(_write(tmp_path, UR5E_DEFAULT_KINEMATICS, "ur5e.yaml"))
+    nominal = ur_chain(ur_nominal("ur5e"))
+    q = np.random.default_rng(4).uniform(-np.pi, np.pi, (100, 6))
+    np.testing.assert_allclose(chain.forward(q), nominal.forward(q), rtol=0, atol=1e-9)
+    again = read_ur_kinematics(_write(tmp_path, format_ur_kinematics(nominal, "x"), "o.yaml"))
+    np.testing.assert_allclose(again.forward(q), nominal.forward(q), rtol=0, atol=1e-9)
+
+
+def test_a_ros_yaml_without_a_frame_is_refused(tmp_path):
+    from armcal.files.ur import read_ur_kinematics
+
+    text = UR5E_DEFAULT_KINEMATICS.replace("    yaw: 3.141592653589793\n", "")
+    with pytest.raises(InputError, match=re.escape("kinematics.wrist_3.yaw is missing")):
+        read_ur_kinematics(_write(tmp_path, text, "bad.yaml"))
+    text = UR5E_DEFAULT_KINEMATICS.replace("z: 0.1333", "z: 0.13x")
+    with pytest.raises(InputError, match=re.escape("line 20: 'z': expected a number")):
+        read_ur_kinematics(_write(tmp_path, text, "bad.yaml"))

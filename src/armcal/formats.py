@@ -337,8 +337,9 @@ SERIAL_KEYS: tuple[Key, ...] = (
         "calibration",
         "path, relative to this file",
         "the nominal table",
-        "the controller's calibration.conf: its [mounting] deltas are added to the nominal "
-        "table, as the controller does",
+        "the controller's calibration.conf, whose [mounting] deltas are added to the nominal "
+        "table as the controller does, or the ROS driver's calibration YAML (.yaml): the "
+        "arm's own joint frames",
     ),
 )
 

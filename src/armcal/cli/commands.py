@@ -487,11 +487,14 @@ def demo(args: argparse.Namespace) -> None:
 
 def export(args: argparse.Namespace) -> None:
     """``armcal export``: the calibrated arm as a robot file or URDF."""
-    outputs = (args.robot_toml, args.urdf, args.joint_offsets, args.ur_calibration)
+    outputs = (
+        args.robot_toml, args.urdf, args.joint_offsets, args.ur_calibration, args.ros_calibration
+    )  # fmt: skip
     if all(path is None for path in outputs):
         raise ArmcalError(
             "export needs an output: give --robot-toml FILE, --urdf FILE, --joint-offsets FILE, "
-            "--ur-calibration FILE or several (see 'armcal export --help')"
+            "--ur-calibration FILE, --ros-calibration FILE or several (see 'armcal export "
+            "--help')"
         )
     cal = read_calibration(args.calibration)
     run = export_files(
@@ -500,6 +503,7 @@ def export(args: argparse.Namespace) -> None:
         urdf_path=args.urdf,
         offsets_path=args.joint_offsets,
         ur_path=args.ur_calibration,
+        ros_path=args.ros_calibration,
     )
     for path, text in run.texts.items():
         atomic_write(path, text)
@@ -508,6 +512,7 @@ def export(args: argparse.Namespace) -> None:
         "urdf": args.urdf,
         "joint_offsets": args.joint_offsets,
         "ur_calibration": args.ur_calibration,
+        "ros_calibration": args.ros_calibration,
     }
     emit(args, document, "\n".join(f"wrote {path}" for path in run.texts), run.warnings)
 

@@ -388,10 +388,16 @@ def build_parser() -> argparse.ArgumentParser:
         help="a Universal Robots arm's [mounting] deltas, as the controller's calibration.conf "
         "holds them (docs/controllers.md)",
     )
+    sub.add_argument(
+        "--ros-calibration",
+        metavar="PATH",
+        help="a Universal Robots arm's calibration YAML for the ROS driver (kinematics: x, y, "
+        "z, roll, pitch, yaw per joint; docs/controllers.md)",
+    )
     sub.set_defaults(
         run=commands.export,
         inputs=("calibration",),
-        outputs=("robot_toml", "urdf", "joint_offsets", "ur_calibration"),
+        outputs=("robot_toml", "urdf", "joint_offsets", "ur_calibration", "ros_calibration"),
     )
 
     sub = _command(subs, "formats")

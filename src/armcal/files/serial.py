@@ -32,7 +32,14 @@ from ..models import MdhTable, SerialChain, SpatialArm, SpatialView, rpy_matrix,
 from ..noise import NoiseModel, TrackerNoise
 from .common import check_keys, fail, load_toml, number, number_within, numbers, suggest
 from .robots import SIGMA_RANGE_MM, RobotSpec, fixed_parameters, load_robot
-from .ur import UR_MODELS, read_ur_calibration, ur_calibration_warning, ur_chain, ur_nominal
+from .ur import (
+    UR_MODELS,
+    read_ur_calibration,
+    read_ur_kinematics,
+    ur_calibration_warning,
+    ur_chain,
+    ur_nominal,
+)
 from .urdf import read_urdf
 
 __all__ = [
@@ -155,11 +162,15 @@ def _ur_chain(path: Path, table: Any) -> tuple[SerialChain, str, tuple[ArmcalWar
                 f"key 'ur.calibration': {conf} does not exist; give the controller's "
                 "calibration.conf relative to the robot file",
             )
-        deltas = read_ur_calibration(conf)
-        dh = dh + deltas
-        far = ur_calibration_warning(conf, model, deltas)
+        if conf.suffix.lower() in (".yaml", ".yml"):  # the ROS driver's: the whole chain
+            chain = read_ur_kinematics(conf)
+        else:  # the controller's calibration.conf: deltas to the nominal table
+            chain = ur_chain(dh + read_ur_calibration(conf))
+        far = ur_calibration_warning(conf, model, chain)
         warnings = () if far is None else (far,)
-    chain = replace(ur_chain(dh), joint_limits=np.tile([-2 * np.pi, 2 * np.pi], (6, 1)))
+    else:
+        chain = ur_chain(dh)
+    chain = replace(chain, joint_limits=np.tile([-2 * np.pi, 2 * np.pi], (6, 1)))
     return chain, model, warnings
 
 

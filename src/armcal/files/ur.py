@@ -37,7 +37,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import ArmcalWarning
-from ..models.spatial_chain import SerialChain
+from ..models.spatial_chain import SerialChain, elementary, transform
 from ..models.spatial_dh import DhTable, dh_table
 from .common import fail, read_text
 
@@ -48,7 +48,9 @@ __all__ = [
     "UR_QUARTER_TURN",
     "UrDh",
     "format_ur_calibration",
+    "format_ur_kinematics",
     "read_ur_calibration",
+    "read_ur_kinematics",
     "ur_calibration_warning",
     "ur_chain",
     "ur_deltas",
@@ -222,22 +224,110 @@ def format_ur_calibration(deltas: UrDh) -> str:
 
 
 def ur_calibration_warning(
-    path: str | os.PathLike, model: str, deltas: UrDh, *, poses: int = 1000
+    path: str | os.PathLike, model: str, calibrated: SerialChain, *, poses: int = 1000
 ) -> ArmcalWarning | None:
-    """``ur-calibration-far`` when the calibrated flange lies farther than
+    """``ur-calibration-far`` when the ``calibrated`` chain's flange lies farther than
     :data:`FAR_FROM_NOMINAL_MM` from the nominal model's at ``poses`` random poses."""
-    nominal = ur_nominal(model)
     q = np.random.default_rng(0).uniform(-np.pi, np.pi, (poses, 6))
-    moved = (
-        ur_chain(nominal + deltas).forward(q)[..., :3, 3]
-        - ur_chain(nominal).forward(q)[..., :3, 3]
-    )
+    nominal = ur_chain(ur_nominal(model)).forward(q)[..., :3, 3]
+    moved = calibrated.forward(q)[..., :3, 3] - nominal
     largest = float(np.max(np.linalg.norm(moved, axis=-1)))
     if largest <= FAR_FROM_NOMINAL_MM:
         return None
     return ArmcalWarning(
         "ur-calibration-far",
-        f"{Path(path).name}: its deltas move the flange up to {largest:.4g} mm from the "
+        f"{Path(path).name}: it moves the flange up to {largest:.4g} mm from the "
         f"nominal {model}'s (a factory calibration moves it a few mm): check that the file is "
         f"this {model}'s, and that its values are in metres and radians",
     )
+
+
+#: The ROS driver's names of the six joint frames in its calibration YAML, base to wrist.
+ROS_FRAMES = ("shoulder", "upper_arm", "forearm", "wrist_1", "wrist_2", "wrist_3")
+_POSE_KEYS = ("x", "y", "z", "roll", "pitch", "yaw")
+
+
+def _xyz_angles(rotation: np.ndarray) -> tuple[float, float, float]:
+    """``(roll, pitch, yaw)`` with ``R = Rx(roll) Ry(pitch) Rz(yaw)``: the order the ROS
+    driver's calibration tool writes (Eigen's ``eulerAngles(0, 1, 2)``)."""
+    pitch = float(np.arcsin(np.clip(rotation[0, 2], -1.0, 1.0)))
+    roll = float(np.arctan2(-rotation[1, 2], rotation[2, 2]))
+    yaw = float(np.arctan2(-rotation[0, 1], rotation[0, 0]))
+    return roll, pitch, yaw
+
+
+def _xyz_rotation(roll: float, pitch: float, yaw: float) -> np.ndarray:
+    return elementary(0, roll) @ elementary(1, pitch) @ elementary(2, yaw)
+
+
+def format_ur_kinematics(chain: SerialChain, label: str) -> str:
+    """``chain`` (a six-axis arm from its DH base frame, mm) as the ROS driver's calibration
+    YAML: every joint frame in the one before, ``x, y, z`` in metres and ``roll, pitch,
+    yaw`` in radians with ``R = Rx(roll) Ry(pitch) Rz(yaw)`` as the driver's calibration
+    tool writes them; the last joint's frame is the flange.  ``hash`` is ``label``: the
+    driver compares it with the controller's and warns when they differ, as they do for
+    a calibration the controller does not hold.
+
+    The ROS description puts these numbers into URDF ``rpy`` (``Rz Ry Rx``), which differs
+    for angles that are not multiples of a quarter turn: for a calibration's milliradians,
+    micrometres at the flange.  armcal's URDF export has no such difference.
+    """
+    origins = chain.origins.copy()
+    origins[-1] = origins[-1] @ chain.tip  # the flange on the last axis: a slide and a turn
+    lines = ["kinematics:"]
+    for name, frame in zip(ROS_FRAMES, origins, strict=True):
+        values = (*(frame[:3, 3] / 1000.0), *_xyz_angles(frame[:3, :3]))
+        lines.append(f"  {name}:")
+        lines += [f"    {key}: {float(v)!r}" for key, v in zip(_POSE_KEYS, values, strict=True)]
+    lines.append(f"  hash: {label}")
+    return "\n".join(lines) + "\n"
+
+
+def read_ur_kinematics(path: str | os.PathLike) -> SerialChain:
+    """The chain (mm) of the ROS driver's calibration YAML (:func:`format_ur_kinematics`'s
+    layout, block or flow style, as the driver's calibration tool and the ROS description
+    write it).
+
+    Raises
+    ------
+    InputError
+        Naming the file and the entry, for a missing frame or value.
+    """
+    text = read_text(path, "UR kinematics")
+    frames: dict[str, dict[str, float]] = {}
+    current = None
+    for number, raw in enumerate(text.splitlines(), start=1):
+        line = raw.split("#", 1)[0].rstrip()
+        name, _, rest = line.strip().partition(":")
+        if not line.strip() or name in ("kinematics", "hash"):
+            continue
+        rest = rest.strip()
+        if name in ROS_FRAMES:
+            current = frames.setdefault(name, {})
+            pairs = [p.partition(":")[::2] for p in rest.strip("{}").split(",")] if rest else []
+        elif current is not None and name in _POSE_KEYS:
+            pairs = [(name, rest)]
+        else:
+            continue
+        for key, value in pairs:
+            try:
+                current[key.strip()] = float(value)
+            except ValueError:
+                raise fail(
+                    path,
+                    f"line {number}: {key.strip()!r}: expected a number, got {value.strip()!r}",
+                ) from None
+    origins = []
+    for name in ROS_FRAMES:
+        entry = frames.get(name, {})
+        missing = [key for key in _POSE_KEYS if key not in entry]
+        if missing:
+            raise fail(
+                path,
+                f"kinematics.{name}.{missing[0]} is missing: the ROS driver's calibration YAML "
+                f"gives {', '.join(_POSE_KEYS)} for each of {', '.join(ROS_FRAMES)}",
+            )
+        rotation = _xyz_rotation(entry["roll"], entry["pitch"], entry["yaw"])
+        origins.append(transform(rotation, 1000.0 * np.array([entry[k] for k in "xyz"])))
+    limits = np.tile([-np.inf, np.inf], (6, 1))
+    return SerialChain(np.array(origins), ("R",) * 6, np.eye(4), UR_JOINTS, limits)

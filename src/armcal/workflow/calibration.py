@@ -34,10 +34,16 @@ from ..errors import (
 from ..export import robot_toml, urdf, urdf_joints_are_readings
 from ..export_serial import joint_offsets_csv, serial_robot_toml, serial_urdf
 from ..files import Measurements, Program, RobotSpec, SerialSpec
-from ..files.ur import FAR_FROM_NOMINAL_MM, format_ur_calibration, ur_deltas, ur_model_of
+from ..files.ur import (
+    FAR_FROM_NOMINAL_MM,
+    format_ur_calibration,
+    format_ur_kinematics,
+    ur_deltas,
+    ur_model_of,
+)
 from ..identification import Calibration, identify
 from ..instrument import identify_3d
-from ..models import CalibratedArm, FitModel, Loads, PlanarArm, SpatialArm, Target
+from ..models import CalibratedArm, FitModel, Loads, PlanarArm, SerialChain, SpatialArm, Target
 from ..plausibility import deviation_warning, explain, suspicious
 from ..validation import (
     CrossValidation,
@@ -530,14 +536,12 @@ class ExportRun:
     warnings: tuple[ArmcalWarning, ...]
 
 
-def _ur_calibration(cal: CalibratedArm, path: str) -> str:
-    """The calibrated arm as a UR controller's ``[mounting]`` deltas, against the nominal table
-    of the UR model it is (:func:`armcal.files.ur.ur_model_of`)."""
+def _ur_arm(cal: CalibratedArm, path: str) -> tuple[SerialChain, str]:
+    """The calibrated chain of a UR arm (DH base frame to flange) and its model
+    (:func:`armcal.files.ur.ur_model_of`), for a controller's file at ``path``."""
     arm = cal.arm
     if not isinstance(arm, SpatialArm) or arm.n_joints != 6 or set(arm.chain.kinds) != {"R"}:
-        raise ArmcalError(
-            f"{path}: a UR calibration needs a six-axis revolute arm; {arm.name} is not"
-        )
+        raise ArmcalError(f"{path}: a UR file needs a six-axis revolute arm; {arm.name} is not")
     chain = arm.calibrated_chain(cal.arm_params)
     model, distance = ur_model_of(chain)
     if distance > FAR_FROM_NOMINAL_MM:
@@ -545,7 +549,19 @@ def _ur_calibration(cal: CalibratedArm, path: str) -> str:
             f"{path}: {arm.name} is no UR model in its DH base frame (nearest {model}, "
             f"{distance:.4g} mm away); describe the arm with a robot file's [ur] table"
         )
-    return format_ur_calibration(ur_deltas(chain, model))
+    return chain, model
+
+
+def _ur_texts(cal: CalibratedArm, ur_path: str | None, ros_path: str | None) -> dict[str, str]:
+    """A UR controller's calibration.conf deltas and the ROS driver's calibration YAML."""
+    texts = {}
+    if ur_path is not None:
+        chain, model = _ur_arm(cal, ur_path)
+        texts[ur_path] = format_ur_calibration(ur_deltas(chain, model))
+    if ros_path is not None:
+        chain, model = _ur_arm(cal, ros_path)
+        texts[ros_path] = format_ur_kinematics(chain, f"armcal_{cal.arm.name}_{model}")
+    return texts
 
 
 def export_files(
@@ -555,6 +571,7 @@ def export_files(
     urdf_path: str | None = None,
     offsets_path: str | None = None,
     ur_path: str | None = None,
+    ros_path: str | None = None,
 ) -> ExportRun:
     """The calibrated arm as a robot TOML, a URDF and/or the joint offsets, with what they
     leave out.
@@ -565,8 +582,7 @@ def export_files(
     """
     serial = isinstance(cal.arm, SpatialArm)  # the file formats differ by family
     texts: dict[str, str] = {}
-    if ur_path is not None:
-        texts[ur_path] = _ur_calibration(cal, ur_path)
+    texts.update(_ur_texts(cal, ur_path, ros_path))
     if robot_toml_path is not None:
         texts[robot_toml_path] = serial_robot_toml(cal) if serial else robot_toml(cal)
     warnings = []
