@@ -167,3 +167,22 @@ def test_validate_iso9283_warns_with_few_cycles_and_refuses_single_poses(tmp_pat
     assert result.returncode == 2
     (line,) = result.stderr.strip().splitlines()
     assert line.startswith("armcal: error: m.csv: row 1, column 'pose': pose 1 was measured")
+
+
+def test_a_6_dof_instrument_s_orientation_accuracy_and_repeatability():
+    """One pose, four cycles, turns after calibration of (1, 3, 1, 3) mrad about x and 0
+    about y and z: AP_a = 2 mrad, S_a = sqrt(4 x 1 / 3) mrad, RP_a = 3 S_a = 2 sqrt(3)
+    mrad; the turns before are 5 mrad more, so AP_a before is 7 mrad."""
+    after = np.zeros((4, 3))
+    after[:, 0] = [1e-3, 3e-3, 1e-3, 3e-3]
+    before = after + np.array([5e-3, 0.0, 0.0])
+    points = np.zeros((4, 3))
+    found = pose_characteristics(
+        np.zeros((4, 1)), points, points, points, ("P",) * 4, turns=(before, after)
+    )
+    np.testing.assert_allclose(found.orientation_after, [[2e-3, 0, 0]], atol=1e-18)
+    np.testing.assert_allclose(found.orientation_before, [[7e-3, 0, 0]], atol=1e-18)
+    np.testing.assert_allclose(found.orientation_repeatability, [[2e-3 * np.sqrt(3), 0, 0]])
+    summary = found.summary()
+    assert summary["rp_orientation_deg"] == pytest.approx(np.degrees(2e-3 * np.sqrt(3)))
+    assert summary["ap_before_orientation_deg"] == pytest.approx(np.degrees(7e-3))

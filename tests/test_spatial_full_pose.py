@@ -250,6 +250,31 @@ def test_a_six_dof_campaign_from_the_command_line(tmp_path):
     check = json.loads(result.stdout)
     assert check["orientation_rms_after_deg"] < 0.1 * check["orientation_rms_before_deg"]
     assert check["warnings"] == []
+    # ISO 9283 with the probe: 5 poses x 12 cycles; RP_a..c = 3 S of the attained turns,
+    # whose std per axis is the probe's (15 values, each with a relative error of about
+    # 1 / sqrt(2 x 11) = 21 %: their mean within 20 %).
+    cell = load_serial_robot(tmp_path / "cell.toml").arm
+    poses = random_poses(cell, 5, np.random.default_rng(15))
+    head = "pose," + ",".join(f"q{k + 1}_deg" for k in range(6))
+    text = [",".join(repr(float(v)) for v in np.degrees(pose)) for pose in poses]
+    rows = [f"P{p + 1},{text[p]}" for _ in range(12) for p in range(5)]
+    (tmp_path / "cycles.csv").write_text("\n".join([head, *rows]) + "\n", encoding="utf-8")
+    result = run_cli(
+        tmp_path, "synthesize", "--robot", "cell.toml", "--truth", "truth.toml", "--plan",
+        "cycles.csv", "--seed", "3", "-o", "iso.csv",
+    )  # fmt: skip
+    assert result.returncode == 0, result.stderr
+    result = run_cli(
+        tmp_path, "validate", "--calibration", "cal.json", "--measurements", "iso.csv",
+        "--iso9283", "--json",
+    )  # fmt: skip
+    assert result.returncode == 0, result.stderr
+    iso = json.loads(result.stdout)["iso9283"]
+    spread = np.array([p["rp_abc_deg"] for p in iso["per_pose"]])
+    assert np.mean(spread) == pytest.approx(3 * SIGMA_DEG, rel=0.2)
+    after = np.abs([p["ap_after_abc_deg"] for p in iso["per_pose"]])
+    before = np.abs([p["ap_before_abc_deg"] for p in iso["per_pose"]])
+    assert np.max(after) < 0.2 * np.max(before)
     result = run_cli(tmp_path, "export", "--calibration", "cal.json", "--robot-toml", "cal.toml")
     assert result.returncode == 0, result.stderr
     result = run_cli(

@@ -11,7 +11,9 @@ clause 6.9) and reports, clause 7.2:
 * **pose repeatability** (7.2.2): the radius of the sphere about the barycentre
   that holds the attained positions, ``RP_l = lbar + 3 S_l`` with
   ``l_j = |x_j - xbar|``, ``lbar`` their mean and
-  ``S_l = sqrt(sum (l_j - lbar)^2 / (n - 1))``.
+  ``S_l = sqrt(sum (l_j - lbar)^2 / (n - 1))``;
+* with a 6-DoF instrument, the orientation's: ``AP_a = abar - a_c`` and
+  ``RP_a = +-3 S_a`` for the turns about x, y and z (``a, b, c``).
 
 A robot's command position lives in its controller's model; an instrument
 measures in its own frame.  Here the command position is where a model puts the
@@ -71,6 +73,14 @@ class PoseCharacteristics:
         ``RP_l = lbar + 3 S_l``, mm.
     barycentres : ndarray, shape (k, d)
         The mean attained positions, mm (instrument frame).
+    orientation_before, orientation_after : ndarray, shape (k, 3), or None
+        For a 6-DoF instrument: ``AP_a, AP_b, AP_c`` (rad), the mean turn from the
+        command orientation to the attained one, about the instrument's x, y and z axes
+        (the small-angle components of the turns, which the standard's angles ``a, b,
+        c`` are to first order).
+    orientation_repeatability : ndarray, shape (k, 3), or None
+        ``RP_a, RP_b, RP_c = 3 S_a`` (rad, a +- band): three sample standard deviations
+        of the attained orientation's components over the cycles.
     """
 
     poses: tuple[str, ...]
@@ -80,6 +90,9 @@ class PoseCharacteristics:
     accuracy_after: np.ndarray
     repeatability_mm: np.ndarray
     barycentres: np.ndarray
+    orientation_before: np.ndarray | None = None
+    orientation_after: np.ndarray | None = None
+    orientation_repeatability: np.ndarray | None = None
 
     @property
     def accuracy_before_mm(self) -> np.ndarray:
@@ -93,14 +106,21 @@ class PoseCharacteristics:
 
     def summary(self) -> dict[str, float | int]:
         """The test's figures: the worst pose's ``AP_P`` before and after and ``RP_l`` (mm),
-        the number of poses and the fewest cycles of any pose."""
-        return {
+        the number of poses and the fewest cycles of any pose; for a 6-DoF instrument the
+        largest ``|AP_a|, |AP_b|, |AP_c|`` before and after and ``RP_a..c`` (deg)."""
+        out: dict[str, float | int] = {
             "poses": len(self.poses),
             "fewest_cycles": int(self.cycles.min()),
             "ap_before_mm": float(self.accuracy_before_mm.max()),
             "ap_after_mm": float(self.accuracy_after_mm.max()),
             "rp_mm": float(self.repeatability_mm.max()),
         }
+        turns = (self.orientation_before, self.orientation_after, self.orientation_repeatability)
+        if all(t is not None for t in turns):
+            for key, values in zip(("ap_before", "ap_after", "rp"), turns, strict=True):
+                assert values is not None
+                out[f"{key}_orientation_deg"] = float(np.degrees(np.max(np.abs(values))))
+        return out
 
 
 def pose_characteristics(
@@ -111,6 +131,7 @@ def pose_characteristics(
     poses: tuple[str, ...],
     targets: tuple[str, ...] | None = None,
     rows: tuple[int, ...] = (),
+    turns: tuple[np.ndarray, np.ndarray] | None = None,
 ) -> PoseCharacteristics:
     """ISO 9283 pose accuracy and repeatability from repeated measurements.
 
@@ -130,6 +151,10 @@ def pose_characteristics(
         Every row's target.
     rows : tuple of int, optional
         Every row's 1-based data row in its file, for messages.
+    turns : pair of ndarray, shape (m, 3), optional
+        A 6-DoF instrument's turns from the nominal and the calibrated model's
+        orientation to the measured one (rotation vectors, rad), as
+        :class:`armcal.validation.Turns` holds them.
 
     Raises
     ------
@@ -183,11 +208,19 @@ def pose_characteristics(
         np.add.at(sums, index, values)
         return sums / cycles[:, None]
 
+    def deviation(values: np.ndarray) -> np.ndarray:  # sample std over every pose's cycles
+        centred = values - mean(values)[index]
+        sums = np.zeros((k, values.shape[-1]))
+        np.add.at(sums, index, centred**2)
+        return np.sqrt(sums / (cycles - 1)[:, None])
+
     centre = mean(attained)
     distance = np.linalg.norm(attained - centre[index], axis=-1)
     mean_distance = np.bincount(index, distance, minlength=k) / cycles
-    squares = np.bincount(index, (distance - mean_distance[index]) ** 2, minlength=k)
-    spread_l = np.sqrt(squares / (cycles - 1))
+    spread_l = deviation(distance[:, None])[:, 0]
+    turned = None
+    if turns is not None:  # the command is one orientation: the turns' spread is the pose's
+        turned = (mean(turns[0]), mean(turns[1]), 3.0 * deviation(turns[1]))
     return PoseCharacteristics(
         poses=tuple(key[0] for key in order),
         targets=None if targets is None else tuple(key[1] for key in order),
@@ -196,6 +229,9 @@ def pose_characteristics(
         accuracy_after=mean(after),
         repeatability_mm=mean_distance + 3.0 * spread_l,
         barycentres=centre,
+        orientation_before=None if turned is None else turned[0],
+        orientation_after=None if turned is None else turned[1],
+        orientation_repeatability=None if turned is None else turned[2],
     )
 
 

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import numpy as np
+
 from ..acceptance import ISO_CYCLES, PoseCharacteristics
 from ..compensation import Compensation
 from ..files import Measurements, Program
@@ -114,6 +116,8 @@ def acceptance_report(found: PoseCharacteristics) -> tuple[dict, list[str]]:
                 "barycentre_mm": found.barycentres[g].tolist(),
             }
         )
+    if found.orientation_after is not None:
+        lines += _orientation_lines(found, poses)
     lines += [
         f"{'worst pose':<25}{s['ap_before_mm']:>11.4g}{s['ap_after_mm']:>10.4g}{s['rp_mm']:>9.4g}",
         "AP: from the command position (where the nominal, or the calibrated, model puts the "
@@ -121,6 +125,24 @@ def acceptance_report(found: PoseCharacteristics) -> tuple[dict, list[str]]:
         "attained positions about their mean (7.2.2)",
     ]
     return {**s, "per_pose": poses}, lines
+
+
+def _orientation_lines(found: PoseCharacteristics, poses: list[dict]) -> list[str]:
+    """A 6-DoF instrument's orientation AP_a..c (after calibration) and RP_a..c per pose, in
+    degrees; adds them to every pose's JSON."""
+    turns = (found.orientation_before, found.orientation_after, found.orientation_repeatability)
+    before, after, spread = (np.degrees(v) for v in turns if v is not None)
+    lines = [
+        f"{'orientation (deg)':<18}{'AP_a':>9}{'AP_b':>9}{'AP_c':>9}{'RP_a':>9}{'RP_b':>9}"
+        f"{'RP_c':>9}   (after calibration; RP a +- band)",
+    ]
+    for g, entry in enumerate(poses):
+        name = entry["pose"] if entry["target"] is None else f"{entry['pose']}/{entry['target']}"
+        lines.append(f"{name:<18}" + "".join(f"{v:>9.3g}" for v in (*after[g], *spread[g])))
+        entry["ap_before_abc_deg"] = before[g].tolist()
+        entry["ap_after_abc_deg"] = after[g].tolist()
+        entry["rp_abc_deg"] = spread[g].tolist()
+    return lines
 
 
 def compensation_report(

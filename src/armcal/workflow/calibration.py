@@ -432,9 +432,10 @@ def validate_measurements(
     acceptance = None
     if iso9283:
         try:
+            turns = None if result.turns is None else (result.turns.before, result.turns.after)
             acceptance = pose_characteristics(
                 meas.q, result.positions, result.before, result.after, meas.labels,
-                meas.targets, meas.rows,
+                meas.targets, meas.rows, turns,
             )  # fmt: skip
         except ArmcalError as exc:
             raise prefixed(source, exc) from None
