@@ -344,3 +344,20 @@ def test_a_ros_yaml_without_a_frame_is_refused(tmp_path):
     text = UR5E_DEFAULT_KINEMATICS.replace("z: 0.1333", "z: 0.13x")
     with pytest.raises(InputError, match=re.escape("line 20: 'z': expected a number")):
         read_ur_kinematics(_write(tmp_path, text, "bad.yaml"))
+
+
+def test_a_zero_offset_is_the_controller_s_theta_delta_with_its_sign(tmp_path):
+    """armcal's dq_k is added to the reading (u = q + dq); a UR's joint angle is q + theta:
+    a calibration that only moves joint 3's zero by +0.01 deg writes delta_theta[2] larger
+    by 0.01 deg (in rad) and every other delta as it was (docs/controllers.md)."""
+    from armcal.files.ur import ur_deltas
+
+    arm = _robot(tmp_path).arm
+    params = arm.nominal.copy()
+    params[arm.param_names.index("dq3")] = np.radians(0.01)
+    found = ur_deltas(arm.calibrated_chain(params), "ur10e")
+    factory = read_ur_calibration(tmp_path / "calibration.conf")
+    change = found.theta - factory.theta
+    np.testing.assert_allclose(change, [0, 0, np.radians(0.01), 0, 0, 0], rtol=0, atol=1e-12)
+    for name, scale in (("a", 1e-12), ("d", 1e-9), ("alpha", 1e-12)):  # m, rad; d in metres
+        np.testing.assert_allclose(getattr(found, name), getattr(factory, name), atol=scale)
