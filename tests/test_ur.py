@@ -331,8 +331,11 @@ def test_the_ros_description_s_nominal_ur5e_is_the_dh_table(tmp_path):
     nominal = ur_chain(ur_nominal("ur5e"))
     q = np.random.default_rng(4).uniform(-np.pi, np.pi, (100, 6))
     np.testing.assert_allclose(chain.forward(q), nominal.forward(q), rtol=0, atol=1e-9)
-    again = read_ur_kinematics(_write(tmp_path, format_ur_kinematics(nominal, "x"), "o.yaml"))
+    written = format_ur_kinematics(nominal, "ur5e", "x")
+    again = read_ur_kinematics(_write(tmp_path, written, "o.yaml"))
     np.testing.assert_allclose(again.forward(q), nominal.forward(q), rtol=0, atol=1e-9)
+    # Every joint frame where the ROS description has it (its links' meshes hang there).
+    np.testing.assert_allclose(again.origins, chain.origins, rtol=0, atol=1e-9)
 
 
 def test_a_ros_yaml_without_a_frame_is_refused(tmp_path):
@@ -341,9 +344,10 @@ def test_a_ros_yaml_without_a_frame_is_refused(tmp_path):
     text = UR5E_DEFAULT_KINEMATICS.replace("    yaw: 3.141592653589793\n", "")
     with pytest.raises(InputError, match=re.escape("kinematics.wrist_3.yaw is missing")):
         read_ur_kinematics(_write(tmp_path, text, "bad.yaml"))
-    text = UR5E_DEFAULT_KINEMATICS.replace("z: 0.1333", "z: 0.13x")
-    with pytest.raises(InputError, match=re.escape("line 20: 'z': expected a number")):
-        read_ur_kinematics(_write(tmp_path, text, "bad.yaml"))
+    for bad in ("0.13x", "nan", "inf"):
+        text = UR5E_DEFAULT_KINEMATICS.replace("z: 0.1333", f"z: {bad}")
+        with pytest.raises(InputError, match=re.escape("line 20: 'z': expected a number")):
+            read_ur_kinematics(_write(tmp_path, text, "bad.yaml"))
 
 
 def test_a_zero_offset_is_the_controller_s_theta_delta_with_its_sign(tmp_path):
@@ -361,3 +365,24 @@ def test_a_zero_offset_is_the_controller_s_theta_delta_with_its_sign(tmp_path):
     np.testing.assert_allclose(change, [0, 0, np.radians(0.01), 0, 0, 0], rtol=0, atol=1e-12)
     for name, scale in (("a", 1e-12), ("d", 1e-9), ("alpha", 1e-12)):  # m, rad; d in metres
         np.testing.assert_allclose(getattr(found, name), getattr(factory, name), atol=scale)
+
+
+def test_what_a_ur_table_cannot_hold_is_refused_with_the_file(tmp_path):
+    """A tip off the last axis (delta_a[5]) still has a DH row; a joint 1 tilted from the
+    base's z has none, and export says why in one line instead of a traceback."""
+    from dataclasses import replace
+
+    from armcal.files.ur import ur_deltas
+    from armcal.models.spatial_chain import elementary, transform
+
+    deltas = read_ur_calibration(_write(tmp_path, UR10E_CALIBRATION))
+    offset = UrDh(deltas.theta, deltas.a + np.array([0, 0, 0, 0, 0, 1e-4]), deltas.d, deltas.alpha)
+    chain = ur_chain(ur_nominal("ur10e") + offset)
+    back = ur_deltas(chain, "ur10e")
+    q = np.random.default_rng(5).uniform(-np.pi, np.pi, (50, 6))
+    again = ur_chain(ur_nominal("ur10e") + back).forward(q)[:, :3, 3]
+    np.testing.assert_allclose(again, chain.forward(q)[:, :3, 3], rtol=0, atol=1e-9)
+    tilted = chain.origins.copy()
+    tilted[0] = transform(elementary(0, 1e-3), [0.2, 0.0, 0.0])
+    with pytest.raises(ValueError, match="joint 1's axis is not the base frame's z"):
+        ur_deltas(replace(chain, origins=tilted), "ur10e")

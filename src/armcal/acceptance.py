@@ -22,7 +22,7 @@ pose (registered once, as :func:`armcal.validation.validate` does): **before**
 calibration the nominal model, **after** it the calibrated one -- what a
 program compensated with the calibration would reach.  The attained positions
 are the measurements, so ``RP`` does not depend on any model.  Every cycle of a
-pose must repeat the same joint values (:data:`SAME_COMMAND_DEG`); then
+pose must repeat the same joint values (:data:`SAME_COMMAND`); then
 ``AP`` is the norm of the mean error of its rows.
 
 The result is per pose and per target (a target's point is one measuring
@@ -39,7 +39,7 @@ from .errors import ArmcalError, ArmcalWarning
 
 __all__ = [
     "ISO_CYCLES",
-    "SAME_COMMAND_DEG",
+    "SAME_COMMAND",
     "PoseCharacteristics",
     "pose_characteristics",
     "pose_characteristics_warnings",
@@ -48,9 +48,9 @@ __all__ = [
 #: Cycles per pose that ISO 9283 prescribes for pose accuracy and repeatability (clause 6.9).
 ISO_CYCLES = 30
 
-#: The largest spread (deg, or mm for a prismatic joint) of a pose's joint values over its
-#: cycles: above it the rows are not one commanded pose.
-SAME_COMMAND_DEG = 1e-6
+#: The largest spread of a pose's joint values over its cycles (rad, or mm for a prismatic
+#: joint, as the readings are kept): above it the rows are not one commanded pose.
+SAME_COMMAND = 1e-8
 
 
 @dataclass(frozen=True, eq=False)
@@ -176,8 +176,9 @@ def pose_characteristics(
     """
     q = np.asarray(q, dtype=float)
     keys = list(zip(poses, targets if targets is not None else [""] * len(poses), strict=True))
-    order = list(dict.fromkeys(keys))
-    index = np.array([order.index(key) for key in keys])
+    number = {key: g for g, key in enumerate(dict.fromkeys(keys))}  # first appearance
+    order = list(number)
+    index = np.array([number[key] for key in keys], dtype=int)
     k = len(order)
     cycles = np.bincount(index, minlength=k)
     first = _first(index, k)
@@ -186,6 +187,11 @@ def pose_characteristics(
         row = f"row {rows[first[group]]}, " if rows else ""
         return f"{row}column 'pose': pose {order[group][0]}"
 
+    if cycles.max() < 2:
+        raise ArmcalError(
+            "no pose is repeated: ISO 9283 measures every commanded pose in several cycles "
+            f"({ISO_CYCLES}); add a column 'pose' whose label repeats for the cycles of a pose"
+        )
     single = np.flatnonzero(cycles < 2)
     if single.size:
         raise ArmcalError(
@@ -194,12 +200,12 @@ def pose_characteristics(
         )
     spread = np.zeros(k)
     np.maximum.at(spread, index, np.max(np.abs(q - q[first][index]), axis=-1))
-    moved = np.flatnonzero(spread > np.radians(SAME_COMMAND_DEG))
+    moved = np.flatnonzero(spread > SAME_COMMAND)
     if moved.size:
         g = int(moved[0])
         raise ArmcalError(
-            f"{where(g)} has cycles with different joint values (up to "
-            f"{np.degrees(spread[g]):.3g} deg apart): ISO 9283 repeats one commanded pose; "
+            f"{where(g)} has cycles with different joint values (up to {spread[g]:.3g} rad, "
+            "or mm for a prismatic joint, apart): ISO 9283 repeats one commanded pose; "
             "give its commanded joint values in every cycle, or different pose labels"
         )
 

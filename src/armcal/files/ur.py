@@ -260,23 +260,58 @@ def _xyz_rotation(roll: float, pitch: float, yaw: float) -> np.ndarray:
     return elementary(0, roll) @ elementary(1, pitch) @ elementary(2, yaw)
 
 
-def format_ur_kinematics(chain: SerialChain, label: str) -> str:
-    """``chain`` (a six-axis arm from its DH base frame, mm) as the ROS driver's calibration
+def _ros_frames(dh: UrDh) -> np.ndarray:
+    """The joint frames ``(6, 4, 4)`` (mm, at zero readings) where the ROS description puts
+    them: joint ``k``'s at the foot of its DH row's ``Rz(theta) Tz(d)``, the last at the
+    flange."""
+    frames, frame = [], np.eye(4)
+    for k in range(6):
+        if k:
+            frame = frame @ transform(elementary(0, dh.alpha[k - 1]), [1000.0 * dh.a[k - 1], 0, 0])
+        frame = frame @ transform(elementary(2, dh.theta[k]), [0.0, 0.0, 1000.0 * dh.d[k]])
+        frames.append(frame)
+    return np.array(frames)
+
+
+def format_ur_kinematics(chain: SerialChain, model: str, label: str) -> str:
+    """``chain`` (a UR ``model`` from its DH base frame, mm) as the ROS driver's calibration
     YAML: every joint frame in the one before, ``x, y, z`` in metres and ``roll, pitch,
-    yaw`` in radians with ``R = Rx(roll) Ry(pitch) Rz(yaw)`` as the driver's calibration
-    tool writes them; the last joint's frame is the flange.  ``hash`` is ``label``: the
-    driver compares it with the controller's and warns when they differ, as they do for
-    a calibration the controller does not hold.
+    yaw`` in radians with ``R = Rx(roll) Ry(pitch) Rz(yaw)``, as the driver's calibration
+    tool writes them.  Each joint frame slides along and turns about its own axis (the
+    same kinematics) to where the ROS description has the model's (:func:`_ros_frames`),
+    so its links' meshes hang where they belong; the last one is the flange.  ``hash`` is
+    ``label``: the driver compares it with the controller's and warns when they differ,
+    as they do for a calibration the controller does not hold.
 
     The ROS description puts these numbers into URDF ``rpy`` (``Rz Ry Rx``), which differs
     for angles that are not multiples of a quarter turn: for a calibration's milliradians,
     micrometres at the flange.  armcal's URDF export has no such difference.
+
+    Raises
+    ------
+    ValueError
+        If the flange is not on the last joint's axis (a UR joint frame is).
     """
-    origins = chain.origins.copy()
-    origins[-1] = origins[-1] @ chain.tip  # the flange on the last axis: a slide and a turn
+    tip = chain.tip
+    if np.linalg.norm(tip[:2, 2]) > 1e-12 or np.linalg.norm(tip[:2, 3]) > 1e-9:
+        raise ValueError("the flange is not on the last joint's axis, where a UR's joint frame is")
+    world = [chain.origins[0]]
+    for k in range(1, 6):
+        world.append(world[-1] @ chain.origins[k])
+    world[5] = world[5] @ tip
+    placed = []
+    for k, (frame, where) in enumerate(zip(world, _ros_frames(ur_nominal(model)), strict=True)):
+        if k < 5:  # slide along and turn about the joint's own axis
+            z, x = frame[:3, 2], frame[:3, 0]
+            slide = float((where[:3, 3] - frame[:3, 3]) @ z)
+            aim = where[:3, 0] - (where[:3, 0] @ z) * z
+            turn = float(np.arctan2(np.cross(x, aim) @ z, x @ aim))
+            frame = frame @ transform(elementary(2, turn), [0.0, 0.0, slide])
+        placed.append(frame)
     lines = ["kinematics:"]
-    for name, frame in zip(ROS_FRAMES, origins, strict=True):
-        values = (*(frame[:3, 3] / 1000.0), *_xyz_angles(frame[:3, :3]))
+    for k, name in enumerate(ROS_FRAMES):
+        step = placed[0] if k == 0 else np.linalg.solve(placed[k - 1], placed[k])
+        values = (*(step[:3, 3] / 1000.0), *_xyz_angles(step[:3, :3]))
         lines.append(f"  {name}:")
         lines += [f"    {key}: {float(v)!r}" for key, v in zip(_POSE_KEYS, values, strict=True)]
     lines.append(f"  hash: {label}")
@@ -313,10 +348,12 @@ def read_ur_kinematics(path: str | os.PathLike) -> SerialChain:
             try:
                 current[key.strip()] = float(value)
             except ValueError:
+                current[key.strip()] = np.nan
+            if not np.isfinite(current[key.strip()]):
                 raise fail(
                     path,
                     f"line {number}: {key.strip()!r}: expected a number, got {value.strip()!r}",
-                ) from None
+                )
     origins = []
     for name in ROS_FRAMES:
         entry = frames.get(name, {})

@@ -205,8 +205,8 @@ def dh_table(chain: SerialChain, reference: DhTable, *, tol: float = 1e-9) -> Dh
     normal from the axis before; for parallel axes the normal through the previous
     frame's origin (``d = 0``), for nearly parallel ones the unique normal, far away (a
     ``d`` of hundreds of metres, as controllers report).  Frame 0 is the chain's base,
-    whose z axis must be joint 1's; the last frame is the tip, whose z axis must lie on
-    the last joint's axis.
+    whose z axis must be joint 1's; the last frame is the tip, whose x axis must cross
+    the last joint's axis at a right angle (a row's ``Tx(a) Rx(alpha)``).
 
     Raises
     ------
@@ -232,7 +232,7 @@ def dh_table(chain: SerialChain, reference: DhTable, *, tol: float = 1e-9) -> Dh
         rows[k] = _dh_row_of(target, k == n - 1, reference.theta[k], tol)
         frame = frame @ dh_row(*rows[k])
     if np.max(np.abs(frame - lines[n])) > tol * max(1.0, np.max(np.abs(lines[n]))):
-        raise ValueError("the tip is not on the last joint's axis: no DH table holds it")
+        raise ValueError("the tip's x axis does not cross the last joint's axis at a right angle")
     return DhTable(rows[:, 0], rows[:, 1], rows[:, 2], rows[:, 3])
 
 
@@ -243,8 +243,8 @@ def _dh_row_of(target: np.ndarray, last: bool, theta_ref: float, tol: float) -> 
     z, p = target[:3, 2], target[:3, 3]
     w = float(z[2])
     normal = np.array([-z[1], z[0], 0.0])  # z_prev x z
-    if last:  # the tip lies on the last axis: its own x axis, no common normal
-        d, x, point = float(p[2]), target[:3, 0].copy(), np.array([0.0, 0.0, p[2]])
+    if last:  # the tip's own x axis (a row's: across the last axis), no common normal
+        d, x, point = float(p[2]), target[:3, 0].copy(), p
     elif np.linalg.norm(normal) > tol:  # the common normal, between its feet
         # t = (p_z w - p.z) / (1 - w^2), written without cancellation for nearly parallel
         # axes (where the feet lie metres away and d is large).

@@ -550,6 +550,14 @@ def _ur_arm(cal: CalibratedArm, path: str) -> tuple[SerialChain, str]:
             f"{path}: {arm.name} is no UR model in its DH base frame (nearest {model}, "
             f"{distance:.4g} mm away); describe the arm with a robot file's [ur] table"
         )
+    try:
+        ur_deltas(chain, model)
+    except ValueError as exc:  # what a UR's DH table cannot hold, e.g. a tilted joint 1
+        raise ArmcalError(
+            f"{path}: the calibrated {arm.name} has no UR DH table: {exc}; a UR's table starts "
+            "at joint 1's axis, so leave the base pose free (the joint's placement merges "
+            "into it) rather than fixing base.* and identifying j1.*"
+        ) from None
     return chain, model
 
 
@@ -561,7 +569,10 @@ def _ur_texts(cal: CalibratedArm, ur_path: str | None, ros_path: str | None) -> 
         texts[ur_path] = format_ur_calibration(ur_deltas(chain, model))
     if ros_path is not None:
         chain, model = _ur_arm(cal, ros_path)
-        texts[ros_path] = format_ur_kinematics(chain, f"armcal_{cal.arm.name}_{model}")
+        try:
+            texts[ros_path] = format_ur_kinematics(chain, model, f"armcal_{cal.arm.name}_{model}")
+        except ValueError as exc:
+            raise ArmcalError(f"{ros_path}: the calibrated {cal.arm.name}: {exc}") from None
     return texts
 
 
