@@ -139,3 +139,13 @@ joint_map = [[1, 0, 0, 0, 0, 0], [0, 1, 0, 0, 0, 0], [0, 1, 1, 0, 0, 0],
              [0, 0, 0, 1, 0, 0], [0, 0, 0, 0, 1, 0], [0, 0, 0, 0, 0, 1]]
 joint_limits_deg = [[-185, 185], [-60, 76], [-132, 150], [-360, 360], [-125, 125], [-360, 360]]
 """
+
+
+def write_cycles(path: Path, poses: np.ndarray, cycles: int) -> None:
+    """A plan of ``poses`` ``(k, n)`` (rad) each visited ``cycles`` times, one pose after
+    the other in every cycle, with a 'pose' column (``P1``..): the rows of an ISO 9283
+    test, which synthesize keeps labelled."""
+    head = "pose," + ",".join(f"q{j + 1}_deg" for j in range(poses.shape[1]))
+    text = [",".join(repr(float(v)) for v in np.degrees(pose)) for pose in poses]
+    rows = [f"P{p + 1},{line}" for _ in range(cycles) for p, line in enumerate(text)]
+    path.write_text("\n".join([head, *rows]) + "\n", encoding="utf-8")

@@ -18,7 +18,7 @@ import pytest
 
 from armcal.acceptance import ISO_CYCLES, pose_characteristics, pose_characteristics_warnings
 from armcal.errors import ArmcalError
-from helpers import run_cli
+from helpers import run_cli, write_cycles
 from test_spatial_virtual import plan_file
 
 
@@ -81,14 +81,8 @@ def test_what_is_not_a_repeated_pose_is_refused(q, labels, message):
 def _cycles_file(tmp_path, poses: int, cycles: int, seed: int) -> None:
     """``iso.csv``: ``poses`` poses of the industrial arm, each measured ``cycles`` times:
     a plan with a 'pose' column, which synthesize copies into the measurements."""
-    arm, q = plan_file(tmp_path, "industrial-6r", m=poses, seed=seed, name="poses.csv")
-    head = "pose," + ",".join(f"q{k + 1}_deg" for k in range(arm.n_joints))
-    rows = [
-        f"P{p + 1}," + ",".join(repr(float(v)) for v in np.degrees(q[p]))
-        for _ in range(cycles)
-        for p in range(poses)
-    ]
-    (tmp_path / "cycles.csv").write_text("\n".join([head, *rows]) + "\n", encoding="utf-8")
+    _, q = plan_file(tmp_path, "industrial-6r", m=poses, seed=seed, name="poses.csv")
+    write_cycles(tmp_path / "cycles.csv", q, cycles)
     result = run_cli(
         tmp_path, "synthesize", "--robot", "industrial-6r", "--plan", "cycles.csv", "--sigma",
         "0.02", "--seed", str(seed), "-o", "iso.csv",

@@ -32,7 +32,7 @@ from armcal.models.spatial_chain import (
 )
 from armcal.noise import NoiseModel
 from armcal.simulate import monte_carlo
-from helpers import INDUSTRIAL_HEAD, central_differences, run_cli
+from helpers import INDUSTRIAL_HEAD, central_differences, run_cli, write_cycles
 from test_spatial_model import ARMS, labelled, random_poses, random_truth
 from test_spatial_virtual import plan_file
 
@@ -255,10 +255,7 @@ def test_a_six_dof_campaign_from_the_command_line(tmp_path):
     # 1 / sqrt(2 x 11) = 21 %: their mean within 20 %).
     cell = load_serial_robot(tmp_path / "cell.toml").arm
     poses = random_poses(cell, 5, np.random.default_rng(15))
-    head = "pose," + ",".join(f"q{k + 1}_deg" for k in range(6))
-    text = [",".join(repr(float(v)) for v in np.degrees(pose)) for pose in poses]
-    rows = [f"P{p + 1},{text[p]}" for _ in range(12) for p in range(5)]
-    (tmp_path / "cycles.csv").write_text("\n".join([head, *rows]) + "\n", encoding="utf-8")
+    write_cycles(tmp_path / "cycles.csv", poses, 12)
     result = run_cli(
         tmp_path, "synthesize", "--robot", "cell.toml", "--truth", "truth.toml", "--plan",
         "cycles.csv", "--seed", "3", "-o", "iso.csv",
