@@ -141,6 +141,18 @@ def load_any_robot(name_or_path: str | os.PathLike) -> RobotSpec | SerialSpec:
     return load_robot(name_or_path)
 
 
+def _relative_file(path: Path, value: Any, key: str, what: str) -> Path:
+    """The existing file that ``key`` of the TOML ``path`` names, relative to ``path``."""
+    if not isinstance(value, str):
+        raise fail(path, f"key '{key}': expected a file name, got {value!r}")
+    found = path.parent / value
+    if not found.is_file():
+        raise fail(
+            path, f"key '{key}': {found} does not exist; give its path relative to the {what}"
+        )
+    return found
+
+
 def _ur_chain(path: Path, table: Any) -> tuple[SerialChain, str, tuple[ArmcalWarning, ...]]:
     """``[ur]``: a UR model's nominal DH table plus its controller's calibration deltas
     (:mod:`~armcal.files.ur`), within the controller's +-360 degrees."""
@@ -153,15 +165,7 @@ def _ur_chain(path: Path, table: Any) -> tuple[SerialChain, str, tuple[ArmcalWar
     dh = ur_nominal(model)
     warnings: tuple[ArmcalWarning, ...] = ()
     if "calibration" in table:
-        if not isinstance(table["calibration"], str):
-            raise fail(path, "key 'ur.calibration': expected a file name (calibration.conf)")
-        conf = path.parent / table["calibration"]
-        if not conf.is_file():
-            raise fail(
-                path,
-                f"key 'ur.calibration': {conf} does not exist; give the controller's "
-                "calibration.conf relative to the robot file",
-            )
+        conf = _relative_file(path, table["calibration"], "ur.calibration", "robot file")
         if conf.suffix.lower() in (".yaml", ".yml"):  # the ROS driver's: the whole chain
             chain = read_ur_kinematics(conf)
         else:  # the controller's calibration.conf: deltas to the nominal table
@@ -185,15 +189,7 @@ def _chain(
     if "ur" in data:
         return _ur_chain(path, data["ur"])
     if "urdf" in data:
-        if not isinstance(data["urdf"], str):
-            raise fail(path, f"key 'urdf': expected a file name, got {data['urdf']!r}")
-        urdf = path.parent / data["urdf"]
-        if not urdf.is_file():
-            raise fail(
-                path,
-                f"key 'urdf': {urdf} does not exist; give the URDF's path relative to the "
-                "robot file",
-            )
+        urdf = _relative_file(path, data["urdf"], "urdf", "robot file")
         links = {}
         for name in ("base_link", "tip_link"):
             if name in data and not isinstance(data[name], str):
@@ -528,14 +524,7 @@ def load_serial_truth(path: str | os.PathLike, arm: SpatialArm) -> np.ndarray:
     labels, positions = _targets(path, data.get("targets"))
     chain = arm.chain
     if "robot" in data:
-        if not isinstance(data["robot"], str):
-            raise fail(path, "key 'robot': expected the true arm's robot file (URDF or TOML)")
-        other = path.parent / data["robot"]
-        if not other.is_file():
-            raise fail(
-                path,
-                f"key 'robot': {other} does not exist; give a path relative to the truth file",
-            )
+        other = _relative_file(path, data["robot"], "robot", "truth file")
         chain = load_serial_robot(other).arm.chain
         if chain.kinds != arm.chain.kinds:
             raise fail(
