@@ -307,3 +307,22 @@ def test_a_probe_that_moved_on_the_flange_is_caught_by_cross_validation():
     assert warning is not None and "orientation RMS" in warning.message
     summary = checked.summary()
     assert summary["orientation_rms_deg"] > 2 * summary["predicted_orientation_rms_deg"]
+
+
+def test_validation_s_predictions_are_the_same_in_chunks(monkeypatch):
+    """validate predicts held-out errors a chunk of rows at a time (memory flat in the
+    rows): chunks of 7 rows give what one pass gives, positions and turns alike."""
+    import armcal.validation as validation
+    from armcal.models import CalibratedArm
+
+    rng = np.random.default_rng(17)
+    full = oriented("industrial", 2)
+    arm = full.prepared(full.plan_conditions(random_poses(full, 30, rng)))
+    factor = rng.normal(size=(arm.n_params, arm.n_params)) * 1e-4
+    cal = CalibratedArm(arm, arm.nominal, factor @ factor.T, 0.01)
+    rows = arm.plan_conditions(random_poses(arm, 25, rng))
+    whole = validation._predicted(cal, rows)
+    monkeypatch.setattr(validation, "PREDICTED_CHUNK", 7)
+    chunked = validation._predicted(cal, rows)
+    for one, other in zip(whole, chunked, strict=True):
+        np.testing.assert_allclose(other, one, rtol=1e-12)

@@ -187,11 +187,32 @@ def predicted_errors(
     return _predicted(cal, conditions)[:2]
 
 
+#: Rows whose Jacobians :func:`_predicted` holds at once (about 10 MB for a six-axis arm):
+#: memory stays flat in the number of held-out rows.
+PREDICTED_CHUNK = 4096
+
+
 def _predicted(
     cal: CalibratedArm, conditions: Conditions
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray | None]:
     """The model's uncertainty and a measurement's expected error of the positions (mm),
-    and of a 6-DoF instrument's turns (rad; None without)."""
+    and of a 6-DoF instrument's turns (rad; None without), :data:`PREDICTED_CHUNK` rows at
+    a time."""
+    parts = [
+        _predicted_rows(cal, conditions.take(slice(start, start + PREDICTED_CHUNK)))
+        for start in range(0, conditions.m, PREDICTED_CHUNK)
+    ]
+    turns = [part[2] for part in parts if part[2] is not None]
+    return (
+        np.concatenate([part[0] for part in parts]),
+        np.concatenate([part[1] for part in parts]),
+        np.concatenate(turns) if len(turns) == len(parts) else None,
+    )
+
+
+def _predicted_rows(
+    cal: CalibratedArm, conditions: Conditions
+) -> tuple[np.ndarray, np.ndarray, np.ndarray | None]:
     model, d = cal.model, cal.model.position_dim
     jac = model.jacobian(conditions, cal.params)
     noise = model.pose_covariances(conditions, cal.params, noise=_noise(cal))
