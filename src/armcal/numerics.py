@@ -29,6 +29,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from .errors import ArmcalError
 
@@ -46,6 +47,7 @@ __all__ = [
     "scaled_svd",
     "solve_least_squares",
     "spd_inverse",
+    "wrap_angle",
 ]
 
 
@@ -478,3 +480,15 @@ def box_image(matrix: np.ndarray, box: np.ndarray) -> np.ndarray:
     low = matrix * box[:, 0]
     high = matrix * box[:, 1]
     return np.column_stack([np.minimum(low, high).sum(axis=1), np.maximum(low, high).sum(axis=1)])
+
+
+def wrap_angle(angle: ArrayLike) -> np.ndarray:
+    """Wrap angles (rad) into ``(-pi, pi]``.
+
+    Examples
+    --------
+    >>> wrap_angle(np.array([np.pi, -np.pi, 3 * np.pi / 2])).round(6).tolist()
+    [3.141593, 3.141593, -1.570796]
+    """
+    wrapped = np.mod(np.asarray(angle, dtype=float) + np.pi, 2 * np.pi) - np.pi
+    return np.where(wrapped <= -np.pi, wrapped + 2 * np.pi, wrapped)

@@ -89,11 +89,7 @@ def _error_map(
 
 def _variance(fig: Figure, spec, model: FitModel, certificate: Certificate, poses) -> None:
     ax = fig.add_subplot(spec)
-    info = model.plan_information(certificate.support)
-    blocks = info.blocks()  # M = sum_x w_x B_x^T B_x / T (T targets a pose): the certificate's
-    weighted = blocks * np.sqrt(certificate.weights / info.rows_per_pose)[:, None, None]
-    flat = weighted.reshape(-1, blocks.shape[-1])
-    inverse = np.linalg.pinv(flat.T @ flat)
+    inverse = certificate.reference_inverse(model)
     values, _ = model.plan_information(poses).pose_variance(inverse)
     ax.plot(np.sort(values)[::-1], color="C0", label="d(x) at random feasible poses, sorted")
     ax.axhline(model.n_free, color="C2", ls="--", label=f"p = {model.n_free}: the optimum's")

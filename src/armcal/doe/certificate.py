@@ -66,6 +66,11 @@ class Certificate:
     weights: np.ndarray
     max_pose: np.ndarray | None = None
 
+    def reference_inverse(self, model: FitModel) -> np.ndarray:
+        """``M(xi*)^-1`` of the reference design (its support and weights) by the rank
+        policy: the matrix whose variance function ``max_variance`` bounds."""
+        return _weighted_svd(_pose_blocks(model, self.support), self.weights).inverse_gram()[0]
+
 
 def _variance_function(model: FitModel, q: np.ndarray, m_inv: np.ndarray):
     """``d(x) = tr(M^-1 I(x))`` ``(k,)`` of poses ``q`` ``(k, n)`` and its gradient ``(k, n)``."""

@@ -39,6 +39,7 @@ import numpy as np
 from ..errors import ArmcalWarning
 from ..models.spatial_chain import SerialChain, elementary, transform
 from ..models.spatial_dh import DhTable, dh_table
+from ..numerics import wrap_angle
 from .common import fail, read_text
 
 __all__ = [
@@ -127,33 +128,26 @@ def ur_deltas(chain: SerialChain, model: str) -> UrDh:
     nominal = ur_nominal(model)
     reference = DhTable(nominal.theta, 1000.0 * nominal.d, 1000.0 * nominal.a, nominal.alpha)
     table = dh_table(chain, reference)
-
-    def turned(delta: np.ndarray) -> np.ndarray:
-        return (delta + np.pi) % (2 * np.pi) - np.pi
-
     return UrDh(
-        turned(table.theta - nominal.theta),
+        wrap_angle(table.theta - nominal.theta),
         table.a / 1000.0 - nominal.a,
         table.d / 1000.0 - nominal.d,
-        turned(table.alpha - nominal.alpha),
+        wrap_angle(table.alpha - nominal.alpha),
     )
+
+
+def _farthest_mm(chain: SerialChain, model: str, poses: int) -> float:
+    """The largest distance (mm) between ``chain``'s flange and ``model``'s nominal one over
+    ``poses`` random readings (seeded: the same figure every run)."""
+    q = np.random.default_rng(0).uniform(-np.pi, np.pi, (poses, 6))
+    moved = chain.forward(q)[..., :3, 3] - ur_chain(ur_nominal(model)).forward(q)[..., :3, 3]
+    return float(np.max(np.linalg.norm(moved, axis=-1)))
 
 
 def ur_model_of(chain: SerialChain, *, poses: int = 200) -> tuple[str, float]:
     """The UR model whose nominal flange lies nearest ``chain``'s over random poses, and
     that largest distance (mm): models differ by centimetres, a calibration by millimetres."""
-    q = np.random.default_rng(0).uniform(-np.pi, np.pi, (poses, 6))
-    flange = chain.forward(q)[..., :3, 3]
-    distance = {
-        model: float(
-            np.max(
-                np.linalg.norm(
-                    ur_chain(ur_nominal(model)).forward(q)[..., :3, 3] - flange, axis=-1
-                )
-            )
-        )
-        for model in UR_MODELS
-    }
+    distance = {model: _farthest_mm(chain, model, poses) for model in UR_MODELS}
     model = min(distance, key=distance.__getitem__)
     return model, distance[model]
 
@@ -228,10 +222,7 @@ def ur_calibration_warning(
 ) -> ArmcalWarning | None:
     """``ur-calibration-far`` when the ``calibrated`` chain's flange lies farther than
     :data:`FAR_FROM_NOMINAL_MM` from the nominal model's at ``poses`` random poses."""
-    q = np.random.default_rng(0).uniform(-np.pi, np.pi, (poses, 6))
-    nominal = ur_chain(ur_nominal(model)).forward(q)[..., :3, 3]
-    moved = calibrated.forward(q)[..., :3, 3] - nominal
-    largest = float(np.max(np.linalg.norm(moved, axis=-1)))
+    largest = _farthest_mm(calibrated, model, poses)
     if largest <= FAR_FROM_NOMINAL_MM:
         return None
     return ArmcalWarning(

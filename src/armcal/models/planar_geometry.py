@@ -42,6 +42,8 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import ArrayLike
 
+from ..numerics import wrap_angle
+
 __all__ = [
     "PlanarGeometry",
     "Target",
@@ -445,18 +447,6 @@ def _check_targets(targets: tuple[Target, ...]) -> None:
             )
         if not (np.isfinite(t.length) and t.length > 0 and np.isfinite(t.angle)):
             raise ValueError(f"target {t.label}: length must be positive and angle finite")
-
-
-def wrap_angle(angle: np.ndarray) -> np.ndarray:
-    """Wrap angles (rad) into ``(-pi, pi]``.
-
-    Examples
-    --------
-    >>> wrap_angle(np.array([np.pi, -np.pi, 3 * np.pi / 2])).round(6).tolist()
-    [3.141593, 3.141593, -1.570796]
-    """
-    wrapped = np.mod(angle + np.pi, 2 * np.pi) - np.pi
-    return np.where(wrapped <= -np.pi, wrapped + 2 * np.pi, wrapped)
 
 
 def link_angles(q: np.ndarray) -> np.ndarray:

@@ -27,6 +27,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..numerics import wrap_angle
 from .spatial_chain import SerialChain, dh_row, elementary, transform
 
 __all__ = [
@@ -191,10 +192,6 @@ class DhTable:
         return SerialChain.from_dh(self.theta, self.d, self.a, self.alpha, joint_names)
 
 
-def _wrap(angle: float) -> float:
-    return float((angle + np.pi) % (2 * np.pi) - np.pi)
-
-
 def dh_table(chain: SerialChain, reference: DhTable, *, tol: float = 1e-9) -> DhTable:
     """The standard DH table of a revolute ``chain``, exact to round-off, on the branch of
     ``reference`` (its nominal table: every ``x`` axis on the side that keeps ``theta``
@@ -262,8 +259,8 @@ def _dh_row_of(target: np.ndarray, last: bool, theta_ref: float, tol: float) -> 
             x = np.array([np.cos(theta_ref), np.sin(theta_ref), 0.0])
     x = x / np.linalg.norm(x)
     theta = float(np.arctan2(x[1], x[0]))
-    if not last and abs(_wrap(theta - theta_ref)) > np.pi / 2:  # the reference's side
-        x, theta = -x, _wrap(theta + np.pi)
+    if not last and abs(wrap_angle(theta - theta_ref)) > np.pi / 2:  # the reference's side
+        x, theta = -x, float(wrap_angle(theta + np.pi))
     y = np.cross([0.0, 0.0, 1.0], x)
     alpha = float(np.arctan2(-(z @ y), z[2]))
     a = float((point - [0.0, 0.0, d]) @ x)

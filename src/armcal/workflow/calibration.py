@@ -563,12 +563,14 @@ def _ur_arm(cal: CalibratedArm, path: str) -> tuple[SerialChain, str]:
 
 def _ur_texts(cal: CalibratedArm, ur_path: str | None, ros_path: str | None) -> dict[str, str]:
     """A UR controller's calibration.conf deltas and the ROS driver's calibration YAML."""
-    texts = {}
+    texts: dict[str, str] = {}
+    first = ur_path if ur_path is not None else ros_path
+    if first is None:
+        return texts
+    chain, model = _ur_arm(cal, first)
     if ur_path is not None:
-        chain, model = _ur_arm(cal, ur_path)
         texts[ur_path] = format_ur_calibration(ur_deltas(chain, model))
     if ros_path is not None:
-        chain, model = _ur_arm(cal, ros_path)
         try:
             texts[ros_path] = format_ur_kinematics(chain, model, f"armcal_{cal.arm.name}_{model}")
         except ValueError as exc:
