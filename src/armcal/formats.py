@@ -341,6 +341,45 @@ SERIAL_KEYS: tuple[Key, ...] = (
         "table as the controller does, or the ROS driver's calibration YAML (.yaml): the "
         "arm's own joint frames",
     ),
+    Key(
+        "elastostatic",
+        "gravity",
+        "a direction [gx, gy, gz] in the robot's base frame",
+        "[0, 0, -1]: a floor-mounted arm",
+        "gravity, scaled to 9.80665 m/s^2; the table makes the revolute joints compliant",
+    ),
+    Key(
+        "elastostatic",
+        "link_masses_kg",
+        "kg, one per joint",
+        "the URDF's <inertial> tags, else the lumped mode",
+        "what each joint moves up to the next joint; compliance k1..kn [urad/(N*m)]",
+    ),
+    Key(
+        "elastostatic",
+        "link_com_mm",
+        "mm, [x, y, z] per joint, in the joint's frame after its motion (z its axis)",
+        "the joint's origin",
+        "every link's centre of mass",
+    ),
+    Key(
+        "elastostatic",
+        "lumped",
+        "true/false",
+        "true when no masses are known",
+        "masses unknown: c{j}.{s} [mdeg/m], joint j's twist per metre of horizontal lever "
+        "arm to station s (the joints beyond it and the tip), and with payloads that vary k{j}",
+    ),
+    Key(
+        "elastostatic", "payload_kg", "kg", "0", "the payload of rows without a payload_kg column"
+    ),
+    Key(
+        "elastostatic",
+        "payload_com_mm",
+        "mm, [x, y, z] in the tip (flange) frame",
+        "[0, 0, 0]",
+        "the payload's centre of mass",
+    ),
 )
 
 #: A spatial arm's truth TOML (virtual arms).
@@ -366,6 +405,13 @@ SERIAL_TRUTH_KEYS: tuple[Key, ...] = (
         "table of LABEL = { xyz_mm = [x, y, z] }",
         "the robot file's",
         "the reflectors' true positions in the tip frame",
+    ),
+    Key(
+        "",
+        "compliance",
+        "table of parameter = value (urad/(N*m) for k2, mdeg/m for c2.j3)",
+        "none: 0",
+        "the true joint compliance of a robot with [elastostatic]",
     ),
 )
 

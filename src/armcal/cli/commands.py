@@ -36,6 +36,7 @@ from ..files import (
     load_any_robot,
     load_compliance_truth,
     load_robot,
+    load_serial_compliance_truth,
     load_serial_robot,
     load_serial_truth,
     load_truth,
@@ -49,7 +50,7 @@ from ..files import (
     write_json,
 )
 from ..formats import format_reference
-from ..models import CompliantArm, FitModel, PlanarArm, SpatialArm
+from ..models import CompliantArm, CompliantSerialArm, FitModel, PlanarArm, SpatialArm
 from ..progress import ProgressBar
 from ..report import (
     acceptance_report,
@@ -132,7 +133,10 @@ def _truth(args: argparse.Namespace, spec: RobotSpec | SerialSpec, model: FitMod
                 "(robot = the true arm's file, base = the instrument's pose, [errors], "
                 "[targets]; armcal formats)"
             )
-        return load_serial_truth(path, model.arm)
+        geometry = load_serial_truth(path, model.arm)
+        if not isinstance(model, CompliantSerialArm):
+            return geometry
+        return np.concatenate([geometry, load_serial_compliance_truth(path, model)])
     if isinstance(model, CompliantArm):
         if args.truth is None:
             keys = ", ".join(COMPLIANCE_TRUTH_KEYS[k] for k in dict.fromkeys(model.kinds))
@@ -254,7 +258,9 @@ def identify(args: argparse.Namespace) -> None:
         if is_serial_robot(args.robot):
             serial = load_serial_robot(args.robot)
             meas = read_measurements(args.measurements, serial.arm)
-            run = calibrate_serial(serial, meas, **_options(args))
+            run = calibrate_serial(
+                serial, meas, compliance=not args.no_compliance, **_options(args)
+            )
         else:
             spec = load_robot(args.robot)
             meas = read_measurements(args.measurements, spec.arm)

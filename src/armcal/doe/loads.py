@@ -14,8 +14,10 @@ How a plan is made (:func:`design_with_loads`):
 1. Random feasible poses (joint limits and the instrument's view) times every
    payload make the candidates; the multiplicative algorithm gives the
    D-optimal weights on them.
-2. Greedy selection from the weights' support and the modified Fedorov exchange
-   (:func:`armcal.doe.exchange.exchange_indices`) pick ``m`` points.
+2. The weights rounded to ``m`` points, then the modified Fedorov exchange
+   (:func:`armcal.doe.exchange.exchange_indices`) for one point in the plane a
+   pose, DETMAX (:func:`armcal.doe.pool.detmax_indices`) for several rows a pose
+   (a spatial arm's targets).
 3. A continuous polish moves every pose uphill in ``log det M`` (the gradient
    of ``log det`` in pose ``i`` is that of ``d_i(x) = tr(M^-1 F_x^T F_x)`` with
    ``M`` held), within the limits and the view; the payloads stay.
@@ -44,6 +46,7 @@ from .designer import Design
 from .exchange import exchange_indices
 from .order import ORDERS, joint_travel, order_poses
 from .plans import feasible_poses
+from .pool import detmax_indices
 
 __all__ = [
     "design_with_loads",
@@ -229,21 +232,13 @@ def design_with_loads(
     Raises
     ------
     ArmcalError
-        If the model's points do not depend on the load, or it has several
-        targets.
+        If the model's points do not depend on the load.
     NotIdentifiableError
         If no plan of these poses and payloads can identify every parameter
         (e.g. ``k`` and ``c`` with a single payload in the lumped mode).
     """
     if order not in ORDERS:
         raise ArmcalError(f"unknown order {order!r}; choose one of {', '.join(ORDERS)}")
-    targets = len(model.target_labels)
-    if targets > 1:
-        raise ArmcalError(
-            f"{model.name} has {targets} targets: plans for joint compliance are "
-            "designed for one target per pose (exchange weighs a pose by one point); design "
-            "for the target the tool carries, then measure every target at its poses"
-        )
     chosen = model.design_loads(payloads)
     if chosen is None:
         raise ArmcalError(f"the points of {model.name} do not depend on the load: use design()")
@@ -272,7 +267,12 @@ def design_with_loads(
     blocks = points.blocks(cand_q, cand_w)
     counts = np.floor(ref_weights * m).astype(int)
     start = np.repeat(np.arange(ref_q.shape[0]), counts)[:m]
-    index = exchange_indices(blocks, start, m)
+    if blocks.shape[-2] == 2:  # one point in the plane: the modified Fedorov exchange
+        index = exchange_indices(blocks, start, m)
+    else:  # several rows a pose: DETMAX from the reference design rounded up
+        ranked = np.argsort(-(ref_weights * m - counts), kind="stable")
+        rest = np.resize(ranked, m - start.size)
+        index = detmax_indices(blocks, np.concatenate([start, rest]))
     q, w = cand_q[index], cand_w[index]
     q = _polish(points, model, q, w)
     plan_blocks = points.blocks(q, w)

@@ -13,6 +13,9 @@ and any number of rows per pose, on the poses' information blocks:
    ``d(x) = tr(M^-1 I(x))``, then drop the plan pose whose removal costs least,
    ``det(I - F_i M'^-1 F_i^T)`` largest, until the pose added is the one dropped.
 
+:func:`detmax_indices` is step 3 alone, for any candidates' blocks (poses with
+a payload, :mod:`armcal.doe.loads`, of several rows each).
+
 Every pose of the result is a pool pose, so it satisfies whatever the pool
 satisfies.
 """
@@ -27,6 +30,7 @@ from ..numerics import spd_inverse
 from .certificate import multiplicative_weights
 
 __all__ = [
+    "detmax_indices",
     "pool_plan",
     "pool_weights_plan",
 ]
@@ -69,7 +73,15 @@ def pool_plan(model: FitModel, m: int, pool: np.ndarray) -> np.ndarray:
             f"the {pool.shape[0]} candidate poses cannot identify the {p} free parameters "
             "of " + model.name + " together; add poses that move every joint"
         )
-    chosen = list(_largest_weights(blocks, m))
+    return detmax_indices(blocks, _largest_weights(blocks, m))
+
+
+def detmax_indices(blocks: np.ndarray, start: np.ndarray) -> np.ndarray:
+    """Mitchell's DETMAX with excursions of one pose (module notes) from the ``m`` indices
+    ``start`` into the candidates' information blocks ``(N, r, p_f)``, any ``r``: the
+    ``m`` indices it ends with, ``det M`` never lower than the start's."""
+    chosen = [int(i) for i in start]
+    m = len(chosen)
     for _ in range(MAX_EXCHANGES):
         plan = blocks[chosen]
         information = np.einsum("krp,krq->pq", plan, plan)

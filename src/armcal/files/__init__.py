@@ -34,6 +34,7 @@ from .serial import (
     SerialSpec,
     is_serial_robot,
     load_any_robot,
+    load_serial_compliance_truth,
     load_serial_robot,
     load_serial_truth,
 )
@@ -81,6 +82,7 @@ __all__ = [
     "load_any_robot",
     "load_compliance_truth",
     "load_robot",
+    "load_serial_compliance_truth",
     "load_serial_robot",
     "load_serial_truth",
     "load_truth",

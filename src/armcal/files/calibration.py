@@ -24,12 +24,14 @@ from ..models import (
     Box,
     CalibratedArm,
     CompliantArm,
+    CompliantSerialArm,
     Elastostatic,
     FitModel,
     PlanarArm,
     Plane,
     Region,
     SerialChain,
+    SerialElastics,
     SpatialArm,
     Target,
 )
@@ -110,7 +112,7 @@ def _serial_from_dict(
         np.where(np.abs(limits) >= 1e300, np.copysign(np.inf, limits), limits),
     )
     held = tuple(str(name) for name in data["held"])
-    return SpatialArm(
+    arm = SpatialArm(
         chain,
         str(data["name"]),
         np.array(data["joint_map"], dtype=float).reshape(n, n),
@@ -119,13 +121,15 @@ def _serial_from_dict(
         target_positions=np.array(data["target_positions_mm"], dtype=float).reshape(-1, 3),
         base_pose=np.array(data["base_pose"], dtype=float).reshape(6),
         noise=noise,
-        user_fixed=tuple(name for name in fixed if name not in held),
         held=held,
         merges=tuple(str(text) for text in data["merges"]),
         known_targets=bool(data["known_targets"]),
         oriented=bool(data.get("oriented", False)),
         target_turns=np.array(data.get("target_turns_rad", []), dtype=float).reshape(-1, 3),
     )
+    # "fixed" lists every parameter held, by the user or a rule, an effect's too
+    own = set(arm.layout.names) - set(held)
+    return arm.replace(user_fixed=tuple(name for name in fixed if name in own))
 
 
 def robot_to_dict(arm: PlanarArm | SpatialArm) -> dict[str, Any]:
@@ -232,7 +236,7 @@ def read_calibration(path: str | os.PathLike) -> CalibratedArm:
             else _arm_from_dict(doc["robot"], noise, fixed)
         )
         model: FitModel = arm
-        if doc.get("elastostatic") is not None and isinstance(arm, PlanarArm):
+        if doc.get("elastostatic") is not None:
             key = "elastostatic"
             model = _compliance_from_dict(arm, doc["elastostatic"])
         key = "parameters"
@@ -271,8 +275,23 @@ def read_calibration(path: str | os.PathLike) -> CalibratedArm:
     return CalibratedArm(model, values, full, sigma, plane)
 
 
-def _compliance_from_dict(arm: PlanarArm, data: dict[str, Any]) -> CompliantArm:
+def _compliance_from_dict(
+    arm: PlanarArm | SpatialArm, data: dict[str, Any]
+) -> CompliantArm | CompliantSerialArm:
     """The compliance model of a calibration file's ``elastostatic`` section."""
+    if isinstance(arm, SpatialArm):
+        serial = CompliantSerialArm(
+            arm,
+            SerialElastics.from_dict(data, arm.n_joints),
+            bool(data["known_loads"]),
+            tuple(str(name) for name in data["held"]),
+            tuple(str(text) for text in data["merges"]),
+        )
+        if list(data["parameters"]) != list(serial.compliance_names):
+            raise ValueError(
+                f"compliance parameters do not match {', '.join(serial.compliance_names)}"
+            )
+        return serial
     gravity = data["gravity_mps2"]
     masses = data["link_masses_kg"]
     elastic = Elastostatic(
@@ -297,6 +316,15 @@ def _finite_or_none(value: float | None) -> float | None:
 def _elastostatic_dict(cal: Calibration) -> dict | None:
     """The loads model of a fit with compliance, enough to rebuild it (gravity in m/s^2)."""
     model, nested = cal.model, cal.nested
+    if isinstance(model, CompliantSerialArm) and nested is not None:
+        return {
+            **model.elastic.to_dict(),
+            "known_loads": model.known_loads,
+            "parameters": list(model.compliance_names),
+            "held": list(model.held),
+            "merges": list(model.merges),
+            "geometry_only_rms_per_coordinate_mm": nested.rms_per_coordinate_mm,
+        }
     if not isinstance(model, CompliantArm) or nested is None:
         return None
     elastic = model.elastic
@@ -367,14 +395,14 @@ def calibration_document(
         "sigma_source": cal.sigma_source,
         "noise": None if arm.noise is None else arm.noise.to_dict(),
         "elastostatic": _elastostatic_dict(cal),
-        "fixed": list(arm.fixed),
+        "fixed": list(cal.model.fixed),
         "parameters": [
             {
                 "name": name,
                 "unit": unit,
                 "value": float(v),
-                "std": 0.0 if name in arm.fixed else float(s),
-                "fixed": name in arm.fixed,
+                "std": 0.0 if name in cal.model.fixed else float(s),
+                "fixed": name in cal.model.fixed,
             }
             for name, unit, v, s in zip(cal.names, cal.units, cal.values, cal.std, strict=True)
         ],

@@ -20,15 +20,26 @@ or both (the errors on top of that description).
 from __future__ import annotations
 
 import os
+from collections.abc import Sequence
 from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from ..errors import ArmcalWarning, InputError
+from ..errors import ArmcalError, ArmcalWarning, InputError
 from ..formats import SERIAL_KEYS, SERIAL_TRUTH_KEYS, allowed_keys
-from ..models import MdhTable, SerialChain, SpatialArm, SpatialView, rpy_matrix, transform
+from ..models import (
+    CompliantSerialArm,
+    LinkMasses,
+    MdhTable,
+    SerialChain,
+    SerialElastics,
+    SpatialArm,
+    SpatialView,
+    rpy_matrix,
+    transform,
+)
 from ..noise import NoiseModel, TrackerNoise
 from .common import check_keys, fail, load_toml, number, number_within, numbers, suggest
 from .robots import SIGMA_RANGE_MM, RobotSpec, fixed_parameters, load_robot
@@ -47,6 +58,7 @@ __all__ = [
     "SerialSpec",
     "is_serial_robot",
     "load_any_robot",
+    "load_serial_compliance_truth",
     "load_serial_robot",
     "load_serial_truth",
 ]
@@ -78,15 +90,21 @@ class SerialSpec:
         The built-in name or the file it came from.
     default_truth : Path or None
         The built-in robot's truth file (a virtual arm), None for robot files.
-    warnings, elastic, gravity_3d
-        As :class:`~armcal.files.robots.RobotSpec`'s: none for a spatial arm.
+    warnings : tuple of ArmcalWarning
+        What reading the robot warns of.
+    elastic : SerialElastics or None
+        The ``[elastostatic]`` table: the joints twist under gravity and payload
+        (:mod:`armcal.models.spatial_compliance`); None for a rigid arm.
+    gravity_3d : None
+        As :class:`~armcal.files.robots.RobotSpec`'s: a spatial arm's gravity is in
+        its ``[elastostatic]`` table.
     """
 
     arm: SpatialArm
     source: str
     default_truth: Path | None = None
     warnings: tuple[ArmcalWarning, ...] = ()
-    elastic: None = None  # as RobotSpec's: no joint compliance for spatial arms yet
+    elastic: SerialElastics | None = None
     gravity_3d: None = None
 
 
@@ -125,7 +143,7 @@ def load_serial_robot(
         path = BUILTIN_SERIAL_ROBOTS[key]
         truth = path.with_name(path.stem + "-truth.toml")
         spec = _from_toml(path, key)
-        return SerialSpec(spec.arm, key, truth if truth.is_file() else None)
+        return replace(spec, default_truth=truth if truth.is_file() else None)
     path = Path(key)
     if path.suffix.lower() == ".urdf":
         found = read_urdf(path, None, tip_link)
@@ -180,14 +198,14 @@ def _ur_chain(path: Path, table: Any) -> tuple[SerialChain, str, tuple[ArmcalWar
 
 def _chain(
     path: Path, data: dict, tip_link: str | None
-) -> tuple[SerialChain, str, tuple[ArmcalWarning, ...]]:
+) -> tuple[SerialChain, str, tuple[ArmcalWarning, ...], LinkMasses | None]:
     """The chain of a robot TOML: its URDF's, its ``[mdh]`` table's or a UR's (``[ur]``),
-    a default name, and what reading it warns of."""
+    a default name, what reading it warns of, and its URDF's masses."""
     given = [key for key in _DESCRIPTIONS if key in data]
     if len(given) > 1:
         raise fail(path, f"keys {' and '.join(given)} all describe the arm; keep one")
     if "ur" in data:
-        return _ur_chain(path, data["ur"])
+        return (*_ur_chain(path, data["ur"]), None)
     if "urdf" in data:
         urdf = _relative_file(path, data["urdf"], "urdf", "robot file")
         links = {}
@@ -196,7 +214,7 @@ def _chain(
                 raise fail(path, f"key '{name}': expected a link name, got {data[name]!r}")
             links[name] = data.get(name)
         found = read_urdf(urdf, links["base_link"], tip_link or links["tip_link"])
-        return found.chain, found.robot, ()
+        return found.chain, found.robot, (), found.masses
     if "mdh" not in data:
         raise fail(
             path, "needs 'urdf' (a URDF file), an [mdh] table or a [ur] model to describe the arm"
@@ -237,13 +255,13 @@ def _chain(
         frames["base"],
         frames["tip"],
     ).chain()
-    return chain, path.stem, ()
+    return chain, path.stem, (), None
 
 
 def _from_toml(path: Path, builtin: str | None, tip_link: str | None = None) -> SerialSpec:
     data = load_toml(path, "robot")
     check_keys(path, data, allowed_keys("", SERIAL_KEYS))
-    chain, default_name, read_warnings = _chain(path, data, tip_link)
+    chain, default_name, read_warnings, masses = _chain(path, data, tip_link)
     n = chain.n_joints
     name = data.get("name", default_name)
     if not isinstance(name, str) or not name.strip():
@@ -293,7 +311,53 @@ def _from_toml(path: Path, builtin: str | None, tip_link: str | None = None) -> 
     )
     if "identify" in data:
         arm = arm.with_fixed(fixed_parameters(path, data["identify"], arm.param_names, arm.name))
-    return SerialSpec(arm, builtin or os.fspath(path), warnings=read_warnings)
+    elastic = None
+    if "elastostatic" in data:
+        elastic = _elastostatic(path, data["elastostatic"], chain, masses)
+    return SerialSpec(arm, builtin or os.fspath(path), warnings=read_warnings, elastic=elastic)
+
+
+def _elastostatic(
+    path: Path, table: Any, chain: SerialChain, masses: LinkMasses | None
+) -> SerialElastics:
+    """``[elastostatic]`` of a spatial arm: gravity in the base frame, the links' masses
+    (the table's, else the URDF's ``<inertial>``, else the lumped mode) and the payload."""
+    if not isinstance(table, dict):
+        raise fail(path, "key 'elastostatic': expected a table [elastostatic]")
+    check_keys(path, table, allowed_keys("elastostatic", SERIAL_KEYS), "elastostatic.")
+    n = chain.n_joints
+    key = "elastostatic.gravity"
+    gravity = numbers(path, table.get("gravity", [0, 0, -1]), key, 3)
+    lumped = table.get("lumped", False)
+    if not isinstance(lumped, bool):
+        raise fail(path, f"key 'elastostatic.lumped': expected true or false, got {lumped!r}")
+    mass: Any = None
+    com: Any = None
+    if "link_masses_kg" in table:
+        mass = numbers(path, table["link_masses_kg"], "elastostatic.link_masses_kg", n)
+        raw = table.get("link_com_mm", [[0.0, 0.0, 0.0]] * n)
+        if not isinstance(raw, list) or len(raw) != n:
+            raise fail(path, f"key 'elastostatic.link_com_mm': expected {n} points [x, y, z]")
+        com = [numbers(path, p, f"elastostatic.link_com_mm[{j}]", 3) for j, p in enumerate(raw)]
+    elif "link_com_mm" in table:
+        raise fail(path, "key 'elastostatic.link_com_mm': give link_masses_kg with it")
+    elif masses is not None:
+        mass, com = masses.mass_kg, masses.com_mm
+    payload = number(path, table.get("payload_kg", 0.0), "elastostatic.payload_kg")
+    payload_at = numbers(
+        path, table.get("payload_com_mm", [0, 0, 0]), "elastostatic.payload_com_mm", 3
+    )
+    try:
+        return SerialElastics.create(
+            n,
+            gravity=gravity,
+            mass_kg=None if lumped else mass,
+            com_mm=None if lumped else com,
+            payload_kg=payload,
+            payload_com_mm=payload_at,
+        )
+    except ArmcalError as exc:
+        raise fail(path, f"[elastostatic]: {exc}") from None
 
 
 #: A 6-DoF instrument's orientation noise (deg, 1 std) outside this range is a wrong unit:
@@ -549,24 +613,55 @@ def load_serial_truth(path: str | os.PathLike, arm: SpatialArm) -> np.ndarray:
 
 def _errors(path: Path, table: Any, arm: SpatialArm) -> np.ndarray:
     """``[errors]`` in display units as an internal parameter vector."""
-    if not isinstance(table, dict):
-        raise fail(path, "key 'errors': expected a table [errors] (j2.x = 0.4, dq3 = 0.05, ...)")
-    flat: dict[str, Any] = {}
-    for key, value in table.items():
-        if isinstance(value, dict):
-            flat.update({f"{key}.{k}": v for k, v in value.items()})
-        else:
-            flat[key] = value
-    out = np.zeros(arm.n_params)
     robot = ~arm.instrument_params
     names = [n for n, r in zip(arm.param_names, robot, strict=True) if r]
-    for key, value in flat.items():
-        if key not in names:
+    return _named(path, table, "errors", "j2.x = 0.4, dq3 = 0.05", arm, names, arm.param_names)
+
+
+def _named(
+    path: Path,
+    table: Any,
+    key: str,
+    example: str,
+    arm: SpatialArm,
+    names: Sequence[str],
+    order: Sequence[str],
+    scale: np.ndarray | None = None,
+) -> np.ndarray:
+    """A table of ``name = value`` in display units (dotted names nest in TOML) as a vector
+    over ``order`` in internal units; only ``names`` may be given."""
+    if not isinstance(table, dict):
+        raise fail(path, f"key '{key}': expected a table [{key}] ({example}, ...)")
+    flat: dict[str, Any] = {}
+    for name, value in table.items():
+        if isinstance(value, dict):
+            flat.update({f"{name}.{k}": v for k, v in value.items()})
+        else:
+            flat[name] = value
+    scale = arm.display_scale if scale is None else scale
+    out = np.zeros(len(order))
+    for name, value in flat.items():
+        if name not in names:
             raise fail(
                 path,
-                f"key 'errors.{key}': not an error of {arm.name}; {suggest(key, names)}the "
-                f"errors are {', '.join(names)}",
+                f"key '{key}.{name}': not a parameter of {arm.name}'s [{key}]; "
+                f"{suggest(name, names)}they are {', '.join(names)}",
             )
-        i = arm.param_names.index(key)
-        out[i] = number(path, value, f"errors.{key}") / arm.display_scale[i]
+        i = list(order).index(name)
+        out[i] = number(path, value, f"{key}.{name}") / scale[i]
     return out
+
+
+def load_serial_compliance_truth(path: str | os.PathLike, model: CompliantSerialArm) -> np.ndarray:
+    """The true compliance ``(P,)`` (internal units) of a truth TOML's ``[compliance]``
+    table (display units: urad/(N*m), mdeg/m); a parameter not given is 0."""
+    path = Path(path)
+    data = load_toml(path, "truth")
+    names = model.compliance_names
+    if "compliance" not in data:
+        return np.zeros(len(names))
+    example = f"{names[-1]} = 0.5"
+    table = data["compliance"]
+    return _named(
+        path, table, "compliance", example, model.arm, names, names, model.compliance_scale
+    )

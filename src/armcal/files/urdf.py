@@ -17,8 +17,11 @@ import xml.etree.ElementTree as ET
 from dataclasses import dataclass
 from pathlib import Path
 
+import numpy as np
+
 from ..errors import InputError
-from ..models import SerialChain, UrdfJoint
+from ..models import LinkMasses, SerialChain, UrdfJoint
+from ..models.spatial_chain import axis_frame, rpy_matrix, transform
 from .common import suggest
 
 __all__ = [
@@ -40,12 +43,17 @@ class UrdfChain:
     robot : str
         The URDF's ``<robot name>``.
     base_link, tip_link : str
+    masses : LinkMasses or None
+        Every moving link's mass and centre of mass (in armcal's joint frame, mm)
+        from the ``<inertial>`` tags of the links each joint moves rigidly (through
+        fixed joints, side branches included); None when no such link has one.
     """
 
     chain: SerialChain
     robot: str
     base_link: str
     tip_link: str
+    masses: LinkMasses | None = None
 
 
 def _line_of(text: str, tag: str, name: str) -> int:
@@ -184,7 +192,68 @@ def read_urdf(
         serial = SerialChain.from_joints(joints)
     except ValueError as exc:
         raise InputError(f"{path}: the chain from {base!r} to {tip_link!r}: {exc}") from None
-    return UrdfChain(serial, root.get("name", path.stem), base, tip_link)
+    moving = [(element, joint) for element, joint in zip(reversed(chain), joints, strict=True)]
+    masses = _link_masses(path, text, root, moving, parent_joint, children)
+    return UrdfChain(serial, root.get("name", path.stem), base, tip_link, masses)
+
+
+def _inertials(path: Path, text: str, root: ET.Element) -> dict[str, tuple[float, np.ndarray]]:
+    """Every link's ``<inertial>``: its mass (kg) and centre of mass in its frame (mm)."""
+    out = {}
+    for link in root.findall("link"):
+        inertial = link.find("inertial")
+        if inertial is None:
+            continue
+        name = link.get("name", "")
+        where = f"line {_line_of(text, 'link', name)}, link {name!r}"
+        mass = inertial.find("mass")
+        value = None if mass is None else _floats(path, text, mass, "value", 1, where)
+        if value is None or value[0] < 0:
+            raise InputError(
+                f"{path}: {where}: <inertial> needs <mass value> >= 0 (kg); give the link's mass"
+            )
+        origin = inertial.find("origin")
+        xyz = None if origin is None else _floats(path, text, origin, "xyz", 3, where)
+        out[name] = (value[0], 1000.0 * np.array(xyz or (0.0, 0.0, 0.0)))
+    return out
+
+
+def _link_masses(
+    path: Path,
+    text: str,
+    root: ET.Element,
+    chain: list[tuple[ET.Element, UrdfJoint]],
+    parent_joint: dict[str, ET.Element],
+    children: dict[str, list[str]],
+) -> LinkMasses | None:
+    """What every moving joint of ``chain`` moves rigidly: mass and centre (module notes)."""
+    inertial = _inertials(path, text, root)
+    masses, centres, seen = [], [], False
+    for element, joint in chain:
+        if joint.kind == "fixed":
+            continue
+        child = element.find("child")
+        assert child is not None
+        total, moment = 0.0, np.zeros(3)
+        stack = [(child.get("link", ""), np.eye(4))]
+        while stack:
+            link, frame = stack.pop()
+            if link in inertial:
+                mass, centre = inertial[link]
+                total, moment = (
+                    total + mass,
+                    moment + mass * (frame[:3, :3] @ centre + frame[:3, 3]),
+                )
+                seen = True
+            for below in children[link]:
+                if parent_joint[below].get("type") != "fixed":
+                    continue  # a side branch that moves (a gripper's fingers): not rigid
+                fixed = _joint(path, text, parent_joint[below])
+                stack.append((below, frame @ transform(rpy_matrix(fixed.rpy), fixed.xyz)))
+        centre = moment / total if total > 0 else np.zeros(3)
+        masses.append(total)
+        centres.append(axis_frame(joint.axis).T @ centre)  # armcal's frame: z along the axis
+    return LinkMasses(np.array(masses), np.array(centres)) if seen else None
 
 
 def _joint(path: Path, text: str, element: ET.Element) -> UrdfJoint:

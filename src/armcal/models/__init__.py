@@ -13,6 +13,8 @@
   :mod:`~armcal.models.spatial_kinematics`, :mod:`~armcal.models.spatial_selection`,
   :mod:`~armcal.models.spatial_registration`, :mod:`~armcal.models.spatial` -- a spatial
   serial arm (:class:`SpatialArm`) from a URDF or a modified DH table;
+* :mod:`~armcal.models.spatial_gravity`, :mod:`~armcal.models.spatial_compliance` --
+  its joints twisting under gravity and payload (:class:`CompliantSerialArm`);
 * :mod:`~armcal.models.plane` -- the plane of motion of 3-D data;
 * :mod:`~armcal.models.calibrated` -- an arm with its identified deviations.
 """
@@ -93,7 +95,9 @@ from .spatial_chain import (
     transform,
     vector_rotation,
 )
+from .spatial_compliance import CompliantSerialArm, SerialElastics
 from .spatial_dh import MdhTable, mdh_table
+from .spatial_gravity import LinkMasses
 from .spatial_kinematics import SpatialLayout, default_targets
 from .spatial_selection import Selection
 from .spatial_view import SpatialView
@@ -109,6 +113,7 @@ __all__ = [
     "ClosedFormPlan",
     "ClosedFormPlans",
     "CompliantArm",
+    "CompliantSerialArm",
     "Conditions",
     "DesignEffort",
     "Effect",
@@ -116,6 +121,7 @@ __all__ = [
     "FitModel",
     "Identifiability",
     "LinearPositions",
+    "LinkMasses",
     "Loads",
     "MdhTable",
     "PaperCriteria",
@@ -127,6 +133,7 @@ __all__ = [
     "Region",
     "Selection",
     "SerialChain",
+    "SerialElastics",
     "SpatialArm",
     "SpatialLayout",
     "SpatialView",

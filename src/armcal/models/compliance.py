@@ -50,6 +50,7 @@ from __future__ import annotations
 from collections.abc import Sequence
 from dataclasses import dataclass, replace
 from functools import cached_property
+from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -176,6 +177,11 @@ class Elastostatic:
     def lumped(self) -> bool:
         """True when the masses are unknown (parameters ``c1..cn``)."""
         return self.link_masses_kg is None
+
+    def model_for(self, arm: Any, loads: Loads, *, virtual: bool = False) -> CompliantArm:
+        """The compliant model of ``arm`` for rows with ``loads``
+        (:meth:`CompliantArm.for_loads`)."""
+        return CompliantArm.for_loads(arm, self, loads, virtual=virtual)
 
     def with_gravity(self, gravity: np.ndarray | None) -> Elastostatic:
         """The same loads with gravity (m/s^2) given in another frame."""

@@ -40,6 +40,7 @@ __all__ = [
     "mean_tip_variance",
     "pose_derivative",
     "predicted_covariance",
+    "refit_free",
     "tip_variances",
     "weighted_whitening",
     "whitened_blocks",
@@ -148,6 +149,30 @@ def column_identifiability(
         poorly_determined=tuple(combination(v, names, drop=1e-3) for v in weak_rows),
     )
     return info, svd
+
+
+#: Gauss-Newton steps at most of :func:`refit_free` (it converges in a few).
+_REFIT_STEPS = 30
+
+
+def refit_free(model: FitModel, conditions: Conditions, params: np.ndarray) -> np.ndarray:
+    """The free parameters that reproduce ``params``' points at these rows, the held ones
+    at their held values: Gauss-Newton from ``params`` (a held parameter of a spatial arm
+    merges by an exact symmetry of the kinematics, so the points are reproduced to
+    round-off).  What :meth:`~armcal.models.interface.FitModel.expressed` does for a
+    family whose held parameters are not zero."""
+    goal = model.positions(conditions, params)
+    free = model.free
+    out = np.where(free, np.asarray(params, dtype=float), model.held_values)
+    tol = 1e-12 * model.reach_mm
+    for _ in range(_REFIT_STEPS):
+        miss = (goal - model.positions(conditions, out)).reshape(-1)
+        jac = model.jacobian(conditions, out)[..., free].reshape(miss.size, -1)
+        step, *_ = np.linalg.lstsq(jac, miss, rcond=None)
+        out[free] += step
+        if np.max(np.abs(jac @ step), initial=0.0) <= tol:
+            break
+    return out
 
 
 def predicted_covariance(

@@ -32,6 +32,7 @@ from .information import (
     Linearization,
     column_identifiability,
     covariance_factor_from,
+    refit_free,
     whitened_blocks,
     whitened_free_jacobian,
 )
@@ -64,9 +65,6 @@ __all__ = [
 
 #: The label of the one target of data without a target column.
 SINGLE_TARGET = "tool"
-
-#: Gauss-Newton steps at most of :meth:`SpatialArm.expressed` (it converges in a few).
-_EXPRESS_STEPS = 30
 
 
 @dataclass(frozen=True, eq=False)
@@ -448,6 +446,16 @@ class SpatialArm(RigidLoads):
         kin = self._kinematics(conditions, params, derivatives=True)
         return self._stacked(kin, conditions, kin.joint_jacobian, kin.tip_angular)
 
+    def jacobians(
+        self, conditions: Conditions, params: np.ndarray | None = None
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """:meth:`jacobian` and :meth:`joint_jacobian` from one pass of the kinematics."""
+        kin = self._kinematics(conditions, params, derivatives=True)
+        return (
+            self._stacked(kin, conditions, kin.jacobian, kin.target_angular),
+            self._stacked(kin, conditions, kin.joint_jacobian, kin.tip_angular),
+        )
+
     def anchor(self, conditions: Conditions, points: np.ndarray) -> tuple[Conditions, np.ndarray]:
         """A 6-DoF instrument's measured orientations become the rows' frames
         (:func:`~armcal.models.spatial_pose.anchor`)."""
@@ -636,18 +644,7 @@ class SpatialArm(RigidLoads):
         """The free parameters that reproduce ``params``' points at these rows, the held
         ones at their nominal values: Gauss-Newton from ``params`` (each merge is an exact
         symmetry of the kinematics, so the points are reproduced to round-off)."""
-        goal = self.positions(conditions, params)
-        free = self.free
-        out = np.where(free, np.asarray(params, dtype=float), self.nominal)
-        tol = 1e-12 * self.reach_mm
-        for _ in range(_EXPRESS_STEPS):
-            miss = (goal - self.positions(conditions, out)).reshape(-1)
-            jac = self.jacobian(conditions, out)[..., free].reshape(miss.size, -1)
-            step, *_ = np.linalg.lstsq(jac, miss, rcond=None)
-            out[free] += step
-            if np.max(np.abs(jac @ step), initial=0.0) <= tol:
-                break
-        return out
+        return refit_free(self, conditions, params)
 
     @property
     def held_values(self) -> np.ndarray:

@@ -24,7 +24,7 @@ from numpy.typing import ArrayLike
 
 from .spatial_chain import SerialChain, joint_motion
 
-__all__ = ["STANDARD_GRAVITY", "LinkMasses", "gravity_torques"]
+__all__ = ["STANDARD_GRAVITY", "LinkMasses", "chain_frames", "gravity_torques"]
 
 #: Standard gravity, m/s^2 (the CGPM's conventional value).
 STANDARD_GRAVITY = 9.80665
@@ -44,6 +44,24 @@ class LinkMasses:
 
     mass_kg: np.ndarray
     com_mm: np.ndarray
+
+
+def chain_frames(
+    chain: SerialChain, u: np.ndarray
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Every joint's axis and origin ``(..., n, 3)`` (mm), its frame after its motion
+    ``(..., n, 4, 4)`` and the tip frame ``(..., 4, 4)``, in the chain's base frame, at
+    joint values ``u`` ``(..., n)``."""
+    frame = np.broadcast_to(np.eye(4), (*u.shape[:-1], 4, 4))
+    axes, origins, after = [], [], []
+    for k, kind in enumerate(chain.kinds):
+        frame = frame @ chain.origins[k]
+        axes.append(frame[..., :3, 2])
+        origins.append(frame[..., :3, 3])
+        frame = frame @ joint_motion(kind, u[..., k])
+        after.append(frame)
+    stack = np.stack
+    return stack(axes, axis=-2), stack(origins, axis=-2), stack(after, axis=-3), frame @ chain.tip
 
 
 def gravity_torques(
@@ -84,15 +102,8 @@ def gravity_torques(
     u = np.asarray(u, dtype=float)
     g = np.asarray(gravity, dtype=float)
     n = chain.n_joints
-    frame = np.broadcast_to(np.eye(4), (*u.shape[:-1], 4, 4))
-    axes, origins, centres = [], [], []
-    for k, kind in enumerate(chain.kinds):
-        frame = frame @ chain.origins[k]
-        axes.append(frame[..., :3, 2])
-        origins.append(frame[..., :3, 3])
-        frame = frame @ joint_motion(kind, u[..., k])
-        centres.append(frame[..., :3, :3] @ links.com_mm[k] + frame[..., :3, 3])
-    tip = frame @ chain.tip
+    axes, origins, after, tip = chain_frames(chain, u)
+    centres = np.einsum("...kij,kj->...ki", after[..., :3, :3], links.com_mm) + after[..., :3, 3]
     payload = np.asarray(payload_kg, dtype=float)
     payload_at = tip[..., :3, :3] @ np.asarray(payload_com_mm, dtype=float) + tip[..., :3, 3]
     force = np.asarray(payload, dtype=float)[..., None] * g  # (..., 3), N
@@ -101,10 +112,10 @@ def gravity_torques(
     for j in range(n - 1, -1, -1):  # running sums from the tip
         weight = links.mass_kg[j] * g
         force = force + weight
-        moment = moment + np.cross(centres[j], weight)
+        moment = moment + np.cross(centres[..., j, :], weight)
         if chain.kinds[j] == "R":
-            about = moment - np.cross(origins[j], force)
-            torques[..., j] = np.einsum("...i,...i->...", axes[j], about) / 1000.0
+            about = moment - np.cross(origins[..., j, :], force)
+            torques[..., j] = np.einsum("...i,...i->...", axes[..., j, :], about) / 1000.0
         else:
-            torques[..., j] = np.einsum("...i,...i->...", axes[j], force)
+            torques[..., j] = np.einsum("...i,...i->...", axes[..., j, :], force)
     return torques

@@ -6,7 +6,6 @@ import numpy as np
 
 from ..identification import Calibration
 from ..identification.result import STRONG_CORRELATION
-from ..models import SpatialArm
 from .common import identified, model_lines, small
 
 __all__ = [
@@ -14,6 +13,20 @@ __all__ = [
     "format_calibration",
     "format_cross_validation",
 ]
+
+
+def _effect_held_lines(cal: Calibration) -> list[str]:
+    """The effect's parameters the rows cannot identify (joint compliance of a spatial arm:
+    a joint gravity does not twist), held at zero, with why."""
+    own = set(cal.arm.held_notes)
+    notes = [note for note in cal.model.held_notes if note not in own]
+    if not notes:
+        return []
+    effect = cal.model.effect
+    name = "the effect" if effect is None else effect.name
+    return [f"{name} held at zero, because the measurements cannot see or separate it:"] + [
+        f"  {note}" for note in notes
+    ]
 
 
 def _fit_line(cal: Calibration) -> str:
@@ -96,11 +109,15 @@ def format_calibration(cal: Calibration, *, truth: np.ndarray | None = None) -> 
         + f", method {cal.method}"
         + (", robust" if cal.robust else ""),
         *model_lines(arm, plan=False),
+        *_effect_held_lines(cal),
         "",
         header,
     ]
     truth_display = None if truth is None else np.asarray(truth) * cal.display_scale
-    merged = set(arm.held) if isinstance(arm, SpatialArm) else set()
+    model = cal.model  # held by a rule (not by the user): every family's, the effect's too
+    merged = {n for n, free in zip(model.param_names, model.free, strict=True) if not free} - set(
+        arm.fixed
+    )
     for i, (name, unit) in enumerate(zip(cal.names, cal.units, strict=True)):
         if name in merged:
             continue  # held by the identifiable-set rule: listed with why, above

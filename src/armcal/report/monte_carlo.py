@@ -25,6 +25,8 @@ def format_monte_carlo(result: MonteCarlo) -> str:
         f"{'ratio':>8}  unit",
     ]
     truth = result.truth * result.display_scale
+    model = result.model
+    held = {n for n, free in zip(model.param_names, model.free, strict=True) if not free}
     for name, unit, t, b, s, ps in zip(
         result.names,
         result.units,
@@ -34,7 +36,7 @@ def format_monte_carlo(result: MonteCarlo) -> str:
         result.predicted_std,
         strict=True,
     ):
-        if name in arm.fixed:  # held at nominal: no spread to compare
+        if name in held:  # held (by the user or a rule): no spread to compare
             lines.append(
                 f"{name:<10}{t:>10.4f}{b:>11.2e}{'fixed':>15}{'fixed':>15}{'':>8}  {unit}"
             )

@@ -188,7 +188,7 @@ def _identify_file(
 
 
 def _ignored_loads(
-    spec: RobotSpec, meas: Measurements, source: str, compliance: bool
+    spec: RobotSpec | SerialSpec, meas: Measurements, source: str, compliance: bool
 ) -> list[ArmcalWarning]:
     """A warning when the data carry loads that a rigid model cannot use."""
     if (spec.elastic is not None and compliance) or not meas.has_loads:
@@ -350,19 +350,26 @@ def calibrate_serial(
     robust: bool = False,
     folds: int | None = None,
     seed: int | np.random.Generator | None = 0,
+    compliance: bool = True,
 ) -> CalibrationRun:
     """:func:`calibrate` for a spatial arm: the same options, checks and warnings.
 
     The base pose and the targets are found from the data (no start from the
     user); the identifiable set is chosen for these measurements and named.
+    With ``[elastostatic]`` (and ``compliance``) the joints' compliance is
+    fitted with the geometry, under the rows' payloads.
     """
+    ignored = _ignored_loads(spec, meas, source, compliance)
+    if not compliance:
+        spec = replace(spec, elastic=None)
     try:
         arm = model_arm(serial_arm(spec.arm, meas), fixed=fixed, sigma=sigma)
         if sigma:  # the given noise replaces the file's sigma_mm column too
             meas = replace(meas, row_sigma=None)
         index = None if meas.targets is None else arm.target_index(meas.targets)
+        loads = None if spec.elastic is None else meas.loads(spec.elastic.payload_kg)
         cal = identify(
-            arm,
+            fit_model(spec, arm, loads),
             meas.q,
             meas.instrument_points,
             method=method,
@@ -371,6 +378,7 @@ def calibrate_serial(
             rows=meas.rows,
             row_sigma=meas.row_sigma,
             target=index,
+            loads=loads,
         )
     except (InputError, FixError):
         raise
@@ -378,7 +386,7 @@ def calibrate_serial(
         raise prefixed(source, exc) from None
     except ValueError as exc:
         raise InputError(f"{source}: {exc}") from None
-    warnings = [*meas.warnings, *cal.warnings]
+    warnings = [*meas.warnings, *ignored, *cal.warnings]
     checked = None
     if folds is not None:
         checked = _cross_validated(cal, meas, meas.instrument_points, folds, sigma, seed, warnings)

@@ -18,7 +18,7 @@ import numpy as np
 from ..doe import random_plan
 from ..errors import ArmcalError, NotIdentifiableError
 from ..files import RobotSpec, SerialSpec, read_plan, unknown_parameter
-from ..models import CompliantArm, FitModel, Loads, PlanarArm, SpatialArm
+from ..models import FitModel, Loads, PlanarArm, SpatialArm
 from ..noise import instrument_override
 
 __all__ = [
@@ -107,11 +107,11 @@ def fit_model(
 
     Raises ArmcalError, naming the robot file, when nothing would twist the joints.
     """
-    if spec.elastic is None or not isinstance(arm, PlanarArm):
+    if spec.elastic is None:
         return arm
     loads = Loads.create(1, spec.elastic.payload_kg) if loads is None else loads
     try:
-        return CompliantArm.for_loads(arm, spec.elastic, loads, virtual=virtual)
+        return spec.elastic.model_for(arm, loads, virtual=virtual)
     except ArmcalError as exc:
         raise prefixed(spec.source, exc) from None
 

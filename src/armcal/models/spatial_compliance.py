@@ -1,0 +1,801 @@
+"""Joint compliance of a spatial serial arm under gravity and payload: :class:`CompliantSerialArm`.
+
+A revolute joint twists under the static torque of everything beyond it (the
+links' weight and the payload): ``du_j = k_j tau_j`` (linear elastostatics, one
+virtual spring per joint).  The twist adds to the joint's value, so the
+measured point is the rigid arm's at ``u = M (q + dq) + du``: the deflection is
+exact in the kinematics, and the Jacobian of a compliance parameter is the
+joint's column of the joint Jacobian times the load it multiplies.
+
+The loads (torques, lever arms) are computed on the *nominal* chain in the
+robot's base frame, where gravity is given (``[elastostatic] gravity``; a
+floor-mounted arm's is ``-z``).  The identified geometry changes them by its
+relative size (1e-3 of a deflection of 1e-3 rad: 1e-6 rad, far below any
+instrument), and in exchange the loads are constants of the rows: the model is
+linear in the compliance and its Jacobian is exact.
+
+Parameters, in display units
+----------------------------
+* **Masses known** (URDF ``<inertial>`` or the robot TOML): ``k{j}``
+  [urad/(N*m)] for every revolute joint ``j``, the load its torque
+  (:func:`~armcal.models.spatial_gravity.gravity_torques`).
+* **Lumped mode** (masses unknown): the arm's weight is lumped at *stations*,
+  the origins of the joints beyond ``j`` and the tip.  ``c{j}.{s}`` [mdeg/m] is
+  joint ``j``'s deflection per metre of horizontal lever arm from joint ``j``
+  to station ``s``, ``h = a_j . ((p_s - p_j) x g_hat)``: a weight at ``s``
+  (``k_j`` times that weight).  A link whose centre of mass lies between two
+  stations is a combination of the two, so J2 of an industrial arm sees its
+  upper arm and forearm through the elbow's and the wrist's elevation.  With
+  payloads that vary, ``k{j}`` is identified as well, from the payload's own
+  torque.
+
+What the rows cannot identify is held at zero and named
+(:meth:`CompliantSerialArm.prepared`): a joint whose axis is parallel to
+gravity (joint 1 of a floor-mounted arm) has no torque; a torque that never
+changes is a zero offset, ``dq{j}``; two stations that coincide (a spherical
+wrist) are one.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass, field, replace
+from functools import cached_property
+from typing import Any
+
+import numpy as np
+from numpy.typing import ArrayLike
+
+from ..errors import ArmcalError, ArmcalWarning, NotIdentifiableError, action
+from ..noise import NoiseModel
+from ..numerics import ScaledSVD, scaled_svd
+from .identifiability import Identifiability, listing
+from .information import (
+    BlockInformation,
+    column_identifiability,
+    covariance_factor_from,
+    refit_free,
+    whitened_free_jacobian,
+)
+from .interface import Conditions, DesignEffort, Effect, LinearPositions, Loads
+from .spatial import SpatialArm
+from .spatial_gravity import STANDARD_GRAVITY, LinkMasses, chain_frames, gravity_torques
+from .spatial_selection import SELECT_RTOL
+
+__all__ = [
+    "C_SCALE",
+    "K_SCALE",
+    "CompliantSerialArm",
+    "SerialElastics",
+]
+
+#: Display scale of ``k`` (rad/(N m) -> urad/(N m)) and ``c`` (rad/m -> mdeg/m).
+K_SCALE = 1e6
+C_SCALE = 1e3 * 180.0 / np.pi
+_UNITS = {"k": "urad/(N*m)", "c": "mdeg/m"}
+_SCALES = {"k": K_SCALE, "c": C_SCALE}
+
+#: Poses of the fixed probe that decides which compliance a design can identify.
+_PROBE_POSES = 200
+
+
+@dataclass(frozen=True, eq=False)
+class SerialElastics:
+    """What loads a spatial arm's joints: gravity, the links' masses and the payload.
+
+    Attributes
+    ----------
+    gravity : ndarray, shape (3,)
+        Gravity's acceleration in the robot's base frame (m/s^2).
+    links : LinkMasses or None
+        Every link's mass and centre of mass; None selects the lumped mode.
+    payload_kg : float
+        The payload of rows that do not give their own.
+    payload_com_mm : ndarray, shape (3,)
+        Where the payload's centre of mass is in the tip (flange) frame.
+    """
+
+    gravity: np.ndarray = field(default_factory=lambda: np.array([0.0, 0.0, -STANDARD_GRAVITY]))
+    links: LinkMasses | None = None
+    payload_kg: float = 0.0
+    payload_com_mm: np.ndarray = field(default_factory=lambda: np.zeros(3))
+
+    @classmethod
+    def create(
+        cls,
+        n: int,
+        *,
+        gravity: ArrayLike = (0.0, 0.0, -1.0),
+        mass_kg: ArrayLike | None = None,
+        com_mm: ArrayLike | None = None,
+        payload_kg: float = 0.0,
+        payload_com_mm: ArrayLike = (0.0, 0.0, 0.0),
+    ) -> SerialElastics:
+        """Checked parameters; ``gravity`` is a direction scaled to standard gravity.
+
+        Examples
+        --------
+        >>> e = SerialElastics.create(2, mass_kg=[10, 5], com_mm=[[0, 0, 100], [200, 0, 0]])
+        >>> e.gravity.tolist(), e.lumped
+        ([0.0, 0.0, -9.80665], False)
+        """
+        g = np.asarray(gravity, dtype=float)
+        if g.shape != (3,) or not np.all(np.isfinite(g)) or not np.any(g):
+            raise ArmcalError(
+                f"gravity must be a non-zero direction [gx, gy, gz], got {gravity!r}"
+            )
+        links = None
+        if mass_kg is not None:
+            mass = np.asarray(mass_kg, dtype=float)
+            com = np.zeros((n, 3)) if com_mm is None else np.asarray(com_mm, dtype=float)
+            if mass.shape != (n,) or not np.all(np.isfinite(mass)) or np.any(mass < 0):
+                raise ArmcalError(f"link masses must be {n} numbers >= 0 (kg), got {mass_kg!r}")
+            if com.shape != (n, 3) or not np.all(np.isfinite(com)):
+                raise ArmcalError(f"centres of mass must be {n} points [x, y, z] (mm)")
+            links = LinkMasses(mass, com)
+        payload = float(payload_kg)
+        if not np.isfinite(payload) or payload < 0:
+            raise ArmcalError(f"payload_kg must be finite and not negative, got {payload_kg!r}")
+        at = np.asarray(payload_com_mm, dtype=float)
+        if at.shape != (3,) or not np.all(np.isfinite(at)):
+            raise ArmcalError(f"payload_com_mm must be 3 numbers (mm), got {payload_com_mm!r}")
+        return cls(g / np.linalg.norm(g) * STANDARD_GRAVITY, links, payload, at)
+
+    @property
+    def lumped(self) -> bool:
+        """True when the masses are unknown (parameters ``c{j}.{s}``)."""
+        return self.links is None
+
+    def model_for(self, arm: Any, loads: Loads, *, virtual: bool = False) -> CompliantSerialArm:
+        """The compliant model of ``arm`` for rows with ``loads``
+        (:meth:`CompliantSerialArm.for_loads`)."""
+        return CompliantSerialArm.for_loads(arm, self, loads, virtual=virtual)
+
+    def to_dict(self) -> dict[str, Any]:
+        """The ``elastostatic`` section of a calibration file."""
+        links = self.links
+        return {
+            "family": "serial",
+            "gravity_mps2": self.gravity.tolist(),
+            "link_masses_kg": None if links is None else links.mass_kg.tolist(),
+            "link_com_mm": None if links is None else links.com_mm.tolist(),
+            "payload_kg": self.payload_kg,
+            "payload_com_mm": self.payload_com_mm.tolist(),
+        }
+
+    @classmethod
+    def from_dict(cls, data: dict[str, Any], n: int) -> SerialElastics:
+        masses = data["link_masses_kg"]
+        links = None
+        if masses is not None:
+            links = LinkMasses(
+                np.array(masses, dtype=float).reshape(n),
+                np.array(data["link_com_mm"], dtype=float).reshape(n, 3),
+            )
+        return cls(
+            np.array(data["gravity_mps2"], dtype=float).reshape(3),
+            links,
+            float(data["payload_kg"]),
+            np.array(data["payload_com_mm"], dtype=float).reshape(3),
+        )
+
+
+@dataclass(frozen=True, eq=False)
+class CompliantSerialArm:
+    """A spatial serial arm whose revolute joints twist under gravity (module notes).
+
+    The parameter vector is the arm's followed by the compliance parameters
+    (:attr:`compliance_names`), in internal units (rad/(N m) for ``k``, rad/m
+    for ``c``).
+
+    Attributes
+    ----------
+    arm : SpatialArm
+        The rigid arm: its geometry, limits, noise model and held parameters.
+    elastic : SerialElastics
+    known_loads : bool
+        Whether the rows carry payloads that vary (lumped mode: ``k`` as well).
+    held : tuple of str
+        Compliance parameters the rows cannot identify (:meth:`prepared`).
+    merges : tuple of str
+        Why, one sentence per group.
+    """
+
+    arm: SpatialArm
+    elastic: SerialElastics
+    known_loads: bool = False
+    held: tuple[str, ...] = ()
+    merges: tuple[str, ...] = ()
+
+    def __repr__(self) -> str:
+        mode = "lumped" if self.elastic.lumped else "masses known"
+        return f"CompliantSerialArm({self.arm.name}, {mode}, {len(self.compliance_names)} terms)"
+
+    @classmethod
+    def for_loads(
+        cls, arm: SpatialArm, elastic: SerialElastics, loads: Loads, *, virtual: bool = False
+    ) -> CompliantSerialArm:
+        """The model for rows with ``loads``.  In lumped mode payloads that vary add
+        ``k{j}``; one constant payload only adds to the lumped weight, and the model
+        records it (:meth:`unpredicted_loads`).  ``virtual``: a virtual robot, which
+        every known load bends whether or not a fit could tell ``k`` from the weight."""
+        if np.any(loads.force_n != 0):
+            raise ArmcalError(
+                "a spatial arm takes payloads (payload_kg), not tip forces fx_N/fy_N"
+            )
+        if elastic.lumped and not virtual and not loads.varying and loads.n_rows:
+            return cls(arm, replace(elastic, payload_kg=float(loads.payload_kg[0])), False)
+        return cls(arm, elastic, loads.known)
+
+    # -- the compliance parameters -------------------------------------------------------
+
+    @cached_property
+    def _terms(self) -> tuple[tuple[str, int, int], ...]:
+        """``(kind, joint, station)`` of every compliance parameter (0-based; station
+        ``n`` is the tip, -1 for ``k``)."""
+        chain = self.arm.chain
+        n = chain.n_joints
+        revolute = [j for j in range(n) if chain.kinds[j] == "R"]
+        out: list[tuple[str, int, int]] = []
+        if self.elastic.lumped:
+            out += [("c", j, s) for j in revolute for s in range(j + 1, n + 1)]
+        if not self.elastic.lumped or self.known_loads:
+            out += [("k", j, -1) for j in revolute]
+        return tuple(out)
+
+    @cached_property
+    def compliance_names(self) -> tuple[str, ...]:
+        """``c{j}.j{i}``, ``c{j}.tip`` (lumped) and ``k{j}``."""
+        n = self.arm.n_joints
+        return tuple(
+            f"k{j + 1}" if kind == "k" else f"c{j + 1}." + ("tip" if s == n else f"j{s + 1}")
+            for kind, j, s in self._terms
+        )
+
+    @property
+    def kinds(self) -> tuple[str, ...]:
+        return tuple(t[0] for t in self._terms)
+
+    @cached_property
+    def joints(self) -> np.ndarray:
+        """The chain joint (0-based) every compliance parameter twists."""
+        return np.array([t[1] for t in self._terms], dtype=int)
+
+    @property
+    def n_compliance(self) -> int:
+        return len(self._terms)
+
+    @cached_property
+    def compliance_scale(self) -> np.ndarray:
+        return np.array([_SCALES[k] for k in self.kinds])
+
+    def split(self, params: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Geometry ``(..., p)`` and compliance ``(..., P)`` of a full parameter vector."""
+        p = self.arm.n_params
+        return params[..., :p], params[..., p:]
+
+    # -- parameters ------------------------------------------------------------------------
+
+    @property
+    def name(self) -> str:
+        return self.arm.name
+
+    @property
+    def param_names(self) -> tuple[str, ...]:
+        return self.arm.param_names + self.compliance_names
+
+    @property
+    def param_units(self) -> tuple[str, ...]:
+        return self.arm.param_units + tuple(_UNITS[k] for k in self.kinds)
+
+    @property
+    def display_scale(self) -> np.ndarray:
+        return np.concatenate([self.arm.display_scale, self.compliance_scale])
+
+    @property
+    def fixed(self) -> tuple[str, ...]:
+        """The arm's held parameters and the compliance the rows cannot identify (as
+        :attr:`SpatialArm.fixed`: held by the user or by the rule)."""
+        return self.arm.fixed + self.held
+
+    @cached_property
+    def free(self) -> np.ndarray:
+        mine = np.array([name not in self.held for name in self.compliance_names], dtype=bool)
+        return np.concatenate([self.arm.free, mine])
+
+    @property
+    def held_values(self) -> np.ndarray:
+        return np.concatenate([self.arm.held_values, np.zeros(self.n_compliance)])
+
+    @property
+    def held_notes(self) -> tuple[str, ...]:
+        return self.arm.held_notes + self.merges
+
+    @property
+    def free_names(self) -> tuple[str, ...]:
+        return tuple(n for n, f in zip(self.param_names, self.free, strict=True) if f)
+
+    @property
+    def n_params(self) -> int:
+        return self.arm.n_params + self.n_compliance
+
+    @property
+    def n_free(self) -> int:
+        return int(np.count_nonzero(self.free))
+
+    @property
+    def angle_params(self) -> np.ndarray:
+        return np.concatenate([self.arm.angle_params, np.zeros(self.n_compliance, dtype=bool)])
+
+    @property
+    def instrument_params(self) -> np.ndarray:
+        extra = np.zeros(self.n_compliance, dtype=bool)
+        return np.concatenate([self.arm.instrument_params, extra])
+
+    @property
+    def noise(self) -> NoiseModel | None:
+        return self.arm.noise
+
+    @property
+    def n_joints(self) -> int:
+        return self.arm.n_joints
+
+    @property
+    def joint_limits(self) -> np.ndarray:
+        return self.arm.joint_limits
+
+    def within_limits(self, q: np.ndarray, *, tol: float = 1e-9) -> np.ndarray:
+        return self.arm.within_limits(q, tol=tol)
+
+    @property
+    def point_dim(self) -> int:
+        return self.arm.point_dim
+
+    @property
+    def position_dim(self) -> int:
+        return self.arm.position_dim
+
+    @property
+    def design_effort(self) -> DesignEffort:
+        return self.arm.design_effort
+
+    def anchor(self, conditions: Conditions, points: np.ndarray) -> tuple[Conditions, np.ndarray]:
+        return self.arm.anchor(conditions, points)
+
+    def unanchor(self, conditions: Conditions, points: np.ndarray) -> np.ndarray:
+        return self.arm.unanchor(conditions, points)
+
+    @property
+    def reach_mm(self) -> float:
+        return self.arm.reach_mm
+
+    @property
+    def target_labels(self) -> tuple[str, ...]:
+        return self.arm.target_labels
+
+    def _with_arm(self, arm: SpatialArm) -> CompliantSerialArm:
+        return CompliantSerialArm(arm, self.elastic, self.known_loads)
+
+    def with_noise(self, noise: NoiseModel | None) -> CompliantSerialArm:
+        return replace(self, arm=self.arm.with_noise(noise))
+
+    def with_fixed(self, fixed: Sequence[str]) -> CompliantSerialArm:
+        """Other geometric parameters fixed (the compliance is always identified)."""
+        return self._with_arm(self.arm.with_fixed(fixed))
+
+    @property
+    def default_payload_kg(self) -> float:
+        return self.elastic.payload_kg
+
+    def unpredicted_loads(self, loads: Loads) -> str | None:
+        """In lumped mode without ``k``, any payload but the one the ``c`` hold."""
+        if not self.elastic.lumped or self.known_loads:
+            return None
+        held = self.elastic.payload_kg
+        other = np.unique(loads.payload_kg[loads.payload_kg != held])
+        if not other.size:
+            return None
+        shown = ", ".join(f"{v:g}" for v in other[:4]) + (", ..." if other.size > 4 else "")
+        return (
+            f"the calibration's lumped compliance holds the deflection under its data's one "
+            f"payload, {held:g} kg (with one payload the compliance k cannot be told from the "
+            f"weight), so the deflection under payloads of {shown} kg is not predicted; "
+            "calibrate with poses at two payloads or more to identify k"
+        )
+
+    @property
+    def uses_gravity(self) -> bool:
+        """Gravity is given in the robot's base frame, not in a plane of the instrument's."""
+        return False
+
+    def with_gravity(self, gravity: np.ndarray | None) -> CompliantSerialArm:
+        return self
+
+    # -- the deflected arm -----------------------------------------------------------------
+
+    def default_loads(self, m: int) -> Loads:
+        return Loads.create(m, self.elastic.payload_kg)
+
+    def load_terms(self, conditions: Conditions) -> np.ndarray:
+        """The load ``(..., m, P)`` every compliance parameter multiplies: torque (N m) for
+        ``k``, lever arm (m) for ``c``, on the nominal chain at the rows' readings."""
+        arm, elastic = self.arm, self.elastic
+        q = np.asarray(conditions.q, dtype=float)
+        loads = self.default_loads(q.shape[-2]) if conditions.loads is None else conditions.loads
+        u = q @ arm.joint_map.T
+        axes, origins, _, tip = chain_frames(arm.chain, u)
+        g = elastic.gravity
+        terms = self._terms
+        joints = self.joints
+        out = np.empty((*q.shape[:-1], len(terms)))
+        c = np.array([kind == "c" for kind, _, _ in terms], dtype=bool)
+        if np.any(c):
+            stations = np.concatenate([origins, tip[..., None, :3, 3]], axis=-2)
+            at = np.array([s for kind, _, s in terms if kind == "c"])
+            lever = stations[..., at, :] - origins[..., joints[c], :]
+            moment = np.cross(lever, g / np.linalg.norm(g))
+            out[..., c] = np.einsum("...ki,...ki->...k", axes[..., joints[c], :], moment) / 1e3
+        if not np.all(c):
+            links = elastic.links or LinkMasses(
+                np.zeros(arm.n_joints), np.zeros((arm.n_joints, 3))
+            )
+            torques = gravity_torques(
+                arm.chain,
+                u,
+                links,
+                g,
+                payload_kg=loads.payload_kg,
+                payload_com_mm=elastic.payload_com_mm,
+            )
+            out[..., ~c] = torques[..., joints[~c]]
+        return out
+
+    def deflection(self, conditions: Conditions, compliance: np.ndarray) -> np.ndarray:
+        """The joints' twists ``(..., m, n)`` (rad) under ``compliance`` ``(..., P)``."""
+        per_term = self.load_terms(conditions) * np.asarray(compliance)[..., None, :]
+        out = np.zeros((*per_term.shape[:-1], self.arm.n_joints))
+        np.add.at(np.moveaxis(out, -1, 0), self.joints, np.moveaxis(per_term, -1, 0))
+        return out
+
+    def _bent(self, conditions: Conditions, params: np.ndarray | None) -> tuple[Conditions, Any]:
+        """The rows with the readings that put the rigid arm where the twisted one is
+        (``q + M^-1 du``), and the geometric parameters."""
+        full = self.nominal if params is None else np.asarray(params, dtype=float)
+        geometry, compliance = self.split(full)
+        q = np.asarray(conditions.q, dtype=float)
+        if np.any(compliance):  # the nominal arm (design, rank analysis) does not twist
+            q = q + self.deflection(conditions, compliance) @ self._inverse_map.T
+        bent = Conditions(q, conditions.target, conditions.loads, conditions.sigma_mm)
+        return bent.with_frames(conditions.frames), geometry
+
+    @cached_property
+    def _inverse_map(self) -> np.ndarray:
+        return np.linalg.inv(self.arm.joint_map)
+
+    @cached_property
+    def nominal(self) -> np.ndarray:
+        """The arm's nominal parameters and no compliance."""
+        return self.lift(self.arm.nominal)
+
+    # -- measurement -----------------------------------------------------------------------
+
+    def conditions(
+        self,
+        q: ArrayLike,
+        *,
+        target: ArrayLike | None = None,
+        loads: Loads | None = None,
+        sigma_mm: np.ndarray | None = None,
+    ) -> Conditions:
+        """The arm's checked rows, each loaded (default: the robot file's payload)."""
+        rows = self.arm.conditions(q, target=target, sigma_mm=sigma_mm)
+        loads = self.default_loads(rows.m) if loads is None else loads
+        if loads.n_rows != rows.m:
+            raise ValueError(f"loads must have {rows.m} rows, got {loads.n_rows}")
+        return Conditions(rows.q, rows.target, loads, rows.sigma_mm)
+
+    def positions(self, conditions: Conditions, params: np.ndarray | None = None) -> np.ndarray:
+        bent, geometry = self._bent(conditions, params)
+        return self.arm.positions(bent, geometry)
+
+    def _columns(self, conditions: Conditions, per_joint: np.ndarray) -> np.ndarray:
+        """The compliance columns ``(..., m, d, P)`` from ``d point / d reading``."""
+        per_u = per_joint @ self._inverse_map  # d point / d u
+        return per_u[..., self.joints] * self.load_terms(conditions)[..., None, :]
+
+    def jacobian(self, conditions: Conditions, params: np.ndarray | None = None) -> np.ndarray:
+        """The rigid arm's columns at the twisted pose, then ``J_u[:, j] * load``: exact."""
+        bent, geometry = self._bent(conditions, params)
+        geo, joint = self.arm.jacobians(bent, geometry)
+        return np.concatenate([geo, self._columns(conditions, joint)], axis=-1)
+
+    def joint_jacobian(
+        self, conditions: Conditions, params: np.ndarray | None = None
+    ) -> np.ndarray:
+        """``d point / dq`` at the twisted pose (the torques' own change with ``q``, about
+        1e-3 of a step, left out)."""
+        bent, geometry = self._bent(conditions, params)
+        return self.arm.joint_jacobian(bent, geometry)
+
+    def pose_covariances(
+        self,
+        conditions: Conditions,
+        params: np.ndarray | None = None,
+        *,
+        noise: NoiseModel | None = None,
+    ) -> np.ndarray:
+        geometry = None if params is None else self.split(np.asarray(params, dtype=float))[0]
+        return self.arm.pose_covariances(conditions, geometry, noise=noise)
+
+    def whitening(
+        self, conditions: Conditions, params: np.ndarray | None = None
+    ) -> np.ndarray | None:
+        geometry = None if params is None else self.split(np.asarray(params, dtype=float))[0]
+        return self.arm.whitening(conditions, geometry)
+
+    # -- fitting ---------------------------------------------------------------------------
+
+    @property
+    def has_closed_form(self) -> bool:
+        return False
+
+    @property
+    def why_no_closed_form(self) -> str:
+        return self.arm.why_no_closed_form
+
+    def closed_form(self, conditions: Conditions) -> None:
+        return None
+
+    @property
+    def nested(self) -> SpatialArm:
+        """The rigid arm."""
+        return self.arm
+
+    @property
+    def effect(self) -> Effect:
+        mode = (
+            "lumped mode (masses unknown): c{j}.{s} is joint j's twist per metre of "
+            "horizontal lever arm to station s"
+            if self.elastic.lumped
+            else "link masses known: k{j} is joint j's compliance"
+        )
+        return Effect(
+            "joint compliance",
+            "compliance",
+            "geometry",
+            mode,
+            f"measure poses under two payloads or more, or {action('geometry-alone')}",
+        )
+
+    def lift(self, nested_params: np.ndarray) -> np.ndarray:
+        """The rigid arm's parameters with no compliance."""
+        shape = (*np.shape(nested_params)[:-1], self.n_compliance)
+        return np.concatenate([nested_params, np.zeros(shape)], axis=-1)
+
+    def start(
+        self, conditions: Conditions, points: np.ndarray, weights: np.ndarray | None = None
+    ) -> np.ndarray:
+        return self.lift(self.arm.start(conditions, points, weights))
+
+    def canonical(self, params: np.ndarray) -> np.ndarray:
+        geometry, compliance = self.split(np.asarray(params, dtype=float))
+        return np.concatenate([self.arm.canonical(geometry), compliance], axis=-1)
+
+    def step_scale(self, conditions: Conditions) -> np.ndarray:
+        """The arm's, then the reach times the RMS load of every compliance parameter."""
+        rms = np.sqrt(np.mean(self.load_terms(conditions) ** 2, axis=-2))
+        return np.concatenate([self.arm.step_scale(conditions), rms * self.reach_mm])
+
+    # -- the identifiable set ----------------------------------------------------------------
+
+    def prepared(
+        self, conditions: Conditions, points: np.ndarray | None = None
+    ) -> CompliantSerialArm:
+        """The arm prepared for these rows (:meth:`SpatialArm.prepared`), and the compliance
+        they cannot identify held at zero, each named with what it merges into: the
+        columns are taken after the arm's free ones, and one whose part outside the span
+        of those before is at most ``SELECT_RTOL`` of its length is held."""
+        arm = self.arm.prepared(conditions, points)
+        model = self._with_arm(arm)
+        jac = model.jacobian(conditions, model.nominal)
+        w = arm.whitening(conditions)
+        rows = jac if w is None else w @ jac
+        flat = rows.reshape(-1, model.n_params)
+        geo = np.flatnonzero(arm.free)
+        svd = scaled_svd(
+            flat[:, np.concatenate([geo, arm.n_params + np.arange(model.n_compliance)])]
+        )
+        columns = svd.singular_values[:, None] * svd.vt * svd.column_norms
+        held, merges = _select(model, columns, geo)
+        return replace(model, held=held, merges=merges)
+
+    def expressed(self, conditions: Conditions, params: np.ndarray) -> np.ndarray:
+        """The free parameters that reproduce ``params``' points at these rows."""
+        return refit_free(self, conditions, params)
+
+    def identifiability(self, conditions: Conditions) -> tuple[Identifiability, ScaledSVD]:
+        return column_identifiability(self, conditions, self.nominal)
+
+    def check_identifiable(self, conditions: Conditions) -> Identifiability:
+        info, _ = self.identifiability(conditions)
+        if info.identifiable:
+            return info
+        m, p = conditions.m, self.n_free
+        raise NotIdentifiableError(
+            f"the {m} rows cannot identify all {p} parameters of {self.name} with compliance "
+            f"(rank {info.rank} of {p}): not identifiable: "
+            f"{listing(info.unidentifiable) or '(none)'}; measure poses in which every joint "
+            "takes several values and the torques vary (links pointing in different "
+            "directions relative to gravity, different payloads)",
+            list(info.combinations),
+        )
+
+    def conditioning_warning(self, info: Identifiability) -> ArmcalWarning | None:
+        if not info.ill_conditioned:
+            return None
+        return ArmcalWarning(
+            "ill-conditioned",
+            f"geometry plus compliance of {self.name} is barely identifiable (condition "
+            f"number {info.condition_number:.3g}); poorly determined: "
+            f"{'; '.join(info.poorly_determined[:3])}; vary the torques more (poses, payloads)",
+        )
+
+    def covariance_factor(
+        self, conditions: Conditions, params: np.ndarray | None = None
+    ) -> tuple[np.ndarray, np.ndarray]:
+        return covariance_factor_from(whitened_free_jacobian(self, conditions, params), self.free)
+
+    def fit_details(self, conditions: Conditions, params: np.ndarray) -> dict[str, np.ndarray]:
+        """``max_deflection_rad`` ``(n,)``: every joint's largest fitted twist."""
+        twist = self.deflection(conditions, self.split(np.asarray(params, dtype=float))[1])
+        return {"max_deflection_rad": np.max(np.abs(twist), axis=0)}
+
+    def linear_positions(self, conditions: Conditions) -> LinearPositions | None:
+        return None
+
+    def plan_conditions(self, q: np.ndarray, loads: Loads | None = None) -> Conditions:
+        """Every target measured at every pose, each row with its pose's load."""
+        rows = self.arm.plan_conditions(q)
+        loads = self.default_loads(np.shape(q)[-2]) if loads is None else loads
+        loads = loads.repeat(len(self.arm.targets))
+        return Conditions(rows.q, rows.target, loads, rows.sigma_mm, rows.frames)
+
+    # -- design ----------------------------------------------------------------------------
+
+    def feasible(self, q: np.ndarray, *, tol: float = 1e-9) -> np.ndarray:
+        return self.arm.feasible(q, tol=tol)
+
+    @property
+    def has_view(self) -> bool:
+        return self.arm.has_view
+
+    def view_constraints(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray] | None:
+        return self.arm.view_constraints(q)
+
+    @property
+    def rotation_invariant(self) -> bool:
+        return False
+
+    @property
+    def information_bound(self) -> bool:
+        return False
+
+    def plan_information(self, q: np.ndarray, loads: Loads | None = None) -> BlockInformation:
+        return BlockInformation(self, q, loads, unit_columns=True)
+
+    def closed_form_plans(self, m: int) -> None:
+        return None
+
+    def paper_criteria(self, q: np.ndarray) -> None:
+        return None
+
+    def design_loads(
+        self, payloads: Sequence[float] | None
+    ) -> tuple[CompliantSerialArm, np.ndarray]:
+        """The model of a plan whose poses carry ``payloads`` (kg; default 0 and the robot
+        file's payload), with the compliance that poses at those payloads identify (a
+        fixed probe of random poses within the limits decides)."""
+        values = np.array(payload_choices(self.elastic.payload_kg, payloads))
+        model = CompliantSerialArm.for_loads(
+            self.arm, self.elastic, Loads.create(values.size, values)
+        )
+        lo, hi = self.joint_limits[:, 0], self.joint_limits[:, 1]
+        probe = lo + (hi - lo) * np.random.default_rng(0).random((_PROBE_POSES, self.n_joints))
+        loads = Loads.create(_PROBE_POSES, np.resize(values, _PROBE_POSES))
+        rows = model.plan_conditions(probe, loads)
+        held, merges = model.prepared(rows).held, model.prepared(rows).merges
+        return replace(model, held=held, merges=merges), values
+
+    # -- the tool --------------------------------------------------------------------------
+
+    @property
+    def orientation_dim(self) -> int:
+        return self.arm.orientation_dim
+
+    @property
+    def angle_scale_mm(self) -> float:
+        return self.arm.angle_scale_mm
+
+    def orientation(self, conditions: Conditions, params: np.ndarray | None = None) -> np.ndarray:
+        bent, geometry = self._bent(conditions, params)
+        return self.arm.orientation(bent, geometry)
+
+    def orientation_error(self, orientation: np.ndarray, reference: np.ndarray) -> np.ndarray:
+        return self.arm.orientation_error(orientation, reference)
+
+    def orientation_joint_jacobian(
+        self, conditions: Conditions, params: np.ndarray | None = None
+    ) -> np.ndarray:
+        bent, geometry = self._bent(conditions, params)
+        return self.arm.orientation_joint_jacobian(bent, geometry)
+
+    def orientation_jacobian(
+        self, conditions: Conditions, params: np.ndarray | None = None
+    ) -> np.ndarray:
+        bent, geometry = self._bent(conditions, params)
+        geo = self.arm.orientation_jacobian(bent, geometry)
+        joint = self.arm.orientation_joint_jacobian(bent, geometry)
+        return np.concatenate([geo, self._columns(conditions, joint)], axis=-1)
+
+    def in_robot_frame(self, params: np.ndarray) -> tuple[CompliantSerialArm, np.ndarray]:
+        """The base pose set to 0; gravity is in the base frame already."""
+        geometry, compliance = self.split(np.asarray(params, dtype=float))
+        arm, robot = self.arm.in_robot_frame(geometry)
+        return replace(self, arm=arm), np.concatenate([robot, compliance], axis=-1)
+
+    def arm_params(self, params: np.ndarray) -> np.ndarray:
+        return self.split(np.asarray(params, dtype=float))[0]
+
+
+def payload_choices(default_kg: float, given: Sequence[float] | None) -> tuple[float, ...]:
+    """The payloads a design may use: ``given``, else 0 and the robot file's payload."""
+    if given is not None:
+        values = sorted({float(v) for v in given})
+        if not values or any(not np.isfinite(v) or v < 0 for v in values):
+            raise ArmcalError(f"payloads must be finite and not negative (kg), got {list(given)}")
+        return tuple(values)
+    return (0.0, default_kg) if default_kg > 0 else (0.0,)
+
+
+def _select(
+    model: CompliantSerialArm, columns: np.ndarray, geo: np.ndarray
+) -> tuple[tuple[str, ...], tuple[str, ...]]:
+    """The compliance parameters to hold and why, from ``columns`` ``(r, g + P)``: the
+    arm's ``g`` free columns, then every compliance parameter's."""
+    g = geo.size
+    names = model.compliance_names
+    geo_names = [model.arm.param_names[i] for i in geo]
+    norms = np.linalg.norm(columns, axis=0)
+    top = float(np.max(norms[g:], initial=0.0))
+    basis, _ = np.linalg.qr(columns[:, :g])
+    kept: list[int] = []
+    groups: dict[str, list[str]] = {}
+    everyone = [*geo_names, *names]
+    for i in range(model.n_compliance):
+        col = columns[:, g + i]
+        if norms[g + i] <= 1e-12 * max(top, 1e-300):
+            why = f"there is no torque on joint {model.joints[i] + 1} that varies"
+            groups.setdefault(f"cannot be seen: {why}", []).append(names[i])
+            continue
+        rest = col - basis @ (basis.T @ col)
+        rest = rest - basis @ (basis.T @ rest)  # twice is enough (Kahan, Parlett)
+        if np.linalg.norm(rest) > SELECT_RTOL * norms[g + i]:
+            basis = np.column_stack([basis, rest / np.linalg.norm(rest)])
+            kept.append(i)
+            continue
+        keep = np.concatenate([np.arange(g), g + np.array(kept, dtype=int)])
+        unit = columns / np.maximum(norms, 1e-300)
+        coef = np.linalg.lstsq(unit[:, keep], unit[:, g + i], rcond=None)[0]
+        big = np.abs(coef) >= 0.05 * np.max(np.abs(coef))
+        partners = [everyone[k] for k in keep[big]]
+        into = listing(partners[:4]) + (" and more" if len(partners) > 4 else "")
+        zero = any(p.startswith("dq") for p in partners)
+        why = ": a torque that does not change is a zero offset" if zero else ""
+        groups.setdefault(f"into {into}{why}", []).append(names[i])
+    held = tuple(n for members in groups.values() for n in members)
+    sentences = []
+    for text, members in groups.items():
+        if text.startswith("into"):
+            text = ("merges " if len(members) == 1 else "merge ") + text
+        sentences.append(f"{listing(members)} {text}")
+    return held, tuple(sentences)
