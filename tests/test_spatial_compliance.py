@@ -508,3 +508,41 @@ def test_a_truth_with_an_unknown_compliance_is_refused(tmp_path):
     )
     assert run.returncode == 2
     assert "compliance.k7" in run.stderr and not (tmp_path / "meas.csv").exists()
+
+
+@pytest.mark.parametrize("lumped", [False, True])
+def test_the_design_gradient_pulls_back_the_compliance_columns_exactly(lumped):
+    """Against central differences of the blocks themselves (step 1e-6 rad: truncation and
+    round-off near 1e-9 of the gradient), with a laser tracker's pose-dependent weights."""
+    from armcal.models.information import BlockInformation
+    from armcal.noise import NoiseModel, TrackerNoise
+
+    arm = _arm().with_noise(NoiseModel.laser_tracker(TrackerNoise(0.01, 0.002, 0.01, 0.003)))
+    q, loads = _poses(8, 3)
+    model = CompliantSerialArm.for_loads(arm, _elastics(lumped), loads)
+    model = model.prepared(model.plan_conditions(*_poses(60, 4)))
+    weight = np.random.default_rng(0).normal(size=(model.n_free, model.n_free))
+    weight = weight @ weight.T
+    fast = model.plan_information(q, loads)
+    slow = BlockInformation(model, q, loads, unit_columns=True)  # no pullback
+    np.testing.assert_array_equal(fast.blocks(), slow.blocks())
+    grad = fast.pose_variance(weight)[1]
+    reference = slow.pose_variance(weight)[1]
+    assert np.max(np.abs(grad - reference)) < 1e-7 * np.max(np.abs(reference))
+
+
+@pytest.mark.slow  # a design with its certificate: run by make test-slow
+def test_a_design_chooses_poses_and_payloads_and_certifies_them(tmp_path):
+    """Lumped mode needs two payloads (k from the payload's own torque): the design uses
+    both and reports its Kiefer-Wolfowitz certificate."""
+    _cell(tmp_path, "lumped = true")
+    run = run_cli(tmp_path, "design", "--robot", "cell.toml", "--poses", "40",
+                  "--payloads", "0,165", "--json", "-o", "designed.csv")  # fmt: skip
+    assert run.returncode == 0, run.stderr
+    doc = json.loads(run.stdout)
+    certified = doc["certified_d_efficiency"]
+    assert 0.95 <= certified <= 1.0
+    payloads = np.loadtxt(tmp_path / "designed.csv", delimiter=",", skiprows=1)[:, -1]
+    assert set(payloads) == {0.0, PAYLOAD}
+    checked = run_cli(tmp_path, "evaluate", "--robot", "cell.toml", "--plan", "designed.csv")
+    assert checked.returncode == 0, checked.stderr

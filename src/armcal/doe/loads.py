@@ -38,8 +38,7 @@ import numpy as np
 
 from ..criteria import d_efficiency
 from ..errors import ArmcalError
-from ..models import FitModel, Loads, equations_per_pose
-from ..models.information import BlockInformation, pose_derivative
+from ..models import FitModel, Loads, PlanInformation, equations_per_pose
 from ..numerics import log_det
 from .certificate import Certificate, multiplicative_weights
 from .designer import Design
@@ -66,17 +65,23 @@ class _Points:
     def __init__(self, model: FitModel, scale: np.ndarray) -> None:
         self.model, self.scale = model, scale
 
+    def _information(self, q: np.ndarray, payload: np.ndarray) -> PlanInformation:
+        return self.model.plan_information(q, Loads.create(q.shape[0], payload))
+
     def blocks(self, q: np.ndarray, payload: np.ndarray) -> np.ndarray:
-        loads = Loads.create(q.shape[0], payload)
-        return BlockInformation(self.model, q, loads, scale=self.scale).blocks()
+        return self._information(q, payload).blocks() / self.scale
 
     def variance(self, q: np.ndarray, payload: np.ndarray, m_inv: np.ndarray) -> np.ndarray:
         """``d(x) = tr(M^-1 F_x^T F_x)`` ``(k,)``."""
         return _variance(self.blocks(q, payload), m_inv)
 
     def gradient(self, q: np.ndarray, payload: np.ndarray, m_inv: np.ndarray) -> np.ndarray:
-        """Central-difference gradient ``(k, n)`` of ``d`` in every joint (rad)."""
-        return pose_derivative(lambda x: self.variance(x, payload, m_inv), q)
+        """The gradient ``(k, n)`` of ``d`` in every joint (rad): the model's pullback where
+        it has one (:meth:`~armcal.models.interface.PlanInformation.pose_variance`), else
+        central differences."""
+        information = self._information(q, payload)
+        scaled = m_inv / np.outer(self.scale, self.scale)  # the blocks' own columns
+        return information.pose_variance(scaled)[1] * information.rows_per_pose
 
 
 def _ascend(
@@ -197,9 +202,9 @@ def design_with_loads(
     *,
     payloads: Sequence[float] | None = None,
     rng: np.random.Generator | int | None = None,
-    candidates: int = 3000,
+    candidates: int | None = None,
     rounds: int = 3,
-    search: int = 20000,
+    search: int | None = None,
     order: str = "travel",
 ) -> Design:
     """A D-optimal plan of ``m`` poses and their payloads for a model whose points depend on
@@ -219,7 +224,8 @@ def design_with_loads(
     candidates, rounds, search
         Random feasible poses of the candidate pool; rounds of adding the
         variance function's maximizers to the reference design; random poses
-        the final search of ``max d`` starts from.
+        the final search of ``max d`` starts from.  Default: the model's
+        :attr:`~armcal.models.interface.FitModel.design_effort`.
     order : {"travel", "none"}
         Order the poses for short joint travel (:func:`armcal.doe.order.order_poses`).
 
@@ -243,6 +249,9 @@ def design_with_loads(
     if chosen is None:
         raise ArmcalError(f"the points of {model.name} do not depend on the load: use design()")
     rng = np.random.default_rng(rng)
+    effort = model.design_effort
+    candidates = effort.candidates if candidates is None else candidates
+    search = effort.search if search is None else search
     design_model, values = chosen
     p = design_model.n_free
     per_pose = equations_per_pose(design_model)

@@ -13,7 +13,7 @@ into the generic ones of :mod:`~armcal.models.information`.
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field, replace
 from functools import cached_property
 from typing import Any
@@ -36,7 +36,7 @@ from .information import (
     whitened_blocks,
     whitened_free_jacobian,
 )
-from .interface import Conditions, DesignEffort, Effect, LinearPositions, Loads
+from .interface import Conditions, DesignEffort, Effect, FitModel, LinearPositions, Loads
 from .spatial_chain import (
     SerialChain,
     elementary,
@@ -47,7 +47,7 @@ from .spatial_chain import (
     transform,
     vector_rotation,
 )
-from .spatial_gradient import linearization
+from .spatial_gradient import Extra, linearization
 from .spatial_kinematics import (
     ChainKinematics,
     SpatialLayout,
@@ -759,15 +759,22 @@ class SpatialArm(RigidLoads):
     def plan_information(self, q: np.ndarray, loads: Loads | None = None) -> BlockInformation:
         return BlockInformation(self, q, loads, unit_columns=True, linearize=self.linearize)
 
-    def linearize(self, conditions: Conditions) -> Linearization:
+    def linearize(
+        self,
+        conditions: Conditions,
+        extra: Callable[[ChainKinematics], Extra] | None = None,
+        model: FitModel | None = None,
+    ) -> Linearization:
         """The rows' whitened blocks at the nominal parameters and their pullback from one
         pass of the kinematics (:mod:`~armcal.models.spatial_gradient`); no pullback for
-        rows' own sigmas and a 6-DoF instrument's turns."""
+        rows' own sigmas and a 6-DoF instrument's turns.  ``extra`` gives the columns
+        ``model`` (default: this arm) adds to the arm's free ones, from the kinematics."""
         if self.oriented or conditions.sigma_mm is not None:
-            return Linearization(whitened_blocks(self, conditions), None)
+            return Linearization(whitened_blocks(model or self, conditions), None)
         kin = self._kinematics(conditions, None, derivatives=True)
-        columns = np.flatnonzero(self.free)
-        return linearization(kin, self.layout, self.joint_map, columns, self._noise_of(None))
+        columns, noise = np.flatnonzero(self.free), self._noise_of(None)
+        added = None if extra is None else extra(kin)
+        return linearization(kin, self.layout, self.joint_map, columns, noise, added)
 
     def closed_form_plans(self, m: int) -> None:
         return None

@@ -52,6 +52,7 @@ from ..numerics import ScaledSVD, scaled_svd
 from .identifiability import Identifiability, listing
 from .information import (
     BlockInformation,
+    Linearization,
     column_identifiability,
     covariance_factor_from,
     refit_free,
@@ -59,7 +60,9 @@ from .information import (
 )
 from .interface import Conditions, DesignEffort, Effect, LinearPositions, Loads
 from .spatial import SpatialArm
+from .spatial_gradient import Extra, jacobian_pose_pullback
 from .spatial_gravity import STANDARD_GRAVITY, LinkMasses, chain_frames, gravity_torques
+from .spatial_kinematics import ChainKinematics
 from .spatial_selection import SELECT_RTOL
 
 __all__ = [
@@ -423,7 +426,8 @@ class CompliantSerialArm:
         q = np.asarray(conditions.q, dtype=float)
         loads = self.default_loads(q.shape[-2]) if conditions.loads is None else conditions.loads
         u = q @ arm.joint_map.T
-        axes, origins, _, tip = chain_frames(arm.chain, u)
+        frames = chain_frames(arm.chain, u)
+        axes, origins, _, tip = frames
         g = elastic.gravity
         terms = self._terms
         joints = self.joints
@@ -446,6 +450,7 @@ class CompliantSerialArm:
                 g,
                 payload_kg=loads.payload_kg,
                 payload_com_mm=elastic.payload_com_mm,
+                frames=frames,
             )
             out[..., ~c] = torques[..., joints[~c]]
         return out
@@ -681,7 +686,48 @@ class CompliantSerialArm:
         return False
 
     def plan_information(self, q: np.ndarray, loads: Loads | None = None) -> BlockInformation:
-        return BlockInformation(self, q, loads, unit_columns=True)
+        return BlockInformation(self, q, loads, unit_columns=True, linearize=self.linearize)
+
+    def linearize(self, conditions: Conditions) -> Linearization:
+        """The rows' whitened blocks at the nominal parameters and their pullback: the arm's
+        (:meth:`SpatialArm.linearize`) and the compliance columns' ``J_u[:, j] L``, whose
+        ``J_u`` is the zero errors' columns through ``M^-1`` (pulled back by the chain's
+        rule) and whose loads ``L`` are differentiated by central differences (they cost
+        a pass of the frames, not of the Jacobian)."""
+        arm, minv = self.arm, self._inverse_map
+        free = np.flatnonzero(self.free[arm.n_params :])
+        joints = self.joints[free]
+        loads = self.load_terms(conditions)[..., free]  # (..., m, P_f)
+        zeros = np.arange(arm.layout.zero_start, arm.layout.target_start)
+
+        def extra(kin: ChainKinematics) -> Extra:
+            assert kin.jacobian is not None
+            along = (kin.jacobian[..., zeros] @ minv)[..., joints]  # J_u's columns (..., 3, P_f)
+
+            def pullback(cotangent: np.ndarray) -> np.ndarray:
+                mapped = (cotangent * loads[..., None, :]) @ minv[:, joints].T
+                out = jacobian_pose_pullback(kin, arm.layout, arm.joint_map, zeros, mapped)
+                weight = np.sum(cotangent * along, axis=-2)  # (..., m, P_f)
+                return out + np.einsum(
+                    "...p,...pn->...n", weight, self._load_gradient(conditions, free)
+                )
+
+            return along * loads[..., None, :], pullback
+
+        return arm.linearize(conditions, extra, self)
+
+    def _load_gradient(self, conditions: Conditions, free: np.ndarray) -> np.ndarray:
+        """``d L / d q`` ``(..., m, P_f, n)`` of the free compliance's loads, by central
+        differences of step 1e-6 rad (the loads are smooth trigonometric sums)."""
+        q = np.asarray(conditions.q, dtype=float)
+        out = np.empty((*q.shape[:-1], free.size, q.shape[-1]))
+        for j in range(q.shape[-1]):
+            step = np.zeros(q.shape[-1])
+            step[j] = 1e-6
+            ahead = self.load_terms(Conditions(q + step, loads=conditions.loads))[..., free]
+            behind = self.load_terms(Conditions(q - step, loads=conditions.loads))[..., free]
+            out[..., j] = (ahead - behind) / 2e-6
+        return out
 
     def closed_form_plans(self, m: int) -> None:
         return None

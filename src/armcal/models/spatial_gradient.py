@@ -11,13 +11,15 @@ the point, add their own term (:meth:`armcal.noise.NoiseModel.metric_pullback`).
 
 from __future__ import annotations
 
+from collections.abc import Callable
+
 import numpy as np
 
 from ..noise import NoiseModel
 from .information import Linearization
 from .spatial_kinematics import ChainKinematics, SpatialLayout, cross
 
-__all__ = ["jacobian_pose_pullback", "linearization", "upstream_joints"]
+__all__ = ["Extra", "jacobian_pose_pullback", "linearization", "upstream_joints"]
 
 
 def upstream_joints(layout: SpatialLayout) -> np.ndarray:
@@ -80,19 +82,28 @@ def jacobian_pose_pullback(
     return by_joint @ joint_map  # d/dq_i = sum_l M_li d/du_l
 
 
+#: Columns a model adds to a spatial arm's (joint compliance): their unwhitened values
+#: ``(..., m, 3, P)`` and the pullback of a cotangent on them ``(..., m, 3, P) -> (..., m, n)``.
+Extra = tuple[np.ndarray, Callable[[np.ndarray], np.ndarray]]
+
+
 def linearization(
     kin: ChainKinematics,
     layout: SpatialLayout,
     joint_map: np.ndarray,
     columns: np.ndarray,
     noise: NoiseModel,
+    extra: Extra | None = None,
 ) -> Linearization:
     """Rows' whitened blocks ``W J[:, columns]`` and their pullback, from kinematics with
     derivatives and a noise model whose whitening depends on the rows through the points
     and the joint Jacobian (isotropic, anisotropic, a tracker's, encoder noise; not rows'
-    own sigmas or orientations)."""
+    own sigmas or orientations); ``extra`` columns follow the arm's."""
     assert kin.jacobian is not None and kin.joint_jacobian is not None
     jac = kin.jacobian[..., columns]
+    g = jac.shape[-1]
+    if extra is not None:
+        jac = np.concatenate([jac, extra[0]], axis=-1)
     velocity = kin.joint_jacobian
     encoder = velocity if noise.joint_sigma is not None else None
     w = None
@@ -102,7 +113,9 @@ def linearization(
 
     def pullback(cotangent: np.ndarray) -> np.ndarray:
         plain = cotangent if w is None else np.swapaxes(w, -1, -2) @ cotangent
-        out = jacobian_pose_pullback(kin, layout, joint_map, columns, plain)
+        out = jacobian_pose_pullback(kin, layout, joint_map, columns, plain[..., :g])
+        if extra is not None:
+            out = out + extra[1](plain[..., g:])
         if w is None:
             return out
         position, joint = noise.metric_pullback(w, kin.points, velocity, jac, cotangent)

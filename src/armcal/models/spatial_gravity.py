@@ -72,6 +72,7 @@ def gravity_torques(
     *,
     payload_kg: ArrayLike = 0.0,
     payload_com_mm: ArrayLike = (0.0, 0.0, 0.0),
+    frames: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray] | None = None,
 ) -> np.ndarray:
     """Gravity's torques ``(..., n)`` about every joint (N m; N for a prismatic joint).
 
@@ -86,6 +87,8 @@ def gravity_torques(
         ``[0, 0, -STANDARD_GRAVITY]`` for a floor-mounted arm.
     payload_kg : float or ndarray, shape (...)
         A payload at the tip, at ``payload_com_mm`` in the tip frame.
+    frames : tuple, optional
+        :func:`chain_frames` at ``u``, where the caller has them.
 
     Examples
     --------
@@ -102,7 +105,7 @@ def gravity_torques(
     u = np.asarray(u, dtype=float)
     g = np.asarray(gravity, dtype=float)
     n = chain.n_joints
-    axes, origins, after, tip = chain_frames(chain, u)
+    axes, origins, after, tip = chain_frames(chain, u) if frames is None else frames
     centres = np.einsum("...kij,kj->...ki", after[..., :3, :3], links.com_mm) + after[..., :3, 3]
     payload = np.asarray(payload_kg, dtype=float)
     payload_at = tip[..., :3, :3] @ np.asarray(payload_com_mm, dtype=float) + tip[..., :3, 3]
