@@ -421,7 +421,28 @@ class CompliantSerialArm:
 
     def load_terms(self, conditions: Conditions) -> np.ndarray:
         """The load ``(..., m, P)`` every compliance parameter multiplies: torque (N m) for
-        ``k``, lever arm (m) for ``c``, on the nominal chain at the rows' readings."""
+        ``k``, lever arm (m) for ``c``, on the nominal chain at the rows' readings (once
+        for the rows: every step of a fit needs them, and they do not change)."""
+        return conditions.memo(self._loads_key, lambda: self._load_terms(conditions))
+
+    @cached_property
+    def _loads_key(self) -> tuple:
+        """What the loads depend on besides the rows: the terms, gravity, the masses, the
+        payload's centre and the nominal chain (by value: a key outlives its model)."""
+        elastic, chain, links = self.elastic, self.arm.chain, self.elastic.links
+        return (
+            "serial compliance loads",
+            self._terms,
+            elastic.gravity.tobytes(),
+            None if links is None else (links.mass_kg.tobytes(), links.com_mm.tobytes()),
+            elastic.payload_com_mm.tobytes(),
+            chain.origins.tobytes(),
+            chain.tip.tobytes(),
+            chain.kinds,
+            self.arm.joint_map.tobytes(),
+        )
+
+    def _load_terms(self, conditions: Conditions) -> np.ndarray:
         arm, elastic = self.arm, self.elastic
         q = np.asarray(conditions.q, dtype=float)
         loads = self.default_loads(q.shape[-2]) if conditions.loads is None else conditions.loads
