@@ -472,6 +472,10 @@ def test_compliance_the_data_cannot_see_is_warned_of(tmp_path):
     run = run_cli(tmp_path, "identify", "--robot", "cell.toml", "--measurements", "meas.csv")
     assert run.returncode == 0, run.stderr
     assert "compliance-unseen" in run.stderr or "do not show the joint compliance" in run.stderr
+    # what a rule holds is listed with why, not as a value: the arm's and the compliance's
+    assert "k1 cannot be seen" in run.stdout and "j1.x, j1.y and j1.z merge" in run.stdout
+    shown = [line.split()[0] for line in run.stdout.splitlines() if line[:1].isalnum()]
+    assert "k1" not in shown and "j1.x" not in shown and "k2" in shown
 
 
 @pytest.mark.parametrize(

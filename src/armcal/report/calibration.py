@@ -6,6 +6,7 @@ import numpy as np
 
 from ..identification import Calibration
 from ..identification.result import STRONG_CORRELATION
+from ..models import SpatialArm
 from .common import identified, model_lines, small
 
 __all__ = [
@@ -114,10 +115,14 @@ def format_calibration(cal: Calibration, *, truth: np.ndarray | None = None) -> 
         header,
     ]
     truth_display = None if truth is None else np.asarray(truth) * cal.display_scale
-    model = cal.model  # held by a rule (not by the user): every family's, the effect's too
-    merged = {n for n, free in zip(model.param_names, model.free, strict=True) if not free} - set(
-        arm.fixed
-    )
+    # held by a rule, listed with why above: the spatial arm's, and its effect's (compliance)
+    merged = set(arm.held) if isinstance(arm, SpatialArm) else set()
+    model, mine = cal.model, set(arm.param_names)
+    merged |= {
+        n
+        for n, free in zip(model.param_names, model.free, strict=True)
+        if not free and n not in mine
+    }
     for i, (name, unit) in enumerate(zip(cal.names, cal.units, strict=True)):
         if name in merged:
             continue  # held by the identifiable-set rule: listed with why, above
