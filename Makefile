@@ -72,6 +72,7 @@ bench: $(VENV)/.installed
 	$(BIN)/python benchmarks/bench_scale.py
 	$(BIN)/python benchmarks/bench_spatial.py
 	$(BIN)/python benchmarks/bench_spatial_design.py
+	$(BIN)/python benchmarks/bench_spatial_compliance.py
 	$(BIN)/python benchmarks/bench_outliers.py
 	$(BIN)/python benchmarks/bench_floor.py
 
