@@ -540,8 +540,19 @@ def test_a_design_chooses_poses_and_payloads_and_certifies_them(tmp_path):
     """Lumped mode needs two payloads (k from the payload's own torque): the design uses
     both and reports its Kiefer-Wolfowitz certificate."""
     _cell(tmp_path, "lumped = true")
-    run = run_cli(tmp_path, "design", "--robot", "cell.toml", "--poses", "40",
-                  "--payloads", "0,165", "--json", "-o", "designed.csv")  # fmt: skip
+    run = run_cli(
+        tmp_path,
+        "design",
+        "--robot",
+        "cell.toml",
+        "--poses",
+        "40",
+        "--payloads",
+        "0,165",
+        "--json",
+        "-o",
+        "designed.csv",
+    )
     assert run.returncode == 0, run.stderr
     doc = json.loads(run.stdout)
     certified = doc["certified_d_efficiency"]
@@ -550,3 +561,80 @@ def test_a_design_chooses_poses_and_payloads_and_certifies_them(tmp_path):
     assert set(payloads) == {0.0, PAYLOAD}
     checked = run_cli(tmp_path, "evaluate", "--robot", "cell.toml", "--plan", "designed.csv")
     assert checked.returncode == 0, checked.stderr
+
+
+def test_a_lumped_calibration_under_one_payload_warns_under_another(tmp_path):
+    """With one payload the lumped weights hold it: another payload is not predicted."""
+    _cell(tmp_path, "lumped = true")
+    plan = (tmp_path / "plan.csv").read_text().replace(",0\n", ",165\n")  # every pose at 165
+    (tmp_path / "plan.csv").write_text(plan)
+    run_cli(
+        tmp_path,
+        "synthesize",
+        "--robot",
+        "cell.toml",
+        "--plan",
+        "plan.csv",
+        "--truth",
+        "truth.toml",
+        "--sigma",
+        "0.02",
+        "-o",
+        "meas.csv",
+    )
+    fit = run_cli(
+        tmp_path,
+        "identify",
+        "--robot",
+        "cell.toml",
+        "--measurements",
+        "meas.csv",
+        "-o",
+        "cal.json",
+    )
+    assert fit.returncode == 0, fit.stderr
+    assert (
+        "k2" not in json.loads((tmp_path / "cal.json").read_text())["elastostatic"]["parameters"]
+    )
+    program = "q1_deg,q2_deg,q3_deg,q4_deg,q5_deg,q6_deg\n10,20,-30,40,50,60\n"
+    (tmp_path / "program.csv").write_text(program)
+    run = run_cli(
+        tmp_path,
+        "compensate",
+        "--calibration",
+        "cal.json",
+        "--program",
+        "program.csv",
+        "--payload-kg",
+        "0",
+        "--target",
+        "A",
+        "-o",
+        "out.csv",
+    )
+    assert run.returncode == 0, run.stderr
+    assert "deflection under payloads of 0 kg is not predicted" in run.stderr
+
+
+def test_tip_force_columns_are_refused_for_a_spatial_arm(tmp_path):
+    _cell(tmp_path)
+    run_cli(
+        tmp_path,
+        "synthesize",
+        "--robot",
+        "cell.toml",
+        "--plan",
+        "plan.csv",
+        "--truth",
+        "truth.toml",
+        "--sigma",
+        "0.02",
+        "-o",
+        "meas.csv",
+    )
+    lines = (tmp_path / "meas.csv").read_text().splitlines()
+    forced = [lines[0] + ",fx_N"] + [line + ",10" for line in lines[1:]]
+    (tmp_path / "forced.csv").write_text("\n".join(forced) + "\n")
+    run = run_cli(tmp_path, "identify", "--robot", "cell.toml", "--measurements", "forced.csv")
+    assert run.returncode == 2
+    assert "payloads (payload_kg), not tip forces" in run.stderr
