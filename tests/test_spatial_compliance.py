@@ -109,8 +109,10 @@ def test_a_twist_is_the_chains_kinematics_at_the_twisted_joint_values():
 
 def test_lumped_lever_arms_are_the_horizontal_distances_of_the_stations():
     chain = SerialChain.from_mdh([0, 0, 0], [0, 500.0, 300.0], [0, 0, 0], [0, 0, 0])
+    tip = np.eye(4)
+    tip[0, 3] = 200.0  # the flange 200 mm beyond joint 3 along its link
     chain = SerialChain(
-        chain.origins, chain.kinds, np.eye(4), chain.joint_names, np.tile([-np.pi, np.pi], (3, 1))
+        chain.origins, chain.kinds, tip, chain.joint_names, np.tile([-np.pi, np.pi], (3, 1))
     )
     arm = SpatialArm(chain)
     elastic = SerialElastics.create(3, gravity=[0, -2, 0])  # axes along z: a vertical arm
@@ -121,14 +123,15 @@ def test_lumped_lever_arms_are_the_horizontal_distances_of_the_stations():
     x = np.stack(
         [np.zeros(2), 500 * np.cos(a1[:, 0]), 500 * np.cos(a1[:, 0]) + 300 * np.cos(a1[:, 1])],
         axis=1,
-    )  # joints 1, 2, 3 (the tip is joint 3's origin)
+    )  # joints 1, 2, 3
+    tip = x[:, 2] + 200 * np.cos(a1[:, 2])
     expected = {
         "c1.j2": x[:, 1],
         "c1.j3": x[:, 2],
-        "c1.tip": x[:, 2],
+        "c1.tip": tip,
         "c2.j3": x[:, 2] - x[:, 1],
-        "c2.tip": x[:, 2] - x[:, 1],
-        "c3.tip": np.zeros(2),
+        "c2.tip": tip - x[:, 1],
+        "c3.tip": tip - x[:, 2],
     }
     terms = model.load_terms(rows)
     for name, value in expected.items():
@@ -257,21 +260,29 @@ URDF = """<?xml version="1.0"?>
     <origin xyz="0.1 0 0"/><axis xyz="0 0 1"/><limit lower="-3" upper="3"/></joint>
   <joint name="flange" type="fixed"><parent link="link2"/><child link="tool"/>
     <origin xyz="0 0.5 0" rpy="0 0 1.2"/></joint>
+  <link name="finger"><inertial><origin xyz="0.05 0 0"/><mass value="0.5"/></inertial></link>
+  <joint name="grip" type="prismatic"><parent link="tool"/><child link="finger"/>
+    <origin xyz="0 0 0.1"/><axis xyz="1 0 0"/><limit lower="0" upper="0.04"/></joint>
+  <link name="camera"/>
+  <joint name="mount" type="fixed"><parent link="link2"/><child link="camera"/>
+    <origin xyz="0.1 0 0"/></joint>
 </robot>
 """
 
 
 def test_a_urdfs_inertials_fold_through_fixed_joints(tmp_path):
-    """Link 1 carries link1 and the bracket (10 + 2 kg), link 2 carries link2 and the tool
-    (3 + 1 kg); their centres in the world frame are the URDF's own transforms'."""
+    """Link 1 carries link1 and the bracket (10 + 2 kg), link 2 carries link2, the tool and
+    a gripper's finger beyond the tip link, at the finger's zero (3 + 1 + 0.5 kg; a camera
+    without <inertial> weighs nothing); their centres in the world frame are the URDF's
+    own transforms'."""
     from armcal.files.urdf import read_urdf
     from armcal.models.spatial_chain import elementary
     from armcal.models.spatial_gravity import chain_frames
 
     (tmp_path / "two.urdf").write_text(URDF)
-    found = read_urdf(tmp_path / "two.urdf")
+    found = read_urdf(tmp_path / "two.urdf", tip_link="tool")
     assert found.masses is not None
-    np.testing.assert_allclose(found.masses.mass_kg, [12.0, 4.0])
+    np.testing.assert_allclose(found.masses.mass_kg, [12.0, 4.5])
     u = np.array([0.7, -0.4])
     _, _, after, _ = chain_frames(found.chain, u)
     world = after[:, :3, :3] @ found.masses.com_mm[:, :, None]
@@ -282,7 +293,10 @@ def test_a_urdfs_inertials_fold_through_fixed_joints(tmp_path):
     centre1 = (10 * link1 @ [200, 0, 0] + 2 * link1 @ [400, 0, 100]) / 12 + [0, 0, 500]
     link2 = link1 @ elementary(2, u[1])
     at2 = link1 @ [500, 0, 0] + [0, 0, 500]
-    centre2 = (3 * (link2 @ [0, 300, 0]) + 1 * (link2 @ [0, 500, 0])) / 4 + at2
+    tool = link2 @ elementary(2, 1.2)  # the flange's rpy
+    finger = link2 @ [0, 500, 0] + tool @ [50, 0, 100]  # grip at 0: (0, 0, 100) + (50, 0, 0)
+    centre2 = (3 * (link2 @ [0, 300, 0]) + 1 * (link2 @ [0, 500, 0]) + 0.5 * finger) / 4.5
+    centre2 = centre2 + at2
     np.testing.assert_allclose(world, [centre1, centre2], atol=1e-9)
 
 
@@ -293,6 +307,7 @@ def _cell(folder: Path, extra: str = "") -> None:
     source = BUILTIN_SERIAL_ROBOTS["industrial-6r"]
     (folder / "industrial-6r.urdf").write_text(source.with_suffix(".urdf").read_text())
     targets = "\n".join(f"{k} = {{ xyz_mm = {v} }}" for k, v in TARGETS.items())
+    masses = "" if "lumped = true" in extra else f"link_masses_kg = {MASSES}"
     (folder / "cell.toml").write_text(
         f"""name = "cell-6r"
 urdf = "industrial-6r.urdf"
@@ -306,7 +321,7 @@ sigma_mm = 0.02
 [targets]
 {targets}
 [elastostatic]
-link_masses_kg = {MASSES}
+{masses}
 payload_kg = {PAYLOAD}
 payload_com_mm = [0, 0, 100]
 {extra}
@@ -484,6 +499,7 @@ def test_compliance_the_data_cannot_see_is_warned_of(tmp_path):
         ("gravity = [0, 0, 0]", "gravity must be a non-zero direction"),
         ("lumped = 1", "elastostatic.lumped"),
         ("link_com_mm = [[0, 0, 0]]", "elastostatic.link_com_mm"),
+        ("lumped = true\nlink_masses_kg = [1, 1, 1, 1, 1, 1]", "remove one of them"),
     ],
 )
 def test_a_bad_elastostatic_table_is_refused_with_its_key(tmp_path, extra, words):
@@ -638,3 +654,97 @@ def test_tip_force_columns_are_refused_for_a_spatial_arm(tmp_path):
     run = run_cli(tmp_path, "identify", "--robot", "cell.toml", "--measurements", "forced.csv")
     assert run.returncode == 2
     assert "payloads (payload_kg), not tip forces" in run.stderr
+
+
+def test_conditions_copied_for_other_readings_do_not_share_their_loads():
+    """A copy by dataclasses.replace (another q) computes its own loads, and two models
+    whose default payloads differ do not share theirs on the same rows."""
+    import dataclasses
+
+    from armcal.models import Conditions
+
+    q, loads = _poses(4, 13)
+    model = CompliantSerialArm.for_loads(_arm(), _elastics(), loads)
+    rows = Conditions(q)
+    first = model.load_terms(rows)
+    moved = model.load_terms(dataclasses.replace(rows, q=q + 0.3))
+    assert not np.allclose(first, moved)
+    light = CompliantSerialArm(model.arm, dataclasses.replace(model.elastic, payload_kg=0.0))
+    assert not np.allclose(light.load_terms(rows), first)
+
+
+def test_held_compliance_is_neither_tested_nor_shown():
+    """The F test of compliance counts its free parameters only (k2..k5 here, 4; not k1, k6,
+    which gravity does not show)."""
+    q, loads = _poses(40, 14)
+    model = CompliantSerialArm.for_loads(_arm(), _elastics(), loads)
+    rows, points = _measured(model, q, loads, _truth(model), 0.02, 15)
+    cal = identify(model, rows.q, points, target=rows.target, loads=rows.loads, sigma=0.02)
+    assert cal.nested is not None
+    assert cal.nested.names == ("k2", "k3", "k4", "k5")
+
+
+def test_tip_forces_and_a_rigid_truths_compliance_are_refused(tmp_path):
+    _cell(tmp_path)
+    run_cli(
+        tmp_path,
+        "synthesize",
+        "--robot",
+        "cell.toml",
+        "--plan",
+        "plan.csv",
+        "--truth",
+        "truth.toml",
+        "--sigma",
+        "0.02",
+        "-o",
+        "meas.csv",
+    )
+    run_cli(
+        tmp_path,
+        "identify",
+        "--robot",
+        "cell.toml",
+        "--measurements",
+        "meas.csv",
+        "-o",
+        "cal.json",
+    )
+    program = "q1_deg,q2_deg,q3_deg,q4_deg,q5_deg,q6_deg,fx_N\n10,20,-30,40,50,60,500\n"
+    (tmp_path / "program.csv").write_text(program)
+    run = run_cli(
+        tmp_path,
+        "compensate",
+        "--calibration",
+        "cal.json",
+        "--program",
+        "program.csv",
+        "--target",
+        "A",
+        "-o",
+        "out.csv",
+    )
+    assert run.returncode == 2 and "not tip forces" in run.stderr
+    assert not (tmp_path / "out.csv").exists()
+    rigid = (tmp_path / "cell.toml").read_text().split("[elastostatic]")[0]
+    (tmp_path / "rigid.toml").write_text(rigid)
+    (tmp_path / "truth.toml").write_text(
+        (tmp_path / "truth.toml")
+        .read_text()
+        .replace('robot = "cell.toml"', 'robot = "rigid.toml"')
+    )
+    plan = [line.rsplit(",", 1)[0] for line in (tmp_path / "plan.csv").read_text().splitlines()]
+    (tmp_path / "rigid-plan.csv").write_text("\n".join(plan) + "\n")  # no payload column
+    run = run_cli(
+        tmp_path,
+        "synthesize",
+        "--robot",
+        "rigid.toml",
+        "--plan",
+        "rigid-plan.csv",
+        "--truth",
+        "truth.toml",
+        "-o",
+        "rigid.csv",
+    )
+    assert run.returncode == 2 and "key 'compliance'" in run.stderr

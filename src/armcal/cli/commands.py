@@ -133,7 +133,9 @@ def _truth(args: argparse.Namespace, spec: RobotSpec | SerialSpec, model: FitMod
                 "(robot = the true arm's file, base = the instrument's pose, [errors], "
                 "[targets]; armcal formats)"
             )
-        geometry = load_serial_truth(path, model.arm)
+        geometry = load_serial_truth(
+            path, model.arm, compliant=isinstance(model, CompliantSerialArm)
+        )
         if not isinstance(model, CompliantSerialArm):
             return geometry
         return np.concatenate([geometry, load_serial_compliance_truth(path, model)])

@@ -343,6 +343,18 @@ def _elastostatic(
         raise fail(path, "key 'elastostatic.link_com_mm': give link_masses_kg with it")
     elif masses is not None:
         mass, com = masses.mass_kg, masses.com_mm
+    if lumped and "link_masses_kg" in table:
+        raise fail(
+            path,
+            "[elastostatic]: lumped = true and link_masses_kg: the lumped mode is for "
+            "masses unknown; remove one of them",
+        )
+    if table.get("lumped") is False and mass is None:
+        raise fail(
+            path,
+            "[elastostatic]: lumped = false but no masses: give link_masses_kg (and "
+            "link_com_mm), or <inertial> tags in the URDF",
+        )
     payload = number(path, table.get("payload_kg", 0.0), "elastostatic.payload_kg")
     payload_at = numbers(
         path, table.get("payload_com_mm", [0, 0, 0]), "elastostatic.payload_com_mm", 3
@@ -569,15 +581,24 @@ def _view(path: Path, table: Any, labels: tuple[str, ...], normals: list) -> Spa
     )
 
 
-def load_serial_truth(path: str | os.PathLike, arm: SpatialArm) -> np.ndarray:
+def load_serial_truth(
+    path: str | os.PathLike, arm: SpatialArm, *, compliant: bool = False
+) -> np.ndarray:
     """The true parameters ``(p,)`` (mm, rad) of a virtual spatial arm (module notes).
 
     The true arm's description, when given, is turned into ``arm``'s parameters
-    exactly (:meth:`~armcal.models.SpatialArm.params_of`).
+    exactly (:meth:`~armcal.models.SpatialArm.params_of`).  A ``[compliance]``
+    table needs a ``compliant`` arm (its robot file's ``[elastostatic]``).
     """
     path = Path(path)
     data = load_toml(path, "truth")
     check_keys(path, data, allowed_keys("", SERIAL_TRUTH_KEYS))
+    if "compliance" in data and not compliant:
+        raise fail(
+            path,
+            f"key 'compliance': robot {arm.name} has no [elastostatic] table, so nothing "
+            "twists its joints; add the table to the robot file or remove [compliance]",
+        )
     base = np.zeros(6)
     if "base" in data:
         entry = data["base"]

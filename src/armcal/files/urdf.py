@@ -45,8 +45,9 @@ class UrdfChain:
     base_link, tip_link : str
     masses : LinkMasses or None
         Every moving link's mass and centre of mass (in armcal's joint frame, mm)
-        from the ``<inertial>`` tags of the links each joint moves rigidly (through
-        fixed joints, side branches included); None when no such link has one.
+        from the ``<inertial>`` tags of the links each joint moves (through fixed
+        joints, side branches included, a side branch that moves at its zero; a
+        link without the tag weighs nothing); None when no such link has one.
     """
 
     chain: SerialChain
@@ -218,6 +219,18 @@ def _inertials(path: Path, text: str, root: ET.Element) -> dict[str, tuple[float
     return out
 
 
+def _side_joint(path: Path, text: str, element: ET.Element) -> UrdfJoint:
+    """A joint off the chain, for its origin only (a mimic joint is allowed there)."""
+    origin = element.find("origin")
+    where = f"line {_line_of(text, 'joint', element.get('name', ''))}"
+    xyz = None if origin is None else _floats(path, text, origin, "xyz", 3, where)
+    rpy = None if origin is None else _floats(path, text, origin, "rpy", 3, where)
+    mm = tuple(1000.0 * v for v in (xyz or (0.0, 0.0, 0.0)))
+    return UrdfJoint(
+        element.get("name", ""), "fixed", (mm[0], mm[1], mm[2]), rpy or (0.0, 0.0, 0.0)
+    )
+
+
 def _link_masses(
     path: Path,
     text: str,
@@ -228,6 +241,7 @@ def _link_masses(
 ) -> LinkMasses | None:
     """What every moving joint of ``chain`` moves rigidly: mass and centre (module notes)."""
     inertial = _inertials(path, text, root)
+    on_chain = {element for element, joint in chain if joint.kind != "fixed"}
     masses, centres, seen = [], [], False
     for element, joint in chain:
         if joint.kind == "fixed":
@@ -246,10 +260,12 @@ def _link_masses(
                 )
                 seen = True
             for below in children[link]:
-                if parent_joint[below].get("type") != "fixed":
-                    continue  # a side branch that moves (a gripper's fingers): not rigid
-                fixed = _joint(path, text, parent_joint[below])
-                stack.append((below, frame @ transform(rpy_matrix(fixed.rpy), fixed.xyz)))
+                if parent_joint[below] in on_chain:
+                    continue  # the next moving joint of the chain: its own link
+                # a fixed joint, or a side branch that moves (a gripper's fingers) taken at
+                # its zero: its weight loads the chain wherever it is
+                side = _side_joint(path, text, parent_joint[below])
+                stack.append((below, frame @ transform(rpy_matrix(side.rpy), side.xyz)))
         centre = moment / total if total > 0 else np.zeros(3)
         masses.append(total)
         centres.append(axis_frame(joint.axis).T @ centre)  # armcal's frame: z along the axis

@@ -365,21 +365,22 @@ def identify(
         # each fit minimised (whitened residuals, in one unit).
         inner_fit = inner_all if used.all() else nested_problem.fit(used)
         assert inner_fit is not None
-        count = model.n_params - inner.n_params
-        p_value = nested_test(inner_fit.whitened[used], fit.whitened[used], count, dof)
+        # The effect's free parameters: those a rule holds (a joint gravity does not twist)
+        # are neither tested nor shown.
+        effect = inner.n_params + np.flatnonzero(model.free[inner.n_params :])
+        p_value = nested_test(inner_fit.whitened[used], fit.whitened[used], effect.size, dof)
         nested = NestedFit(
             effect_words,
-            model.param_names[inner.n_params :],
+            tuple(model.param_names[i] for i in effect),
             rms(inner_fit.residuals[used]),
             p_value,
         )
-        effect = slice(inner.n_params, None)
         std = display_std(model, covariance)[effect]
         shown = ", ".join(
             f"{name} = {v:.3g} ± {s:.3g} {unit}"
             for name, unit, v, s in zip(
                 nested.names,
-                model.param_units[effect],
+                [model.param_units[i] for i in effect],
                 fit.params[effect] * model.display_scale[effect],
                 std,
                 strict=True,

@@ -174,7 +174,8 @@ class Conditions:
     loads: Loads | None = None
     sigma_mm: np.ndarray | None = None
     frames: np.ndarray | None = None
-    _memo: dict[Hashable, Any] = field(default_factory=dict, repr=False)
+    # Not an argument: a copy by dataclasses.replace (another q) starts with its own memo.
+    _memo: dict[Hashable, Any] = field(default_factory=dict, init=False, repr=False, compare=False)
 
     @property
     def m(self) -> int:

@@ -23,9 +23,12 @@ Parameters, in display units
   the origins of the joints beyond ``j`` and the tip.  ``c{j}.{s}`` [mdeg/m] is
   joint ``j``'s deflection per metre of horizontal lever arm from joint ``j``
   to station ``s``, ``h = a_j . ((p_s - p_j) x g_hat)``: a weight at ``s``
-  (``k_j`` times that weight).  A link whose centre of mass lies between two
-  stations is a combination of the two, so J2 of an industrial arm sees its
-  upper arm and forearm through the elbow's and the wrist's elevation.  With
+  (``k_j`` times that weight).  A link whose centre of mass lies on the segment
+  between two stations is a combination of the two, so J2 of an industrial arm
+  sees its upper arm and forearm through the elbow's and the wrist's elevation;
+  a centre off the stations' lines is approximated (the lever arm about a joint
+  is two-dimensional, and the stations span what the chain's origins span).
+  Revolute joints only: a prismatic joint is taken as rigid.  With
   payloads that vary, ``k{j}`` is identified as well, from the payload's own
   torque.
 
@@ -63,7 +66,7 @@ from .spatial import SpatialArm
 from .spatial_gradient import Extra, jacobian_pose_pullback
 from .spatial_gravity import STANDARD_GRAVITY, LinkMasses, chain_frames, gravity_torques
 from .spatial_kinematics import ChainKinematics
-from .spatial_selection import SELECT_RTOL
+from .spatial_selection import select_effect
 
 __all__ = [
     "C_SCALE",
@@ -222,9 +225,11 @@ class CompliantSerialArm:
         ``k{j}``; one constant payload only adds to the lumped weight, and the model
         records it (:meth:`unpredicted_loads`).  ``virtual``: a virtual robot, which
         every known load bends whether or not a fit could tell ``k`` from the weight."""
-        if np.any(loads.force_n != 0):
+        _payloads_only(loads)
+        if not any(kind == "R" for kind in arm.chain.kinds):
             raise ArmcalError(
-                "a spatial arm takes payloads (payload_kg), not tip forces fx_N/fy_N"
+                f"[elastostatic]: {arm.name} has no revolute joint, and only revolute joints "
+                "twist in armcal's model; remove the table"
             )
         if elastic.lumped and not virtual and not loads.varying and loads.n_rows:
             return cls(arm, replace(elastic, payload_kg=float(loads.payload_kg[0])), False)
@@ -433,6 +438,7 @@ class CompliantSerialArm:
         return (
             "serial compliance loads",
             self._terms,
+            elastic.payload_kg,  # the rows' payload where they give none
             elastic.gravity.tobytes(),
             None if links is None else (links.mass_kg.tobytes(), links.com_mm.tobytes()),
             elastic.payload_com_mm.tobytes(),
@@ -515,7 +521,7 @@ class CompliantSerialArm:
     ) -> Conditions:
         """The arm's checked rows, each loaded (default: the robot file's payload)."""
         rows = self.arm.conditions(q, target=target, sigma_mm=sigma_mm)
-        loads = self.default_loads(rows.m) if loads is None else loads
+        loads = self.default_loads(rows.m) if loads is None else _payloads_only(loads)
         if loads.n_rows != rows.m:
             raise ValueError(f"loads must have {rows.m} rows, got {loads.n_rows}")
         return Conditions(rows.q, rows.target, loads, rows.sigma_mm)
@@ -632,7 +638,8 @@ class CompliantSerialArm:
             flat[:, np.concatenate([geo, arm.n_params + np.arange(model.n_compliance)])]
         )
         columns = svd.singular_values[:, None] * svd.vt * svd.column_norms
-        held, merges = _select(model, columns, geo)
+        geo_names = [arm.param_names[i] for i in geo]
+        held, merges = select_effect(columns, geo_names, model.compliance_names, model.joints)
         return replace(model, held=held, merges=merges)
 
     def expressed(self, conditions: Conditions, params: np.ndarray) -> np.ndarray:
@@ -682,7 +689,7 @@ class CompliantSerialArm:
     def plan_conditions(self, q: np.ndarray, loads: Loads | None = None) -> Conditions:
         """Every target measured at every pose, each row with its pose's load."""
         rows = self.arm.plan_conditions(q)
-        loads = self.default_loads(np.shape(q)[-2]) if loads is None else loads
+        loads = self.default_loads(np.shape(q)[-2]) if loads is None else _payloads_only(loads)
         loads = loads.repeat(len(self.arm.targets))
         return Conditions(rows.q, rows.target, loads, rows.sigma_mm, rows.frames)
 
@@ -721,6 +728,8 @@ class CompliantSerialArm:
         loads = self.load_terms(conditions)[..., free]  # (..., m, P_f)
         zeros = np.arange(arm.layout.zero_start, arm.layout.target_start)
 
+        gradient: list[np.ndarray] = []  # d L / d q, computed once, when a gradient is asked
+
         def extra(kin: ChainKinematics) -> Extra:
             assert kin.jacobian is not None
             along = (kin.jacobian[..., zeros] @ minv)[..., joints]  # J_u's columns (..., 3, P_f)
@@ -729,9 +738,9 @@ class CompliantSerialArm:
                 mapped = (cotangent * loads[..., None, :]) @ minv[:, joints].T
                 out = jacobian_pose_pullback(kin, arm.layout, arm.joint_map, zeros, mapped)
                 weight = np.sum(cotangent * along, axis=-2)  # (..., m, P_f)
-                return out + np.einsum(
-                    "...p,...pn->...n", weight, self._load_gradient(conditions, free)
-                )
+                if not gradient:
+                    gradient.append(self._load_gradient(conditions, free))
+                return out + np.einsum("...p,...pn->...n", weight, gradient[0])
 
             return along * loads[..., None, :], pullback
 
@@ -769,9 +778,8 @@ class CompliantSerialArm:
         lo, hi = self.joint_limits[:, 0], self.joint_limits[:, 1]
         probe = lo + (hi - lo) * np.random.default_rng(0).random((_PROBE_POSES, self.n_joints))
         loads = Loads.create(_PROBE_POSES, np.resize(values, _PROBE_POSES))
-        rows = model.plan_conditions(probe, loads)
-        held, merges = model.prepared(rows).held, model.prepared(rows).merges
-        return replace(model, held=held, merges=merges), values
+        ready = model.prepared(model.plan_conditions(probe, loads))
+        return replace(model, held=ready.held, merges=ready.merges), values
 
     # -- the tool --------------------------------------------------------------------------
 
@@ -814,6 +822,16 @@ class CompliantSerialArm:
         return self.split(np.asarray(params, dtype=float))[0]
 
 
+def _payloads_only(loads: Loads) -> Loads:
+    """``loads``, or ArmcalError for tip forces, which this model has no term for."""
+    if np.any(loads.force_n != 0):
+        raise ArmcalError(
+            "a spatial arm takes payloads (payload_kg), not tip forces fx_N/fy_N; remove "
+            "the force columns"
+        )
+    return loads
+
+
 def payload_choices(default_kg: float, given: Sequence[float] | None) -> tuple[float, ...]:
     """The payloads a design may use: ``given``, else 0 and the robot file's payload."""
     if given is not None:
@@ -822,47 +840,3 @@ def payload_choices(default_kg: float, given: Sequence[float] | None) -> tuple[f
             raise ArmcalError(f"payloads must be finite and not negative (kg), got {list(given)}")
         return tuple(values)
     return (0.0, default_kg) if default_kg > 0 else (0.0,)
-
-
-def _select(
-    model: CompliantSerialArm, columns: np.ndarray, geo: np.ndarray
-) -> tuple[tuple[str, ...], tuple[str, ...]]:
-    """The compliance parameters to hold and why, from ``columns`` ``(r, g + P)``: the
-    arm's ``g`` free columns, then every compliance parameter's."""
-    g = geo.size
-    names = model.compliance_names
-    geo_names = [model.arm.param_names[i] for i in geo]
-    norms = np.linalg.norm(columns, axis=0)
-    top = float(np.max(norms[g:], initial=0.0))
-    basis, _ = np.linalg.qr(columns[:, :g])
-    kept: list[int] = []
-    groups: dict[str, list[str]] = {}
-    everyone = [*geo_names, *names]
-    for i in range(model.n_compliance):
-        col = columns[:, g + i]
-        if norms[g + i] <= 1e-12 * max(top, 1e-300):
-            why = f"there is no torque on joint {model.joints[i] + 1} that varies"
-            groups.setdefault(f"cannot be seen: {why}", []).append(names[i])
-            continue
-        rest = col - basis @ (basis.T @ col)
-        rest = rest - basis @ (basis.T @ rest)  # twice is enough (Kahan, Parlett)
-        if np.linalg.norm(rest) > SELECT_RTOL * norms[g + i]:
-            basis = np.column_stack([basis, rest / np.linalg.norm(rest)])
-            kept.append(i)
-            continue
-        keep = np.concatenate([np.arange(g), g + np.array(kept, dtype=int)])
-        unit = columns / np.maximum(norms, 1e-300)
-        coef = np.linalg.lstsq(unit[:, keep], unit[:, g + i], rcond=None)[0]
-        big = np.abs(coef) >= 0.05 * np.max(np.abs(coef))
-        partners = [everyone[k] for k in keep[big]]
-        into = listing(partners[:4]) + (" and more" if len(partners) > 4 else "")
-        zero = any(p.startswith("dq") for p in partners)
-        why = ": a torque that does not change is a zero offset" if zero else ""
-        groups.setdefault(f"into {into}{why}", []).append(names[i])
-    held = tuple(n for members in groups.values() for n in members)
-    sentences = []
-    for text, members in groups.items():
-        if text.startswith("into"):
-            text = ("merges " if len(members) == 1 else "merge ") + text
-        sentences.append(f"{listing(members)} {text}")
-    return held, tuple(sentences)

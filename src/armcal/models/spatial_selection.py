@@ -43,6 +43,7 @@ __all__ = [
     "parallel_runs",
     "priority",
     "select",
+    "select_effect",
     "select_from_rows",
 ]
 
@@ -290,3 +291,49 @@ def select_from_rows(
     chosen = select(layout, chain, columns, still=still, held=held)
     left = zip(layout.names, chosen.kept, strict=True)
     return tuple(n for n, kept in left if not kept and n not in held), chosen.merges
+
+
+def select_effect(
+    columns: np.ndarray, kept_names: Sequence[str], names: Sequence[str], joints: np.ndarray
+) -> tuple[tuple[str, ...], tuple[str, ...]]:
+    """An effect's parameters to hold and why (joint compliance of a spatial arm), by the
+    rule of :func:`select`: from ``columns`` ``(r, g + P)``, the ``g`` columns the arm
+    keeps (``kept_names``) then the effect's ``P`` (``names``, each twisting
+    ``joints[i]``, 0-based), a column whose part outside the span of those kept before
+    it is at most :data:`SELECT_RTOL` of its length is held, named with what it merges
+    into; one of no effect at all "cannot be seen"."""
+    g = len(kept_names)
+    norms = np.linalg.norm(columns, axis=0)
+    top = float(np.max(norms[g:], initial=0.0))
+    basis, _ = np.linalg.qr(columns[:, :g])
+    kept: list[int] = []
+    groups: dict[str, list[str]] = {}
+    everyone = [*kept_names, *names]
+    for i in range(len(names)):
+        col = columns[:, g + i]
+        if norms[g + i] <= _ZERO_RTOL * max(top, 1e-300):
+            why = f"there is no torque on joint {joints[i] + 1} that varies"
+            groups.setdefault(f"cannot be seen: {why}", []).append(names[i])
+            continue
+        rest = col - basis @ (basis.T @ col)
+        rest = rest - basis @ (basis.T @ rest)  # twice is enough (Kahan, Parlett)
+        if np.linalg.norm(rest) > SELECT_RTOL * norms[g + i]:
+            basis = np.column_stack([basis, rest / np.linalg.norm(rest)])
+            kept.append(i)
+            continue
+        keep = np.concatenate([np.arange(g), g + np.array(kept, dtype=int)])
+        unit = columns / np.maximum(norms, 1e-300)
+        coef = np.linalg.lstsq(unit[:, keep], unit[:, g + i], rcond=None)[0]
+        big = np.abs(coef) >= 0.05 * np.max(np.abs(coef))
+        partners = [everyone[k] for k in keep[big]]
+        into = listing(partners[:4]) + (" and more" if len(partners) > 4 else "")
+        zero = any(p.startswith("dq") for p in partners)
+        why = ": a torque that does not change is a zero offset" if zero else ""
+        groups.setdefault(f"into {into}{why}", []).append(names[i])
+    held = tuple(n for members in groups.values() for n in members)
+    sentences = []
+    for text, members in groups.items():
+        if text.startswith("into"):
+            text = ("merges " if len(members) == 1 else "merge ") + text
+        sentences.append(f"{listing(members)} {text}")
+    return held, tuple(sentences)
