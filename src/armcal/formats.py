@@ -358,9 +358,11 @@ SERIAL_KEYS: tuple[Key, ...] = (
     Key(
         "elastostatic",
         "link_com_mm",
-        "mm, [x, y, z] per joint, in the joint's frame after its motion (z its axis)",
+        "mm, [x, y, z] per joint, in armcal's frame of the joint after its motion (z along "
+        "its axis; a URDF child link's frame turned so, the same for a joint about z)",
         "the joint's origin",
-        "every link's centre of mass",
+        "every link's centre of mass (the URDF's <inertial> tags are turned into this frame "
+        "when the table gives no masses)",
     ),
     Key(
         "elastostatic",
