@@ -58,15 +58,13 @@ from numpy.typing import ArrayLike
 from ..errors import ArmcalError, ArmcalWarning, NotIdentifiableError, action
 from ..noise import NoiseModel
 from ..numerics import ScaledSVD
-from .defaults import MinimalPlanar
+from .defaults import ArmEffect, MinimalPlanar
 from .identifiability import Identifiability, listing
 from .information import (
     BlockInformation,
     column_identifiability,
-    covariance_factor_from,
-    whitened_free_jacobian,
 )
-from .interface import Conditions, Effect, LinearPositions, Loads
+from .interface import Conditions, Effect, Loads
 from .planar import PlanarArm
 from .planar_kinematics import (
     forward_kinematics,
@@ -194,7 +192,7 @@ class Elastostatic:
 
 
 @dataclass(frozen=True, eq=False)
-class CompliantArm(MinimalPlanar):
+class CompliantArm(ArmEffect, MinimalPlanar):
     """A planar arm whose joints twist under load: geometry plus joint compliance.
 
     The parameter vector is the arm's user deviations followed by the
@@ -296,29 +294,7 @@ class CompliantArm(MinimalPlanar):
         """Internal to display units of the compliance parameters."""
         return np.array([K_SCALE if k == "k" else C_SCALE for k in self.kinds])
 
-    def split(self, params: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Geometry ``(..., p)`` and compliance ``(..., P)`` of a full parameter vector."""
-        p = self.arm.n_params
-        return params[..., :p], params[..., p:]
-
     # -- parameters (FitModel) ----------------------------------------------------------
-
-    @property
-    def name(self) -> str:
-        return self.arm.name
-
-    @property
-    def param_names(self) -> tuple[str, ...]:
-        """The arm's parameter names, then the compliance parameters'."""
-        return self.arm.param_names + self.compliance_names
-
-    @property
-    def param_units(self) -> tuple[str, ...]:
-        return self.arm.param_units + self.compliance_units
-
-    @property
-    def display_scale(self) -> np.ndarray:
-        return np.concatenate([self.arm.display_scale, self.compliance_scale])
 
     @property
     def fixed(self) -> tuple[str, ...]:
@@ -334,48 +310,8 @@ class CompliantArm(MinimalPlanar):
         return self.arm.free_names + self.compliance_names
 
     @property
-    def n_params(self) -> int:
-        return self.arm.n_params + self.n_compliance
-
-    @property
     def n_free(self) -> int:
         return self.arm.n_free + self.n_compliance
-
-    @property
-    def angle_params(self) -> np.ndarray:
-        return np.concatenate([self.arm.angle_params, np.zeros(self.n_compliance, dtype=bool)])
-
-    @property
-    def instrument_params(self) -> np.ndarray:
-        extra = np.zeros(self.n_compliance, dtype=bool)
-        return np.concatenate([self.arm.instrument_params, extra])
-
-    @property
-    def noise(self) -> NoiseModel | None:
-        return self.arm.noise
-
-    @property
-    def n_joints(self) -> int:
-        return self.arm.n_joints
-
-    @property
-    def joint_limits(self) -> np.ndarray:
-        return self.arm.joint_limits
-
-    def within_limits(self, q: np.ndarray, *, tol: float = 1e-9) -> np.ndarray:
-        return self.arm.within_limits(q, tol=tol)
-
-    @property
-    def point_dim(self) -> int:
-        return self.arm.point_dim
-
-    @property
-    def reach_mm(self) -> float:
-        return self.arm.reach_mm
-
-    @property
-    def target_labels(self) -> tuple[str, ...]:
-        return self.arm.target_labels
 
     def with_noise(self, noise: NoiseModel | None) -> CompliantArm:
         return CompliantArm(self.arm.with_noise(noise), self.elastic, self.known_loads)
@@ -383,11 +319,6 @@ class CompliantArm(MinimalPlanar):
     def with_fixed(self, fixed: Sequence[str]) -> CompliantArm:
         """Other geometric parameters fixed (the compliance is always identified)."""
         return CompliantArm(self.arm.with_fixed(fixed), self.elastic, self.known_loads)
-
-    @property
-    def default_payload_kg(self) -> float:
-        """The robot file's payload."""
-        return self.elastic.payload_kg
 
     def unpredicted_loads(self, loads: Loads) -> str | None:
         """In lumped mode without ``k1..kn``, any payload but the one ``c1..cn`` hold.
@@ -423,10 +354,6 @@ class CompliantArm(MinimalPlanar):
         return CompliantArm(self.arm, self.elastic.with_gravity(gravity), self.known_loads)
 
     # -- the deflected arm --------------------------------------------------------------
-
-    def default_loads(self, m: int) -> Loads:
-        """The robot file's payload on every one of ``m`` rows."""
-        return Loads.create(m, self.elastic.payload_kg)
 
     def load_terms(
         self, q: np.ndarray, geometry: np.ndarray | None, loads: Loads | None
@@ -531,27 +458,7 @@ class CompliantArm(MinimalPlanar):
             self.arm, conditions.q, geometry, target=conditions.target, deflection=bend
         )
 
-    def pose_covariances(
-        self,
-        conditions: Conditions,
-        params: np.ndarray | None = None,
-        *,
-        noise: NoiseModel | None = None,
-    ) -> np.ndarray:
-        geometry = None if params is None else self.split(np.asarray(params, dtype=float))[0]
-        return self.arm.pose_covariances(conditions, geometry, noise=noise)
-
-    def whitening(
-        self, conditions: Conditions, params: np.ndarray | None = None
-    ) -> np.ndarray | None:
-        geometry = None if params is None else self.split(np.asarray(params, dtype=float))[0]
-        return self.arm.whitening(conditions, geometry)
-
     # -- fitting ------------------------------------------------------------------------
-
-    @property
-    def has_closed_form(self) -> bool:
-        return False
 
     @property
     def why_no_closed_form(self) -> str:
@@ -559,14 +466,6 @@ class CompliantArm(MinimalPlanar):
             "the closed form fits the geometry only; joint compliance needs --method "
             "gauss-newton (or auto)"
         )
-
-    def closed_form(self, conditions: Conditions) -> None:
-        return None
-
-    @property
-    def nested(self) -> PlanarArm:
-        """The rigid arm."""
-        return self.arm
 
     @property
     def effect(self) -> Effect:
@@ -584,20 +483,10 @@ class CompliantArm(MinimalPlanar):
             f"load the arm more (payload_kg) or {action('geometry-alone')}",
         )
 
-    def lift(self, nested_params: np.ndarray) -> np.ndarray:
-        """The rigid arm's deviations with no compliance."""
-        shape = (*np.shape(nested_params)[:-1], self.n_compliance)
-        return np.concatenate([nested_params, np.zeros(shape)], axis=-1)
-
     def start(
         self, conditions: Conditions, points: np.ndarray, weights: np.ndarray | None = None
     ) -> np.ndarray:
         return np.zeros((points.shape[0], self.n_params))
-
-    def canonical(self, params: np.ndarray) -> np.ndarray:
-        """The arm's canonical geometry (the deflected points do not change), compliance kept."""
-        geometry, compliance = self.split(np.asarray(params, dtype=float))
-        return np.concatenate([self.arm.canonical(geometry), compliance], axis=-1)
 
     def step_scale(self, conditions: Conditions) -> np.ndarray:
         """The arm's, then the RMS tip motion per unit of every compliance parameter."""
@@ -616,20 +505,10 @@ class CompliantArm(MinimalPlanar):
     def conditioning_warning(self, info: Identifiability) -> ArmcalWarning | None:
         return barely_identifiable_warning(info)
 
-    def covariance_factor(
-        self, conditions: Conditions, params: np.ndarray | None = None
-    ) -> tuple[np.ndarray, np.ndarray]:
-        """From the SVD of the whitened free columns (:mod:`armcal.models.information`)."""
-        return covariance_factor_from(whitened_free_jacobian(self, conditions, params), self.free)
-
     def fit_details(self, conditions: Conditions, params: np.ndarray) -> dict[str, np.ndarray]:
         """``max_deflection_rad`` ``(n,)``: every joint's largest fitted deflection."""
         _, _, bend = self._bent(conditions, params)
         return {"max_deflection_rad": np.max(np.abs(bend), axis=0)}
-
-    def linear_positions(self, conditions: Conditions) -> LinearPositions | None:
-        """None: the deflected tip is not linear in any coordinates of the parameters."""
-        return None
 
     def plan_conditions(self, q: np.ndarray, loads: Loads | None = None) -> Conditions:
         """Every target measured at every pose, each row with its pose's load."""
@@ -638,37 +517,16 @@ class CompliantArm(MinimalPlanar):
 
     # -- design -------------------------------------------------------------------------
 
-    def feasible(self, q: np.ndarray, *, tol: float = 1e-9) -> np.ndarray:
-        return self.arm.feasible(q, tol=tol)
-
-    @property
-    def has_view(self) -> bool:
-        return self.arm.has_view
-
-    def view_constraints(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray] | None:
-        return self.arm.view_constraints(q)
-
     @property
     def rotation_invariant(self) -> bool:
         """Gravity has a direction: turning joint 1 changes every deflection."""
         return self.elastic.gravity is None and self.arm.rotation_invariant
-
-    @property
-    def information_bound(self) -> bool:
-        """No bound on the information of a pose with compliance parameters."""
-        return False
 
     def plan_information(self, q: np.ndarray, loads: Loads | None = None) -> BlockInformation:
         """From the whitened Jacobian.  The criteria's singular values are those of unit-norm
         columns: no design coordinates are fixed in advance for the compliance parameters,
         so the D-criterion compares how orthogonal a plan's columns are."""
         return BlockInformation(self, q, loads, unit_columns=True)
-
-    def closed_form_plans(self, m: int) -> None:
-        return None
-
-    def paper_criteria(self, q: np.ndarray) -> None:
-        return None
 
     def design_loads(self, payloads: Sequence[float] | None) -> tuple[CompliantArm, np.ndarray]:
         """The model of a plan whose poses carry ``payloads`` (kg; default 0 and the robot
@@ -683,10 +541,6 @@ class CompliantArm(MinimalPlanar):
     @property
     def orientation_dim(self) -> int:
         return 1
-
-    @property
-    def angle_scale_mm(self) -> float:
-        return self.arm.angle_scale_mm
 
     def orientation(self, conditions: Conditions, params: np.ndarray | None = None) -> np.ndarray:
         """The tool's direction ``(..., m, 1)``: it turns with every joint's deflection."""
@@ -716,9 +570,6 @@ class CompliantArm(MinimalPlanar):
         phi0 = float(params[self.arm.param_names.index("phi0")])
         g = complex(*self.elastic.gravity) * np.exp(-1j * phi0)
         return self.with_gravity(np.array([g.real, g.imag])), robot
-
-    def arm_params(self, params: np.ndarray) -> np.ndarray:
-        return self.split(params)[0]
 
 
 def _link_chain(arm: PlanarArm, q: np.ndarray, geometry: np.ndarray | None) -> np.ndarray:

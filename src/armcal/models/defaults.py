@@ -5,19 +5,24 @@
   overrides all four);
 * :class:`MinimalPlanar` -- a planar family whose parameters are minimal: it
   needs no preparing for a set of rows, its truth is its own, nothing is held
-  by a rule, and its tool's orientation is one angle in the plane.
+  by a rule, and its tool's orientation is one angle in the plane;
+* :class:`ArmEffect` -- a model that adds an effect's parameters after an arm's
+  (joint compliance, planar or spatial): what it passes through to the arm.
 """
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING, Self
+from typing import TYPE_CHECKING, Any, Self
 
 import numpy as np
 
+from ..noise import NoiseModel
+from .information import covariance_factor_from, whitened_free_jacobian
 from .interface import Conditions, DesignEffort, Loads
 from .planar_geometry import wrap_angle
 
 __all__ = [
+    "ArmEffect",
     "MinimalPlanar",
     "RigidLoads",
 ]
@@ -91,3 +96,176 @@ class MinimalPlanar:
     def orientation_error(self, orientation: np.ndarray, reference: np.ndarray) -> np.ndarray:
         """The difference of the tool's directions, wrapped into ``(-pi, pi]``."""
         return wrap_angle(np.asarray(orientation) - np.asarray(reference))
+
+
+class ArmEffect:
+    """A model whose parameters are an arm's followed by an effect's (module notes): the
+    arm's limits, instrument, view and tool, and the effect's parameters appended.
+
+    The family gives ``arm``, ``elastic`` (with ``payload_kg``), ``n_compliance``,
+    ``compliance_names``, ``compliance_units``, ``compliance_scale`` and ``free``.
+    """
+
+    if TYPE_CHECKING:  # the family's own (a class attribute here would shadow it)
+        arm: Any
+        elastic: Any
+
+        @property
+        def n_compliance(self) -> int: ...
+        @property
+        def compliance_names(self) -> tuple[str, ...]: ...
+        @property
+        def compliance_units(self) -> tuple[str, ...]: ...
+        @property
+        def compliance_scale(self) -> np.ndarray: ...
+        @property
+        def free(self) -> np.ndarray: ...
+
+    @property
+    def name(self) -> str:
+        return self.arm.name
+
+    @property
+    def param_names(self) -> tuple[str, ...]:
+        """The arm's parameter names, then the effect's."""
+        return self.arm.param_names + self.compliance_names
+
+    @property
+    def param_units(self) -> tuple[str, ...]:
+        return self.arm.param_units + self.compliance_units
+
+    @property
+    def display_scale(self) -> np.ndarray:
+        return np.concatenate([self.arm.display_scale, self.compliance_scale])
+
+    @property
+    def n_params(self) -> int:
+        return self.arm.n_params + self.n_compliance
+
+    @property
+    def angle_params(self) -> np.ndarray:
+        return np.concatenate([self.arm.angle_params, np.zeros(self.n_compliance, dtype=bool)])
+
+    @property
+    def instrument_params(self) -> np.ndarray:
+        extra = np.zeros(self.n_compliance, dtype=bool)
+        return np.concatenate([self.arm.instrument_params, extra])
+
+    @property
+    def noise(self) -> NoiseModel | None:
+        return self.arm.noise
+
+    @property
+    def n_joints(self) -> int:
+        return self.arm.n_joints
+
+    @property
+    def joint_limits(self) -> np.ndarray:
+        return self.arm.joint_limits
+
+    def within_limits(self, q: np.ndarray, *, tol: float = 1e-9) -> np.ndarray:
+        return self.arm.within_limits(q, tol=tol)
+
+    @property
+    def point_dim(self) -> int:
+        return self.arm.point_dim
+
+    @property
+    def reach_mm(self) -> float:
+        return self.arm.reach_mm
+
+    @property
+    def target_labels(self) -> tuple[str, ...]:
+        return self.arm.target_labels
+
+    def split(self, params: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """The arm's parameters ``(..., p)`` and the effect's ``(..., P)`` of a full vector."""
+        p = self.arm.n_params
+        return params[..., :p], params[..., p:]
+
+    def lift(self, nested_params: np.ndarray) -> np.ndarray:
+        """The arm's parameters with no effect."""
+        shape = (*np.shape(nested_params)[:-1], self.n_compliance)
+        return np.concatenate([nested_params, np.zeros(shape)], axis=-1)
+
+    def arm_params(self, params: np.ndarray) -> np.ndarray:
+        return self.split(np.asarray(params, dtype=float))[0]
+
+    def canonical(self, params: np.ndarray) -> np.ndarray:
+        """The arm's canonical parameters (the points do not change), the effect's kept."""
+        geometry, effect = self.split(np.asarray(params, dtype=float))
+        return np.concatenate([self.arm.canonical(geometry), effect], axis=-1)
+
+    @property
+    def nested(self) -> Any:
+        """The arm without the effect."""
+        return self.arm
+
+    @property
+    def has_closed_form(self) -> bool:
+        return False
+
+    def closed_form(self, conditions: Conditions) -> None:
+        return None
+
+    def linear_positions(self, conditions: Conditions) -> None:
+        """None: the effect's points are not linear in any coordinates of the parameters."""
+        return None
+
+    def covariance_factor(
+        self, conditions: Conditions, params: np.ndarray | None = None
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """From the SVD of the whitened free columns (:mod:`armcal.models.information`)."""
+        model: Any = self  # a whole FitModel once its family adds the rest
+        return covariance_factor_from(whitened_free_jacobian(model, conditions, params), self.free)
+
+    def pose_covariances(
+        self,
+        conditions: Conditions,
+        params: np.ndarray | None = None,
+        *,
+        noise: NoiseModel | None = None,
+    ) -> np.ndarray:
+        """The arm's: the effect moves the points, not the instrument's noise."""
+        geometry = None if params is None else self.split(np.asarray(params, dtype=float))[0]
+        return self.arm.pose_covariances(conditions, geometry, noise=noise)
+
+    def whitening(
+        self, conditions: Conditions, params: np.ndarray | None = None
+    ) -> np.ndarray | None:
+        geometry = None if params is None else self.split(np.asarray(params, dtype=float))[0]
+        return self.arm.whitening(conditions, geometry)
+
+    def feasible(self, q: np.ndarray, *, tol: float = 1e-9) -> np.ndarray:
+        return self.arm.feasible(q, tol=tol)
+
+    @property
+    def has_view(self) -> bool:
+        return self.arm.has_view
+
+    def view_constraints(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray] | None:
+        return self.arm.view_constraints(q)
+
+    @property
+    def information_bound(self) -> bool:
+        """No bound on the information of a pose with the effect's parameters."""
+        return False
+
+    def closed_form_plans(self, m: int) -> None:
+        return None
+
+    def paper_criteria(self, q: np.ndarray) -> None:
+        return None
+
+    @property
+    def angle_scale_mm(self) -> float:
+        return self.arm.angle_scale_mm
+
+    @property
+    def default_payload_kg(self) -> float:
+        """The robot file's payload."""
+        return float(self.elastic.payload_kg)
+
+    def default_loads(self, m: int) -> Loads:
+        """The robot file's payload on every one of ``m`` rows."""
+        return Loads.create(m, self.elastic.payload_kg)

@@ -52,16 +52,15 @@ from numpy.typing import ArrayLike
 from ..errors import ArmcalError, ArmcalWarning, NotIdentifiableError, action
 from ..noise import NoiseModel
 from ..numerics import ScaledSVD, scaled_svd
+from .defaults import ArmEffect
 from .identifiability import Identifiability, listing
 from .information import (
     BlockInformation,
     Linearization,
     column_identifiability,
-    covariance_factor_from,
     refit_free,
-    whitened_free_jacobian,
 )
-from .interface import Conditions, DesignEffort, Effect, LinearPositions, Loads
+from .interface import Conditions, DesignEffort, Effect, Loads
 from .spatial import SpatialArm
 from .spatial_gradient import Extra, jacobian_pose_pullback
 from .spatial_gravity import STANDARD_GRAVITY, LinkMasses, chain_frames, gravity_torques
@@ -187,7 +186,7 @@ class SerialElastics:
 
 
 @dataclass(frozen=True, eq=False)
-class CompliantSerialArm:
+class CompliantSerialArm(ArmEffect):
     """A spatial serial arm whose revolute joints twist under gravity (module notes).
 
     The parameter vector is the arm's followed by the compliance parameters
@@ -261,6 +260,10 @@ class CompliantSerialArm:
         )
 
     @property
+    def compliance_units(self) -> tuple[str, ...]:
+        return tuple(_UNITS[k] for k in self.kinds)
+
+    @property
     def kinds(self) -> tuple[str, ...]:
         return tuple(t[0] for t in self._terms)
 
@@ -277,28 +280,7 @@ class CompliantSerialArm:
     def compliance_scale(self) -> np.ndarray:
         return np.array([_SCALES[k] for k in self.kinds])
 
-    def split(self, params: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Geometry ``(..., p)`` and compliance ``(..., P)`` of a full parameter vector."""
-        p = self.arm.n_params
-        return params[..., :p], params[..., p:]
-
     # -- parameters ------------------------------------------------------------------------
-
-    @property
-    def name(self) -> str:
-        return self.arm.name
-
-    @property
-    def param_names(self) -> tuple[str, ...]:
-        return self.arm.param_names + self.compliance_names
-
-    @property
-    def param_units(self) -> tuple[str, ...]:
-        return self.arm.param_units + tuple(_UNITS[k] for k in self.kinds)
-
-    @property
-    def display_scale(self) -> np.ndarray:
-        return np.concatenate([self.arm.display_scale, self.compliance_scale])
 
     @property
     def fixed(self) -> tuple[str, ...]:
@@ -324,40 +306,8 @@ class CompliantSerialArm:
         return tuple(n for n, f in zip(self.param_names, self.free, strict=True) if f)
 
     @property
-    def n_params(self) -> int:
-        return self.arm.n_params + self.n_compliance
-
-    @property
     def n_free(self) -> int:
         return int(np.count_nonzero(self.free))
-
-    @property
-    def angle_params(self) -> np.ndarray:
-        return np.concatenate([self.arm.angle_params, np.zeros(self.n_compliance, dtype=bool)])
-
-    @property
-    def instrument_params(self) -> np.ndarray:
-        extra = np.zeros(self.n_compliance, dtype=bool)
-        return np.concatenate([self.arm.instrument_params, extra])
-
-    @property
-    def noise(self) -> NoiseModel | None:
-        return self.arm.noise
-
-    @property
-    def n_joints(self) -> int:
-        return self.arm.n_joints
-
-    @property
-    def joint_limits(self) -> np.ndarray:
-        return self.arm.joint_limits
-
-    def within_limits(self, q: np.ndarray, *, tol: float = 1e-9) -> np.ndarray:
-        return self.arm.within_limits(q, tol=tol)
-
-    @property
-    def point_dim(self) -> int:
-        return self.arm.point_dim
 
     @property
     def position_dim(self) -> int:
@@ -373,14 +323,6 @@ class CompliantSerialArm:
     def unanchor(self, conditions: Conditions, points: np.ndarray) -> np.ndarray:
         return self.arm.unanchor(conditions, points)
 
-    @property
-    def reach_mm(self) -> float:
-        return self.arm.reach_mm
-
-    @property
-    def target_labels(self) -> tuple[str, ...]:
-        return self.arm.target_labels
-
     def _with_arm(self, arm: SpatialArm) -> CompliantSerialArm:
         return CompliantSerialArm(arm, self.elastic, self.known_loads)
 
@@ -390,10 +332,6 @@ class CompliantSerialArm:
     def with_fixed(self, fixed: Sequence[str]) -> CompliantSerialArm:
         """Other geometric parameters fixed (the compliance is always identified)."""
         return self._with_arm(self.arm.with_fixed(fixed))
-
-    @property
-    def default_payload_kg(self) -> float:
-        return self.elastic.payload_kg
 
     def unpredicted_loads(self, loads: Loads) -> str | None:
         """In lumped mode without ``k``, any payload but the one the ``c`` hold."""
@@ -420,9 +358,6 @@ class CompliantSerialArm:
         return self
 
     # -- the deflected arm -----------------------------------------------------------------
-
-    def default_loads(self, m: int) -> Loads:
-        return Loads.create(m, self.elastic.payload_kg)
 
     def load_terms(self, conditions: Conditions) -> np.ndarray:
         """The load ``(..., m, P)`` every compliance parameter multiplies: torque (N m) for
@@ -549,39 +484,11 @@ class CompliantSerialArm:
         bent, geometry = self._bent(conditions, params)
         return self.arm.joint_jacobian(bent, geometry)
 
-    def pose_covariances(
-        self,
-        conditions: Conditions,
-        params: np.ndarray | None = None,
-        *,
-        noise: NoiseModel | None = None,
-    ) -> np.ndarray:
-        geometry = None if params is None else self.split(np.asarray(params, dtype=float))[0]
-        return self.arm.pose_covariances(conditions, geometry, noise=noise)
-
-    def whitening(
-        self, conditions: Conditions, params: np.ndarray | None = None
-    ) -> np.ndarray | None:
-        geometry = None if params is None else self.split(np.asarray(params, dtype=float))[0]
-        return self.arm.whitening(conditions, geometry)
-
     # -- fitting ---------------------------------------------------------------------------
-
-    @property
-    def has_closed_form(self) -> bool:
-        return False
 
     @property
     def why_no_closed_form(self) -> str:
         return self.arm.why_no_closed_form
-
-    def closed_form(self, conditions: Conditions) -> None:
-        return None
-
-    @property
-    def nested(self) -> SpatialArm:
-        """The rigid arm."""
-        return self.arm
 
     @property
     def effect(self) -> Effect:
@@ -599,19 +506,10 @@ class CompliantSerialArm:
             f"measure poses under two payloads or more, or {action('geometry-alone')}",
         )
 
-    def lift(self, nested_params: np.ndarray) -> np.ndarray:
-        """The rigid arm's parameters with no compliance."""
-        shape = (*np.shape(nested_params)[:-1], self.n_compliance)
-        return np.concatenate([nested_params, np.zeros(shape)], axis=-1)
-
     def start(
         self, conditions: Conditions, points: np.ndarray, weights: np.ndarray | None = None
     ) -> np.ndarray:
         return self.lift(self.arm.start(conditions, points, weights))
-
-    def canonical(self, params: np.ndarray) -> np.ndarray:
-        geometry, compliance = self.split(np.asarray(params, dtype=float))
-        return np.concatenate([self.arm.canonical(geometry), compliance], axis=-1)
 
     def step_scale(self, conditions: Conditions) -> np.ndarray:
         """The arm's, then the reach times the RMS load of every compliance parameter."""
@@ -673,18 +571,10 @@ class CompliantSerialArm:
             f"{'; '.join(info.poorly_determined[:3])}; vary the torques more (poses, payloads)",
         )
 
-    def covariance_factor(
-        self, conditions: Conditions, params: np.ndarray | None = None
-    ) -> tuple[np.ndarray, np.ndarray]:
-        return covariance_factor_from(whitened_free_jacobian(self, conditions, params), self.free)
-
     def fit_details(self, conditions: Conditions, params: np.ndarray) -> dict[str, np.ndarray]:
         """``max_deflection_rad`` ``(n,)``: every joint's largest fitted twist."""
         twist = self.deflection(conditions, self.split(np.asarray(params, dtype=float))[1])
         return {"max_deflection_rad": np.max(np.abs(twist), axis=0)}
-
-    def linear_positions(self, conditions: Conditions) -> LinearPositions | None:
-        return None
 
     def plan_conditions(self, q: np.ndarray, loads: Loads | None = None) -> Conditions:
         """Every target measured at every pose, each row with its pose's load."""
@@ -695,22 +585,8 @@ class CompliantSerialArm:
 
     # -- design ----------------------------------------------------------------------------
 
-    def feasible(self, q: np.ndarray, *, tol: float = 1e-9) -> np.ndarray:
-        return self.arm.feasible(q, tol=tol)
-
-    @property
-    def has_view(self) -> bool:
-        return self.arm.has_view
-
-    def view_constraints(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray] | None:
-        return self.arm.view_constraints(q)
-
     @property
     def rotation_invariant(self) -> bool:
-        return False
-
-    @property
-    def information_bound(self) -> bool:
         return False
 
     def plan_information(self, q: np.ndarray, loads: Loads | None = None) -> BlockInformation:
@@ -759,12 +635,6 @@ class CompliantSerialArm:
             out[..., j] = (ahead - behind) / 2e-6
         return out
 
-    def closed_form_plans(self, m: int) -> None:
-        return None
-
-    def paper_criteria(self, q: np.ndarray) -> None:
-        return None
-
     def design_loads(
         self, payloads: Sequence[float] | None
     ) -> tuple[CompliantSerialArm, np.ndarray]:
@@ -786,10 +656,6 @@ class CompliantSerialArm:
     @property
     def orientation_dim(self) -> int:
         return self.arm.orientation_dim
-
-    @property
-    def angle_scale_mm(self) -> float:
-        return self.arm.angle_scale_mm
 
     def orientation(self, conditions: Conditions, params: np.ndarray | None = None) -> np.ndarray:
         bent, geometry = self._bent(conditions, params)
@@ -817,9 +683,6 @@ class CompliantSerialArm:
         geometry, compliance = self.split(np.asarray(params, dtype=float))
         arm, robot = self.arm.in_robot_frame(geometry)
         return replace(self, arm=arm), np.concatenate([robot, compliance], axis=-1)
-
-    def arm_params(self, params: np.ndarray) -> np.ndarray:
-        return self.split(np.asarray(params, dtype=float))[0]
 
 
 def _payloads_only(loads: Loads) -> Loads:
