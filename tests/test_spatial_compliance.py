@@ -748,3 +748,53 @@ def test_tip_forces_and_a_rigid_truths_compliance_are_refused(tmp_path):
         "rigid.csv",
     )
     assert run.returncode == 2 and "key 'compliance'" in run.stderr
+
+
+def test_geometry_alone_on_a_sagging_arm_stops_reweighting_early(tmp_path, monkeypatch):
+    """The sag leaves every pose far off a rigid fit: Huber leaves all below full weight,
+    round after round.  The reweighting stops after MISFIT_ROUNDS of it, and the document
+    is the one iterating the weights to 1e-9 gives (the fit falls back to every pose
+    either way)."""
+    from armcal.identification import problem, robust
+
+    _cell(tmp_path)
+    run_cli(
+        tmp_path,
+        "synthesize",
+        "--robot",
+        "cell.toml",
+        "--plan",
+        "plan.csv",
+        "--truth",
+        "truth.toml",
+        "--sigma",
+        "0.02",
+        "-o",
+        "meas.csv",
+    )
+    counted = []
+    fit = problem.Problem.fit
+
+    def counting(self, *args, **kwargs):
+        counted.append(1)
+        return fit(self, *args, **kwargs)
+
+    monkeypatch.setattr(problem.Problem, "fit", counting)
+    rigid = (
+        "identify",
+        "--robot",
+        "cell.toml",
+        "--measurements",
+        "meas.csv",
+        "--no-compliance",
+        "--json",
+    )
+    quick = run_cli(tmp_path, *rigid)
+    fits_quick = len(counted)
+    counted.clear()
+    monkeypatch.setattr(robust, "MISFIT_ROUNDS", 10**9)  # the reweighting to 1e-9
+    slow = run_cli(tmp_path, *rigid)
+    assert quick.returncode == slow.returncode == 0
+    assert json.loads(quick.stdout) == json.loads(slow.stdout)
+    assert quick.stderr == slow.stderr
+    assert fits_quick + 10 < len(counted)
