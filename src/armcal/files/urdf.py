@@ -219,16 +219,15 @@ def _inertials(path: Path, text: str, root: ET.Element) -> dict[str, tuple[float
     return out
 
 
-def _side_joint(path: Path, text: str, element: ET.Element) -> UrdfJoint:
-    """A joint off the chain, for its origin only (a mimic joint is allowed there)."""
+def _origin(
+    path: Path, text: str, element: ET.Element, where: str
+) -> tuple[tuple[float, float, float], tuple[float, float, float]]:
+    """A joint's ``<origin>``: ``xyz`` in mm and ``rpy`` in rad (zeros where absent)."""
     origin = element.find("origin")
-    where = f"line {_line_of(text, 'joint', element.get('name', ''))}"
     xyz = None if origin is None else _floats(path, text, origin, "xyz", 3, where)
     rpy = None if origin is None else _floats(path, text, origin, "rpy", 3, where)
-    mm = tuple(1000.0 * v for v in (xyz or (0.0, 0.0, 0.0)))
-    return UrdfJoint(
-        element.get("name", ""), "fixed", (mm[0], mm[1], mm[2]), rpy or (0.0, 0.0, 0.0)
-    )
+    x, y, z = (1000.0 * v for v in (xyz or (0.0, 0.0, 0.0)))
+    return (x, y, z), rpy or (0.0, 0.0, 0.0)
 
 
 def _link_masses(
@@ -264,8 +263,10 @@ def _link_masses(
                     continue  # the next moving joint of the chain: its own link
                 # a fixed joint, or a side branch that moves (a gripper's fingers) taken at
                 # its zero: its weight loads the chain wherever it is
-                side = _side_joint(path, text, parent_joint[below])
-                stack.append((below, frame @ transform(rpy_matrix(side.rpy), side.xyz)))
+                side = parent_joint[below]
+                where = f"line {_line_of(text, 'joint', side.get('name', ''))}"
+                xyz, rpy = _origin(path, text, side, where)
+                stack.append((below, frame @ transform(rpy_matrix(rpy), xyz)))
         centre = moment / total if total > 0 else np.zeros(3)
         masses.append(total)
         centres.append(axis_frame(joint.axis).T @ centre)  # armcal's frame: z along the axis
@@ -282,11 +283,7 @@ def _joint(path: Path, text: str, element: ET.Element) -> UrdfJoint:
             f"{path}: {where}: a mimic joint on the chain; armcal calibrates joints the "
             "controller reads: model the coupling with joint_map in a robot TOML"
         )
-    origin = element.find("origin")
-    xyz = rpy = None
-    if origin is not None:
-        xyz = _floats(path, text, origin, "xyz", 3, where)
-        rpy = _floats(path, text, origin, "rpy", 3, where)
+    xyz, rpy = _origin(path, text, element, where)
     axis_element = element.find("axis")
     axis = (1.0, 0.0, 0.0)
     if axis_element is not None:
@@ -305,12 +302,4 @@ def _joint(path: Path, text: str, element: ET.Element) -> UrdfJoint:
             if not lo[0] < hi[0]:
                 raise InputError(f"{path}: {where}: <limit> needs lower < upper")
             limits = (lo[0] * scale, hi[0] * scale)
-    mm = tuple(1000.0 * v for v in (xyz or (0.0, 0.0, 0.0)))
-    return UrdfJoint(
-        name,
-        kind,
-        (mm[0], mm[1], mm[2]),
-        rpy or (0.0, 0.0, 0.0),
-        (axis[0], axis[1], axis[2]),
-        limits,
-    )
+    return UrdfJoint(name, kind, xyz, rpy, (axis[0], axis[1], axis[2]), limits)

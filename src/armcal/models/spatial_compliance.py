@@ -51,7 +51,7 @@ from numpy.typing import ArrayLike
 
 from ..errors import ArmcalError, ArmcalWarning, NotIdentifiableError, action
 from ..noise import NoiseModel
-from ..numerics import ScaledSVD, scaled_svd
+from ..numerics import ScaledSVD
 from .defaults import ArmEffect
 from .identifiability import Identifiability, listing
 from .information import (
@@ -65,7 +65,7 @@ from .spatial import SpatialArm
 from .spatial_gradient import Extra, jacobian_pose_pullback
 from .spatial_gravity import STANDARD_GRAVITY, LinkMasses, chain_frames, gravity_torques
 from .spatial_kinematics import ChainKinematics
-from .spatial_selection import select_effect
+from .spatial_selection import column_space, select_effect
 
 __all__ = [
     "C_SCALE",
@@ -432,8 +432,8 @@ class CompliantSerialArm(ArmEffect):
         q = np.asarray(conditions.q, dtype=float)
         if np.any(compliance):  # the nominal arm (design, rank analysis) does not twist
             q = q + self.deflection(conditions, compliance) @ self._inverse_map.T
-        bent = Conditions(q, conditions.target, conditions.loads, conditions.sigma_mm)
-        return bent.with_frames(conditions.frames), geometry
+        c = conditions
+        return Conditions(q, c.target, c.loads, c.sigma_mm, c.frames), geometry
 
     @cached_property
     def _inverse_map(self) -> np.ndarray:
@@ -532,10 +532,9 @@ class CompliantSerialArm(ArmEffect):
         rows = jac if w is None else w @ jac
         flat = rows.reshape(-1, model.n_params)
         geo = np.flatnonzero(arm.free)
-        svd = scaled_svd(
+        columns = column_space(
             flat[:, np.concatenate([geo, arm.n_params + np.arange(model.n_compliance)])]
         )
-        columns = svd.singular_values[:, None] * svd.vt * svd.column_norms
         geo_names = [arm.param_names[i] for i in geo]
         held, merges = select_effect(columns, geo_names, model.compliance_names, model.joints)
         return replace(model, held=held, merges=merges)

@@ -40,6 +40,7 @@ from .spatial_kinematics import SpatialLayout
 __all__ = [
     "SELECT_RTOL",
     "Selection",
+    "column_space",
     "parallel_runs",
     "priority",
     "select",
@@ -274,6 +275,13 @@ def _explain(
     return tuple(sentences)
 
 
+def column_space(rows: np.ndarray) -> np.ndarray:
+    """A ``p x p`` matrix with the column space (and column norms) of ``rows`` ``(r, p)``:
+    ``S V^T diag(c)`` of the SVD of the scaled rows, for :func:`select` at any ``r``."""
+    svd = scaled_svd(rows)
+    return svd.singular_values[:, None] * svd.vt * svd.column_norms
+
+
 def select_from_rows(
     layout: SpatialLayout,
     chain: SerialChain,
@@ -284,9 +292,7 @@ def select_from_rows(
     """:func:`select` from the whitened Jacobian's ``rows`` ``(..., p)`` at joint values
     ``joints`` ``(..., n)`` (the joint map applied): the parameters it holds beyond
     ``held``, and its merge sentences."""
-    # S V^T diag(c) of the scaled rows has the rows' column space in p x p.
-    svd = scaled_svd(rows.reshape(-1, layout.n_params))
-    columns = svd.singular_values[:, None] * svd.vt * svd.column_norms
+    columns = column_space(rows.reshape(-1, layout.n_params))
     still = [j for j in range(layout.n_joints) if np.ptp(joints[..., j]) <= 1e-9]
     chosen = select(layout, chain, columns, still=still, held=held)
     left = zip(layout.names, chosen.kept, strict=True)
