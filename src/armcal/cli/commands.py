@@ -36,7 +36,6 @@ from ..files import (
     load_any_robot,
     load_compliance_truth,
     load_robot,
-    load_serial_compliance_truth,
     load_serial_robot,
     load_serial_truth,
     load_truth,
@@ -133,12 +132,8 @@ def _truth(args: argparse.Namespace, spec: RobotSpec | SerialSpec, model: FitMod
                 "(robot = the true arm's file, base = the instrument's pose, [errors], "
                 "[targets]; armcal formats)"
             )
-        geometry = load_serial_truth(
-            path, model.arm, compliant=isinstance(model, CompliantSerialArm)
-        )
-        if not isinstance(model, CompliantSerialArm):
-            return geometry
-        return np.concatenate([geometry, load_serial_compliance_truth(path, model)])
+        assert isinstance(model, SpatialArm | CompliantSerialArm)
+        return load_serial_truth(path, model)
     if isinstance(model, CompliantArm):
         if args.truth is None:
             keys = ", ".join(COMPLIANCE_TRUTH_KEYS[k] for k in dict.fromkeys(model.kinds))

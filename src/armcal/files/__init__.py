@@ -34,7 +34,6 @@ from .serial import (
     SerialSpec,
     is_serial_robot,
     load_any_robot,
-    load_serial_compliance_truth,
     load_serial_robot,
     load_serial_truth,
 )
@@ -82,7 +81,6 @@ __all__ = [
     "load_any_robot",
     "load_compliance_truth",
     "load_robot",
-    "load_serial_compliance_truth",
     "load_serial_robot",
     "load_serial_truth",
     "load_truth",

@@ -58,7 +58,6 @@ __all__ = [
     "SerialSpec",
     "is_serial_robot",
     "load_any_robot",
-    "load_serial_compliance_truth",
     "load_serial_robot",
     "load_serial_truth",
 ]
@@ -582,23 +581,39 @@ def _view(path: Path, table: Any, labels: tuple[str, ...], normals: list) -> Spa
 
 
 def load_serial_truth(
-    path: str | os.PathLike, arm: SpatialArm, *, compliant: bool = False
+    path: str | os.PathLike, model: SpatialArm | CompliantSerialArm
 ) -> np.ndarray:
-    """The true parameters ``(p,)`` (mm, rad) of a virtual spatial arm (module notes).
+    """The true parameters ``(p,)`` (mm, rad) of a virtual spatial arm (module notes), and
+    for a model of joint compliance its ``[compliance]`` table's after them (display
+    units urad/(N*m), mdeg/m; a parameter not given is 0).
 
-    The true arm's description, when given, is turned into ``arm``'s parameters
+    The true arm's description, when given, is turned into the arm's parameters
     exactly (:meth:`~armcal.models.SpatialArm.params_of`).  A ``[compliance]``
-    table needs a ``compliant`` arm (its robot file's ``[elastostatic]``).
+    table needs a model of compliance (its robot file's ``[elastostatic]``).
     """
     path = Path(path)
     data = load_toml(path, "truth")
     check_keys(path, data, allowed_keys("", SERIAL_TRUTH_KEYS))
-    if "compliance" in data and not compliant:
-        raise fail(
-            path,
-            f"key 'compliance': robot {arm.name} has no [elastostatic] table, so nothing "
-            "twists its joints; add the table to the robot file or remove [compliance]",
-        )
+    arm = model.arm
+    if not isinstance(model, CompliantSerialArm):
+        if "compliance" in data:
+            raise fail(
+                path,
+                f"key 'compliance': robot {arm.name} has no [elastostatic] table, so nothing "
+                "twists its joints; add the table to the robot file or remove [compliance]",
+            )
+        return _geometry_truth(path, data, arm)
+    names = model.compliance_names
+    compliance = np.zeros(len(names))
+    if "compliance" in data:
+        example, scale = f"{names[-1]} = 0.5", model.compliance_scale
+        table = data["compliance"]
+        compliance = _named(path, table, "compliance", example, arm, names, names, scale)
+    return np.concatenate([_geometry_truth(path, data, arm), compliance])
+
+
+def _geometry_truth(path: Path, data: dict, arm: SpatialArm) -> np.ndarray:
+    """The geometric truth of a truth TOML's ``data`` for ``arm``."""
     base = np.zeros(6)
     if "base" in data:
         entry = data["base"]
@@ -671,18 +686,3 @@ def _named(
         i = list(order).index(name)
         out[i] = number(path, value, f"{key}.{name}") / scale[i]
     return out
-
-
-def load_serial_compliance_truth(path: str | os.PathLike, model: CompliantSerialArm) -> np.ndarray:
-    """The true compliance ``(P,)`` (internal units) of a truth TOML's ``[compliance]``
-    table (display units: urad/(N*m), mdeg/m); a parameter not given is 0."""
-    path = Path(path)
-    data = load_toml(path, "truth")
-    names = model.compliance_names
-    if "compliance" not in data:
-        return np.zeros(len(names))
-    example = f"{names[-1]} = 0.5"
-    table = data["compliance"]
-    return _named(
-        path, table, "compliance", example, model.arm, names, names, model.compliance_scale
-    )
