@@ -101,6 +101,10 @@ class UrDh:
             self.theta + other.theta, self.a + other.a, self.d + other.d, self.alpha + other.alpha
         )
 
+    def table(self) -> DhTable:
+        """The same table in armcal's units (mm, rad)."""
+        return DhTable(self.theta, 1000.0 * self.d, 1000.0 * self.a, self.alpha)
+
 
 def ur_nominal(model: str) -> UrDh:
     """The nominal DH table of a UR model (a key of :data:`UR_MODELS`)."""
@@ -116,7 +120,7 @@ def ur_nominal(model: str) -> UrDh:
 
 def ur_chain(dh: UrDh) -> SerialChain:
     """The chain of a UR's DH table (mm): the DH base frame to the flange."""
-    return SerialChain.from_dh(dh.theta, 1000.0 * dh.d, 1000.0 * dh.a, dh.alpha, UR_JOINTS)
+    return dh.table().chain(UR_JOINTS)
 
 
 def ur_deltas(chain: SerialChain, model: str) -> UrDh:
@@ -126,8 +130,7 @@ def ur_deltas(chain: SerialChain, model: str) -> UrDh:
     within half a turn.  Nearly parallel axes give ``d`` deltas of metres that cancel, as
     the controller's own do."""
     nominal = ur_nominal(model)
-    reference = DhTable(nominal.theta, 1000.0 * nominal.d, 1000.0 * nominal.a, nominal.alpha)
-    table = dh_table(chain, reference)
+    table = dh_table(chain, nominal.table())
     return UrDh(
         wrap_angle(table.theta - nominal.theta),
         table.a / 1000.0 - nominal.a,
@@ -286,9 +289,7 @@ def format_ur_kinematics(chain: SerialChain, model: str, label: str) -> str:
     tip = chain.tip
     if np.linalg.norm(tip[:2, 2]) > 1e-12 or np.linalg.norm(tip[:2, 3]) > 1e-9:
         raise ValueError("the flange is not on the last joint's axis, where a UR's joint frame is")
-    world = [chain.origins[0]]
-    for k in range(1, 6):
-        world.append(world[-1] @ chain.origins[k])
+    world = chain.zero_frames()
     world[5] = world[5] @ tip
     placed = []
     for k, (frame, where) in enumerate(zip(world, _ros_frames(ur_nominal(model)), strict=True)):

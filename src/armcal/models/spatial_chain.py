@@ -418,6 +418,14 @@ class SerialChain:
             raise ValueError("the chain has no moving joint")
         return cls(np.array(origins), tuple(kinds), pending, tuple(names), np.array(limits))
 
+    def zero_frames(self) -> np.ndarray:
+        """Every joint's frame ``(n, 4, 4)`` in the base frame at zero joint values (z its
+        axis); the tip's is ``zero_frames()[-1] @ tip``."""
+        frames = [self.origins[0]]
+        for origin in self.origins[1:]:
+            frames.append(frames[-1] @ origin)
+        return np.array(frames)
+
     def forward(self, u: ArrayLike) -> np.ndarray:
         """The tip frames ``(..., 4, 4)`` at joint values ``u`` ``(..., n)`` (rad, mm).
 

@@ -155,9 +155,7 @@ def mdh_table(chain: SerialChain) -> MdhTable:
     True
     """
     n = chain.n_joints
-    world = [chain.origins[0]]
-    for k in range(1, n):
-        world.append(world[-1] @ chain.origins[k])
+    world = chain.zero_frames()
     screws = [np.eye(4)] * n
     hayati = [True] * n  # row k + 1's kind
     for k in range(n - 1):
@@ -214,10 +212,8 @@ def dh_table(chain: SerialChain, reference: DhTable, *, tol: float = 1e-9) -> Dh
     if any(kind != "R" for kind in chain.kinds):
         raise ValueError("a standard DH table of revolute joints cannot hold a prismatic joint")
     n = chain.n_joints
-    lines = [chain.origins[0]]
-    for k in range(1, n):
-        lines.append(lines[-1] @ chain.origins[k])
-    lines.append(lines[-1] @ chain.tip)  # the tip: its z axis and its x axis are the last row's
+    frames = chain.zero_frames()
+    lines = [*frames, frames[-1] @ chain.tip]  # the tip: its z and x axes are the last row's
     first = lines[0]
     reach = max(1.0, float(np.linalg.norm(first[:3, 3])))
     if np.linalg.norm(first[:2, 2]) > tol or np.linalg.norm(first[:2, 3]) > tol * reach:
