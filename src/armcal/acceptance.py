@@ -181,7 +181,7 @@ def pose_characteristics(
     index = np.array([number[key] for key in keys], dtype=int)
     k = len(order)
     cycles = np.bincount(index, minlength=k)
-    first = _first(index, k)
+    first = np.unique(index, return_index=True)[1]  # the first row of every group
 
     def where(group: int) -> str:
         row = f"row {rows[first[group]]}, " if rows else ""
@@ -239,13 +239,6 @@ def pose_characteristics(
         orientation_after=None if turned is None else turned[1],
         orientation_repeatability=None if turned is None else turned[2],
     )
-
-
-def _first(index: np.ndarray, k: int) -> np.ndarray:
-    """The first row of every group ``(k,)``."""
-    first = np.full(k, index.size)
-    np.minimum.at(first, index, np.arange(index.size))
-    return first
 
 
 def pose_characteristics_warnings(found: PoseCharacteristics) -> list[ArmcalWarning]:

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import cached_property
 from typing import Literal
 
 import numpy as np
@@ -117,7 +118,7 @@ class Design:
         the plan with the best one."""
         return self.model.information_bound
 
-    @property
+    @cached_property
     def reference_efficiency(self) -> float | None:
         """``(det M / det M(xi*))^(1/p_f)``: the plan against the best weighted design its
         certificate found (:attr:`Certificate.reference_d_efficiency`, the same

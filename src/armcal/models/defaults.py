@@ -17,9 +17,9 @@ from typing import TYPE_CHECKING, Any, Self
 import numpy as np
 
 from ..noise import NoiseModel
+from ..numerics import wrap_angle
 from .information import covariance_factor_from, whitened_free_jacobian
 from .interface import Conditions, DesignEffort, Loads
-from .planar_geometry import wrap_angle
 
 __all__ = [
     "ArmEffect",

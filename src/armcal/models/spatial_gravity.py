@@ -109,7 +109,7 @@ def gravity_torques(
     centres = np.einsum("...kij,kj->...ki", after[..., :3, :3], links.com_mm) + after[..., :3, 3]
     payload = np.asarray(payload_kg, dtype=float)
     payload_at = tip[..., :3, :3] @ np.asarray(payload_com_mm, dtype=float) + tip[..., :3, 3]
-    force = np.asarray(payload, dtype=float)[..., None] * g  # (..., 3), N
+    force = payload[..., None] * g  # (..., 3), N
     moment = np.cross(payload_at, force)  # N mm about the base origin
     torques = np.empty((*u.shape[:-1], n))
     for j in range(n - 1, -1, -1):  # running sums from the tip

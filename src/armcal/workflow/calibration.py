@@ -36,6 +36,7 @@ from ..export_serial import joint_offsets_csv, serial_robot_toml, serial_urdf
 from ..files import Measurements, Program, RobotSpec, SerialSpec
 from ..files.ur import (
     FAR_FROM_NOMINAL_MM,
+    UrDh,
     format_ur_calibration,
     format_ur_kinematics,
     ur_deltas,
@@ -545,9 +546,10 @@ class ExportRun:
     warnings: tuple[ArmcalWarning, ...]
 
 
-def _ur_arm(cal: CalibratedArm, path: str) -> tuple[SerialChain, str]:
-    """The calibrated chain of a UR arm (DH base frame to flange) and its model
-    (:func:`armcal.files.ur.ur_model_of`), for a controller's file at ``path``."""
+def _ur_arm(cal: CalibratedArm, path: str) -> tuple[SerialChain, str, UrDh]:
+    """The calibrated chain of a UR arm (DH base frame to flange), its model
+    (:func:`armcal.files.ur.ur_model_of`) and its deltas from that model's table, for a
+    controller's file at ``path``."""
     arm = cal.arm
     if not isinstance(arm, SpatialArm) or arm.n_joints != 6 or set(arm.chain.kinds) != {"R"}:
         raise ArmcalError(f"{path}: a UR file needs a six-axis revolute arm; {arm.name} is not")
@@ -559,14 +561,14 @@ def _ur_arm(cal: CalibratedArm, path: str) -> tuple[SerialChain, str]:
             f"{distance:.4g} mm away); describe the arm with a robot file's [ur] table"
         )
     try:
-        ur_deltas(chain, model)
+        deltas = ur_deltas(chain, model)
     except ValueError as exc:  # what a UR's DH table cannot hold, e.g. a tilted joint 1
         raise ArmcalError(
             f"{path}: the calibrated {arm.name} has no UR DH table: {exc}; a UR's table starts "
             "at joint 1's axis, so leave the base pose free (the joint's placement merges "
             "into it) rather than fixing base.* and identifying j1.*"
         ) from None
-    return chain, model
+    return chain, model, deltas
 
 
 def _ur_texts(cal: CalibratedArm, ur_path: str | None, ros_path: str | None) -> dict[str, str]:
@@ -575,9 +577,9 @@ def _ur_texts(cal: CalibratedArm, ur_path: str | None, ros_path: str | None) -> 
     first = ur_path if ur_path is not None else ros_path
     if first is None:
         return texts
-    chain, model = _ur_arm(cal, first)
+    chain, model, deltas = _ur_arm(cal, first)
     if ur_path is not None:
-        texts[ur_path] = format_ur_calibration(ur_deltas(chain, model))
+        texts[ur_path] = format_ur_calibration(deltas)
     if ros_path is not None:
         try:
             texts[ros_path] = format_ur_kinematics(chain, model, f"armcal_{cal.arm.name}_{model}")
