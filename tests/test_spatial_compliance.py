@@ -413,10 +413,13 @@ def test_a_compliant_six_axis_cell_from_the_command_line(tmp_path):
         "-o",
         "rigid.json",
     )
-    assert "loads-ignored" in rigid.stderr or "not used" in rigid.stderr
+    assert "columns are not used: --no-compliance" in rigid.stderr
     worse = run_cli(
         tmp_path, "validate", "--calibration", "rigid.json", "--measurements", "held.csv", "--json"
     )
+    ignored = [w for w in json.loads(worse.stdout)["warnings"] if w["code"] == "loads-ignored"]
+    assert len(ignored) == 1 and "no joint compliance" in ignored[0]["message"]
+    assert "columns are not used: the calibration has no" in worse.stderr  # loaded rows
     after = json.loads(checked.stdout)["rms_after_per_point_mm"]
     rigid_after = json.loads(worse.stdout)["rms_after_per_point_mm"]
     assert after < 0.05 < 0.5 < rigid_after  # mm

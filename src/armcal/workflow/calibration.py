@@ -198,11 +198,14 @@ def _ignored_loads(
         why = f"{action('geometry-only')}; leave it out to fit the joints' compliance"
     else:
         why = "the robot file has no [elastostatic] table; add one to fit the joints' compliance"
-    return [
-        ArmcalWarning(
-            "loads-ignored", f"{source}: the payload_kg/fx_N/fy_N columns are not used: {why}"
-        )
-    ]
+    return [_loads_ignored(source, why)]
+
+
+def _loads_ignored(source: str, why: str) -> ArmcalWarning:
+    """``loads-ignored``: the rows' payloads and tip forces are not used, and ``why``."""
+    return ArmcalWarning(
+        "loads-ignored", f"{source}: the payload_kg/fx_N/fy_N columns are not used: {why}"
+    )
 
 
 def calibrate(
@@ -438,6 +441,15 @@ def validate_measurements(
     except ArmcalError as exc:
         raise prefixed(source, exc) from None
     warnings = [*meas.warnings, *_unpredicted(cal, loads, source), *validation_warnings(result)]
+    if loads is None and meas.has_loads:  # the rows sag by their loads; the model cannot say
+        warnings.append(
+            _loads_ignored(
+                source,
+                "the calibration has no joint compliance, so the sag under them is in the "
+                "errors after calibration; calibrate with the robot file's [elastostatic] "
+                "table to predict it",
+            )
+        )
     acceptance = None
     if iso9283:
         try:
