@@ -34,7 +34,26 @@ from pathlib import Path
 # One BLAS thread, as `make test` runs: an optimizer's last digits depend on how the
 # BLAS splits its sums, and a page must print the same digits wherever it is checked.
 SERIAL = {"OPENBLAS_NUM_THREADS": "1", "OMP_NUM_THREADS": "1", "MKL_NUM_THREADS": "1"}
-os.environ.update(SERIAL)  # before any doctest imports numpy
+
+
+def _same_kernels() -> dict[str, str]:
+    """The same arithmetic on every x86-64 machine with AVX2: the last digits of a sum or a
+    sine depend on the CPU's vector kernels, and a design's optimizer (started from random
+    poses) turns a last digit into another plan.  numpy's AVX-512 loops (its own sine,
+    exponential, ...) are switched off, so it calls the C library's everywhere, and
+    OpenBLAS takes its Haswell (AVX2) kernels, which it picks on AMD's Zen too, instead of
+    its SkylakeX ones.  A CPU without AVX2 keeps its own (and may print other digits)."""
+    pinned = {"NPY_DISABLE_CPU_FEATURES": "X86_V4 AVX512_ICL AVX512_SPR"}
+    try:
+        flags = Path("/proc/cpuinfo").read_text().split()
+    except OSError:
+        flags = []
+    if "avx2" in flags and "fma" in flags:
+        pinned["OPENBLAS_CORETYPE"] = "Haswell"
+    return pinned
+
+
+os.environ.update(SERIAL | _same_kernels())  # before any doctest imports numpy
 
 ROOT = Path(__file__).resolve().parent.parent
 README = ROOT / "README.md"
