@@ -27,8 +27,9 @@ from functools import cached_property
 
 import numpy as np
 
+from ..errors import NotIdentifiableError
 from ..numerics import COND_WARN, RANK_RTOL, ScaledSVD, gram_of_factor, scaled_svd
-from .identifiability import Identifiability, combination, row_echelon
+from .identifiability import Identifiability, combination, listing, row_echelon
 from .interface import Conditions, FitModel, Loads
 
 __all__ = [
@@ -149,6 +150,22 @@ def column_identifiability(
         poorly_determined=tuple(combination(v, names, drop=1e-3) for v in weak_rows),
     )
     return info, svd
+
+
+def identifiable_or_raise(
+    model: FitModel, conditions: Conditions, what: str, advice: str
+) -> Identifiability:
+    """The model's identifiability at these rows; when they cannot identify every free
+    parameter, NotIdentifiableError naming ``what``, the combinations, and ``advice``."""
+    info, _ = model.identifiability(conditions)
+    if info.identifiable:
+        return info
+    m, p = conditions.m, model.n_free
+    raise NotIdentifiableError(
+        f"the {m} rows cannot identify all {p} parameters of {what} (rank {info.rank} of "
+        f"{p}): not identifiable: {listing(info.unidentifiable) or '(none)'}; {advice}",
+        list(info.combinations),
+    )
 
 
 #: Gauss-Newton steps at most of :func:`refit_free` (it converges in a few).

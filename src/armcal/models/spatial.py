@@ -21,17 +21,18 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike
 
-from ..errors import ArmcalWarning, NotIdentifiableError
+from ..errors import ArmcalWarning
 from ..noise import NoiseModel, relative_noise
 from ..numerics import ScaledSVD
 from . import spatial_pose
 from .defaults import RigidLoads
-from .identifiability import Identifiability, listing
+from .identifiability import Identifiability
 from .information import (
     BlockInformation,
     Linearization,
     column_identifiability,
     covariance_factor_from,
+    identifiable_or_raise,
     refit_free,
     whitened_blocks,
     whitened_free_jacobian,
@@ -659,15 +660,11 @@ class SpatialArm(RigidLoads):
         return column_identifiability(self, conditions, self.nominal)
 
     def check_identifiable(self, conditions: Conditions) -> Identifiability:
-        info, _ = self.identifiability(conditions)
-        if info.identifiable:
-            return info
-        m, p = conditions.m, self.n_free
-        raise NotIdentifiableError(
-            f"the {m} rows cannot identify all {p} parameters of {self.name} (rank {info.rank} "
-            f"of {p}): not identifiable: {listing(info.unidentifiable) or '(none)'}; measure "
-            "poses in which every joint takes several different values",
-            list(info.combinations),
+        return identifiable_or_raise(
+            self,
+            conditions,
+            self.name,
+            "measure poses in which every joint takes several different values",
         )
 
     def conditioning_warning(self, info: Identifiability) -> ArmcalWarning | None:

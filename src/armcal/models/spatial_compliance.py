@@ -49,15 +49,16 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike
 
-from ..errors import ArmcalError, ArmcalWarning, NotIdentifiableError, action
+from ..errors import ArmcalError, ArmcalWarning, action
 from ..noise import NoiseModel
 from ..numerics import ScaledSVD
 from .defaults import ArmEffect
-from .identifiability import Identifiability, listing
+from .identifiability import Identifiability
 from .information import (
     BlockInformation,
     Linearization,
     column_identifiability,
+    identifiable_or_raise,
     refit_free,
 )
 from .interface import Conditions, DesignEffort, Effect, Loads
@@ -547,17 +548,13 @@ class CompliantSerialArm(ArmEffect):
         return column_identifiability(self, conditions, self.nominal)
 
     def check_identifiable(self, conditions: Conditions) -> Identifiability:
-        info, _ = self.identifiability(conditions)
-        if info.identifiable:
-            return info
-        m, p = conditions.m, self.n_free
-        raise NotIdentifiableError(
-            f"the {m} rows cannot identify all {p} parameters of {self.name} with compliance "
-            f"(rank {info.rank} of {p}): not identifiable: "
-            f"{listing(info.unidentifiable) or '(none)'}; measure poses in which every joint "
-            "takes several values and the torques vary (links pointing in different "
+        return identifiable_or_raise(
+            self,
+            conditions,
+            f"{self.name} with compliance",
+            "measure poses in which every "
+            "joint takes several values and the torques vary (links pointing in different "
             "directions relative to gravity, different payloads)",
-            list(info.combinations),
         )
 
     def conditioning_warning(self, info: Identifiability) -> ArmcalWarning | None:
