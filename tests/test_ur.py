@@ -277,6 +277,36 @@ def test_a_ur_cell_calibrated_and_exported_for_its_controller(tmp_path):
     )
 
 
+def test_what_the_robot_file_warns_of_reaches_the_calibration(tmp_path):
+    """The calibration.conf in millimetres warns ``ur-calibration-far`` when read; the
+    calibration made with that robot file carries the warning on (identify reported
+    nothing of it before)."""
+    from dataclasses import replace
+
+    from armcal.files import read_measurements
+    from armcal.workflow import calibrate_serial
+    from helpers import run_cli
+
+    spec = _robot(tmp_path)
+    (tmp_path / "truth.toml").write_text(
+        'robot = "ur.toml"\nbase = { xyz_mm = [2500, -800, -400], rpy_deg = [0, 0, 30] }\n',
+        encoding="utf-8",
+    )
+    for step in (
+        ("design", "--robot", "ur.toml", "--poses", "30", "-o", "plan.csv"),
+        ("synthesize", "--robot", "ur.toml", "--truth", "truth.toml", "--plan", "plan.csv",
+         "--sigma", "0.01", "-o", "meas.csv"),
+    ):  # fmt: skip
+        assert run_cli(tmp_path, *step).returncode == 0, step
+    deltas = read_ur_calibration(_write(tmp_path, UR10E_CALIBRATION))
+    scaled = UrDh(deltas.theta, 1000 * deltas.a, 1000 * deltas.d, deltas.alpha)
+    (far,) = _robot(tmp_path, format_ur_calibration(scaled)).warnings
+    run = calibrate_serial(
+        replace(spec, warnings=(far,)), read_measurements(tmp_path / "meas.csv", spec.arm)
+    )
+    assert far in run.warnings
+
+
 #: The ROS description's nominal UR5e (Universal_Robots_ROS2_Description,
 #: config/ur5e/default_kinematics.yaml): the controller's DH table with its twist
 #: 1.570796327 as the driver's calibration tool writes it, R = Rx(roll) Ry(pitch) Rz(yaw).

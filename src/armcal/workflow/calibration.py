@@ -13,7 +13,7 @@ Errors name the file they concern (``source``).
 from __future__ import annotations
 
 from dataclasses import dataclass, replace
-from typing import Any
+from typing import Any, TypeVar
 
 import numpy as np
 
@@ -208,6 +208,10 @@ def _loads_ignored(source: str, why: str) -> ArmcalWarning:
     )
 
 
+#: A robot file of either family.
+_Spec = TypeVar("_Spec", RobotSpec, SerialSpec)
+
+
 def calibrate(
     spec: RobotSpec,
     meas: Measurements,
@@ -263,19 +267,43 @@ def calibrate(
     except InputError as exc:
         raise prefixed(source, exc) from None
     arm = model_arm(structure, fixed=fixed, sigma=sigma)
-    if sigma is not None:  # the given noise replaces the file's sigma_mm column too
+    spec, meas, ignored = _as_asked(spec, meas, source, sigma, compliance)
+    cal = _identify_file(spec, arm, source, meas, method=method, robust=robust)
+    large = deviation_warning(cal.arm, cal.model.arm_params(cal.params))
+    points = meas.xy if cal.plane is None else cal.plane.to_plane(meas.xyz)
+    return _calibration_run(cal, spec, meas, points, ignored, large, folds, sigma, seed)
+
+
+def _as_asked(
+    spec: _Spec, meas: Measurements, source: str, sigma: float | None, compliance: bool
+) -> tuple[_Spec, Measurements, list[ArmcalWarning]]:
+    """The robot file and the measurements as the options ask: a given ``sigma`` replaces
+    the file's ``sigma_mm`` column too, and without ``compliance`` the arm is rigid (the
+    data's loads then ``loads-ignored``)."""
+    if sigma is not None:
         meas = replace(meas, row_sigma=None)
     ignored = _ignored_loads(spec, meas, source, compliance)
-    if not compliance:
-        spec = replace(spec, elastic=None)
-    cal = _identify_file(spec, arm, source, meas, method=method, robust=robust)
+    return (spec if compliance else replace(spec, elastic=None)), meas, ignored
+
+
+def _calibration_run(
+    cal: Calibration,
+    spec: RobotSpec | SerialSpec,
+    meas: Measurements,
+    points: np.ndarray,
+    ignored: list[ArmcalWarning],
+    large: ArmcalWarning | None,
+    folds: int | None,
+    sigma: float | None,
+    seed: int | np.random.Generator | None,
+) -> CalibrationRun:
+    """The run of ``cal``: what the robot file, the measurements, the options (``ignored``)
+    and the fit warn of, ``large`` unless the fit warned of it, and the cross-validation."""
     warnings = [*spec.warnings, *meas.warnings, *ignored, *cal.warnings]
-    large = deviation_warning(cal.arm, cal.model.arm_params(cal.params))
     if large is not None and all(w.code != large.code for w in warnings):
         warnings.append(large)
     checked = None
     if folds is not None:
-        points = meas.xy if cal.plane is None else cal.plane.to_plane(meas.xyz)
         checked = _cross_validated(cal, meas, points, folds, sigma, seed, warnings)
     return CalibrationRun(cal, tuple(unique_warnings(warnings)), checked)
 
@@ -363,13 +391,9 @@ def calibrate_serial(
     With ``[elastostatic]`` (and ``compliance``) the joints' compliance is
     fitted with the geometry, under the rows' payloads.
     """
-    ignored = _ignored_loads(spec, meas, source, compliance)
-    if not compliance:
-        spec = replace(spec, elastic=None)
+    spec, meas, ignored = _as_asked(spec, meas, source, sigma, compliance)
     try:
         arm = model_arm(serial_arm(spec.arm, meas), fixed=fixed, sigma=sigma)
-        if sigma:  # the given noise replaces the file's sigma_mm column too
-            meas = replace(meas, row_sigma=None)
         index = None if meas.targets is None else arm.target_index(meas.targets)
         loads = None if spec.elastic is None else meas.loads(spec.elastic.payload_kg)
         cal = identify(
@@ -390,11 +414,8 @@ def calibrate_serial(
         raise prefixed(source, exc) from None
     except ValueError as exc:
         raise InputError(f"{source}: {exc}") from None
-    warnings = [*meas.warnings, *ignored, *cal.warnings]
-    checked = None
-    if folds is not None:
-        checked = _cross_validated(cal, meas, meas.instrument_points, folds, sigma, seed, warnings)
-    return CalibrationRun(cal, tuple(unique_warnings(warnings)), checked)
+    points = meas.instrument_points
+    return _calibration_run(cal, spec, meas, points, ignored, None, folds, sigma, seed)
 
 
 @dataclass(frozen=True, eq=False)
