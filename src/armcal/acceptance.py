@@ -95,6 +95,13 @@ class PoseCharacteristics:
     orientation_repeatability: np.ndarray | None = None
 
     @property
+    def names(self) -> tuple[str, ...]:
+        """Every pose's name: its label, ``pose/target`` with several targets."""
+        if self.targets is None:
+            return self.poses
+        return tuple(f"{p}/{t}" for p, t in zip(self.poses, self.targets, strict=True))
+
+    @property
     def accuracy_before_mm(self) -> np.ndarray:
         """``AP_P`` against the nominal model ``(k,)``, mm."""
         return np.linalg.norm(self.accuracy_before, axis=-1)

@@ -22,9 +22,7 @@ def plot_acceptance(found: PoseCharacteristics) -> Figure:
     after calibration, whose signs show a systematic error the model misses."""
     fig = Figure(figsize=(10.0, 4.2), layout=ConstrainedLayoutEngine())
     left, right = fig.subplots(1, 2, gridspec_kw={"width_ratios": [3, 2]})
-    names = list(found.poses)
-    if found.targets is not None:
-        names = [f"{p}/{t}" for p, t in zip(found.poses, found.targets, strict=True)]
+    names = found.names
     x = np.arange(len(names))
     width = 0.27
     left.bar(x - width, found.accuracy_before_mm, width, label="AP, nominal model", color="C3")

@@ -136,8 +136,7 @@ def _orientation_lines(found: PoseCharacteristics, poses: list[dict]) -> list[st
         f"{'orientation (deg)':<18}{'AP_a':>9}{'AP_b':>9}{'AP_c':>9}{'RP_a':>9}{'RP_b':>9}"
         f"{'RP_c':>9}   (after calibration; RP a +- band)",
     ]
-    for g, entry in enumerate(poses):
-        name = entry["pose"] if entry["target"] is None else f"{entry['pose']}/{entry['target']}"
+    for g, (entry, name) in enumerate(zip(poses, found.names, strict=True)):
         lines.append(f"{name:<18}" + "".join(f"{v:>9.3g}" for v in (*after[g], *spread[g])))
         entry["ap_before_abc_deg"] = before[g].tolist()
         entry["ap_after_abc_deg"] = after[g].tolist()
