@@ -340,24 +340,17 @@ payload_com_mm = [0, 0, 100]
         (folder / name).write_text("\n".join(rows) + "\n")
 
 
+def _synthesize(folder: Path, plan: str, out: str, *options: str, robot: str = "cell.toml"):
+    """``armcal synthesize`` of ``plan`` on the virtual cell's truth, written to ``out``."""
+    truth = ("--truth", "truth.toml")
+    return run_cli(
+        folder, "synthesize", "--robot", robot, "--plan", plan, *truth, *options, "-o", out
+    )
+
+
 def test_a_compliant_six_axis_cell_from_the_command_line(tmp_path):
     _cell(tmp_path)
-    ok = run_cli(
-        tmp_path,
-        "synthesize",
-        "--robot",
-        "cell.toml",
-        "--plan",
-        "plan.csv",
-        "--truth",
-        "truth.toml",
-        "--sigma",
-        "0.02",
-        "--seed",
-        "1",
-        "-o",
-        "meas.csv",
-    )
+    ok = _synthesize(tmp_path, "plan.csv", "meas.csv", "--sigma", "0.02", "--seed", "1")
     assert ok.returncode == 0, ok.stderr
     assert "payload_kg" in (tmp_path / "meas.csv").read_text().splitlines()[0]
     run = run_cli(
@@ -382,22 +375,7 @@ def test_a_compliant_six_axis_cell_from_the_command_line(tmp_path):
     assert "k1 cannot be seen" in " ".join(doc["elastostatic"]["merges"])
     assert "compliance-unseen" not in run.stderr
     # held-out poses: the file's calibration predicts them; geometry alone does not
-    run_cli(
-        tmp_path,
-        "synthesize",
-        "--robot",
-        "cell.toml",
-        "--plan",
-        "other.csv",
-        "--truth",
-        "truth.toml",
-        "--sigma",
-        "0.02",
-        "--seed",
-        "2",
-        "-o",
-        "held.csv",
-    )
+    _synthesize(tmp_path, "other.csv", "held.csv", "--sigma", "0.02", "--seed", "2")
     checked = run_cli(
         tmp_path, "validate", "--calibration", "cal.json", "--measurements", "held.csv", "--json"
     )
@@ -471,22 +449,7 @@ def test_compliance_the_data_cannot_see_is_warned_of(tmp_path):
     truth = (tmp_path / "truth.toml").read_text()
     truth = truth.replace("k2 = 0.2", "k2 = 0").replace("k3 = 0.4", "k3 = 0")
     (tmp_path / "truth.toml").write_text(truth)
-    run_cli(
-        tmp_path,
-        "synthesize",
-        "--robot",
-        "cell.toml",
-        "--plan",
-        "plan.csv",
-        "--truth",
-        "truth.toml",
-        "--sigma",
-        "0.02",
-        "--seed",
-        "1",
-        "-o",
-        "meas.csv",
-    )
+    _synthesize(tmp_path, "plan.csv", "meas.csv", "--sigma", "0.02", "--seed", "1")
     run = run_cli(tmp_path, "identify", "--robot", "cell.toml", "--measurements", "meas.csv")
     assert run.returncode == 0, run.stderr
     assert "compliance-unseen" in run.stderr or "do not show the joint compliance" in run.stderr
@@ -517,18 +480,7 @@ def test_a_truth_with_an_unknown_compliance_is_refused(tmp_path):
     _cell(tmp_path)
     with (tmp_path / "truth.toml").open("a") as f:
         f.write("k7 = 1\n")
-    run = run_cli(
-        tmp_path,
-        "synthesize",
-        "--robot",
-        "cell.toml",
-        "--plan",
-        "plan.csv",
-        "--truth",
-        "truth.toml",
-        "-o",
-        "meas.csv",
-    )
+    run = _synthesize(tmp_path, "plan.csv", "meas.csv")
     assert run.returncode == 2
     assert "compliance.k7" in run.stderr and not (tmp_path / "meas.csv").exists()
 
@@ -587,20 +539,7 @@ def test_a_lumped_calibration_under_one_payload_warns_under_another(tmp_path):
     _cell(tmp_path, "lumped = true")
     plan = (tmp_path / "plan.csv").read_text().replace(",0\n", ",165\n")  # every pose at 165
     (tmp_path / "plan.csv").write_text(plan)
-    run_cli(
-        tmp_path,
-        "synthesize",
-        "--robot",
-        "cell.toml",
-        "--plan",
-        "plan.csv",
-        "--truth",
-        "truth.toml",
-        "--sigma",
-        "0.02",
-        "-o",
-        "meas.csv",
-    )
+    _synthesize(tmp_path, "plan.csv", "meas.csv", "--sigma", "0.02")
     fit = run_cli(
         tmp_path,
         "identify",
@@ -637,20 +576,7 @@ def test_a_lumped_calibration_under_one_payload_warns_under_another(tmp_path):
 
 def test_tip_force_columns_are_refused_for_a_spatial_arm(tmp_path):
     _cell(tmp_path)
-    run_cli(
-        tmp_path,
-        "synthesize",
-        "--robot",
-        "cell.toml",
-        "--plan",
-        "plan.csv",
-        "--truth",
-        "truth.toml",
-        "--sigma",
-        "0.02",
-        "-o",
-        "meas.csv",
-    )
+    _synthesize(tmp_path, "plan.csv", "meas.csv", "--sigma", "0.02")
     lines = (tmp_path / "meas.csv").read_text().splitlines()
     forced = [lines[0] + ",fx_N"] + [line + ",10" for line in lines[1:]]
     (tmp_path / "forced.csv").write_text("\n".join(forced) + "\n")
@@ -689,20 +615,7 @@ def test_held_compliance_is_neither_tested_nor_shown():
 
 def test_tip_forces_and_a_rigid_truths_compliance_are_refused(tmp_path):
     _cell(tmp_path)
-    run_cli(
-        tmp_path,
-        "synthesize",
-        "--robot",
-        "cell.toml",
-        "--plan",
-        "plan.csv",
-        "--truth",
-        "truth.toml",
-        "--sigma",
-        "0.02",
-        "-o",
-        "meas.csv",
-    )
+    _synthesize(tmp_path, "plan.csv", "meas.csv", "--sigma", "0.02")
     run_cli(
         tmp_path,
         "identify",
@@ -738,18 +651,7 @@ def test_tip_forces_and_a_rigid_truths_compliance_are_refused(tmp_path):
     )
     plan = [line.rsplit(",", 1)[0] for line in (tmp_path / "plan.csv").read_text().splitlines()]
     (tmp_path / "rigid-plan.csv").write_text("\n".join(plan) + "\n")  # no payload column
-    run = run_cli(
-        tmp_path,
-        "synthesize",
-        "--robot",
-        "rigid.toml",
-        "--plan",
-        "rigid-plan.csv",
-        "--truth",
-        "truth.toml",
-        "-o",
-        "rigid.csv",
-    )
+    run = _synthesize(tmp_path, "rigid-plan.csv", "rigid.csv", robot="rigid.toml")
     assert run.returncode == 2 and "key 'compliance'" in run.stderr
 
 
@@ -761,20 +663,7 @@ def test_geometry_alone_on_a_sagging_arm_stops_reweighting_early(tmp_path, monke
     from armcal.identification import problem, robust
 
     _cell(tmp_path)
-    run_cli(
-        tmp_path,
-        "synthesize",
-        "--robot",
-        "cell.toml",
-        "--plan",
-        "plan.csv",
-        "--truth",
-        "truth.toml",
-        "--sigma",
-        "0.02",
-        "-o",
-        "meas.csv",
-    )
+    _synthesize(tmp_path, "plan.csv", "meas.csv", "--sigma", "0.02")
     counted = []
     fit = problem.Problem.fit
 

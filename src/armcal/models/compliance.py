@@ -63,6 +63,7 @@ from .identifiability import Identifiability, listing
 from .information import (
     BlockInformation,
     column_identifiability,
+    ill_conditioned_warning,
 )
 from .interface import Conditions, Effect, Loads
 from .planar import PlanarArm
@@ -648,14 +649,8 @@ def check_compliance_identifiable(
 
 def barely_identifiable_warning(info: Identifiability) -> ArmcalWarning | None:
     """An ``ill-conditioned`` warning when geometry plus compliance is barely identifiable."""
-    if not info.ill_conditioned:
-        return None
-    return ArmcalWarning(
-        "ill-conditioned",
-        f"geometry plus compliance is barely identifiable (condition number "
-        f"{info.condition_number:.3g}); poorly determined: "
-        f"{'; '.join(info.poorly_determined[:3])}; vary the torques more (poses, payloads)",
-    )
+    said = "geometry plus compliance is barely identifiable"
+    return ill_conditioned_warning(info, said, "vary the torques more (poses, payloads)")
 
 
 def payload_values(elastic: Elastostatic, given: Sequence[float] | None) -> tuple[float, ...]:

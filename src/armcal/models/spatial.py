@@ -33,6 +33,7 @@ from .information import (
     column_identifiability,
     covariance_factor_from,
     identifiable_or_raise,
+    ill_conditioned_warning,
     refit_free,
     whitened_blocks,
     whitened_free_jacobian,
@@ -668,14 +669,8 @@ class SpatialArm(RigidLoads):
         )
 
     def conditioning_warning(self, info: Identifiability) -> ArmcalWarning | None:
-        if not info.ill_conditioned:
-            return None
-        return ArmcalWarning(
-            "ill-conditioned",
-            f"{self.name} is barely identifiable from these measurements (condition number "
-            f"{info.condition_number:.3g}); poorly determined: "
-            f"{'; '.join(info.poorly_determined[:3])}; measure poses that move every joint more",
-        )
+        said = f"{self.name} is barely identifiable from these measurements"
+        return ill_conditioned_warning(info, said, "measure poses that move every joint more")
 
     def covariance_factor(
         self, conditions: Conditions, params: np.ndarray | None = None

@@ -59,6 +59,7 @@ from .information import (
     Linearization,
     column_identifiability,
     identifiable_or_raise,
+    ill_conditioned_warning,
     refit_free,
 )
 from .interface import Conditions, DesignEffort, Effect, Loads
@@ -552,20 +553,13 @@ class CompliantSerialArm(ArmEffect):
             self,
             conditions,
             f"{self.name} with compliance",
-            "measure poses in which every "
-            "joint takes several values and the torques vary (links pointing in different "
-            "directions relative to gravity, different payloads)",
+            "measure poses in which every joint takes several values and the torques vary "
+            "(links pointing in different directions relative to gravity, different payloads)",
         )
 
     def conditioning_warning(self, info: Identifiability) -> ArmcalWarning | None:
-        if not info.ill_conditioned:
-            return None
-        return ArmcalWarning(
-            "ill-conditioned",
-            f"geometry plus compliance of {self.name} is barely identifiable (condition "
-            f"number {info.condition_number:.3g}); poorly determined: "
-            f"{'; '.join(info.poorly_determined[:3])}; vary the torques more (poses, payloads)",
-        )
+        said = f"geometry plus compliance of {self.name} is barely identifiable"
+        return ill_conditioned_warning(info, said, "vary the torques more (poses, payloads)")
 
     def fit_details(self, conditions: Conditions, params: np.ndarray) -> dict[str, np.ndarray]:
         """``max_deflection_rad`` ``(n,)``: every joint's largest fitted twist."""
