@@ -422,8 +422,18 @@ def test_a_compliant_six_axis_cell_from_the_command_line(tmp_path):
             out,
         )
         assert run.returncode == 0, run.stderr
+        assert f"sag corrected under a payload of {payload} kg (--payload-kg)" in run.stdout
         line = (tmp_path / out).read_text().splitlines()[1].split(",")
         corrected.append(np.array([float(v) for v in line[:6]]))
+    default = run_cli(
+        tmp_path, "compensate", "--calibration", "cal.json", "--program", "program.csv",
+        "--target", "A", "-o", "comp.csv", "--json",
+    )  # fmt: skip
+    assert json.loads(default.stdout)["payload_kg"] == {
+        "min": PAYLOAD,
+        "max": PAYLOAD,
+        "from": "the calibration's default",
+    }  # the robot file's, which the program does not say
     # J2's sag under 165 kg at 0.2 urad/(N m): about 165 * 9.8 * 1.5 m * 0.2e-6 rad, 0.03 deg
     assert 0.005 < abs(corrected[1][1] - corrected[0][1]) < 0.1
     sim = run_cli(

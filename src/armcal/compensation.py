@@ -61,6 +61,7 @@ from .numerics import RANK_RTOL, rms
 __all__ = [
     "MAX_AMPLIFICATION",
     "Compensation",
+    "Payload",
     "compensate",
 ]
 
@@ -82,6 +83,17 @@ _GOOD_FIT = 0.75
 #: step on ``1 / |dq(mu)| - 1 / D``, nearly linear in ``mu``, so a few give the radius
 #: to a fraction of a percent; the step is then scaled onto the radius exactly.
 _HEBDEN_STEPS = 8
+
+
+@dataclass(frozen=True)
+class Payload:
+    """The payload a compensation corrected the sag under: the smallest and largest (kg)
+    and where it came from (the program's ``payload_kg`` column, ``--payload-kg``, or the
+    calibration's default, what its robot file or its data carried)."""
+
+    low_kg: float
+    high_kg: float
+    source: str
 
 
 @dataclass(frozen=True, eq=False)

@@ -314,7 +314,7 @@ def compensate(args: argparse.Namespace) -> None:
     atomic_write(
         args.output, format_program_csv(result.q, result.corrected, program.labels, run.targets)
     )
-    document, text = compensation_report(cal, result, program)
+    document, text = compensation_report(cal, result, program, run.payload)
     text += f"\nwrote {args.output}"
     emit(args, document, text, run.warnings)
 

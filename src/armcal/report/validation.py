@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..acceptance import ISO_CYCLES, PoseCharacteristics
-from ..compensation import Compensation
+from ..compensation import Compensation, Payload
 from ..files import Measurements, Program
 from ..models import CalibratedArm
 from ..validation import Validation
@@ -145,9 +145,13 @@ def _orientation_lines(found: PoseCharacteristics, poses: list[dict]) -> list[st
 
 
 def compensation_report(
-    cal: CalibratedArm, result: Compensation, program: Program
+    cal: CalibratedArm,
+    result: Compensation,
+    program: Program,
+    payload: Payload | None = None,
 ) -> tuple[dict, str]:
-    """The ``compensate`` document and text."""
+    """The ``compensate`` document and text, with the ``payload`` the sag was corrected
+    under for a calibration with joint compliance."""
     s = result.summary()
     m = result.q.shape[0]
     bad = result.uncorrectable
@@ -167,6 +171,10 @@ def compensation_report(
             f"{after:.4g} deg after"
         )
     lines.append(f"largest joint change: {result.largest_change_deg:.4g} deg")
+    if payload is not None:
+        low, high = payload.low_kg, payload.high_kg
+        kg = f"{low:g} kg" if low == high else f"{low:g} to {high:g} kg"
+        lines.append(f"sag corrected under a payload of {kg} ({payload.source})")
     labels = program.labels or tuple(str(i + 1) for i in range(m))
     uncorrectable = [
         {"row": int(i) + 1, "pose": labels[i], "reason": result.reasons[i]} for i in bad
@@ -178,4 +186,6 @@ def compensation_report(
         "uncorrectable": uncorrectable,
         "largest_joint_change_deg": result.largest_change_deg,
     }
+    if payload is not None:
+        document["payload_kg"] = {"min": low, "max": high, "from": payload.source}
     return document, "\n".join(lines)

@@ -22,7 +22,7 @@ from ..acceptance import (
     pose_characteristics,
     pose_characteristics_warnings,
 )
-from ..compensation import Compensation, compensate
+from ..compensation import Compensation, Payload, compensate
 from ..errors import (
     ArmcalError,
     ArmcalWarning,
@@ -498,6 +498,7 @@ class CompensationRun:
     compensation: Compensation
     targets: tuple[str, ...] | None
     warnings: tuple[ArmcalWarning, ...]
+    payload: Payload | None = None
 
 
 def compensate_program(
@@ -540,15 +541,19 @@ def compensate_program(
     index = None if labels is None or not arm.target_labels else arm.target_index(labels)
     default = cal.model.default_payload_kg
     loads = None
+    used = None
     if default is not None:
         payload: float | np.ndarray = default
+        source = "the calibration's default"
         if payload_kg is not None:
             if program.payload_kg is not None:
                 raise ArmcalError("--payload-kg: the program has a payload_kg column already")
-            payload = payload_kg
+            payload, source = payload_kg, "--payload-kg"
         if program.payload_kg is not None:
-            payload = program.payload_kg
+            payload, source = program.payload_kg, "the program's payload_kg column"
         loads = Loads.create(program.q.shape[0], payload, program.force_n)
+        kg = loads.payload_kg
+        used = Payload(float(kg.min()), float(kg.max()), source)
     elif payload_kg is not None or program.payload_kg is not None:
         raise ArmcalError(
             "--payload-kg/payload_kg: the calibration has no joint compliance, so a payload "
@@ -568,7 +573,7 @@ def compensate_program(
                 f"(corrected = 0 in the output): {shown}{more}",
             )
         )
-    return CompensationRun(result, labels, tuple(warnings))
+    return CompensationRun(result, labels, tuple(warnings), used)
 
 
 @dataclass(frozen=True, eq=False)
