@@ -582,6 +582,7 @@ def test_a_lumped_calibration_under_one_payload_warns_under_another(tmp_path):
     )
     assert run.returncode == 0, run.stderr
     assert "deflection under payloads of 0 kg is not predicted" in run.stderr
+    assert "armcal: warning: program.csv: " in run.stderr  # the warning names the program
 
 
 def test_tip_force_columns_are_refused_for_a_spatial_arm(tmp_path):

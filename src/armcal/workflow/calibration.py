@@ -544,16 +544,16 @@ def compensate_program(
     used = None
     if default is not None:
         payload: float | np.ndarray = default
-        source = "the calibration's default"
+        origin = "the calibration's default"
         if payload_kg is not None:
             if program.payload_kg is not None:
                 raise ArmcalError("--payload-kg: the program has a payload_kg column already")
-            payload, source = payload_kg, "--payload-kg"
+            payload, origin = payload_kg, "--payload-kg"
         if program.payload_kg is not None:
-            payload, source = program.payload_kg, "the program's payload_kg column"
+            payload, origin = program.payload_kg, "the program's payload_kg column"
         loads = Loads.create(program.q.shape[0], payload, program.force_n)
         kg = loads.payload_kg
-        used = Payload(float(kg.min()), float(kg.max()), source)
+        used = Payload(float(kg.min()), float(kg.max()), origin)
     elif payload_kg is not None or program.payload_kg is not None:
         raise ArmcalError(
             "--payload-kg/payload_kg: the calibration has no joint compliance, so a payload "
