@@ -171,10 +171,6 @@ def compensation_report(
             f"{after:.4g} deg after"
         )
     lines.append(f"largest joint change: {result.largest_change_deg:.4g} deg")
-    if payload is not None:
-        low, high = payload.low_kg, payload.high_kg
-        kg = f"{low:g} kg" if low == high else f"{low:g} to {high:g} kg"
-        lines.append(f"sag corrected under a payload of {kg} ({payload.source})")
     labels = program.labels or tuple(str(i + 1) for i in range(m))
     uncorrectable = [
         {"row": int(i) + 1, "pose": labels[i], "reason": result.reasons[i]} for i in bad
@@ -186,6 +182,9 @@ def compensation_report(
         "uncorrectable": uncorrectable,
         "largest_joint_change_deg": result.largest_change_deg,
     }
-    if payload is not None:
+    if payload is not None:  # the last line of the text, too
+        low, high = payload.low_kg, payload.high_kg
+        kg = f"{low:g} kg" if low == high else f"{low:g} to {high:g} kg"
+        lines.append(f"sag corrected under a payload of {kg} ({payload.source})")
         document["payload_kg"] = {"min": low, "max": high, "from": payload.source}
     return document, "\n".join(lines)

@@ -198,10 +198,10 @@ def _ignored_loads(
         why = f"{action('geometry-only')}; leave it out to fit the joints' compliance"
     else:
         why = "the robot file has no [elastostatic] table; add one to fit the joints' compliance"
-    return [_loads_ignored(source, why)]
+    return [_loads_ignored_warning(source, why)]
 
 
-def _loads_ignored(source: str, why: str) -> ArmcalWarning:
+def _loads_ignored_warning(source: str, why: str) -> ArmcalWarning:
     """``loads-ignored``: the rows' payloads and tip forces are not used, and ``why``."""
     return ArmcalWarning(
         "loads-ignored", f"{source}: the payload_kg/fx_N/fy_N columns are not used: {why}"
@@ -464,7 +464,7 @@ def validate_measurements(
     warnings = [*meas.warnings, *_unpredicted(cal, loads, source), *validation_warnings(result)]
     if loads is None and meas.has_loads:  # the rows sag by their loads; the model cannot say
         warnings.append(
-            _loads_ignored(
+            _loads_ignored_warning(
                 source,
                 "the calibration has no joint compliance, so the sag under them is in the "
                 "errors after calibration; calibrate with the robot file's [elastostatic] "
