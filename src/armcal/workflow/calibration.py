@@ -270,7 +270,9 @@ def calibrate(
     spec, meas, ignored = _as_asked(spec, meas, source, sigma, compliance)
     cal = _identify_file(spec, arm, source, meas, method=method, robust=robust)
     large = deviation_warning(cal.arm, cal.model.arm_params(cal.params))
-    points = meas.xy if cal.plane is None else cal.plane.to_plane(meas.xyz)
+    points = None
+    if folds is not None:  # the fitted points: a 3-D file's in its plane
+        points = meas.xy if cal.plane is None else cal.plane.to_plane(meas.xyz)
     return _calibration_run(cal, spec, meas, points, ignored, large, folds, sigma, seed)
 
 
@@ -290,7 +292,7 @@ def _calibration_run(
     cal: Calibration,
     spec: RobotSpec | SerialSpec,
     meas: Measurements,
-    points: np.ndarray,
+    points: np.ndarray | None,
     ignored: list[ArmcalWarning],
     large: ArmcalWarning | None,
     folds: int | None,
@@ -298,12 +300,14 @@ def _calibration_run(
     seed: int | np.random.Generator | None,
 ) -> CalibrationRun:
     """The run of ``cal``: what the robot file, the measurements, the options (``ignored``)
-    and the fit warn of, ``large`` unless the fit warned of it, and the cross-validation."""
+    and the fit warn of, ``large`` unless the fit warned of it, and the cross-validation
+    of ``folds`` on the fitted ``points`` (given with ``folds``)."""
     warnings = [*spec.warnings, *meas.warnings, *ignored, *cal.warnings]
     if large is not None and all(w.code != large.code for w in warnings):
         warnings.append(large)
     checked = None
     if folds is not None:
+        assert points is not None
         checked = _cross_validated(cal, meas, points, folds, sigma, seed, warnings)
     return CalibrationRun(cal, tuple(unique_warnings(warnings)), checked)
 
@@ -394,12 +398,13 @@ def calibrate_serial(
     spec, meas, ignored = _as_asked(spec, meas, source, sigma, compliance)
     try:
         arm = model_arm(serial_arm(spec.arm, meas), fixed=fixed, sigma=sigma)
+        points = meas.instrument_points  # 3-D: serial_arm refuses data without z_mm
         index = None if meas.targets is None else arm.target_index(meas.targets)
         loads = None if spec.elastic is None else meas.loads(spec.elastic.payload_kg)
         cal = identify(
             fit_model(spec, arm, loads),
             meas.q,
-            meas.instrument_points,
+            points,
             method=method,
             robust=robust,
             pose_labels=meas.labels,
@@ -414,7 +419,6 @@ def calibrate_serial(
         raise prefixed(source, exc) from None
     except ValueError as exc:
         raise InputError(f"{source}: {exc}") from None
-    points = meas.instrument_points
     return _calibration_run(cal, spec, meas, points, ignored, None, folds, sigma, seed)
 
 
