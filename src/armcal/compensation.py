@@ -110,7 +110,9 @@ class Compensation:
         Why a pose was not corrected ("" for the corrected ones).
     position_before_mm : ndarray, shape (m,)
         Where the calibrated arm puts the target at the original command, from
-        where the nominal program meant: the error compensation removes, mm.
+        where the nominal arm registered on its own puts it (the calibration's
+        baseline; without one, the nominal arm at the calibrated instrument pose):
+        the error a user without calibration sees, mm.
     position_after_mm : ndarray, shape (m,)
         The calibrated model's uncertainty (RMS) at the corrected command: the
         error left after compensation, as the calibration predicts it, mm.
@@ -452,11 +454,20 @@ def compensate(
     final = goal.rows(q, everyone)
     covariance = cal.robot_covariance()
     before = np.linalg.norm(at_program[:, :dim], axis=1)
+    baseline = None if cal.baseline is None else cal.model.arm.positions(program, cal.baseline)
+    if baseline is not None:  # the arm without calibration: the nominal one, registered
+        before = np.linalg.norm((cal.positions(program) - baseline)[:, :dim], axis=1)
     after = np.sqrt(tip_variances(position_jacobian(model, final, robot), covariance))
     turn_before = turn_after = None
     if keep:
         arcs = np.linalg.norm(at_program[:, dim:], axis=1)
         turn_before = np.degrees(arcs / goal.scale)
+        if cal.baseline is not None:
+            turn = cal.model.orientation_error(
+                cal.model.orientation(program, cal.params),
+                cal.model.arm.orientation(program, cal.baseline),
+            )
+            turn_before = np.degrees(np.linalg.norm(turn, axis=1))
         angles = model.orientation_jacobian(final, robot)  # (m, k, p)
         turn_after = np.degrees(np.sqrt(tip_variances(angles, covariance)))
     return Compensation(

@@ -1,10 +1,14 @@
 """What a calibration predicts, checked: validation on held-out poses, cross-validation.
 
 **Validation** (:func:`validate`) compares measured positions with the nominal
-model and with the calibrated one.  Both are placed where the calibration put
-the arm in the instrument frame (its instrument parameters, the planar arm's
-base pose ``x0, y0, phi0``): the instrument's pose is not the robot's error, so
-"before" is the nominal geometry at the calibrated base pose.  Next to the
+arm and with the calibrated one.  "Before" is what a user has without
+calibrating: the nominal arm with its *own* instrument pose and targets, fitted
+on the calibration's training rows (the calibration's baseline,
+:func:`armcal.identification.registration.register_nominal`).  It is never the
+nominal arm placed at the *calibrated* instrument pose, which has taken up the
+geometry that merges into it and misses by several times as much.  A calibration
+without a recorded baseline registers the nominal arm on the held-out rows
+themselves (a baseline that flatters the nominal arm, and says so).  Next to the
 measured errors it gives the error the calibration predicts for a measurement:
 ``sqrt(tr(J C J^T) + tr(Sigma))``, the model's uncertainty at the pose (``J``
 the Jacobian in the parameters, ``C`` their covariance) plus the instrument's
@@ -24,26 +28,33 @@ every axis.  A 6-DoF instrument's orientations are checked apart, in degrees
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Literal
 
 import numpy as np
 from numpy.typing import ArrayLike
 
 from .errors import ArmcalError, ArmcalWarning, NotIdentifiableError, action
 from .identification import identify
+from .identification.registration import register_nominal
 from .models import CalibratedArm, Conditions, FitModel, Loads
 from .models.information import tip_variances
 from .noise import NoiseModel
 from .numerics import point_norms, rms
 
 __all__ = [
+    "BETTER_ALPHA",
+    "BETTER_RATIO",
     "CrossValidation",
     "Turns",
     "Validation",
+    "clearly_better",
     "cross_validate",
     "cross_validation_warning",
+    "cross_validation_warnings",
     "predicted_errors",
     "validate",
     "validation_warnings",
+    "worse_warning",
 ]
 
 
@@ -68,6 +79,10 @@ class Validation:
         For 3-D data of a planar arm: each point's distance from its target's plane, mm.
     turns : Turns or None
         For a 6-DoF instrument: the orientation errors before and after, and predicted.
+    baseline_rows : {"calibration", "held-out"}
+        Where the nominal arm of ``before`` was registered: on the calibration's
+        training rows (its recorded baseline), or on these held-out rows (for a
+        calibration that recorded none).
     """
 
     before: np.ndarray
@@ -77,6 +92,7 @@ class Validation:
     positions: np.ndarray
     out_of_plane_mm: np.ndarray | None = None
     turns: Turns | None = None
+    baseline_rows: Literal["calibration", "held-out"] = "calibration"
 
     def __repr__(self) -> str:
         s = self.summary()
@@ -298,7 +314,18 @@ def validate(
         if points.shape[-1] != model.point_dim:
             raise ArmcalError(_other_data(model.point_dim))
         conditions, measured = model.anchor(conditions, points)
-    before = measured - model.positions(conditions, cal.instrument_pose_params())
+    baseline_rows: Literal["calibration", "held-out"] = "calibration"
+    if cal.baseline is not None:
+        nominal = cal.baseline_positions(conditions)
+    else:  # an older calibration file: the nominal arm registered on these rows
+        found = register_nominal(model, conditions, measured, cal.params)
+        if found is None:
+            raise ArmcalError(
+                "the nominal arm cannot be registered on these rows, and the calibration "
+                "records no baseline; identify again to record one"
+            )
+        nominal, baseline_rows = model.arm.positions(conditions, found.params), "held-out"
+    before = measured - nominal
     after = measured - cal.positions(conditions)
     uncertainty, predicted, turn = _predicted(cal, conditions)
     d = model.position_dim
@@ -310,6 +337,7 @@ def validate(
         measured[:, :d],
         out_of_plane,
         _turns(model, before, after, turn),
+        baseline_rows,
     )
 
 
@@ -337,9 +365,91 @@ def _too_large(measured: float, predicted: float, count: int) -> bool:
     return measured > predicted * (1.0 + max(0.2, 3.0 / np.sqrt(max(count, 1))))
 
 
-def validation_warnings(result: Validation) -> list[ArmcalWarning]:
+#: A calibration is *clearly better* than the nominal arm on held-out points when its
+#: RMS is at most this fraction of the nominal one's ...
+BETTER_RATIO = 0.9
+
+#: ... and the paired one-sided t test of the points' squared errors (before minus
+#: after, a pose's points together) says so at this level.
+BETTER_ALPHA = 0.01
+
+
+def clearly_better(
+    before_mm: np.ndarray, after_mm: np.ndarray, groups: np.ndarray | None = None
+) -> bool:
+    """Whether errors ``after_mm`` ``(m,)`` are clearly below ``before_mm`` ``(m,)``, mm.
+
+    Clearly: an RMS at most :data:`BETTER_RATIO` of the nominal one, and the mean of
+    the paired differences of squared errors (one per pose: ``groups`` ``(m,)``
+    gathers a pose's points, which share its errors) above zero by the one-sided t
+    test at :data:`BETTER_ALPHA`.  A gain of a few percent, or one that a few poses
+    make alone, is no reason to calibrate.
+
+    Examples
+    --------
+    >>> before = np.array([1.0, 1.2, 0.9, 1.1, 1.0])
+    >>> clearly_better(before, before / 10), clearly_better(before, before * 0.95)
+    (True, False)
+    """
+    before_mm, after_mm = np.asarray(before_mm, float), np.asarray(after_mm, float)
+    if rms(after_mm) > BETTER_RATIO * rms(before_mm):
+        return False
+    gain = before_mm**2 - after_mm**2
+    if groups is not None:
+        keys, index = np.unique(np.asarray(groups), return_inverse=True)
+        gain = np.bincount(index, weights=gain, minlength=keys.size)
+    n = gain.size
+    spread = float(np.std(gain, ddof=1)) if n > 1 else 0.0
+    if spread == 0.0:
+        return bool(np.mean(gain) > 0)
+    from scipy import special  # on use, and not scipy.stats (slow to import)
+
+    critical = float(special.stdtrit(n - 1, 1.0 - BETTER_ALPHA))
+    return bool(np.mean(gain) / (spread / np.sqrt(n)) > critical)
+
+
+def worse_warning(
+    before: float, after: float, predicted: float, count: int, where: str
+) -> ArmcalWarning:
+    """``calibration-worse``: RMS per point ``after`` calibration is not clearly below the
+    nominal arm's ``before`` on ``count`` points, ``where`` (a phrase); ``predicted`` is
+    the calibrated error expected, against which the nominal arm is judged."""
+    numbers = (
+        f"{after:.3g} mm RMS per point after calibration against {before:.3g} mm for the "
+        "nominal arm registered on its own"
+    )
+    causes = (
+        "the arm or the instrument changed during the campaign (a tracker or a base that "
+        "moved, a joint that slipped, temperature), the model misses an effect, or the "
+        "calibration and the measurements are of different setups"
+    )
+    nominal_fits = not _too_large(before, predicted, count)
+    if after >= before and not (nominal_fits and not _too_large(after, predicted, count)):
+        return ArmcalWarning(
+            "calibration-worse",
+            f"the calibrated model is worse than the nominal arm on {where} ({numbers}): {causes}",
+        )
+    if nominal_fits:  # both within the noise: nothing to buy
+        return ArmcalWarning(
+            "calibration-worse",
+            f"calibration buys nothing measurable on {where} ({numbers}): the nominal arm "
+            f"already predicts them within the noise and the calibration's uncertainty "
+            f"({predicted:.3g} mm); keep the nominal model, or measure with a better instrument",
+        )
+    return ArmcalWarning(
+        "calibration-worse",
+        f"calibration does not make {where} clearly better ({numbers}), and both miss them "
+        f"by more than the {predicted:.3g} mm predicted: {causes}",
+    )
+
+
+def validation_warnings(
+    result: Validation, groups: np.ndarray | None = None
+) -> list[ArmcalWarning]:
     """``validation-error`` when the calibrated error exceeds its prediction beyond chance,
-    ``calibration-worse`` when the calibrated model misses the poses more than the nominal."""
+    ``calibration-worse`` when the calibrated model is not clearly better than the nominal
+    arm registered on its own (:func:`clearly_better`; ``groups`` ``(m,)`` gathers a pose's
+    points)."""
     s = result.summary()
     warnings = []
     count = result.after.shape[0]
@@ -356,14 +466,14 @@ def validation_warnings(result: Validation) -> list[ArmcalWarning]:
         )
     if result.turns is not None:
         warnings += _turn_warnings(s, count)
-    if s["rms_after_per_point_mm"] > s["rms_before_per_point_mm"]:
+    if not clearly_better(result.before_mm, result.after_mm, groups):
         warnings.append(
-            ArmcalWarning(
-                "calibration-worse",
-                f"the calibrated model is worse than the nominal one on these poses "
-                f"({s['rms_after_per_point_mm']:.3g} against "
-                f"{s['rms_before_per_point_mm']:.3g} mm RMS per point): check that "
-                "the calibration and the measurements are of the same robot and instrument setup",
+            worse_warning(
+                s["rms_before_per_point_mm"],
+                s["rms_after_per_point_mm"],
+                s["predicted_rms_after_per_point_mm"],
+                count,
+                "these held-out poses",
             )
         )
     return warnings
@@ -415,6 +525,11 @@ class CrossValidation:
     turns : Turns or None
         For a 6-DoF instrument: the predicted orientations' errors (``before``
         unused: the same as ``after``).
+    nominal_errors : ndarray, shape (m, d), or None
+        Measured minus the nominal arm's position, the nominal arm registered on its
+        own to the same training rows as the fold's calibration (its baseline), mm.
+    groups : ndarray, shape (m,), or None
+        The pose every row belongs to (rows of one pose share its errors).
     """
 
     folds: int
@@ -422,6 +537,8 @@ class CrossValidation:
     errors: np.ndarray
     predicted_mm: np.ndarray
     turns: Turns | None = None
+    nominal_errors: np.ndarray | None = None
+    groups: np.ndarray | None = None
 
     def __repr__(self) -> str:
         s = self.summary()
@@ -435,20 +552,67 @@ class CrossValidation:
         """Euclidean prediction error ``(m,)`` of every row, mm."""
         return point_norms(self.errors)
 
+    @property
+    def nominal_mm(self) -> np.ndarray | None:
+        """Euclidean error ``(m,)`` of the registered nominal arm at every row, mm."""
+        return None if self.nominal_errors is None else point_norms(self.nominal_errors)
+
+    def per_fold(self) -> list[dict[str, float | int | None]]:
+        """Every fold's held-out points, their RMS per point after calibration, predicted,
+        and the nominal arm's (registered on the same training rows), mm."""
+        nominal = self.nominal_mm
+        out: list[dict[str, float | int | None]] = []
+        for k in range(self.folds):
+            held = self.fold == k
+            out.append(
+                {
+                    "fold": k + 1,
+                    "points": int(np.count_nonzero(held)),
+                    "rms_per_point_mm": rms(self.errors_mm[held]),
+                    "predicted_rms_per_point_mm": rms(self.predicted_mm[held]),
+                    "nominal_rms_per_point_mm": None if nominal is None else rms(nominal[held]),
+                }
+            )
+        return out
+
     def summary(self) -> dict[str, float | int]:
-        """``folds``, RMS and max prediction error and the predicted RMS (mm), per point;
-        for a 6-DoF instrument the orientations' RMS and predicted RMS (deg)."""
+        """``folds``, RMS and max prediction error and the predicted RMS (mm), per point, and
+        the nominal arm's RMS (registered on every fold's training rows); for a 6-DoF
+        instrument the orientations' RMS and predicted RMS (deg)."""
         out: dict[str, float | int] = {
             "folds": self.folds,
             "rms_per_point_mm": rms(self.errors_mm),
             "max_mm": float(np.max(self.errors_mm)),
             "predicted_rms_per_point_mm": rms(self.predicted_mm),
         }
+        nominal = self.nominal_mm
+        if nominal is not None:
+            out["nominal_rms_per_point_mm"] = rms(nominal)
         if self.turns is not None:
             turns = self.turns.summary()
             out["orientation_rms_deg"] = turns["orientation_rms_after_deg"]
             out["predicted_orientation_rms_deg"] = turns["predicted_orientation_rms_after_deg"]
         return out
+
+
+def cross_validation_warnings(result: CrossValidation) -> list[ArmcalWarning]:
+    """:func:`cross_validation_warning`, and ``calibration-worse`` when the held-out poses
+    are not clearly better predicted than by the nominal arm registered on the same
+    training rows (:func:`clearly_better`)."""
+    found = [w for w in (cross_validation_warning(result),) if w is not None]
+    nominal = result.nominal_mm
+    if nominal is not None and not clearly_better(nominal, result.errors_mm, result.groups):
+        s = result.summary()
+        found.append(
+            worse_warning(
+                s["nominal_rms_per_point_mm"],
+                s["rms_per_point_mm"],
+                s["predicted_rms_per_point_mm"],
+                result.errors.shape[0],
+                "the held-out poses of the cross-validation",
+            )
+        )
+    return found
 
 
 def cross_validation_warning(result: CrossValidation) -> ArmcalWarning | None:
@@ -532,6 +696,7 @@ def cross_validate(
     of_group[rng.permutation(count)] = np.arange(count) % folds
     fold = of_group[keys]
     errors = np.empty(points.shape)
+    nominal: np.ndarray | None = np.empty(points.shape)
     predicted = np.empty(m)
     turn_predicted = np.empty(m)
     for k in range(folds):
@@ -556,9 +721,21 @@ def cross_validate(
         test = conditions.take(held)
         fitted = cal.calibrated()
         errors[held] = points[held] - fitted.positions(test)
+        if nominal is not None and fitted.baseline is not None:
+            nominal[held] = points[held] - fitted.baseline_positions(test)
+        else:  # a fold whose rows cannot place the nominal arm: no baseline to compare
+            nominal = None
         _, predicted[held], turn = _predicted(fitted, test)
         if turn is not None:
             turn_predicted[held] = turn
     d = model.position_dim
     turns = _turns(model, errors, errors, turn_predicted if points.shape[1] > d else None)
-    return CrossValidation(folds, fold, errors[:, :d], predicted, turns)
+    return CrossValidation(
+        folds,
+        fold,
+        errors[:, :d],
+        predicted,
+        turns,
+        None if nominal is None else nominal[:, :d],
+        None if groups is None else np.asarray(groups),
+    )

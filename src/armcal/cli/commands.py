@@ -269,8 +269,9 @@ def identify(args: argparse.Namespace) -> None:
     document = calibration_document(cal, warnings=run.warnings, words=CLI_ACTIONS)
     if run.cross_validation is not None:
         summary = run.cross_validation.summary()
-        document["cross_validation"] = summary
-        text += "\n" + format_cross_validation(summary)
+        folds = run.cross_validation.per_fold()
+        document["cross_validation"] = {**summary, "per_fold": folds}
+        text += "\n" + format_cross_validation(summary, folds)
     if args.output is not None:
         atomic_write(args.output, partial(write_json, document))
     emit(args, document, text, run.warnings)

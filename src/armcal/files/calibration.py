@@ -260,6 +260,8 @@ def read_calibration(path: str | os.PathLike) -> CalibratedArm:
             raise ValueError(f"expected a positive noise std in mm, got {sigma}")
         key = "plane"
         plane = None if doc.get("plane") is None else Plane.from_dict(doc["plane"])
+        key = "baseline"
+        baseline = _baseline_from_dict(arm, doc.get("baseline"))
     except (KeyError, TypeError, ValueError, AttributeError, OverflowError, InputError) as exc:
         # AttributeError: a section of the wrong JSON type ("robot": [] has no .get)
         what = f"missing key {exc}" if isinstance(exc, KeyError) else str(exc)
@@ -272,7 +274,7 @@ def read_calibration(path: str | os.PathLike) -> CalibratedArm:
         raise fail(path, "key 'parameters': values must be finite numbers")
     if plane is None and isinstance(arm, PlanarArm) and arm.base_rotation:
         raise fail(path, "key 'plane': a calibration from 3-D data must record its plane")
-    return CalibratedArm(model, values, full, sigma, plane)
+    return CalibratedArm(model, values, full, sigma, plane, baseline)
 
 
 def _compliance_from_dict(
@@ -339,6 +341,46 @@ def _elastostatic_dict(cal: Calibration) -> dict | None:
         "parameters": list(model.compliance_names),
         "geometry_only_rms_per_coordinate_mm": nested.rms_per_coordinate_mm,
     }
+
+
+def _baseline_dict(cal: Calibration) -> dict[str, Any] | None:
+    """The nominal arm registered on its own to the calibration's rows: its registration
+    (instrument pose and targets, display units) and its RMS there; null without one."""
+    baseline = cal.baseline
+    if baseline is None:
+        return None
+    arm = cal.arm
+    shown = baseline.params * arm.display_scale
+    return {
+        "what": "the nominal arm with its own instrument pose and targets, fitted on the "
+        "calibration's rows (the geometry nominal)",
+        "rows": baseline.rows,
+        "rms_per_point_mm": baseline.rms_per_point_mm,
+        "parameters": [
+            {"name": name, "unit": unit, "value": float(v)}
+            for name, unit, v, free in zip(
+                arm.param_names, arm.param_units, shown, arm.registration_params, strict=True
+            )
+            if free
+        ],
+    }
+
+
+def _baseline_from_dict(arm: FitModel, data: Any) -> np.ndarray | None:
+    """The geometric arm's parameters of a calibration file's ``baseline`` (None without)."""
+    if data is None:
+        return None
+    values = np.array(arm.held_values, dtype=float)
+    names = list(arm.param_names)
+    for entry in data["parameters"]:
+        name = str(entry["name"])
+        if name not in names:
+            raise ValueError(f"{name} is not a parameter of the robot")
+        i = names.index(name)
+        values[i] = float(entry["value"]) / arm.display_scale[i]
+    if not np.all(np.isfinite(values)):
+        raise ValueError("values must be finite numbers")
+    return values
 
 
 def calibration_document(
@@ -410,6 +452,7 @@ def calibration_document(
         "correlation": {"names": list(cal.names), "matrix": corr.tolist()},
         "residual_rms_mm": cal.residual_rms,
         "residual_rms_per_coordinate_mm": cal.residual_rms,
+        "residual_rms_per_point_mm": cal.residual_rms_per_point,
         "residual_max_mm": cal.residual_max,
         **({} if turn_rms is None else {"orientation_residual_rms_per_axis_deg": turn_rms}),
         "degrees_of_freedom": cal.dof,
@@ -444,5 +487,6 @@ def calibration_document(
         "iterations": cal.iterations,
         "converged": cal.converged,
         "plane": None if cal.plane is None else cal.plane.to_dict(),
+        "baseline": _baseline_dict(cal),
         "warnings": [w.to_dict(words) for w in (cal.warnings if warnings is None else warnings)],
     }

@@ -44,6 +44,7 @@ from .judgement import (
     unseen_warning,
 )
 from .problem import Problem, reference_sigma
+from .registration import Movement, instrument_moved, register_nominal
 from .result import Calibration, NestedFit
 from .robust import robust_fit
 from .solvers import resolve_method
@@ -356,6 +357,10 @@ def identify(
                 rows=noun,
             )
         )
+    if not fit_test.consistent:
+        moved = instrument_moved(model, conditions, points, fit.params, used=used)
+        if moved is not None:
+            warnings.append(moved_warning(moved, row_numbers))
     g = np.zeros((model.n_params, n_free))
     g[model.free] = fit.factor
     covariance = sigma_value**2 * (g @ g.T)
@@ -412,4 +417,19 @@ def identify(
         conditions=conditions,
         nested=nested,
         details=model.fit_details(conditions, fit.params),
+        baseline=register_nominal(model, conditions, points, fit.params, used=used),
+    )
+
+
+def moved_warning(moved: Movement, rows: Sequence[int]) -> ArmcalWarning:
+    """``instrument-moved``: the rows from ``moved.split`` on place the instrument elsewhere."""
+    first, last = rows[moved.split - 1], rows[moved.split]
+    return ArmcalWarning(
+        "instrument-moved",
+        f"the rows up to row {first} and from row {last} on are fitted far better with an "
+        f"instrument pose of their own (it takes up {100 * moved.explained:.0f} % of the "
+        f"residual; the two poses put the points {moved.shift_mm:.3g} mm apart, RMS per "
+        "point): the instrument or the arm's base moved during the campaign, and no "
+        "calibration of the arm can take that up; calibrate from the rows of one setup, "
+        "or measure again with the instrument fixed",
     )

@@ -23,6 +23,7 @@ from ..errors import ArmcalWarning
 from ..models import CalibratedArm, Conditions, Effect, FitModel, Plane
 from ..numerics import point_norms, rms
 from .judgement import GoodnessOfFit, Outlier
+from .registration import Baseline
 
 __all__ = [
     "STRONG_CORRELATION",
@@ -143,6 +144,10 @@ class Calibration:
     details : dict
         What the model reports of the fit besides its parameters
         (:meth:`~armcal.models.interface.FitModel.fit_details`).
+    baseline : Baseline or None
+        The nominal arm registered on its own to the same rows
+        (:func:`~armcal.identification.registration.register_nominal`): what a user
+        has without calibrating, against which validation judges the calibration.
     """
 
     model: FitModel
@@ -166,6 +171,7 @@ class Calibration:
     plane: Plane | None = None
     nested: NestedFit | None = None
     details: dict[str, np.ndarray] = field(default_factory=dict)
+    baseline: Baseline | None = None
 
     def __repr__(self) -> str:
         used = f"{self.n_used} of {self.n_poses}" if self.n_used < self.n_poses else self.n_poses
@@ -178,7 +184,10 @@ class Calibration:
 
     def calibrated(self) -> CalibratedArm:
         """The model with these parameters, for validation, compensation and export."""
-        return CalibratedArm(self.model, self.params, self.covariance, self.sigma_mm, self.plane)
+        baseline = None if self.baseline is None else self.baseline.params
+        return CalibratedArm(
+            self.model, self.params, self.covariance, self.sigma_mm, self.plane, baseline
+        )
 
     def __getitem__(self, name: str) -> Estimate:
         """A parameter by name, in display units: ``cal["dl1"]``."""
@@ -292,6 +301,13 @@ class Calibration:
         degrees; None for positions only."""
         turns = self._used_residuals()[:, self.model.position_dim :]
         return None if turns.shape[1] == 0 else float(np.degrees(rms(turns)))
+
+    @property
+    def residual_rms_per_point(self) -> float:
+        """RMS of the Euclidean residuals of the positions of the poses in the fit (per
+        point: ``sqrt(d)`` times :attr:`residual_rms` for noise alike on every axis), mm."""
+        used = self.pose_residuals if self.used is None else self.pose_residuals[self.used]
+        return rms(used)
 
     @property
     def residual_max(self) -> float:

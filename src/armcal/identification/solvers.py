@@ -265,6 +265,8 @@ def gauss_newton(
     weights: np.ndarray | None,
     threshold: float,
     max_iter: int,
+    *,
+    free: np.ndarray | None = None,
 ) -> Solution:
     """Gauss-Newton over the free parameters, on whitened rows, every active set at once.
 
@@ -275,8 +277,12 @@ def gauss_newton(
     ill-conditioned problem the ``cond(J_w) eps`` of the reach a backward-stable
     solve is accurate to (:data:`ROUND_OFF`).  The result is
     in the model's canonical form (angles in ``(-pi, pi]``).
+
+    ``free`` ``(p,)`` boolean fits only those parameters, every other held where
+    ``params`` has it (default: the model's free ones).
     """
-    free, n_free, dim = model.free, model.n_free, model.point_dim
+    free = model.free if free is None else np.asarray(free, dtype=bool)
+    n_free, dim = int(np.count_nonzero(free)), model.point_dim
     params = np.array(params, dtype=float)
     scale = model.step_scale(conditions)
     n_sets = sets.shape[0]

@@ -46,6 +46,12 @@ class CalibratedArm:
         The instrument noise (1 std, mm) the calibration used.
     plane : Plane or None
         The plane of motion of 3-D data (instrument frame), else None.
+    baseline : ndarray, shape (p_arm,), or None
+        The nominal arm registered on its own to the calibration's rows: the
+        geometric arm's parameters (:attr:`FitModel.arm`), its instrument pose and
+        targets fitted and everything else nominal.  What a user has without
+        calibrating, and what validation compares the calibration with; None for a
+        calibration that did not record it.
 
     Examples
     --------
@@ -59,6 +65,7 @@ class CalibratedArm:
     covariance: np.ndarray
     sigma_mm: float
     plane: Plane | None = None
+    baseline: np.ndarray | None = None
 
     def __repr__(self) -> str:
         where = ", 3-D data in a plane" if self.plane is not None else ""
@@ -88,6 +95,16 @@ class CalibratedArm:
     def instrument_pose_params(self) -> np.ndarray:
         """Only the instrument's parameters, every other 0: the nominal arm where it stood."""
         return np.where(self.robot_mask, 0.0, self.params)
+
+    def baseline_positions(self, conditions: Conditions) -> np.ndarray:
+        """Where the nominal arm registered on its own (:attr:`baseline`) puts the points
+        of ``conditions`` (a rigid arm: loads play no part), mm.
+
+        Raises ValueError for a calibration without a baseline.
+        """
+        if self.baseline is None:
+            raise ValueError("the calibration has no baseline (the nominal arm registered)")
+        return self.model.arm.positions(conditions, self.baseline)
 
     def in_robot_frame(self) -> tuple[FitModel, np.ndarray]:
         """The model and parameters in the robot's own frame (the instrument's pose out)."""

@@ -152,6 +152,11 @@ class ArmEffect:
         return np.concatenate([self.arm.instrument_params, extra])
 
     @property
+    def registration_params(self) -> np.ndarray:
+        extra = np.zeros(self.n_compliance, dtype=bool)
+        return np.concatenate([self.arm.registration_params, extra])
+
+    @property
     def noise(self) -> NoiseModel | None:
         return self.arm.noise
 

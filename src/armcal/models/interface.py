@@ -478,6 +478,14 @@ class FitModel(Protocol):
         ...
 
     @property
+    def registration_params(self) -> np.ndarray:
+        """Boolean ``(p,)``: what registering the nominal arm to measured points fits (the
+        instrument's pose and the targets on the tool), the rest held at nominal: the
+        honest baseline a calibration is judged against
+        (:func:`armcal.identification.register_nominal`)."""
+        ...
+
+    @property
     def noise(self) -> NoiseModel | None: ...
     @property
     def n_joints(self) -> int: ...

@@ -146,6 +146,12 @@ class PlanarArm(RigidLoads, MinimalPlanar, PlanarArmSpec):
         return np.array([name in INSTRUMENT_PARAMS for name in self.param_names])
 
     @property
+    def registration_params(self) -> np.ndarray:
+        """Boolean ``(p,)``: the base pose and, on an arm with several targets, every
+        target's last link (``dl{n}@{t}``, ``dq{n}@{t}``): where the targets sit on the tool."""
+        return self.instrument_params | np.array(["@" in name for name in self.param_names])
+
+    @property
     def point_dim(self) -> int:
         """Measured points are in the plane: 2 coordinates."""
         return 2

@@ -298,6 +298,11 @@ class SpatialArm(RigidLoads):
         return self.layout.instrument
 
     @property
+    def registration_params(self) -> np.ndarray:
+        """The base pose and the targets (:attr:`instrument_params`)."""
+        return self.layout.instrument
+
+    @property
     def n_joints(self) -> int:
         return self.chain.n_joints
 

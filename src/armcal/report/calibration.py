@@ -139,7 +139,8 @@ def format_calibration(cal: Calibration, *, truth: np.ndarray | None = None) -> 
     lines += [
         "",
         f"sigma {cal.sigma_mm:.4g} mm ({cal.sigma_source}); "
-        f"residual RMS {cal.residual_rms:.4g} mm per coordinate, "
+        f"residual RMS {cal.residual_rms:.4g} mm per coordinate "
+        f"({cal.residual_rms_per_point:.4g} mm per point), "
         f"max {cal.residual_max:.4g} mm at pose {cal.pose_labels[worst]}; "
         + _turn_residual(cal)
         + f"{cal.dof} degrees of freedom",
@@ -190,9 +191,11 @@ def effect_lines(cal: Calibration) -> list[str]:
     return out
 
 
-def format_cross_validation(summary: dict) -> str:
-    """One line: the K-fold prediction error against what the calibrations predict."""
-    return (
+def format_cross_validation(summary: dict, per_fold: list[dict] | None = None) -> str:
+    """The K-fold prediction error against what the calibrations predict and against the
+    nominal arm registered on the same training rows; with ``per_fold`` a line a fold."""
+    nominal = summary.get("nominal_rms_per_point_mm")
+    text = (
         f"cross-validation ({summary['folds']} folds): prediction error RMS per point "
         f"{summary['rms_per_point_mm']:.4g} mm (max {summary['max_mm']:.4g} mm); predicted "
         f"{summary['predicted_rms_per_point_mm']:.4g} mm"
@@ -202,4 +205,25 @@ def format_cross_validation(summary: dict) -> str:
             if "orientation_rms_deg" in summary
             else ""
         )
+        + (
+            ""
+            if nominal is None
+            else f"; the nominal arm, registered on its own to the same training rows, "
+            f"{nominal:.4g} mm"
+        )
     )
+    if not per_fold:
+        return text
+    lines = [
+        text,
+        f"{'fold':>6}{'points':>8}{'nominal':>11}{'calibrated':>12}{'predicted':>11}"
+        "   (RMS per point, mm)",
+    ]
+    for entry in per_fold:
+        before = entry["nominal_rms_per_point_mm"]
+        lines.append(
+            f"{entry['fold']:>6}{entry['points']:>8}"
+            + (f"{'-':>11}" if before is None else f"{before:>11.4g}")
+            + f"{entry['rms_per_point_mm']:>12.4g}{entry['predicted_rms_per_point_mm']:>11.4g}"
+        )
+    return "\n".join(lines)

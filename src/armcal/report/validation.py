@@ -32,7 +32,7 @@ def validation_report(
         + (" (3-D, projected into the calibration's plane)" if cal.plane is not None else ""),
         "",
         f"{'position error (mm)':<24}{'RMS':>10}{'95 %':>10}{'max':>10}   (per point)",
-        f"{'nominal model':<24}{s['rms_before_per_point_mm']:>10.4g}"
+        f"{'nominal arm':<24}{s['rms_before_per_point_mm']:>10.4g}"
         f"{s['p95_before_mm']:>10.4g}{s['max_before_mm']:>10.4g}",
         f"{'calibrated model':<24}{s['rms_after_per_point_mm']:>10.4g}"
         f"{s['p95_after_mm']:>10.4g}{s['max_after_mm']:>10.4g}",
@@ -40,13 +40,14 @@ def validation_report(
         "",
         f"predicted = the noise of a measurement and the calibration's own uncertainty "
         f"({s['model_rms_per_point_mm']:.3g} mm RMS per point at these poses)",
+        _baseline_line(result.baseline_rows),
     ]
-    document: dict = {"poses": m, **s}
+    document: dict = {"poses": m, **s, "baseline": result.baseline_rows}
     if result.turns is not None:
         lines[6:6] = [
             "",
             f"{'orientation error (deg)':<24}{'RMS':>10}{'':>10}{'max':>10}   (angle of the turn)",
-            f"{'nominal model':<24}{s['orientation_rms_before_deg']:>10.4g}",
+            f"{'nominal arm':<24}{s['orientation_rms_before_deg']:>10.4g}",
             f"{'calibrated model':<24}{s['orientation_rms_after_deg']:>10.4g}{'':>10}"
             f"{s['orientation_max_after_deg']:>10.4g}",
             f"{'predicted (calibrated)':<24}{s['predicted_orientation_rms_after_deg']:>10.4g}",
@@ -85,6 +86,20 @@ def validation_report(
     return document, "\n".join(lines)
 
 
+def _baseline_line(rows: str) -> str:
+    """What the nominal arm's row is: the arm a user has without calibrating."""
+    if rows == "calibration":
+        return (
+            "nominal arm = the nominal geometry with its own instrument pose and targets, "
+            "fitted on the calibration's rows (what the arm does without calibration)"
+        )
+    return (
+        "nominal arm = the nominal geometry with its own instrument pose and targets, fitted "
+        "on these held-out rows: the calibration file records no baseline of its own rows, so "
+        "this flatters the nominal arm (identify again to record one)"
+    )
+
+
 def acceptance_report(found: PoseCharacteristics) -> tuple[dict, list[str]]:
     """The ISO 9283 section of ``validate --iso9283``: every pose's cycles, pose accuracy
     against the nominal and the calibrated model, and repeatability, and the worst pose."""
@@ -120,9 +135,9 @@ def acceptance_report(found: PoseCharacteristics) -> tuple[dict, list[str]]:
         lines += _orientation_lines(found, poses)
     lines += [
         f"{'worst pose':<25}{s['ap_before_mm']:>11.4g}{s['ap_after_mm']:>10.4g}{s['rp_mm']:>9.4g}",
-        "AP: from the command position (where the nominal, or the calibrated, model puts the "
-        "commanded joints) to the mean attained position (7.2.1); RP = lbar + 3 S_l of the "
-        "attained positions about their mean (7.2.2)",
+        "AP: from the command position (where the nominal arm, registered on its own, or the "
+        "calibrated model puts the commanded joints) to the mean attained position (7.2.1); "
+        "RP = lbar + 3 S_l of the attained positions about their mean (7.2.2)",
     ]
     return {**s, "per_pose": poses}, lines
 

@@ -50,7 +50,7 @@ from ..validation import (
     CrossValidation,
     Validation,
     cross_validate,
-    cross_validation_warning,
+    cross_validation_warnings,
     validate,
     validation_warnings,
 )
@@ -335,9 +335,7 @@ def _cross_validated(
         rng=seed,
         loads=None if conditions is None else conditions.loads,
     )
-    warning = cross_validation_warning(checked)
-    if warning is not None:
-        warnings.append(warning)
+    warnings.extend(cross_validation_warnings(checked))
     return checked
 
 
@@ -465,7 +463,12 @@ def validate_measurements(
         )
     except ArmcalError as exc:
         raise prefixed(source, exc) from None
-    warnings = [*meas.warnings, *_unpredicted(cal, loads, source), *validation_warnings(result)]
+    poses = None if meas.targets is None else np.array(meas.labels)  # a pose's points together
+    warnings = [
+        *meas.warnings,
+        *_unpredicted(cal, loads, source),
+        *validation_warnings(result, poses),
+    ]
     if loads is None and meas.has_loads:  # the rows sag by their loads; the model cannot say
         warnings.append(
             _loads_ignored_warning(

@@ -1,0 +1,264 @@
+"""The nominal arm registered on its own, and whether the instrument moved during a campaign.
+
+**The honest baseline.**  A calibration is worth what it buys over the arm a
+user has without it: the nominal arm, placed in the instrument's frame by
+fitting only where the instrument stands and where the targets sit on the tool
+(the model's :attr:`~armcal.models.interface.FitModel.registration_params`), on
+the same rows.  The *calibrated* instrument pose is no such baseline: it has
+taken up the geometry that merges into it (joint 1's placement and zero into
+the base pose, joint 6's zero and its placement along the axis into the
+targets), so the nominal arm placed there misses by several times what it
+misses when registered on its own.  :func:`register_nominal` fits the baseline:
+Gauss-Newton over the registration alone, from the calibration's own
+registration (a start within the merged geometry of the answer).
+
+**An instrument that moved.**  A tracker nudged, a tripod that settled or a
+base bolted loose during a campaign moves every later point alike, and no
+geometry can take that up: the fit is inconsistent with the noise, and a
+calibration may do worse on held-out poses than the nominal arm.
+:func:`instrument_moved` asks whether the rows before and after a point of the
+campaign (a quarter, half or three quarters of the rows, in the order
+measured) are fitted far better with an instrument pose of their own, the
+calibrated geometry held: an F test of the ``k`` extra registration parameters
+(Bonferroni over the three splits), and a split that takes up at least half of
+the residual sum of squares, so that a model's misfit spread over the poses
+(which a second registration only nibbles at) is not taken for a move.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..models import Conditions, FitModel
+from ..numerics import point_norms, rms
+from .solvers import gauss_newton
+
+__all__ = [
+    "MOVE_ALPHA",
+    "MOVE_SHARE",
+    "MOVE_SPLITS",
+    "Baseline",
+    "Movement",
+    "instrument_moved",
+    "register_nominal",
+]
+
+#: Where the campaign is split, as fractions of its rows in the order measured.
+MOVE_SPLITS = (0.25, 0.5, 0.75)
+
+#: Significance of the F test of a move, over all splits (Bonferroni).
+MOVE_ALPHA = 1e-3
+
+#: The least share of the residual sum of squares a second instrument pose must take
+#: up to be called a move: a misfit spread over the poses (compliance, a wrong
+#: joint map) is fitted a little better by any extra parameters, never by half.
+MOVE_SHARE = 0.5
+
+#: Gauss-Newton's step tolerance (relative to the reach) and iteration cap here.
+_TOL, _MAX_ITER = 1e-10, 30
+
+
+@dataclass(frozen=True, eq=False)
+class Baseline:
+    """The nominal arm registered on its own to measured rows.
+
+    Attributes
+    ----------
+    params : ndarray, shape (p_arm,)
+        The geometric arm's parameters (:attr:`~armcal.models.interface.FitModel.arm`):
+        its registration fitted, every other at nominal; internal units.
+    rms_per_point_mm : float
+        Its residual RMS per point (positions) on the rows fitted, mm.
+    rows : int
+        The rows fitted.
+    """
+
+    params: np.ndarray
+    rms_per_point_mm: float
+    rows: int
+
+    def __repr__(self) -> str:
+        return (
+            f"Baseline(nominal arm registered on {self.rows} rows: RMS per point "
+            f"{self.rms_per_point_mm:.4g} mm)"
+        )
+
+
+def _fit_registration(
+    model: FitModel,
+    conditions: Conditions,
+    points: np.ndarray,
+    start: np.ndarray,
+    free: np.ndarray,
+) -> np.ndarray | None:
+    """``start`` with the parameters ``free`` fitted to ``points`` (None if it fails)."""
+    if not free.any():
+        return start
+    threshold = _TOL * model.reach_mm
+    found = gauss_newton(
+        model, conditions, points[None], start[None], None, threshold, _MAX_ITER, free=free
+    )
+    params = found.params[0]
+    return params if bool(np.all(np.isfinite(params))) else None
+
+
+def register_nominal(
+    model: FitModel,
+    conditions: Conditions,
+    points: np.ndarray,
+    params: np.ndarray,
+    *,
+    used: np.ndarray | None = None,
+) -> Baseline | None:
+    """The nominal arm of ``model`` registered on its own to the rows ``used``.
+
+    Parameters
+    ----------
+    model : FitModel
+        The model calibrated (prepared for these rows); its geometric arm
+        (:attr:`~armcal.models.interface.FitModel.arm`) is registered.
+    conditions : Conditions
+        The rows, anchored as the fit saw them.
+    points : ndarray, shape (m, d)
+        The measured points, anchored as the fit saw them, mm.
+    params : ndarray, shape (p,)
+        The calibration's parameters: its registration is where the fit starts.
+    used : ndarray of bool, shape (m,), optional
+        The rows the calibration kept (default: all).
+
+    Returns
+    -------
+    Baseline or None
+        None when the rows cannot place the nominal arm (the fit fails).
+
+    Examples
+    --------
+    >>> from armcal.models import PlanarArm, forward_kinematics
+    >>> arm = PlanarArm([260.0, 180.0], base_offset=True)
+    >>> q = np.radians([[0, 0], [0, 90], [90, 90], [45, -120], [-60, 30]])
+    >>> truth = np.array([1.5, -0.6, 0.01, -0.01, 100.0, 50.0])
+    >>> rows = arm.conditions(q)
+    >>> found = register_nominal(arm, rows, forward_kinematics(arm, q, truth), truth)
+    >>> found.params[:4].tolist(), bool(found.rms_per_point_mm > 1.0)
+    ([0.0, 0.0, 0.0, 0.0], True)
+    """
+    arm = model.arm
+    free = np.asarray(arm.registration_params, dtype=bool)
+    start = np.where(free, model.arm_params(np.asarray(params, dtype=float)), arm.held_values)
+    used = np.ones(conditions.m, dtype=bool) if used is None else np.asarray(used, dtype=bool)
+    rows = conditions if used.all() else conditions.take(used)
+    kept = np.asarray(points, dtype=float)[used]
+    fitted = _fit_registration(arm, rows, kept, start, free)
+    if fitted is None:
+        return None
+    d = arm.position_dim
+    miss = point_norms((kept - arm.positions(rows, fitted))[:, :d])
+    return Baseline(fitted, rms(miss), int(np.count_nonzero(used)))
+
+
+@dataclass(frozen=True)
+class Movement:
+    """The instrument (or the arm's base) moved between two parts of a campaign.
+
+    Attributes
+    ----------
+    split : int
+        The index of the first row (in the order measured) after the move.
+    shift_mm : float
+        RMS per point of how far the two parts' instrument poses put the rows apart, mm.
+    explained : float
+        The share of the residual sum of squares a pose of each part takes up.
+    p_value : float
+        The F test's, Bonferroni-corrected over the splits tried.
+    """
+
+    split: int
+    shift_mm: float
+    explained: float
+    p_value: float
+
+
+def _whitened_rss(
+    model: FitModel, conditions: Conditions, points: np.ndarray, params: np.ndarray
+) -> float:
+    """The residual sum of squares of ``params`` on the rows, whitened as the fit is."""
+    residual = points - model.positions(conditions, params)
+    w = model.whitening(conditions, params)
+    if w is not None:
+        residual = (w @ residual[..., None])[..., 0]
+    return float(np.sum(residual**2))
+
+
+def instrument_moved(
+    model: FitModel,
+    conditions: Conditions,
+    points: np.ndarray,
+    params: np.ndarray,
+    *,
+    used: np.ndarray | None = None,
+) -> Movement | None:
+    """Whether the rows before and after some point were measured from another instrument pose.
+
+    Parameters
+    ----------
+    model, conditions, points, params
+        The calibrated (prepared) model, its anchored rows and points, and the
+        fitted parameters, whose geometry is held.
+    used : ndarray of bool, shape (m,), optional
+        The rows in the fit.
+
+    Returns
+    -------
+    Movement or None
+        The split that explains the most, when it passes both tests (module
+        notes); None otherwise, or when the parts are too small to tell.
+    """
+    points = np.asarray(points, dtype=float)
+    m = conditions.m
+    used = np.ones(m, dtype=bool) if used is None else np.asarray(used, dtype=bool)
+    free = np.asarray(model.registration_params, dtype=bool) & np.asarray(model.free)
+    k = int(np.count_nonzero(free))
+    d = model.point_dim
+    rows = np.flatnonzero(used)
+    residual_dof = d * rows.size - model.n_free - k
+    if k == 0 or residual_dof <= 0:
+        return None
+    whole = conditions.take(rows)
+    total = _whitened_rss(model, whole, points[rows], params)
+    if total <= 0:
+        return None
+    best: Movement | None = None
+    for fraction in MOVE_SPLITS:
+        split = round(fraction * rows.size)
+        parts = (rows[:split], rows[split:])
+        if min(d * part.size for part in parts) <= 2 * k:  # a part too small to place
+            continue
+        fits = []
+        for part in parts:
+            rows_of = conditions.take(part)
+            fitted = _fit_registration(model, rows_of, points[part], params, free)
+            if fitted is None:
+                break
+            fits.append((rows_of, part, fitted))
+        if len(fits) < 2:
+            continue
+        split_rss = sum(_whitened_rss(model, c, points[p], f) for c, p, f in fits)
+        explained = 1.0 - split_rss / total
+        if split_rss <= 0:
+            p_value = 0.0
+        else:
+            statistic = ((total - split_rss) / k) / (split_rss / residual_dof)
+            from scipy import special  # on use, and not scipy.stats (slow to import)
+
+            p_value = float(special.fdtrc(k, residual_dof, statistic)) * len(MOVE_SPLITS)
+        if p_value >= MOVE_ALPHA or explained < MOVE_SHARE:
+            continue
+        (_, _, first), (_, _, second) = fits
+        apart = model.positions(whole, first) - model.positions(whole, second)
+        shift = rms(point_norms(apart[:, : model.position_dim]))
+        found = Movement(int(rows[split]), shift, float(explained), min(p_value, 1.0))
+        if best is None or found.explained > best.explained:
+            best = found
+    return best
