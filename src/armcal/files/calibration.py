@@ -12,6 +12,7 @@ import json
 import math
 import os
 from collections.abc import Mapping, Sequence
+from dataclasses import replace
 from typing import Any
 
 import numpy as np
@@ -34,6 +35,7 @@ from ..models import (
     SerialElastics,
     SpatialArm,
     Target,
+    TermChoice,
 )
 from ..noise import NoiseModel, TrackerNoise
 from .common import fail, read_text
@@ -233,12 +235,12 @@ def read_calibration(path: str | os.PathLike) -> CalibratedArm:
         arm: PlanarArm | SpatialArm = (
             _serial_from_dict(doc["robot"], noise, fixed)
             if serial
-            else _arm_from_dict(doc["robot"], noise, fixed)
+            else _arm_from_dict(doc["robot"], noise, [n for n in fixed if n not in _terms(doc)])
         )
         model: FitModel = arm
         if doc.get("elastostatic") is not None:
             key = "elastostatic"
-            model = _compliance_from_dict(arm, doc["elastostatic"])
+            model = _compliance_from_dict(arm, doc["elastostatic"], fixed)
         key = "parameters"
         names = [entry["name"] for entry in doc["parameters"]]
         expected = model.param_names
@@ -275,14 +277,24 @@ def read_calibration(path: str | os.PathLike) -> CalibratedArm:
     return CalibratedArm(model, values, full, sigma, plane)
 
 
+def _terms(doc: dict[str, Any]) -> list[str]:
+    """The compliance terms of a calibration file (none without an ``elastostatic`` section)."""
+    section = doc.get("elastostatic")
+    return [] if not isinstance(section, dict) else list(section.get("parameters", []))
+
+
 def _compliance_from_dict(
-    arm: PlanarArm | SpatialArm, data: dict[str, Any]
+    arm: PlanarArm | SpatialArm, data: dict[str, Any], fixed: Sequence[str]
 ) -> CompliantArm | CompliantSerialArm:
-    """The compliance model of a calibration file's ``elastostatic`` section."""
+    """The compliance model of a calibration file's ``elastostatic`` section; of the terms
+    ``fixed`` lists, those the rule did not hold (``held``) the user held."""
+    rule = set(data.get("held", []))
+    terms = data.get("parameters", [])  # older planar files: none held
+    user = TermChoice(fixed=tuple(n for n in fixed if n in terms and n not in rule))
     if isinstance(arm, SpatialArm):
         serial = CompliantSerialArm(
             arm,
-            SerialElastics.from_dict(data, arm.n_joints),
+            replace(SerialElastics.from_dict(data, arm.n_joints), terms=user),
             bool(data["known_loads"]),
             tuple(str(name) for name in data["held"]),
             tuple(str(text) for text in data["merges"]),
@@ -299,6 +311,7 @@ def _compliance_from_dict(
         None if masses is None else np.array(masses, dtype=float).reshape(arm.n_joints),
         np.array(data["com_fraction"], dtype=float).reshape(arm.n_joints),
         float(data["payload_kg"]),
+        user,
     )
     model = CompliantArm(arm, elastic, bool(data["known_loads"]))
     if list(data.get("parameters", model.compliance_names)) != list(model.compliance_names):

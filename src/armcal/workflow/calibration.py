@@ -54,7 +54,7 @@ from ..validation import (
     validate,
     validation_warnings,
 )
-from .setup import FixError, fit_model, model_arm, prefixed
+from .setup import FixError, fit_model, model_spec, prefixed
 
 __all__ = [
     "CalibrationRun",
@@ -236,7 +236,8 @@ def calibrate(
     source : str
         The measurement file's name, for error messages.
     fixed : tuple of str, optional
-        Parameters held at nominal, replacing the robot file's set.
+        Parameters held at nominal, replacing the robot file's set: the arm's, and
+        the joint compliance's terms held at zero.
     sigma : float, optional
         Isotropic instrument noise (mm), replacing the robot file's and any
         ``sigma_mm`` column.
@@ -266,8 +267,8 @@ def calibrate(
         structure = measured_arm(spec.arm, meas)
     except InputError as exc:
         raise prefixed(source, exc) from None
-    arm = model_arm(structure, fixed=fixed, sigma=sigma)
     spec, meas, ignored = _as_asked(spec, meas, source, sigma, compliance)
+    spec, arm = model_spec(spec, structure, fixed=fixed, sigma=sigma)
     cal = _identify_file(spec, arm, source, meas, method=method, robust=robust)
     large = deviation_warning(cal.arm, cal.model.arm_params(cal.params))
     points = None
@@ -397,7 +398,7 @@ def calibrate_serial(
     """
     spec, meas, ignored = _as_asked(spec, meas, source, sigma, compliance)
     try:
-        arm = model_arm(serial_arm(spec.arm, meas), fixed=fixed, sigma=sigma)
+        spec, arm = model_spec(spec, serial_arm(spec.arm, meas), fixed=fixed, sigma=sigma)
         points = meas.instrument_points  # 3-D: serial_arm refuses data without z_mm
         index = None if meas.targets is None else arm.target_index(meas.targets)
         loads = None if spec.elastic is None else meas.loads(spec.elastic.payload_kg)
