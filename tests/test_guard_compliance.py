@@ -13,6 +13,11 @@ References independent of the code under test:
   joint 2 as a mass of ``200 - 400 = -200`` kg there would (joint 3's origin is on no
   axis beyond joint 2, and joint 1 is vertical), so the lumped weight at joint 3,
   ``c2.j3 = k2 m g``, is ``0.2e-6 * -200 * 9.80665`` rad/m: -22.5 mdeg/m;
+* a planar arm's points are ``sum_i l_i exp(i theta_i)`` (complex notation), and a
+  joint's twist under gravity is ``k_j tau_j`` with ``tau_j = -g sum_i m_i x_i`` over
+  the centres of mass beyond joint ``j`` (lever arms in m, gravity along ``-y``);
+* a registration is checked against :func:`scipy.optimize.least_squares`, another solver
+  of the same least-squares problem.
 """
 
 from __future__ import annotations
@@ -22,7 +27,9 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from scipy.optimize import least_squares
 
+from armcal.export_rigid import rigid_export
 from armcal.files import (
     load_robot,
     load_serial_robot,
@@ -33,12 +40,17 @@ from armcal.files import (
 from armcal.identification import identify
 from armcal.models import (
     STANDARD_GRAVITY,
+    CalibratedArm,
     CompliantArm,
     CompliantSerialArm,
+    Conditions,
+    Elastostatic,
     LinkMasses,
     Loads,
+    PlanarArm,
     SerialElastics,
 )
+from armcal.workflow import export_files
 from helpers import run_cli
 
 # -- a planar vertical arm with its masses known ----------------------------------------
@@ -371,6 +383,131 @@ def test_a_balancer_the_model_lacks_gives_a_negative_weight_and_a_warning():
     )
     assert held["c2.j3"].value == 0.0 and held["c2.j3"].fixed
     assert "c2.j3 = " not in " ".join(w.message for w in held.warnings)
+
+
+# -- what a rigid export loses ---------------------------------------------------------
+
+
+def test_the_rigid_export_figures_equal_an_independent_computation(tmp_path):
+    _six_axis_cell(tmp_path)
+    _identify(tmp_path, "cell.toml")
+    doc = json.loads((tmp_path / "cal.json").read_text())
+    stored = doc["elastostatic"]["rows"]
+    # the rows stored are the measurement file's (readings in rad), every target's
+    header = (tmp_path / "meas.csv").read_text().splitlines()[0].split(",")
+    columns = [header.index(f"q{j}_deg") for j in range(1, 7)]
+    meas = np.loadtxt(tmp_path / "meas.csv", delimiter=",", skiprows=1, usecols=columns)
+    np.testing.assert_allclose(stored["q"], np.radians(meas), rtol=0, atol=1e-12)
+    assert len(stored["payload_kg"]) == meas.shape[0] == 90
+    cal = read_calibration(tmp_path / "cal.json")
+    rows = Conditions(
+        np.array(stored["q"]), np.array(stored["target"]), Loads.create(90, stored["payload_kg"])
+    )
+    model, arm = cal.model, cal.model.nested
+    compliant = model.positions(rows, cal.params)
+    geometry = model.arm_params(cal.params)
+    distance = np.linalg.norm(compliant - arm.positions(rows, geometry), axis=1)
+    lost = rigid_export(cal)
+    assert lost is not None and lost.rows == 90
+    assert lost.rms_per_point_mm == pytest.approx(np.sqrt(np.mean(distance**2)), rel=1e-12)
+    assert lost.max_mm == pytest.approx(np.max(distance), rel=1e-12)
+
+    def registered(start: np.ndarray) -> np.ndarray:
+        """Distances after fitting the instrument's free parameters by another solver."""
+        free = np.flatnonzero(arm.instrument_params & arm.free)
+
+        def miss(x):
+            p = start.copy()
+            p[free] = x
+            return (compliant - arm.positions(rows, p)).ravel()
+
+        found = least_squares(miss, start[free], xtol=1e-15, ftol=1e-15, gtol=1e-15)
+        return np.linalg.norm(found.fun.reshape(-1, 3), axis=1)
+
+    again = registered(geometry)
+    nominal = registered(np.where(arm.instrument_params, geometry, 0.0))
+    # both solvers stop at the least-squares minimum, where the RMS is flat: they agree to
+    # 1e-13 of it (measured), the max (first order in the parameters) to 2e-7
+    assert lost.registered_rms_per_point_mm == pytest.approx(np.sqrt(np.mean(again**2)), rel=1e-9)
+    assert lost.nominal_rms_per_point_mm == pytest.approx(np.sqrt(np.mean(nominal**2)), rel=1e-9)
+    assert lost.registered_max_mm == pytest.approx(np.max(again), rel=1e-5)
+    assert lost.nominal_max_mm == pytest.approx(np.max(nominal), rel=1e-5)
+    # the command says it, in mm per point, in the text and the JSON
+    run = run_cli(tmp_path, "export", "--calibration", "cal.json", "--urdf", "out.urdf", "--json")
+    assert run.returncode == 0, run.stderr
+    shown = json.loads(run.stdout)["rigid_export"]
+    assert shown["rms_per_point_mm"] == pytest.approx(lost.rms_per_point_mm, rel=1e-12)
+    assert f"by {lost.rms_per_point_mm:.3g} mm RMS per point (max {lost.max_mm:.3g} mm)" in (
+        run.stderr
+    )
+    assert f"nominal arm so fitted misses them by {lost.nominal_rms_per_point_mm:.3g} mm" in (
+        run.stderr
+    )
+    # this cell's geometry (j2.y and dq3 off nominal) exported rigid still beats the nominal
+    assert not shown["worse_than_nominal"] and "rigid-export-worse" not in run.stderr
+
+
+def _planar_points(lengths, theta: np.ndarray) -> np.ndarray:
+    """A planar arm's tip ``(m, 2)`` at absolute link angles ``theta`` ``(m, n)``."""
+    tip = np.sum(np.asarray(lengths) * np.exp(1j * theta), axis=1)
+    return np.column_stack([tip.real, tip.imag])
+
+
+def test_a_rigid_export_worse_than_the_nominal_arm_says_so():
+    """A joint zero that holds the opposite of the mean sag: the compliant model is near the
+    nominal arm, the exported geometry (the zero without the sag) is not."""
+    arm = PlanarArm([500.0, 300.0])
+    elastic = Elastostatic.create(2, gravity_xy=[0, -1], link_masses_kg=[10.0, 4.0])
+    model = CompliantArm.for_loads(arm, elastic, Loads.create(1))
+    q = np.radians(np.stack(np.meshgrid(np.linspace(-10, 10, 5), np.linspace(-10, 10, 5)), -1))
+    q = q.reshape(-1, 2)
+    k1, zero = 2e-6, 1e-4  # rad/(N m), rad: the sag of the level arm is -1.0e-4 rad
+    params = np.array([0.0, 0.0, zero, 0.0, k1, 0.0])
+    rows = model.conditions(q)
+    cal = CalibratedArm(model, params, np.zeros((6, 6)), 0.02, training_rows=rows)
+    # by hand: the torque on joint 1 of the arm at q + zero (module notes), its twist
+    a1, a12 = q[:, 0] + zero, q[:, 0] + zero + q[:, 1]
+    lever = 10 * 0.25 * np.cos(a1) + 4 * (0.5 * np.cos(a1) + 0.15 * np.cos(a12))  # kg m
+    twist = k1 * -STANDARD_GRAVITY * lever
+    compliant = _planar_points([500, 300], np.column_stack([a1 + twist, a12 + twist]))
+    rigid = _planar_points([500, 300], np.column_stack([a1, a12]))
+    nominal = _planar_points([500, 300], np.column_stack([q[:, 0], q.sum(axis=1)]))
+    lost = rigid_export(cal)
+    assert lost is not None
+    # no instrument pose to fit (2-D data, no base offset): registered = as calibrated
+    rigid_rms = np.sqrt(np.mean(np.sum((compliant - rigid) ** 2, axis=1)))
+    nominal_rms = np.sqrt(np.mean(np.sum((compliant - nominal) ** 2, axis=1)))
+    assert lost.rms_per_point_mm == pytest.approx(rigid_rms, rel=1e-9)
+    assert lost.registered_rms_per_point_mm == pytest.approx(rigid_rms, rel=1e-9)
+    assert lost.nominal_rms_per_point_mm == pytest.approx(nominal_rms, rel=1e-9)
+    assert rigid_rms > 10 * nominal_rms  # 0.079 mm against 0.0008 mm, the sag's change
+    run = export_files(cal, robot_toml_path="out.toml")
+    codes = [w.code for w in run.warnings]
+    assert codes == ["compliance-not-exported", "rigid-export-worse"]
+    worse = run.warnings[1].message
+    assert "WORSE than the nominal arm" in worse
+    assert f"{rigid_rms:.3g} mm against {nominal_rms:.3g} mm RMS per point" in worse
+    assert "fit the geometry alone" in worse
+
+
+def test_a_calibration_file_without_rows_exports_without_the_figure(tmp_path):
+    _planar_cell(tmp_path)
+    _identify(tmp_path, "robot.toml")
+    doc = json.loads((tmp_path / "cal.json").read_text())
+    assert len(doc["elastostatic"]["rows"]["q"]) == 40
+    del doc["elastostatic"]["rows"]  # a file written before the rows were stored
+    (tmp_path / "old.json").write_text(json.dumps(doc))
+    run = run_cli(
+        tmp_path, "export", "--calibration", "old.json", "--robot-toml", "r.toml", "--json"
+    )
+    assert run.returncode == 0, run.stderr
+    assert "rigid_export" not in json.loads(run.stdout)
+    assert "compliance-not-exported" in run.stdout
+    rows = {"q": [[0, 0]], "target": None, "payload_kg": [0.0], "force_n": None}  # 2 of 3 joints
+    bad = dict(doc, elastostatic=dict(doc["elastostatic"], rows=rows))
+    (tmp_path / "bad.json").write_text(json.dumps(bad))
+    run = run_cli(tmp_path, "export", "--calibration", "bad.json", "--robot-toml", "r.toml")
+    assert run.returncode == 2 and "key 'elastostatic'" in run.stderr, run.stderr
 
 
 # -- the unit of every RMS the compliance paths print -----------------------------------

@@ -517,6 +517,8 @@ def export(args: argparse.Namespace) -> None:
         "ur_calibration": args.ur_calibration,
         "ros_calibration": args.ros_calibration,
     }
+    if run.rigid is not None:
+        document["rigid_export"] = run.rigid.to_dict()
     emit(args, document, "\n".join(f"wrote {path}" for path in run.texts), run.warnings)
 
 

@@ -178,7 +178,12 @@ class Calibration:
 
     def calibrated(self) -> CalibratedArm:
         """The model with these parameters, for validation, compensation and export."""
-        return CalibratedArm(self.model, self.params, self.covariance, self.sigma_mm, self.plane)
+        rows = self.conditions
+        if rows is not None and self.used is not None:
+            rows = rows.take(np.asarray(self.used, dtype=bool))
+        return CalibratedArm(
+            self.model, self.params, self.covariance, self.sigma_mm, self.plane, rows
+        )
 
     def __getitem__(self, name: str) -> Estimate:
         """A parameter by name, in display units: ``cal["dl1"]``."""

@@ -32,6 +32,7 @@ from ..errors import (
     unique_warnings,
 )
 from ..export import robot_toml, urdf, urdf_joints_are_readings
+from ..export_rigid import RigidExport, rigid_export, rigid_export_warnings
 from ..export_serial import joint_offsets_csv, serial_robot_toml, serial_urdf
 from ..files import Measurements, Program, RobotSpec, SerialSpec
 from ..files.ur import (
@@ -587,6 +588,7 @@ class ExportRun:
 
     texts: dict[str, str]
     warnings: tuple[ArmcalWarning, ...]
+    rigid: RigidExport | None = None
 
 
 def _ur_arm(cal: CalibratedArm, path: str) -> tuple[SerialChain, str, UrDh]:
@@ -645,7 +647,10 @@ def export_files(
 
     ``urdf-joint-values`` when the URDF's joint values are not the controller's
     readings (coupled axes), ``offsets-only`` for the offsets (the geometry is not
-    in them), and a warning that a model's effect (joint compliance) is in no file.
+    in them), and a warning that a model's effect (joint compliance) is in no file,
+    with what the rigid geometry loses on the calibration's rows (``rigid``,
+    :func:`armcal.export_rigid.rigid_export`; ``rigid-export-worse`` when it fits
+    them worse than the nominal arm).
     """
     serial = isinstance(cal.arm, SpatialArm)  # the file formats differ by family
     texts: dict[str, str] = {}
@@ -679,24 +684,6 @@ def export_files(
                     "publishing joint_states (see the file's comment)",
                 )
             )
-    model, effect, inner = cal.model, cal.model.effect, cal.model.nested
-    if effect is not None and inner is not None:
-        extra = slice(inner.n_params, None)
-        values = ", ".join(
-            f"{name} = {v:.4g} {unit}"
-            for name, unit, v in zip(
-                model.param_names[extra],
-                model.param_units[extra],
-                cal.params[extra] * model.display_scale[extra],
-                strict=True,
-            )
-        )
-        warnings.append(
-            ArmcalWarning(
-                f"{effect.short}-not-exported",
-                f"the exported {effect.nested} is rigid: the {effect.name} ({values}) is not "
-                "part of a robot file or URDF; compensate programs with armcal compensate, "
-                "which uses it",
-            )
-        )
-    return ExportRun(texts, tuple(warnings))
+    loss = rigid_export(cal)
+    warnings += rigid_export_warnings(cal, loss)
+    return ExportRun(texts, tuple(warnings), loss)
