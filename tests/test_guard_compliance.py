@@ -115,6 +115,7 @@ def _held_by_the_user(run, doc: dict, folder: Path, name: str) -> None:
     cal = read_calibration(folder / "cal.json")
     i = cal.model.param_names.index(name)
     assert not cal.model.free[i] and cal.params[i] == 0.0 and name in cal.model.fixed
+    assert name not in cal.model.free_names
 
 
 @pytest.mark.parametrize("how", ["robot file", "--fix"])
