@@ -206,8 +206,8 @@ def format_check(check: ComplianceCheck) -> str:
         f"{', '.join(w.code for w in fit.warnings) or 'none'}",
         f"held-out poses (200, payload 0 or {PAYLOAD_KG:g} kg): "
         f"RMS {check.validation_rms_mm:.4f} mm per point "
-        f"with compliance (predicted {check.validation_predicted_mm:.4f} mm), "
-        f"{check.validation_rigid_mm:.4f} mm with the geometry-only fit",
+        f"with compliance (predicted {check.validation_predicted_mm:.4f} mm per point), "
+        f"{check.validation_rigid_mm:.4f} mm per point with the geometry-only fit",
         "",
         f"{'parameter':<10}{'truth':>10}{'fit':>11}{'± std':>10}{'err/std':>9}"
         f"{'MC std/pred':>13}{'MC bias/limit':>15}{'design std':>12}{'random std':>12}  unit",

@@ -40,6 +40,8 @@ ACTIONS: dict[str, str] = {
     "try-closed-form": 'try the closed form (method="closed-form")',
     "geometry-alone": "fit the geometry alone (the model without compliance)",
     "geometry-only": "a fit without compliance (compliance=False) fits the geometry only",
+    "hold-terms": "fixed = [...] in the robot file's [identify] table, or calibrate(..., "
+    "fixed=...)",
     "design": "(armcal.design)",
 }
 

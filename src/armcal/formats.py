@@ -136,14 +136,16 @@ ROBOT_KEYS: tuple[Key, ...] = (
         "fixed",
         "list of parameter names",
         "none: all free",
-        "parameters held at nominal (e.g. ['dl4', 'dq1'])",
+        "parameters held at nominal (e.g. ['dl4', 'dq1']); with [elastostatic] also "
+        "compliance terms, held at zero (e.g. 'k3')",
     ),
     Key(
         "identify",
         "free",
         "list of parameter names",
         "all",
-        "the only parameters identified (instead of fixed)",
+        "the only parameters identified (instead of fixed); geometry and compliance "
+        "terms are each governed only when the list names one of their kind",
     ),
     Key(
         "targets",
@@ -322,8 +324,23 @@ SERIAL_KEYS: tuple[Key, ...] = (
         "a reflector's nominal position, and the way it faces (for acceptance_deg); "
         "measurements name it in a target column",
     ),
-    Key("identify", "fixed", "list of parameter names", "none", "parameters held at nominal"),
-    Key("identify", "free", "list of parameter names", "all", "the only parameters identified"),
+    Key(
+        "identify",
+        "fixed",
+        "list of parameter names",
+        "none",
+        "parameters held at nominal; with [elastostatic] also compliance terms "
+        "(c2.j3, k4), held at zero",
+    ),
+    Key(
+        "identify",
+        "free",
+        "list of parameter names",
+        "all",
+        "the only parameters identified; geometry and compliance terms are each governed "
+        "only when the list names one of their kind, and a term the rows cannot identify "
+        "is refused",
+    ),
     Key(
         "ur",
         "model",

@@ -76,7 +76,7 @@ from ..workflow import (
     design_sigma,
     evaluate_file,
     export_files,
-    model_arm,
+    model_spec,
     plan_model,
     simulate_plan,
     simulation_sigma,
@@ -112,11 +112,14 @@ REQUIREMENT_OPTIONS = {
 }
 
 
-def _model(args: argparse.Namespace, spec: RobotSpec | SerialSpec) -> PlanarArm | SpatialArm:
-    """The robot's arm with ``--fix`` (replacing the file's set) and ``--sigma`` applied."""
+def _model(
+    args: argparse.Namespace, spec: RobotSpec | SerialSpec
+) -> tuple[RobotSpec | SerialSpec, PlanarArm | SpatialArm]:
+    """The robot file and its arm with ``--fix`` (replacing the file's set, the arm's and
+    the compliance's) and ``--sigma`` applied."""
     fixed = getattr(args, "fix", None)
     try:
-        return model_arm(spec.arm, fixed=fixed, sigma=getattr(args, "sigma", None))
+        return model_spec(spec, spec.arm, fixed=fixed, sigma=getattr(args, "sigma", None))
     except FixError as exc:
         raise ArmcalError(f"--fix: {exc}") from None
 
@@ -322,8 +325,7 @@ def compensate(args: argparse.Namespace) -> None:
 
 def design(args: argparse.Namespace) -> None:
     """``armcal design``: an optimal plan, its quality and its picture."""
-    spec = load_any_robot(args.robot)
-    arm = _model(args, spec)
+    spec, arm = _model(args, load_any_robot(args.robot))
     candidates = None if args.candidates is None else read_plan(args.candidates, spec.arm)
     run = design_plan(
         spec,
@@ -369,8 +371,7 @@ def design(args: argparse.Namespace) -> None:
 
 def evaluate(args: argparse.Namespace) -> None:
     """``armcal evaluate``: a plan's quality."""
-    spec = load_any_robot(args.robot)
-    arm = _model(args, spec)
+    spec, arm = _model(args, load_any_robot(args.robot))
     q, payload = _plan(args.plan, spec)
     run = evaluate_file(
         spec, arm, q, test_q=_test_poses(args, spec), payload=payload, source=args.plan
@@ -380,8 +381,7 @@ def evaluate(args: argparse.Namespace) -> None:
 
 def simulate(args: argparse.Namespace) -> None:
     """``armcal simulate``: a Monte Carlo of a plan."""
-    spec = load_any_robot(args.robot)
-    arm = _model(args, spec)
+    spec, arm = _model(args, load_any_robot(args.robot))
     q, payload = _plan(args.plan, spec)
     model, loads = plan_model(spec, arm, q.shape[0], payload)
     truth = _truth(args, spec, model)
@@ -408,7 +408,7 @@ def simulate(args: argparse.Namespace) -> None:
 def poses_needed(args: argparse.Namespace) -> None:
     """``armcal poses-needed``: the smallest plan that reaches an accuracy."""
     spec = load_any_robot(args.robot)
-    arm = _model(args, spec) if spec.elastic is None else spec.arm
+    arm = _model(args, spec)[1] if spec.elastic is None else spec.arm
     requirement = next(key for key in REQUIREMENT_OPTIONS if getattr(args, key) is not None)
     found, seconds = size_plan(
         spec,
@@ -518,6 +518,8 @@ def export(args: argparse.Namespace) -> None:
         "ur_calibration": args.ur_calibration,
         "ros_calibration": args.ros_calibration,
     }
+    if run.rigid is not None:
+        document["rigid_export"] = run.rigid.to_dict()
     emit(args, document, "\n".join(f"wrote {path}" for path in run.texts), run.warnings)
 
 

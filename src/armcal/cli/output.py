@@ -27,6 +27,7 @@ CLI_ACTIONS = {
     "try-closed-form": "try --method closed-form",
     "geometry-alone": "fit the geometry alone (--no-compliance)",
     "geometry-only": "--no-compliance fits the geometry only",
+    "hold-terms": "--fix NAME, or fixed = [...] in the robot file's [identify] table",
     "design": "(armcal design)",
 }
 

@@ -12,6 +12,7 @@ import json
 import math
 import os
 from collections.abc import Mapping, Sequence
+from dataclasses import replace
 from typing import Any
 
 import numpy as np
@@ -25,8 +26,10 @@ from ..models import (
     CalibratedArm,
     CompliantArm,
     CompliantSerialArm,
+    Conditions,
     Elastostatic,
     FitModel,
+    Loads,
     PlanarArm,
     Plane,
     Region,
@@ -34,6 +37,7 @@ from ..models import (
     SerialElastics,
     SpatialArm,
     Target,
+    TermChoice,
 )
 from ..noise import NoiseModel, TrackerNoise
 from .common import fail, read_text
@@ -233,12 +237,16 @@ def read_calibration(path: str | os.PathLike) -> CalibratedArm:
         arm: PlanarArm | SpatialArm = (
             _serial_from_dict(doc["robot"], noise, fixed)
             if serial
-            else _arm_from_dict(doc["robot"], noise, fixed)
+            else _arm_from_dict(doc["robot"], noise, [n for n in fixed if n not in _terms(doc)])
         )
         model: FitModel = arm
+        rows = None
         if doc.get("elastostatic") is not None:
             key = "elastostatic"
-            model = _compliance_from_dict(arm, doc["elastostatic"])
+            model = _compliance_from_dict(arm, doc["elastostatic"], fixed)
+            rows = _rows_from_dict(
+                doc["elastostatic"].get("rows"), arm.n_joints, len(arm.target_labels)
+            )
         key = "parameters"
         names = [entry["name"] for entry in doc["parameters"]]
         expected = model.param_names
@@ -274,17 +282,29 @@ def read_calibration(path: str | os.PathLike) -> CalibratedArm:
         raise fail(path, "key 'parameters': values must be finite numbers")
     if plane is None and isinstance(arm, PlanarArm) and arm.base_rotation:
         raise fail(path, "key 'plane': a calibration from 3-D data must record its plane")
-    return CalibratedArm(model, values, full, sigma, plane, baseline)
+    if rows is not None and not np.all(np.isfinite(rows.q)):
+        raise fail(path, "key 'elastostatic.rows': joint readings must be finite numbers")
+    return CalibratedArm(model, values, full, sigma, plane, rows, baseline)
+
+
+def _terms(doc: dict[str, Any]) -> list[str]:
+    """The compliance terms of a calibration file (none without an ``elastostatic`` section)."""
+    section = doc.get("elastostatic")
+    return [] if not isinstance(section, dict) else list(section.get("parameters", []))
 
 
 def _compliance_from_dict(
-    arm: PlanarArm | SpatialArm, data: dict[str, Any]
+    arm: PlanarArm | SpatialArm, data: dict[str, Any], fixed: Sequence[str]
 ) -> CompliantArm | CompliantSerialArm:
-    """The compliance model of a calibration file's ``elastostatic`` section."""
+    """The compliance model of a calibration file's ``elastostatic`` section; of the terms
+    ``fixed`` lists, those the rule did not hold (``held``) the user held."""
+    rule = set(data.get("held", []))
+    terms = data.get("parameters", [])  # older planar files: none held
+    user = TermChoice(fixed=tuple(n for n in fixed if n in terms and n not in rule))
     if isinstance(arm, SpatialArm):
         serial = CompliantSerialArm(
             arm,
-            SerialElastics.from_dict(data, arm.n_joints),
+            replace(SerialElastics.from_dict(data, arm.n_joints), terms=user),
             bool(data["known_loads"]),
             tuple(str(name) for name in data["held"]),
             tuple(str(text) for text in data["merges"]),
@@ -301,6 +321,7 @@ def _compliance_from_dict(
         None if masses is None else np.array(masses, dtype=float).reshape(arm.n_joints),
         np.array(data["com_fraction"], dtype=float).reshape(arm.n_joints),
         float(data["payload_kg"]),
+        user,
     )
     model = CompliantArm(arm, elastic, bool(data["known_loads"]))
     if list(data.get("parameters", model.compliance_names)) != list(model.compliance_names):
@@ -315,8 +336,42 @@ def _finite_or_none(value: float | None) -> float | None:
     return float(value)
 
 
+def _rows_dict(cal: Calibration) -> dict[str, Any] | None:
+    """The rows the fit used, compactly: joint readings ``q`` (rad, mm for a prismatic
+    joint), target indices and loads (what a rigid export is judged on,
+    :func:`armcal.export_rigid.rigid_export`)."""
+    rows = cal.calibrated().training_rows
+    if rows is None:
+        return None
+    loads = rows.loads
+    return {
+        "q": np.asarray(rows.q, dtype=float).tolist(),
+        "target": None if rows.target is None else rows.target.tolist(),
+        "payload_kg": None if loads is None else loads.payload_kg.tolist(),
+        "force_n": None if loads is None or not np.any(loads.force_n) else loads.force_n.tolist(),
+    }
+
+
+def _rows_from_dict(data: dict[str, Any] | None, n: int, targets: int) -> Conditions | None:
+    """The rows of :func:`_rows_dict` of an arm of ``n`` joints and ``targets`` target
+    labels (None when the file has none)."""
+    if data is None:
+        return None
+    q = np.array(data["q"], dtype=float).reshape(-1, n)
+    m = q.shape[0]
+    target = None if data["target"] is None else np.array(data["target"], dtype=int).reshape(m)
+    if target is not None and np.any((target < 0) | (target >= targets)):
+        raise ValueError(f"rows: target indices must lie in 0..{targets - 1}")
+    loads = None
+    if data["payload_kg"] is not None:
+        force = None if data["force_n"] is None else np.array(data["force_n"], dtype=float)
+        loads = Loads.create(m, np.array(data["payload_kg"], dtype=float), force)
+    return Conditions(q, target, loads)
+
+
 def _elastostatic_dict(cal: Calibration) -> dict | None:
-    """The loads model of a fit with compliance, enough to rebuild it (gravity in m/s^2)."""
+    """The loads model of a fit with compliance, enough to rebuild it (gravity in m/s^2),
+    and the rows it used."""
     model, nested = cal.model, cal.nested
     if isinstance(model, CompliantSerialArm) and nested is not None:
         return {
@@ -326,6 +381,7 @@ def _elastostatic_dict(cal: Calibration) -> dict | None:
             "held": list(model.held),
             "merges": list(model.merges),
             "geometry_only_rms_per_coordinate_mm": nested.rms_per_coordinate_mm,
+            "rows": _rows_dict(cal),
         }
     if not isinstance(model, CompliantArm) or nested is None:
         return None
@@ -340,6 +396,7 @@ def _elastostatic_dict(cal: Calibration) -> dict | None:
         "known_loads": model.known_loads,
         "parameters": list(model.compliance_names),
         "geometry_only_rms_per_coordinate_mm": nested.rms_per_coordinate_mm,
+        "rows": _rows_dict(cal),
     }
 
 

@@ -11,7 +11,7 @@ from __future__ import annotations
 import math
 import os
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any
 
@@ -27,6 +27,7 @@ from ..models import (
     PlanarArm,
     Region,
     Target,
+    TermChoice,
 )
 from ..noise import NoiseModel
 from ..paper import BUILTIN_ROBOTS, paper_arm
@@ -42,6 +43,7 @@ __all__ = [
     "SIGMA_RANGE_MM",
     "RobotSpec",
     "fixed_parameters",
+    "held_terms",
     "load_compliance_truth",
     "load_robot",
     "load_truth",
@@ -227,8 +229,16 @@ def _joint_sigma(path, meas: dict, n: int) -> np.ndarray | None:
     return np.radians(values)
 
 
-def fixed_parameters(path, table: Any, names: Sequence[str], arm_name: str) -> list[str]:
-    """``[identify] fixed = [...]`` or ``free = [...]`` as the list of fixed names."""
+def fixed_parameters(
+    path, table: Any, names: Sequence[str], arm_name: str, terms: Sequence[str] = ()
+) -> list[str]:
+    """``[identify] fixed = [...]`` or ``free = [...]`` as the list of fixed names of the
+    arm's parameters ``names``.
+
+    ``terms`` are an effect's (joint compliance's, :func:`held_terms`), which the
+    lists may name too.  With them, ``free`` governs each group apart: a list that
+    names no parameter of the arm leaves every one free.
+    """
     if not isinstance(table, dict):
         raise fail(path, "key 'identify': expected a table [identify]")
     if "fixed" in table and "free" in table:
@@ -243,6 +253,7 @@ def fixed_parameters(path, table: Any, names: Sequence[str], arm_name: str) -> l
     raw = table[key]
     if not isinstance(raw, list) or not all(isinstance(v, str) for v in raw):
         raise fail(path, f"key 'identify.{key}': expected a list of parameter names, got {raw!r}")
+    known = [*names, *terms]
     for name in raw:
         if name == "phi0":  # a policy: the robot file describes the robot, not a set-up
             raise fail(
@@ -252,9 +263,11 @@ def fixed_parameters(path, table: Any, names: Sequence[str], arm_name: str) -> l
                 "leave it out (held, it would put the instrument's turn into the joint "
                 "offsets); to hold it for one fit, use --fix phi0",
             )
-        if name not in names:
-            raise fail(path, f"key 'identify.{key}': {unknown_parameter(name, names, arm_name)}")
+        if name not in known:
+            raise fail(path, f"key 'identify.{key}': {unknown_parameter(name, known, arm_name)}")
     chosen = set(raw)
+    if key == "free" and chosen and not chosen & set(names):
+        return []  # only the effect's terms listed: the arm's parameters stay free
     fixed = [nm for nm in names if (nm in chosen) == (key == "fixed")]
     if len(fixed) == len(names):
         raise fail(
@@ -262,6 +275,17 @@ def fixed_parameters(path, table: Any, names: Sequence[str], arm_name: str) -> l
             f"key 'identify.{key}': every parameter would be fixed; leave at least one free",
         )
     return fixed
+
+
+def held_terms(table: Any, terms: Sequence[str]) -> TermChoice:
+    """The effect's ``terms`` the ``[identify]`` table (checked by :func:`fixed_parameters`)
+    holds: those ``fixed`` lists, or, where ``free`` lists any, every one it does not."""
+    if not isinstance(table, dict):
+        return TermChoice()
+    if "free" in table:
+        free = tuple(n for n in table["free"] if n in terms)
+        return TermChoice(free=free) if free else TermChoice()
+    return TermChoice(fixed=tuple(n for n in table.get("fixed", []) if n in terms))
 
 
 def unknown_parameter(name: str, names: Sequence[str], arm_name: str) -> str:
@@ -439,7 +463,13 @@ def load_robot(name_or_path: str | os.PathLike) -> RobotSpec:
     except ValueError as exc:
         raise fail(path, str(exc)) from None
     names = structure.param_names
-    fixed = fixed_parameters(path, data["identify"], names, name) if "identify" in data else []
+    elastic = _elastostatic(path, data["elastostatic"], n) if "elastostatic" in data else None
+    terms = () if elastic is None else elastic.term_names(structure)
+    fixed = []
+    if "identify" in data:
+        fixed = fixed_parameters(path, data["identify"], names, name, terms)
+        if elastic is not None:
+            elastic = replace(elastic, terms=held_terms(data["identify"], terms))
     try:
         arm = PlanarArm(
             lengths,
@@ -455,7 +485,6 @@ def load_robot(name_or_path: str | os.PathLike) -> RobotSpec:
         )
     except ValueError as exc:  # every value was checked above; this names what is left
         raise fail(path, str(exc)) from None
-    elastic = _elastostatic(path, data["elastostatic"], n) if "elastostatic" in data else None
     return RobotSpec(arm, None, key, tuple(warnings), elastic, gravity_3d)
 
 

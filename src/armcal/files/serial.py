@@ -42,7 +42,7 @@ from ..models import (
 )
 from ..noise import NoiseModel, TrackerNoise
 from .common import check_keys, fail, load_toml, number, number_within, numbers, suggest
-from .robots import SIGMA_RANGE_MM, RobotSpec, fixed_parameters, load_robot
+from .robots import SIGMA_RANGE_MM, RobotSpec, fixed_parameters, held_terms, load_robot
 from .ur import (
     UR_MODELS,
     read_ur_calibration,
@@ -308,11 +308,15 @@ def _from_toml(path: Path, builtin: str | None, tip_link: str | None = None) -> 
         oriented=noise is not None and noise.orientation_sigma is not None,
         view=view,
     )
-    if "identify" in data:
-        arm = arm.with_fixed(fixed_parameters(path, data["identify"], arm.param_names, arm.name))
     elastic = None
     if "elastostatic" in data:
         elastic = _elastostatic(path, data["elastostatic"], chain, masses)
+    if "identify" in data:
+        table = data["identify"]
+        terms = () if elastic is None else elastic.term_names(arm)
+        arm = arm.with_fixed(fixed_parameters(path, table, arm.param_names, arm.name, terms))
+        if elastic is not None:
+            elastic = replace(elastic, terms=held_terms(table, terms))
     return SerialSpec(arm, builtin or os.fspath(path), warnings=read_warnings, elastic=elastic)
 
 

@@ -37,6 +37,7 @@ from .judgement import (
     goodness_of_fit,
     inconsistent_fit_warning,
     most_disagree,
+    negative_effect_warning,
     nested_test,
     not_converged_warning,
     outlier_warning,
@@ -396,6 +397,15 @@ def identify(
         )
         if unseen is not None and conditioning is None:
             warnings.append(unseen)
+        negative = negative_effect_warning(
+            effect_words,
+            nested.names,
+            fit.params[effect] * model.display_scale[effect],
+            std,
+            [model.param_units[i] for i in effect],
+        )
+        if negative is not None:
+            warnings.append(negative)
     return Calibration(
         model=model,
         method=method,

@@ -47,6 +47,7 @@ from ..models import Effect, listing
 __all__ = [
     "FEW_DOF",
     "FIT_ALPHA",
+    "NEGATIVE_STD",
     "NESTED_UNSEEN_P",
     "OUTLIER_ALPHA",
     "GoodnessOfFit",
@@ -55,6 +56,7 @@ __all__ = [
     "few_dof_warning",
     "goodness_of_fit",
     "inconsistent_fit_warning",
+    "negative_effect_warning",
     "nested_test",
     "not_converged_warning",
     "outlier_warning",
@@ -442,4 +444,38 @@ def unseen_warning(
         "only from "
         f"{nested_rms_mm:.4g} to {rms_mm:.4g} mm, no more than noise would (F test p = "
         f"{p_value:.2g}), and its values are undetermined ({shown}); {effect.advice}",
+    )
+
+
+#: An effect's parameter that cannot be negative (:attr:`~armcal.models.Effect.negative`)
+#: is warned of when it lies more than this many std below zero: by chance that
+#: happens to 0.13 % of the estimates of a parameter whose true value is 0.
+NEGATIVE_STD = 3.0
+
+
+def negative_effect_warning(
+    effect: Effect,
+    names: Sequence[str],
+    values: np.ndarray,
+    std: np.ndarray,
+    units: Sequence[str],
+) -> ArmcalWarning | None:
+    """A ``{short}-negative`` warning (``compliance-negative``) naming the effect's
+    parameters identified more than :data:`NEGATIVE_STD` std below zero, where the effect
+    says none can be negative; ``values`` and ``std`` in display units ``units``."""
+    if not effect.negative:
+        return None
+    below = [
+        f"{name} = {v:.3g} ± {s:.2g} {unit} ({-v / s:.1f} std below 0)"
+        for name, v, s, unit in zip(names, values, std, units, strict=True)
+        if s > 0 and v < -NEGATIVE_STD * s
+    ]
+    if not below:
+        return None
+    one = len(below) == 1
+    return ArmcalWarning(
+        f"{effect.short}-negative",
+        f"the {effect.name} fitted {'a value' if one else 'values'} that cannot be: "
+        f"{listing(below)}; {effect.negative}; find the cause, or hold "
+        f"{'it' if one else 'them'} at zero ({action('hold-terms')})",
     )

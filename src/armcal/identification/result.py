@@ -184,9 +184,12 @@ class Calibration:
 
     def calibrated(self) -> CalibratedArm:
         """The model with these parameters, for validation, compensation and export."""
+        rows = self.conditions
+        if rows is not None and self.used is not None:
+            rows = rows.take(np.asarray(self.used, dtype=bool))
         baseline = None if self.baseline is None else self.baseline.params
         return CalibratedArm(
-            self.model, self.params, self.covariance, self.sigma_mm, self.plane, baseline
+            self.model, self.params, self.covariance, self.sigma_mm, self.plane, rows, baseline
         )
 
     def __getitem__(self, name: str) -> Estimate:

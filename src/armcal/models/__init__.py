@@ -28,6 +28,7 @@ from .compliance import (
     check_compliance_identifiable,
     compliance_identifiability,
 )
+from .defaults import TermChoice
 from .identifiability import Identifiability, combination, listing, row_echelon
 from .interface import (
     ClosedForm,
@@ -138,6 +139,7 @@ __all__ = [
     "SpatialLayout",
     "SpatialView",
     "Target",
+    "TermChoice",
     "UrdfJoint",
     "barely_identifiable_warning",
     "check_compliance_identifiable",

@@ -46,6 +46,11 @@ class CalibratedArm:
         The instrument noise (1 std, mm) the calibration used.
     plane : Plane or None
         The plane of motion of 3-D data (instrument frame), else None.
+    training_rows : Conditions or None
+        The rows the calibration was fitted to (joint readings, targets, loads), where
+        known: in memory, and in the file of a calibration with an effect (joint
+        compliance), whose rigid export is judged on them
+        (:func:`armcal.export_rigid.rigid_export`).
     baseline : ndarray, shape (p_arm,), or None
         The nominal arm registered on its own to the calibration's rows: the
         geometric arm's parameters (:attr:`FitModel.arm`), its instrument pose and
@@ -65,6 +70,7 @@ class CalibratedArm:
     covariance: np.ndarray
     sigma_mm: float
     plane: Plane | None = None
+    training_rows: Conditions | None = None
     baseline: np.ndarray | None = None
 
     def __repr__(self) -> str:

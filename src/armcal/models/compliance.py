@@ -48,7 +48,7 @@ arm, from whose fit a fit starts and against which it is judged.
 from __future__ import annotations
 
 from collections.abc import Sequence
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
 from functools import cached_property
 from typing import Any
 
@@ -58,7 +58,7 @@ from numpy.typing import ArrayLike
 from ..errors import ArmcalError, ArmcalWarning, NotIdentifiableError, action
 from ..noise import NoiseModel
 from ..numerics import ScaledSVD
-from .defaults import ArmEffect, MinimalPlanar
+from .defaults import ArmEffect, MinimalPlanar, TermChoice
 from .identifiability import Identifiability, listing
 from .information import (
     BlockInformation,
@@ -80,6 +80,7 @@ __all__ = [
     "C_UNIT",
     "K_SCALE",
     "K_UNIT",
+    "NEGATIVE_WORDS",
     "STANDARD_GRAVITY",
     "CompliantArm",
     "Elastostatic",
@@ -97,6 +98,18 @@ K_SCALE = 1e6
 C_SCALE = 1e3 * 180.0 / np.pi
 K_UNIT = "urad/(N*m)"
 C_UNIT = "mdeg/m"
+
+
+#: Why a joint's compliance (``k``) or a lumped weight's (``c``) cannot be negative, and what
+#: makes a fit find one: the :attr:`~armcal.models.interface.Effect.negative` words of both
+#: families' joint compliance.
+NEGATIVE_WORDS = (
+    "a joint's compliance (k) and a lumped weight's twist (c, compliance times weight) "
+    "cannot be negative; a fit finds one where the data hold an effect the model lacks "
+    "(a gravity balancer or a cable pulling on the arm, a gear's backlash), where the "
+    "robot file's link masses or centres of mass are wrong, or in a term the poses' "
+    "torques barely excite, where a misfit elsewhere lands"
+)
 
 
 def _vector(values: ArrayLike, n: int, what: str) -> np.ndarray:
@@ -125,12 +138,15 @@ class Elastostatic:
         next (1).
     payload_kg : float
         Payload at the tip for rows that do not give their own.
+    terms : TermChoice
+        The compliance terms the user holds (the robot file's ``[identify]``).
     """
 
     gravity: np.ndarray | None
     link_masses_kg: np.ndarray | None
     com_fraction: np.ndarray
     payload_kg: float = 0.0
+    terms: TermChoice = field(default_factory=TermChoice)
 
     @classmethod
     def create(
@@ -182,14 +198,13 @@ class Elastostatic:
         (:meth:`CompliantArm.for_loads`)."""
         return CompliantArm.for_loads(arm, self, loads, virtual=virtual)
 
+    def term_names(self, arm: PlanarArm) -> tuple[str, ...]:
+        """Every compliance term a model of ``arm`` can have, whatever its rows' loads."""
+        return CompliantArm(arm, self, known_loads=True).compliance_names
+
     def with_gravity(self, gravity: np.ndarray | None) -> Elastostatic:
         """The same loads with gravity (m/s^2) given in another frame."""
-        return Elastostatic(
-            None if gravity is None else np.asarray(gravity, dtype=float),
-            self.link_masses_kg,
-            self.com_fraction,
-            self.payload_kg,
-        )
+        return replace(self, gravity=None if gravity is None else np.asarray(gravity, dtype=float))
 
 
 @dataclass(frozen=True, eq=False)
@@ -201,7 +216,8 @@ class CompliantArm(ArmEffect, MinimalPlanar):
     masses are known; ``c1..cn`` in the lumped mode, followed by ``k1..kn``
     when ``known_loads`` (a payload or tip force that the torque can be
     computed from).  Internal units: rad/(N m) for ``k``, rad/m for ``c``.
-    The compliance parameters are always free.
+    The compliance parameters are free but for those the user holds at zero
+    (``elastic.terms``, :meth:`with_fixed`).
 
     Attributes
     ----------
@@ -299,27 +315,40 @@ class CompliantArm(ArmEffect, MinimalPlanar):
 
     @property
     def fixed(self) -> tuple[str, ...]:
-        return self.arm.fixed
+        """The arm's fixed parameters and the compliance terms the user holds."""
+        return self.arm.fixed + self.user_held
 
     @property
     def free(self) -> np.ndarray:
-        """Free mask over every parameter (compliance parameters are always free)."""
-        return np.concatenate([self.arm.free, np.ones(self.n_compliance, dtype=bool)])
+        """Free mask over every parameter: the compliance's but for those the user holds."""
+        held = set(self.user_held)
+        mine = np.array([n not in held for n in self.compliance_names], dtype=bool)
+        return np.concatenate([self.arm.free, mine])
 
     @property
     def free_names(self) -> tuple[str, ...]:
-        return self.arm.free_names + self.compliance_names
+        held = set(self.user_held)
+        return self.arm.free_names + tuple(n for n in self.compliance_names if n not in held)
 
     @property
     def n_free(self) -> int:
-        return self.arm.n_free + self.n_compliance
+        return self.arm.n_free + self.n_compliance - len(self.user_held)
+
+    @property
+    def held_notes(self) -> tuple[str, ...]:
+        """Which compliance terms the user holds (the planar arm holds none by a rule)."""
+        return self.user_note
 
     def with_noise(self, noise: NoiseModel | None) -> CompliantArm:
         return CompliantArm(self.arm.with_noise(noise), self.elastic, self.known_loads)
 
     def with_fixed(self, fixed: Sequence[str]) -> CompliantArm:
-        """Other geometric parameters fixed (the compliance is always identified)."""
-        return CompliantArm(self.arm.with_fixed(fixed), self.elastic, self.known_loads)
+        """``fixed`` held, replacing the held set: the arm's parameters among them and the
+        compliance terms (every term any rows could give the model is one,
+        :meth:`Elastostatic.term_names`)."""
+        geometry, terms = self.split_fixed(fixed)
+        elastic = replace(self.elastic, terms=terms)
+        return CompliantArm(self.arm.with_fixed(geometry), elastic, self.known_loads)
 
     def unpredicted_loads(self, loads: Loads) -> str | None:
         """In lumped mode without ``k1..kn``, any payload but the one ``c1..cn`` hold.
@@ -482,6 +511,7 @@ class CompliantArm(ArmEffect, MinimalPlanar):
             "geometry",
             mode,
             f"load the arm more (payload_kg) or {action('geometry-alone')}",
+            NEGATIVE_WORDS,
         )
 
     def start(

@@ -7,17 +7,21 @@
   needs no preparing for a set of rows, its truth is its own, nothing is held
   by a rule, and its tool's orientation is one angle in the plane;
 * :class:`ArmEffect` -- a model that adds an effect's parameters after an arm's
-  (joint compliance, planar or spatial): what it passes through to the arm.
+  (joint compliance, planar or spatial): what it passes through to the arm, and
+  which of its terms the user holds (:class:`TermChoice`).
 """
 
 from __future__ import annotations
 
+from collections.abc import Sequence
+from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any, Self
 
 import numpy as np
 
 from ..noise import NoiseModel
 from ..numerics import wrap_angle
+from .identifiability import listing
 from .information import covariance_factor_from, whitened_free_jacobian
 from .interface import Conditions, DesignEffort, Loads
 
@@ -25,6 +29,7 @@ __all__ = [
     "ArmEffect",
     "MinimalPlanar",
     "RigidLoads",
+    "TermChoice",
 ]
 
 
@@ -98,12 +103,51 @@ class MinimalPlanar:
         return wrap_angle(np.asarray(orientation) - np.asarray(reference))
 
 
+@dataclass(frozen=True)
+class TermChoice:
+    """Which of an effect's terms (joint compliance: ``k{j}``, ``c{j}``, ``c{j}.{s}``) the
+    user holds at zero: a robot file's ``[identify]`` table, or the fix option.
+
+    Attributes
+    ----------
+    fixed : tuple of str
+        Terms held at zero (``[identify] fixed``, the fix option).
+    free : tuple of str or None
+        The only terms identified, every other held (``[identify] free``); None when
+        the user did not list them.  A term listed here is one the user asks for:
+        a model that cannot identify it from the rows refuses rather than hold it.
+
+    Examples
+    --------
+    >>> TermChoice(fixed=("k2",)).held(("k1", "k2", "k3"))
+    ('k2',)
+    >>> TermChoice(free=("k2",)).held(("k1", "k2", "k3"))
+    ('k1', 'k3')
+    """
+
+    fixed: tuple[str, ...] = ()
+    free: tuple[str, ...] | None = None
+
+    def held(self, names: Sequence[str]) -> tuple[str, ...]:
+        """The terms of ``names`` the user holds, in their order."""
+        if self.free is not None:
+            return tuple(n for n in names if n not in self.free)
+        return tuple(n for n in names if n in self.fixed)
+
+    @property
+    def asked(self) -> tuple[str, ...]:
+        """The terms the user asks to identify by name (``free``)."""
+        return () if self.free is None else self.free
+
+
 class ArmEffect:
     """A model whose parameters are an arm's followed by an effect's (module notes): the
     arm's limits, instrument, view and tool, and the effect's parameters appended.
 
-    The family gives ``arm``, ``elastic`` (with ``payload_kg``), ``n_compliance``,
-    ``compliance_names``, ``compliance_units``, ``compliance_scale`` and ``free``.
+    The family gives ``arm``, ``elastic`` (with ``payload_kg``, ``terms``, a
+    :class:`TermChoice`, and ``term_names(arm)``, every term its model of any rows
+    can have), ``n_compliance``, ``compliance_names``, ``compliance_units``,
+    ``compliance_scale`` and ``free``.
     """
 
     if TYPE_CHECKING:  # the family's own (a class attribute here would shadow it)
@@ -124,6 +168,33 @@ class ArmEffect:
     @property
     def name(self) -> str:
         return self.arm.name
+
+    @property
+    def user_held(self) -> tuple[str, ...]:
+        """The effect's terms the user holds at zero (:class:`TermChoice`)."""
+        return self.elastic.terms.held(self.compliance_names)
+
+    @property
+    def user_note(self) -> tuple[str, ...]:
+        """One sentence naming the terms the user holds, for :attr:`held_notes` (none: empty)."""
+        held = self.user_held
+        if not held:
+            return ()
+        verb = "is" if len(held) == 1 else "are"
+        return (
+            f"{listing(held)} {verb} held by the user (the robot file's [identify], or "
+            "the fix option)",
+        )
+
+    def split_fixed(self, fixed: Sequence[str]) -> tuple[tuple[str, ...], TermChoice]:
+        """``fixed`` (the arm's parameters and the effect's terms, as the fix option gives
+        them) as the arm's and the effect's: a term any rows could give the model is the
+        effect's, every other name the arm's."""
+        terms = set(self.elastic.term_names(self.arm))
+        return (
+            tuple(n for n in fixed if n not in terms),
+            TermChoice(fixed=tuple(n for n in fixed if n in terms)),
+        )
 
     @property
     def param_names(self) -> tuple[str, ...]:

@@ -249,6 +249,11 @@ class Effect:
     advice : str
         What to do when the data do not show it (a clause; may hold
         :func:`~armcal.errors.action` references).
+    negative : str
+        Why none of its parameters can be negative and what makes a fit find one (a
+        clause: joint compliances and lumped weights); empty when either sign is
+        physical.  A parameter identified clearly below zero is warned of
+        (``{short}-negative``).
     """
 
     name: str
@@ -256,6 +261,7 @@ class Effect:
     nested: str
     description: str
     advice: str
+    negative: str = ""
 
 
 @dataclass(frozen=True, eq=False)

@@ -36,7 +36,11 @@ What the rows cannot identify is held at zero and named
 (:meth:`CompliantSerialArm.prepared`): a joint whose axis is parallel to
 gravity (joint 1 of a floor-mounted arm) has no torque; a torque that never
 changes is a zero offset, ``dq{j}``; two stations that coincide (a spherical
-wrist) are one.
+wrist) are one.  The user may hold more (a robot file's ``[identify]``, the fix
+option: :meth:`CompliantSerialArm.with_fixed`); a term the user lists as free
+that the rows cannot identify is refused with the rule's reason rather than
+held or fitted (its column lies within 1 % of the span of the others, so a fit
+would trade it against them and report a number the data do not hold).
 """
 
 from __future__ import annotations
@@ -52,7 +56,8 @@ from numpy.typing import ArrayLike
 from ..errors import ArmcalError, ArmcalWarning, action
 from ..noise import NoiseModel
 from ..numerics import ScaledSVD
-from .defaults import ArmEffect
+from .compliance import NEGATIVE_WORDS
+from .defaults import ArmEffect, TermChoice
 from .identifiability import Identifiability
 from .information import (
     BlockInformation,
@@ -100,12 +105,15 @@ class SerialElastics:
         The payload of rows that do not give their own.
     payload_com_mm : ndarray, shape (3,)
         Where the payload's centre of mass is in the tip (flange) frame.
+    terms : TermChoice
+        The compliance terms the user holds (the robot file's ``[identify]``).
     """
 
     gravity: np.ndarray = field(default_factory=lambda: np.array([0.0, 0.0, -STANDARD_GRAVITY]))
     links: LinkMasses | None = None
     payload_kg: float = 0.0
     payload_com_mm: np.ndarray = field(default_factory=lambda: np.zeros(3))
+    terms: TermChoice = field(default_factory=TermChoice)
 
     @classmethod
     def create(
@@ -158,6 +166,10 @@ class SerialElastics:
         (:meth:`CompliantSerialArm.for_loads`)."""
         return CompliantSerialArm.for_loads(arm, self, loads, virtual=virtual)
 
+    def term_names(self, arm: SpatialArm) -> tuple[str, ...]:
+        """Every compliance term a model of ``arm`` can have, whatever its rows' loads."""
+        return CompliantSerialArm(arm, self, known_loads=True).compliance_names
+
     def to_dict(self) -> dict[str, Any]:
         """The ``elastostatic`` section of a calibration file."""
         links = self.links
@@ -203,7 +215,8 @@ class CompliantSerialArm(ArmEffect):
     known_loads : bool
         Whether the rows carry payloads that vary (lumped mode: ``k`` as well).
     held : tuple of str
-        Compliance parameters the rows cannot identify (:meth:`prepared`).
+        Compliance parameters the rows cannot identify (:meth:`prepared`); those the
+        user holds are ``elastic.terms`` (:attr:`user_held`).
     merges : tuple of str
         Why, one sentence per group.
     """
@@ -286,13 +299,15 @@ class CompliantSerialArm(ArmEffect):
 
     @property
     def fixed(self) -> tuple[str, ...]:
-        """The arm's held parameters and the compliance the rows cannot identify (as
-        :attr:`SpatialArm.fixed`: held by the user or by the rule)."""
-        return self.arm.fixed + self.held
+        """The arm's held parameters and the compliance held by the user or because the
+        rows cannot identify it (as :attr:`SpatialArm.fixed`)."""
+        held = set(self.held) | set(self.user_held)
+        return self.arm.fixed + tuple(n for n in self.compliance_names if n in held)
 
     @cached_property
     def free(self) -> np.ndarray:
-        mine = np.array([name not in self.held for name in self.compliance_names], dtype=bool)
+        held = set(self.held) | set(self.user_held)
+        mine = np.array([name not in held for name in self.compliance_names], dtype=bool)
         return np.concatenate([self.arm.free, mine])
 
     @property
@@ -301,7 +316,7 @@ class CompliantSerialArm(ArmEffect):
 
     @property
     def held_notes(self) -> tuple[str, ...]:
-        return self.arm.held_notes + self.merges
+        return self.arm.held_notes + self.user_note + self.merges
 
     @property
     def free_names(self) -> tuple[str, ...]:
@@ -332,8 +347,13 @@ class CompliantSerialArm(ArmEffect):
         return replace(self, arm=self.arm.with_noise(noise))
 
     def with_fixed(self, fixed: Sequence[str]) -> CompliantSerialArm:
-        """Other geometric parameters fixed (the compliance is always identified)."""
-        return self._with_arm(self.arm.with_fixed(fixed))
+        """``fixed`` held, replacing the held set: the arm's parameters among them and the
+        compliance terms (every term any rows could give the model is one,
+        :meth:`SerialElastics.term_names`); the rule's set is chosen again
+        (:meth:`prepared`)."""
+        geometry, terms = self.split_fixed(fixed)
+        elastic = replace(self.elastic, terms=terms)
+        return CompliantSerialArm(self.arm.with_fixed(geometry), elastic, self.known_loads)
 
     def unpredicted_loads(self, loads: Loads) -> str | None:
         """In lumped mode without ``k``, any payload but the one the ``c`` hold."""
@@ -506,6 +526,7 @@ class CompliantSerialArm(ArmEffect):
             "geometry",
             mode,
             f"measure poses under two payloads or more, or {action('geometry-alone')}",
+            NEGATIVE_WORDS,
         )
 
     def start(
@@ -526,7 +547,12 @@ class CompliantSerialArm(ArmEffect):
         """The arm prepared for these rows (:meth:`SpatialArm.prepared`), and the compliance
         they cannot identify held at zero, each named with what it merges into: the
         columns are taken after the arm's free ones, and one whose part outside the span
-        of those before is at most ``SELECT_RTOL`` of its length is held."""
+        of those before is at most ``SELECT_RTOL`` of its length is held.  The terms the
+        user holds take no part.
+
+        Raises ArmcalError for a term the user lists as free (``[identify] free``) that
+        the rows cannot identify, with the rule's reason.
+        """
         arm = self.arm.prepared(conditions, points)
         model = self._with_arm(arm)
         jac = model.jacobian(conditions, model.nominal)
@@ -534,11 +560,22 @@ class CompliantSerialArm(ArmEffect):
         rows = jac if w is None else w @ jac
         flat = rows.reshape(-1, model.n_params)
         geo = np.flatnonzero(arm.free)
-        columns = column_space(
-            flat[:, np.concatenate([geo, arm.n_params + np.arange(model.n_compliance)])]
-        )
+        user = set(model.user_held)
+        mine = np.array([i for i, n in enumerate(model.compliance_names) if n not in user], int)
+        columns = column_space(flat[:, np.concatenate([geo, arm.n_params + mine])])
         geo_names = [arm.param_names[i] for i in geo]
-        held, merges = select_effect(columns, geo_names, model.compliance_names, model.joints)
+        names = [model.compliance_names[i] for i in mine]
+        held, merges = select_effect(columns, geo_names, names, model.joints[mine])
+        asked = [n for n in self.elastic.terms.asked if n in held]
+        if asked:
+            why = "; ".join(
+                s for s in merges if set(asked) & {w.strip(",;:") for w in s.split(" ")}
+            )
+            raise ArmcalError(
+                f"[identify] free lists {', '.join(asked)}, which these rows cannot identify "
+                f"({why}); leave {'it' if len(asked) == 1 else 'them'} out of free: "
+                "a term the rows cannot tell from the others is held at zero"
+            )
         return replace(model, held=held, merges=merges)
 
     def expressed(self, conditions: Conditions, params: np.ndarray) -> np.ndarray:

@@ -17,17 +17,16 @@ __all__ = [
 
 
 def _effect_held_lines(cal: Calibration) -> list[str]:
-    """The effect's parameters the rows cannot identify (joint compliance of a spatial arm:
-    a joint gravity does not twist), held at zero, with why."""
+    """The effect's parameters held at zero, each sentence with why: by the user, or because
+    the rows cannot identify them (joint compliance of a spatial arm: a joint gravity does
+    not twist)."""
     own = set(cal.arm.held_notes)
     notes = [note for note in cal.model.held_notes if note not in own]
     if not notes:
         return []
     effect = cal.model.effect
     name = "the effect" if effect is None else effect.name
-    return [f"{name} held at zero, because the measurements cannot see or separate it:"] + [
-        f"  {note}" for note in notes
-    ]
+    return [f"{name} held at zero:"] + [f"  {note}" for note in notes]
 
 
 def _fit_line(cal: Calibration) -> str:
@@ -179,7 +178,7 @@ def effect_lines(cal: Calibration) -> list[str]:
         "",
         f"{effect.name}, {effect.description}; {effect.nested} alone leaves "
         f"{nested.rms_per_coordinate_mm:.4g} mm residual RMS per coordinate, with "
-        f"{effect.short} {cal.residual_rms:.4g} mm",
+        f"{effect.short} {cal.residual_rms:.4g} mm per coordinate",
     ]
     deflection = cal.details.get("max_deflection_rad")
     if deflection is not None:

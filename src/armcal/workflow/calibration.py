@@ -32,6 +32,7 @@ from ..errors import (
     unique_warnings,
 )
 from ..export import robot_toml, urdf, urdf_joints_are_readings
+from ..export_rigid import RigidExport, rigid_export, rigid_export_warnings
 from ..export_serial import joint_offsets_csv, serial_robot_toml, serial_urdf
 from ..files import Measurements, Program, RobotSpec, SerialSpec
 from ..files.ur import (
@@ -54,7 +55,7 @@ from ..validation import (
     validate,
     validation_warnings,
 )
-from .setup import FixError, fit_model, model_arm, prefixed
+from .setup import FixError, fit_model, model_spec, prefixed
 
 __all__ = [
     "CalibrationRun",
@@ -236,7 +237,8 @@ def calibrate(
     source : str
         The measurement file's name, for error messages.
     fixed : tuple of str, optional
-        Parameters held at nominal, replacing the robot file's set.
+        Parameters held at nominal, replacing the robot file's set: the arm's, and
+        the joint compliance's terms held at zero.
     sigma : float, optional
         Isotropic instrument noise (mm), replacing the robot file's and any
         ``sigma_mm`` column.
@@ -266,8 +268,8 @@ def calibrate(
         structure = measured_arm(spec.arm, meas)
     except InputError as exc:
         raise prefixed(source, exc) from None
-    arm = model_arm(structure, fixed=fixed, sigma=sigma)
     spec, meas, ignored = _as_asked(spec, meas, source, sigma, compliance)
+    spec, arm = model_spec(spec, structure, fixed=fixed, sigma=sigma)
     cal = _identify_file(spec, arm, source, meas, method=method, robust=robust)
     large = deviation_warning(cal.arm, cal.model.arm_params(cal.params))
     points = None
@@ -395,7 +397,7 @@ def calibrate_serial(
     """
     spec, meas, ignored = _as_asked(spec, meas, source, sigma, compliance)
     try:
-        arm = model_arm(serial_arm(spec.arm, meas), fixed=fixed, sigma=sigma)
+        spec, arm = model_spec(spec, serial_arm(spec.arm, meas), fixed=fixed, sigma=sigma)
         points = meas.instrument_points  # 3-D: serial_arm refuses data without z_mm
         index = None if meas.targets is None else arm.target_index(meas.targets)
         loads = None if spec.elastic is None else meas.loads(spec.elastic.payload_kg)
@@ -589,6 +591,7 @@ class ExportRun:
 
     texts: dict[str, str]
     warnings: tuple[ArmcalWarning, ...]
+    rigid: RigidExport | None = None
 
 
 def _ur_arm(cal: CalibratedArm, path: str) -> tuple[SerialChain, str, UrDh]:
@@ -647,7 +650,10 @@ def export_files(
 
     ``urdf-joint-values`` when the URDF's joint values are not the controller's
     readings (coupled axes), ``offsets-only`` for the offsets (the geometry is not
-    in them), and a warning that a model's effect (joint compliance) is in no file.
+    in them), and a warning that a model's effect (joint compliance) is in no file,
+    with what the rigid geometry loses on the calibration's rows (``rigid``,
+    :func:`armcal.export_rigid.rigid_export`; ``rigid-export-worse`` when it fits
+    them worse than the nominal arm).
     """
     serial = isinstance(cal.arm, SpatialArm)  # the file formats differ by family
     texts: dict[str, str] = {}
@@ -681,24 +687,6 @@ def export_files(
                     "publishing joint_states (see the file's comment)",
                 )
             )
-    model, effect, inner = cal.model, cal.model.effect, cal.model.nested
-    if effect is not None and inner is not None:
-        extra = slice(inner.n_params, None)
-        values = ", ".join(
-            f"{name} = {v:.4g} {unit}"
-            for name, unit, v in zip(
-                model.param_names[extra],
-                model.param_units[extra],
-                cal.params[extra] * model.display_scale[extra],
-                strict=True,
-            )
-        )
-        warnings.append(
-            ArmcalWarning(
-                f"{effect.short}-not-exported",
-                f"the exported {effect.nested} is rigid: the {effect.name} ({values}) is not "
-                "part of a robot file or URDF; compensate programs with armcal compensate, "
-                "which uses it",
-            )
-        )
-    return ExportRun(texts, tuple(warnings))
+    loss = rigid_export(cal)
+    warnings += rigid_export_warnings(cal, loss)
+    return ExportRun(texts, tuple(warnings), loss)

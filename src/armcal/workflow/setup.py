@@ -1,24 +1,26 @@
 """What a robot file and the options make of the model a command works on.
 
 The robot file gives the arm and, with ``[elastostatic]``, its joint
-compliance; the options hold parameters fixed and override the instrument's
-noise.  Every command goes through these, so ``--fix`` and ``--sigma`` mean the
-same everywhere (and :func:`armcal.noise.instrument_override` is the one place
-``--sigma`` is applied).
+compliance; the options hold parameters fixed (the arm's and the compliance's
+terms) and override the instrument's noise.  Every command goes through these,
+so ``--fix`` and ``--sigma`` mean the same everywhere (and
+:func:`armcal.noise.instrument_override` is the one place ``--sigma`` is
+applied).
 """
 
 from __future__ import annotations
 
 import os
 from collections.abc import Sequence
-from typing import TypeVar
+from dataclasses import replace
+from typing import Any, TypeVar
 
 import numpy as np
 
 from ..doe import random_plan
 from ..errors import ArmcalError, NotIdentifiableError
 from ..files import RobotSpec, SerialSpec, read_plan, unknown_parameter
-from ..models import FitModel, Loads, PlanarArm, SpatialArm
+from ..models import FitModel, Loads, PlanarArm, SpatialArm, TermChoice
 from ..noise import instrument_override
 
 __all__ = [
@@ -29,6 +31,7 @@ __all__ = [
     "design_sigma",
     "fit_model",
     "model_arm",
+    "model_spec",
     "plan_model",
     "prefixed",
     "simulation_sigma",
@@ -55,25 +58,58 @@ def prefixed(source: str, exc: ArmcalError) -> ArmcalError:
 Arm = TypeVar("Arm", PlanarArm, SpatialArm, PlanarArm | SpatialArm)
 
 
-def with_fixed(arm: Arm, fixed: Sequence[str]) -> Arm:
+def with_fixed(arm: Arm, fixed: Sequence[str], terms: Sequence[str] = ()) -> Arm:
     """The arm with ``fixed`` held (replacing the robot file's set); FixError for a name
-    the arm does not have or when nothing would be left to identify."""
+    that is neither the arm's nor one of an effect's ``terms`` (joint compliance, held
+    by :func:`model_spec`), or when nothing of the arm would be left to identify."""
+    known = (*arm.param_names, *terms)
     for name in fixed:
-        if name not in arm.param_names:
-            raise FixError(unknown_parameter(name, arm.param_names, arm.name))
-    if len(set(fixed)) == arm.n_params:
+        if name not in known:
+            raise FixError(unknown_parameter(name, known, arm.name))
+    mine = [name for name in fixed if name in arm.param_names]
+    if len(set(mine)) == arm.n_params:
         raise FixError("every parameter would be fixed; leave at least one free")
-    return arm.with_fixed(tuple(fixed))
+    return arm.with_fixed(tuple(mine))
 
 
-def model_arm(arm: Arm, *, fixed: Sequence[str] | None = None, sigma: float | None = None) -> Arm:
-    """The arm with ``fixed`` parameters (None: the robot file's) and instrument noise
-    ``sigma`` (mm; None or 0: the robot file's), its encoder noise kept."""
+def model_arm(
+    arm: Arm,
+    *,
+    fixed: Sequence[str] | None = None,
+    sigma: float | None = None,
+    terms: Sequence[str] = (),
+) -> Arm:
+    """The arm with ``fixed`` parameters (None: the robot file's; names among an effect's
+    ``terms`` are the effect's, :func:`model_spec`) and instrument noise ``sigma`` (mm;
+    None or 0: the robot file's), its encoder noise kept."""
     if fixed is not None:
-        arm = with_fixed(arm, fixed)
+        arm = with_fixed(arm, fixed, terms)
     if sigma:  # 0 (noiseless synthesis) is no noise model
         arm = arm.with_noise(instrument_override(arm.noise, sigma))
     return arm
+
+
+#: A robot file of either family.
+Spec = TypeVar("Spec", RobotSpec, SerialSpec, RobotSpec | SerialSpec)
+
+
+def model_spec(
+    spec: Spec, arm: Arm, *, fixed: Sequence[str] | None = None, sigma: float | None = None
+) -> tuple[Spec, Arm]:
+    """The robot file and its arm ``arm`` (``spec.arm`` fitted to the data's targets and
+    3-D columns) as the options ask: ``fixed`` (None: the robot file's ``[identify]``)
+    replaces the held set of the arm and of the joint compliance's terms alike
+    (``[elastostatic]``), and ``sigma`` the instrument noise (:func:`model_arm`).
+
+    Raises FixError for a name that is neither a parameter of the arm nor a term of
+    its compliance.
+    """
+    elastic: Any = spec.elastic
+    terms: tuple[str, ...] = () if elastic is None else elastic.term_names(arm)
+    if fixed is not None and elastic is not None:
+        held = TermChoice(fixed=tuple(name for name in fixed if name in terms))
+        spec = replace(spec, elastic=replace(elastic, terms=held))
+    return spec, model_arm(arm, fixed=fixed, sigma=sigma, terms=terms)
 
 
 def simulation_sigma(spec: RobotSpec | SerialSpec, sigma: float | None) -> float | None:
@@ -109,11 +145,36 @@ def fit_model(
     """
     if spec.elastic is None:
         return arm
+    given = loads is not None
     loads = Loads.create(1, spec.elastic.payload_kg) if loads is None else loads
     try:
-        return spec.elastic.model_for(arm, loads, virtual=virtual)
+        model = spec.elastic.model_for(arm, loads, virtual=virtual)
+        if given and not virtual:  # the rows' own model: what it can identify is known
+            _check_terms(model, spec.elastic.terms)
     except ArmcalError as exc:
         raise prefixed(spec.source, exc) from None
+    return model
+
+
+def _check_terms(model: FitModel, terms: TermChoice) -> None:
+    """ArmcalError when the user asks for a compliance term the model of these rows does
+    not have, or holds every one it has."""
+    inner = model.nested
+    names = model.param_names[0 if inner is None else inner.n_params :]
+    absent = [name for name in terms.asked if name not in names]
+    if absent:
+        raise ArmcalError(
+            f"[identify] free lists {', '.join(absent)}, which these rows cannot identify: "
+            f"their model of the joint compliance has {', '.join(names)} (k, the compliance "
+            "itself, is told from the lumped weight c only by payloads that vary); measure "
+            "poses under two payloads or more, or leave it out of free"
+        )
+    if names and set(terms.held(names)) >= set(names):
+        raise ArmcalError(
+            f"every term of the joint compliance ({', '.join(names)}) would be held at zero, "
+            "which is the geometry alone; leave one free, or fit the geometry without the "
+            "compliance"
+        )
 
 
 def plan_model(
