@@ -444,10 +444,14 @@ def compensate(
     inside = model.within_limits(q)
     for i in np.flatnonzero(done & ~np.all(inside, axis=1)):
         j = int(np.flatnonzero(~inside[i])[0])
-        lo, hi = np.degrees(limits[j])
+        slide = model.joint_kinds[j] == "P"  # a prismatic joint's reading is in mm
+        (lo, hi), value = (
+            (limits[j], q[i, j]) if slide else (np.degrees(limits[j]), np.degrees(q[i, j]))
+        )
+        unit = "mm" if slide else "deg"
         reasons[i] = (
-            f"joint {j + 1} would need {np.degrees(q[i, j]):.4g} deg, beyond its limits "
-            f"[{lo:g}, {hi:g}] deg"
+            f"joint {j + 1} would need {value:.4g} {unit}, beyond its limits "
+            f"[{lo:g}, {hi:g}] {unit}"
         )
         done[i] = False
     q = np.where(done[:, None], q, q0)

@@ -189,15 +189,18 @@ def run_serial_demo(
         return plot_residuals(cal.residuals, cal.sigma_mm, used=cal.used)
 
     document = calibration_document(cal)
+    kinds = arm.joint_kinds
     files: dict[str, str | Callable[[Path], None]] = {
-        "measurements.csv": format_measurements_csv(rows.q, points, pose_labels, targets),
+        "measurements.csv": format_measurements_csv(
+            rows.q, points, pose_labels, targets, kinds=kinds
+        ),
         "calibration.json": to_json(document),
         "validation.csv": format_measurements_csv(
-            test_rows.q, test_points, test_poses, test_targets
+            test_rows.q, test_points, test_poses, test_targets, kinds=kinds
         ),
-        "program.csv": format_plan_csv(program, targets=["A"] * PROGRAM_POSES),
+        "program.csv": format_plan_csv(program, targets=["A"] * PROGRAM_POSES, kinds=kinds),
         "program_corrected.csv": format_program_csv(
-            comp.q, comp.corrected, targets=["A"] * PROGRAM_POSES
+            comp.q, comp.corrected, targets=["A"] * PROGRAM_POSES, kinds=kinds
         ),
         "robot_calibrated.toml": serial_robot_toml(calibrated),
         "arm.urdf": serial_urdf(calibrated),

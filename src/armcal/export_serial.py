@@ -21,7 +21,11 @@ DH table (:func:`armcal.models.mdh_table`: Craig's rows, Hayati's ``beta_deg``
 where consecutive axes are nearly parallel, ``base_*``/``tip_*`` frames where
 needed), the joint map and limits, the noise, and the calibrated targets.  It is
 a robot file every command accepts, and a later calibration against it measures
-what has changed since.
+what has changed since.  The limits are the arm's: ``joint_limits_deg`` on the
+readings ``q``, and where the description's own limits on its joint values
+``u = M q`` (a URDF's, under a coupled joint map) constrain more than those, they
+too, as ``[mdh] joint_limits_deg`` (:func:`_own_limits`), so the file reads back as
+the same arm with the same reachable readings.
 
 **Joint offsets** (:func:`joint_offsets_csv`, any arm).  The zero offset ``dq_k``
 of every controller reading (deg, or mm for a slide), its std, and whether the
@@ -109,6 +113,24 @@ def _limits_on_values(arm: SpatialArm) -> np.ndarray:
     return np.column_stack([lo, hi])
 
 
+def _own_limits(arm: SpatialArm) -> np.ndarray | None:
+    """The limits of the joint values ``u = M q`` the robot TOML must carry
+    (:func:`_limits_on_values`), or None where the readings' limits already imply them."""
+    if not np.any(np.isfinite(arm.chain.joint_limits)):
+        return None
+    values = _limits_on_values(arm)
+    return None if np.array_equal(values, box_image(arm.joint_map, arm.limits)) else values
+
+
+def _limit_pairs(limits: np.ndarray, kinds: tuple[str, ...]) -> str:
+    """``[[lo, hi], ...]`` in deg (mm for a prismatic joint) of ``limits`` (rad, mm)."""
+    pairs = (
+        nums(np.degrees(pair) if kind == "R" else pair)
+        for pair, kind in zip(limits, kinds, strict=True)
+    )
+    return "[" + ", ".join(pairs) + "]"
+
+
 def serial_urdf(cal: CalibratedArm) -> str:
     """The calibrated spatial arm as a URDF (module notes).
 
@@ -182,12 +204,7 @@ def serial_robot_toml(cal: CalibratedArm) -> str:
     lines += [
         f"name = {toml_string(arm.name + '-calibrated')}",
         "joint_map = [" + ", ".join(nums(row) for row in arm.joint_map) + "]",
-        "joint_limits_deg = ["
-        + ", ".join(
-            nums(np.degrees(pair) if kind == "R" else pair)
-            for pair, kind in zip(arm.limits, arm.chain.kinds, strict=True)
-        )
-        + "]",
+        f"joint_limits_deg = {_limit_pairs(arm.limits, arm.chain.kinds)}",
         "",
         "[mdh]",
         f"alpha_deg = {nums(np.degrees(table.alpha))}",
@@ -198,6 +215,9 @@ def serial_robot_toml(cal: CalibratedArm) -> str:
     if np.any(table.beta != 0):
         lines.append(f"beta_deg = {nums(np.degrees(table.beta))}")
     lines.append("joint_types = [" + ", ".join(f'"{k}"' for k in table.kinds) + "]")
+    own = _own_limits(arm)
+    if own is not None:
+        lines.append(f"joint_limits_deg = {_limit_pairs(own, table.kinds)}")
     for where, frame in (("base", table.base), ("tip", table.tip)):
         if not np.array_equal(frame, np.eye(4)):
             lines.append(f"{where}_xyz_mm = {nums(frame[:3, 3])}")

@@ -230,7 +230,8 @@ SERIAL_KEYS: tuple[Key, ...] = (
         "joint_limits_deg",
         "deg (mm for a prismatic joint), [lo, hi] per joint",
         "the URDF's (on u); a full turn each way for continuous joints",
-        "limits on the controller's readings q; they replace the URDF's",
+        "limits on the controller's readings q; they replace the URDF's (not an [mdh] "
+        "table's own)",
     ),
     Key("mdh", "alpha_deg", "deg, one per joint", "required", "Craig's alpha: Rx(alpha)"),
     Key("mdh", "a_mm", "mm, one per joint", "required", "Craig's a: Tx(a)"),
@@ -243,7 +244,21 @@ SERIAL_KEYS: tuple[Key, ...] = (
         "0 each",
         "Hayati's beta, Ry(beta) after Tx(a): nearly parallel consecutive axes",
     ),
-    Key("mdh", "joint_types", '"R" or "P" per joint', '"R" each', "revolute or prismatic"),
+    Key(
+        "mdh",
+        "joint_types",
+        '"R" or "P" per joint',
+        '"R" each',
+        "revolute or prismatic (then d is the reading, in mm: its columns are q{j}_mm)",
+    ),
+    Key(
+        "mdh",
+        "joint_limits_deg",
+        "deg (mm for a prismatic joint), [lo, hi] per joint",
+        "none",
+        "the table's own limits, on its joint values u = M q as a URDF's <limit> (export "
+        "writes them for a coupled joint_map); kept beside the top-level joint_limits_deg",
+    ),
     Key("mdh", "base_xyz_mm", "mm, [x, y, z]", "0", "a base frame before the first row"),
     Key("mdh", "base_rpy_deg", "deg, [roll, pitch, yaw]", "0", "its orientation"),
     Key("mdh", "tip_xyz_mm", "mm, [x, y, z]", "0", "the flange after the last row"),
@@ -457,7 +472,13 @@ class Column:
     meaning: str
 
 
-_JOINTS = Column("q1_deg..qn_deg", "deg", True, "joint commands, one column per joint")
+_JOINTS = Column(
+    "q1_deg..qn_deg",
+    "deg (mm for a prismatic joint)",
+    True,
+    "joint commands, one column per joint: q{j}_deg for a revolute joint, q{j}_mm for a "
+    "prismatic one (a slide, read in mm); a column in the other unit is an error",
+)
 _POSE = Column("pose", "text", False, "pose label: rows with the same label are one pose")
 _TARGET = Column("target", "text", False, "the [targets] label of the point measured")
 _PAYLOAD = Column("payload_kg", "kg", False, "payload at the tip ([elastostatic] robots)")

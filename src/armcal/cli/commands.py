@@ -124,19 +124,38 @@ def _model(
         raise ArmcalError(f"--fix: {exc}") from None
 
 
-def _truth(args: argparse.Namespace, spec: RobotSpec | SerialSpec, model: FitModel) -> np.ndarray:
+#: What simulate and synthesize say when a robot file without a default truth is given no
+#: ``--truth``: they study the nominal arm (zero deviations, no compliance).
+NOMINAL_TRUTH = "truth: nominal (no --truth)"
+
+
+def _truth(
+    args: argparse.Namespace,
+    spec: RobotSpec | SerialSpec,
+    model: FitModel,
+    *,
+    nominal: bool = False,
+) -> tuple[np.ndarray, str | None]:
     """The parameters of the virtual robot ``model`` (a plan's, with the plan's loads):
-    ``--truth``, with compliance for a model of joint compliance, else the built-in's."""
+    ``--truth``, with compliance for a model of joint compliance, else the built-in's.
+
+    A robot file without ``--truth`` is refused, or with ``nominal`` studied as its nominal
+    arm (:data:`NOMINAL_TRUTH`, returned as the note to print): zero errors and no
+    compliance, the values the model holds its fixed parameters at, for every family.
+    """
+    default = spec.default_truth
+    if args.truth is None and default is None:
+        if nominal:
+            return model.held_values, NOMINAL_TRUTH
+        raise ArmcalError(
+            f"{spec.source}: a robot file has no default truth; pass --truth truth.toml "
+            "(armcal formats lists its keys)"
+        )
     if isinstance(spec, SerialSpec):  # a truth file of the spatial family
-        path = args.truth if args.truth is not None else spec.default_truth
-        if path is None:
-            raise ArmcalError(
-                f"{spec.source}: a robot file has no default truth; pass --truth truth.toml "
-                "(robot = the true arm's file, base = the instrument's pose, [errors], "
-                "[targets]; armcal formats)"
-            )
         assert isinstance(model, SpatialArm | CompliantSerialArm)
-        return load_serial_truth(path, model)
+        path = args.truth if args.truth is not None else spec.default_truth
+        assert path is not None
+        return load_serial_truth(path, model), None
     if isinstance(model, CompliantArm):
         if args.truth is None:
             keys = ", ".join(COMPLIANCE_TRUTH_KEYS[k] for k in dict.fromkeys(model.kinds))
@@ -145,15 +164,19 @@ def _truth(args: argparse.Namespace, spec: RobotSpec | SerialSpec, model: FitMod
                 f"deviations and {keys}"
             )
         geometry = load_truth(args.truth, model.arm)
-        return np.concatenate([geometry, load_compliance_truth(args.truth, model)])
+        return np.concatenate([geometry, load_compliance_truth(args.truth, model)]), None
     if args.truth is not None:
-        return load_truth(args.truth, spec.arm)
-    if spec.default_truth is None:
-        raise ArmcalError(
-            f"{spec.source}: a robot file has no default truth; pass --truth truth.toml "
-            "(dl_mm, dq_deg and, with a base offset, base_mm)"
-        )
-    return spec.default_truth
+        return load_truth(args.truth, spec.arm), None
+    assert isinstance(default, np.ndarray)
+    return default, None
+
+
+def _truth_source(args: argparse.Namespace, note: str | None) -> str:
+    """Where the truth came from, for the JSON: ``given`` (--truth), ``built-in`` or
+    ``nominal`` (:data:`NOMINAL_TRUTH`)."""
+    if note is not None:
+        return "nominal"
+    return "given" if args.truth is not None else "built-in"
 
 
 def _plan(path: str, spec: RobotSpec | SerialSpec) -> tuple[np.ndarray, np.ndarray | None]:
@@ -199,7 +222,7 @@ def synthesize(args: argparse.Namespace) -> None:
     spec = load_any_robot(args.robot)
     q, payload, labels = _labelled_plan(args.plan, spec)
     model, loads = plan_model(spec, spec.arm, q.shape[0], payload, virtual=True)
-    truth = _truth(args, spec, model)
+    truth, note = _truth(args, spec, model, nominal=True)
     made = synthesize_plan(
         model,
         q,
@@ -209,14 +232,28 @@ def synthesize(args: argparse.Namespace) -> None:
         loads=loads,
         pose_labels=labels,
     )
-    text = format_measurements_csv(made.q, made.points, made.labels, made.targets, made.payload_kg)
+    text = format_measurements_csv(
+        made.q,
+        made.points,
+        made.labels,
+        made.targets,
+        made.payload_kg,
+        kinds=spec.arm.joint_kinds,
+    )
     if args.output is None or args.output == STDIO:
         print_warnings(spec.warnings)
+        if note is not None:  # stdout holds the measurements: the note goes beside the warnings
+            print(f"armcal: {note}", file=sys.stderr)
         sys.stdout.write(text)
         return
     atomic_write(args.output, text)
     what = f" with {made.effect}" if made.effect else ""
-    document = {"poses": int(made.q.shape[0]), "sigma_mm": made.sigma_mm, "output": args.output}
+    document = {
+        "poses": int(made.q.shape[0]),
+        "sigma_mm": made.sigma_mm,
+        "truth_source": _truth_source(args, note),
+        "output": args.output,
+    }
     noise = spec.arm.noise
     tracker = args.sigma is None and noise is not None and noise.tracker is not None
     turn_sigma = None if noise is None else noise.orientation_sigma
@@ -228,7 +265,8 @@ def synthesize(args: argparse.Namespace) -> None:
         document,
         f"wrote {made.q.shape[0]} measurements of {spec.arm.name}{what} ("
         f"{'laser tracker noise, reference sigma' if tracker else 'sigma'} "
-        f"{made.sigma_mm:g} mm{turn}, seed {args.seed}) to {args.output}",
+        f"{made.sigma_mm:g} mm{turn}, seed {args.seed}) to {args.output}"
+        + ("" if note is None else f"\n{note}"),
         spec.warnings,
     )
 
@@ -316,7 +354,10 @@ def compensate(args: argparse.Namespace) -> None:
     )
     result = run.compensation
     atomic_write(
-        args.output, format_program_csv(result.q, result.corrected, program.labels, run.targets)
+        args.output,
+        format_program_csv(
+            result.q, result.corrected, program.labels, run.targets, kinds=cal.arm.joint_kinds
+        ),
     )
     document, text = compensation_report(cal, result, program, run.payload)
     text += f"\nwrote {args.output}"
@@ -363,7 +404,8 @@ def design(args: argparse.Namespace) -> None:
             figure = plot_plan(spec.arm, run.q, payload_kg=run.payload_kg, gravity=gravity)
         save_figure(figure, args.plot)
     if args.output is not None:
-        atomic_write(args.output, format_plan_csv(run.q, run.payload_kg))
+        plan = format_plan_csv(run.q, run.payload_kg, kinds=spec.arm.joint_kinds)
+        atomic_write(args.output, plan)
     written = _written(args.output, args.plot)
     text = "\n".join([*header, report, *([""] if written else []), *written])
     emit(args, document, text, run.warnings)
@@ -384,7 +426,7 @@ def simulate(args: argparse.Namespace) -> None:
     spec, arm = _model(args, load_any_robot(args.robot))
     q, payload = _plan(args.plan, spec)
     model, loads = plan_model(spec, arm, q.shape[0], payload)
-    truth = _truth(args, spec, model)
+    truth, note = _truth(args, spec, model, nominal=True)
     result = simulate_plan(
         model,
         q,
@@ -397,12 +439,13 @@ def simulate(args: argparse.Namespace) -> None:
         progress=ProgressBar("simulate"),
         source=args.plan,
     )
-    emit(
-        args,
-        monte_carlo_to_dict(result),
-        format_monte_carlo(result),
-        [*spec.warnings, *result.warnings],
-    )
+    document = monte_carlo_to_dict(result)
+    document["truth_source"] = _truth_source(args, note)
+    text = format_monte_carlo(result)
+    if note is not None:  # under the heading line
+        head, _, rest = text.partition("\n")
+        text = f"{head}\n{note}\n{rest}"
+    emit(args, document, text, [*spec.warnings, *result.warnings])
 
 
 def poses_needed(args: argparse.Namespace) -> None:
@@ -422,7 +465,8 @@ def poses_needed(args: argparse.Namespace) -> None:
     )
     document, lines = poses_needed_summary(found, found.model or arm, seconds)
     if args.output is not None:
-        atomic_write(args.output, format_plan_csv(found.plan, found.payload_kg))
+        plan = format_plan_csv(found.plan, found.payload_kg, kinds=spec.arm.joint_kinds)
+        atomic_write(args.output, plan)
         lines.append(f"wrote {args.output}")
     emit(args, document, "\n".join(lines), spec.warnings)
 
@@ -470,14 +514,14 @@ def demo(args: argparse.Namespace) -> None:
     if isinstance(spec, SerialSpec):  # the six-axis story: a tracker and three reflectors
         result = run_serial_demo(
             spec.arm,
-            lambda arm: _truth(args, spec, arm),
+            lambda arm: _truth(args, spec, arm)[0],
             poses=SERIAL_DEMO_POSES if args.poses is None else args.poses,
             sigma=args.sigma,
             seed=args.seed,
         )
         kinds = "report.md, residuals, measurements, calibration, program, URDF, DH table, offsets"
     else:
-        truth = _truth(args, spec, spec.arm)  # the demo calibrates the geometry
+        truth = _truth(args, spec, spec.arm)[0]  # the demo calibrates the geometry
         sigma = design_sigma(spec.arm) if args.sigma is None else args.sigma
         poses = PLANAR_DEMO_POSES if args.poses is None else args.poses
         result = run_demo(spec.arm, truth, poses=poses, sigma=sigma, seed=args.seed)

@@ -42,6 +42,7 @@ from ..models import (
 )
 from ..noise import NoiseModel, TrackerNoise
 from .common import check_keys, fail, load_toml, number, number_within, numbers, suggest
+from .robot_units import check_mdh_angles, check_reach, limit_warnings, urdf_limit_warning
 from .robots import SIGMA_RANGE_MM, RobotSpec, fixed_parameters, held_terms, load_robot
 from .ur import (
     UR_MODELS,
@@ -146,8 +147,16 @@ def load_serial_robot(
     path = Path(key)
     if path.suffix.lower() == ".urdf":
         found = read_urdf(path, None, tip_link)
-        return SerialSpec(SpatialArm(found.chain, found.robot), key)
+        warnings = _urdf_units(path, found.chain)
+        return SerialSpec(SpatialArm(found.chain, found.robot), key, warnings=warnings)
     return _from_toml(path, None, tip_link)
+
+
+def _urdf_units(path: Path, chain: SerialChain) -> tuple[ArmcalWarning, ...]:
+    """A URDF's unit mistakes (:mod:`~armcal.files.robot_units`): an error for one in mm,
+    warnings for lengths that look like another unit and limits that look like degrees."""
+    found = [check_reach(path, chain, urdf=True), urdf_limit_warning(path, chain)]
+    return tuple(w for w in found if w is not None)
 
 
 def load_any_robot(name_or_path: str | os.PathLike) -> RobotSpec | SerialSpec:
@@ -213,7 +222,7 @@ def _chain(
                 raise fail(path, f"key '{name}': expected a link name, got {data[name]!r}")
             links[name] = data.get(name)
         found = read_urdf(urdf, links["base_link"], tip_link or links["tip_link"])
-        return found.chain, found.robot, (), found.masses
+        return found.chain, found.robot, _urdf_units(urdf, found.chain), found.masses
     if "mdh" not in data:
         raise fail(
             path, "needs 'urdf' (a URDF file), an [mdh] table or a [ur] model to describe the arm"
@@ -240,10 +249,13 @@ def _chain(
     if not isinstance(kinds, list) or len(kinds) != n or any(k not in ("R", "P") for k in kinds):
         raise fail(path, f'key \'mdh.joint_types\': expected {n} of "R" or "P", got {kinds!r}')
     frames = {}
+    angles = {name: values[name] for name in ("alpha_deg", "theta_deg")}
     for where in ("base", "tip"):
         xyz = numbers(path, table.get(f"{where}_xyz_mm", [0, 0, 0]), f"mdh.{where}_xyz_mm", 3)
         rpy = numbers(path, table.get(f"{where}_rpy_deg", [0, 0, 0]), f"mdh.{where}_rpy_deg", 3)
+        angles[f"{where}_rpy_deg"] = rpy
         frames[where] = transform(rpy_matrix(np.radians(rpy)), xyz)
+    check_mdh_angles(path, angles)
     chain = MdhTable(
         np.radians(values["alpha_deg"]),
         np.array(values["a_mm"]),
@@ -254,7 +266,13 @@ def _chain(
         frames["base"],
         frames["tip"],
     ).chain()
-    return chain, path.stem, (), None
+    metres = check_reach(path, chain, urdf=False)
+    warned: tuple[ArmcalWarning, ...] = () if metres is None else (metres,)
+    if "joint_limits_deg" in table:  # limits on the table's joint values, as a URDF's
+        own, more = _limits(path, table["joint_limits_deg"], chain.kinds, "mdh.joint_limits_deg")
+        chain = replace(chain, joint_limits=own)
+        warned += more
+    return chain, path.stem, warned, None
 
 
 def _from_toml(path: Path, builtin: str | None, tip_link: str | None = None) -> SerialSpec:
@@ -277,22 +295,15 @@ def _from_toml(path: Path, builtin: str | None, tip_link: str | None = None) -> 
             raise fail(
                 path, "key 'joint_map': the matrix is singular; every joint value needs a reading"
             )
+        _check_map_kinds(path, mapping, chain.kinds)
     limits = np.zeros((0, 2))
     if "joint_limits_deg" in data:
-        raw = data["joint_limits_deg"]
-        if not isinstance(raw, list) or len(raw) != n:
-            raise fail(path, f"key 'joint_limits_deg': expected {n} pairs [lo, hi], one per joint")
-        pairs = np.array(
-            [numbers(path, p, f"joint_limits_deg[{j}]", 2) for j, p in enumerate(raw)]
-        )
-        for j, (lo, hi) in enumerate(pairs):
-            if not lo < hi:
-                raise fail(
-                    path, f"key 'joint_limits_deg[{j}]': need lo < hi, got [{lo:g}, {hi:g}]"
-                )
-        limits = np.where(chain.revolute[:, None], np.radians(pairs), pairs)
-        # They replace the description's limits, which hold for the joint values M q.
-        chain = replace(chain, joint_limits=np.tile([-np.inf, np.inf], (n, 1)))
+        limits, warned = _limits(path, data["joint_limits_deg"], chain.kinds, "joint_limits_deg")
+        read_warnings += warned
+        if "mdh" not in data:
+            # They replace the URDF's (or UR's) limits, which hold for the joint values M q;
+            # an [mdh] table's own limits (mdh.joint_limits_deg) are the user's, and kept.
+            chain = replace(chain, joint_limits=np.tile([-np.inf, np.inf], (n, 1)))
     noise = _noise(path, data.get("measurement"))
     labels, positions, normals = _target_table(path, data.get("targets"))
     view = _view(path, data.get("instrument"), labels, normals)
@@ -318,6 +329,40 @@ def _from_toml(path: Path, builtin: str | None, tip_link: str | None = None) -> 
         if elastic is not None:
             elastic = replace(elastic, terms=held_terms(table, terms))
     return SerialSpec(arm, builtin or os.fspath(path), warnings=read_warnings, elastic=elastic)
+
+
+def _limits(
+    path: Path, raw: Any, kinds: Sequence[str], key: str
+) -> tuple[np.ndarray, tuple[ArmcalWarning, ...]]:
+    """Limits ``(n, 2)`` (rad; mm for a prismatic joint) of the key ``key``: a pair
+    ``[lo, hi]`` per joint in deg (mm), and the unit warnings of
+    :func:`~armcal.files.robot_units.limit_warnings`."""
+    n = len(kinds)
+    if not isinstance(raw, list) or len(raw) != n:
+        raise fail(path, f"key '{key}': expected {n} pairs [lo, hi], one per joint")
+    pairs = np.array([numbers(path, p, f"{key}[{j}]", 2) for j, p in enumerate(raw)])
+    for j, (lo, hi) in enumerate(pairs):
+        if not lo < hi:
+            raise fail(path, f"key '{key}[{j}]': need lo < hi, got [{lo:g}, {hi:g}]")
+    revolute = np.array([kind == "R" for kind in kinds])
+    limits = np.where(revolute[:, None], np.radians(pairs), pairs)
+    return limits, tuple(limit_warnings(path, pairs, kinds, key))
+
+
+def _check_map_kinds(path: Path, mapping: np.ndarray, kinds: Sequence[str]) -> None:
+    """Refuse a ``joint_map`` that makes a revolute joint's angle of a slide's reading (mm)
+    or a slide of an angle: the units do not mix, and every reading's column unit follows
+    the kind of the joints it moves (``q{j}_deg`` or ``q{j}_mm``)."""
+    for i, j in np.argwhere(mapping != 0):
+        if kinds[i] != kinds[j]:
+            what = {"R": "revolute", "P": "prismatic"}
+            raise fail(
+                path,
+                f"key 'joint_map': row {i + 1}, column {j + 1} is {mapping[i, j]:g}: it moves "
+                f"{what[kinds[i]]} joint {i + 1} by reading {j + 1} of {what[kinds[j]]} joint "
+                f"{j + 1}; a reading moves joints of its own kind only (degrees and mm do not "
+                "mix): set it to 0",
+            )
 
 
 def _elastostatic(

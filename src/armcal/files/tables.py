@@ -1,6 +1,7 @@
 """CSV tables: plans, measurements and robot programs, read strictly and written exactly.
 
-A plan or program has a column per joint (``q1_deg..qn_deg``); measurements add
+A plan or program has a column per joint (``q1_deg..qn_deg``; a prismatic joint's
+is ``q{j}_mm``, its reading a slide in mm); measurements add
 the measured point (``x_mm, y_mm[, z_mm]``) and optional columns (``pose``,
 ``target``, ``sigma_mm``, ``payload_kg``, ``fx_N``, ``fy_N``).  Readers accept
 the variants spreadsheets and instruments write (``#`` comments, ``;`` with a
@@ -29,12 +30,24 @@ from ..models import (
     SpatialArm,
 )
 from .common import MAX_ABS_VALUE, fail, read_text, suggest
+from .joints import (
+    JOINT_COLUMN,
+    JOINT_UNITS,
+    check_joint_units,
+    check_joint_values,
+    file_limits,
+    joint_names,
+    limit_slack,
+    model_units,
+    revolute,
+)
 from .robots import METRE_REACH_MM, RADIAN_LIMIT_BOUND, SIGMA_RANGE_MM
-from .writers import ORIENTATION_COLUMNS, joint_names
+from .writers import ORIENTATION_COLUMNS
 
 __all__ = [
     "INSTRUMENT_RANGE",
     "LIMIT_TOLERANCE_DEG",
+    "LIMIT_TOLERANCE_MM",
     "REACH_MARGIN",
     "Measurements",
     "Program",
@@ -54,6 +67,11 @@ __all__ = [
 #: limits are wrong, and the reading stays an error.
 LIMIT_TOLERANCE_DEG = 2.0
 
+#: The same for a prismatic joint's reading (mm): overshoot and encoder noise of a slide
+#: are hundredths to tenths of a mm, and 2 mm is about the largest zero offset PRODUCT.md
+#: expects of a joint ("up to a few mm").  Farther is an error.
+LIMIT_TOLERANCE_MM = 2.0
+
 #: A measured tip farther than ``(1 + REACH_MARGIN)`` times the arm's reach (the sum of
 #: its link lengths) from the base is an error: no arm whose links deviate by less than
 #: 10 % (the ``large-deviation`` bound of :mod:`armcal.plausibility`) gets there.
@@ -65,7 +83,6 @@ REACH_MARGIN = 0.1
 INSTRUMENT_RANGE = 100.0
 
 
-_JOINT_COLUMN = re.compile(r"^q([1-9][0-9]{0,3})_deg$")  # up to 9999 joints
 #: A column with a known stem and another unit suffix (``q1_rad``, ``x_m``).
 _UNIT_COLUMN = re.compile(r"^(q[1-9][0-9]{0,3}|x|y|z|rx|ry|rz|sigma)_([A-Za-z]+)$")
 
@@ -86,7 +103,7 @@ class Measurements:
     Attributes
     ----------
     q : ndarray, shape (m, n)
-        Commanded joint angles in rad.
+        Commanded joint values: rad (mm for a prismatic joint).
     xy : ndarray, shape (m, 2)
         Measured positions in mm.
     labels : tuple of str
@@ -160,11 +177,11 @@ class Measurements:
 class _Table:
     """A validated CSV: numbers in file units and the optional columns found."""
 
-    values: np.ndarray  # (m, n + len(numeric)): joint columns (deg), then the numeric ones
+    values: np.ndarray  # (m, n + len(numeric)): joint columns (deg, mm), then the numeric ones
     texts: dict[str, list[str]]  # optional text columns present
     numbers: dict[str, np.ndarray]  # optional numeric columns present
     lines: list[int]  # file line of every data row
-    beyond: list[tuple[int, int, float, float]]  # (row index, joint, value deg, by deg)
+    beyond: list[tuple[int, int, float, float]]  # (row index, joint, value, by): deg or mm
     header_line: int = 1  # file line of the header
 
 
@@ -334,15 +351,19 @@ def _delimiter(header: str) -> str:
 def _unit_hint(name: str, allowed: Sequence[str]) -> str:
     """What to do about an ``allowed`` column in another unit (``q1_rad``, ``x_m``), else ``""``.
 
-    A unit that is a typo of the right one (``q1_dge``) gets a did-you-mean instead.
+    A joint's right unit is the one its ``allowed`` column has (``q3_mm`` for a
+    prismatic joint), else degrees.  A unit that is a typo of the right one
+    (``q1_dge``) gets a did-you-mean instead.
     """
     match = _UNIT_COLUMN.match(name)
     if match is None:
         return ""
     stem, unit = match.groups()
-    right = "deg" if stem.startswith("q") else "mm"
+    right = "mm"
+    if stem.startswith("q"):
+        right = "mm" if f"{stem}_mm" in allowed else "deg"
     fixed = f"{stem}_{right}"
-    if fixed not in allowed and not (stem.startswith("q") and _JOINT_COLUMN.match(fixed)):
+    if fixed not in allowed and not (stem.startswith("q") and JOINT_COLUMN.match(fixed)):
         return ""
     unit = unit.lower()
     if unit not in _OTHER_UNITS and (
@@ -353,6 +374,11 @@ def _unit_hint(name: str, allowed: Sequence[str]) -> str:
         return (
             f"joint angles are read in degrees: name the column {fixed} and give degrees "
             "(deg = rad x 57.29578); "
+        )
+    if stem.startswith("q"):
+        return (
+            f"joint {stem[1:]} is prismatic, its reading a slide in mm: name the column "
+            f"{fixed} and give millimetres; "
         )
     return f"positions are read in mm: name the column {fixed} and give millimetres; "
 
@@ -373,7 +399,7 @@ def _read_csv(
     path,
     arm: PlanarArm | SpatialArm,
     what: str,
-    limit_tol_deg: float = 0.0,
+    measured: bool = False,
     arm_from: str | None = None,
 ) -> _Table:
     """Validate a CSV of kind ``what`` (a key of :data:`armcal.formats.COLUMNS`).
@@ -381,12 +407,16 @@ def _read_csv(
     ``arm_from`` names where the arm came from when not from ``--robot`` (``"the
     calibration cal.json"``), for the errors that blame a wrong robot.
 
-    Its joint columns and required columns must be there; its optional text and
-    numeric columns may be.  A joint angle beyond its limit by at most
-    ``limit_tol_deg`` is accepted and listed in ``beyond``; farther is an error.
+    Its joint columns (in every joint's unit: :func:`~armcal.files.writers.joint_names`)
+    and required columns must be there; its optional text and numeric columns may
+    be.  A ``measured`` joint value beyond its limit by at most
+    :data:`LIMIT_TOLERANCE_DEG` (:data:`LIMIT_TOLERANCE_MM` for a prismatic joint) is
+    accepted and listed in ``beyond``; farther is an error, as any value beyond a
+    limit of a plan or program is.
     """
     numeric, optional, optional_numeric = reader_columns(what)
-    expected = joint_names(arm.n_joints) + list(numeric)
+    kinds = arm.joint_kinds
+    expected = joint_names(kinds) + list(numeric)
     extras = list(optional) + list(optional_numeric)
     layout = ",".join(expected) + "".join(f" [,{c}]" for c in extras)
     text = read_text(path, what)
@@ -415,24 +445,18 @@ def _read_csv(
         if header.count(name) > 1:
             raise fail(path, f"line {header_line}: duplicate column '{name}'; keep one")
     for name in header:
-        if name not in expected and name not in extras and not _JOINT_COLUMN.match(name):
+        if name not in expected and name not in extras and not JOINT_COLUMN.match(name):
             raise fail(
                 path,
                 f"line {header_line}: unknown column {_shown(name)}: "
                 f"{_unit_hint(name, expected + extras) or suggest(name, expected + extras)}"
                 f"expected {layout}",
             )
-    joints = sorted(int(m.group(1)) for h in header if (m := _JOINT_COLUMN.match(h)))
-    if joints and joints != list(range(1, len(joints) + 1)):
+    found = check_joint_units(path, header, header_line, arm)
+    if found and len(found) != arm.n_joints:
         raise fail(
             path,
-            f"line {header_line}: joint columns must be q1_deg..qN_deg without gaps, got "
-            f"{', '.join(f'q{j}_deg' for j in joints)}",
-        )
-    if joints and len(joints) != arm.n_joints:
-        raise fail(
-            path,
-            f"has {len(joints)} joint columns (q1_deg..q{len(joints)}_deg) but robot "
+            f"has {len(found)} joint columns ({found[0][1]}..{found[-1][1]}) but robot "
             f"{arm.name}{_from(arm_from)} has {arm.n_joints} joints; {_other_robot(arm_from)} "
             "or fix the header",
         )
@@ -458,23 +482,27 @@ def _read_csv(
         for name in optional
         if name in header
     }
-    q_deg = values[:, : arm.n_joints]
-    limits_deg = np.degrees(arm.joint_limits)
-    # Distance beyond the nearer limit (deg), 0 inside; the 1e-9 rad slack of
-    # PlanarArm.within_limits keeps a limit written out in the file inside.
-    by = np.maximum(limits_deg[:, 0] - q_deg, q_deg - limits_deg[:, 1])
-    outside = by > math.degrees(1e-9)
-    far = outside & (by > limit_tol_deg)
+    q_file = values[:, : arm.n_joints]
+    turns = revolute(kinds)
+    units = [JOINT_UNITS[kind] for kind in kinds]
+    limits = file_limits(arm)
+    # Distance beyond the nearer limit (file units), 0 inside; the slack of within_limits
+    # keeps a limit written out in the file inside.
+    by = np.maximum(limits[:, 0] - q_file, q_file - limits[:, 1])
+    outside = by > limit_slack(kinds)
+    tolerance = np.where(turns, LIMIT_TOLERANCE_DEG, LIMIT_TOLERANCE_MM) * float(measured)
+    far = outside & (by > tolerance)
     if far.any():
         r, j = map(int, np.argwhere(far)[0])
-        lo, hi = limits_deg[j]
+        lo, hi = limits[j]
+        unit = units[j]
         fix = "fix the pose or the robot's joint_limits_deg"
-        if limit_tol_deg > 0:
+        if measured:
             fix = (
-                f"readings up to {limit_tol_deg:g} deg beyond a limit are accepted; "
+                f"readings up to {tolerance[j]:g} {unit} beyond a limit are accepted; "
                 "check the robot file (joint_limits_deg) and the column"
             )
-        wrapped = _wrapped_into(q_deg[:, j], lo, hi)
+        wrapped = _wrapped_into(q_file[:, j], lo, hi) if turns[j] else None
         if wrapped is not None:  # a controller that reads 0..360
             fix = (
                 f"{values[r, j]:g} is {values[r, j] + wrapped:g} {'+' if wrapped < 0 else '-'} "
@@ -483,14 +511,16 @@ def _read_csv(
             )
         raise fail(
             path,
-            f"row {r + 1} (line {lines[r]}), column q{j + 1}_deg: "
-            f"{values[r, j]:g} deg is outside joint {j + 1}'s limits [{lo:g}, {hi:g}] deg; {fix}",
+            f"row {r + 1} (line {lines[r]}), column {expected[j]}: {values[r, j]:g} {unit} is "
+            f"outside joint {j + 1}'s limits [{lo:g}, {hi:g}] {unit}; {fix}",
         )
     beyond = [
         (int(r), int(j), float(values[r, j]), float(by[r, j])) for r, j in np.argwhere(outside)
     ]
     if what in ("plan", "program"):
-        _refuse_radians(path, what, q_deg, limits_deg)
+        if turns.any():
+            _refuse_radians(path, what, q_file[:, turns], limits[turns])
+        check_joint_values(path, what, arm, model_units(q_file, kinds), lines)
     return _Table(values, texts, numbers, lines, beyond, header_line)
 
 
@@ -540,7 +570,7 @@ def read_plan(path: str | os.PathLike, arm: PlanarArm | SpatialArm) -> np.ndarra
     Returns
     -------
     ndarray, shape (m, n)
-        Joint angles in rad, each within the joint limits.
+        Joint values in rad (mm for a prismatic joint), each within the joint limits.
     """
     return read_labelled_plan(path, arm)[0]
 
@@ -568,7 +598,7 @@ def read_loaded_plan(
     Returns
     -------
     q : ndarray, shape (m, n)
-        Joint angles in rad.
+        Joint values in rad (mm for a prismatic joint).
     payload : ndarray, shape (m,), or None
         The payload of every pose (kg), when the column is there.
     labels : tuple of str, or None
@@ -577,7 +607,8 @@ def read_loaded_plan(
     table = _read_csv(path, arm, "plan")
     payload, _ = _load_columns(path, table)
     labels = table.texts.get("pose")
-    return np.radians(table.values), payload, None if labels is None else tuple(labels)
+    q = model_units(table.values, arm.joint_kinds)
+    return q, payload, None if labels is None else tuple(labels)
 
 
 @dataclass(frozen=True, eq=False)
@@ -587,7 +618,7 @@ class Program:
     Attributes
     ----------
     q : ndarray, shape (m, n)
-        Joint commands in rad, within the joint limits.
+        Joint commands in rad (mm for a prismatic joint), within the joint limits.
     labels : tuple of str, or None
         The optional ``pose`` column.
     targets : tuple of str, or None
@@ -626,7 +657,7 @@ def read_program(
     labels = table.texts.get("pose")
     payload, force = _load_columns(path, table)
     return Program(
-        np.radians(table.values),
+        model_units(table.values, arm.joint_kinds),
         None if labels is None else tuple(labels),
         None if targets is None else tuple(targets),
         payload,
@@ -635,19 +666,22 @@ def read_program(
 
 
 def _beyond_limits_warning(path, arm: PlanarArm | SpatialArm, beyond) -> ArmcalWarning:
-    limits_deg = np.degrees(arm.joint_limits)
+    kinds = arm.joint_kinds
+    limits = file_limits(arm)
+    names = joint_names(kinds)
     shown = [
-        f"row {r + 1} q{j + 1}_deg = {value:g} "
-        f"([{limits_deg[j, 0]:g}, {limits_deg[j, 1]:g}], {by:.3g} deg beyond)"
+        f"row {r + 1} {names[j]} = {value:g} "
+        f"([{limits[j, 0]:g}, {limits[j, 1]:g}], {by:.3g} {JOINT_UNITS[kinds[j]]} beyond)"
         for r, j, value, by in beyond[:5]
     ]
     more = f" and {len(beyond) - 5} more" if len(beyond) > 5 else ""
+    slides = f" ({LIMIT_TOLERANCE_MM:g} mm for a slide)" if "P" in kinds else ""
     return ArmcalWarning(
         "beyond-limits",
-        f"{os.fspath(path)}: {len(beyond)} measured joint angle(s) beyond the robot's limits by "
-        f"at most {LIMIT_TOLERANCE_DEG:g} deg, accepted (limits constrain plans, not what the "
-        f"arm did): {'; '.join(shown)}{more}; if the arm cannot go there, check the robot "
-        "file's joint_limits_deg",
+        f"{os.fspath(path)}: {len(beyond)} measured joint {'value' if slides else 'angle'}(s) "
+        f"beyond the robot's limits by at most {LIMIT_TOLERANCE_DEG:g} deg{slides}, accepted "
+        f"(limits constrain plans, not what the arm did): {'; '.join(shown)}{more}; if the arm "
+        "cannot go there, check the robot file's joint_limits_deg",
     )
 
 
@@ -714,8 +748,9 @@ def read_measurements(
     Returns
     -------
     Measurements
-        Angles in rad, positions in mm, the data rows, the ``sigma_mm`` column
-        (per-row instrument noise, mm) and the ``beyond-limits`` warning.
+        Joint values in rad (mm for a slide), positions in mm, the data rows, the
+        ``sigma_mm`` column (per-row instrument noise, mm) and the ``beyond-limits``
+        warning.
 
     Raises
     ------
@@ -725,9 +760,7 @@ def read_measurements(
         :data:`SIGMA_RANGE_MM`; a point no arm of this geometry can reach
         (:data:`REACH_MARGIN`).
     """
-    table = _read_csv(
-        path, arm, "measurements", limit_tol_deg=LIMIT_TOLERANCE_DEG, arm_from=arm_from
-    )
+    table = _read_csv(path, arm, "measurements", measured=True, arm_from=arm_from)
     n = arm.n_joints
     values = table.values
     m = values.shape[0]
@@ -758,7 +791,7 @@ def read_measurements(
     payload, force = _load_columns(path, table)
     orientation = _orientation_columns(path, arm, table)
     return Measurements(
-        np.radians(values[:, :n]),
+        model_units(values[:, :n], arm.joint_kinds),
         xy,
         tuple(labels),
         rows=tuple(range(1, m + 1)),

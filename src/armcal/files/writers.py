@@ -1,5 +1,11 @@
 """The CSV files armcal writes: plans, measurements and programs, in the layouts
-:mod:`~armcal.files.tables` reads (:mod:`armcal.formats` documents them)."""
+:mod:`~armcal.files.tables` reads (:mod:`armcal.formats` documents them).
+
+A joint's column says its unit (:mod:`~armcal.files.joints`): ``q{j}_deg`` for a
+revolute joint, ``q{j}_mm`` for a prismatic one.  Every writer takes the arm's
+``kinds`` (``"R"``/``"P"`` per joint, ``arm.joint_kinds``); without them every
+joint is revolute.
+"""
 
 from __future__ import annotations
 
@@ -8,33 +14,30 @@ from collections.abc import Sequence
 import numpy as np
 
 from .csv_text import csv_text, degrees, floats
+from .joints import joint_names, joint_values
 
 __all__ = [
     "ORIENTATION_COLUMNS",
     "format_measurements_csv",
     "format_plan_csv",
     "format_program_csv",
-    "joint_names",
 ]
 
 #: The columns of a 6-DoF instrument's orientation: a rotation vector in degrees.
 ORIENTATION_COLUMNS = ("rx_deg", "ry_deg", "rz_deg")
 
 
-def joint_names(n: int) -> list[str]:
-    """The joint columns ``q1_deg..qn_deg`` of an arm of ``n`` joints."""
-    return [f"q{j}_deg" for j in range(1, n + 1)]
-
-
 def format_plan_csv(
     q: np.ndarray,
     payload_kg: np.ndarray | None = None,
     targets: Sequence[str] | None = None,
+    *,
+    kinds: Sequence[str] | None = None,
 ) -> str:
-    """Plan (or program) CSV text for joint angles ``q`` ``(m, n)`` in rad, and every pose's
-    payload or target where given."""
-    head = joint_names(q.shape[1]) + (["payload_kg"] if payload_kg is not None else [])
-    columns: list = [degrees(q)]
+    """Plan (or program) CSV text for joint values ``q`` ``(m, n)`` (rad; mm for a joint
+    that ``kinds`` says is prismatic), and every pose's payload or target where given."""
+    head = joint_names(kinds or q.shape[1]) + (["payload_kg"] if payload_kg is not None else [])
+    columns: list = [joint_values(q, kinds)]
     if payload_kg is not None:
         columns.append(floats(payload_kg))
     if targets is not None:
@@ -49,8 +52,13 @@ def format_measurements_csv(
     labels: Sequence[str] | None = None,
     targets: Sequence[str] | None = None,
     payload_kg: np.ndarray | None = None,
+    *,
+    kinds: Sequence[str] | None = None,
 ) -> str:
     """Measurements CSV text; positions are written with full round-trip precision.
+
+    ``q`` ``(m, n)`` are the joint values (rad; mm for a joint that ``kinds`` says is
+    prismatic: :func:`joint_names`).
 
     ``xy`` of shape ``(m, 3)`` writes 3-D points (``z_mm``), of shape ``(m, 6)`` also a
     6-DoF instrument's orientation (a rotation vector in rad, written in degrees:
@@ -59,14 +67,14 @@ def format_measurements_csv(
     """
     xy = np.asarray(xy, dtype=float)
     head = ["pose"] if labels is not None else []
-    head += joint_names(q.shape[1]) + ["x_mm", "y_mm", "z_mm"][: xy.shape[1]]
+    head += joint_names(kinds or q.shape[1]) + ["x_mm", "y_mm", "z_mm"][: xy.shape[1]]
     head += list(ORIENTATION_COLUMNS) if xy.shape[1] == 6 else []
     head += ["target"] if targets is not None else []
     head += ["payload_kg"] if payload_kg is not None else []
     if xy.shape[0] != q.shape[0]:
         raise ValueError(f"q has {q.shape[0]} rows but xy has {xy.shape[0]}")
     columns: list = [[str(label) for label in labels]] if labels is not None else []
-    columns += [degrees(q), floats(xy[:, :3])]
+    columns += [joint_values(q, kinds), floats(xy[:, :3])]
     columns += [degrees(xy[:, 3:])] if xy.shape[1] == 6 else []
     columns += [[str(target) for target in targets]] if targets is not None else []
     if payload_kg is not None:
@@ -79,12 +87,15 @@ def format_program_csv(
     corrected: np.ndarray,
     labels: Sequence[str] | None = None,
     targets: Sequence[str] | None = None,
+    *,
+    kinds: Sequence[str] | None = None,
 ) -> str:
-    """Program CSV text: ``[pose,]q1_deg..qn_deg[,target],corrected`` (1 or 0 per row)."""
-    head = (["pose"] if labels is not None else []) + joint_names(q.shape[1])
+    """Program CSV text: ``[pose,]q1_deg..qn_deg[,target],corrected`` (1 or 0 per row); a
+    prismatic joint's column is ``q{j}_mm`` (:func:`joint_names`)."""
+    head = (["pose"] if labels is not None else []) + joint_names(kinds or q.shape[1])
     head += (["target"] if targets is not None else []) + ["corrected"]
     columns: list = [[str(label) for label in labels]] if labels is not None else []
-    columns.append(degrees(q))
+    columns.append(joint_values(q, kinds))
     columns += [[str(target) for target in targets]] if targets is not None else []
     columns.append(["1" if c else "0" for c in np.asarray(corrected, dtype=bool).tolist()])
     return csv_text(head, columns)

@@ -239,6 +239,10 @@ class ArmEffect:
     def joint_limits(self) -> np.ndarray:
         return self.arm.joint_limits
 
+    @property
+    def joint_kinds(self) -> tuple[str, ...]:
+        return self.arm.joint_kinds
+
     def within_limits(self, q: np.ndarray, *, tol: float = 1e-9) -> np.ndarray:
         return self.arm.within_limits(q, tol=tol)
 

@@ -497,7 +497,12 @@ class FitModel(Protocol):
     def n_joints(self) -> int: ...
     @property
     def joint_limits(self) -> np.ndarray:
-        """``(n, 2)`` limits of the joint readings, rad."""
+        """``(n, 2)`` limits of the joint readings, rad (mm for a prismatic joint)."""
+        ...
+
+    @property
+    def joint_kinds(self) -> tuple[str, ...]:
+        """Every joint reading's kind: ``"R"`` (an angle, rad) or ``"P"`` (a slide, mm)."""
         ...
 
     def within_limits(self, q: np.ndarray, *, tol: float = 1e-9) -> np.ndarray:

@@ -211,6 +211,11 @@ class PlanarGeometry:
         return int(self.link_lengths.size)
 
     @property
+    def joint_kinds(self) -> tuple[str, ...]:
+        """Every joint reading's kind: ``"R"`` each (a planar arm's joints turn; rad)."""
+        return ("R",) * self.n_joints
+
+    @property
     def n_target_links(self) -> int:
         """Number of last links: one per target, at least one."""
         return max(1, len(self.targets))

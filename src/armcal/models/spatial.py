@@ -307,6 +307,15 @@ class SpatialArm(RigidLoads):
         return self.chain.n_joints
 
     @property
+    def joint_kinds(self) -> tuple[str, ...]:
+        """Every reading's kind: ``"R"`` (an angle, rad) or ``"P"`` (a slide, mm).
+
+        A reading feeds joints of its own kind only (the robot file's ``joint_map``
+        is checked for it), so reading ``j`` is of the kind of the chain's joint ``j``.
+        """
+        return self.chain.kinds
+
+    @property
     def joint_limits(self) -> np.ndarray:
         return self.limits
 

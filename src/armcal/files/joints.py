@@ -1,0 +1,167 @@
+"""The joint columns of every CSV armcal reads and writes, in each joint's own unit.
+
+A revolute joint's column is ``q{j}_deg`` (the model's radians written in
+degrees), a prismatic joint's ``q{j}_mm`` (a slide, in mm, as the model takes it):
+PRODUCT.md, "Joint columns and units of joints".  A column in the other unit is
+an error that names the joint's kind and the right column, never a conversion:
+a prismatic reading of 200 under ``q3_deg`` read as degrees would move the slide
+3.49 mm.  Which kind a reading is comes from the arm (``arm.joint_kinds``); a
+joint map moves joints of a reading's own kind only, so reading ``j`` is of the
+kind of joint ``j``.
+"""
+
+from __future__ import annotations
+
+import math
+import re
+from collections.abc import Sequence
+
+import numpy as np
+
+from ..models import PlanarArm, SpatialArm
+from .common import fail
+from .csv_text import WIDTH, Column, degree_cells, degrees, float_cells
+
+__all__ = [
+    "JOINT_COLUMN",
+    "JOINT_UNITS",
+    "check_joint_units",
+    "check_joint_values",
+    "file_limits",
+    "joint_names",
+    "joint_values",
+    "limit_slack",
+    "model_units",
+    "revolute",
+]
+
+#: The unit of a joint's column by the joint's kind: an angle in degrees, a slide in mm.
+JOINT_UNITS = {"R": "deg", "P": "mm"}
+
+#: A joint column of either unit (``q3_deg``, ``q3_mm``); up to 9999 joints.
+JOINT_COLUMN = re.compile(r"^q([1-9][0-9]{0,3})_(deg|mm)$")
+
+
+def _kinds(kinds: int | Sequence[str]) -> tuple[str, ...]:
+    """``kinds`` as a tuple; a count ``n`` stands for ``n`` revolute joints."""
+    if isinstance(kinds, int):
+        return ("R",) * kinds
+    return tuple(kinds)
+
+
+def revolute(kinds: int | Sequence[str]) -> np.ndarray:
+    """Boolean ``(n,)``: the revolute joints of ``kinds`` (a count: all of them)."""
+    return np.array([kind == "R" for kind in _kinds(kinds)], dtype=bool)
+
+
+def joint_names(kinds: int | Sequence[str]) -> list[str]:
+    """The joint columns of an arm whose joints are ``kinds`` (``"R"``/``"P"`` each, or a
+    count of revolute joints).
+
+    >>> joint_names(["R", "R", "P"])
+    ['q1_deg', 'q2_deg', 'q3_mm']
+    >>> joint_names(2)
+    ['q1_deg', 'q2_deg']
+    """
+    return [f"q{j}_{JOINT_UNITS[kind]}" for j, kind in enumerate(_kinds(kinds), start=1)]
+
+
+def joint_values(q: np.ndarray, kinds: int | Sequence[str] | None = None) -> Column:
+    """The joint values ``q`` ``(m, n)`` (rad, mm) as their columns' text: a revolute
+    joint's in degrees (:func:`~armcal.files.csv_text.degree_cells`), a prismatic one's
+    in mm with full round-trip precision; without ``kinds`` every joint is revolute."""
+    q = np.asarray(q, dtype=float)
+    turns = revolute(q.shape[1] if kinds is None else kinds)
+    if turns.size != q.shape[1]:
+        raise ValueError(f"q has {q.shape[1]} joints but kinds gives {turns.size}")
+    if turns.all():
+        return degrees(q)
+
+    def cells(block: np.ndarray) -> np.ndarray:
+        out = np.zeros((*block.shape, WIDTH), dtype=np.uint8)
+        out[:, turns] = degree_cells(block[:, turns])
+        out[:, ~turns] = float_cells(block[:, ~turns])
+        return out
+
+    return Column(q, cells)
+
+
+def model_units(q_file: np.ndarray, kinds: Sequence[str]) -> np.ndarray:
+    """Joint values ``(m, n)`` in the files' units (deg; mm) in the model's (rad; mm)."""
+    return np.where(revolute(kinds), np.radians(q_file), q_file)
+
+
+def file_limits(arm: PlanarArm | SpatialArm) -> np.ndarray:
+    """The arm's reading limits ``(n, 2)`` in the files' units (deg; mm)."""
+    turns = revolute(arm.joint_kinds)[:, None]
+    return np.where(turns, np.degrees(arm.joint_limits), arm.joint_limits)
+
+
+def limit_slack(kinds: Sequence[str]) -> np.ndarray:
+    """``(n,)``: the 1e-9 (rad, mm) slack of ``within_limits`` in deg (mm)."""
+    return np.where(revolute(kinds), math.degrees(1e-9), 1e-9)
+
+
+def check_joint_units(
+    path, header: Sequence[str], header_line: int, arm: PlanarArm | SpatialArm
+) -> list[tuple[int, str]]:
+    """The header's joint columns as ``(joint number, name)``, sorted, each in its joint's
+    unit, without gaps or a joint twice; else InputError naming the column and the fix."""
+    found = sorted((int(m.group(1)), h) for h in header if (m := JOINT_COLUMN.match(h)))
+    joints = [j for j, _ in found]
+    if len(set(joints)) < len(joints):
+        j = next(j for j in joints if joints.count(j) > 1)
+        raise fail(
+            path,
+            f"line {header_line}: joint {j} has two columns "
+            f"({', '.join(h for i, h in found if i == j)}); keep the one in its unit",
+        )
+    if joints and joints != list(range(1, len(joints) + 1)):
+        raise fail(
+            path,
+            f"line {header_line}: joint columns must be q1_deg..qN_deg without gaps, got "
+            f"{', '.join(h for _, h in found)}",
+        )
+    names = joint_names(arm.joint_kinds)
+    for j, name in found:
+        if j <= len(names) and name != names[j - 1]:
+            kind = "prismatic" if arm.joint_kinds[j - 1] == "P" else "revolute"
+            what, fix = (
+                ("a slide in mm, not an angle", "millimetres")
+                if kind == "prismatic"
+                else ("an angle, not a length", "degrees")
+            )
+            raise fail(
+                path,
+                f"line {header_line}, column {name}: joint {j} of {arm.name} is {kind}: its "
+                f"reading is {what}; name the column {names[j - 1]} and give {fix}",
+            )
+    return found
+
+
+def check_joint_values(
+    path, what: str, arm: PlanarArm | SpatialArm, q: np.ndarray, lines: Sequence[int]
+) -> None:
+    """Refuse a plan's or program's pose ``q`` ``(m, n)`` (rad, mm) whose readings are within
+    their limits but whose joint values ``u = M q`` leave the limits of the arm's
+    description (a URDF's ``<limit>``, which hold for ``u`` under a coupled joint map):
+    the arm cannot go there, so designing, synthesizing or correcting it would be fiction.
+    """
+    bad = np.flatnonzero(~np.all(arm.within_limits(q), axis=1))
+    if not bad.size or not isinstance(arm, SpatialArm):
+        return
+    r = int(bad[0])
+    u = arm.joint_map @ q[r]
+    limits = arm.chain.joint_limits
+    k = int(np.flatnonzero((u < limits[:, 0] - 1e-9) | (u > limits[:, 1] + 1e-9))[0])
+    turns = arm.joint_kinds[k] == "R"
+    unit = "deg" if turns else "mm"
+    lo, hi = np.degrees(limits[k]) if turns else limits[k]
+    value = math.degrees(u[k]) if turns else u[k]
+    raise fail(
+        path,
+        f"{what} row {r + 1} (line {lines[r]}): its readings are within their limits, but "
+        f"joint {k + 1} of the arm's description ({arm.chain.joint_names[k]}, u = M q by "
+        f"joint_map) would be at {value:.6g} {unit}, outside its limits [{lo:g}, {hi:g}] "
+        f"{unit} (the URDF's, on u): the arm cannot reach this pose; remove or change it",
+    )
