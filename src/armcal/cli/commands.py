@@ -32,11 +32,8 @@ from ..files import (
     format_measurements_csv,
     format_plan_csv,
     format_program_csv,
-    is_serial_robot,
     load_any_robot,
     load_compliance_truth,
-    load_robot,
-    load_serial_robot,
     load_serial_truth,
     load_truth,
     read_calibration,
@@ -110,6 +107,11 @@ REQUIREMENT_OPTIONS = {
     "angle_std_deg": "--angle-std-deg",
     "position_rms_mm": "--position-rms-mm",
 }
+
+
+def _robot(args: argparse.Namespace) -> RobotSpec | SerialSpec:
+    """``--robot``, its URDF's chain from ``--base-link`` to ``--tip-link`` where given."""
+    return load_any_robot(args.robot, base_link=args.base_link, tip_link=args.tip_link)
 
 
 def _model(args: argparse.Namespace, spec: RobotSpec | SerialSpec) -> PlanarArm | SpatialArm:
@@ -193,7 +195,7 @@ def synthesize(args: argparse.Namespace) -> None:
             f"-o {args.output}: synthesize writes measurements as a CSV table (--json changes "
             "only the summary on stdout); give a name ending in .csv"
         )
-    spec = load_any_robot(args.robot)
+    spec = _robot(args)
     q, payload, labels = _labelled_plan(args.plan, spec)
     model, loads = plan_model(spec, spec.arm, q.shape[0], payload, virtual=True)
     truth = _truth(args, spec, model)
@@ -252,14 +254,11 @@ def identify(args: argparse.Namespace) -> None:
             f"its keys) or a built-in name ({', '.join(BUILTIN_ROBOTS)})"
         )
     try:
-        if is_serial_robot(args.robot):
-            serial = load_serial_robot(args.robot)
-            meas = read_measurements(args.measurements, serial.arm)
-            run = calibrate_serial(
-                serial, meas, compliance=not args.no_compliance, **_options(args)
-            )
+        spec = _robot(args)
+        if isinstance(spec, SerialSpec):
+            meas = read_measurements(args.measurements, spec.arm)
+            run = calibrate_serial(spec, meas, compliance=not args.no_compliance, **_options(args))
         else:
-            spec = load_robot(args.robot)
             meas = read_measurements(args.measurements, spec.arm)
             run = calibrate(spec, meas, compliance=not args.no_compliance, **_options(args))
     except FixError as exc:
@@ -321,7 +320,7 @@ def compensate(args: argparse.Namespace) -> None:
 
 def design(args: argparse.Namespace) -> None:
     """``armcal design``: an optimal plan, its quality and its picture."""
-    spec = load_any_robot(args.robot)
+    spec = _robot(args)
     arm = _model(args, spec)
     candidates = None if args.candidates is None else read_plan(args.candidates, spec.arm)
     run = design_plan(
@@ -368,7 +367,7 @@ def design(args: argparse.Namespace) -> None:
 
 def evaluate(args: argparse.Namespace) -> None:
     """``armcal evaluate``: a plan's quality."""
-    spec = load_any_robot(args.robot)
+    spec = _robot(args)
     arm = _model(args, spec)
     q, payload = _plan(args.plan, spec)
     run = evaluate_file(
@@ -379,7 +378,7 @@ def evaluate(args: argparse.Namespace) -> None:
 
 def simulate(args: argparse.Namespace) -> None:
     """``armcal simulate``: a Monte Carlo of a plan."""
-    spec = load_any_robot(args.robot)
+    spec = _robot(args)
     arm = _model(args, spec)
     q, payload = _plan(args.plan, spec)
     model, loads = plan_model(spec, arm, q.shape[0], payload)
@@ -406,7 +405,7 @@ def simulate(args: argparse.Namespace) -> None:
 
 def poses_needed(args: argparse.Namespace) -> None:
     """``armcal poses-needed``: the smallest plan that reaches an accuracy."""
-    spec = load_any_robot(args.robot)
+    spec = _robot(args)
     arm = _model(args, spec) if spec.elastic is None else spec.arm
     requirement = next(key for key in REQUIREMENT_OPTIONS if getattr(args, key) is not None)
     found, seconds = size_plan(
@@ -465,7 +464,7 @@ def check_compliance(args: argparse.Namespace) -> None:
 
 def demo(args: argparse.Namespace) -> None:
     """``armcal demo``: the whole workflow on a built-in robot."""
-    spec = load_any_robot(args.robot)
+    spec = _robot(args)
     if isinstance(spec, SerialSpec):  # the six-axis story: a tracker and three reflectors
         result = run_serial_demo(
             spec.arm,

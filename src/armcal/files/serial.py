@@ -2,8 +2,9 @@
 table, the built-in spatial robots, and the truth of a virtual spatial arm.
 
 A robot TOML of a spatial arm has ``urdf`` (a path relative to the file, with
-optional ``base_link`` and ``tip_link``) or an ``[mdh]`` table (``alpha_deg``,
-``a_mm``, ``theta_deg``, ``d_mm``, optional ``joint_types``), and optionally
+optional ``base_link`` and ``tip_link``), an ``[mdh]`` table (``alpha_deg``,
+``a_mm``, ``theta_deg``, ``d_mm``, optional ``joint_types``: Craig's modified DH)
+or a ``[dh]`` table (the same keys: standard DH), and optionally
 ``name``, ``joint_map`` (URDF joint values ``u = M q`` from the controller's
 readings ``q``), ``joint_limits_deg`` (on ``q``; they replace the URDF's, which
 hold for ``u``), ``[measurement]`` (``sigma_mm``: one number or ``[sx, sy,
@@ -32,7 +33,6 @@ from ..formats import SERIAL_KEYS, SERIAL_TRUTH_KEYS, allowed_keys
 from ..models import (
     CompliantSerialArm,
     LinkMasses,
-    MdhTable,
     SerialChain,
     SerialElastics,
     SpatialArm,
@@ -40,6 +40,7 @@ from ..models import (
     rpy_matrix,
     transform,
 )
+from ..models.spatial_dh import convention_mistake, table_chain
 from ..noise import NoiseModel, TrackerNoise
 from .common import check_keys, fail, load_toml, number, number_within, numbers, suggest
 from .robots import SIGMA_RANGE_MM, RobotSpec, fixed_parameters, load_robot
@@ -109,9 +110,9 @@ class SerialSpec:
 
 def is_serial_robot(name_or_path: str | os.PathLike) -> bool:
     """Whether ``name_or_path`` names a spatial robot: a built-in one, a URDF, or a robot
-    TOML with ``urdf`` or ``[mdh]``."""
+    TOML with ``urdf``, ``[mdh]``, ``[dh]`` or ``[ur]``."""
     key = os.fspath(name_or_path)
-    if key in BUILTIN_SERIAL_ROBOTS or key.lower().endswith(".urdf"):
+    if key in BUILTIN_SERIAL_ROBOTS or key.lower().endswith(_URDF_SUFFIXES):
         return True
     path = Path(key)
     if path.suffix.lower() != ".toml" or not path.is_file():
@@ -124,13 +125,22 @@ def is_serial_robot(name_or_path: str | os.PathLike) -> bool:
 
 
 #: The keys that describe a spatial arm in a robot TOML (exactly one of them).
-_DESCRIPTIONS = ("urdf", "mdh", "ur")
+_DESCRIPTIONS = ("urdf", "mdh", "dh", "ur")
+
+#: A URDF's suffixes (a xacro file, ROS's macros for URDF, is read to say what it is).
+_URDF_SUFFIXES = (".urdf", ".xacro")
 
 
 def load_serial_robot(
-    name_or_path: str | os.PathLike, *, tip_link: str | None = None
+    name_or_path: str | os.PathLike,
+    *,
+    base_link: str | None = None,
+    tip_link: str | None = None,
 ) -> SerialSpec:
     """A spatial robot from a built-in name, a URDF or a robot TOML (module notes).
+
+    ``base_link`` and ``tip_link`` choose a URDF's chain (over a robot TOML's keys of
+    the same names); a robot described otherwise refuses them.
 
     Raises
     ------
@@ -138,24 +148,37 @@ def load_serial_robot(
         Naming the file and the key (or the URDF's line).
     """
     key = os.fspath(name_or_path)
+    links = (base_link, tip_link)
     if key in BUILTIN_SERIAL_ROBOTS:
         path = BUILTIN_SERIAL_ROBOTS[key]
         truth = path.with_name(path.stem + "-truth.toml")
-        spec = _from_toml(path, key)
+        spec = _from_toml(path, key, links)
         return replace(spec, default_truth=truth if truth.is_file() else None)
     path = Path(key)
-    if path.suffix.lower() == ".urdf":
-        found = read_urdf(path, None, tip_link)
-        return SerialSpec(SpatialArm(found.chain, found.robot), key)
-    return _from_toml(path, None, tip_link)
+    if path.suffix.lower() in _URDF_SUFFIXES:
+        found = read_urdf(path, base_link, tip_link)
+        return SerialSpec(SpatialArm(found.chain, found.robot), key, warnings=found.warnings)
+    return _from_toml(path, None, links)
 
 
-def load_any_robot(name_or_path: str | os.PathLike) -> RobotSpec | SerialSpec:
+def load_any_robot(
+    name_or_path: str | os.PathLike,
+    *,
+    base_link: str | None = None,
+    tip_link: str | None = None,
+) -> RobotSpec | SerialSpec:
     """A planar robot (:func:`~armcal.files.robots.load_robot`) or a spatial one
-    (:func:`load_serial_robot`), whichever ``name_or_path`` names."""
+    (:func:`load_serial_robot`, with ``base_link`` and ``tip_link``), whichever
+    ``name_or_path`` names."""
     if is_serial_robot(name_or_path):
-        return load_serial_robot(name_or_path)
-    return load_robot(name_or_path)
+        return load_serial_robot(name_or_path, base_link=base_link, tip_link=tip_link)
+    spec = load_robot(name_or_path)
+    if base_link is not None or tip_link is not None:
+        raise ArmcalError(
+            f"{os.fspath(name_or_path)}: a base or tip link was given, but this is a planar "
+            "robot, not one from a URDF: links choose a URDF's chain; drop them"
+        )
+    return spec
 
 
 def _relative_file(path: Path, value: Any, key: str, what: str) -> Path:
@@ -196,13 +219,20 @@ def _ur_chain(path: Path, table: Any) -> tuple[SerialChain, str, tuple[ArmcalWar
 
 
 def _chain(
-    path: Path, data: dict, tip_link: str | None
+    path: Path, data: dict, chosen: tuple[str | None, str | None]
 ) -> tuple[SerialChain, str, tuple[ArmcalWarning, ...], LinkMasses | None]:
-    """The chain of a robot TOML: its URDF's, its ``[mdh]`` table's or a UR's (``[ur]``),
-    a default name, what reading it warns of, and its URDF's masses."""
+    """The chain of a robot TOML: its URDF's (from the ``chosen`` base and tip links, else
+    the file's), its ``[mdh]`` or ``[dh]`` table's or a UR's (``[ur]``), a default name,
+    what reading it warns of, and its URDF's masses."""
     given = [key for key in _DESCRIPTIONS if key in data]
     if len(given) > 1:
         raise fail(path, f"keys {' and '.join(given)} all describe the arm; keep one")
+    if given and given[0] != "urdf" and any(link is not None for link in chosen):
+        raise fail(
+            path,
+            f"a base or tip link was given, but the file describes the arm by [{given[0]}], "
+            "not by a URDF: links choose a URDF's chain; drop them",
+        )
     if "ur" in data:
         return (*_ur_chain(path, data["ur"]), None)
     if "urdf" in data:
@@ -212,55 +242,64 @@ def _chain(
             if name in data and not isinstance(data[name], str):
                 raise fail(path, f"key '{name}': expected a link name, got {data[name]!r}")
             links[name] = data.get(name)
-        found = read_urdf(urdf, links["base_link"], tip_link or links["tip_link"])
-        return found.chain, found.robot, (), found.masses
-    if "mdh" not in data:
+        base_link, tip_link = chosen
+        found = read_urdf(urdf, base_link or links["base_link"], tip_link or links["tip_link"])
+        return found.chain, found.robot, found.warnings, found.masses
+    if not given:
         raise fail(
-            path, "needs 'urdf' (a URDF file), an [mdh] table or a [ur] model to describe the arm"
+            path,
+            "needs 'urdf' (a URDF file), an [mdh] or [dh] table or a [ur] model to describe "
+            "the arm",
         )
-    table = data["mdh"]
+    key = given[0]  # a table of one of the DH conventions
+    table = data[key]
     if not isinstance(table, dict):
-        raise fail(path, "key 'mdh': expected a table [mdh]")
-    check_keys(path, table, allowed_keys("mdh", SERIAL_KEYS), "mdh.")
+        raise fail(path, f"key '{key}': expected a table [{key}]")
+    check_keys(path, table, allowed_keys(key, SERIAL_KEYS), f"{key}.")
     values = {}
     for name in _MDH_REQUIRED:
         if name not in table:
-            raise fail(path, f"missing key 'mdh.{name}': one value per joint")
-        values[name] = numbers(path, table[name], f"mdh.{name}")
+            raise fail(path, f"missing key '{key}.{name}': one value per joint")
+        values[name] = numbers(path, table[name], f"{key}.{name}")
     n = len(values["alpha_deg"])
-    values["beta_deg"] = numbers(path, table.get("beta_deg", [0.0] * n), "mdh.beta_deg")
+    values["beta_deg"] = numbers(path, table.get("beta_deg", [0.0] * n), f"{key}.beta_deg")
     for name, column in values.items():
         if len(column) != n or n == 0:
             raise fail(
                 path,
-                f"key 'mdh.{name}': expected {n} values (one per joint, as alpha_deg), "
+                f"key '{key}.{name}': expected {n} values (one per joint, as alpha_deg), "
                 f"got {len(column)}",
             )
     kinds = table.get("joint_types", ["R"] * n)
     if not isinstance(kinds, list) or len(kinds) != n or any(k not in ("R", "P") for k in kinds):
-        raise fail(path, f'key \'mdh.joint_types\': expected {n} of "R" or "P", got {kinds!r}')
+        raise fail(path, f'key \'{key}.joint_types\': expected {n} of "R" or "P", got {kinds!r}')
     frames = {}
     for where in ("base", "tip"):
-        xyz = numbers(path, table.get(f"{where}_xyz_mm", [0, 0, 0]), f"mdh.{where}_xyz_mm", 3)
-        rpy = numbers(path, table.get(f"{where}_rpy_deg", [0, 0, 0]), f"mdh.{where}_rpy_deg", 3)
+        xyz = numbers(path, table.get(f"{where}_xyz_mm", [0, 0, 0]), f"{key}.{where}_xyz_mm", 3)
+        rpy = numbers(path, table.get(f"{where}_rpy_deg", [0, 0, 0]), f"{key}.{where}_rpy_deg", 3)
         frames[where] = transform(rpy_matrix(np.radians(rpy)), xyz)
-    chain = MdhTable(
+    rows = (
         np.radians(values["alpha_deg"]),
         np.array(values["a_mm"]),
-        np.radians(values["beta_deg"]),
         np.radians(values["theta_deg"]),
         np.array(values["d_mm"]),
         tuple(kinds),
         frames["base"],
         frames["tip"],
-    ).chain()
-    return chain, path.stem, (), None
+    )
+    beta = np.radians(values["beta_deg"])
+    mistake = convention_mistake(key, *rows, beta=beta)
+    if mistake is not None:
+        raise fail(path, f"[{key}]: {mistake}")
+    return table_chain(key, *rows, beta=beta), path.stem, (), None
 
 
-def _from_toml(path: Path, builtin: str | None, tip_link: str | None = None) -> SerialSpec:
+def _from_toml(
+    path: Path, builtin: str | None, links: tuple[str | None, str | None] = (None, None)
+) -> SerialSpec:
     data = load_toml(path, "robot")
     check_keys(path, data, allowed_keys("", SERIAL_KEYS))
-    chain, default_name, read_warnings, masses = _chain(path, data, tip_link)
+    chain, default_name, read_warnings, masses = _chain(path, data, links)
     n = chain.n_joints
     name = data.get("name", default_name)
     if not isinstance(name, str) or not name.strip():
