@@ -162,7 +162,7 @@ def test_several_leaves_name_the_flag_on_the_command_line_and_the_key_in_the_lib
     with pytest.raises(InputError) as raised:
         read_urdf(tmp_path / "arm.urdf")
     library = str(raised.value)
-    assert "2 links end chains beyond 'base' (camera, flange)" in library
+    assert "2 links end chains beyond 'base' (camera: 2 joints, flange: 2 joints)" in library
     assert "tip_link in a robot TOML" in library and "tip_link=" in library
     assert "--" not in library  # the library names no flag
     line = one_error(run_cli(tmp_path, "design", "--robot", "arm.urdf", "--poses", "12"))
@@ -200,6 +200,38 @@ def test_tip_link_chooses_the_chain_and_overrides_the_robot_toml(tmp_path):
     beyond = ("--robot", "arm.urdf", "--base-link", "l1", "--tip-link", "flange")
     result = run_cli(tmp_path, "evaluate", *beyond, "--plan", "one.csv", "--json")
     assert result.returncode == 0, result.stderr
+
+
+#: A truth of the same URDF, the instrument at the base and the target at the tip.
+TRUTH_AT_TIP = 'robot = "arm.urdf"\n[targets]\ntool = { xyz_mm = [0, 0, 0] }\n'
+
+
+def test_a_truth_s_bare_urdf_takes_the_robot_s_links(tmp_path):
+    """synthesize --robot arm.urdf --tip-link flange with a truth whose robot is the same
+    URDF: its chain runs to the same tip (it needed one and could not be told); the
+    measurements are the truth's arm, the nominal one here, at the flange."""
+    q_deg = np.array([[0.0, 0.0], [90.0, 0.0], [0.0, 90.0]])
+    write(
+        tmp_path,
+        {
+            "arm.urdf": TWO_LEAVES,
+            "truth.toml": TRUTH_AT_TIP,
+            "plan.csv": plan_csv(q_deg),
+        },
+    )
+    result = run_cli(
+        tmp_path, "synthesize", "--robot", "arm.urdf", "--tip-link", "flange", "--truth",
+        "truth.toml", "--plan", "plan.csv", "--sigma", "0", "-o", "meas.csv",
+    )  # fmt: skip
+    assert result.returncode == 0, result.stderr
+    rows = (tmp_path / "meas.csv").read_text(encoding="utf-8").splitlines()
+    header = rows[0].split(",")
+    points = np.array([[float(v) for v in row.split(",")[2:5]] for row in rows[1:]])
+    assert header[2:5] == ["x_mm", "y_mm", "z_mm"]
+    # Joint 1 at x = 300 mm, joint 2 300 mm beyond, the flange 100 mm further (the URDF's
+    # origins): (700, 0); joint 1 at 90 deg: (300, 400); joint 2 at 90 deg: (600, 100).
+    expected = [[700.0, 0.0, 0.0], [300.0, 400.0, 0.0], [600.0, 100.0, 0.0]]
+    np.testing.assert_allclose(points, expected, rtol=0, atol=1e-9)
 
 
 @pytest.mark.parametrize(

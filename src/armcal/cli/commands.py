@@ -135,7 +135,8 @@ def _truth(args: argparse.Namespace, spec: RobotSpec | SerialSpec, model: FitMod
                 "[targets]; armcal formats)"
             )
         assert isinstance(model, SpatialArm | CompliantSerialArm)
-        return load_serial_truth(path, model)
+        links = (getattr(args, "base_link", None), getattr(args, "tip_link", None))
+        return load_serial_truth(path, model, links=links)
     if isinstance(model, CompliantArm):
         if args.truth is None:
             keys = ", ".join(COMPLIANCE_TRUTH_KEYS[k] for k in dict.fromkeys(model.kinds))

@@ -620,14 +620,18 @@ def _view(path: Path, table: Any, labels: tuple[str, ...], normals: list) -> Spa
 
 
 def load_serial_truth(
-    path: str | os.PathLike, model: SpatialArm | CompliantSerialArm
+    path: str | os.PathLike,
+    model: SpatialArm | CompliantSerialArm,
+    *,
+    links: tuple[str | None, str | None] = (None, None),
 ) -> np.ndarray:
     """The true parameters ``(p,)`` (mm, rad) of a virtual spatial arm (module notes), and
     for a model of joint compliance its ``[compliance]`` table's after them (display
     units urad/(N*m), mdeg/m; a parameter not given is 0).
 
     The true arm's description, when given, is turned into the arm's parameters
-    exactly (:meth:`~armcal.models.SpatialArm.params_of`).  A ``[compliance]``
+    exactly (:meth:`~armcal.models.SpatialArm.params_of`); a bare URDF's chain runs
+    between the base and tip ``links`` (the robot's, where given).  A ``[compliance]``
     table needs a model of compliance (its robot file's ``[elastostatic]``).
     """
     path = Path(path)
@@ -641,17 +645,19 @@ def load_serial_truth(
                 f"key 'compliance': robot {arm.name} has no [elastostatic] table, so nothing "
                 "twists its joints; add the table to the robot file or remove [compliance]",
             )
-        return _geometry_truth(path, data, arm)
+        return _geometry_truth(path, data, arm, links)
     names = model.compliance_names
     compliance = np.zeros(len(names))
     if "compliance" in data:
         example, scale = f"{names[-1]} = 0.5", model.compliance_scale
         table = data["compliance"]
         compliance = _named(path, table, "compliance", example, arm, names, names, scale)
-    return np.concatenate([_geometry_truth(path, data, arm), compliance])
+    return np.concatenate([_geometry_truth(path, data, arm, links), compliance])
 
 
-def _geometry_truth(path: Path, data: dict, arm: SpatialArm) -> np.ndarray:
+def _geometry_truth(
+    path: Path, data: dict, arm: SpatialArm, links: tuple[str | None, str | None]
+) -> np.ndarray:
     """The geometric truth of a truth TOML's ``data`` for ``arm``."""
     base = np.zeros(6)
     if "base" in data:
@@ -664,7 +670,9 @@ def _geometry_truth(path: Path, data: dict, arm: SpatialArm) -> np.ndarray:
     chain = arm.chain
     if "robot" in data:
         other = _relative_file(path, data["robot"], "robot", "truth file")
-        chain = load_serial_robot(other).arm.chain
+        bare = other.suffix.lower() in _URDF_SUFFIXES  # a robot TOML says its own links
+        chosen = dict(zip(("base_link", "tip_link"), links, strict=True)) if bare else {}
+        chain = load_serial_robot(other, **chosen).arm.chain
         if chain.kinds != arm.chain.kinds:
             raise fail(
                 path,

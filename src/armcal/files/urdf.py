@@ -281,9 +281,12 @@ def read_urdf(
             if not children[link]:
                 leaves.append(link)
         if len(leaves) != 1:
+            counted = ", ".join(
+                f"{leaf}: {_moving_to(leaf, base, parent_joint)} joints" for leaf in sorted(leaves)
+            )
             raise InputError(
-                f"{path}: {len(leaves)} links end chains beyond {base!r} "
-                f"({', '.join(sorted(leaves))}); say which is the tip: {action('choose-tip')}"
+                f"{path}: {len(leaves)} links end chains beyond {base!r} ({counted}); say "
+                f"which is the tip: {action('choose-tip')}"
             )
         tip_link = leaves[0]
     chain: list[ET.Element] = []
@@ -311,6 +314,18 @@ def read_urdf(
     gripper = _gripper_warning(path, text, chain, mimicked)
     warnings = () if gripper is None else (gripper,)
     return UrdfChain(serial, root.get("name", path.stem), base, tip_link, masses, warnings)
+
+
+def _moving_to(link: str, base: str, parent_joint: dict[str, ET.Element]) -> int:
+    """How many moving joints lie between ``base`` and ``link`` (beyond it)."""
+    count = 0
+    while link != base:
+        joint = parent_joint[link]
+        count += joint.get("type") != "fixed"
+        parent = joint.find("parent")
+        assert parent is not None
+        link = parent.get("link", "")
+    return count
 
 
 def _check_chain(path: Path, text: str, chain: list[ET.Element], base: str, tip: str) -> None:
