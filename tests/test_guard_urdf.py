@@ -374,6 +374,22 @@ def test_a_standard_dh_table_under_mdh_is_named_for_what_it_is(tmp_path):
         assert fragment in line, line
 
 
+def test_a_seven_axis_standard_table_under_mdh_is_named_too(tmp_path):
+    """A KUKA LBR iiwa 7's standard DH table (Sciavicco-Siciliano style: every a = 0,
+    alpha = -90, 90, 90, -90, -90, 90, 0, d = 340, 0, 400, 0, 400, 0, 126 mm): read as
+    modified DH its joints 6 and 7 share an axis, though the rank is 6 of 7 as for the
+    real arm; the pair alone names the mistake."""
+    alpha, d = [-90, 90, 90, -90, -90, 90, 0], [340, 0, 400, 0, 400, 0, 126]
+    write(tmp_path, {"iiwa.toml": dh_toml("mdh", alpha, [0] * 7, [0] * 7, d)})
+    with pytest.raises(InputError) as raised:
+        load_serial_robot(tmp_path / "iiwa.toml")
+    message = str(raised.value)
+    assert "joints 6 and 7 turn about one axis: two of its joints do the work of one" in message
+    assert "write it under [dh]" in message
+    write(tmp_path, {"iiwa.toml": dh_toml("dh", alpha, [0] * 7, [0] * 7, d)})
+    assert load_serial_robot(tmp_path / "iiwa.toml").arm.n_joints == 7
+
+
 def test_a_dh_table_is_the_dh_product(tmp_path):
     """[dh] reads the UR5's table: its tip frames are the DH product written out, within
     1e-9 mm and 1e-12 rad, at 50 random readings; with a base and a tip frame too."""
@@ -652,6 +668,16 @@ def test_a_six_axis_arm_that_is_no_ur_is_still_refused_for_ur_export(tmp_path):
             ("arm.urdf", "not well-formed XML", "xacro file, not a URDF"),
         ),
         ("arm.urdf", "", ("arm.urdf", "the file is empty")),
+        (
+            "arm.urdf",
+            urdf(link("base")).replace('"1.0"?>', '"1.0" encoding="klingon"?>'),
+            ("arm.urdf", "unknown encoding: klingon", "save the file as UTF-8"),
+        ),
+        (
+            "arm.urdf",
+            urdf(link("base"), link("tool"), joint("mount", "base", "tool", "fixed")),
+            ("arm.urdf", "no moving joint", "'base'", "'tool'"),
+        ),
         ("arm.urdf", "name = 'x'\n", ("arm.urdf", "a URDF is XML")),
         (
             "arm.urdf",
@@ -666,7 +692,10 @@ def test_a_six_axis_arm_that_is_no_ur_is_still_refused_for_ur_export(tmp_path):
             ("arm.urdf", "'float'", "floating joint on the chain", "link 'base'", "--base-link"),
         ),
     ],
-    ids=["xacro", "xacro-unbound-prefix", "empty", "not-xml", "two-roots", "floating-on-chain"],
+    ids=[
+        "xacro", "xacro-unbound-prefix", "empty", "unknown-encoding", "no-moving-joint",
+        "not-xml", "two-roots", "floating-on-chain",
+    ],
 )  # fmt: skip
 def test_what_a_new_user_gives_by_mistake_is_named(tmp_path, name, content, expected):
     write(tmp_path, {name: content})

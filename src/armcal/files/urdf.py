@@ -141,6 +141,11 @@ def _parse(path: Path) -> tuple[ET.Element, str]:
         raise InputError(f"{path}: the file is empty; give the robot's URDF")
     try:
         root = ET.fromstring(data)
+    except LookupError as exc:  # a declared encoding Python does not know
+        raise InputError(
+            f"{path}: {exc}: declare an encoding the XML parser knows (UTF-8, ISO-8859-1) or "
+            "save the file as UTF-8"
+        ) from None
     except ET.ParseError as exc:
         line, column = exc.position
         fix = "fix the URDF"
@@ -305,6 +310,11 @@ def read_urdf(
     chain.reverse()
     _check_chain(path, text, chain, base, tip_link)
     joints = [_joint(path, text, element) for element in chain]
+    if all(joint.kind == "fixed" for joint in joints):
+        raise InputError(
+            f"{path}: no moving joint (revolute, continuous or prismatic) from base_link "
+            f"{base!r} to tip_link {tip_link!r}; choose links with the arm's joints between them"
+        )
     try:
         serial = SerialChain.from_joints(joints)
     except ValueError as exc:
