@@ -80,8 +80,8 @@ class ArmcalError(ValueError):
     >>> error = ArmcalError(f"two leaves; {action('choose-tip')}")
     >>> str(error).startswith("two leaves; name the tip link (tip_link in a robot TOML")
     True
-    >>> error.render({"choose-tip": "give --tip-link"})
-    'two leaves; give --tip-link'
+    >>> error.render({"choose-tip": "say which"})
+    'two leaves; say which'
     """
 
     def __str__(self) -> str:

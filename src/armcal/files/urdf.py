@@ -193,9 +193,10 @@ def _unique(path: Path, text: str, root: ET.Element, tag: str) -> list[str]:
         if name in seen:
             lines = _lines_of(text, tag, name)
             where = f" (lines {lines[0]} and {lines[1]})" if len(lines) > 1 else ""
+            also = " (and the joints that name it)" if tag == "link" else ""
             raise InputError(
                 f"{path}: {tag} {name!r} is declared twice{where}; a URDF's {tag} names are "
-                "unique: rename one of them (and the joints that name it)"
+                f"unique: rename one of them{also}"
             )
         seen.add(name)
     return names
