@@ -1403,7 +1403,7 @@ CASES += [
             "meas.csv": SPATIAL_MEAS,
         },
         IDENTIFY_URDF,
-        ("arm.urdf", "'j2'", "mimic", "joint_map"),
+        ("arm.urdf", "'j2'", "mimic", "follows joint 'j1'", "--tip-link"),
     ),
     case(
         "urdf-unknown-link",

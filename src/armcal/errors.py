@@ -9,11 +9,11 @@ A result that is computed but suspicious carries :class:`ArmcalWarning` records
 (code and message); the command line prints each as ``armcal: warning: ...``
 and the JSON lists them under ``warnings``.
 
-A warning says what to try in neutral words: "try a robust fit".  Where such
-advice is an option of the library or a flag of the command line, the text
-holds a reference to an *action* (:func:`action`), which the library renders
-in its own words (:data:`ACTIONS`) and the command line in its flags
-(:meth:`ArmcalWarning.render`).
+A warning or an error says what to try in neutral words: "try a robust fit".
+Where such advice is an option of the library or a flag of the command line,
+the text holds a reference to an *action* (:func:`action`), which the library
+renders in its own words (:data:`ACTIONS`) and the command line in its flags
+(:meth:`ArmcalWarning.render`, :meth:`ArmcalError.render`).
 """
 
 from __future__ import annotations
@@ -32,8 +32,8 @@ __all__ = [
     "unique_warnings",
 ]
 
-#: What a warning can advise, by key, in the library's words (the command line has
-#: its flags for the same, :mod:`armcal.cli`).
+#: What a warning or an error can advise, by key, in the library's words (the command
+#: line has its flags for the same, :mod:`armcal.cli`).
 ACTIONS: dict[str, str] = {
     "refit-robust": "fit robustly (identify(..., robust=True)) to leave them out",
     "try-robust": "try a robust fit (robust=True)",
@@ -43,13 +43,18 @@ ACTIONS: dict[str, str] = {
     "hold-terms": "fixed = [...] in the robot file's [identify] table, or calibrate(..., "
     "fixed=...)",
     "design": "(armcal.design)",
+    "choose-tip": "name the tip link (tip_link in a robot TOML, or load_serial_robot(..., "
+    "tip_link=LINK))",
+    "choose-base": "name the base link (base_link in a robot TOML, or load_serial_robot(..., "
+    "base_link=LINK))",
 }
 
 _ACTION = re.compile(r"\u27e6([a-z][a-z-]*)\u27e7")
 
 
 def action(key: str) -> str:
-    """A reference to the advice ``key`` of :data:`ACTIONS`, for a warning's text.
+    """A reference to the advice ``key`` of :data:`ACTIONS`, for a warning's or an error's
+    text.
 
     Examples
     --------
@@ -61,8 +66,32 @@ def action(key: str) -> str:
     return f"\u27e6{key}\u27e7"
 
 
+def _render(text: str, words: Mapping[str, str]) -> str:
+    """``text`` with every action in ``words`` (the library's for keys ``words`` lacks)."""
+    return _ACTION.sub(lambda m: words.get(m.group(1), ACTIONS[m.group(1)]), text)
+
+
 class ArmcalError(ValueError):
-    """A problem with the user's input or request, with a message that says how to fix it."""
+    """A problem with the user's input or request, with a message that says how to fix it.
+
+    Its text may refer to an :func:`action`: ``str(error)`` says it in the library's
+    words, :meth:`render` in another vocabulary (the command line's flags).
+
+    Examples
+    --------
+    >>> error = ArmcalError(f"two leaves; {action('choose-tip')}")
+    >>> str(error).startswith("two leaves; name the tip link (tip_link in a robot TOML")
+    True
+    >>> error.render({"choose-tip": "say which"})
+    'two leaves; say which'
+    """
+
+    def __str__(self) -> str:
+        return self.render(ACTIONS)
+
+    def render(self, words: Mapping[str, str]) -> str:
+        """The message with every action in ``words`` (the library's for keys it lacks)."""
+        return _render(super().__str__(), words)
 
 
 class InputError(ArmcalError):
@@ -117,7 +146,7 @@ class ArmcalWarning:
 
     def render(self, words: Mapping[str, str]) -> str:
         """The text with every action in ``words`` (the library's for keys ``words`` lacks)."""
-        return _ACTION.sub(lambda m: words.get(m.group(1), ACTIONS[m.group(1)]), self.text)
+        return _render(self.text, words)
 
     def to_dict(self, words: Mapping[str, str] | None = None) -> dict[str, str]:
         """The JSON form ``{code, message}`` (in ``words``, default the library's)."""

@@ -212,10 +212,17 @@ TRUTH_KEYS: tuple[Key, ...] = (
 )
 
 
-#: A spatial serial arm's robot TOML: from a URDF, or a modified DH table (``[mdh]``).
+#: A spatial serial arm's robot TOML: from a URDF, a modified DH table (``[mdh]``), a
+#: standard one (``[dh]``) or a UR model (``[ur]``).
 SERIAL_KEYS: tuple[Key, ...] = (
     Key("", "name", "text", "the file's stem", "name shown in reports and exports"),
-    Key("", "urdf", "path, relative to this file", "none: give [mdh] or [ur]", "the arm's URDF"),
+    Key(
+        "",
+        "urdf",
+        "path, relative to this file",
+        "none: give [mdh], [dh] or [ur]",
+        "the arm's URDF",
+    ),
     Key("", "base_link", "URDF link name", "the URDF's root", "where the chain starts"),
     Key("", "tip_link", "URDF link name", "the one leaf of the chain", "where the chain ends"),
     Key(
@@ -263,6 +270,15 @@ SERIAL_KEYS: tuple[Key, ...] = (
     Key("mdh", "base_rpy_deg", "deg, [roll, pitch, yaw]", "0", "its orientation"),
     Key("mdh", "tip_xyz_mm", "mm, [x, y, z]", "0", "the flange after the last row"),
     Key("mdh", "tip_rpy_deg", "deg, [roll, pitch, yaw]", "0", "its orientation"),
+    Key("dh", "alpha_deg", "deg, one per joint", "required", "the DH twist: Rx(alpha)"),
+    Key("dh", "a_mm", "mm, one per joint", "required", "the DH length: Tx(a)"),
+    Key("dh", "theta_deg", "deg, one per joint", "required", "the joint's zero: Rz(theta)"),
+    Key("dh", "d_mm", "mm, one per joint", "required", "the DH offset: Tz(d)"),
+    Key("dh", "joint_types", '"R" or "P" per joint', '"R" each', "revolute or prismatic"),
+    Key("dh", "base_xyz_mm", "mm, [x, y, z]", "0", "a base frame before the first row"),
+    Key("dh", "base_rpy_deg", "deg, [roll, pitch, yaw]", "0", "its orientation"),
+    Key("dh", "tip_xyz_mm", "mm, [x, y, z]", "0", "a tip frame after the last row"),
+    Key("dh", "tip_rpy_deg", "deg, [roll, pitch, yaw]", "0", "its orientation"),
     Key(
         "measurement",
         "sigma_mm",
@@ -360,7 +376,7 @@ SERIAL_KEYS: tuple[Key, ...] = (
         "ur",
         "model",
         "ur3, ur5, ur10, ur3e, ur5e, ur10e or ur16e",
-        "none: give urdf or [mdh]",
+        "none: give urdf, [mdh] or [dh]",
         "a Universal Robots arm: its nominal DH table, built in (metres and radians as the "
         "controller's)",
     ),

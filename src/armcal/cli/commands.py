@@ -32,11 +32,8 @@ from ..files import (
     format_measurements_csv,
     format_plan_csv,
     format_program_csv,
-    is_serial_robot,
     load_any_robot,
     load_compliance_truth,
-    load_robot,
-    load_serial_robot,
     load_serial_truth,
     load_truth,
     read_calibration,
@@ -112,6 +109,11 @@ REQUIREMENT_OPTIONS = {
 }
 
 
+def _robot(args: argparse.Namespace) -> RobotSpec | SerialSpec:
+    """``--robot``, its URDF's chain from ``--base-link`` to ``--tip-link`` where given."""
+    return load_any_robot(args.robot, base_link=args.base_link, tip_link=args.tip_link)
+
+
 def _model(
     args: argparse.Namespace, spec: RobotSpec | SerialSpec
 ) -> tuple[RobotSpec | SerialSpec, PlanarArm | SpatialArm]:
@@ -155,7 +157,8 @@ def _truth(
         assert isinstance(model, SpatialArm | CompliantSerialArm)
         path = args.truth if args.truth is not None else spec.default_truth
         assert path is not None
-        return load_serial_truth(path, model), None
+        links = (getattr(args, "base_link", None), getattr(args, "tip_link", None))
+        return load_serial_truth(path, model, links=links), None
     if isinstance(model, CompliantArm):
         if args.truth is None:
             keys = ", ".join(COMPLIANCE_TRUTH_KEYS[k] for k in dict.fromkeys(model.kinds))
@@ -219,7 +222,7 @@ def synthesize(args: argparse.Namespace) -> None:
             f"-o {args.output}: synthesize writes measurements as a CSV table (--json changes "
             "only the summary on stdout); give a name ending in .csv"
         )
-    spec = load_any_robot(args.robot)
+    spec = _robot(args)
     q, payload, labels = _labelled_plan(args.plan, spec)
     model, loads = plan_model(spec, spec.arm, q.shape[0], payload, virtual=True)
     truth, note = _truth(args, spec, model, nominal=True)
@@ -293,14 +296,11 @@ def identify(args: argparse.Namespace) -> None:
             f"its keys) or a built-in name ({', '.join(BUILTIN_ROBOTS)})"
         )
     try:
-        if is_serial_robot(args.robot):
-            serial = load_serial_robot(args.robot)
-            meas = read_measurements(args.measurements, serial.arm)
-            run = calibrate_serial(
-                serial, meas, compliance=not args.no_compliance, **_options(args)
-            )
+        spec = _robot(args)
+        if isinstance(spec, SerialSpec):
+            meas = read_measurements(args.measurements, spec.arm)
+            run = calibrate_serial(spec, meas, compliance=not args.no_compliance, **_options(args))
         else:
-            spec = load_robot(args.robot)
             meas = read_measurements(args.measurements, spec.arm)
             run = calibrate(spec, meas, compliance=not args.no_compliance, **_options(args))
     except FixError as exc:
@@ -366,7 +366,7 @@ def compensate(args: argparse.Namespace) -> None:
 
 def design(args: argparse.Namespace) -> None:
     """``armcal design``: an optimal plan, its quality and its picture."""
-    spec, arm = _model(args, load_any_robot(args.robot))
+    spec, arm = _model(args, _robot(args))
     candidates = None if args.candidates is None else read_plan(args.candidates, spec.arm)
     run = design_plan(
         spec,
@@ -413,7 +413,7 @@ def design(args: argparse.Namespace) -> None:
 
 def evaluate(args: argparse.Namespace) -> None:
     """``armcal evaluate``: a plan's quality."""
-    spec, arm = _model(args, load_any_robot(args.robot))
+    spec, arm = _model(args, _robot(args))
     q, payload = _plan(args.plan, spec)
     run = evaluate_file(
         spec, arm, q, test_q=_test_poses(args, spec), payload=payload, source=args.plan
@@ -423,7 +423,7 @@ def evaluate(args: argparse.Namespace) -> None:
 
 def simulate(args: argparse.Namespace) -> None:
     """``armcal simulate``: a Monte Carlo of a plan."""
-    spec, arm = _model(args, load_any_robot(args.robot))
+    spec, arm = _model(args, _robot(args))
     q, payload = _plan(args.plan, spec)
     model, loads = plan_model(spec, arm, q.shape[0], payload)
     truth, note = _truth(args, spec, model, nominal=True)
@@ -450,7 +450,7 @@ def simulate(args: argparse.Namespace) -> None:
 
 def poses_needed(args: argparse.Namespace) -> None:
     """``armcal poses-needed``: the smallest plan that reaches an accuracy."""
-    spec = load_any_robot(args.robot)
+    spec = _robot(args)
     arm = _model(args, spec)[1] if spec.elastic is None else spec.arm
     requirement = next(key for key in REQUIREMENT_OPTIONS if getattr(args, key) is not None)
     found, seconds = size_plan(
@@ -510,7 +510,7 @@ def check_compliance(args: argparse.Namespace) -> None:
 
 def demo(args: argparse.Namespace) -> None:
     """``armcal demo``: the whole workflow on a built-in robot."""
-    spec = load_any_robot(args.robot)
+    spec = _robot(args)
     if isinstance(spec, SerialSpec):  # the six-axis story: a tracker and three reflectors
         result = run_serial_demo(
             spec.arm,

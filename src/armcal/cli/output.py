@@ -1,7 +1,7 @@
 """What the command line prints: the result on stdout, every warning once on stderr.
 
-The library's warnings advise in neutral words; here they are said in the
-command line's, its flags (:data:`CLI_ACTIONS`).
+The library's warnings and errors advise in neutral words; here they are said
+in the command line's, its flags (:data:`CLI_ACTIONS`).
 """
 
 from __future__ import annotations
@@ -20,7 +20,8 @@ __all__ = [
     "warning_dicts",
 ]
 
-#: The command line's words for the advice of warnings (:data:`armcal.errors.ACTIONS`).
+#: The command line's words for the advice of warnings and errors
+#: (:data:`armcal.errors.ACTIONS`).
 CLI_ACTIONS = {
     "refit-robust": "rerun with --robust to fit without them",
     "try-robust": "try --robust",
@@ -29,6 +30,8 @@ CLI_ACTIONS = {
     "geometry-only": "--no-compliance fits the geometry only",
     "hold-terms": "--fix NAME, or fixed = [...] in the robot file's [identify] table",
     "design": "(armcal design)",
+    "choose-tip": "name the tip link with --tip-link LINK (or tip_link in a robot TOML)",
+    "choose-base": "name the base link with --base-link LINK (or base_link in a robot TOML)",
 }
 
 

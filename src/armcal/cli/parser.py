@@ -53,7 +53,7 @@ def _add_common(
     output: str | None = None,
     robot_required: bool = False,
 ) -> None:
-    """--robot, --seed, --json and -o.
+    """--robot (with --tip-link and --base-link), --seed, --json and -o.
 
     ``robot_required``: the command calibrates a real arm's data, so it has no
     default robot (fitting a user's measurements to the paper's arm would give a
@@ -68,6 +68,18 @@ def _add_common(
         "one arm)"
         if robot_required
         else f"built-in robot name or robot TOML file (default {DEFAULT_ROBOT})",
+    )
+    sub.add_argument(
+        "--tip-link",
+        metavar="LINK",
+        help="for a robot from a URDF: the link where the arm's chain ends (default: the "
+        "robot TOML's tip_link, else the URDF's one leaf)",
+    )
+    sub.add_argument(
+        "--base-link",
+        metavar="LINK",
+        help="for a robot from a URDF: the link where the arm's chain starts (default: the "
+        "robot TOML's base_link, else the URDF's root)",
     )
     if seed:
         sub.add_argument(

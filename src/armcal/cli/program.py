@@ -16,6 +16,7 @@ from collections.abc import Callable, Sequence
 from ..errors import ArmcalError
 from ..files import BUILTIN_ROBOTS, STDIO, OutputFolder, check_outputs
 from ..formats import FIGURE_FORMATS
+from .output import CLI_ACTIONS
 from .parser import build_parser
 
 __all__ = ["main"]
@@ -101,7 +102,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         run: Callable[[argparse.Namespace], None] = args.run
         run(args)
     except ArmcalError as exc:
-        print(f"armcal: error: {exc}", file=sys.stderr)
+        print(f"armcal: error: {exc.render(CLI_ACTIONS)}", file=sys.stderr)
         return 2
     except KeyboardInterrupt:  # Ctrl-C: writers have removed their temporary files
         if sys.stderr.isatty():

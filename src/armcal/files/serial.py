@@ -2,8 +2,9 @@
 table, the built-in spatial robots, and the truth of a virtual spatial arm.
 
 A robot TOML of a spatial arm has ``urdf`` (a path relative to the file, with
-optional ``base_link`` and ``tip_link``) or an ``[mdh]`` table (``alpha_deg``,
-``a_mm``, ``theta_deg``, ``d_mm``, optional ``joint_types``), and optionally
+optional ``base_link`` and ``tip_link``), an ``[mdh]`` table (``alpha_deg``,
+``a_mm``, ``theta_deg``, ``d_mm``, optional ``joint_types``: Craig's modified DH)
+or a ``[dh]`` table (the same keys: standard DH), and optionally
 ``name``, ``joint_map`` (URDF joint values ``u = M q`` from the controller's
 readings ``q``), ``joint_limits_deg`` (on ``q``; they replace the URDF's, which
 hold for ``u``), ``[measurement]`` (``sigma_mm``: one number or ``[sx, sy,
@@ -32,7 +33,6 @@ from ..formats import SERIAL_KEYS, SERIAL_TRUTH_KEYS, allowed_keys
 from ..models import (
     CompliantSerialArm,
     LinkMasses,
-    MdhTable,
     SerialChain,
     SerialElastics,
     SpatialArm,
@@ -40,10 +40,11 @@ from ..models import (
     rpy_matrix,
     transform,
 )
-from ..noise import NoiseModel, TrackerNoise
+from ..models.spatial_dh import convention_mistake, table_chain
 from .common import check_keys, fail, load_toml, number, number_within, numbers, suggest
 from .robot_units import check_mdh_angles, check_reach, limit_warnings, urdf_limit_warning
-from .robots import SIGMA_RANGE_MM, RobotSpec, fixed_parameters, held_terms, load_robot
+from .robots import RobotSpec, fixed_parameters, held_terms, load_robot
+from .serial_noise import read_serial_noise
 from .ur import (
     UR_MODELS,
     read_ur_calibration,
@@ -76,7 +77,6 @@ BUILTIN_SERIAL_ROBOTS = {
 # The keys each table takes: the catalogue's (armcal formats prints it), so a key cannot be
 # accepted without being documented.
 _MDH_REQUIRED = ("alpha_deg", "a_mm", "theta_deg", "d_mm")
-_TRACKER_KEYS = ("range_mm", "range_mm_per_m", "transverse_mm", "transverse_mm_per_m")
 
 
 @dataclass(frozen=True, eq=False)
@@ -110,9 +110,9 @@ class SerialSpec:
 
 def is_serial_robot(name_or_path: str | os.PathLike) -> bool:
     """Whether ``name_or_path`` names a spatial robot: a built-in one, a URDF, or a robot
-    TOML with ``urdf`` or ``[mdh]``."""
+    TOML with ``urdf``, ``[mdh]``, ``[dh]`` or ``[ur]``."""
     key = os.fspath(name_or_path)
-    if key in BUILTIN_SERIAL_ROBOTS or key.lower().endswith(".urdf"):
+    if key in BUILTIN_SERIAL_ROBOTS or key.lower().endswith(_URDF_SUFFIXES):
         return True
     path = Path(key)
     if path.suffix.lower() != ".toml" or not path.is_file():
@@ -125,13 +125,22 @@ def is_serial_robot(name_or_path: str | os.PathLike) -> bool:
 
 
 #: The keys that describe a spatial arm in a robot TOML (exactly one of them).
-_DESCRIPTIONS = ("urdf", "mdh", "ur")
+_DESCRIPTIONS = ("urdf", "mdh", "dh", "ur")
+
+#: A URDF's suffixes (a xacro file, ROS's macros for URDF, is read to say what it is).
+_URDF_SUFFIXES = (".urdf", ".xacro")
 
 
 def load_serial_robot(
-    name_or_path: str | os.PathLike, *, tip_link: str | None = None
+    name_or_path: str | os.PathLike,
+    *,
+    base_link: str | None = None,
+    tip_link: str | None = None,
 ) -> SerialSpec:
     """A spatial robot from a built-in name, a URDF or a robot TOML (module notes).
+
+    ``base_link`` and ``tip_link`` choose a URDF's chain (over a robot TOML's keys of
+    the same names); a robot described otherwise refuses them.
 
     Raises
     ------
@@ -139,17 +148,18 @@ def load_serial_robot(
         Naming the file and the key (or the URDF's line).
     """
     key = os.fspath(name_or_path)
+    links = (base_link, tip_link)
     if key in BUILTIN_SERIAL_ROBOTS:
         path = BUILTIN_SERIAL_ROBOTS[key]
         truth = path.with_name(path.stem + "-truth.toml")
-        spec = _from_toml(path, key)
+        spec = _from_toml(path, key, links)
         return replace(spec, default_truth=truth if truth.is_file() else None)
     path = Path(key)
-    if path.suffix.lower() == ".urdf":
-        found = read_urdf(path, None, tip_link)
-        warnings = _urdf_units(path, found.chain)
+    if path.suffix.lower() in _URDF_SUFFIXES:
+        found = read_urdf(path, base_link, tip_link)
+        warnings = (*found.warnings, *_urdf_units(path, found.chain))
         return SerialSpec(SpatialArm(found.chain, found.robot), key, warnings=warnings)
-    return _from_toml(path, None, tip_link)
+    return _from_toml(path, None, links)
 
 
 def _urdf_units(path: Path, chain: SerialChain) -> tuple[ArmcalWarning, ...]:
@@ -159,12 +169,24 @@ def _urdf_units(path: Path, chain: SerialChain) -> tuple[ArmcalWarning, ...]:
     return tuple(w for w in found if w is not None)
 
 
-def load_any_robot(name_or_path: str | os.PathLike) -> RobotSpec | SerialSpec:
+def load_any_robot(
+    name_or_path: str | os.PathLike,
+    *,
+    base_link: str | None = None,
+    tip_link: str | None = None,
+) -> RobotSpec | SerialSpec:
     """A planar robot (:func:`~armcal.files.robots.load_robot`) or a spatial one
-    (:func:`load_serial_robot`), whichever ``name_or_path`` names."""
+    (:func:`load_serial_robot`, with ``base_link`` and ``tip_link``), whichever
+    ``name_or_path`` names."""
     if is_serial_robot(name_or_path):
-        return load_serial_robot(name_or_path)
-    return load_robot(name_or_path)
+        return load_serial_robot(name_or_path, base_link=base_link, tip_link=tip_link)
+    spec = load_robot(name_or_path)
+    if base_link is not None or tip_link is not None:
+        raise ArmcalError(
+            f"{os.fspath(name_or_path)}: a base or tip link was given, but this is a planar "
+            "robot, not one from a URDF: links choose a URDF's chain; drop them"
+        )
+    return spec
 
 
 def _relative_file(path: Path, value: Any, key: str, what: str) -> Path:
@@ -205,13 +227,20 @@ def _ur_chain(path: Path, table: Any) -> tuple[SerialChain, str, tuple[ArmcalWar
 
 
 def _chain(
-    path: Path, data: dict, tip_link: str | None
+    path: Path, data: dict, chosen: tuple[str | None, str | None]
 ) -> tuple[SerialChain, str, tuple[ArmcalWarning, ...], LinkMasses | None]:
-    """The chain of a robot TOML: its URDF's, its ``[mdh]`` table's or a UR's (``[ur]``),
-    a default name, what reading it warns of, and its URDF's masses."""
+    """The chain of a robot TOML: its URDF's (from the ``chosen`` base and tip links, else
+    the file's), its ``[mdh]`` or ``[dh]`` table's or a UR's (``[ur]``), a default name,
+    what reading it warns of, and its URDF's masses."""
     given = [key for key in _DESCRIPTIONS if key in data]
     if len(given) > 1:
         raise fail(path, f"keys {' and '.join(given)} all describe the arm; keep one")
+    if given and given[0] != "urdf" and any(link is not None for link in chosen):
+        raise fail(
+            path,
+            f"a base or tip link was given, but the file describes the arm by [{given[0]}], "
+            "not by a URDF: links choose a URDF's chain; drop them",
+        )
     if "ur" in data:
         return (*_ur_chain(path, data["ur"]), None)
     if "urdf" in data:
@@ -221,64 +250,76 @@ def _chain(
             if name in data and not isinstance(data[name], str):
                 raise fail(path, f"key '{name}': expected a link name, got {data[name]!r}")
             links[name] = data.get(name)
-        found = read_urdf(urdf, links["base_link"], tip_link or links["tip_link"])
-        return found.chain, found.robot, _urdf_units(urdf, found.chain), found.masses
-    if "mdh" not in data:
+        base_link, tip_link = chosen
+        found = read_urdf(urdf, base_link or links["base_link"], tip_link or links["tip_link"])
+        warned_urdf = (*found.warnings, *_urdf_units(urdf, found.chain))
+        return found.chain, found.robot, warned_urdf, found.masses
+    if not given:
         raise fail(
-            path, "needs 'urdf' (a URDF file), an [mdh] table or a [ur] model to describe the arm"
+            path,
+            "needs 'urdf' (a URDF file), an [mdh] or [dh] table or a [ur] model to describe "
+            "the arm",
         )
-    table = data["mdh"]
+    key = given[0]  # a table of one of the DH conventions
+    table = data[key]
     if not isinstance(table, dict):
-        raise fail(path, "key 'mdh': expected a table [mdh]")
-    check_keys(path, table, allowed_keys("mdh", SERIAL_KEYS), "mdh.")
+        raise fail(path, f"key '{key}': expected a table [{key}]")
+    check_keys(path, table, allowed_keys(key, SERIAL_KEYS), f"{key}.")
     values = {}
     for name in _MDH_REQUIRED:
         if name not in table:
-            raise fail(path, f"missing key 'mdh.{name}': one value per joint")
-        values[name] = numbers(path, table[name], f"mdh.{name}")
+            raise fail(path, f"missing key '{key}.{name}': one value per joint")
+        values[name] = numbers(path, table[name], f"{key}.{name}")
     n = len(values["alpha_deg"])
-    values["beta_deg"] = numbers(path, table.get("beta_deg", [0.0] * n), "mdh.beta_deg")
+    values["beta_deg"] = numbers(path, table.get("beta_deg", [0.0] * n), f"{key}.beta_deg")
     for name, column in values.items():
         if len(column) != n or n == 0:
             raise fail(
                 path,
-                f"key 'mdh.{name}': expected {n} values (one per joint, as alpha_deg), "
+                f"key '{key}.{name}': expected {n} values (one per joint, as alpha_deg), "
                 f"got {len(column)}",
             )
     kinds = table.get("joint_types", ["R"] * n)
     if not isinstance(kinds, list) or len(kinds) != n or any(k not in ("R", "P") for k in kinds):
-        raise fail(path, f'key \'mdh.joint_types\': expected {n} of "R" or "P", got {kinds!r}')
+        raise fail(path, f'key \'{key}.joint_types\': expected {n} of "R" or "P", got {kinds!r}')
     frames = {}
     angles = {name: values[name] for name in ("alpha_deg", "theta_deg")}
     for where in ("base", "tip"):
-        xyz = numbers(path, table.get(f"{where}_xyz_mm", [0, 0, 0]), f"mdh.{where}_xyz_mm", 3)
-        rpy = numbers(path, table.get(f"{where}_rpy_deg", [0, 0, 0]), f"mdh.{where}_rpy_deg", 3)
+        xyz = numbers(path, table.get(f"{where}_xyz_mm", [0, 0, 0]), f"{key}.{where}_xyz_mm", 3)
+        rpy = numbers(path, table.get(f"{where}_rpy_deg", [0, 0, 0]), f"{key}.{where}_rpy_deg", 3)
         angles[f"{where}_rpy_deg"] = rpy
         frames[where] = transform(rpy_matrix(np.radians(rpy)), xyz)
     check_mdh_angles(path, angles)
-    chain = MdhTable(
+    rows = (
         np.radians(values["alpha_deg"]),
         np.array(values["a_mm"]),
-        np.radians(values["beta_deg"]),
         np.radians(values["theta_deg"]),
         np.array(values["d_mm"]),
         tuple(kinds),
         frames["base"],
         frames["tip"],
-    ).chain()
+    )
+    beta = np.radians(values["beta_deg"])
+    mistake = convention_mistake(key, *rows, beta=beta)
+    if mistake is not None:
+        raise fail(path, f"[{key}]: {mistake}")
+    chain = table_chain(key, *rows, beta=beta)
     metres = check_reach(path, chain, urdf=False)
     warned: tuple[ArmcalWarning, ...] = () if metres is None else (metres,)
     if "joint_limits_deg" in table:  # limits on the table's joint values, as a URDF's
-        own, more = _limits(path, table["joint_limits_deg"], chain.kinds, "mdh.joint_limits_deg")
+        limits = table["joint_limits_deg"]
+        own, more = _limits(path, limits, chain.kinds, f"{key}.joint_limits_deg")
         chain = replace(chain, joint_limits=own)
         warned += more
     return chain, path.stem, warned, None
 
 
-def _from_toml(path: Path, builtin: str | None, tip_link: str | None = None) -> SerialSpec:
+def _from_toml(
+    path: Path, builtin: str | None, links: tuple[str | None, str | None] = (None, None)
+) -> SerialSpec:
     data = load_toml(path, "robot")
     check_keys(path, data, allowed_keys("", SERIAL_KEYS))
-    chain, default_name, read_warnings, masses = _chain(path, data, tip_link)
+    chain, default_name, read_warnings, masses = _chain(path, data, links)
     n = chain.n_joints
     name = data.get("name", default_name)
     if not isinstance(name, str) or not name.strip():
@@ -304,7 +345,7 @@ def _from_toml(path: Path, builtin: str | None, tip_link: str | None = None) -> 
             # They replace the URDF's (or UR's) limits, which hold for the joint values M q;
             # an [mdh] table's own limits (mdh.joint_limits_deg) are the user's, and kept.
             chain = replace(chain, joint_limits=np.tile([-np.inf, np.inf], (n, 1)))
-    noise = _noise(path, data.get("measurement"))
+    noise = read_serial_noise(path, data.get("measurement"))
     labels, positions, normals = _target_table(path, data.get("targets"))
     view = _view(path, data.get("instrument"), labels, normals)
     arm = SpatialArm(
@@ -420,111 +461,6 @@ def _elastostatic(
         raise fail(path, f"[elastostatic]: {exc}") from None
 
 
-#: A 6-DoF instrument's orientation noise (deg, 1 std) outside this range is a wrong unit:
-#: the probes on trackers and the optical trackers state 0.001-0.1 deg.
-ORIENTATION_SIGMA_RANGE_DEG = (1e-5, 5.0)
-
-
-def _noise(path: Path, table: Any) -> NoiseModel | None:
-    """``[measurement]``: the instrument's noise, and a 6-DoF instrument's orientation noise."""
-    if table is None:
-        return None
-    if not isinstance(table, dict):
-        raise fail(path, "key 'measurement': expected a table [measurement]")
-    check_keys(path, table, allowed_keys("measurement", SERIAL_KEYS), "measurement.")
-    noise = _position_noise(path, table)
-    if "orientation_sigma_deg" not in table:
-        return noise
-    value = number_within(
-        path,
-        table["orientation_sigma_deg"],
-        "measurement.orientation_sigma_deg",
-        ORIENTATION_SIGMA_RANGE_DEG,
-        "deg",
-    )
-    if noise is None:
-        raise fail(
-            path,
-            "key 'measurement.orientation_sigma_deg': give the instrument's position noise "
-            "too (sigma_mm, covariance_mm2 or tracker)",
-        )
-    return noise.with_orientation(np.radians(value))
-
-
-def _position_noise(path: Path, table: dict) -> NoiseModel | None:
-    """The instrument's position noise of ``[measurement]``, if it gives one."""
-    given = [key for key in ("sigma_mm", "covariance_mm2", "tracker") if key in table]
-    if len(given) > 1:
-        raise fail(
-            path,
-            f"keys {' and '.join(f'measurement.{k}' for k in given)} all give the instrument's "
-            "noise; keep one",
-        )
-    if "tracker" in table:
-        return NoiseModel.laser_tracker(_tracker(path, table["tracker"]))
-    if "sigma_mm" in table:
-        raw = table["sigma_mm"]
-        values = (
-            numbers(path, raw, "measurement.sigma_mm", 3)
-            if isinstance(raw, list)
-            else [number(path, raw, "measurement.sigma_mm")] * 3
-        )
-        low, high = SIGMA_RANGE_MM
-        if not all(low <= v <= high for v in values):
-            raise fail(
-                path,
-                f"key 'measurement.sigma_mm': must be between {low:g} and {high:g} mm; check "
-                "the unit (mm)",
-            )
-        return NoiseModel(np.diag(np.square(values)))
-    if "covariance_mm2" in table:
-        raw = table["covariance_mm2"]
-        if not isinstance(raw, list) or len(raw) != 3:
-            raise fail(path, "key 'measurement.covariance_mm2': expected a 3 x 3 matrix in mm^2")
-        cov = np.array(
-            [numbers(path, r, f"measurement.covariance_mm2[{i}]", 3) for i, r in enumerate(raw)]
-        )
-        try:
-            return NoiseModel(cov)
-        except ValueError as exc:
-            raise fail(path, f"key 'measurement.covariance_mm2': {exc}") from None
-    return None
-
-
-def _tracker(path: Path, table: Any) -> TrackerNoise:
-    """``[measurement.tracker]``: the four terms of a laser tracker's noise (1 std)."""
-    keys = list(_TRACKER_KEYS)
-    if not isinstance(table, dict):
-        raise fail(
-            path,
-            "key 'measurement.tracker': expected a table { range_mm = a, range_mm_per_m = b, "
-            "transverse_mm = c, transverse_mm_per_m = d } (1 std: a + b per metre of distance)",
-        )
-    check_keys(path, table, keys, "measurement.tracker.")
-    missing = [k for k in keys if k not in table]
-    if missing:
-        raise fail(
-            path,
-            f"key 'measurement.tracker': missing {', '.join(missing)} (1 std in mm and mm per "
-            "metre of distance; 0 for a term the data sheet does not give)",
-        )
-    values = [number(path, table[k], f"measurement.tracker.{k}") for k in keys]
-    low, high = SIGMA_RANGE_MM
-    for key, value in zip(keys, values, strict=True):
-        if not (0 <= value <= high) or (value < low and not key.endswith("_per_m")):
-            bounds = (
-                f"between {low:g} and {high:g}"
-                if not key.endswith("_per_m")
-                else f"in [0, {high:g}]"
-            )
-            raise fail(
-                path,
-                f"key 'measurement.tracker.{key}': must be {bounds} mm; check the unit "
-                "(mm, 1 std; data sheets often quote 2 std)",
-            )
-    return TrackerNoise(*values)
-
-
 def _targets(path: Path, table: Any) -> tuple[tuple[str, ...], np.ndarray]:
     labels, positions, _ = _target_table(path, table)
     return labels, positions
@@ -630,14 +566,18 @@ def _view(path: Path, table: Any, labels: tuple[str, ...], normals: list) -> Spa
 
 
 def load_serial_truth(
-    path: str | os.PathLike, model: SpatialArm | CompliantSerialArm
+    path: str | os.PathLike,
+    model: SpatialArm | CompliantSerialArm,
+    *,
+    links: tuple[str | None, str | None] = (None, None),
 ) -> np.ndarray:
     """The true parameters ``(p,)`` (mm, rad) of a virtual spatial arm (module notes), and
     for a model of joint compliance its ``[compliance]`` table's after them (display
     units urad/(N*m), mdeg/m; a parameter not given is 0).
 
     The true arm's description, when given, is turned into the arm's parameters
-    exactly (:meth:`~armcal.models.SpatialArm.params_of`).  A ``[compliance]``
+    exactly (:meth:`~armcal.models.SpatialArm.params_of`); a bare URDF's chain runs
+    between the base and tip ``links`` (the robot's, where given).  A ``[compliance]``
     table needs a model of compliance (its robot file's ``[elastostatic]``).
     """
     path = Path(path)
@@ -651,17 +591,19 @@ def load_serial_truth(
                 f"key 'compliance': robot {arm.name} has no [elastostatic] table, so nothing "
                 "twists its joints; add the table to the robot file or remove [compliance]",
             )
-        return _geometry_truth(path, data, arm)
+        return _geometry_truth(path, data, arm, links)
     names = model.compliance_names
     compliance = np.zeros(len(names))
     if "compliance" in data:
         example, scale = f"{names[-1]} = 0.5", model.compliance_scale
         table = data["compliance"]
         compliance = _named(path, table, "compliance", example, arm, names, names, scale)
-    return np.concatenate([_geometry_truth(path, data, arm), compliance])
+    return np.concatenate([_geometry_truth(path, data, arm, links), compliance])
 
 
-def _geometry_truth(path: Path, data: dict, arm: SpatialArm) -> np.ndarray:
+def _geometry_truth(
+    path: Path, data: dict, arm: SpatialArm, links: tuple[str | None, str | None]
+) -> np.ndarray:
     """The geometric truth of a truth TOML's ``data`` for ``arm``."""
     base = np.zeros(6)
     if "base" in data:
@@ -674,7 +616,9 @@ def _geometry_truth(path: Path, data: dict, arm: SpatialArm) -> np.ndarray:
     chain = arm.chain
     if "robot" in data:
         other = _relative_file(path, data["robot"], "robot", "truth file")
-        chain = load_serial_robot(other).arm.chain
+        bare = other.suffix.lower() in _URDF_SUFFIXES  # a robot TOML says its own links
+        chosen = dict(zip(("base_link", "tip_link"), links, strict=True)) if bare else {}
+        chain = load_serial_robot(other, **chosen).arm.chain
         if chain.kinds != arm.chain.kinds:
             raise fail(
                 path,

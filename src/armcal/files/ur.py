@@ -31,14 +31,14 @@ from __future__ import annotations
 
 import os
 import re
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 import numpy as np
 
 from ..errors import ArmcalWarning
 from ..models.spatial_chain import SerialChain, elementary, transform
-from ..models.spatial_dh import DhTable, dh_table
+from ..models.spatial_dh import PARALLEL_COS, DhTable, dh_table
 from ..numerics import wrap_angle
 from .common import fail, read_text
 
@@ -48,6 +48,7 @@ __all__ = [
     "UR_MODELS",
     "UR_QUARTER_TURN",
     "UrDh",
+    "UrFrames",
     "format_ur_calibration",
     "format_ur_kinematics",
     "read_ur_calibration",
@@ -55,6 +56,7 @@ __all__ = [
     "ur_calibration_warning",
     "ur_chain",
     "ur_deltas",
+    "ur_frames",
     "ur_model_of",
     "ur_nominal",
 ]
@@ -145,6 +147,128 @@ def _farthest_mm(chain: SerialChain, model: str, poses: int) -> float:
     q = np.random.default_rng(0).uniform(-np.pi, np.pi, (poses, 6))
     moved = chain.forward(q)[..., :3, 3] - ur_chain(ur_nominal(model)).forward(q)[..., :3, 3]
     return float(np.max(np.linalg.norm(moved, axis=-1)))
+
+
+@dataclass(frozen=True, eq=False)
+class UrFrames:
+    """Where a chain's base and tip frames lie from a UR model's DH frames.
+
+    ``base @ chain.forward(q) @ tip`` is the model's kinematics from its DH base frame
+    to its flange (:func:`ur_chain`) for a ``chain`` that is the model in other frames:
+    Universal Robots' ROS description has ``base_link`` turned by half a turn about z
+    from the controller's base frame, and ``tool0`` (or ``flange``, ``wrist_3_link``)
+    at or about its flange.
+
+    Attributes
+    ----------
+    model : str
+        The UR model (a key of :data:`UR_MODELS`) nearest the chain.
+    base, tip : ndarray, shape (4, 4)
+        The chain's base frame in the DH base frame, and the DH flange in the chain's
+        tip frame (the identity for a chain in the DH frames).
+    distance_mm : float
+        The largest distance left between the flanges over random poses.
+    """
+
+    model: str
+    base: np.ndarray
+    tip: np.ndarray
+    distance_mm: float
+
+    def apply(self, chain: SerialChain) -> SerialChain:
+        """``chain`` (the same arm, calibrated or not) from the DH base frame to the flange."""
+        origins = chain.origins.copy()
+        origins[0] = self.base @ origins[0]
+        return replace(chain, origins=origins, tip=chain.tip @ self.tip)
+
+
+def _foot(line: np.ndarray) -> float:
+    """Where on the z axis the common normal to the line of ``line``'s z axis (a frame
+    ``(4, 4)`` in the z axis's frame, not parallel to it) meets the z axis."""
+    z, p = line[:3, 2], line[:3, 3]
+    return float((p[2] - z[2] * (p @ z)) / (1.0 - z[2] ** 2))
+
+
+def _screw_part(frame: np.ndarray) -> np.ndarray:
+    """``Rz(phi) Tz(s)``: the turn about and the slide along z of a ``frame`` that nearly
+    keeps the z axis (the rest is the round-off of two descriptions of one arm)."""
+    return transform(elementary(2, np.arctan2(frame[1, 0], frame[0, 0])), [0, 0, frame[2, 3]])
+
+
+def _snapped(frame: np.ndarray) -> np.ndarray:
+    """``frame`` with its rotation rounded to the nearest quarter turns and every coordinate
+    of its translation within :data:`FAR_FROM_NOMINAL_MM` of 0 set to 0: the frames of a
+    description differ from the DH ones by such (a calibration moves them by less)."""
+    rotation = np.round(frame[:3, :3])
+    if np.max(np.abs(frame[:3, :3] - rotation)) > 0.1 or not np.allclose(
+        rotation @ rotation.T, np.eye(3)
+    ):
+        rotation = frame[:3, :3]
+    shift = np.where(np.abs(frame[:3, 3]) < FAR_FROM_NOMINAL_MM, 0.0, frame[:3, 3])
+    return transform(rotation, shift)
+
+
+def _on_axis(frame: np.ndarray) -> bool:
+    """Whether ``frame`` (in a joint's frame) has its z axis on the joint's axis."""
+    return bool(np.linalg.norm(frame[:2, 2]) < 1e-12 and np.linalg.norm(frame[:2, 3]) < 1e-9)
+
+
+def _frames_to(chain: SerialChain, model: str, poses: int) -> UrFrames:
+    """:class:`UrFrames` of ``chain`` to ``model``'s DH frames.
+
+    Joint 1's axis goes exactly onto the DH base frame's z axis (a DH table starts
+    there), turned about and slid along it so that the first axis not parallel to it
+    (a UR's joint 2) lies where the model's does; the flange sits on the last joint's
+    axis, turned about and slid along it as the model's.  Axis lines do not depend on
+    where a description puts a joint's frame along or about its axis.  Those frames,
+    rounded to quarter turns and to no offset where that keeps joint 1's axis and the
+    flange where a DH table needs them (:func:`_snapped`), are a description's own: a
+    calibrated description (a UR's calibration file, or the ROS description with the
+    robot's calibration YAML) gives the same frames as the nominal one, and its
+    calibration stays in the chain.
+    """
+    nominal = ur_chain(ur_nominal(model))
+    mine, theirs = chain.zero_frames(), nominal.zero_frames()
+    rel_mine = np.linalg.solve(mine[0], mine)
+    rel_theirs = np.linalg.solve(theirs[0], theirs)
+    k = next((k for k in range(1, 6) if abs(rel_mine[k, 2, 2]) < PARALLEL_COS), None)
+    turn = slide = 0.0
+    if k is not None:  # a UR's joint 2
+        turn = np.arctan2(rel_theirs[k, 1, 2], rel_theirs[k, 0, 2]) - np.arctan2(
+            rel_mine[k, 1, 2], rel_mine[k, 0, 2]
+        )
+        slide = _foot(rel_theirs[k]) - _foot(rel_mine[k])
+    base = theirs[0] @ transform(elementary(2, turn), [0, 0, slide]) @ np.linalg.inv(mine[0])
+    last = _screw_part(np.linalg.solve(base @ mine[-1], theirs[-1]))
+    tip = np.linalg.solve(chain.tip, last @ nominal.tip)
+    rounded = _snapped(base)
+    if _on_axis(rounded @ chain.origins[0]):
+        base = rounded
+    rounded = _snapped(tip)
+    if _on_axis(chain.tip @ rounded):
+        tip = rounded
+    frames = UrFrames(model, base, tip, 0.0)
+    return replace(frames, distance_mm=_farthest_mm(frames.apply(chain), model, poses))
+
+
+def ur_frames(chain: SerialChain, *, poses: int = 200) -> UrFrames:
+    """The UR model that ``chain`` (six revolute joints) is in some base and tip frames, and
+    those frames (:class:`UrFrames`): the model whose flange, in them, lies nearest the
+    chain's over ``poses`` random readings.  ``chain`` is a nominal one: its frames then
+    hold for every calibration of it (:meth:`UrFrames.apply`).
+
+    Examples
+    --------
+    >>> turned = transform(elementary(2, np.pi))  # ROS's base_link from the DH base frame
+    >>> chain = ur_chain(ur_nominal("ur5"))
+    >>> origins = chain.origins.copy()
+    >>> origins[0] = turned @ origins[0]
+    >>> found = ur_frames(replace(chain, origins=origins))
+    >>> found.model, bool(found.distance_mm < 1e-9)
+    ('ur5', True)
+    """
+    found = [_frames_to(chain, model, poses) for model in UR_MODELS]
+    return min(found, key=lambda frames: frames.distance_mm)
 
 
 def ur_model_of(chain: SerialChain, *, poses: int = 200) -> tuple[str, float]:

@@ -16,7 +16,10 @@ Descriptions of other forms reduce to this one:
   fixed joints fold into their neighbours;
 * a modified DH table (Craig, :meth:`SerialChain.from_mdh`):
   ``Rx(alpha) Tx(a) Rz(theta) Tz(d)`` per joint, the joint value added to
-  ``theta`` (revolute) or ``d`` (prismatic).
+  ``theta`` (revolute) or ``d`` (prismatic);
+* a standard DH table (Denavit and Hartenberg's distal convention,
+  :meth:`SerialChain.from_dh`): ``Rz(theta) Tz(d) Tx(a) Rx(alpha)`` per joint,
+  the joint value added to ``theta`` or ``d`` likewise.
 
 The controller's readings ``q`` need not be these joint values: with a joint
 map ``M`` (coupled axes, a joint counted the other way round) ``u = M q``.  The
@@ -359,15 +362,18 @@ class SerialChain:
         a: ArrayLike,
         alpha: ArrayLike,
         names: Sequence[str] | None = None,
+        *,
+        kinds: Sequence[str] | None = None,
     ) -> SerialChain:
-        """A chain of revolute joints from a standard (distal) DH table, as controllers give
-        it: joint ``k`` moves the frame by ``Rz(q_k + theta_k) Tz(d_k) Tx(a_k) Rx(alpha_k)``
-        (rad, mm).  Joint 1's axis is the base frame's z; each row after its joint's turn
-        becomes the next joint's origin, the last row the tip, and each joint's frame then
-        slides along its own axis to the point nearest the frame before (the same
-        kinematics), so the metres of ``d`` of near-parallel axes (a controller's) cancel
-        here, to round-off of their size (``1e-16`` of 1e6 mm is 1e-10 mm), and nowhere
-        else.
+        """A chain from a standard (distal) DH table, as controllers give it: joint ``k``
+        moves the frame by ``Rz(q_k + theta_k) Tz(d_k) Tx(a_k) Rx(alpha_k)`` (rad, mm), or
+        for a prismatic joint (``kinds``, default every joint revolute) by
+        ``Rz(theta_k) Tz(q_k + d_k) Tx(a_k) Rx(alpha_k)``.  Joint 1's axis is the base
+        frame's z; each row after its joint's motion becomes the next joint's origin, the
+        last row the tip, and each joint's frame then slides along its own axis to the
+        point nearest the frame before (the same kinematics), so the metres of ``d`` of
+        near-parallel axes (a controller's) cancel here, to round-off of their size
+        (``1e-16`` of 1e6 mm is 1e-10 mm), and nowhere else.
 
         Examples
         --------
@@ -382,7 +388,7 @@ class SerialChain:
         rows = np.array([dh_row(theta[j], d[j], a[j], alpha[j]) for j in range(n)])
         origins = np.concatenate([np.eye(4)[None], rows[:-1], rows[-1:]])
         # Slide every joint's frame along its own axis to the point nearest the frame
-        # before it (a slide along the axis commutes with the joint's turn: the same
+        # before it (a slide along the axis commutes with the joint's motion: the same
         # kinematics), so no frame sits the metres away where near-parallel axes' common
         # normals meet them, and errors are placed at the joints themselves.
         for j in range(1, n):
@@ -392,7 +398,8 @@ class SerialChain:
             origins[j + 1] = np.linalg.inv(slide) @ origins[j + 1]
         names = tuple(names) if names is not None else tuple(f"joint {j + 1}" for j in range(n))
         limits = np.tile([-np.inf, np.inf], (n, 1))
-        return cls(origins[:n], ("R",) * n, origins[n], names, limits)
+        kinds = tuple(kinds) if kinds is not None else ("R",) * n
+        return cls(origins[:n], kinds, origins[n], names, limits)
 
     @classmethod
     def from_joints(cls, joints: Sequence[UrdfJoint]) -> SerialChain:

@@ -23,20 +23,24 @@ and the first row and the tip absorb what is left (``base``, ``tip``), so
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
 from ..numerics import wrap_angle
-from .spatial_chain import SerialChain, dh_row, elementary, transform
+from .spatial_chain import SerialChain, dh_row, elementary, joint_motion, transform
 
 __all__ = [
+    "CONVENTIONS",
     "PARALLEL_COS",
     "DhTable",
     "MdhTable",
+    "convention_mistake",
+    "degeneracy",
     "dh_table",
     "mdh_table",
     "mdh_transform",
+    "table_chain",
 ]
 
 #: Consecutive axes closer to parallel than 45 degrees get Hayati's row (module notes).
@@ -261,3 +265,134 @@ def _dh_row_of(target: np.ndarray, last: bool, theta_ref: float, tol: float) -> 
     alpha = float(np.arctan2(-(z @ y), z[2]))
     a = float((point - [0.0, 0.0, d]) @ x)
     return np.array([theta, d, a, alpha])
+
+
+def degeneracy(chain: SerialChain) -> str | None:
+    """Why the joints of ``chain`` cannot move its tip in ``min(n, 6)`` independent ways,
+    in words ("makes joints 5 and 6 turn about one axis, ..."), or None for a regular arm.
+
+    Two consecutive revolute joints about one axis (or prismatic ones along one
+    direction) are named; the rank of the tip's twists over the joints (lengths over
+    the arm's size) is taken at three generic joint values (seeded: the same answer
+    every run), so a rank lost only at a singular pose does not count.  A DH table read
+    in the other convention usually shows here: the row of zeros ``(alpha, a) = (0, 0)``
+    that a standard table has at its end and a modified one at its start moves between
+    two joints, whose axes then coincide.
+
+    Examples
+    --------
+    >>> degeneracy(SerialChain.from_mdh([0, 0], [0, 0], [0, 0], [0, 100.0]))
+    'makes joints 1 and 2 turn about one axis, so its tip moves in 1 independent way, not 2'
+    >>> degeneracy(SerialChain.from_mdh([0, 0], [0, 300.0], [0, 0], [0, 0])) is None
+    True
+    """
+    n = chain.n_joints
+    zero = chain.zero_frames()
+    size = max(1.0, float(np.sum(np.linalg.norm(chain.origins[:, :3, 3], axis=1))))
+    size += float(np.linalg.norm(chain.tip[:3, 3]))
+    pair = None
+    for k in range(n - 1):
+        z, z_next = zero[k][:3, 2], zero[k + 1][:3, 2]
+        if np.linalg.norm(np.cross(z, z_next)) > 1e-9:
+            continue
+        offset = np.linalg.norm(np.cross(z, zero[k + 1][:3, 3] - zero[k][:3, 3]))
+        if chain.kinds[k] == chain.kinds[k + 1] == "R" and offset <= 1e-9 * size:
+            pair = f"makes joints {k + 1} and {k + 2} turn about one axis"
+        elif chain.kinds[k] == chain.kinds[k + 1] == "P":
+            pair = f"makes joints {k + 1} and {k + 2} slide along one direction"
+        if pair is not None:
+            break
+    full = min(n, 6)
+    rank = 0
+    for q in np.random.default_rng(0).uniform(-np.pi, np.pi, (3, n)):
+        frame, columns = np.eye(4), []
+        for k, kind in enumerate(chain.kinds):
+            frame = frame @ chain.origins[k]
+            z, p = frame[:3, 2], frame[:3, 3]
+            line = np.cross(p, z) / size
+            columns.append(np.concatenate([z, line]) if kind == "R" else np.r_[0, 0, 0, z])
+            frame = frame @ joint_motion(kind, q[k])
+        values = np.linalg.svd(np.array(columns).T, compute_uv=False)
+        rank = max(rank, int(np.sum(values > 1e-9 * values[0])))
+    ways = f"{rank} independent way{'s' if rank != 1 else ''}, not {full}"
+    if rank < full:
+        return f"{pair}, so its tip moves in {ways}" if pair else f"moves its tip in {ways}"
+    return None if pair is None else f"{pair}: two of its joints do the work of one"
+
+
+#: The two conventions of a DH table, by the robot TOML's key, in words.
+CONVENTIONS = {
+    "mdh": "modified DH (Craig: Rx(alpha) Tx(a) Rz(theta) Tz(d) per row)",
+    "dh": "standard DH (Denavit-Hartenberg: Rz(theta) Tz(d) Tx(a) Rx(alpha) per row)",
+}
+
+
+def table_chain(
+    convention: str,
+    alpha: np.ndarray,
+    a: np.ndarray,
+    theta: np.ndarray,
+    d: np.ndarray,
+    kinds: tuple[str, ...],
+    base: np.ndarray,
+    tip: np.ndarray,
+    *,
+    beta: np.ndarray | None = None,
+) -> SerialChain:
+    """The chain of a DH table (rad, mm) read in ``convention`` (a key of
+    :data:`CONVENTIONS`) between a ``base`` and a ``tip`` frame; ``beta`` (Hayati's) is
+    modified DH's alone.
+
+    Examples
+    --------
+    >>> row = (np.zeros(1), np.array([100.0]), np.zeros(1), np.zeros(1), ("R",))
+    >>> np.round(table_chain("dh", *row, np.eye(4), np.eye(4)).forward([np.pi / 2])[:3, 3], 9)
+    array([  0., 100.,   0.])
+    """
+    if convention == "mdh":
+        beta = np.zeros_like(alpha) if beta is None else beta
+        return MdhTable(alpha, a, beta, theta, d, kinds, base, tip).chain()
+    chain = SerialChain.from_dh(theta, d, a, alpha, kinds=kinds)
+    origins = chain.origins.copy()
+    origins[0] = base @ origins[0]
+    return replace(chain, origins=origins, tip=chain.tip @ tip)
+
+
+def convention_mistake(
+    convention: str,
+    alpha: np.ndarray,
+    a: np.ndarray,
+    theta: np.ndarray,
+    d: np.ndarray,
+    kinds: tuple[str, ...],
+    base: np.ndarray,
+    tip: np.ndarray,
+    *,
+    beta: np.ndarray | None = None,
+) -> str | None:
+    """What to say of a table (:func:`table_chain`'s arguments) whose arm is degenerate in
+    its ``convention`` and regular in the other (:func:`degeneracy`): the table of the
+    other convention under the wrong name, the cheap and reliable sign of the mistake;
+    None otherwise (a Hayati ``beta`` is modified DH's alone, so never a mistake).
+
+    Examples
+    --------
+    >>> table = (np.radians([90, 0]), np.array([0, 0]), np.zeros(2), np.array([100, 50]),
+    ...          ("R", "R"), np.eye(4), np.eye(4))
+    >>> print(convention_mistake("mdh", *table))  # doctest: +NORMALIZE_WHITESPACE
+    read as modified DH (Craig: Rx(alpha) Tx(a) Rz(theta) Tz(d) per row), the table makes
+    joints 1 and 2 turn about one axis, so its tip moves in 1 independent way, not 2; read
+    as standard DH (Denavit-Hartenberg: Rz(theta) Tz(d) Tx(a) Rx(alpha) per row), it is a
+    regular arm: the table looks like standard DH; write it under [dh] (the same keys)
+    """
+    reason = degeneracy(table_chain(convention, alpha, a, theta, d, kinds, base, tip, beta=beta))
+    if reason is None or (beta is not None and np.any(beta)):
+        return None
+    other = "dh" if convention == "mdh" else "mdh"
+    if degeneracy(table_chain(other, alpha, a, theta, d, kinds, base, tip)) is not None:
+        return None
+    return (
+        f"read as {CONVENTIONS[convention]}, the table {reason}; read as {CONVENTIONS[other]}, "
+        f"it is a regular arm: the table looks like {CONVENTIONS[other].split(' (')[0]}; "
+        f"write it under [{other}] (the same keys)"
+    )

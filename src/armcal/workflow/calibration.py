@@ -41,6 +41,7 @@ from ..files.ur import (
     format_ur_calibration,
     format_ur_kinematics,
     ur_deltas,
+    ur_frames,
     ur_model_of,
 )
 from ..identification import Calibration, identify
@@ -595,18 +596,26 @@ class ExportRun:
 
 
 def _ur_arm(cal: CalibratedArm, path: str) -> tuple[SerialChain, str, UrDh]:
-    """The calibrated chain of a UR arm (DH base frame to flange), its model
+    """The calibrated chain of a UR arm (DH base frame to flange, whatever frames its
+    description used: :func:`armcal.files.ur.ur_frames`), its model
     (:func:`armcal.files.ur.ur_model_of`) and its deltas from that model's table, for a
     controller's file at ``path``."""
     arm = cal.arm
     if not isinstance(arm, SpatialArm) or arm.n_joints != 6 or set(arm.chain.kinds) != {"R"}:
         raise ArmcalError(f"{path}: a UR file needs a six-axis revolute arm; {arm.name} is not")
-    chain = arm.calibrated_chain(cal.arm_params)
+    frames = ur_frames(arm.chain)  # of the nominal: they hold for its calibration
+    if frames.distance_mm > FAR_FROM_NOMINAL_MM:
+        raise ArmcalError(
+            f"{path}: {arm.name} is no UR model in any base and tip frames (nearest "
+            f"{frames.model}, {frames.distance_mm:.4g} mm away); describe the arm with a robot "
+            "file's [ur] table or Universal Robots' own URDF"
+        )
+    chain = frames.apply(arm.calibrated_chain(cal.arm_params))
     model, distance = ur_model_of(chain)
     if distance > FAR_FROM_NOMINAL_MM:
         raise ArmcalError(
-            f"{path}: {arm.name} is no UR model in its DH base frame (nearest {model}, "
-            f"{distance:.4g} mm away); describe the arm with a robot file's [ur] table"
+            f"{path}: the calibrated {arm.name} moves the flange {distance:.4g} mm from the "
+            f"nominal {model}'s (a calibration moves it a few mm); check the calibration"
         )
     try:
         deltas = ur_deltas(chain, model)
