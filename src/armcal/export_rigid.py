@@ -14,9 +14,9 @@ fitted to (noise-free, so every figure is the model's and none the instrument's)
   export carries no instrument pose: it is the instrument's, not the robot's);
 * the nominal arm so fitted: what the rows would give without calibrating.
 
-The fits are Gauss-Newton on the instrument's free parameters alone
-(:attr:`~armcal.models.interface.FitModel.instrument_params`), the rest held, started
-from the calibration's instrument pose, unweighted: distances in mm.
+The fits are Gauss-Newton on the registration alone
+(:func:`~armcal.identification.registration.fit_registration`: the instrument's pose and
+the targets), the rest held, started from the calibration's.
 """
 
 from __future__ import annotations
@@ -27,6 +27,7 @@ from typing import Any
 import numpy as np
 
 from .errors import ArmcalWarning, action
+from .identification.registration import fit_registration
 from .models import CalibratedArm, Conditions, FitModel
 from .numerics import point_norms, rms
 
@@ -36,13 +37,6 @@ __all__ = [
     "rigid_export",
     "rigid_export_warnings",
 ]
-
-#: Gauss-Newton steps of a registration at most; it starts within the calibrated arm's
-#: deviations of the answer (mm, hundredths of a degree) and takes three or four.
-_ITERATIONS = 30
-
-#: A registration has converged when its step moves no point by more than this (mm).
-_STEP_MM = 1e-9
 
 #: The exported geometry is called worse than the nominal arm when, registered, it misses
 #: the rows by more than this factor of the nominal arm's RMS: a calibration of an arm
@@ -102,19 +96,13 @@ class RigidExport:
 def _registered(
     model: FitModel, rows: Conditions, start: np.ndarray, reference: np.ndarray
 ) -> np.ndarray:
-    """Every row's distance (mm) from ``reference`` ``(m, d)`` of ``model`` with the
-    instrument's free parameters fitted (least squares), the others held at ``start``."""
-    d = reference.shape[-1]
-    free = np.flatnonzero(model.instrument_params & model.free)
-    params = np.array(start, dtype=float)
-    for _ in range(_ITERATIONS if free.size else 0):
-        miss = reference - model.positions(rows, params)[..., :d]
-        jac = model.jacobian(rows, params)[..., :d, :][..., free].reshape(-1, free.size)
-        step = np.linalg.lstsq(jac, miss.reshape(-1), rcond=None)[0]
-        params[free] += step
-        if np.max(np.abs(jac @ step), initial=0.0) <= _STEP_MM:
-            break
-    return point_norms(reference - model.positions(rows, params)[..., :d])
+    """Every row's distance (mm) from ``reference`` ``(m, d)`` of ``model`` with its
+    registration (instrument pose and targets) fitted, the others held at ``start``."""
+    d = model.position_dim
+    free = np.asarray(model.registration_params, dtype=bool) & np.asarray(model.free)
+    fitted = fit_registration(model, rows, reference, np.asarray(start, dtype=float), free)
+    params = np.asarray(start, dtype=float) if fitted is None else fitted
+    return point_norms(reference[..., :d] - model.positions(rows, params)[..., :d])
 
 
 def rigid_export(cal: CalibratedArm) -> RigidExport | None:
@@ -141,11 +129,11 @@ def rigid_export(cal: CalibratedArm) -> RigidExport | None:
     if inner is None or model.effect is None or rows is None or rows.m == 0:
         return None
     d = model.position_dim
-    reference = model.positions(rows, cal.params)[..., :d]
+    reference = model.positions(rows, cal.params)
     geometry = model.arm_params(cal.params)
-    at_pose = point_norms(reference - inner.positions(rows, geometry)[..., :d])
+    at_pose = point_norms(reference[..., :d] - inner.positions(rows, geometry)[..., :d])
     registered = _registered(inner, rows, geometry, reference)
-    nominal = np.where(inner.instrument_params, geometry, 0.0)
+    nominal = np.where(inner.registration_params, geometry, inner.held_values)
     nominal_fit = _registered(inner, rows, nominal, reference)
     return RigidExport(
         rows.m,

@@ -41,6 +41,7 @@ __all__ = [
     "MOVE_SPLITS",
     "Baseline",
     "Movement",
+    "fit_registration",
     "instrument_moved",
     "register_nominal",
 ]
@@ -86,14 +87,15 @@ class Baseline:
         )
 
 
-def _fit_registration(
+def fit_registration(
     model: FitModel,
     conditions: Conditions,
     points: np.ndarray,
     start: np.ndarray,
     free: np.ndarray,
 ) -> np.ndarray | None:
-    """``start`` with the parameters ``free`` fitted to ``points`` (None if it fails)."""
+    """``start`` with the parameters ``free`` ``(p,)`` fitted to ``points`` ``(m, d)`` by
+    Gauss-Newton on the model's whitened rows, every other held (None if it fails)."""
     if not free.any():
         return start
     threshold = _TOL * model.reach_mm
@@ -150,7 +152,7 @@ def register_nominal(
     used = np.ones(conditions.m, dtype=bool) if used is None else np.asarray(used, dtype=bool)
     rows = conditions if used.all() else conditions.take(used)
     kept = np.asarray(points, dtype=float)[used]
-    fitted = _fit_registration(arm, rows, kept, start, free)
+    fitted = fit_registration(arm, rows, kept, start, free)
     if fitted is None:
         return None
     d = arm.position_dim
@@ -238,7 +240,7 @@ def instrument_moved(
         fits = []
         for part in parts:
             rows_of = conditions.take(part)
-            fitted = _fit_registration(model, rows_of, points[part], params, free)
+            fitted = fit_registration(model, rows_of, points[part], params, free)
             if fitted is None:
                 break
             fits.append((rows_of, part, fitted))
