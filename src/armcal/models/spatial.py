@@ -38,7 +38,15 @@ from .information import (
     whitened_blocks,
     whitened_free_jacobian,
 )
-from .interface import Conditions, DesignEffort, Effect, FitModel, LinearPositions, Loads
+from .interface import (
+    Conditions,
+    DesignEffort,
+    DeviationBounds,
+    Effect,
+    FitModel,
+    LinearPositions,
+    Loads,
+)
 from .spatial_chain import (
     SerialChain,
     elementary,
@@ -54,6 +62,7 @@ from .spatial_kinematics import (
     ChainKinematics,
     SpatialLayout,
     default_targets,
+    deviation_bounds,
     kinematics,
 )
 from .spatial_registration import register, register_turns
@@ -64,6 +73,7 @@ __all__ = [
     "SINGLE_TARGET",
     "SpatialArm",
 ]
+
 
 #: The label of the one target of data without a target column.
 SINGLE_TARGET = "tool"
@@ -331,6 +341,12 @@ class SpatialArm(RigidLoads):
         """The sum of the joint origins' and the tip's offsets (an upper bound of the reach)."""
         offsets = np.linalg.norm(self.chain.origins[:, :3, 3], axis=1)
         return float(np.sum(offsets) + np.linalg.norm(self.chain.tip[:3, 3]) + 1.0)
+
+    @property
+    def deviation_bounds(self) -> DeviationBounds:
+        """Every joint's placement and zero (:func:`~armcal.models.spatial_kinematics.\
+deviation_bounds`); the base pose and the targets are the instrument's."""
+        return deviation_bounds(self.layout, self.reach_mm)
 
     @property
     def base_offset(self) -> bool:
