@@ -43,6 +43,7 @@ from armcal.models import (
     SerialChain,
     SerialElastics,
     SpatialArm,
+    Target,
 )
 from armcal.noise import NoiseModel
 from armcal.plausibility import (
@@ -188,6 +189,22 @@ def test_a_unit_mistake_in_the_measurements_is_an_error_for_every_family(
     if family == "planar":
         ok = run_cli(tmp_path, "identify", "--robot", robot, "--measurements", "meas.csv")
         assert ok.returncode == 0 and "error" not in ok.stderr, ok.stderr
+
+
+def test_validation_measurements_in_metres_are_an_error(tmp_path):
+    """validate reads measurement files too: held-out points in metres are refused with
+    the same line, not reported as a calibration that misses by metres."""
+    model, rows, labels, _, points = _industrial()
+    calibrated = _identify_file(tmp_path, model, rows, labels, points, "-o", "cal.json")
+    assert calibrated.returncode == 0, calibrated.stderr
+    targets = [model.targets[t] for t in rows.target]
+    text = format_measurements_csv(rows.q, points / 1000.0, labels, targets)
+    (tmp_path / "held.csv").write_text(text, encoding="utf-8")
+    run = run_cli(tmp_path, "validate", "--calibration", "cal.json", "--measurements", "held.csv")
+    assert run.returncode == 2, run.stderr
+    lines = run.stderr.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith("armcal: error: held.csv: the positions in")
+    assert "look like metres" in lines[0] and "convert them to mm" in lines[0]
 
 
 # --------------------------------------------------------------------------- the check itself
@@ -393,6 +410,24 @@ def test_two_swapped_reflector_labels_are_named_with_their_pose_and_rows(tmp_pat
     assert 0.8 * SIGMA < after < 1.2 * SIGMA
     clean = _identify_file(tmp_path, model, rows, labels, points)
     assert "targets-swapped" not in _warnings(clean)
+
+
+def test_swapped_labels_are_named_on_a_planar_arm_with_a_nest_too():
+    """The same test through the planar family: a two-link arm with three targets on
+    its last link (each its own link vector), one pose's B and C exchanged."""
+    nest = (Target("A", 200.0, 0.0), Target("B", 180.0, 0.6), Target("C", 180.0, -0.6))
+    arm = PlanarArm([400.0, 250.0], targets=nest, sigma=0.02)
+    q = np.repeat(random_plan(arm, 20, rng=8), 3, axis=0)
+    target = np.tile([0, 1, 2], 20)
+    truth = arm.params_from_display([0.5, -0.3, 0.2, 0.4], [0.2, -0.1, 0.3, -0.2])
+    rng = np.random.default_rng(9)
+    points = arm.positions(arm.conditions(q, target=target), truth)
+    points += rng.normal(0.0, 0.02, points.shape)
+    points[[16, 17]] = points[[17, 16]]  # pose 6's B and C
+    labels = [str(i // 3 + 1) for i in range(60)]
+    cal = identify(arm, q, points, target=target, pose_labels=labels)
+    message = next(w.message for w in cal.warnings if w.code == "targets-swapped")
+    assert message.startswith("pose 6: targets B and C look swapped (rows 17, 18)")
 
 
 def test_a_pose_labelled_once_per_row_has_no_swap_to_name():

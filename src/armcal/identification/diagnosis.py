@@ -183,13 +183,14 @@ def swapped_targets(
     if not candidates:
         return None
     pairs = np.array([pair for _, pair in candidates])
-    gain = _exchanged(model, conditions, points, fit.params, pairs)
-    own = row_squares[pairs[:, 0]] + row_squares[pairs[:, 1]]
+    # The change of its pose's sum of squares if a pair's labels are exchanged.
+    change = _exchanged(model, conditions, points, fit.params, pairs)
+    change -= row_squares[pairs[:, 0]] + row_squares[pairs[:, 1]]
     chosen: dict[int, int] = {}  # pose -> its best candidate
     for k, (g, _) in enumerate(candidates):
-        after = pose_squares[g] - own[k] + gain[k]
+        after = pose_squares[g] + change[k]
         if after * SWAP_GAIN <= pose_squares[g] and (
-            g not in chosen or gain[k] - own[k] < gain[chosen[g]] - own[chosen[g]]
+            g not in chosen or change[k] < change[chosen[g]]
         ):
             chosen[g] = k
     if not chosen:

@@ -457,8 +457,9 @@ def validate_measurements(
     (:func:`armcal.acceptance.pose_characteristics`).
 
     Raises InputError, naming ``source``, for a target column the calibration
-    does not have or lacks, points of the other dimension, or (``iso9283``) poses
-    measured once or with different joint values from cycle to cycle.
+    does not have or lacks, points of the other dimension, measurements that look
+    like a unit mistake (:func:`armcal.plausibility.unit_mistake`), or (``iso9283``)
+    poses measured once or with different joint values from cycle to cycle.
     """
     arm = cal.arm
     if meas.targets is not None and not arm.target_labels:
@@ -472,6 +473,9 @@ def validate_measurements(
         )
     points = meas.xy if meas.z is None else meas.instrument_points
     loads = row_loads(cal.model, meas)
+    mistake = _unit_mistake(cal.model, meas, _row_targets(arm, meas), loads)
+    if mistake is not None:
+        raise InputError(f"{source}: {mistake}")
     try:
         result = validate(
             cal,
