@@ -312,6 +312,25 @@ def test_a_slide_is_not_taken_for_an_angle_in_radians():
     assert unit_mistake(arm, q, points) is None
 
 
+def test_a_6_dof_instrument_s_orientations_in_radians_are_named():
+    """A probe's orientations (rotation vectors) in radians under rx_deg, ry_deg, rz_deg
+    are read as 180 / pi times smaller turns: from row to row they turn 57 times less
+    than the nominal tool, which the angle of ``R_i R_j^T`` shows wherever the
+    instrument stands; in degrees they turn as the nominal tool does."""
+    arm = load_serial_robot("industrial-6r").arm.replace(oriented=True, view=None)
+    q = random_plan(arm, 40, rng=2)
+    rows = arm.conditions(q)
+    placed = arm.nominal.copy()
+    placed[:6] = [2850.0, -1700.0, -650.0, *np.radians([0.3, -0.2, 120.0])]
+    points = arm.positions(rows, placed)  # rotation vectors in the instrument's frame
+    assert unit_mistake(arm, q, points[:, :3], orientations=points[:, 3:]) is None
+    read = np.radians(points[:, 3:])  # radians written under the _deg columns, read as deg
+    found = unit_mistake(arm, q, points[:, :3], orientations=read)
+    assert found is not None
+    assert found.startswith("the orientations in rx_deg, ry_deg, rz_deg look like radians")
+    assert found.endswith("convert them to degrees")
+
+
 def test_the_tolerance_keeps_every_unit_apart():
     """Inches (25.4 mm) and centimetres (10 mm) are the closest units tried: a factor of
     SPREAD_TOLERANCE either way about each leaves them apart, so one spread names one unit."""

@@ -73,6 +73,8 @@ from .models import (
     Loads,
     PlanarArm,
     forward_kinematics,
+    rotation_vector,
+    vector_rotation,
 )
 
 __all__ = [
@@ -82,6 +84,7 @@ __all__ = [
     "LENGTH_UNITS",
     "MIN_DOF",
     "MIN_SPREAD_FRACTION",
+    "MIN_TURN_DEG",
     "SPREAD_TOLERANCE",
     "SUSPICIOUS_RMS_FRACTION",
     "Explanation",
@@ -431,6 +434,27 @@ SPREAD_TOLERANCE = 1.5
 MIN_SPREAD_FRACTION = 0.05
 
 
+#: A 6-DoF instrument's orientations tell a unit only when the nominal tool turns at
+#: least this much (RMS, deg) from one row of a target to the next: radians read as
+#: degrees turn 57 times less, 0.09 deg here, still several times a probe's noise.
+MIN_TURN_DEG = 5.0
+
+
+def _turns_between(turns: np.ndarray, target: np.ndarray | None) -> float:
+    """The RMS angle (rad) from each row's orientation ``(m, 3)`` (rotation vectors) to the
+    next row's of the same target.  A turn of the instrument, or of a target on the tool,
+    leaves it unchanged (``R_i R_j^T`` is only turned), so measured and nominal compare."""
+    m = turns.shape[0]
+    labels = np.zeros(m, dtype=int) if target is None else np.asarray(target)
+    order = np.lexsort((np.arange(m), labels))
+    rotations = vector_rotation(turns[order])
+    same = labels[order][1:] == labels[order][:-1]
+    if not same.any():
+        return 0.0
+    between = rotations[1:][same] @ np.swapaxes(rotations[:-1][same], -1, -2)
+    return float(np.sqrt(np.mean(np.sum(rotation_vector(between) ** 2, axis=-1))))
+
+
 def spread(points: np.ndarray) -> float:
     """The RMS distance of points ``(m, d)`` from their centroid, mm.
 
@@ -473,6 +497,7 @@ def unit_mistake(
     *,
     target: np.ndarray | None = None,
     loads: Loads | None = None,
+    orientations: np.ndarray | None = None,
 ) -> str | None:
     """What looks like a unit mistake in measurements, said with the fix; None when none does.
 
@@ -488,6 +513,9 @@ def unit_mistake(
       they do.
 
     Both need a nominal spread of at least :data:`MIN_SPREAD_FRACTION` of the reach.
+    A 6-DoF instrument's orientations in radians under ``rx_deg, ry_deg, rz_deg``
+    turn 180 / pi times less from row to row than the nominal tool (at least
+    :data:`MIN_TURN_DEG`), where in degrees they turn as far.
 
     Parameters
     ----------
@@ -500,6 +528,9 @@ def unit_mistake(
         a planar arm spread as their plane's).
     target, loads
         Every row's target (for a model with several) and loads.
+    orientations : ndarray, shape (m, 3), optional
+        A 6-DoF instrument's orientations as read (rotation vectors, rad), for a
+        model whose points include them.
 
     Returns
     -------
@@ -545,6 +576,10 @@ def unit_mistake(
                 f"centroid {radians:.4g} mm, measured {measured:.4g} mm; as degrees "
                 f"{nominal:.3g} mm); convert them to degrees"
             )
+    if orientations is not None and model.point_dim > model.position_dim:
+        found = _orientations_in_radians(model, conditions, np.asarray(orientations, float))
+        if found is not None:
+            return found
     if nominal < least:
         return None
     for unit, length in LENGTH_UNITS:
@@ -558,3 +593,24 @@ def unit_mistake(
                 "each); convert them to mm"
             )
     return None
+
+
+def _orientations_in_radians(
+    model: FitModel, conditions: Conditions, orientations: np.ndarray
+) -> str | None:
+    """A 6-DoF instrument's orientations that turn like radians read as degrees."""
+    nominal = _turns_between(
+        model.positions(conditions)[:, model.position_dim :], conditions.target
+    )
+    measured = _turns_between(orientations, conditions.target)
+    if nominal < np.radians(MIN_TURN_DEG) or _near(measured / nominal):
+        return None
+    if not _near(np.degrees(measured) / nominal):
+        return None
+    return (
+        f"the orientations in rx_deg, ry_deg, rz_deg look like radians: from row to row of a "
+        f"target they turn {nominal / max(measured, 1e-300):.3g} times less than the nominal "
+        f"tool at the same joint readings (RMS {np.degrees(measured):.3g} deg against "
+        f"{np.degrees(nominal):.3g} deg), as radians read as degrees would; convert them to "
+        "degrees"
+    )

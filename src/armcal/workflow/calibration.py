@@ -196,9 +196,12 @@ def _unit_mistake(
     model: FitModel, meas: Measurements, target: np.ndarray | None, loads: Loads | None
 ) -> str | None:
     """What in ``meas`` looks like a unit mistake for ``model`` (:func:`unit_mistake`), checked
-    before the fit: positions in metres or another unit, angles in radians."""
+    before the fit: positions in metres or another unit, angles in radians (joints, a
+    6-DoF instrument's orientations)."""
     points = meas.xy if meas.z is None else meas.xyz
-    return unit_mistake(model, meas.q, points, target=target, loads=loads)
+    return unit_mistake(
+        model, meas.q, points, target=target, loads=loads, orientations=meas.orientation
+    )
 
 
 def _ignored_loads(
