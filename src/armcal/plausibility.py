@@ -1,5 +1,19 @@
 """Is a fit plausible for this arm?  Unit mistakes, a missing base offset, large deviations.
 
+**Before any fit, for every family** (:func:`unit_mistake`): the spread of the
+measured points (their RMS distance from their centroid) does not depend on
+where the instrument stands, so it is compared with the nominal arm's points at
+the same joint readings.  Points that spread 1000, 25.4 or 10 times less are in
+metres, inches or centimetres; angles in radians under ``q*_deg`` barely move
+the nominal arm, while taken as radians they spread its points as far as the
+measured ones.  One or two evaluations of the model per row.
+
+**Large deviations, for every family** (:func:`deviation_warning`): each model
+says which of its parameters are the robot's deviations and how large one is
+implausible (:attr:`~armcal.models.interface.FitModel.deviation_bounds`).
+
+**After a fit, for the plain planar arm** (:func:`explain`):
+
 Least squares gives the exact answer to whatever it is handed.  Handed joint
 angles in radians under ``q*_deg``, positions in metres under ``x_mm``, or
 instrument-frame data for an arm without a base offset, it answers with
@@ -44,36 +58,43 @@ may be anything: they are left out of the plausibility of the alternatives
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
 from .errors import ArmcalError, ArmcalWarning
 from .identification import Calibration, solve
-from .models import PlanarArm, combination, forward_kinematics
+from .identification.diagnosis import IMPROVEMENT, SUSPICIOUS_RMS_FRACTION
+from .models import (
+    LARGE_ANGLE_DEG,
+    LARGE_LENGTH_FRACTION,
+    Conditions,
+    FitModel,
+    Loads,
+    PlanarArm,
+    forward_kinematics,
+    rotation_vector,
+    vector_rotation,
+)
 
 __all__ = [
     "IMPROVEMENT",
     "LARGE_ANGLE_DEG",
     "LARGE_LENGTH_FRACTION",
+    "LENGTH_UNITS",
     "MIN_DOF",
+    "MIN_SPREAD_FRACTION",
+    "MIN_TURN_DEG",
+    "SPREAD_TOLERANCE",
     "SUSPICIOUS_RMS_FRACTION",
     "Explanation",
     "deviation_warning",
     "explain",
     "large_deviations",
+    "spread",
     "suspicious",
+    "unit_mistake",
 ]
-
-#: A link-length deviation beyond this fraction of its nominal length is implausible.
-LARGE_LENGTH_FRACTION = 0.10
-
-#: A joint-offset deviation beyond this many degrees is implausible.
-LARGE_ANGLE_DEG = 10.0
-
-#: How many times smaller an alternative's residual sum of squares must be (two
-#: orders of magnitude: far beyond what two extra parameters or chance give).
-IMPROVEMENT = 100.0
 
 #: Residual degrees of freedom an alternative must keep to be compared.  For data
 #: the original model fits (Gaussian noise), two extra parameters leave
@@ -81,12 +102,6 @@ IMPROVEMENT = 100.0
 #: happens by chance with probability ``100^(-k/2)``: 1 % at ``k = 2``, ``1e-6`` at 6.
 #: With as many parameters as equations any reading fits exactly and proves nothing.
 MIN_DOF = 6
-
-#: A residual RMS above this fraction of the arm's reach (0.66 mm for the paper's
-#: 660 mm arm) is more than an instrument good enough to calibrate the arm leaves:
-#: calibration corrects deviations of about 1/200 of the reach (a few mm), so a
-#: useful instrument is several times better than 1/1000 of it.
-SUSPICIOUS_RMS_FRACTION = 1e-3
 
 #: Position scale factors tried, with the unit they stand for.
 _LENGTH_UNITS = ((1000.0, "metres"), (10.0, "centimetres"))
@@ -149,25 +164,28 @@ def _fit(arm: PlanarArm, q: np.ndarray, xy: np.ndarray) -> _Fit | None:
 
 
 def large_deviations(
-    arm: PlanarArm, params: np.ndarray, *, rotation_free: bool = False
+    model: FitModel, params: np.ndarray, *, rotation_free: bool = False
 ) -> list[str]:
-    """The deviations that are a large fraction of a link, described one by one.
+    """The robot's deviations that are implausibly large, described one by one.
 
     Parameters
     ----------
-    arm : PlanarArm
+    model : FitModel
+        Of any family: its :attr:`~armcal.models.interface.FitModel.deviation_bounds`
+        say which parameters are the robot's deviations and how large is implausible.
     params : ndarray, shape (p,)
-        User deviations (mm, rad).
+        Identified parameters (mm, rad).
     rotation_free : bool
-        Leave out the offsets that take up a turn of the instrument's axes
-        (with a base offset; ``dq1`` for the default joint map), which may be anything.
+        Leave out the deviations that may take up something else (with a base offset,
+        the offsets that take up a turn of the instrument's axes: ``dq1`` for the
+        default joint map), which may be anything.
 
     Returns
     -------
     list of str
-        ``"dl1 = 378 mm (108 % of link 1, 350 mm)"`` for every ``|dl_k|`` above
-        :data:`LARGE_LENGTH_FRACTION` of ``l_k`` and ``"dq2 = 25.3 deg"`` for
-        every ``|dq_k|`` above :data:`LARGE_ANGLE_DEG`; empty when none is.
+        ``"dl1 = 378 mm (108 % of link 1, 350 mm)"`` for every length beyond its bound
+        (:data:`LARGE_LENGTH_FRACTION` of a planar link), ``"dq2 = 25.3 deg"`` for every
+        angle beyond :data:`LARGE_ANGLE_DEG`; empty when none is.
 
     Examples
     --------
@@ -175,40 +193,40 @@ def large_deviations(
     >>> large_deviations(arm, arm.params_from_display([378.0, 1.0], [0.5, -25.3]))
     ['dl1 = 378 mm (108 % of link 1, 350 mm)', 'dq2 = -25.3 deg']
     """
-    k = arm.n_links
-    names = arm.param_names
-    nominal = arm.link_nominal
-    dl = params[:k]
-    dq = np.degrees(params[k : 2 * k])
-    found = [
-        f"{names[i]} = {dl[i]:.4g} mm ({100 * abs(dl[i]) / nominal[i]:.3g} % of link "
-        f"{arm.link_names[i]}, {nominal[i]:g} mm)"
-        for i in range(k)
-        if abs(dl[i]) > LARGE_LENGTH_FRACTION * nominal[i]
-    ]
-    turned = arm.turn_offsets != 0 if rotation_free else np.zeros(k, dtype=bool)
-    found += [
-        f"{names[k + i]} = {dq[i]:.4g} deg"
-        for i in range(k)
-        if abs(dq[i]) > LARGE_ANGLE_DEG and not turned[i]
-    ]
+    bounds = model.deviation_bounds
+    params = np.asarray(params, dtype=float)
+    large = np.abs(params) > bounds.bounds
+    if rotation_free:
+        large &= ~bounds.absorbing
+    shown = params * model.display_scale
+    found = []
+    for i in np.flatnonzero(large):
+        text = f"{model.param_names[i]} = {shown[i]:.4g} {model.param_units[i]}"
+        reference = bounds.reference_mm[i]
+        if np.isfinite(reference):
+            text += (
+                f" ({100 * abs(params[i]) / reference:.3g} % of {bounds.reference_names[i]}, "
+                f"{reference:g} mm)"
+            )
+        found.append(text)
     return found
 
 
-def deviation_warning(arm: PlanarArm, params: np.ndarray) -> ArmcalWarning | None:
+def deviation_warning(model: FitModel, params: np.ndarray) -> ArmcalWarning | None:
     """A ``large-deviation`` warning when identified deviations are implausibly large.
 
     Parameters
     ----------
-    arm : PlanarArm
-        The arm calibrated.
+    model : FitModel
+        The model calibrated (any family).
     params : ndarray, shape (p,)
-        Identified user deviations (mm, rad).
+        Its identified parameters (mm, rad, and an effect's units).
 
     Returns
     -------
     ArmcalWarning or None
-        Naming every large deviation (:func:`large_deviations`) and what to check.
+        Naming every large deviation (:func:`large_deviations`), the family's bounds
+        and what to check.
 
     Examples
     --------
@@ -218,26 +236,19 @@ def deviation_warning(arm: PlanarArm, params: np.ndarray) -> ArmcalWarning | Non
     >>> deviation_warning(arm, arm.params_from_display([30.0, 0.0], [0.0, 0.0])).code
     'large-deviation'
     """
-    found = large_deviations(arm, params)
+    found = large_deviations(model, params)
     if not found:
         return None
-    rotation = ""
-    k = arm.n_links
-    turn = arm.turn_offsets
-    turned = [arm.param_names[k + i] for i in np.flatnonzero(turn)]
-    if arm.base_offset and any(item.split(" ")[0] in turned for item in found):
-        offsets = combination(turn, arm.param_names[k : 2 * k])
-        rotation = (
-            f" (with a base offset, {offsets} also take{'s' if len(turned) == 1 else ''} up "
-            "any rotation of the instrument's axes)"
-        )
+    bounds = model.deviation_bounds
+    absorbing = {model.param_names[i] for i in np.flatnonzero(bounds.absorbing)}
+    note = ""
+    if any(item.split(" ")[0] in absorbing for item in found):
+        note = f" ({bounds.absorbing_note})"
     return ArmcalWarning(
         "large-deviation",
-        f"identified deviations are a large part of a link: {', '.join(found)}{rotation}; "
+        f"identified deviations are {bounds.summary}: {', '.join(found)}{note}; "
         f"calibration-sized deviations are a few mm and about a degree (here more than "
-        f"{100 * LARGE_LENGTH_FRACTION:g} % of a link or {LARGE_ANGLE_DEG:g} deg); check the "
-        "robot file's link lengths, the units of the measurements (mm, deg), "
-        "and base_offset",
+        f"{bounds.rule}); {bounds.advice}",
     )
 
 
@@ -402,3 +413,204 @@ def _worst_fraction(arm: PlanarArm, params: np.ndarray) -> float:
     """Largest ``|dl_k| / l_k`` in percent."""
     n = arm.n_joints
     return float(100 * np.max(np.abs(params[:n]) / arm.link_lengths))
+
+
+# --------------------------------------------------------------------------- every family
+
+#: Length units measurements are given in by mistake, with their length in mm.
+LENGTH_UNITS = (("metres", 1000.0), ("inches", 25.4), ("centimetres", 10.0))
+
+#: How far (a factor either way) the measured points' spread may be from the nominal
+#: arm's at the same readings for the two to be the same arm in the same unit.  A
+#: calibration changes the arm by a few mm, and targets the robot file does not place
+#: (a reflector nest, a tool) change the spread by their offset from the flange, a few
+#: tens of percent of a small arm's at most; the units tried are at least a factor 2.54
+#: apart (inches, centimetres), which a factor 1.5 either way keeps apart.
+SPREAD_TOLERANCE = 1.5
+
+#: The nominal points' spread must be at least this fraction of the reach for their
+#: size to tell a unit: a plan that hardly moves the arm spreads its points over little
+#: more than the targets' offsets, which the robot file may not give.
+MIN_SPREAD_FRACTION = 0.05
+
+
+#: A 6-DoF instrument's orientations tell a unit only when the nominal tool turns at
+#: least this much (RMS, deg) from one row of a target to the next: radians read as
+#: degrees turn 57 times less, 0.09 deg here, still several times a probe's noise.
+MIN_TURN_DEG = 5.0
+
+
+def _turns_between(turns: np.ndarray, target: np.ndarray | None) -> float:
+    """The RMS angle (rad) from each row's orientation ``(m, 3)`` (rotation vectors) to the
+    next row's of the same target.  A turn of the instrument, or of a target on the tool,
+    leaves it unchanged (``R_i R_j^T`` is only turned), so measured and nominal compare."""
+    m = turns.shape[0]
+    labels = np.zeros(m, dtype=int) if target is None else np.asarray(target)
+    order = np.lexsort((np.arange(m), labels))
+    rotations = vector_rotation(turns[order])
+    same = labels[order][1:] == labels[order][:-1]
+    if not same.any():
+        return 0.0
+    between = rotations[1:][same] @ np.swapaxes(rotations[:-1][same], -1, -2)
+    return float(np.sqrt(np.mean(np.sum(rotation_vector(between) ** 2, axis=-1))))
+
+
+def spread(points: np.ndarray) -> float:
+    """The RMS distance of points ``(m, d)`` from their centroid, mm.
+
+    It does not change when the instrument stands elsewhere or turns (a rigid motion
+    of every point), so measured points and the nominal arm's compare without a fit.
+
+    Examples
+    --------
+    >>> spread(np.array([[0.0, 0.0], [6.0, 8.0]]))
+    5.0
+    """
+    points = np.asarray(points, dtype=float)
+    return float(np.sqrt(np.mean(np.sum((points - points.mean(axis=0)) ** 2, axis=-1))))
+
+
+def _near(ratio: float) -> bool:
+    return 1.0 / SPREAD_TOLERANCE <= ratio <= SPREAD_TOLERANCE
+
+
+def _turns(model: FitModel, conditions: Conditions) -> np.ndarray:
+    """Which readings turn a joint: a full turn of it leaves every point of the first row
+    where it was (a slide moves them)."""
+    n = model.n_joints
+    rows = conditions.take(np.zeros(n + 1, dtype=int))
+    q = np.array(rows.q, dtype=float)
+    q[1:] += 2 * np.pi * np.eye(n)
+    points = model.positions(replace(rows, q=q))[:, : model.position_dim]
+    moved = np.linalg.norm(points[1:] - points[0], axis=-1)
+    return moved <= 1e-9 * model.reach_mm
+
+
+def _columns(names: list[str]) -> str:
+    return names[0] if len(names) == 1 else f"{names[0]}..{names[-1]}"
+
+
+def unit_mistake(
+    model: FitModel,
+    q: np.ndarray,
+    points: np.ndarray,
+    *,
+    target: np.ndarray | None = None,
+    loads: Loads | None = None,
+    orientations: np.ndarray | None = None,
+) -> str | None:
+    """What looks like a unit mistake in measurements, said with the fix; None when none does.
+
+    Two tests, without a fit and for every family, on the spread of the points
+    (:func:`spread`), which does not depend on where the instrument stands:
+
+    * **positions in metres, inches or centimetres** (:data:`LENGTH_UNITS`): the
+      measured points spread as far as the nominal arm's at the same readings once
+      multiplied by the unit's length in mm (within :data:`SPREAD_TOLERANCE`);
+    * **angles in radians** read as degrees: every turning joint's reading is within
+      a turn of "degrees" (2 pi / 180 rad), the nominal arm's points at these readings
+      do not spread like the measured ones, and at the readings taken as radians
+      they do.
+
+    Both need a nominal spread of at least :data:`MIN_SPREAD_FRACTION` of the reach.
+    A 6-DoF instrument's orientations in radians under ``rx_deg, ry_deg, rz_deg``
+    turn 180 / pi times less from row to row than the nominal tool (at least
+    :data:`MIN_TURN_DEG`), where in degrees they turn as far.
+
+    Parameters
+    ----------
+    model : FitModel
+        The model to fit, with its nominal targets and loads.
+    q : ndarray, shape (m, n)
+        Joint readings as read (rad; a slide's in mm).
+    points : ndarray, shape (m, d)
+        Measured positions as read (the file's ``x_mm, y_mm[, z_mm]``; 3-D points of
+        a planar arm spread as their plane's).
+    target, loads
+        Every row's target (for a model with several) and loads.
+    orientations : ndarray, shape (m, 3), optional
+        A 6-DoF instrument's orientations as read (rotation vectors, rad), for a
+        model whose points include them.
+
+    Returns
+    -------
+    str or None
+        One line naming the columns, what they look like and the fix (the file's
+        name is the caller's).
+
+    Notes
+    -----
+    One or two evaluations of the model at every row: ``O(m)``, far less than a fit.
+
+    Examples
+    --------
+    >>> arm = PlanarArm([260.0, 180.0])
+    >>> q = np.radians([[0, 0], [0, 90], [90, 90], [45, -120], [-60, 30], [120, -45]])
+    >>> xy = forward_kinematics(arm, q)
+    >>> unit_mistake(arm, q, xy) is None
+    True
+    >>> unit_mistake(arm, q, xy / 1000).split(":")[0]
+    'the positions in x_mm, y_mm look like metres'
+    >>> unit_mistake(arm, np.radians(q), xy).split(":")[0]
+    'the joint angles in q1_deg..q2_deg look like radians'
+    """
+    q = np.asarray(q, dtype=float)
+    measured = spread(np.asarray(points, dtype=float))
+    conditions = model.conditions(q, target=target, loads=loads)
+    nominal = spread(model.positions(conditions)[:, : model.position_dim])
+    least = MIN_SPREAD_FRACTION * model.reach_mm
+    turning = _turns(model, conditions)
+    angles = q[:, turning]
+    if angles.size and np.max(np.abs(angles)) <= np.radians(2 * np.pi) * (1 + 1e-9):
+        as_radians = q.copy()
+        as_radians[:, turning] = np.degrees(angles)
+        turned = replace(conditions, q=as_radians)
+        radians = spread(model.positions(turned)[:, : model.position_dim])
+        if radians >= least and _near(measured / radians) and not _near(measured / nominal):
+            names = [f"q{j + 1}_deg" for j in np.flatnonzero(turning)]
+            columns = _columns(names) if turning.all() else ", ".join(names)
+            return (
+                f"the joint angles in {columns} look like radians: every value is within "
+                f"±{np.degrees(np.max(np.abs(angles))):.3g}, and taken as radians they spread "
+                f"the nominal arm's points as far as the measured ones (RMS distance from their "
+                f"centroid {radians:.4g} mm, measured {measured:.4g} mm; as degrees "
+                f"{nominal:.3g} mm); convert them to degrees"
+            )
+    if orientations is not None and model.point_dim > model.position_dim:
+        found = _orientations_in_radians(model, conditions, np.asarray(orientations, float))
+        if found is not None:
+            return found
+    if nominal < least:
+        return None
+    for unit, length in LENGTH_UNITS:
+        if _near(measured * length / nominal):
+            columns = ", ".join(["x_mm", "y_mm", "z_mm"][: np.shape(points)[1]])
+            return (
+                f"the positions in {columns} look like {unit}: they spread "
+                f"{nominal / measured:.3g} times less than the nominal arm's points at the "
+                f"same joint readings (RMS distance from their centroid {measured:.4g} in the "
+                f"file, {nominal:.4g} mm for the nominal arm), as {unit} would ({length:g} mm "
+                "each); convert them to mm"
+            )
+    return None
+
+
+def _orientations_in_radians(
+    model: FitModel, conditions: Conditions, orientations: np.ndarray
+) -> str | None:
+    """A 6-DoF instrument's orientations that turn like radians read as degrees."""
+    nominal = _turns_between(
+        model.positions(conditions)[:, model.position_dim :], conditions.target
+    )
+    measured = _turns_between(orientations, conditions.target)
+    if nominal < np.radians(MIN_TURN_DEG) or _near(measured / nominal):
+        return None
+    if not _near(np.degrees(measured) / nominal):
+        return None
+    return (
+        f"the orientations in rx_deg, ry_deg, rz_deg look like radians: from row to row of a "
+        f"target they turn {nominal / max(measured, 1e-300):.3g} times less than the nominal "
+        f"tool at the same joint readings (RMS {np.degrees(measured):.3g} deg against "
+        f"{np.degrees(nominal):.3g} deg), as radians read as degrees would; convert them to "
+        "degrees"
+    )

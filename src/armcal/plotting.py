@@ -580,8 +580,9 @@ def plot_validation(
     -------
     matplotlib.figure.Figure
         Top: the measured positions in the instrument frame (for 3-D data, the
-        plane of motion fitted in it) with the errors of the nominal model
-        (left) and the calibrated one (right) as arrows, each panel at one
+        plane of motion fitted in it) with the errors of the nominal arm
+        registered on its own (left; the calibration's baseline) and of the
+        calibrated one (right) as arrows, each panel at one
         stated magnification with a key arrow in mm.  Bottom: every row's
         error before and after, and the error the calibration predicts (RMS
         over a pose's rows), against the pose; a pose's rows side by side.
@@ -602,7 +603,9 @@ def plot_validation(
     x_name, y_name, frame = ("x", "y", "instrument frame")
     if result.out_of_plane_mm is not None:  # 3-D data: the plane fitted in the instrument frame
         x_name, y_name, frame = ("u", "v", "instrument's plane of motion")
-    _error_arrows(ax_before, positions, result.before, "nominal model", "0.45")
+    _error_arrows(
+        ax_before, positions, result.before, "nominal arm (registered on its own)", "0.45"
+    )
     _error_arrows(ax_after, positions, result.after, "calibrated", "tab:red")
     lo, hi = positions.min(axis=0), positions.max(axis=0)
     pad = 0.12 * max(float(np.max(hi - lo)), 1.0)  # the longest arrow is a tenth of the spread
@@ -612,7 +615,9 @@ def plot_validation(
         ax.set_xlabel(f"{x_name} in {frame} [mm]")
     ax_before.set_ylabel(f"{y_name} in {frame} [mm]")
     x = _side_by_side(of_pose)
-    ax_err.semilogy(x, result.before_mm, "o", color="0.45", ms=3, label="nominal model")
+    ax_err.semilogy(
+        x, result.before_mm, "o", color="0.45", ms=3, label="nominal arm (registered on its own)"
+    )
     ax_err.semilogy(x, result.after_mm, "o", color="tab:red", ms=3, label="calibrated")
     count = np.bincount(of_pose)
     predicted = np.sqrt(np.bincount(of_pose, result.predicted_mm**2) / count)

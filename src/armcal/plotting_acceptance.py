@@ -25,7 +25,13 @@ def plot_acceptance(found: PoseCharacteristics) -> Figure:
     names = found.names
     x = np.arange(len(names))
     width = 0.27
-    left.bar(x - width, found.accuracy_before_mm, width, label="AP, nominal model", color="C3")
+    left.bar(
+        x - width,
+        found.accuracy_before_mm,
+        width,
+        label="AP, nominal arm (registered on its own)",
+        color="C3",
+    )
     left.bar(x, found.accuracy_after_mm, width, label="AP, calibrated model", color="C0")
     left.bar(x + width, found.repeatability_mm, width, label="RP", color="C2")
     left.set_yscale("log")

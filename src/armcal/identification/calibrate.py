@@ -31,6 +31,7 @@ from ..models import Conditions, FitModel, Loads, equations_per_pose
 from ..models.information import display_std
 from ..noise import instrument_override
 from ..numerics import point_norms, rms
+from .diagnosis import SUSPICIOUS_RMS_FRACTION, coupled_joints, far_off, swapped_targets
 from .judgement import (
     Outlier,
     few_dof_warning,
@@ -279,6 +280,12 @@ def identify(
         inner_all = nested_problem.fit(everyone)
         start = model.lift(inner_all.params)
     least_squares = problem.fit(everyone, start=start)
+    # A fit far off is tested at once for coupled joints: a step that fails on its absurd
+    # estimate (a singular Jacobian) then names the cause too (Problem.suspect).
+    cause = None  # a likely cause a cheap test names (diagnosis), before the mirror's
+    if far_off(model, least_squares, reference if given else None):
+        cause = coupled_joints(problem, least_squares)
+        problem.suspect = None if cause is None else cause.message
     fit, used = least_squares, everyone
     if robust:
         fit, used, flagged, kept_warning = robust_fit(problem, robust_sigma, least_squares)
@@ -339,10 +346,12 @@ def identify(
         suggested = sigma_value * float(np.sqrt((fit_test.chi2 or 0.0) / max(dof, 1)))
         chi2 = fit_test.chi2 or 0.0
         freed = _freed_fit(problem, used, sigma_value, chi2)
+        if freed is None and cause is None:
+            cause = swapped_targets(problem, least_squares, labels, row_numbers)
         flagged_count = int(np.count_nonzero(test.flagged))
         mirrored = (
             _mirrored_fit(problem, used, sigma_value, chi2)
-            if freed is None and most_disagree(flagged_count, m)
+            if freed is None and cause is None and most_disagree(flagged_count, m)
             else None
         )
         warnings.append(
@@ -358,7 +367,14 @@ def identify(
                 rows=noun,
             )
         )
-    if not fit_test.consistent:
+    elif cause is None and (
+        outliers
+        or rms(fit.residuals[:, : model.position_dim]) > SUSPICIOUS_RMS_FRACTION * model.reach_mm
+    ):  # consistent (sigma estimated, say): judged by its outliers and its size alone
+        cause = swapped_targets(problem, least_squares, labels, row_numbers)
+    if cause is not None:
+        warnings.append(cause)
+    if not fit_test.consistent and cause is None:  # a cause named already explains it
         moved = instrument_moved(model, conditions, points, fit.params, used=used)
         if moved is not None:
             warnings.append(moved_warning(moved, row_numbers))

@@ -108,7 +108,9 @@ class Fit:
             rows = self.jacobian[self.used].reshape(-1, model.n_free)
             factor, ok = covariance_factor_from(rows, model.free)
         if not bool(ok):  # identifiable at nominal, so only for absurd deviations
-            raise ArmcalError("the Jacobian is singular at the estimate; check the data")
+            raise ArmcalError(
+                f"the Jacobian is singular at the estimate; {problem.suspect or 'check the data'}"
+            )
         return factor[..., model.free, :]
 
     @cached_property
@@ -178,6 +180,9 @@ class Problem:
         self.model, self.conditions, self.points = model, conditions, points
         self.method, self.tol, self.max_iter = method, tol, max_iter
         self._subsets: dict[bytes, Conditions] = {}
+        #: What looks wrong with the data (:mod:`~armcal.identification.diagnosis`), said
+        #: when a fit fails on its absurd estimate instead of "check the data".
+        self.suspect: str | None = None
 
     @property
     def m(self) -> int:

@@ -28,7 +28,7 @@ from .compliance import (
     check_compliance_identifiable,
     compliance_identifiability,
 )
-from .defaults import TermChoice
+from .defaults import LARGE_ANGLE_DEG, TermChoice
 from .identifiability import Identifiability, combination, listing, row_echelon
 from .interface import (
     ClosedForm,
@@ -36,6 +36,7 @@ from .interface import (
     ClosedFormPlans,
     Conditions,
     DesignEffort,
+    DeviationBounds,
     Effect,
     FitModel,
     LinearPositions,
@@ -45,7 +46,7 @@ from .interface import (
     equations_per_pose,
     position_jacobian,
 )
-from .planar import INSTRUMENT_PARAMS, PlanarArm
+from .planar import INSTRUMENT_PARAMS, LARGE_LENGTH_FRACTION, PlanarArm
 from .planar_geometry import (
     PlanarGeometry,
     Target,
@@ -99,12 +100,15 @@ from .spatial_chain import (
 from .spatial_compliance import CompliantSerialArm, SerialElastics
 from .spatial_dh import MdhTable, mdh_table
 from .spatial_gravity import LinkMasses
-from .spatial_kinematics import SpatialLayout, default_targets
+from .spatial_kinematics import LARGE_PLACEMENT_FRACTION, SpatialLayout, default_targets
 from .spatial_selection import Selection
 from .spatial_view import SpatialView
 
 __all__ = [
     "INSTRUMENT_PARAMS",
+    "LARGE_ANGLE_DEG",
+    "LARGE_LENGTH_FRACTION",
+    "LARGE_PLACEMENT_FRACTION",
     "SINGLE_TARGET",
     "STANDARD_GRAVITY",
     "Annulus",
@@ -117,6 +121,7 @@ __all__ = [
     "CompliantSerialArm",
     "Conditions",
     "DesignEffort",
+    "DeviationBounds",
     "Effect",
     "Elastostatic",
     "FitModel",

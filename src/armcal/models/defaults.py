@@ -23,14 +23,22 @@ from ..noise import NoiseModel
 from ..numerics import wrap_angle
 from .identifiability import listing
 from .information import covariance_factor_from, whitened_free_jacobian
-from .interface import Conditions, DesignEffort, Loads
+from .interface import Conditions, DesignEffort, DeviationBounds, Loads
 
 __all__ = [
+    "LARGE_ANGLE_DEG",
     "ArmEffect",
     "MinimalPlanar",
     "RigidLoads",
     "TermChoice",
 ]
+
+#: An angular deviation (a joint zero, a turn of a joint's placement) beyond this many
+#: degrees is implausible for a calibration, in every family: calibration-sized angles
+#: are about a degree at most (a zero mastered by eye), while a unit mistake or a wrong
+#: robot file gives tens of degrees (radians read as degrees: 57 times the angle), so
+#: 10 deg leaves a factor of several on either side (the ``large-deviation`` warning).
+LARGE_ANGLE_DEG = 10.0
 
 
 class RigidLoads:
@@ -253,6 +261,17 @@ class ArmEffect:
     @property
     def reach_mm(self) -> float:
         return self.arm.reach_mm
+
+    @property
+    def deviation_bounds(self) -> DeviationBounds:
+        """The arm's; the effect's parameters are no deviation of the robot's geometry."""
+        bounds: DeviationBounds = self.arm.deviation_bounds
+        return bounds.extended(self.n_compliance)
+
+    @property
+    def joint_map(self) -> np.ndarray:
+        """The arm's joint map."""
+        return np.asarray(self.arm.joint_map)
 
     @property
     def target_labels(self) -> tuple[str, ...]:

@@ -26,8 +26,9 @@ What a model provides, by use:
   of a step in mm, and a *nested* model (the same without an effect, e.g. the
   geometry without compliance) with which a fit starts and is judged;
 * **analysis** -- identifiability on the model's own scaled Jacobian, the
-  words for a barely identifiable one, and the covariance factor of the free
-  parameters;
+  words for a barely identifiable one, the covariance factor of the free
+  parameters, and which parameters are the robot's deviations and how large
+  one is implausible (:class:`DeviationBounds`);
 * **design** -- the poses a plan may hold (:meth:`~FitModel.feasible`, the
   instrument's view as smooth constraints), what a plan tells about the free
   parameters in the family's design coordinates (:meth:`~FitModel.plan_information`,
@@ -66,6 +67,7 @@ __all__ = [
     "ClosedFormPlans",
     "Conditions",
     "DesignEffort",
+    "DeviationBounds",
     "Effect",
     "FitModel",
     "LinearPositions",
@@ -262,6 +264,63 @@ class Effect:
     description: str
     advice: str
     negative: str = ""
+
+
+@dataclass(frozen=True, eq=False)
+class DeviationBounds:
+    """Which parameters are the robot's deviations, and how large one is implausible.
+
+    A calibration finds deviations of a few mm and about a degree; one far beyond
+    its bound says that the robot file or the data are wrong (a unit, another
+    variant of the arm), not the arm: the ``large-deviation`` warning
+    (:func:`armcal.plausibility.deviation_warning`).
+
+    Attributes
+    ----------
+    bounds : ndarray, shape (p,)
+        Internal units (mm, rad): a deviation larger in magnitude is implausible;
+        ``inf`` for a parameter that is no deviation of the robot (the
+        instrument's pose, a target found from the data, an effect's parameter).
+    reference_mm : ndarray, shape (p,)
+        The length a bound is a fraction of (a link), shown beside a large value
+        as a percentage; NaN where the bound is not a fraction of a length.
+    reference_names : tuple of str, shape (p,)
+        What that length is (``"link 2"``); empty where there is none.
+    summary : str
+        What large deviations are, for the warning (``"a large part of a link"``).
+    rule : str
+        The bounds in words (``"10 % of a link or 10 deg"``).
+    advice : str
+        What to check (a clause).
+    absorbing : ndarray of bool, shape (p,)
+        Deviations that may also take up something that is no error of the robot
+        (with a base offset, the joint offsets that turn the instrument's axes).
+    absorbing_note : str
+        What they take up (a clause), said when one of them is large.
+    """
+
+    bounds: np.ndarray
+    reference_mm: np.ndarray
+    reference_names: tuple[str, ...]
+    summary: str
+    rule: str
+    advice: str
+    absorbing: np.ndarray
+    absorbing_note: str = ""
+
+    def extended(self, count: int) -> DeviationBounds:
+        """The same bounds followed by ``count`` parameters that are no deviation of the
+        robot (an effect's, appended after the arm's)."""
+        return DeviationBounds(
+            np.concatenate([self.bounds, np.full(count, np.inf)]),
+            np.concatenate([self.reference_mm, np.full(count, np.nan)]),
+            self.reference_names + ("",) * count,
+            self.summary,
+            self.rule,
+            self.advice,
+            np.concatenate([self.absorbing, np.zeros(count, dtype=bool)]),
+            self.absorbing_note,
+        )
 
 
 @dataclass(frozen=True, eq=False)
@@ -543,6 +602,18 @@ class FitModel(Protocol):
     @property
     def reach_mm(self) -> float:
         """A length scale of the arm (its stretched reach), for tolerances, mm."""
+        ...
+
+    @property
+    def deviation_bounds(self) -> DeviationBounds:
+        """Which parameters are the robot's deviations, and how large one is implausible
+        for a calibration (the ``large-deviation`` warning)."""
+        ...
+
+    @property
+    def joint_map(self) -> np.ndarray:
+        """``M`` ``(n, n)``: the chain's joint values (a planar arm's absolute link angles)
+        are ``M q`` of the controller's readings ``q``."""
         ...
 
     @property

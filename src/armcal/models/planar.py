@@ -20,9 +20,9 @@ from ..errors import ArmcalWarning
 from ..noise import NoiseModel
 from ..numerics import ScaledSVD
 from . import planar_design
-from .defaults import MinimalPlanar, RigidLoads
-from .identifiability import Identifiability
-from .interface import Conditions, LinearPositions, Loads, PaperCriteria
+from .defaults import LARGE_ANGLE_DEG, MinimalPlanar, RigidLoads
+from .identifiability import Identifiability, combination
+from .interface import Conditions, DeviationBounds, LinearPositions, Loads, PaperCriteria
 from .planar_arm import PlanarArmSpec
 from .planar_closed_form import (
     PlanarClosedForm,
@@ -55,8 +55,15 @@ from .planar_plans import PaperPlans
 
 __all__ = [
     "INSTRUMENT_PARAMS",
+    "LARGE_LENGTH_FRACTION",
     "PlanarArm",
 ]
+
+#: A link-length deviation beyond this fraction of its nominal length is implausible for
+#: a calibration: 10 % is several times a calibration's deviation even on a 100 mm link
+#: (10 mm against a few), yet far from what a unit mistake gives (-99.9 % or -90 % of
+#: every link); any bound between a few percent and 90 % separates the two.
+LARGE_LENGTH_FRACTION = 0.10
 
 #: The parameters that place the arm in the instrument frame, not part of the robot.
 INSTRUMENT_PARAMS = ("x0", "y0", "phi0")
@@ -160,6 +167,41 @@ class PlanarArm(RigidLoads, MinimalPlanar, PlanarArmSpec):
     def reach_mm(self) -> float:
         """The sum of the link lengths, mm."""
         return float(np.sum(self.link_lengths))
+
+    @property
+    def deviation_bounds(self) -> DeviationBounds:
+        """Every link's length deviation beyond :data:`LARGE_LENGTH_FRACTION` of its link,
+        every joint offset beyond :data:`~armcal.models.defaults.LARGE_ANGLE_DEG`; the base
+        pose is the instrument's.  With a base offset, the offsets that turn every link
+        alike (:attr:`turn_offsets`) also take up any turn of the instrument's axes."""
+        k, p = self.n_links, self.n_params
+        bounds = np.full(p, np.inf)
+        bounds[:k] = LARGE_LENGTH_FRACTION * self.link_nominal
+        bounds[k : 2 * k] = np.radians(LARGE_ANGLE_DEG)
+        reference = np.full(p, np.nan)
+        reference[:k] = self.link_nominal
+        names = tuple(f"link {name}" for name in self.link_names) + ("",) * (p - k)
+        absorbing = np.zeros(p, dtype=bool)
+        note = ""
+        if self.base_offset:
+            turn = self.turn_offsets
+            absorbing[k : 2 * k] = turn != 0
+            one = np.count_nonzero(turn) == 1
+            note = (
+                f"with a base offset, {combination(turn, self.param_names[k : 2 * k])} also "
+                f"take{'s' if one else ''} up any rotation of the instrument's axes"
+            )
+        return DeviationBounds(
+            bounds,
+            reference,
+            names,
+            "a large part of a link",
+            f"{100 * LARGE_LENGTH_FRACTION:g} % of a link or {LARGE_ANGLE_DEG:g} deg",
+            "check the robot file's link lengths, the units of the measurements (mm, deg), "
+            "and base_offset",
+            absorbing,
+            note,
+        )
 
     @property
     def angle_scale_mm(self) -> float:

@@ -38,7 +38,15 @@ from .information import (
     whitened_blocks,
     whitened_free_jacobian,
 )
-from .interface import Conditions, DesignEffort, Effect, FitModel, LinearPositions, Loads
+from .interface import (
+    Conditions,
+    DesignEffort,
+    DeviationBounds,
+    Effect,
+    FitModel,
+    LinearPositions,
+    Loads,
+)
 from .spatial_chain import (
     SerialChain,
     elementary,
@@ -54,9 +62,10 @@ from .spatial_kinematics import (
     ChainKinematics,
     SpatialLayout,
     default_targets,
+    deviation_bounds,
     kinematics,
 )
-from .spatial_registration import register, register_turns
+from .spatial_registration import register, registered_targets
 from .spatial_selection import select_from_rows
 from .spatial_view import SpatialView
 
@@ -64,6 +73,7 @@ __all__ = [
     "SINGLE_TARGET",
     "SpatialArm",
 ]
+
 
 #: The label of the one target of data without a target column.
 SINGLE_TARGET = "tool"
@@ -347,6 +357,12 @@ class SpatialArm(RigidLoads):
         return float(np.sum(offsets) + np.linalg.norm(self.chain.tip[:3, 3]) + 1.0)
 
     @property
+    def deviation_bounds(self) -> DeviationBounds:
+        """Every joint's placement and zero (:func:`~armcal.models.spatial_kinematics.\
+deviation_bounds`); the base pose and the targets are the instrument's."""
+        return deviation_bounds(self.layout, self.reach_mm)
+
+    @property
     def base_offset(self) -> bool:
         """True: the base pose in the instrument's frame is always identified."""
         return True
@@ -573,16 +589,10 @@ class SpatialArm(RigidLoads):
         out = self.nominal.copy()
         out[:3] = translation
         out[3:6] = matrix_rpy(rotation)
-        measured = np.zeros(len(self.targets), dtype=bool)
-        measured[np.unique(target)] = True
-        positions = self.target_positions
-        if not self.known_targets:
-            positions = np.where(measured[:, None], found, nominal)
-        turns = self.target_turns
-        if self.oriented:  # a 6-DoF instrument's orientations: the rows' own, in its frame
-            seen = vector_rotation(points[:, 3:])
-            seen = seen if conditions.frames is None else seen @ conditions.frames
-            turns = register_turns(rotation @ frames, seen, target, turns)
+        positions, turns = registered_targets(
+            rotation @ frames, target, points, found, nominal, self.target_turns,
+            known=self.known_targets, oriented=self.oriented, row_frames=conditions.frames,
+        )  # fmt: skip
         out[self.layout.target_start :] = self._target_block(positions, turns)
         return out
 

@@ -34,14 +34,18 @@ from functools import cached_property
 
 import numpy as np
 
+from .defaults import LARGE_ANGLE_DEG
+from .interface import DeviationBounds
 from .spatial_chain import SerialChain, elementary, left_jacobian, rpy_matrix, vector_rotation
 
 __all__ = [
     "BASE_NAMES",
+    "LARGE_PLACEMENT_FRACTION",
     "ChainKinematics",
     "SpatialLayout",
     "cross",
     "default_targets",
+    "deviation_bounds",
     "kinematics",
 ]
 
@@ -178,6 +182,45 @@ class SpatialLayout:
         start = self.target_start + self.target_size * t
         turn = slice(start + 3, start + 6) if self.oriented else None
         return slice(start, start + 3), turn
+
+
+#: A joint's placement error (or a prismatic joint's zero) beyond this fraction of the
+#: arm's reach is implausible for a calibration.  Calibration-sized placement errors are
+#: tenths of a mm to a few mm, about 0.1 % of a 1-3 m reach; a unit mistake gives
+#: deviations as large as the links (tens of percent of the reach), and another variant
+#: of the arm (a longer upper arm, an offset wrist) tens to hundreds of mm, 3-10 % of it.
+#: 1 % (29 mm on the industrial-6r, whose reach_mm is 2.9 m; 12 mm on the cobot-6r)
+#: leaves a factor of 3 to 10 on either side.
+LARGE_PLACEMENT_FRACTION = 0.01
+
+
+def deviation_bounds(layout: SpatialLayout, reach_mm: float) -> DeviationBounds:
+    """How large a spatial arm's deviations may be (:class:`DeviationBounds`): every joint's
+    placement and zero, lengths beyond :data:`LARGE_PLACEMENT_FRACTION` of ``reach_mm``,
+    angles beyond :data:`~armcal.models.defaults.LARGE_ANGLE_DEG`; the base pose and the
+    targets are the instrument's, not the robot's.
+
+    Examples
+    --------
+    >>> bounds = deviation_bounds(SpatialLayout(("R",), ("tool",)), 1000.0)
+    >>> bounds.bounds[[0, 6, 11]].tolist(), round(float(np.degrees(bounds.bounds[9])), 9)
+    ([inf, 10.0, 0.17453292519943295], 10.0)
+    """
+    length = LARGE_PLACEMENT_FRACTION * reach_mm
+    bounds = np.where(layout.angles, np.radians(LARGE_ANGLE_DEG), length)
+    bounds[layout.instrument] = np.inf
+    p = layout.n_params
+    return DeviationBounds(
+        bounds,
+        np.full(p, np.nan),
+        ("",) * p,
+        "larger than a calibration finds",
+        f"{100 * LARGE_PLACEMENT_FRACTION:g} % of the reach, {length:.3g} mm, or "
+        f"{LARGE_ANGLE_DEG:g} deg",
+        "check that the robot file describes this arm (the variant of its URDF or MDH table, "
+        "its joint_map) and the units of the measurements (mm, deg)",
+        np.zeros(p, dtype=bool),
+    )
 
 
 #: Where targets without a nominal position are thought to be before any data: this

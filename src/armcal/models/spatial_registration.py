@@ -23,7 +23,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .spatial_chain import rotation_vector
+from .spatial_chain import rotation_vector, vector_rotation
 
 __all__ = [
     "REGISTER_ROWS",
@@ -31,6 +31,7 @@ __all__ = [
     "mean_rotation",
     "register",
     "register_turns",
+    "registered_targets",
 ]
 
 #: Rows a registration uses at most, evenly spaced through the data: the start of a
@@ -192,3 +193,33 @@ def register(
         rotation = best_rotation(tips[keep], points[keep])
     translation, targets = _with_rotation(rotation, frames, origins, target, points, k, weights)
     return rotation, translation, targets
+
+
+def registered_targets(
+    tips: np.ndarray,
+    target: np.ndarray,
+    points: np.ndarray,
+    found: np.ndarray,
+    nominal: np.ndarray,
+    turns: np.ndarray,
+    *,
+    known: bool,
+    oriented: bool,
+    row_frames: np.ndarray | None,
+) -> tuple[np.ndarray, np.ndarray]:
+    """The targets after a registration: positions ``(k, 3)`` and turns ``(k, 3)``.
+
+    The positions :func:`register` ``found`` for the targets the rows measure, the
+    ``nominal`` ones where the robot file gives them (``known``) or no row measures
+    them; for a 6-DoF instrument (``oriented``) the turns of :func:`register_turns`
+    from the rows' own orientations (``points[:, 3:]``, about ``row_frames`` where
+    anchored), ``tips`` ``(m, 3, 3)`` the registered tip frames; else ``turns``.
+    """
+    measured = np.zeros(len(nominal), dtype=bool)
+    measured[np.unique(target)] = True
+    positions = nominal if known else np.where(measured[:, None], found, nominal)
+    if oriented:  # a 6-DoF instrument's orientations: the rows' own, in its frame
+        seen = vector_rotation(points[:, 3:])
+        seen = seen if row_frames is None else seen @ row_frames
+        turns = register_turns(tips, seen, target, turns)
+    return positions, turns

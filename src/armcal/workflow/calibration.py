@@ -47,7 +47,7 @@ from ..files.ur import (
 from ..identification import Calibration, identify
 from ..instrument import identify_3d
 from ..models import CalibratedArm, FitModel, Loads, PlanarArm, SerialChain, SpatialArm, Target
-from ..plausibility import deviation_warning, explain, suspicious
+from ..plausibility import deviation_warning, explain, suspicious, unit_mistake
 from ..validation import (
     CrossValidation,
     Validation,
@@ -154,9 +154,10 @@ def _identify_file(
 ) -> Calibration:
     """Identify from a measurement file; data that look like a unit mistake are an error.
 
-    3-D data (a ``z_mm`` column) are fitted with their plane first.  The unit
-    checks refit the plain 2-D model; they are skipped for data with several
-    targets, in 3-D or with compliance, whose reach check stays.
+    3-D data (a ``z_mm`` column) are fitted with their plane first.  Units are
+    checked before the fit for every model (:func:`_unit_mistake`); the checks that
+    refit the plain 2-D model (a missing base offset too) are skipped for data with
+    several targets, in 3-D or with compliance.
     """
     elastic = spec.elastic
     plain = meas.z is None and arm.n_target_links == 1 and not arm.targets and elastic is None
@@ -170,6 +171,9 @@ def _identify_file(
         loads = None if elastic is None else meas.loads(elastic.payload_kg)
         model = fit_model(spec, arm, loads)
         options["loads"] = loads
+        mistake = _unit_mistake(model, meas, options["target"], loads)
+        if mistake is not None:
+            raise InputError(mistake)  # named with the file below
         if meas.z is not None:
             options["gravity_3d"] = spec.gravity_3d
             cal = identify_3d(model, meas.q, meas.xyz, **options)
@@ -188,6 +192,18 @@ def _identify_file(
         if unit is not None:
             raise unit
     return cal
+
+
+def _unit_mistake(
+    model: FitModel, meas: Measurements, target: np.ndarray | None, loads: Loads | None
+) -> str | None:
+    """What in ``meas`` looks like a unit mistake for ``model`` (:func:`unit_mistake`), checked
+    before the fit: positions in metres or another unit, angles in radians (joints, a
+    6-DoF instrument's orientations)."""
+    points = meas.xy if meas.z is None else meas.xyz
+    return unit_mistake(
+        model, meas.q, points, target=target, loads=loads, orientations=meas.orientation
+    )
 
 
 def _ignored_loads(
@@ -272,7 +288,7 @@ def calibrate(
     spec, meas, ignored = _as_asked(spec, meas, source, sigma, compliance)
     spec, arm = model_spec(spec, structure, fixed=fixed, sigma=sigma)
     cal = _identify_file(spec, arm, source, meas, method=method, robust=robust)
-    large = deviation_warning(cal.arm, cal.model.arm_params(cal.params))
+    large = deviation_warning(cal.model, cal.params)
     points = None
     if folds is not None:  # the fitted points: a 3-D file's in its plane
         points = meas.xy if cal.plane is None else cal.plane.to_plane(meas.xyz)
@@ -402,8 +418,12 @@ def calibrate_serial(
         points = meas.instrument_points  # 3-D: serial_arm refuses data without z_mm
         index = None if meas.targets is None else arm.target_index(meas.targets)
         loads = None if spec.elastic is None else meas.loads(spec.elastic.payload_kg)
+        model = fit_model(spec, arm, loads)
+        mistake = _unit_mistake(model, meas, index, loads)
+        if mistake is not None:
+            raise InputError(f"{source}: {mistake}")
         cal = identify(
-            fit_model(spec, arm, loads),
+            model,
             meas.q,
             points,
             method=method,
@@ -420,7 +440,8 @@ def calibrate_serial(
         raise prefixed(source, exc) from None
     except ValueError as exc:
         raise InputError(f"{source}: {exc}") from None
-    return _calibration_run(cal, spec, meas, points, ignored, None, folds, sigma, seed)
+    large = deviation_warning(cal.model, cal.params)
+    return _calibration_run(cal, spec, meas, points, ignored, large, folds, sigma, seed)
 
 
 @dataclass(frozen=True, eq=False)
@@ -440,8 +461,9 @@ def validate_measurements(
     (:func:`armcal.acceptance.pose_characteristics`).
 
     Raises InputError, naming ``source``, for a target column the calibration
-    does not have or lacks, points of the other dimension, or (``iso9283``) poses
-    measured once or with different joint values from cycle to cycle.
+    does not have or lacks, points of the other dimension, measurements that look
+    like a unit mistake (:func:`armcal.plausibility.unit_mistake`), or (``iso9283``)
+    poses measured once or with different joint values from cycle to cycle.
     """
     arm = cal.arm
     if meas.targets is not None and not arm.target_labels:
@@ -455,6 +477,9 @@ def validate_measurements(
         )
     points = meas.xy if meas.z is None else meas.instrument_points
     loads = row_loads(cal.model, meas)
+    mistake = _unit_mistake(cal.model, meas, _row_targets(arm, meas), loads)
+    if mistake is not None:
+        raise InputError(f"{source}: {mistake}")
     try:
         result = validate(
             cal,

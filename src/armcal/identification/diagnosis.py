@@ -1,0 +1,339 @@
+"""Name the likely cause of a fit that is far off: swapped target labels, coupled joints.
+
+A misfit has many possible causes, and the fit-inconsistent warning lists them
+in general.  Two of them a cheap test can name, for every family of arm
+(:class:`~armcal.models.interface.FitModel`), and then a warning says which rows
+or which robot-file key to fix:
+
+* **target labels swapped** (``targets-swapped``): a pose measured at several
+  targets (a tracker's nest of reflectors) whose labels were exchanged puts two
+  rows a target spacing away from the fit.  At the fitted parameters, for the
+  :data:`WORST_POSES` worst poses only, every exchange of two of a pose's labels
+  is tried (one call of the model on a few rows); the exchanges that cut their
+  pose's residual sum of squares :data:`SWAP_GAIN` times are applied and the model
+  refitted once, from the fit.  They are named when the refit's chi-square is
+  :data:`SWAP_GAIN` times lower (its residual RMS halves) and each still fits
+  that much better exchanged than as labelled.
+* **coupled joints** (``coupled-joints``): a controller that reads a joint
+  against the horizon (FANUC's J2/J3 interaction: the chain's elbow angle is
+  ``J2 + J3``), described by a robot file without that ``joint_map``, or the
+  other way round.  Tried only when the fit is far off (residual RMS beyond
+  :data:`SUSPICIOUS_RMS_FRACTION` of the reach, or a chi-square
+  :data:`IMPROVEMENT` times its degrees of freedom): for every pair of
+  consecutive readings whose tool rotations are parallel (every pair of a planar
+  arm), the readings ``q_k + q_j`` and ``q_k - q_j`` in place of ``q_k``, on at
+  most :data:`COUPLING_ROWS` rows.  Each reading places the nominal arm on the
+  data (the model's start, no fit); the one whose nominal arm fits best, and
+  :data:`SWAP_GAIN` times better than the fit as read, is refitted, and named
+  when its residual mean square is :data:`IMPROVEMENT` times lower than the fit
+  as read and its residual RMS within :data:`SUSPICIOUS_RMS_FRACTION` of the reach.
+
+Both tests run only on a fit that looks wrong (:func:`armcal.identification.identify`
+calls them), and cost next to nothing unless a candidate passes its cheap screen:
+then one refit.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import replace
+
+import numpy as np
+
+from ..errors import ArmcalError, ArmcalWarning
+from ..models import Conditions, FitModel
+from ..numerics import rms
+from .problem import Fit, Problem
+
+__all__ = [
+    "COUPLING_ROWS",
+    "IMPROVEMENT",
+    "SUSPICIOUS_RMS_FRACTION",
+    "SWAP_GAIN",
+    "WORST_POSES",
+    "coupled_joints",
+    "far_off",
+    "swapped_targets",
+]
+
+#: How many times smaller an alternative reading's residual mean square must be to be
+#: named (two orders of magnitude: far beyond what chance or a few parameters give).
+IMPROVEMENT = 100.0
+
+#: A residual RMS above this fraction of the arm's reach (0.66 mm for the paper's
+#: 660 mm arm) is more than an instrument good enough to calibrate the arm leaves:
+#: calibration corrects deviations of about 1/200 of the reach (a few mm), so a
+#: useful instrument is several times better than 1/1000 of it.
+SUSPICIOUS_RMS_FRACTION = 1e-3
+
+#: How many times an exchange of two target labels must lower the residual sum of
+#: squares (of its pose, and of the whole fit after the refit): its RMS halves.
+SWAP_GAIN = 4.0
+
+#: The worst poses (largest residual sum of squares) whose label exchanges are tried.
+WORST_POSES = 10
+
+#: Rows a coupled reading is tried on (evenly spaced): 100 poses at three targets
+#: identify a six-axis arm many times over, and keep the refits cheap at 10^5 rows.
+COUPLING_ROWS = 300
+
+#: Two tool rotations per reading are parallel when the sine of their angle is below this.
+PARALLEL_SINE = 1e-6
+
+
+def _chi2(fit: Fit, rows: np.ndarray | slice = slice(None)) -> float:
+    return float(np.sum(fit.whitened[rows] ** 2))
+
+
+def far_off(model: FitModel, fit: Fit, sigma: float | None) -> bool:
+    """Whether a fit is far off: its residual RMS per coordinate beyond
+    :data:`SUSPICIOUS_RMS_FRACTION` of the reach, or (with a given ``sigma``, mm) a
+    chi-square :data:`IMPROVEMENT` times its degrees of freedom or more."""
+    residuals = fit.residuals[:, : model.position_dim]
+    if rms(residuals) > SUSPICIOUS_RMS_FRACTION * model.reach_mm:
+        return True
+    if sigma is None:
+        return False
+    dof = max(fit.whitened.size - model.n_free, 1)
+    return _chi2(fit) / sigma**2 >= IMPROVEMENT * dof
+
+
+def _fold(before: float, after: float) -> str:
+    return "to round-off" if after <= 0 else f"{before / after:.3g}-fold"
+
+
+# --------------------------------------------------------------------------- swapped labels
+
+
+def _pose_groups(labels: np.ndarray, target: np.ndarray) -> tuple[np.ndarray, int]:
+    """Every row's pose index (by its label) and the number of poses."""
+    _, group = np.unique(labels, return_inverse=True)
+    return group.reshape(target.shape), int(group.max()) + 1
+
+
+def _pairs(rows: np.ndarray, target: np.ndarray) -> list[tuple[int, int]]:
+    """Every two rows of one pose with different targets."""
+    return [
+        (int(a), int(b))
+        for i, a in enumerate(rows)
+        for b in rows[i + 1 :]
+        if target[a] != target[b]
+    ]
+
+
+def _exchanged(
+    model: FitModel,
+    conditions: Conditions,
+    points: np.ndarray,
+    params: np.ndarray,
+    pairs: np.ndarray,
+) -> np.ndarray:
+    """Squared position residuals ``(k,)`` of every row pair ``(k, 2)`` with their two
+    targets exchanged, at ``params``: one call of the model on ``2 k`` rows."""
+    assert conditions.target is not None
+    rows = np.concatenate([pairs[:, 0], pairs[:, 1]])
+    exchanged = np.concatenate([conditions.target[pairs[:, 1]], conditions.target[pairs[:, 0]]])
+    trial = replace(conditions.take(rows), target=exchanged)
+    d = model.position_dim
+    errors = points[rows, :d] - model.positions(trial, params)[:, :d]
+    squares = np.sum(errors**2, axis=1)
+    return squares[: len(pairs)] + squares[len(pairs) :]
+
+
+def swapped_targets(
+    problem: Problem,
+    fit: Fit,
+    pose_labels: Sequence[str],
+    rows: Sequence[int],
+) -> ArmcalWarning | None:
+    """A ``targets-swapped`` warning naming the poses whose two target labels look exchanged.
+
+    Parameters
+    ----------
+    problem : Problem
+        The identification: its model, rows (with every row's target) and points.
+    fit : Fit
+        Its least-squares fit to every row.
+    pose_labels : sequence of str
+        Every row's pose (the rows of a pose share its label).
+    rows : sequence of int
+        Every row's 1-based row in its file, for the message.
+
+    Returns
+    -------
+    ArmcalWarning or None
+        None without several targets, without a pose measured at two of them, or
+        when no exchange passes the tests of the module notes.
+    """
+    model, conditions, points = problem.model, problem.conditions, problem.points
+    target = conditions.target
+    if target is None or len(model.target_labels) < 2:
+        return None
+    group, count = _pose_groups(np.asarray(pose_labels), target)
+    d = model.position_dim
+    row_squares = np.sum(fit.residuals[:, :d] ** 2, axis=1)
+    pose_squares = np.bincount(group, weights=row_squares, minlength=count)
+    several = np.bincount(group, minlength=count) >= 2
+    order = np.argsort(group, kind="stable")
+    starts = np.searchsorted(group[order], np.arange(count + 1))
+    worst = [int(g) for g in np.argsort(-pose_squares) if several[g]][:WORST_POSES]
+    candidates = [
+        (g, pair) for g in worst for pair in _pairs(order[starts[g] : starts[g + 1]], target)
+    ]
+    if not candidates:
+        return None
+    pairs = np.array([pair for _, pair in candidates])
+    # The change of its pose's sum of squares if a pair's labels are exchanged.
+    change = _exchanged(model, conditions, points, fit.params, pairs)
+    change -= row_squares[pairs[:, 0]] + row_squares[pairs[:, 1]]
+    chosen: dict[int, int] = {}  # pose -> its best candidate
+    for k, (g, _) in enumerate(candidates):
+        after = pose_squares[g] + change[k]
+        if after * SWAP_GAIN <= pose_squares[g] and (
+            g not in chosen or change[k] < change[chosen[g]]
+        ):
+            chosen[g] = k
+    if not chosen:
+        return None
+    picked = pairs[list(chosen.values())]
+    relabelled = target.copy()
+    relabelled[picked[:, 0]], relabelled[picked[:, 1]] = target[picked[:, 1]], target[picked[:, 0]]
+    swapped = Problem(
+        model,
+        replace(conditions, target=relabelled),
+        points,
+        problem.method,
+        problem.tol,
+        problem.max_iter,
+    )
+    try:
+        refit = swapped.fit(np.ones(conditions.m, dtype=bool), start=fit.params)
+    except ArmcalError:  # NotIdentifiableError among them: the exchange tells nothing
+        return None
+    if _chi2(refit) * SWAP_GAIN > _chi2(fit):
+        return None
+    # Each exchange must still fit far better than its labels at the refit's parameters.
+    as_labelled = _exchanged(model, swapped.conditions, points, refit.params, picked)
+    refit_squares = np.sum(refit.residuals[:, :d] ** 2, axis=1)
+    exchanged = refit_squares[picked[:, 0]] + refit_squares[picked[:, 1]]
+    kept = picked[exchanged * SWAP_GAIN <= as_labelled]
+    if not len(kept):
+        return None
+    labels = model.target_labels
+    named = [
+        f"pose {pose_labels[a]}: targets {labels[target[a]]} and {labels[target[b]]} look "
+        f"swapped (rows {rows[a]}, {rows[b]})"
+        for a, b in kept[:5]
+    ]
+    more = f" and {len(kept) - 5} more" if len(kept) > 5 else ""
+    before = rms(fit.residuals[:, :d])
+    after = rms(refit.residuals[:, :d])
+    return ArmcalWarning(
+        "targets-swapped",
+        f"{'; '.join(named)}{more}: relabelled, the residual RMS per coordinate falls from "
+        f"{before:.3g} to {after:.3g} mm; check the target column of these rows",
+    )
+
+
+# --------------------------------------------------------------------------- coupled joints
+
+
+def _parallel_pairs(model: FitModel, conditions: Conditions) -> list[int]:
+    """The readings ``j`` (0-based) whose tool rotation is parallel to reading ``j + 1``'s
+    at every one of the first rows (a zero rotation, a slide, counts as parallel)."""
+    sample = conditions.take(slice(0, min(conditions.m, 5)))
+    turns = np.asarray(model.orientation_joint_jacobian(sample))  # (k, dim, n)
+    found = []
+    for j in range(model.n_joints - 1):
+        a, b = turns[:, :, j], turns[:, :, j + 1]
+        sizes = np.linalg.norm(a, axis=1) * np.linalg.norm(b, axis=1)
+        along = np.abs(np.sum(a * b, axis=1))
+        # |a x b|^2 = |a|^2 |b|^2 - (a . b)^2, in any dimension (0 for one rotation axis);
+        # a reading that turns the tool by round-off only (rad per rad) is parallel to any.
+        across = np.sqrt(np.maximum(sizes**2 - along**2, 0.0))
+        if np.all((across <= PARALLEL_SINE * sizes) | (sizes <= PARALLEL_SINE)):
+            found.append(j)
+    return found
+
+
+def _map_text(matrix: np.ndarray) -> str:
+    rows = ", ".join("[" + ", ".join(f"{v:g}" for v in row) + "]" for row in matrix)
+    return f"[{rows}]"
+
+
+def coupled_joints(problem: Problem, fit: Fit) -> ArmcalWarning | None:
+    """A ``coupled-joints`` warning when the readings fit far better with two joints coupled.
+
+    Parameters
+    ----------
+    problem : Problem
+        The identification: its model (with its joint map), rows and points.
+    fit : Fit
+        Its least-squares fit to every row, far off (:func:`far_off`).
+
+    Returns
+    -------
+    ArmcalWarning or None
+        Naming the two joints, the improvement and the robot file's ``joint_map``
+        that reads them so; None when no coupling passes the tests of the module notes.
+    """
+    model, conditions, points = problem.model, problem.conditions, problem.points
+    m, n = conditions.m, model.n_joints
+    sub = np.unique(np.linspace(0, m - 1, min(m, COUPLING_ROWS)).astype(int))
+    rows, measured = conditions.take(sub), points[sub]
+    every = np.ones(len(sub), dtype=bool)
+    dim = points.shape[1]
+    before = _chi2(fit, sub) / max(dim * len(sub) - model.n_free, 1)
+    placed: list[tuple[float, int, float, Problem, np.ndarray]] = []
+    for j in _parallel_pairs(model, rows):
+        for sign in (1.0, -1.0):
+            coupling = np.eye(n)
+            coupling[j + 1, j] = sign
+            trial = replace(rows, q=np.asarray(rows.q) @ coupling.T)
+            try:
+                prepared = model.prepared(trial, measured)
+                prepared.check_identifiable(trial)
+                start = prepared.start(trial, measured[None])[0]
+            except (ArmcalError, ValueError, np.linalg.LinAlgError):
+                continue  # this reading cannot be fitted: it explains nothing
+            alternative = Problem(
+                prepared, trial, measured, problem.method, problem.tol, problem.max_iter
+            )
+            dof = max(dim * len(sub) - prepared.n_free, 1)
+            nominal = _chi2(Fit(alternative, start, every, 0, False)) / dof
+            if nominal * SWAP_GAIN <= before:  # the nominal arm read so already fits better
+                placed.append((nominal, j, sign, alternative, start))
+    if not placed:
+        return None
+    _, j, sign, alternative, start = min(placed, key=lambda found: found[0])
+    try:  # the one refit: the reading whose nominal arm fits best
+        refit = alternative.fit(every, start=start)
+    except (ArmcalError, np.linalg.LinAlgError):
+        return None
+    after = _chi2(refit) / max(dim * len(sub) - alternative.model.n_free, 1)
+    coupling = np.eye(n)
+    coupling[j + 1, j] = sign
+    d = model.position_dim
+    residual = rms(refit.residuals[:, :d])
+    if after * IMPROVEMENT > before or residual > SUSPICIOUS_RMS_FRACTION * model.reach_mm:
+        return None
+    given = np.asarray(model.joint_map, dtype=float)
+    proposed = given @ coupling
+    plain = np.array_equal(given, np.eye(n))
+    first, second = f"J{j + 1}", f"J{j + 2}"
+    if plain and sign > 0:
+        head = (
+            f"the joint readings look like those of a controller that couples {first} and "
+            f"{second} (FANUC-style: {second} read against the horizon)"
+        )
+    else:
+        head = "the joint readings do not follow the robot file's joint map"
+    where = "add joint_map = {} to" if plain else "set joint_map = {} in"
+    return ArmcalWarning(
+        "coupled-joints",
+        f"{head}: read with {second} as {second} {'+' if sign > 0 else '-'} {first}, the fit "
+        f"improves {_fold(before, after)} (residual RMS per coordinate "
+        f"{rms(fit.residuals[sub, :d]):.3g} -> {residual:.3g} mm on {len(sub)} rows); "
+        + where.format(_map_text(proposed))
+        + " the robot file",
+    )
