@@ -348,6 +348,9 @@ def identify(
         freed = _freed_fit(problem, used, sigma_value, chi2)
         if freed is None and cause is None:
             cause = swapped_targets(problem, least_squares, labels, row_numbers)
+        if freed is None and cause is None:  # an instrument that moved mid-campaign
+            moved = instrument_moved(model, conditions, points, fit.params, used=used)
+            cause = None if moved is None else moved_warning(moved, row_numbers)
         flagged_count = int(np.count_nonzero(test.flagged))
         mirrored = (
             _mirrored_fit(problem, used, sigma_value, chi2)
@@ -374,10 +377,6 @@ def identify(
         cause = swapped_targets(problem, least_squares, labels, row_numbers)
     if cause is not None:
         warnings.append(cause)
-    if not fit_test.consistent and cause is None:  # a cause named already explains it
-        moved = instrument_moved(model, conditions, points, fit.params, used=used)
-        if moved is not None:
-            warnings.append(moved_warning(moved, row_numbers))
     g = np.zeros((model.n_params, n_free))
     g[model.free] = fit.factor
     covariance = sigma_value**2 * (g @ g.T)
@@ -452,10 +451,11 @@ def moved_warning(moved: Movement, rows: Sequence[int]) -> ArmcalWarning:
     first, last = rows[moved.split - 1], rows[moved.split]
     return ArmcalWarning(
         "instrument-moved",
-        f"the rows up to row {first} and from row {last} on are fitted far better with an "
-        f"instrument pose of their own (it takes up {100 * moved.explained:.0f} % of the "
-        f"residual; the two poses put the points {moved.shift_mm:.3g} mm apart, RMS per "
-        "point): the instrument or the arm's base moved during the campaign, and no "
-        "calibration of the arm can take that up; calibrate from the rows of one setup, "
-        "or measure again with the instrument fixed",
+        f"the rows up to row {first} and from row {last} on (the campaign cut at "
+        f"{moved.fraction:.0%} of its rows) are fitted far better with an instrument pose of "
+        f"their own (it takes up {100 * moved.explained:.0f} % of the residual; the two poses "
+        f"put the points {moved.shift_mm:.3g} mm apart, RMS per point): the instrument or "
+        "the arm's base moved during the campaign, and no calibration of the arm can take "
+        "that up; calibrate from the rows of one setup, or measure again with the "
+        "instrument fixed",
     )

@@ -32,7 +32,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..models import Conditions, FitModel
-from ..numerics import point_norms, rms
+from ..numerics import point_norms, rms, solve_least_squares
 from .solvers import gauss_newton
 
 __all__ = [
@@ -167,7 +167,10 @@ class Movement:
     Attributes
     ----------
     split : int
-        The index of the first row (in the order measured) after the move.
+        The index of the first row (in the order measured) after the split tried (a
+        quarter, half or three quarters of the rows), the nearest to the move.
+    fraction : float
+        That split as a fraction of the rows.
     shift_mm : float
         RMS per point of how far the two parts' instrument poses put the rows apart, mm.
     explained : float
@@ -177,20 +180,65 @@ class Movement:
     """
 
     split: int
+    fraction: float
     shift_mm: float
     explained: float
     p_value: float
 
 
-def _whitened_rss(
+def _whitened(
     model: FitModel, conditions: Conditions, points: np.ndarray, params: np.ndarray
-) -> float:
-    """The residual sum of squares of ``params`` on the rows, whitened as the fit is."""
+) -> tuple[np.ndarray, np.ndarray]:
+    """Whitened residuals ``(r,)`` of ``params`` on the rows, and their Jacobian ``(r, p)``."""
     residual = points - model.positions(conditions, params)
+    jac = model.jacobian(conditions, params)
     w = model.whitening(conditions, params)
     if w is not None:
         residual = (w @ residual[..., None])[..., 0]
-    return float(np.sum(residual**2))
+        jac = w @ jac
+    return residual.reshape(-1), jac.reshape(-1, jac.shape[-1])
+
+
+def _split_rss(
+    model: FitModel,
+    parts: tuple[Conditions, Conditions],
+    points: tuple[np.ndarray, np.ndarray],
+    params: np.ndarray,
+    moved: np.ndarray,
+) -> tuple[float, np.ndarray, np.ndarray]:
+    """The whitened residual sum of squares of the model refitted with a registration of
+    its own for the second part (Gauss-Newton over the free parameters and the second
+    part's copy of the registration ``moved`` ``(p,)``, from ``params``), and the two
+    parts' parameters."""
+    free = np.asarray(model.free, dtype=bool)
+    first, second = np.array(params, dtype=float), np.array(params, dtype=float)
+    k = int(np.count_nonzero(moved))
+    scale = model.step_scale(parts[0])
+    for _ in range(_MAX_ITER):
+        r1, j1 = _whitened(model, parts[0], points[0], first)
+        r2, j2 = _whitened(model, parts[1], points[1], second)
+        # Columns: the shared free parameters, then the second part's registration.  The
+        # second part's rows see their own registration, not the shared one.
+        top = np.hstack([j1[:, free], np.zeros((j1.shape[0], k))])
+        shared = j2[:, free] * ~moved[free]
+        bottom = np.hstack([shared, j2[:, moved]])
+        step, _, _ = solve_least_squares(
+            np.vstack([top, bottom])[None], np.concatenate([r1, r2])[None]
+        )
+        step = step[0]
+        if not np.all(np.isfinite(step)):
+            break
+        shift = np.zeros_like(first)
+        shift[free] = step[: int(np.count_nonzero(free))]
+        own = step[-k:]
+        first, second = first + shift, second + shift
+        second[moved] = second[moved] - shift[moved] + own
+        size = max(np.max(np.abs(shift * scale)), np.max(np.abs(own * scale[moved])))
+        if size <= _TOL * model.reach_mm:
+            break
+    r1, _ = _whitened(model, parts[0], points[0], first)
+    r2, _ = _whitened(model, parts[1], points[1], second)
+    return float(r1 @ r1 + r2 @ r2), first, second
 
 
 def instrument_moved(
@@ -207,7 +255,7 @@ def instrument_moved(
     ----------
     model, conditions, points, params
         The calibrated (prepared) model, its anchored rows and points, and the
-        fitted parameters, whose geometry is held.
+        fitted parameters (where the refits start).
     used : ndarray of bool, shape (m,), optional
         The rows in the fit.
 
@@ -216,51 +264,53 @@ def instrument_moved(
     Movement or None
         The split that explains the most, when it passes both tests (module
         notes); None otherwise, or when the parts are too small to tell.
+
+    Notes
+    -----
+    At each split the whole model is refitted with a second copy of its registration
+    for the rows after it (Gauss-Newton from the calibration): the nested F test of
+    those ``k`` parameters.  Holding the calibrated geometry instead would not do: a
+    calibration of a campaign whose instrument moved has bent its geometry towards
+    the move, and a second registration alone then takes up only part of it.
     """
     points = np.asarray(points, dtype=float)
     m = conditions.m
     used = np.ones(m, dtype=bool) if used is None else np.asarray(used, dtype=bool)
-    free = np.asarray(model.registration_params, dtype=bool) & np.asarray(model.free)
-    k = int(np.count_nonzero(free))
+    moved = np.asarray(model.registration_params, dtype=bool) & np.asarray(model.free)
+    k = int(np.count_nonzero(moved))
     d = model.point_dim
     rows = np.flatnonzero(used)
     residual_dof = d * rows.size - model.n_free - k
     if k == 0 or residual_dof <= 0:
         return None
     whole = conditions.take(rows)
-    total = _whitened_rss(model, whole, points[rows], params)
+    residual, _ = _whitened(model, whole, points[rows], params)
+    total = float(residual @ residual)
     if total <= 0:
         return None
+    from scipy import special  # on use, and not scipy.stats (slow to import)
+
     best: Movement | None = None
     for fraction in MOVE_SPLITS:
         split = round(fraction * rows.size)
         parts = (rows[:split], rows[split:])
         if min(d * part.size for part in parts) <= 2 * k:  # a part too small to place
             continue
-        fits = []
-        for part in parts:
-            rows_of = conditions.take(part)
-            fitted = fit_registration(model, rows_of, points[part], params, free)
-            if fitted is None:
-                break
-            fits.append((rows_of, part, fitted))
-        if len(fits) < 2:
-            continue
-        split_rss = sum(_whitened_rss(model, c, points[p], f) for c, p, f in fits)
+        conditions_of = (conditions.take(parts[0]), conditions.take(parts[1]))
+        split_rss, first, second = _split_rss(
+            model, conditions_of, (points[parts[0]], points[parts[1]]), params, moved
+        )
         explained = 1.0 - split_rss / total
         if split_rss <= 0:
             p_value = 0.0
         else:
-            statistic = ((total - split_rss) / k) / (split_rss / residual_dof)
-            from scipy import special  # on use, and not scipy.stats (slow to import)
-
+            statistic = max(total - split_rss, 0.0) / k / (split_rss / residual_dof)
             p_value = float(special.fdtrc(k, residual_dof, statistic)) * len(MOVE_SPLITS)
         if p_value >= MOVE_ALPHA or explained < MOVE_SHARE:
             continue
-        (_, _, first), (_, _, second) = fits
         apart = model.positions(whole, first) - model.positions(whole, second)
         shift = rms(point_norms(apart[:, : model.position_dim]))
-        found = Movement(int(rows[split]), shift, float(explained), min(p_value, 1.0))
+        found = Movement(int(rows[split]), fraction, shift, float(explained), min(p_value, 1.0))
         if best is None or found.explained > best.explained:
             best = found
     return best
