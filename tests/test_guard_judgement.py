@@ -477,3 +477,15 @@ def test_a_robust_pass_that_would_drop_a_third_of_the_rows_reports_a_model_probl
             message = _warning(cal, "model-misfit")
             assert "model problem, not outliers" in message and "check, in order" in message
             assert "none should be dropped" in message
+
+
+@pytest.mark.parametrize("family", ["planar", "planar-compliance"])
+def test_with_sigma_estimated_a_third_of_the_rows_off_is_a_model_problem_too(family):
+    virtual = _family(family)
+    points = virtual.points(np.random.default_rng(22))
+    m = virtual.rows.m
+    points[np.arange(m) % 3 == 0, 0] += 1.0
+    cal = virtual.identify(points, robust=True)
+    assert cal.sigma_source == "estimated"
+    assert cal.n_used == m and not cal.outliers
+    assert "none should be dropped" in _warning(cal, "model-misfit")

@@ -138,10 +138,7 @@ def misfit_warning(problem: Problem, disagreeing: int, *, left_out: int = 0) -> 
             "blunders are accidents of single rows)"
         )
     if left_out:
-        done = (
-            f"the robust fit leaves out only the {left_out} that stand far off the scatter "
-            "of the others"
-        )
+        done = f"only the {left_out} that stand far off the scatter of the others are outliers"
     else:
         done = "the robust fit leaves none out and none should be dropped"
     return ArmcalWarning(
@@ -170,6 +167,16 @@ def robust_fit(
     the rows it happens to explain, not calibrate it.  ``sigma`` is the reference noise
     when given, None when it is estimated.
     """
+    return _robust(problem, sigma, fit, huber=huber)[:4]
+
+
+#: What :func:`_robust` returns: :func:`robust_fit`'s four, and how many rows the test
+#: flagged when they were too many (0 otherwise).
+_Robust = tuple[Fit, np.ndarray, np.ndarray, ArmcalWarning | None, int]
+
+
+def _robust(problem: Problem, sigma: float | None, fit: Fit, *, huber: bool) -> _Robust:
+    """:func:`robust_fit`, and the count of a misfit."""
     m = problem.m
     dim = problem.model.point_dim
     everyone = np.ones(m, dtype=bool)
@@ -200,9 +207,7 @@ def robust_fit(
     return _tested(problem, sigma, problem.fit(used, start=fit.params), used)
 
 
-def _tested(
-    problem: Problem, sigma: float | None, fit: Fit, used: np.ndarray
-) -> tuple[Fit, np.ndarray, np.ndarray, ArmcalWarning | None]:
+def _tested(problem: Problem, sigma: float | None, fit: Fit, used: np.ndarray) -> _Robust:
     """From ``fit`` to the rows ``used``: test every row, leave the flagged out, refit,
     until the set is stable (:func:`robust_fit`)."""
     m = problem.m
@@ -210,18 +215,22 @@ def _tested(
     n_free = problem.model.n_free
     everyone = np.ones(m, dtype=bool)
 
-    def everything(flagged: np.ndarray, warning: ArmcalWarning) -> tuple:
-        return problem.fit(everyone, start=fit.params), everyone, flagged, warning
+    def everything(flagged: np.ndarray, warning: ArmcalWarning, count: int = 0) -> _Robust:
+        return problem.fit(everyone, start=fit.params), everyone, flagged, warning, count
 
     for _ in range(20):
         dof = dim * int(np.count_nonzero(used)) - n_free
         scale = sigma if sigma is not None else fit.scale(max(dof, 1))
         test = fit.test(scale, given=sigma is not None)
         keep = ~test.flagged
-        if too_many(int(np.count_nonzero(~keep)), m):
-            return everything(~everyone, misfit_warning(problem, int(np.count_nonzero(~keep))))
-        if np.array_equal(keep, used):
-            return fit, used, ~used, None
+        count = int(np.count_nonzero(~keep))
+        # Too many on the way (at least half: a fit to the rest would fit a handful), or
+        # where the set settles (a round may flag more than it finally leaves out).
+        settled = np.array_equal(keep, used)
+        if most_disagree(count, m) or (settled and too_many(count, m)):
+            return everything(~everyone, misfit_warning(problem, count), count)
+        if settled:
+            return fit, used, ~used, None, 0
         if not problem.identifiable(keep) or dim * int(np.count_nonzero(keep)) <= n_free:
             warning = ArmcalWarning(
                 "outliers-kept",
@@ -232,7 +241,10 @@ def _tested(
             return everything(~keep, warning)
         used = keep
         fit = problem.fit(used, start=fit.params)
-    return fit, used, ~used, None
+    count = int(np.count_nonzero(~used))
+    if too_many(count, m):
+        return everything(~everyone, misfit_warning(problem, count), count)
+    return fit, used, ~used, None, 0
 
 
 @dataclass(frozen=True, eq=False)
@@ -274,38 +286,43 @@ class Judgement:
 
 
 def _judged(problem: Problem, sigma: float | None, fit: Fit, *, huber: bool = True) -> tuple:
-    """:func:`robust_fit` against ``sigma`` (None: the rows' scatter), its test, the scale."""
-    found, used, flagged, warning = robust_fit(problem, sigma, fit, huber=huber)
+    """:func:`robust_fit` against ``sigma`` (None: the rows' scatter), its test, the scale,
+    and the count of a misfit."""
+    found, used, flagged, warning, count = _robust(problem, sigma, fit, huber=huber)
     dof = problem.model.point_dim * int(np.count_nonzero(used)) - problem.model.n_free
     scale = sigma if sigma is not None else found.scale(max(dof, 1))
-    return found, used, flagged, warning, found.test(scale, given=sigma is not None), scale, dof
+    test = found.test(scale, given=sigma is not None)
+    return found, used, flagged, warning, test, scale, dof, count
 
 
 def judge(problem: Problem, sigma: float | None, fit: Fit, *, robust: bool) -> Judgement:
     """The outliers of the least-squares ``fit``, found robustly (module notes).
 
-    Against ``sigma`` when given (None: sigma estimated); when the rows kept still
-    fail the chi-square test against it, against the rows' own scatter instead, so
-    that a blunder far off the scatter of the others is found whatever the misfit.
+    Against ``sigma`` when given (None: sigma estimated), from Huber's fit.  When the
+    rows kept still fail the chi-square test against the given sigma, or too many rows
+    fail the test for outliers (:func:`too_many`), against the scatter of every other
+    row instead, so that a blunder far off the others is found whatever the misfit.
     The warning is the one to show for a ``robust`` fit or not: without it only a
-    misfit is news, and a misfit against sigma alone the ``fit-inconsistent``
+    misfit is news, and a misfit against a given sigma the ``fit-inconsistent``
     warning says.
     """
-    found, used, flagged, warning, test, scale, dof = _judged(problem, sigma, fit)
+    found, used, flagged, warning, test, scale, dof, count = _judged(problem, sigma, fit)
     disagreeing = int(np.count_nonzero(test.flagged))
-    switched = False
-    if sigma is not None:
+    switched = count > 0
+    if sigma is not None and not switched:
         kept = goodness_of_fit(found.whitened[used] / sigma, dof, sigma_given=True)
         switched = kept.too_large
     if switched:
         first = warning
-        found, used, flagged, warning, test, scale, _ = _judged(problem, None, fit, huber=False)
-        if robust and warning is None and first is not None and first.code == "model-misfit":
-            # Against sigma every row disagreed: still a model problem, said with what the
-            # judgement against the scatter left out.
+        found, used, flagged, warning, test, scale, _, _ = _judged(problem, None, fit, huber=False)
+        misfit = first is not None and first.code == "model-misfit"
+        if warning is None and misfit and (robust or sigma is None):
+            # Too many rows disagreed: still a model problem, said with what the judgement
+            # against the scatter left out.
             warning = misfit_warning(
-                problem, disagreeing, left_out=int(np.count_nonzero(flagged & ~used))
+                problem, max(count, disagreeing), left_out=int(np.count_nonzero(~used))
             )
     if not robust and (warning is None or warning.code != "model-misfit"):
         warning = None
-    return Judgement(found, used, flagged, test, scale, switched, disagreeing, warning)
+    scatter = switched and sigma is not None
+    return Judgement(found, used, flagged, test, scale, scatter, disagreeing, warning)
