@@ -461,8 +461,9 @@ def calibration_document(
     Returns
     -------
     dict
-        The contract keys, plus ``goodness_of_fit`` ``{chi2, dof, p_value}``
-        (null chi2 and p-value when sigma was estimated), ``standardized_residuals``
+        The contract keys, plus ``goodness_of_fit`` ``{chi2, dof, p_value,
+        p_value_below}`` (the two tails; null chi2 and p-values when sigma was
+        estimated), ``standardized_residuals``
         per pose, ``outliers`` (``{row, pose, target, residual_mm, studentized,
         removed}``), ``noise`` (the noise model or null), ``fixed`` (names; their
         parameters carry ``"fixed": true`` and std 0).  No NaN anywhere.
@@ -517,6 +518,7 @@ def calibration_document(
             "chi2": None if fit is None else _finite_or_none(fit.chi2),
             "dof": cal.dof if fit is None else int(fit.dof),
             "p_value": None if fit is None else _finite_or_none(fit.p_value),
+            "p_value_below": None if fit is None else _finite_or_none(fit.p_below),
         },
         "residuals": [
             {"row": row, "pose": label, "target": t, **dict(zip(axes, d, strict=True)), "used": u}

@@ -32,6 +32,13 @@ from ..models.information import display_std
 from ..noise import instrument_override
 from ..numerics import point_norms, rms
 from .diagnosis import SUSPICIOUS_RMS_FRACTION, coupled_joints, far_off, swapped_targets
+from .experiment import (
+    coverage,
+    plan_degenerate_warning,
+    refuse_registration_only,
+    repeated_rows,
+    repeated_rows_warning,
+)
 from .judgement import (
     Outlier,
     few_dof_warning,
@@ -43,12 +50,13 @@ from .judgement import (
     not_converged_warning,
     outlier_warning,
     row_noun,
+    too_good_warning,
     unseen_warning,
 )
 from .problem import Problem, reference_sigma
 from .registration import Movement, instrument_moved, register_nominal
 from .result import Calibration, NestedFit
-from .robust import robust_fit
+from .robust import judge
 from .solvers import resolve_method
 
 __all__ = [
@@ -223,8 +231,8 @@ def identify(
     >>> cal = identify(arm, q, forward_kinematics(arm, q, truth), sigma=0.1)
     >>> cal.values.round(9).tolist(), cal.std.round(4).tolist()
     ([1.5, -0.6, 0.5, -0.5], [0.05, 0.05, 0.011, 0.0194])
-    >>> cal.goodness_of_fit.dof, [w.code for w in cal.warnings]
-    (4, [])
+    >>> cal.goodness_of_fit.dof, [w.code for w in cal.warnings]  # noiseless: too good
+    (4, ['fit-too-good'])
     >>> cal["dq2"]
     dq2 = -0.5 ± 0.0194 deg
     """
@@ -254,6 +262,17 @@ def identify(
     if sigma is not None:
         model = model.with_noise(instrument_override(model.noise, sigma))
     model = model.prepared(conditions, points)
+    noun = row_noun(conditions.target)
+    # What the rows can support, before any fit: a plan that sees nothing of the arm is
+    # refused, one that misses part of it and rows repeated exactly are warned of.
+    found = coverage(model, conditions.q)
+    refuse_registration_only(found, m, noun)
+    labels = tuple(str(i) for i in range(1, m + 1)) if pose_labels is None else tuple(pose_labels)
+    row_numbers = tuple(range(1, m + 1)) if rows is None else tuple(int(r) for r in rows)
+    repeats = repeated_rows(conditions.q, points, conditions.target)
+    repeated_count = int(np.count_nonzero(repeats >= 0))
+    repeated = repeated_rows_warning(repeats, row_numbers, noun)
+    experiment = [plan_degenerate_warning(found), repeated]
     given = model.noise is not None or row_sigma is not None
     problem = Problem(model, conditions, points, method, tol, max_iter)
     info = model.check_identifiable(conditions)
@@ -287,10 +306,9 @@ def identify(
         cause = coupled_joints(problem, least_squares)
         problem.suspect = None if cause is None else cause.message
     fit, used = least_squares, everyone
-    if robust:
-        fit, used, flagged, kept_warning = robust_fit(problem, robust_sigma, least_squares)
-        if kept_warning is not None:
-            extra.append(kept_warning)
+    judged = judge(problem, robust_sigma, least_squares, robust=True) if robust else None
+    if judged is not None:
+        fit, used = judged.fit, judged.used
     dof = dim * int(np.count_nonzero(used)) - n_free
     source: Literal["given", "estimated"]
     if given:
@@ -299,18 +317,16 @@ def identify(
         sigma_value, source = fit.scale(max(dof, 1)), "estimated"
     standardized = fit.whitened / sigma_value
     test = fit.test(sigma_value, given=given)
-    if not robust:
-        flagged = test.flagged
-    if not robust and np.any(test.flagged):
+    if judged is None and np.any(test.flagged):
         # Gross outliers pull a least-squares fit towards them and inflate every
         # residual, so the poses to flag are those the robust procedure would
         # leave out, judged against its fit; this fit keeps them.
-        clean, kept, flagged, _ = robust_fit(problem, robust_sigma, least_squares)
-        clean_dof = dim * int(np.count_nonzero(kept)) - n_free
-        scale = reference if given else clean.scale(max(clean_dof, 1))
-        test = clean.test(scale, given=given)
-    labels = tuple(str(i) for i in range(1, m + 1)) if pose_labels is None else tuple(pose_labels)
-    row_numbers = tuple(range(1, m + 1)) if rows is None else tuple(int(r) for r in rows)
+        judged = judge(problem, robust_sigma, least_squares, robust=False)
+    flagged, disagreeing = test.flagged, int(np.count_nonzero(test.flagged))
+    if judged is not None:
+        flagged, test, disagreeing = judged.flagged, judged.test, judged.disagreeing
+        if judged.warning is not None:
+            extra.append(judged.warning)
     distance = point_norms(fit.residuals[:, : model.position_dim])
     target_index = conditions.target
     outliers = tuple(
@@ -328,13 +344,13 @@ def identify(
     )
     fit_test = goodness_of_fit(standardized[used], dof, sigma_given=given)
     conditioning = model.conditioning_warning(info)
-    warnings = [w for w in (conditioning,) if w is not None]
+    warnings = [w for w in (conditioning, *experiment) if w is not None]
     if not fit.converged:
         warnings.append(not_converged_warning(method, fit.iterations, model.has_closed_form))
+    scatter = judged.scale if judged is not None and judged.scatter else None
     if outliers:
-        warnings.append(outlier_warning(outliers, robust=robust))
+        warnings.append(outlier_warning(outliers, robust=robust, scatter=scatter, sigma=reference))
     warnings.extend(extra)
-    noun = row_noun(conditions.target)
     few = (
         few_dof_warning(int(np.count_nonzero(used)), dof, n_free, equations_per_pose(model), noun)
         if given
@@ -342,7 +358,7 @@ def identify(
     )
     if few is not None:
         warnings.append(few)
-    if not fit_test.consistent:
+    if fit_test.too_large:
         suggested = sigma_value * float(np.sqrt((fit_test.chi2 or 0.0) / max(dof, 1)))
         chi2 = fit_test.chi2 or 0.0
         freed = _freed_fit(problem, used, sigma_value, chi2)
@@ -351,10 +367,9 @@ def identify(
         if freed is None and cause is None:  # an instrument that moved mid-campaign
             moved = instrument_moved(model, conditions, points, fit.params, used=used)
             cause = None if moved is None else moved_warning(moved, row_numbers)
-        flagged_count = int(np.count_nonzero(test.flagged))
         mirrored = (
             _mirrored_fit(problem, used, sigma_value, chi2)
-            if freed is None and cause is None and most_disagree(flagged_count, m)
+            if freed is None and cause is None and most_disagree(disagreeing, m)
             else None
         )
         warnings.append(
@@ -362,12 +377,15 @@ def identify(
                 fit_test,
                 sigma_value,
                 suggested,
-                flagged_count,
+                int(np.count_nonzero(flagged)),
                 poses=m,
                 held=model.fixed,
                 freed=freed,
                 mirrored=mirrored,
                 rows=noun,
+                disagreeing=disagreeing,
+                scatter=scatter,
+                robust=robust,
             )
         )
     elif cause is None and (
@@ -377,6 +395,8 @@ def identify(
         cause = swapped_targets(problem, least_squares, labels, row_numbers)
     if cause is not None:
         warnings.append(cause)
+    if fit_test.too_good:
+        warnings.append(too_good_warning(fit_test, sigma_value, repeated=repeated_count))
     g = np.zeros((model.n_params, n_free))
     g[model.free] = fit.factor
     covariance = sigma_value**2 * (g @ g.T)

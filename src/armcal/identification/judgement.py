@@ -14,8 +14,13 @@ own leverage.
 
 **Goodness of fit.**  With ``sigma`` given, ``chi2 = sum_i e_i^T Sigma_i^-1 e_i``
 over the poses in the fit follows a chi-square law with ``d m - p_f`` degrees
-of freedom; a p-value below :data:`FIT_ALPHA` says the data and the model (or
-``sigma``) disagree.
+of freedom.  The test has two tails, each at the level :data:`FIT_ALPHA`:
+``P(chi2_dof >= chi2)`` (the p-value every report shows) below it says the
+data and the model (or ``sigma``) disagree; ``P(chi2_dof <= chi2)`` below it
+says the fit is *too good* for ``sigma`` -- sigma too large, rows repeated, or
+points computed rather than measured -- and every std is too large by about
+``sqrt(dof / chi2)``.  On a fit consistent with ``sigma`` either tail fails
+with probability :data:`FIT_ALPHA`, both together ``2 FIT_ALPHA``.
 
 **Outliers.**  A pose is an outlier when its residual is larger than the fit
 and the noise can explain.  With ``B_i = W_i J_i G`` (``G G^T = (J_w^T J_w)^-1``
@@ -61,10 +66,12 @@ __all__ = [
     "not_converged_warning",
     "outlier_warning",
     "studentized_test",
+    "too_good_warning",
     "unseen_warning",
 ]
 
-#: A fit whose chi-square p-value is below this is inconsistent with sigma.
+#: A fit whose chi-square p-value is below this is inconsistent with sigma; one whose
+#: lower tail ``P(chi2_dof <= chi2)`` is below it is too good for sigma (module notes).
 FIT_ALPHA = 1e-3
 #: Family-wise false-alarm rate of the outlier test over all poses of a fit.
 OUTLIER_ALPHA = 1e-3
@@ -74,7 +81,7 @@ FEW_DOF = 4
 
 @dataclass(frozen=True)
 class GoodnessOfFit:
-    """The chi-square test of a fit against its noise model.
+    """The chi-square test of a fit against its noise model, both tails (module notes).
 
     Attributes
     ----------
@@ -85,39 +92,65 @@ class GoodnessOfFit:
     dof : int
         ``2 m - p_f``: measured coordinates minus free parameters.
     p_value : float or None
-        ``P(chi2_dof >= chi2)``; None when ``sigma`` was estimated or ``dof <= 0``.
+        ``P(chi2_dof >= chi2)``, the upper tail; None when ``sigma`` was estimated or
+        ``dof <= 0``.
+    p_below : float or None
+        ``P(chi2_dof <= chi2)``, the lower tail: small when the fit is too good for
+        ``sigma``; None when ``p_value`` is.
     """
 
     chi2: float | None
     dof: int
     p_value: float | None
+    p_below: float | None = None
+
+    @property
+    def too_large(self) -> bool:
+        """Whether chi-square is too large for sigma: ``p_value`` below :data:`FIT_ALPHA`."""
+        return self.p_value is not None and self.p_value < FIT_ALPHA
+
+    @property
+    def too_good(self) -> bool:
+        """Whether chi-square is too small for sigma: ``p_below`` below :data:`FIT_ALPHA`."""
+        return self.p_below is not None and self.p_below < FIT_ALPHA
 
     @property
     def consistent(self) -> bool:
-        """False when the p-value is below :data:`FIT_ALPHA`."""
-        return self.p_value is None or self.p_value >= FIT_ALPHA
+        """Neither tail fails (or there is no test)."""
+        return not (self.too_large or self.too_good)
 
     def to_dict(self) -> dict[str, float | int | None]:
-        """JSON form ``{chi2, dof, p_value}``."""
-        return {"chi2": self.chi2, "dof": self.dof, "p_value": self.p_value}
+        """JSON form ``{chi2, dof, p_value, p_value_below}``."""
+        return {
+            "chi2": self.chi2,
+            "dof": self.dof,
+            "p_value": self.p_value,
+            "p_value_below": self.p_below,
+        }
 
 
 def goodness_of_fit(standardized: np.ndarray, dof: int, *, sigma_given: bool) -> GoodnessOfFit:
-    """Chi-square test of standardized residuals ``(m_used, 2)`` on ``dof`` degrees of freedom.
+    """Chi-square test of standardized residuals ``(m_used, d)`` on ``dof`` degrees of freedom.
 
     Examples
     --------
     >>> fit = goodness_of_fit(np.ones((10, 2)), 16, sigma_given=True)
-    >>> fit.chi2, fit.dof, round(fit.p_value, 4)
-    (20.0, 16, 0.2202)
+    >>> fit.chi2, fit.dof, round(fit.p_value, 4), round(fit.p_below, 4), fit.consistent
+    (20.0, 16, 0.2202, 0.7798, True)
+    >>> goodness_of_fit(np.full((10, 2), 0.1), 16, sigma_given=True).too_good
+    True
     """
     if not sigma_given:
         return GoodnessOfFit(None, int(dof), None)
     from scipy import special  # on use, and not scipy.stats (3x slower to import)
 
     chi2 = float(np.sum(standardized**2))
-    p_value = float(special.chdtrc(dof, chi2)) if dof > 0 else None
-    return GoodnessOfFit(chi2, int(dof), p_value)
+    if dof <= 0:
+        return GoodnessOfFit(chi2, int(dof), None)
+    # Each tail from its own function: 1 - P would lose the small one to round-off.
+    return GoodnessOfFit(
+        chi2, int(dof), float(special.chdtrc(dof, chi2)), float(special.chdtr(dof, chi2))
+    )
 
 
 @dataclass(frozen=True)
@@ -278,8 +311,18 @@ def _quadratic_forms(standardized: np.ndarray, leverage: np.ndarray, used: np.nd
 NESTED_UNSEEN_P = 0.05
 
 
-def outlier_warning(outliers: Sequence[Outlier], *, robust: bool) -> ArmcalWarning:
-    """``outlier``: the flagged poses, and what was done with them (or what to do)."""
+def outlier_warning(
+    outliers: Sequence[Outlier],
+    *,
+    robust: bool,
+    scatter: float | None = None,
+    sigma: float | None = None,
+) -> ArmcalWarning:
+    """``outlier``: the flagged poses, and what was done with them (or what to do).
+
+    ``scatter`` (mm) is the scale they were judged against when the fit is
+    inconsistent with the given ``sigma`` (:func:`~armcal.identification.robust.judge`).
+    """
     shown = [
         f"row {o.row} (pose {o.pose}: residual {o.residual_mm:.3g} mm, "
         f"studentized {o.studentized:.3g})"
@@ -291,9 +334,16 @@ def outlier_warning(outliers: Sequence[Outlier], *, robust: bool) -> ArmcalWarni
         then = "left out of the fit; check these measurements"
     else:
         then = f"{action('refit-robust')}, or check these measurements"
+    against = ""
+    if scatter is not None:
+        given = "" if sigma is None else f" = {sigma:.3g} mm"
+        against = (
+            f", judged against the scatter of the other rows ({scatter:.3g} mm) since the "
+            f"fit is inconsistent with sigma{given}"
+        )
     return ArmcalWarning(
         "outlier",
-        f"{len(outliers)} {what} at the {OUTLIER_ALPHA:g} family-wise level: "
+        f"{len(outliers)} {what} at the {OUTLIER_ALPHA:g} family-wise level{against}: "
         f"{listing(shown)}{more}; {then}",
     )
 
@@ -320,12 +370,18 @@ def inconsistent_fit_warning(
     freed: tuple[float, int] | None = None,
     mirrored: tuple[str, float, int] | None = None,
     rows: str = "poses",
+    disagreeing: int | None = None,
+    scatter: float | None = None,
+    robust: bool = False,
 ) -> ArmcalWarning:
     """``fit-inconsistent``: the chi-square test failed, and the likely causes in order.
 
     ``flagged`` of the ``poses`` data rows (which are ``rows``: :func:`row_noun`) fail
-    the outlier test; when they are at least half, they are no outliers and a
-    robust fit cannot help, so the message says so instead of advising one.
+    the outlier test, and ``disagreeing`` (default ``flagged``) fail it against
+    sigma; when those are at least half, they are no outliers and a robust fit
+    cannot help, so the message says so instead of advising one -- unless the
+    outliers were judged against the rows' own ``scatter`` (mm) instead, where
+    ``flagged`` stand out of it (left out by a ``robust`` fit).
     ``held`` are the fixed parameters' names; ``freed`` is the chi-square and its
     degrees of freedom of the same fit with them free, given when freeing them
     explains the misfit: it is then the first cause.  ``mirrored`` is what mirrors
@@ -347,14 +403,27 @@ def inconsistent_fit_warning(
             f"{'it' if one else 'them'} free, chi2 = {chi2:.4g} on {dof} degrees of freedom; "
             f"free {'it' if one else 'them'} (--fix or the robot file's [identify])"
         )
-    if most_disagree(flagged, poses):
+    disagreeing = flagged if disagreeing is None else disagreeing
+    stand_out = ""
+    if scatter is not None and flagged:
+        done = "left out" if robust else action("try-robust")
+        stand_out = (
+            f"{flagged} of {poses} {rows} stand out of the rows' scatter, about "
+            f"{scatter / sigma:.3g} times sigma ({done})"
+        )
+    if most_disagree(disagreeing, poses):
+        shown = f"not outliers: {disagreeing} of {poses} {rows} disagree with the fit"
         causes.append(
-            f"not outliers: {flagged} of {poses} {rows} disagree with the fit, so a robust fit "
-            "cannot help"
+            f"{shown}; {stand_out}" if stand_out else f"{shown}, so a robust fit cannot help"
+        )
+    elif scatter is not None:
+        ratio = f"the rows scatter about {scatter / sigma:.3g} times sigma"
+        causes.append(
+            f"not outliers alone: {stand_out}" if stand_out else f"not outliers: {ratio}"
         )
     else:
-        robust = action("try-robust")
-        causes.append(f"outliers ({f'{flagged} flagged; ' if flagged else ''}{robust})")
+        advice = action("try-robust")
+        causes.append(f"outliers ({f'{flagged} flagged; ' if flagged else ''}{advice})")
     causes.append("a wrong unit (angles in radians, positions in metres)")
     model = "a model that misses an effect (base offset, a wrong robot file, compliance under load"
     if freed is None and held:
@@ -365,6 +434,34 @@ def inconsistent_fit_warning(
         "fit-inconsistent",
         f"the fit is inconsistent with sigma = {sigma:.3g} mm: chi2 = {fit.chi2:.4g} on "
         f"{fit.dof} degrees of freedom (p = {fit.p_value:.2g}); likely causes, in order: "
+        + "; ".join(causes),
+    )
+
+
+def too_good_warning(fit: GoodnessOfFit, sigma: float, *, repeated: int = 0) -> ArmcalWarning:
+    """``fit-too-good``: chi-square far below its degrees of freedom (module notes).
+
+    The residuals suggest ``sigma sqrt(chi2 / dof)``; every std, proportional to
+    sigma, is too large by the inverse ratio.  ``repeated`` rows repeat another
+    exactly (:func:`~armcal.identification.experiment.repeated_rows`): they are then
+    the first cause named.
+    """
+    chi2, dof = fit.chi2 or 0.0, fit.dof
+    suggested = sigma * float(np.sqrt(chi2 / max(dof, 1)))
+    ratio = f"{sigma / suggested:.3g} times" if suggested > 0 else "far"
+    causes = []
+    if repeated:
+        causes.append(f"rows repeated ({repeated} repeat another exactly)")
+    causes += [
+        f"sigma too large (the residuals suggest about {suggested:.3g} mm; give the "
+        "instrument's noise for these measurements)",
+        "points computed rather than measured (noiseless virtual data)",
+    ]
+    return ArmcalWarning(
+        "fit-too-good",
+        f"the fit is better than sigma = {sigma:.3g} mm allows: chi2 = {chi2:.4g} on {dof} "
+        f"degrees of freedom, as small by chance with probability {fit.p_below:.2g} (below "
+        f"{FIT_ALPHA:g}); every std is {ratio} too large; likely causes, in order: "
         + "; ".join(causes),
     )
 

@@ -37,7 +37,11 @@ def _fit_line(cal: Calibration) -> str:
         return f"goodness of fit: sigma estimated from the residuals, no test ({dof} dof)"
     if fit.p_value is None:
         return f"goodness of fit: chi2 = {fit.chi2:.4g} on {dof} dof: no test without dof"
-    verdict = "consistent with sigma" if fit.p_value >= 1e-3 else "INCONSISTENT with sigma"
+    verdict = "consistent with sigma"
+    if fit.too_large:
+        verdict = "INCONSISTENT with sigma"
+    elif fit.too_good:
+        verdict = f"TOO GOOD for sigma (P(chi2 below) = {fit.p_below:.3g})"
     return (
         f"goodness of fit: chi2 = {fit.chi2:.4g} on {dof} dof "
         f"(chi2/dof {fit.chi2 / max(dof, 1):.3g}), p = {fit.p_value:.3g}: {verdict}"

@@ -45,6 +45,7 @@ from ..files.ur import (
     ur_model_of,
 )
 from ..identification import Calibration, identify
+from ..identification.experiment import coverage, plan_degenerate_warning
 from ..instrument import identify_3d
 from ..models import CalibratedArm, FitModel, Loads, PlanarArm, SerialChain, SpatialArm, Target
 from ..plausibility import deviation_warning, explain, suspicious, unit_mistake
@@ -497,6 +498,14 @@ def validate_measurements(
         *_unpredicted(cal, loads, source),
         *validation_warnings(result, poses),
     ]
+    degenerate = plan_degenerate_warning(  # the calibration holds part of the arm nominal
+        coverage(cal.model),
+        "the calibration's measurements",
+        holds="its predicted error holds",
+        like="those it was calibrated on",
+    )
+    if degenerate is not None:
+        warnings.append(degenerate)
     if loads is None and meas.has_loads:  # the rows sag by their loads; the model cannot say
         warnings.append(
             _loads_ignored_warning(

@@ -26,6 +26,11 @@ from ..doe import (
 )
 from ..errors import ArmcalError, ArmcalWarning, NotIdentifiableError
 from ..files import RobotSpec, SerialSpec
+from ..identification.experiment import (
+    coverage,
+    plan_degenerate_warning,
+    refuse_registration_only,
+)
 from ..models import FitModel, Loads, PlanarArm, SpatialArm
 from ..progress import ProgressCallback
 from ..simulate import MonteCarlo, monte_carlo
@@ -164,12 +169,20 @@ def evaluate_file(
     """
     model, loads = plan_model(spec, arm, q.shape[0], payload)
     model = model.prepared(model.plan_conditions(q, loads))
+    # A plan that misses part of the arm: its predicted figures assume the rest nominal.
+    found = coverage(model, q)
     try:
+        refuse_registration_only(found, q.shape[0], "poses")
         quality = evaluate_plan(model, q, sigma=design_sigma(arm), test_q=test_q, loads=loads)
     except NotIdentifiableError as exc:  # PRODUCT.md: an error, exit 2, one line
         raise prefixed(source, exc) from None
-    outside = _outside_warning(spec, q, source)
-    extra = () if outside is None else (outside,)
+    degenerate = plan_degenerate_warning(
+        found,
+        f"{source}'s poses",
+        holds="its predicted std and predicted position error after calibration hold",
+        like="the plan's",
+    )
+    extra = tuple(w for w in (degenerate, _outside_warning(spec, q, source)) if w is not None)
     return EvaluationRun(quality, (*spec.warnings, *quality.warnings, *extra))
 
 
