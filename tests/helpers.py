@@ -1,5 +1,5 @@
-"""Helpers shared by the tests: random arms and deviations, and the program run in-process
-or in a subprocess."""
+"""Helpers shared by the tests: random arms and deviations, the program run in-process
+or in a subprocess, and the robot file of the virtual six-axis cell with compliance."""
 
 import contextlib
 import io
@@ -149,3 +149,43 @@ def write_cycles(path: Path, poses: np.ndarray, cycles: int) -> None:
     text = [",".join(repr(float(v)) for v in np.degrees(pose)) for pose in poses]
     rows = [f"P{p + 1},{line}" for _ in range(cycles) for p, line in enumerate(text)]
     path.write_text("\n".join([head, *rows]) + "\n", encoding="utf-8")
+
+
+#: The virtual heavy six-axis cell of the compliance tests: its links' masses (kg), its
+#: payload (kg) and its three reflectors in the flange frame (mm).
+CELL_MASSES = [350.0, 150.0, 200.0, 60.0, 20.0, 5.0]
+CELL_PAYLOAD = 165.0
+CELL_TARGETS = {"A": [100.0, 0.0, 150.0], "B": [-50.0, 86.6, 150.0], "C": [-50.0, -86.6, 150.0]}
+
+
+def cell_toml(
+    urdf: str = "industrial-6r.urdf",
+    *,
+    lumped: bool = False,
+    targets: bool = True,
+    extra: str = "",
+) -> str:
+    """The robot TOML of the virtual cell: the built-in industrial-6r's URDF at ``urdf``
+    with its J2/J3 joint map and limits, sigma 0.02 mm, the reflectors of
+    :data:`CELL_TARGETS` (``targets``), and ``[elastostatic]`` with the masses of
+    :data:`CELL_MASSES` (or ``lumped``); ``extra`` ends the file (more of
+    ``[elastostatic]``, or tables after it)."""
+    reflectors = "\n".join(f"{k} = {{ xyz_mm = {v} }}" for k, v in CELL_TARGETS.items())
+    masses = "lumped = true" if lumped else f"link_masses_kg = {CELL_MASSES}"
+    return f"""name = "cell-6r"
+urdf = "{urdf}"
+base_link = "base_link"
+tip_link = "flange"
+joint_map = [[1, 0, 0, 0, 0, 0], [0, 1, 0, 0, 0, 0], [0, 1, 1, 0, 0, 0],
+             [0, 0, 0, 1, 0, 0], [0, 0, 0, 0, 1, 0], [0, 0, 0, 0, 0, 1]]
+joint_limits_deg = [[-185, 185], [-60, 76], [-132, 150], [-360, 360], [-125, 125], [-360, 360]]
+[measurement]
+sigma_mm = 0.02
+{"[targets]" if targets else ""}
+{reflectors if targets else ""}
+[elastostatic]
+{masses}
+payload_kg = {CELL_PAYLOAD}
+payload_com_mm = [0, 0, 100]
+{extra}
+"""

@@ -51,7 +51,7 @@ from armcal.models import (
     SerialElastics,
 )
 from armcal.workflow import export_files
-from helpers import run_cli
+from helpers import cell_toml, run_cli
 
 # -- a planar vertical arm with its masses known ----------------------------------------
 
@@ -214,25 +214,7 @@ def _six_axis_cell(folder: Path, identify_table: str = "") -> None:
 
     source = BUILTIN_SERIAL_ROBOTS["industrial-6r"]
     (folder / "industrial-6r.urdf").write_text(source.with_suffix(".urdf").read_text())
-    targets = "\n".join(f"{k} = {{ xyz_mm = {v} }}" for k, v in TARGETS.items())
-    (folder / "cell.toml").write_text(
-        f"""name = "cell-6r"
-urdf = "industrial-6r.urdf"
-base_link = "base_link"
-tip_link = "flange"
-joint_map = [[1, 0, 0, 0, 0, 0], [0, 1, 0, 0, 0, 0], [0, 1, 1, 0, 0, 0],
-             [0, 0, 0, 1, 0, 0], [0, 0, 0, 0, 1, 0], [0, 0, 0, 0, 0, 1]]
-joint_limits_deg = [[-185, 185], [-60, 76], [-132, 150], [-360, 360], [-125, 125], [-360, 360]]
-[measurement]
-sigma_mm = 0.02
-[targets]
-{targets}
-[elastostatic]
-lumped = true
-payload_kg = {PAYLOAD}
-payload_com_mm = [0, 0, 100]
-{identify_table}"""
-    )
+    (folder / "cell.toml").write_text(cell_toml(lumped=True, extra=identify_table))
     (folder / "truth.toml").write_text(
         'robot = "truth-robot.toml"\n'
         "base = { xyz_mm = [2850.0, -1700.0, -650.0], rpy_deg = [0.3, -0.2, 120.0] }\n"

@@ -54,7 +54,7 @@ from armcal.plausibility import (
     unit_mistake,
 )
 from armcal.synthesis import synthesize_measurements
-from helpers import run_cli
+from helpers import cell_toml, run_cli
 
 SIGMA = 0.03  # mm, the tracker's noise in these tests
 
@@ -74,20 +74,8 @@ payload_kg = 10
 
 PLANAR_TRUTH = "dl_mm = [1.0, -0.5, 0.8]\ndq_deg = [0.3, -0.2, 0.4]\n"
 
-SPATIAL_CELL = f"""name = "cell-6r"
-urdf = {json.dumps(str(ROBOT_FOLDER / "industrial-6r.urdf"))}
-base_link = "base_link"
-tip_link = "flange"
-joint_map = [[1, 0, 0, 0, 0, 0], [0, 1, 0, 0, 0, 0], [0, 1, 1, 0, 0, 0],
-             [0, 0, 0, 1, 0, 0], [0, 0, 0, 0, 1, 0], [0, 0, 0, 0, 0, 1]]
-joint_limits_deg = [[-185, 185], [-60, 76], [-132, 150], [-360, 360], [-125, 125], [-360, 360]]
-[measurement]
-sigma_mm = 0.02
-[elastostatic]
-link_masses_kg = [350.0, 150.0, 200.0, 60.0, 20.0, 5.0]
-payload_kg = 165.0
-payload_com_mm = [0, 0, 100]
-"""
+# The compliance tests' cell without reflectors (a URDF path TOML quotes as JSON does).
+SPATIAL_CELL = cell_toml(str(ROBOT_FOLDER / "industrial-6r.urdf"), targets=False)
 
 SPATIAL_CELL_TRUTH = (
     'robot = "robot.toml"\n'

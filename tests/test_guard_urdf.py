@@ -463,7 +463,9 @@ def test_a_latin_1_urdf_that_declares_it_reads(tmp_path):
     )
     text = text.replace('"camera"', '"caméra"').replace("<robot", "<!-- bras articulé -->\n<robot")
     data = text.encode("latin-1")
-    assert b"\xe9" in data and not _is_utf8(data)
+    assert b"\xe9" in data
+    with pytest.raises(UnicodeDecodeError):  # the bytes are not UTF-8: the declaration counts
+        data.decode("utf-8")
     write(tmp_path, {"arm.urdf": data})
     found = read_urdf(tmp_path / "arm.urdf", tip_link="caméra")
     assert found.tip_link == "caméra" and found.chain.n_joints == 2
@@ -473,14 +475,6 @@ def test_a_latin_1_urdf_that_declares_it_reads(tmp_path):
     assert line == 6  # the declaration, the comment, <robot>, the links and j1, j2
     with pytest.raises(InputError, match=rf"line {line}, joint 'l2_flange'"):
         read_urdf(tmp_path / "arm.urdf", tip_link="flange")
-
-
-def _is_utf8(data: bytes) -> bool:
-    try:
-        data.decode("utf-8")
-    except UnicodeDecodeError:
-        return False
-    return True
 
 
 def test_latin_1_bytes_without_a_declaration_say_so(tmp_path):

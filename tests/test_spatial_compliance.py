@@ -40,7 +40,7 @@ from armcal.models import (
 from armcal.models.spatial_gravity import STANDARD_GRAVITY, gravity_torques
 from armcal.simulate import monte_carlo
 from armcal.validation import validate
-from helpers import run_cli
+from helpers import cell_toml, run_cli
 
 MASSES = [350.0, 150.0, 200.0, 60.0, 20.0, 5.0]
 PAYLOAD = 165.0
@@ -306,26 +306,9 @@ def _cell(folder: Path, extra: str = "") -> None:
 
     source = BUILTIN_SERIAL_ROBOTS["industrial-6r"]
     (folder / "industrial-6r.urdf").write_text(source.with_suffix(".urdf").read_text())
-    targets = "\n".join(f"{k} = {{ xyz_mm = {v} }}" for k, v in TARGETS.items())
-    masses = "" if "lumped = true" in extra else f"link_masses_kg = {MASSES}"
+    lumped = "lumped = true" in extra
     (folder / "cell.toml").write_text(
-        f"""name = "cell-6r"
-urdf = "industrial-6r.urdf"
-base_link = "base_link"
-tip_link = "flange"
-joint_map = [[1, 0, 0, 0, 0, 0], [0, 1, 0, 0, 0, 0], [0, 1, 1, 0, 0, 0],
-             [0, 0, 0, 1, 0, 0], [0, 0, 0, 0, 1, 0], [0, 0, 0, 0, 0, 1]]
-joint_limits_deg = [[-185, 185], [-60, 76], [-132, 150], [-360, 360], [-125, 125], [-360, 360]]
-[measurement]
-sigma_mm = 0.02
-[targets]
-{targets}
-[elastostatic]
-{masses}
-payload_kg = {PAYLOAD}
-payload_com_mm = [0, 0, 100]
-{extra}
-"""
+        cell_toml(lumped=lumped, extra=extra.replace("lumped = true", ""))
     )
     (folder / "truth.toml").write_text(
         'robot = "cell.toml"\n'
