@@ -186,7 +186,7 @@ def test_sigma_source_given_or_estimated(arm4, paper_truth4, rng):
 def test_estimating_sigma_needs_residual_freedom(arm4, paper_truth4, rng):
     q = random_plan(arm4, 4, rng=rng)  # 8 equations, 8 parameters
     xy = forward_kinematics(arm4, q, paper_truth4)
-    with pytest.raises(ArmcalError, match="--sigma"):
+    with pytest.raises(ArmcalError, match="give the instrument noise with sigma or measure"):
         identify(arm4, q, xy)
     cal = identify(arm4, q, xy, sigma=0.1)
     assert cal.dof == 0

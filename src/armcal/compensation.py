@@ -88,8 +88,8 @@ _HEBDEN_STEPS = 8
 @dataclass(frozen=True)
 class Payload:
     """The payload a compensation corrected the sag under: the smallest and largest (kg)
-    and where it came from (the program's ``payload_kg`` column, ``--payload-kg``, or the
-    calibration's default, what its robot file or its data carried)."""
+    and where it came from (the program's ``payload_kg`` column, the ``payload_kg``
+    argument, or the calibration's default, what its robot file or its data carried)."""
 
     low_kg: float
     high_kg: float

@@ -8,7 +8,7 @@ to show, next to what the calibration predicts, what really happened.
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -16,7 +16,7 @@ import numpy as np
 
 from .compensation import compensate
 from .doe import design, random_plan
-from .errors import ArmcalWarning
+from .errors import ACTIONS, ArmcalWarning
 from .export import robot_toml, urdf
 from .files import (
     calibration_document,
@@ -112,6 +112,7 @@ def run_demo(
     poses: int = PLANAR_DEMO_POSES,
     sigma: float = 0.1,
     seed: int = 0,
+    words: Mapping[str, str] = ACTIONS,
 ) -> Demo:
     """Calibrate a virtual robot from design to export; nothing is written here.
 
@@ -127,6 +128,9 @@ def run_demo(
         Instrument noise (1 std, mm) of the virtual measurements, known to the fit.
     seed : int
         Seeds every random draw.
+    words : mapping, optional
+        The words of the advice in the text and the calibration file's warnings
+        (:func:`armcal.errors.render`; default the library's).
 
     Returns
     -------
@@ -142,7 +146,7 @@ def run_demo(
     labels = [str(i + 1) for i in range(poses)]
     cal = identify(model, q, xy, robust=True, pose_labels=labels)
     calibrated = cal.calibrated()
-    document = calibration_document(cal)
+    document = calibration_document(cal, words=words)
 
     q_test = random_plan(arm, VALIDATION_POSES, rng=rng)
     xy_test = synthesize_measurements(arm, q_test, truth, sigma, rng=rng)
@@ -180,7 +184,7 @@ def run_demo(
         f"{np.hypot(*OUTLIER_MM):.2g} mm (a bumped reflector)",
         f"3. identify (robust): outliers left out: {found}",
         "",
-        format_calibration(cal, truth=truth),
+        format_calibration(cal, truth=truth, words=words),
         "",
         f"4. validate on {VALIDATION_POSES} fresh poses: position error RMS per point "
         f"{check['rms_before_per_point_mm']:.3g} mm nominal, "

@@ -12,7 +12,7 @@ within the limits.
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from pathlib import Path
 
 import numpy as np
@@ -20,6 +20,7 @@ import numpy as np
 from .compensation import compensate
 from .demo import Demo, figure_writer, report_head
 from .doe import random_plan
+from .errors import ACTIONS
 from .export_serial import joint_offsets_csv, serial_robot_toml, serial_urdf
 from .files import (
     calibration_document,
@@ -92,6 +93,7 @@ def run_serial_demo(
     poses: int = SERIAL_DEMO_POSES,
     sigma: float | None = None,
     seed: int = 0,
+    words: Mapping[str, str] = ACTIONS,
 ) -> Demo:
     """Calibrate a virtual spatial arm from measurements to export; nothing is written here.
 
@@ -107,6 +109,9 @@ def run_serial_demo(
         Isotropic instrument noise (1 std, mm) in place of the tracker's model.
     seed : int
         Seeds every random draw.
+    words : mapping, optional
+        The words of the advice in the text and the calibration file's warnings
+        (:func:`armcal.errors.render`; default the library's).
     """
     rng = np.random.default_rng(seed)
     labels = tuple(DEMO_REFLECTORS)
@@ -168,7 +173,7 @@ def run_serial_demo(
         f"from the data): {cal.model.n_free} of {cal.model.n_params} parameters identifiable; "
         f"largest |estimate - truth| {np.max(np.abs(error)):.2g} std",
         "",
-        format_calibration(cal, truth=seen),
+        format_calibration(cal, truth=seen, words=words),
         "",
         f"3. {format_cross_validation(folds)}",
         f"4. validate on {VALIDATION_POSES} fresh poses: position error RMS per point "
@@ -188,7 +193,7 @@ def run_serial_demo(
 
         return plot_residuals(cal.residuals, cal.sigma_mm, used=cal.used)
 
-    document = calibration_document(cal)
+    document = calibration_document(cal, words=words)
     kinds = arm.joint_kinds
     files: dict[str, str | Callable[[Path], None]] = {
         "measurements.csv": format_measurements_csv(

@@ -13,14 +13,21 @@ A warning or an error says what to try in neutral words: "try a robust fit".
 Where such advice is an option of the library or a flag of the command line,
 the text holds a reference to an *action* (:func:`action`), which the library
 renders in its own words (:data:`ACTIONS`) and the command line in its flags
-(:meth:`ArmcalWarning.render`, :meth:`ArmcalError.render`).
+(:meth:`ArmcalWarning.render`, :meth:`ArmcalError.render`).  An action may carry
+values (``action("method", "optimize")``), which each vocabulary places in its own
+way: ``method="optimize"`` here, ``--method optimize`` on the command line.
+
+An error built from another's text takes that text as raised (:func:`unrendered`),
+not ``str(exc)``, so that its actions still reach the command line unrendered.
 """
 
 from __future__ import annotations
 
 import re
+import string
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
+from urllib.parse import quote, unquote
 
 __all__ = [
     "ACTIONS",
@@ -29,7 +36,9 @@ __all__ = [
     "InputError",
     "NotIdentifiableError",
     "action",
+    "render",
     "unique_warnings",
+    "unrendered",
 ]
 
 #: What a warning or an error can advise, by key, in the library's words (the command
@@ -47,28 +56,95 @@ ACTIONS: dict[str, str] = {
     "tip_link=LINK))",
     "choose-base": "name the base link (base_link in a robot TOML, or load_serial_robot(..., "
     "base_link=LINK))",
+    # Options named in an error or a note; ``{}`` is the action's values joined by
+    # commas, ``{:q}`` each in double quotes, joined by ", " (:func:`action`).
+    "method": "method={:q}",
+    "poses": "m = {}",
+    "test-poses": "test_q",
+    "sigma": "sigma",
+    "isotropic-noise": "NoiseModel.isotropic(sigma_mm)",
+    "hold": "fixed=[{:q}]",
+    "fixed": "fixed",
+    "free-held": "calibrate(..., fixed=...) or the robot file's [identify]",
+    "trials": "trials={}",
+    "cross-validate": "cross_validate",
+    "target": "target",
+    "target-label": "target=LABEL",
+    "payload-kg": "payload_kg",
+    "payload-given": "payload_kg (given or the program's column)",
+    "design-defaults": "criterion and method at their defaults",
+    "candidates-distinct": "candidates and distinct",
+    "payloads": "payloads",
+    "robot-file": "load_robot",
+    "robot-arm": "arm",
 }
 
-_ACTION = re.compile(r"\u27e6([a-z][a-z-]*)\u27e7")
+_ACTION = re.compile(r"\u27e6([a-z][a-z-]*)(?::([^\u27e6\u27e7]*))?\u27e7")
+#: What a value keeps as it is inside a reference: all but ``%``, ``|`` and non-ASCII.
+_PLAIN = " " + "".join(c for c in string.punctuation if c not in "%|")
 
 
-def action(key: str) -> str:
+class _Values(tuple):
+    """An action's values, as its words' ``{}`` (comma-joined) or ``{:q}`` (quoted) say."""
+
+    def __format__(self, spec: str) -> str:
+        if spec == "q":
+            return ", ".join(f'"{value}"' for value in self)
+        if spec:
+            raise ValueError(f"unknown format {spec!r} for an action's values")
+        return ",".join(self)
+
+
+def action(key: str, *values: object) -> str:
     """A reference to the advice ``key`` of :data:`ACTIONS`, for a warning's or an error's
-    text.
+    text, with the ``values`` its words place (an option's value, parameter names).
 
     Examples
     --------
     >>> ArmcalWarning("outlier", f"2 outliers; {action('try-robust')}").message
     '2 outliers; try a robust fit (robust=True)'
+    >>> error = ArmcalError(f"use {action('method', 'optimize')}")
+    >>> str(error), error.render({"method": "--method {}"})
+    ('use method="optimize"', 'use --method optimize')
     """
     if key not in ACTIONS:
         raise KeyError(f"unknown action {key!r}")
-    return f"\u27e6{key}\u27e7"
+    if not values:
+        if "{" in ACTIONS[key]:
+            raise ValueError(f"action {key!r} needs its values")
+        return f"\u27e6{key}\u27e7"
+    encoded = "|".join(quote(str(value), safe=_PLAIN) for value in values)
+    return f"\u27e6{key}:{encoded}\u27e7"
 
 
-def _render(text: str, words: Mapping[str, str]) -> str:
-    """``text`` with every action in ``words`` (the library's for keys ``words`` lacks)."""
-    return _ACTION.sub(lambda m: words.get(m.group(1), ACTIONS[m.group(1)]), text)
+def render(text: str, words: Mapping[str, str] = ACTIONS) -> str:
+    """``text`` with every action in ``words`` (the library's for keys ``words`` lacks).
+
+    For a text that carries actions and is neither a warning nor an error: a note,
+    a line of a report.
+    """
+
+    def said(found: re.Match[str]) -> str:
+        key, encoded = found.group(1), found.group(2)
+        template = words.get(key, ACTIONS[key])
+        if encoded is None:
+            return template
+        return template.format(_Values(unquote(value) for value in encoded.split("|")))
+
+    return _ACTION.sub(said, text)
+
+
+def unrendered(exc: BaseException) -> str:
+    """The text of ``exc`` as raised, its actions not yet rendered (an :class:`ArmcalError`'s),
+    to build another error's text from; ``str(exc)`` for any other exception.
+
+    Examples
+    --------
+    >>> inner = ArmcalError(f"too few; {action('try-robust')}")
+    >>> ArmcalError(f"file.csv: {unrendered(inner)}").render({"try-robust": "try --robust"})
+    'file.csv: too few; try --robust'
+    """
+    return exc.text if isinstance(exc, ArmcalError) else str(exc)
 
 
 class ArmcalError(ValueError):
@@ -89,9 +165,14 @@ class ArmcalError(ValueError):
     def __str__(self) -> str:
         return self.render(ACTIONS)
 
+    @property
+    def text(self) -> str:
+        """The message as raised, its actions not rendered (:func:`unrendered`)."""
+        return super().__str__()
+
     def render(self, words: Mapping[str, str]) -> str:
         """The message with every action in ``words`` (the library's for keys it lacks)."""
-        return _render(super().__str__(), words)
+        return render(self.text, words)
 
 
 class InputError(ArmcalError):
@@ -146,7 +227,7 @@ class ArmcalWarning:
 
     def render(self, words: Mapping[str, str]) -> str:
         """The text with every action in ``words`` (the library's for keys ``words`` lacks)."""
-        return _render(self.text, words)
+        return render(self.text, words)
 
     def to_dict(self, words: Mapping[str, str] | None = None) -> dict[str, str]:
         """The JSON form ``{code, message}`` (in ``words``, default the library's)."""

@@ -25,7 +25,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike
 
-from .errors import ArmcalError, ArmcalWarning
+from .errors import ArmcalError, ArmcalWarning, action
 from .identification import resolve_method, solve
 from .models import Conditions, FitModel, LinearPositions, Loads, position_jacobian
 from .models.information import predicted_covariance, tip_variances
@@ -589,8 +589,8 @@ def monte_carlo(
             ArmcalWarning(
                 "few-trials",
                 f"with {trials} trials each empirical std is known to about +-{spread:.0f} % "
-                f"(1 std), so a std ratio far from 1 may be chance; use --trials 1000 or more "
-                f"(+-{100 / np.sqrt(2 * 999):.1f} %)",
+                f"(1 std), so a std ratio far from 1 may be chance; use {action('trials', 1000)} "
+                f"or more (+-{100 / np.sqrt(2 * 999):.1f} %)",
             )
         )
     if not_converged:

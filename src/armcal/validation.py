@@ -671,7 +671,9 @@ def cross_validate(
     keys = np.arange(m) if groups is None else np.unique(groups, return_inverse=True)[1]
     count = int(keys.max()) + 1
     if not 2 <= folds <= count:
-        raise ArmcalError(f"--cross-validate needs 2 to {count} folds (the poses), got {folds}")
+        raise ArmcalError(
+            f"{action('cross-validate')} needs 2 to {count} folds (the poses), got {folds}"
+        )
     of_group = np.empty(count, dtype=int)
     of_group[rng.permutation(count)] = np.arange(count) % folds
     fold = of_group[keys]

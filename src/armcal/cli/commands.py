@@ -12,6 +12,7 @@ import argparse
 import math
 import sys
 from collections.abc import Callable
+from dataclasses import replace
 from functools import partial
 from pathlib import Path
 from typing import Any
@@ -65,7 +66,6 @@ from ..report import (
 )
 from ..reproduction import TABLE_COLUMNS, reproduce
 from ..workflow import (
-    FixError,
     calibrate,
     calibrate_serial,
     compensate_program,
@@ -120,10 +120,7 @@ def _model(
     """The robot file and its arm with ``--fix`` (replacing the file's set, the arm's and
     the compliance's) and ``--sigma`` applied."""
     fixed = getattr(args, "fix", None)
-    try:
-        return model_spec(spec, spec.arm, fixed=fixed, sigma=getattr(args, "sigma", None))
-    except FixError as exc:
-        raise ArmcalError(f"--fix: {exc}") from None
+    return model_spec(spec, spec.arm, fixed=fixed, sigma=getattr(args, "sigma", None))
 
 
 #: What simulate and synthesize say when a robot file without a default truth is given no
@@ -295,18 +292,15 @@ def identify(args: argparse.Namespace) -> None:
             "arm's model is a wrong calibration; give your robot file (armcal formats lists "
             f"its keys) or a built-in name ({', '.join(BUILTIN_ROBOTS)})"
         )
-    try:
-        spec = _robot(args)
-        if isinstance(spec, SerialSpec):
-            meas = read_measurements(args.measurements, spec.arm)
-            run = calibrate_serial(spec, meas, compliance=not args.no_compliance, **_options(args))
-        else:
-            meas = read_measurements(args.measurements, spec.arm)
-            run = calibrate(spec, meas, compliance=not args.no_compliance, **_options(args))
-    except FixError as exc:
-        raise ArmcalError(f"--fix: {exc}") from None
+    spec = _robot(args)
+    if isinstance(spec, SerialSpec):
+        meas = read_measurements(args.measurements, spec.arm)
+        run = calibrate_serial(spec, meas, compliance=not args.no_compliance, **_options(args))
+    else:
+        meas = read_measurements(args.measurements, spec.arm)
+        run = calibrate(spec, meas, compliance=not args.no_compliance, **_options(args))
     cal = run.calibration
-    text = format_calibration(cal)
+    text = format_calibration(cal, words=CLI_ACTIONS)
     document = calibration_document(cal, warnings=run.warnings, words=CLI_ACTIONS)
     if run.cross_validation is not None:
         summary = run.cross_validation.summary()
@@ -359,7 +353,10 @@ def compensate(args: argparse.Namespace) -> None:
             result.q, result.corrected, program.labels, run.targets, kinds=cal.arm.joint_kinds
         ),
     )
-    document, text = compensation_report(cal, result, program, run.payload)
+    payload = run.payload
+    if payload is not None and args.payload_kg is not None:  # the library names its argument
+        payload = replace(payload, source="--payload-kg")
+    document, text = compensation_report(cal, result, program, payload)
     text += f"\nwrote {args.output}"
     emit(args, document, text, run.warnings)
 
@@ -383,8 +380,8 @@ def design(args: argparse.Namespace) -> None:
         test_q=_test_poses(args, spec),
         progress=ProgressBar("design"),
     )
-    document, report = quality_report(run.quality)
-    extra, header = design_summary(run.design, run.seconds)
+    document, report = quality_report(run.quality, words=CLI_ACTIONS)
+    extra, header = design_summary(run.design, run.seconds, words=CLI_ACTIONS)
     document.update(extra)
     if args.plot is not None:  # first: drawing is what can fail, the plan CSV is text
         from ..plotting import plot_plan, save_figure  # matplotlib only when a plot is asked for
@@ -418,7 +415,7 @@ def evaluate(args: argparse.Namespace) -> None:
     run = evaluate_file(
         spec, arm, q, test_q=_test_poses(args, spec), payload=payload, source=args.plan
     )
-    emit(args, *quality_report(run.quality), run.warnings)
+    emit(args, *quality_report(run.quality, words=CLI_ACTIONS), run.warnings)
 
 
 def simulate(args: argparse.Namespace) -> None:
@@ -441,7 +438,7 @@ def simulate(args: argparse.Namespace) -> None:
     )
     document = monte_carlo_to_dict(result)
     document["truth_source"] = _truth_source(args, note)
-    text = format_monte_carlo(result)
+    text = format_monte_carlo(result, words=CLI_ACTIONS)
     if note is not None:  # under the heading line
         head, _, rest = text.partition("\n")
         text = f"{head}\n{note}\n{rest}"
@@ -463,7 +460,7 @@ def poses_needed(args: argparse.Namespace) -> None:
         max_poses=args.max_poses,
         progress=ProgressBar("poses-needed"),
     )
-    document, lines = poses_needed_summary(found, found.model or arm, seconds)
+    document, lines = poses_needed_summary(found, found.model or arm, seconds, words=CLI_ACTIONS)
     if args.output is not None:
         plan = format_plan_csv(found.plan, found.payload_kg, kinds=spec.arm.joint_kinds)
         atomic_write(args.output, plan)
@@ -518,13 +515,16 @@ def demo(args: argparse.Namespace) -> None:
             poses=SERIAL_DEMO_POSES if args.poses is None else args.poses,
             sigma=args.sigma,
             seed=args.seed,
+            words=CLI_ACTIONS,
         )
         kinds = "report.md, residuals, measurements, calibration, program, URDF, DH table, offsets"
     else:
         truth = _truth(args, spec, spec.arm)[0]  # the demo calibrates the geometry
         sigma = design_sigma(spec.arm) if args.sigma is None else args.sigma
         poses = PLANAR_DEMO_POSES if args.poses is None else args.poses
-        result = run_demo(spec.arm, truth, poses=poses, sigma=sigma, seed=args.seed)
+        result = run_demo(
+            spec.arm, truth, poses=poses, sigma=sigma, seed=args.seed, words=CLI_ACTIONS
+        )
         kinds = "report.md, figures, plan, measurements, calibration, program, robot file, URDF"
     lines = [result.text]
     if args.output is not None:

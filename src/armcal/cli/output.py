@@ -21,7 +21,7 @@ __all__ = [
 ]
 
 #: The command line's words for the advice of warnings and errors
-#: (:data:`armcal.errors.ACTIONS`).
+#: (:data:`armcal.errors.ACTIONS`); ``{}`` places an action's values, comma-joined.
 CLI_ACTIONS = {
     "refit-robust": "rerun with --robust to fit without them",
     "try-robust": "try --robust",
@@ -32,6 +32,25 @@ CLI_ACTIONS = {
     "design": "(armcal design)",
     "choose-tip": "name the tip link with --tip-link LINK (or tip_link in a robot TOML)",
     "choose-base": "name the base link with --base-link LINK (or base_link in a robot TOML)",
+    "method": "--method {}",
+    "poses": "--poses {}",
+    "test-poses": "--test-poses",
+    "sigma": "--sigma",
+    "isotropic-noise": "--sigma",
+    "hold": "--fix {}",
+    "fixed": "--fix",
+    "free-held": "--fix or the robot file's [identify]",
+    "trials": "--trials {}",
+    "cross-validate": "--cross-validate",
+    "target": "--target",
+    "target-label": "--target LABEL",
+    "payload-kg": "--payload-kg",
+    "payload-given": "--payload-kg/payload_kg",
+    "design-defaults": "--criterion and --method at their defaults",
+    "candidates-distinct": "--candidates and --distinct",
+    "payloads": "--payloads",
+    "robot-file": "--robot",
+    "robot-arm": "--robot",
 }
 
 

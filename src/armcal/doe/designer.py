@@ -9,7 +9,7 @@ from typing import Literal
 import numpy as np
 
 from ..criteria import CRITERIA, Criterion, attains_unit_bound, d_efficiency, efficiencies
-from ..errors import ArmcalError
+from ..errors import ArmcalError, action, render
 from ..models import ClosedFormPlan, ClosedFormPlans, FitModel, equations_per_pose
 from ..progress import ProgressCallback, share
 from .certificate import Certificate, certify
@@ -74,10 +74,12 @@ class Design:
     certificate : Certificate or None
         Lower bound relative to the best plan within the constraints (None when
         not asked for).
-    notes : tuple of str
+    note_texts : tuple of str
         Why a method was not used (e.g. the analytic plan breaks the limits),
         whether the paper's closed-form plans are optimal for the arm's model,
-        and what making the poses distinct cost.
+        and what making the poses distinct cost; advice that is an option refers
+        to an :func:`~armcal.errors.action` (:attr:`notes` says it in the
+        library's words, :func:`armcal.errors.render` in another vocabulary).
     order : str
         How the poses are ordered (key of :data:`armcal.doe.order.ORDERS`):
         ``travel`` for short joint travel, ``none`` as the method made them.
@@ -102,13 +104,18 @@ class Design:
     method: str
     d_efficiency: float
     certificate: Certificate | None
-    notes: tuple[str, ...]
+    note_texts: tuple[str, ...]
     order: str
     joint_travel: float
     joint_travel_unordered: float
     distinct: bool
     payload_kg: np.ndarray | None = None
     payloads: tuple[float, ...] = ()
+
+    @property
+    def notes(self) -> tuple[str, ...]:
+        """The notes (:attr:`note_texts`) in the library's words."""
+        return tuple(render(text) for text in self.note_texts)
 
     @property
     def normalized(self) -> bool:
@@ -264,7 +271,9 @@ def design(
     aim: str | Criterion = criterion
     if criterion in TASK_CRITERIA:
         if test_q is None or not len(test_q):
-            raise ArmcalError(f"the {criterion} criterion needs test poses (--test-poses)")
+            raise ArmcalError(
+                f"the {criterion} criterion needs test poses ({action('test-poses')})"
+            )
         aim = task_criterion(criterion, model, test_q)
     if method not in METHODS:
         raise ArmcalError(f"unknown method {method!r}; choose one of {', '.join(METHODS)}")
@@ -277,7 +286,7 @@ def design(
         free = "" if p == model.n_params else " free"
         raise ArmcalError(
             f"{m} poses give {per_pose * m} equations for the {p}{free} parameters of "
-            f"{model.name}; use --poses {min_poses} or more"
+            f"{model.name}; use {action('poses', min_poses)} or more"
         )
     rng = np.random.default_rng(rng)
     notes: list[str] = []
@@ -289,7 +298,8 @@ def design(
     searched = False  # whether the optimizer searched (its note comes after)
     if method == "analytic" and family is None:
         raise ArmcalError(
-            f"{model.name} has no closed-form plans; use --method auto, optimize or exchange"
+            f"{model.name} has no closed-form plans; use {action('method', 'auto')}, optimize or "
+            "exchange"
         )
     if family is not None and method in ("auto", "analytic"):
         closed = list(family.plans)
@@ -324,7 +334,7 @@ def design(
         extra = m - copies * size
         q = np.concatenate([np.tile(base.q, (copies, 1)), base.q[:extra]])
         used = base.method
-        notes.extend(base.notes)
+        notes.extend(base.note_texts)
         notes.append(
             f"{m} poses: the optimal {size}-pose plan taken {copies} times"
             + (f", and its first {extra} poses once more" if extra else "")
@@ -401,7 +411,7 @@ def design(
         method=used,
         d_efficiency=efficiency,
         certificate=certificate,
-        notes=tuple(notes),
+        note_texts=tuple(notes),
         order=order,
         joint_travel=joint_travel(q),
         joint_travel_unordered=travel_found,

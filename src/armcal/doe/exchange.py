@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..errors import ArmcalError
+from ..errors import ArmcalError, action
 from ..models import FitModel
 from .plans import repeated_poses
 
@@ -128,7 +128,7 @@ def exchange_plan(
     if targets > 1:
         raise ArmcalError(
             f"exchange evaluates one point per pose, and {model.name} has "
-            f"{targets} targets; use --method optimize (or auto)"
+            f"{targets} targets; use {action('method', 'optimize')} (or auto)"
         )
     rng = np.random.default_rng(rng)
     candidates = np.asarray(candidates, dtype=float)
@@ -170,7 +170,7 @@ def exchange_indices(
     if blocks.shape[-2] != 2:
         raise ArmcalError(
             f"exchange evaluates one point in the plane per pose (2 rows), got {blocks.shape[-2]} "
-            "rows per pose; use --method optimize (or auto)"
+            f"rows per pose; use {action('method', 'optimize')} (or auto)"
         )
     p = blocks.shape[-1]
     ridge = 1e-10 * np.eye(p)

@@ -324,7 +324,7 @@ def design_with_loads(
         method="exchange+polish",
         d_efficiency=float(d_efficiency(design_model, q, info=plan_information)),
         certificate=certificate,
-        notes=(),
+        note_texts=(),
         order=order,
         joint_travel=joint_travel(q),
         joint_travel_unordered=travel_found,

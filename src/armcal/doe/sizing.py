@@ -10,7 +10,7 @@ from typing import Literal
 import numpy as np
 
 from ..criteria import position_rms, predicted_std
-from ..errors import ArmcalError
+from ..errors import ArmcalError, action
 from ..models import FitModel, Loads, equations_per_pose
 from ..progress import ProgressCallback
 from .designer import design
@@ -51,7 +51,7 @@ REQUIREMENT_RTOL = 1e-9
 #: information per pose would have to grow this much with its size.
 UNREACHABLE_MARGIN = 4
 
-_RELAX = "relax the target or measure with a better instrument (smaller --sigma)"
+_RELAX = f"relax the target or measure with a better instrument (smaller {action('sigma')})"
 
 
 def _check_requirement(requirement: str) -> None:

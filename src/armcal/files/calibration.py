@@ -18,7 +18,7 @@ from typing import Any
 import numpy as np
 
 from .._version import __version__
-from ..errors import ACTIONS, ArmcalWarning, InputError
+from ..errors import ACTIONS, ArmcalWarning, InputError, unrendered
 from ..identification import Calibration
 from ..models import (
     Annulus,
@@ -272,7 +272,7 @@ def read_calibration(path: str | os.PathLike) -> CalibratedArm:
         baseline = _baseline_from_dict(arm, doc.get("baseline"))
     except (KeyError, TypeError, ValueError, AttributeError, OverflowError, InputError) as exc:
         # AttributeError: a section of the wrong JSON type ("robot": [] has no .get)
-        what = f"missing key {exc}" if isinstance(exc, KeyError) else str(exc)
+        what = f"missing key {exc}" if isinstance(exc, KeyError) else unrendered(exc)
         if isinstance(exc, AttributeError):
             what = "a section of the wrong type"
         raise fail(

@@ -17,7 +17,7 @@ from collections.abc import Iterator, Sequence
 from pathlib import Path
 from typing import Any, BinaryIO
 
-from ..errors import InputError
+from ..errors import InputError, action
 from ..formats import table_of
 
 if sys.version_info >= (3, 11):
@@ -183,7 +183,7 @@ def _toml_advice(text: str, message: str, what: str) -> str:
     first = lines[0] if lines else ""
     if first.count(",") >= 1 and "=" not in first:
         return f"{where}; this looks like a CSV table, not a {what} TOML file; " + (
-            "--robot takes a built-in robot's name or a robot .toml file"
+            f"{action('robot-file')} takes a built-in robot's name or a robot .toml file"
             if what == "robot"
             else f"pass the {what} .toml file"
         )

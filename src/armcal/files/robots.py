@@ -17,7 +17,7 @@ from typing import Any
 
 import numpy as np
 
-from ..errors import ArmcalError, ArmcalWarning, InputError
+from ..errors import ArmcalError, ArmcalWarning, InputError, action, unrendered
 from ..formats import TRUTH_KEYS, allowed_keys
 from ..models import (
     Annulus,
@@ -261,7 +261,7 @@ def fixed_parameters(
                 f"key 'identify.{key}': phi0 is the base's turn in the instrument's axes, "
                 "which exists only with 3-D data and belongs to the set-up, not the robot; "
                 "leave it out (held, it would put the instrument's turn into the joint "
-                "offsets); to hold it for one fit, use --fix phi0",
+                f"offsets); to hold it for one fit, use {action('hold', 'phi0')}",
             )
         if name not in known:
             raise fail(path, f"key 'identify.{key}': {unknown_parameter(name, known, arm_name)}")
@@ -300,7 +300,7 @@ def unknown_parameter(name: str, names: Sequence[str], arm_name: str) -> str:
     if per_target:  # the last link's parameter, which targets split into one per target
         hint = (
             f"with targets it is one per target ({', '.join(per_target)}): the last link and "
-            f"each target are one vector; hold them all with --fix {','.join(per_target)}; "
+            f"each target are one vector; hold them all with {action('hold', *per_target)}; "
         )
     else:
         hint = suggest(name, names)
@@ -461,7 +461,7 @@ def load_robot(name_or_path: str | os.PathLike) -> RobotSpec:
     try:
         structure = PlanarArm(lengths, base_offset=base_offset, joint_map=mapping, targets=targets)
     except ValueError as exc:
-        raise fail(path, str(exc)) from None
+        raise fail(path, unrendered(exc)) from None
     names = structure.param_names
     elastic = _elastostatic(path, data["elastostatic"], n) if "elastostatic" in data else None
     terms = () if elastic is None else elastic.term_names(structure)
@@ -484,7 +484,7 @@ def load_robot(name_or_path: str | os.PathLike) -> RobotSpec:
             joint_offsets=offsets,
         )
     except ValueError as exc:  # every value was checked above; this names what is left
-        raise fail(path, str(exc)) from None
+        raise fail(path, unrendered(exc)) from None
     return RobotSpec(arm, None, key, tuple(warnings), elastic, gravity_3d)
 
 
@@ -511,7 +511,7 @@ def _elastostatic(path, table: Any, n: int) -> Elastostatic:
             n, gravity_xy=gravity, link_masses_kg=masses, com_fraction=fraction, payload_kg=payload
         )
     except ArmcalError as exc:
-        raise fail(path, f"[elastostatic]: {exc}") from None
+        raise fail(path, f"[elastostatic]: {unrendered(exc)}") from None
 
 
 def _joint_map(path, value: Any, n: int) -> np.ndarray:
@@ -552,7 +552,7 @@ def _targets(path, table: Any, last_length: float) -> tuple[Target, ...]:
             targets.append(Target(str(label), length, math.radians(angle)))
             PlanarArm([1.0], targets=targets)  # label rules
         except ValueError as exc:
-            raise fail(path, f"key '{key}': {exc}") from None
+            raise fail(path, f"key '{key}': {unrendered(exc)}") from None
     return tuple(targets)
 
 

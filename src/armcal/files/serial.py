@@ -28,7 +28,7 @@ from typing import Any
 
 import numpy as np
 
-from ..errors import ArmcalError, ArmcalWarning, InputError
+from ..errors import ArmcalError, ArmcalWarning, InputError, unrendered
 from ..formats import SERIAL_KEYS, SERIAL_TRUTH_KEYS, allowed_keys
 from ..models import (
     CompliantSerialArm,
@@ -458,7 +458,7 @@ def _elastostatic(
             payload_com_mm=payload_at,
         )
     except ArmcalError as exc:
-        raise fail(path, f"[elastostatic]: {exc}") from None
+        raise fail(path, f"[elastostatic]: {unrendered(exc)}") from None
 
 
 def _targets(path: Path, table: Any) -> tuple[tuple[str, ...], np.ndarray]:

@@ -14,6 +14,7 @@ from typing import Any
 
 import numpy as np
 
+from ..errors import unrendered
 from ..formats import SERIAL_KEYS, allowed_keys
 from ..noise import NoiseModel, TrackerNoise
 from .common import check_keys, fail, number, number_within, numbers
@@ -95,7 +96,7 @@ def _position_noise(path: Path, table: dict) -> NoiseModel | None:
         try:
             return NoiseModel(cov)
         except ValueError as exc:
-            raise fail(path, f"key 'measurement.covariance_mm2': {exc}") from None
+            raise fail(path, f"key 'measurement.covariance_mm2': {unrendered(exc)}") from None
     return None
 
 

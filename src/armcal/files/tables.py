@@ -22,7 +22,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..errors import ArmcalWarning
+from ..errors import ArmcalWarning, action
 from ..formats import reader_columns
 from ..models import (
     Loads,
@@ -384,14 +384,14 @@ def _unit_hint(name: str, allowed: Sequence[str]) -> str:
 
 
 def _from(arm_from: str | None) -> str:
-    """`` of the calibration cal.json``, or nothing for an arm from ``--robot``."""
+    """`` of the calibration cal.json``, or nothing for an arm from a robot file."""
     return "" if arm_from is None else f" of {arm_from}"
 
 
 def _other_robot(arm_from: str | None) -> str:
     """How to give the robot measured, where the arm came from ``arm_from``."""
     if arm_from is None:
-        return "pass the matching --robot"
+        return f"pass the matching {action('robot-arm')}"
     return f"pass a calibration of the robot measured ({arm_from} is of another arm)"
 
 

@@ -21,7 +21,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..errors import ArmcalWarning, InputError, action
+from ..errors import ArmcalWarning, InputError, action, unrendered
 from ..models import LinkMasses, SerialChain, UrdfJoint
 from ..models.spatial_chain import axis_frame, rpy_matrix, transform
 from .common import suggest
@@ -319,7 +319,9 @@ def read_urdf(
     try:
         serial = SerialChain.from_joints(joints)
     except ValueError as exc:
-        raise InputError(f"{path}: the chain from {base!r} to {tip_link!r}: {exc}") from None
+        raise InputError(
+            f"{path}: the chain from {base!r} to {tip_link!r}: {unrendered(exc)}"
+        ) from None
     moving = [(element, joint) for element, joint in zip(chain, joints, strict=True)]
     masses = _link_masses(path, text, root, moving, parent_joint, children)
     gripper = _gripper_warning(path, text, chain, mimicked)

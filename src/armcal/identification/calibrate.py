@@ -26,7 +26,7 @@ from typing import Literal
 import numpy as np
 from numpy.typing import ArrayLike
 
-from ..errors import ArmcalError, ArmcalWarning
+from ..errors import ArmcalError, ArmcalWarning, action
 from ..models import Conditions, FitModel, Loads, equations_per_pose
 from ..models.information import display_std
 from ..noise import instrument_override
@@ -280,7 +280,7 @@ def identify(
     if not given and dim * m - n_free <= 0:
         raise ArmcalError(
             f"{m} poses leave no residual to estimate sigma from ({dim * m} equations, "
-            f"{n_free} parameters); give the instrument noise with --sigma or measure "
+            f"{n_free} parameters); give the instrument noise with {action('sigma')} or measure "
             "more poses"
         )
     reference = reference_sigma(model, row_sigma)
@@ -304,7 +304,7 @@ def identify(
     cause = None  # a likely cause a cheap test names (diagnosis), before the mirror's
     if far_off(model, least_squares, reference if given else None):
         cause = coupled_joints(problem, least_squares)
-        problem.suspect = None if cause is None else cause.message
+        problem.suspect = None if cause is None else cause.text
     fit, used = least_squares, everyone
     judged = judge(problem, robust_sigma, least_squares, robust=True) if robust else None
     if judged is not None:

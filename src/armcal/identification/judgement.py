@@ -401,7 +401,7 @@ def inconsistent_fit_warning(
         causes.append(
             f"{fixed_parameters(held)} {'is' if one else 'are'} not at nominal: with "
             f"{'it' if one else 'them'} free, chi2 = {chi2:.4g} on {dof} degrees of freedom; "
-            f"free {'it' if one else 'them'} (--fix or the robot file's [identify])"
+            f"free {'it' if one else 'them'} ({action('free-held')})"
         )
     disagreeing = flagged if disagreeing is None else disagreeing
     stand_out = ""

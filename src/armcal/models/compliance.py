@@ -493,8 +493,8 @@ class CompliantArm(ArmEffect, MinimalPlanar):
     @property
     def why_no_closed_form(self) -> str:
         return (
-            "the closed form fits the geometry only; joint compliance needs --method "
-            "gauss-newton (or auto)"
+            "the closed form fits the geometry only; joint compliance needs "
+            f"{action('method', 'gauss-newton')} (or auto)"
         )
 
     @property

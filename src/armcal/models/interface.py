@@ -719,7 +719,8 @@ class FitModel(Protocol):
 
     @property
     def why_no_closed_form(self) -> str:
-        """Why a closed form was asked of a model without one (a sentence with the fix)."""
+        """Why a closed form was asked of a model without one (a sentence with the fix, for
+        an error's text: the fix refers to an :func:`~armcal.errors.action`)."""
         ...
 
     def closed_form(self, conditions: Conditions) -> ClosedForm | None:

@@ -16,7 +16,7 @@ from collections.abc import Sequence
 import numpy as np
 from numpy.typing import ArrayLike
 
-from ..errors import ArmcalWarning
+from ..errors import ArmcalWarning, action
 from ..noise import NoiseModel
 from ..numerics import ScaledSVD
 from . import planar_design
@@ -286,7 +286,7 @@ class PlanarArm(RigidLoads, MinimalPlanar, PlanarArmSpec):
         verb = "is" if len(self.fixed) == 1 else "are"
         return (
             f"the closed form needs every parameter free, but {held} {verb} fixed; "
-            "use --method gauss-newton or auto"
+            f"use {action('method', 'gauss-newton')} or auto"
         )
 
     def closed_form(self, conditions: Conditions) -> PlanarClosedForm | None:

@@ -55,7 +55,7 @@ from functools import cached_property
 
 import numpy as np
 
-from ..errors import ArmcalError
+from ..errors import ArmcalError, action
 from ..noise import complex_whitening
 from ..numerics import ScaledSVD
 from .identifiability import Identifiability
@@ -204,7 +204,7 @@ def _check_designable(arm: PlanarArmSpec) -> None:
         raise ArmcalError(
             f"{arm.name} has {arm.n_target_links} targets: plans for several targets are "
             "designed for isotropic instrument noise without encoder noise; give "
-            "[measurement] sigma_mm as one number, or --sigma"
+            f"[measurement] sigma_mm as one number, or {action('isotropic-noise')}"
         )
 
 

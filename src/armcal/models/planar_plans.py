@@ -17,7 +17,7 @@ from typing import cast
 
 import numpy as np
 
-from ..errors import ArmcalError
+from ..errors import ArmcalError, action
 from .interface import ClosedFormPlan, FitModel
 from .planar_arm import PlanarArmSpec
 from .planar_design import feasible, model_description, rotation_invariant
@@ -300,7 +300,8 @@ def analytic_plan(arm: PlanarArmSpec, m: int, *, turn_joint1: bool = False) -> n
         raise ArmcalError(
             f"the closed-form orthogonal {m}-pose plan (the paper's Table I family) does not fit "
             f"the joint limits of {arm.name}: joints 2..{n} would each need {m} angles spaced "
-            f"{360 / m:g} deg apart; other plans may still be optimal (--method optimize)"
+            f"{360 / m:g} deg apart; other plans may still be optimal "
+            f"({action('method', 'optimize')})"
         )
     q = np.empty((m, n))
     for j in range(1, n):
@@ -347,7 +348,7 @@ def _mapped_analytic_plan(arm: PlanarArmSpec, m: int, *, turn_joint1: bool) -> n
             f"the closed-form orthogonal {m}-pose plan (the paper's Table I family), read "
             f"through the joint map and targets of {arm.name}, leaves the joint limits of "
             f"joints 1..{n} or puts a target outside the measurement region; other plans may "
-            "still be optimal (--method optimize)"
+            f"still be optimal ({action('method', 'optimize')})"
         )
     return q
 
@@ -506,7 +507,7 @@ class PaperPlans:
         if refused:
             return (
                 f"the closed-form {m}-pose plan of {name} repeats one pose (its one joint is "
-                "held still); distinct poses need --method optimize or exchange"
+                f"held still); distinct poses need {action('method', 'optimize')} or exchange"
             )
         return (
             f"the closed-form plan of {name} repeats one pose {m} times (its one joint is held "
@@ -527,7 +528,7 @@ class PaperPlans:
             return (
                 f"{model_description(arm)}: {_PAPER_ASSUMES}; the closed-form plan is not "
                 f"D-optimal for this model (D-criterion {d_criteria[chosen.label]:.4f}); "
-                "--method auto optimizes for it"
+                f"{action('method', 'auto')} optimizes for it"
             )
         how = "this closed-form orthogonal plan reaches it"
         if chosen.label == JOINT1_STEPPING:

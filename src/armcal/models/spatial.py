@@ -21,7 +21,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike
 
-from ..errors import ArmcalWarning
+from ..errors import ArmcalWarning, action
 from ..noise import NoiseModel, relative_noise
 from ..numerics import ScaledSVD
 from . import spatial_pose
@@ -554,7 +554,7 @@ deviation_bounds`); the base pose and the targets are the instrument's."""
     def why_no_closed_form(self) -> str:
         return (
             f"{self.name} is a spatial arm, whose points are not linear in any coordinates "
-            "of its parameters; use --method gauss-newton (or auto)"
+            f"of its parameters; use {action('method', 'gauss-newton')} (or auto)"
         )
 
     def closed_form(self, conditions: Conditions) -> None:

@@ -2,8 +2,11 @@
 
 from __future__ import annotations
 
+from collections.abc import Mapping
+
 import numpy as np
 
+from ..errors import ACTIONS
 from ..identification import Calibration
 from ..identification.result import STRONG_CORRELATION
 from ..models import SpatialArm
@@ -70,7 +73,9 @@ def _outlier_lines(cal: Calibration) -> list[str]:
     return lines
 
 
-def format_calibration(cal: Calibration, *, truth: np.ndarray | None = None) -> str:
+def format_calibration(
+    cal: Calibration, *, truth: np.ndarray | None = None, words: Mapping[str, str] = ACTIONS
+) -> str:
     """Human-readable table of a calibration: value ± std with units, and a fit summary.
 
     Parameters
@@ -79,6 +84,9 @@ def format_calibration(cal: Calibration, *, truth: np.ndarray | None = None) -> 
     truth : ndarray, shape (p,), optional
         Known deviations (internal units) of a virtual robot; adds columns with the
         truth and the error in standard errors.
+    words : mapping, optional
+        The words of the advice in the text (:func:`armcal.errors.render`; default
+        the library's).
 
     Returns
     -------
@@ -112,7 +120,7 @@ def format_calibration(cal: Calibration, *, truth: np.ndarray | None = None) -> 
         )
         + f", method {cal.method}"
         + (", robust" if cal.robust else ""),
-        *model_lines(arm, plan=False),
+        *model_lines(arm, plan=False, words=words),
         *_effect_held_lines(cal),
         "",
         header,

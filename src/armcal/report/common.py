@@ -8,9 +8,11 @@ with the results).
 from __future__ import annotations
 
 import math
+from collections.abc import Mapping
 
 import numpy as np
 
+from ..errors import ACTIONS, action, render
 from ..models import PlanarArm, SpatialArm, combination
 
 __all__ = [
@@ -98,12 +100,15 @@ def spatial_model_lines(arm: SpatialArm) -> list[str]:
     return lines
 
 
-def model_lines(arm: PlanarArm | SpatialArm, *, plan: bool = True) -> list[str]:
+def model_lines(
+    arm: PlanarArm | SpatialArm, *, plan: bool = True, words: Mapping[str, str] = ACTIONS
+) -> list[str]:
     """Lines naming the fixed parameters and a noise model that is not isotropic iid.
 
     Empty for the paper's model (every parameter free, isotropic iid noise).
     ``plan`` adds, for a noise model that is not isotropic iid, that the paper's
     D*, Table I and analytic plans assume one (what changes the answer for a plan).
+    ``words`` say the advice (:func:`armcal.errors.render`; the library's by default).
 
     Examples
     --------
@@ -128,7 +133,7 @@ def model_lines(arm: PlanarArm | SpatialArm, *, plan: bool = True) -> list[str]:
             f"base rotation phi0 identified, {arm.rotation_partner} held: a rotation of the base "
             f"turns every link vector like the joint offsets {_rotation_words(arm)}, so the data "
             f"cannot tell them apart; keep phi0 free, as it also holds the turn of the "
-            f"instrument's axes{_other_zero(arm)}"
+            f"instrument's axes{render(_other_zero(arm), words)}"
         )
     noise = _noise_text(arm)
     if noise is not None:
@@ -147,7 +152,7 @@ def _other_zero(arm: PlanarArm) -> str:
     others = [n for n in arm.rotation_names() if n not in (arm.rotation_partner, "phi0")]
     if not others:
         return ""
-    return f" (to take {others[0]}'s zero as the arm's instead, --fix {others[0]})"
+    return f" (to take {others[0]}'s zero as the arm's instead, {action('hold', others[0])})"
 
 
 def _rotation_words(arm: PlanarArm) -> str:

@@ -3,11 +3,13 @@
 from __future__ import annotations
 
 import math
+from collections.abc import Mapping
 
 import numpy as np
 
 from ..doe.designer import Design
 from ..doe.sizing import REQUIREMENTS, PosesNeeded
+from ..errors import ACTIONS, render
 from ..models import FitModel
 from .common import model_lines, model_to_dict
 
@@ -17,7 +19,9 @@ __all__ = [
 ]
 
 
-def design_summary(result: Design, seconds: float) -> tuple[dict, list[str]]:
+def design_summary(
+    result: Design, seconds: float, *, words: Mapping[str, str] = ACTIONS
+) -> tuple[dict, list[str]]:
     """JSON keys and header lines of ``armcal design`` (before the plan's quality report).
 
     Parameters
@@ -25,6 +29,9 @@ def design_summary(result: Design, seconds: float) -> tuple[dict, list[str]]:
     result : Design
     seconds : float
         Wall time of the design.
+    words : mapping, optional
+        The words of the notes' advice (:func:`armcal.errors.render`; default the
+        library's).
 
     Returns
     -------
@@ -41,6 +48,7 @@ def design_summary(result: Design, seconds: float) -> tuple[dict, list[str]]:
     if result.payload_kg is not None:
         return _loaded_design_summary(result, seconds)
     cert = result.certificate
+    notes = [render(note, words) for note in result.note_texts]
     document = {
         "criterion": result.criterion,
         "method": result.method,
@@ -52,7 +60,7 @@ def design_summary(result: Design, seconds: float) -> tuple[dict, list[str]]:
         "max_variance_pose_deg": None
         if cert is None or cert.max_pose is None
         else np.degrees(cert.max_pose).tolist(),
-        "notes": list(result.notes),
+        "notes": notes,
         "seconds": seconds,
         "order": result.order,
         "distinct": result.distinct,
@@ -79,7 +87,7 @@ def design_summary(result: Design, seconds: float) -> tuple[dict, list[str]]:
     lines = [
         f"design: {result.q.shape[0]} poses, criterion {result.criterion}, method {result.method} "
         f"({seconds:.2f} s)",
-        *(f"note: {note}" for note in result.notes),
+        *(f"note: {note}" for note in notes),
         efficiency,
         _travel_line(result),
         "",
@@ -130,7 +138,7 @@ def _loaded_design_summary(result: Design, seconds: float) -> tuple[dict, list[s
 
 
 def poses_needed_summary(
-    found: PosesNeeded, model: FitModel, seconds: float
+    found: PosesNeeded, model: FitModel, seconds: float, *, words: Mapping[str, str] = ACTIONS
 ) -> tuple[dict, list[str]]:
     """The JSON document and the text lines of ``armcal poses-needed``.
 
@@ -141,6 +149,8 @@ def poses_needed_summary(
         The model the plans were designed for (its name is printed).
     seconds : float
         Wall time of the search.
+    words : mapping, optional
+        The words of the advice (:func:`armcal.errors.render`; default the library's).
 
     Returns
     -------
@@ -178,6 +188,6 @@ def poses_needed_summary(
         f"{found.goal:g} {unit}; {less}",
         f"({REQUIREMENTS[found.requirement]}; sigma {found.sigma_mm:g} mm; "
         f"{len(found.evaluated)} plan sizes tried in {seconds:.2f} s)",
-        *model_lines(arm),
+        *model_lines(arm, words=words),
     ]
     return document, lines

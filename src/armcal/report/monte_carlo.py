@@ -2,8 +2,11 @@
 
 from __future__ import annotations
 
+from collections.abc import Mapping
+
 import numpy as np
 
+from ..errors import ACTIONS
 from ..simulate import MonteCarlo
 from .common import model_lines, model_to_dict, small
 
@@ -13,13 +16,14 @@ __all__ = [
 ]
 
 
-def format_monte_carlo(result: MonteCarlo) -> str:
-    """Human-readable table of :func:`monte_carlo`: empirical vs predicted std and bias."""
+def format_monte_carlo(result: MonteCarlo, *, words: Mapping[str, str] = ACTIONS) -> str:
+    """Human-readable table of :func:`monte_carlo`: empirical vs predicted std and bias
+    (``words`` say the advice, :func:`armcal.errors.render`)."""
     arm = result.arm
     lines = [
         f"Monte Carlo: {result.trials} trials of {result.q.shape[0]} poses of {arm.name}, "
         f"sigma {result.sigma_mm:g} mm, {result.method} ({result.seconds:.2f} s)",
-        *model_lines(arm),
+        *model_lines(arm, words=words),
         "",
         f"{'parameter':<10}{'truth':>10}{'bias':>11}{'empirical std':>15}{'predicted std':>15}"
         f"{'ratio':>8}  unit",

@@ -2,7 +2,10 @@
 
 from __future__ import annotations
 
+from collections.abc import Mapping
+
 from ..criteria import PlanQuality
+from ..errors import ACTIONS
 from .common import identified, model_lines, model_to_dict, std_cell
 
 __all__ = [
@@ -31,11 +34,14 @@ def _table1_line(quality: PlanQuality) -> str:
     )
 
 
-def quality_report(quality: PlanQuality) -> tuple[dict, str]:
-    """The JSON document and the text of :func:`~armcal.criteria.evaluate_plan`."""
+def quality_report(
+    quality: PlanQuality, *, words: Mapping[str, str] = ACTIONS
+) -> tuple[dict, str]:
+    """The JSON document and the text of :func:`~armcal.criteria.evaluate_plan` (``words``
+    say the advice, :func:`armcal.errors.render`)."""
     if quality.payload_counts is not None:
         return _loaded_quality(quality)
-    return _document(quality), _text(quality)
+    return _document(quality), _text(quality, words)
 
 
 def format_quality(quality: PlanQuality) -> str:
@@ -48,13 +54,13 @@ def quality_to_dict(quality: PlanQuality) -> dict:
     return quality_report(quality)[0]
 
 
-def _text(quality: PlanQuality) -> str:
+def _text(quality: PlanQuality, words: Mapping[str, str]) -> str:
     arm = quality.model.arm  # the geometric model, described in words
     eff = quality.efficiencies
     obs = quality.observability
     lines = [
         f"{quality.n_poses} poses of {arm.name}, {identified(arm)}, sigma {quality.sigma_mm:g} mm",
-        *model_lines(arm),
+        *model_lines(arm, words=words),
         f"{_efficiency_label(quality)}: D {eff['D']:.4f}  A {eff['A']:.4f}  E {eff['E']:.4f}",
         f"observability: O1 {obs['O1']:.4f}  O2 {obs['O2']:.4f}  O3 {obs['O3']:.4f}  "
         f"O4 {obs['O4']:.4f}",

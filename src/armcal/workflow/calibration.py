@@ -30,6 +30,7 @@ from ..errors import (
     NotIdentifiableError,
     action,
     unique_warnings,
+    unrendered,
 )
 from ..export import robot_toml, urdf, urdf_joints_are_readings
 from ..export_rigid import RigidExport, rigid_export, rigid_export_warnings
@@ -128,7 +129,7 @@ def measured_arm(arm: PlanarArm, meas: Measurements) -> PlanarArm:
     try:  # the fixed parameters that still exist are carried over
         return arm.replace(**changes)
     except ValueError as exc:
-        raise InputError(f"{arm.name}: {exc}") from None
+        raise InputError(f"{arm.name}: {unrendered(exc)}") from None
 
 
 def _row_targets(arm: PlanarArm | SpatialArm, meas: Measurements) -> np.ndarray | None:
@@ -440,7 +441,7 @@ def calibrate_serial(
     except ArmcalError as exc:
         raise prefixed(source, exc) from None
     except ValueError as exc:
-        raise InputError(f"{source}: {exc}") from None
+        raise InputError(f"{source}: {unrendered(exc)}") from None
     large = deviation_warning(cal.model, cal.params)
     return _calibration_run(cal, spec, meas, points, ignored, large, folds, sigma, seed)
 
@@ -571,16 +572,19 @@ def compensate_program(
         labels = (target,) * program.q.shape[0]
     if labels is not None:
         if target is not None and program.targets is not None:
-            raise ArmcalError("--target: the program has a target column already; give one")
+            raise ArmcalError(
+                f"{action('target')}: the program has a target column already; give one"
+            )
         if target is not None and target not in arm.target_labels:
             raise ArmcalError(
-                f"--target: {target!r} is not a target of the calibration "
+                f"{action('target')}: {target!r} is not a target of the calibration "
                 f"({', '.join(arm.target_labels) or 'none'})"
             )
     elif len(arm.target_labels) > 1:
         raise ArmcalError(
             f"{source}: the calibration has targets {', '.join(arm.target_labels)}; "
-            "add a column 'target' or pass --target LABEL for the tool point of the program"
+            f"add a column 'target' or pass {action('target-label')} for the tool point of the "
+            "program"
         )
     index = None if labels is None or not arm.target_labels else arm.target_index(labels)
     default = cal.model.default_payload_kg
@@ -591,8 +595,10 @@ def compensate_program(
         origin = "the calibration's default"
         if payload_kg is not None:
             if program.payload_kg is not None:
-                raise ArmcalError("--payload-kg: the program has a payload_kg column already")
-            payload, origin = payload_kg, "--payload-kg"
+                raise ArmcalError(
+                    f"{action('payload-kg')}: the program has a payload_kg column already"
+                )
+            payload, origin = payload_kg, "the payload_kg argument"
         if program.payload_kg is not None:
             payload, origin = program.payload_kg, "the program's payload_kg column"
         loads = Loads.create(program.q.shape[0], payload, program.force_n)
@@ -600,7 +606,7 @@ def compensate_program(
         used = Payload(float(kg.min()), float(kg.max()), origin)
     elif payload_kg is not None or program.payload_kg is not None:
         raise ArmcalError(
-            "--payload-kg/payload_kg: the calibration has no joint compliance, so a payload "
+            f"{action('payload-given')}: the calibration has no joint compliance, so a payload "
             "changes nothing; calibrate with [elastostatic] in the robot file"
         )
     result = compensate(cal, program.q, target=index, loads=loads)
@@ -655,7 +661,8 @@ def _ur_arm(cal: CalibratedArm, path: str) -> tuple[SerialChain, str, UrDh]:
         deltas = ur_deltas(chain, model)
     except ValueError as exc:  # what a UR's DH table cannot hold, e.g. a tilted joint 1
         raise ArmcalError(
-            f"{path}: the calibrated {arm.name} has no UR DH table: {exc}; a UR's table starts "
+            f"{path}: the calibrated {arm.name} has no UR DH table: {unrendered(exc)}; a UR's "
+            "table starts "
             "at joint 1's axis, so leave the base pose free (the joint's placement merges "
             "into it) rather than fixing base.* and identifying j1.*"
         ) from None
@@ -675,7 +682,9 @@ def _ur_texts(cal: CalibratedArm, ur_path: str | None, ros_path: str | None) -> 
         try:
             texts[ros_path] = format_ur_kinematics(chain, model, f"armcal_{cal.arm.name}_{model}")
         except ValueError as exc:
-            raise ArmcalError(f"{ros_path}: the calibrated {cal.arm.name}: {exc}") from None
+            raise ArmcalError(
+                f"{ros_path}: the calibrated {cal.arm.name}: {unrendered(exc)}"
+            ) from None
     return texts
 
 

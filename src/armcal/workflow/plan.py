@@ -24,7 +24,7 @@ from ..doe import (
     poses_needed,
     random_plan,
 )
-from ..errors import ArmcalError, ArmcalWarning, NotIdentifiableError
+from ..errors import ArmcalError, ArmcalWarning, NotIdentifiableError, action
 from ..files import RobotSpec, SerialSpec
 from ..identification.experiment import (
     coverage,
@@ -253,11 +253,11 @@ def design_plan(
         if criterion != "D" or method not in ("auto", "exchange"):
             raise ArmcalError(
                 "a robot with [elastostatic] is designed D-optimal by exchange and polish; "
-                "leave --criterion and --method at their defaults"
+                f"leave {action('design-defaults')}"
             )
         if candidates is not None or distinct:
             raise ArmcalError(
-                "--candidates and --distinct are not supported with [elastostatic] yet"
+                f"{action('candidates-distinct')} are not supported with [elastostatic] yet"
             )
         made = design_with_loads(model, poses, payloads=payloads, rng=rng, order=order)
         assert made.payload_kg is not None
@@ -265,8 +265,8 @@ def design_plan(
     else:
         if payloads is not None:
             raise ArmcalError(
-                f"--payloads: robot {spec.arm.name} has no [elastostatic] table, so a payload "
-                "changes nothing; add the table to the robot file"
+                f"{action('payloads')}: robot {spec.arm.name} has no [elastostatic] table, so a "
+                "payload changes nothing; add the table to the robot file"
             )
         if candidates is not None and not np.all(spec.arm.feasible(candidates)):
             row = int(np.flatnonzero(~spec.arm.feasible(candidates))[0]) + 1

@@ -18,7 +18,7 @@ from typing import Any, TypeVar
 import numpy as np
 
 from ..doe import random_plan
-from ..errors import ArmcalError, NotIdentifiableError
+from ..errors import ArmcalError, NotIdentifiableError, action
 from ..files import RobotSpec, SerialSpec, read_plan, unknown_parameter
 from ..models import FitModel, Loads, PlanarArm, SpatialArm, TermChoice
 from ..noise import instrument_override
@@ -44,14 +44,16 @@ DEFAULT_SIGMA_MM = 0.1
 
 
 class FixError(ArmcalError):
-    """Parameters to hold that the arm cannot hold (the command line's ``--fix``)."""
+    """Parameters to hold that the arm cannot hold: the message starts with the option that
+    named them (``fixed``; the command line says its ``--fix``)."""
 
 
 def prefixed(source: str, exc: ArmcalError) -> ArmcalError:
-    """``exc`` of the same kind (and, unidentifiable, with its combinations) naming ``source``."""
+    """``exc`` of the same kind (and, unidentifiable, with its combinations) naming ``source``;
+    its actions are carried as raised, for the command line to say in its flags."""
     if isinstance(exc, NotIdentifiableError):
-        return NotIdentifiableError(f"{source}: {exc}", exc.combinations)
-    return type(exc)(f"{source}: {exc}")
+        return NotIdentifiableError(f"{source}: {exc.text}", exc.combinations)
+    return type(exc)(f"{source}: {exc.text}")
 
 
 #: A robot file's arm, of either family: what --fix and --sigma apply to.
@@ -65,10 +67,12 @@ def with_fixed(arm: Arm, fixed: Sequence[str], terms: Sequence[str] = ()) -> Arm
     known = (*arm.param_names, *terms)
     for name in fixed:
         if name not in known:
-            raise FixError(unknown_parameter(name, known, arm.name))
+            raise FixError(f"{action('fixed')}: {unknown_parameter(name, known, arm.name)}")
     mine = [name for name in fixed if name in arm.param_names]
     if len(set(mine)) == arm.n_params:
-        raise FixError("every parameter would be fixed; leave at least one free")
+        raise FixError(
+            f"{action('fixed')}: every parameter would be fixed; leave at least one free"
+        )
     return arm.with_fixed(tuple(mine))
 
 
@@ -219,7 +223,7 @@ def check_plan_size(poses: int, memory: int | None = None) -> None:
     if memory is None or 2 * need <= memory:
         return
     raise ArmcalError(
-        f"--poses {poses}: a plan this large takes about {need / 1e9:.3g} GB to design, "
+        f"{action('poses', poses)}: a plan this large takes about {need / 1e9:.3g} GB to design, "
         f"check and write (about {BYTES_PER_DESIGNED_POSE} bytes a pose), more than half of "
         f"this machine's {memory / 1e9:.3g} GB; a plan's information per pose stops growing "
         "after a few hundred poses, so design fewer and repeat them (the plan of m poses "
