@@ -603,9 +603,7 @@ def plot_validation(
     x_name, y_name, frame = ("x", "y", "instrument frame")
     if result.out_of_plane_mm is not None:  # 3-D data: the plane fitted in the instrument frame
         x_name, y_name, frame = ("u", "v", "instrument's plane of motion")
-    _error_arrows(
-        ax_before, positions, result.before, "nominal arm (registered on its own)", "0.45"
-    )
+    _error_arrows(ax_before, positions, result.before, "nominal arm", "0.45")
     _error_arrows(ax_after, positions, result.after, "calibrated", "tab:red")
     lo, hi = positions.min(axis=0), positions.max(axis=0)
     pad = 0.12 * max(float(np.max(hi - lo)), 1.0)  # the longest arrow is a tenth of the spread

@@ -181,8 +181,11 @@ def compensation_report(
         s["orientation_rms_after_per_pose_deg"],
     )
     if before is not None and after is not None:
+        # Below 1e-9 deg is round-off: a planar arm's registered tool frame takes up every
+        # joint zero, so its orientation is the calibrated one's exactly.
+        shown = "0" if before < 1e-9 else f"{before:.4g}"
         lines.append(
-            f"predicted tool orientation error: RMS per pose {before:.4g} deg before, "
+            f"predicted tool orientation error: RMS per pose {shown} deg before, "
             f"{after:.4g} deg after"
         )
     lines.append(f"largest joint change: {result.largest_change_deg:.4g} deg")
