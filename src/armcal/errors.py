@@ -74,6 +74,8 @@ ACTIONS: dict[str, str] = {
     "payload-given": "payload_kg (given or the program's column)",
     "design-defaults": "criterion and method at their defaults",
     "candidates-distinct": "candidates and distinct",
+    "position-requirement": 'the requirement "position_rms_mm"',
+    "distinct": "distinct=True",
     "payloads": "payloads",
     "robot-file": "load_robot",
     "robot-arm": "arm",

@@ -48,6 +48,8 @@ CLI_ACTIONS = {
     "payload-given": "--payload-kg/payload_kg",
     "design-defaults": "--criterion and --method at their defaults",
     "candidates-distinct": "--candidates and --distinct",
+    "position-requirement": "--position-rms-mm",
+    "distinct": "--distinct",
     "payloads": "--payloads",
     "robot-file": "--robot",
     "robot-arm": "--robot",

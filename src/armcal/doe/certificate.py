@@ -15,8 +15,10 @@ from .plans import feasible_poses
 
 __all__ = [
     "CLOSE_ENOUGH",
+    "POOL_CERTIFICATE_ITERATIONS",
     "Certificate",
     "certify",
+    "certify_pool",
     "multiplicative_weights",
 ]
 
@@ -56,6 +58,10 @@ class Certificate:
     max_pose : ndarray, shape (n,), or None
         The pose (rad) where the search found ``max_variance``: where the best
         weighted design is least informed (None for a certificate without a search).
+    pool_size : int or None
+        For a plan from a pool of candidate poses (:func:`certify_pool`): how many
+        distinct poses the pool holds, and every bound is relative to the best
+        design over them, not over every feasible pose; None otherwise.
     """
 
     certified_d_efficiency: float
@@ -65,6 +71,7 @@ class Certificate:
     support: np.ndarray
     weights: np.ndarray
     max_pose: np.ndarray | None = None
+    pool_size: int | None = None
 
     def reference_inverse(self, model: FitModel) -> np.ndarray:
         """``M(xi*)^-1`` of the reference design (its support and weights) by the rank
@@ -314,6 +321,79 @@ def certify(
         max_pose=max_pose,
         support=support,
         weights=support_w,
+    )
+
+
+#: Iterations of the multiplicative algorithm for the best weighted design over a pool.
+POOL_CERTIFICATE_ITERATIONS = 1000
+
+
+def certify_pool(model: FitModel, q: np.ndarray, pool: np.ndarray) -> Certificate:
+    """Certify a plan taken from ``pool`` against the best design over the pool's poses.
+
+    Parameters
+    ----------
+    model : FitModel
+    q : ndarray, shape (m, n)
+        The plan (rad), every pose a pose of ``pool``; must identify every parameter.
+    pool : ndarray, shape (N, n)
+        The candidate poses (rad) a plan may take (a cell's collision-free poses).
+
+    Returns
+    -------
+    Certificate
+        With ``pool_size`` the number of distinct pool poses; ``max_pose`` is the
+        pool pose where the reference design is least informed.
+
+    Raises
+    ------
+    NotIdentifiableError
+        If the plan cannot identify every parameter.
+
+    Notes
+    -----
+    The Kiefer-Wolfowitz bound of :func:`certify` with the feasible poses replaced by
+    the pool's: a finite set, so ``max_x d(x, xi)`` is exact, no search.  For any
+    weighted design ``xi`` over the pool ``log det M* <= log det M(xi) + max_x d(x, xi)
+    - p`` for the best design ``M*`` over the pool (concavity of ``log det``), so the
+    plan's efficiency relative to it is at least ``(det M_plan / det M(xi*))^(1/p)
+    exp(1 - max_x d(x, xi*) / p)``, ``xi*`` the multiplicative algorithm's weights
+    (:data:`POOL_CERTIFICATE_ITERATIONS` iterations; any weights give a valid bound,
+    better ones a tighter).  The plan is a design over the pool too: its own bound
+    ``exp(1 - max_x d(x, plan) / p)``.  Where every design has ``det M <= 1``
+    (:attr:`~armcal.models.interface.FitModel.information_bound`) so has the pool's
+    best, and ``det M_plan^(1/p)`` is a bound as well.
+    """
+    q = np.asarray(q, dtype=float)
+    pool = np.asarray(pool, dtype=float)
+    p = model.n_free
+    plan_information = model.plan_information(q)
+    plan_information.check_identifiable()
+    plan = plan_information.svd()
+    logdet_plan = float(plan.log_det_gram())
+    poses = np.unique(pool, axis=0)  # a copy adds no pose a design could weigh
+    plan_inverse, _ = plan.inverse_gram()
+    d_plan, _ = _variance_function(model, poses, plan_inverse)
+    plan_only = float(np.exp(1.0 - d_plan.max() / p))
+    blocks = _pose_blocks(model, poses)
+    weights = np.full(poses.shape[0], 1.0 / poses.shape[0])
+    weights = multiplicative_weights(blocks, weights, POOL_CERTIFICATE_ITERATIONS)
+    star = _weighted_svd(blocks, weights)
+    star_inverse, _ = star.inverse_gram()
+    d_star, _ = _variance_function(model, poses, star_inverse)
+    logdet_star = float(star.log_det_gram())
+    kw = float(np.exp((logdet_plan - logdet_star) / p + 1.0 - d_star.max() / p))
+    hadamard = float(np.exp(logdet_plan / p)) if model.information_bound else 0.0
+    support = weights > 1e-6
+    return Certificate(
+        certified_d_efficiency=float(min(1.0, max(kw, plan_only, hadamard))),
+        plan_only_bound=plan_only,
+        reference_d_efficiency=float(np.exp(logdet_star / p)),
+        max_variance=float(d_star.max()),
+        support=poses[support],
+        weights=weights[support] / weights[support].sum(),
+        max_pose=poses[int(np.argmax(d_star))],
+        pool_size=int(poses.shape[0]),
     )
 
 

@@ -9,15 +9,15 @@ from typing import Literal
 import numpy as np
 
 from ..criteria import CRITERIA, Criterion, attains_unit_bound, d_efficiency, efficiencies
-from ..errors import ArmcalError, action, render
+from ..errors import ArmcalError, ArmcalWarning, action, render
 from ..models import ClosedFormPlan, ClosedFormPlans, FitModel, equations_per_pose
 from ..progress import ProgressCallback, share
-from .certificate import Certificate, certify
+from .certificate import Certificate, certify, certify_pool
 from .exchange import exchange_plan
 from .optimizer import optimize_plan
 from .order import ORDERS, Order, joint_travel, order_poses
 from .plans import DISTINCT_TOLERANCE, feasible_poses, repeated_poses
-from .pool import pool_plan
+from .pool import distinct_count, pool_plan
 from .task import TASK_CRITERIA, task_criterion
 
 __all__ = [
@@ -25,6 +25,7 @@ __all__ = [
     "REPLICATE_ABOVE",
     "Design",
     "design",
+    "pool_warnings",
 ]
 
 
@@ -59,8 +60,8 @@ class Design:
     criterion : str
         Criterion optimized (key of :data:`armcal.criteria.CRITERIA`).
     method : str
-        How the plan was made: ``analytic``, ``optimize``, ``optimize+exchange`` or
-        ``exchange``.
+        How the plan was made: ``analytic``, ``optimize``, ``optimize+exchange``,
+        ``exchange``, or from a pool of candidates ``pool`` or ``pool+exchange``.
     d_efficiency : float
         :func:`armcal.criteria.d_efficiency` on the model.  For the paper's
         model ``(det F / det F_opt)^(1/p)``, relative to the unconstrained
@@ -96,6 +97,10 @@ class Design:
         (:func:`armcal.doe.loads.design_with_loads`).
     payloads : tuple of float
         The payload values the design could choose from (empty otherwise).
+    warnings : tuple of ArmcalWarning
+        What the plan cannot do that was asked of it: ``pool-repeats`` when the
+        candidates hold fewer distinct poses than the plan, which then measures
+        some of them twice.
     """
 
     model: FitModel
@@ -111,6 +116,7 @@ class Design:
     distinct: bool
     payload_kg: np.ndarray | None = None
     payloads: tuple[float, ...] = ()
+    warnings: tuple[ArmcalWarning, ...] = ()
 
     @property
     def notes(self) -> tuple[str, ...]:
@@ -164,6 +170,25 @@ def _planar_exchange(model: FitModel) -> bool:
     return len(model.target_labels) <= 1 and model.point_dim == 2
 
 
+def pool_warnings(pool: np.ndarray, q: np.ndarray) -> tuple[ArmcalWarning, ...]:
+    """``pool-repeats`` for a plan ``q`` ``(m, n)`` from ``pool`` ``(N, n)`` that holds fewer
+    distinct poses than the plan: it measures some poses twice or more (none otherwise)."""
+    m, count = q.shape[0], distinct_count(pool)
+    if count >= m:
+        return ()
+    repeats = m - distinct_count(q)
+    return (
+        ArmcalWarning(
+            "pool-repeats",
+            f"the candidate poses hold {count} distinct poses, fewer than the {m} poses asked "
+            f"for: the plan measures {repeats} of its poses a second time or more (a repeat "
+            "adds its information again, but shows nothing new of the arm); give more "
+            f"candidates, use {action('poses', count)} or fewer, or ask for "
+            f"{action('distinct')} to refuse repeats",
+        ),
+    )
+
+
 def _would_be_optimal(family: ClosedFormPlans) -> bool:
     """Whether a closed-form plan would be D-optimal for the model without limits and view."""
     free = family.unconstrained()
@@ -205,8 +230,16 @@ def design(
     rng : numpy.random.Generator or int or None
         The same seed gives the same plan.
     candidates : ndarray, shape (N, n), optional
-        Poses the robot can really reach, for ``exchange`` (default: random
-        feasible poses).
+        A pool of poses the robot can really reach (a cell's collision-free poses):
+        every pose of the plan is one of them, and the certificate compares the
+        plan with the best design over them (:func:`certify_pool`).  ``auto``
+        takes the pool's D-optimal weights, then DETMAX (:func:`pool_plan`) and,
+        for one point in the plane a pose, the exchange if it does better;
+        ``exchange`` exchanges over them; ``analytic`` and ``optimize``, which
+        make poses of their own, are refused.  A pool of fewer (distinct) poses
+        than ``m`` gives a plan that measures some poses twice, and the warning
+        ``pool-repeats`` (:attr:`Design.warnings`); with ``distinct`` it is refused.
+        Default: ``exchange`` uses random feasible poses.
     with_certificate : bool
         Certify the plan (:func:`certify`); searches that design many plans
         skip it.
@@ -292,7 +325,16 @@ def design(
     notes: list[str] = []
     q: np.ndarray | None = None
     used: str = method
-    family = model.closed_form_plans(m)  # placed only where asked for: auto, analytic
+    user_pool: np.ndarray | None = None  # the user's candidates: every pose from them
+    if candidates is not None:
+        user_pool = np.asarray(candidates, dtype=float)
+        if method in ("analytic", "optimize"):
+            raise ArmcalError(
+                f"a plan from candidate poses takes every pose from them, and method {method!r} "
+                f"makes poses of its own; use {action('method', 'auto')} or exchange"
+            )
+    # placed only where asked for (auto, analytic): never for a plan from a pool
+    family = None if user_pool is not None else model.closed_form_plans(m)
     closed: list[ClosedFormPlan] = []
     repeats, found = 0, 0.0  # the optimizer's repeated poses and its plan's D-criterion
     searched = False  # whether the optimizer searched (its note comes after)
@@ -342,10 +384,15 @@ def design(
             "than the best plan below, and searching every pose would cost time and memory "
             "in proportion"
         )
-    elif candidates is not None and not _planar_exchange(model):
-        # Every pose from the user's pool: the pool's D-optimal weights, then DETMAX.
-        q = np.asarray(candidates, dtype=float)[pool_plan(model, m, candidates)]
+    elif user_pool is not None and (method == "auto" or not _planar_exchange(model)):
+        # Every pose from the user's pool: the pool's D-optimal weights, then DETMAX, then
+        # (one point in the plane a pose) the Fedorov exchange over the pool, if better.
+        q = user_pool[pool_plan(model, m, user_pool, distinct=distinct)]
         used = "pool"
+        if _planar_exchange(model):
+            swapped = exchange_plan(model, m, user_pool, start=q, rng=rng, distinct=distinct)
+            if float(d_efficiency(model, swapped)) > float(d_efficiency(model, q)) * (1 + 1e-12):
+                q, used = swapped, "pool+exchange"
         if criterion != "D":
             notes.append("a plan from a pool maximizes D; it was not tuned for " + criterion)
     elif method == "exchange":
@@ -364,12 +411,12 @@ def design(
         found = float(d_efficiency(model, q))
         single = _planar_exchange(model)
         if criterion == "D" and single:
-            pool = feasible_poses(model, 4000, rng=rng) if candidates is None else candidates
+            pool = feasible_poses(model, 4000, rng=rng)
             polished = exchange_plan(model, m, pool, start=q, rng=rng, distinct=distinct)
             if repeats or float(d_efficiency(model, polished)) > found * (1 + 1e-12):
                 q, used = polished, "optimize+exchange"
         elif repeats and single:  # replace the repeats, without exchanges that tune for D
-            pool = feasible_poses(model, 4000, rng=rng) if candidates is None else candidates
+            pool = feasible_poses(model, 4000, rng=rng)
             q = exchange_plan(model, m, pool, start=q, rng=rng, max_swaps=0, distinct=True)
         if best is not None and _score(model, best.q, aim) > _score(model, q, aim):
             q, used = best.q, "analytic"  # not expected: the optimizer starts from it
@@ -397,7 +444,9 @@ def design(
     tick = progress if progress is not None else (lambda done, total: None)
     tick(500, 1000)
     certificate = None
-    if with_certificate:
+    if with_certificate and user_pool is not None:  # the best plan is the pool's best
+        certificate = certify_pool(model, q, user_pool)
+    elif with_certificate:
         certificate = certify(model, q, rng=rng, progress=share(progress, 0.5, 0.95))
     tick(950, 1000)
     travel_found = joint_travel(q)
@@ -416,4 +465,5 @@ def design(
         joint_travel=joint_travel(q),
         joint_travel_unordered=travel_found,
         distinct=distinct,
+        warnings=() if user_pool is None else pool_warnings(user_pool, q),
     )

@@ -17,20 +17,24 @@ and any number of rows per pose, on the poses' information blocks:
 a payload, :mod:`armcal.doe.loads`, of several rows each).
 
 Every pose of the result is a pool pose, so it satisfies whatever the pool
-satisfies.
+satisfies.  A plan of more poses than the pool holds repeats pool poses (a pose
+measured twice adds its information twice); with ``distinct`` every pool pose
+counts once and such a plan is refused.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-from ..errors import ArmcalError
+from ..errors import ArmcalError, action
 from ..models import FitModel
 from ..numerics import spd_inverse
 from .certificate import multiplicative_weights
+from .plans import DISTINCT_TOLERANCE, repeated_poses
 
 __all__ = [
     "detmax_indices",
+    "distinct_count",
     "pool_plan",
     "pool_weights_plan",
 ]
@@ -44,10 +48,11 @@ MAX_EXCHANGES = 2000
 
 def _largest_weights(blocks: np.ndarray, m: int) -> np.ndarray:
     """Indices ``(m,)`` of the poses of largest continuous D-optimal weight, from the pool's
-    information blocks ``(N, r, p_f)``."""
+    information blocks ``(N, r, p_f)``; a pool of fewer than ``m`` poses is taken in that
+    order again and again (every pose as often as the others, within one)."""
     weights = np.full(blocks.shape[0], 1.0 / blocks.shape[0])
     weights = multiplicative_weights(blocks, weights, POOL_WEIGHT_ITERATIONS)
-    return np.argsort(-weights, kind="stable")[:m]
+    return np.resize(np.argsort(-weights, kind="stable"), m)
 
 
 def pool_weights_plan(model: FitModel, m: int, pool: np.ndarray) -> np.ndarray:
@@ -56,16 +61,35 @@ def pool_weights_plan(model: FitModel, m: int, pool: np.ndarray) -> np.ndarray:
     return _largest_weights(model.plan_information(pool).blocks(), m)
 
 
-def pool_plan(model: FitModel, m: int, pool: np.ndarray) -> np.ndarray:
-    """Indices ``(m,)`` into ``pool`` ``(N, n)`` of a D-optimal ``m``-pose plan from it
-    (module notes); poses may repeat where the exchange finds a repeat best.
+def distinct_count(pool: np.ndarray) -> int:
+    """How many poses of ``pool`` ``(N, n)`` are distinct: poses within
+    :data:`~armcal.doe.plans.DISTINCT_TOLERANCE` rad of an earlier one on every joint
+    count once (:func:`~armcal.doe.plans.repeated_poses`)."""
+    return int(np.count_nonzero(~repeated_poses(np.asarray(pool, dtype=float))))
 
-    Raises ArmcalError when the pool's poses cannot identify every free parameter.
+
+def pool_plan(model: FitModel, m: int, pool: np.ndarray, *, distinct: bool = False) -> np.ndarray:
+    """Indices ``(m,)`` into ``pool`` ``(N, n)`` of a D-optimal ``m``-pose plan from it
+    (module notes); poses may repeat where the exchange finds a repeat best, and must
+    where the pool holds fewer than ``m`` poses -- unless ``distinct``: then no two poses
+    of the plan are equal (within :data:`~armcal.doe.plans.DISTINCT_TOLERANCE`).
+
+    Raises ArmcalError when the pool's poses cannot identify every free parameter, or
+    ``distinct`` and the pool holds fewer than ``m`` distinct poses.
     """
     pool = np.asarray(pool, dtype=float)
     if pool.shape[0] < 1:
         raise ArmcalError("the candidate pool is empty")
-    blocks = model.plan_information(pool).blocks()  # once: the weights and the exchange
+    usable = ~repeated_poses(pool) if distinct else np.ones(pool.shape[0], dtype=bool)
+    count = int(np.count_nonzero(usable))
+    if distinct and count < m:
+        raise ArmcalError(
+            f"distinct poses: the {pool.shape[0]} candidate poses hold {count} distinct ones "
+            f"(within {DISTINCT_TOLERANCE:g} rad on every joint), fewer than the {m} poses "
+            f"asked for; use {action('poses', count)} or fewer, or give more candidates"
+        )
+    index = np.flatnonzero(usable)
+    blocks = model.plan_information(pool[index]).blocks()  # once: the weights and the exchange
     p = blocks.shape[-1]
     everything = np.einsum("krp,krq->pq", blocks, blocks)
     if np.linalg.matrix_rank(everything) < p:
@@ -73,13 +97,14 @@ def pool_plan(model: FitModel, m: int, pool: np.ndarray) -> np.ndarray:
             f"the {pool.shape[0]} candidate poses cannot identify the {p} free parameters "
             "of " + model.name + " together; add poses that move every joint"
         )
-    return detmax_indices(blocks, _largest_weights(blocks, m))
+    return index[detmax_indices(blocks, _largest_weights(blocks, m), distinct=distinct)]
 
 
-def detmax_indices(blocks: np.ndarray, start: np.ndarray) -> np.ndarray:
+def detmax_indices(blocks: np.ndarray, start: np.ndarray, *, distinct: bool = False) -> np.ndarray:
     """Mitchell's DETMAX with excursions of one pose (module notes) from the ``m`` indices
     ``start`` into the candidates' information blocks ``(N, r, p_f)``, any ``r``: the
-    ``m`` indices it ends with, ``det M`` never lower than the start's."""
+    ``m`` indices it ends with, ``det M`` never lower than the start's.  With
+    ``distinct`` (a start of distinct indices) a pose the plan holds is never added."""
     chosen = [int(i) for i in start]
     m = len(chosen)
     for _ in range(MAX_EXCHANGES):
@@ -87,6 +112,10 @@ def detmax_indices(blocks: np.ndarray, start: np.ndarray) -> np.ndarray:
         information = np.einsum("krp,krq->pq", plan, plan)
         inverse = spd_inverse(information)
         variance = np.einsum("krp,pq,krq->k", blocks, inverse, blocks)
+        if distinct:
+            variance[chosen] = -np.inf
+            if not np.isfinite(variance).any():  # the plan holds every candidate
+                break
         added = int(np.argmax(variance))
         grown = information + blocks[added].T @ blocks[added]
         grown_inverse = spd_inverse(grown)

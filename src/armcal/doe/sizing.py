@@ -21,11 +21,13 @@ from .plans import random_plan
 __all__ = [
     "REQUIREMENTS",
     "REQUIREMENT_RTOL",
+    "REQUIREMENT_UNITS",
     "UNREACHABLE_MARGIN",
     "PosesNeeded",
     "Requirement",
     "accuracy_metric",
     "poses_needed",
+    "requirement_params",
 ]
 
 
@@ -34,8 +36,8 @@ Requirement = Literal["length_std_mm", "angle_std_deg", "position_rms_mm"]
 
 #: Accuracy requirements: what each measures, in which unit.
 REQUIREMENTS: dict[str, str] = {
-    "length_std_mm": "largest std of a link-length deviation dl (mm)",
-    "angle_std_deg": "largest std of a joint-offset deviation dq (deg)",
+    "length_std_mm": "largest std of a length of the arm itself (mm)",
+    "angle_std_deg": "largest std of an angle of the arm itself (deg)",
     "position_rms_mm": (
         "predicted RMS tip error per point after calibration at the test poses (mm)"
     ),
@@ -51,6 +53,9 @@ REQUIREMENT_RTOL = 1e-9
 #: information per pose would have to grow this much with its size.
 UNREACHABLE_MARGIN = 4
 
+#: The display unit of the parameters a requirement on the arm's own parameters bounds.
+REQUIREMENT_UNITS: dict[str, str] = {"length_std_mm": "mm", "angle_std_deg": "deg"}
+
 _RELAX = f"relax the target or measure with a better instrument (smaller {action('sigma')})"
 
 
@@ -59,6 +64,54 @@ def _check_requirement(requirement: str) -> None:
         raise ArmcalError(
             f"unknown requirement {requirement!r}; choose one of {', '.join(REQUIREMENTS)}"
         )  # a library caller's mistake: the command line offers only these
+
+
+def requirement_params(model: FitModel, requirement: str) -> np.ndarray:
+    """Boolean ``(p,)``: the parameters whose largest std ``requirement`` bounds (every
+    parameter for ``position_rms_mm``, which bounds none alone).
+
+    A length (``length_std_mm``) or angle (``angle_std_deg``) requirement bounds the
+    arm's own parameters of that display unit (mm or deg): a planar arm's link lengths
+    ``dl`` and joint offsets ``dq`` (those of its targets' last links included), a
+    spatial arm's joint placements and zeros (a slide's zero is a length); never the
+    instrument's pose or the targets found from the data
+    (:attr:`~armcal.models.interface.FitModel.instrument_params`), nor an effect's
+    parameters in other units (compliance).
+
+    Examples
+    --------
+    >>> from armcal.models import PlanarArm
+    >>> arm = PlanarArm([260.0, 180.0], base_offset=True)
+    >>> [n for n, f in zip(arm.param_names, requirement_params(arm, "length_std_mm")) if f]
+    ['dl1', 'dl2']
+    """
+    _check_requirement(requirement)
+    unit = REQUIREMENT_UNITS.get(requirement)
+    if unit is None:
+        return np.ones(model.n_params, dtype=bool)
+    units = np.array(model.param_units)
+    return (units == unit) & ~np.asarray(model.instrument_params, dtype=bool)
+
+
+def _check_measurable(model: FitModel, requirement: str) -> None:
+    """Refuse a length or angle requirement the model has no free parameter for."""
+    measured = requirement_params(model, requirement)
+    if np.any(measured & model.free):
+        return
+    unit = REQUIREMENT_UNITS[requirement]
+    kind = "length" if unit == "mm" else "angle"
+    names = [name for name, picked in zip(model.param_names, measured, strict=True) if picked]
+    free = f"choose a target on the free parameters ({', '.join(model.free_names)})"
+    if names:
+        raise ArmcalError(
+            f"every parameter the target {requirement} measures ({', '.join(names)}) is fixed "
+            f"for {model.name}; {free}"
+        )
+    raise ArmcalError(
+        f"{model.name} has no {kind} of its own in {unit} for the target {requirement} to "
+        f"bound (only the instrument's pose, the targets or other units); {free}, or "
+        f"{action('position-requirement')}"
+    )
 
 
 def accuracy_metric(
@@ -75,11 +128,10 @@ def accuracy_metric(
     _check_requirement(requirement)
     if requirement == "position_rms_mm":
         return position_rms(model, q, test_q, sigma, loads=loads)
+    _check_measurable(model, requirement)
     std = predicted_std(model, q, sigma, loads=loads)  # inf when the plan is singular
-    # every dl (or dq) parameter, targets' dl_n@T and dq_n@T included
-    kind = "dl" if requirement == "length_std_mm" else "dq"
-    picked = [i for i, name in enumerate(model.param_names) if name.startswith(kind)]
-    return float(std[picked].max())
+    # fixed parameters have std 0: the largest is over the free ones
+    return float(std[requirement_params(model, requirement)].max())
 
 
 @dataclass(frozen=True, eq=False)
@@ -113,6 +165,9 @@ class PosesNeeded:
         design chooses them with the poses, :func:`armcal.doe.design_with_loads`).
     model : FitModel, optional
         The model the plan fits (its identifiable set).
+    measured : tuple of str
+        The free parameters whose largest std the requirement bounds
+        (:func:`requirement_params`; empty for ``position_rms_mm``).
     """
 
     requirement: str
@@ -126,6 +181,7 @@ class PosesNeeded:
     evaluated: dict[int, float]
     payload_kg: np.ndarray | None = None
     model: FitModel | None = None
+    measured: tuple[str, ...] = ()
 
 
 #: Random plans drawn per size by ``plans="random"``; the most accurate is kept.
@@ -249,22 +305,13 @@ def poses_needed(
     _check_requirement(requirement)
     if not (goal > 0 and math.isfinite(goal)):
         raise ArmcalError(f"the target accuracy must be a positive number, got {goal}")
-    n = model.n_joints
-    measured = {
-        "length_std_mm": [f"dl{k}" for k in range(1, n + 1)],
-        "angle_std_deg": [f"dq{k}" for k in range(1, n + 1)],
-    }.get(requirement)
-    if measured is not None and not set(measured) - set(model.fixed):
-        raise ArmcalError(
-            f"every parameter the target {requirement} measures ({', '.join(measured)}) is fixed "
-            f"for {model.name}; choose a target on the free parameters "
-            f"({', '.join(model.free_names)})"
-        )
+    chosen = model.design_loads(payloads)
+    fitted = model if chosen is None else chosen[0]  # what a plan of poses and loads fits
+    if requirement in REQUIREMENT_UNITS:  # before any plan is designed
+        _check_measurable(fitted, requirement)
     rng = np.random.default_rng(rng)
     if test_q is None:
         test_q = random_plan(model, 1000, rng=rng)
-    chosen = model.design_loads(payloads)
-    fitted = model if chosen is None else chosen[0]  # what a plan of poses and loads fits
     min_poses = -(-fitted.n_free // equations_per_pose(model))
     found: dict[int, tuple[_Plan, float]] = {}
 
@@ -323,6 +370,10 @@ def poses_needed(
     if progress is not None:
         progress(1000, 1000)
     made, achieved = found[m]
+    measured: tuple[str, ...] = ()
+    if requirement in REQUIREMENT_UNITS:
+        picked = requirement_params(made.model, requirement) & made.model.free
+        measured = tuple(str(name) for name in np.array(made.model.param_names)[picked])
     order = order_poses(made.q)  # only the plan kept is ordered: the order changes no accuracy
     return PosesNeeded(
         requirement=requirement,
@@ -336,4 +387,5 @@ def poses_needed(
         evaluated={key: value[1] for key, value in sorted(found.items())},
         payload_kg=None if made.payload_kg is None else made.payload_kg[order],
         model=made.model,
+        measured=measured,
     )

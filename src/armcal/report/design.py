@@ -37,6 +37,8 @@ def design_summary(
     -------
     document : dict
         ``criterion``, ``method``, the certificate's bounds (None without one),
+        ``certificate_pool_size`` (the distinct candidate poses a plan from a pool is
+        certified against, the best plan over them; None: over every feasible pose),
         ``notes``, ``seconds``, ``order``, ``distinct`` and the joint travel in
         the plan's order and in the order the method found
         (``joint_travel_deg``, ``joint_travel_unordered_deg``).
@@ -60,6 +62,7 @@ def design_summary(
         "max_variance_pose_deg": None
         if cert is None or cert.max_pose is None
         else np.degrees(cert.max_pose).tolist(),
+        "certificate_pool_size": None if cert is None else cert.pool_size,
         "notes": notes,
         "seconds": seconds,
         "order": result.order,
@@ -80,9 +83,14 @@ def design_summary(
         # The note ruled out only the closed-form family: say that the search met the optimum.
         efficiency += " (an orthogonal plan, found by search)"
     if cert is not None:
+        over = (
+            "within the constraints"
+            if cert.pool_size is None
+            else f"from the {cert.pool_size} candidate poses"
+        )
         efficiency += (
-            f"; certified >= {cert.certified_d_efficiency:.4f} of the best plan within the "
-            f"constraints (plan-only bound {cert.plan_only_bound:.4f})"
+            f"; certified >= {cert.certified_d_efficiency:.4f} of the best plan {over} "
+            f"(plan-only bound {cert.plan_only_bound:.4f})"
         )
     lines = [
         f"design: {result.q.shape[0]} poses, criterion {result.criterion}, method {result.method} "
@@ -137,6 +145,19 @@ def _loaded_design_summary(result: Design, seconds: float) -> tuple[dict, list[s
     return document, lines
 
 
+#: Parameter names a poses-needed report lists before "and k more".
+_NAMES_SHOWN = 6
+
+
+def _measured(names: tuple[str, ...]) -> str:
+    """``": dl1, dl2"``: the parameters a length or angle target bounds, or ``""``."""
+    if not names:
+        return ""
+    shown = ", ".join(names[:_NAMES_SHOWN])
+    rest = len(names) - _NAMES_SHOWN
+    return f": {shown}" + (f" and {rest} more" if rest > 0 else "")
+
+
 def poses_needed_summary(
     found: PosesNeeded, model: FitModel, seconds: float, *, words: Mapping[str, str] = ACTIONS
 ) -> tuple[dict, list[str]]:
@@ -158,7 +179,8 @@ def poses_needed_summary(
         ``poses`` (PRODUCT.md), ``requirement``, ``goal``, ``achieved``,
         ``with_one_pose_less`` (null when fewer poses cannot identify every
         parameter), ``sigma_mm``, ``method``, ``evaluated`` (m -> accuracy of the
-        best m-pose plan, identifiable ones only) and ``seconds``.
+        best m-pose plan, identifiable ones only), ``measured`` (the parameters a
+        length or angle target bounds; empty for the position RMS) and ``seconds``.
     lines : list of str
         The answer and how it was found; the caller adds the file it wrote.
     """
@@ -174,6 +196,7 @@ def poses_needed_summary(
         "sigma_mm": found.sigma_mm,
         "method": found.method,
         "evaluated": {str(m): v for m, v in found.evaluated.items() if math.isfinite(v)},
+        "measured": list(found.measured),
         "seconds": seconds,
         **model_to_dict(arm),
     }
@@ -186,7 +209,8 @@ def poses_needed_summary(
         f"{found.poses} poses: the best {found.poses}-pose plan of {arm.name} "
         f"({found.method}) reaches {found.achieved:.6g} {unit} against a target of "
         f"{found.goal:g} {unit}; {less}",
-        f"({REQUIREMENTS[found.requirement]}; sigma {found.sigma_mm:g} mm; "
+        f"({REQUIREMENTS[found.requirement]}{_measured(found.measured)}; "
+        f"sigma {found.sigma_mm:g} mm; "
         f"{len(found.evaluated)} plan sizes tried in {seconds:.2f} s)",
         *model_lines(arm, words=words),
     ]

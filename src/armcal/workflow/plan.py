@@ -289,7 +289,7 @@ def design_plan(
         loads = None
     seconds = time.perf_counter() - start
     quality = evaluate_plan(made.model, made.q, sigma=sigma, test_q=test_q, loads=loads)
-    return DesignRun(made, quality, seconds, (*spec.warnings, *quality.warnings))
+    return DesignRun(made, quality, seconds, (*spec.warnings, *made.warnings, *quality.warnings))
 
 
 def simulate_plan(
