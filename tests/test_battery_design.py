@@ -258,3 +258,36 @@ def test_the_pool_certificate_never_overclaims_and_is_tight_on_a_designed_plan(c
     assert found.certified_d_efficiency <= truth * (1 + 1e-9)  # a lower bound, never more
     # the reference is the multiplicative algorithm's 1000 iterations: close to xi*
     assert found.certified_d_efficiency >= 0.9 * truth
+
+
+# ---------------------------------------------------------------- item 5: payload candidates
+
+#: The battery's planar arm with compliance (/tmp/battery-pcomp/vertical.toml).
+VERTICAL = """name = "vertical-3link"
+link_lengths_mm = [600.0, 450.0, 200.0]
+joint_limits_deg = [[-170, 170], [-150, 150], [-150, 150]]
+[measurement]
+sigma_mm = 0.02
+[elastostatic]
+gravity_xy = [0, -1]
+link_masses_kg = [20, 12, 6]
+payload_kg = 10
+"""
+
+
+@pytest.mark.parametrize("robot", ["vertical", "bench"])
+def test_candidates_with_a_payload_column_are_refused_naming_the_column(tmp_path, robot):
+    """The battery's C040: with [elastostatic] the refusal said the robot had no such
+    table; without it the column is not the robot's.  Never dropped in silence."""
+    (tmp_path / "robot.toml").write_text(VERTICAL if robot == "vertical" else BENCH)
+    q = np.degrees(random_plan(_bench(), 12, rng=np.random.default_rng(6))).round(6)
+    rows = [",".join(f"{v:.6f}" for v in row) + ",10.0" for row in q]
+    (tmp_path / "cand.csv").write_text("q1_deg,q2_deg,q3_deg,payload_kg\n" + "\n".join(rows))
+    run = run_cli(tmp_path, "design", "--robot", "robot.toml", "--poses", "8",
+                  "--candidates", "cand.csv", "-o", "plan.csv")  # fmt: skip
+    assert run.returncode == 2 and not (tmp_path / "plan.csv").exists()
+    (line,) = run.stderr.splitlines()
+    assert line.startswith("armcal: error: cand.csv:") and "payload_kg" in line
+    if robot == "vertical":
+        assert "[elastostatic]" in line and "--candidates" in line
+        assert "has no [elastostatic]" not in line

@@ -73,7 +73,7 @@ ACTIONS: dict[str, str] = {
     "payload-kg": "payload_kg",
     "payload-given": "payload_kg (given or the program's column)",
     "design-defaults": "criterion and method at their defaults",
-    "candidates-distinct": "candidates and distinct",
+    "candidates": "candidates",
     "position-requirement": 'the requirement "position_rms_mm"',
     "distinct": "distinct=True",
     "payloads": "payloads",

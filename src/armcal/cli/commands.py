@@ -41,7 +41,6 @@ from ..files import (
     read_labelled_plan,
     read_loaded_plan,
     read_measurements,
-    read_plan,
     read_program,
     write_folder,
     write_json,
@@ -364,7 +363,9 @@ def compensate(args: argparse.Namespace) -> None:
 def design(args: argparse.Namespace) -> None:
     """``armcal design``: an optimal plan, its quality and its picture."""
     spec, arm = _model(args, _robot(args))
-    candidates = None if args.candidates is None else read_plan(args.candidates, spec.arm)
+    # with [elastostatic] a candidates file may carry payload_kg: read it, so that the
+    # refusal the user sees is design_plan's (candidates with loads), not a column's
+    candidates = None if args.candidates is None else _plan(args.candidates, spec)[0]
     run = design_plan(
         spec,
         arm,

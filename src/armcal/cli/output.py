@@ -47,7 +47,7 @@ CLI_ACTIONS = {
     "payload-kg": "--payload-kg",
     "payload-given": "--payload-kg/payload_kg",
     "design-defaults": "--criterion and --method at their defaults",
-    "candidates-distinct": "--candidates and --distinct",
+    "candidates": "--candidates",
     "position-requirement": "--position-rms-mm",
     "distinct": "--distinct",
     "payloads": "--payloads",

@@ -255,10 +255,14 @@ def design_plan(
                 "a robot with [elastostatic] is designed D-optimal by exchange and polish; "
                 f"leave {action('design-defaults')}"
             )
-        if candidates is not None or distinct:
+        if candidates is not None:  # their payload_kg column too: refused, never dropped
             raise ArmcalError(
-                f"{action('candidates-distinct')} are not supported with [elastostatic] yet"
+                f"{candidates_source}: a plan from candidate poses (with or without a "
+                "payload_kg column) is not supported with [elastostatic] yet: the design "
+                f"chooses the poses and their payloads itself; leave out {action('candidates')}"
             )
+        if distinct:
+            raise ArmcalError(f"{action('distinct')} is not supported with [elastostatic] yet")
         made = design_with_loads(model, poses, payloads=payloads, rng=rng, order=order)
         assert made.payload_kg is not None
         loads: Loads | None = Loads.create(poses, made.payload_kg)
