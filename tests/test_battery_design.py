@@ -291,3 +291,49 @@ def test_candidates_with_a_payload_column_are_refused_naming_the_column(tmp_path
     if robot == "vertical":
         assert "[elastostatic]" in line and "--candidates" in line
         assert "has no [elastostatic]" not in line
+
+
+# ---------------------------------------------------------------- item 6: flags, progress
+
+
+@pytest.mark.parametrize(
+    ("command", "flag", "what"),
+    [
+        ("simulate", "--trials", "trials"),
+        ("reproduce", "--trials", "trials"),
+        ("reproduce", "--random-plans", "random plans"),
+    ],
+)
+def test_too_few_trials_is_one_line_naming_the_flag_and_the_minimum(tmp_path, command, flag, what):
+    """The battery's P421: ``--trials 0`` said 'expected at least 1 pose'."""
+    (tmp_path / "bench.toml").write_text(BENCH)
+    _write_plan(tmp_path / "plan.csv", np.degrees(random_plan(_bench(), 8, rng=0)).round(6))
+    given = {
+        "simulate": ("--robot", "bench.toml", "--plan", "plan.csv"),
+        "reproduce": ("-o", "out"),
+    }
+    for value, said in (
+        ("0", f"expected at least 2 {what}, got 0"),
+        ("x", f"whole number of {what}"),
+    ):
+        run = run_cli(tmp_path, command, *given[command], flag, value)
+        assert run.returncode == 2
+        (line,) = run.stderr.splitlines()
+        assert line.startswith(f"armcal: error: argument {flag}: ") and said in line
+        assert "pose" not in line
+
+
+def test_poses_needed_reports_progress_while_each_size_is_designed():
+    """The battery's B016: the bar stood still for the whole of one size's design.  The
+    calls are never decreasing, end at 1000, and come between the sizes too."""
+    calls: list[int] = []
+    model = PlanarArm([300.0, 250.0, 150.0], joint_limits=np.radians([[-90, 90]] * 3))
+
+    def progress(done: int, total: int) -> None:
+        calls.append(1000 * done // total)
+
+    found = poses_needed(model, "position_rms_mm", 0.05, sigma=0.02, rng=0, progress=progress)
+    assert calls == sorted(calls) and calls[-1] == 1000
+    # each size reports its end once; a design that optimizes reports as it goes
+    assert found.method.startswith("optimize")
+    assert len(calls) > len(found.evaluated) + 1

@@ -108,11 +108,27 @@ def folds(text: str) -> int:
     return value
 
 
-def trials(text: str) -> int:
-    value = poses(text)
-    if value < 2:
-        raise argparse.ArgumentTypeError(f"expected at least 2 trials, got {value}")
+def _at_least(text: str, smallest: int, what: str) -> int:
+    """A whole number of ``what`` of at least ``smallest``, or the reason it is not."""
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(
+            f"expected a whole number of {what}, got {text!r}"
+        ) from None
+    if value < smallest:
+        raise argparse.ArgumentTypeError(f"expected at least {smallest} {what}, got {value}")
     return value
+
+
+def trials(text: str) -> int:
+    """``--trials N``: Monte Carlo trials, at least 2 (one has no spread to compare)."""
+    return _at_least(text, 2, "trials")
+
+
+def random_plans(text: str) -> int:
+    """``--random-plans N``: random plans per study, at least 2."""
+    return _at_least(text, 2, "random plans")
 
 
 def names(text: str) -> tuple[str, ...]:

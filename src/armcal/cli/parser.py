@@ -244,7 +244,11 @@ def build_parser() -> argparse.ArgumentParser:
         default="auto",
         help="auto = analytic if it fits the constraints, else optimize + exchange",
     )
-    sub.add_argument("--candidates", metavar="PLAN_CSV", help="reachable poses for exchange")
+    sub.add_argument(
+        "--candidates",
+        metavar="PLAN_CSV",
+        help="reachable poses: every pose of the plan is one of them",
+    )
     sub.add_argument(
         "--payloads",
         type=options.payloads,
@@ -344,7 +348,7 @@ def build_parser() -> argparse.ArgumentParser:
     )
     sub.add_argument(
         "--random-plans",
-        type=options.trials,
+        type=options.random_plans,
         default=10_000,
         metavar="N",
         help="random plans per study (default 10000, as in the paper)",

@@ -12,7 +12,7 @@ import numpy as np
 from ..criteria import position_rms, predicted_std
 from ..errors import ArmcalError, action
 from ..models import FitModel, Loads, equations_per_pose
-from ..progress import ProgressCallback
+from ..progress import ProgressCallback, share
 from .designer import design
 from .loads import design_with_loads
 from .order import order_poses
@@ -206,6 +206,7 @@ def _best_plan(
     payloads: Sequence[float] | None,
     metric: Callable[[FitModel, np.ndarray, Loads | None], float],
     plans: str,
+    progress: ProgressCallback | None = None,
 ) -> _Plan:
     """The best ``m``-pose plan (designed, or the most accurate of :data:`RANDOM_PLANS`
     uniform in the limits), with its loads where the design chooses the payloads."""
@@ -214,7 +215,7 @@ def _best_plan(
         best = min(drawn, key=lambda q: metric(model, q, None))
         return _Plan(best, model, f"random (the best of {RANDOM_PLANS})")
     if model.design_loads(payloads) is None:
-        made = design(model, m, rng=rng, with_certificate=False, order="none")
+        made = design(model, m, rng=rng, with_certificate=False, order="none", progress=progress)
         return _Plan(made.q, made.model, made.method)
     made = design_with_loads(model, m, payloads=payloads, rng=rng, order="none")
     assert made.payload_kg is not None
@@ -264,7 +265,8 @@ def poses_needed(
         Called after each size is designed with ``(done, 1000)``: thousandths of
         ``tried / (tried + left)``, never decreasing, ``left`` the designs the
         search still expects (2 while it jumps, then the bisection's ``log2`` of
-        the sizes left).
+        the sizes left); a design's own progress fills the bar between, so a long
+        design of one size still moves it.
 
     Returns
     -------
@@ -324,11 +326,15 @@ def poses_needed(
     def best(size: int) -> float:
         nonlocal shown
         if size not in found:
-            made = _best_plan(model, size, rng, payloads, metric, plans)
+            # designs left: 2 while jumping, then log2 of the span; the design of this
+            # size fills the bar up to where its end is reported (a long design moves it)
+            left = 2 if low is None else max(m - low - 1, 1).bit_length()
+            after = max(shown, 1000 * (len(found) + 1) // (len(found) + 1 + left))
+            part = share(progress, shown / 1000, after / 1000)
+            made = _best_plan(model, size, rng, payloads, metric, plans, part)
             found[size] = (made, metric(made.model, made.q, made.loads))
-            if progress is not None:  # designs left: 2 while jumping, then log2 of the span
-                left = 2 if low is None else max(m - low - 1, 1).bit_length()
-                shown = max(shown, 1000 * len(found) // (len(found) + left))
+            if progress is not None:
+                shown = after
                 progress(shown, 1000)
         return found[size][1]
 
