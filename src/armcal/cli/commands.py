@@ -281,6 +281,7 @@ def _options(args: argparse.Namespace) -> dict[str, Any]:
         "robust": args.robust,
         "folds": args.cross_validate,
         "seed": args.seed,
+        "progress": None if args.cross_validate is None else ProgressBar("cross-validation"),
     }
 
 
