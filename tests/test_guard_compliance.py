@@ -51,20 +51,11 @@ from armcal.models import (
     SerialElastics,
 )
 from armcal.workflow import export_files
-from helpers import cell_toml, run_cli
+from helpers import VERTICAL_3LINK, cell_toml, run_cli
 
 # -- a planar vertical arm with its masses known ----------------------------------------
 
-PLANAR = """name = "vertical-3link"
-link_lengths_mm = [600.0, 450.0, 200.0]
-joint_limits_deg = [[-170, 170], [-150, 150], [-150, 150]]
-[measurement]
-sigma_mm = 0.02
-[elastostatic]
-gravity_xy = [0, -1]
-link_masses_kg = [20, 12, 6]
-payload_kg = 10
-"""
+PLANAR = VERTICAL_3LINK
 
 PLANAR_TRUTH = """dl_mm = [1.0, -0.5, 0.8]
 dq_deg = [0.3, -0.2, 0.4]
