@@ -19,7 +19,7 @@ from typing import Any
 
 import numpy as np
 
-from ..demo import PLANAR_DEMO_POSES, run_demo
+from ..demo import PLANAR_DEMO_POSES, demo_rigid_warning, run_demo
 from ..demo_serial import SERIAL_DEMO_POSES, run_serial_demo
 from ..errors import ArmcalError
 from ..files import (
@@ -134,6 +134,7 @@ def _truth(
     model: FitModel,
     *,
     nominal: bool = False,
+    geometry_only: bool = False,
 ) -> tuple[np.ndarray, str | None]:
     """The parameters of the virtual robot ``model`` (a plan's, with the plan's loads):
     ``--truth``, with compliance for a model of joint compliance, else the built-in's.
@@ -141,6 +142,7 @@ def _truth(
     A robot file without ``--truth`` is refused, or with ``nominal`` studied as its nominal
     arm (:data:`NOMINAL_TRUTH`, returned as the note to print): zero errors and no
     compliance, the values the model holds its fixed parameters at, for every family.
+    ``geometry_only`` (the demo's rigid arm) leaves a truth's compliance out.
     """
     default = spec.default_truth
     if args.truth is None and default is None:
@@ -155,7 +157,7 @@ def _truth(
         path = args.truth if args.truth is not None else spec.default_truth
         assert path is not None
         links = (getattr(args, "base_link", None), getattr(args, "tip_link", None))
-        return load_serial_truth(path, model, links=links), None
+        return load_serial_truth(path, model, links=links, geometry_only=geometry_only), None
     if isinstance(model, CompliantArm):
         if args.truth is None:
             keys = ", ".join(COMPLIANCE_TRUTH_KEYS[k] for k in dict.fromkeys(model.kinds))
@@ -512,7 +514,7 @@ def demo(args: argparse.Namespace) -> None:
     if isinstance(spec, SerialSpec):  # the six-axis story: a tracker and three reflectors
         result = run_serial_demo(
             spec.arm,
-            lambda arm: _truth(args, spec, arm)[0],
+            lambda arm: _truth(args, spec, arm, geometry_only=True)[0],
             poses=SERIAL_DEMO_POSES if args.poses is None else args.poses,
             sigma=args.sigma,
             seed=args.seed,
@@ -531,7 +533,8 @@ def demo(args: argparse.Namespace) -> None:
     if args.output is not None:
         folder = write_folder(args.output, result.files)
         lines += ["", f"wrote {len(result.files)} files to {folder}/: {kinds}"]
-    emit(args, dict(result.document), "\n".join(lines), [*spec.warnings, *result.warnings])
+    rigid = () if spec.elastic is None else (demo_rigid_warning(spec.arm.name),)
+    emit(args, dict(result.document), "\n".join(lines), [*spec.warnings, *rigid, *result.warnings])
 
 
 def export(args: argparse.Namespace) -> None:
