@@ -58,3 +58,17 @@ def test_a_six_axis_demo_takes_a_truth_with_compliance(tmp_path):
     assert run.returncode == 0, run.stderr
     assert "demo-rigid" in _codes(run.stdout)
     assert "no [elastostatic]" not in run.stderr
+
+
+def test_a_rigid_planar_robot_refuses_a_truth_with_compliance(tmp_path):
+    """synthesize on a robot without [elastostatic] cannot use the truth's compliance: it
+    is refused (as for six-axis arms), not dropped; nothing is written."""
+    (tmp_path / "robot.toml").write_text(VERTICAL_3LINK.split("[elastostatic]")[0])
+    (tmp_path / "truth.toml").write_text(PLANAR_TRUTH)
+    (tmp_path / "plan.csv").write_text("q1_deg,q2_deg,q3_deg\n0,10,20\n30,-40,50\n")
+    options = ("--robot", "robot.toml", "--truth", "truth.toml", "--plan", "plan.csv")
+    run = run_cli(tmp_path, "synthesize", *options, "-o", "meas.csv")
+    assert run.returncode == 2
+    assert run.stderr.startswith("armcal: error: truth.toml: key 'k_urad_per_Nm'")
+    assert "no joint compliance" in run.stderr and run.stderr.count("\n") == 1
+    assert not (tmp_path / "meas.csv").exists()

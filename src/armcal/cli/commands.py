@@ -168,7 +168,7 @@ def _truth(
         geometry = load_truth(args.truth, model.arm)
         return np.concatenate([geometry, load_compliance_truth(args.truth, model)]), None
     if args.truth is not None:
-        return load_truth(args.truth, spec.arm), None
+        return load_truth(args.truth, spec.arm, rigid=not geometry_only), None
     assert isinstance(default, np.ndarray)
     return default, None
 
@@ -522,7 +522,7 @@ def demo(args: argparse.Namespace) -> None:
         )
         kinds = "report.md, residuals, measurements, calibration, program, URDF, DH table, offsets"
     else:
-        truth = _truth(args, spec, spec.arm)[0]  # the demo calibrates the geometry
+        truth = _truth(args, spec, spec.arm, geometry_only=True)[0]  # the geometry alone
         sigma = design_sigma(spec.arm) if args.sigma is None else args.sigma
         poses = PLANAR_DEMO_POSES if args.poses is None else args.poses
         result = run_demo(

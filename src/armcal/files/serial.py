@@ -43,7 +43,7 @@ from ..models import (
 from ..models.spatial_dh import convention_mistake, table_chain
 from .common import check_keys, fail, load_toml, number, number_within, numbers, suggest
 from .robot_units import check_mdh_angles, check_reach, limit_warnings, urdf_limit_warning
-from .robots import RobotSpec, fixed_parameters, held_terms, load_robot
+from .robots import RobotSpec, fixed_parameters, held_terms, load_robot, rigid_truth_message
 from .serial_noise import read_serial_noise
 from .ur import (
     UR_MODELS,
@@ -588,11 +588,7 @@ def load_serial_truth(
     arm = model.arm
     if not isinstance(model, CompliantSerialArm):
         if "compliance" in data and not geometry_only:
-            raise fail(
-                path,
-                f"key 'compliance': robot {arm.name} has no [elastostatic] table, so nothing "
-                "twists its joints; add the table to the robot file or remove [compliance]",
-            )
+            raise fail(path, rigid_truth_message("compliance", arm.name, "[compliance]"))
         return _geometry_truth(path, data, arm, links)
     names = model.compliance_names
     compliance = np.zeros(len(names))
