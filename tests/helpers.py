@@ -129,6 +129,20 @@ def deviated_tip(
     return x, y
 
 
+#: A planar vertical 3-link arm with its link masses known and a 10 kg payload, sigma
+#: 0.02 mm: the compliance tests' arm (gravity along -y, in the arm's plane).
+VERTICAL_3LINK = """name = "vertical-3link"
+link_lengths_mm = [600.0, 450.0, 200.0]
+joint_limits_deg = [[-170, 170], [-150, 150], [-150, 150]]
+[measurement]
+sigma_mm = 0.02
+[elastostatic]
+gravity_xy = [0, -1]
+link_masses_kg = [20, 12, 6]
+payload_kg = 10
+"""
+
+
 #: The head of a robot TOML for the built-in industrial 6R's URDF (``{urdf}``) under
 #: another ``{name}``: its coupled J2/J3 and its limits, as the built-in file has them.
 INDUSTRIAL_HEAD = """name = "{name}"
@@ -172,14 +186,8 @@ def cell_toml(
     ``[elastostatic]``, or tables after it)."""
     reflectors = "\n".join(f"{k} = {{ xyz_mm = {v} }}" for k, v in CELL_TARGETS.items())
     masses = "lumped = true" if lumped else f"link_masses_kg = {CELL_MASSES}"
-    return f"""name = "cell-6r"
-urdf = "{urdf}"
-base_link = "base_link"
-tip_link = "flange"
-joint_map = [[1, 0, 0, 0, 0, 0], [0, 1, 0, 0, 0, 0], [0, 1, 1, 0, 0, 0],
-             [0, 0, 0, 1, 0, 0], [0, 0, 0, 0, 1, 0], [0, 0, 0, 0, 0, 1]]
-joint_limits_deg = [[-185, 185], [-60, 76], [-132, 150], [-360, 360], [-125, 125], [-360, 360]]
-[measurement]
+    head = INDUSTRIAL_HEAD.format(name="cell-6r", urdf=urdf)
+    return f"""{head}[measurement]
 sigma_mm = 0.02
 {"[targets]" if targets else ""}
 {reflectors if targets else ""}

@@ -22,7 +22,7 @@ from armcal.files import load_serial_robot, load_serial_truth, read_calibration
 from armcal.identification import identify
 from armcal.identification.registration import instrument_moved, register_nominal
 from armcal.models import CalibratedArm, PlanarArm, forward_kinematics
-from armcal.validation import clearly_better, validate
+from armcal.validation import clearly_better, cross_validate, validate
 from helpers import run_cli
 
 SIGMA = 0.03  # mm, the virtual instrument's noise (isotropic: whitening is the identity)
@@ -260,3 +260,74 @@ def test_a_misfit_spread_over_the_poses_is_not_called_a_move():
     assert "instrument-moved" not in [w.code for w in cal.warnings]
     rows = cal.model.conditions(q)
     assert instrument_moved(cal.model, rows, bent, cal.params) is None
+
+
+def test_validating_on_the_calibrations_own_rows_is_said(tmp_path):
+    _campaign(tmp_path, errors=True, turn_deg=0.0)
+    run = run_cli(
+        tmp_path, "identify", "--robot", "industrial-6r", "--measurements", "meas.csv",
+        "--sigma", str(SIGMA), "-o", "cal.json",
+    )  # fmt: skip
+    assert run.returncode == 0, run.stderr
+    # Every family's calibration file keeps the rows it was fitted to.
+    assert len(json.loads((tmp_path / "cal.json").read_text())["training_rows"]["q"]) == 40
+    checked = run_cli(
+        tmp_path, "validate", "--calibration", "cal.json", "--measurements", "meas.csv", "--json"
+    )
+    assert checked.returncode == 0, checked.stderr
+    warned = {w["code"]: w["message"] for w in json.loads(checked.stdout)["warnings"]}
+    assert "40 of 40 rows are rows the calibration was fitted to" in warned["not-held-out"]
+    # Fresh poses of the same arm are held out: no such warning.
+    fresh = run_cli(
+        tmp_path, "validate", "--calibration", "cal.json", "--measurements", "m2.csv", "--json"
+    )
+    part = {w["code"]: w["message"] for w in json.loads(fresh.stdout)["warnings"]}
+    assert "20 of 20 rows" in part["not-held-out"]  # m2.csv is the second half of meas.csv
+    lines = (tmp_path / "m2.csv").read_text().splitlines()
+    first = lines[1].split(",")
+    first[0] = repr(float(first[0]) + 1e-6)  # one reading moved by a micro-degree
+    (tmp_path / "shifted.csv").write_text(
+        "\n".join([lines[0], ",".join(first), *lines[2:]]) + "\n"
+    )
+    shifted = run_cli(
+        tmp_path, "validate", "--calibration", "cal.json", "--measurements", "shifted.csv",
+        "--json",
+    )  # fmt: skip
+    codes = {w["code"]: w["message"] for w in json.loads(shifted.stdout)["warnings"]}
+    assert "19 of 20 rows" in codes["not-held-out"]
+
+
+def _write_points(folder: Path, name: str, q: np.ndarray, points: np.ndarray) -> None:
+    head = ",".join(f"q{k + 1}_deg" for k in range(6)) + ",x_mm,y_mm,z_mm"
+    rows = [
+        ",".join(repr(float(v)) for v in (*np.degrees(a), *p))
+        for a, p in zip(q, points, strict=True)
+    ]
+    (folder / name).write_text("\n".join([head, *rows]) + "\n")
+
+
+@pytest.mark.parametrize("mirror", ["swap-xy", "flip-z"])
+def test_mirrored_six_axis_data_are_named_and_no_move_is_blamed(tmp_path, mirror):
+    # Any reflection of the instrument's frame (two axes swapped, one flipped) is one
+    # mirror up to a rotation, which the base pose takes up: either is named.
+    _, _, q, points = _six_axis(m=40)
+    mirrored = points[:, [1, 0, 2]] if mirror == "swap-xy" else points * [1.0, 1.0, -1.0]
+    _write_points(tmp_path, "meas.csv", q, mirrored)
+    run = run_cli(
+        tmp_path, "identify", "--robot", "industrial-6r", "--measurements", "meas.csv",
+        "--sigma", str(SIGMA),
+    )  # fmt: skip
+    assert "mirrored" in run.stderr, run.stderr
+    assert (
+        "instrument-moved" not in run.stderr and "instrument pose of their own" not in run.stderr
+    )
+
+
+def test_cross_validation_reports_its_progress_fold_by_fold():
+    arm, _, q, points = _six_axis(m=30)
+    calls: list[tuple[int, int]] = []
+    cross_validate(
+        arm.with_noise(None), q, points, 3, sigma=SIGMA, rng=0,
+        progress=lambda done, total: calls.append((done, total)),
+    )  # fmt: skip
+    assert calls == [(1, 3), (2, 3), (3, 3)]

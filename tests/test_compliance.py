@@ -32,7 +32,7 @@ from armcal.models import (
 )
 from armcal.synthesis import synthesize_measurements
 from armcal.validation import validate
-from helpers import Run, run_cli
+from helpers import VERTICAL_3LINK, Run, run_cli
 
 G = STANDARD_GRAVITY
 
@@ -256,17 +256,7 @@ def _armcal(*args: str, cwd: Path) -> Run:
     return run_cli(cwd, *args)
 
 
-ROBOT = """
-name = "vertical-3link"
-link_lengths_mm = [600.0, 450.0, 200.0]
-joint_limits_deg = [[-170, 170], [-150, 150], [-150, 150]]
-[measurement]
-sigma_mm = 0.02
-[elastostatic]
-gravity_xy = [0, -1]
-link_masses_kg = [20, 12, 6]
-payload_kg = 10
-"""
+ROBOT = VERTICAL_3LINK
 
 TRUTH = """
 dl_mm = [1.0, -0.5, 0.8]

@@ -51,20 +51,11 @@ from armcal.models import (
     SerialElastics,
 )
 from armcal.workflow import export_files
-from helpers import cell_toml, run_cli
+from helpers import VERTICAL_3LINK, cell_toml, run_cli
 
 # -- a planar vertical arm with its masses known ----------------------------------------
 
-PLANAR = """name = "vertical-3link"
-link_lengths_mm = [600.0, 450.0, 200.0]
-joint_limits_deg = [[-170, 170], [-150, 150], [-150, 150]]
-[measurement]
-sigma_mm = 0.02
-[elastostatic]
-gravity_xy = [0, -1]
-link_masses_kg = [20, 12, 6]
-payload_kg = 10
-"""
+PLANAR = VERTICAL_3LINK
 
 PLANAR_TRUTH = """dl_mm = [1.0, -0.5, 0.8]
 dq_deg = [0.3, -0.2, 0.4]
@@ -375,7 +366,7 @@ def test_the_rigid_export_figures_equal_an_independent_computation(tmp_path):
     _six_axis_cell(tmp_path)
     _identify(tmp_path, "cell.toml")
     doc = json.loads((tmp_path / "cal.json").read_text())
-    stored = doc["elastostatic"]["rows"]
+    stored = doc["training_rows"]
     # the rows stored are the measurement file's (readings in rad), every target's
     header = (tmp_path / "meas.csv").read_text().splitlines()[0].split(",")
     columns = [header.index(f"q{j}_deg") for j in range(1, 7)]
@@ -477,8 +468,8 @@ def test_a_calibration_file_without_rows_exports_without_the_figure(tmp_path):
     _planar_cell(tmp_path)
     _identify(tmp_path, "robot.toml")
     doc = json.loads((tmp_path / "cal.json").read_text())
-    assert len(doc["elastostatic"]["rows"]["q"]) == 40
-    del doc["elastostatic"]["rows"]  # a file written before the rows were stored
+    assert len(doc["training_rows"]["q"]) == 40
+    doc["training_rows"] = None  # a file written before the rows were stored
     (tmp_path / "old.json").write_text(json.dumps(doc))
     run = run_cli(
         tmp_path, "export", "--calibration", "old.json", "--robot-toml", "r.toml", "--json"
@@ -487,10 +478,10 @@ def test_a_calibration_file_without_rows_exports_without_the_figure(tmp_path):
     assert "rigid_export" not in json.loads(run.stdout)
     assert "compliance-not-exported" in run.stdout
     rows = {"q": [[0, 0]], "target": None, "payload_kg": [0.0], "force_n": None}  # 2 of 3 joints
-    bad = dict(doc, elastostatic=dict(doc["elastostatic"], rows=rows))
+    bad = dict(doc, training_rows=rows)
     (tmp_path / "bad.json").write_text(json.dumps(bad))
     run = run_cli(tmp_path, "export", "--calibration", "bad.json", "--robot-toml", "r.toml")
-    assert run.returncode == 2 and "key 'elastostatic'" in run.stderr, run.stderr
+    assert run.returncode == 2 and "key 'training_rows'" in run.stderr, run.stderr
 
 
 # -- the unit of every RMS the compliance paths print -----------------------------------

@@ -37,6 +37,7 @@ __all__ = [
     "OUTLIER_MM",
     "PLANAR_DEMO_POSES",
     "Demo",
+    "demo_rigid_warning",
     "figure_writer",
     "report_head",
     "run_demo",
@@ -92,6 +93,17 @@ class Demo:
     files: dict[str, str | Callable[[Path], None]]
     document: dict
     warnings: tuple[ArmcalWarning, ...]
+
+
+def demo_rigid_warning(name: str) -> ArmcalWarning:
+    """``demo-rigid``: the demo of robot ``name``, whose file has ``[elastostatic]``,
+    calibrates its geometry alone (every family: the demo's arm is rigid)."""
+    return ArmcalWarning(
+        "demo-rigid",
+        f"the demo calibrates the geometry of {name} alone: its joint compliance "
+        "([elastostatic], and a truth's compliance) is left out of the virtual arm and of "
+        "the fit; synthesize, identify and validate take it",
+    )
 
 
 def figure_writer(make: Callable[[], object]) -> Callable[[Path], None]:

@@ -40,6 +40,7 @@ from .models import CalibratedArm, Conditions, FitModel, Loads
 from .models.information import tip_variances
 from .noise import NoiseModel
 from .numerics import point_norms, rms
+from .progress import ProgressCallback
 
 __all__ = [
     "CrossValidation",
@@ -50,6 +51,7 @@ __all__ = [
     "cross_validation_warning",
     "cross_validation_warnings",
     "predicted_errors",
+    "training_rows_among",
     "validate",
     "validation_warnings",
     "worse_warning",
@@ -81,6 +83,9 @@ class Validation:
         Where the nominal arm of ``before`` was registered: on the calibration's
         training rows (its recorded baseline), or on these held-out rows (for a
         calibration that recorded none).
+    reused : ndarray of bool, shape (m,), or None
+        Which rows are rows the calibration was fitted to (the same joint readings and
+        target, to the last bit); None where the calibration does not record its rows.
     """
 
     before: np.ndarray
@@ -91,6 +96,7 @@ class Validation:
     out_of_plane_mm: np.ndarray | None = None
     turns: Turns | None = None
     baseline_rows: Literal["calibration", "held-out"] = "calibration"
+    reused: np.ndarray | None = None
 
     def __repr__(self) -> str:
         s = self.summary()
@@ -336,7 +342,29 @@ def validate(
         out_of_plane,
         _turns(model, before, after, turn),
         baseline_rows,
+        None if cal.training_rows is None else training_rows_among(cal.training_rows, conditions),
     )
+
+
+def _row_keys(rows: Conditions) -> np.ndarray:
+    """Every row's joint readings and target as one opaque key ``(m,)``, bit for bit."""
+    target = np.zeros(rows.m) if rows.target is None else rows.target.astype(float)
+    table = np.ascontiguousarray(np.column_stack([np.asarray(rows.q, dtype=float), target]))
+    return table.view(np.dtype((np.void, table.dtype.itemsize * table.shape[1]))).ravel()
+
+
+def training_rows_among(training: Conditions, rows: Conditions) -> np.ndarray:
+    """Boolean ``(m,)``: which of ``rows`` are rows of ``training`` (the same joint readings,
+    to the last bit, and the same target): a calibration's own rows given to validation as
+    held out.  One sort of both, ``O(m log m)``.
+
+    Examples
+    --------
+    >>> train = Conditions(np.array([[0.1, 0.2], [0.3, 0.4]]))
+    >>> training_rows_among(train, Conditions(np.array([[0.3, 0.4], [0.3, 0.41]]))).tolist()
+    [True, False]
+    """
+    return np.isin(_row_keys(rows), _row_keys(training))
 
 
 def _other_data(dim: int) -> str:
@@ -446,6 +474,16 @@ def validation_warnings(
         )
     if result.turns is not None:
         warnings += _turn_warnings(s, count)
+    reused = 0 if result.reused is None else int(np.count_nonzero(result.reused))
+    if reused:
+        warnings.append(
+            ArmcalWarning(
+                "not-held-out",
+                f"{reused} of {count} rows are rows the calibration was fitted to (the same "
+                "joint readings and target): they are not held out, and their errors after "
+                "calibration flatter it; validate on poses the calibration has not seen",
+            )
+        )
     if not clearly_better(result.before_mm, result.after_mm, groups):
         warnings.append(
             worse_warning(
@@ -632,6 +670,7 @@ def cross_validate(
     row_sigma: np.ndarray | None = None,
     rng: np.random.Generator | int | None = None,
     loads: Loads | None = None,
+    progress: ProgressCallback | None = None,
 ) -> CrossValidation:
     """K-fold cross-validation of the calibration of ``model``.
 
@@ -653,6 +692,8 @@ def cross_validate(
         As for :func:`armcal.identification.identify`.
     rng : numpy.random.Generator or int or None
         Shuffles the groups into folds.
+    progress : callable, optional
+        ``progress(done, folds)`` after every fold (:mod:`armcal.progress`).
 
     Returns
     -------
@@ -710,6 +751,8 @@ def cross_validate(
         _, predicted[held], turn = _predicted(fitted, test)
         if turn is not None:
             turn_predicted[held] = turn
+        if progress is not None:
+            progress(k + 1, folds)
     d = model.position_dim
     turns = _turns(model, errors, errors, turn_predicted if points.shape[1] > d else None)
     return CrossValidation(

@@ -19,7 +19,7 @@ from typing import Any
 
 import numpy as np
 
-from ..demo import PLANAR_DEMO_POSES, run_demo
+from ..demo import PLANAR_DEMO_POSES, demo_rigid_warning, run_demo
 from ..demo_serial import SERIAL_DEMO_POSES, run_serial_demo
 from ..errors import ArmcalError
 from ..files import (
@@ -133,6 +133,7 @@ def _truth(
     model: FitModel,
     *,
     nominal: bool = False,
+    geometry_only: bool = False,
 ) -> tuple[np.ndarray, str | None]:
     """The parameters of the virtual robot ``model`` (a plan's, with the plan's loads):
     ``--truth``, with compliance for a model of joint compliance, else the built-in's.
@@ -140,6 +141,7 @@ def _truth(
     A robot file without ``--truth`` is refused, or with ``nominal`` studied as its nominal
     arm (:data:`NOMINAL_TRUTH`, returned as the note to print): zero errors and no
     compliance, the values the model holds its fixed parameters at, for every family.
+    ``geometry_only`` (the demo's rigid arm) leaves a truth's compliance out.
     """
     default = spec.default_truth
     if args.truth is None and default is None:
@@ -154,7 +156,7 @@ def _truth(
         path = args.truth if args.truth is not None else spec.default_truth
         assert path is not None
         links = (getattr(args, "base_link", None), getattr(args, "tip_link", None))
-        return load_serial_truth(path, model, links=links), None
+        return load_serial_truth(path, model, links=links, geometry_only=geometry_only), None
     if isinstance(model, CompliantArm):
         if args.truth is None:
             keys = ", ".join(COMPLIANCE_TRUTH_KEYS[k] for k in dict.fromkeys(model.kinds))
@@ -165,7 +167,7 @@ def _truth(
         geometry = load_truth(args.truth, model.arm)
         return np.concatenate([geometry, load_compliance_truth(args.truth, model)]), None
     if args.truth is not None:
-        return load_truth(args.truth, spec.arm), None
+        return load_truth(args.truth, spec.arm, rigid=not geometry_only), None
     assert isinstance(default, np.ndarray)
     return default, None
 
@@ -280,6 +282,7 @@ def _options(args: argparse.Namespace) -> dict[str, Any]:
         "robust": args.robust,
         "folds": args.cross_validate,
         "seed": args.seed,
+        "progress": None if args.cross_validate is None else ProgressBar("cross-validation"),
     }
 
 
@@ -512,7 +515,7 @@ def demo(args: argparse.Namespace) -> None:
     if isinstance(spec, SerialSpec):  # the six-axis story: a tracker and three reflectors
         result = run_serial_demo(
             spec.arm,
-            lambda arm: _truth(args, spec, arm)[0],
+            lambda arm: _truth(args, spec, arm, geometry_only=True)[0],
             poses=SERIAL_DEMO_POSES if args.poses is None else args.poses,
             sigma=args.sigma,
             seed=args.seed,
@@ -520,7 +523,7 @@ def demo(args: argparse.Namespace) -> None:
         )
         kinds = "report.md, residuals, measurements, calibration, program, URDF, DH table, offsets"
     else:
-        truth = _truth(args, spec, spec.arm)[0]  # the demo calibrates the geometry
+        truth = _truth(args, spec, spec.arm, geometry_only=True)[0]  # the geometry alone
         sigma = design_sigma(spec.arm) if args.sigma is None else args.sigma
         poses = PLANAR_DEMO_POSES if args.poses is None else args.poses
         result = run_demo(
@@ -531,7 +534,8 @@ def demo(args: argparse.Namespace) -> None:
     if args.output is not None:
         folder = write_folder(args.output, result.files)
         lines += ["", f"wrote {len(result.files)} files to {folder}/: {kinds}"]
-    emit(args, dict(result.document), "\n".join(lines), [*spec.warnings, *result.warnings])
+    rigid = () if spec.elastic is None else (demo_rigid_warning(spec.arm.name),)
+    emit(args, dict(result.document), "\n".join(lines), [*spec.warnings, *rigid, *result.warnings])
 
 
 def export(args: argparse.Namespace) -> None:

@@ -240,13 +240,11 @@ def read_calibration(path: str | os.PathLike) -> CalibratedArm:
             else _arm_from_dict(doc["robot"], noise, [n for n in fixed if n not in _terms(doc)])
         )
         model: FitModel = arm
-        rows = None
         if doc.get("elastostatic") is not None:
             key = "elastostatic"
             model = _compliance_from_dict(arm, doc["elastostatic"], fixed)
-            rows = _rows_from_dict(
-                doc["elastostatic"].get("rows"), arm.n_joints, len(arm.target_labels)
-            )
+        key = "training_rows"
+        rows = _rows_from_dict(doc.get("training_rows"), arm.n_joints, len(arm.target_labels))
         key = "parameters"
         names = [entry["name"] for entry in doc["parameters"]]
         expected = model.param_names
@@ -283,7 +281,7 @@ def read_calibration(path: str | os.PathLike) -> CalibratedArm:
     if plane is None and isinstance(arm, PlanarArm) and arm.base_rotation:
         raise fail(path, "key 'plane': a calibration from 3-D data must record its plane")
     if rows is not None and not np.all(np.isfinite(rows.q)):
-        raise fail(path, "key 'elastostatic.rows': joint readings must be finite numbers")
+        raise fail(path, "key 'training_rows': joint readings must be finite numbers")
     return CalibratedArm(model, values, full, sigma, plane, rows, baseline)
 
 
@@ -338,8 +336,9 @@ def _finite_or_none(value: float | None) -> float | None:
 
 def _rows_dict(cal: Calibration) -> dict[str, Any] | None:
     """The rows the fit used, compactly: joint readings ``q`` (rad, mm for a prismatic
-    joint), target indices and loads (what a rigid export is judged on,
-    :func:`armcal.export_rigid.rigid_export`)."""
+    joint), target indices and loads: what validation checks held-out rows against
+    (:func:`armcal.validation.validate`) and a rigid export is judged on
+    (:func:`armcal.export_rigid.rigid_export`)."""
     rows = cal.calibrated().training_rows
     if rows is None:
         return None
@@ -381,7 +380,6 @@ def _elastostatic_dict(cal: Calibration) -> dict | None:
             "held": list(model.held),
             "merges": list(model.merges),
             "geometry_only_rms_per_coordinate_mm": nested.rms_per_coordinate_mm,
-            "rows": _rows_dict(cal),
         }
     if not isinstance(model, CompliantArm) or nested is None:
         return None
@@ -396,7 +394,6 @@ def _elastostatic_dict(cal: Calibration) -> dict | None:
         "known_loads": model.known_loads,
         "parameters": list(model.compliance_names),
         "geometry_only_rms_per_coordinate_mm": nested.rms_per_coordinate_mm,
-        "rows": _rows_dict(cal),
     }
 
 
@@ -547,5 +544,6 @@ def calibration_document(
         "converged": cal.converged,
         "plane": None if cal.plane is None else cal.plane.to_dict(),
         "baseline": _baseline_dict(cal),
+        "training_rows": _rows_dict(cal),
         "warnings": [w.to_dict(words) for w in (cal.warnings if warnings is None else warnings)],
     }

@@ -34,7 +34,11 @@ no real arm could look like that, a warning where a strange arm might.
 * **A URDF in millimetres** (error): those offsets add up to more than
   :data:`MAX_REACH_MM` (20 m).  The largest serial arms reach about 17.6 m (the
   space station's Canadarm2; industrial arms 4.7 m at most): a URDF written in mm
-  (``xyz="0 0 425"`` for 425 mm) makes a 1 m arm reach 1 km.
+  (``xyz="0 0 425"`` for 425 mm) makes a 1 m arm reach 1 km.  Where a few origins
+  are each beyond that reach alone while the others make an arm, those origins are
+  named: millimetres among metres.
+* **rpy in degrees** (error, read with the URDF: :data:`~armcal.files.urdf.RPY_BOUND_RAD`):
+  an origin's angle beyond 2 pi.
 """
 
 from __future__ import annotations
@@ -181,6 +185,28 @@ def urdf_limit_warning(path: str | os.PathLike, chain: SerialChain) -> ArmcalWar
     )
 
 
+def _offsets_in_mm(chain: SerialChain, offsets: np.ndarray) -> str | None:
+    """What to say of a URDF whose reach is beyond :data:`MAX_REACH_MM` because of a few
+    joint origins (``offsets``: joints 2 to n, mm), each beyond it alone, while the others
+    make an arm: those origins, in mm among metres (None when the whole file is in mm)."""
+    big = offsets > MAX_REACH_MM
+    rest = float(np.sum(offsets[~big]) + np.linalg.norm(chain.tip[:3, 3]))
+    if not big.any() or rest > MAX_REACH_MM or rest < METRE_REACH_MM:
+        return None
+    joints = np.flatnonzero(big) + 1  # offsets start at the second joint
+    written = [" ".join(f"{v / 1000:g}" for v in chain.origins[j, :3, 3]) for j in joints]
+    shown = ", ".join(
+        f'joint {chain.joint_names[j]!r} (xyz="{xyz}")'
+        for j, xyz in zip(joints, written, strict=True)
+    )
+    which = "that xyz" if joints.size == 1 else "those xyz"
+    return (
+        f"the origin of {shown} is beyond any arm's reach ({MAX_REACH_MM / 1000:g} m) alone, "
+        f"while the arm's other offsets add up to {rest / 1000:.3g} m: it looks written in "
+        f"millimetres among metres; a URDF's lengths are metres: divide {which} by 1000"
+    )
+
+
 def check_reach(
     path: str | os.PathLike, chain: SerialChain, *, urdf: bool
 ) -> ArmcalWarning | None:
@@ -195,6 +221,9 @@ def check_reach(
     offsets = np.linalg.norm(chain.origins[1:, :3, 3], axis=1)
     reach = float(np.sum(offsets) + np.linalg.norm(chain.tip[:3, 3]))
     if reach > MAX_REACH_MM:
+        alone = _offsets_in_mm(chain, offsets) if urdf else None
+        if alone is not None:
+            raise fail(path, alone)
         fix = (
             'the URDF looks written in millimetres (xyz="0 0 425" for 425 mm), but a URDF\'s '
             "lengths are metres: divide its xyz and its prismatic limits by 1000"

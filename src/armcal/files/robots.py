@@ -48,6 +48,7 @@ __all__ = [
     "load_robot",
     "load_truth",
     "parse_region",
+    "rigid_truth_message",
     "unknown_parameter",
 ]
 
@@ -556,8 +557,11 @@ def _targets(path, table: Any, last_length: float) -> tuple[Target, ...]:
     return tuple(targets)
 
 
-def load_truth(path: str | os.PathLike, arm: PlanarArm) -> np.ndarray:
+def load_truth(path: str | os.PathLike, arm: PlanarArm, *, rigid: bool = False) -> np.ndarray:
     """Read a truth TOML (``dl_mm``, ``dq_deg``, optional ``base_mm``) for ``arm``.
+
+    A model with joint compliance reads the truth's compliance on its own
+    (:func:`load_compliance_truth`); a ``rigid`` model refuses it, as it cannot use it.
 
     Returns
     -------
@@ -566,6 +570,9 @@ def load_truth(path: str | os.PathLike, arm: PlanarArm) -> np.ndarray:
     """
     data = load_toml(path, "truth")
     check_keys(path, data, allowed_keys("", TRUTH_KEYS), robot=False)
+    given = [key for key in COMPLIANCE_TRUTH_KEYS.values() if key in data]
+    if rigid and given:
+        raise fail(path, rigid_truth_message(given[0], arm.name))
     n, k = arm.n_joints, arm.n_links
     counts = f"{n} numbers, one per joint" + (
         f", or {k}: one per link vector (the last link once per target)" if k != n else ""
@@ -596,6 +603,16 @@ def load_truth(path: str | os.PathLike, arm: PlanarArm) -> np.ndarray:
 
 #: Truth keys of the compliance parameters (:mod:`armcal.models.compliance`), by kind.
 COMPLIANCE_TRUTH_KEYS = {"k": "k_urad_per_Nm", "c": "c_mdeg_per_m"}
+
+
+def rigid_truth_message(key: str, name: str, table: str | None = None) -> str:
+    """Why a truth's compliance ``key`` (a ``table`` of keys, where given) is refused for
+    the rigid model of robot ``name``."""
+    return (
+        f"key '{key}': the model of robot {name} has no joint compliance (its robot file has "
+        "no [elastostatic] table, or the compliance is left out), so nothing twists its "
+        f"joints; add the table to the robot file or remove {table or key}"
+    )
 
 
 def load_compliance_truth(path: str | os.PathLike, model: CompliantArm) -> np.ndarray:

@@ -43,7 +43,7 @@ from ..models import (
 from ..models.spatial_dh import convention_mistake, table_chain
 from .common import check_keys, fail, load_toml, number, number_within, numbers, suggest
 from .robot_units import check_mdh_angles, check_reach, limit_warnings, urdf_limit_warning
-from .robots import RobotSpec, fixed_parameters, held_terms, load_robot
+from .robots import RobotSpec, fixed_parameters, held_terms, load_robot, rigid_truth_message
 from .serial_noise import read_serial_noise
 from .ur import (
     UR_MODELS,
@@ -570,6 +570,7 @@ def load_serial_truth(
     model: SpatialArm | CompliantSerialArm,
     *,
     links: tuple[str | None, str | None] = (None, None),
+    geometry_only: bool = False,
 ) -> np.ndarray:
     """The true parameters ``(p,)`` (mm, rad) of a virtual spatial arm (module notes), and
     for a model of joint compliance its ``[compliance]`` table's after them (display
@@ -578,19 +579,16 @@ def load_serial_truth(
     The true arm's description, when given, is turned into the arm's parameters
     exactly (:meth:`~armcal.models.SpatialArm.params_of`); a bare URDF's chain runs
     between the base and tip ``links`` (the robot's, where given).  A ``[compliance]``
-    table needs a model of compliance (its robot file's ``[elastostatic]``).
+    table needs a model of compliance (its robot file's ``[elastostatic]``), unless
+    ``geometry_only``: then it is read for its keys and left out (the demo's rigid arm).
     """
     path = Path(path)
     data = load_toml(path, "truth")
     check_keys(path, data, allowed_keys("", SERIAL_TRUTH_KEYS))
     arm = model.arm
     if not isinstance(model, CompliantSerialArm):
-        if "compliance" in data:
-            raise fail(
-                path,
-                f"key 'compliance': robot {arm.name} has no [elastostatic] table, so nothing "
-                "twists its joints; add the table to the robot file or remove [compliance]",
-            )
+        if "compliance" in data and not geometry_only:
+            raise fail(path, rigid_truth_message("compliance", arm.name, "[compliance]"))
         return _geometry_truth(path, data, arm, links)
     names = model.compliance_names
     compliance = np.zeros(len(names))

@@ -13,6 +13,7 @@ Units: a URDF is in metres and radians; the chain returned is in mm and rad
 from __future__ import annotations
 
 import codecs
+import math
 import os
 import re
 import xml.etree.ElementTree as ET
@@ -28,6 +29,7 @@ from .common import suggest
 
 __all__ = [
     "GRIPPER_WORDS",
+    "RPY_BOUND_RAD",
     "UrdfChain",
     "read_urdf",
 ]
@@ -36,6 +38,11 @@ _MOVING = ("revolute", "continuous", "prismatic")
 _KINDS = (*_MOVING, "fixed")
 #: Every joint type of the URDF format; floating and planar ones only off the chain.
 _URDF_KINDS = (*_KINDS, "floating", "planar")
+
+#: The largest rpy angle (rad) of a URDF origin: any orientation has angles within +-pi,
+#: and a file may write 2 pi (with the last digits of a rounding); beyond it the angles
+#: are degrees (rpy="90 0 0" read as radians turns by 90 rad = 5157 deg).
+RPY_BOUND_RAD = 2 * math.pi + 2e-3
 
 
 @dataclass(frozen=True, eq=False)
@@ -436,6 +443,13 @@ def _origin(
     origin = element.find("origin")
     xyz = None if origin is None else _floats(path, text, origin, "xyz", 3, where)
     rpy = None if origin is None else _floats(path, text, origin, "rpy", 3, where)
+    if rpy is not None and max(abs(v) for v in rpy) > RPY_BOUND_RAD:
+        shown = " ".join(f"{v:g}" for v in rpy)
+        raise InputError(
+            f'{path}: {where}: rpy="{shown}" has an angle beyond 2 pi ({2 * math.pi:.4g} rad), '
+            "which looks like degrees; a URDF's rpy is in radians: convert it (rad = deg / "
+            "57.29578)"
+        )
     x, y, z = (1000.0 * v for v in (xyz or (0.0, 0.0, 0.0)))
     return (x, y, z), rpy or (0.0, 0.0, 0.0)
 

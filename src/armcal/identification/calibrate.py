@@ -53,7 +53,7 @@ from .judgement import (
     too_good_warning,
     unseen_warning,
 )
-from .problem import Problem, reference_sigma
+from .problem import Fit, Problem, reference_sigma
 from .registration import Movement, instrument_moved, register_nominal
 from .result import Calibration, NestedFit
 from .robust import judge
@@ -114,6 +114,13 @@ MIRRORS = (
 )
 
 
+#: How far from the noise a fit to mirrored points may stay (chi-square over its degrees
+#: of freedom) for the mirror to be its cause: a wrong joint map's fit, mirrored, still
+#: misses by a billion (chi-square 1e10 on 150 dof), a mirrored export's comes back to
+#: the noise (1 on average), and what the model lacks besides may leave a few times more.
+MIRROR_FIT = 100.0
+
+
 def _mirrored_fit(
     problem: Problem, used: np.ndarray, sigma: float, chi2: float
 ) -> tuple[str, float, int] | None:
@@ -121,8 +128,10 @@ def _mirrored_fit(
 
     Tried when most poses disagree: a mirrored frame moves every point.  None
     unless undoing a mirror of :data:`MIRRORS` lowers chi-square
-    :data:`FREED_IMPROVEMENT` times; the best one is named (both, when the fit's
-    registration makes them the same, to within a factor 2).
+    :data:`FREED_IMPROVEMENT` times and leaves a fit that is not itself far off (chi-square
+    below :data:`MIRROR_FIT` times its degrees of freedom: a mirror explains a misfit
+    only if undoing it leaves a fit near the noise); the best one is named (both, when
+    the fit's registration makes them the same, to within a factor 2).
     """
     model = problem.model
     points = problem.points[used]
@@ -133,11 +142,28 @@ def _mirrored_fit(
         refit = _refit_chi2(problem, model, used, mirrored, problem.method)
         found.append((refit / sigma**2, what))
     best, what = min(found)
-    if best * FREED_IMPROVEMENT > chi2:
+    dof = model.point_dim * len(points) - model.n_free
+    if best * FREED_IMPROVEMENT > chi2 or best > MIRROR_FIT * max(dof, 1):
         return None
     if all(c <= 2 * best for c, _ in found):
         what = "x and y are swapped, or one axis is flipped (a camera's image y points down)"
-    return what, best, model.point_dim * len(points) - model.n_free
+    return what, best, dof
+
+
+def _mirror_suspect(problem: Problem, fit: Fit, sigma: float) -> str | None:
+    """What to say of a fit far off whose points, mirrored back, fit far better (the
+    mirror of :func:`_mirrored_fit`): the cause named when its estimate breaks the fit."""
+    used = np.ones(problem.m, dtype=bool)
+    chi2 = float(np.sum(fit.whitened**2)) / sigma**2
+    found = _mirrored_fit(problem, used, sigma, chi2)
+    if found is None:
+        return None
+    what, mirrored_chi2, _ = found
+    return (
+        f"the measurements look mirrored: {what} (undone, the fit improves "
+        f"{chi2 / max(mirrored_chi2, 1e-300):.3g}-fold); fix the instrument's export or the "
+        "columns"
+    )
 
 
 def identify(
@@ -305,6 +331,8 @@ def identify(
     if far_off(model, least_squares, reference if given else None):
         cause = coupled_joints(problem, least_squares)
         problem.suspect = None if cause is None else cause.text
+        if cause is None:  # a mirrored frame moves every point: said if the fit breaks
+            problem.suspect = _mirror_suspect(problem, least_squares, reference)
     fit, used = least_squares, everyone
     judged = judge(problem, robust_sigma, least_squares, robust=True) if robust else None
     if judged is not None:
@@ -364,7 +392,7 @@ def identify(
         freed = _freed_fit(problem, used, sigma_value, chi2)
         if freed is None and cause is None:
             cause = swapped_targets(problem, least_squares, labels, row_numbers)
-        if freed is None and cause is None:  # an instrument that moved mid-campaign
+        if freed is None and cause is None and fit.converged:  # the instrument moved?
             moved = instrument_moved(model, conditions, points, fit.params, used=used)
             cause = None if moved is None else moved_warning(moved, row_numbers)
         mirrored = (

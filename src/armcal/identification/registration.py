@@ -22,7 +22,9 @@ measured) are fitted far better with an instrument pose of their own, the
 calibrated geometry held: an F test of the ``k`` extra registration parameters
 (Bonferroni over the three splits), and a split that takes up at least half of
 the residual sum of squares, so that a model's misfit spread over the poses
-(which a second registration only nibbles at) is not taken for a move.
+(which a second registration only nibbles at) is not taken for a move.  A "move"
+of more than a twentieth of the reach (:data:`MOVE_MOST`) is another mistake, and a
+fit that did not converge is not judged.
 """
 
 from __future__ import annotations
@@ -37,6 +39,7 @@ from .solvers import gauss_newton
 
 __all__ = [
     "MOVE_ALPHA",
+    "MOVE_MOST",
     "MOVE_SHARE",
     "MOVE_SPLITS",
     "Baseline",
@@ -56,6 +59,13 @@ MOVE_ALPHA = 1e-3
 #: up to be called a move: a misfit spread over the poses (compliance, a wrong
 #: joint map) is fitted a little better by any extra parameters, never by half.
 MOVE_SHARE = 0.5
+
+#: The largest move (RMS per point of how far the two registrations put the rows apart,
+#: as a fraction of the reach) taken for an instrument that moved: a tracker knocked or a
+#: tripod that settles moves the points by millimetres, not by a twentieth of the arm;
+#: a larger "move" is another mistake (a mirrored frame, a wrong joint map), whose fit the
+#: second registration only happens to shrink.
+MOVE_MOST = 0.05
 
 #: Gauss-Newton's step tolerance (relative to the reach) and iteration cap here.
 _TOL, _MAX_ITER = 1e-10, 30
@@ -310,6 +320,8 @@ def instrument_moved(
             continue
         apart = model.positions(whole, first) - model.positions(whole, second)
         shift = rms(point_norms(apart[:, : model.position_dim]))
+        if not shift <= MOVE_MOST * model.reach_mm:  # (a NaN too)
+            continue
         found = Movement(int(rows[split]), fraction, shift, float(explained), min(p_value, 1.0))
         if best is None or found.explained > best.explained:
             best = found

@@ -50,6 +50,7 @@ from ..identification.experiment import coverage, plan_degenerate_warning
 from ..instrument import identify_3d
 from ..models import CalibratedArm, FitModel, Loads, PlanarArm, SerialChain, SpatialArm, Target
 from ..plausibility import deviation_warning, explain, suspicious, unit_mistake
+from ..progress import ProgressCallback
 from ..validation import (
     CrossValidation,
     Validation,
@@ -244,6 +245,7 @@ def calibrate(
     compliance: bool = True,
     folds: int | None = None,
     seed: int | np.random.Generator | None = 0,
+    progress: ProgressCallback | None = None,
 ) -> CalibrationRun:
     """Calibrate the robot of ``spec`` from measurements, with every check and warning.
 
@@ -270,6 +272,9 @@ def calibrate(
         K-fold cross-validation.
     seed
         Shuffles the folds.
+    progress : callable, optional
+        ``progress(done, folds)`` as the cross-validation's folds finish
+        (:mod:`armcal.progress`).
 
     Returns
     -------
@@ -294,7 +299,9 @@ def calibrate(
     points = None
     if folds is not None:  # the fitted points: a 3-D file's in its plane
         points = meas.xy if cal.plane is None else cal.plane.to_plane(meas.xyz)
-    return _calibration_run(cal, spec, meas, points, ignored, large, folds, sigma, seed)
+    return _calibration_run(
+        cal, spec, meas, points, ignored, large, folds, sigma, seed, progress=progress
+    )
 
 
 def _as_asked(
@@ -319,6 +326,8 @@ def _calibration_run(
     folds: int | None,
     sigma: float | None,
     seed: int | np.random.Generator | None,
+    *,
+    progress: ProgressCallback | None = None,
 ) -> CalibrationRun:
     """The run of ``cal``: what the robot file, the measurements, the options (``ignored``)
     and the fit warn of, ``large`` unless the fit warned of it, and the cross-validation
@@ -329,7 +338,7 @@ def _calibration_run(
     checked = None
     if folds is not None:
         assert points is not None
-        checked = _cross_validated(cal, meas, points, folds, sigma, seed, warnings)
+        checked = _cross_validated(cal, meas, points, folds, sigma, seed, warnings, progress)
     return CalibrationRun(cal, tuple(unique_warnings(warnings)), checked)
 
 
@@ -341,6 +350,7 @@ def _cross_validated(
     sigma: float | None,
     seed: int | np.random.Generator | None,
     warnings: list[ArmcalWarning],
+    progress: ProgressCallback | None = None,
 ) -> CrossValidation:
     """K-fold cross-validation of ``cal`` on its ``points``; its warning joins ``warnings``."""
     conditions = cal.conditions
@@ -355,6 +365,7 @@ def _cross_validated(
         row_sigma=meas.row_sigma,
         rng=seed,
         loads=None if conditions is None else conditions.loads,
+        progress=progress,
     )
     warnings.extend(cross_validation_warnings(checked))
     return checked
@@ -406,6 +417,7 @@ def calibrate_serial(
     folds: int | None = None,
     seed: int | np.random.Generator | None = 0,
     compliance: bool = True,
+    progress: ProgressCallback | None = None,
 ) -> CalibrationRun:
     """:func:`calibrate` for a spatial arm: the same options, checks and warnings.
 
@@ -443,7 +455,9 @@ def calibrate_serial(
     except ValueError as exc:
         raise InputError(f"{source}: {unrendered(exc)}") from None
     large = deviation_warning(cal.model, cal.params)
-    return _calibration_run(cal, spec, meas, points, ignored, large, folds, sigma, seed)
+    return _calibration_run(
+        cal, spec, meas, points, ignored, large, folds, sigma, seed, progress=progress
+    )
 
 
 @dataclass(frozen=True, eq=False)
