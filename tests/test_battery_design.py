@@ -256,7 +256,7 @@ def test_the_pool_certificate_never_overclaims_and_is_tight_on_a_designed_plan(c
     found = certify_pool(model, plan, pool)
     assert found.pool_size == 15
     assert found.certified_d_efficiency <= truth * (1 + 1e-9)  # a lower bound, never more
-    # the reference is the multiplicative algorithm's 1000 iterations: close to xi*
+    # the reference is 300 iterations of the multiplicative algorithm: close to xi*
     assert found.certified_d_efficiency >= 0.9 * truth
 
 
