@@ -13,7 +13,12 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from helpers import Run, cell_toml, run_cli
+import numpy as np
+import pytest
+
+from armcal.errors import InputError
+from armcal.files.joints import SAME_POSE, check_pose_labels
+from helpers import Run, cell_toml, deviated_tip, run_cli
 
 
 def _one_error(run: Run) -> str:
@@ -57,3 +62,43 @@ def test_truth_target_not_of_the_robot_is_named_with_the_robots_targets(tmp_path
     assert "name one of them" in line
     assert not line.rstrip().endswith(";")  # the battery's line ended in a dangling '; '
     assert not (tmp_path / "out.csv").exists()
+
+
+# -- 2. one pose label for two joint readings ----------------------------------------------
+
+
+def _labelled_measurements(second_pose_q1: str) -> str:
+    """Six rows of the paper's 4-link arm, labelled P1, P1, P1, P2, P2, P2; row 4's q1 is
+    ``second_pose_q1`` (rows 5, 6 keep 30 deg).  The points are the nominal arm's
+    (paper eq. 1 with lengths 260/180/120/100 mm), which the reader does not judge."""
+    links, zero = (260.0, 180.0, 120.0, 100.0), (0.0,) * 4
+    rows = ["pose,q1_deg,q2_deg,q3_deg,q4_deg,x_mm,y_mm"]
+    poses = [("P1", (0.0, 40.0, 40.0, 40.0))] * 3 + [("P2", (30.0, 20.0, 20.0, 20.0))] * 3
+    for k, (label, q) in enumerate(poses):
+        x, y = deviated_tip(q, links, zero, zero)
+        q1 = second_pose_q1 if k == 3 else f"{q[0]:g}"
+        rows.append(f"{label},{q1},{q[1]:g},{q[2]:g},{q[3]:g},{x!r},{y!r}")
+    return "\n".join(rows) + "\n"
+
+
+def test_a_pose_label_reused_for_two_joint_readings_is_refused(tmp_path: Path):
+    # row 4 (label P2) reads q1 = 0 deg, rows 5 and 6 (also P2) read 30 deg
+    # (the point stays at q1 = 30 deg: only the label's two readings matter here)
+    (tmp_path / "m.csv").write_text(_labelled_measurements("0"))
+    run = run_cli(
+        tmp_path, "identify", "--robot", "paper-4link", "--measurements", "m.csv", "-o", "cal.json"
+    )
+    line = _one_error(run)
+    assert line.startswith("armcal: error: m.csv: rows 4 and 5 (lines 5 and 6), column pose: ")
+    assert "'P2' is given to two different joint readings (q1_deg 0 and 30 deg)" in line
+    assert "give the other pose a label of its own" in line
+    assert not (tmp_path / "cal.json").exists()
+
+
+def test_a_pose_label_over_readings_within_the_encoder_resolution_is_one_pose():
+    # 0.005 deg apart, half of SAME_POSE (0.01 deg): one pose read twice
+    q = np.array([[30.0, 20.0], [30.0 + SAME_POSE / 2, 20.0], [30.0 + 2 * SAME_POSE, 20.0]])
+    check_pose_labels("m.csv", ["P", "P", "Q"], q, ("R", "R"), [2, 3, 4])  # no error
+    with pytest.raises(InputError, match=r"rows 1 and 3 \(lines 2 and 4\)"):
+        check_pose_labels("m.csv", ["P", "P", "P"], q, ("R", "R"), [2, 3, 4])
+    check_pose_labels("m.csv", ["", "", ""], q, ("R", "R"), [2, 3, 4])  # empty: no label

@@ -35,6 +35,7 @@ from .joints import (
     JOINT_UNITS,
     check_joint_units,
     check_joint_values,
+    check_pose_labels,
     file_limits,
     joint_names,
     limit_slack,
@@ -521,6 +522,8 @@ def _read_csv(
         if turns.any():
             _refuse_radians(path, what, q_file[:, turns], limits[turns])
         check_joint_values(path, what, arm, model_units(q_file, kinds), lines)
+    if "pose" in texts:
+        check_pose_labels(path, texts["pose"], q_file, kinds, lines)
     return _Table(values, texts, numbers, lines, beyond, header_line)
 
 
