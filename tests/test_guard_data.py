@@ -17,8 +17,9 @@ import numpy as np
 import pytest
 
 from armcal.errors import InputError
-from armcal.files.joints import SAME_POSE, check_pose_labels
+from armcal.files.joints import SAME_POSE, check_pose_labels, joint_names
 from helpers import Run, cell_toml, deviated_tip, run_cli
+from test_guard_files import KINDS, SLIDE_TOML, slide_plan, slide_points
 
 
 def _one_error(run: Run) -> str:
@@ -102,3 +103,65 @@ def test_a_pose_label_over_readings_within_the_encoder_resolution_is_one_pose():
     with pytest.raises(InputError, match=r"rows 1 and 3 \(lines 2 and 4\)"):
         check_pose_labels("m.csv", ["P", "P", "P"], q, ("R", "R"), [2, 3, 4])
     check_pose_labels("m.csv", ["", "", ""], q, ("R", "R"), [2, 3, 4])  # empty: no label
+
+
+# -- 3. joint readings in the wrong unit ---------------------------------------------------
+
+
+def test_slide_readings_in_metres_are_named_before_the_fit(tmp_path: Path):
+    # the five-joint arm of test_guard_files.py, whose joint 4 slides 0..400 mm; its points
+    # are written out from its MDH table there, independently of armcal
+    (tmp_path / "arm.toml").write_text(SLIDE_TOML)
+    q_file = slide_plan(30, seed=9)
+    points = slide_points(q_file)
+    read = q_file.copy()
+    read[:, 3] /= 1000.0  # the slide written in metres under q4_mm
+    header = [*joint_names(KINDS), "x_mm", "y_mm", "z_mm"]
+    rows = [",".join(repr(float(v)) for v in row) for row in np.column_stack([read, points])]
+    (tmp_path / "meas.csv").write_text("\n".join([",".join(header), *rows]) + "\n")
+    run = run_cli(
+        tmp_path, "identify", "--robot", "arm.toml", "--measurements", "meas.csv", "-o", "c.json"
+    )
+    line = _one_error(run)
+    assert line.startswith("armcal: error: meas.csv: the slide readings in q4_mm look like metres")
+    assert f"they span {read[:, 3].min():.4g} to {read[:, 3].max():.4g}" in line
+    assert line.endswith("convert them to mm")
+    assert not (tmp_path / "c.json").exists()
+    # the same readings in mm are no unit mistake: the fit runs (and writes its file)
+    rows = [",".join(repr(float(v)) for v in row) for row in np.column_stack([q_file, points])]
+    (tmp_path / "meas.csv").write_text("\n".join([",".join(header), *rows]) + "\n")
+    run = run_cli(
+        tmp_path, "identify", "--robot", "arm.toml", "--measurements", "meas.csv", "-o", "c.json"
+    )
+    assert run.returncode == 0, run.stderr
+    assert (tmp_path / "c.json").exists()
+
+
+#: A planar three-link arm whose joint 2 never reaches 0: -140..-5 deg (the battery's
+#: kr-cell joint 2), so radians of its angles fall outside its limits.
+BENT_ARM = """name = "bent-3link"
+link_lengths_mm = [400.0, 300.0, 200.0]
+joint_limits_deg = [[-170, 170], [-140, -5], [-150, 150]]
+"""
+
+
+def test_radians_that_break_a_joint_limit_are_named_as_radians(tmp_path: Path):
+    (tmp_path / "arm.toml").write_text(BENT_ARM)
+    q_deg = [(10.0 * k - 40.0, -5.0 - 12.0 * k, 15.0 * k - 60.0) for k in range(10)]
+    lines = ["q1_deg,q2_deg,q3_deg,x_mm,y_mm"]
+    zero = (0.0, 0.0, 0.0)
+    for q in q_deg:
+        x, y = deviated_tip(q, (400.0, 300.0, 200.0), zero, zero)  # paper eq. 1, by hand
+        lines.append(",".join(f"{np.radians(v):.6f}" for v in q) + f",{x!r},{y!r}")
+    (tmp_path / "meas.csv").write_text("\n".join(lines) + "\n")
+    run = run_cli(
+        tmp_path, "identify", "--robot", "arm.toml", "--measurements", "meas.csv", "-o", "c.json"
+    )
+    line = _one_error(run)
+    # row 1: q2 = -5 deg = -0.0872665 rad, read as -0.087 deg, outside [-140, -5]
+    assert line.startswith("armcal: error: meas.csv: row 1 (line 2), column q2_deg: ")
+    assert "outside joint 2's limits [-140, -5] deg" in line
+    # the largest angle, q2 = -5 - 12 * 9 = -113 deg, is 1.97 rad
+    assert f"within +-{np.radians(113.0):.3g}, which looks like radians" in line
+    assert "convert the angles to degrees" in line
+    assert not (tmp_path / "c.json").exists()

@@ -510,6 +510,8 @@ def _read_csv(
                 f"360: the column reads turns in 0..360 (or -360..0); subtract or add 360 "
                 f"where a value exceeds the limit, or give joint_limits_deg in that range"
             )
+        if turns[j]:  # radians blame no limit: say so before the limits
+            fix = _radians(what, q_file[:, turns], limits[turns]) or fix
         raise fail(
             path,
             f"row {r + 1} (line {lines[r]}), column {expected[j]}: {values[r, j]:g} {unit} is "
@@ -546,7 +548,15 @@ RADIAN_MIN_POSES = 3
 
 
 def _refuse_radians(path, what: str, q_deg: np.ndarray, limits_deg: np.ndarray) -> None:
-    """InputError when a plan's or program's angles look like radians under ``q*_deg``.
+    """InputError when a plan's or program's angles look like radians (:func:`_radians`)."""
+    found = _radians(what, q_deg, limits_deg)
+    if found is not None:
+        raise fail(path, found)
+
+
+def _radians(what: str, q_deg: np.ndarray, limits_deg: np.ndarray) -> str | None:
+    """What says that a file's angles ``q_deg`` look like radians under ``q*_deg``, with
+    the fix; None when they do not.
 
     Every angle within :data:`RADIAN_LIMIT_BOUND` (2 pi, rounded up) over at
     least :data:`RADIAN_MIN_POSES` poses, while the joints may turn farther: an
@@ -558,12 +568,11 @@ def _refuse_radians(path, what: str, q_deg: np.ndarray, limits_deg: np.ndarray) 
     span = np.abs(q_deg).max(initial=0.0)
     may_turn = np.maximum(-limits_deg[:, 0], limits_deg[:, 1]).max() > RADIAN_LIMIT_BOUND
     if len(q_deg) < RADIAN_MIN_POSES or span == 0.0 or span > RADIAN_LIMIT_BOUND or not may_turn:
-        return
-    raise fail(
-        path,
+        return None
+    return (
         f"every joint angle of the {len(q_deg)} {what} rows is within +-{span:.3g}, which "
         f"looks like radians under the q*_deg columns (the joints may turn to "
-        f"{np.abs(limits_deg).max():g} deg); convert the angles to degrees (x 180/pi)",
+        f"{np.abs(limits_deg).max():g} deg); convert the angles to degrees (x 180/pi)"
     )
 
 
