@@ -11,6 +11,7 @@ stderr and in the JSON).
 
 from __future__ import annotations
 
+import json
 from pathlib import Path
 
 import numpy as np
@@ -19,6 +20,7 @@ import pytest
 from armcal.errors import InputError
 from armcal.files.joints import SAME_POSE, check_pose_labels, joint_names
 from helpers import Run, cell_toml, deviated_tip, run_cli
+from test_guard_compliance import PLANAR, PLANAR_TRUTH
 from test_guard_files import KINDS, SLIDE_TOML, slide_plan, slide_points
 
 
@@ -165,3 +167,138 @@ def test_radians_that_break_a_joint_limit_are_named_as_radians(tmp_path: Path):
     assert f"within +-{np.radians(113.0):.3g}, which looks like radians" in line
     assert "convert the angles to degrees" in line
     assert not (tmp_path / "c.json").exists()
+
+
+# -- 4. payloads in another unit, beyond the calibrated range, or missing ------------------
+
+
+def _vertical_cell(folder: Path) -> None:
+    """test_guard_compliance.py's vertical 3-link arm (masses 20/12/6 kg, the robot file's
+    payload_kg 10), its truth (k = 1.5/3/6 urad/(N m)) and 40 poses measured by
+    synthesize, every other one under the 10 kg payload (meas.csv)."""
+    (folder / "robot.toml").write_text(PLANAR)
+    (folder / "truth.toml").write_text(PLANAR_TRUTH)
+    rng = np.random.default_rng(4)
+    rows = ["q1_deg,q2_deg,q3_deg,payload_kg"] + [
+        f"{a:.6f},{b:.6f},{c:.6f},{10 if i % 2 else 0}"
+        for i, (a, b, c) in enumerate(rng.uniform(-140, 140, (40, 3)))
+    ]
+    (folder / "plan.csv").write_text("\n".join(rows) + "\n")
+    made = run_cli(
+        folder, "synthesize", "--robot", "robot.toml", "--plan", "plan.csv",
+        "--truth", "truth.toml", "-o", "meas.csv", "--seed", "3",
+    )  # fmt: skip
+    assert made.returncode == 0, made.stderr
+
+
+def _with_payloads(folder: Path, name: str, change) -> None:
+    """meas.csv with its payload_kg column changed by ``change`` (or left out: None)."""
+    lines = (folder / "meas.csv").read_text().splitlines()
+    header = lines[0].split(",")
+    col = header.index("payload_kg")
+    out = []
+    for line in lines:
+        fields = line.split(",")
+        if change is None:
+            del fields[col]
+        elif line is not lines[0]:
+            fields[col] = repr(change(float(fields[col])))
+        out.append(",".join(fields))
+    (folder / name).write_text("\n".join(out) + "\n")
+
+
+def _codes(run: Run) -> dict[str, str]:
+    """The warnings of a run's stderr by code: every line ``armcal: warning: ...`` and the
+    JSON's ``warnings`` (when the run printed JSON) say the same."""
+    codes = {w["code"]: w["message"] for w in json.loads(run.stdout)["warnings"]}
+    for message in codes.values():
+        assert f"armcal: warning: {message}" in run.stderr
+    return codes
+
+
+@pytest.mark.parametrize(
+    ("unit", "per_kg"),
+    [("grams", 1000.0), ("pounds", 2.20462)],  # the definitions: 1 kg = 1000 g = 2.20462 lb
+)
+def test_a_payload_column_in_grams_or_pounds_is_warned_of(tmp_path: Path, unit, per_kg):
+    _vertical_cell(tmp_path)
+    _with_payloads(tmp_path, "m.csv", lambda kg: kg * per_kg)
+    run = run_cli(
+        tmp_path, "identify", "--robot", "robot.toml", "--measurements", "m.csv", "--json"
+    )
+    assert run.returncode == 0, run.stderr
+    words = _codes(run)["payload-unit"]
+    # the heaviest row carries 10 kg (the robot file's payload_kg): 10 * per_kg in the file
+    assert words.startswith(
+        f"m.csv: column payload_kg: the rows carry up to {10 * per_kg:g} kg, "
+        f"{per_kg:.4g} times the robot file's payload_kg (10 kg): they look like {unit}"
+    )
+    assert "give payload_kg in kg" in words
+    assert f"armcal: warning: {words}" in run.stderr
+    # in kg: no such warning
+    run = run_cli(
+        tmp_path, "identify", "--robot", "robot.toml", "--measurements", "meas.csv", "--json"
+    )
+    assert run.returncode == 0, run.stderr
+    assert "payload-unit" not in _codes(run)
+
+
+def test_a_forgotten_payload_column_is_named_as_the_likely_cause(tmp_path: Path):
+    # half the rows were measured without the payload; read without the column, every row
+    # carries the robot file's 10 kg, and 10 kg at up to 1.25 m on k3 = 6 urad/(N m) alone
+    # turns the last link by ~0.7 mrad: tenths of a mm, far above sigma = 0.02 mm
+    _vertical_cell(tmp_path)
+    _with_payloads(tmp_path, "m.csv", None)
+    run = run_cli(
+        tmp_path, "identify", "--robot", "robot.toml", "--measurements", "m.csv", "--json"
+    )
+    assert run.returncode == 0, run.stderr
+    codes = _codes(run)
+    assert "fit-inconsistent" in codes
+    assert codes["payload-missing"].startswith(
+        "m.csv: has no payload_kg column, so every row was taken to carry the robot file's "
+        "payload_kg (10 kg), and the fit is inconsistent with the noise"
+    )
+    assert "add the column payload_kg" in codes["payload-missing"]
+    # with the column the fit is consistent, and nothing is said of it
+    run = run_cli(
+        tmp_path, "identify", "--robot", "robot.toml", "--measurements", "meas.csv", "--json"
+    )
+    assert not {"payload-missing", "fit-inconsistent"} & set(_codes(run))
+
+
+def test_payloads_beyond_the_calibrated_range_are_an_extrapolation(tmp_path: Path):
+    _vertical_cell(tmp_path)
+    made = run_cli(
+        tmp_path, "identify", "--robot", "robot.toml", "--measurements", "meas.csv",
+        "-o", "cal.json",
+    )  # fmt: skip
+    assert made.returncode == 0, made.stderr
+    (tmp_path / "prog.csv").write_text("q1_deg,q2_deg,q3_deg\n10,20,30\n-40,50,-60\n")
+
+    def compensate(kg: str) -> Run:
+        return run_cli(
+            tmp_path, "compensate", "--calibration", "cal.json", "--program", "prog.csv",
+            "--payload-kg", kg, "-o", "out.csv",
+        )  # fmt: skip
+
+    # the calibration saw 0 and 10 kg: 100 kg is 10 times its largest
+    run = compensate("100")
+    assert run.returncode == 0, run.stderr
+    assert (
+        "armcal: warning: prog.csv: payloads up to 100 kg, 10 times the largest the "
+        "calibration was fitted under (0 to 10 kg)" in run.stderr
+    )
+    # twice its largest (PAYLOAD_EXTRAPOLATION) is not warned of
+    run = compensate("20")
+    assert run.returncode == 0 and "payload" not in run.stderr, run.stderr
+    # validation on rows whose payloads are in grams: 1000 times, and the unit named
+    _with_payloads(tmp_path, "grams.csv", lambda kg: kg * 1000.0)
+    run = run_cli(
+        tmp_path, "validate", "--calibration", "cal.json", "--measurements", "grams.csv",
+        "--json",
+    )  # fmt: skip
+    assert run.returncode == 0, run.stderr
+    words = _codes(run)["payload-extrapolated"]
+    assert words.startswith("grams.csv: payloads up to 10000 kg, 1000 times the largest")
+    assert words.endswith("if the payloads are not in kg, they look like grams (1000 per kg)")
