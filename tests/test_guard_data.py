@@ -20,6 +20,7 @@ import pytest
 from armcal.errors import InputError
 from armcal.files.joints import SAME_POSE, check_pose_labels, joint_names
 from helpers import Run, cell_toml, deviated_tip, run_cli
+from test_cli_errors import VALID_MEAS
 from test_guard_compliance import PLANAR, PLANAR_TRUTH
 from test_guard_files import KINDS, SLIDE_TOML, slide_plan, slide_points
 
@@ -302,3 +303,42 @@ def test_payloads_beyond_the_calibrated_range_are_an_extrapolation(tmp_path: Pat
     words = _codes(run)["payload-extrapolated"]
     assert words.startswith("grams.csv: payloads up to 10000 kg, 1000 times the largest")
     assert words.endswith("if the payloads are not in kg, they look like grams (1000 per kg)")
+
+
+# -- 5. a calibration of another arm -------------------------------------------------------
+
+
+def test_a_calibration_of_another_arm_is_named_as_such(tmp_path: Path):
+    # a calibration of paper-4link (4 joints) from test_cli_errors.py's valid measurements
+    (tmp_path / "meas.csv").write_text(VALID_MEAS)
+    made = run_cli(
+        tmp_path, "identify", "--robot", "paper-4link", "--measurements", "meas.csv",
+        "-o", "cal.json",
+    )  # fmt: skip
+    assert made.returncode == 0, made.stderr
+    # a 3-joint arm's program (its joints well within any limits)
+    (tmp_path / "prog.csv").write_text("q1_deg,q2_deg,q3_deg\n10,20,30\n-10,40,-20\n")
+    run = run_cli(
+        tmp_path, "compensate", "--calibration", "cal.json", "--program", "prog.csv",
+        "-o", "out.csv",
+    )  # fmt: skip
+    line = _one_error(run)
+    assert line == (
+        "armcal: error: prog.csv: has 3 joint columns (q1_deg..q3_deg), but the calibration "
+        "cal.json belongs to paper-4link, an arm of 4 joints: the program and the calibration "
+        "cal.json are of different arms; pass the calibration of the same arm (or fix the "
+        "header, if the file is of paper-4link)"
+    )
+    assert not (tmp_path / "out.csv").exists()
+    # held-out measurements of that arm: the same words, for the measurements
+    (tmp_path / "test.csv").write_text(
+        "q1_deg,q2_deg,q3_deg,x_mm,y_mm\n10,20,30,100,200\n-10,40,-20,150,100\n"
+    )
+    run = run_cli(
+        tmp_path, "validate", "--calibration", "cal.json", "--measurements", "test.csv",
+        "--plot", "v.png",
+    )  # fmt: skip
+    line = _one_error(run)
+    assert "the calibration cal.json belongs to paper-4link, an arm of 4 joints" in line
+    assert "the measurements and the calibration cal.json are of different arms" in line
+    assert not (tmp_path / "v.png").exists()

@@ -384,18 +384,6 @@ def _unit_hint(name: str, allowed: Sequence[str]) -> str:
     return f"positions are read in mm: name the column {fixed} and give millimetres; "
 
 
-def _from(arm_from: str | None) -> str:
-    """`` of the calibration cal.json``, or nothing for an arm from a robot file."""
-    return "" if arm_from is None else f" of {arm_from}"
-
-
-def _other_robot(arm_from: str | None) -> str:
-    """How to give the robot measured, where the arm came from ``arm_from``."""
-    if arm_from is None:
-        return f"pass the matching {action('robot-arm')}"
-    return f"pass a calibration of the robot measured ({arm_from} is of another arm)"
-
-
 def _read_csv(
     path,
     arm: PlanarArm | SpatialArm,
@@ -455,11 +443,15 @@ def _read_csv(
             )
     found = check_joint_units(path, header, header_line, arm)
     if found and len(found) != arm.n_joints:
+        has = f"has {len(found)} joint columns ({found[0][1]}..{found[-1][1]})"
         raise fail(
             path,
-            f"has {len(found)} joint columns ({found[0][1]}..{found[-1][1]}) but robot "
-            f"{arm.name}{_from(arm_from)} has {arm.n_joints} joints; {_other_robot(arm_from)} "
-            "or fix the header",
+            f"{has} but robot {arm.name} has {arm.n_joints} joints; pass the matching "
+            f"{action('robot-arm')} or fix the header"
+            if arm_from is None
+            else f"{has}, but {arm_from} belongs to {arm.name}, an arm of {arm.n_joints} "
+            f"joints: the {what} and {arm_from} are of different arms; pass the calibration "
+            f"of the same arm (or fix the header, if the file is of {arm.name})",
         )
     for name in expected:
         if name not in header:
@@ -723,7 +715,10 @@ def _check_reach(
     column = ("x_mm", "y_mm", "z_mm")[c]
     fix = "check the value and the unit (mm)"
     if arm_from is not None:
-        fix = f"is {arm_from} of the arm measured? If so, {fix}"
+        fix = (
+            f"{arm_from} belongs to {arm.name}: if the measurements are of another arm, pass "
+            f"that arm's calibration; else {fix}"
+        )
     elif distance[r] <= 1000 * limit and reach < METRE_REACH_MM:
         fix = (
             f"the robot's links add up to {reach:g} mm: if the robot file's link_lengths_mm "
@@ -737,7 +732,7 @@ def _check_reach(
     raise fail(
         path,
         f"row {r + 1} (line {lines[r]}), column {column}: {xy[r, c]:g} puts the tip "
-        f"{distance[r]:.4g} mm {where}, beyond the reach of {arm.name}{_from(arm_from)} ("
+        f"{distance[r]:.4g} mm {where}, beyond the reach of {arm.name} ("
         f"{'2 x ' if arm.base_offset else ''}{reach:g} mm, +{100 * REACH_MARGIN:g} % for "
         f"deviations: {limit:.4g} mm); {fix}",
     )
