@@ -342,3 +342,45 @@ def test_a_calibration_of_another_arm_is_named_as_such(tmp_path: Path):
     assert "the calibration cal.json belongs to paper-4link, an arm of 4 joints" in line
     assert "the measurements and the calibration cal.json are of different arms" in line
     assert not (tmp_path / "v.png").exists()
+
+
+# -- 6. a slide's words ----------------------------------------------------------------------
+
+#: A lift (joint 1 slides 0..800 mm along the base's z) under a three-joint arm.
+LIFT_TOML = """name = "lift-arm"
+joint_limits_deg = [[0, 800], [-170, 170], [-120, 120], [-170, 170]]
+[mdh]
+alpha_deg = [0, 0, -90, 0]
+a_mm = [0, 0, 0, 400]
+theta_deg = [0, 0, 0, 0]
+d_mm = [0, 0, 0, 0]
+joint_types = ["P", "R", "R", "R"]
+tip_xyz_mm = [300, 0, 50]
+[measurement]
+sigma_mm = 0.02
+"""
+
+
+def test_a_slide_at_joint_1_slides_the_arm_in_the_identifiability_report(tmp_path: Path):
+    (tmp_path / "lift.toml").write_text(LIFT_TOML)
+    (tmp_path / "truth.toml").write_text(
+        "base = { xyz_mm = [2000.0, -500.0, -300.0], rpy_deg = [0.2, -0.1, 30.0] }\n"
+    )
+    rng = np.random.default_rng(12)
+    low, high = np.array([[0, 800], [-170, 170], [-120, 120], [-170, 170]], float).T
+    q = rng.uniform(low, high, (30, 4))
+    rows = ["q1_mm,q2_deg,q3_deg,q4_deg", *(",".join(f"{v:.6f}" for v in row) for row in q)]
+    (tmp_path / "plan.csv").write_text("\n".join(rows) + "\n")
+    made = run_cli(
+        tmp_path, "synthesize", "--robot", "lift.toml", "--truth", "truth.toml",
+        "--plan", "plan.csv", "--seed", "1", "-o", "meas.csv",
+    )  # fmt: skip
+    assert made.returncode == 0, made.stderr
+    run = run_cli(tmp_path, "identify", "--robot", "lift.toml", "--measurements", "meas.csv")
+    assert run.returncode == 0, run.stderr
+    # the slide's zero is a shift of the whole arm along its axis: the base's position
+    assert (
+        "the zero of joint 1 (dq1) merges into the base position: joint 1 slides the whole "
+        "arm along its axis, as the base position does" in run.stdout
+    )
+    assert "joint 1 turns" not in run.stdout
