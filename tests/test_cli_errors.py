@@ -1187,9 +1187,8 @@ CASES += [
         (
             "test.csv",
             "3 joint columns",
-            "4 joints",
-            "of the calibration cal.json",
-            "pass a calibration of the robot measured",
+            "the calibration cal.json belongs to paper-4link, an arm of 4 joints",
+            "are of different arms; pass the calibration of the same arm",
         ),
     ),
     case(  # a 3x larger arm: its points lie beyond paper-4link's reach (issue 20)
@@ -1198,8 +1197,9 @@ CASES += [
         VALIDATE,
         (
             "test.csv",
-            "beyond the reach of paper-4link of the calibration cal.json",
-            "is the calibration cal.json of the arm measured?",
+            "beyond the reach of paper-4link (",
+            "the calibration cal.json belongs to paper-4link: if the measurements are of "
+            "another arm, pass that arm's calibration",
         ),
     ),
     case(  # the last link's parameter splits into one per target: name them, not dl3
@@ -1212,7 +1212,11 @@ CASES += [
         "compensate-program-of-another-robot",
         {"cal.json": CALIBRATION, "prog.csv": _drop_column(PLAN_HEADER, PLAN_ROWS, "q4_deg")},
         COMPENSATE,
-        ("prog.csv", "of the calibration cal.json", "pass a calibration of the robot measured"),
+        (
+            "prog.csv",
+            "the calibration cal.json belongs to paper-4link",
+            "the program and the calibration cal.json are of different arms",
+        ),
     ),
     case(
         "validate-plan-instead-of-measurements",

@@ -495,7 +495,9 @@ _JOINTS = Column(
     "joint commands, one column per joint: q{j}_deg for a revolute joint, q{j}_mm for a "
     "prismatic one (a slide, read in mm); a column in the other unit is an error",
 )
-_POSE = Column("pose", "text", False, "pose label: rows with the same label are one pose")
+_POSE = Column(
+    "pose", "text", False, "pose label: rows with the same label are one pose (same joint values)"
+)
 _TARGET = Column("target", "text", False, "the [targets] label of the point measured")
 _PAYLOAD = Column("payload_kg", "kg", False, "payload at the tip ([elastostatic] robots)")
 _FORCE = (

@@ -85,6 +85,8 @@ __all__ = [
     "MIN_DOF",
     "MIN_SPREAD_FRACTION",
     "MIN_TURN_DEG",
+    "SLIDE_GAIN",
+    "SLIDE_LIMIT_SLACK",
     "SPREAD_TOLERANCE",
     "SUSPICIOUS_RMS_FRACTION",
     "Explanation",
@@ -434,6 +436,17 @@ SPREAD_TOLERANCE = 1.5
 MIN_SPREAD_FRACTION = 0.05
 
 
+#: How many times less (RMS) the distances of the points from their centroid must miss
+#: the measured ones with slide readings taken in another unit than as read, for that
+#: unit to be named: the two readings share the nominal tool point's error (tens of mm),
+#: while a slide read 1000 or 10 times too small misses by its whole travel.
+SLIDE_GAIN = 2.0
+
+#: How far (a fraction of a slide's range) its readings taken in another unit may fall
+#: beyond its limits and still be that unit's: a reading a little past a limit.
+SLIDE_LIMIT_SLACK = 0.01
+
+
 #: A 6-DoF instrument's orientations tell a unit only when the nominal tool turns at
 #: least this much (RMS, deg) from one row of a target to the next: radians read as
 #: degrees turn 57 times less, 0.09 deg here, still several times a probe's noise.
@@ -576,6 +589,10 @@ def unit_mistake(
                 f"centroid {radians:.4g} mm, measured {measured:.4g} mm; as degrees "
                 f"{nominal:.3g} mm); convert them to degrees"
             )
+    if not turning.all():
+        found = _slides_in_another_unit(model, conditions, q, np.asarray(points, float), turning)
+        if found is not None:
+            return found
     if orientations is not None and model.point_dim > model.position_dim:
         found = _orientations_in_radians(model, conditions, np.asarray(orientations, float))
         if found is not None:
@@ -593,6 +610,63 @@ def unit_mistake(
                 "each); convert them to mm"
             )
     return None
+
+
+def _centroid_distances(points: np.ndarray) -> np.ndarray:
+    """Every point's distance from the points' centroid (mm): unchanged by where the
+    instrument stands or how it is turned, so measured and nominal compare row by row."""
+    return np.linalg.norm(points - points.mean(axis=0), axis=-1)
+
+
+def _slides_in_another_unit(
+    model: FitModel,
+    conditions: Conditions,
+    q: np.ndarray,
+    points: np.ndarray,
+    turning: np.ndarray,
+) -> str | None:
+    """Slide readings in metres (inches, centimetres) under ``q*_mm``, said with the fix.
+
+    A slide read 1000 times too small hardly moves the nominal arm, while its other
+    joints still spread its points: the spread alone may not tell (a 3 m track under a
+    2 m arm spreads them about as far either way).  Every point's distance from the
+    centroid does, row by row.  A unit is named when the readings taken in it lie
+    within the slides' limits (give or take :data:`SLIDE_LIMIT_SLACK` of their range),
+    the distances as read miss the measured ones by at least
+    :data:`MIN_SPREAD_FRACTION` of the reach (RMS; no calibration deviation does), and
+    the readings taken in the unit miss them :data:`SLIDE_GAIN` times less: the nominal
+    tool point may be tens of mm off the true one, which the two share.
+    """
+    measured = _centroid_distances(points)
+    positions = model.positions(conditions)[:, : model.position_dim]
+    as_read = float(np.sqrt(np.mean((measured - _centroid_distances(positions)) ** 2)))
+    if as_read < MIN_SPREAD_FRACTION * model.reach_mm:
+        return None
+    slides = ~turning
+    low, high = model.joint_limits[slides].T
+    slack = SLIDE_LIMIT_SLACK * (high - low)
+    best: tuple[float, str, float] | None = None
+    for unit, length in LENGTH_UNITS:
+        scaled = q.copy()
+        scaled[:, slides] *= length
+        inside = (scaled[:, slides] >= low - slack) & (scaled[:, slides] <= high + slack)
+        if not inside.all():
+            continue
+        moved = model.positions(replace(conditions, q=scaled))[:, : model.position_dim]
+        mismatch = float(np.sqrt(np.mean((measured - _centroid_distances(moved)) ** 2)))
+        if mismatch * SLIDE_GAIN <= as_read and (best is None or mismatch < best[0]):
+            best = (mismatch, unit, length)
+    if best is None:
+        return None
+    mismatch, unit, length = best
+    names = [f"q{j + 1}_mm" for j in np.flatnonzero(slides)]
+    span = q[:, slides]
+    return (
+        f"the slide readings in {', '.join(names)} look like {unit}: they span "
+        f"{span.min():.4g} to {span.max():.4g}, and taken as {unit} ({length:g} mm each) "
+        f"they put the nominal arm's points about as far from their centroid as the measured "
+        f"ones (RMS mismatch {mismatch:.3g} mm, as read {as_read:.3g} mm); convert them to mm"
+    )
 
 
 def _orientations_in_radians(

@@ -25,8 +25,10 @@ from .csv_text import WIDTH, Column, degree_cells, degrees, float_cells
 __all__ = [
     "JOINT_COLUMN",
     "JOINT_UNITS",
+    "SAME_POSE",
     "check_joint_units",
     "check_joint_values",
+    "check_pose_labels",
     "file_limits",
     "joint_names",
     "joint_values",
@@ -40,6 +42,12 @@ JOINT_UNITS = {"R": "deg", "P": "mm"}
 
 #: A joint column of either unit (``q3_deg``, ``q3_mm``); up to 9999 joints.
 JOINT_COLUMN = re.compile(r"^q([1-9][0-9]{0,3})_(deg|mm)$")
+
+#: The largest difference of two rows' joint readings (deg, or mm for a slide) under one
+#: ``pose`` label: ten times an industrial joint encoder's reading resolution (about
+#: 0.001 deg) and far above a CSV's printing round-off.  Farther apart, the rows are two
+#: poses.
+SAME_POSE = 0.01
 
 
 def _kinds(kinds: int | Sequence[str]) -> tuple[str, ...]:
@@ -164,4 +172,54 @@ def check_joint_values(
         f"joint {k + 1} of the arm's description ({arm.chain.joint_names[k]}, u = M q by "
         f"joint_map) would be at {value:.6g} {unit}, outside its limits [{lo:g}, {hi:g}] "
         f"{unit} (the URDF's, on u): the arm cannot reach this pose; remove or change it",
+    )
+
+
+def check_pose_labels(
+    path, labels: Sequence[str], q_file: np.ndarray, kinds: Sequence[str], lines: Sequence[int]
+) -> None:
+    """Refuse a ``pose`` label given to two different joint readings.
+
+    A pose label names one pose: the rows measured at its joint readings (one per
+    target, load or cycle).  What groups rows by it (the check of swapped targets, the
+    ISO 9283 cycles, the report's count of poses) would mix two poses.
+
+    Parameters
+    ----------
+    path : str or path
+        The file, for the message.
+    labels : sequence of str
+        Every row's ``pose`` label.
+    q_file : ndarray, shape (m, n)
+        Every row's joint readings in the file's units (deg, mm for a slide).
+    kinds : sequence of str
+        Every joint's kind, ``"R"`` or ``"P"``.
+    lines : sequence of int
+        Every row's line in the file.
+
+    Raises
+    ------
+    InputError
+        Naming the label, its two rows and the joint that differs by more than
+        :data:`SAME_POSE`.
+    """
+    _, first, group = np.unique(np.asarray(labels), return_index=True, return_inverse=True)
+    group = group.reshape(-1)
+    spread = np.abs(q_file - q_file[first[group]])
+    named = np.array([bool(label) for label in labels], dtype=bool)  # an empty cell: no label
+    moved = np.flatnonzero(named & (np.max(spread, axis=1, initial=0.0) > SAME_POSE))
+    if not moved.size:
+        return
+    r = int(moved[0])
+    a = int(first[group[r]])
+    j = int(np.argmax(spread[r]))
+    name = joint_names(kinds)[j]
+    unit = JOINT_UNITS[_kinds(kinds)[j]]
+    raise fail(
+        path,
+        f"rows {a + 1} and {r + 1} (lines {lines[a]} and {lines[r]}), column pose: the label "
+        f"{labels[r]!r} is given to two different joint readings ({name} {q_file[a, j]:g} "
+        f"and {q_file[r, j]:g} {unit}); a pose label names one pose (the rows measured at "
+        "its joint readings, one per target, load or cycle): give the other pose a label "
+        "of its own",
     )

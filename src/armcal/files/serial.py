@@ -628,14 +628,24 @@ def _geometry_truth(
         if label not in arm.targets:
             raise fail(
                 path,
-                f"key 'targets.{label}': {arm.name} has no target {label!r}; "
-                f"{suggest(label, arm.targets)}",
+                f"key 'targets.{label}': {label!r} is not a target of {arm.name}: "
+                f"{suggest(label, arm.targets)}{_target_list(arm)}",
             )
         truth_targets[arm.targets.index(label)] = position
     params = arm.params_of(chain, base, truth_targets)
     if "errors" in data:
         params = params + _errors(path, data["errors"], arm)
     return params
+
+
+def _target_list(arm: SpatialArm) -> str:
+    """What a truth file's ``[targets]`` may name: the robot file's targets, or none."""
+    if not arm.targets:
+        return "the robot file has no [targets]; remove [targets] from the truth file"
+    return (
+        f"the robot file's [targets] has {', '.join(arm.targets)}; name one of them "
+        "(a new target goes into the robot file first)"
+    )
 
 
 def _errors(path: Path, table: Any, arm: SpatialArm) -> np.ndarray:

@@ -35,6 +35,7 @@ from .joints import (
     JOINT_UNITS,
     check_joint_units,
     check_joint_values,
+    check_pose_labels,
     file_limits,
     joint_names,
     limit_slack,
@@ -383,18 +384,6 @@ def _unit_hint(name: str, allowed: Sequence[str]) -> str:
     return f"positions are read in mm: name the column {fixed} and give millimetres; "
 
 
-def _from(arm_from: str | None) -> str:
-    """`` of the calibration cal.json``, or nothing for an arm from a robot file."""
-    return "" if arm_from is None else f" of {arm_from}"
-
-
-def _other_robot(arm_from: str | None) -> str:
-    """How to give the robot measured, where the arm came from ``arm_from``."""
-    if arm_from is None:
-        return f"pass the matching {action('robot-arm')}"
-    return f"pass a calibration of the robot measured ({arm_from} is of another arm)"
-
-
 def _read_csv(
     path,
     arm: PlanarArm | SpatialArm,
@@ -454,11 +443,15 @@ def _read_csv(
             )
     found = check_joint_units(path, header, header_line, arm)
     if found and len(found) != arm.n_joints:
+        has = f"has {len(found)} joint columns ({found[0][1]}..{found[-1][1]})"
         raise fail(
             path,
-            f"has {len(found)} joint columns ({found[0][1]}..{found[-1][1]}) but robot "
-            f"{arm.name}{_from(arm_from)} has {arm.n_joints} joints; {_other_robot(arm_from)} "
-            "or fix the header",
+            f"{has} but robot {arm.name} has {arm.n_joints} joints; pass the matching "
+            f"{action('robot-arm')} or fix the header"
+            if arm_from is None
+            else f"{has}, but {arm_from} belongs to {arm.name}, an arm of {arm.n_joints} "
+            f"joints: the {what} and {arm_from} are of different arms; pass the calibration "
+            f"of the same arm (or fix the header, if the file is of {arm.name})",
         )
     for name in expected:
         if name not in header:
@@ -509,6 +502,8 @@ def _read_csv(
                 f"360: the column reads turns in 0..360 (or -360..0); subtract or add 360 "
                 f"where a value exceeds the limit, or give joint_limits_deg in that range"
             )
+        if turns[j]:  # radians blame no limit: say so before the limits
+            fix = _radians(what, q_file[:, turns], limits[turns]) or fix
         raise fail(
             path,
             f"row {r + 1} (line {lines[r]}), column {expected[j]}: {values[r, j]:g} {unit} is "
@@ -521,6 +516,8 @@ def _read_csv(
         if turns.any():
             _refuse_radians(path, what, q_file[:, turns], limits[turns])
         check_joint_values(path, what, arm, model_units(q_file, kinds), lines)
+    if "pose" in texts:
+        check_pose_labels(path, texts["pose"], q_file, kinds, lines)
     return _Table(values, texts, numbers, lines, beyond, header_line)
 
 
@@ -543,7 +540,15 @@ RADIAN_MIN_POSES = 3
 
 
 def _refuse_radians(path, what: str, q_deg: np.ndarray, limits_deg: np.ndarray) -> None:
-    """InputError when a plan's or program's angles look like radians under ``q*_deg``.
+    """InputError when a plan's or program's angles look like radians (:func:`_radians`)."""
+    found = _radians(what, q_deg, limits_deg)
+    if found is not None:
+        raise fail(path, found)
+
+
+def _radians(what: str, q_deg: np.ndarray, limits_deg: np.ndarray) -> str | None:
+    """What says that a file's angles ``q_deg`` look like radians under ``q*_deg``, with
+    the fix; None when they do not.
 
     Every angle within :data:`RADIAN_LIMIT_BOUND` (2 pi, rounded up) over at
     least :data:`RADIAN_MIN_POSES` poses, while the joints may turn farther: an
@@ -555,12 +560,11 @@ def _refuse_radians(path, what: str, q_deg: np.ndarray, limits_deg: np.ndarray) 
     span = np.abs(q_deg).max(initial=0.0)
     may_turn = np.maximum(-limits_deg[:, 0], limits_deg[:, 1]).max() > RADIAN_LIMIT_BOUND
     if len(q_deg) < RADIAN_MIN_POSES or span == 0.0 or span > RADIAN_LIMIT_BOUND or not may_turn:
-        return
-    raise fail(
-        path,
+        return None
+    return (
         f"every joint angle of the {len(q_deg)} {what} rows is within +-{span:.3g}, which "
         f"looks like radians under the q*_deg columns (the joints may turn to "
-        f"{np.abs(limits_deg).max():g} deg); convert the angles to degrees (x 180/pi)",
+        f"{np.abs(limits_deg).max():g} deg); convert the angles to degrees (x 180/pi)"
     )
 
 
@@ -711,7 +715,10 @@ def _check_reach(
     column = ("x_mm", "y_mm", "z_mm")[c]
     fix = "check the value and the unit (mm)"
     if arm_from is not None:
-        fix = f"is {arm_from} of the arm measured? If so, {fix}"
+        fix = (
+            f"{arm_from} belongs to {arm.name}: if the measurements are of another arm, pass "
+            f"that arm's calibration; else {fix}"
+        )
     elif distance[r] <= 1000 * limit and reach < METRE_REACH_MM:
         fix = (
             f"the robot's links add up to {reach:g} mm: if the robot file's link_lengths_mm "
@@ -725,7 +732,7 @@ def _check_reach(
     raise fail(
         path,
         f"row {r + 1} (line {lines[r]}), column {column}: {xy[r, c]:g} puts the tip "
-        f"{distance[r]:.4g} mm {where}, beyond the reach of {arm.name}{_from(arm_from)} ("
+        f"{distance[r]:.4g} mm {where}, beyond the reach of {arm.name} ("
         f"{'2 x ' if arm.base_offset else ''}{reach:g} mm, +{100 * REACH_MARGIN:g} % for "
         f"deviations: {limit:.4g} mm); {fix}",
     )

@@ -154,14 +154,18 @@ def _reason(
     last = layout.n_joints
     into_base = all(p.startswith("base.") for p in partners)
     into_targets = all(p.split(".")[0] in layout.targets for p in partners)
+    slides = [kind == "P" for kind in chain.kinds]  # a slide moves along its axis, not about
     if dropped == "dq1" and into_base:
+        if slides[0]:
+            return "joint 1 slides the whole arm along its axis, as the base position does"
         return "joint 1 turns the whole arm, as the base rotation does"
     if dropped.startswith("j1.") and into_base:
         return "joint 1's placement comes before any joint moves, like the base pose"
     if dropped == f"dq{last}" and into_targets:
+        verb = "slides" if slides[last - 1] else "turns"
         if layout.oriented:
-            return f"every target turns with joint {last}, so its zero only moves the targets"
-        return f"a point target turns with joint {last}, so its zero only moves the targets"
+            return f"every target {verb} with joint {last}, so its zero only moves the targets"
+        return f"a point target {verb} with joint {last}, so its zero only moves the targets"
     if dropped == f"j{last}.z" and into_targets:
         return f"a shift along joint {last}'s axis moves every target alike"
     if not dropped.startswith("j"):
@@ -177,10 +181,16 @@ def _reason(
                     else f"{first + 1} to {end + 1}"
                 )
                 return f"joints {joints} are parallel: a shift along their axes passes them"
+        if slides[k]:
+            return f"a shift along joint {k + 1}'s axis is what its zero does: it slides there"
         return f"a shift along joint {k + 1}'s axis is the same before and after it turns"
     # An error about or along the previous joint's axis is that joint's zero, or passes it.
     direction = chain.origins[k, :3, :3] @ np.eye(3)["xyz".index(component[-1])]
     if k > 0 and abs(abs(direction[2]) - 1.0) < 1e-9:
+        if slides[k - 1]:  # a slide's zero shifts along its axis; a turn about it passes it
+            if component.startswith("r"):
+                return f"it turns about joint {k}'s axis, which the slide does not change"
+            return f"it shifts along joint {k}'s axis, as joint {k}'s zero does"
         if component.startswith("r"):
             return f"it turns about joint {k}'s axis, as joint {k}'s zero does"
         return f"it shifts along joint {k}'s axis, which is the same before and after it turns"

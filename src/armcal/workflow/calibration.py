@@ -59,6 +59,7 @@ from ..validation import (
     validate,
     validation_warnings,
 )
+from .payloads import payload_extrapolated, payload_missing, payload_unit
 from .setup import FixError, fit_model, model_spec, prefixed
 
 __all__ = [
@@ -300,7 +301,7 @@ def calibrate(
     if folds is not None:  # the fitted points: a 3-D file's in its plane
         points = meas.xy if cal.plane is None else cal.plane.to_plane(meas.xyz)
     return _calibration_run(
-        cal, spec, meas, points, ignored, large, folds, sigma, seed, progress=progress
+        cal, spec, meas, points, ignored, large, folds, sigma, seed, source, progress=progress
     )
 
 
@@ -326,13 +327,21 @@ def _calibration_run(
     folds: int | None,
     sigma: float | None,
     seed: int | np.random.Generator | None,
+    source: str,
     *,
     progress: ProgressCallback | None = None,
 ) -> CalibrationRun:
-    """The run of ``cal``: what the robot file, the measurements, the options (``ignored``)
-    and the fit warn of, ``large`` unless the fit warned of it, and the cross-validation
-    of ``folds`` on the fitted ``points`` (given with ``folds``)."""
+    """The run of ``cal``: what the robot file, the measurements (of ``source``; their
+    payloads too: :mod:`armcal.workflow.payloads`), the options (``ignored``) and the fit
+    warn of, ``large`` unless the fit warned of it, and the cross-validation of ``folds``
+    on the fitted ``points`` (given with ``folds``)."""
     warnings = [*spec.warnings, *meas.warnings, *ignored, *cal.warnings]
+    for found in (
+        payload_unit(cal.model, meas.payload_kg, source),
+        payload_missing(cal.model, meas.payload_kg, cal.warnings, source),
+    ):
+        if found is not None:
+            warnings.append(found)
     if large is not None and all(w.code != large.code for w in warnings):
         warnings.append(large)
     checked = None
@@ -456,7 +465,7 @@ def calibrate_serial(
         raise InputError(f"{source}: {unrendered(exc)}") from None
     large = deviation_warning(cal.model, cal.params)
     return _calibration_run(
-        cal, spec, meas, points, ignored, large, folds, sigma, seed, progress=progress
+        cal, spec, meas, points, ignored, large, folds, sigma, seed, source, progress=progress
     )
 
 
@@ -511,6 +520,7 @@ def validate_measurements(
     warnings = [
         *meas.warnings,
         *_unpredicted(cal, loads, source),
+        *_extrapolated(cal, loads, source),
         *validation_warnings(result, poses),
     ]
     degenerate = plan_degenerate_warning(  # the calibration holds part of the arm nominal
@@ -548,6 +558,12 @@ def _unpredicted(cal: CalibratedArm, loads: Loads | None, source: str) -> list[A
     """``loads-unpredicted`` when the calibration cannot predict the deflection of ``loads``."""
     words = None if loads is None else cal.model.unpredicted_loads(loads)
     return [] if words is None else [ArmcalWarning("loads-unpredicted", f"{source}: {words}")]
+
+
+def _extrapolated(cal: CalibratedArm, loads: Loads | None, source: str) -> list[ArmcalWarning]:
+    """``payload-extrapolated`` when ``loads`` go far beyond the calibration's payloads."""
+    found = payload_extrapolated(cal, loads, source)
+    return [] if found is None else [found]
 
 
 @dataclass(frozen=True, eq=False)
@@ -625,7 +641,7 @@ def compensate_program(
         )
     result = compensate(cal, program.q, target=index, loads=loads)
     bad = result.uncorrectable
-    warnings = _unpredicted(cal, loads, source)
+    warnings = [*_unpredicted(cal, loads, source), *_extrapolated(cal, loads, source)]
     if bad.size:
         m = program.q.shape[0]
         shown = "; ".join(f"row {int(i) + 1}: {result.reasons[i]}" for i in bad[:5])
