@@ -95,6 +95,7 @@ __all__ = [
     "large_deviations",
     "spread",
     "suspicious",
+    "truth_warning",
     "unit_mistake",
 ]
 
@@ -251,6 +252,35 @@ def deviation_warning(model: FitModel, params: np.ndarray) -> ArmcalWarning | No
         f"identified deviations are {bounds.summary}: {', '.join(found)}{note}; "
         f"calibration-sized deviations are a few mm and about a degree (here more than "
         f"{bounds.rule}); {bounds.advice}",
+    )
+
+
+def truth_warning(model: FitModel, truth: np.ndarray) -> ArmcalWarning | None:
+    """A ``truth-large`` warning when a virtual arm's deviations (a truth file's, for
+    synthesize and simulate) are implausibly large for a calibration, any family.
+
+    A truth this far from the nominal model is another arm: a fit from nominal may not
+    reach it, and a study of it says nothing of a real calibration.  The deviations that
+    may take up a turn of the instrument (:func:`large_deviations`' ``rotation_free``)
+    are left out: a truth may turn the arm in the instrument's frame at will.
+
+    Examples
+    --------
+    >>> arm = PlanarArm([260.0, 180.0])
+    >>> truth_warning(arm, arm.params_from_display([1.0, -0.5], [0.3, -0.2])) is None
+    True
+    >>> truth_warning(arm, arm.params_from_display([150.0, 0.0], [0.0, 0.0])).code
+    'truth-large'
+    """
+    found = large_deviations(model, truth, rotation_free=True)
+    if not found:
+        return None
+    return ArmcalWarning(
+        "truth-large",
+        f"the virtual arm's deviations are {model.deviation_bounds.summary}: {', '.join(found)}; "
+        "an arm this far from its nominal model is another arm (a fit from nominal may not "
+        "reach it, and the study says little of a real calibration): check the truth's units "
+        "and the arm it describes",
     )
 
 

@@ -242,7 +242,7 @@ def synthesize(args: argparse.Namespace) -> None:
         kinds=spec.arm.joint_kinds,
     )
     if args.output is None or args.output == STDIO:
-        print_warnings(spec.warnings)
+        print_warnings([*spec.warnings, *made.warnings])
         if note is not None:  # stdout holds the measurements: the note goes beside the warnings
             print(f"armcal: {note}", file=sys.stderr)
         sys.stdout.write(text)
@@ -268,7 +268,7 @@ def synthesize(args: argparse.Namespace) -> None:
         f"{'laser tracker noise, reference sigma' if tracker else 'sigma'} "
         f"{made.sigma_mm:g} mm{turn}, seed {args.seed}) to {args.output}"
         + ("" if note is None else f"\n{note}"),
-        spec.warnings,
+        [*spec.warnings, *made.warnings],
     )
 
 

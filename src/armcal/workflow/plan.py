@@ -11,7 +11,7 @@ of every pose.
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -32,6 +32,7 @@ from ..identification.experiment import (
     refuse_registration_only,
 )
 from ..models import FitModel, Loads, PlanarArm, SpatialArm
+from ..plausibility import truth_warning
 from ..progress import ProgressCallback
 from ..simulate import MonteCarlo, monte_carlo
 from ..synthesis import synthesize_measurements
@@ -70,6 +71,9 @@ class Synthesis:
         The instrument noise drawn (mm; the noise model's reference when not given).
     effect : str
         What the virtual robot adds to its geometry ("joint compliance"), or "".
+    warnings : tuple of ArmcalWarning
+        ``truth-large`` for a virtual arm far from its nominal model
+        (:func:`armcal.plausibility.truth_warning`).
     """
 
     q: np.ndarray
@@ -79,6 +83,7 @@ class Synthesis:
     payload_kg: np.ndarray | None
     sigma_mm: float
     effect: str
+    warnings: tuple[ArmcalWarning, ...] = ()
 
 
 def synthesize_plan(
@@ -126,7 +131,9 @@ def synthesize_plan(
     shown = sigma if sigma is not None else float(arm.sigma or 0.0)
     effect = "" if model.effect is None else model.effect.name
     payload_kg = None if rows.loads is None else rows.loads.payload_kg
-    return Synthesis(rows.q, points, labels, targets, payload_kg, shown, effect)
+    found = truth_warning(model, truth)
+    warnings = () if found is None else (found,)
+    return Synthesis(rows.q, points, labels, targets, payload_kg, shown, effect, warnings)
 
 
 @dataclass(frozen=True, eq=False)
@@ -319,13 +326,14 @@ def simulate_plan(
     """
     if test_q is not None and not len(test_q):
         test_q = None
+    found = truth_warning(model, truth)  # of the truth as given, in the model's parameters
     # The model for this plan, and the truth as its fit sees it (the same for a family
     # whose parameters are minimal).
     rows = model.plan_conditions(q, loads)
     model = model.prepared(rows, model.positions(rows, truth))
     truth = model.expressed(rows, truth)
     try:
-        return monte_carlo(
+        result = monte_carlo(
             model,
             q,
             truth,
@@ -339,6 +347,7 @@ def simulate_plan(
         )
     except NotIdentifiableError as exc:
         raise prefixed(source, exc) from None
+    return result if found is None else replace(result, warnings=(found, *result.warnings))
 
 
 def size_plan(
