@@ -21,6 +21,7 @@ from __future__ import annotations
 import csv
 import io
 import json
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -437,13 +438,34 @@ def test_swapped_labels_are_named_on_a_planar_arm_with_a_nest_too():
     assert message.startswith("pose 6: targets B and C look swapped (rows 17, 18)")
 
 
-def test_a_pose_labelled_once_per_row_has_no_swap_to_name():
-    """Without pose labels every row is its own pose: no two labels of one pose to swap."""
+def test_rows_without_pose_labels_are_relabelled_one_by_one():
+    """Without pose labels every row is its own pose: no two labels of one pose to swap,
+    but each of the two rows is one wrong label, and is named as such (rows 34 and 35
+    of the file, 0-based 33 and 34: P12's A and B)."""
     model, rows, _, _, points = _industrial()
     swapped = points.copy()
     swapped[[33, 34]] = points[[34, 33]]
     cal = identify(model, rows.q, swapped, target=rows.target)
-    assert "targets-swapped" not in [w.code for w in cal.warnings]
+    message = next(w.message for w in cal.warnings if w.code == "targets-swapped")
+    assert message.startswith("pose 34: row 34 labelled A fits as B; pose 35: row 35 labelled B")
+    assert "look swapped" not in message
+
+
+def test_one_wrong_label_is_named_where_a_pose_carries_a_target_twice(tmp_path):
+    """Pose P12's C row labelled A (the file's row 36: the pose then carries A twice):
+    the fit is ruined by one row a reflector spacing (173 mm) off; relabelled C, the
+    refit leaves the noise."""
+    model, rows, labels, _, points = _industrial()
+    assert list(rows.target[33:36]) == [0, 1, 2] and labels[35] == "P12"
+    target = rows.target.copy()
+    target[35] = 0
+    mislabelled = replace(rows, target=target)
+    run = _identify_file(tmp_path, model, mislabelled, labels, points)
+    assert run.returncode == 0, run.stderr
+    message = _warnings(run)["targets-swapped"]
+    assert message.startswith("pose P12: row 36 labelled A fits as C:")
+    after = float(message.split(" to ")[1].split(" mm")[0])
+    assert 0.8 * SIGMA < after < 1.2 * SIGMA  # as in the swap test above
 
 
 # --------------------------------------------------------------------------- coupled joints

@@ -7,13 +7,15 @@ or which robot-file key to fix:
 
 * **target labels swapped** (``targets-swapped``): a pose measured at several
   targets (a tracker's nest of reflectors) whose labels were exchanged puts two
-  rows a target spacing away from the fit.  At the fitted parameters, for the
+  rows a target spacing away from the fit; one wrong label (a pose that carries one
+  target twice) puts one row there.  At the fitted parameters, for the
   :data:`WORST_POSES` worst poses only, every exchange of two of a pose's labels
-  is tried (one call of the model on a few rows); the exchanges that cut their
-  pose's residual sum of squares :data:`SWAP_GAIN` times are applied and the model
-  refitted once, from the fit.  They are named when the refit's chi-square is
-  :data:`SWAP_GAIN` times lower (its residual RMS halves) and each still fits
-  that much better exchanged than as labelled.
+  and every other label of each of its rows is tried (one call of the model on a
+  few rows); the best relabelling of each pose that cuts its residual sum of
+  squares :data:`SWAP_GAIN` times is applied and the model refitted once, from the
+  fit.  They are named when the refit's chi-square is :data:`SWAP_GAIN` times
+  lower (its residual RMS halves) and each still fits that much better relabelled
+  than as labelled.
 * **coupled joints** (``coupled-joints``): a controller that reads a joint
   against the horizon (FANUC's J2/J3 interaction: the chain's elbow angle is
   ``J2 + J3``), described by a robot file without that ``joint_map``, or the
@@ -111,33 +113,54 @@ def _pose_groups(labels: np.ndarray, target: np.ndarray) -> tuple[np.ndarray, in
     return group.reshape(target.shape), int(group.max()) + 1
 
 
-def _pairs(rows: np.ndarray, target: np.ndarray) -> list[tuple[int, int]]:
-    """Every two rows of one pose with different targets."""
-    return [
-        (int(a), int(b))
+def _relabels(rows: np.ndarray, target: np.ndarray, labels: int) -> list[list[tuple[int, int]]]:
+    """Every relabelling tried on one pose's ``rows``, each a list of ``(row, new target)``:
+    every exchange of two rows' different targets, and every row given another of the
+    ``labels`` targets (a single wrong label, as when a pose carries one target twice)."""
+    found = [
+        [(int(a), int(target[b])), (int(b), int(target[a]))]
         for i, a in enumerate(rows)
         for b in rows[i + 1 :]
         if target[a] != target[b]
     ]
+    found += [[(int(a), t)] for a in rows for t in range(labels) if t != target[a]]
+    return found
 
 
-def _exchanged(
+def _relabelled(
     model: FitModel,
     conditions: Conditions,
     points: np.ndarray,
     params: np.ndarray,
-    pairs: np.ndarray,
+    changes: np.ndarray,
 ) -> np.ndarray:
-    """Squared position residuals ``(k,)`` of every row pair ``(k, 2)`` with their two
-    targets exchanged, at ``params``: one call of the model on ``2 k`` rows."""
-    assert conditions.target is not None
-    rows = np.concatenate([pairs[:, 0], pairs[:, 1]])
-    exchanged = np.concatenate([conditions.target[pairs[:, 1]], conditions.target[pairs[:, 0]]])
-    trial = replace(conditions.take(rows), target=exchanged)
+    """Squared position residuals ``(k,)`` at ``params`` of rows ``changes[:, 0]`` given
+    targets ``changes[:, 1]``: one call of the model on ``k`` rows."""
+    rows = changes[:, 0]
+    trial = replace(conditions.take(rows), target=changes[:, 1])
     d = model.position_dim
     errors = points[rows, :d] - model.positions(trial, params)[:, :d]
-    squares = np.sum(errors**2, axis=1)
-    return squares[: len(pairs)] + squares[len(pairs) :]
+    return np.sum(errors**2, axis=1)
+
+
+def _describe(
+    change: list[tuple[int, int]],
+    target: np.ndarray,
+    labels: Sequence[str],
+    pose_labels: Sequence[str],
+    rows: Sequence[int],
+) -> str:
+    """One relabelling in words: a swap of two targets, or one row's label."""
+    a, new = change[0]
+    if len(change) == 2:
+        b = change[1][0]
+        return (
+            f"pose {pose_labels[a]}: targets {labels[target[a]]} and {labels[target[b]]} look "
+            f"swapped (rows {rows[a]}, {rows[b]})"
+        )
+    return (
+        f"pose {pose_labels[a]}: row {rows[a]} labelled {labels[target[a]]} fits as {labels[new]}"
+    )
 
 
 def swapped_targets(
@@ -146,7 +169,8 @@ def swapped_targets(
     pose_labels: Sequence[str],
     rows: Sequence[int],
 ) -> ArmcalWarning | None:
-    """A ``targets-swapped`` warning naming the poses whose two target labels look exchanged.
+    """A ``targets-swapped`` warning naming the poses whose target labels look exchanged,
+    or one row whose label looks wrong.
 
     Parameters
     ----------
@@ -162,30 +186,35 @@ def swapped_targets(
     Returns
     -------
     ArmcalWarning or None
-        None without several targets, without a pose measured at two of them, or
-        when no exchange passes the tests of the module notes.
+        None without several targets, or when no relabelling passes the tests of the
+        module notes.
     """
     model, conditions, points = problem.model, problem.conditions, problem.points
     target = conditions.target
-    if target is None or len(model.target_labels) < 2:
+    labels = model.target_labels
+    if target is None or len(labels) < 2:
         return None
     group, count = _pose_groups(np.asarray(pose_labels), target)
     d = model.position_dim
     row_squares = np.sum(fit.residuals[:, :d] ** 2, axis=1)
     pose_squares = np.bincount(group, weights=row_squares, minlength=count)
-    several = np.bincount(group, minlength=count) >= 2
     order = np.argsort(group, kind="stable")
     starts = np.searchsorted(group[order], np.arange(count + 1))
-    worst = [int(g) for g in np.argsort(-pose_squares) if several[g]][:WORST_POSES]
+    worst = [int(g) for g in np.argsort(-pose_squares)[:WORST_POSES]]
     candidates = [
-        (g, pair) for g in worst for pair in _pairs(order[starts[g] : starts[g + 1]], target)
+        (g, change)
+        for g in worst
+        for change in _relabels(order[starts[g] : starts[g + 1]], target, len(labels))
     ]
     if not candidates:
         return None
-    pairs = np.array([pair for _, pair in candidates])
-    # The change of its pose's sum of squares if a pair's labels are exchanged.
-    change = _exchanged(model, conditions, points, fit.params, pairs)
-    change -= row_squares[pairs[:, 0]] + row_squares[pairs[:, 1]]
+    changes = np.array([pair for _, change in candidates for pair in change])
+    owner = np.repeat(np.arange(len(candidates)), [len(c) for _, c in candidates])
+    # The change of its pose's sum of squares if a candidate's relabelling is applied.
+    delta = (
+        _relabelled(model, conditions, points, fit.params, changes) - row_squares[changes[:, 0]]
+    )
+    change = np.bincount(owner, weights=delta, minlength=len(candidates))
     chosen: dict[int, int] = {}  # pose -> its best candidate
     for k, (g, _) in enumerate(candidates):
         after = pose_squares[g] + change[k]
@@ -195,9 +224,10 @@ def swapped_targets(
             chosen[g] = k
     if not chosen:
         return None
-    picked = pairs[list(chosen.values())]
+    picked = [candidates[k][1] for k in chosen.values()]
+    applied = np.array([pair for item in picked for pair in item])
     relabelled = target.copy()
-    relabelled[picked[:, 0]], relabelled[picked[:, 1]] = target[picked[:, 1]], target[picked[:, 0]]
+    relabelled[applied[:, 0]] = applied[:, 1]
     swapped = Problem(
         model,
         replace(conditions, target=relabelled),
@@ -208,23 +238,26 @@ def swapped_targets(
     )
     try:
         refit = swapped.fit(np.ones(conditions.m, dtype=bool), start=fit.params)
-    except ArmcalError:  # NotIdentifiableError among them: the exchange tells nothing
+    except ArmcalError:  # NotIdentifiableError among them: the relabelling tells nothing
         return None
     if _chi2(refit) * SWAP_GAIN > _chi2(fit):
         return None
-    # Each exchange must still fit far better than its labels at the refit's parameters.
-    as_labelled = _exchanged(model, swapped.conditions, points, refit.params, picked)
+    # Each relabelling must still fit far better than its labels at the refit's parameters.
+    back = np.column_stack([applied[:, 0], target[applied[:, 0]]])
+    owners = np.repeat(np.arange(len(picked)), [len(item) for item in picked])
+    as_labelled = np.bincount(
+        owners, weights=_relabelled(model, swapped.conditions, points, refit.params, back)
+    )
     refit_squares = np.sum(refit.residuals[:, :d] ** 2, axis=1)
-    exchanged = refit_squares[picked[:, 0]] + refit_squares[picked[:, 1]]
-    kept = picked[exchanged * SWAP_GAIN <= as_labelled]
-    if not len(kept):
-        return None
-    labels = model.target_labels
-    named = [
-        f"pose {pose_labels[a]}: targets {labels[target[a]]} and {labels[target[b]]} look "
-        f"swapped (rows {rows[a]}, {rows[b]})"
-        for a, b in kept[:5]
+    relabelled_squares = np.bincount(owners, weights=refit_squares[applied[:, 0]])
+    kept = [
+        item
+        for item, a, b in zip(picked, relabelled_squares, as_labelled, strict=True)
+        if a * SWAP_GAIN <= b
     ]
+    if not kept:
+        return None
+    named = [_describe(item, target, labels, pose_labels, rows) for item in kept[:5]]
     more = f" and {len(kept) - 5} more" if len(kept) > 5 else ""
     before = rms(fit.residuals[:, :d])
     after = rms(refit.residuals[:, :d])
