@@ -1,0 +1,257 @@
+"""A hand-edited calibration file is refused in one line that names the key (issue 34).
+
+Each edit a user makes by hand to a calibration file written by ``armcal identify
+-o`` (a planar one and a spatial one) gives exit 2 and one line ``armcal: error:``
+naming the file, the key, what it must hold, and the fix (write the calibration
+again), never numpy's or Python's own text.  An unedited file passes; a covariance
+no fit gives (a negative variance, a std that is not the root of its variance,
+correlations that contradict each other) is refused rather than used.
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from armcal.doe import random_plan
+from armcal.files import load_serial_robot
+from armcal.files.checked import BadKey, check_covariance
+from helpers import run_cli
+
+PLANAR = """name = "edited-3link"
+link_lengths_mm = [300.0, 250.0, 150.0]
+[measurement]
+sigma_mm = 0.02
+"""
+
+PLANAR_TRUTH = "dl_mm = [0.4, -0.3, 0.2]\ndq_deg = [0.2, -0.1, 0.3]\n"
+
+FAMILIES = ("planar", "spatial")
+
+#: Text of numpy and Python that a message must never carry.
+INTERNALS = ("reshape", "broadcast", "could not convert", "float()", "ndarray", "Traceback")
+
+
+def _plan(path: Path, q_deg: np.ndarray) -> None:
+    head = ",".join(f"q{j + 1}_deg" for j in range(q_deg.shape[1]))
+    rows = [",".join(f"{v:.6f}" for v in pose) for pose in q_deg]
+    path.write_text("\n".join([head, *rows]) + "\n", encoding="utf-8")
+
+
+@pytest.fixture(scope="module")
+def calibrations(tmp_path_factory) -> dict[str, Path]:
+    """A folder per family holding ``cal.json`` (identify -o on 30 synthesized poses) and
+    the measurements ``meas.csv`` it was fitted on."""
+    rng = np.random.default_rng(34)
+    out = {}
+    for family in FAMILIES:
+        folder = tmp_path_factory.mktemp(family)
+        if family == "planar":
+            (folder / "robot.toml").write_text(PLANAR)
+            (folder / "truth.toml").write_text(PLANAR_TRUTH)
+            _plan(folder / "plan.csv", rng.uniform(-150, 150, (30, 3)))
+            robot, truth = "robot.toml", ("--truth", "truth.toml")
+        else:
+            arm = load_serial_robot("industrial-6r").arm
+            _plan(folder / "plan.csv", np.degrees(random_plan(arm, 30, rng=rng)))
+            robot, truth = "industrial-6r", ()
+        run = run_cli(folder, "synthesize", "--robot", robot, "--plan", "plan.csv", *truth,
+                      "--sigma", "0.02", "--seed", "1", "-o", "meas.csv")  # fmt: skip
+        assert run.returncode == 0, run.stderr
+        run = run_cli(folder, "identify", "--robot", robot, "--measurements", "meas.csv",
+                      "-o", "cal.json")  # fmt: skip
+        assert run.returncode == 0, run.stderr
+        out[family] = folder
+    return out
+
+
+def _validate(folder: Path, doc: dict | list | str) -> str:
+    """The one error line of ``validate`` on ``doc`` written as ``edited.json``."""
+    text = doc if isinstance(doc, str) else json.dumps(doc)
+    (folder / "edited.json").write_text(text, encoding="utf-8")
+    run = run_cli(folder, "validate", "--calibration", "edited.json", "--measurements", "meas.csv")
+    lines = run.stderr.strip().splitlines()
+    assert run.returncode == 2, run.stderr
+    assert len(lines) == 1 and lines[0].startswith("armcal: error: edited.json: "), run.stderr
+    assert not any(word in lines[0] for word in INTERNALS), lines[0]
+    return lines[0]
+
+
+def _doc(folder: Path) -> dict:
+    return json.loads((folder / "cal.json").read_text(encoding="utf-8"))
+
+
+def _variance_index(doc: dict) -> int:
+    """The first parameter with a variance > 0 (a parameter held has none)."""
+    return next(i for i, e in enumerate(doc["parameters"]) if e["std"] > 0)
+
+
+@pytest.mark.parametrize("family", FAMILIES)
+def test_the_unedited_file_is_read(calibrations, family):
+    folder = calibrations[family]
+    run = run_cli(folder, "validate", "--calibration", "cal.json", "--measurements", "meas.csv")
+    assert run.returncode == 0, run.stderr
+
+
+# Each edit: (what it does to the document, words the error line must carry).
+def _value_text(doc):
+    doc["parameters"][0]["value"] = str(doc["parameters"][0]["value"])  # "0.6": a number quoted
+    return ("key 'parameters'", f"the value of {doc['parameters'][0]['name']}", "got the text")
+
+
+def _value_nan(doc):
+    doc["parameters"][0]["value"] = float("nan")  # json.dumps writes NaN, as a hand edit can
+    return ("key 'parameters'", f"the value of {doc['parameters'][0]['name']}", "finite")
+
+
+def _negative_std(doc):
+    i = _variance_index(doc)
+    doc["parameters"][i]["std"] = -doc["parameters"][i]["std"]
+    return ("key 'parameters'", doc["parameters"][i]["name"], "negative")
+
+
+def _std_not_root(doc):
+    i = _variance_index(doc)
+    doc["parameters"][i]["std"] *= 2  # the variance keeps the old std's square
+    return ("key 'parameters'", doc["parameters"][i]["name"], "not the root of its variance")
+
+
+def _negative_variance(doc):
+    i = _variance_index(doc)
+    doc["covariance"]["matrix"][i][i] = -1.0
+    return ("key 'covariance'", f"the variance of {doc['parameters'][i]['name']}", "negative")
+
+
+def _rows_cut(doc):
+    doc["covariance"]["matrix"] = doc["covariance"]["matrix"][:3]
+    p = len(doc["parameters"])
+    return ("key 'covariance.matrix'", f"shape {p} x {p}", f"got shape 3 x {p}")
+
+
+def _covariance_text(doc):
+    doc["covariance"]["matrix"][0][1] = "0"
+    return ("key 'covariance.matrix'", "text or null among the numbers")
+
+
+def _not_psd(doc):
+    # Three parameters correlated +0.9 (1, 2), -0.9 (1, 3) and +0.9 (2, 3): each within +-1,
+    # yet the correlation matrix R has R (1, -1, 1) = (1 - 0.9 - 0.9) (1, -1, 1), an
+    # eigenvalue -0.8 (closed form), as no covariance can.  Variances and stds unchanged.
+    seen = [i for i, e in enumerate(doc["parameters"]) if e["std"] > 0][:3]
+    std = [doc["parameters"][i]["std"] for i in seen]
+    rho = {(0, 1): 0.9, (0, 2): -0.9, (1, 2): 0.9}
+    matrix = doc["covariance"]["matrix"]
+    for (a, b), r in rho.items():
+        matrix[seen[a]][seen[b]] = matrix[seen[b]][seen[a]] = r * std[a] * std[b]
+    return ("key 'covariance'", "not positive semi-definite")
+
+
+def _asymmetric(doc):
+    i, j = [k for k, e in enumerate(doc["parameters"]) if e["std"] > 0][:2]
+    matrix = doc["covariance"]["matrix"]
+    matrix[i][j] = matrix[i][j] + 0.5 * doc["parameters"][i]["std"] * doc["parameters"][j]["std"]
+    return ("key 'covariance'", "not symmetric")
+
+
+def _no_parameters(doc):
+    del doc["parameters"]
+    return ("key 'parameters': missing",)
+
+
+def _few_parameters(doc):
+    doc["parameters"] = doc["parameters"][:-1]
+    return ("key 'parameters'", "do not match the robot's")
+
+
+def _no_sigma(doc):
+    doc["sigma_mm"] = None
+    return ("key 'sigma_mm'", "the noise std (mm)", "got null")
+
+
+EDITS = [
+    _value_text,
+    _value_nan,
+    _negative_std,
+    _std_not_root,
+    _negative_variance,
+    _rows_cut,
+    _covariance_text,
+    _not_psd,
+    _asymmetric,
+    _no_parameters,
+    _few_parameters,
+    _no_sigma,
+]
+
+
+@pytest.mark.parametrize("family", FAMILIES)
+@pytest.mark.parametrize("edit", EDITS, ids=lambda f: f.__name__.strip("_"))
+def test_an_edited_key_is_named_with_what_it_must_hold(calibrations, family, edit):
+    folder = calibrations[family]
+    doc = _doc(folder)
+    words = edit(doc)
+    line = _validate(folder, doc)
+    assert all(word in line for word in words), line
+    assert "write the calibration again with armcal identify -o" in line, line
+
+
+@pytest.mark.parametrize(
+    ("key", "edit", "words"),
+    [
+        ("origins", lambda r: r["origins"].pop(), "key 'robot.origins': expected 6 joint"),
+        ("tip", lambda r: r.__setitem__("tip", [[1, 0, 0]]), "key 'robot.tip'"),
+        ("joint_types", lambda r: r.__setitem__("joint_types", ["R"] * 5 + ["X"]), "'R' or 'P'"),
+        ("base_pose", lambda r: r.__setitem__("base_pose", [0.0] * 5), "got shape 5"),
+        ("joint_map", lambda r: r["joint_map"][0].append(0.0), "key 'robot.joint_map'"),
+        ("joint_names", lambda r: r["joint_names"].pop(), "a list of 6"),
+        ("limits", lambda r: r.__setitem__("joint_limits", None), "got null"),
+    ],
+)
+def test_an_edited_spatial_robot_section_names_the_sub_key(calibrations, key, edit, words):
+    folder = calibrations["spatial"]
+    doc = _doc(folder)
+    edit(doc["robot"])
+    line = _validate(folder, doc)
+    assert words in line, line
+
+
+def test_an_edited_planar_robot_section_names_the_link_count(calibrations):
+    """A link removed from link_lengths_mm: the limits no longer agree, and the line says
+    with which key they must agree."""
+    folder = calibrations["planar"]
+    doc = _doc(folder)
+    doc["robot"]["link_lengths_mm"].pop()
+    line = _validate(folder, doc)
+    assert "key 'robot." in line and "the 2 links in robot.link_lengths_mm" in line, line
+    doc = _doc(folder)
+    doc["robot"]["link_lengths_mm"] = "300, 250, 150"
+    line = _validate(folder, doc)
+    assert "key 'robot.link_lengths_mm'" in line and "got the text" in line, line
+
+
+@pytest.mark.parametrize("family", FAMILIES)
+def test_a_file_cut_short_or_of_another_shape_says_so(calibrations, family):
+    folder = calibrations[family]
+    text = (folder / "cal.json").read_text(encoding="utf-8")
+    line = _validate(folder, text[: len(text) // 2])
+    assert "invalid JSON" in line and "cut short" in line, line
+    line = _validate(folder, [])
+    assert "a list where an object with a 'format' key was expected" in line, line
+
+
+def test_a_covariance_from_a_fit_passes_the_check():
+    """A covariance sigma^2 (J^T J)^-1 of a random, badly conditioned J (condition ~1e6):
+    positive definite by construction, so the round-off allowance must let it through."""
+    rng = np.random.default_rng(3)
+    jac = rng.standard_normal((40, 8)) * np.logspace(0, 6, 8)
+    cov = 0.02**2 * np.linalg.inv(jac.T @ jac)
+    names = [f"p{k}" for k in range(8)]
+    check_covariance(cov, names, list(np.sqrt(np.diag(cov))))
+    # Round-off past the allowance is refused: the same matrix made asymmetric by 1e-6 of
+    # the product of two stds (COVARIANCE_RTOL is 1e-9).
+    cov[0, 1] += 1e-6 * np.sqrt(cov[0, 0] * cov[1, 1])
+    with pytest.raises(BadKey, match="not symmetric"):
+        check_covariance(cov, names, [None] * 8)
