@@ -6,6 +6,8 @@ naming the file, the key, what it must hold, and the fix (write the calibration
 again), never numpy's or Python's own text.  An unedited file passes; a covariance
 no fit gives (a negative variance, a std that is not the root of its variance,
 correlations that contradict each other) is refused rather than used.
+
+The robot options' messages: an unknown robot lists the built-ins of both families.
 """
 
 from __future__ import annotations
@@ -17,7 +19,8 @@ import numpy as np
 import pytest
 
 from armcal.doe import random_plan
-from armcal.files import load_serial_robot
+from armcal.errors import InputError
+from armcal.files import BUILTIN_ROBOTS, BUILTIN_SERIAL_ROBOTS, load_serial_robot
 from armcal.files.checked import BadKey, check_covariance
 from helpers import run_cli
 
@@ -255,3 +258,29 @@ def test_a_covariance_from_a_fit_passes_the_check():
     cov[0, 1] += 1e-6 * np.sqrt(cov[0, 0] * cov[1, 1])
     with pytest.raises(BadKey, match="not symmetric"):
         check_covariance(cov, names, [None] * 8)
+
+
+# --------------------------------------------------------------------------- unknown robot
+
+
+@pytest.mark.parametrize(
+    ("name", "meant"),
+    [("industrial-6x", "industrial-6r"), ("cobot6r", "cobot-6r"), ("paper-4lnk", "paper-4link")],
+)
+def test_an_unknown_robot_lists_every_built_in_and_the_closest(tmp_path, name, meant):
+    """The list names the built-ins of both families (the spatial ones were left out) and
+    a typo of one gets did-you-mean."""
+    run = run_cli(tmp_path, "identify", "--robot", name, "--measurements", "meas.csv")
+    lines = run.stderr.strip().splitlines()
+    assert run.returncode == 2 and len(lines) == 1, run.stderr
+    assert lines[0].startswith(f"armcal: error: {name}: robot is neither a built-in"), lines[0]
+    every = [*BUILTIN_ROBOTS, *BUILTIN_SERIAL_ROBOTS]
+    assert all(builtin in lines[0] for builtin in every), lines[0]
+    assert f"did you mean '{meant}'?" in lines[0], lines[0]
+
+
+def test_an_unknown_robot_far_from_every_name_gets_no_guess(tmp_path):
+    with pytest.raises(InputError, match="neither a built-in") as caught:
+        load_serial_robot(tmp_path / "nowhere.toml")
+    assert "did you mean" not in str(caught.value)
+    assert "industrial-6r" in str(caught.value)

@@ -41,7 +41,8 @@ from ..models import (
     transform,
 )
 from ..models.spatial_dh import convention_mistake, table_chain
-from .common import check_keys, fail, load_toml, number, number_within, numbers, suggest
+from ..paper import BUILTIN_ROBOTS
+from .common import STDIO, check_keys, fail, load_toml, number, number_within, numbers, suggest
 from .robot_units import check_mdh_angles, check_reach, limit_warnings, urdf_limit_warning
 from .robots import RobotSpec, fixed_parameters, held_terms, load_robot
 from .serial_noise import read_serial_noise
@@ -154,12 +155,26 @@ def load_serial_robot(
         truth = path.with_name(path.stem + "-truth.toml")
         spec = _from_toml(path, key, links)
         return replace(spec, default_truth=truth if truth.is_file() else None)
+    _refuse_unknown(key)
     path = Path(key)
     if path.suffix.lower() in _URDF_SUFFIXES:
         found = read_urdf(path, base_link, tip_link)
         warnings = (*found.warnings, *_urdf_units(path, found.chain))
         return SerialSpec(SpatialArm(found.chain, found.robot), key, warnings=warnings)
     return _from_toml(path, None, links)
+
+
+def _refuse_unknown(key: str) -> None:
+    """Refuse a robot that is no file and no built-in, listing the built-ins of both
+    families and the closest to ``key`` (a typo of a name)."""
+    if key == STDIO or key in BUILTIN_ROBOTS or key in BUILTIN_SERIAL_ROBOTS or Path(key).exists():
+        return
+    raise InputError(
+        f"{key}: robot is neither a built-in (planar: {', '.join(BUILTIN_ROBOTS)}; spatial: "
+        f"{', '.join(BUILTIN_SERIAL_ROBOTS)}) nor an existing file; "
+        f"{suggest(key, [*BUILTIN_ROBOTS, *BUILTIN_SERIAL_ROBOTS])}"
+        "give a built-in's name or the path of a robot TOML file or a URDF"
+    )
 
 
 def _urdf_units(path: Path, chain: SerialChain) -> tuple[ArmcalWarning, ...]:
@@ -180,6 +195,7 @@ def load_any_robot(
     ``name_or_path`` names."""
     if is_serial_robot(name_or_path):
         return load_serial_robot(name_or_path, base_link=base_link, tip_link=tip_link)
+    _refuse_unknown(os.fspath(name_or_path))
     spec = load_robot(name_or_path)
     if base_link is not None or tip_link is not None:
         raise ArmcalError(
