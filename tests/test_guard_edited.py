@@ -284,3 +284,32 @@ def test_an_unknown_robot_far_from_every_name_gets_no_guess(tmp_path):
         load_serial_robot(tmp_path / "nowhere.toml")
     assert "did you mean" not in str(caught.value)
     assert "industrial-6r" in str(caught.value)
+
+
+def test_identify_without_a_robot_lists_every_built_in(tmp_path):
+    run = run_cli(tmp_path, "identify", "--measurements", "meas.csv")
+    assert run.returncode == 2, run.stderr
+    assert all(name in run.stderr for name in [*BUILTIN_ROBOTS, *BUILTIN_SERIAL_ROBOTS])
+
+
+# --------------------------------------------------------------------------- repeated --fix
+
+
+def test_repeated_fix_options_add_up(calibrations):
+    """``--fix dl1 --fix dq2`` holds both, as ``--fix dl1,dq2`` does (argparse kept only
+    the last); a name given twice is held once."""
+    folder = calibrations["planar"]
+    base = ("identify", "--robot", "robot.toml", "--measurements", "meas.csv", "--json")
+    documents = {}
+    for argv in (("--fix", "dl1", "--fix", "dq2"), ("--fix", "dl1,dq2"), ("--fix", "dq2")):
+        run = run_cli(folder, *base, *argv)
+        assert run.returncode == 0, run.stderr
+        documents[argv] = json.loads(run.stdout)
+    repeated, joined, last = documents.values()
+    assert set(repeated["fixed"]) == set(joined["fixed"]) == {"dl1", "dq2"}
+    assert set(last["fixed"]) == {"dq2"}  # the difference the repeats make
+    held = {e["name"]: e["fixed"] for e in repeated["parameters"]}
+    assert held["dl1"] and held["dq2"] and not held["dl2"]
+    assert repeated["parameters"] == joined["parameters"]
+    run = run_cli(folder, *base, "--fix", "dl1", "--fix", "dl1,dq2")
+    assert json.loads(run.stdout)["fixed"] == joined["fixed"]

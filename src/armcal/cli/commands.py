@@ -24,6 +24,7 @@ from ..demo_serial import SERIAL_DEMO_POSES, run_serial_demo
 from ..errors import ArmcalError
 from ..files import (
     BUILTIN_ROBOTS,
+    BUILTIN_SERIAL_ROBOTS,
     COMPLIANCE_TRUTH_KEYS,
     STDIO,
     RobotSpec,
@@ -288,10 +289,11 @@ def _options(args: argparse.Namespace) -> dict[str, Any]:
 def identify(args: argparse.Namespace) -> None:
     """``armcal identify``: the calibration of a measurement file."""
     if args.robot is None:
+        builtins = ", ".join([*BUILTIN_ROBOTS, *BUILTIN_SERIAL_ROBOTS])
         raise ArmcalError(
             "identify needs --robot: the measurements are of one arm, and a fit to another "
             "arm's model is a wrong calibration; give your robot file (armcal formats lists "
-            f"its keys) or a built-in name ({', '.join(BUILTIN_ROBOTS)})"
+            f"its keys) or a built-in name ({builtins})"
         )
     spec = _robot(args)
     if isinstance(spec, SerialSpec):

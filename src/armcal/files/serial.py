@@ -155,12 +155,12 @@ def load_serial_robot(
         truth = path.with_name(path.stem + "-truth.toml")
         spec = _from_toml(path, key, links)
         return replace(spec, default_truth=truth if truth.is_file() else None)
-    _refuse_unknown(key)
     path = Path(key)
-    if path.suffix.lower() in _URDF_SUFFIXES:
+    if path.suffix.lower() in _URDF_SUFFIXES:  # a missing one: the URDF reader says so
         found = read_urdf(path, base_link, tip_link)
         warnings = (*found.warnings, *_urdf_units(path, found.chain))
         return SerialSpec(SpatialArm(found.chain, found.robot), key, warnings=warnings)
+    _refuse_unknown(key)
     return _from_toml(path, None, links)
 
 
