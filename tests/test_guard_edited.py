@@ -13,6 +13,8 @@ The robot options' messages: an unknown robot lists the built-ins of both famili
 from __future__ import annotations
 
 import json
+import math
+import re
 from pathlib import Path
 
 import numpy as np
@@ -313,3 +315,41 @@ def test_repeated_fix_options_add_up(calibrations):
     assert repeated["parameters"] == joined["parameters"]
     run = run_cli(folder, *base, "--fix", "dl1", "--fix", "dl1,dq2")
     assert json.loads(run.stdout)["fixed"] == joined["fixed"]
+
+
+# --------------------------------------------------------------------------- [dh] table keys
+
+#: Universal Robots' UR5 in standard DH (their published table: alpha in deg, a, d in mm).
+UR5_DH = {
+    "alpha_deg": [90, 0, 0, 90, -90, 0],
+    "a_mm": [0, -425, -392.25, 0, 0, 0],
+    "theta_deg": [0, 0, 0, 0, 0, 0],
+    "d_mm": [89.159, 0, 0, 109.15, 94.65, 82.3],
+}
+
+
+def _dh_toml(table: str, changes: dict) -> str:
+    values = {**UR5_DH, **changes}
+    return f'name = "ur5"\n[{table}]\n' + "".join(f"{k} = {v}\n" for k, v in values.items())
+
+
+@pytest.mark.parametrize("table", ["dh", "mdh"])
+def test_a_dh_table_s_messages_name_the_section_written(tmp_path, table):
+    """Radians in alpha_deg (an error) and a table in metres (the lengths-in-metres
+    warning) name ``dh.*`` for a [dh] table, ``mdh.*`` for an [mdh] one."""
+    other = "mdh" if table == "dh" else "dh"
+    radians = {"alpha_deg": [round(math.radians(a), 6) for a in UR5_DH["alpha_deg"]]}
+    (tmp_path / "rad.toml").write_text(_dh_toml(table, radians))
+    with pytest.raises(InputError) as caught:
+        load_serial_robot(tmp_path / "rad.toml")
+    assert f"key '{table}.alpha_deg': " in str(caught.value)
+    assert not re.search(rf"\b{other}\.", str(caught.value))  # "mdh." holds no \bdh.
+    # Lengths in metres: a reach of about 1.19 m read as 1.19 mm.
+    metres = {k: [v / 1000 for v in UR5_DH[k]] for k in ("a_mm", "d_mm")}
+    (tmp_path / "m.toml").write_text(_dh_toml(table, metres))
+    if table == "mdh":  # the UR5's table read as modified DH is no regular arm; skip it
+        return
+    spec = load_serial_robot(tmp_path / "m.toml")
+    (warned,) = [w for w in spec.warnings if w.code == "lengths-in-metres"]
+    assert f"{table}.a_mm and {table}.d_mm are in mm" in warned.message
+    assert not re.search(rf"\b{other}\.", warned.message)

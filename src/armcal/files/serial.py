@@ -305,7 +305,7 @@ def _chain(
         rpy = numbers(path, table.get(f"{where}_rpy_deg", [0, 0, 0]), f"{key}.{where}_rpy_deg", 3)
         angles[f"{where}_rpy_deg"] = rpy
         frames[where] = transform(rpy_matrix(np.radians(rpy)), xyz)
-    check_mdh_angles(path, angles)
+    check_mdh_angles(path, angles, key)
     rows = (
         np.radians(values["alpha_deg"]),
         np.array(values["a_mm"]),
@@ -320,7 +320,7 @@ def _chain(
     if mistake is not None:
         raise fail(path, f"[{key}]: {mistake}")
     chain = table_chain(key, *rows, beta=beta)
-    metres = check_reach(path, chain, urdf=False)
+    metres = check_reach(path, chain, urdf=False, table=key)
     warned: tuple[ArmcalWarning, ...] = () if metres is None else (metres,)
     if "joint_limits_deg" in table:  # limits on the table's joint values, as a URDF's
         limits = table["joint_limits_deg"]
