@@ -353,3 +353,47 @@ def test_a_dh_table_s_messages_name_the_section_written(tmp_path, table):
     (warned,) = [w for w in spec.warnings if w.code == "lengths-in-metres"]
     assert f"{table}.a_mm and {table}.d_mm are in mm" in warned.message
     assert not re.search(rf"\b{other}\.", warned.message)
+
+
+# --------------------------------------------------------------------------- decimal commas
+
+
+def _identify(folder: Path, measurements: str):
+    return run_cli(folder, "identify", "--robot", "robot.toml", "--measurements", measurements)
+
+
+def test_decimal_commas_in_a_comma_separated_file_are_named(calibrations):
+    """The measurements written with decimal commas: each row has twice the header's
+    fields, all whole numbers; the line says so and gives both fixes, and the second
+    fix (';' between columns) reads."""
+    folder = calibrations["planar"]
+    head, *rows = (folder / "meas.csv").read_text(encoding="utf-8").splitlines()
+    width = len(head.split(","))
+    assert all("." in field for field in rows[0].split(","))  # every value has a decimal part
+    commas = [row.replace(".", ",") for row in rows]
+    (folder / "commas.csv").write_text("\n".join([head, *commas]) + "\n", encoding="utf-8")
+    run = _identify(folder, "commas.csv")
+    assert run.returncode == 2, run.stderr
+    assert f"row 1 (line 2) has {2 * width} fields but the header has {width}" in run.stderr
+    assert "seems to use decimal commas" in run.stderr
+    assert "write a point as the decimal separator" in run.stderr and "';'" in run.stderr
+    semicolons = [row.replace(",", ";").replace(".", ",") for row in rows]
+    text = "\n".join([head.replace(",", ";"), *semicolons]) + "\n"
+    (folder / "semicolons.csv").write_text(text, encoding="utf-8")
+    assert _identify(folder, "semicolons.csv").returncode == 0
+
+
+def test_a_thousands_separator_and_a_missing_field_are_told_apart(calibrations):
+    folder = calibrations["planar"]
+    head, first, *rows = (folder / "meas.csv").read_text(encoding="utf-8").splitlines()
+    fields = first.split(",")
+    thousands = ",".join([*fields[:-1], "1,234.5"])  # y = 1234.5 mm, written "1,234.5"
+    short = ",".join(fields[:-1])
+    for row, words in (
+        (thousands, "1,234.5 looks like one number with a thousands separator"),
+        (short, "give every column a value"),
+    ):
+        (folder / "odd.csv").write_text("\n".join([head, row, *rows]) + "\n", encoding="utf-8")
+        run = _identify(folder, "odd.csv")
+        assert run.returncode == 2 and words in run.stderr, run.stderr
+        assert "decimal commas" not in run.stderr

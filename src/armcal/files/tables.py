@@ -233,9 +233,41 @@ def _split(
             raise fail(
                 path,
                 f"row {r} (line {line}) has {len(row)} fields but the header has "
-                f"{len(header)}; give every column a value",
+                f"{len(header)}; {_decimal_commas(row, len(header), delimiter)}",
             )
     return header_line, header, [line for line, _ in data], lambda c: [row[c] for _, row in data]
+
+
+#: A field that is digits only, maybe signed: what a comma-separated row's numbers split into
+#: when they were written with decimal commas ("-159,93" gives "-159" and "93").
+_DIGITS = re.compile(r"\s*[-+]?\d+\s*")
+
+#: Two fields that are one number with a thousands separator ("1,234.5"): 1 to 3 digits, then
+#: 3 digits and a decimal part.
+_THOUSANDS = re.compile(r"\s*[-+]?\d{1,3},\d{3}\.\d*\s*")
+
+
+def _decimal_commas(row: list[str], width: int, delimiter: str) -> str:
+    """The fix for a row of ``row`` fields where the header has ``width``: a comma-separated
+    row of whole numbers only, up to twice as many as the header's, seems written with
+    decimal commas (each number split in two; a whole number, in one); a pair of fields
+    like ``1`` and ``234.5``, with a thousands separator; else every column needs a value."""
+    if delimiter != "," or len(row) <= width:
+        return "give every column a value"
+    if len(row) <= 2 * width and all(map(_DIGITS.fullmatch, row)):
+        return (
+            f"every field is a whole number, as when numbers are written with decimal commas "
+            f"({','.join(row[:2])} for {'.'.join(row[:2])}): the file seems to use decimal "
+            "commas; write a point as the decimal separator, or separate the columns with ';'"
+        )
+    pairs = (",".join(row[k : k + 2]) for k in range(len(row) - 1))
+    split = next((pair for pair in pairs if _THOUSANDS.fullmatch(pair)), None)
+    if split is not None:
+        return (
+            f"{split.strip()} looks like one number with a thousands separator: write numbers "
+            f"without one ({split.strip().replace(',', '')})"
+        )
+    return "give every column a value"
 
 
 def _numeric_file(text: str, text_columns: Sequence[str]) -> tuple[int, str, np.ndarray] | None:
