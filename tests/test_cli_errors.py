@@ -448,7 +448,7 @@ CASES = [
         "robot-is-a-measurements-csv",
         {"meas.csv": VALID_MEAS},
         ("identify", "--robot", "meas.csv", "--measurements", "meas.csv"),
-        ("meas.csv", "line 1", "looks like a CSV table", "--robot takes a built-in robot's name"),
+        ("meas.csv", "not a robot TOML file", "looks like a measurements file", "--measurements"),
     ),
     case(
         "robot-duplicate-key",
@@ -1144,7 +1144,7 @@ CASES += [
         "calibration-is-a-csv",
         {"cal.json": VALID_MEAS, "test.csv": VALID_MEAS},
         VALIDATE,
-        ("cal.json", "not a calibration file", "JSON"),
+        ("cal.json", "not a calibration file", "looks like a measurements file", "--measurements"),
     ),
     case(
         "calibration-truncated",

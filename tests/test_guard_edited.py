@@ -397,3 +397,63 @@ def test_a_thousands_separator_and_a_missing_field_are_told_apart(calibrations):
         run = _identify(folder, "odd.csv")
         assert run.returncode == 2 and words in run.stderr, run.stderr
         assert "decimal commas" not in run.stderr
+
+
+# --------------------------------------------------------------------------- wrong-kind files
+
+
+def _kinds(folder: Path) -> None:
+    """A plan (the measurements' joint columns), a truth file and a URDF beside cal.json."""
+    head, *rows = (folder / "meas.csv").read_text(encoding="utf-8").splitlines()
+    joints = [k for k, name in enumerate(head.split(",")) if name.startswith("q")]
+    plan = [",".join(row.split(",")[k] for k in joints) for row in [head, *rows]]
+    (folder / "plan-only.csv").write_text("\n".join(plan) + "\n", encoding="utf-8")
+    (folder / "arm.urdf").write_text('<?xml version="1.0"?>\n<robot name="a"></robot>\n')
+
+
+@pytest.mark.parametrize(
+    ("argv", "words"),
+    [
+        (("identify", "--robot", "robot.toml", "--measurements", "plan-only.csv"),
+         ("plan-only.csv: line 1: missing column 'x_mm'", "looks like a plan file", "--plan")),
+        (("synthesize", "--robot", "robot.toml", "--plan", "meas.csv", "-o", "s.csv"),
+         ("unknown column 'x_mm'", "looks like a measurements file", "--measurements takes")),
+        (("identify", "--robot", "cal.json", "--measurements", "meas.csv"),
+         ("cal.json: not a robot TOML file", "looks like a calibration file", "--calibration")),
+        (("synthesize", "--robot", "robot.toml", "--truth", "arm.urdf", "--plan", "plan.csv",
+          "-o", "s.csv"), ("arm.urdf: not a truth TOML file", "looks like a URDF", "--robot")),
+        (("synthesize", "--robot", "robot.toml", "--truth", "robot.toml", "--plan", "plan.csv",
+          "-o", "s.csv"), ("robot.toml: not a truth file", "looks like a robot file", "--robot")),
+        (("synthesize", "--robot", "truth.toml", "--plan", "plan.csv", "-o", "s.csv"),
+         ("truth.toml: not a robot file", "looks like a truth file", "--truth takes it")),
+        (("validate", "--calibration", "robot.toml", "--measurements", "meas.csv"),
+         ("robot.toml: not a calibration file", "looks like a robot file", "--robot takes it")),
+        (("identify", "--robot", "robot.toml", "--measurements", "cal.json"),
+         ("cal.json: not a measurements CSV file", "looks like a calibration file")),
+        (("compensate", "--calibration", "cal.json", "--program", "meas.csv", "-o", "c.csv"),
+         ("unknown column 'x_mm'", "looks like a measurements file")),
+    ],
+)  # fmt: skip
+def test_a_file_given_to_the_wrong_option_is_named(calibrations, argv, words):
+    folder = calibrations["planar"]
+    _kinds(folder)
+    run = run_cli(folder, *argv)
+    lines = run.stderr.strip().splitlines()
+    assert run.returncode == 2 and len(lines) == 1, run.stderr
+    assert all(word in lines[0] for word in words), lines[0]
+    assert not (folder / "s.csv").exists() and not (folder / "c.csv").exists()
+
+
+def test_a_program_is_no_wrong_kind_for_a_plan_nor_a_typo_for_another_kind(calibrations):
+    """A plan given as --program (the same columns) reads; a measurements file with a
+    misspelt x column keeps its unit hint, not a guess of another kind."""
+    folder = calibrations["planar"]
+    _kinds(folder)
+    run = run_cli(folder, "compensate", "--calibration", "cal.json", "--program",
+                  "plan-only.csv", "-o", "compensated.csv")  # fmt: skip
+    assert run.returncode == 0, run.stderr
+    text = (folder / "meas.csv").read_text(encoding="utf-8").replace("x_mm", "x_m", 1)
+    (folder / "xm.csv").write_text(text, encoding="utf-8")
+    run = _identify(folder, "xm.csv")
+    assert run.returncode == 2 and "give millimetres" in run.stderr, run.stderr
+    assert "looks like" not in run.stderr

@@ -76,6 +76,10 @@ ACTIONS: dict[str, str] = {
     "candidates-distinct": "candidates and distinct",
     "payloads": "payloads",
     "robot-file": "load_robot",
+    "measurements-file": "read_measurements",
+    "plan-file": "read_plan",
+    "calibration-file": "read_calibration",
+    "truth-file": "load_truth",
     "robot-arm": "arm",
 }
 

@@ -50,6 +50,10 @@ CLI_ACTIONS = {
     "candidates-distinct": "--candidates and --distinct",
     "payloads": "--payloads",
     "robot-file": "--robot",
+    "measurements-file": "--measurements",
+    "plan-file": "--plan",
+    "calibration-file": "--calibration",
+    "truth-file": "--truth",
     "robot-arm": "--robot",
 }
 

@@ -42,6 +42,7 @@ from ..models import (
 from ..noise import NoiseModel, TrackerNoise
 from .checked import BadKey, array_of, check_covariance, described, list_of, number_of
 from .common import fail, read_text
+from .kinds import looks_like
 from .robots import parse_region
 
 __all__ = [
@@ -230,6 +231,9 @@ def read_calibration(path: str | os.PathLike) -> CalibratedArm:
     try:
         doc = json.loads(text)
     except (ValueError, RecursionError) as exc:  # JSONDecodeError, or digits/nesting limits
+        other = looks_like(text, "calibration-file")
+        if other:  # a file of another kind: say which, not what JSON finds wrong in it
+            raise fail(path, f"not a calibration file: {other.removesuffix('; ')}") from None
         raise fail(
             path,
             f"not a calibration file: invalid JSON ({exc}), as in a file cut short or "

@@ -19,6 +19,7 @@ from typing import Any, BinaryIO
 
 from ..errors import InputError, action
 from ..formats import table_of
+from .kinds import looks_like, wrong_toml
 
 if sys.version_info >= (3, 11):
     import tomllib
@@ -157,9 +158,16 @@ def load_toml(path, what: str) -> dict:
     """A TOML file's table; an error names the line, shows it and says how to fix it."""
     text = read_text(path, what)
     try:
-        return tomllib.loads(text)
+        data = tomllib.loads(text)
     except (ValueError, RecursionError) as exc:  # TOMLDecodeError, or digits/nesting limits
+        other = looks_like(text, f"{what}-file")
+        if other:  # a file of another kind: say which, not what TOML finds wrong in it
+            raise fail(path, f"not a {what} TOML file: {other.removesuffix('; ')}") from None
         raise fail(path, f"invalid TOML: {_toml_advice(text, str(exc), what)}") from None
+    other = wrong_toml(data, what)
+    if other:
+        raise fail(path, f"not a {what} file: {other.removesuffix('; ')}")
+    return data
 
 
 _TOML_AT = re.compile(r"^(?P<what>.*) \(at line (?P<line>\d+), column (?P<column>\d+)\)$")

@@ -41,6 +41,7 @@ from .joints import (
     model_units,
     revolute,
 )
+from .kinds import field_count_fix, looks_like, not_a_table
 from .robots import METRE_REACH_MM, RADIAN_LIMIT_BOUND, SIGMA_RANGE_MM
 from .writers import ORIENTATION_COLUMNS
 
@@ -233,41 +234,9 @@ def _split(
             raise fail(
                 path,
                 f"row {r} (line {line}) has {len(row)} fields but the header has "
-                f"{len(header)}; {_decimal_commas(row, len(header), delimiter)}",
+                f"{len(header)}; {field_count_fix(row, len(header), delimiter)}",
             )
     return header_line, header, [line for line, _ in data], lambda c: [row[c] for _, row in data]
-
-
-#: A field that is digits only, maybe signed: what a comma-separated row's numbers split into
-#: when they were written with decimal commas ("-159,93" gives "-159" and "93").
-_DIGITS = re.compile(r"\s*[-+]?\d+\s*")
-
-#: Two fields that are one number with a thousands separator ("1,234.5"): 1 to 3 digits, then
-#: 3 digits and a decimal part.
-_THOUSANDS = re.compile(r"\s*[-+]?\d{1,3},\d{3}\.\d*\s*")
-
-
-def _decimal_commas(row: list[str], width: int, delimiter: str) -> str:
-    """The fix for a row of ``row`` fields where the header has ``width``: a comma-separated
-    row of whole numbers only, up to twice as many as the header's, seems written with
-    decimal commas (each number split in two; a whole number, in one); a pair of fields
-    like ``1`` and ``234.5``, with a thousands separator; else every column needs a value."""
-    if delimiter != "," or len(row) <= width:
-        return "give every column a value"
-    if len(row) <= 2 * width and all(map(_DIGITS.fullmatch, row)):
-        return (
-            f"every field is a whole number, as when numbers are written with decimal commas "
-            f"({','.join(row[:2])} for {'.'.join(row[:2])}): the file seems to use decimal "
-            "commas; write a point as the decimal separator, or separate the columns with ';'"
-        )
-    pairs = (",".join(row[k : k + 2]) for k in range(len(row) - 1))
-    split = next((pair for pair in pairs if _THOUSANDS.fullmatch(pair)), None)
-    if split is not None:
-        return (
-            f"{split.strip()} looks like one number with a thousands separator: write numbers "
-            f"without one ({split.strip().replace(',', '')})"
-        )
-    return "give every column a value"
 
 
 def _numeric_file(text: str, text_columns: Sequence[str]) -> tuple[int, str, np.ndarray] | None:
@@ -452,6 +421,11 @@ def _read_csv(
     extras = list(optional) + list(optional_numeric)
     layout = ",".join(expected) + "".join(f" [,{c}]" for c in extras)
     text = read_text(path, what)
+    expected_kind = f"{what}-file"
+    if not_a_table(text):  # JSON, XML or TOML
+        other = looks_like(text, expected_kind)
+        if other:
+            raise fail(path, f"not a {what} CSV file: {other}expected a header line {layout}")
     numeric_file = _numeric_file(text, optional)
     if numeric_file is not None:
         header_line, header_raw, block = numeric_file
@@ -478,11 +452,11 @@ def _read_csv(
             raise fail(path, f"line {header_line}: duplicate column '{name}'; keep one")
     for name in header:
         if name not in expected and name not in extras and not JOINT_COLUMN.match(name):
+            hint = _unit_hint(name, expected + extras) or looks_like(text, expected_kind)
             raise fail(
                 path,
                 f"line {header_line}: unknown column {_shown(name)}: "
-                f"{_unit_hint(name, expected + extras) or suggest(name, expected + extras)}"
-                f"expected {layout}",
+                f"{hint or suggest(name, expected + extras)}expected {layout}",
             )
     found = check_joint_units(path, header, header_line, arm)
     if found and len(found) != arm.n_joints:
@@ -494,7 +468,11 @@ def _read_csv(
         )
     for name in expected:
         if name not in header:
-            raise fail(path, f"line {header_line}: missing column '{name}'; expected {layout}")
+            raise fail(
+                path,
+                f"line {header_line}: missing column '{name}'; "
+                f"{looks_like(text, expected_kind)}expected {layout}",
+            )
     if not lines:
         raise fail(
             path, f"has a header but no poses; add one row per pose after line {header_line}"
