@@ -457,3 +457,39 @@ def test_a_program_is_no_wrong_kind_for_a_plan_nor_a_typo_for_another_kind(calib
     run = _identify(folder, "xm.csv")
     assert run.returncode == 2 and "give millimetres" in run.stderr, run.stderr
     assert "looks like" not in run.stderr
+
+
+# --------------------------------------------------------------------------- truth keys
+
+PLANAR_TRUTH_KEYS = ("dl_mm", "dq_deg", "base_mm", "k_urad_per_Nm", "c_mdeg_per_m")
+SPATIAL_TRUTH_KEYS = ("robot", "base", "errors", "targets", "compliance")
+
+
+@pytest.mark.parametrize(
+    ("family", "truth", "words"),
+    [
+        ("spatial", "dq_deg = [0.1, 0, 0, 0, 0, 0]\n",
+         ("unknown key 'dq_deg'", "planar arm's truth file", "[errors] with dq1 = ...")),
+        ("spatial", "base_mm = [1.0, 2.0]\n",
+         ("unknown key 'base_mm'", "base = { xyz_mm = [x, y, z]",)),
+        ("spatial", "dq1 = 0.1\n", ("unknown key 'dq1'", "belongs in the [errors] table")),
+        ("spatial", "errros = 1\n", ("unknown key 'errros'", "did you mean 'errors'?")),
+        ("planar", "[errors]\ndq1 = 0.1\n",
+         ("unknown key 'errors'", "spatial arm's truth file", "dq_deg = [...] in deg")),
+        ("planar", "dl_mm = [0, 0, 0]\ndq_rad = [0, 0, 0]\n",
+         ("unknown key 'dq_rad'", "did you mean 'dq_deg'?")),
+    ],
+)  # fmt: skip
+def test_an_unknown_truth_key_lists_the_family_s_keys(calibrations, family, truth, words):
+    """Each family's truth file names its own keys; a key of the other family's says how
+    this family writes it."""
+    folder = calibrations[family]
+    robot = "robot.toml" if family == "planar" else "industrial-6r"
+    (folder / "odd-truth.toml").write_text(truth, encoding="utf-8")
+    run = run_cli(folder, "synthesize", "--robot", robot, "--truth", "odd-truth.toml",
+                  "--plan", "plan.csv", "-o", "odd-synth.csv")  # fmt: skip
+    lines = run.stderr.strip().splitlines()
+    assert run.returncode == 2 and len(lines) == 1, run.stderr
+    assert all(word in lines[0] for word in words), lines[0]
+    own = PLANAR_TRUTH_KEYS if family == "planar" else SPATIAL_TRUTH_KEYS
+    assert lines[0].endswith(f"allowed keys are {', '.join(own)}"), lines[0]

@@ -29,7 +29,7 @@ from typing import Any
 import numpy as np
 
 from ..errors import ArmcalError, ArmcalWarning, InputError, unrendered
-from ..formats import SERIAL_KEYS, SERIAL_TRUTH_KEYS, allowed_keys
+from ..formats import SERIAL_KEYS, SERIAL_TRUTH_KEYS, TRUTH_KEYS, allowed_keys
 from ..models import (
     CompliantSerialArm,
     LinkMasses,
@@ -42,7 +42,17 @@ from ..models import (
 )
 from ..models.spatial_dh import convention_mistake, table_chain
 from ..paper import BUILTIN_ROBOTS
-from .common import STDIO, check_keys, fail, load_toml, number, number_within, numbers, suggest
+from .common import (
+    STDIO,
+    check_keys,
+    check_truth_keys,
+    fail,
+    load_toml,
+    number,
+    number_within,
+    numbers,
+    suggest,
+)
 from .robot_units import check_mdh_angles, check_reach, limit_warnings, urdf_limit_warning
 from .robots import RobotSpec, fixed_parameters, held_terms, load_robot
 from .serial_noise import read_serial_noise
@@ -598,7 +608,9 @@ def load_serial_truth(
     """
     path = Path(path)
     data = load_toml(path, "truth")
-    check_keys(path, data, allowed_keys("", SERIAL_TRUTH_KEYS))
+    spatial = allowed_keys("", SERIAL_TRUTH_KEYS)
+    check_truth_keys(path, data, spatial, allowed_keys("", TRUTH_KEYS), "spatial")
+    check_keys(path, data, spatial)
     arm = model.arm
     if not isinstance(model, CompliantSerialArm):
         if "compliance" in data:
