@@ -493,3 +493,35 @@ def test_an_unknown_truth_key_lists_the_family_s_keys(calibrations, family, trut
     assert all(word in lines[0] for word in words), lines[0]
     own = PLANAR_TRUTH_KEYS if family == "planar" else SPATIAL_TRUTH_KEYS
     assert lines[0].endswith(f"allowed keys are {', '.join(own)}"), lines[0]
+
+
+# --------------------------------------------------------------------------- warnings kept
+
+
+#: The planar arm with its limits written in radians (170 deg = 2.967 rad, each joint).
+RADIAN_LIMITS = """name = "rad-3link"
+link_lengths_mm = [300.0, 250.0, 150.0]
+joint_limits_deg = [[-2.967, 2.967], [-2.967, 2.967], [-2.967, 2.967]]
+[measurement]
+sigma_mm = 0.02
+"""
+
+
+def test_robot_file_warnings_print_before_the_error_that_stops_the_command(calibrations):
+    """Limits written in radians warn (limits-radians); the measurements in degrees then
+    fall outside them, an error.  The warning, which explains the error, prints first,
+    once; a command that succeeds prints it once, with its report."""
+    folder = calibrations["planar"]
+    (folder / "rad.toml").write_text(RADIAN_LIMITS, encoding="utf-8")
+    run = run_cli(folder, "identify", "--robot", "rad.toml", "--measurements", "meas.csv")
+    lines = run.stderr.strip().splitlines()
+    assert run.returncode == 2 and len(lines) == 2, run.stderr
+    assert lines[0].startswith("armcal: warning: rad.toml: key 'joint_limits_deg'"), lines[0]
+    assert "looks like radians" in lines[0]
+    assert lines[1].startswith("armcal: error: meas.csv: ") and "outside" in lines[1], lines[1]
+    # Readings within the limits as written (deg): the command succeeds, the warning once.
+    rng = np.random.default_rng(8)
+    _plan(folder / "small.csv", rng.uniform(-2.9, 2.9, (12, 3)))
+    run = run_cli(folder, "evaluate", "--robot", "rad.toml", "--plan", "small.csv")
+    assert run.returncode == 0, run.stderr
+    assert run.stderr.count("looks like radians") == 1, run.stderr

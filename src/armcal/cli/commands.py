@@ -111,8 +111,13 @@ REQUIREMENT_OPTIONS = {
 
 
 def _robot(args: argparse.Namespace) -> RobotSpec | SerialSpec:
-    """``--robot``, its URDF's chain from ``--base-link`` to ``--tip-link`` where given."""
-    return load_any_robot(args.robot, base_link=args.base_link, tip_link=args.tip_link)
+    """``--robot``, its URDF's chain from ``--base-link`` to ``--tip-link`` where given.
+
+    What reading it warns of is kept on ``args.loaded_warnings`` too: a later error stops
+    the command before its report prints them, and the program prints them then."""
+    spec = load_any_robot(args.robot, base_link=args.base_link, tip_link=args.tip_link)
+    args.loaded_warnings = tuple(spec.warnings)
+    return spec
 
 
 def _model(
@@ -243,6 +248,7 @@ def synthesize(args: argparse.Namespace) -> None:
     )
     if args.output is None or args.output == STDIO:
         print_warnings(spec.warnings)
+        args.loaded_warnings = ()  # printed
         if note is not None:  # stdout holds the measurements: the note goes beside the warnings
             print(f"armcal: {note}", file=sys.stderr)
         sys.stdout.write(text)
