@@ -78,6 +78,10 @@ ACTIONS: dict[str, str] = {
     "distinct": "distinct=True",
     "payloads": "payloads",
     "robot-file": "load_robot",
+    "measurements-file": "read_measurements",
+    "plan-file": "read_plan",
+    "calibration-file": "read_calibration",
+    "truth-file": "load_truth",
     "robot-arm": "arm",
 }
 

@@ -24,6 +24,7 @@ from ..demo_serial import SERIAL_DEMO_POSES, run_serial_demo
 from ..errors import ArmcalError
 from ..files import (
     BUILTIN_ROBOTS,
+    BUILTIN_SERIAL_ROBOTS,
     COMPLIANCE_TRUTH_KEYS,
     STDIO,
     RobotSpec,
@@ -109,8 +110,13 @@ REQUIREMENT_OPTIONS = {
 
 
 def _robot(args: argparse.Namespace) -> RobotSpec | SerialSpec:
-    """``--robot``, its URDF's chain from ``--base-link`` to ``--tip-link`` where given."""
-    return load_any_robot(args.robot, base_link=args.base_link, tip_link=args.tip_link)
+    """``--robot``, its URDF's chain from ``--base-link`` to ``--tip-link`` where given.
+
+    What reading it warns of is kept on ``args.loaded_warnings`` too: a later error stops
+    the command before its report prints them, and the program prints them then."""
+    spec = load_any_robot(args.robot, base_link=args.base_link, tip_link=args.tip_link)
+    args.loaded_warnings = tuple(spec.warnings)
+    return spec
 
 
 def _model(
@@ -243,6 +249,7 @@ def synthesize(args: argparse.Namespace) -> None:
     )
     if args.output is None or args.output == STDIO:
         print_warnings([*spec.warnings, *made.warnings])
+        args.loaded_warnings = ()  # printed
         if note is not None:  # stdout holds the measurements: the note goes beside the warnings
             print(f"armcal: {note}", file=sys.stderr)
         sys.stdout.write(text)
@@ -289,10 +296,11 @@ def _options(args: argparse.Namespace) -> dict[str, Any]:
 def identify(args: argparse.Namespace) -> None:
     """``armcal identify``: the calibration of a measurement file."""
     if args.robot is None:
+        builtins = ", ".join([*BUILTIN_ROBOTS, *BUILTIN_SERIAL_ROBOTS])
         raise ArmcalError(
             "identify needs --robot: the measurements are of one arm, and a fit to another "
             "arm's model is a wrong calibration; give your robot file (armcal formats lists "
-            f"its keys) or a built-in name ({', '.join(BUILTIN_ROBOTS)})"
+            f"its keys) or a built-in name ({builtins})"
         )
     spec = _robot(args)
     if isinstance(spec, SerialSpec):

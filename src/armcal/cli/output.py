@@ -52,6 +52,10 @@ CLI_ACTIONS = {
     "distinct": "--distinct",
     "payloads": "--payloads",
     "robot-file": "--robot",
+    "measurements-file": "--measurements",
+    "plan-file": "--plan",
+    "calibration-file": "--calibration",
+    "truth-file": "--truth",
     "robot-arm": "--robot",
 }
 
@@ -81,6 +85,7 @@ def emit(
     warnings = unique_warnings(warnings)
     document["warnings"] = warning_dicts(warnings)
     print_warnings(warnings)
+    args.loaded_warnings = ()  # printed: an error after this does not print them again
     if getattr(args, "stdout_taken", False):  # `-o -`: the file is the command's output
         return
     print(to_json(document) if args.json else text, end="" if args.json else "\n")

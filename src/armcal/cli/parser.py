@@ -96,13 +96,29 @@ def _add_calibration(sub: argparse.ArgumentParser) -> None:
     sub.add_argument("--json", action="store_true", help="print a JSON document on stdout")
 
 
+class _Joined(argparse.Action):
+    """An option whose repeats add up: ``--fix dl1 --fix dq2`` is ``--fix dl1,dq2`` (a
+    plain option keeps only the last, silently dropping what the user asked first)."""
+
+    def __call__(
+        self,
+        parser: argparse.ArgumentParser,
+        namespace: argparse.Namespace,
+        values: Any,
+        option_string: str | None = None,
+    ) -> None:
+        before = getattr(namespace, self.dest, None) or ()
+        setattr(namespace, self.dest, tuple(dict.fromkeys((*before, *values))))
+
+
 def _add_fix(sub: argparse.ArgumentParser) -> None:
     sub.add_argument(
         "--fix",
         type=options.names,
+        action=_Joined,
         metavar="P,..",
-        help="parameters held at nominal, not identified (e.g. dl4,dq1); replaces the robot "
-        "file's [identify] set",
+        help="parameters held at nominal, not identified (e.g. dl4,dq1; repeats add up); "
+        "replaces the robot file's [identify] set",
     )
 
 

@@ -13,10 +13,10 @@ import os
 import sys
 from collections.abc import Callable, Sequence
 
-from ..errors import ArmcalError
+from ..errors import ArmcalError, unique_warnings
 from ..files import BUILTIN_ROBOTS, STDIO, OutputFolder, check_outputs
 from ..formats import FIGURE_FORMATS
-from .output import CLI_ACTIONS
+from .output import CLI_ACTIONS, print_warnings
 from .parser import build_parser
 
 __all__ = ["main"]
@@ -96,12 +96,16 @@ def main(argv: Sequence[str] | None = None) -> int:
         build_parser().print_help()
         print("armcal: error: no command given; pick one of the commands above", file=sys.stderr)
         return 2
+    args = None
     try:
         args = build_parser().parse_args(argv)
         _check_paths(args)
         run: Callable[[argparse.Namespace], None] = args.run
         run(args)
     except ArmcalError as exc:
+        # The robot file's warnings (radian limits, lengths in metres) often explain the
+        # error that stopped the command before its report: print them first.
+        print_warnings(unique_warnings(getattr(args, "loaded_warnings", ())))
         print(f"armcal: error: {exc.render(CLI_ACTIONS)}", file=sys.stderr)
         return 2
     except KeyboardInterrupt:  # Ctrl-C: writers have removed their temporary files

@@ -40,7 +40,9 @@ from ..models import (
     TermChoice,
 )
 from ..noise import NoiseModel, TrackerNoise
+from .checked import BadKey, array_of, check_covariance, described, list_of, number_of
 from .common import fail, read_text
+from .kinds import looks_like
 from .robots import parse_region
 
 __all__ = [
@@ -105,31 +107,42 @@ def _serial_from_dict(
     data: dict[str, Any], noise: NoiseModel | None, fixed: list[str]
 ) -> SpatialArm:
     """The spatial arm of a calibration file's ``robot`` section (:func:`serial_robot_to_dict`)."""
-    kinds = tuple(str(k) for k in data["joint_types"])
+    kinds = tuple(str(k) for k in list_of(data, "joint_types", "'R' or 'P' per joint"))
     n = len(kinds)
-    limits = np.array(data["chain_limits"], dtype=float).reshape(n, 2)
+    if n == 0 or any(k not in ("R", "P") for k in kinds):
+        raise BadKey("robot.joint_types", f"expected 'R' or 'P' per joint, got {kinds!r}")
+    pairs = f"{n} pairs [lo, hi]"
+    limits = array_of(data, "chain_limits", (n, 2), f"{pairs} (the URDF's limits, rad or mm)")
     chain = SerialChain(
-        np.array(data["origins"], dtype=float).reshape(n, 4, 4),
+        array_of(data, "origins", (n, 4, 4), f"{n} joint origins, each a 4 x 4 transform (mm)"),
         kinds,
-        np.array(data["tip"], dtype=float).reshape(4, 4),
-        tuple(str(name) for name in data["joint_names"]),
+        array_of(data, "tip", (4, 4), "the tip frame, a 4 x 4 transform (mm)"),
+        tuple(str(name) for name in list_of(data, "joint_names", f"{n} joint names", n)),
         np.where(np.abs(limits) >= 1e300, np.copysign(np.inf, limits), limits),
     )
-    held = tuple(str(name) for name in data["held"])
+    targets = tuple(str(label) for label in list_of(data, "targets", "the target labels"))
+    k = len(targets)
+    held = tuple(str(name) for name in list_of(data, "held", "the parameters held"))
     arm = SpatialArm(
         chain,
         str(data["name"]),
-        np.array(data["joint_map"], dtype=float).reshape(n, n),
-        np.array(data["joint_limits"], dtype=float).reshape(n, 2),
-        targets=tuple(str(label) for label in data["targets"]),
-        target_positions=np.array(data["target_positions_mm"], dtype=float).reshape(-1, 3),
-        base_pose=np.array(data["base_pose"], dtype=float).reshape(6),
+        array_of(data, "joint_map", (n, n), f"a {n} x {n} matrix (joint values from readings)"),
+        array_of(data, "joint_limits", (n, 2), f"{pairs} (the readings' limits, rad or mm)"),
+        targets=targets,
+        target_positions=array_of(
+            data, "target_positions_mm", (k, 3), f"{k} positions [x, y, z] (mm), one per target"
+        ),
+        base_pose=array_of(
+            data, "base_pose", (6,), "6 numbers: the instrument's x, y, z (mm), rx, ry, rz (rad)"
+        ),
         noise=noise,
         held=held,
-        merges=tuple(str(text) for text in data["merges"]),
+        merges=tuple(str(text) for text in list_of(data, "merges", "sentences")),
         known_targets=bool(data["known_targets"]),
         oriented=bool(data.get("oriented", False)),
-        target_turns=np.array(data.get("target_turns_rad", []), dtype=float).reshape(-1, 3),
+        target_turns=array_of(
+            data, "target_turns_rad", (-1, 3), "a rotation vector (rad) per target", []
+        ),
     )
     # "fixed" lists every parameter held, by the user or a rule, an effect's too
     own = set(arm.layout.names) - set(held)
@@ -170,19 +183,31 @@ def _arm_from_dict(data: dict[str, Any], noise: NoiseModel | None, fixed: list[s
         Target(label, float(entry["length_mm"]), math.radians(float(entry["angle_deg"])))
         for label, entry in data.get("targets", {}).items()
     )
+    lengths = array_of(data, "link_lengths_mm", (-1,), "the nominal link lengths (mm)")
+    n = lengths.size
+    if n == 0:
+        raise BadKey("robot.link_lengths_mm", "expected the nominal link lengths (mm); got none")
+    each = f"for each of the {n} links in robot.link_lengths_mm"  # the count the rest follow
     offsets = data.get("joint_offsets_deg")
+    joint_map = None
+    if data.get("joint_map") is not None:
+        joint_map = array_of(
+            data, "joint_map", (n, n), f"the matrix theta = M q, a row and column {each}"
+        )
     return PlanarArm(
-        np.array(data["link_lengths_mm"], dtype=float),
-        np.radians(np.array(data["joint_limits_deg"], dtype=float)),
+        lengths,
+        np.radians(array_of(data, "joint_limits_deg", (n, 2), f"a pair [lo, hi] (deg) {each}")),
         base_offset=bool(data["base_offset"]),
         name=str(data["name"]),
         noise=noise,
         region=region,
         fixed=fixed,
-        joint_map=data.get("joint_map"),
+        joint_map=joint_map,
         targets=targets,
         base_rotation=bool(data.get("base_rotation", False)),
-        joint_offsets=None if offsets is None else np.radians(np.array(offsets, dtype=float)),
+        joint_offsets=None
+        if offsets is None
+        else np.radians(array_of(data, "joint_offsets_deg", (n,), f"a joint offset (deg) {each}")),
     )
 
 
@@ -206,8 +231,21 @@ def read_calibration(path: str | os.PathLike) -> CalibratedArm:
     try:
         doc = json.loads(text)
     except (ValueError, RecursionError) as exc:  # JSONDecodeError, or digits/nesting limits
-        raise fail(path, f"not a calibration file: invalid JSON ({exc})") from None
-    if not isinstance(doc, dict) or "format" not in doc:
+        other = looks_like(text, "calibration-file")
+        if other:  # a file of another kind: say which, not what JSON finds wrong in it
+            raise fail(path, f"not a calibration file: {other.removesuffix('; ')}") from None
+        raise fail(
+            path,
+            f"not a calibration file: invalid JSON ({exc}), as in a file cut short or "
+            "mistyped by hand; write the calibration again with armcal identify -o",
+        ) from None
+    if not isinstance(doc, dict):
+        raise fail(
+            path,
+            f"not a calibration file: {'a list' if isinstance(doc, list) else described(doc)} "
+            "where an object with a 'format' key was expected; write one with armcal identify -o",
+        )
+    if "format" not in doc:
         raise fail(
             path, "not a calibration file: no 'format' key; write one with armcal identify -o"
         )
@@ -246,23 +284,35 @@ def read_calibration(path: str | os.PathLike) -> CalibratedArm:
         key = "training_rows"
         rows = _rows_from_dict(doc.get("training_rows"), arm.n_joints, len(arm.target_labels))
         key = "parameters"
-        names = [entry["name"] for entry in doc["parameters"]]
+        entries = list_of(doc, "parameters", "an entry per parameter", where="")
+        names = [entry["name"] for entry in entries]
         expected = model.param_names
         if tuple(names) != expected:
             raise ValueError(
                 f"parameters {', '.join(names)} do not match the robot's {', '.join(expected)}"
             )
         scale = model.display_scale
-        values = np.array([float(entry["value"]) for entry in doc["parameters"]]) / scale
+        values = np.array(
+            [number_of(e.get("value"), "parameters", f"the value of {e['name']}") for e in entries]
+        )
+        values = values / scale
+        stds = [entry.get("std") for entry in entries]
         key = "covariance"
         if list(doc["covariance"]["names"]) != names:
             raise ValueError("covariance names do not match the parameters")
-        full = np.array(doc["covariance"]["matrix"], dtype=float) / np.outer(scale, scale)
-        if full.shape != (len(names), len(names)):
-            raise ValueError(f"expected a {len(names)} x {len(names)} matrix")
+        p = len(names)
+        shown = array_of(
+            doc["covariance"],
+            "matrix",
+            (p, p),
+            "a row and a column per parameter (mm, deg)",
+            where="covariance",
+        )
+        check_covariance(shown, names, stds)
+        full = shown / np.outer(scale, scale)
         key = "sigma_mm"
-        sigma = float(doc["sigma_mm"])
-        if not (sigma > 0 and math.isfinite(sigma)):
+        sigma = number_of(doc.get("sigma_mm"), key, "the noise std (mm)")
+        if not sigma > 0:
             raise ValueError(f"expected a positive noise std in mm, got {sigma}")
         key = "plane"
         plane = None if doc.get("plane") is None else Plane.from_dict(doc["plane"])
@@ -270,14 +320,16 @@ def read_calibration(path: str | os.PathLike) -> CalibratedArm:
         baseline = _baseline_from_dict(arm, doc.get("baseline"))
     except (KeyError, TypeError, ValueError, AttributeError, OverflowError, InputError) as exc:
         # AttributeError: a section of the wrong JSON type ("robot": [] has no .get)
-        what = f"missing key {exc}" if isinstance(exc, KeyError) else unrendered(exc)
+        what = unrendered(exc)
+        if isinstance(exc, KeyError):
+            what = "missing" if exc.args == (key,) else f"missing key {exc}"
         if isinstance(exc, AttributeError):
             what = "a section of the wrong type"
+        if isinstance(exc, BadKey):
+            key = exc.key
         raise fail(
             path, f"key '{key}': {what}; write the calibration again with armcal identify -o"
         ) from None
-    if not (np.all(np.isfinite(values)) and np.all(np.isfinite(full))):
-        raise fail(path, "key 'parameters': values must be finite numbers")
     if plane is None and isinstance(arm, PlanarArm) and arm.base_rotation:
         raise fail(path, "key 'plane': a calibration from 3-D data must record its plane")
     if rows is not None and not np.all(np.isfinite(rows.q)):

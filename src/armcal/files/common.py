@@ -19,6 +19,7 @@ from typing import Any, BinaryIO
 
 from ..errors import InputError, action
 from ..formats import table_of
+from .kinds import looks_like, wrong_toml
 
 if sys.version_info >= (3, 11):
     import tomllib
@@ -107,6 +108,48 @@ def check_keys(
             )
 
 
+#: How a truth file of the other family writes what a key of this family holds: a planar
+#: arm's (lists, one per joint) and a spatial arm's (a table of parameters).
+_TRUTH_FAMILIES = {
+    "planar": (
+        "a planar arm's truth file: deviations as lists, one per joint (dl_mm = [...] in mm, "
+        "dq_deg = [...] in deg, base_mm = [x0, y0])"
+    ),
+    "spatial": (
+        "a spatial arm's truth file: the deviations as a table of parameters ([errors] with "
+        "dq1 = ... in deg, j2.x = ... in mm), the base as base = { xyz_mm = [x, y, z], "
+        "rpy_deg = [r, p, y] }, the compliance as [compliance]"
+    ),
+}
+
+
+#: A spatial arm's parameter (dq3, j2.x), which a truth file gives under [errors].
+_PARAMETER = re.compile(r"^(dq\d+|j\d+\.\w+)$")
+
+
+def check_truth_keys(
+    path, data: dict, allowed: Sequence[str], other: Sequence[str], family: str
+) -> None:
+    """Refuse a key of a truth file that the ``other`` family's truth file takes (a planar
+    arm's ``dq_deg`` for a spatial arm), saying how the arm's ``family`` (``"planar"`` or
+    ``"spatial"``) writes it; the other keys :func:`check_keys` judges."""
+    for key in data:
+        if family == "spatial" and _PARAMETER.match(key):
+            raise fail(
+                path,
+                f"unknown key '{key}': a parameter's error belongs in the [errors] table (write "
+                f"it under an [errors] line); allowed keys are {', '.join(allowed)}",
+            )
+        if key not in allowed and key in other:
+            theirs = "spatial" if family == "planar" else "planar"
+            raise fail(
+                path,
+                f"unknown key '{key}': it belongs in a {theirs} arm's truth file, but the robot "
+                f"is {family}; write {_TRUTH_FAMILIES[family]}; allowed keys are "
+                f"{', '.join(allowed)}",
+            )
+
+
 def misplaced(key: str, where: str) -> str:
     """A hint when a robot-file ``key`` belongs in another table than ``where``."""
     home = table_of(key)
@@ -157,9 +200,16 @@ def load_toml(path, what: str) -> dict:
     """A TOML file's table; an error names the line, shows it and says how to fix it."""
     text = read_text(path, what)
     try:
-        return tomllib.loads(text)
+        data = tomllib.loads(text)
     except (ValueError, RecursionError) as exc:  # TOMLDecodeError, or digits/nesting limits
+        other = looks_like(text, f"{what}-file")
+        if other:  # a file of another kind: say which, not what TOML finds wrong in it
+            raise fail(path, f"not a {what} TOML file: {other.removesuffix('; ')}") from None
         raise fail(path, f"invalid TOML: {_toml_advice(text, str(exc), what)}") from None
+    other = wrong_toml(data, what)
+    if other:
+        raise fail(path, f"not a {what} file: {other.removesuffix('; ')}")
+    return data
 
 
 _TOML_AT = re.compile(r"^(?P<what>.*) \(at line (?P<line>\d+), column (?P<column>\d+)\)$")

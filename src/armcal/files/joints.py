@@ -21,10 +21,12 @@ import numpy as np
 from ..models import PlanarArm, SpatialArm
 from .common import fail
 from .csv_text import WIDTH, Column, degree_cells, degrees, float_cells
+from .robots import RADIAN_LIMIT_BOUND
 
 __all__ = [
     "JOINT_COLUMN",
     "JOINT_UNITS",
+    "RADIAN_MIN_POSES",
     "SAME_POSE",
     "check_joint_units",
     "check_joint_values",
@@ -34,7 +36,10 @@ __all__ = [
     "joint_values",
     "limit_slack",
     "model_units",
+    "radians_message",
+    "refuse_radians",
     "revolute",
+    "wrapped_into",
 ]
 
 #: The unit of a joint's column by the joint's kind: an angle in degrees, a slide in mm.
@@ -222,4 +227,51 @@ def check_pose_labels(
         f"and {q_file[r, j]:g} {unit}); a pose label names one pose (the rows measured at "
         "its joint readings, one per target, load or cycle): give the other pose a label "
         "of its own",
+    )
+
+
+def wrapped_into(q_deg: np.ndarray, lo: float, hi: float) -> float | None:
+    """The turn (-360 or +360) that brings every one of a column's angles within [lo, hi].
+
+    None when no single turn does.
+    """
+    for turn in (-360.0, 360.0):
+        shifted = np.where((q_deg < lo) | (q_deg > hi), q_deg + turn, q_deg)
+        if np.all((shifted >= lo) & (shifted <= hi)):
+            return turn
+    return None
+
+
+#: Fewest poses whose angles all lie within :data:`RADIAN_LIMIT_BOUND` before a
+#: plan or a program is refused as radians: one or two poses near zero are a
+#: home position, not a unit mistake.
+RADIAN_MIN_POSES = 3
+
+
+def refuse_radians(path, what: str, q_deg: np.ndarray, limits_deg: np.ndarray) -> None:
+    """InputError when a plan's or program's angles look like radians (:func:`radians_message`)."""
+    found = radians_message(what, q_deg, limits_deg)
+    if found is not None:
+        raise fail(path, found)
+
+
+def radians_message(what: str, q_deg: np.ndarray, limits_deg: np.ndarray) -> str | None:
+    """What says that a file's angles ``q_deg`` look like radians under ``q*_deg``, with
+    the fix; None when they do not.
+
+    Every angle within :data:`RADIAN_LIMIT_BOUND` (2 pi, rounded up) over at
+    least :data:`RADIAN_MIN_POSES` poses, while the joints may turn farther: an
+    arm calibrated or corrected there would move a few degrees in all, whereas
+    radians of any pose lie within 2 pi.  ``identify`` catches the same mistake
+    by fitting both readings (:mod:`armcal.plausibility`); a plan or a program
+    has no positions to fit, so its range is the evidence.
+    """
+    span = np.abs(q_deg).max(initial=0.0)
+    may_turn = np.maximum(-limits_deg[:, 0], limits_deg[:, 1]).max() > RADIAN_LIMIT_BOUND
+    if len(q_deg) < RADIAN_MIN_POSES or span == 0.0 or span > RADIAN_LIMIT_BOUND or not may_turn:
+        return None
+    return (
+        f"every joint angle of the {len(q_deg)} {what} rows is within +-{span:.3g}, which "
+        f"looks like radians under the q*_deg columns (the joints may turn to "
+        f"{np.abs(limits_deg).max():g} deg); convert the angles to degrees (x 180/pi)"
     )

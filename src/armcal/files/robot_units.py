@@ -90,8 +90,10 @@ def _looks_like_radians(values: Sequence[float]) -> float | None:
     return float(np.asarray(values, dtype=float)[np.argmax(hit)])
 
 
-def check_mdh_angles(path: str | os.PathLike, angles: Mapping[str, Sequence[float]]) -> None:
-    """Refuse a modified DH table whose angles are radians (module notes).
+def check_mdh_angles(
+    path: str | os.PathLike, angles: Mapping[str, Sequence[float]], table: str = "mdh"
+) -> None:
+    """Refuse a DH table (modified or standard) whose angles are radians (module notes).
 
     Parameters
     ----------
@@ -100,7 +102,9 @@ def check_mdh_angles(path: str | os.PathLike, angles: Mapping[str, Sequence[floa
     angles : mapping
         ``alpha_deg``, ``theta_deg``, ``base_rpy_deg`` and ``tip_rpy_deg`` (those
         given) to the file's values, each judged on its own; the keys are named
-        ``mdh.<key>`` in the message.
+        ``<table>.<key>`` in the message.
+    table : str
+        The table the file wrote them under: ``mdh`` or ``dh`` (standard DH).
 
     Raises
     ------
@@ -121,7 +125,7 @@ def check_mdh_angles(path: str | os.PathLike, angles: Mapping[str, Sequence[floa
             continue
         raise fail(
             path,
-            f"key 'mdh.{key}': every angle is within +-pi and "
+            f"key '{table}.{key}': every angle is within +-pi and "
             f"{found:g} is {'' if found > 0 else '-'}pi{'/2' if abs(found) < 2 else ''}, "
             f"which looks like radians; give degrees (e.g. {math.degrees(found):.4g} for "
             f"{found:g}; deg = rad x 57.29578)",
@@ -208,13 +212,13 @@ def _offsets_in_mm(chain: SerialChain, offsets: np.ndarray) -> str | None:
 
 
 def check_reach(
-    path: str | os.PathLike, chain: SerialChain, *, urdf: bool
+    path: str | os.PathLike, chain: SerialChain, *, urdf: bool, table: str = "mdh"
 ) -> ArmcalWarning | None:
     """Refuse an arm that reaches beyond :data:`MAX_REACH_MM`; ``lengths-in-metres`` when
     its offsets add up to less than :data:`~armcal.files.robots.METRE_REACH_MM`.
 
     ``urdf`` says whether the lengths came from a URDF (metres) or a modified DH table
-    (``a_mm``, ``d_mm``), for the fix the message gives.
+    (``a_mm``, ``d_mm`` of the ``table``, ``mdh`` or ``dh``), for the fix the message gives.
     """
     # From the first joint on: the first joint's origin places the arm in its root link's
     # frame, which may be a cell's world frame metres away.
@@ -228,7 +232,7 @@ def check_reach(
             'the URDF looks written in millimetres (xyz="0 0 425" for 425 mm), but a URDF\'s '
             "lengths are metres: divide its xyz and its prismatic limits by 1000"
             if urdf
-            else "check the unit of mdh.a_mm, mdh.d_mm and the frames' xyz (mm)"
+            else f"check the unit of {table}.a_mm, {table}.d_mm and the frames' xyz (mm)"
         )
         raise fail(
             path,
@@ -238,7 +242,9 @@ def check_reach(
         )
     if reach >= METRE_REACH_MM:
         return None
-    where = "the URDF's xyz are read in metres" if urdf else "mdh.a_mm and mdh.d_mm are in mm"
+    where = (
+        "the URDF's xyz are read in metres" if urdf else f"{table}.a_mm and {table}.d_mm are in mm"
+    )
     return ArmcalWarning(
         "lengths-in-metres",
         f"{os.fspath(path)}: the arm's joint offsets from joint 1 add up to {reach:g} mm, which "

@@ -18,7 +18,7 @@ from typing import Any
 import numpy as np
 
 from ..errors import ArmcalError, ArmcalWarning, InputError, action, unrendered
-from ..formats import TRUTH_KEYS, allowed_keys
+from ..formats import SERIAL_TRUTH_KEYS, TRUTH_KEYS, allowed_keys
 from ..models import (
     Annulus,
     Box,
@@ -31,7 +31,17 @@ from ..models import (
 )
 from ..noise import NoiseModel
 from ..paper import BUILTIN_ROBOTS, paper_arm
-from .common import STDIO, check_keys, fail, load_toml, number, number_within, numbers, suggest
+from .common import (
+    STDIO,
+    check_keys,
+    check_truth_keys,
+    fail,
+    load_toml,
+    number,
+    number_within,
+    numbers,
+    suggest,
+)
 
 __all__ = [
     "BUILTIN_ROBOTS",
@@ -569,7 +579,9 @@ def load_truth(path: str | os.PathLike, arm: PlanarArm, *, rigid: bool = False) 
         User deviations in mm and rad.
     """
     data = load_toml(path, "truth")
-    check_keys(path, data, allowed_keys("", TRUTH_KEYS), robot=False)
+    planar = allowed_keys("", TRUTH_KEYS)
+    check_truth_keys(path, data, planar, allowed_keys("", SERIAL_TRUTH_KEYS), "planar")
+    check_keys(path, data, planar, robot=False)
     given = [key for key in COMPLIANCE_TRUTH_KEYS.values() if key in data]
     if rigid and given:
         raise fail(path, rigid_truth_message(given[0], arm.name))

@@ -29,7 +29,7 @@ from typing import Any
 import numpy as np
 
 from ..errors import ArmcalError, ArmcalWarning, InputError, unrendered
-from ..formats import SERIAL_KEYS, SERIAL_TRUTH_KEYS, allowed_keys
+from ..formats import SERIAL_KEYS, SERIAL_TRUTH_KEYS, TRUTH_KEYS, allowed_keys
 from ..models import (
     CompliantSerialArm,
     LinkMasses,
@@ -41,7 +41,18 @@ from ..models import (
     transform,
 )
 from ..models.spatial_dh import convention_mistake, table_chain
-from .common import check_keys, fail, load_toml, number, number_within, numbers, suggest
+from ..paper import BUILTIN_ROBOTS
+from .common import (
+    STDIO,
+    check_keys,
+    check_truth_keys,
+    fail,
+    load_toml,
+    number,
+    number_within,
+    numbers,
+    suggest,
+)
 from .robot_units import check_mdh_angles, check_reach, limit_warnings, urdf_limit_warning
 from .robots import RobotSpec, fixed_parameters, held_terms, load_robot, rigid_truth_message
 from .serial_noise import read_serial_noise
@@ -155,11 +166,25 @@ def load_serial_robot(
         spec = _from_toml(path, key, links)
         return replace(spec, default_truth=truth if truth.is_file() else None)
     path = Path(key)
-    if path.suffix.lower() in _URDF_SUFFIXES:
+    if path.suffix.lower() in _URDF_SUFFIXES:  # a missing one: the URDF reader says so
         found = read_urdf(path, base_link, tip_link)
         warnings = (*found.warnings, *_urdf_units(path, found.chain))
         return SerialSpec(SpatialArm(found.chain, found.robot), key, warnings=warnings)
+    _refuse_unknown(key)
     return _from_toml(path, None, links)
+
+
+def _refuse_unknown(key: str) -> None:
+    """Refuse a robot that is no file and no built-in, listing the built-ins of both
+    families and the closest to ``key`` (a typo of a name)."""
+    if key == STDIO or key in BUILTIN_ROBOTS or key in BUILTIN_SERIAL_ROBOTS or Path(key).exists():
+        return
+    raise InputError(
+        f"{key}: robot is neither a built-in (planar: {', '.join(BUILTIN_ROBOTS)}; spatial: "
+        f"{', '.join(BUILTIN_SERIAL_ROBOTS)}) nor an existing file; "
+        f"{suggest(key, [*BUILTIN_ROBOTS, *BUILTIN_SERIAL_ROBOTS])}"
+        "give a built-in's name or the path of a robot TOML file or a URDF"
+    )
 
 
 def _urdf_units(path: Path, chain: SerialChain) -> tuple[ArmcalWarning, ...]:
@@ -180,6 +205,7 @@ def load_any_robot(
     ``name_or_path`` names."""
     if is_serial_robot(name_or_path):
         return load_serial_robot(name_or_path, base_link=base_link, tip_link=tip_link)
+    _refuse_unknown(os.fspath(name_or_path))
     spec = load_robot(name_or_path)
     if base_link is not None or tip_link is not None:
         raise ArmcalError(
@@ -289,7 +315,7 @@ def _chain(
         rpy = numbers(path, table.get(f"{where}_rpy_deg", [0, 0, 0]), f"{key}.{where}_rpy_deg", 3)
         angles[f"{where}_rpy_deg"] = rpy
         frames[where] = transform(rpy_matrix(np.radians(rpy)), xyz)
-    check_mdh_angles(path, angles)
+    check_mdh_angles(path, angles, key)
     rows = (
         np.radians(values["alpha_deg"]),
         np.array(values["a_mm"]),
@@ -304,7 +330,7 @@ def _chain(
     if mistake is not None:
         raise fail(path, f"[{key}]: {mistake}")
     chain = table_chain(key, *rows, beta=beta)
-    metres = check_reach(path, chain, urdf=False)
+    metres = check_reach(path, chain, urdf=False, table=key)
     warned: tuple[ArmcalWarning, ...] = () if metres is None else (metres,)
     if "joint_limits_deg" in table:  # limits on the table's joint values, as a URDF's
         limits = table["joint_limits_deg"]
@@ -584,7 +610,9 @@ def load_serial_truth(
     """
     path = Path(path)
     data = load_toml(path, "truth")
-    check_keys(path, data, allowed_keys("", SERIAL_TRUTH_KEYS))
+    spatial = allowed_keys("", SERIAL_TRUTH_KEYS)
+    check_truth_keys(path, data, spatial, allowed_keys("", TRUTH_KEYS), "spatial")
+    check_keys(path, data, spatial)
     arm = model.arm
     if not isinstance(model, CompliantSerialArm):
         if "compliance" in data and not geometry_only:

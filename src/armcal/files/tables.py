@@ -40,9 +40,13 @@ from .joints import (
     joint_names,
     limit_slack,
     model_units,
+    radians_message,
+    refuse_radians,
     revolute,
+    wrapped_into,
 )
-from .robots import METRE_REACH_MM, RADIAN_LIMIT_BOUND, SIGMA_RANGE_MM
+from .kinds import field_count_fix, looks_like, not_a_table
+from .robots import METRE_REACH_MM, SIGMA_RANGE_MM
 from .writers import ORIENTATION_COLUMNS
 
 __all__ = [
@@ -234,7 +238,7 @@ def _split(
             raise fail(
                 path,
                 f"row {r} (line {line}) has {len(row)} fields but the header has "
-                f"{len(header)}; give every column a value",
+                f"{len(header)}; {field_count_fix(row, len(header), delimiter)}",
             )
     return header_line, header, [line for line, _ in data], lambda c: [row[c] for _, row in data]
 
@@ -409,6 +413,11 @@ def _read_csv(
     extras = list(optional) + list(optional_numeric)
     layout = ",".join(expected) + "".join(f" [,{c}]" for c in extras)
     text = read_text(path, what)
+    expected_kind = f"{what}-file"
+    if not_a_table(text):  # JSON, XML or TOML
+        other = looks_like(text, expected_kind)
+        if other:
+            raise fail(path, f"not a {what} CSV file: {other}expected a header line {layout}")
     numeric_file = _numeric_file(text, optional)
     if numeric_file is not None:
         header_line, header_raw, block = numeric_file
@@ -435,11 +444,11 @@ def _read_csv(
             raise fail(path, f"line {header_line}: duplicate column '{name}'; keep one")
     for name in header:
         if name not in expected and name not in extras and not JOINT_COLUMN.match(name):
+            hint = _unit_hint(name, expected + extras) or looks_like(text, expected_kind)
             raise fail(
                 path,
                 f"line {header_line}: unknown column {_shown(name)}: "
-                f"{_unit_hint(name, expected + extras) or suggest(name, expected + extras)}"
-                f"expected {layout}",
+                f"{hint or suggest(name, expected + extras)}expected {layout}",
             )
     found = check_joint_units(path, header, header_line, arm)
     if found and len(found) != arm.n_joints:
@@ -455,7 +464,11 @@ def _read_csv(
         )
     for name in expected:
         if name not in header:
-            raise fail(path, f"line {header_line}: missing column '{name}'; expected {layout}")
+            raise fail(
+                path,
+                f"line {header_line}: missing column '{name}'; "
+                f"{looks_like(text, expected_kind)}expected {layout}",
+            )
     if not lines:
         raise fail(
             path, f"has a header but no poses; add one row per pose after line {header_line}"
@@ -495,7 +508,7 @@ def _read_csv(
                 f"readings up to {tolerance[j]:g} {unit} beyond a limit are accepted; "
                 "check the robot file (joint_limits_deg) and the column"
             )
-        wrapped = _wrapped_into(q_file[:, j], lo, hi) if turns[j] else None
+        wrapped = wrapped_into(q_file[:, j], lo, hi) if turns[j] else None
         if wrapped is not None:  # a controller that reads 0..360
             fix = (
                 f"{values[r, j]:g} is {values[r, j] + wrapped:g} {'+' if wrapped < 0 else '-'} "
@@ -503,7 +516,7 @@ def _read_csv(
                 f"where a value exceeds the limit, or give joint_limits_deg in that range"
             )
         if turns[j]:  # radians blame no limit: say so before the limits
-            fix = _radians(what, q_file[:, turns], limits[turns]) or fix
+            fix = radians_message(what, q_file[:, turns], limits[turns]) or fix
         raise fail(
             path,
             f"row {r + 1} (line {lines[r]}), column {expected[j]}: {values[r, j]:g} {unit} is "
@@ -514,58 +527,11 @@ def _read_csv(
     ]
     if what in ("plan", "program"):
         if turns.any():
-            _refuse_radians(path, what, q_file[:, turns], limits[turns])
+            refuse_radians(path, what, q_file[:, turns], limits[turns])
         check_joint_values(path, what, arm, model_units(q_file, kinds), lines)
     if "pose" in texts:
         check_pose_labels(path, texts["pose"], q_file, kinds, lines)
     return _Table(values, texts, numbers, lines, beyond, header_line)
-
-
-def _wrapped_into(q_deg: np.ndarray, lo: float, hi: float) -> float | None:
-    """The turn (-360 or +360) that brings every one of a column's angles within [lo, hi].
-
-    None when no single turn does.
-    """
-    for turn in (-360.0, 360.0):
-        shifted = np.where((q_deg < lo) | (q_deg > hi), q_deg + turn, q_deg)
-        if np.all((shifted >= lo) & (shifted <= hi)):
-            return turn
-    return None
-
-
-#: Fewest poses whose angles all lie within :data:`RADIAN_LIMIT_BOUND` before a
-#: plan or a program is refused as radians: one or two poses near zero are a
-#: home position, not a unit mistake.
-RADIAN_MIN_POSES = 3
-
-
-def _refuse_radians(path, what: str, q_deg: np.ndarray, limits_deg: np.ndarray) -> None:
-    """InputError when a plan's or program's angles look like radians (:func:`_radians`)."""
-    found = _radians(what, q_deg, limits_deg)
-    if found is not None:
-        raise fail(path, found)
-
-
-def _radians(what: str, q_deg: np.ndarray, limits_deg: np.ndarray) -> str | None:
-    """What says that a file's angles ``q_deg`` look like radians under ``q*_deg``, with
-    the fix; None when they do not.
-
-    Every angle within :data:`RADIAN_LIMIT_BOUND` (2 pi, rounded up) over at
-    least :data:`RADIAN_MIN_POSES` poses, while the joints may turn farther: an
-    arm calibrated or corrected there would move a few degrees in all, whereas
-    radians of any pose lie within 2 pi.  ``identify`` catches the same mistake
-    by fitting both readings (:mod:`armcal.plausibility`); a plan or a program
-    has no positions to fit, so its range is the evidence.
-    """
-    span = np.abs(q_deg).max(initial=0.0)
-    may_turn = np.maximum(-limits_deg[:, 0], limits_deg[:, 1]).max() > RADIAN_LIMIT_BOUND
-    if len(q_deg) < RADIAN_MIN_POSES or span == 0.0 or span > RADIAN_LIMIT_BOUND or not may_turn:
-        return None
-    return (
-        f"every joint angle of the {len(q_deg)} {what} rows is within +-{span:.3g}, which "
-        f"looks like radians under the q*_deg columns (the joints may turn to "
-        f"{np.abs(limits_deg).max():g} deg); convert the angles to degrees (x 180/pi)"
-    )
 
 
 def read_plan(path: str | os.PathLike, arm: PlanarArm | SpatialArm) -> np.ndarray:
