@@ -462,13 +462,14 @@ def poses_needed(args: argparse.Namespace) -> None:
     spec = _robot(args)
     arm = _model(args, spec)[1] if spec.elastic is None else spec.arm
     requirement = next(key for key in REQUIREMENT_OPTIONS if getattr(args, key) is not None)
+    positions = requirement == "position_rms_mm"  # test poses with the robot's payload
     found, seconds = size_plan(
         spec,
         arm,
         requirement,
         getattr(args, requirement),
         seed=args.seed,
-        test_q=_test_poses(args, spec),
+        test_q=test_poses(spec, args.seed, args.test_poses, loaded=positions),
         max_poses=args.max_poses,
         progress=ProgressBar("poses-needed"),
     )

@@ -127,6 +127,8 @@ def accuracy_metric(
     ``loads``; inf if singular."""
     _check_requirement(requirement)
     if requirement == "position_rms_mm":
+        if not len(test_q):  # a mean over no poses is no accuracy
+            raise ArmcalError("a position target needs test poses; none were given")
         return position_rms(model, q, test_q, sigma, loads=loads)
     _check_measurable(model, requirement)
     std = predicted_std(model, q, sigma, loads=loads)  # inf when the plan is singular

@@ -231,15 +231,18 @@ def check_plan_size(poses: int, memory: int | None = None) -> None:
     )
 
 
-def test_poses(spec: RobotSpec | SerialSpec, seed: int, path: str | None = None) -> np.ndarray:
+def test_poses(
+    spec: RobotSpec | SerialSpec, seed: int, path: str | None = None, *, loaded: bool = False
+) -> np.ndarray:
     """Poses where positioning accuracy matters: the plan file ``path``, else 1000 uniform
     in the limits (seeded by ``seed``).
 
     None, shape ``(0, n)``, for a robot with ``[elastostatic]`` (the file is not read):
     its plans are judged by the predicted std of the parameters, not by the position
-    error at test poses.
+    error at test poses -- unless ``loaded``: where a position error is asked for (a
+    position target of poses-needed), the test poses carry the robot file's payload.
     """
-    if spec.elastic is not None:
+    if spec.elastic is not None and not loaded:
         return np.zeros((0, spec.arm.n_joints))
     if path is not None:
         return read_plan(path, spec.arm)

@@ -1,0 +1,52 @@
+"""poses-needed with a position target on a robot with joint compliance (battery 2).
+
+A robot file with ``[elastostatic]`` had no test poses (its plans are judged by the std
+of their parameters), so ``--position-rms-mm`` ended in a traceback on planar arms and
+in "reaches only nan" on spatial ones.  The test poses of a position target now carry
+the robot file's payload, for every family.
+"""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+from armcal.doe.sizing import accuracy_metric
+from armcal.errors import ArmcalError
+from armcal.models import PlanarArm
+from helpers import VERTICAL_3LINK, run_cli
+
+
+def test_a_position_target_on_a_compliant_planar_robot_is_answered(tmp_path):
+    (tmp_path / "robot.toml").write_text(VERTICAL_3LINK)
+    run = run_cli(
+        tmp_path, "poses-needed", "--robot", "robot.toml", "--position-rms-mm", "0.05", "--json"
+    )
+    assert run.returncode == 0, run.stderr
+    found = json.loads(run.stdout)
+    assert np.isfinite(found["achieved"]) and found["achieved"] <= 0.05
+    # dl1..3, dq1..3 and k1..3 (masses known, a payload that varies): 9 parameters, two
+    # equations a pose, so at least 5 poses
+    assert found["poses"] >= 5
+
+
+@pytest.mark.slow
+def test_the_given_test_poses_are_used(tmp_path):
+    """Test poses all at the stretched arm (q = 0) differ from the default 1000 random
+    ones: the answers' accuracies differ, so the file was read, not ignored."""
+    (tmp_path / "robot.toml").write_text(VERTICAL_3LINK)
+    (tmp_path / "test.csv").write_text("q1_deg,q2_deg,q3_deg\n0,0,0\n1,0,0\n")
+    common = ("poses-needed", "--robot", "robot.toml", "--position-rms-mm", "0.05", "--json")
+    default = json.loads(run_cli(tmp_path, *common).stdout)["achieved"]
+    run = run_cli(tmp_path, *common, "--test-poses", "test.csv")
+    assert run.returncode == 0, run.stderr
+    assert json.loads(run.stdout)["achieved"] != pytest.approx(default, rel=1e-3)
+
+
+def test_no_test_poses_is_an_error_not_nan():
+    arm = PlanarArm([300.0, 200.0], sigma=0.05)
+    q = np.radians([[0, 30], [40, 60], [80, -30], [-50, 90]])
+    with pytest.raises(ArmcalError, match="needs test poses"):
+        accuracy_metric(arm, q, "position_rms_mm", 0.05, np.zeros((0, 2)))
