@@ -50,3 +50,22 @@ def test_no_test_poses_is_an_error_not_nan():
     q = np.radians([[0, 30], [40, 60], [80, -30], [-50, 90]])
     with pytest.raises(ArmcalError, match="needs test poses"):
         accuracy_metric(arm, q, "position_rms_mm", 0.05, np.zeros((0, 2)))
+
+
+@pytest.mark.parametrize("poses", [121, 1000, 100_000])
+def test_a_replicated_plan_has_exactly_the_poses_asked_for(poses):
+    """Above REPLICATE_ABOVE poses the plan repeats a smaller optimal plan; for 10^5
+    poses of a 3-link arm the copies of 119 poses fell 635 short (834 * 119 = 99 246,
+    and "its first 754 poses once more" of a 119-pose plan). The note's counts add up."""
+    from armcal.doe import design
+    from armcal.doe.designer import REPLICATE_ABOVE
+
+    arm = PlanarArm([300.0, 200.0, 100.0], joint_limits=np.radians([[-170, 170]] * 3))
+    made = design(arm, poses, rng=1, with_certificate=False)
+    assert made.q.shape == (poses, 3)
+    (note,) = [n for n in made.note_texts if "-pose plan taken" in n]
+    size = int(note.split("optimal ")[1].split("-pose")[0])
+    copies = int(note.split("taken ")[1].split(" times")[0])
+    extra = int(note.split("first ")[1].split(" poses")[0]) if "first" in note else 0
+    assert size <= REPLICATE_ABOVE and extra < size and copies * size + extra == poses
+    assert not any(f"at {poses} angles" in n for n in made.note_texts)

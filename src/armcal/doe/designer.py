@@ -373,9 +373,12 @@ def design(
             model, size, criterion=criterion, method=method, rng=rng, candidates=candidates,
             with_certificate=False, order="none", test_q=test_q,
         )  # fmt: skip
-        extra = m - copies * size
+        # whole copies, then the plan's first poses: ``m`` in all (``copies * size`` may
+        # fall short by more than ``size`` poses, so count the copies of ``size`` anew)
+        copies, extra = divmod(m, size)
         q = np.concatenate([np.tile(base.q, (copies, 1)), base.q[:extra]])
         used = base.method
+        notes.clear()  # the family's notes are of the m-pose plans; the smaller plan's replace
         notes.extend(base.note_texts)
         notes.append(
             f"{m} poses: the optimal {size}-pose plan taken {copies} times"
