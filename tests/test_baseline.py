@@ -201,11 +201,14 @@ def _campaign(folder: Path, errors: bool, turn_deg: float) -> None:
     (folder / "meas.csv").write_text("\n".join([*first, *second]) + "\n")
 
 
-def _identify_with_folds(folder: Path, *, folds: bool = True) -> tuple[dict, str]:
+def _identify_with_folds(
+    folder: Path, *, folds: bool = True, sigma: bool = True
+) -> tuple[dict, str]:
     more = ("--cross-validate", "5") if folds else ()
+    given = ("--sigma", str(SIGMA)) if sigma else ()  # else estimated from the residuals
     run = run_cli(
         folder, "identify", "--robot", "industrial-6r", "--measurements", "meas.csv",
-        "--sigma", str(SIGMA), *more, "--json",
+        *given, *more, "--json",
     )  # fmt: skip
     assert run.returncode == 0, run.stderr
     return json.loads(run.stdout), run.stderr
@@ -247,6 +250,38 @@ def test_a_tracker_that_turns_by_006_deg_halfway_is_caught(tmp_path, errors):
         summary = document["cross_validation"]
         assert "calibration-worse" in codes
         assert summary["rms_per_point_mm"] > summary["nominal_rms_per_point_mm"]
+
+
+@pytest.mark.parametrize("turn", [0.0, 0.06])
+def test_with_sigma_estimated_a_move_is_caught_and_a_clean_campaign_is_not(tmp_path, turn):
+    """No chi-square flags a fit whose sigma is estimated (battery 2: a tracker moved
+    3 mm halfway went unsaid, the estimated sigma grew 40-fold): the screened test runs
+    on every converged fit."""
+    _campaign(tmp_path, errors=True, turn_deg=turn)
+    document, _ = _identify_with_folds(tmp_path, folds=False, sigma=False)
+    assert document["sigma_source"] == "estimated"
+    codes = [w["code"] for w in document["warnings"]]
+    assert ("instrument-moved" in codes) is (turn > 0)
+
+
+def test_the_screen_passes_what_the_refits_find_and_stops_a_misfit():
+    """The linear screen at the fit takes up most of what the refits do for a move of the
+    instrument (a one-step linearization of a small turn), and stops a misfit tied to
+    the poses before any refit."""
+    arm, _, q, points = _six_axis(m=60, seed=7)
+    half = q.shape[0] // 2
+    turned = points.copy()
+    angle = np.radians(0.06)  # about the instrument's z, as _campaign's turn
+    c, s = np.cos(angle), np.sin(angle)
+    turned[half:, :2] = turned[half:, :2] @ np.array([[c, s], [-s, c]])
+    cal = identify(arm, q, turned)
+    model = cal.model
+    found = instrument_moved(model, model.conditions(q), turned, cal.params, screen=True)
+    assert found is not None and found.fraction == 0.5
+    bent = points + 0.5 * np.sin(q[:, [1]])
+    cal = identify(arm, q, bent)
+    assert instrument_moved(cal.model, cal.model.conditions(q), bent, cal.params,
+                            screen=True) is None  # fmt: skip
 
 
 def test_a_misfit_spread_over_the_poses_is_not_called_a_move():

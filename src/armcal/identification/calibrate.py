@@ -421,6 +421,9 @@ def identify(
         or rms(fit.residuals[:, : model.position_dim]) > SUSPICIOUS_RMS_FRACTION * model.reach_mm
     ):  # consistent (sigma estimated, say): judged by its outliers and its size alone
         cause = swapped_targets(problem, least_squares, labels, row_numbers)
+    if cause is None and not given and fit.converged:  # sigma estimated: no chi-square
+        moved = instrument_moved(model, conditions, points, fit.params, used=used, screen=True)
+        cause = None if moved is None else moved_warning(moved, row_numbers)
     if cause is not None:
         warnings.append(cause)
     if fit_test.too_good:

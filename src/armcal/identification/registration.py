@@ -42,6 +42,7 @@ __all__ = [
     "MOVE_MOST",
     "MOVE_SHARE",
     "MOVE_SPLITS",
+    "SCREEN_SHARE",
     "Baseline",
     "Movement",
     "fit_registration",
@@ -251,6 +252,31 @@ def _split_rss(
     return float(r1 @ r1 + r2 @ r2), first, second
 
 
+#: The share of the residual one linear step must take up at some split for a screened
+#: test (:func:`instrument_moved`'s ``screen``) to refit: half of :data:`MOVE_SHARE`,
+#: room for the curvature a refit follows beyond one step.
+SCREEN_SHARE = MOVE_SHARE / 2
+
+
+def _linear_shares(
+    model: FitModel, residual: np.ndarray, jac: np.ndarray, rows: int, moved: np.ndarray
+) -> list[float]:
+    """The share of the whitened residual ``(r,)`` one Gauss-Newton step takes up at each
+    split of :data:`MOVE_SPLITS`, with the free parameters' Jacobian ``jac`` ``(r, p)``
+    and a copy of the registration ``moved`` for the rows after the split."""
+    d = residual.size // rows
+    free = np.asarray(model.free, dtype=bool)
+    total = float(residual @ residual)
+    shares = []
+    for fraction in MOVE_SPLITS:
+        after = np.arange(residual.size) >= d * round(fraction * rows)
+        columns = np.hstack([jac[:, free], jac[:, moved] * after[:, None]])
+        step, _, _ = solve_least_squares(columns[None], residual[None])
+        left = residual - columns @ step[0]
+        shares.append(1.0 - float(left @ left) / total if np.all(np.isfinite(step)) else 0.0)
+    return shares
+
+
 def instrument_moved(
     model: FitModel,
     conditions: Conditions,
@@ -258,6 +284,7 @@ def instrument_moved(
     params: np.ndarray,
     *,
     used: np.ndarray | None = None,
+    screen: bool = False,
 ) -> Movement | None:
     """Whether the rows before and after some point were measured from another instrument pose.
 
@@ -268,6 +295,12 @@ def instrument_moved(
         fitted parameters (where the refits start).
     used : ndarray of bool, shape (m,), optional
         The rows in the fit.
+    screen : bool
+        Refit only where one linear step, at the fit, takes up
+        :data:`SCREEN_SHARE` of the residual or more at some split: one Jacobian of
+        the rows and three small least-squares solves instead of three refits, for a
+        fit that no chi-square flags (sigma estimated), so every calibration can be
+        asked.
 
     Returns
     -------
@@ -294,9 +327,11 @@ def instrument_moved(
     if k == 0 or residual_dof <= 0:
         return None
     whole = conditions.take(rows)
-    residual, _ = _whitened(model, whole, points[rows], params)
+    residual, jac = _whitened(model, whole, points[rows], params)
     total = float(residual @ residual)
     if total <= 0:
+        return None
+    if screen and max(_linear_shares(model, residual, jac, rows.size, moved)) < SCREEN_SHARE:
         return None
     from scipy import special  # on use, and not scipy.stats (slow to import)
 
