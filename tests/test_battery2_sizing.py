@@ -69,3 +69,22 @@ def test_a_replicated_plan_has_exactly_the_poses_asked_for(poses):
     extra = int(note.split("first ")[1].split(" poses")[0]) if "first" in note else 0
     assert size <= REPLICATE_ABOVE and extra < size and copies * size + extra == poses
     assert not any(f"at {poses} angles" in n for n in made.note_texts)
+
+
+@pytest.mark.parametrize(
+    ("text", "what"),
+    [
+        ('urdf = "arm.urdf"\n', "a six-axis robot file"),
+        ('<?xml version="1.0"?>\n<robot name="x"/>\n', "a URDF"),
+    ],
+)
+def test_a_six_axis_robot_piped_in_is_told_to_give_its_path(tmp_path, text, what):
+    """--robot - read only planar TOML: a six-axis file got "unknown key 'urdf'" and the
+    planar key list, a URDF "invalid TOML" (battery 2)."""
+    (tmp_path / "plan.csv").write_text("q1_deg,q2_deg\n0,10\n")
+    run = run_cli(tmp_path, "evaluate", "--robot", "-", "--plan", "plan.csv", stdin=text)
+    assert run.returncode == 2
+    assert (
+        run.stderr == f"armcal: error: <stdin>: {what} is read from a file, not piped in "
+        "(only a planar robot file may be): give its path\n"
+    )

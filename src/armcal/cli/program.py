@@ -15,6 +15,7 @@ from collections.abc import Callable, Sequence
 
 from ..errors import ArmcalError, unique_warnings
 from ..files import BUILTIN_ROBOTS, STDIO, OutputFolder, check_outputs
+from ..files.common import forget_stdin
 from ..formats import FIGURE_FORMATS
 from .output import CLI_ACTIONS, print_warnings
 from .parser import build_parser
@@ -97,6 +98,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         print("armcal: error: no command given; pick one of the commands above", file=sys.stderr)
         return 2
     args = None
+    forget_stdin()  # this run's stdin, not an earlier run's in the same process
     try:
         args = build_parser().parse_args(argv)
         _check_paths(args)

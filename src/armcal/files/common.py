@@ -32,6 +32,7 @@ __all__ = [
     "PathArg",
     "check_keys",
     "fail",
+    "forget_stdin",
     "load_toml",
     "number",
     "number_within",
@@ -60,6 +61,12 @@ _stdin_text: list[str] = []
 def fail(path: str | os.PathLike, message: str) -> InputError:
     name = os.fspath(path)
     return InputError(f"{'<stdin>' if name == STDIO else name}: {message}")
+
+
+def forget_stdin() -> None:
+    """Forget what :func:`read_stdin` read: a new run of the program reads its own stdin
+    (several runs in one process, as tests and notebooks make)."""
+    _stdin_text.clear()
 
 
 def read_stdin(what: str) -> str:
@@ -196,9 +203,10 @@ def numbers(path, value: Any, key: str, count: int | None = None) -> list[float]
     return [number(path, v, f"{key}[{i}]") for i, v in enumerate(value)]
 
 
-def load_toml(path, what: str) -> dict:
-    """A TOML file's table; an error names the line, shows it and says how to fix it."""
-    text = read_text(path, what)
+def load_toml(path, what: str, text: str | None = None) -> dict:
+    """A TOML file's table (of its ``text`` where already read); an error names the line,
+    shows it and says how to fix it."""
+    text = read_text(path, what) if text is None else text
     try:
         data = tomllib.loads(text)
     except (ValueError, RecursionError) as exc:  # TOMLDecodeError, or digits/nesting limits

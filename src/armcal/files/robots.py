@@ -40,6 +40,7 @@ from .common import (
     number,
     number_within,
     numbers,
+    read_text,
     suggest,
 )
 
@@ -353,6 +354,14 @@ def _radian_limits_warning(path, raw_limits: list[tuple[float, float]]) -> Armca
     )
 
 
+#: Keys of a spatial robot file (a URDF, a DH table or a UR model) that planar ones lack.
+SERIAL_ROBOT_KEYS = frozenset({"urdf", "mdh", "dh", "ur"})
+
+_PIPED_SERIAL = (
+    "{what} is read from a file, not piped in (only a planar robot file may be): give its path"
+)
+
+
 def load_robot(name_or_path: str | os.PathLike) -> RobotSpec:
     """Load a built-in robot by name or a robot TOML file.
 
@@ -394,7 +403,15 @@ def load_robot(name_or_path: str | os.PathLike) -> RobotSpec:
             f"nor an existing file; {suggest(key, list(BUILTIN_ROBOTS))}"
             "give a built-in's name or the path of a robot TOML file"
         )
-    data = load_toml(path, "robot")
+    if key == STDIO:
+        text = read_text(path, "robot")
+        if text.lstrip().startswith("<"):
+            raise fail(path, _PIPED_SERIAL.format(what="a URDF"))
+        data = load_toml(path, "robot", text)
+        if SERIAL_ROBOT_KEYS & set(data):
+            raise fail(path, _PIPED_SERIAL.format(what="a six-axis robot file"))
+    else:
+        data = load_toml(path, "robot")
     check_keys(path, data, allowed_keys(""))
     for table in ("measurement", "identify", "elastostatic"):  # [targets] holds labels
         if isinstance(data.get(table), dict):
