@@ -1,0 +1,84 @@
+"""Second bad-input battery (issue 34): exports that keep the loads model, programs that
+keep their payload, limit messages that do not contradict themselves, and CSV cells
+told apart (UTF-16, trailing separators, empty, huge, underscored numbers)."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+
+from helpers import run_cli
+
+# A vertical three-link arm with link masses and a payload: every joint's torque varies
+# with the pose and the load, so the compliance k1..k3 is identifiable (as in the
+# battery's v.toml).
+VERTICAL = """name = "vertical"
+link_lengths_mm = [600.0, 450.0, 200.0]
+joint_limits_deg = [[-170, 170], [-150, 150], [-150, 150]]
+
+[measurement]
+sigma_mm = 0.02
+
+[elastostatic]
+gravity_xy = [0, -1]
+link_masses_kg = [20, 12, 6]
+payload_kg = 10
+"""
+
+# Calibration-sized deviations and compliances of a few urad/(N m) (PRODUCT.md's scale).
+VERTICAL_TRUTH = """dl_mm = [1.0, -0.5, 0.8]
+dq_deg = [0.3, -0.2, 0.4]
+k_urad_per_Nm = [1.5, 3.0, 6.0]
+"""
+
+
+def _vertical_plan(path: Path, rng: np.random.Generator, m: int = 24) -> None:
+    """``m`` poses spread over the joints' limits, half of them with the 10 kg payload."""
+    q = rng.uniform([-160.0, -140.0, -140.0], [160.0, 140.0, 140.0], size=(m, 3))
+    payload = np.where(np.arange(m) % 2 == 0, 10.0, 0.0)
+    lines = ["q1_deg,q2_deg,q3_deg,payload_kg"]
+    lines += [f"{a:.17g},{b:.17g},{c:.17g},{p:g}" for (a, b, c), p in zip(q, payload, strict=True)]
+    path.write_text("\n".join(lines) + "\n")
+
+
+def _vertical_campaign(root: Path, rng: np.random.Generator) -> dict:
+    """The robot file, plan, measurements and calibration (its JSON) of the vertical arm."""
+    (root / "v.toml").write_text(VERTICAL)
+    (root / "vt.toml").write_text(VERTICAL_TRUTH)
+    _vertical_plan(root / "plan.csv", rng)
+    run = run_cli(
+        root, "synthesize", "--robot", "v.toml", "--truth", "vt.toml", "--plan", "plan.csv",
+        "--seed", "3", "-o", "meas.csv",
+    )  # fmt: skip
+    assert run.returncode == 0, run.stderr
+    run = run_cli(root, "identify", "--robot", "v.toml", "--measurements", "meas.csv",
+                  "-o", "cal.json")  # fmt: skip
+    assert run.returncode == 0, run.stderr
+    return json.loads((root / "cal.json").read_text())
+
+
+def test_exported_robot_file_keeps_the_loads_and_refits_its_own_data(tmp_path, rng):
+    cal = _vertical_campaign(tmp_path, rng)
+    run = run_cli(tmp_path, "export", "--calibration", "cal.json", "--robot-toml", "x.toml")
+    assert run.returncode == 0, run.stderr
+    text = (tmp_path / "x.toml").read_text()
+    assert "[elastostatic]" in text
+    run = run_cli(tmp_path, "identify", "--robot", "x.toml", "--measurements", "meas.csv",
+                  "--json", "-o", "again.json")  # fmt: skip
+    assert run.returncode == 0, run.stderr
+    assert "not used" not in run.stderr  # the payload column is used
+    again = json.loads((tmp_path / "again.json").read_text())
+    # The exported file's nominal arm is the calibrated one and it carries the same loads
+    # model, so the fit is the same least-squares problem reparametrized: the same chi2
+    # (to the fit's convergence, 1e-6 relative) and compliance, with deviations of 0.
+    first, second = cal["goodness_of_fit"], again["goodness_of_fit"]
+    assert second["dof"] == first["dof"]
+    assert abs(second["chi2"] - first["chi2"]) <= 1e-6 * first["chi2"]
+    values = {p["name"]: p for p in again["parameters"]}
+    before = {p["name"]: p for p in cal["parameters"]}
+    for name in ("k1", "k2", "k3"):
+        assert abs(values[name]["value"] - before[name]["value"]) <= 1e-3 * before[name]["std"]
+    for name in ("dl1", "dl2", "dl3", "dq1", "dq2", "dq3"):
+        assert abs(values[name]["value"]) <= 1e-3 * before[name]["std"]
