@@ -82,3 +82,21 @@ def test_exported_robot_file_keeps_the_loads_and_refits_its_own_data(tmp_path, r
         assert abs(values[name]["value"] - before[name]["value"]) <= 1e-3 * before[name]["std"]
     for name in ("dl1", "dl2", "dl3", "dq1", "dq2", "dq3"):
         assert abs(values[name]["value"]) <= 1e-3 * before[name]["std"]
+
+
+def _csv_columns(path: Path) -> dict[str, list[str]]:
+    lines = path.read_text().splitlines()
+    head = lines[0].split(",")
+    rows = [line.split(",") for line in lines[1:]]
+    return {name: [row[i] for row in rows] for i, name in enumerate(head)}
+
+
+def test_compensated_program_keeps_its_payload_column(tmp_path, rng):
+    _vertical_campaign(tmp_path, rng)
+    run = run_cli(tmp_path, "compensate", "--calibration", "cal.json", "--program", "plan.csv",
+                  "-o", "out.csv")  # fmt: skip
+    assert run.returncode == 0, run.stderr
+    given, written = _csv_columns(tmp_path / "plan.csv"), _csv_columns(tmp_path / "out.csv")
+    assert "payload_kg" in written
+    # the corrections were computed for these loads: the output carries the same ones
+    assert [float(v) for v in written["payload_kg"]] == [float(v) for v in given["payload_kg"]]
