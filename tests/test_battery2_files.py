@@ -100,3 +100,53 @@ def test_compensated_program_keeps_its_payload_column(tmp_path, rng):
     assert "payload_kg" in written
     # the corrections were computed for these loads: the output carries the same ones
     assert [float(v) for v in written["payload_kg"]] == [float(v) for v in given["payload_kg"]]
+
+
+# A rigid three-link arm without base offset: its model is invariant to a turn of joint 1
+# (no base pose, no gravity), so a command's correction of joint 1 does not depend on q1.
+BENCH = """name = "bench"
+link_lengths_mm = [300, 200, 100]
+joint_limits_deg = [[-170, 170], [-150, 150], [-150, 150]]
+[measurement]
+sigma_mm = 0.05
+"""
+BENCH_TRUTH = "dl_mm = [0.5, -0.3, 0.2]\ndq_deg = [0.2, -0.1, 0.3]\n"
+
+
+def _bench_calibration(root: Path, rng: np.random.Generator) -> None:
+    (root / "b.toml").write_text(BENCH)
+    (root / "bt.toml").write_text(BENCH_TRUTH)
+    q = rng.uniform([-160.0, -140.0, -140.0], [160.0, 140.0, 140.0], size=(15, 3))
+    (root / "plan.csv").write_text(
+        "q1_deg,q2_deg,q3_deg\n" + "".join(f"{a:.17g},{b:.17g},{c:.17g}\n" for a, b, c in q)
+    )
+    run = run_cli(
+        root, "synthesize", "--robot", "b.toml", "--truth", "bt.toml", "--plan", "plan.csv",
+        "--seed", "1", "-o", "meas.csv",
+    )  # fmt: skip
+    assert run.returncode == 0, run.stderr
+    run = run_cli(root, "identify", "--robot", "b.toml", "--measurements", "meas.csv",
+                  "-o", "cal.json")  # fmt: skip
+    assert run.returncode == 0, run.stderr
+
+
+def test_limit_message_shows_the_value_beyond_the_limit(tmp_path, rng):
+    _bench_calibration(tmp_path, rng)
+    (tmp_path / "p1.csv").write_text("q1_deg,q2_deg,q3_deg\n-160,40,60\n")
+    run = run_cli(tmp_path, "compensate", "--calibration", "cal.json", "--program", "p1.csv",
+                  "-o", "c1.csv")  # fmt: skip
+    assert run.returncode == 0, run.stderr
+    delta = float(_csv_columns(tmp_path / "c1.csv")["q1_deg"][0]) + 160.0
+    # the same command turned so that the correction needs joint 1 at -170.0003 deg: 3e-4
+    # deg beyond the limit, which 4 significant digits print as -170
+    needed = -170.0003
+    assert f"{needed:.4g}" == "-170"
+    (tmp_path / "p2.csv").write_text(f"q1_deg,q2_deg,q3_deg\n{needed - delta!r},40,60\n")
+    run = run_cli(tmp_path, "compensate", "--calibration", "cal.json", "--program", "p2.csv",
+                  "-o", "c2.csv")  # fmt: skip
+    assert run.returncode == 0, run.stderr
+    words = run.stderr.split("joint 1 would need ")[1].split(" deg, beyond its limits [-170, 170]")
+    shown = float(words[0])
+    assert shown < -170.0
+    # printed to the first digit that shows it beyond (the 7th): within half a unit of it
+    assert abs(shown - needed) <= 5e-5
