@@ -150,3 +150,19 @@ def test_limit_message_shows_the_value_beyond_the_limit(tmp_path, rng):
     assert shown < -170.0
     # printed to the first digit that shows it beyond (the 7th): within half a unit of it
     assert abs(shown - needed) <= 5e-5
+
+
+def test_utf16_csv_names_its_encoding(tmp_path, rng):
+    _bench_calibration(tmp_path, rng)
+    text = (tmp_path / "meas.csv").read_text()
+    # Excel's "Unicode text" is UTF-16 little-endian with a byte-order mark; without the
+    # mark an ASCII file shows a NUL beside every character
+    (tmp_path / "bom.csv").write_bytes(text.encode("utf-16"))
+    (tmp_path / "le.csv").write_bytes(text.encode("utf-16-le"))
+    for name in ("bom.csv", "le.csv"):
+        run = run_cli(tmp_path, "identify", "--robot", "b.toml", "--measurements", name)
+        assert run.returncode == 2
+        lines = run.stderr.splitlines()
+        assert len(lines) == 1
+        assert lines[0].startswith(f"armcal: error: {name}: is UTF-16 text")
+        assert "save it as UTF-8" in lines[0]

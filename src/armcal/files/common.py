@@ -62,15 +62,36 @@ def fail(path: str | os.PathLike, message: str) -> InputError:
     return InputError(f"{'<stdin>' if name == STDIO else name}: {message}")
 
 
+def _is_utf16(data: bytes) -> bool:
+    """Whether ``data`` look like UTF-16: a byte-order mark, or ASCII text with a NUL beside
+    every character (UTF-16 without a mark) in its first bytes."""
+    if data.startswith((b"\xff\xfe", b"\xfe\xff")):
+        return True
+    head = data[:64]
+    half = len(head) // 2
+    return half >= 2 and (head[1::2] == b"\0" * half or head[0::2] == b"\0" * half)
+
+
+def _decoded(path: str | os.PathLike, data: bytes, what: str) -> str:
+    """``data`` as UTF-8 text (a byte-order mark dropped), or the error that names the
+    encoding: UTF-16 (Excel's "Unicode text") gets its own fix."""
+    if _is_utf16(data):
+        raise fail(
+            path,
+            "is UTF-16 text (as Excel's 'Unicode text' writes it); save it as UTF-8 (in "
+            f"Excel: CSV UTF-8); expected a {what} file",
+        )
+    try:
+        return data.decode("utf-8-sig")
+    except UnicodeDecodeError:
+        raise fail(path, f"is not UTF-8 text; expected a {what} file") from None
+
+
 def read_stdin(what: str) -> str:
     if not _stdin_text:
         if sys.stdin is None or sys.stdin.isatty():
             raise fail(STDIO, f"no {what} piped in; give a file name or pipe one into armcal")
-        data = sys.stdin.buffer.read()
-        try:
-            _stdin_text.append(data.decode("utf-8-sig"))
-        except UnicodeDecodeError:
-            raise fail(STDIO, f"is not UTF-8 text; expected a {what} file") from None
+        _stdin_text.append(_decoded(STDIO, sys.stdin.buffer.read(), what))
     return _stdin_text[0]
 
 
@@ -78,15 +99,16 @@ def read_text(path: str | os.PathLike, what: str) -> str:
     if os.fspath(path) == STDIO:
         return read_stdin(what)
     try:
-        return Path(path).read_text(encoding="utf-8-sig")
+        data = Path(path).read_bytes()
     except FileNotFoundError:
         raise fail(path, f"{what} file not found") from None
     except IsADirectoryError:
         raise fail(path, f"is a directory, expected a {what} file") from None
-    except UnicodeDecodeError:
-        raise fail(path, f"is not UTF-8 text; expected a {what} file") from None
     except OSError as exc:
         raise fail(path, f"cannot read: {exc.strerror}") from None
+    # universal newlines, as reading in text mode gives: \r\n and \r end a line too
+    text = _decoded(path, data, what)
+    return text.replace("\r\n", "\n").replace("\r", "\n") if "\r" in text else text
 
 
 def suggest(key: str, allowed: Sequence[str]) -> str:
