@@ -166,3 +166,28 @@ def test_utf16_csv_names_its_encoding(tmp_path, rng):
         assert len(lines) == 1
         assert lines[0].startswith(f"armcal: error: {name}: is UTF-16 text")
         assert "save it as UTF-8" in lines[0]
+
+
+def _one_error(run) -> str:
+    assert run.returncode == 2
+    lines = run.stderr.splitlines()
+    assert len(lines) == 1 and lines[0].startswith("armcal: error: "), run.stderr
+    return lines[0]
+
+
+def test_trailing_separator_is_named_with_its_fix(tmp_path, rng):
+    _bench_calibration(tmp_path, rng)
+    lines = (tmp_path / "meas.csv").read_text().splitlines()
+    cases = {  # Excel's trailing separator on every line, on the header only, on rows only
+        "all.csv": [line + "," for line in lines],
+        "header.csv": [lines[0] + ",", *lines[1:]],
+        "rows.csv": lines[:1] + [line + "," for line in lines[1:]],
+        "semi.csv": [line.replace(",", ";") + ";" for line in lines],
+    }
+    for name, text in cases.items():
+        (tmp_path / name).write_text("\n".join(text) + "\n")
+        run = run_cli(tmp_path, "identify", "--robot", "b.toml", "--measurements", name)
+        line = _one_error(run)
+        assert f"{name}: " in line
+        assert "ends with a separator: remove the trailing separator" in line, line
+        assert "at the end of each line" in line

@@ -238,7 +238,7 @@ def _split(
             raise fail(
                 path,
                 f"row {r} (line {line}) has {len(row)} fields but the header has "
-                f"{len(header)}; {field_count_fix(row, len(header), delimiter)}",
+                f"{len(header)}; {field_count_fix(row, len(header), delimiter, header[-1])}",
             )
     return header_line, header, [line for line, _ in data], lambda c: [row[c] for _, row in data]
 
@@ -438,6 +438,13 @@ def _read_csv(
         header_line, header, lines, fields = _split(path, kept, delimiter, layout)
     header = [h.strip() for h in header]
     for col, name in enumerate(header, start=1):
+        if not name and col == len(header) > 1:  # Excel's trailing separator
+            raise fail(
+                path,
+                f"line {header_line}: header column {col} is empty: the header ends with a "
+                f"separator: remove the trailing separator ({_delimiter(header_raw)!r}) at "
+                "the end of each line",
+            )
         if not name:
             raise fail(path, f"line {header_line}: header column {col} is empty")
         if header.count(name) > 1:
