@@ -191,3 +191,54 @@ def test_trailing_separator_is_named_with_its_fix(tmp_path, rng):
         assert f"{name}: " in line
         assert "ends with a separator: remove the trailing separator" in line, line
         assert "at the end of each line" in line
+
+
+def _with_cell(path: Path, out: Path, row: int, column: str, value: str) -> None:
+    """``path``'s CSV with data row ``row`` (1-based) of ``column`` set to ``value``."""
+    lines = path.read_text().splitlines()
+    c = lines[0].split(",").index(column)
+    fields = lines[row].split(",")
+    fields[c] = value
+    lines[row] = ",".join(fields)
+    out.write_text("\n".join(lines) + "\n")
+
+
+def test_empty_payload_cell_says_empty_and_what_to_write(tmp_path, rng):
+    _vertical_campaign(tmp_path, rng)
+    _with_cell(tmp_path / "meas.csv", tmp_path / "e.csv", 3, "payload_kg", "")
+    run = run_cli(tmp_path, "identify", "--robot", "v.toml", "--measurements", "e.csv")
+    line = _one_error(run)
+    assert "e.csv: row 3 (line 4), column payload_kg: the cell is empty" in line
+    assert "write the payload in kg (0 for none)" in line
+    # any numeric column: empty, not "'' is not a number"
+    _with_cell(tmp_path / "meas.csv", tmp_path / "x.csv", 2, "x_mm", "  ")
+    line = _one_error(
+        run_cli(tmp_path, "identify", "--robot", "v.toml", "--measurements", "x.csv")
+    )
+    assert "row 2 (line 3), column x_mm: the cell is empty" in line
+    assert "''" not in line
+
+
+def test_huge_cell_is_cut_in_the_message(tmp_path, rng):
+    _bench_calibration(tmp_path, rng)
+    for value in ("1" * 5000, "9" * 200 + ".5", "abc" * 2000):  # infinite, beyond 1e9, text
+        _with_cell(tmp_path / "meas.csv", tmp_path / "h.csv", 1, "q1_deg", value)
+        run = run_cli(tmp_path, "identify", "--robot", "b.toml", "--measurements", "h.csv")
+        line = _one_error(run)
+        assert "column q1_deg" in line
+        # the path, the row and the fix take about 150 characters; the cell at most 45
+        assert len(line) < 250, line
+        assert "...'" in line
+
+
+def test_underscored_number_is_not_a_number(tmp_path, rng):
+    _bench_calibration(tmp_path, rng)
+    lines = (tmp_path / "meas.csv").read_text().splitlines()
+    x = lines[1].split(",")[3]
+    grouped = x[0] + "_" + x[1:]  # Python's float() would read it as x
+    _with_cell(tmp_path / "meas.csv", tmp_path / "u.csv", 1, "x_mm", grouped)
+    line = _one_error(
+        run_cli(tmp_path, "identify", "--robot", "b.toml", "--measurements", "u.csv")
+    )
+    assert f"row 1 (line 2), column x_mm: {grouped!r} is not a number" in line
+    assert f"write {x!r}" in line

@@ -36,7 +36,9 @@ __all__ = [
     "number",
     "number_within",
     "numbers",
+    "parse_number",
     "read_text",
+    "shown",
     "suggest",
     "to_json",
     "write_json",
@@ -109,6 +111,54 @@ def read_text(path: str | os.PathLike, what: str) -> str:
     # universal newlines, as reading in text mode gives: \r\n and \r end a line too
     text = _decoded(path, data, what)
     return text.replace("\r\n", "\n").replace("\r", "\n") if "\r" in text else text
+
+
+def shown(text: str, limit: int = 40) -> str:
+    """``text`` quoted for a message, cut to ``limit`` characters (a cell may be huge).
+
+    Examples
+    --------
+    >>> shown("1" * 50, limit=5)
+    "'11111...'"
+    """
+    return repr(text if len(text) <= limit else text[:limit] + "...")
+
+
+#: What an empty numeric cell should hold, by column (else a number in the column's unit).
+_EMPTY_FIX = {
+    "payload_kg": "write the payload in kg (0 for none)",
+    "fx_N": "write the tip force in N (0 for none)",
+    "fy_N": "write the tip force in N (0 for none)",
+}
+
+
+def parse_number(path, where: str, name: str, field: str, decimal_comma: bool = False) -> float:
+    """A CSV cell ``field`` (stripped) of column ``name`` at ``where`` (row and line) as a
+    finite number within :data:`MAX_ABS_VALUE`, or the error that says what is wrong with
+    it and what to write: an empty cell, digits grouped with '_', not a number, not finite,
+    too large.  The cell is shown cut (:func:`shown`); a semicolon file may write 1,5."""
+    if not field:
+        fix = _EMPTY_FIX.get(name, "write its value, a number")
+        raise fail(path, f"{where}, column {name}: the cell is empty; {fix}")
+    if "_" in field:  # Python's float() reads 1_249.3 as 1249.3; no instrument writes it
+        raise fail(
+            path,
+            f"{where}, column {name}: {shown(field)} is not a number: digits are not grouped "
+            f"with '_'; write {shown(field.replace('_', ''))}",
+        )
+    try:
+        value = float(field.replace(",", ".", 1) if decimal_comma else field)
+    except ValueError:
+        raise fail(path, f"{where}, column {name}: {shown(field)} is not a number") from None
+    if not math.isfinite(value):
+        raise fail(path, f"{where}, column {name}: {shown(field)} is not a finite number")
+    if abs(value) > MAX_ABS_VALUE:
+        raise fail(
+            path,
+            f"{where}, column {name}: {shown(field)} is beyond ±{MAX_ABS_VALUE:g}; "
+            "check the unit (mm, deg)",
+        )
+    return value
 
 
 def suggest(key: str, allowed: Sequence[str]) -> str:
