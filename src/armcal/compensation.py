@@ -450,7 +450,7 @@ def compensate(
         )
         unit = "mm" if slide else "deg"
         reasons[i] = (
-            f"joint {j + 1} would need {value:.4g} {unit}, beyond its limits "
+            f"joint {j + 1} would need {_beyond(value, lo, hi)} {unit}, beyond its limits "
             f"[{lo:g}, {hi:g}] {unit}"
         )
         done[i] = False
@@ -477,3 +477,21 @@ def compensate(
     return Compensation(
         q, done, tuple(reasons), before, after, turn_before, turn_after, q0, np.degrees(bound)
     )
+
+
+def _beyond(value: float, lo: float, hi: float) -> str:
+    """``value`` with 4 significant digits, or as many more as it takes for the printed
+    value to lie visibly beyond the printed limits ``[lo:g, hi:g]`` (-170.0004 beside
+    -170, where 4 digits would print -170, which reads as within the limits).
+
+    Examples
+    --------
+    >>> _beyond(-170.00041, -170.0, 170.0), _beyond(171.04, -170.0, 170.0)
+    ('-170.0004', '171')
+    """
+    low, high = float(f"{lo:g}"), float(f"{hi:g}")
+    for digits in range(4, 18):
+        text = f"{value:.{digits}g}"
+        if not low <= float(text) <= high:
+            return text
+    return repr(float(value))

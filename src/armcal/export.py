@@ -72,9 +72,11 @@ from .export_text import (
 )
 from .models import (
     INSTRUMENT_PARAMS,
+    STANDARD_GRAVITY,
     Annulus,
     Box,
     CalibratedArm,
+    Elastostatic,
     PlanarArm,
     Target,
     standard_joint_map,
@@ -228,6 +230,30 @@ def _base_pose_text(cal: CalibratedArm) -> str | None:
     return ", ".join(parts) if parts else None
 
 
+def _elastostatic_toml(cal: CalibratedArm) -> tuple[list[str], tuple[str, ...]] | None:
+    """The ``[elastostatic]`` lines of a calibration with joint compliance, gravity turned
+    into the robot's frame, and the compliance terms the user held; None without one.
+
+    The table is the loads model (gravity, masses, centres of mass, default payload),
+    not the identified compliance: a calibration against the exported file fits the
+    compliance anew with the same loads, as the calibration did.
+    """
+    model = cal.in_robot_frame()[0]
+    elastic = getattr(model, "elastic", None)
+    if not isinstance(elastic, Elastostatic):
+        return None
+    lines = []
+    if elastic.gravity is not None:
+        lines.append(f"gravity_xy = {nums(elastic.gravity / STANDARD_GRAVITY)}")
+    if elastic.link_masses_kg is not None:
+        lines.append(f"link_masses_kg = {nums(elastic.link_masses_kg)}")
+    lines += [
+        f"com_fraction = {nums(elastic.com_fraction)}",
+        f"payload_kg = {num(elastic.payload_kg)}",
+    ]
+    return lines, elastic.terms.held(elastic.term_names(cal.arm))
+
+
 def robot_toml(cal: CalibratedArm) -> str:
     """The calibrated arm as a robot TOML file that :func:`armcal.files.load_robot` accepts.
 
@@ -242,7 +268,9 @@ def robot_toml(cal: CalibratedArm) -> str:
         The file's text: the arm of :func:`folded_arm` (``name`` with
         ``-calibrated``, ``link_lengths_mm``, ``joint_limits_deg``,
         ``base_offset``, ``joint_map`` unless the default, ``joint_offsets_deg``,
-        ``[measurement]`` noise and region, ``[identify] fixed``, ``[targets]``),
+        ``[measurement]`` noise and region, ``[identify] fixed``, ``[targets]``,
+        and for a calibration with joint compliance its ``[elastostatic]`` loads
+        with gravity in the robot's frame),
         every number with full round-trip precision.  Comments give the
         deviations folded in and the base pose in the instrument frame (not part
         of the robot).
@@ -304,9 +332,13 @@ def robot_toml(cal: CalibratedArm) -> str:
         measurement.append(f"region = {_region_toml(folded.region)}")
     if measurement:
         lines += ["", "[measurement]", *measurement]
-    if folded.fixed:
-        fixed = ", ".join(toml_string(name) for name in folded.fixed)
+    elastic = _elastostatic_toml(cal)
+    held = [*folded.fixed, *(() if elastic is None else elastic[1])]
+    if held:
+        fixed = ", ".join(toml_string(name) for name in held)
         lines += ["", "[identify]", f"fixed = [{fixed}]"]
+    if elastic is not None:
+        lines += ["", "[elastostatic]", *elastic[0]]
     if folded.targets:
         lines += ["", "[targets]"]
         lines += [

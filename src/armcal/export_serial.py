@@ -19,7 +19,9 @@ listed in a comment (each a fixed frame would make several leaves).
 **Robot TOML** (:func:`serial_robot_toml`).  The calibrated chain as a modified
 DH table (:func:`armcal.models.mdh_table`: Craig's rows, Hayati's ``beta_deg``
 where consecutive axes are nearly parallel, ``base_*``/``tip_*`` frames where
-needed), the joint map and limits, the noise, and the calibrated targets.  It is
+needed), the joint map and limits, the noise, the calibrated targets and, from a
+calibration with joint compliance, its ``[elastostatic]`` loads model (the centres of
+mass turned into the table's link frames; :func:`_elastostatic_lines`).  It is
 a robot file every command accepts, and a later calibration against it measures
 what has changed since.  The limits are the arm's: ``joint_limits_deg`` on the
 readings ``q``, and where the description's own limits on its joint values
@@ -54,7 +56,15 @@ from .export_text import (
     xml_comment,
     xml_name,
 )
-from .models import CalibratedArm, SpatialArm, matrix_rpy, mdh_table
+from .models import (
+    STANDARD_GRAVITY,
+    CalibratedArm,
+    SerialChain,
+    SerialElastics,
+    SpatialArm,
+    matrix_rpy,
+    mdh_table,
+)
 from .numerics import box_image
 
 __all__ = [
@@ -230,7 +240,40 @@ def serial_robot_toml(cal: CalibratedArm) -> str:
             f"{toml_key(label)} = {{ xyz_mm = {nums(xyz)} }}"
             for label, xyz in zip(arm.targets, arm.layout.target_points(params), strict=True)
         ]
+    elastic = getattr(cal.model, "elastic", None)
+    if isinstance(elastic, SerialElastics):
+        held = elastic.terms.held(elastic.term_names(arm))
+        if held:
+            lines += ["", "[identify]", f"fixed = [{', '.join(toml_string(n) for n in held)}]"]
+        chains = (arm.calibrated_chain(params), table.chain())
+        lines += ["", "[elastostatic]", *_elastostatic_lines(elastic, *chains)]
     return "\n".join(lines) + "\n"
+
+
+def _elastostatic_lines(
+    elastic: SerialElastics, calibrated: SerialChain, written: SerialChain
+) -> list[str]:
+    """The ``[elastostatic]`` loads model of a calibration with joint compliance, for the
+    file's modified DH table: gravity in the base frame and the payload in the tip frame
+    (both kept by the table), and every link's centre of mass turned from the calibrated
+    chain's joint frame into the table's (both frames ride on the same link, z along the
+    joint's axis, so the transform between them is the one at zero joint values)."""
+    lines = [f"gravity = {nums(elastic.gravity / STANDARD_GRAVITY)}"]
+    if elastic.links is None:
+        lines.append("lumped = true")
+    else:
+        old, new = calibrated.zero_frames(), written.zero_frames()
+        com = np.column_stack([elastic.links.com_mm, np.ones(len(old))])
+        moved = np.einsum("jab,jbc,jc->ja", np.linalg.inv(new), old, com)[:, :3]
+        lines += [
+            f"link_masses_kg = {nums(elastic.links.mass_kg)}",
+            "link_com_mm = [" + ", ".join(nums(point) for point in moved) + "]",
+        ]
+    lines += [
+        f"payload_kg = {num(elastic.payload_kg)}",
+        f"payload_com_mm = {nums(elastic.payload_com_mm)}",
+    ]
+    return lines
 
 
 def joint_offsets_csv(cal: CalibratedArm) -> str:

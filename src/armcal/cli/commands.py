@@ -360,7 +360,13 @@ def compensate(args: argparse.Namespace) -> None:
     atomic_write(
         args.output,
         format_program_csv(
-            result.q, result.corrected, program.labels, run.targets, kinds=cal.arm.joint_kinds
+            result.q,
+            result.corrected,
+            program.labels,
+            run.targets,
+            kinds=cal.arm.joint_kinds,
+            payload_kg=program.payload_kg,
+            force_n=program.force_n,
         ),
     )
     payload = run.payload

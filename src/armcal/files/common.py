@@ -37,7 +37,9 @@ __all__ = [
     "number",
     "number_within",
     "numbers",
+    "parse_number",
     "read_text",
+    "shown",
     "suggest",
     "to_json",
     "write_json",
@@ -69,15 +71,36 @@ def forget_stdin() -> None:
     _stdin_text.clear()
 
 
+def _is_utf16(data: bytes) -> bool:
+    """Whether ``data`` look like UTF-16: a byte-order mark, or ASCII text with a NUL beside
+    every character (UTF-16 without a mark) in its first bytes."""
+    if data.startswith((b"\xff\xfe", b"\xfe\xff")):
+        return True
+    head = data[:64]
+    half = len(head) // 2
+    return half >= 2 and (head[1::2] == b"\0" * half or head[0::2] == b"\0" * half)
+
+
+def _decoded(path: str | os.PathLike, data: bytes, what: str) -> str:
+    """``data`` as UTF-8 text (a byte-order mark dropped), or the error that names the
+    encoding: UTF-16 (Excel's "Unicode text") gets its own fix."""
+    if _is_utf16(data):
+        raise fail(
+            path,
+            "is UTF-16 text (as Excel's 'Unicode text' writes it); save it as UTF-8 (in "
+            f"Excel: CSV UTF-8); expected a {what} file",
+        )
+    try:
+        return data.decode("utf-8-sig")
+    except UnicodeDecodeError:
+        raise fail(path, f"is not UTF-8 text; expected a {what} file") from None
+
+
 def read_stdin(what: str) -> str:
     if not _stdin_text:
         if sys.stdin is None or sys.stdin.isatty():
             raise fail(STDIO, f"no {what} piped in; give a file name or pipe one into armcal")
-        data = sys.stdin.buffer.read()
-        try:
-            _stdin_text.append(data.decode("utf-8-sig"))
-        except UnicodeDecodeError:
-            raise fail(STDIO, f"is not UTF-8 text; expected a {what} file") from None
+        _stdin_text.append(_decoded(STDIO, sys.stdin.buffer.read(), what))
     return _stdin_text[0]
 
 
@@ -85,15 +108,64 @@ def read_text(path: str | os.PathLike, what: str) -> str:
     if os.fspath(path) == STDIO:
         return read_stdin(what)
     try:
-        return Path(path).read_text(encoding="utf-8-sig")
+        data = Path(path).read_bytes()
     except FileNotFoundError:
         raise fail(path, f"{what} file not found") from None
     except IsADirectoryError:
         raise fail(path, f"is a directory, expected a {what} file") from None
-    except UnicodeDecodeError:
-        raise fail(path, f"is not UTF-8 text; expected a {what} file") from None
     except OSError as exc:
         raise fail(path, f"cannot read: {exc.strerror}") from None
+    # universal newlines, as reading in text mode gives: \r\n and \r end a line too
+    text = _decoded(path, data, what)
+    return text.replace("\r\n", "\n").replace("\r", "\n") if "\r" in text else text
+
+
+def shown(text: str, limit: int = 40) -> str:
+    """``text`` quoted for a message, cut to ``limit`` characters (a cell may be huge).
+
+    Examples
+    --------
+    >>> shown("1" * 50, limit=5)
+    "'11111...'"
+    """
+    return repr(text if len(text) <= limit else text[:limit] + "...")
+
+
+#: What an empty numeric cell should hold, by column (else a number in the column's unit).
+_EMPTY_FIX = {
+    "payload_kg": "write the payload in kg (0 for none)",
+    "fx_N": "write the tip force in N (0 for none)",
+    "fy_N": "write the tip force in N (0 for none)",
+}
+
+
+def parse_number(path, where: str, name: str, field: str, decimal_comma: bool = False) -> float:
+    """A CSV cell ``field`` (stripped) of column ``name`` at ``where`` (row and line) as a
+    finite number within :data:`MAX_ABS_VALUE`, or the error that says what is wrong with
+    it and what to write: an empty cell, digits grouped with '_', not a number, not finite,
+    too large.  The cell is shown cut (:func:`shown`); a semicolon file may write 1,5."""
+    if not field:
+        fix = _EMPTY_FIX.get(name, "write its value, a number")
+        raise fail(path, f"{where}, column {name}: the cell is empty; {fix}")
+    if "_" in field:  # Python's float() reads 1_249.3 as 1249.3; no instrument writes it
+        raise fail(
+            path,
+            f"{where}, column {name}: {shown(field)} is not a number: digits are not grouped "
+            f"with '_'; write {shown(field.replace('_', ''))}",
+        )
+    try:
+        value = float(field.replace(",", ".", 1) if decimal_comma else field)
+    except ValueError:
+        raise fail(path, f"{where}, column {name}: {shown(field)} is not a number") from None
+    if not math.isfinite(value):
+        raise fail(path, f"{where}, column {name}: {shown(field)} is not a finite number")
+    if abs(value) > MAX_ABS_VALUE:
+        raise fail(
+            path,
+            f"{where}, column {name}: {shown(field)} is beyond ±{MAX_ABS_VALUE:g}; "
+            "check the unit (mm, deg)",
+        )
+    return value
 
 
 def suggest(key: str, allowed: Sequence[str]) -> str:

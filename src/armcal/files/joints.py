@@ -19,7 +19,7 @@ from collections.abc import Sequence
 import numpy as np
 
 from ..models import PlanarArm, SpatialArm
-from .common import fail
+from .common import fail, shown
 from .csv_text import WIDTH, Column, degree_cells, degrees, float_cells
 from .robots import RADIAN_LIMIT_BOUND
 
@@ -223,7 +223,7 @@ def check_pose_labels(
     raise fail(
         path,
         f"rows {a + 1} and {r + 1} (lines {lines[a]} and {lines[r]}), column pose: the label "
-        f"{labels[r]!r} is given to two different joint readings ({name} {q_file[a, j]:g} "
+        f"{shown(labels[r])} is given to two different joint readings ({name} {q_file[a, j]:g} "
         f"and {q_file[r, j]:g} {unit}); a pose label names one pose (the rows measured at "
         "its joint readings, one per target, load or cycle): give the other pose a label "
         "of its own",

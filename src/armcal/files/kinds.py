@@ -150,11 +150,18 @@ _DIGITS = re.compile(r"\s*[-+]?\d+\s*")
 _THOUSANDS = re.compile(r"\s*[-+]?\d{1,3},\d{3}\.\d*\s*")
 
 
-def field_count_fix(row: list[str], width: int, delimiter: str) -> str:
-    """The fix for a row of ``row`` fields where the header has ``width``: a comma-separated
+def field_count_fix(row: list[str], width: int, delimiter: str, header_end: str = "x") -> str:
+    """The fix for a row of ``row`` fields where the header has ``width`` (its last field
+    ``header_end``): one more field, empty, or one less beside an empty last header field,
+    is a separator that ends the line (Excel writes one); a comma-separated
     row of whole numbers only, up to twice as many as the header's, seems written with
     decimal commas (each number split in two; a whole number, in one); a pair of fields
     like ``1`` and ``234.5``, with a thousands separator; else every column needs a value."""
+    trailing = f"remove the trailing separator ({delimiter!r}) at the end of each line"
+    if len(row) == width + 1 and not row[-1].strip():
+        return f"the row ends with a separator: {trailing}"
+    if len(row) == width - 1 and not header_end.strip():
+        return f"the header ends with a separator: {trailing}"
     if delimiter != "," or len(row) <= width:
         return "give every column a value"
     if len(row) <= 2 * width and all(map(_DIGITS.fullmatch, row)):

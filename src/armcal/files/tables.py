@@ -13,7 +13,6 @@ from __future__ import annotations
 import csv
 import difflib
 import io
-import math
 import os
 import re
 import warnings
@@ -29,7 +28,7 @@ from ..models import (
     PlanarArm,
     SpatialArm,
 )
-from .common import MAX_ABS_VALUE, fail, read_text, suggest
+from .common import MAX_ABS_VALUE, fail, parse_number, read_text, shown, suggest
 from .joints import (
     JOINT_COLUMN,
     JOINT_UNITS,
@@ -190,22 +189,6 @@ class _Table:
     header_line: int = 1  # file line of the header
 
 
-def _parse_number(path, where: str, name: str, field: str, decimal_comma: bool = False) -> float:
-    try:
-        value = float(field.replace(",", ".", 1) if decimal_comma else field)
-    except ValueError:
-        raise fail(path, f"{where}, column {name}: {field!r} is not a number") from None
-    if not math.isfinite(value):
-        raise fail(path, f"{where}, column {name}: {field!r} is not a finite number")
-    if abs(value) > MAX_ABS_VALUE:
-        raise fail(
-            path,
-            f"{where}, column {name}: {field} is beyond ±{MAX_ABS_VALUE:g}; "
-            "check the unit (mm, deg)",
-        )
-    return value
-
-
 def _split(
     path, kept: list[tuple[int, str]], delimiter: str, layout: str
 ) -> tuple[int, list[str], list[int], Callable[[int], list[str]]]:
@@ -238,7 +221,7 @@ def _split(
             raise fail(
                 path,
                 f"row {r} (line {line}) has {len(row)} fields but the header has "
-                f"{len(header)}; {field_count_fix(row, len(header), delimiter)}",
+                f"{len(header)}; {field_count_fix(row, len(header), delimiter, header[-1])}",
             )
     return header_line, header, [line for line, _ in data], lambda c: [row[c] for _, row in data]
 
@@ -304,7 +287,8 @@ def _numbers(
     name the first bad one in file order.  A semicolon file may write 1,5 for 1.5.
     """
     comma = delimiter == ";"
-    if not comma:
+    # NumPy reads 1_249.3 as 1249.3, as float() does: a column with '_' is read field by field
+    if not comma and not any("_" in "".join(column) for column in columns):
         try:
             # C order, as every reader gives: the fits' round-off follows the layout.
             values = np.ascontiguousarray(np.array(columns, dtype=float).reshape(-1, len(lines)).T)
@@ -317,7 +301,7 @@ def _numbers(
     for r, line in enumerate(lines):  # row by row: the first bad field in file order
         where = f"row {r + 1} (line {line})"
         for c, name in enumerate(names):
-            values[r, c] = _parse_number(path, where, name, columns[c][r].strip(), comma)
+            values[r, c] = parse_number(path, where, name, columns[c][r].strip(), comma)
     return values
 
 
@@ -337,11 +321,6 @@ def _records(path, kept: list[tuple[int, str]], delimiter: str) -> list[tuple[in
         line = kept[min(start, len(kept) - 1)][0]
         raise fail(path, f"line {line}: not a CSV row ({exc}); check the file") from None
     return records
-
-
-def _shown(text: str, limit: int = 40) -> str:
-    """``text`` quoted for a message, cut to ``limit`` characters."""
-    return repr(text if len(text) <= limit else text[:limit] + "...")
 
 
 def _delimiter(header: str) -> str:
@@ -438,6 +417,13 @@ def _read_csv(
         header_line, header, lines, fields = _split(path, kept, delimiter, layout)
     header = [h.strip() for h in header]
     for col, name in enumerate(header, start=1):
+        if not name and col == len(header) > 1:  # Excel's trailing separator
+            raise fail(
+                path,
+                f"line {header_line}: header column {col} is empty: the header ends with a "
+                f"separator: remove the trailing separator ({_delimiter(header_raw)!r}) at "
+                "the end of each line",
+            )
         if not name:
             raise fail(path, f"line {header_line}: header column {col} is empty")
         if header.count(name) > 1:
@@ -447,7 +433,7 @@ def _read_csv(
             hint = _unit_hint(name, expected + extras) or looks_like(text, expected_kind)
             raise fail(
                 path,
-                f"line {header_line}: unknown column {_shown(name)}: "
+                f"line {header_line}: unknown column {shown(name)}: "
                 f"{hint or suggest(name, expected + extras)}expected {layout}",
             )
     found = check_joint_units(path, header, header_line, arm)
@@ -851,7 +837,7 @@ def _check_target_labels(
         if known and label not in known:
             raise fail(
                 path,
-                f"row {r + 1} (line {lines[r]}), column target: {label!r} is not a target of "
+                f"row {r + 1} (line {lines[r]}), column target: {shown(label)} is not a target of "
                 f"{arm.name}: {suggest(label, known)}the robot file's [targets] has "
                 f"{', '.join(known)}",
             )

@@ -89,13 +89,23 @@ def format_program_csv(
     targets: Sequence[str] | None = None,
     *,
     kinds: Sequence[str] | None = None,
+    payload_kg: np.ndarray | None = None,
+    force_n: np.ndarray | None = None,
 ) -> str:
-    """Program CSV text: ``[pose,]q1_deg..qn_deg[,target],corrected`` (1 or 0 per row); a
-    prismatic joint's column is ``q{j}_mm`` (:func:`joint_names`)."""
+    """Program CSV text:
+    ``[pose,]q1_deg..qn_deg[,payload_kg][,fx_N,fy_N][,target],corrected`` (1 or 0 per row);
+    a prismatic joint's column is ``q{j}_mm`` (:func:`joint_names`).  The loads are the
+    program's own (the corrections depend on them), written back as they were given."""
     head = (["pose"] if labels is not None else []) + joint_names(kinds or q.shape[1])
+    head += ["payload_kg"] if payload_kg is not None else []
+    head += ["fx_N", "fy_N"] if force_n is not None else []
     head += (["target"] if targets is not None else []) + ["corrected"]
     columns: list = [[str(label) for label in labels]] if labels is not None else []
     columns.append(joint_values(q, kinds))
+    columns += [floats(payload_kg)] if payload_kg is not None else []
+    columns += (
+        [floats(np.asarray(force_n, dtype=float).reshape(-1, 2))] if force_n is not None else []
+    )
     columns += [[str(target) for target in targets]] if targets is not None else []
     columns.append(["1" if c else "0" for c in np.asarray(corrected, dtype=bool).tolist()])
     return csv_text(head, columns)
