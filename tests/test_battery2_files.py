@@ -9,23 +9,12 @@ from pathlib import Path
 
 import numpy as np
 
-from helpers import cell_toml, run_cli
+from helpers import VERTICAL_3LINK, cell_toml, run_cli
 
 # A vertical three-link arm with link masses and a payload: every joint's torque varies
 # with the pose and the load, so the compliance k1..k3 is identifiable (as in the
 # battery's v.toml).
-VERTICAL = """name = "vertical"
-link_lengths_mm = [600.0, 450.0, 200.0]
-joint_limits_deg = [[-170, 170], [-150, 150], [-150, 150]]
-
-[measurement]
-sigma_mm = 0.02
-
-[elastostatic]
-gravity_xy = [0, -1]
-link_masses_kg = [20, 12, 6]
-payload_kg = 10
-"""
+VERTICAL = VERTICAL_3LINK
 
 # Calibration-sized deviations and compliances of a few urad/(N m) (PRODUCT.md's scale).
 VERTICAL_TRUTH = """dl_mm = [1.0, -0.5, 0.8]

@@ -26,7 +26,7 @@ from armcal.doe.sizing import accuracy_metric, poses_needed, requirement_params
 from armcal.errors import ArmcalError
 from armcal.models import PlanarArm
 from armcal.workflow.plan import moving_set
-from helpers import run_cli
+from helpers import VERTICAL_3LINK, run_cli
 from test_spatial_model import ARMS
 
 #: The battery's planar bench (/tmp/battery-planar/bench.toml): three links, limits.
@@ -263,16 +263,7 @@ def test_the_pool_certificate_never_overclaims_and_is_tight_on_a_designed_plan(c
 # ---------------------------------------------------------------- item 5: payload candidates
 
 #: The battery's planar arm with compliance (/tmp/battery-pcomp/vertical.toml).
-VERTICAL = """name = "vertical-3link"
-link_lengths_mm = [600.0, 450.0, 200.0]
-joint_limits_deg = [[-170, 170], [-150, 150], [-150, 150]]
-[measurement]
-sigma_mm = 0.02
-[elastostatic]
-gravity_xy = [0, -1]
-link_masses_kg = [20, 12, 6]
-payload_kg = 10
-"""
+VERTICAL = VERTICAL_3LINK
 
 
 @pytest.mark.parametrize("robot", ["vertical", "bench"])

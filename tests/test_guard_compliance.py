@@ -63,7 +63,7 @@ k_urad_per_Nm = [1.5, 3.0, 6.0]
 """
 
 
-def _planar_cell(folder: Path, identify_table: str = "") -> None:
+def planar_cell(folder: Path, identify_table: str = "") -> None:
     """The robot file (with ``identify_table``), its truth and 40 measured poses, every
     other one under the 10 kg payload."""
     (folder / "robot.toml").write_text(PLANAR + identify_table)
@@ -114,7 +114,7 @@ def test_a_planar_compliance_term_is_held_by_the_robot_file_or_fix(tmp_path, how
     table = (
         '[identify]\nfixed = ["k3"]\n' if how == "robot file" else '[identify]\nfixed = ["dl1"]\n'
     )
-    _planar_cell(tmp_path, table)
+    planar_cell(tmp_path, table)
     options = () if how == "robot file" else ("--fix", "k3")  # replaces the file's dl1
     run, doc = _identify(tmp_path, "robot.toml", *options)
     _held_by_the_user(run, doc, tmp_path, "k3")
@@ -133,7 +133,7 @@ def test_a_planar_compliance_term_is_held_by_the_robot_file_or_fix(tmp_path, how
 
 
 def test_a_planar_fit_with_a_held_term_is_the_least_squares_fit_of_the_others(tmp_path):
-    _planar_cell(tmp_path)
+    planar_cell(tmp_path)
     spec = load_robot(tmp_path / "robot.toml")
     meas = read_measurements(tmp_path / "meas.csv", spec.arm)
     loads = meas.loads(10.0)
@@ -158,7 +158,7 @@ def test_a_planar_fit_with_a_held_term_is_the_least_squares_fit_of_the_others(tm
 
 
 def test_a_planar_free_list_names_the_only_terms_identified(tmp_path):
-    _planar_cell(tmp_path, '[identify]\nfree = ["k1", "k2"]\n')
+    planar_cell(tmp_path, '[identify]\nfree = ["k1", "k2"]\n')
     run, doc = _identify(tmp_path, "robot.toml")
     _held_by_the_user(run, doc, tmp_path, "k3")
     entries = _entries(doc)
@@ -178,7 +178,7 @@ def test_a_planar_free_list_names_the_only_terms_identified(tmp_path):
     ],
 )
 def test_bad_choices_of_terms_are_one_line_errors(tmp_path, options, table, words):
-    _planar_cell(tmp_path)
+    planar_cell(tmp_path)
     (tmp_path / "robot.toml").write_text(PLANAR + table)
     run = run_cli(
         tmp_path, "identify", "--robot", "robot.toml", "--measurements", "meas.csv", *options
@@ -465,7 +465,7 @@ def test_a_rigid_export_worse_than_the_nominal_arm_says_so():
 
 
 def test_a_calibration_file_without_rows_exports_without_the_figure(tmp_path):
-    _planar_cell(tmp_path)
+    planar_cell(tmp_path)
     _identify(tmp_path, "robot.toml")
     doc = json.loads((tmp_path / "cal.json").read_text())
     assert len(doc["training_rows"]["q"]) == 40
@@ -488,7 +488,7 @@ def test_a_calibration_file_without_rows_exports_without_the_figure(tmp_path):
 
 
 def test_the_compliance_lines_say_per_coordinate(tmp_path):
-    _planar_cell(tmp_path)
+    planar_cell(tmp_path)
     run, _ = _identify(tmp_path, "robot.toml")
     line = next(x for x in run.stdout.splitlines() if "geometry alone leaves" in x)
     assert line.count("per coordinate") == 2, line

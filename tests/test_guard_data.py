@@ -21,7 +21,7 @@ from armcal.errors import InputError
 from armcal.files.joints import SAME_POSE, check_pose_labels, joint_names
 from helpers import Run, cell_toml, deviated_tip, run_cli
 from test_cli_errors import VALID_MEAS
-from test_guard_compliance import PLANAR, PLANAR_TRUTH
+from test_guard_compliance import planar_cell
 from test_guard_files import KINDS, SLIDE_TOML, slide_plan, slide_points
 
 
@@ -177,19 +177,7 @@ def _vertical_cell(folder: Path) -> None:
     """test_guard_compliance.py's vertical 3-link arm (masses 20/12/6 kg, the robot file's
     payload_kg 10), its truth (k = 1.5/3/6 urad/(N m)) and 40 poses measured by
     synthesize, every other one under the 10 kg payload (meas.csv)."""
-    (folder / "robot.toml").write_text(PLANAR)
-    (folder / "truth.toml").write_text(PLANAR_TRUTH)
-    rng = np.random.default_rng(4)
-    rows = ["q1_deg,q2_deg,q3_deg,payload_kg"] + [
-        f"{a:.6f},{b:.6f},{c:.6f},{10 if i % 2 else 0}"
-        for i, (a, b, c) in enumerate(rng.uniform(-140, 140, (40, 3)))
-    ]
-    (folder / "plan.csv").write_text("\n".join(rows) + "\n")
-    made = run_cli(
-        folder, "synthesize", "--robot", "robot.toml", "--plan", "plan.csv",
-        "--truth", "truth.toml", "-o", "meas.csv", "--seed", "3",
-    )  # fmt: skip
-    assert made.returncode == 0, made.stderr
+    planar_cell(folder)
 
 
 def _with_payloads(folder: Path, name: str, change) -> None:
