@@ -6,6 +6,8 @@
   round: every reading of the chain is wrong, not one pair) and for a spatial arm
   whose URDF has a calibration's small errors folded in (its J2 and J3 axes are
   parallel to a calibration's tilt, not to round-off).
+* A fixed instrument parameter (a spatial arm's base pose) is said to be held at the
+  value registered from the data, not at a nominal value.
 """
 
 from __future__ import annotations
@@ -16,12 +18,13 @@ import numpy as np
 
 from armcal.demo_serial import DEMO_REFLECTORS
 from armcal.doe import random_plan
-from armcal.files import load_serial_robot, load_serial_truth
+from armcal.files import format_measurements_csv, load_serial_robot, load_serial_truth
 from armcal.files.serial import ROBOT_FOLDER
 from armcal.identification import identify
 from armcal.models import PlanarArm
 from armcal.noise import NoiseModel
 from armcal.synthesis import synthesize_measurements
+from helpers import run_cli
 
 # --------------------------------------------------------------------------- joint maps
 
@@ -132,3 +135,40 @@ def test_a_forgotten_joint_map_is_named_under_a_calibrated_urdf(tmp_path):
     assert "couples J2 and J3" in message and "read with J3 as J3 + J2" in message
     assert "add joint_map = [[1, 0, 0, 0, 0, 0], [0, 1, 0, 0, 0, 0], [0, 1, 1, 0" in message
     assert _coupled_message(fitted(joint_map=True)) is None
+
+
+# --------------------------------------------------------------------------- fixed instrument
+
+
+def test_a_fixed_base_coordinate_is_held_at_its_registered_value_not_at_nominal(tmp_path):
+    """``--fix base.x``: the base pose is the instrument's, registered from the data (the
+    built-in truth file puts the base metres from the tracker, xyz_mm = [2850, -1700,
+    -650], far from any nominal 0); the report says where the held value comes from,
+    and keeps "held at nominal" for a robot parameter fixed with it."""
+    spec = load_serial_robot("industrial-6r")
+    model = spec.arm.replace(
+        targets=tuple(DEMO_REFLECTORS),
+        target_positions=np.array(list(DEMO_REFLECTORS.values())),
+        view=None,
+    ).with_noise(NoiseModel.isotropic(0.03, dim=3))
+    truth = load_serial_truth(spec.default_truth, model)
+    rng = np.random.default_rng(5)
+    rows = model.plan_conditions(random_plan(model, 20, rng=rng))
+    points = synthesize_measurements(model, rows.q, truth, rng=rng, target=rows.target)
+    labels = [f"P{i + 1}" for i in np.repeat(np.arange(20), len(DEMO_REFLECTORS))]
+    text = format_measurements_csv(rows.q, points, labels, [model.targets[t] for t in rows.target])
+    (tmp_path / "meas.csv").write_text(text, encoding="utf-8")
+    run = run_cli(
+        tmp_path, "identify", "--robot", "industrial-6r", "--measurements", "meas.csv",
+        "--fix", "base.x", "--fix", "j2.y",
+    )  # fmt: skip
+    assert run.returncode == 0, run.stderr
+    lines = run.stdout.splitlines()
+    assert "fixed (held at nominal, not identified): j2.y" in lines
+    registered = [line for line in lines if "base.x" in line and line.startswith("fixed")]
+    assert registered == [
+        "fixed (held at the value registered from the data, where the nominal arm placed on "
+        "the measured points puts it; not identified): base.x"
+    ]
+    shown = next(line for line in lines if line.startswith("base.x "))
+    assert abs(float(shown.split()[1])) > 100.0  # the base is metres away: no nominal 0
