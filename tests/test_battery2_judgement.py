@@ -172,3 +172,32 @@ def test_a_fixed_base_coordinate_is_held_at_its_registered_value_not_at_nominal(
     ]
     shown = next(line for line in lines if line.startswith("base.x "))
     assert abs(float(shown.split()[1])) > 100.0  # the base is metres away: no nominal 0
+
+
+# --------------------------------------------------------------------------- horizontal compliance
+
+HORIZONTAL = """name = "horizontal"
+link_lengths_mm = [600.0, 450.0, 200.0]
+[measurement]
+sigma_mm = 0.02
+[elastostatic]
+link_masses_kg = [20, 12, 6]
+payload_kg = 10
+"""
+
+
+def test_a_horizontal_compliant_arm_is_told_to_add_gravity_or_forces(tmp_path):
+    """The battery's r_horiz.toml: [elastostatic] without gravity_xy is a horizontal arm,
+    whose poses and payloads (weight across the plane) twist no joint; the advice is
+    gravity_xy or tip forces, not poses "relative to gravity" (there is none)."""
+    (tmp_path / "r.toml").write_text(HORIZONTAL, encoding="utf-8")
+    arm = PlanarArm([600.0, 450.0, 200.0])
+    q = np.degrees(random_plan(arm, 15, rng=7))
+    lines = ["q1_deg,q2_deg,q3_deg", *(",".join(f"{v:.6f}" for v in row) for row in q)]
+    (tmp_path / "plan.csv").write_text("\n".join(lines) + "\n", encoding="utf-8")
+    run = run_cli(tmp_path, "evaluate", "--robot", "r.toml", "--plan", "plan.csv")
+    assert run.returncode == 2
+    assert "not identifiable: k1, k2 and k3" in run.stderr
+    assert "relative to gravity" not in run.stderr
+    assert "add gravity_xy if the arm is vertical" in run.stderr
+    assert "tip forces that vary (the measurements' fx_N, fy_N columns)" in run.stderr
