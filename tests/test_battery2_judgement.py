@@ -201,3 +201,49 @@ def test_a_horizontal_compliant_arm_is_told_to_add_gravity_or_forces(tmp_path):
     assert "relative to gravity" not in run.stderr
     assert "add gravity_xy if the arm is vertical" in run.stderr
     assert "tip forces that vary (the measurements' fx_N, fy_N columns)" in run.stderr
+
+
+# --------------------------------------------------------------------------- validation headline
+
+BENCH = """name = "bench"
+link_lengths_mm = [300, 200, 100]
+[measurement]
+sigma_mm = 0.05
+"""
+
+
+def _bench_csv(path: Path, q: np.ndarray, points: np.ndarray) -> None:
+    lines = ["q1_deg,q2_deg,q3_deg,x_mm,y_mm"]
+    table = np.column_stack([np.degrees(q), points])
+    lines += [",".join(repr(float(v)) for v in row) for row in table]
+    path.write_text("\n".join(lines) + "\n", encoding="utf-8")
+
+
+def test_the_validation_headline_does_not_call_the_calibration_s_own_rows_held_out(tmp_path):
+    """The battery's validate of bcal.json on its own bmeas.csv: warned not-held-out, but
+    headlined "on 15 held-out poses".  Here a calibration on 15 rows is validated on 10
+    of its own rows and 5 new ones, on its own 15, and on the 5 new ones only."""
+    (tmp_path / "b.toml").write_text(BENCH, encoding="utf-8")
+    _, q, points = _planar_data(np.tril(np.ones((3, 3))), seed=8)  # the default map
+    _bench_csv(tmp_path / "own.csv", q, points)
+    _, fresh_q, fresh_points = _planar_data(np.tril(np.ones((3, 3))), seed=9)
+    _bench_csv(
+        tmp_path / "mixed.csv",
+        np.vstack([q[:10], fresh_q[:5]]),
+        np.vstack([points[:10], fresh_points[:5]]),
+    )
+    _bench_csv(tmp_path / "fresh.csv", fresh_q[:5], fresh_points[:5])
+    run = run_cli(
+        tmp_path, "identify", "--robot", "b.toml", "--measurements", "own.csv", "-o", "cal.json"
+    )
+    assert run.returncode == 0, run.stderr
+
+    def headline(csv: str) -> str:
+        run = run_cli(tmp_path, "validate", "--calibration", "cal.json", "--measurements", csv)
+        assert run.returncode == 0, run.stderr
+        return run.stdout.splitlines()[0]
+
+    own = "the calibration's own rows, not held out"
+    assert headline("mixed.csv") == f"validation of bench on 15 poses (10 of them {own})"
+    assert headline("own.csv") == f"validation of bench on 15 poses (all of them {own})"
+    assert headline("fresh.csv") == "validation of bench on 5 held-out poses"
