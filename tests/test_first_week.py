@@ -351,7 +351,11 @@ def test_several_reflectors_count_poses_not_rows(tmp_path: Path) -> None:
                   "-o", "cal.json")  # fmt: skip
     assert run.stdout.startswith("calibration of two-reflectors: 8 poses (16 measurements of 2 ")
     run = run_cli(tmp_path, "validate", "--calibration", "cal.json", "--measurements", "meas.csv")
-    assert run.stdout.startswith("validation of two-reflectors on 8 held-out poses (16 points)")
+    # The calibration's own rows: counted as poses, and not called held-out (battery 2).
+    assert run.stdout.startswith(
+        "validation of two-reflectors on 8 poses (16 points, all of them the calibration's "
+        "own rows, not held out)"
+    )
 
 
 def test_a_robot_file_in_metres_is_named_on_every_command(tmp_path: Path) -> None:

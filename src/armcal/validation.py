@@ -461,11 +461,14 @@ def validation_warnings(
     s = result.summary()
     warnings = []
     count = result.after.shape[0]
+    reused = 0 if result.reused is None else int(np.count_nonzero(result.reused))
+    poses = "these poses" if reused else "these held-out poses"  # own rows are not held out
     if _too_large(s["rms_after_per_point_mm"], s["predicted_rms_after_per_point_mm"], count):
         warnings.append(
             ArmcalWarning(
                 "validation-error",
-                "the calibrated model misses the held-out poses by RMS "
+                f"the calibrated model misses {'these' if reused else 'the held-out'} poses "
+                "by RMS "
                 f"{s['rms_after_per_point_mm']:.3g} mm per point, more than the "
                 f"{s['predicted_rms_after_per_point_mm']:.3g} mm it predicts (noise and "
                 "its uncertainty): the model misses an effect, the poses lie outside the "
@@ -474,7 +477,6 @@ def validation_warnings(
         )
     if result.turns is not None:
         warnings += _turn_warnings(s, count)
-    reused = 0 if result.reused is None else int(np.count_nonzero(result.reused))
     if reused:
         warnings.append(
             ArmcalWarning(
@@ -491,7 +493,7 @@ def validation_warnings(
                 s["rms_after_per_point_mm"],
                 s["predicted_rms_after_per_point_mm"],
                 count,
-                "these held-out poses",
+                poses,
             )
         )
     return warnings

@@ -22,9 +22,13 @@ or which robot-file key to fix:
   other way round.  Tried only when the fit is far off (residual RMS beyond
   :data:`SUSPICIOUS_RMS_FRACTION` of the reach, or a chi-square
   :data:`IMPROVEMENT` times its degrees of freedom): for every pair of
-  consecutive readings whose tool rotations are parallel (every pair of a planar
-  arm), the readings ``q_k + q_j`` and ``q_k - q_j`` in place of ``q_k``, on at
-  most :data:`COUPLING_ROWS` rows.  Each reading places the nominal arm on the
+  consecutive readings whose tool rotations are parallel (to :data:`PARALLEL_SINE`:
+  a calibrated URDF's axes are tilted a little; every pair of a planar arm), the
+  readings ``q_k + q_j`` and ``q_k - q_j`` in place of ``q_k``, and for every run of
+  three or more such readings the running sums or the differences of the whole run
+  (a planar arm's relative readings under an identity ``joint_map``, or absolute
+  ones under the default map: every reading is wrong, not one), on at most
+  :data:`COUPLING_ROWS` rows.  Each reading places the nominal arm on the
   data (the model's start, no fit); the one whose nominal arm fits best, and
   :data:`SWAP_GAIN` times better than the fit as read, is refitted, and named
   when its residual mean square is :data:`IMPROVEMENT` times lower than the fit
@@ -38,7 +42,7 @@ then one refit.
 from __future__ import annotations
 
 from collections.abc import Sequence
-from dataclasses import replace
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -79,8 +83,16 @@ WORST_POSES = 10
 #: identify a six-axis arm many times over, and keep the refits cheap at 10^5 rows.
 COUPLING_ROWS = 300
 
-#: Two tool rotations per reading are parallel when the sine of their angle is below this.
-PARALLEL_SINE = 1e-6
+#: Two tool rotations per reading are parallel when the sine of their angle is below this:
+#: nominally parallel axes of a robot file with a calibration folded in (an exported
+#: URDF) are tilted by a calibration's angular errors, about 0.01-0.1 deg (sine 2e-4 to
+#: 2e-3), and a coupling may be read there; 0.01 (0.57 deg) stays far below the angle
+#: of axes that are not meant to be parallel (90 deg on a six-axis arm).
+PARALLEL_SINE = 1e-2
+
+#: A reading turns the tool by round-off only (a slide) when its rotation, rad per rad,
+#: is below this: parallel to any.
+ROUND_OFF_TURN = 1e-6
 
 
 def _chi2(fit: Fit, rows: np.ndarray | slice = slice(None)) -> float:
@@ -284,7 +296,7 @@ def _parallel_pairs(model: FitModel, conditions: Conditions) -> list[int]:
         # |a x b|^2 = |a|^2 |b|^2 - (a . b)^2, in any dimension (0 for one rotation axis);
         # a reading that turns the tool by round-off only (rad per rad) is parallel to any.
         across = np.sqrt(np.maximum(sizes**2 - along**2, 0.0))
-        if np.all((across <= PARALLEL_SINE * sizes) | (sizes <= PARALLEL_SINE)):
+        if np.all((across <= PARALLEL_SINE * sizes) | (sizes <= ROUND_OFF_TURN)):
             found.append(j)
     return found
 
@@ -292,6 +304,67 @@ def _parallel_pairs(model: FitModel, conditions: Conditions) -> list[int]:
 def _map_text(matrix: np.ndarray) -> str:
     rows = ", ".join("[" + ", ".join(f"{v:g}" for v in row) + "]" for row in matrix)
     return f"[{rows}]"
+
+
+@dataclass(frozen=True)
+class Reading:
+    """One alternative reading of the joints: the chain's values from ``coupling @ q``."""
+
+    coupling: np.ndarray  # (n, n)
+    text: str  # what each changed reading is read as
+    head: str = ""  # the warning's opening when the robot file has no joint map
+
+
+def _runs(pairs: Sequence[int]) -> list[tuple[int, int]]:
+    """The maximal runs ``(a, b)`` of readings ``a..b`` (0-based) each parallel to the next."""
+    runs: list[tuple[int, int]] = []
+    for j in pairs:
+        if runs and runs[-1][1] == j:
+            runs[-1] = (runs[-1][0], j + 1)
+        else:
+            runs.append((j, j + 1))
+    return runs
+
+
+def _readings(pairs: Sequence[int], n: int) -> list[Reading]:
+    """The alternative readings tried: each parallel pair coupled (``q_k + q_j`` or
+    ``q_k - q_j``), and each run of three or more parallel readings summed or
+    differenced as a whole (a planar arm's relative readings taken for absolute ones,
+    or the other way round: every reading of the run would be wrong, not one)."""
+    found = []
+    for j in pairs:
+        first, second = f"J{j + 1}", f"J{j + 2}"
+        for sign in (1.0, -1.0):
+            coupling = np.eye(n)
+            coupling[j + 1, j] = sign
+            head = (
+                f"the joint readings look like those of a controller that couples {first} "
+                f"and {second} (FANUC-style: {second} read against the horizon)"
+                if sign > 0
+                else ""
+            )
+            text = f"{second} as {second} {'+' if sign > 0 else '-'} {first}"
+            found.append(Reading(coupling, text, head))
+    for a, b in _runs(pairs):
+        if b - a < 2:
+            continue  # a run of two is the pair above
+        sums = np.eye(n)
+        sums[a : b + 1, a : b + 1] = np.tril(np.ones((b - a + 1, b - a + 1)))
+        named = [f"J{k + 1}" for k in range(a, b + 1)]
+        summed = ", ".join(
+            f"{named[k]} as {' + '.join(named[: k + 1])}" for k in range(1, len(named))
+        )
+        differences = ", ".join(
+            f"{named[k]} as {named[k]} - {named[k - 1]}" for k in range(1, len(named))
+        )
+        found.append(Reading(sums, f"{summed} (running sums of the readings)"))
+        found.append(
+            Reading(
+                np.linalg.inv(sums),
+                f"{differences} (differences of consecutive readings)",
+            )
+        )
+    return found
 
 
 def coupled_joints(problem: Problem, fit: Fit) -> ArmcalWarning | None:
@@ -317,54 +390,46 @@ def coupled_joints(problem: Problem, fit: Fit) -> ArmcalWarning | None:
     every = np.ones(len(sub), dtype=bool)
     dim = points.shape[1]
     before = _chi2(fit, sub) / max(dim * len(sub) - model.n_free, 1)
-    placed: list[tuple[float, int, float, Problem, np.ndarray]] = []
-    for j in _parallel_pairs(model, rows):
-        for sign in (1.0, -1.0):
-            coupling = np.eye(n)
-            coupling[j + 1, j] = sign
-            trial = replace(rows, q=np.asarray(rows.q) @ coupling.T)
-            try:
-                prepared = model.prepared(trial, measured)
-                prepared.check_identifiable(trial)
-                start = prepared.start(trial, measured[None])[0]
-            except (ArmcalError, ValueError, np.linalg.LinAlgError):
-                continue  # this reading cannot be fitted: it explains nothing
-            alternative = Problem(
-                prepared, trial, measured, problem.method, problem.tol, problem.max_iter
-            )
-            dof = max(dim * len(sub) - prepared.n_free, 1)
-            nominal = _chi2(Fit(alternative, start, every, 0, False)) / dof
-            if nominal * SWAP_GAIN <= before:  # the nominal arm read so already fits better
-                placed.append((nominal, j, sign, alternative, start))
+    placed: list[tuple[float, int, Reading, Problem, np.ndarray]] = []
+    for index, reading in enumerate(_readings(_parallel_pairs(model, rows), n)):
+        trial = replace(rows, q=np.asarray(rows.q) @ reading.coupling.T)
+        try:
+            prepared = model.prepared(trial, measured)
+            prepared.check_identifiable(trial)
+            start = prepared.start(trial, measured[None])[0]
+        except (ArmcalError, ValueError, np.linalg.LinAlgError):
+            continue  # this reading cannot be fitted: it explains nothing
+        alternative = Problem(
+            prepared, trial, measured, problem.method, problem.tol, problem.max_iter
+        )
+        dof = max(dim * len(sub) - prepared.n_free, 1)
+        nominal = _chi2(Fit(alternative, start, every, 0, False)) / dof
+        if nominal * SWAP_GAIN <= before:  # the nominal arm read so already fits better
+            placed.append((nominal, index, reading, alternative, start))
     if not placed:
         return None
-    _, j, sign, alternative, start = min(placed, key=lambda found: found[0])
+    _, _, reading, alternative, start = min(placed, key=lambda found: found[:2])
     try:  # the one refit: the reading whose nominal arm fits best
         refit = alternative.fit(every, start=start)
     except (ArmcalError, np.linalg.LinAlgError):
         return None
     after = _chi2(refit) / max(dim * len(sub) - alternative.model.n_free, 1)
-    coupling = np.eye(n)
-    coupling[j + 1, j] = sign
     d = model.position_dim
     residual = rms(refit.residuals[:, :d])
     if after * IMPROVEMENT > before or residual > SUSPICIOUS_RMS_FRACTION * model.reach_mm:
         return None
     given = np.asarray(model.joint_map, dtype=float)
-    proposed = given @ coupling
+    proposed = given @ reading.coupling
     plain = np.array_equal(given, np.eye(n))
-    first, second = f"J{j + 1}", f"J{j + 2}"
-    if plain and sign > 0:
-        head = (
-            f"the joint readings look like those of a controller that couples {first} and "
-            f"{second} (FANUC-style: {second} read against the horizon)"
-        )
-    else:
-        head = "the joint readings do not follow the robot file's joint map"
+    head = (
+        reading.head
+        if plain and reading.head
+        else ("the joint readings do not follow the robot file's joint map")
+    )
     where = "add joint_map = {} to" if plain else "set joint_map = {} in"
     return ArmcalWarning(
         "coupled-joints",
-        f"{head}: read with {second} as {second} {'+' if sign > 0 else '-'} {first}, the fit "
+        f"{head}: read with {reading.text}, the fit "
         f"improves {_fold(before, after)} (residual RMS per coordinate "
         f"{rms(fit.residuals[sub, :d]):.3g} -> {residual:.3g} mm on {len(sub)} rows); "
         + where.format(_map_text(proposed))

@@ -661,10 +661,18 @@ def check_compliance_identifiable(
                 "k is told from c only by known loads that vary: measure some poses with "
                 "a different payload (or tip force)"
             )
-        needs.append(
-            "the torques must vary: measure poses in which the links point in different "
-            "directions relative to gravity, and with different payloads"
-        )
+        if model.elastic.gravity is None:  # a horizontal arm: neither pose nor payload twists it
+            needs.append(
+                "the torques must vary, and without gravity_xy in [elastostatic] (a horizontal "
+                "arm) neither the poses nor a payload (its weight is across the plane) "
+                "give any: add gravity_xy if the arm is vertical, or measure with in-plane "
+                "tip forces that vary (the measurements' fx_N, fy_N columns)"
+            )
+        else:
+            needs.append(
+                "the torques must vary: measure poses in which the links point in different "
+                "directions relative to gravity, and with different payloads"
+            )
         why = "; ".join(needs)
     else:
         why = "add poses in which every joint takes several different angles (armcal design)"

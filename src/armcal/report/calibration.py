@@ -120,7 +120,7 @@ def format_calibration(
         )
         + f", method {cal.method}"
         + (", robust" if cal.robust else ""),
-        *model_lines(arm, plan=False, words=words),
+        *model_lines(arm, plan=False, words=words, registered=True),
         *_effect_held_lines(cal),
         "",
         header,

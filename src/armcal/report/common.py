@@ -70,8 +70,12 @@ def _noise_text(arm: PlanarArm | SpatialArm) -> str | None:
     return "; ".join(parts) + f" (reference sigma {noise.sigma_mm:.4g} mm)"
 
 
-def spatial_model_lines(arm: SpatialArm) -> list[str]:
-    """A spatial arm's model: joint map, targets, the identifiable set and what merges."""
+def spatial_model_lines(arm: SpatialArm, *, registered: bool = False) -> list[str]:
+    """A spatial arm's model: joint map, targets, the identifiable set and what merges.
+
+    ``registered``: the arm was placed on measured points (a calibration), so a fixed
+    parameter of the instrument (the base pose, a target found from the data) is held
+    where that registration put it, not at a nominal value."""
     lines = []
     if not np.array_equal(arm.joint_map, np.eye(arm.n_joints)):
         rows = "; ".join(" ".join(f"{v:g}" for v in row) for row in arm.joint_map)
@@ -89,8 +93,16 @@ def spatial_model_lines(arm: SpatialArm) -> list[str]:
         f"target{'s' if k > 1 else ''}: 4R + 2P + {per}k = "
         f"{4 * revolute + 2 * prismatic + per * k})"
     )
-    if arm.user_fixed:
-        lines.append(f"fixed (held at nominal, not identified): {', '.join(arm.user_fixed)}")
+    instrument = {n for n, i in zip(arm.param_names, arm.instrument_params, strict=True) if i}
+    placed = [n for n in arm.user_fixed if registered and n in instrument]
+    nominal = [n for n in arm.user_fixed if n not in placed]
+    if nominal:
+        lines.append(f"fixed (held at nominal, not identified): {', '.join(nominal)}")
+    if placed:
+        lines.append(
+            "fixed (held at the value registered from the data, where the nominal arm placed "
+            f"on the measured points puts it; not identified): {', '.join(placed)}"
+        )
     if arm.merges:
         lines.append("held at nominal, because the measurements cannot separate them:")
         lines += [f"  {sentence}" for sentence in arm.merges]
@@ -101,7 +113,11 @@ def spatial_model_lines(arm: SpatialArm) -> list[str]:
 
 
 def model_lines(
-    arm: PlanarArm | SpatialArm, *, plan: bool = True, words: Mapping[str, str] = ACTIONS
+    arm: PlanarArm | SpatialArm,
+    *,
+    plan: bool = True,
+    words: Mapping[str, str] = ACTIONS,
+    registered: bool = False,
 ) -> list[str]:
     """Lines naming the fixed parameters and a noise model that is not isotropic iid.
 
@@ -109,6 +125,8 @@ def model_lines(
     ``plan`` adds, for a noise model that is not isotropic iid, that the paper's
     D*, Table I and analytic plans assume one (what changes the answer for a plan).
     ``words`` say the advice (:func:`armcal.errors.render`; the library's by default).
+    ``registered``: the arm was placed on measured points (a calibration), so a spatial
+    arm's fixed instrument parameters are named as held at their registered value.
 
     Examples
     --------
@@ -116,7 +134,7 @@ def model_lines(
     ['fixed (held at nominal, not identified): dl2']
     """
     if isinstance(arm, SpatialArm):
-        return spatial_model_lines(arm)
+        return spatial_model_lines(arm, registered=registered)
     lines = []
     if not np.array_equal(arm.joint_map, np.tril(np.ones((arm.n_joints, arm.n_joints)))):
         rows = "; ".join(" ".join(f"{v:g}" for v in row) for row in arm.joint_map)

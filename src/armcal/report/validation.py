@@ -17,16 +17,23 @@ __all__ = [
 ]
 
 
+def _rows_words(m: int, poses: int | None, result: Validation) -> str:
+    """What validation ran on: ``m`` rows of ``poses`` poses (None: a row is a pose),
+    held out, or not all (the calibration's own rows are not called held-out)."""
+    reused = 0 if result.reused is None else int(np.count_nonzero(result.reused))
+    if not reused:
+        return f"{m} held-out poses" if poses is None else f"{poses} held-out poses ({m} points)"
+    own = f"{'all' if reused == m else reused} of them the calibration's own rows, not held out"
+    return f"{m} poses ({own})" if poses is None else f"{poses} poses ({m} points, {own})"
+
+
 def validation_report(
     cal: CalibratedArm, result: Validation, meas: Measurements, *, per_pose: bool = False
 ) -> tuple[dict, str]:
     """The ``validate`` document and text: errors before and after, predicted, per pose."""
     s = result.summary()
     m = result.after.shape[0]
-    if meas.targets is None:
-        held = f"{m} held-out poses"
-    else:  # a row is one target's point of a pose
-        held = f"{len(set(meas.labels))} held-out poses ({m} points)"
+    held = _rows_words(m, None if meas.targets is None else len(set(meas.labels)), result)
     lines = [
         f"validation of {cal.arm.name} on {held}"
         + (" (3-D, projected into the calibration's plane)" if cal.plane is not None else ""),
