@@ -202,9 +202,11 @@ def _labelled_plan(
     return read_loaded_plan(path, spec.arm)
 
 
-def _test_poses(args: argparse.Namespace, spec: RobotSpec | SerialSpec) -> np.ndarray:
+def _test_poses(
+    args: argparse.Namespace, spec: RobotSpec | SerialSpec, *, loaded: bool = False
+) -> np.ndarray:
     """``--test-poses``, else 1000 uniform poses within the limits (:func:`test_poses`)."""
-    return test_poses(spec, args.seed, args.test_poses)
+    return test_poses(spec, args.seed, args.test_poses, loaded=loaded)
 
 
 def _written(*paths: str | None) -> list[str]:
@@ -475,7 +477,7 @@ def poses_needed(args: argparse.Namespace) -> None:
         requirement,
         getattr(args, requirement),
         seed=args.seed,
-        test_q=test_poses(spec, args.seed, args.test_poses, loaded=positions),
+        test_q=_test_poses(args, spec, loaded=positions),
         max_poses=args.max_poses,
         progress=ProgressBar("poses-needed"),
     )

@@ -51,6 +51,7 @@ __all__ = [
     "JOINT_SIGMA_MAX_DEG",
     "LINK_LENGTH_RANGE_MM",
     "RADIAN_LIMIT_BOUND",
+    "SERIAL_ROBOT_KEYS",
     "SIGMA_RANGE_MM",
     "RobotSpec",
     "fixed_parameters",
@@ -354,8 +355,9 @@ def _radian_limits_warning(path, raw_limits: list[tuple[float, float]]) -> Armca
     )
 
 
-#: Keys of a spatial robot file (a URDF, a DH table or a UR model) that planar ones lack.
-SERIAL_ROBOT_KEYS = frozenset({"urdf", "mdh", "dh", "ur"})
+#: The keys that describe a spatial arm in a robot TOML (a URDF, a DH table or a UR
+#: model; exactly one of them), which planar robot files lack.
+SERIAL_ROBOT_KEYS = ("urdf", "mdh", "dh", "ur")
 
 _PIPED_SERIAL = (
     "{what} is read from a file, not piped in (only a planar robot file may be): give its path"
@@ -408,7 +410,7 @@ def load_robot(name_or_path: str | os.PathLike) -> RobotSpec:
         if text.lstrip().startswith("<"):
             raise fail(path, _PIPED_SERIAL.format(what="a URDF"))
         data = load_toml(path, "robot", text)
-        if SERIAL_ROBOT_KEYS & set(data):
+        if any(key in data for key in SERIAL_ROBOT_KEYS):
             raise fail(path, _PIPED_SERIAL.format(what="a six-axis robot file"))
     else:
         data = load_toml(path, "robot")

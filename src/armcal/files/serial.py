@@ -54,7 +54,14 @@ from .common import (
     suggest,
 )
 from .robot_units import check_mdh_angles, check_reach, limit_warnings, urdf_limit_warning
-from .robots import RobotSpec, fixed_parameters, held_terms, load_robot, rigid_truth_message
+from .robots import (
+    SERIAL_ROBOT_KEYS,
+    RobotSpec,
+    fixed_parameters,
+    held_terms,
+    load_robot,
+    rigid_truth_message,
+)
 from .serial_noise import read_serial_noise
 from .ur import (
     UR_MODELS,
@@ -132,11 +139,8 @@ def is_serial_robot(name_or_path: str | os.PathLike) -> bool:
         data = load_toml(path, "robot")
     except InputError:  # the robot loader reports it
         return False
-    return any(key in data for key in _DESCRIPTIONS)
+    return any(key in data for key in SERIAL_ROBOT_KEYS)
 
-
-#: The keys that describe a spatial arm in a robot TOML (exactly one of them).
-_DESCRIPTIONS = ("urdf", "mdh", "dh", "ur")
 
 #: A URDF's suffixes (a xacro file, ROS's macros for URDF, is read to say what it is).
 _URDF_SUFFIXES = (".urdf", ".xacro")
@@ -258,7 +262,7 @@ def _chain(
     """The chain of a robot TOML: its URDF's (from the ``chosen`` base and tip links, else
     the file's), its ``[mdh]`` or ``[dh]`` table's or a UR's (``[ur]``), a default name,
     what reading it warns of, and its URDF's masses."""
-    given = [key for key in _DESCRIPTIONS if key in data]
+    given = [key for key in SERIAL_ROBOT_KEYS if key in data]
     if len(given) > 1:
         raise fail(path, f"keys {' and '.join(given)} all describe the arm; keep one")
     if given and given[0] != "urdf" and any(link is not None for link in chosen):
