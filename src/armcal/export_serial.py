@@ -209,7 +209,8 @@ def serial_urdf(cal: CalibratedArm) -> str:
 def serial_robot_toml(cal: CalibratedArm) -> str:
     """The calibrated spatial arm as a robot TOML with its modified DH table (module notes)."""
     arm, params = _calibrated(cal)
-    table = mdh_table(arm.calibrated_chain(params))
+    calibrated = arm.calibrated_chain(params)
+    table = mdh_table(calibrated)
     lines = [f"# {line}" for line in _comments(cal, "Robot file")]
     lines += [
         f"name = {toml_string(arm.name + '-calibrated')}",
@@ -245,8 +246,7 @@ def serial_robot_toml(cal: CalibratedArm) -> str:
         held = elastic.terms.held(elastic.term_names(arm))
         if held:
             lines += ["", "[identify]", f"fixed = [{', '.join(toml_string(n) for n in held)}]"]
-        chains = (arm.calibrated_chain(params), table.chain())
-        lines += ["", "[elastostatic]", *_elastostatic_lines(elastic, *chains)]
+        lines += ["", "[elastostatic]", *_elastostatic_lines(elastic, calibrated, table.chain())]
     return "\n".join(lines) + "\n"
 
 

@@ -517,18 +517,6 @@ def _near(ratio: float) -> bool:
     return 1.0 / SPREAD_TOLERANCE <= ratio <= SPREAD_TOLERANCE
 
 
-def _turns(model: FitModel, conditions: Conditions) -> np.ndarray:
-    """Which readings turn a joint: a full turn of it leaves every point of the first row
-    where it was (a slide moves them)."""
-    n = model.n_joints
-    rows = conditions.take(np.zeros(n + 1, dtype=int))
-    q = np.array(rows.q, dtype=float)
-    q[1:] += 2 * np.pi * np.eye(n)
-    points = model.positions(replace(rows, q=q))[:, : model.position_dim]
-    moved = np.linalg.norm(points[1:] - points[0], axis=-1)
-    return moved <= 1e-9 * model.reach_mm
-
-
 def _columns(names: list[str]) -> str:
     return names[0] if len(names) == 1 else f"{names[0]}..{names[-1]}"
 
@@ -602,7 +590,7 @@ def unit_mistake(
     conditions = model.conditions(q, target=target, loads=loads)
     nominal = spread(model.positions(conditions)[:, : model.position_dim])
     least = MIN_SPREAD_FRACTION * model.reach_mm
-    turning = _turns(model, conditions)
+    turning = np.array(model.joint_kinds) == "R"  # the readings that turn a joint
     angles = q[:, turning]
     if angles.size and np.max(np.abs(angles)) <= np.radians(2 * np.pi) * (1 + 1e-9):
         as_radians = q.copy()

@@ -412,8 +412,7 @@ def clearly_better(
     """
     before_mm, after_mm = np.asarray(before_mm, float), np.asarray(after_mm, float)
     poses = before_mm.size if groups is None else np.unique(np.asarray(groups)).size
-    margin = 1.0 + max(0.2, 3.0 / np.sqrt(max(poses, 1)))
-    return bool(rms(after_mm) * margin < rms(before_mm))
+    return bool(_too_large(rms(before_mm), rms(after_mm), poses))
 
 
 def worse_warning(

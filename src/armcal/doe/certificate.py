@@ -375,14 +375,15 @@ def certify_pool(model: FitModel, q: np.ndarray, pool: np.ndarray) -> Certificat
     logdet_plan = float(plan.log_det_gram())
     poses = np.unique(pool, axis=0)  # a copy adds no pose a design could weigh
     plan_inverse, _ = plan.inverse_gram()
-    d_plan, _ = _variance_function(model, poses, plan_inverse)
+    pool_information = model.plan_information(poses)  # once: both variances and the blocks
+    d_plan, _ = pool_information.pose_variance(plan_inverse)
     plan_only = float(np.exp(1.0 - d_plan.max() / p))
-    blocks = _pose_blocks(model, poses)
+    blocks = pool_information.blocks() / np.sqrt(pool_information.rows_per_pose)
     weights = np.full(poses.shape[0], 1.0 / poses.shape[0])
     weights = multiplicative_weights(blocks, weights, POOL_CERTIFICATE_ITERATIONS, power=2.0)
     star = _weighted_svd(blocks, weights)
     star_inverse, _ = star.inverse_gram()
-    d_star, _ = _variance_function(model, poses, star_inverse)
+    d_star, _ = pool_information.pose_variance(star_inverse)
     logdet_star = float(star.log_det_gram())
     kw = float(np.exp((logdet_plan - logdet_star) / p + 1.0 - d_star.max() / p))
     hadamard = float(np.exp(logdet_plan / p)) if model.information_bound else 0.0

@@ -31,7 +31,7 @@ from ..models import Conditions, FitModel, Loads, equations_per_pose
 from ..models.information import display_std
 from ..noise import instrument_override
 from ..numerics import point_norms, rms
-from .diagnosis import SUSPICIOUS_RMS_FRACTION, coupled_joints, far_off, swapped_targets
+from .diagnosis import coupled_joints, far_off, swapped_targets
 from .experiment import (
     coverage,
     plan_degenerate_warning,
@@ -150,20 +150,24 @@ def _mirrored_fit(
     return what, best, dof
 
 
-def _mirror_suspect(problem: Problem, fit: Fit, sigma: float) -> str | None:
+def _mirror_suspect(
+    problem: Problem, fit: Fit, sigma: float
+) -> tuple[str | None, tuple[str, float, int] | None]:
     """What to say of a fit far off whose points, mirrored back, fit far better (the
-    mirror of :func:`_mirrored_fit`): the cause named when its estimate breaks the fit."""
+    mirror of :func:`_mirrored_fit`): the cause named when its estimate breaks the fit,
+    and :func:`_mirrored_fit`'s finding on every row (kept: the fit's verdict reuses it)."""
     used = np.ones(problem.m, dtype=bool)
     chi2 = float(np.sum(fit.whitened**2)) / sigma**2
     found = _mirrored_fit(problem, used, sigma, chi2)
     if found is None:
-        return None
+        return None, None
     what, mirrored_chi2, _ = found
-    return (
+    text = (
         f"the measurements look mirrored: {what} (undone, the fit improves "
         f"{chi2 / max(mirrored_chi2, 1e-300):.3g}-fold); fix the instrument's export or the "
         "columns"
     )
+    return text, found
 
 
 def identify(
@@ -328,11 +332,14 @@ def identify(
     # A fit far off is tested at once for coupled joints: a step that fails on its absurd
     # estimate (a singular Jacobian) then names the cause too (Problem.suspect).
     cause = None  # a likely cause a cheap test names (diagnosis), before the mirror's
+    early_mirror: tuple[str, float, int] | None = None
+    mirror_tried = False  # whether early_mirror is _mirrored_fit's finding on every row
     if far_off(model, least_squares, reference if given else None):
         cause = coupled_joints(problem, least_squares)
         problem.suspect = None if cause is None else cause.text
         if cause is None:  # a mirrored frame moves every point: said if the fit breaks
-            problem.suspect = _mirror_suspect(problem, least_squares, reference)
+            problem.suspect, early_mirror = _mirror_suspect(problem, least_squares, reference)
+            mirror_tried = True
     fit, used = least_squares, everyone
     judged = judge(problem, robust_sigma, least_squares, robust=True) if robust else None
     if judged is not None:
@@ -395,11 +402,10 @@ def identify(
         if freed is None and cause is None and fit.converged:  # the instrument moved?
             moved = instrument_moved(model, conditions, points, fit.params, used=used)
             cause = None if moved is None else moved_warning(moved, row_numbers)
-        mirrored = (
-            _mirrored_fit(problem, used, sigma_value, chi2)
-            if freed is None and cause is None and most_disagree(disagreeing, m)
-            else None
-        )
+        mirrored = None
+        if freed is None and cause is None and most_disagree(disagreeing, m):
+            same = mirror_tried and fit is least_squares and sigma_value == reference
+            mirrored = early_mirror if same else _mirrored_fit(problem, used, sigma_value, chi2)
         warnings.append(
             inconsistent_fit_warning(
                 fit_test,
@@ -416,10 +422,8 @@ def identify(
                 robust=robust,
             )
         )
-    elif cause is None and (
-        outliers
-        or rms(fit.residuals[:, : model.position_dim]) > SUSPICIOUS_RMS_FRACTION * model.reach_mm
-    ):  # consistent (sigma estimated, say): judged by its outliers and its size alone
+    elif cause is None and (outliers or far_off(model, fit, None)):
+        # consistent (sigma estimated, say): judged by its outliers and its size alone
         cause = swapped_targets(problem, least_squares, labels, row_numbers)
     if cause is None and not given and fit.converged:  # sigma estimated: no chi-square
         moved = instrument_moved(model, conditions, points, fit.params, used=used, screen=True)

@@ -197,6 +197,17 @@ class Movement:
     p_value: float
 
 
+def _whitened_residual(
+    model: FitModel, conditions: Conditions, points: np.ndarray, params: np.ndarray
+) -> np.ndarray:
+    """Whitened residuals ``(r,)`` of ``params`` on the rows (no Jacobian)."""
+    residual = points - model.positions(conditions, params)
+    w = model.whitening(conditions, params)
+    if w is not None:
+        residual = (w @ residual[..., None])[..., 0]
+    return residual.reshape(-1)
+
+
 def _whitened(
     model: FitModel, conditions: Conditions, points: np.ndarray, params: np.ndarray
 ) -> tuple[np.ndarray, np.ndarray]:
@@ -247,8 +258,8 @@ def _split_rss(
         size = max(np.max(np.abs(shift * scale)), np.max(np.abs(own * scale[moved])))
         if size <= _TOL * model.reach_mm:
             break
-    r1, _ = _whitened(model, parts[0], points[0], first)
-    r2, _ = _whitened(model, parts[1], points[1], second)
+    r1 = _whitened_residual(model, parts[0], points[0], first)
+    r2 = _whitened_residual(model, parts[1], points[1], second)
     return float(r1 @ r1 + r2 @ r2), first, second
 
 
@@ -327,7 +338,10 @@ def instrument_moved(
     if k == 0 or residual_dof <= 0:
         return None
     whole = conditions.take(rows)
-    residual, jac = _whitened(model, whole, points[rows], params)
+    if screen:
+        residual, jac = _whitened(model, whole, points[rows], params)
+    else:
+        residual = _whitened_residual(model, whole, points[rows], params)
     total = float(residual @ residual)
     if total <= 0:
         return None

@@ -502,7 +502,8 @@ def validate_measurements(
         )
     points = meas.xy if meas.z is None else meas.instrument_points
     loads = row_loads(cal.model, meas)
-    mistake = _unit_mistake(cal.model, meas, _row_targets(arm, meas), loads)
+    target = _row_targets(arm, meas)
+    mistake = _unit_mistake(cal.model, meas, target, loads)
     if mistake is not None:
         raise InputError(f"{source}: {mistake}")
     try:
@@ -510,7 +511,7 @@ def validate_measurements(
             cal,
             meas.q,
             points,
-            target=_row_targets(arm, meas),
+            target=target,
             row_sigma=meas.row_sigma,
             loads=loads,
         )

@@ -54,11 +54,20 @@ PAYLOAD_EXTRAPOLATION = 2.0
 _UNIT_MATCH = 0.1
 
 
+def _unit_named(ratio: float) -> tuple[str, float] | None:
+    """The unit of :data:`PAYLOAD_UNITS` whose count per kg a payload ``ratio`` times too
+    heavy matches (within :data:`_UNIT_MATCH`), or None."""
+    return next(
+        ((u, per_kg) for u, per_kg in PAYLOAD_UNITS if abs(ratio / per_kg - 1.0) <= _UNIT_MATCH),
+        None,
+    )
+
+
 def _unit_hint(ratio: float) -> str:
     """Which unit a payload ``ratio`` times too heavy looks like, in words."""
-    for unit, per_kg in PAYLOAD_UNITS:
-        if abs(ratio / per_kg - 1.0) <= _UNIT_MATCH:
-            return f"they look like {unit} ({per_kg:g} per kg)"
+    named = _unit_named(ratio)
+    if named is not None:
+        return f"they look like {named[0]} ({named[1]:g} per kg)"
     return "grams (1000 per kg) or pounds (2.205 per kg) read that much heavier"
 
 
@@ -150,7 +159,7 @@ def payload_extrapolated(
     ratio = asked / heaviest
     range_ = f"{heaviest:g} kg" if lightest == heaviest else f"{lightest:g} to {heaviest:g} kg"
     hint = ""
-    if any(abs(ratio / per_kg - 1.0) <= _UNIT_MATCH for _, per_kg in PAYLOAD_UNITS):
+    if _unit_named(ratio) is not None:
         hint = f"; if the payloads are not in kg, {_unit_hint(ratio)}"
     return ArmcalWarning(
         "payload-extrapolated",
