@@ -68,7 +68,7 @@ from measure import armcal_argv, at_end, machine_and_date, measure
 from armcal import PlanarArm, forward_kinematics, identify, load_robot
 from armcal.doe import orthogonal_plan, random_plan
 from armcal.files import format_measurements_csv
-from armcal.models.planar_closed_form import solve_closed_form
+from armcal.models.planar.closed_form import solve_closed_form
 from armcal.simulate import monte_carlo
 from armcal.synthesis import synthesize_measurements
 

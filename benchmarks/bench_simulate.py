@@ -43,7 +43,7 @@ from scipy.optimize import least_squares
 
 from armcal import forward_kinematics, jacobian, load_robot
 from armcal.doe import orthogonal_plan
-from armcal.models.planar_closed_form import solve_closed_form
+from armcal.models.planar.closed_form import solve_closed_form
 from armcal.reproduction.algorithm import solve_gauss_newton
 from armcal.simulate import monte_carlo
 

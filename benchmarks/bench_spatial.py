@@ -9,7 +9,7 @@ horizon) measured by a laser tracker at three reflectors A, B, C, at
 frame.  The model is the one ``armcal identify --robot industrial-6r`` builds
 for a file with a target column: the reflectors' positions are found from the
 data, and of the 51 parameters (base pose 6, joint placements 30, joint zeros
-6, reflectors 9) the rule of :meth:`~armcal.models.spatial.SpatialArm.prepared`
+6, reflectors 9) the rule of :meth:`~armcal.models.spatial.arm.SpatialArm.prepared`
 frees 33 (4R + 3k).  The true arm has an error on each of those free joint
 parameters (normal, 0.3 mm or 0.05 deg std), its base is 4 m from the
 tracker, tilted by a few tenths of a degree and turned 120 degrees about z
@@ -24,14 +24,14 @@ with isotropic noise sigma = 0.03 mm; ``identify`` is told sigma = 0.03 mm.
    which needs every row's leverage) against ``scipy.optimize.least_squares``
    on the same residuals (points predicted by the same model at the same 33
    free parameters, the other 18 held) from the same start (the
-   registration, :meth:`~armcal.models.spatial.SpatialArm.start`).  The
+   registration, :meth:`~armcal.models.spatial.arm.SpatialArm.start`).  The
    baseline is only the solve: the identifiable set and the start are given
    to it.  Baselines:
 
    * ``method='lm'`` with its default 2-point finite-difference Jacobian and
      default tolerances: the plain way (scipy's MINPACK Levenberg-Marquardt);
    * ``method='trf'`` with armcal's analytic Jacobian
-     (:meth:`~armcal.models.spatial.SpatialArm.jacobian`) as ``jac``;
+     (:meth:`~armcal.models.spatial.arm.SpatialArm.jacobian`) as ``jac``;
    * ``method='lm'`` with that analytic Jacobian: the fastest of scipy's.
 
    Target for each: armcal within 1x (no slower).  Every estimate must agree

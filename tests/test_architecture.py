@@ -48,10 +48,11 @@ def _layout() -> list[set[str]]:
         parts = re.split(r"\n    - ", item)
         names = {f"{t[:-3]}" for t in re.findall(r"`([^`/]+\.py)`", parts[0])}
         for sub in parts[1:]:
-            package = re.match(r"`([a-z_]+)/`:", sub)
+            package = re.match(r"`([a-z_/]+)/`:", sub)
             assert package, sub
             modules = re.findall(r"`([^`/]+\.py)`", sub)
-            names |= {f"{package.group(1)}.{m[:-3]}" for m in modules}
+            dotted = package.group(1).replace("/", ".")
+            names |= {f"{dotted}.{m[:-3]}" for m in modules}
         layers.append(names)
     return layers
 

@@ -249,7 +249,7 @@ def _turned_urdf() -> str:
     a link frame that the modified DH table's does not equal."""
     from armcal.files.serial import BUILTIN_SERIAL_ROBOTS
     from armcal.models import matrix_rpy, rpy_matrix
-    from armcal.models.spatial_chain import elementary
+    from armcal.models.spatial.chain import elementary
 
     text = BUILTIN_SERIAL_ROBOTS["industrial-6r"].with_suffix(".urdf").read_text()
     psi = 0.7

@@ -22,7 +22,7 @@ from armcal.criteria import (
     predicted_std,
 )
 from armcal.doe.optimizer import _criterion_value_and_gradient
-from armcal.models.planar_criteria import dstar, information_matrix, optimality_sums
+from armcal.models.planar.criteria import dstar, information_matrix, optimality_sums
 from helpers import random_arm
 
 

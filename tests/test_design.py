@@ -17,7 +17,7 @@ from armcal.doe import (
     feasible_poses,
     optimize_plan,
 )
-from armcal.models.planar_criteria import information_matrix, optimality_sums
+from armcal.models.planar.criteria import information_matrix, optimality_sums
 
 PAPER_LENGTHS = [260.0, 180.0, 120.0, 100.0]
 LIMITS_60 = np.radians([[-180, 180], [-60, 60], [-60, 60], [-60, 60]])

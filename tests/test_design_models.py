@@ -2,7 +2,7 @@
 
 A model is the arm's noise model (anisotropic, correlated, encoder noise) and its
 fixed parameters; design, exchange and certificates work on its information
-(:mod:`armcal.models.planar_design`).  Optima are derived in each test's comments.
+(:mod:`armcal.models.planar.design`).  Optima are derived in each test's comments.
 """
 
 import math
@@ -19,7 +19,7 @@ from armcal.doe.certificate import _variance_function
 from armcal.doe.exchange import _swap_ratios
 from armcal.doe.optimizer import _criterion_value_and_gradient
 from armcal.models import model_columns, unit_trace
-from armcal.models.planar_design import (
+from armcal.models.planar.design import (
     information_gradient,
     model_description,
     pose_model,

@@ -21,7 +21,7 @@ from armcal.models import (
     paper_from_user,
     tool_angles,
 )
-from armcal.models.planar_closed_form import solve_closed_form
+from armcal.models.planar.closed_form import solve_closed_form
 from armcal.reproduction.algorithm import solve_gauss_newton
 
 #: Joint maps of real controllers, 3 joints: the default, joint 2 counted the other

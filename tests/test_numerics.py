@@ -42,7 +42,7 @@ from armcal import (
     solve_gauss_newton,
 )
 from armcal.criteria import CRITERIA, efficiencies, observability_indices
-from armcal.models.planar_criteria import inverse_information, scaled_information
+from armcal.models.planar.criteria import inverse_information, scaled_information
 from armcal.numerics import (
     COND_WARN,
     RANK_RTOL,

@@ -9,9 +9,9 @@ from numpy.testing import assert_allclose
 from armcal import Annulus, ArmcalError, Box, PlanarArm, forward_kinematics, wrap_angle
 from armcal.criteria import d_efficiency
 from armcal.doe import analytic_plan, feasible
-from armcal.models import planar_plans as plans_module
-from armcal.models.planar_criteria import optimality_sums
-from armcal.models.planar_plans import _best_common_shift
+from armcal.models.planar import plans as plans_module
+from armcal.models.planar.criteria import optimality_sums
+from armcal.models.planar.plans import _best_common_shift
 
 #: Shifts of the brute-force grid over one turn.  The margin is piecewise linear in
 #: the shift with slopes +-1 (each angle moves with the shift), so the best grid

@@ -53,7 +53,7 @@ from armcal.files import (
     to_json,
 )
 from armcal.models import every_target, paper_from_user, wrap_angle
-from armcal.models.planar_criteria import scaled_information
+from armcal.models.planar.criteria import scaled_information
 from armcal.noise import NoiseModel
 
 #: Unit round-off of double precision (2.2e-16).

@@ -1,4 +1,4 @@
-"""Joint compliance of spatial serial arms (:mod:`armcal.models.spatial_compliance`).
+"""Joint compliance of spatial serial arms (:mod:`armcal.models.spatial.compliance`).
 
 References used here, independent of the code under test:
 
@@ -37,7 +37,7 @@ from armcal.models import (
     SerialElastics,
     SpatialArm,
 )
-from armcal.models.spatial_gravity import STANDARD_GRAVITY, gravity_torques
+from armcal.models.spatial.gravity import STANDARD_GRAVITY, gravity_torques
 from armcal.simulate import monte_carlo
 from armcal.validation import validate
 from helpers import cell_toml, run_cli
@@ -276,8 +276,8 @@ def test_a_urdfs_inertials_fold_through_fixed_joints(tmp_path):
     without <inertial> weighs nothing); their centres in the world frame are the URDF's
     own transforms'."""
     from armcal.files.urdf import read_urdf
-    from armcal.models.spatial_chain import elementary
-    from armcal.models.spatial_gravity import chain_frames
+    from armcal.models.spatial.chain import elementary
+    from armcal.models.spatial.gravity import chain_frames
 
     (tmp_path / "two.urdf").write_text(URDF)
     found = read_urdf(tmp_path / "two.urdf", tip_link="tool")

@@ -15,8 +15,8 @@ import numpy as np
 import pytest
 
 from armcal.models.information import BlockInformation, pose_derivative
-from armcal.models.spatial_gradient import jacobian_pose_pullback
-from armcal.models.spatial_kinematics import kinematics
+from armcal.models.spatial.gradient import jacobian_pose_pullback
+from armcal.models.spatial.kinematics import kinematics
 from armcal.noise import NoiseModel, TrackerNoise
 from helpers import INDUSTRIAL_HEAD, central_differences
 from test_spatial_model import ARMS, labelled, random_poses, random_truth
@@ -313,7 +313,7 @@ def test_the_view_s_constraints_have_exact_gradients(tmp_path, volume):
 def test_the_view_s_constraints_say_what_they_check(tmp_path):
     """One pose's values by hand: the distance to the tracker, the normal's angle to it
     and the height above the floor (the constraints' definitions, module notes)."""
-    from armcal.models.spatial_view import ACCEPTANCE_SCALE_MM
+    from armcal.models.spatial.view import ACCEPTANCE_SCALE_MM
 
     arm = _cell(tmp_path)
     q = random_poses(arm, 1, np.random.default_rng(9))

@@ -22,7 +22,7 @@ from armcal.models import (
     rotation_vector,
     vector_rotation,
 )
-from armcal.models.spatial_dh import PARALLEL_COS
+from armcal.models.spatial.dh import PARALLEL_COS
 from helpers import run_cli
 
 ROBOTS = ("industrial-6r", "cobot-6r", "arm-7r")

@@ -24,7 +24,7 @@ import pytest
 from armcal.files import format_measurements_csv, read_measurements
 from armcal.identification import identify
 from armcal.models import SpatialArm
-from armcal.models.spatial_chain import (
+from armcal.models.spatial.chain import (
     left_jacobian,
     left_jacobian_inverse,
     rotation_vector,

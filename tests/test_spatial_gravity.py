@@ -12,8 +12,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from armcal.models.spatial_chain import joint_motion
-from armcal.models.spatial_gravity import STANDARD_GRAVITY, LinkMasses, gravity_torques
+from armcal.models.spatial.chain import joint_motion
+from armcal.models.spatial.gravity import STANDARD_GRAVITY, LinkMasses, gravity_torques
 from helpers import central_differences
 from test_spatial_model import ARMS, random_poses
 

@@ -15,8 +15,8 @@ from armcal import (
 )
 from armcal.doe import analytic_plan
 from armcal.models import Annulus, every_target, forward_kinematics, plan_rows
-from armcal.models.planar_closed_form import solve_closed_form
-from armcal.models.planar_design import information_gradient, pose_model
+from armcal.models.planar.closed_form import solve_closed_form
+from armcal.models.planar.design import information_gradient, pose_model
 
 NEST = (Target("A", 100.0, 0.0), Target("B", 80.0, 0.7), Target("C", 120.0, -0.5))
 

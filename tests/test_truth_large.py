@@ -15,7 +15,7 @@ import numpy as np
 
 from armcal.files.serial import BUILTIN_SERIAL_ROBOTS
 from armcal.models import LARGE_PLACEMENT_FRACTION, PlanarArm
-from armcal.models.planar import LARGE_LENGTH_FRACTION
+from armcal.models.planar.arm import LARGE_LENGTH_FRACTION
 from armcal.plausibility import truth_warning
 from helpers import run_cli
 

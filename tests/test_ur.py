@@ -202,7 +202,7 @@ def test_a_calibrated_chain_becomes_deltas_that_read_back_to_it(tmp_path):
     from dataclasses import replace
 
     from armcal.files.ur import ur_deltas
-    from armcal.models.spatial_chain import elementary, transform
+    from armcal.models.spatial.chain import elementary, transform
 
     rng = np.random.default_rng(2)
     nominal = ur_chain(ur_nominal("ur10e"))
@@ -403,7 +403,7 @@ def test_what_a_ur_table_cannot_hold_is_refused_with_the_file(tmp_path):
     from dataclasses import replace
 
     from armcal.files.ur import ur_deltas
-    from armcal.models.spatial_chain import elementary, transform
+    from armcal.models.spatial.chain import elementary, transform
 
     deltas = read_ur_calibration(_write(tmp_path, UR10E_CALIBRATION))
     offset = UrDh(deltas.theta, deltas.a + np.array([0, 0, 0, 0, 0, 1e-4]), deltas.d, deltas.alpha)

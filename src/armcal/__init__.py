@@ -75,7 +75,7 @@ from .models import (
     paper_from_user_matrix,
     wrap_angle,
 )
-from .models.planar_closed_form import solve_closed_form
+from .models.planar.closed_form import solve_closed_form
 from .noise import NoiseModel
 from .report import format_calibration
 from .reproduction.algorithm import solve_gauss_newton

@@ -449,7 +449,7 @@ def urdf(cal: CalibratedArm) -> str:
     ``base_link`` (``s_i`` the axis sign, ``v_i`` the joint value of
     :func:`urdf_joint_values`) places every target frame where
     the calibrated arm in its own frame puts the target, with the yaw of
-    :func:`~armcal.models.planar_kinematics.tool_angles`.  The module docstring says why
+    :func:`~armcal.models.planar.kinematics.tool_angles`.  The module docstring says why
     the offsets are in ``<origin>`` and not in ``<calibration>``.
 
     Examples

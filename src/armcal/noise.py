@@ -371,7 +371,7 @@ class NoiseModel:
         """``Sigma_i`` ``(..., m, d, d)`` in mm^2 of measurements of shape ``(..., m)``.
 
         ``joint_jacobian`` ``(..., m, d, n)`` (mm/rad) is ``d tip / d q`` where the
-        encoder term is linearized: the model's (:meth:`armcal.models.planar.PlanarArm.
+        encoder term is linearized: the model's (:meth:`armcal.models.planar.arm.PlanarArm.
         pose_covariances` gives it); without it, or without encoder noise, only the
         instrument's covariance counts.  ``row_sigma``, ``points`` and ``oriented`` as
         for :meth:`instrument_covariances` (``d`` is then ``dim + 3``).
@@ -490,7 +490,7 @@ def complex_whitening(w: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """``(alpha, beta)`` ``(...)`` with ``W (x, y) = alpha z + beta conj(z)`` for ``z = x + i y``.
 
     Every real-linear map of the plane acts on complex numbers this way, which
-    keeps the complex-column form of the Jacobian (:mod:`armcal.models.planar_information`)
+    keeps the complex-column form of the Jacobian (:mod:`armcal.models.planar.information`)
     for weighted models.
 
     Examples

@@ -14,7 +14,7 @@ from matplotlib.layout_engine import ConstrainedLayoutEngine
 from .criteria import position_accuracy
 from .doe import Certificate, feasible_poses
 from .models import FitModel, SpatialArm
-from .models.spatial_chain import joint_motion
+from .models.spatial.chain import joint_motion
 
 __all__ = [
     "plot_spatial_plan",

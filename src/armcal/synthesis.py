@@ -176,8 +176,8 @@ def synthesize_measurements(
     Parameters
     ----------
     model : FitModel
-        The nominal model (a :class:`~armcal.models.planar.PlanarArm`, a
-        :class:`~armcal.models.compliance.CompliantArm`); its noise model gives the
+        The nominal model (a :class:`~armcal.models.planar.arm.PlanarArm`, a
+        :class:`~armcal.models.planar.compliance.CompliantArm`); its noise model gives the
         shape of the instrument noise and the encoder noise.
     plan : ndarray, shape (m, n)
         Joint angles in rad, as the controller reports them.

@@ -30,11 +30,11 @@ isotropic iid, the weighted information over the free parameters otherwise.
   best plan reaches an accuracy requirement.
 
 The planar family's closed-form plans (:func:`orthogonal_plan`,
-:func:`analytic_plan`, :mod:`armcal.models.planar_plans`) are exported here too,
+:func:`analytic_plan`, :mod:`armcal.models.planar.plans`) are exported here too,
 beside the other plans.
 """
 
-from ..models.planar_plans import analytic_plan, orthogonal_plan
+from ..models.planar.plans import analytic_plan, orthogonal_plan
 from .certificate import Certificate, certify
 from .designer import METHODS, Design, design
 from .exchange import exchange_plan

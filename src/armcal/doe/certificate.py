@@ -225,7 +225,7 @@ def certify(
 
     Where every pose's information has trace ``p``
     (:attr:`~armcal.models.interface.FitModel.information_bound`; for a planar
-    arm :func:`~armcal.models.planar_information.unit_trace`: the paper's model,
+    arm :func:`~armcal.models.planar.information.unit_trace`: the paper's model,
     isotropic iid noise with only lengths, base or leading offsets fixed, or every parameter free
     without encoder noise) every design has ``tr M = p``, so ``det M* <= 1``
     (Hadamard's bound for the paper's unit diagonal; AM-GM in general) is a

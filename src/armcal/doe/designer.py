@@ -275,7 +275,7 @@ def design(
     information over the free parameters.  The paper's orthogonal plans are
     optimal for its model -- isotropic iid noise, every parameter free -- by
     Hadamard's bound; ``auto`` takes a closed-form plan whenever the model keeps
-    that bound (:func:`armcal.models.planar_information.unit_trace`) and the plan reaches it,
+    that bound (:func:`armcal.models.planar.information.unit_trace`) and the plan reaches it,
     which covers fixed lengths, base coordinates or leading offsets under
     isotropic noise, and anisotropic instrument noise with every parameter free
     (joint 1 stepping too, ``m > 2 n``).  Otherwise -- encoder noise, a fixed

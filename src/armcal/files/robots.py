@@ -107,7 +107,7 @@ class RobotSpec:
         command prints these.
     elastic : Elastostatic or None
         The ``[elastostatic]`` table: gravity, masses and payload that twist the
-        joints (:mod:`armcal.models.compliance`); None for a rigid arm.
+        joints (:mod:`armcal.models.planar.compliance`); None for a rigid arm.
     gravity_3d : ndarray, shape (3,), or None
         ``[measurement] gravity``: gravity's direction in the instrument frame,
         for 3-D data.
@@ -632,7 +632,7 @@ def load_truth(path: str | os.PathLike, arm: PlanarArm, *, rigid: bool = False) 
     return params
 
 
-#: Truth keys of the compliance parameters (:mod:`armcal.models.compliance`), by kind.
+#: Truth keys of the compliance parameters (:mod:`armcal.models.planar.compliance`), by kind.
 COMPLIANCE_TRUTH_KEYS = {"k": "k_urad_per_Nm", "c": "c_mdeg_per_m"}
 
 

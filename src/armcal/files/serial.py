@@ -40,7 +40,7 @@ from ..models import (
     rpy_matrix,
     transform,
 )
-from ..models.spatial_dh import convention_mistake, table_chain
+from ..models.spatial.dh import convention_mistake, table_chain
 from ..paper import BUILTIN_ROBOTS
 from .common import (
     STDIO,
@@ -112,7 +112,7 @@ class SerialSpec:
         What reading the robot warns of.
     elastic : SerialElastics or None
         The ``[elastostatic]`` table: the joints twist under gravity and payload
-        (:mod:`armcal.models.spatial_compliance`); None for a rigid arm.
+        (:mod:`armcal.models.spatial.compliance`); None for a rigid arm.
     gravity_3d : None
         As :class:`~armcal.files.robots.RobotSpec`'s: a spatial arm's gravity is in
         its ``[elastostatic]`` table.

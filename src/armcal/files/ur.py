@@ -37,8 +37,8 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import ArmcalWarning
-from ..models.spatial_chain import SerialChain, elementary, transform
-from ..models.spatial_dh import PARALLEL_COS, DhTable, dh_table
+from ..models.spatial.chain import SerialChain, elementary, transform
+from ..models.spatial.dh import PARALLEL_COS, DhTable, dh_table
 from ..numerics import wrap_angle
 from .common import fail, read_text
 
@@ -127,7 +127,7 @@ def ur_chain(dh: UrDh) -> SerialChain:
 
 def ur_deltas(chain: SerialChain, model: str) -> UrDh:
     """The deltas to ``model``'s nominal table that give ``chain`` (the DH base frame to the
-    flange, mm): its exact standard DH table (:func:`~armcal.models.spatial_dh.dh_table`,
+    flange, mm): its exact standard DH table (:func:`~armcal.models.spatial.dh.dh_table`,
     on the nominal table's branch) minus the nominal, in metres and radians, every angle
     within half a turn.  Nearly parallel axes give ``d`` deltas of metres that cancel, as
     the controller's own do."""

@@ -24,7 +24,7 @@ import numpy as np
 
 from ..errors import ArmcalWarning, InputError, action, unrendered
 from ..models import LinkMasses, SerialChain, UrdfJoint
-from ..models.spatial_chain import axis_frame, rpy_matrix, transform
+from ..models.spatial.chain import axis_frame, rpy_matrix, transform
 from .common import suggest
 
 __all__ = [

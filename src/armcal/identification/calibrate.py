@@ -192,8 +192,8 @@ def identify(
     Parameters
     ----------
     model : FitModel
-        The nominal model (a :class:`~armcal.models.planar.PlanarArm`, a
-        :class:`~armcal.models.compliance.CompliantArm`), with its noise model and
+        The nominal model (a :class:`~armcal.models.planar.arm.PlanarArm`, a
+        :class:`~armcal.models.planar.compliance.CompliantArm`), with its noise model and
         fixed parameters.
     q : ndarray, shape (m, n)
         Commanded joint angles in rad.
@@ -201,7 +201,7 @@ def identify(
         Measured points in mm, in the instrument frame (``d = 2`` in the plane).
     method : {"auto", "closed-form", "gauss-newton"}
         ``"auto"`` is the closed form where the model has one (exact, see
-        :mod:`~armcal.models.planar_closed_form`), else Gauss-Newton
+        :mod:`~armcal.models.planar.closed_form`), else Gauss-Newton
         (:func:`~armcal.identification.solvers.resolve_method`).
     sigma : float, optional
         Instrument noise (1 std, mm), replacing the noise model's instrument

@@ -56,7 +56,7 @@ PROBE_POSES = 100
 PROBE_SEED = 20260034
 
 #: A joint whose readings span no more than this (rad, or mm for a prismatic joint)
-#: never moves: the rule of :mod:`~armcal.models.spatial_selection` for a still joint.
+#: never moves: the rule of :mod:`~armcal.models.spatial.selection` for a still joint.
 STILL_TOLERANCE = 1e-9
 
 #: How many names a warning lists before "and N more".

@@ -1,33 +1,25 @@
 """The families of arm armcal fits, and what every family shares.
 
 * :mod:`~armcal.models.regions` -- where the instrument measures;
-* :mod:`~armcal.models.planar_geometry`, :mod:`~armcal.models.planar_kinematics`,
-  :mod:`~armcal.models.planar` -- the paper's planar arm (:class:`PlanarArm`);
-* :mod:`~armcal.models.planar_information` -- the planar arm's scaled Jacobian,
+* :mod:`~armcal.models.planar.geometry`, :mod:`~armcal.models.planar.kinematics`,
+  :mod:`~armcal.models.planar.arm` -- the paper's planar arm (:class:`PlanarArm`);
+* :mod:`~armcal.models.planar.information` -- the planar arm's scaled Jacobian,
   identifiability and its words;
-* :mod:`~armcal.models.planar_design`, :mod:`~armcal.models.planar_plans`,
-  :mod:`~armcal.models.planar_criteria` -- the planar arm's design view, the
+* :mod:`~armcal.models.planar.design`, :mod:`~armcal.models.planar.plans`,
+  :mod:`~armcal.models.planar.criteria` -- the planar arm's design view, the
   paper's closed-form plans and its own criteria (D*, Table I);
-* :mod:`~armcal.models.compliance` -- joint compliance under gravity and load;
-* :mod:`~armcal.models.spatial_chain`, :mod:`~armcal.models.spatial_dh`,
-  :mod:`~armcal.models.spatial_kinematics`, :mod:`~armcal.models.spatial_selection`,
-  :mod:`~armcal.models.spatial_registration`, :mod:`~armcal.models.spatial` -- a spatial
+* :mod:`~armcal.models.planar.compliance` -- joint compliance under gravity and load;
+* :mod:`~armcal.models.spatial.chain`, :mod:`~armcal.models.spatial.dh`,
+  :mod:`~armcal.models.spatial.kinematics`, :mod:`~armcal.models.spatial.selection`,
+  :mod:`~armcal.models.spatial.registration`, :mod:`~armcal.models.spatial.arm` -- a spatial
   serial arm (:class:`SpatialArm`) from a URDF or a modified DH table;
-* :mod:`~armcal.models.spatial_gravity`, :mod:`~armcal.models.spatial_compliance` --
+* :mod:`~armcal.models.spatial.gravity`, :mod:`~armcal.models.spatial.compliance` --
   its joints twisting under gravity and payload (:class:`CompliantSerialArm`);
 * :mod:`~armcal.models.plane` -- the plane of motion of 3-D data;
 * :mod:`~armcal.models.calibrated` -- an arm with its identified deviations.
 """
 
 from .calibrated import CalibratedArm
-from .compliance import (
-    STANDARD_GRAVITY,
-    CompliantArm,
-    Elastostatic,
-    barely_identifiable_warning,
-    check_compliance_identifiable,
-    compliance_identifiability,
-)
 from .defaults import LARGE_ANGLE_DEG, TermChoice
 from .identifiability import Identifiability, combination, listing, row_echelon
 from .interface import (
@@ -46,8 +38,16 @@ from .interface import (
     equations_per_pose,
     position_jacobian,
 )
-from .planar import INSTRUMENT_PARAMS, LARGE_LENGTH_FRACTION, PlanarArm
-from .planar_geometry import (
+from .planar.arm import INSTRUMENT_PARAMS, LARGE_LENGTH_FRACTION, PlanarArm
+from .planar.compliance import (
+    STANDARD_GRAVITY,
+    CompliantArm,
+    Elastostatic,
+    barely_identifiable_warning,
+    check_compliance_identifiable,
+    compliance_identifiability,
+)
+from .planar.geometry import (
     PlanarGeometry,
     Target,
     link_angles,
@@ -57,7 +57,7 @@ from .planar_geometry import (
     standard_joint_map,
     wrap_angle,
 )
-from .planar_information import (
+from .planar.information import (
     check_identifiable,
     conditioning_warning,
     covariance_factor,
@@ -74,7 +74,7 @@ from .planar_information import (
     user_from_scaled,
     weighted_user_jacobian,
 )
-from .planar_kinematics import (
+from .planar.kinematics import (
     Parametrization,
     check_target,
     forward_kinematics,
@@ -87,8 +87,8 @@ from .planar_kinematics import (
 )
 from .plane import Plane, fit_plane
 from .regions import Annulus, Box, Region
-from .spatial import SINGLE_TARGET, SpatialArm
-from .spatial_chain import (
+from .spatial.arm import SINGLE_TARGET, SpatialArm
+from .spatial.chain import (
     SerialChain,
     UrdfJoint,
     matrix_rpy,
@@ -97,12 +97,12 @@ from .spatial_chain import (
     transform,
     vector_rotation,
 )
-from .spatial_compliance import CompliantSerialArm, SerialElastics
-from .spatial_dh import MdhTable, mdh_table
-from .spatial_gravity import LinkMasses
-from .spatial_kinematics import LARGE_PLACEMENT_FRACTION, SpatialLayout, default_targets
-from .spatial_selection import Selection
-from .spatial_view import SpatialView
+from .spatial.compliance import CompliantSerialArm, SerialElastics
+from .spatial.dh import MdhTable, mdh_table
+from .spatial.gravity import LinkMasses
+from .spatial.kinematics import LARGE_PLACEMENT_FRACTION, SpatialLayout, default_targets
+from .spatial.selection import Selection
+from .spatial.view import SpatialView
 
 __all__ = [
     "INSTRUMENT_PARAMS",

@@ -40,6 +40,17 @@ __all__ = [
 #: 10 deg leaves a factor of several on either side (the ``large-deviation`` warning).
 LARGE_ANGLE_DEG = 10.0
 
+#: Why a joint's compliance (``k``) or a lumped weight's (``c``) cannot be negative, and what
+#: makes a fit find one: the :attr:`~armcal.models.interface.Effect.negative` words of both
+#: families' joint compliance.
+NEGATIVE_WORDS = (
+    "a joint's compliance (k) and a lumped weight's twist (c, compliance times weight) "
+    "cannot be negative; a fit finds one where the data hold an effect the model lacks "
+    "(a gravity balancer or a cable pulling on the arm, a gear's backlash), where the "
+    "robot file's link masses or centres of mass are wrong, or in a term the poses' "
+    "torques barely excite, where a misfit elsewhere lands"
+)
+
 
 class RigidLoads:
     """An arm whose points depend on neither its load nor gravity."""

@@ -1,6 +1,6 @@
 """The paper's iterative algorithm (Section III, Steps 1-5), as it is printed: Gauss-Newton.
 
-armcal identifies with the closed form of :mod:`armcal.models.planar_closed_form`
+armcal identifies with the closed form of :mod:`armcal.models.planar.closed_form`
 and, for every other model, the one Gauss-Newton loop of
 :mod:`armcal.identification.solvers`.  This module keeps the algorithm the paper
 prints -- start from ``DeltaPi = 0``, linearize, solve (11), correct, repeat --
@@ -13,7 +13,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..models import Conditions, PlanarArm, wrap_angle
-from ..models.planar_closed_form import as_sets, link_phasors_fit, plan_factor, user_from_links
+from ..models.planar.closed_form import as_sets, link_phasors_fit, plan_factor, user_from_links
 
 __all__ = [
     "solve_gauss_newton",
@@ -108,7 +108,7 @@ def solve_gauss_newton(
     ------
     NotIdentifiableError
         If the plan cannot identify every parameter (``check_identifiable`` of
-        :mod:`~armcal.models.planar_information`).
+        :mod:`~armcal.models.planar.information`).
 
     Notes
     -----

@@ -13,13 +13,13 @@ from ..doe.plans import random_plan
 from ..errors import ArmcalError
 from ..models import PlanarArm, identifiability
 from ..models.information import display_std
-from ..models.planar_criteria import (
+from ..models.planar.criteria import (
     information_matrix,
     inverse_information,
     optimality_sums,
     scaled_information,
 )
-from ..models.planar_plans import orthogonal_plan
+from ..models.planar.plans import orthogonal_plan
 from ..paper import (
     PAPER_100_POSE_ANGLES_DEG,
     PAPER_DIGIT,

@@ -27,8 +27,8 @@ from ..models import (
     link_angles,
     paper_from_user_matrix,
 )
-from ..models.planar_criteria import dstar, information_matrix, inverse_information
-from ..models.planar_plans import orthogonal_plan
+from ..models.planar.criteria import dstar, information_matrix, inverse_information
+from ..models.planar.plans import orthogonal_plan
 from ..paper import PAPER_FIGURE1_POSES, PAPER_RANGE_POSES, PAPER_TABLE3, paper_arm
 from .algorithm import solve_gauss_newton
 from .catalogue import (

@@ -15,7 +15,7 @@ from ..criteria import CRITERIA
 from ..doe.plans import random_plan
 from ..models import PlanarArm, plan_svd
 from ..models.information import display_std, mean_tip_variance
-from ..models.planar_criteria import dstar, inverse_information_batch, model_singular_values
+from ..models.planar.criteria import dstar, inverse_information_batch, model_singular_values
 from ..progress import ProgressCallback
 from ..simulate import chunk_size
 from ..synthesis import simulated_noise
@@ -44,11 +44,11 @@ class PlanStudy:
         ``det D'``: determinant of the Hadamard-normalized information matrix,
         ``= d_efficiency ** p`` (1 for an orthogonal plan).  For a weighted or
         reduced model, the determinant of its information matrix ``H^T H``
-        (:func:`armcal.models.planar_information.scaled_jacobian`, ``p_f x p_f``), which
+        (:func:`armcal.models.planar.information.scaled_jacobian`, ``p_f x p_f``), which
         compares plans of that model but is no longer at most 1.
     det_c : ndarray, shape (N,)
         ``det C'`` with ``C' = C / m`` (eq. 20 corrected, see
-        :class:`~armcal.models.planar_criteria.DStar`).
+        :class:`~armcal.models.planar.criteria.DStar`).
         The paper's D* assumes isotropic iid noise and every parameter free: it
         ignores the noise model and the fixed parameters.
     abs_det_s : ndarray, shape (N,)

@@ -143,7 +143,7 @@ def fit_model(
     ``virtual``: the model of a virtual robot to measure under ``loads`` rather
     than the one a fit of its data would use; they differ for a lumped arm under
     one constant payload, which a fit merges into ``c1..cn`` but which still
-    bends the arm (:meth:`~armcal.models.compliance.CompliantArm.for_loads`).
+    bends the arm (:meth:`~armcal.models.planar.compliance.CompliantArm.for_loads`).
 
     Raises ArmcalError, naming the robot file, when nothing would twist the joints.
     """

@@ -14,15 +14,15 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..numerics import ScaledSVD, gram_of_factor
-from .planar_arm import PlanarArmSpec
-from .planar_information import (
+from ...numerics import ScaledSVD, gram_of_factor
+from .information import (
     covariance_factor,
     model_columns,
     plan_svd,
     scaled_jacobian,
 )
-from .planar_kinematics import jacobian
+from .kinematics import jacobian
+from .spec import PlanarArmSpec
 
 __all__ = [
     "DStar",
@@ -189,7 +189,7 @@ def optimality_sums(arm: PlanarArmSpec, q: np.ndarray) -> dict[str, float]:
 
     Examples
     --------
-    >>> from armcal.models.planar_plans import orthogonal_plan
+    >>> from armcal.models.planar.plans import orthogonal_plan
     >>> arm = PlanarArmSpec([2.0, 1.0])
     >>> sums = optimality_sums(arm, orthogonal_plan(arm, 3))
     >>> sorted(sums), max(abs(v) for v in sums.values()) < 1e-12

@@ -7,7 +7,7 @@ itself are a chart with a seam at a half turn; the fit compares instead the turn
 (:attr:`~armcal.models.interface.Conditions.frames`), which :func:`anchor` sets to
 the measured orientation: the residual ``rotvec(R_meas R_pred^T)`` is then small
 at every orientation.  A turn ``w`` of the prediction changes it by
-``J_l(phi)^-1 w`` (:func:`~armcal.models.spatial_chain.left_jacobian_inverse`),
+``J_l(phi)^-1 w`` (:func:`~armcal.models.spatial.chain.left_jacobian_inverse`),
 exactly.
 """
 
@@ -15,8 +15,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from .interface import Conditions
-from .spatial_chain import left_jacobian_inverse, rotation_vector, vector_rotation
+from ..interface import Conditions
+from .chain import left_jacobian_inverse, rotation_vector, vector_rotation
 
 __all__ = [
     "anchor",

@@ -2,11 +2,11 @@
 
 :class:`PlanarArm` is what users construct.  Its description -- geometry, joint
 limits, noise, fixed parameters, measuring region -- is
-:class:`~armcal.models.planar_arm.PlanarArmSpec`'s; this module adds the methods
+:class:`~armcal.models.planar.spec.PlanarArmSpec`'s; this module adds the methods
 of :class:`~armcal.models.interface.FitModel`, each a thin call into the family's
-modules: kinematics (:mod:`~armcal.models.planar_kinematics`), the scaled
-Jacobian and identifiability (:mod:`~armcal.models.planar_information`) and the
-closed form (:mod:`~armcal.models.planar_closed_form`).
+modules: kinematics (:mod:`~armcal.models.planar.kinematics`), the scaled
+Jacobian and identifiability (:mod:`~armcal.models.planar.information`) and the
+closed form (:mod:`~armcal.models.planar.closed_form`).
 """
 
 from __future__ import annotations
@@ -16,24 +16,23 @@ from collections.abc import Sequence
 import numpy as np
 from numpy.typing import ArrayLike
 
-from ..errors import ArmcalWarning, action
-from ..noise import NoiseModel
-from ..numerics import ScaledSVD
-from . import planar_design
-from .defaults import LARGE_ANGLE_DEG, MinimalPlanar, RigidLoads
-from .identifiability import Identifiability, combination
-from .interface import Conditions, DeviationBounds, LinearPositions, Loads, PaperCriteria
-from .planar_arm import PlanarArmSpec
-from .planar_closed_form import (
+from ...errors import ArmcalWarning, action
+from ...noise import NoiseModel
+from ...numerics import ScaledSVD
+from ..defaults import LARGE_ANGLE_DEG, MinimalPlanar, RigidLoads
+from ..identifiability import Identifiability, combination
+from ..interface import Conditions, DeviationBounds, LinearPositions, Loads, PaperCriteria
+from . import design as planar_design
+from .closed_form import (
     PlanarClosedForm,
     projected_start,
     shared_plan_factor,
     user_from_links,
 )
-from .planar_criteria import dstar, optimality_sums
-from .planar_design import PlanarPlanInformation
-from .planar_geometry import split_params, wrap_angle
-from .planar_information import (
+from .criteria import dstar, optimality_sums
+from .design import PlanarPlanInformation
+from .geometry import split_params, wrap_angle
+from .information import (
     check_identifiable,
     conditioning_warning,
     covariance_factor,
@@ -42,7 +41,7 @@ from .planar_information import (
     plan_svd,
     unit_trace,
 )
-from .planar_kinematics import (
+from .kinematics import (
     check_target,
     forward_kinematics,
     jacobian,
@@ -51,7 +50,8 @@ from .planar_kinematics import (
     link_units,
     tool_angles,
 )
-from .planar_plans import PaperPlans
+from .plans import PaperPlans
+from .spec import PlanarArmSpec
 
 __all__ = [
     "INSTRUMENT_PARAMS",
@@ -290,7 +290,7 @@ class PlanarArm(RigidLoads, MinimalPlanar, PlanarArmSpec):
         )
 
     def closed_form(self, conditions: Conditions) -> PlanarClosedForm | None:
-        """The link-phasor least squares (:mod:`~armcal.models.planar_closed_form`)."""
+        """The link-phasor least squares (:mod:`~armcal.models.planar.closed_form`)."""
         return PlanarClosedForm(self, conditions) if self.complete else None
 
     @property
@@ -417,12 +417,12 @@ class PlanarArm(RigidLoads, MinimalPlanar, PlanarArmSpec):
     @property
     def rotation_invariant(self) -> bool:
         """No base offset and no direction in the instrument noise (see
-        :func:`~armcal.models.planar_design.rotation_invariant`)."""
+        :func:`~armcal.models.planar.design.rotation_invariant`)."""
         return planar_design.rotation_invariant(self)
 
     @property
     def information_bound(self) -> bool:
-        """:func:`~armcal.models.planar_information.unit_trace`: the paper's bound holds."""
+        """:func:`~armcal.models.planar.information.unit_trace`: the paper's bound holds."""
         return unit_trace(self)
 
     def plan_information(self, q: np.ndarray, loads: Loads | None = None) -> PlanarPlanInformation:

@@ -18,7 +18,7 @@ Parameters, in display units
 ----------------------------
 * **Masses known** (URDF ``<inertial>`` or the robot TOML): ``k{j}``
   [urad/(N*m)] for every revolute joint ``j``, the load its torque
-  (:func:`~armcal.models.spatial_gravity.gravity_torques`).
+  (:func:`~armcal.models.spatial.gravity.gravity_torques`).
 * **Lumped mode** (masses unknown): the arm's weight is lumped at *stations*,
   the origins of the joints beyond ``j`` and the tip.  ``c{j}.{s}`` [mdeg/m] is
   joint ``j``'s deflection per metre of horizontal lever arm from joint ``j``
@@ -53,13 +53,12 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike
 
-from ..errors import ArmcalError, ArmcalWarning, action
-from ..noise import NoiseModel
-from ..numerics import ScaledSVD
-from .compliance import NEGATIVE_WORDS
-from .defaults import ArmEffect, TermChoice
-from .identifiability import Identifiability
-from .information import (
+from ...errors import ArmcalError, ArmcalWarning, action
+from ...noise import NoiseModel
+from ...numerics import ScaledSVD
+from ..defaults import NEGATIVE_WORDS, ArmEffect, TermChoice
+from ..identifiability import Identifiability
+from ..information import (
     BlockInformation,
     Linearization,
     column_identifiability,
@@ -67,12 +66,12 @@ from .information import (
     ill_conditioned_warning,
     refit_free,
 )
-from .interface import Conditions, DesignEffort, Effect, Loads
-from .spatial import SpatialArm
-from .spatial_gradient import Extra, jacobian_pose_pullback
-from .spatial_gravity import STANDARD_GRAVITY, LinkMasses, chain_frames, gravity_torques
-from .spatial_kinematics import ChainKinematics
-from .spatial_selection import column_space, select_effect
+from ..interface import Conditions, DesignEffort, Effect, Loads
+from .arm import SpatialArm
+from .gradient import Extra, jacobian_pose_pullback
+from .gravity import STANDARD_GRAVITY, LinkMasses, chain_frames, gravity_torques
+from .kinematics import ChainKinematics
+from .selection import column_space, select_effect
 
 __all__ = [
     "C_SCALE",

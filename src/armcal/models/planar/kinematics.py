@@ -4,12 +4,12 @@ All functions are batched on leading axes: joint angles ``q`` of shape
 ``(m, n)`` give positions ``(m, 2)`` and Jacobians ``(m, 2, p)``; deviations
 ``params`` of shape ``(..., p)`` give ``(..., m, 2)`` and ``(..., m, 2, p)``.  An
 arm with several targets needs the ``target`` of every row.  The geometry and
-the parametrization are :mod:`armcal.models.planar_geometry`'s.
+the parametrization are :mod:`armcal.models.planar.geometry`'s.
 
 Complex numbers carry the plane: a link vector is ``z_k u_k`` with the
 deviated link phasor ``z_k`` (:func:`link_phasors`) and the unit phasor of its
 nominal direction ``u_k`` (:func:`link_units`), so the tip is linear in the
-``z_k``: the closed form of :mod:`armcal.models.planar_closed_form` rests on that.
+``z_k``: the closed form of :mod:`armcal.models.planar.closed_form` rests on that.
 """
 
 from __future__ import annotations
@@ -19,7 +19,7 @@ from typing import Literal
 import numpy as np
 from numpy.typing import ArrayLike
 
-from .planar_geometry import PlanarGeometry, split_params
+from .geometry import PlanarGeometry, split_params
 
 __all__ = [
     "Parametrization",
@@ -78,7 +78,7 @@ def link_units(arm: PlanarGeometry, q: np.ndarray, target: ArrayLike | None = No
 
     Examples
     --------
-    >>> from armcal.models.planar_geometry import Target
+    >>> from armcal.models.planar.geometry import Target
     >>> arm = PlanarGeometry([2.0, 1.0], targets=[Target("A", 1.0), Target("B", 1.0, np.pi / 2)])
     >>> link_units(arm, np.zeros((2, 2)), target=np.array([0, 1])).round(12).tolist()
     [[(1+0j), (1+0j), 0j], [(1+0j), 0j, 1j]]
@@ -116,7 +116,7 @@ def _tip_terms(
     """``z_k u_k`` ``(..., m, K)``, ``exp(i dtheta_k) u_k`` ``(..., m, K)`` and the base.
 
     ``deflection`` ``(..., m, n)``: joint deflections (rad, relative: joint ``j``
-    turns every link from ``j`` on), e.g. under load (:mod:`armcal.models.compliance`).
+    turns every link from ``j`` on), e.g. under load (:mod:`armcal.models.planar.compliance`).
     """
     index = check_target(arm, q, target)
     dl, dtheta, base = split_params(arm, params)
@@ -177,7 +177,7 @@ def forward_kinematics(
         when the arm has several targets.
     deflection : ndarray, shape (m, n) or (..., m, n), optional
         Joint deflections in rad (relative angles, e.g. under gravity:
-        :mod:`armcal.models.compliance`), added to the real joint angles.
+        :mod:`armcal.models.planar.compliance`), added to the real joint angles.
 
     Returns
     -------

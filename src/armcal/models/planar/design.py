@@ -3,9 +3,9 @@
 :class:`PlanarPlanInformation` is the planar family's
 :class:`~armcal.models.interface.PlanInformation`: every design function
 (optimizer, exchange, certificate, criteria) sees a plan of a planar arm through
-the columns of :func:`~armcal.models.planar_information.model_columns`: the paper's scaled
-columns ``c`` (:func:`~armcal.models.planar_information.scaled_columns`) in the free
-coordinates ``C`` of :func:`~armcal.models.planar_information.model_basis` and whitened
+the columns of :func:`~armcal.models.planar.information.model_columns`: the paper's scaled
+columns ``c`` (:func:`~armcal.models.planar.information.scaled_columns`) in the free
+coordinates ``C`` of :func:`~armcal.models.planar.information.model_basis` and whitened
 per pose.  Pose ``i`` contributes ``I_i = A_i^T P_i A_i`` to the information,
 ``A_i`` the real ``2 x p_f`` form of ``u_i = c_i C`` and
 ``P_i = W_i^T W_i = sigma_ref^2 Sigma_i^-1`` its relative precision
@@ -32,7 +32,7 @@ Hadamard's inequality: every column has unit modulus at every pose, so the
 normalized information has a unit diagonal and ``det <= 1``, with equality iff
 it is ``I`` (an orthogonal plan).  AM-GM on its eigenvalues gives the same
 bound whenever only the *trace* of every pose's information is ``p_f``
-(:func:`~armcal.models.planar_information.unit_trace`): ``tr M = p_f`` for every
+(:func:`~armcal.models.planar.information.unit_trace`): ``tr M = p_f`` for every
 design, so ``det M <= 1``, and a plan with ``M = I`` is D-, A- and E-optimal.  That holds
 
 * with isotropic iid noise when each free coordinate is one paper column (a
@@ -55,13 +55,12 @@ from functools import cached_property
 
 import numpy as np
 
-from ..errors import ArmcalError, action
-from ..noise import complex_whitening
-from ..numerics import ScaledSVD
-from .identifiability import Identifiability
-from .planar_arm import PlanarArmSpec
-from .planar_criteria import model_singular_values, weighted_information
-from .planar_information import (
+from ...errors import ArmcalError, action
+from ...noise import complex_whitening
+from ...numerics import ScaledSVD
+from ..identifiability import Identifiability
+from .criteria import model_singular_values, weighted_information
+from .information import (
     check_identifiable,
     covariance_factor,
     model_basis,
@@ -70,7 +69,8 @@ from .planar_information import (
     plan_svd,
     scaled_columns,
 )
-from .planar_kinematics import forward_kinematics, link_jacobian
+from .kinematics import forward_kinematics, link_jacobian
+from .spec import PlanarArmSpec
 
 __all__ = [
     "PlanarPlanInformation",
@@ -143,12 +143,12 @@ class PoseModel:
     Attributes
     ----------
     columns : ndarray, shape (..., m, p_f)
-        :func:`~armcal.models.planar_information.model_columns`: ``sum_i Re(c_i^H c_i)`` is
+        :func:`~armcal.models.planar.information.model_columns`: ``sum_i Re(c_i^H c_i)`` is
         the information.
     full : ndarray, shape (..., m, p)
         The paper's scaled columns (before the basis and the whitening).
     basis : ndarray, shape (p, p_f), or None
-        ``C`` of :func:`~armcal.models.planar_information.model_basis`; None when every
+        ``C`` of :func:`~armcal.models.planar.information.model_basis`; None when every
         parameter is free.
     precision : ndarray, shape (..., m, 2, 2), or None
         ``P_i = W_i^T W_i`` (dimensionless); None for isotropic iid noise.
@@ -157,8 +157,8 @@ class PoseModel:
     targets : int
         Rows per pose: every target of the arm is measured at every pose, so
         the row axis of the arrays above has ``m T`` rows, pose-major
-        (:func:`~armcal.models.planar_information.every_target`), the targets'
-        columns weighted by :func:`~armcal.models.planar_information.target_weights`.
+        (:func:`~armcal.models.planar.information.every_target`), the targets'
+        columns weighted by :func:`~armcal.models.planar.information.target_weights`.
     """
 
     columns: np.ndarray
@@ -298,7 +298,7 @@ def region_constraints(arm: PlanarArmSpec, q: np.ndarray) -> tuple[np.ndarray, n
     None without a measurement region.  Every target's point gives its own
     constraints (``k`` is the region's count times the targets): the point from
     the forward kinematics, its derivative through the link angles
-    (:func:`~armcal.models.planar_kinematics.link_jacobian`), then the joint map.
+    (:func:`~armcal.models.planar.kinematics.link_jacobian`), then the joint map.
     """
     if arm.region is None:
         return None
@@ -319,7 +319,7 @@ class PlanarPlanInformation:
     """What plans ``q`` ``(..., m, n)`` of a planar arm tell about its free parameters.
 
     The planar family's :class:`~armcal.models.interface.PlanInformation`, on the
-    complex columns of :func:`~armcal.models.planar_information.model_columns`:
+    complex columns of :func:`~armcal.models.planar.information.model_columns`:
     the Hadamard-normalized information of the paper for its model, the weighted
     information over the free parameters otherwise (module notes).  Every target
     of every pose is measured.

@@ -29,8 +29,8 @@ axes parallel to the base frame) it is part of the joint offsets and never
 identified; with :attr:`PlanarGeometry.base_rotation` one joint-offset direction
 is held instead (:attr:`PlanarGeometry.rotation_partner`).
 
-This module holds the structure only; :mod:`armcal.models.planar_kinematics`
-evaluates it and :class:`armcal.models.planar.PlanarArm` adds what a fit needs
+This module holds the structure only; :mod:`armcal.models.planar.kinematics`
+evaluates it and :class:`armcal.models.planar.arm.PlanarArm` adds what a fit needs
 (joint limits, noise, fixed parameters, the measuring region).
 """
 
@@ -42,7 +42,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import ArrayLike
 
-from ..numerics import wrap_angle
+from ...numerics import wrap_angle
 
 __all__ = [
     "PlanarGeometry",
@@ -112,8 +112,8 @@ def checked_link_lengths(link_lengths: ArrayLike) -> np.ndarray:
 class PlanarGeometry:
     """The structure of a planar serial arm: links, joint map, targets and base pose.
 
-    What the kinematics need (:mod:`armcal.models.planar_kinematics`); the
-    arm that is fitted, :class:`armcal.models.planar.PlanarArm`, adds its joint
+    What the kinematics need (:mod:`armcal.models.planar.kinematics`); the
+    arm that is fitted, :class:`armcal.models.planar.arm.PlanarArm`, adds its joint
     limits, noise, fixed parameters and measuring region.
 
     Attributes

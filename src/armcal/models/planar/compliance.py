@@ -55,19 +55,19 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike
 
-from ..errors import ArmcalError, ArmcalWarning, NotIdentifiableError, action
-from ..noise import NoiseModel
-from ..numerics import ScaledSVD
-from .defaults import ArmEffect, MinimalPlanar, TermChoice
-from .identifiability import Identifiability, listing
-from .information import (
+from ...errors import ArmcalError, ArmcalWarning, NotIdentifiableError, action
+from ...noise import NoiseModel
+from ...numerics import ScaledSVD
+from ..defaults import NEGATIVE_WORDS, ArmEffect, MinimalPlanar, TermChoice
+from ..identifiability import Identifiability, listing
+from ..information import (
     BlockInformation,
     column_identifiability,
     ill_conditioned_warning,
 )
-from .interface import Conditions, Effect, Loads
-from .planar import PlanarArm
-from .planar_kinematics import (
+from ..interface import Conditions, Effect, Loads
+from .arm import PlanarArm
+from .kinematics import (
     forward_kinematics,
     jacobian,
     joint_jacobian,
@@ -80,7 +80,6 @@ __all__ = [
     "C_UNIT",
     "K_SCALE",
     "K_UNIT",
-    "NEGATIVE_WORDS",
     "STANDARD_GRAVITY",
     "CompliantArm",
     "Elastostatic",
@@ -98,18 +97,6 @@ K_SCALE = 1e6
 C_SCALE = 1e3 * 180.0 / np.pi
 K_UNIT = "urad/(N*m)"
 C_UNIT = "mdeg/m"
-
-
-#: Why a joint's compliance (``k``) or a lumped weight's (``c``) cannot be negative, and what
-#: makes a fit find one: the :attr:`~armcal.models.interface.Effect.negative` words of both
-#: families' joint compliance.
-NEGATIVE_WORDS = (
-    "a joint's compliance (k) and a lumped weight's twist (c, compliance times weight) "
-    "cannot be negative; a fit finds one where the data hold an effect the model lacks "
-    "(a gravity balancer or a cable pulling on the arm, a gear's backlash), where the "
-    "robot file's link masses or centres of mass are wrong, or in a term the poses' "
-    "torques barely excite, where a misfit elsewhere lands"
-)
 
 
 def _vector(values: ArrayLike, n: int, what: str) -> np.ndarray:

@@ -1,13 +1,13 @@
 """The description of a planar arm to calibrate: geometry, joint limits, noise, fixed parameters.
 
 :class:`PlanarArmSpec` is the paper's arm (eq. 1) with the extensions of
-:mod:`armcal.models.planar_geometry` -- joint maps, several targets, a base pose --
+:mod:`armcal.models.planar.geometry` -- joint maps, several targets, a base pose --
 and what a calibration needs besides the geometry: the joint limits, the
 instrument's noise (:mod:`armcal.noise`), the parameters held fixed and the
 region where the instrument measures (:mod:`armcal.models.regions`).  The
-planar family's analysis (:mod:`~armcal.models.planar_information`,
-:mod:`~armcal.models.planar_closed_form`) works on it;
-:class:`armcal.models.planar.PlanarArm` adds the methods of the fit-model
+planar family's analysis (:mod:`~armcal.models.planar.information`,
+:mod:`~armcal.models.planar.closed_form`) works on it;
+:class:`armcal.models.planar.arm.PlanarArm` adds the methods of the fit-model
 interface on top and is what users construct.
 """
 
@@ -20,11 +20,11 @@ from typing import Any, TypeVar
 import numpy as np
 from numpy.typing import ArrayLike
 
-from ..noise import NoiseModel, relative_noise
-from .interface import Conditions
-from .planar_geometry import PlanarGeometry, Target, checked_link_lengths
-from .planar_kinematics import joint_jacobian
-from .regions import Region
+from ...noise import NoiseModel, relative_noise
+from ..interface import Conditions
+from ..regions import Region
+from .geometry import PlanarGeometry, Target, checked_link_lengths
+from .kinematics import joint_jacobian
 
 __all__ = [
     "PlanarArmSpec",
@@ -41,7 +41,7 @@ _STRUCTURE = frozenset({"link_lengths", "base_offset", "targets", "base_rotation
 class PlanarArmSpec(PlanarGeometry):
     """A planar arm to calibrate, as the planar family's analysis reads it.
 
-    The fields and derived properties of :class:`armcal.models.planar.PlanarArm`
+    The fields and derived properties of :class:`armcal.models.planar.arm.PlanarArm`
     (which see) without the fit-model methods: the family's modules below that
     class take this type.
     """

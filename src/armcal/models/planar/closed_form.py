@@ -11,7 +11,7 @@ for ``|z_k| > 0``).  No iterations, no starting point, and it batches over
 trials: many measurement sets share one factorization.
 
 The solve rests on one thin QR of the plan's regressor ``H``
-(:func:`armcal.models.planar_information.scaled_jacobian`, ``2m x p``, memory
+(:func:`armcal.models.planar.information.scaled_jacobian`, ``2m x p``, memory
 ``O(m p)``) and the SVD of its ``p x p`` triangle, with the rank policy of
 :mod:`armcal.numerics`: no normal equations, so accuracy degrades with
 ``cond(J)``, never ``cond(J)^2``, and a singular plan is a
@@ -28,13 +28,13 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..numerics import LinearLeastSquares, factor_least_squares, solve_least_squares
-from .information import weighted_whitening
-from .interface import Conditions
-from .planar_arm import PlanarArmSpec
-from .planar_geometry import paper_from_user, wrap_angle
-from .planar_information import check_identifiable, plan_svd, scaled_columns, scaled_jacobian
-from .planar_kinematics import forward_kinematics
+from ...numerics import LinearLeastSquares, factor_least_squares, solve_least_squares
+from ..information import weighted_whitening
+from ..interface import Conditions
+from .geometry import paper_from_user, wrap_angle
+from .information import check_identifiable, plan_svd, scaled_columns, scaled_jacobian
+from .kinematics import forward_kinematics
+from .spec import PlanarArmSpec
 
 __all__ = [
     "PlanarClosedForm",
@@ -73,7 +73,7 @@ def plan_factor(arm: PlanarArmSpec, conditions: Conditions) -> LinearLeastSquare
 def link_phasors_fit(factor: LinearLeastSquares, xy: np.ndarray) -> np.ndarray:
     """Least-squares ``v = (Im z_1..n, Re z_1..n, [x0, y0])`` ``(N, p)`` of sets ``xy (N, m, 2)``.
 
-    The tip is ``sqrt(m) H v`` (:func:`~armcal.models.planar_information.scaled_jacobian`), so
+    The tip is ``sqrt(m) H v`` (:func:`~armcal.models.planar.information.scaled_jacobian`), so
     ``v = H^+ y / sqrt(m)``: one projection ``Q^T y`` and a ``p x p`` product per set.
     """
     m = xy.shape[-2]
@@ -100,7 +100,7 @@ def user_from_links(
     """User deviations ``(N, p)`` of link-vector deviations ``(N, K)`` and base ``(N, 2)``.
 
     Solves ``P_free user_free = (dtheta, dl, base)`` (``paper_from_user`` of
-    :mod:`~armcal.models.planar_geometry`; fixed parameters 0).  The link angles
+    :mod:`~armcal.models.planar.geometry`; fixed parameters 0).  The link angles
     are first put on one branch around the first link vector's (a base rotation
     can turn them all near +-pi), and for a
     joint map of integers the angle parameters are wrapped into (-pi, pi]: whole

@@ -1,12 +1,12 @@
 """A spatial serial arm as a fit model: :class:`SpatialArm`.
 
-The arm is a :class:`~armcal.models.spatial_chain.SerialChain` (from a URDF or a
+The arm is a :class:`~armcal.models.spatial.chain.SerialChain` (from a URDF or a
 modified DH table) read through a joint map; its parameters are those of
-:mod:`~armcal.models.spatial_kinematics` (base pose, every joint's placement
+:mod:`~armcal.models.spatial.kinematics` (base pose, every joint's placement
 error and zero, every target's position), of which the measurements at hand
-identify a subset chosen by :mod:`~armcal.models.spatial_selection`
+identify a subset chosen by :mod:`~armcal.models.spatial.selection`
 (:meth:`SpatialArm.prepared`).  The base pose and the targets start where
-:mod:`~armcal.models.spatial_registration` puts them.  Every method of
+:mod:`~armcal.models.spatial.registration` puts them.  Every method of
 :class:`~armcal.models.interface.FitModel` is a thin call into those modules or
 into the generic ones of :mod:`~armcal.models.information`.
 """
@@ -21,13 +21,12 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike
 
-from ..errors import ArmcalWarning, action
-from ..noise import NoiseModel, relative_noise
-from ..numerics import ScaledSVD
-from . import spatial_pose
-from .defaults import RigidLoads
-from .identifiability import Identifiability
-from .information import (
+from ...errors import ArmcalWarning, action
+from ...noise import NoiseModel, relative_noise
+from ...numerics import ScaledSVD
+from ..defaults import RigidLoads
+from ..identifiability import Identifiability
+from ..information import (
     BlockInformation,
     Linearization,
     column_identifiability,
@@ -38,7 +37,7 @@ from .information import (
     whitened_blocks,
     whitened_free_jacobian,
 )
-from .interface import (
+from ..interface import (
     Conditions,
     DesignEffort,
     DeviationBounds,
@@ -47,7 +46,8 @@ from .interface import (
     LinearPositions,
     Loads,
 )
-from .spatial_chain import (
+from . import pose as spatial_pose
+from .chain import (
     SerialChain,
     elementary,
     joint_motion,
@@ -57,17 +57,17 @@ from .spatial_chain import (
     transform,
     vector_rotation,
 )
-from .spatial_gradient import Extra, linearization
-from .spatial_kinematics import (
+from .gradient import Extra, linearization
+from .kinematics import (
     ChainKinematics,
     SpatialLayout,
     default_targets,
     deviation_bounds,
     kinematics,
 )
-from .spatial_registration import register, registered_targets
-from .spatial_selection import select_from_rows
-from .spatial_view import SpatialView
+from .registration import register, registered_targets
+from .selection import select_from_rows
+from .view import SpatialView
 
 __all__ = [
     "SINGLE_TARGET",
@@ -117,7 +117,7 @@ class SpatialArm(RigidLoads):
         Nominal orientations of the targets in the tip frame (rotation vectors,
         rad): zero until registered to data.
     view : SpatialView or None
-        What the instrument can measure, for plans (:mod:`~armcal.models.spatial_view`).
+        What the instrument can measure, for plans (:mod:`~armcal.models.spatial.view`).
     """
 
     chain: SerialChain
@@ -358,7 +358,7 @@ class SpatialArm(RigidLoads):
 
     @property
     def deviation_bounds(self) -> DeviationBounds:
-        """Every joint's placement and zero (:func:`~armcal.models.spatial_kinematics.\
+        """Every joint's placement and zero (:func:`~armcal.models.spatial.kinematics.\
 deviation_bounds`); the base pose and the targets are the instrument's."""
         return deviation_bounds(self.layout, self.reach_mm)
 
@@ -452,7 +452,7 @@ deviation_bounds`); the base pose and the targets are the instrument's."""
         angular: np.ndarray | None,
     ) -> np.ndarray:
         """A Jacobian of the points: its position rows and, for a 6-DoF instrument, the turns'
-        rows from the target's angular velocities (:mod:`~armcal.models.spatial_pose`)."""
+        rows from the target's angular velocities (:mod:`~armcal.models.spatial.pose`)."""
         assert position is not None
         if not self.oriented:
             return position
@@ -490,7 +490,7 @@ deviation_bounds`); the base pose and the targets are the instrument's."""
 
     def anchor(self, conditions: Conditions, points: np.ndarray) -> tuple[Conditions, np.ndarray]:
         """A 6-DoF instrument's measured orientations become the rows' frames
-        (:func:`~armcal.models.spatial_pose.anchor`)."""
+        (:func:`~armcal.models.spatial.pose.anchor`)."""
         points = np.asarray(points, dtype=float)
         return spatial_pose.anchor(conditions, points) if self.oriented else (conditions, points)
 
@@ -575,7 +575,7 @@ deviation_bounds`); the base pose and the targets are the instrument's."""
         self, conditions: Conditions, points: np.ndarray, weights: np.ndarray | None = None
     ) -> np.ndarray:
         """Parameters ``(p,)``: the nominal arm with its base pose and targets registered to
-        one point set ``(m, 3)`` (:mod:`~armcal.models.spatial_registration`)."""
+        one point set ``(m, 3)`` (:mod:`~armcal.models.spatial.registration`)."""
         at_tip = self._kinematics(conditions, self._at_tip())  # targets at the tip frame
         frames, tips = at_tip.rotation, at_tip.points
         target = (
@@ -642,7 +642,7 @@ deviation_bounds`); the base pose and the targets are the instrument's."""
 
     def prepared(self, conditions: Conditions, points: np.ndarray | None = None) -> SpatialArm:
         """The arm for these rows: registered to ``points`` (when given) and reduced to the
-        parameters they identify, by the fixed rule of :mod:`~armcal.models.spatial_selection`.
+        parameters they identify, by the fixed rule of :mod:`~armcal.models.spatial.selection`.
         """
         arm = self
         if points is not None:
@@ -749,7 +749,7 @@ deviation_bounds`); the base pose and the targets are the instrument's."""
 
     def view_constraints(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray] | None:
         """The instrument's volume, acceptance angle and floor, in the robot's frame where the
-        robot file places the instrument (:mod:`~armcal.models.spatial_view`)."""
+        robot file places the instrument (:mod:`~armcal.models.spatial.view`)."""
         if self.view is None:
             return None
         g, dg = self._view_of(q, derivatives=True)
@@ -782,7 +782,7 @@ deviation_bounds`); the base pose and the targets are the instrument's."""
         model: FitModel | None = None,
     ) -> Linearization:
         """The rows' whitened blocks at the nominal parameters and their pullback from one
-        pass of the kinematics (:mod:`~armcal.models.spatial_gradient`); no pullback for
+        pass of the kinematics (:mod:`~armcal.models.spatial.gradient`); no pullback for
         rows' own sigmas and a 6-DoF instrument's turns.  ``extra`` gives the columns
         ``model`` (default: this arm) adds to the arm's free ones, from the kinematics."""
         if self.oriented or conditions.sigma_mm is not None:

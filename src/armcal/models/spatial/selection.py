@@ -1,6 +1,6 @@
 """Which of a spatial arm's parameters the measurements identify, chosen by a fixed rule.
 
-A spatial arm's parameters (:mod:`~armcal.models.spatial_kinematics`) are
+A spatial arm's parameters (:mod:`~armcal.models.spatial.kinematics`) are
 over-complete: an arm with ``R`` revolute and ``P`` prismatic joints measured at
 ``k`` point targets by an instrument whose pose is unknown identifies
 ``4R + 2P + 3k`` of them (Everett, Driels and Mooring's count ``4R + 2P + 6``
@@ -32,10 +32,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..numerics import scaled_svd
-from .identifiability import listing
-from .spatial_chain import SerialChain
-from .spatial_kinematics import SpatialLayout
+from ...numerics import scaled_svd
+from ..identifiability import listing
+from .chain import SerialChain
+from .kinematics import SpatialLayout
 
 __all__ = [
     "SELECT_RTOL",

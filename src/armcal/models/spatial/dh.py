@@ -27,8 +27,8 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from ..numerics import wrap_angle
-from .spatial_chain import SerialChain, dh_row, elementary, joint_motion, transform
+from ...numerics import wrap_angle
+from .chain import SerialChain, dh_row, elementary, joint_motion, transform
 
 __all__ = [
     "CONVENTIONS",

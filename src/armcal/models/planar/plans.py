@@ -17,13 +17,13 @@ from typing import cast
 
 import numpy as np
 
-from ..errors import ArmcalError, action
-from .interface import ClosedFormPlan, FitModel
-from .planar_arm import PlanarArmSpec
-from .planar_design import feasible, model_description, rotation_invariant
-from .planar_geometry import wrap_angle
-from .planar_information import plan_rows
-from .planar_kinematics import forward_kinematics
+from ...errors import ArmcalError, action
+from ..interface import ClosedFormPlan, FitModel
+from .design import feasible, model_description, rotation_invariant
+from .geometry import wrap_angle
+from .information import plan_rows
+from .kinematics import forward_kinematics
+from .spec import PlanarArmSpec
 
 __all__ = [
     "BYTES_PER_CANDIDATE_POSE",
@@ -455,7 +455,7 @@ class PaperPlans:
 
     @property
     def model(self) -> FitModel:
-        """The arm the plans are for (the :class:`~armcal.models.planar.PlanarArm` that
+        """The arm the plans are for (the :class:`~armcal.models.planar.arm.PlanarArm` that
         made them; :meth:`unconstrained` keeps its type)."""
         return cast("FitModel", self._arm)
 

@@ -26,7 +26,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .spatial_kinematics import ChainKinematics
+from .kinematics import ChainKinematics
 
 __all__ = [
     "ACCEPTANCE_SCALE_MM",

@@ -17,14 +17,14 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from ..errors import ArmcalWarning, NotIdentifiableError, action
-from ..noise import complex_whitening, relative_noise
-from ..numerics import COND_WARN, RANK_RTOL, ScaledSVD, scaled_svd
-from .identifiability import Identifiability, combination, listing, row_echelon
-from .information import covariance_factor_from
-from .planar_arm import PlanarArmSpec
-from .planar_geometry import paper_from_user, split_params
-from .planar_kinematics import jacobian, link_units
+from ...errors import ArmcalWarning, NotIdentifiableError, action
+from ...noise import complex_whitening, relative_noise
+from ...numerics import COND_WARN, RANK_RTOL, ScaledSVD, scaled_svd
+from ..identifiability import Identifiability, combination, listing, row_echelon
+from ..information import covariance_factor_from
+from .geometry import paper_from_user, split_params
+from .kinematics import jacobian, link_units
+from .spec import PlanarArmSpec
 
 __all__ = [
     "check_identifiable",
@@ -93,7 +93,7 @@ def scaled_columns(
     Row x of the real Jacobian is the real part, row y the imaginary part;
     column ``dtheta_k`` (``i l_k e^{i theta_k}``) is divided by ``l_k``.  With
     several targets, ``target`` ``(m,)`` says which one every row measures
-    (:func:`~armcal.models.planar_kinematics.link_units`); without it every
+    (:func:`~armcal.models.planar.kinematics.link_units`); without it every
     target is measured at every pose (``T`` rows per pose, :func:`plan_rows`) and
     the targets' columns are weighted by :func:`target_weights`.
     """

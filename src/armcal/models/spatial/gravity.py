@@ -22,7 +22,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike
 
-from .spatial_chain import SerialChain, joint_motion
+from .chain import SerialChain, joint_motion
 
 __all__ = ["STANDARD_GRAVITY", "LinkMasses", "chain_frames", "gravity_torques"]
 
@@ -95,7 +95,7 @@ def gravity_torques(
     A horizontal 1 m link of 2 kg with its centre at 500 mm, about a vertical
     joint's perpendicular: a revolute joint about y, gravity along -z.
 
-    >>> from armcal.models.spatial_chain import elementary, transform
+    >>> from armcal.models.spatial.chain import elementary, transform
     >>> chain = SerialChain(np.array([transform(elementary(0, -np.pi / 2))]), ("R",),
     ...                     np.eye(4), ("j",), np.array([[-np.inf, np.inf]]))
     >>> links = LinkMasses(np.array([2.0]), np.array([[500.0, 0.0, 0.0]]))

@@ -15,9 +15,9 @@ from collections.abc import Callable
 
 import numpy as np
 
-from ..noise import NoiseModel
-from .information import Linearization
-from .spatial_kinematics import ChainKinematics, SpatialLayout, cross
+from ...noise import NoiseModel
+from ..information import Linearization
+from .kinematics import ChainKinematics, SpatialLayout, cross
 
 __all__ = ["Extra", "jacobian_pose_pullback", "linearization", "upstream_joints"]
 

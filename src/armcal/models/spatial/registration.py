@@ -23,7 +23,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .spatial_chain import rotation_vector, vector_rotation
+from .chain import rotation_vector, vector_rotation
 
 __all__ = [
     "REGISTER_ROWS",

@@ -19,7 +19,7 @@
 Every parameter acts at a point of the chain as a small screw, so the
 parametrization has no singularity where consecutive axes are parallel (a plain
 DH model's ``d`` runs off to infinity there).  Which of these the measurements
-identify is :mod:`~armcal.models.spatial_selection`'s job.
+identify is :mod:`~armcal.models.spatial.selection`'s job.
 
 **Kinematics** (:func:`kinematics`): batched over parameter stacks ``(..., p)``
 and rows ``(m,)``.  A parameter's column of the Jacobian is that of a screw with
@@ -34,9 +34,9 @@ from functools import cached_property
 
 import numpy as np
 
-from .defaults import LARGE_ANGLE_DEG
-from .interface import DeviationBounds
-from .spatial_chain import SerialChain, elementary, left_jacobian, rpy_matrix, vector_rotation
+from ..defaults import LARGE_ANGLE_DEG
+from ..interface import DeviationBounds
+from .chain import SerialChain, elementary, left_jacobian, rpy_matrix, vector_rotation
 
 __all__ = [
     "BASE_NAMES",
@@ -390,7 +390,7 @@ def kinematics(
     jac = np.swapaxes(jac, -1, -2).copy()  # (..., m, 3, p)
     target_angular = None
     angular = np.swapaxes(axis, -1, -2)
-    if turn is not None:  # a target's turn exp(v) moves at rot J_l(v) dv (spatial_chain)
+    if turn is not None:  # a target's turn exp(v) moves at rot J_l(v) dv (chain.py)
         target_angular = angular.copy()
         turning = rot @ left_jacobian(turn)
     for t in range(len(layout.targets)):
