@@ -86,7 +86,7 @@ from measure import machine_and_date
 from scipy.optimize import least_squares
 
 from armcal.doe import random_plan
-from armcal.files import format_measurements_csv, load_serial_robot
+from armcal.files import format_measurements_csv, load_spatial_robot
 from armcal.identification import Calibration, identify
 from armcal.identification.solvers import solve
 from armcal.models import Conditions, SpatialArm
@@ -115,8 +115,8 @@ AGREE_STD = 1e-3
 
 def nominal_arm() -> SpatialArm:
     """The arm ``armcal identify --robot industrial-6r`` fits to a file naming A, B, C
-    (:func:`armcal.workflow.calibration.serial_arm`): reflectors found from the data."""
-    arm = load_serial_robot(ROBOT).arm
+    (:func:`armcal.workflow.measured.spatial_measured_arm`): reflectors found from the data."""
+    arm = load_spatial_robot(ROBOT).arm
     assert not arm.known_targets, "the built-in robot file does not place reflectors"
     return arm.replace(targets=LABELS, target_positions=np.zeros((0, 3)))
 

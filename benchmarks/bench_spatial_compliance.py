@@ -50,10 +50,10 @@ from bench_scale import Row, finish
 from measure import armcal_argv, machine_and_date, measure
 
 from armcal.doe import design, design_with_loads
-from armcal.files import format_measurements_csv, load_serial_robot, load_serial_truth
-from armcal.files.serial import BUILTIN_SERIAL_ROBOTS
+from armcal.files import format_measurements_csv, load_spatial_robot, load_spatial_truth
+from armcal.files.spatial import BUILTIN_SPATIAL_ROBOTS
 from armcal.identification import identify
-from armcal.models import CompliantSerialArm, Loads, SerialElastics, SpatialArm
+from armcal.models import CompliantSpatialArm, Loads, SpatialArm, SpatialElastics
 from armcal.validation import validate
 
 RESULTS = Path(__file__).with_name("RESULTS_SPATIAL_COMPLIANCE.md")
@@ -80,13 +80,13 @@ payload_com_mm = [0, 0, 100]
 
 
 def arm_of() -> SpatialArm:
-    arm = load_serial_robot("industrial-6r").arm
+    arm = load_spatial_robot("industrial-6r").arm
     positions = np.array(list(TARGETS.values()))
     return arm.replace(targets=tuple(TARGETS), target_positions=positions, view=None)
 
 
-def elastics(lumped: bool) -> SerialElastics:
-    return SerialElastics.create(
+def elastics(lumped: bool) -> SpatialElastics:
+    return SpatialElastics.create(
         6,
         mass_kg=None if lumped else MASSES,
         com_mm=None if lumped else np.zeros((6, 3)),
@@ -101,8 +101,8 @@ def poses(m: int, rng: np.random.Generator) -> tuple[np.ndarray, Loads]:
     return q, Loads.create(m, np.where(rng.random(m) < 0.5, 0.0, PAYLOAD))
 
 
-def truth_of(model: CompliantSerialArm) -> np.ndarray:
-    geometry = load_serial_truth(load_serial_robot("industrial-6r").default_truth, model.arm)
+def truth_of(model: CompliantSpatialArm) -> np.ndarray:
+    geometry = load_spatial_truth(load_spatial_robot("industrial-6r").default_truth, model.arm)
     compliance = np.zeros(model.n_compliance)
     compliance[model.compliance_names.index("k2")] = 0.2e-6
     compliance[model.compliance_names.index("k3")] = 0.4e-6
@@ -131,7 +131,7 @@ def main() -> None:
     rng = np.random.default_rng(args.seed)
     arm = arm_of()
     q, loads = poses(10_000 // 3, rng)
-    model = CompliantSerialArm.for_loads(arm, elastics(False), loads)
+    model = CompliantSpatialArm.for_loads(arm, elastics(False), loads)
     truth = truth_of(model)
     rows, points = measured(model, q, loads, truth, rng)
     flat = truth.copy()
@@ -140,12 +140,12 @@ def main() -> None:
     fit = dict(target=rows.target, sigma=SIGMA_MM)
     t_rigid, _ = timed(lambda: identify(arm, rows.q, sagless, **fit))
     t_known, _ = timed(lambda: identify(model, rows.q, points, loads=rows.loads, **fit))
-    lumped = CompliantSerialArm.for_loads(arm, elastics(True), loads)
+    lumped = CompliantSpatialArm.for_loads(arm, elastics(True), loads)
     t_lumped, _ = timed(lambda: identify(lumped, rows.q, points, loads=rows.loads, **fit))
 
     with tempfile.TemporaryDirectory() as folder:
         work = Path(folder)
-        source = BUILTIN_SERIAL_ROBOTS["industrial-6r"].with_suffix(".urdf")
+        source = BUILTIN_SPATIAL_ROBOTS["industrial-6r"].with_suffix(".urdf")
         (work / "cell.toml").write_text(ROBOT.replace("{urdf}", str(source)))
         labels = np.array(list(TARGETS))[rows.target]
         for name, data in (("sag.csv", points), ("rigid.csv", sagless)):

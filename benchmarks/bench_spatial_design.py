@@ -50,7 +50,7 @@ from measure import machine_and_date
 from armcal.criteria import position_accuracy
 from armcal.doe import design, feasible_poses, random_plan
 from armcal.doe.pool import pool_plan, pool_weights_plan
-from armcal.files import load_serial_robot
+from armcal.files import load_spatial_robot
 from armcal.models import SpatialArm
 from armcal.noise import NoiseModel, TrackerNoise
 
@@ -64,7 +64,7 @@ REFLECTORS = np.array([[100.0, 0.0, 150.0], [-50.0, 87.0, 150.0], [-50.0, -87.0,
 
 def model_of() -> SpatialArm:
     """The industrial arm with three known reflectors, reduced to its identifiable set."""
-    arm = load_serial_robot("industrial-6r").arm.replace(
+    arm = load_spatial_robot("industrial-6r").arm.replace(
         targets=("A", "B", "C"), target_positions=REFLECTORS, known_targets=True
     )
     arm = arm.with_noise(NoiseModel.isotropic(SIGMA_MM, dim=3))
@@ -74,7 +74,7 @@ def model_of() -> SpatialArm:
 def tracker_model_of() -> SpatialArm:
     """The same arm measured by a laser tracker 3.4 m away and turned (its weights move
     with the pose: :class:`armcal.noise.TrackerNoise`, a data sheet's form)."""
-    arm = load_serial_robot("industrial-6r").arm.replace(
+    arm = load_spatial_robot("industrial-6r").arm.replace(
         targets=("A", "B", "C"),
         target_positions=REFLECTORS,
         known_targets=True,

@@ -18,7 +18,7 @@ import pytest
 from scipy.optimize import least_squares
 
 from armcal.doe import random_plan
-from armcal.files import load_serial_robot, load_serial_truth, read_calibration
+from armcal.files import load_spatial_robot, load_spatial_truth, read_calibration
 from armcal.identification import identify
 from armcal.identification.registration import instrument_moved, register_nominal
 from armcal.models import CalibratedArm, PlanarArm, forward_kinematics
@@ -31,9 +31,9 @@ SIGMA = 0.03  # mm, the virtual instrument's noise (isotropic: whitening is the 
 def _six_axis(m: int = 40, seed: int = 3):
     """The built-in industrial-6r, its default truth, a random plan of ``m`` poses and
     its noisy points (sigma :data:`SIGMA`)."""
-    spec = load_serial_robot("industrial-6r")
+    spec = load_spatial_robot("industrial-6r")
     arm = spec.arm
-    truth = load_serial_truth(spec.default_truth, arm)
+    truth = load_spatial_truth(spec.default_truth, arm)
     q = random_plan(arm, m, rng=seed)
     rng = np.random.default_rng(seed)
     points = arm.positions(arm.conditions(q), truth) + rng.normal(0.0, SIGMA, (m, 3))
@@ -173,7 +173,7 @@ def _campaign(folder: Path, errors: bool, turn_deg: float) -> None:
     """40 poses of the virtual industrial-6r measured with SIGMA; the tracker turns by
     ``turn_deg`` about its vertical after the first 20 poses.  ``errors``: the built-in
     truth's placement errors and zeros, else a perfectly built arm."""
-    spec = load_serial_robot("industrial-6r")
+    spec = load_spatial_robot("industrial-6r")
     truth = spec.default_truth.read_text(encoding="utf-8")
     if not errors:
         lines = truth.split("[errors]")[0]

@@ -247,11 +247,11 @@ def _turned_urdf() -> str:
     """The built-in industrial-6r's URDF with link 3's frame turned 0.7 rad about joint 3's
     axis (``R3 Rz(psi)``, and joint 4's origin ``Rz(-psi) T4``): the same kinematics, but
     a link frame that the modified DH table's does not equal."""
-    from armcal.files.serial import BUILTIN_SERIAL_ROBOTS
+    from armcal.files.spatial import BUILTIN_SPATIAL_ROBOTS
     from armcal.models import matrix_rpy, rpy_matrix
     from armcal.models.spatial.chain import elementary
 
-    text = BUILTIN_SERIAL_ROBOTS["industrial-6r"].with_suffix(".urdf").read_text()
+    text = BUILTIN_SPATIAL_ROBOTS["industrial-6r"].with_suffix(".urdf").read_text()
     psi = 0.7
     r3 = '<origin xyz="1.075 0 0" rpy="3.1415926535897931 0 0"/>'
     t4 = '<origin xyz="0.225 -1.28 0" rpy="-1.5707963267948966 0 0"/>'

@@ -16,10 +16,10 @@ from pathlib import Path
 
 import numpy as np
 
-from armcal.demo_serial import DEMO_REFLECTORS
+from armcal.demo_spatial import DEMO_REFLECTORS
 from armcal.doe import random_plan
-from armcal.files import format_measurements_csv, load_serial_robot, load_serial_truth
-from armcal.files.serial import ROBOT_FOLDER
+from armcal.files import format_measurements_csv, load_spatial_robot, load_spatial_truth
+from armcal.files.spatial import ROBOT_FOLDER
 from armcal.identification import identify
 from armcal.models import PlanarArm
 from armcal.noise import NoiseModel
@@ -111,20 +111,20 @@ def test_a_forgotten_joint_map_is_named_under_a_calibrated_urdf(tmp_path):
     fitted to the built-in arm's data (coupled J2/J3): the fit diverged silently
     (j3.x = 1.85e7 mm); the coupling is named, and the file with the map has no
     warning."""
-    spec = load_serial_robot("industrial-6r")
+    spec = load_spatial_robot("industrial-6r")
     sigma = 0.03  # mm
     truth_model = spec.arm.replace(
         targets=tuple(DEMO_REFLECTORS),
         target_positions=np.array(list(DEMO_REFLECTORS.values())),
         view=None,
     ).with_noise(NoiseModel.isotropic(sigma, dim=3))
-    truth = load_serial_truth(spec.default_truth, truth_model)
+    truth = load_spatial_truth(spec.default_truth, truth_model)
     rng = np.random.default_rng(2)
     rows = truth_model.plan_conditions(random_plan(truth_model, 20, rng=rng))
     points = synthesize_measurements(truth_model, rows.q, truth, rng=rng, target=rows.target)
 
     def fitted(joint_map: bool):
-        arm = load_serial_robot(_tilted_robot(tmp_path, joint_map)).arm
+        arm = load_spatial_robot(_tilted_robot(tmp_path, joint_map)).arm
         model = arm.replace(
             targets=tuple(DEMO_REFLECTORS), target_positions=np.zeros((0, 3)), view=None
         ).with_noise(NoiseModel.isotropic(sigma, dim=3))
@@ -145,13 +145,13 @@ def test_a_fixed_base_coordinate_is_held_at_its_registered_value_not_at_nominal(
     built-in truth file puts the base metres from the tracker, xyz_mm = [2850, -1700,
     -650], far from any nominal 0); the report says where the held value comes from,
     and keeps "held at nominal" for a robot parameter fixed with it."""
-    spec = load_serial_robot("industrial-6r")
+    spec = load_spatial_robot("industrial-6r")
     model = spec.arm.replace(
         targets=tuple(DEMO_REFLECTORS),
         target_positions=np.array(list(DEMO_REFLECTORS.values())),
         view=None,
     ).with_noise(NoiseModel.isotropic(0.03, dim=3))
-    truth = load_serial_truth(spec.default_truth, model)
+    truth = load_spatial_truth(spec.default_truth, model)
     rng = np.random.default_rng(5)
     rows = model.plan_conditions(random_plan(model, 20, rng=rng))
     points = synthesize_measurements(model, rows.q, truth, rng=rng, target=rows.target)

@@ -17,7 +17,7 @@ import numpy as np
 import pytest
 
 from armcal.compensation import MAX_AMPLIFICATION, compensate
-from armcal.files import load_serial_robot, load_serial_truth
+from armcal.files import load_spatial_robot, load_spatial_truth
 from armcal.models import (
     CalibratedArm,
     PlanarArm,
@@ -33,8 +33,8 @@ CONTRACT_DEG = 0.001
 
 
 def _industrial() -> tuple[SpatialArm, np.ndarray, CalibratedArm]:
-    spec = load_serial_robot("industrial-6r")
-    truth = load_serial_truth(spec.default_truth, spec.arm)
+    spec = load_spatial_robot("industrial-6r")
+    truth = load_spatial_truth(spec.default_truth, spec.arm)
     p = truth.size
     return spec.arm, truth, CalibratedArm(spec.arm, truth, np.zeros((p, p)), 0.03)
 

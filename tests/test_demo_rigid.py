@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import json
 
-from armcal.files.serial import BUILTIN_SERIAL_ROBOTS
+from armcal.files.spatial import BUILTIN_SPATIAL_ROBOTS
 from helpers import VERTICAL_3LINK, cell_toml, run_cli
 
 #: A planar truth with compliance (the keys of ``armcal formats``).
@@ -49,7 +49,7 @@ def test_a_planar_demo_of_a_rigid_robot_does_not(tmp_path):
 
 
 def test_a_six_axis_demo_takes_a_truth_with_compliance(tmp_path):
-    source = BUILTIN_SERIAL_ROBOTS["industrial-6r"].with_suffix(".urdf")
+    source = BUILTIN_SPATIAL_ROBOTS["industrial-6r"].with_suffix(".urdf")
     (tmp_path / "industrial-6r.urdf").write_text(source.read_text())
     (tmp_path / "cell.toml").write_text(cell_toml())
     (tmp_path / "truth.toml").write_text(SPATIAL_TRUTH)

@@ -238,9 +238,9 @@ def test_a_spatial_design_reports_its_progress_as_it_goes():
     their ends, and never backwards."""
     from armcal.doe import designer as designer_module
     from armcal.doe import feasible_poses
-    from armcal.files import load_serial_robot
+    from armcal.files import load_spatial_robot
 
-    arm = load_serial_robot("industrial-6r").arm
+    arm = load_spatial_robot("industrial-6r").arm
     model = arm.prepared(arm.plan_conditions(feasible_poses(arm, 100, rng=0)))
     calls = []
     designer_module.design(model, 16, rng=0, progress=lambda *a: calls.append(a))

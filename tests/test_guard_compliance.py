@@ -32,8 +32,8 @@ from scipy.optimize import least_squares
 from armcal.export_rigid import rigid_export
 from armcal.files import (
     load_robot,
-    load_serial_robot,
-    load_serial_truth,
+    load_spatial_robot,
+    load_spatial_truth,
     read_calibration,
     read_measurements,
 )
@@ -42,13 +42,13 @@ from armcal.models import (
     STANDARD_GRAVITY,
     CalibratedArm,
     CompliantArm,
-    CompliantSerialArm,
+    CompliantSpatialArm,
     Conditions,
     Elastostatic,
     LinkMasses,
     Loads,
     PlanarArm,
-    SerialElastics,
+    SpatialElastics,
 )
 from armcal.workflow import export_files
 from helpers import VERTICAL_3LINK, cell_toml, run_cli
@@ -201,9 +201,9 @@ TARGETS = {"A": [100.0, 0.0, 150.0], "B": [-50.0, 86.6, 150.0], "C": [-50.0, -86
 def _six_axis_cell(folder: Path, identify_table: str = "") -> None:
     """The lumped cell of ``test_spatial_compliance.py`` (its robot TOML with ``lumped =
     true``, its truth) and 30 measured poses under 0 and 165 kg."""
-    from armcal.files.serial import BUILTIN_SERIAL_ROBOTS
+    from armcal.files.spatial import BUILTIN_SPATIAL_ROBOTS
 
-    source = BUILTIN_SERIAL_ROBOTS["industrial-6r"]
+    source = BUILTIN_SPATIAL_ROBOTS["industrial-6r"]
     (folder / "industrial-6r.urdf").write_text(source.with_suffix(".urdf").read_text())
     (folder / "cell.toml").write_text(cell_toml(lumped=True, extra=identify_table))
     (folder / "truth.toml").write_text(
@@ -216,7 +216,7 @@ def _six_axis_cell(folder: Path, identify_table: str = "") -> None:
     (folder / "truth-robot.toml").write_text(
         robot.replace("lumped = true", f"link_masses_kg = {MASSES}")
     )
-    arm = load_serial_robot(folder / "cell.toml").arm
+    arm = load_spatial_robot(folder / "cell.toml").arm
     lo, hi = arm.joint_limits.T
     q = lo + (hi - lo) * np.random.default_rng(11).random((30, 6))
     rows = ["q1_deg,q2_deg,q3_deg,q4_deg,q5_deg,q6_deg,payload_kg"]
@@ -295,7 +295,7 @@ def _six_axis_rows(balancer_kg: float, *, lumped: bool):
     """``test_spatial_compliance.py``'s virtual arm (40 poses, seed 6; noise 0.02 mm,
     seed 7), joint 2 relieved by a balancer of ``balancer_kg`` at joint 3's origin (module
     notes), and the model a fit uses (lumped, or with the robot file's masses)."""
-    spec = load_serial_robot("industrial-6r")
+    spec = load_spatial_robot("industrial-6r")
     arm = spec.arm.replace(
         targets=tuple(TARGETS), target_positions=np.array(list(TARGETS.values())), view=None
     )
@@ -305,25 +305,25 @@ def _six_axis_rows(balancer_kg: float, *, lumped: bool):
     mass = np.array(MASSES)
     mass[2] -= balancer_kg
     gravity = np.array([0.0, 0.0, -STANDARD_GRAVITY])
-    pulled = SerialElastics(
+    pulled = SpatialElastics(
         gravity, LinkMasses(mass, np.zeros((6, 3))), PAYLOAD, np.array([0, 0, 100.0])
     )
-    virtual = CompliantSerialArm.for_loads(arm, pulled, loads, virtual=True)
+    virtual = CompliantSpatialArm.for_loads(arm, pulled, loads, virtual=True)
     compliance = np.zeros(virtual.n_compliance)
     compliance[virtual.compliance_names.index("k2")] = K2
     compliance[virtual.compliance_names.index("k3")] = K3
-    truth = np.concatenate([load_serial_truth(spec.default_truth, virtual.arm), compliance])
+    truth = np.concatenate([load_spatial_truth(spec.default_truth, virtual.arm), compliance])
     rows = virtual.plan_conditions(q, loads)
     points = virtual.positions(rows, truth)
     points = points + np.random.default_rng(7).normal(0.0, 0.02, points.shape)
-    elastic = SerialElastics.create(
+    elastic = SpatialElastics.create(
         6,
         mass_kg=None if lumped else MASSES,
         com_mm=None if lumped else np.zeros((6, 3)),
         payload_kg=PAYLOAD,
         payload_com_mm=[0.0, 0.0, 100.0],
     )
-    model = CompliantSerialArm.for_loads(arm, elastic, loads)
+    model = CompliantSpatialArm.for_loads(arm, elastic, loads)
     return identify(model, rows.q, points, target=rows.target, loads=rows.loads, sigma=0.02)
 
 

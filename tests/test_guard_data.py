@@ -38,9 +38,9 @@ def _one_error(run: Run) -> str:
 def _industrial_cell(folder: Path) -> None:
     """The virtual six-axis cell (the built-in industrial-6r's URDF, reflectors A, B, C)
     and a four-pose plan inside its limits."""
-    from armcal.files.serial import BUILTIN_SERIAL_ROBOTS
+    from armcal.files.spatial import BUILTIN_SPATIAL_ROBOTS
 
-    source = BUILTIN_SERIAL_ROBOTS["industrial-6r"]
+    source = BUILTIN_SPATIAL_ROBOTS["industrial-6r"]
     (folder / "industrial-6r.urdf").write_text(source.with_suffix(".urdf").read_text())
     (folder / "cell.toml").write_text(cell_toml())
     rows = ["q1_deg,q2_deg,q3_deg,q4_deg,q5_deg,q6_deg,payload_kg"]

@@ -22,7 +22,7 @@ import pytest
 
 from armcal.doe import random_plan
 from armcal.errors import InputError
-from armcal.files import BUILTIN_ROBOTS, BUILTIN_SERIAL_ROBOTS, load_serial_robot
+from armcal.files import BUILTIN_ROBOTS, BUILTIN_SPATIAL_ROBOTS, load_spatial_robot
 from armcal.files.checked import BadKey, check_covariance
 from helpers import run_cli
 
@@ -60,7 +60,7 @@ def calibrations(tmp_path_factory) -> dict[str, Path]:
             _plan(folder / "plan.csv", rng.uniform(-150, 150, (30, 3)))
             robot, truth = "robot.toml", ("--truth", "truth.toml")
         else:
-            arm = load_serial_robot("industrial-6r").arm
+            arm = load_spatial_robot("industrial-6r").arm
             _plan(folder / "plan.csv", np.degrees(random_plan(arm, 30, rng=rng)))
             robot, truth = "industrial-6r", ()
         run = run_cli(folder, "synthesize", "--robot", robot, "--plan", "plan.csv", *truth,
@@ -276,14 +276,14 @@ def test_an_unknown_robot_lists_every_built_in_and_the_closest(tmp_path, name, m
     lines = run.stderr.strip().splitlines()
     assert run.returncode == 2 and len(lines) == 1, run.stderr
     assert lines[0].startswith(f"armcal: error: {name}: robot is neither a built-in"), lines[0]
-    every = [*BUILTIN_ROBOTS, *BUILTIN_SERIAL_ROBOTS]
+    every = [*BUILTIN_ROBOTS, *BUILTIN_SPATIAL_ROBOTS]
     assert all(builtin in lines[0] for builtin in every), lines[0]
     assert f"did you mean '{meant}'?" in lines[0], lines[0]
 
 
 def test_an_unknown_robot_far_from_every_name_gets_no_guess(tmp_path):
     with pytest.raises(InputError, match="neither a built-in") as caught:
-        load_serial_robot(tmp_path / "nowhere.toml")
+        load_spatial_robot(tmp_path / "nowhere.toml")
     assert "did you mean" not in str(caught.value)
     assert "industrial-6r" in str(caught.value)
 
@@ -291,7 +291,7 @@ def test_an_unknown_robot_far_from_every_name_gets_no_guess(tmp_path):
 def test_identify_without_a_robot_lists_every_built_in(tmp_path):
     run = run_cli(tmp_path, "identify", "--measurements", "meas.csv")
     assert run.returncode == 2, run.stderr
-    assert all(name in run.stderr for name in [*BUILTIN_ROBOTS, *BUILTIN_SERIAL_ROBOTS])
+    assert all(name in run.stderr for name in [*BUILTIN_ROBOTS, *BUILTIN_SPATIAL_ROBOTS])
 
 
 # --------------------------------------------------------------------------- repeated --fix
@@ -341,7 +341,7 @@ def test_a_dh_table_s_messages_name_the_section_written(tmp_path, table):
     radians = {"alpha_deg": [round(math.radians(a), 6) for a in UR5_DH["alpha_deg"]]}
     (tmp_path / "rad.toml").write_text(_dh_toml(table, radians))
     with pytest.raises(InputError) as caught:
-        load_serial_robot(tmp_path / "rad.toml")
+        load_spatial_robot(tmp_path / "rad.toml")
     assert f"key '{table}.alpha_deg': " in str(caught.value)
     assert not re.search(rf"\b{other}\.", str(caught.value))  # "mdh." holds no \bdh.
     # Lengths in metres: a reach of about 1.19 m read as 1.19 mm.
@@ -349,7 +349,7 @@ def test_a_dh_table_s_messages_name_the_section_written(tmp_path, table):
     (tmp_path / "m.toml").write_text(_dh_toml(table, metres))
     if table == "mdh":  # the UR5's table read as modified DH is no regular arm; skip it
         return
-    spec = load_serial_robot(tmp_path / "m.toml")
+    spec = load_spatial_robot(tmp_path / "m.toml")
     (warned,) = [w for w in spec.warnings if w.code == "lengths-in-metres"]
     assert f"{table}.a_mm and {table}.d_mm are in mm" in warned.message
     assert not re.search(rf"\b{other}\.", warned.message)

@@ -21,8 +21,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from armcal.export_serial import serial_robot_toml
-from armcal.files import BUILTIN_SERIAL_ROBOTS, load_serial_robot
+from armcal.export_spatial import spatial_robot_toml
+from armcal.files import BUILTIN_SPATIAL_ROBOTS, load_spatial_robot
 from armcal.files.joints import joint_names
 from armcal.files.robot_units import MAX_REACH_MM
 from armcal.files.tables import read_measurements, read_plan, read_program
@@ -153,7 +153,7 @@ def test_joint_columns_say_each_joints_unit():
 
 def test_every_writer_writes_a_slide_in_mm_and_every_reader_reads_it_back(tmp_path):
     (tmp_path / "arm.toml").write_text(SLIDE_TOML)
-    arm = load_serial_robot(tmp_path / "arm.toml").arm
+    arm = load_spatial_robot(tmp_path / "arm.toml").arm
     q_file = slide_plan(7, seed=1)
     # the model takes rad for a revolute joint and mm for a slide
     q = np.where(np.array(KINDS) == "R", np.radians(q_file), q_file)
@@ -348,7 +348,7 @@ def test_a_revolute_joint_in_mm_is_an_error(tmp_path):
 
 def test_a_slide_beyond_its_limit_is_judged_in_mm(tmp_path):
     (tmp_path / "arm.toml").write_text(SLIDE_TOML)
-    arm = load_serial_robot(tmp_path / "arm.toml").arm
+    arm = load_spatial_robot(tmp_path / "arm.toml").arm
     q_file = slide_plan(6, seed=8)
     points = slide_points(q_file)
     header = [*joint_names(KINDS), "x_mm", "y_mm", "z_mm"]
@@ -418,7 +418,7 @@ def test_the_built_in_spatial_robots_and_a_degree_table_load_without_a_unit_warn
     (tmp_path / "slide.toml").write_text(SLIDE_TOML)
     for robot in ("industrial-6r", "cobot-6r", "arm-7r", tmp_path / "arm.toml",
                   tmp_path / "slide.toml"):  # fmt: skip
-        assert load_serial_robot(robot).warnings == (), robot
+        assert load_spatial_robot(robot).warnings == (), robot
 
 
 def _warnings(tmp_path: Path, robot: str, plan_rows: np.ndarray, header: list[str]) -> list:
@@ -454,7 +454,7 @@ def test_a_slides_limits_in_metres_warn(tmp_path):
 
 
 #: The built-in industrial 6R's URDF (a FANUC R-2000iC's nominal geometry).
-INDUSTRIAL_URDF = BUILTIN_SERIAL_ROBOTS["industrial-6r"].with_suffix(".urdf").read_text()
+INDUSTRIAL_URDF = BUILTIN_SPATIAL_ROBOTS["industrial-6r"].with_suffix(".urdf").read_text()
 
 
 def _urdf_offsets_mm(text: str) -> float:
@@ -501,7 +501,7 @@ def test_the_reach_bound_lies_between_the_largest_arm_and_a_urdf_in_mm(tmp_path)
     reach = _urdf_offsets_mm(INDUSTRIAL_URDF)
     assert 5.6 * reach < 17_600 and 7.5 * reach > MAX_REACH_MM
     (tmp_path / "big.urdf").write_text(_urdf_scaled(5.6, 1.0))
-    assert load_serial_robot(tmp_path / "big.urdf").warnings == ()
+    assert load_spatial_robot(tmp_path / "big.urdf").warnings == ()
     (tmp_path / "huge.urdf").write_text(_urdf_scaled(7.5, 1.0))
     line = _error(run_cli(tmp_path, "design", "--robot", "huge.urdf", "--poses", "30"))
     assert "beyond any arm's reach (20 m)" in line
@@ -510,7 +510,7 @@ def test_the_reach_bound_lies_between_the_largest_arm_and_a_urdf_in_mm(tmp_path)
 def test_mdh_lengths_in_metres_warn(tmp_path):
     text = SIX_DEG.replace("[0, 312, 1075, 225, 0, 0]", "[0, 0.312, 1.075, 0.225, 0, 0]")
     (tmp_path / "arm.toml").write_text(text.replace("-1280, 0, -215", "-1.28, 0, -0.215"))
-    (warning,) = load_serial_robot(tmp_path / "arm.toml").warnings
+    (warning,) = load_spatial_robot(tmp_path / "arm.toml").warnings
     assert warning.code == "lengths-in-metres"
     # every row's offset is Tx(a) Tz(d), of length hypot(a, d)
     reach = 0.312 + 1.075 + math.hypot(0.225, 1.28) + 0.215
@@ -520,7 +520,7 @@ def test_mdh_lengths_in_metres_warn(tmp_path):
 def test_urdf_limits_in_degrees_warn(tmp_path):
     # limits in degrees read as radians: J1's +-185 deg as +-185 rad, 29 turns
     (tmp_path / "arm.urdf").write_text(_urdf_scaled(1.0, 180 / math.pi))
-    (warning,) = load_serial_robot(tmp_path / "arm.urdf").warnings
+    (warning,) = load_spatial_robot(tmp_path / "arm.urdf").warnings
     assert warning.code == "urdf-limits-degrees"
     assert "joint_1 [-185, 185]" in warning.message
     assert "look" in warning.message and "radians" in warning.message
@@ -604,11 +604,11 @@ def _exported(tmp_path: Path, robot_text: str, urdf: str | None = None):
     if urdf is not None:
         (tmp_path / "arm.urdf").write_text(urdf)
     (tmp_path / "arm.toml").write_text(robot_text)
-    arm = load_serial_robot(tmp_path / "arm.toml").arm
+    arm = load_spatial_robot(tmp_path / "arm.toml").arm
     p = arm.n_params
-    exported = serial_robot_toml(CalibratedArm(arm, arm.nominal, np.zeros((p, p)), 0.1))
+    exported = spatial_robot_toml(CalibratedArm(arm, arm.nominal, np.zeros((p, p)), 0.1))
     (tmp_path / "exported.toml").write_text(exported)
-    return arm, load_serial_robot(tmp_path / "exported.toml").arm, exported
+    return arm, load_spatial_robot(tmp_path / "exported.toml").arm, exported
 
 
 COUPLED = """urdf = "arm.urdf"

@@ -28,18 +28,18 @@ from scipy import stats
 from armcal.compliance_check import PAYLOAD_KG, virtual_vertical_arm
 from armcal.doe import random_plan
 from armcal.errors import NotIdentifiableError
-from armcal.files import load_robot, load_serial_robot, load_serial_truth
+from armcal.files import load_robot, load_spatial_robot, load_spatial_truth
 from armcal.identification import identify
 from armcal.identification.experiment import repeated_rows
 from armcal.identification.judgement import FIT_ALPHA, goodness_of_fit
 from armcal.identification.robust import OUTLIER_FEW, OUTLIER_SHARE, too_many
 from armcal.models import (
     CompliantArm,
-    CompliantSerialArm,
+    CompliantSpatialArm,
     Conditions,
     FitModel,
     Loads,
-    SerialElastics,
+    SpatialElastics,
 )
 from armcal.validation import validate
 from helpers import run_cli
@@ -71,7 +71,7 @@ class Virtual:
 
 
 def _spatial_arm():
-    arm = load_serial_robot("industrial-6r").arm
+    arm = load_spatial_robot("industrial-6r").arm
     return arm.replace(
         targets=tuple(REFLECTORS), target_positions=np.array(list(REFLECTORS.values())), view=None
     )
@@ -95,21 +95,21 @@ def _family(name: str, q: np.ndarray | None = None, m: int = 30, seed: int = 1) 
         loads = _alternating(q.shape[0], PAYLOAD_KG)
         model = CompliantArm.for_loads(arm, elastic, loads)
         return Virtual(model, model.plan_conditions(q, loads), truth)
-    spec = load_serial_robot("industrial-6r")
+    spec = load_spatial_robot("industrial-6r")
     arm = _spatial_arm()
-    geometry = load_serial_truth(spec.default_truth, arm)
+    geometry = load_spatial_truth(spec.default_truth, arm)
     q = random_plan(arm, m, rng=rng) if q is None else q
     if name == "spatial":
         return Virtual(arm, arm.plan_conditions(q), geometry)
     loads = _alternating(q.shape[0], PAYLOAD)
-    elastic = SerialElastics.create(
+    elastic = SpatialElastics.create(
         6,
         mass_kg=MASSES,
         com_mm=np.zeros((6, 3)),
         payload_kg=PAYLOAD,
         payload_com_mm=[0.0, 0.0, 100.0],
     )
-    model = CompliantSerialArm.for_loads(arm, elastic, loads)
+    model = CompliantSpatialArm.for_loads(arm, elastic, loads)
     k = np.zeros(model.n_compliance)
     k[model.compliance_names.index("k2")] = 0.2e-6  # rad/(N m), as test_spatial_compliance
     k[model.compliance_names.index("k3")] = 0.4e-6
@@ -316,7 +316,7 @@ def _plan_csv(path, q: np.ndarray) -> None:
 
 
 def test_evaluate_and_validate_warn_that_the_prediction_holds_only_at_the_plans_poses(tmp_path):
-    arm = load_serial_robot("industrial-6r").arm
+    arm = load_spatial_robot("industrial-6r").arm
     _plan_csv(tmp_path / "still.csv", _still(random_plan(arm, 30, rng=16), 3))
     _plan_csv(tmp_path / "same.csv", np.tile(random_plan(arm, 1, rng=17), (30, 1)))
     _plan_csv(tmp_path / "fresh.csv", random_plan(arm, 20, rng=18))

@@ -27,23 +27,23 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from armcal.demo_serial import DEMO_REFLECTORS
+from armcal.demo_spatial import DEMO_REFLECTORS
 from armcal.doe import random_plan
 from armcal.errors import ArmcalError
-from armcal.files import format_measurements_csv, load_serial_robot, load_serial_truth
-from armcal.files.serial import ROBOT_FOLDER
+from armcal.files import format_measurements_csv, load_spatial_robot, load_spatial_truth
+from armcal.files.spatial import ROBOT_FOLDER
 from armcal.identification import identify
 from armcal.models import (
     LARGE_ANGLE_DEG,
     LARGE_PLACEMENT_FRACTION,
     CompliantArm,
-    CompliantSerialArm,
+    CompliantSpatialArm,
     Elastostatic,
     Loads,
     PlanarArm,
     SerialChain,
-    SerialElastics,
     SpatialArm,
+    SpatialElastics,
     Target,
 )
 from armcal.noise import NoiseModel
@@ -107,13 +107,13 @@ def _family(folder: Path, family: str) -> tuple[str, int]:
         _plan(folder / "plan.csv", rng.uniform(-140, 140, (30, 3)), payload if elastic else None)
         robot, n, truth = "robot.toml", 3, ("--truth", "truth.toml")
     elif family == "spatial":
-        arm = load_serial_robot("industrial-6r").arm
+        arm = load_spatial_robot("industrial-6r").arm
         _plan(folder / "plan.csv", np.degrees(random_plan(arm, 30, rng=rng)))
         robot, n, truth = "industrial-6r", 6, ()
     else:
         (folder / "robot.toml").write_text(SPATIAL_CELL)
         (folder / "truth.toml").write_text(SPATIAL_CELL_TRUTH)
-        arm = load_serial_robot(folder / "robot.toml").arm
+        arm = load_spatial_robot(folder / "robot.toml").arm
         q = np.degrees(random_plan(arm, 30, rng=rng))
         _plan(folder / "plan.csv", q, np.where(np.arange(30) % 2, 0.0, 165.0))
         robot, n, truth = "robot.toml", 6, ("--truth", "truth.toml")
@@ -203,13 +203,13 @@ def _industrial(seed: int = 0, poses: int = 30, shift: dict[str, float] | None =
     """The virtual industrial-6r at the demo's three reflectors: its model (tracker noise
     SIGMA), the rows of ``poses`` random poses, their pose labels, the truth and the
     measured points."""
-    spec = load_serial_robot("industrial-6r")
+    spec = load_spatial_robot("industrial-6r")
     model = spec.arm.replace(
         targets=tuple(DEMO_REFLECTORS),
         target_positions=np.array(list(DEMO_REFLECTORS.values())),
         view=None,
     ).with_noise(NoiseModel.isotropic(SIGMA, dim=3))
-    truth = load_serial_truth(spec.default_truth, model)
+    truth = load_spatial_truth(spec.default_truth, model)
     for name, value in (shift or {}).items():
         truth[model.param_names.index(name)] += value
     rng = np.random.default_rng(seed)
@@ -235,11 +235,11 @@ def _planar_compliant(rng: np.random.Generator):
 def _spatial_compliant():
     model, rows, _, truth, _ = _industrial(poses=20)
     loads = Loads.create(rows.m, np.where(np.arange(rows.m) % 2, 0.0, 165.0))
-    elastic = SerialElastics.create(
+    elastic = SpatialElastics.create(
         6, mass_kg=[350.0, 150.0, 200.0, 60.0, 20.0, 5.0], com_mm=np.zeros((6, 3)),
         payload_kg=165.0,
     )  # fmt: skip
-    compliant = CompliantSerialArm.for_loads(model, elastic, loads)
+    compliant = CompliantSpatialArm.for_loads(model, elastic, loads)
     rows = compliant.conditions(rows.q, target=rows.target, loads=loads)
     # The truth's geometry with zero compliance: loads move nothing, as on a rigid arm.
     return compliant, rows, compliant.positions(rows, compliant.lift(truth))
@@ -306,7 +306,7 @@ def test_a_6_dof_instrument_s_orientations_in_radians_are_named():
     are read as 180 / pi times smaller turns: from row to row they turn 57 times less
     than the nominal tool, which the angle of ``R_i R_j^T`` shows wherever the
     instrument stands; in degrees they turn as the nominal tool does."""
-    arm = load_serial_robot("industrial-6r").arm.replace(oriented=True, view=None)
+    arm = load_spatial_robot("industrial-6r").arm.replace(oriented=True, view=None)
     q = random_plan(arm, 40, rng=2)
     rows = arm.conditions(q)
     placed = arm.nominal.copy()
@@ -369,7 +369,7 @@ def test_the_deviation_bounds_are_the_models_own_in_every_family():
     """Which parameters are the robot's deviations: a spatial arm's placements and zeros
     (not its base pose or targets), the planar arm's links and offsets (not x0, y0); a
     model of compliance adds parameters that are none."""
-    arm = load_serial_robot("industrial-6r").arm
+    arm = load_spatial_robot("industrial-6r").arm
     bounds = arm.deviation_bounds.bounds
     robot = ~arm.instrument_params
     assert np.all(np.isinf(bounds[~robot])) and np.all(np.isfinite(bounds[robot]))
@@ -378,8 +378,8 @@ def test_the_deviation_bounds_are_the_models_own_in_every_family():
     np.testing.assert_allclose(
         bounds[robot & ~angles], LARGE_PLACEMENT_FRACTION * arm.reach_mm, rtol=1e-15
     )
-    elastic = SerialElastics.create(6, payload_kg=10.0)
-    compliant = CompliantSerialArm.for_loads(arm, elastic, Loads.create(1))
+    elastic = SpatialElastics.create(6, payload_kg=10.0)
+    compliant = CompliantSpatialArm.for_loads(arm, elastic, Loads.create(1))
     extended = compliant.deviation_bounds.bounds
     assert extended.shape == (compliant.n_params,)
     np.testing.assert_array_equal(extended[: arm.n_params], bounds)

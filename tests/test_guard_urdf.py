@@ -28,7 +28,7 @@ import pytest
 
 from armcal.cli import build_parser
 from armcal.errors import ArmcalError, InputError
-from armcal.files import load_any_robot, load_serial_robot, read_calibration
+from armcal.files import load_robot, load_spatial_robot, read_calibration
 from armcal.files.ur import ur_frames
 from armcal.files.urdf import read_urdf
 from helpers import run_cli
@@ -179,14 +179,14 @@ def test_tip_link_chooses_the_chain_and_overrides_the_robot_toml(tmp_path):
             "robot.toml": 'urdf = "arm.urdf"\ntip_link = "l1"\n',
         },
     )
-    assert load_serial_robot(tmp_path / "robot.toml").arm.n_joints == 1
-    over = load_serial_robot(tmp_path / "robot.toml", tip_link="flange")
+    assert load_spatial_robot(tmp_path / "robot.toml").arm.n_joints == 1
+    over = load_spatial_robot(tmp_path / "robot.toml", tip_link="flange")
     assert over.arm.n_joints == 2
     # The flange is 300 + 300 + 100 mm out along x at zero (the URDF's origins).
     np.testing.assert_allclose(
         over.arm.chain.forward(np.zeros(2))[:3, 3], [700.0, 0.0, 0.0], rtol=0, atol=1e-9
     )
-    beyond = load_serial_robot(tmp_path / "arm.urdf", base_link="l1", tip_link="camera")
+    beyond = load_spatial_robot(tmp_path / "arm.urdf", base_link="l1", tip_link="camera")
     assert beyond.arm.n_joints == 1
     rng = np.random.default_rng(6)
     write(tmp_path, {"two.csv": plan_csv(rng.uniform(-90, 90, (12, 2)))})
@@ -260,7 +260,7 @@ def test_a_tip_link_for_a_robot_without_that_link_is_refused(tmp_path, files, ro
     for fragment in expected:
         assert fragment in line, line
     with pytest.raises(ArmcalError):
-        load_any_robot(tmp_path / robot if files else robot, tip_link="flang")
+        load_robot(tmp_path / robot if files else robot, tip_link="flang")
 
 
 # --------------------------------------------------------------------------- 2. grippers
@@ -271,7 +271,7 @@ def test_a_chain_that_ends_in_a_finger_warns_and_names_the_hand(tmp_path):
     finger's; the warning names link 'hand' and how to choose it, on stderr and in the
     JSON; with --tip-link hand the arm has its 2 joints and no warning."""
     write(tmp_path, {"arm.urdf": GRIPPER_URDF})
-    spec = load_serial_robot(tmp_path / "arm.urdf")
+    spec = load_spatial_robot(tmp_path / "arm.urdf")
     assert spec.arm.n_joints == 3
     (warning,) = spec.warnings
     assert warning.code == "gripper-joint"
@@ -286,7 +286,7 @@ def test_a_chain_that_ends_in_a_finger_warns_and_names_the_hand(tmp_path):
     (shown,) = [w for w in json.loads(result.stdout)["warnings"] if w["code"] == "gripper-joint"]
     assert "--tip-link LINK" in shown["message"]
     assert f"armcal: warning: {shown['message']}" in result.stderr
-    chosen = load_serial_robot(tmp_path / "arm.urdf", tip_link="hand")
+    chosen = load_spatial_robot(tmp_path / "arm.urdf", tip_link="hand")
     assert chosen.arm.n_joints == 2 and chosen.warnings == ()
 
 
@@ -301,13 +301,13 @@ def test_a_joint_that_others_mimic_is_a_gripper_s_whatever_its_name(tmp_path):
         joint("j4", "l2", "b", xyz="0.1 0 0", extra='<mimic joint="j3" multiplier="-1"/>'),
     )
     write(tmp_path, {"arm.urdf": text})
-    (warning,) = load_serial_robot(tmp_path / "arm.urdf", tip_link="a").warnings
+    (warning,) = load_spatial_robot(tmp_path / "arm.urdf", tip_link="a").warnings
     assert "other joints mimic it" in warning.message and "link 'l2'" in warning.message
 
 
 def test_an_arm_whose_last_joint_is_its_own_warns_of_nothing(tmp_path):
     write(tmp_path, {"arm.urdf": TWO_LEAVES})
-    assert load_serial_robot(tmp_path / "arm.urdf", tip_link="flange").warnings == ()
+    assert load_spatial_robot(tmp_path / "arm.urdf", tip_link="flange").warnings == ()
 
 
 def test_a_mimic_joint_on_the_chain_says_where_to_end_it(tmp_path):
@@ -384,12 +384,12 @@ def test_a_seven_axis_standard_table_under_mdh_is_named_too(tmp_path):
     alpha, d = [-90, 90, 90, -90, -90, 90, 0], [340, 0, 400, 0, 400, 0, 126]
     write(tmp_path, {"iiwa.toml": dh_toml("mdh", alpha, [0] * 7, [0] * 7, d)})
     with pytest.raises(InputError) as raised:
-        load_serial_robot(tmp_path / "iiwa.toml")
+        load_spatial_robot(tmp_path / "iiwa.toml")
     message = str(raised.value)
     assert "joints 6 and 7 turn about one axis: two of its joints do the work of one" in message
     assert "write it under [dh]" in message
     write(tmp_path, {"iiwa.toml": dh_toml("dh", alpha, [0] * 7, [0] * 7, d)})
-    assert load_serial_robot(tmp_path / "iiwa.toml").arm.n_joints == 7
+    assert load_spatial_robot(tmp_path / "iiwa.toml").arm.n_joints == 7
 
 
 def test_a_dh_table_is_the_dh_product(tmp_path):
@@ -398,7 +398,7 @@ def test_a_dh_table_is_the_dh_product(tmp_path):
     theta = [0.0, -90.0, 0.0, -90.0, 0.0, 0.0]
     extra = "base_xyz_mm = [10, 20, 30]\nbase_rpy_deg = [0, 0, 180]\ntip_xyz_mm = [0, 0, 50]\n"
     write(tmp_path, {"ur5.toml": dh_toml("dh", UR5_ALPHA_DEG, UR5_A, theta, UR5_D, extra)})
-    chain = load_serial_robot(tmp_path / "ur5.toml").arm.chain
+    chain = load_spatial_robot(tmp_path / "ur5.toml").arm.chain
     q = np.random.default_rng(0).uniform(-np.pi, np.pi, (50, 6))
     reference = dh_product(q, np.radians(theta), UR5_D, UR5_A, np.radians(UR5_ALPHA_DEG))
     base = np.array([[-1.0, 0, 0, 10], [0, -1.0, 0, 20], [0, 0, 1.0, 30], [0, 0, 0, 1]])
@@ -420,7 +420,7 @@ def test_a_dh_table_with_a_prismatic_joint_is_the_dh_product(tmp_path):
     )
     extra = 'joint_types = ["R", "P", "R"]\n'
     write(tmp_path, {"arm.toml": dh_toml("dh", alpha, a, theta, d, extra)})
-    chain = load_serial_robot(tmp_path / "arm.toml").arm.chain
+    chain = load_spatial_robot(tmp_path / "arm.toml").arm.chain
     rng = np.random.default_rng(1)
     q = np.column_stack([rng.uniform(-3, 3, 20), rng.uniform(0, 500, 20), rng.uniform(-3, 3, 20)])
     expected = dh_product(q, np.radians(theta), d, a, np.radians(alpha), ["R", "P", "R"])
@@ -434,12 +434,12 @@ def test_a_modified_dh_table_under_dh_is_named_for_what_it_is(tmp_path):
     theta, d = [0, -90, 0, 0, 0, 0], [0, 0, 0, -1280, 0, -215]
     write(tmp_path, {"arm.toml": dh_toml("dh", alpha, a, theta, d)})
     with pytest.raises(InputError) as raised:
-        load_serial_robot(tmp_path / "arm.toml")
+        load_spatial_robot(tmp_path / "arm.toml")
     message = str(raised.value)
     assert "joints 1 and 2 turn about one axis" in message
     assert "looks like modified DH; write it under [mdh]" in message
     write(tmp_path, {"arm.toml": dh_toml("mdh", alpha, a, theta, d)})
-    assert load_serial_robot(tmp_path / "arm.toml").arm.n_joints == 6
+    assert load_spatial_robot(tmp_path / "arm.toml").arm.n_joints == 6
 
 
 def test_a_degenerate_table_that_is_degenerate_both_ways_is_not_blamed_on_the_convention(
@@ -448,7 +448,7 @@ def test_a_degenerate_table_that_is_degenerate_both_ways_is_not_blamed_on_the_co
     """A planar 4R arm (every alpha 0) moves its tip in 3 independent ways under either
     convention: a redundant planar arm, not a convention mistake, so it loads."""
     write(tmp_path, {"arm.toml": dh_toml("mdh", [0] * 4, [0, 300, 200, 100], [0] * 4, [0] * 4)})
-    assert load_serial_robot(tmp_path / "arm.toml").arm.n_joints == 4
+    assert load_spatial_robot(tmp_path / "arm.toml").arm.n_joints == 4
 
 
 # --------------------------------------------------------------------------- 5. encodings
@@ -620,7 +620,7 @@ def test_a_ur5_calibrated_from_ur_s_own_urdf_exports_to_its_controller(tmp_path)
         (tmp_path / "cell.toml").write_text(
             f'[ur]\nmodel = "ur5"\ncalibration = "{written}"\n', encoding="utf-8"
         )
-        exported = load_serial_robot(tmp_path / "cell.toml")
+        exported = load_spatial_robot(tmp_path / "cell.toml")
         assert exported.warnings == ()
         found = exported.arm.chain.forward(q)
         np.testing.assert_allclose(found[:, :3, 3], expected[:, :3, 3], rtol=0, atol=1e-9)

@@ -12,13 +12,13 @@ from __future__ import annotations
 
 import math
 
-from armcal.files.serial import BUILTIN_SERIAL_ROBOTS
+from armcal.files.spatial import BUILTIN_SPATIAL_ROBOTS
 from armcal.files.urdf import RPY_BOUND_RAD
 from helpers import run_cli
 
 #: The built-in industrial 6R's URDF: joint_3's origin is xyz="1.075 0 0" (the upper
 #: arm, 1075 mm), joint_4's rpy="-1.5707963267948966 0 0".
-URDF = BUILTIN_SERIAL_ROBOTS["industrial-6r"].with_suffix(".urdf").read_text()
+URDF = BUILTIN_SPATIAL_ROBOTS["industrial-6r"].with_suffix(".urdf").read_text()
 
 
 def _error(run) -> str:

@@ -27,15 +27,15 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from armcal.files import load_serial_robot, load_serial_truth
+from armcal.files import load_spatial_robot, load_spatial_truth
 from armcal.identification import identify
 from armcal.models import (
-    CompliantSerialArm,
+    CompliantSpatialArm,
     LinkMasses,
     Loads,
     SerialChain,
-    SerialElastics,
     SpatialArm,
+    SpatialElastics,
 )
 from armcal.models.spatial.gravity import STANDARD_GRAVITY, gravity_torques
 from armcal.simulate import monte_carlo
@@ -49,14 +49,14 @@ TARGETS = {"A": [100.0, 0.0, 150.0], "B": [-50.0, 86.6, 150.0], "C": [-50.0, -86
 
 
 def _arm() -> SpatialArm:
-    arm = load_serial_robot("industrial-6r").arm
+    arm = load_spatial_robot("industrial-6r").arm
     return arm.replace(
         targets=tuple(TARGETS), target_positions=np.array(list(TARGETS.values())), view=None
     )
 
 
-def _elastics(lumped: bool = False) -> SerialElastics:
-    return SerialElastics.create(
+def _elastics(lumped: bool = False) -> SpatialElastics:
+    return SpatialElastics.create(
         6,
         mass_kg=None if lumped else MASSES,
         com_mm=None if lumped else np.zeros((6, 3)),
@@ -72,16 +72,16 @@ def _poses(m: int, seed: int) -> tuple[np.ndarray, Loads]:
     return q, Loads.create(m, np.where(np.arange(m) % 2, 0.0, PAYLOAD))
 
 
-def _truth(model: CompliantSerialArm) -> np.ndarray:
+def _truth(model: CompliantSpatialArm) -> np.ndarray:
     """The built-in truth's geometry and instrument pose, K2 and K3."""
-    geometry = load_serial_truth(load_serial_robot("industrial-6r").default_truth, model.arm)
+    geometry = load_spatial_truth(load_spatial_robot("industrial-6r").default_truth, model.arm)
     compliance = np.zeros(model.n_compliance)
     compliance[model.compliance_names.index("k2")] = K2
     compliance[model.compliance_names.index("k3")] = K3
     return np.concatenate([geometry, compliance])
 
 
-def _measured(model: CompliantSerialArm, q, loads, truth, sigma, seed):
+def _measured(model: CompliantSpatialArm, q, loads, truth, sigma, seed):
     rows = model.plan_conditions(q, loads)
     points = model.positions(rows, truth)
     noise = np.random.default_rng(seed).normal(0.0, sigma, points.shape) if sigma else 0.0
@@ -91,7 +91,7 @@ def _measured(model: CompliantSerialArm, q, loads, truth, sigma, seed):
 def test_a_twist_is_the_chains_kinematics_at_the_twisted_joint_values():
     arm = _arm().replace(base_pose=np.zeros(6))
     q, loads = _poses(7, 1)
-    model = CompliantSerialArm.for_loads(arm, _elastics(), loads)
+    model = CompliantSpatialArm.for_loads(arm, _elastics(), loads)
     k = np.array([0.0, K2, K3, 1e-6, 2e-6, 3e-6])
     rows = model.plan_conditions(q, loads)
     params = np.concatenate([arm.nominal, k[[model.joints]].ravel()])
@@ -115,8 +115,8 @@ def test_lumped_lever_arms_are_the_horizontal_distances_of_the_stations():
         chain.origins, chain.kinds, tip, chain.joint_names, np.tile([-np.pi, np.pi], (3, 1))
     )
     arm = SpatialArm(chain)
-    elastic = SerialElastics.create(3, gravity=[0, -2, 0])  # axes along z: a vertical arm
-    model = CompliantSerialArm.for_loads(arm, elastic, Loads.create(1))
+    elastic = SpatialElastics.create(3, gravity=[0, -2, 0])  # axes along z: a vertical arm
+    model = CompliantSpatialArm.for_loads(arm, elastic, Loads.create(1))
     q = np.radians([[30.0, -50.0, 70.0], [-120.0, 10.0, 95.0]])
     rows = model.conditions(q)
     a1 = np.cumsum(q, axis=1)
@@ -143,7 +143,7 @@ def test_lumped_lever_arms_are_the_horizontal_distances_of_the_stations():
 def test_the_jacobian_agrees_with_central_differences(lumped):
     arm = _arm()
     q, loads = _poses(6, 2)
-    model = CompliantSerialArm.for_loads(arm, _elastics(lumped), loads)
+    model = CompliantSpatialArm.for_loads(arm, _elastics(lumped), loads)
     rows = model.plan_conditions(q, loads)
     truth = _truth(model)
     truth[arm.n_params :] += np.linspace(1e-7, 1e-6, model.n_compliance)
@@ -168,11 +168,11 @@ def test_the_jacobian_agrees_with_central_differences(lumped):
 
 def test_joint_1_about_gravity_and_a_wrist_on_its_axis_are_held_and_named():
     q, loads = _poses(40, 3)
-    model = CompliantSerialArm.for_loads(_arm(), _elastics(), loads)
+    model = CompliantSpatialArm.for_loads(_arm(), _elastics(), loads)
     model = model.prepared(model.plan_conditions(q, loads))
     assert set(model.held) == {"k1", "k6"}  # J1 is vertical; the payload hangs on J6's axis
     assert "k1 cannot be seen: there is no torque on joint 1 that varies" in model.merges
-    lumped = CompliantSerialArm.for_loads(_arm(), _elastics(lumped=True), loads)
+    lumped = CompliantSpatialArm.for_loads(_arm(), _elastics(lumped=True), loads)
     lumped = lumped.prepared(lumped.plan_conditions(q, loads))
     assert "c2.j5 merges into c2.j4" in lumped.merges  # the spherical wrist: one station
     assert {"k2", "k3", "c2.j3", "c3.j4"} <= set(lumped.free_names)
@@ -180,7 +180,7 @@ def test_joint_1_about_gravity_and_a_wrist_on_its_axis_are_held_and_named():
 
 def test_noiseless_data_give_the_compliance_to_round_off():
     q, loads = _poses(40, 4)
-    model = CompliantSerialArm.for_loads(_arm(), _elastics(), loads)
+    model = CompliantSpatialArm.for_loads(_arm(), _elastics(), loads)
     truth = _truth(model)
     rows, points = _measured(model, q, loads, truth, 0.0, 0)
     cal = identify(model, rows.q, points, target=rows.target, loads=rows.loads, sigma=0.02)
@@ -192,9 +192,9 @@ def test_noiseless_data_give_the_compliance_to_round_off():
 def test_the_lumped_mode_finds_the_weights_at_its_stations():
     """Every link's centre at a joint's origin: the lumped mode is exact, ``c = k m g``."""
     q, loads = _poses(60, 5)
-    virtual = CompliantSerialArm.for_loads(_arm(), _elastics(), loads)
+    virtual = CompliantSpatialArm.for_loads(_arm(), _elastics(), loads)
     rows, points = _measured(virtual, q, loads, _truth(virtual), 0.0, 0)
-    lumped = CompliantSerialArm.for_loads(_arm(), _elastics(lumped=True), loads)
+    lumped = CompliantSpatialArm.for_loads(_arm(), _elastics(lumped=True), loads)
     cal = identify(lumped, rows.q, points, target=rows.target, loads=rows.loads, sigma=0.02)
     g = STANDARD_GRAVITY
     to_mdeg = 1e3 * 180.0 / np.pi
@@ -213,7 +213,7 @@ def test_the_lumped_mode_finds_the_weights_at_its_stations():
 def test_a_virtual_six_axis_arm_under_two_payloads():
     """The issue's case: within 3 std, and better on held-out poses than geometry alone."""
     q, loads = _poses(40, 6)
-    model = CompliantSerialArm.for_loads(_arm(), _elastics(), loads)
+    model = CompliantSpatialArm.for_loads(_arm(), _elastics(), loads)
     truth = _truth(model)
     rows, points = _measured(model, q, loads, truth, 0.02, 7)
     cal = identify(model, rows.q, points, target=rows.target, loads=rows.loads, sigma=0.02)
@@ -236,7 +236,7 @@ def test_a_virtual_six_axis_arm_under_two_payloads():
 @pytest.mark.slow  # 2000 fits: run by make test-slow
 def test_monte_carlo_agrees_with_the_predicted_std():
     q, loads = _poses(40, 6)
-    model = CompliantSerialArm.for_loads(_arm(), _elastics(), loads)
+    model = CompliantSpatialArm.for_loads(_arm(), _elastics(), loads)
     model = model.prepared(model.plan_conditions(q, loads))
     result = monte_carlo(model, q, _truth(model), 0.02, 2000, rng=10, loads=loads)
     # the std of a std from N normal draws is 1/sqrt(2N) = 1.6 % of it: 5 % is 3 of them
@@ -302,9 +302,9 @@ def test_a_urdfs_inertials_fold_through_fixed_joints(tmp_path):
 
 def _cell(folder: Path, extra: str = "") -> None:
     """The virtual cell's robot TOML and truth, as in the module notes."""
-    from armcal.files.serial import BUILTIN_SERIAL_ROBOTS
+    from armcal.files.spatial import BUILTIN_SPATIAL_ROBOTS
 
-    source = BUILTIN_SERIAL_ROBOTS["industrial-6r"]
+    source = BUILTIN_SPATIAL_ROBOTS["industrial-6r"]
     (folder / "industrial-6r.urdf").write_text(source.with_suffix(".urdf").read_text())
     lumped = "lumped = true" in extra
     (folder / "cell.toml").write_text(
@@ -487,7 +487,7 @@ def test_the_design_gradient_pulls_back_the_compliance_columns_exactly(lumped):
 
     arm = _arm().with_noise(NoiseModel.laser_tracker(TrackerNoise(0.01, 0.002, 0.01, 0.003)))
     q, loads = _poses(8, 3)
-    model = CompliantSerialArm.for_loads(arm, _elastics(lumped), loads)
+    model = CompliantSpatialArm.for_loads(arm, _elastics(lumped), loads)
     model = model.prepared(model.plan_conditions(*_poses(60, 4)))
     weight = np.random.default_rng(0).normal(size=(model.n_free, model.n_free))
     weight = weight @ weight.T
@@ -587,12 +587,12 @@ def test_conditions_copied_for_other_readings_do_not_share_their_loads():
     from armcal.models import Conditions
 
     q, loads = _poses(4, 13)
-    model = CompliantSerialArm.for_loads(_arm(), _elastics(), loads)
+    model = CompliantSpatialArm.for_loads(_arm(), _elastics(), loads)
     rows = Conditions(q)
     first = model.load_terms(rows)
     moved = model.load_terms(dataclasses.replace(rows, q=q + 0.3))
     assert not np.allclose(first, moved)
-    light = CompliantSerialArm(model.arm, dataclasses.replace(model.elastic, payload_kg=0.0))
+    light = CompliantSpatialArm(model.arm, dataclasses.replace(model.elastic, payload_kg=0.0))
     assert not np.allclose(light.load_terms(rows), first)
 
 
@@ -600,7 +600,7 @@ def test_held_compliance_is_neither_tested_nor_shown():
     """The F test of compliance counts its free parameters only (k2..k5 here, 4; not k1, k6,
     which gravity does not show)."""
     q, loads = _poses(40, 14)
-    model = CompliantSerialArm.for_loads(_arm(), _elastics(), loads)
+    model = CompliantSpatialArm.for_loads(_arm(), _elastics(), loads)
     rows, points = _measured(model, q, loads, _truth(model), 0.02, 15)
     cal = identify(model, rows.q, points, target=rows.target, loads=rows.loads, sigma=0.02)
     assert cal.nested is not None

@@ -103,7 +103,7 @@ def test_design_for_a_six_axis_arm_from_the_command_line(tmp_path):
 
     from armcal.criteria import d_efficiency
     from armcal.doe import feasible_poses, random_plan
-    from armcal.files import load_serial_robot, read_plan
+    from armcal.files import load_spatial_robot, read_plan
     from helpers import run_cli
 
     result = run_cli(
@@ -112,7 +112,7 @@ def test_design_for_a_six_axis_arm_from_the_command_line(tmp_path):
     )  # fmt: skip
     assert result.returncode == 0, result.stderr
     document = json.loads(result.stdout)
-    arm = load_serial_robot("industrial-6r").arm
+    arm = load_spatial_robot("industrial-6r").arm
     q = read_plan(tmp_path / "p.csv", arm)
     assert q.shape == (30, 6) and np.all(arm.feasible(q))
     model = arm.prepared(arm.plan_conditions(feasible_poses(arm, 200, rng=0)))
@@ -141,9 +141,9 @@ def test_certificates_with_three_reflectors_never_overclaim(m):
     maximum the bound rests on (Kiefer-Wolfowitz: the bound needs max_x d(x, xi*))."""
     from armcal.criteria import d_efficiency
     from armcal.doe import design, feasible_poses, random_plan
-    from armcal.files import load_serial_robot
+    from armcal.files import load_spatial_robot
 
-    arm = load_serial_robot("industrial-6r").arm.replace(
+    arm = load_spatial_robot("industrial-6r").arm.replace(
         targets=("A", "B", "C"),
         target_positions=np.array([[100.0, 0, 150], [-50, 87, 150], [-50, -87, 150]]),
         known_targets=True,
@@ -174,9 +174,9 @@ def test_certificates_with_three_reflectors_never_overclaim(m):
 
 def _three_reflectors():
     from armcal.doe import feasible_poses
-    from armcal.files import load_serial_robot
+    from armcal.files import load_spatial_robot
 
-    arm = load_serial_robot("industrial-6r").arm.replace(
+    arm = load_spatial_robot("industrial-6r").arm.replace(
         targets=("A", "B", "C"),
         target_positions=np.array([[100.0, 0, 150], [-50, 87, 150], [-50, -87, 150]]),
         known_targets=True,
@@ -286,14 +286,14 @@ VOLUMES = {
 
 
 def _cell(tmp_path, volume: str = "range"):
-    from armcal.files import load_serial_robot
-    from armcal.files.serial import ROBOT_FOLDER
+    from armcal.files import load_spatial_robot
+    from armcal.files.spatial import ROBOT_FOLDER
 
     urdf = (ROBOT_FOLDER / "industrial-6r.urdf").as_posix()
     path = tmp_path / "cell.toml"
     head = INDUSTRIAL_HEAD.format(name="cell-6r", urdf=urdf)
     path.write_text(head + CELL.format(volume=VOLUMES[volume]), encoding="utf-8")
-    return load_serial_robot(path).arm
+    return load_spatial_robot(path).arm
 
 
 @pytest.mark.parametrize("volume", sorted(VOLUMES))

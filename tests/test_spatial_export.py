@@ -15,7 +15,7 @@ import numpy as np
 import pytest
 
 from armcal.compensation import MAX_AMPLIFICATION
-from armcal.files import load_serial_robot, read_calibration
+from armcal.files import load_spatial_robot, read_calibration
 from armcal.models import (
     SpatialArm,
     mdh_table,
@@ -56,7 +56,7 @@ def _write(path, arm, q, points, targets, labels=None):
 def _campaign(tmp_path, robot="industrial-6r", *, m=40, noise=0.0, seed=3, name="meas.csv"):
     """A virtual campaign of ``m`` poses with three reflectors: the arm and the truth."""
     rng = np.random.default_rng(seed)
-    arm = load_serial_robot(robot).arm.replace(
+    arm = load_spatial_robot(robot).arm.replace(
         targets=LABELS,
         target_positions=np.array([[100.0, 0.0, 150.0], [-50.0, 80.0, 150.0], [-50, -80, 150]]),
     )
@@ -75,7 +75,7 @@ def _campaign(tmp_path, robot="industrial-6r", *, m=40, noise=0.0, seed=3, name=
 def _calibrated_chains():
     rng = np.random.default_rng(7)
     for robot in ROBOTS:
-        arm = load_serial_robot(robot).arm
+        arm = load_spatial_robot(robot).arm
         yield robot, arm, arm.calibrated_chain(_truth(arm, rng, scale=3.0))
 
 
@@ -95,7 +95,7 @@ def test_the_dh_table_of_a_calibrated_chain_is_exact(robot, arm, chain):
 
 def test_the_dh_table_of_a_nominal_arm_is_its_published_one():
     """The UR5e's table as written in cobot-6r.toml (modified DH from the published one)."""
-    table = mdh_table(load_serial_robot("cobot-6r").arm.chain)
+    table = mdh_table(load_spatial_robot("cobot-6r").arm.chain)
     np.testing.assert_allclose(np.degrees(table.alpha), [0, 90, 0, 0, 90, -90], atol=1e-9)
     np.testing.assert_allclose(table.a, [0, 0, -425, -392.2, 0, 0], atol=1e-9)
     np.testing.assert_allclose(table.d, [162.5, 0, 0, 133.3, 99.7, 99.6], atol=1e-9)
@@ -160,10 +160,10 @@ def test_export_round_trips_and_identifying_again_finds_nothing(tmp_path):
     u = q @ arm.joint_map.T
     chain = cal.arm.calibrated_chain(cal.arm_params)
     for exported in ("cal.urdf", "cal.toml"):
-        back = load_serial_robot(tmp_path / exported).arm
+        back = load_spatial_robot(tmp_path / exported).arm
         frames = back.chain.forward(u)
         assert np.max(np.abs(frames[:, :3, 3] - chain.forward(u)[:, :3, 3])) < 1e-9
-    back = load_serial_robot(tmp_path / "cal.toml").arm  # with its targets and joint map
+    back = load_spatial_robot(tmp_path / "cal.toml").arm  # with its targets and joint map
     got = back.positions(back.plan_conditions(q))
     assert back.targets == LABELS
     assert np.max(np.abs(got - want)) < 1e-9

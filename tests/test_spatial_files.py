@@ -7,21 +7,21 @@ import json
 import numpy as np
 import pytest
 
-from armcal.files import BUILTIN_SERIAL_ROBOTS, load_serial_robot, read_measurements
+from armcal.files import BUILTIN_SPATIAL_ROBOTS, load_spatial_robot, read_measurements
 from armcal.models import SerialChain
-from armcal.workflow import calibrate_serial
+from armcal.workflow import calibrate
 from helpers import run_cli
 
 
 def test_the_built_in_arms_load_with_their_published_joint_counts():
     counts = {"industrial-6r": 6, "cobot-6r": 6, "arm-7r": 7}
-    for name in BUILTIN_SERIAL_ROBOTS:
-        assert load_serial_robot(name).arm.n_joints == counts[name]
+    for name in BUILTIN_SPATIAL_ROBOTS:
+        assert load_spatial_robot(name).arm.n_joints == counts[name]
 
 
 def test_the_industrial_urdf_is_its_dh_table():
     """The table of the URDF's opening comment (FANUC R-2000iC/165F dimensions)."""
-    arm = load_serial_robot("industrial-6r").arm
+    arm = load_spatial_robot("industrial-6r").arm
     table = SerialChain.from_mdh(
         np.radians([0, -90, 180, -90, 90, -90]),
         [0, 312, 1075, 225, 0, 0],
@@ -37,13 +37,13 @@ def test_the_industrial_urdf_is_its_dh_table():
 
 
 def test_the_seven_axis_arm_ignores_the_fingers_and_ends_at_the_flange():
-    arm = load_serial_robot("arm-7r").arm
+    arm = load_spatial_robot("arm-7r").arm
     assert arm.chain.joint_names == tuple(f"panda_joint{k}" for k in range(1, 8))
     assert arm.chain.tip[:3, 3].tolist() == pytest.approx([0.0, 0.0, 107.0])
 
 
 def _measurements(path, rng, noise=0.03):
-    arm = load_serial_robot("industrial-6r").arm.replace(
+    arm = load_spatial_robot("industrial-6r").arm.replace(
         targets=("A", "B", "C"), target_positions=np.zeros((0, 3))
     )
     truth = arm.nominal.copy()
@@ -81,7 +81,7 @@ def test_identify_a_six_axis_arm_with_three_reflectors_from_the_command_line(tmp
     )
     assert result.returncode == 0, result.stderr
     document = json.loads(result.stdout)
-    assert document["robot"]["kind"] == "serial"
+    assert document["robot"]["kind"] == "spatial"
     free = [p for p in document["parameters"] if not p["fixed"]]
     assert len(free) == 33  # 4R + 3k for 6 revolute joints and 3 reflectors
     assert any("joints 2 and 3 are parallel" in s for s in document["robot"]["merges"])
@@ -91,8 +91,8 @@ def test_identify_a_six_axis_arm_with_three_reflectors_from_the_command_line(tmp
 
 def test_noiseless_measurements_from_a_file_are_recovered(tmp_path):
     arm, truth = _measurements(tmp_path / "meas.csv", np.random.default_rng(2), noise=0.0)
-    spec = load_serial_robot("industrial-6r")
-    run = calibrate_serial(spec, read_measurements(tmp_path / "meas.csv", spec.arm))
+    spec = load_spatial_robot("industrial-6r")
+    run = calibrate(spec, read_measurements(tmp_path / "meas.csv", spec.arm))
     cal = run.calibration
     rows = arm.plan_conditions(np.random.default_rng(3).uniform(-1, 1, (50, 6)))
     # 1e-6 mm: the file holds the points to 1e-6 mm and the angles to 1e-10 deg.

@@ -191,9 +191,9 @@ def test_whitening_weighs_orientations_by_their_noise():
 
 
 def test_orientation_columns_round_trip_through_a_file(tmp_path):
-    from armcal.files import load_serial_robot
+    from armcal.files import load_spatial_robot
 
-    arm = load_serial_robot("industrial-6r").arm
+    arm = load_spatial_robot("industrial-6r").arm
     rng = np.random.default_rng(14)
     q = random_poses(arm, 9, rng)
     points = np.column_stack([rng.uniform(-1e3, 1e3, (9, 3)), rng.uniform(-1.8, 1.8, (9, 3))])
@@ -210,8 +210,8 @@ orientation_sigma_deg = {sigma_deg}
 
 def test_a_six_dof_campaign_from_the_command_line(tmp_path):
     """synthesize -> identify --cross-validate -> validate -> export -> identify again."""
-    from armcal.files import load_serial_robot
-    from armcal.files.serial import ROBOT_FOLDER
+    from armcal.files import load_spatial_robot
+    from armcal.files.spatial import ROBOT_FOLDER
 
     urdf = (ROBOT_FOLDER / "industrial-6r.urdf").as_posix()
     (tmp_path / "cell.toml").write_text(
@@ -222,7 +222,7 @@ def test_a_six_dof_campaign_from_the_command_line(tmp_path):
     truth = (ROBOT_FOLDER / "industrial-6r-truth.toml").read_text(encoding="utf-8")
     truth = "\n".join(line for line in truth.splitlines() if not line.startswith("robot"))
     (tmp_path / "truth.toml").write_text('robot = "cell.toml"\n' + truth, encoding="utf-8")
-    arm = load_serial_robot(tmp_path / "cell.toml").arm
+    arm = load_spatial_robot(tmp_path / "cell.toml").arm
     assert arm.oriented
     plan_file(tmp_path, tmp_path / "cell.toml", 60, 1)
     plan_file(tmp_path, tmp_path / "cell.toml", 40, 2, name="test.csv")
@@ -253,7 +253,7 @@ def test_a_six_dof_campaign_from_the_command_line(tmp_path):
     # ISO 9283 with the probe: 5 poses x 12 cycles; RP_a..c = 3 S of the attained turns,
     # whose std per axis is the probe's (15 values, each with a relative error of about
     # 1 / sqrt(2 x 11) = 21 %: their mean within 20 %).
-    cell = load_serial_robot(tmp_path / "cell.toml").arm
+    cell = load_spatial_robot(tmp_path / "cell.toml").arm
     poses = random_poses(cell, 5, np.random.default_rng(15))
     write_cycles(tmp_path / "cycles.csv", poses, 12)
     result = run_cli(

@@ -19,8 +19,8 @@ import numpy as np
 import pytest
 
 from armcal.doe import random_plan
-from armcal.files import load_serial_robot, load_serial_truth, read_calibration
-from armcal.files.serial import ROBOT_FOLDER
+from armcal.files import load_spatial_robot, load_spatial_truth, read_calibration
+from armcal.files.spatial import ROBOT_FOLDER
 from armcal.identification import identify
 from armcal.noise import TRACKER_REFERENCE_MM, NoiseModel, TrackerNoise
 from armcal.synthesis import synthesize_measurements
@@ -67,9 +67,9 @@ def test_the_reference_sigma_is_the_isotropic_equivalent_at_one_metre():
 
 
 def test_the_arm_whitens_every_row_by_its_own_covariance():
-    spec = load_serial_robot("industrial-6r")
+    spec = load_spatial_robot("industrial-6r")
     arm = spec.arm.with_noise(NoiseModel.laser_tracker(TRACKER))
-    truth = load_serial_truth(spec.default_truth, spec.arm)
+    truth = load_spatial_truth(spec.default_truth, spec.arm)
     cond = arm.plan_conditions(random_plan(arm, 20, rng=1))
     w = arm.whitening(cond, truth)
     cov = TRACKER.covariances(arm.positions(cond, truth))
@@ -79,8 +79,8 @@ def test_the_arm_whitens_every_row_by_its_own_covariance():
 
 def _fit(noise_of_fit: NoiseModel, m: int = 1500):
     """Identify industrial-6r (a tracker 3.3 m away) from tracker-noise data."""
-    spec = load_serial_robot("industrial-6r")
-    truth = load_serial_truth(spec.default_truth, spec.arm)
+    spec = load_spatial_robot("industrial-6r")
+    truth = load_spatial_truth(spec.default_truth, spec.arm)
     virtual = spec.arm.with_noise(NoiseModel.laser_tracker(TRACKER))
     cond = virtual.plan_conditions(random_plan(virtual, m, rng=7))
     points = synthesize_measurements(virtual, cond.q, truth, rng=8, target=cond.target)
@@ -109,9 +109,9 @@ def test_assuming_isotropic_noise_of_the_same_reference_is_flagged():
 
 @pytest.mark.slow
 def test_monte_carlo_agrees_with_the_tracker_model():
-    spec = load_serial_robot("industrial-6r")
+    spec = load_spatial_robot("industrial-6r")
     arm = spec.arm.with_noise(NoiseModel.laser_tracker(TRACKER))
-    truth = load_serial_truth(spec.default_truth, spec.arm)
+    truth = load_spatial_truth(spec.default_truth, spec.arm)
     result = simulate_plan(arm, random_plan(arm, 40, rng=3), truth, trials=4000, seed=1)
     free = result.model.free
     # 4000 trials: an empirical std's relative standard error is 1.1 %, so 5 % is > 4 of them.
@@ -130,8 +130,8 @@ def _robot(tmp_path, measurement: str) -> None:
 
 def test_the_robot_file_gives_the_tracker_and_the_calibration_keeps_it(tmp_path):
     _robot(tmp_path, TRACKER_TOML)
-    assert load_serial_robot(tmp_path / "robot.toml").arm.noise.tracker == TRACKER
-    arm = load_serial_robot("industrial-6r").arm
+    assert load_spatial_robot(tmp_path / "robot.toml").arm.noise.tracker == TRACKER
+    arm = load_spatial_robot("industrial-6r").arm
     q = random_plan(arm, 30, rng=2)
     head = ",".join(f"q{k + 1}_deg" for k in range(6))
     rows = [",".join(repr(float(v)) for v in np.degrees(row)) for row in q]
@@ -151,7 +151,7 @@ def test_the_robot_file_gives_the_tracker_and_the_calibration_keeps_it(tmp_path)
     # The exported robot TOML keeps the instrument's noise model.
     result = run_cli(tmp_path, "export", "--calibration", "cal.json", "--robot-toml", "cal.toml")
     assert result.returncode == 0, result.stderr
-    assert load_serial_robot(tmp_path / "cal.toml").arm.noise.tracker == TRACKER
+    assert load_spatial_robot(tmp_path / "cal.toml").arm.noise.tracker == TRACKER
 
 
 @pytest.mark.parametrize(

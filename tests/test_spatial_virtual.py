@@ -13,10 +13,10 @@ import json
 import numpy as np
 import pytest
 
-from armcal.demo_serial import SERIAL_DEMO_FILES
+from armcal.demo_spatial import SPATIAL_DEMO_FILES
 from armcal.doe import random_plan
-from armcal.files import load_serial_robot, load_serial_truth
-from armcal.files.serial import ROBOT_FOLDER
+from armcal.files import load_spatial_robot, load_spatial_truth
+from armcal.files.spatial import ROBOT_FOLDER
 from armcal.identification import identify
 from armcal.workflow import simulate_plan
 from helpers import run_cli
@@ -26,7 +26,7 @@ ROBOTS = ("industrial-6r", "cobot-6r", "arm-7r")
 
 def plan_file(tmp_path, robot, m=30, seed=1, name="plan.csv"):
     """A random plan of ``m`` poses within the robot's limits, written to ``name``."""
-    arm = load_serial_robot(robot).arm
+    arm = load_spatial_robot(robot).arm
     q = random_plan(arm, m, rng=seed)
     head = ",".join(f"q{k + 1}_deg" for k in range(arm.n_joints))
     rows = [",".join(repr(float(v)) for v in np.degrees(row)) for row in q]
@@ -36,8 +36,8 @@ def plan_file(tmp_path, robot, m=30, seed=1, name="plan.csv"):
 
 @pytest.mark.parametrize("robot", ROBOTS)
 def test_the_built_in_truths_are_virtual_arms_with_every_error(robot):
-    spec = load_serial_robot(robot)
-    truth = load_serial_truth(spec.default_truth, spec.arm)
+    spec = load_spatial_robot(robot)
+    truth = load_spatial_truth(spec.default_truth, spec.arm)
     errors = truth[~spec.arm.instrument_params]
     # Every placement error and zero is set, each 0.1-0.5 mm or 0.01-0.05 deg (the file).
     shown = np.abs(errors * spec.arm.display_scale[~spec.arm.instrument_params])
@@ -117,7 +117,7 @@ def test_a_held_reflector_keeps_the_robot_file_s_position(tmp_path):
         f"urdf = {json.dumps(str(urdf))}\n[targets]\nA = {{ xyz_mm = [0, 0, 340] }}\n",
         encoding="utf-8",
     )
-    arm = load_serial_robot(robot).arm
+    arm = load_spatial_robot(robot).arm
     truth = arm.nominal.copy()
     truth[:3] = [2500.0, 1000.0, -300.0]
     cond = arm.plan_conditions(random_plan(arm, 30, rng=2))
@@ -130,9 +130,9 @@ def test_a_held_reflector_keeps_the_robot_file_s_position(tmp_path):
 @pytest.mark.slow
 @pytest.mark.parametrize("robot", ROBOTS)
 def test_monte_carlo_agrees_with_the_predicted_std(robot):
-    spec = load_serial_robot(robot)
+    spec = load_spatial_robot(robot)
     arm = spec.arm.with_noise(None)
-    truth = load_serial_truth(spec.default_truth, arm)
+    truth = load_spatial_truth(spec.default_truth, arm)
     q = random_plan(arm, 40, rng=5)
     result = simulate_plan(arm, q, truth, trials=4000, seed=1)
     free = result.model.free
@@ -155,7 +155,7 @@ def test_the_six_axis_demo_calibrates_compensates_and_exports(tmp_path):
     after = float(story.split("true error RMS ")[1].split(" mm after")[0].split(", ")[1])
     assert after < 0.01  # the reflector's true error, against errors of tenths of a mm
     files = sorted(p.name for p in (tmp_path / "out").iterdir() if not p.name.startswith("."))
-    assert files == sorted(SERIAL_DEMO_FILES)
+    assert files == sorted(SPATIAL_DEMO_FILES)
     # The calibration and the files it goes with work with the other commands.
     out = tmp_path / "out"
     validated = run_cli(
@@ -176,5 +176,5 @@ def test_the_six_axis_demo_calibrates_compensates_and_exports(tmp_path):
         for name in ("again.csv", "program_corrected.csv")
     )
     np.testing.assert_allclose(again, demo, rtol=0, atol=1e-9)
-    exported = load_serial_robot(out / "robot_calibrated.toml").arm
+    exported = load_spatial_robot(out / "robot_calibrated.toml").arm
     assert exported.n_joints == 6

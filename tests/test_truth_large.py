@@ -13,7 +13,7 @@ import json
 
 import numpy as np
 
-from armcal.files.serial import BUILTIN_SERIAL_ROBOTS
+from armcal.files.spatial import BUILTIN_SPATIAL_ROBOTS
 from armcal.models import LARGE_PLACEMENT_FRACTION, PlanarArm
 from armcal.models.planar.arm import LARGE_LENGTH_FRACTION
 from armcal.plausibility import truth_warning
@@ -71,9 +71,9 @@ def test_a_six_axis_truth_of_another_arm_warns(tmp_path):
     """The industrial 6R's URDF with a truth whose robot is the built-in cobot's table:
     both are 6R, so the kinds check passes; their placements differ by hundreds of mm,
     far beyond a calibration's bound (1 % of the reach)."""
-    six = BUILTIN_SERIAL_ROBOTS["industrial-6r"].with_suffix(".urdf")
+    six = BUILTIN_SPATIAL_ROBOTS["industrial-6r"].with_suffix(".urdf")
     (tmp_path / "arm.urdf").write_text(six.read_text())
-    (tmp_path / "other.toml").write_text(BUILTIN_SERIAL_ROBOTS["cobot-6r"].read_text())
+    (tmp_path / "other.toml").write_text(BUILTIN_SPATIAL_ROBOTS["cobot-6r"].read_text())
     (tmp_path / "truth.toml").write_text('robot = "other.toml"\n')
     (tmp_path / "plan.csv").write_text(
         "q1_deg,q2_deg,q3_deg,q4_deg,q5_deg,q6_deg\n"

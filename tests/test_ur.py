@@ -15,7 +15,7 @@ import numpy as np
 import pytest
 
 from armcal.errors import InputError
-from armcal.files import load_serial_robot
+from armcal.files import load_spatial_robot
 from armcal.files.ur import (
     UR_QUARTER_TURN,
     UrDh,
@@ -67,7 +67,7 @@ def _robot(tmp_path, text: str = UR10E_CALIBRATION, model: str = "ur10e"):
         f'name = "cell-ur"\n[ur]\nmodel = "{model}"\ncalibration = "calibration.conf"\n',
         encoding="utf-8",
     )
-    return load_serial_robot(robot)
+    return load_spatial_robot(robot)
 
 
 def test_a_dh_chain_is_the_dh_product_even_with_cancelling_metres():
@@ -174,7 +174,7 @@ def test_a_bad_ur_table_is_refused(tmp_path, body, message):
     robot = tmp_path / "ur.toml"
     robot.write_text(body, encoding="utf-8")
     with pytest.raises(InputError, match=re.escape(message)):
-        load_serial_robot(robot)
+        load_spatial_robot(robot)
 
 
 def test_a_ur_robot_file_works_through_the_commands(tmp_path):
@@ -261,7 +261,7 @@ def test_a_ur_cell_calibrated_and_exported_for_its_controller(tmp_path):
     assert json.loads(result.stdout)["ur_calibration"] == "out.conf"
     robot = tmp_path / "exported.toml"
     robot.write_text('[ur]\nmodel = "ur10e"\ncalibration = "out.conf"\n', encoding="utf-8")
-    exported = load_serial_robot(robot)
+    exported = load_spatial_robot(robot)
     assert exported.warnings == ()
     cal = read_calibration(tmp_path / "cal.json")
     chain = cal.arm.calibrated_chain(cal.arm_params)
@@ -270,7 +270,7 @@ def test_a_ur_cell_calibrated_and_exported_for_its_controller(tmp_path):
         exported.arm.chain.forward(q)[:, :3, 3], chain.forward(q)[:, :3, 3], rtol=0, atol=1e-9
     )
     robot.write_text('[ur]\nmodel = "ur10e"\ncalibration = "out.yaml"\n', encoding="utf-8")
-    ros = load_serial_robot(robot)  # the ROS driver's YAML: the joint frames themselves
+    ros = load_spatial_robot(robot)  # the ROS driver's YAML: the joint frames themselves
     assert ros.warnings == ()
     np.testing.assert_allclose(
         ros.arm.chain.forward(q)[:, :3, 3], chain.forward(q)[:, :3, 3], rtol=0, atol=1e-9
@@ -284,7 +284,7 @@ def test_what_the_robot_file_warns_of_reaches_the_calibration(tmp_path):
     from dataclasses import replace
 
     from armcal.files import read_measurements
-    from armcal.workflow import calibrate_serial
+    from armcal.workflow import calibrate
     from helpers import run_cli
 
     spec = _robot(tmp_path)
@@ -301,7 +301,7 @@ def test_what_the_robot_file_warns_of_reaches_the_calibration(tmp_path):
     deltas = read_ur_calibration(_write(tmp_path, UR10E_CALIBRATION))
     scaled = UrDh(deltas.theta, 1000 * deltas.a, 1000 * deltas.d, deltas.alpha)
     (far,) = _robot(tmp_path, format_ur_calibration(scaled)).warnings
-    run = calibrate_serial(
+    run = calibrate(
         replace(spec, warnings=(far,)), read_measurements(tmp_path / "meas.csv", spec.arm)
     )
     assert far in run.warnings

@@ -52,9 +52,9 @@ ACTIONS: dict[str, str] = {
     "hold-terms": "fixed = [...] in the robot file's [identify] table, or calibrate(..., "
     "fixed=...)",
     "design": "(armcal.design)",
-    "choose-tip": "name the tip link (tip_link in a robot TOML, or load_serial_robot(..., "
+    "choose-tip": "name the tip link (tip_link in a robot TOML, or load_spatial_robot(..., "
     "tip_link=LINK))",
-    "choose-base": "name the base link (base_link in a robot TOML, or load_serial_robot(..., "
+    "choose-base": "name the base link (base_link in a robot TOML, or load_spatial_robot(..., "
     "base_link=LINK))",
     # Options named in an error or a note; ``{}`` is the action's values joined by
     # commas, ``{:q}`` each in double quotes, joined by ", " (:func:`action`).

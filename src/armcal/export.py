@@ -239,9 +239,9 @@ def _elastostatic_toml(cal: CalibratedArm) -> tuple[list[str], tuple[str, ...]] 
     compliance anew with the same loads, as the calibration did.
     """
     model = cal.in_robot_frame()[0]
-    elastic = getattr(model, "elastic", None)
-    if not isinstance(elastic, Elastostatic):
+    if model.effect is None:  # a rigid arm: no loads model to write
         return None
+    elastic: Elastostatic = model.elastic  # type: ignore[attr-defined]  # compliance's loads
     lines = []
     if elastic.gravity is not None:
         lines.append(f"gravity_xy = {nums(elastic.gravity / STANDARD_GRAVITY)}")

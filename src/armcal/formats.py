@@ -25,8 +25,8 @@ __all__ = [
     "FIGURE_FORMATS",
     "FILE_KINDS",
     "ROBOT_KEYS",
-    "SERIAL_KEYS",
-    "SERIAL_TRUTH_KEYS",
+    "SPATIAL_KEYS",
+    "SPATIAL_TRUTH_KEYS",
     "TRUTH_KEYS",
     "Column",
     "Key",
@@ -214,7 +214,7 @@ TRUTH_KEYS: tuple[Key, ...] = (
 
 #: A spatial serial arm's robot TOML: from a URDF, a modified DH table (``[mdh]``), a
 #: standard one (``[dh]``) or a UR model (``[ur]``).
-SERIAL_KEYS: tuple[Key, ...] = (
+SPATIAL_KEYS: tuple[Key, ...] = (
     Key("", "name", "text", "the file's stem", "name shown in reports and exports"),
     Key(
         "",
@@ -433,7 +433,7 @@ SERIAL_KEYS: tuple[Key, ...] = (
 )
 
 #: A spatial arm's truth TOML (virtual arms).
-SERIAL_TRUTH_KEYS: tuple[Key, ...] = (
+SPATIAL_TRUTH_KEYS: tuple[Key, ...] = (
     Key("", "robot", "path to a URDF or robot TOML", "the nominal arm", "the true arm"),
     Key(
         "",
@@ -647,12 +647,12 @@ def format_reference() -> str:
     lines += ["", FILE_KINDS["truth"] + ":"]
     lines += _entries([(k.name, _key_text(k)) for k in TRUTH_KEYS])
     lines += ["", FILE_KINDS["serial robot"] + ":"]
-    for table in dict.fromkeys(k.table for k in SERIAL_KEYS):
+    for table in dict.fromkeys(k.table for k in SPATIAL_KEYS):
         lines += ["", f"  [{table}]" if table else "  top level"]
-        rows = [(k.name, _key_text(k)) for k in SERIAL_KEYS if k.table == table]
-        lines += _entries(rows, max(len(k.name) for k in SERIAL_KEYS))
+        rows = [(k.name, _key_text(k)) for k in SPATIAL_KEYS if k.table == table]
+        lines += _entries(rows, max(len(k.name) for k in SPATIAL_KEYS))
     lines += ["", FILE_KINDS["serial truth"] + ":"]
-    lines += _entries([(k.name, _key_text(k)) for k in SERIAL_TRUTH_KEYS])
+    lines += _entries([(k.name, _key_text(k)) for k in SPATIAL_TRUTH_KEYS])
     for kind, columns in COLUMNS.items():
         lines += ["", FILE_KINDS[kind] + ":"]
         lines += _entries(

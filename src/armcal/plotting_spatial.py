@@ -77,7 +77,6 @@ def _error_map(
     per_point = position_accuracy(model, q, poses, sigma).per_pose_mm  # every target's
     error = np.sqrt(np.mean(per_point.reshape(poses.shape[0], -1) ** 2, axis=1))
     arm = model.arm
-    assert isinstance(arm, SpatialArm)
     flange = _chain_points(arm, poses)[:, -1]
     shown = ax.scatter(flange[:, 0], flange[:, 1], c=error, s=4, cmap="viridis")
     fig.colorbar(shown, ax=ax, label="predicted error after calibration (mm RMS per point)")
@@ -114,7 +113,6 @@ def plot_spatial_plan(
     :data:`MAP_POSES` random feasible poses (noise ``sigma`` mm), and the certificate's
     variance function there against its premise (where a certificate is given)."""
     arm = model.arm
-    assert isinstance(arm, SpatialArm)
     poses = feasible_poses(model, MAP_POSES, rng=rng)
     fig = Figure(figsize=(12, 9))
     fig.set_layout_engine(ConstrainedLayoutEngine())

@@ -19,25 +19,19 @@ from typing import Any
 
 import numpy as np
 
-from ..demo import PLANAR_DEMO_POSES, demo_rigid_warning, run_demo
-from ..demo_serial import SERIAL_DEMO_POSES, run_serial_demo
+from ..demo import demo_rigid_warning
 from ..errors import ArmcalError
 from ..files import (
     BUILTIN_ROBOTS,
-    BUILTIN_SERIAL_ROBOTS,
-    COMPLIANCE_TRUTH_KEYS,
+    BUILTIN_SPATIAL_ROBOTS,
     STDIO,
     RobotSpec,
-    SerialSpec,
     atomic_write,
     calibration_document,
     format_measurements_csv,
     format_plan_csv,
     format_program_csv,
-    load_any_robot,
-    load_compliance_truth,
-    load_serial_truth,
-    load_truth,
+    load_robot,
     read_calibration,
     read_labelled_plan,
     read_loaded_plan,
@@ -47,7 +41,7 @@ from ..files import (
     write_json,
 )
 from ..formats import format_reference
-from ..models import CompliantArm, CompliantSerialArm, FitModel, PlanarArm, SpatialArm
+from ..models import FitModel
 from ..progress import ProgressBar
 from ..report import (
     acceptance_report,
@@ -67,10 +61,8 @@ from ..report import (
 from ..reproduction import TABLE_COLUMNS, reproduce
 from ..workflow import (
     calibrate,
-    calibrate_serial,
     compensate_program,
     design_plan,
-    design_sigma,
     evaluate_file,
     export_files,
     model_spec,
@@ -109,19 +101,17 @@ REQUIREMENT_OPTIONS = {
 }
 
 
-def _robot(args: argparse.Namespace) -> RobotSpec | SerialSpec:
+def _robot(args: argparse.Namespace) -> RobotSpec:
     """``--robot``, its URDF's chain from ``--base-link`` to ``--tip-link`` where given.
 
     What reading it warns of is kept on ``args.loaded_warnings`` too: a later error stops
     the command before its report prints them, and the program prints them then."""
-    spec = load_any_robot(args.robot, base_link=args.base_link, tip_link=args.tip_link)
+    spec = load_robot(args.robot, base_link=args.base_link, tip_link=args.tip_link)
     args.loaded_warnings = tuple(spec.warnings)
     return spec
 
 
-def _model(
-    args: argparse.Namespace, spec: RobotSpec | SerialSpec
-) -> tuple[RobotSpec | SerialSpec, PlanarArm | SpatialArm]:
+def _model(args: argparse.Namespace, spec: RobotSpec) -> tuple[RobotSpec, FitModel]:
     """The robot file and its arm with ``--fix`` (replacing the file's set, the arm's and
     the compliance's) and ``--sigma`` applied."""
     fixed = getattr(args, "fix", None)
@@ -135,7 +125,7 @@ NOMINAL_TRUTH = "truth: nominal (no --truth)"
 
 def _truth(
     args: argparse.Namespace,
-    spec: RobotSpec | SerialSpec,
+    spec: RobotSpec,
     model: FitModel,
     *,
     nominal: bool = False,
@@ -157,25 +147,11 @@ def _truth(
             f"{spec.source}: a robot file has no default truth; pass --truth truth.toml "
             "(armcal formats lists its keys)"
         )
-    if isinstance(spec, SerialSpec):  # a truth file of the spatial family
-        assert isinstance(model, SpatialArm | CompliantSerialArm)
-        path = args.truth if args.truth is not None else spec.default_truth
-        assert path is not None
-        links = (getattr(args, "base_link", None), getattr(args, "tip_link", None))
-        return load_serial_truth(path, model, links=links, geometry_only=geometry_only), None
-    if isinstance(model, CompliantArm):
-        if args.truth is None:
-            keys = ", ".join(COMPLIANCE_TRUTH_KEYS[k] for k in dict.fromkeys(model.kinds))
-            raise ArmcalError(
-                f"{spec.source}: a robot with [elastostatic] needs --truth truth.toml with the "
-                f"deviations and {keys}"
-            )
-        geometry = load_truth(args.truth, model.arm)
-        return np.concatenate([geometry, load_compliance_truth(args.truth, model)]), None
-    if args.truth is not None:
-        return load_truth(args.truth, spec.arm, rigid=not geometry_only), None
-    assert isinstance(default, np.ndarray)
-    return default, None
+    links = (getattr(args, "base_link", None), getattr(args, "tip_link", None))
+    found: np.ndarray = spec.family.role("truth")(
+        spec, model, args.truth, links=links, geometry_only=geometry_only
+    )
+    return found, None
 
 
 def _truth_source(args: argparse.Namespace, note: str | None) -> str:
@@ -186,14 +162,14 @@ def _truth_source(args: argparse.Namespace, note: str | None) -> str:
     return "given" if args.truth is not None else "built-in"
 
 
-def _plan(path: str, spec: RobotSpec | SerialSpec) -> tuple[np.ndarray, np.ndarray | None]:
+def _plan(path: str, spec: RobotSpec) -> tuple[np.ndarray, np.ndarray | None]:
     """A plan file's poses (rad) and, for a robot with [elastostatic], its payload column."""
     q, payload, _ = _labelled_plan(path, spec)
     return q, payload
 
 
 def _labelled_plan(
-    path: str, spec: RobotSpec | SerialSpec
+    path: str, spec: RobotSpec
 ) -> tuple[np.ndarray, np.ndarray | None, tuple[str, ...] | None]:
     """:func:`_plan` and the plan's ``pose`` labels (None without the column)."""
     if spec.elastic is None:
@@ -202,9 +178,7 @@ def _labelled_plan(
     return read_loaded_plan(path, spec.arm)
 
 
-def _test_poses(
-    args: argparse.Namespace, spec: RobotSpec | SerialSpec, *, loaded: bool = False
-) -> np.ndarray:
+def _test_poses(args: argparse.Namespace, spec: RobotSpec, *, loaded: bool = False) -> np.ndarray:
     """``--test-poses``, else 1000 uniform poses within the limits (:func:`test_poses`)."""
     return test_poses(spec, args.seed, args.test_poses, loaded=loaded)
 
@@ -298,19 +272,15 @@ def _options(args: argparse.Namespace) -> dict[str, Any]:
 def identify(args: argparse.Namespace) -> None:
     """``armcal identify``: the calibration of a measurement file."""
     if args.robot is None:
-        builtins = ", ".join([*BUILTIN_ROBOTS, *BUILTIN_SERIAL_ROBOTS])
+        builtins = ", ".join([*BUILTIN_ROBOTS, *BUILTIN_SPATIAL_ROBOTS])
         raise ArmcalError(
             "identify needs --robot: the measurements are of one arm, and a fit to another "
             "arm's model is a wrong calibration; give your robot file (armcal formats lists "
             f"its keys) or a built-in name ({builtins})"
         )
     spec = _robot(args)
-    if isinstance(spec, SerialSpec):
-        meas = read_measurements(args.measurements, spec.arm)
-        run = calibrate_serial(spec, meas, compliance=not args.no_compliance, **_options(args))
-    else:
-        meas = read_measurements(args.measurements, spec.arm)
-        run = calibrate(spec, meas, compliance=not args.no_compliance, **_options(args))
+    meas = read_measurements(args.measurements, spec.arm)
+    run = calibrate(spec, meas, compliance=not args.no_compliance, **_options(args))
     cal = run.calibration
     text = format_calibration(cal, words=CLI_ACTIONS)
     document = calibration_document(cal, warnings=run.warnings, words=CLI_ACTIONS)
@@ -404,21 +374,9 @@ def design(args: argparse.Namespace) -> None:
     extra, header = design_summary(run.design, run.seconds, words=CLI_ACTIONS)
     document.update(extra)
     if args.plot is not None:  # first: drawing is what can fail, the plan CSV is text
-        from ..plotting import plot_plan, save_figure  # matplotlib only when a plot is asked for
+        from ..plotting import save_figure  # matplotlib only when a plot is asked for
 
-        if isinstance(spec.arm, SpatialArm):
-            from ..plotting_spatial import plot_spatial_plan
-
-            figure = plot_spatial_plan(
-                run.design.model,
-                run.q,
-                sigma=run.quality.sigma_mm,
-                certificate=run.design.certificate,
-                rng=args.seed,
-            )
-        else:
-            gravity = None if spec.elastic is None else spec.elastic.gravity
-            figure = plot_plan(spec.arm, run.q, payload_kg=run.payload_kg, gravity=gravity)
+        figure = spec.family.role("plan_figure")(spec, run, seed=args.seed)
         save_figure(figure, args.plot)
     if args.output is not None:
         plan = format_plan_csv(run.q, run.payload_kg, kinds=spec.arm.joint_kinds)
@@ -529,24 +487,14 @@ def check_compliance(args: argparse.Namespace) -> None:
 def demo(args: argparse.Namespace) -> None:
     """``armcal demo``: the whole workflow on a built-in robot."""
     spec = _robot(args)
-    if isinstance(spec, SerialSpec):  # the six-axis story: a tracker and three reflectors
-        result = run_serial_demo(
-            spec.arm,
-            lambda arm: _truth(args, spec, arm, geometry_only=True)[0],
-            poses=SERIAL_DEMO_POSES if args.poses is None else args.poses,
-            sigma=args.sigma,
-            seed=args.seed,
-            words=CLI_ACTIONS,
-        )
-        kinds = "report.md, residuals, measurements, calibration, program, URDF, DH table, offsets"
-    else:
-        truth = _truth(args, spec, spec.arm, geometry_only=True)[0]  # the geometry alone
-        sigma = design_sigma(spec.arm) if args.sigma is None else args.sigma
-        poses = PLANAR_DEMO_POSES if args.poses is None else args.poses
-        result = run_demo(
-            spec.arm, truth, poses=poses, sigma=sigma, seed=args.seed, words=CLI_ACTIONS
-        )
-        kinds = "report.md, figures, plan, measurements, calibration, program, robot file, URDF"
+    result, kinds = spec.family.role("demo")(
+        spec,
+        lambda arm: _truth(args, spec, arm, geometry_only=True)[0],
+        poses=args.poses,
+        sigma=args.sigma,
+        seed=args.seed,
+        words=CLI_ACTIONS,
+    )
     lines = [result.text]
     if args.output is not None:
         folder = write_folder(args.output, result.files)

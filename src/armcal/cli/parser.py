@@ -14,7 +14,7 @@ from typing import Any
 from .._version import __version__
 from ..criteria import CRITERIA
 from ..demo import DEMO_FILES, PLANAR_DEMO_POSES
-from ..demo_serial import SERIAL_DEMO_FILES, SERIAL_DEMO_POSES
+from ..demo_spatial import SPATIAL_DEMO_FILES, SPATIAL_DEMO_POSES
 from ..doe import DISTINCT_TOLERANCE, ORDERS, REQUIREMENTS, TASK_CRITERIA
 from ..doe import METHODS as DESIGN_METHODS
 from ..errors import ArmcalError
@@ -392,7 +392,7 @@ def build_parser() -> argparse.ArgumentParser:
     sub.add_argument(
         "--poses",
         type=options.poses,
-        help=f"number of poses (default {PLANAR_DEMO_POSES}; {SERIAL_DEMO_POSES} for a "
+        help=f"number of poses (default {PLANAR_DEMO_POSES}; {SPATIAL_DEMO_POSES} for a "
         "spatial arm)",
     )
     sub.add_argument("--truth", metavar="TRUTH_TOML", help="deviations (default: the built-in's)")
@@ -402,7 +402,7 @@ def build_parser() -> argparse.ArgumentParser:
         run=commands.demo,
         inputs=("robot", "truth"),
         outputs=("output",),
-        folder_files=tuple(dict.fromkeys(DEMO_FILES + SERIAL_DEMO_FILES)),
+        folder_files=tuple(dict.fromkeys(DEMO_FILES + SPATIAL_DEMO_FILES)),
     )
 
     sub = _command(subs, "export")

@@ -2,11 +2,14 @@
 
 * :mod:`~armcal.files.common` -- one error form, text from a file or stdin, TOML, numbers;
 * :mod:`~armcal.files.paths` -- output paths that destroy nothing, atomic writes;
-* :mod:`~armcal.files.robots` -- robot and truth TOML, the built-in robots;
+* :mod:`~armcal.files.robots` -- planar robot and truth TOML, the built-in robots;
+* :mod:`~armcal.files.spatial` -- spatial robot and truth files (URDF, DH tables);
+* :func:`load_robot` -- a robot of any family (:mod:`armcal.families`);
 * :mod:`~armcal.files.tables` -- plan, measurement and program CSV;
 * :mod:`~armcal.files.calibration` -- the calibration JSON, written and read.
 """
 
+from ..families.registry import RobotSpec, load_robot
 from .calibration import (
     CALIBRATION_FORMAT,
     calibration_document,
@@ -23,19 +26,16 @@ from .robots import (
     LINK_LENGTH_RANGE_MM,
     RADIAN_LIMIT_BOUND,
     SIGMA_RANGE_MM,
-    RobotSpec,
     load_compliance_truth,
-    load_robot,
+    load_planar_robot,
     load_truth,
     unknown_parameter,
 )
-from .serial import (
-    BUILTIN_SERIAL_ROBOTS,
-    SerialSpec,
-    is_serial_robot,
-    load_any_robot,
-    load_serial_robot,
-    load_serial_truth,
+from .spatial import (
+    BUILTIN_SPATIAL_ROBOTS,
+    is_spatial_robot,
+    load_spatial_robot,
+    load_spatial_truth,
 )
 from .tables import (
     INSTRUMENT_RANGE,
@@ -53,7 +53,7 @@ from .writers import format_measurements_csv, format_plan_csv, format_program_cs
 
 __all__ = [
     "BUILTIN_ROBOTS",
-    "BUILTIN_SERIAL_ROBOTS",
+    "BUILTIN_SPATIAL_ROBOTS",
     "CALIBRATION_FORMAT",
     "COMPLIANCE_TRUTH_KEYS",
     "DEFAULT_ROBOT",
@@ -70,19 +70,18 @@ __all__ = [
     "OutputFolder",
     "Program",
     "RobotSpec",
-    "SerialSpec",
     "atomic_write",
     "calibration_document",
     "check_outputs",
     "format_measurements_csv",
     "format_plan_csv",
     "format_program_csv",
-    "is_serial_robot",
-    "load_any_robot",
+    "is_spatial_robot",
     "load_compliance_truth",
+    "load_planar_robot",
     "load_robot",
-    "load_serial_robot",
-    "load_serial_truth",
+    "load_spatial_robot",
+    "load_spatial_truth",
     "load_truth",
     "read_calibration",
     "read_labelled_plan",

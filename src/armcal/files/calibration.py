@@ -12,38 +12,19 @@ import json
 import math
 import os
 from collections.abc import Mapping, Sequence
-from dataclasses import replace
 from typing import Any
 
 import numpy as np
 
 from .._version import __version__
-from ..errors import ACTIONS, ArmcalWarning, InputError, unrendered
+from ..errors import ACTIONS, ArmcalError, ArmcalWarning, InputError, unrendered
+from ..families.registry import Family, family_named, family_of
 from ..identification import Calibration
-from ..models import (
-    Annulus,
-    Box,
-    CalibratedArm,
-    CompliantArm,
-    CompliantSerialArm,
-    Conditions,
-    Elastostatic,
-    FitModel,
-    Loads,
-    PlanarArm,
-    Plane,
-    Region,
-    SerialChain,
-    SerialElastics,
-    SpatialArm,
-    Target,
-    TermChoice,
-)
+from ..models import CalibratedArm, Conditions, FitModel, Loads, Plane, TermChoice
 from ..noise import NoiseModel, TrackerNoise
 from .checked import BadKey, array_of, check_covariance, described, list_of, number_of
 from .common import fail, read_text
 from .kinds import looks_like
-from .robots import parse_region
 
 __all__ = [
     "CALIBRATION_FORMAT",
@@ -58,157 +39,14 @@ __all__ = [
 CALIBRATION_FORMAT = "armcal-calibration/1"
 
 
-def _region_to_dict(region: Region | None) -> dict[str, Any] | None:
-    if isinstance(region, Annulus):
-        return {
-            "kind": "annulus",
-            "center_mm": list(region.center),
-            "r_min_mm": region.r_min,
-            "r_max_mm": region.r_max,
-        }
-    if isinstance(region, Box):
-        return {"kind": "box", "x_mm": list(region.x), "y_mm": list(region.y)}
-    return None
-
-
 #: The coordinates of a standardized residual: a point's, then a 6-DoF instrument's turn.
 _AXES = ("x", "y", "z", "rx", "ry", "rz")
 
 
-def serial_robot_to_dict(arm: SpatialArm) -> dict[str, Any]:
-    """The ``robot`` section of a spatial arm's calibration: the chain as joint origins
-    (mm, rad: 4 x 4 transforms), the joint map and limits, the targets, and the
-    identifiable set with why the rest is held."""
-    return {
-        "name": arm.name,
-        "kind": "serial",
-        "joint_types": list(arm.chain.kinds),
-        "joint_names": list(arm.chain.joint_names),
-        "origins": arm.chain.origins.tolist(),
-        "tip": arm.chain.tip.tolist(),
-        "joint_map": arm.joint_map.tolist(),
-        "joint_limits": arm.limits.tolist(),
-        "chain_limits": np.clip(arm.chain.joint_limits, -1e300, 1e300).tolist(),  # JSON: no inf
-        "targets": list(arm.targets),
-        "target_positions_mm": arm.target_positions.tolist(),
-        "base_pose": arm.base_pose.tolist(),
-        "known_targets": arm.known_targets,
-        **(
-            {"oriented": True, "target_turns_rad": arm.target_turns.tolist()}
-            if arm.oriented
-            else {}
-        ),
-        "held": list(arm.held),
-        "merges": list(arm.merges),
-    }
-
-
-def _serial_from_dict(
-    data: dict[str, Any], noise: NoiseModel | None, fixed: list[str]
-) -> SpatialArm:
-    """The spatial arm of a calibration file's ``robot`` section (:func:`serial_robot_to_dict`)."""
-    kinds = tuple(str(k) for k in list_of(data, "joint_types", "'R' or 'P' per joint"))
-    n = len(kinds)
-    if n == 0 or any(k not in ("R", "P") for k in kinds):
-        raise BadKey("robot.joint_types", f"expected 'R' or 'P' per joint, got {kinds!r}")
-    pairs = f"{n} pairs [lo, hi]"
-    limits = array_of(data, "chain_limits", (n, 2), f"{pairs} (the URDF's limits, rad or mm)")
-    chain = SerialChain(
-        array_of(data, "origins", (n, 4, 4), f"{n} joint origins, each a 4 x 4 transform (mm)"),
-        kinds,
-        array_of(data, "tip", (4, 4), "the tip frame, a 4 x 4 transform (mm)"),
-        tuple(str(name) for name in list_of(data, "joint_names", f"{n} joint names", n)),
-        np.where(np.abs(limits) >= 1e300, np.copysign(np.inf, limits), limits),
-    )
-    targets = tuple(str(label) for label in list_of(data, "targets", "the target labels"))
-    k = len(targets)
-    held = tuple(str(name) for name in list_of(data, "held", "the parameters held"))
-    arm = SpatialArm(
-        chain,
-        str(data["name"]),
-        array_of(data, "joint_map", (n, n), f"a {n} x {n} matrix (joint values from readings)"),
-        array_of(data, "joint_limits", (n, 2), f"{pairs} (the readings' limits, rad or mm)"),
-        targets=targets,
-        target_positions=array_of(
-            data, "target_positions_mm", (k, 3), f"{k} positions [x, y, z] (mm), one per target"
-        ),
-        base_pose=array_of(
-            data, "base_pose", (6,), "6 numbers: the instrument's x, y, z (mm), rx, ry, rz (rad)"
-        ),
-        noise=noise,
-        held=held,
-        merges=tuple(str(text) for text in list_of(data, "merges", "sentences")),
-        known_targets=bool(data["known_targets"]),
-        oriented=bool(data.get("oriented", False)),
-        target_turns=array_of(
-            data, "target_turns_rad", (-1, 3), "a rotation vector (rad) per target", []
-        ),
-    )
-    # "fixed" lists every parameter held, by the user or a rule, an effect's too
-    own = set(arm.layout.names) - set(held)
-    return arm.replace(user_fixed=tuple(name for name in fixed if name in own))
-
-
-def robot_to_dict(arm: PlanarArm | SpatialArm) -> dict[str, Any]:
-    """The ``robot`` section of a calibration file: everything needed to rebuild the arm.
-
-    ``name``, ``link_lengths_mm``, ``joint_limits_deg``, ``base_offset``,
-    ``base_rotation``, ``joint_map``, ``joint_offsets_deg``, ``targets``
-    (label to ``{length_mm, angle_deg}``) and ``region`` (or null); the noise
-    model and the fixed parameters are top-level keys of the document.
-    """
-    if isinstance(arm, SpatialArm):
-        return serial_robot_to_dict(arm)
-    return {
-        "name": arm.name,
-        "link_lengths_mm": arm.link_lengths.tolist(),
-        "joint_limits_deg": arm.joint_limits_deg.tolist(),
-        "base_offset": arm.base_offset,
-        "base_rotation": arm.base_rotation,
-        "joint_map": arm.joint_map.tolist(),
-        "joint_offsets_deg": np.degrees(arm.joint_offsets).tolist(),
-        "targets": {
-            t.label: {"length_mm": t.length, "angle_deg": math.degrees(t.angle)}
-            for t in arm.targets
-        },
-        "region": _region_to_dict(arm.region),
-    }
-
-
-def _arm_from_dict(data: dict[str, Any], noise: NoiseModel | None, fixed: list[str]) -> PlanarArm:
-    region = None
-    if data.get("region") is not None:
-        region = parse_region("", data["region"])
-    targets = tuple(
-        Target(label, float(entry["length_mm"]), math.radians(float(entry["angle_deg"])))
-        for label, entry in data.get("targets", {}).items()
-    )
-    lengths = array_of(data, "link_lengths_mm", (-1,), "the nominal link lengths (mm)")
-    n = lengths.size
-    if n == 0:
-        raise BadKey("robot.link_lengths_mm", "expected the nominal link lengths (mm); got none")
-    each = f"for each of the {n} links in robot.link_lengths_mm"  # the count the rest follow
-    offsets = data.get("joint_offsets_deg")
-    joint_map = None
-    if data.get("joint_map") is not None:
-        joint_map = array_of(
-            data, "joint_map", (n, n), f"the matrix theta = M q, a row and column {each}"
-        )
-    return PlanarArm(
-        lengths,
-        np.radians(array_of(data, "joint_limits_deg", (n, 2), f"a pair [lo, hi] (deg) {each}")),
-        base_offset=bool(data["base_offset"]),
-        name=str(data["name"]),
-        noise=noise,
-        region=region,
-        fixed=fixed,
-        joint_map=joint_map,
-        targets=targets,
-        base_rotation=bool(data.get("base_rotation", False)),
-        joint_offsets=None
-        if offsets is None
-        else np.radians(array_of(data, "joint_offsets_deg", (n,), f"a joint offset (deg) {each}")),
-    )
+def robot_to_dict(arm: FitModel) -> dict[str, Any]:
+    """The ``robot`` section of a calibration file: everything needed to rebuild the arm,
+    as its family writes it (:mod:`armcal.families`), its ``kind`` the family's name."""
+    return dict(family_of(arm).role("encode")(arm))
 
 
 def read_calibration(path: str | os.PathLike) -> CalibratedArm:
@@ -271,16 +109,12 @@ def read_calibration(path: str | os.PathLike) -> CalibratedArm:
             )
         key = "robot"
         fixed = list(doc.get("fixed", []))
-        serial = doc["robot"].get("kind") == "serial"
-        arm: PlanarArm | SpatialArm = (
-            _serial_from_dict(doc["robot"], noise, fixed)
-            if serial
-            else _arm_from_dict(doc["robot"], noise, [n for n in fixed if n not in _terms(doc)])
-        )
+        family = _family(doc["robot"])
+        arm = family.role("decode")(doc["robot"], noise, fixed, doc)
         model: FitModel = arm
         if doc.get("elastostatic") is not None:
             key = "elastostatic"
-            model = _compliance_from_dict(arm, doc["elastostatic"], fixed)
+            model = _compliance_from_dict(family, arm, doc["elastostatic"], fixed)
         key = "training_rows"
         rows = _rows_from_dict(doc.get("training_rows"), arm.n_joints, len(arm.target_labels))
         key = "parameters"
@@ -330,52 +164,31 @@ def read_calibration(path: str | os.PathLike) -> CalibratedArm:
         raise fail(
             path, f"key '{key}': {what}; write the calibration again with armcal identify -o"
         ) from None
-    if plane is None and isinstance(arm, PlanarArm) and arm.base_rotation:
-        raise fail(path, "key 'plane': a calibration from 3-D data must record its plane")
     if rows is not None and not np.all(np.isfinite(rows.q)):
         raise fail(path, "key 'training_rows': joint readings must be finite numbers")
     return CalibratedArm(model, values, full, sigma, plane, rows, baseline)
 
 
-def _terms(doc: dict[str, Any]) -> list[str]:
-    """The compliance terms of a calibration file (none without an ``elastostatic`` section)."""
-    section = doc.get("elastostatic")
-    return [] if not isinstance(section, dict) else list(section.get("parameters", []))
+def _family(robot: dict[str, Any]) -> Family:
+    """The family of a calibration file's ``robot`` section, by its ``kind`` (planar in
+    files written before the key)."""
+    kind = str(robot.get("kind", "planar"))
+    try:
+        return family_named(kind)
+    except ArmcalError as exc:
+        raise BadKey("robot.kind", unrendered(exc)) from None
 
 
 def _compliance_from_dict(
-    arm: PlanarArm | SpatialArm, data: dict[str, Any], fixed: Sequence[str]
-) -> CompliantArm | CompliantSerialArm:
-    """The compliance model of a calibration file's ``elastostatic`` section; of the terms
-    ``fixed`` lists, those the rule did not hold (``held``) the user held."""
+    family: Family, arm: FitModel, data: dict[str, Any], fixed: Sequence[str]
+) -> FitModel:
+    """The compliance model of a calibration file's ``elastostatic`` section, as the arm's
+    family reads it; of the terms ``fixed`` lists, those the rule did not hold (``held``)
+    the user held."""
     rule = set(data.get("held", []))
     terms = data.get("parameters", [])  # older planar files: none held
     user = TermChoice(fixed=tuple(n for n in fixed if n in terms and n not in rule))
-    if isinstance(arm, SpatialArm):
-        serial = CompliantSerialArm(
-            arm,
-            replace(SerialElastics.from_dict(data, arm.n_joints), terms=user),
-            bool(data["known_loads"]),
-            tuple(str(name) for name in data["held"]),
-            tuple(str(text) for text in data["merges"]),
-        )
-        if list(data["parameters"]) != list(serial.compliance_names):
-            raise ValueError(
-                f"compliance parameters do not match {', '.join(serial.compliance_names)}"
-            )
-        return serial
-    gravity = data["gravity_mps2"]
-    masses = data["link_masses_kg"]
-    elastic = Elastostatic(
-        None if gravity is None else np.array(gravity, dtype=float).reshape(2),
-        None if masses is None else np.array(masses, dtype=float).reshape(arm.n_joints),
-        np.array(data["com_fraction"], dtype=float).reshape(arm.n_joints),
-        float(data["payload_kg"]),
-        user,
-    )
-    model = CompliantArm(arm, elastic, bool(data["known_loads"]))
-    if list(data.get("parameters", model.compliance_names)) != list(model.compliance_names):
-        raise ValueError(f"compliance parameters do not match {', '.join(model.compliance_names)}")
+    model: FitModel = family.role("decode_effect")(arm, data, user)
     return model
 
 
@@ -421,32 +234,15 @@ def _rows_from_dict(data: dict[str, Any] | None, n: int, targets: int) -> Condit
 
 
 def _elastostatic_dict(cal: Calibration) -> dict | None:
-    """The loads model of a fit with compliance, enough to rebuild it (gravity in m/s^2),
-    and the rows it used."""
-    model, nested = cal.model, cal.nested
-    if isinstance(model, CompliantSerialArm) and nested is not None:
-        return {
-            **model.elastic.to_dict(),
-            "known_loads": model.known_loads,
-            "parameters": list(model.compliance_names),
-            "held": list(model.held),
-            "merges": list(model.merges),
-            "geometry_only_rms_per_coordinate_mm": nested.rms_per_coordinate_mm,
-        }
-    if not isinstance(model, CompliantArm) or nested is None:
+    """The loads model of a fit with compliance, enough to rebuild it (its family's
+    section), and the RMS of the geometry alone."""
+    nested = cal.nested
+    if nested is None:
         return None
-    elastic = model.elastic
-    return {
-        "gravity_mps2": None if elastic.gravity is None else elastic.gravity.tolist(),
-        "link_masses_kg": None
-        if elastic.link_masses_kg is None
-        else elastic.link_masses_kg.tolist(),
-        "com_fraction": elastic.com_fraction.tolist(),
-        "payload_kg": elastic.payload_kg,
-        "known_loads": model.known_loads,
-        "parameters": list(model.compliance_names),
-        "geometry_only_rms_per_coordinate_mm": nested.rms_per_coordinate_mm,
-    }
+    section = family_of(cal.model).role("encode_effect")(cal.model)
+    if section is None:
+        return None
+    return {**section, "geometry_only_rms_per_coordinate_mm": nested.rms_per_coordinate_mm}
 
 
 def _baseline_dict(cal: Calibration) -> dict[str, Any] | None:

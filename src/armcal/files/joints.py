@@ -18,7 +18,7 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from ..models import PlanarArm, SpatialArm
+from ..models import FitModel
 from .common import fail, shown
 from .csv_text import WIDTH, Column, degree_cells, degrees, float_cells
 from .robots import RADIAN_LIMIT_BOUND
@@ -104,7 +104,7 @@ def model_units(q_file: np.ndarray, kinds: Sequence[str]) -> np.ndarray:
     return np.where(revolute(kinds), np.radians(q_file), q_file)
 
 
-def file_limits(arm: PlanarArm | SpatialArm) -> np.ndarray:
+def file_limits(arm: FitModel) -> np.ndarray:
     """The arm's reading limits ``(n, 2)`` in the files' units (deg; mm)."""
     turns = revolute(arm.joint_kinds)[:, None]
     return np.where(turns, np.degrees(arm.joint_limits), arm.joint_limits)
@@ -116,7 +116,7 @@ def limit_slack(kinds: Sequence[str]) -> np.ndarray:
 
 
 def check_joint_units(
-    path, header: Sequence[str], header_line: int, arm: PlanarArm | SpatialArm
+    path, header: Sequence[str], header_line: int, arm: FitModel
 ) -> list[tuple[int, str]]:
     """The header's joint columns as ``(joint number, name)``, sorted, each in its joint's
     unit, without gaps or a joint twice; else InputError naming the column and the fix."""
@@ -153,7 +153,7 @@ def check_joint_units(
 
 
 def check_joint_values(
-    path, what: str, arm: PlanarArm | SpatialArm, q: np.ndarray, lines: Sequence[int]
+    path, what: str, arm: FitModel, q: np.ndarray, lines: Sequence[int]
 ) -> None:
     """Refuse a plan's or program's pose ``q`` ``(m, n)`` (rad, mm) whose readings are within
     their limits but whose joint values ``u = M q`` leave the limits of the arm's
@@ -161,11 +161,11 @@ def check_joint_values(
     the arm cannot go there, so designing, synthesizing or correcting it would be fiction.
     """
     bad = np.flatnonzero(~np.all(arm.within_limits(q), axis=1))
-    if not bad.size or not isinstance(arm, SpatialArm):
+    limits = arm.value_limits
+    if not bad.size or limits is None:
         return
     r = int(bad[0])
     u = arm.joint_map @ q[r]
-    limits = arm.chain.joint_limits
     k = int(np.flatnonzero((u < limits[:, 0] - 1e-9) | (u > limits[:, 1] + 1e-9))[0])
     turns = arm.joint_kinds[k] == "R"
     unit = "deg" if turns else "mm"
@@ -174,7 +174,7 @@ def check_joint_values(
     raise fail(
         path,
         f"{what} row {r + 1} (line {lines[r]}): its readings are within their limits, but "
-        f"joint {k + 1} of the arm's description ({arm.chain.joint_names[k]}, u = M q by "
+        f"joint {k + 1} of the arm's description ({arm.joint_names[k]}, u = M q by "
         f"joint_map) would be at {value:.6g} {unit}, outside its limits [{lo:g}, {hi:g}] "
         f"{unit} (the URDF's, on u): the arm cannot reach this pose; remove or change it",
     )

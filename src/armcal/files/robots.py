@@ -11,14 +11,15 @@ from __future__ import annotations
 import math
 import os
 from collections.abc import Sequence
-from dataclasses import dataclass, replace
+from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
 from ..errors import ArmcalError, ArmcalWarning, InputError, action, unrendered
-from ..formats import SERIAL_TRUTH_KEYS, TRUTH_KEYS, allowed_keys
+from ..families.registry import RobotSpec, builtin_robots
+from ..formats import SPATIAL_TRUTH_KEYS, TRUTH_KEYS, allowed_keys
 from ..models import (
     Annulus,
     Box,
@@ -51,15 +52,16 @@ __all__ = [
     "JOINT_SIGMA_MAX_DEG",
     "LINK_LENGTH_RANGE_MM",
     "RADIAN_LIMIT_BOUND",
-    "SERIAL_ROBOT_KEYS",
     "SIGMA_RANGE_MM",
+    "SPATIAL_ROBOT_KEYS",
     "RobotSpec",
     "fixed_parameters",
     "held_terms",
     "load_compliance_truth",
-    "load_robot",
+    "load_planar_robot",
     "load_truth",
     "parse_region",
+    "refuse_unknown_robot",
     "rigid_truth_message",
     "unknown_parameter",
 ]
@@ -89,44 +91,12 @@ RADIAN_LIMIT_BOUND = 6.3
 DEFAULT_ROBOT = "paper-4link"
 
 
-@dataclass(frozen=True, eq=False)
-class RobotSpec:
-    """A robot as loaded from a built-in name or a TOML file.
-
-    Attributes
-    ----------
-    arm : PlanarArm
-        The arm, with the file's noise model (``[measurement]``) and fixed
-        parameters (``[identify]``).
-    default_truth : ndarray, shape (p,), or None
-        Deviations (mm, rad) of the built-in virtual robot; None for robot files.
-    source : str
-        The built-in name or the file path it came from.
-    warnings : tuple of ArmcalWarning
-        What in the file is accepted but suspicious (``limits-radians``); every
-        command prints these.
-    elastic : Elastostatic or None
-        The ``[elastostatic]`` table: gravity, masses and payload that twist the
-        joints (:mod:`armcal.models.planar.compliance`); None for a rigid arm.
-    gravity_3d : ndarray, shape (3,), or None
-        ``[measurement] gravity``: gravity's direction in the instrument frame,
-        for 3-D data.
-    """
-
-    arm: PlanarArm
-    default_truth: np.ndarray | None
-    source: str
-    warnings: tuple[ArmcalWarning, ...] = ()
-    elastic: Elastostatic | None = None
-    gravity_3d: np.ndarray | None = None
-
-
 # --------------------------------------------------------------------------- robots
 
 
-def _builtin(name: str) -> RobotSpec:
+def _builtin(name: str) -> RobotSpec[PlanarArm]:
     arm, truth = paper_arm(BUILTIN_ROBOTS[name])
-    return RobotSpec(arm, truth, name)
+    return RobotSpec(arm, name, truth)
 
 
 def parse_region(path, region: Any) -> Region:
@@ -357,15 +327,37 @@ def _radian_limits_warning(path, raw_limits: list[tuple[float, float]]) -> Armca
 
 #: The keys that describe a spatial arm in a robot TOML (a URDF, a DH table or a UR
 #: model; exactly one of them), which planar robot files lack.
-SERIAL_ROBOT_KEYS = ("urdf", "mdh", "dh", "ur")
+SPATIAL_ROBOT_KEYS = ("urdf", "mdh", "dh", "ur")
 
-_PIPED_SERIAL = (
+_PIPED_SPATIAL = (
     "{what} is read from a file, not piped in (only a planar robot file may be): give its path"
 )
 
 
-def load_robot(name_or_path: str | os.PathLike) -> RobotSpec:
-    """Load a built-in robot by name or a robot TOML file.
+def refuse_unknown_robot(key: str) -> None:
+    """Refuse a robot that is no file and no built-in, listing every family's built-ins
+    and the closest to ``key`` (a typo of a name)."""
+    builtins = builtin_robots()
+    if key == STDIO or key in builtins or Path(key).exists():
+        return
+    by_family: dict[str, list[str]] = {}
+    for name, family in builtins.items():
+        by_family.setdefault(family.name, []).append(name)
+    listed = "; ".join(f"{family}: {', '.join(names)}" for family, names in by_family.items())
+    raise InputError(
+        f"{key}: robot is neither a built-in ({listed}) nor an existing file; "
+        f"{suggest(key, list(builtins))}"
+        "give a built-in's name or the path of a robot TOML file or a URDF"
+    )
+
+
+def load_planar_robot(
+    name_or_path: str | os.PathLike,
+    *,
+    base_link: str | None = None,
+    tip_link: str | None = None,
+) -> RobotSpec[PlanarArm]:
+    """Load a built-in planar robot by name or a planar robot TOML file.
 
     Parameters
     ----------
@@ -392,26 +384,26 @@ def load_robot(name_or_path: str | os.PathLike) -> RobotSpec:
 
     Examples
     --------
-    >>> load_robot("paper-4link").arm.link_lengths.tolist()
+    >>> load_planar_robot("paper-4link").arm.link_lengths.tolist()
     [260.0, 180.0, 120.0, 100.0]
     """
     key = os.fspath(name_or_path)
+    refuse_unknown_robot(key)
+    if base_link is not None or tip_link is not None:
+        raise ArmcalError(
+            f"{key}: a base or tip link was given, but this is a planar robot, not one from a "
+            "URDF: links choose a URDF's chain; drop them"
+        )
     if key in BUILTIN_ROBOTS:
         return _builtin(key)
     path = Path(key)
-    if key != STDIO and not path.exists():
-        raise InputError(
-            f"{key}: robot is neither a built-in ({', '.join(BUILTIN_ROBOTS)}) "
-            f"nor an existing file; {suggest(key, list(BUILTIN_ROBOTS))}"
-            "give a built-in's name or the path of a robot TOML file"
-        )
     if key == STDIO:
         text = read_text(path, "robot")
         if text.lstrip().startswith("<"):
-            raise fail(path, _PIPED_SERIAL.format(what="a URDF"))
+            raise fail(path, _PIPED_SPATIAL.format(what="a URDF"))
         data = load_toml(path, "robot", text)
-        if any(key in data for key in SERIAL_ROBOT_KEYS):
-            raise fail(path, _PIPED_SERIAL.format(what="a six-axis robot file"))
+        if any(key in data for key in SPATIAL_ROBOT_KEYS):
+            raise fail(path, _PIPED_SPATIAL.format(what="a six-axis robot file"))
     else:
         data = load_toml(path, "robot")
     check_keys(path, data, allowed_keys(""))
@@ -515,7 +507,7 @@ def load_robot(name_or_path: str | os.PathLike) -> RobotSpec:
         )
     except ValueError as exc:  # every value was checked above; this names what is left
         raise fail(path, unrendered(exc)) from None
-    return RobotSpec(arm, None, key, tuple(warnings), elastic, gravity_3d)
+    return RobotSpec(arm, key, None, tuple(warnings), elastic, gravity_3d)
 
 
 def _elastostatic(path, table: Any, n: int) -> Elastostatic:
@@ -599,7 +591,7 @@ def load_truth(path: str | os.PathLike, arm: PlanarArm, *, rigid: bool = False) 
     """
     data = load_toml(path, "truth")
     planar = allowed_keys("", TRUTH_KEYS)
-    check_truth_keys(path, data, planar, allowed_keys("", SERIAL_TRUTH_KEYS), "planar")
+    check_truth_keys(path, data, planar, allowed_keys("", SPATIAL_TRUTH_KEYS), "planar")
     check_keys(path, data, planar, robot=False)
     given = [key for key in COMPLIANCE_TRUTH_KEYS.values() if key in data]
     if rigid and given:

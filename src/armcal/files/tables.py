@@ -23,11 +23,7 @@ import numpy as np
 
 from ..errors import ArmcalWarning, action
 from ..formats import reader_columns
-from ..models import (
-    Loads,
-    PlanarArm,
-    SpatialArm,
-)
+from ..models import FitModel, Loads
 from .common import MAX_ABS_VALUE, fail, parse_number, read_text, shown, suggest
 from .joints import (
     JOINT_COLUMN,
@@ -369,7 +365,7 @@ def _unit_hint(name: str, allowed: Sequence[str]) -> str:
 
 def _read_csv(
     path,
-    arm: PlanarArm | SpatialArm,
+    arm: FitModel,
     what: str,
     measured: bool = False,
     arm_from: str | None = None,
@@ -520,7 +516,7 @@ def _read_csv(
     return _Table(values, texts, numbers, lines, beyond, header_line)
 
 
-def read_plan(path: str | os.PathLike, arm: PlanarArm | SpatialArm) -> np.ndarray:
+def read_plan(path: str | os.PathLike, arm: FitModel) -> np.ndarray:
     """Read a plan CSV (header ``q1_deg,...,qn_deg``) for ``arm``.
 
     Returns
@@ -532,7 +528,7 @@ def read_plan(path: str | os.PathLike, arm: PlanarArm | SpatialArm) -> np.ndarra
 
 
 def read_labelled_plan(
-    path: str | os.PathLike, arm: PlanarArm | SpatialArm
+    path: str | os.PathLike, arm: FitModel
 ) -> tuple[np.ndarray, tuple[str, ...] | None]:
     """:func:`read_plan` and its optional ``pose`` labels (None without the column)."""
     q, payload, labels = read_loaded_plan(path, arm)
@@ -546,7 +542,7 @@ def read_labelled_plan(
 
 
 def read_loaded_plan(
-    path: str | os.PathLike, arm: PlanarArm | SpatialArm
+    path: str | os.PathLike, arm: FitModel
 ) -> tuple[np.ndarray, np.ndarray | None, tuple[str, ...] | None]:
     """Read a plan CSV with its optional ``payload_kg`` (designs with compliance) and
     ``pose`` columns.
@@ -589,7 +585,7 @@ class Program:
 
 
 def read_program(
-    path: str | os.PathLike, arm: PlanarArm | SpatialArm, *, arm_from: str | None = None
+    path: str | os.PathLike, arm: FitModel, *, arm_from: str | None = None
 ) -> Program:
     """Read a program CSV: ``q1_deg..qn_deg``; optional ``pose``, ``target`` and load columns.
 
@@ -621,7 +617,7 @@ def read_program(
     )
 
 
-def _beyond_limits_warning(path, arm: PlanarArm | SpatialArm, beyond) -> ArmcalWarning:
+def _beyond_limits_warning(path, arm: FitModel, beyond) -> ArmcalWarning:
     kinds = arm.joint_kinds
     limits = file_limits(arm)
     names = joint_names(kinds)
@@ -642,7 +638,7 @@ def _beyond_limits_warning(path, arm: PlanarArm | SpatialArm, beyond) -> ArmcalW
 
 
 def _check_reach(
-    path, arm: PlanarArm | SpatialArm, xy: np.ndarray, lines: list[int], arm_from: str | None
+    path, arm: FitModel, xy: np.ndarray, lines: list[int], arm_from: str | None
 ) -> None:
     """Refuse a measured point no arm of this geometry can reach (see :data:`REACH_MARGIN`).
 
@@ -691,7 +687,7 @@ def _check_reach(
 
 
 def read_measurements(
-    path: str | os.PathLike, arm: PlanarArm | SpatialArm, *, arm_from: str | None = None
+    path: str | os.PathLike, arm: FitModel, *, arm_from: str | None = None
 ) -> Measurements:
     """Read a measurements CSV: ``q1_deg..qn_deg,x_mm,y_mm``, optional ``pose`` and ``sigma_mm``.
 
@@ -764,7 +760,7 @@ def read_measurements(
     )
 
 
-def _orientation_columns(path, arm: PlanarArm | SpatialArm, table: _Table) -> np.ndarray | None:
+def _orientation_columns(path, arm: FitModel, table: _Table) -> np.ndarray | None:
     """The rotation vectors ``(m, 3)`` (rad) of ``rx_deg, ry_deg, rz_deg``: all three or none,
     of a spatial arm, each of at most :data:`MAX_TURN_DEG`."""
     found = [table.numbers.get(name) for name in ORIENTATION_COLUMNS]
@@ -782,10 +778,10 @@ def _orientation_columns(path, arm: PlanarArm | SpatialArm, table: _Table) -> np
             "orientation is a rotation vector rx_deg, ry_deg, rz_deg; add the missing "
             "columns or remove the orientation",
         )
-    if isinstance(arm, PlanarArm):
+    if arm.orientation_dim < 3:
         raise fail(
             path,
-            f"has orientation columns ({', '.join(given)}) but {arm.name} is a planar arm, "
+            f"has orientation columns ({', '.join(given)}) but {arm.name} is a {arm.family} arm, "
             "whose tool orientation is not measured; remove them",
         )
     degrees_ = np.column_stack([column for column in found if column is not None])
@@ -822,9 +818,7 @@ def _load_columns(path, table: _Table) -> tuple[np.ndarray | None, np.ndarray | 
     return payload, force
 
 
-def _check_target_labels(
-    path, arm: PlanarArm | SpatialArm, labels: list[str], lines: list[int]
-) -> None:
+def _check_target_labels(path, arm: FitModel, labels: list[str], lines: list[int]) -> None:
     """Every row names a target, one of the robot file's ``[targets]`` when it has them."""
     known = arm.target_labels
     for r, label in enumerate(labels):

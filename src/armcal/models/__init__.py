@@ -14,7 +14,7 @@
   :mod:`~armcal.models.spatial.registration`, :mod:`~armcal.models.spatial.arm` -- a spatial
   serial arm (:class:`SpatialArm`) from a URDF or a modified DH table;
 * :mod:`~armcal.models.spatial.gravity`, :mod:`~armcal.models.spatial.compliance` --
-  its joints twisting under gravity and payload (:class:`CompliantSerialArm`);
+  its joints twisting under gravity and payload (:class:`CompliantSpatialArm`);
 * :mod:`~armcal.models.plane` -- the plane of motion of 3-D data;
 * :mod:`~armcal.models.calibrated` -- an arm with its identified deviations.
 """
@@ -97,7 +97,7 @@ from .spatial.chain import (
     transform,
     vector_rotation,
 )
-from .spatial.compliance import CompliantSerialArm, SerialElastics
+from .spatial.compliance import CompliantSpatialArm, SpatialElastics
 from .spatial.dh import MdhTable, mdh_table
 from .spatial.gravity import LinkMasses
 from .spatial.kinematics import LARGE_PLACEMENT_FRACTION, SpatialLayout, default_targets
@@ -118,7 +118,7 @@ __all__ = [
     "ClosedFormPlan",
     "ClosedFormPlans",
     "CompliantArm",
-    "CompliantSerialArm",
+    "CompliantSpatialArm",
     "Conditions",
     "DesignEffort",
     "DeviationBounds",
@@ -139,8 +139,8 @@ __all__ = [
     "Region",
     "Selection",
     "SerialChain",
-    "SerialElastics",
     "SpatialArm",
+    "SpatialElastics",
     "SpatialLayout",
     "SpatialView",
     "Target",

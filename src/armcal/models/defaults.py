@@ -80,6 +80,8 @@ class MinimalPlanar:
 
         @property
         def n_params(self) -> int: ...
+        @property
+        def n_joints(self) -> int: ...
 
     def prepared(self, conditions: Conditions, points: np.ndarray | None = None) -> Self:
         """Itself: its parameters are minimal and need no placing."""
@@ -116,6 +118,21 @@ class MinimalPlanar:
     @property
     def held_notes(self) -> tuple[str, ...]:
         return ()
+
+    @property
+    def rule_held(self) -> tuple[str, ...]:
+        """None: the parameters are minimal."""
+        return ()
+
+    @property
+    def joint_names(self) -> tuple[str, ...]:
+        """``joint 1`` ...: a planar arm's description does not name its joints."""
+        return tuple(f"joint {j + 1}" for j in range(self.n_joints))
+
+    @property
+    def value_limits(self) -> np.ndarray | None:
+        """None: the readings' limits are all a planar arm has."""
+        return None
 
     def orientation_error(self, orientation: np.ndarray, reference: np.ndarray) -> np.ndarray:
         """The difference of the tool's directions, wrapped into ``(-pi, pi]``."""
@@ -187,6 +204,32 @@ class ArmEffect:
     @property
     def name(self) -> str:
         return self.arm.name
+
+    @property
+    def family(self) -> str:
+        """The arm's family: an effect does not change the family of the arm it is on."""
+        return str(self.arm.family)
+
+    @property
+    def value_limits(self) -> np.ndarray | None:
+        return self.arm.value_limits
+
+    @property
+    def joint_names(self) -> tuple[str, ...]:
+        return tuple(self.arm.joint_names)
+
+    @property
+    def tip_reach_mm(self) -> float:
+        return float(self.arm.tip_reach_mm)
+
+    @property
+    def base_offset(self) -> bool:
+        return bool(self.arm.base_offset)
+
+    @property
+    def rule_held(self) -> tuple[str, ...]:
+        """The arm's (an effect's own held terms are its :meth:`held_notes`' business)."""
+        return tuple(self.arm.rule_held)
 
     @property
     def user_held(self) -> tuple[str, ...]:

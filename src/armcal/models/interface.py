@@ -51,7 +51,7 @@ from __future__ import annotations
 
 from collections.abc import Callable, Hashable, Mapping, Sequence
 from dataclasses import dataclass, field
-from typing import Any, Protocol
+from typing import Any, Protocol, Self
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -564,6 +564,35 @@ class FitModel(Protocol):
         """Every joint reading's kind: ``"R"`` (an angle, rad) or ``"P"`` (a slide, mm)."""
         ...
 
+    @property
+    def value_limits(self) -> np.ndarray | None:
+        """``(n, 2)`` limits of the joint values ``u = M q`` that the arm's description sets
+        (a URDF's ``<limit>``), beyond those of the readings; None where only the readings
+        are limited."""
+        ...
+
+    @property
+    def joint_names(self) -> tuple[str, ...]:
+        """Every joint's name in the arm's description (a URDF's), or ``joint 1`` ...."""
+        ...
+
+    @property
+    def tip_reach_mm(self) -> float:
+        """How far from the base a measured point can lie (mm): the links to the farthest
+        target."""
+        ...
+
+    @property
+    def base_offset(self) -> bool:
+        """Whether the base's place in the instrument's frame is identified."""
+        ...
+
+    @property
+    def rule_held(self) -> tuple[str, ...]:
+        """The parameters the family's rule holds because the measurements cannot separate
+        them (:meth:`held_notes` says why); empty for a family of minimal parameters."""
+        ...
+
     def within_limits(self, q: np.ndarray, *, tol: float = 1e-9) -> np.ndarray:
         """Boolean ``(..., m, n)``: every joint reading of ``q`` (rad) within its limits."""
         ...
@@ -626,11 +655,17 @@ class FitModel(Protocol):
         """The geometric arm the model is of (the model itself for a geometric family)."""
         ...
 
-    def with_noise(self, noise: NoiseModel | None) -> FitModel:
+    @property
+    def family(self) -> str:
+        """The name of the model's family of arm (``"planar"``, ``"spatial"``): the key
+        under which :mod:`armcal.families` finds its files, exports and pictures."""
+        ...
+
+    def with_noise(self, noise: NoiseModel | None) -> Self:
         """The same model with another noise model."""
         ...
 
-    def with_fixed(self, fixed: Sequence[str]) -> FitModel:
+    def with_fixed(self, fixed: Sequence[str]) -> Self:
         """The same model with another set of fixed parameters."""
         ...
 

@@ -9,7 +9,6 @@ import numpy as np
 from ..errors import ACTIONS
 from ..identification import Calibration
 from ..identification.result import STRONG_CORRELATION
-from ..models import SpatialArm
 from .common import identified, model_lines, small
 
 __all__ = [
@@ -127,7 +126,7 @@ def format_calibration(
     ]
     truth_display = None if truth is None else np.asarray(truth) * cal.display_scale
     # held by a rule, listed with why above: the spatial arm's, and its effect's (compliance)
-    merged = set(arm.held) if isinstance(arm, SpatialArm) else set()
+    merged = set(arm.rule_held)
     model, mine = cal.model, set(arm.param_names)
     merged |= {
         n

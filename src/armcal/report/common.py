@@ -13,20 +13,23 @@ from collections.abc import Mapping
 import numpy as np
 
 from ..errors import ACTIONS, action, render
-from ..models import PlanarArm, SpatialArm, combination
+from ..families.registry import family_of
+from ..models import FitModel, PlanarArm, SpatialArm, combination
 
 __all__ = [
     "identified",
     "markdown",
     "model_lines",
     "model_to_dict",
+    "planar_model_lines",
     "small",
+    "spatial_model_lines",
     "std_cell",
     "table_csv",
 ]
 
 
-def _noise_text(arm: PlanarArm | SpatialArm) -> str | None:
+def _noise_text(arm: FitModel) -> str | None:
     """The noise model in words when it is not isotropic iid (None when it is or is unknown)."""
     noise = arm.noise
     if noise is None or noise.isotropic_iid:
@@ -70,7 +73,13 @@ def _noise_text(arm: PlanarArm | SpatialArm) -> str | None:
     return "; ".join(parts) + f" (reference sigma {noise.sigma_mm:.4g} mm)"
 
 
-def spatial_model_lines(arm: SpatialArm, *, registered: bool = False) -> list[str]:
+def spatial_model_lines(
+    arm: SpatialArm,
+    *,
+    plan: bool = True,
+    words: Mapping[str, str] = ACTIONS,
+    registered: bool = False,
+) -> list[str]:
     """A spatial arm's model: joint map, targets, the identifiable set and what merges.
 
     ``registered``: the arm was placed on measured points (a calibration), so a fixed
@@ -113,7 +122,7 @@ def spatial_model_lines(arm: SpatialArm, *, registered: bool = False) -> list[st
 
 
 def model_lines(
-    arm: PlanarArm | SpatialArm,
+    arm: FitModel,
     *,
     plan: bool = True,
     words: Mapping[str, str] = ACTIONS,
@@ -133,8 +142,20 @@ def model_lines(
     >>> model_lines(PlanarArm([260.0, 180.0], fixed=["dl2"]))
     ['fixed (held at nominal, not identified): dl2']
     """
-    if isinstance(arm, SpatialArm):
-        return spatial_model_lines(arm, registered=registered)
+    describe = family_of(arm).role("describe")
+    lines: list[str] = describe(arm, plan=plan, words=words, registered=registered)
+    return lines
+
+
+def planar_model_lines(
+    arm: PlanarArm,
+    *,
+    plan: bool = True,
+    words: Mapping[str, str] = ACTIONS,
+    registered: bool = False,
+) -> list[str]:
+    """A planar arm's model: joint map, targets, fixed parameters, the base rotation and
+    a noise model that is not isotropic iid (:func:`model_lines`)."""
     lines = []
     if not np.array_equal(arm.joint_map, np.tril(np.ones((arm.n_joints, arm.n_joints)))):
         rows = "; ".join(" ".join(f"{v:g}" for v in row) for row in arm.joint_map)

@@ -13,7 +13,7 @@ Errors name the file they concern (``source``).
 from __future__ import annotations
 
 from dataclasses import dataclass, replace
-from typing import Any, TypeVar
+from typing import TypeVar
 
 import numpy as np
 
@@ -27,29 +27,17 @@ from ..errors import (
     ArmcalError,
     ArmcalWarning,
     InputError,
-    NotIdentifiableError,
     action,
     unique_warnings,
-    unrendered,
 )
-from ..export import robot_toml, urdf, urdf_joints_are_readings
 from ..export_rigid import RigidExport, rigid_export, rigid_export_warnings
-from ..export_serial import joint_offsets_csv, serial_robot_toml, serial_urdf
-from ..files import Measurements, Program, RobotSpec, SerialSpec
-from ..files.ur import (
-    FAR_FROM_NOMINAL_MM,
-    UrDh,
-    format_ur_calibration,
-    format_ur_kinematics,
-    ur_deltas,
-    ur_frames,
-    ur_model_of,
-)
-from ..identification import Calibration, identify
+from ..export_spatial import joint_offsets_csv
+from ..families.registry import family_of
+from ..files import Measurements, Program, RobotSpec
+from ..identification import Calibration
 from ..identification.experiment import coverage, plan_degenerate_warning
-from ..instrument import identify_3d
-from ..models import CalibratedArm, FitModel, Loads, PlanarArm, SerialChain, SpatialArm, Target
-from ..plausibility import deviation_warning, explain, suspicious, unit_mistake
+from ..models import CalibratedArm, FitModel, Loads
+from ..plausibility import deviation_warning
 from ..progress import ProgressCallback
 from ..validation import (
     CrossValidation,
@@ -59,8 +47,9 @@ from ..validation import (
     validate,
     validation_warnings,
 )
+from .measured import row_targets, unit_mistake_of
 from .payloads import payload_extrapolated, payload_missing, payload_unit
-from .setup import FixError, fit_model, model_spec, prefixed
+from .setup import prefixed
 
 __all__ = [
     "CalibrationRun",
@@ -68,11 +57,8 @@ __all__ = [
     "ExportRun",
     "ValidationRun",
     "calibrate",
-    "calibrate_serial",
     "compensate_program",
     "export_files",
-    "measured_arm",
-    "serial_arm",
     "validate_measurements",
 ]
 
@@ -96,122 +82,14 @@ class CalibrationRun:
     cross_validation: CrossValidation | None = None
 
 
-def measured_arm(arm: PlanarArm, meas: Measurements) -> PlanarArm:
-    """The arm to identify from ``meas``: its targets are those measured.
-
-    With a ``target`` column, the targets are the labels measured, in the order
-    of the robot file's ``[targets]`` (nominal last link from there) or, without
-    one, in the order they first appear (nominal: the last link's length, angle
-    0).  With a ``z_mm`` column the base pose in the fitted plane is identified:
-    base offset and base rotation (:mod:`armcal.instrument`).
-
-    Raises
-    ------
-    InputError
-        For an arm with targets and data without a target column.
-    """
-    changes: dict[str, Any] = {}
-    if meas.targets is not None:
-        seen = list(dict.fromkeys(meas.targets))
-        if arm.targets:
-            targets = tuple(t for t in arm.targets if t.label in seen)
-        else:
-            targets = tuple(Target(label, float(arm.link_lengths[-1])) for label in seen)
-        if targets != arm.targets:
-            changes["targets"] = targets
-    elif arm.targets:
-        raise InputError(
-            f"{arm.name} has targets ({', '.join(arm.target_labels)}) but the measurements have "
-            "no target column; add a column 'target' naming the target of every row"
-        )
-    if meas.z is not None:
-        changes.update(base_offset=True, base_rotation=True)
-    if not changes:
-        return arm
-    try:  # the fixed parameters that still exist are carried over
-        return arm.replace(**changes)
-    except ValueError as exc:
-        raise InputError(f"{arm.name}: {unrendered(exc)}") from None
-
-
-def _row_targets(arm: PlanarArm | SpatialArm, meas: Measurements) -> np.ndarray | None:
-    """Every row's target index, for an arm with targets (None without)."""
-    if meas.targets is None or not arm.target_labels:
-        return None
-    return arm.target_index(meas.targets)
-
-
 def row_loads(model: FitModel, meas: Measurements) -> Loads | None:
     """The rows' loads for a model they move (payload column or the model's default)."""
     default = model.default_payload_kg
     return None if default is None else meas.loads(default)
 
 
-def _explained(source: str, arm: PlanarArm, meas: Measurements) -> InputError | None:
-    """The error for data that another reading fits far better (:mod:`armcal.plausibility`)."""
-    found = explain(arm, meas.q, meas.xy)
-    return None if found is None else InputError(f"{source}: {found.message}")
-
-
-def _identify_file(
-    spec: RobotSpec, arm: PlanarArm, source: str, meas: Measurements, **options: Any
-) -> Calibration:
-    """Identify from a measurement file; data that look like a unit mistake are an error.
-
-    3-D data (a ``z_mm`` column) are fitted with their plane first.  Units are
-    checked before the fit for every model (:func:`_unit_mistake`); the checks that
-    refit the plain 2-D model (a missing base offset too) are skipped for data with
-    several targets, in 3-D or with compliance.
-    """
-    elastic = spec.elastic
-    plain = meas.z is None and arm.n_target_links == 1 and not arm.targets and elastic is None
-    options.update(
-        pose_labels=meas.labels,
-        rows=meas.rows,
-        row_sigma=meas.row_sigma,
-        target=_row_targets(arm, meas),
-    )
-    try:
-        loads = None if elastic is None else meas.loads(elastic.payload_kg)
-        model = fit_model(spec, arm, loads)
-        options["loads"] = loads
-        mistake = _unit_mistake(model, meas, options["target"], loads)
-        if mistake is not None:
-            raise InputError(mistake)  # named with the file below
-        if meas.z is not None:
-            options["gravity_3d"] = spec.gravity_3d
-            cal = identify_3d(model, meas.q, meas.xyz, **options)
-        else:
-            cal = identify(model, meas.q, meas.xy, **options)
-    except NotIdentifiableError as exc:
-        # Angles in radians read as degrees put every pose near the stretched arm.
-        unit = _explained(source, arm, meas) if plain else None
-        if unit is not None:
-            raise unit from None
-        raise prefixed(source, exc) from None
-    except ArmcalError as exc:
-        raise prefixed(source, exc) from None
-    if plain and suspicious(cal):
-        unit = _explained(source, arm, meas)
-        if unit is not None:
-            raise unit
-    return cal
-
-
-def _unit_mistake(
-    model: FitModel, meas: Measurements, target: np.ndarray | None, loads: Loads | None
-) -> str | None:
-    """What in ``meas`` looks like a unit mistake for ``model`` (:func:`unit_mistake`), checked
-    before the fit: positions in metres or another unit, angles in radians (joints, a
-    6-DoF instrument's orientations)."""
-    points = meas.xy if meas.z is None else meas.xyz
-    return unit_mistake(
-        model, meas.q, points, target=target, loads=loads, orientations=meas.orientation
-    )
-
-
 def _ignored_loads(
-    spec: RobotSpec | SerialSpec, meas: Measurements, source: str, compliance: bool
+    spec: RobotSpec, meas: Measurements, source: str, compliance: bool
 ) -> list[ArmcalWarning]:
     """A warning when the data carry loads that a rigid model cannot use."""
     if (spec.elastic is not None and compliance) or not meas.has_loads:
@@ -231,7 +109,7 @@ def _loads_ignored_warning(source: str, why: str) -> ArmcalWarning:
 
 
 #: A robot file of either family.
-_Spec = TypeVar("_Spec", RobotSpec, SerialSpec)
+_Spec = TypeVar("_Spec", bound=RobotSpec)
 
 
 def calibrate(
@@ -250,10 +128,14 @@ def calibrate(
 ) -> CalibrationRun:
     """Calibrate the robot of ``spec`` from measurements, with every check and warning.
 
+    The robot's family fits it (:mod:`armcal.families`: a planar arm's 3-D data in
+    their plane, a spatial arm's base pose and targets found from the data); the
+    run's checks, warnings and cross-validation are the same for every family.
+
     Parameters
     ----------
     spec : RobotSpec
-        The robot file (:func:`armcal.files.load_robot`).
+        The robot, of any family (:func:`armcal.load_robot`).
     meas : Measurements
         The measurement file (:func:`armcal.files.read_measurements`).
     source : str
@@ -289,17 +171,12 @@ def calibrate(
     NotIdentifiableError
         If the poses cannot identify every free parameter.
     """
-    try:
-        structure = measured_arm(spec.arm, meas)
-    except InputError as exc:
-        raise prefixed(source, exc) from None
     spec, meas, ignored = _as_asked(spec, meas, source, sigma, compliance)
-    spec, arm = model_spec(spec, structure, fixed=fixed, sigma=sigma)
-    cal = _identify_file(spec, arm, source, meas, method=method, robust=robust)
+    fit = family_of(spec.arm).role("calibrate")
+    cal, points = fit(
+        spec, meas, source=source, fixed=fixed, sigma=sigma, method=method, robust=robust
+    )
     large = deviation_warning(cal.model, cal.params)
-    points = None
-    if folds is not None:  # the fitted points: a 3-D file's in its plane
-        points = meas.xy if cal.plane is None else cal.plane.to_plane(meas.xyz)
     return _calibration_run(
         cal, spec, meas, points, ignored, large, folds, sigma, seed, source, progress=progress
     )
@@ -319,7 +196,7 @@ def _as_asked(
 
 def _calibration_run(
     cal: Calibration,
-    spec: RobotSpec | SerialSpec,
+    spec: RobotSpec,
     meas: Measurements,
     points: np.ndarray | None,
     ignored: list[ArmcalWarning],
@@ -380,95 +257,6 @@ def _cross_validated(
     return checked
 
 
-def serial_arm(arm: SpatialArm, meas: Measurements) -> SpatialArm:
-    """The spatial arm to identify from ``meas``: its targets are those measured, in the
-    robot file's order (their nominal positions from there) or in the order they appear.
-
-    Raises InputError for data without ``z_mm`` or without the targets the robot file has.
-    """
-    if meas.z is None:
-        raise InputError(
-            f"{arm.name} is a spatial arm: its measurements need x_mm, y_mm and z_mm; add the "
-            "z_mm column the instrument reports"
-        )
-    oriented = meas.orientation is not None
-    if oriented and (arm.noise is None or arm.noise.orientation_sigma is None):
-        raise InputError(
-            f"the measurements have orientation columns (rx_deg, ry_deg, rz_deg) but "
-            f"{arm.name}'s robot file does not give their noise; add orientation_sigma_deg "
-            "(and the position noise) to its [measurement] table"
-        )
-    arm = arm.replace(oriented=oriented, view=None)  # the view is for plans, not data
-    if meas.targets is None:
-        if arm.target_labels:
-            raise InputError(
-                f"{arm.name} has targets ({', '.join(arm.target_labels)}) but the measurements "
-                "have no target column; add a column 'target' naming the target of every row"
-            )
-        return arm
-    seen = list(dict.fromkeys(meas.targets))
-    if arm.known_targets:
-        keep = [i for i, label in enumerate(arm.targets) if label in seen]
-        labels = tuple(arm.targets[i] for i in keep)
-        return arm.replace(targets=labels, target_positions=arm.target_positions[keep])
-    return arm.replace(targets=tuple(seen), target_positions=np.zeros((0, 3)))
-
-
-def calibrate_serial(
-    spec: SerialSpec,
-    meas: Measurements,
-    *,
-    source: str = "measurements",
-    fixed: tuple[str, ...] | None = None,
-    sigma: float | None = None,
-    method: str = "auto",
-    robust: bool = False,
-    folds: int | None = None,
-    seed: int | np.random.Generator | None = 0,
-    compliance: bool = True,
-    progress: ProgressCallback | None = None,
-) -> CalibrationRun:
-    """:func:`calibrate` for a spatial arm: the same options, checks and warnings.
-
-    The base pose and the targets are found from the data (no start from the
-    user); the identifiable set is chosen for these measurements and named.
-    With ``[elastostatic]`` (and ``compliance``) the joints' compliance is
-    fitted with the geometry, under the rows' payloads.
-    """
-    spec, meas, ignored = _as_asked(spec, meas, source, sigma, compliance)
-    try:
-        spec, arm = model_spec(spec, serial_arm(spec.arm, meas), fixed=fixed, sigma=sigma)
-        points = meas.instrument_points  # 3-D: serial_arm refuses data without z_mm
-        index = None if meas.targets is None else arm.target_index(meas.targets)
-        loads = None if spec.elastic is None else meas.loads(spec.elastic.payload_kg)
-        model = fit_model(spec, arm, loads)
-        mistake = _unit_mistake(model, meas, index, loads)
-        if mistake is not None:
-            raise InputError(f"{source}: {mistake}")
-        cal = identify(
-            model,
-            meas.q,
-            points,
-            method=method,
-            robust=robust,
-            pose_labels=meas.labels,
-            rows=meas.rows,
-            row_sigma=meas.row_sigma,
-            target=index,
-            loads=loads,
-        )
-    except (InputError, FixError):
-        raise
-    except ArmcalError as exc:
-        raise prefixed(source, exc) from None
-    except ValueError as exc:
-        raise InputError(f"{source}: {unrendered(exc)}") from None
-    large = deviation_warning(cal.model, cal.params)
-    return _calibration_run(
-        cal, spec, meas, points, ignored, large, folds, sigma, seed, source, progress=progress
-    )
-
-
 @dataclass(frozen=True, eq=False)
 class ValidationRun:
     """Held-out measurements against a calibration, and what they say."""
@@ -502,8 +290,8 @@ def validate_measurements(
         )
     points = meas.xy if meas.z is None else meas.instrument_points
     loads = row_loads(cal.model, meas)
-    target = _row_targets(arm, meas)
-    mistake = _unit_mistake(cal.model, meas, target, loads)
+    target = row_targets(arm, meas)
+    mistake = unit_mistake_of(cal.model, meas, target, loads)
     if mistake is not None:
         raise InputError(f"{source}: {mistake}")
     try:
@@ -666,59 +454,6 @@ class ExportRun:
     rigid: RigidExport | None = None
 
 
-def _ur_arm(cal: CalibratedArm, path: str) -> tuple[SerialChain, str, UrDh]:
-    """The calibrated chain of a UR arm (DH base frame to flange, whatever frames its
-    description used: :func:`armcal.files.ur.ur_frames`), its model
-    (:func:`armcal.files.ur.ur_model_of`) and its deltas from that model's table, for a
-    controller's file at ``path``."""
-    arm = cal.arm
-    if not isinstance(arm, SpatialArm) or arm.n_joints != 6 or set(arm.chain.kinds) != {"R"}:
-        raise ArmcalError(f"{path}: a UR file needs a six-axis revolute arm; {arm.name} is not")
-    frames = ur_frames(arm.chain)  # of the nominal: they hold for its calibration
-    if frames.distance_mm > FAR_FROM_NOMINAL_MM:
-        raise ArmcalError(
-            f"{path}: {arm.name} is no UR model in any base and tip frames (nearest "
-            f"{frames.model}, {frames.distance_mm:.4g} mm away); describe the arm with a robot "
-            "file's [ur] table or Universal Robots' own URDF"
-        )
-    chain = frames.apply(arm.calibrated_chain(cal.arm_params))
-    model, distance = ur_model_of(chain)
-    if distance > FAR_FROM_NOMINAL_MM:
-        raise ArmcalError(
-            f"{path}: the calibrated {arm.name} moves the flange {distance:.4g} mm from the "
-            f"nominal {model}'s (a calibration moves it a few mm); check the calibration"
-        )
-    try:
-        deltas = ur_deltas(chain, model)
-    except ValueError as exc:  # what a UR's DH table cannot hold, e.g. a tilted joint 1
-        raise ArmcalError(
-            f"{path}: the calibrated {arm.name} has no UR DH table: {unrendered(exc)}; a UR's "
-            "table starts "
-            "at joint 1's axis, so leave the base pose free (the joint's placement merges "
-            "into it) rather than fixing base.* and identifying j1.*"
-        ) from None
-    return chain, model, deltas
-
-
-def _ur_texts(cal: CalibratedArm, ur_path: str | None, ros_path: str | None) -> dict[str, str]:
-    """A UR controller's calibration.conf deltas and the ROS driver's calibration YAML."""
-    texts: dict[str, str] = {}
-    first = ur_path if ur_path is not None else ros_path
-    if first is None:
-        return texts
-    chain, model, deltas = _ur_arm(cal, first)
-    if ur_path is not None:
-        texts[ur_path] = format_ur_calibration(deltas)
-    if ros_path is not None:
-        try:
-            texts[ros_path] = format_ur_kinematics(chain, model, f"armcal_{cal.arm.name}_{model}")
-        except ValueError as exc:
-            raise ArmcalError(
-                f"{ros_path}: the calibrated {cal.arm.name}: {unrendered(exc)}"
-            ) from None
-    return texts
-
-
 def export_files(
     cal: CalibratedArm,
     *,
@@ -738,11 +473,18 @@ def export_files(
     :func:`armcal.export_rigid.rigid_export`; ``rigid-export-worse`` when it fits
     them worse than the nominal arm).
     """
-    serial = isinstance(cal.arm, SpatialArm)  # the file formats differ by family
+    family = family_of(cal.model)  # the file formats differ by family
+    writers = family.role("exports")()
     texts: dict[str, str] = {}
-    texts.update(_ur_texts(cal, ur_path, ros_path))
+    if ur_path is not None or ros_path is not None:
+        if "ur" not in writers:
+            first = ur_path if ur_path is not None else ros_path
+            raise ArmcalError(
+                f"{first}: a UR file needs a six-axis revolute arm; {cal.arm.name} is not"
+            )
+        texts.update(writers["ur"](cal, ur_path, ros_path))
     if robot_toml_path is not None:
-        texts[robot_toml_path] = serial_robot_toml(cal) if serial else robot_toml(cal)
+        texts[robot_toml_path] = writers["robot"](cal)
     warnings = []
     if offsets_path is not None:
         texts[offsets_path] = joint_offsets_csv(cal)
@@ -754,14 +496,9 @@ def export_files(
             )
         )
     if urdf_path is not None:
-        texts[urdf_path] = serial_urdf(cal) if serial else urdf(cal)
-        coupled = (
-            not np.array_equal(cal.arm.joint_map, np.eye(cal.arm.n_joints))
-            if serial
-            else not urdf_joints_are_readings(cal.arm)
-        )
-        if coupled:
-            values = "M q" if serial else "the relative link angles D M q"
+        texts[urdf_path] = writers["urdf"](cal)
+        values = family.role("coupled_urdf")(cal.arm)
+        if values is not None:
             warnings.append(
                 ArmcalWarning(
                     "urdf-joint-values",

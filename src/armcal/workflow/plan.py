@@ -25,13 +25,13 @@ from ..doe import (
     random_plan,
 )
 from ..errors import ArmcalError, ArmcalWarning, NotIdentifiableError, action
-from ..files import RobotSpec, SerialSpec
+from ..files import RobotSpec
 from ..identification.experiment import (
     coverage,
     plan_degenerate_warning,
     refuse_registration_only,
 )
-from ..models import FitModel, Loads, PlanarArm, SpatialArm
+from ..models import FitModel, Loads
 from ..plausibility import truth_warning
 from ..progress import ProgressCallback
 from ..simulate import MonteCarlo, monte_carlo
@@ -144,9 +144,7 @@ class EvaluationRun:
     warnings: tuple[ArmcalWarning, ...]
 
 
-def _outside_warning(
-    spec: RobotSpec | SerialSpec, q: np.ndarray, source: str
-) -> ArmcalWarning | None:
+def _outside_warning(spec: RobotSpec, q: np.ndarray, source: str) -> ArmcalWarning | None:
     """``outside-region`` for the poses of ``q`` the instrument cannot see, or None."""
     outside = np.flatnonzero(~spec.arm.feasible(q))
     if not outside.size:
@@ -159,8 +157,8 @@ def _outside_warning(
 
 
 def evaluate_file(
-    spec: RobotSpec | SerialSpec,
-    arm: PlanarArm | SpatialArm,
+    spec: RobotSpec,
+    arm: FitModel,
     q: np.ndarray,
     *,
     test_q: np.ndarray,
@@ -222,8 +220,8 @@ def moving_set(model: FitModel, seed: int) -> FitModel:
 
 
 def design_plan(
-    spec: RobotSpec | SerialSpec,
-    arm: PlanarArm | SpatialArm,
+    spec: RobotSpec,
+    arm: FitModel,
     poses: int,
     *,
     criterion: str = "D",
@@ -351,8 +349,8 @@ def simulate_plan(
 
 
 def size_plan(
-    spec: RobotSpec | SerialSpec,
-    arm: PlanarArm | SpatialArm,
+    spec: RobotSpec,
+    arm: FitModel,
     requirement: str,
     goal: float,
     *,

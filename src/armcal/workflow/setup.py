@@ -19,8 +19,8 @@ import numpy as np
 
 from ..doe import random_plan
 from ..errors import ArmcalError, NotIdentifiableError, action
-from ..files import RobotSpec, SerialSpec, read_plan, unknown_parameter
-from ..models import FitModel, Loads, PlanarArm, SpatialArm, TermChoice
+from ..files import RobotSpec, read_plan, unknown_parameter
+from ..models import FitModel, Loads, TermChoice
 from ..noise import instrument_override
 
 __all__ = [
@@ -57,7 +57,7 @@ def prefixed(source: str, exc: ArmcalError) -> ArmcalError:
 
 
 #: A robot file's arm, of either family: what --fix and --sigma apply to.
-Arm = TypeVar("Arm", PlanarArm, SpatialArm, PlanarArm | SpatialArm)
+Arm = TypeVar("Arm", bound=FitModel)
 
 
 def with_fixed(arm: Arm, fixed: Sequence[str], terms: Sequence[str] = ()) -> Arm:
@@ -94,7 +94,7 @@ def model_arm(
 
 
 #: A robot file of either family.
-Spec = TypeVar("Spec", RobotSpec, SerialSpec, RobotSpec | SerialSpec)
+Spec = TypeVar("Spec", bound=RobotSpec)
 
 
 def model_spec(
@@ -116,7 +116,7 @@ def model_spec(
     return spec, model_arm(arm, fixed=fixed, sigma=sigma, terms=terms)
 
 
-def simulation_sigma(spec: RobotSpec | SerialSpec, sigma: float | None) -> float | None:
+def simulation_sigma(spec: RobotSpec, sigma: float | None) -> float | None:
     """The noise a simulation draws: ``sigma``, else None (the robot file's whole noise
     model, shape and encoders), else :data:`DEFAULT_SIGMA_MM`."""
     if sigma is not None:
@@ -124,14 +124,14 @@ def simulation_sigma(spec: RobotSpec | SerialSpec, sigma: float | None) -> float
     return None if spec.arm.noise is not None else DEFAULT_SIGMA_MM
 
 
-def design_sigma(arm: PlanarArm | SpatialArm) -> float:
+def design_sigma(arm: FitModel) -> float:
     """The reference noise of a model arm (:func:`model_arm`), else :data:`DEFAULT_SIGMA_MM`."""
-    return arm.sigma if arm.sigma is not None else DEFAULT_SIGMA_MM
+    return arm.noise.sigma_mm if arm.noise is not None else DEFAULT_SIGMA_MM
 
 
 def fit_model(
-    spec: RobotSpec | SerialSpec,
-    arm: PlanarArm | SpatialArm,
+    spec: RobotSpec,
+    arm: FitModel,
     loads: Loads | None = None,
     *,
     virtual: bool = False,
@@ -182,8 +182,8 @@ def _check_terms(model: FitModel, terms: TermChoice) -> None:
 
 
 def plan_model(
-    spec: RobotSpec | SerialSpec,
-    arm: PlanarArm | SpatialArm,
+    spec: RobotSpec,
+    arm: FitModel,
     m: int,
     payload: np.ndarray | None = None,
     *,
@@ -232,7 +232,7 @@ def check_plan_size(poses: int, memory: int | None = None) -> None:
 
 
 def test_poses(
-    spec: RobotSpec | SerialSpec, seed: int, path: str | None = None, *, loaded: bool = False
+    spec: RobotSpec, seed: int, path: str | None = None, *, loaded: bool = False
 ) -> np.ndarray:
     """Poses where positioning accuracy matters: the plan file ``path``, else 1000 uniform
     in the limits (seeded by ``seed``).

@@ -135,6 +135,11 @@ class PlanarArm(RigidLoads, MinimalPlanar, PlanarArmSpec):
     ('dq1',)
     """
 
+    @property
+    def family(self) -> str:
+        """``"planar"``: the registry's key (:mod:`armcal.families`)."""
+        return "planar"
+
     def __repr__(self) -> str:
         lengths = ", ".join(f"{v:g}" for v in self.link_lengths)
         extras = [f"fixed={list(self.fixed)}"] if self.fixed else []

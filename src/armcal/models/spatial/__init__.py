@@ -12,5 +12,5 @@
   (:class:`~armcal.models.spatial.arm.SpatialArm`);
 * :mod:`~armcal.models.spatial.gravity`, :mod:`~armcal.models.spatial.compliance` --
   joints twisting under gravity and payload
-  (:class:`~armcal.models.spatial.compliance.CompliantSerialArm`).
+  (:class:`~armcal.models.spatial.compliance.CompliantSpatialArm`).
 """

@@ -13,7 +13,7 @@ into the generic ones of :mod:`~armcal.models.information`.
 
 from __future__ import annotations
 
-from collections.abc import Callable, Sequence
+from collections.abc import Sequence
 from dataclasses import dataclass, field, replace
 from functools import cached_property
 from typing import Any
@@ -27,22 +27,17 @@ from ...numerics import ScaledSVD
 from ..defaults import RigidLoads
 from ..identifiability import Identifiability
 from ..information import (
-    BlockInformation,
-    Linearization,
     column_identifiability,
     covariance_factor_from,
     identifiable_or_raise,
     ill_conditioned_warning,
     refit_free,
-    whitened_blocks,
     whitened_free_jacobian,
 )
 from ..interface import (
     Conditions,
-    DesignEffort,
     DeviationBounds,
     Effect,
-    FitModel,
     LinearPositions,
     Loads,
 )
@@ -57,7 +52,7 @@ from .chain import (
     transform,
     vector_rotation,
 )
-from .gradient import Extra, linearization
+from .design import SpatialDesign
 from .kinematics import (
     ChainKinematics,
     SpatialLayout,
@@ -67,6 +62,7 @@ from .kinematics import (
 )
 from .registration import register, registered_targets
 from .selection import select_from_rows
+from .tool import SpatialTool
 from .view import SpatialView
 
 __all__ = [
@@ -80,7 +76,7 @@ SINGLE_TARGET = "tool"
 
 
 @dataclass(frozen=True, eq=False)
-class SpatialArm(RigidLoads):
+class SpatialArm(SpatialDesign, SpatialTool, RigidLoads):
     """A spatial serial arm to calibrate.
 
     Attributes
@@ -135,6 +131,26 @@ class SpatialArm(RigidLoads):
     oriented: bool = False
     target_turns: np.ndarray = field(default_factory=lambda: np.zeros((0, 3)))
     view: SpatialView | None = None
+
+    @property
+    def family(self) -> str:
+        """``"spatial"``: the registry's key (:mod:`armcal.families`)."""
+        return "spatial"
+
+    @property
+    def value_limits(self) -> np.ndarray:
+        """The chain's joint limits (a URDF's), on the joint values ``u = M q``."""
+        return self.chain.joint_limits
+
+    @property
+    def joint_names(self) -> tuple[str, ...]:
+        """The chain's joint names (a URDF's)."""
+        return self.chain.joint_names
+
+    @property
+    def rule_held(self) -> tuple[str, ...]:
+        """The parameters :mod:`~armcal.models.spatial.selection` holds."""
+        return self.held
 
     def __post_init__(self) -> None:
         n = self.chain.n_joints
@@ -421,7 +437,7 @@ deviation_bounds`); the base pose and the targets are the instrument's."""
             raise ValueError(f"{self.name} has several targets: say which one every row measures")
         return Conditions(q, index, None, sigma_mm)
 
-    def _kinematics(
+    def chain_kinematics(
         self, conditions: Conditions, params: np.ndarray | None, *, derivatives: bool = False
     ) -> ChainKinematics:
         return kinematics(
@@ -437,7 +453,7 @@ deviation_bounds`); the base pose and the targets are the instrument's."""
     def positions(self, conditions: Conditions, params: np.ndarray | None = None) -> np.ndarray:
         """The targets' positions ``(..., m, 3)`` (mm); for a 6-DoF instrument also their
         orientations' turns from the rows' frames (rotation vectors, rad): ``(..., m, 6)``."""
-        kin = self._kinematics(conditions, params)
+        kin = self.chain_kinematics(conditions, params)
         if not self.oriented:
             return kin.points
         assert kin.target_rotation is not None
@@ -460,29 +476,29 @@ deviation_bounds`); the base pose and the targets are the instrument's."""
         turn = spatial_pose.turns(kin.target_rotation, conditions.frames)
         return np.concatenate([position, spatial_pose.turn_rows(angular, turn)], axis=-2)
 
-    def _derivative(
+    def derivative(
         self, conditions: Conditions, params: np.ndarray | None, name: str
     ) -> np.ndarray:
         """One of the derivatives of :class:`ChainKinematics` (``jacobian``, ...)."""
-        found = getattr(self._kinematics(conditions, params, derivatives=True), name)
+        found = getattr(self.chain_kinematics(conditions, params, derivatives=True), name)
         assert found is not None
         return found
 
     def jacobian(self, conditions: Conditions, params: np.ndarray | None = None) -> np.ndarray:
-        kin = self._kinematics(conditions, params, derivatives=True)
+        kin = self.chain_kinematics(conditions, params, derivatives=True)
         return self._stacked(kin, conditions, kin.jacobian, kin.target_angular)
 
     def joint_jacobian(
         self, conditions: Conditions, params: np.ndarray | None = None
     ) -> np.ndarray:
-        kin = self._kinematics(conditions, params, derivatives=True)
+        kin = self.chain_kinematics(conditions, params, derivatives=True)
         return self._stacked(kin, conditions, kin.joint_jacobian, kin.tip_angular)
 
     def jacobians(
         self, conditions: Conditions, params: np.ndarray | None = None
     ) -> tuple[np.ndarray, np.ndarray]:
         """:meth:`jacobian` and :meth:`joint_jacobian` from one pass of the kinematics."""
-        kin = self._kinematics(conditions, params, derivatives=True)
+        kin = self.chain_kinematics(conditions, params, derivatives=True)
         return (
             self._stacked(kin, conditions, kin.jacobian, kin.target_angular),
             self._stacked(kin, conditions, kin.joint_jacobian, kin.tip_angular),
@@ -506,10 +522,10 @@ deviation_bounds`); the base pose and the targets are the instrument's."""
         *,
         noise: NoiseModel | None = None,
     ) -> np.ndarray:
-        noise = self._noise_of(noise)
+        noise = self.noise_of(noise)
         return noise.pose_covariances(**self._row_noise(conditions, params, noise))
 
-    def _noise_of(self, noise: NoiseModel | None) -> NoiseModel:
+    def noise_of(self, noise: NoiseModel | None) -> NoiseModel:
         """The 3-D noise model: ``noise``, else the arm's, else unit."""
         return relative_noise(self.noise if noise is None else noise).for_dim(3)
 
@@ -521,7 +537,9 @@ deviation_bounds`); the base pose and the targets are the instrument's."""
         points where a laser tracker's noise depends on them."""
         kin = joint = None
         if noise.joint_sigma is not None or noise.tracker is not None:
-            kin = self._kinematics(conditions, params, derivatives=noise.joint_sigma is not None)
+            kin = self.chain_kinematics(
+                conditions, params, derivatives=noise.joint_sigma is not None
+            )
             if kin.joint_jacobian is not None:
                 joint = self._stacked(kin, conditions, kin.joint_jacobian, kin.tip_angular)
         shape = np.broadcast_shapes(
@@ -541,7 +559,7 @@ deviation_bounds`); the base pose and the targets are the instrument's."""
         plain = self.noise is None or self.noise.isotropic_iid
         if plain and conditions.sigma_mm is None and not self.oriented:
             return None
-        noise = self._noise_of(None)
+        noise = self.noise_of(None)
         return noise.whitening(**self._row_noise(conditions, params, noise))
 
     # -- fitting -----------------------------------------------------------------------
@@ -576,7 +594,7 @@ deviation_bounds`); the base pose and the targets are the instrument's."""
     ) -> np.ndarray:
         """Parameters ``(p,)``: the nominal arm with its base pose and targets registered to
         one point set ``(m, 3)`` (:mod:`~armcal.models.spatial.registration`)."""
-        at_tip = self._kinematics(conditions, self._at_tip())  # targets at the tip frame
+        at_tip = self.chain_kinematics(conditions, self._at_tip())  # targets at the tip frame
         frames, tips = at_tip.rotation, at_tip.points
         target = (
             np.zeros(conditions.m, dtype=int) if conditions.target is None else conditions.target
@@ -720,129 +738,5 @@ deviation_bounds`); the base pose and the targets are the instrument's."""
             )
         if not self.oriented:
             return rows
-        frames = self._kinematics(rows, None).target_rotation
+        frames = self.chain_kinematics(rows, None).target_rotation
         return rows.with_frames(frames)
-
-    # -- design --------------------------------------------------------------------------
-
-    @property
-    def design_effort(self) -> DesignEffort:
-        """A start costs the chain's Jacobian and its derivative at every pose and target,
-        and starts agree (the industrial arm's 40-pose D-optimum: 4 starts of 100 steps
-        reach 0.7677702, 48 of 400 0.7677832); 150 polish iterations end within 3e-6 of
-        500 in log D (60 poses, 3 reflectors); the certificate's search is sized likewise
-        (a bound of 0.9977 against 0.9984 with the planar defaults)."""
-        return DesignEffort(
-            starts=4, steps=100, polish=150, candidates=1000, rounds=2, search=3000
-        )
-
-    def feasible(self, q: np.ndarray, *, tol: float = 1e-9) -> np.ndarray:
-        """Poses within the limits whose every target the instrument sees."""
-        ok = np.all(self.within_limits(q, tol=tol), axis=-1)
-        if self.view is None:
-            return ok
-        return ok & np.all(self._view_of(q, derivatives=False)[0] >= -tol, axis=-1)
-
-    @property
-    def has_view(self) -> bool:
-        return self.view is not None
-
-    def view_constraints(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray] | None:
-        """The instrument's volume, acceptance angle and floor, in the robot's frame where the
-        robot file places the instrument (:mod:`~armcal.models.spatial.view`)."""
-        if self.view is None:
-            return None
-        g, dg = self._view_of(q, derivatives=True)
-        assert dg is not None
-        return g, dg
-
-    def _view_of(
-        self, q: np.ndarray, *, derivatives: bool
-    ) -> tuple[np.ndarray, np.ndarray | None]:
-        assert self.view is not None
-        rows = self.plan_conditions(np.asarray(q, dtype=float))
-        kin = self._kinematics(rows, self.in_robot_frame(self.nominal)[1], derivatives=derivatives)
-        return self.view.of_rows(kin, self.target_positions, rows.target, len(self.targets))
-
-    @property
-    def rotation_invariant(self) -> bool:
-        return False
-
-    @property
-    def information_bound(self) -> bool:
-        return False
-
-    def plan_information(self, q: np.ndarray, loads: Loads | None = None) -> BlockInformation:
-        return BlockInformation(self, q, loads, unit_columns=True, linearize=self.linearize)
-
-    def linearize(
-        self,
-        conditions: Conditions,
-        extra: Callable[[ChainKinematics], Extra] | None = None,
-        model: FitModel | None = None,
-    ) -> Linearization:
-        """The rows' whitened blocks at the nominal parameters and their pullback from one
-        pass of the kinematics (:mod:`~armcal.models.spatial.gradient`); no pullback for
-        rows' own sigmas and a 6-DoF instrument's turns.  ``extra`` gives the columns
-        ``model`` (default: this arm) adds to the arm's free ones, from the kinematics."""
-        if self.oriented or conditions.sigma_mm is not None:
-            return Linearization(whitened_blocks(model or self, conditions), None)
-        kin = self._kinematics(conditions, None, derivatives=True)
-        columns, noise = np.flatnonzero(self.free), self._noise_of(None)
-        added = None if extra is None else extra(kin)
-        return linearization(kin, self.layout, self.joint_map, columns, noise, added)
-
-    def closed_form_plans(self, m: int) -> None:
-        return None
-
-    def paper_criteria(self, q: np.ndarray) -> None:
-        return None
-
-    def design_loads(self, payloads: Sequence[float] | None) -> None:
-        return None
-
-    # -- the tool --------------------------------------------------------------------------
-
-    @property
-    def orientation_dim(self) -> int:
-        return 3
-
-    @property
-    def angle_scale_mm(self) -> float:
-        """The distance at which a tool angle counts like a position: 100 mm."""
-        return 100.0
-
-    def orientation(self, conditions: Conditions, params: np.ndarray | None = None) -> np.ndarray:
-        """The tip frame's orientation ``(..., m, 3)`` in the instrument frame, as a rotation
-        vector (axis times angle, rad)."""
-        return rotation_vector(self._kinematics(conditions, params).rotation)
-
-    def orientation_error(self, orientation: np.ndarray, reference: np.ndarray) -> np.ndarray:
-        """The small turn ``(..., m, 3)`` (rad, instrument frame) from ``reference`` to
-        ``orientation``: the rotation vector of ``R R_ref^T``."""
-        turn = vector_rotation(orientation) @ np.swapaxes(vector_rotation(reference), -1, -2)
-        return rotation_vector(turn)
-
-    def tip_rotation(self, conditions: Conditions, params: np.ndarray | None = None) -> np.ndarray:
-        """The tip frame's rotation ``(..., m, 3, 3)`` in the instrument frame."""
-        return self._kinematics(conditions, params).rotation
-
-    def orientation_joint_jacobian(
-        self, conditions: Conditions, params: np.ndarray | None = None
-    ) -> np.ndarray:
-        """The tip frame's angular velocity per reading ``(..., m, 3, n)``."""
-        return self._derivative(conditions, params, "tip_angular")
-
-    def orientation_jacobian(
-        self, conditions: Conditions, params: np.ndarray | None = None
-    ) -> np.ndarray:
-        """The tip frame's angular velocity per parameter ``(..., m, 3, p)``."""
-        return self._derivative(conditions, params, "angular")
-
-    def in_robot_frame(self, params: np.ndarray) -> tuple[SpatialArm, np.ndarray]:
-        out = np.array(params, dtype=float)
-        out[..., :6] = 0.0
-        return self, out
-
-    def arm_params(self, params: np.ndarray) -> np.ndarray:
-        return np.asarray(params, dtype=float)

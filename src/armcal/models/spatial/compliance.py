@@ -1,4 +1,4 @@
-"""Joint compliance of a spatial serial arm under gravity and payload: :class:`CompliantSerialArm`.
+"""Joint compliance of a spatial arm under gravity and payload: :class:`CompliantSpatialArm`.
 
 A revolute joint twists under the static torque of everything beyond it (the
 links' weight and the payload): ``du_j = k_j tau_j`` (linear elastostatics, one
@@ -33,11 +33,11 @@ Parameters, in display units
   torque.
 
 What the rows cannot identify is held at zero and named
-(:meth:`CompliantSerialArm.prepared`): a joint whose axis is parallel to
+(:meth:`CompliantSpatialArm.prepared`): a joint whose axis is parallel to
 gravity (joint 1 of a floor-mounted arm) has no torque; a torque that never
 changes is a zero offset, ``dq{j}``; two stations that coincide (a spherical
 wrist) are one.  The user may hold more (a robot file's ``[identify]``, the fix
-option: :meth:`CompliantSerialArm.with_fixed`); a term the user lists as free
+option: :meth:`CompliantSpatialArm.with_fixed`); a term the user lists as free
 that the rows cannot identify is refused with the rule's reason rather than
 held or fitted (its column lies within 1 % of the span of the others, so a fit
 would trade it against them and report a number the data do not hold).
@@ -76,8 +76,8 @@ from .selection import column_space, select_effect
 __all__ = [
     "C_SCALE",
     "K_SCALE",
-    "CompliantSerialArm",
-    "SerialElastics",
+    "CompliantSpatialArm",
+    "SpatialElastics",
 ]
 
 #: Display scale of ``k`` (rad/(N m) -> urad/(N m)) and ``c`` (rad/m -> mdeg/m).
@@ -91,7 +91,7 @@ _PROBE_POSES = 200
 
 
 @dataclass(frozen=True, eq=False)
-class SerialElastics:
+class SpatialElastics:
     """What loads a spatial arm's joints: gravity, the links' masses and the payload.
 
     Attributes
@@ -124,12 +124,12 @@ class SerialElastics:
         com_mm: ArrayLike | None = None,
         payload_kg: float = 0.0,
         payload_com_mm: ArrayLike = (0.0, 0.0, 0.0),
-    ) -> SerialElastics:
+    ) -> SpatialElastics:
         """Checked parameters; ``gravity`` is a direction scaled to standard gravity.
 
         Examples
         --------
-        >>> e = SerialElastics.create(2, mass_kg=[10, 5], com_mm=[[0, 0, 100], [200, 0, 0]])
+        >>> e = SpatialElastics.create(2, mass_kg=[10, 5], com_mm=[[0, 0, 100], [200, 0, 0]])
         >>> e.gravity.tolist(), e.lumped
         ([0.0, 0.0, -9.80665], False)
         """
@@ -160,20 +160,20 @@ class SerialElastics:
         """True when the masses are unknown (parameters ``c{j}.{s}``)."""
         return self.links is None
 
-    def model_for(self, arm: Any, loads: Loads, *, virtual: bool = False) -> CompliantSerialArm:
+    def model_for(self, arm: Any, loads: Loads, *, virtual: bool = False) -> CompliantSpatialArm:
         """The compliant model of ``arm`` for rows with ``loads``
-        (:meth:`CompliantSerialArm.for_loads`)."""
-        return CompliantSerialArm.for_loads(arm, self, loads, virtual=virtual)
+        (:meth:`CompliantSpatialArm.for_loads`)."""
+        return CompliantSpatialArm.for_loads(arm, self, loads, virtual=virtual)
 
     def term_names(self, arm: SpatialArm) -> tuple[str, ...]:
         """Every compliance term a model of ``arm`` can have, whatever its rows' loads."""
-        return CompliantSerialArm(arm, self, known_loads=True).compliance_names
+        return CompliantSpatialArm(arm, self, known_loads=True).compliance_names
 
     def to_dict(self) -> dict[str, Any]:
         """The ``elastostatic`` section of a calibration file."""
         links = self.links
         return {
-            "family": "serial",
+            "family": "spatial",
             "gravity_mps2": self.gravity.tolist(),
             "link_masses_kg": None if links is None else links.mass_kg.tolist(),
             "link_com_mm": None if links is None else links.com_mm.tolist(),
@@ -182,7 +182,7 @@ class SerialElastics:
         }
 
     @classmethod
-    def from_dict(cls, data: dict[str, Any], n: int) -> SerialElastics:
+    def from_dict(cls, data: dict[str, Any], n: int) -> SpatialElastics:
         masses = data["link_masses_kg"]
         links = None
         if masses is not None:
@@ -199,7 +199,7 @@ class SerialElastics:
 
 
 @dataclass(frozen=True, eq=False)
-class CompliantSerialArm(ArmEffect):
+class CompliantSpatialArm(ArmEffect):
     """A spatial serial arm whose revolute joints twist under gravity (module notes).
 
     The parameter vector is the arm's followed by the compliance parameters
@@ -210,7 +210,7 @@ class CompliantSerialArm(ArmEffect):
     ----------
     arm : SpatialArm
         The rigid arm: its geometry, limits, noise model and held parameters.
-    elastic : SerialElastics
+    elastic : SpatialElastics
     known_loads : bool
         Whether the rows carry payloads that vary (lumped mode: ``k`` as well).
     held : tuple of str
@@ -221,19 +221,19 @@ class CompliantSerialArm(ArmEffect):
     """
 
     arm: SpatialArm
-    elastic: SerialElastics
+    elastic: SpatialElastics
     known_loads: bool = False
     held: tuple[str, ...] = ()
     merges: tuple[str, ...] = ()
 
     def __repr__(self) -> str:
         mode = "lumped" if self.elastic.lumped else "masses known"
-        return f"CompliantSerialArm({self.arm.name}, {mode}, {len(self.compliance_names)} terms)"
+        return f"CompliantSpatialArm({self.arm.name}, {mode}, {len(self.compliance_names)} terms)"
 
     @classmethod
     def for_loads(
-        cls, arm: SpatialArm, elastic: SerialElastics, loads: Loads, *, virtual: bool = False
-    ) -> CompliantSerialArm:
+        cls, arm: SpatialArm, elastic: SpatialElastics, loads: Loads, *, virtual: bool = False
+    ) -> CompliantSpatialArm:
         """The model for rows with ``loads``.  In lumped mode payloads that vary add
         ``k{j}``; one constant payload only adds to the lumped weight, and the model
         records it (:meth:`unpredicted_loads`).  ``virtual``: a virtual robot, which
@@ -339,20 +339,20 @@ class CompliantSerialArm(ArmEffect):
     def unanchor(self, conditions: Conditions, points: np.ndarray) -> np.ndarray:
         return self.arm.unanchor(conditions, points)
 
-    def _with_arm(self, arm: SpatialArm) -> CompliantSerialArm:
-        return CompliantSerialArm(arm, self.elastic, self.known_loads)
+    def _with_arm(self, arm: SpatialArm) -> CompliantSpatialArm:
+        return CompliantSpatialArm(arm, self.elastic, self.known_loads)
 
-    def with_noise(self, noise: NoiseModel | None) -> CompliantSerialArm:
+    def with_noise(self, noise: NoiseModel | None) -> CompliantSpatialArm:
         return replace(self, arm=self.arm.with_noise(noise))
 
-    def with_fixed(self, fixed: Sequence[str]) -> CompliantSerialArm:
+    def with_fixed(self, fixed: Sequence[str]) -> CompliantSpatialArm:
         """``fixed`` held, replacing the held set: the arm's parameters among them and the
         compliance terms (every term any rows could give the model is one,
-        :meth:`SerialElastics.term_names`); the rule's set is chosen again
+        :meth:`SpatialElastics.term_names`); the rule's set is chosen again
         (:meth:`prepared`)."""
         geometry, terms = self.split_fixed(fixed)
         elastic = replace(self.elastic, terms=terms)
-        return CompliantSerialArm(self.arm.with_fixed(geometry), elastic, self.known_loads)
+        return CompliantSpatialArm(self.arm.with_fixed(geometry), elastic, self.known_loads)
 
     def unpredicted_loads(self, loads: Loads) -> str | None:
         """In lumped mode without ``k``, any payload but the one the ``c`` hold."""
@@ -375,7 +375,7 @@ class CompliantSerialArm(ArmEffect):
         """Gravity is given in the robot's base frame, not in a plane of the instrument's."""
         return False
 
-    def with_gravity(self, gravity: np.ndarray | None) -> CompliantSerialArm:
+    def with_gravity(self, gravity: np.ndarray | None) -> CompliantSpatialArm:
         return self
 
     # -- the deflected arm -----------------------------------------------------------------
@@ -542,7 +542,7 @@ class CompliantSerialArm(ArmEffect):
 
     def prepared(
         self, conditions: Conditions, points: np.ndarray | None = None
-    ) -> CompliantSerialArm:
+    ) -> CompliantSpatialArm:
         """The arm prepared for these rows (:meth:`SpatialArm.prepared`), and the compliance
         they cannot identify held at zero, each named with what it merges into: the
         columns are taken after the arm's free ones, and one whose part outside the span
@@ -663,12 +663,12 @@ class CompliantSerialArm(ArmEffect):
 
     def design_loads(
         self, payloads: Sequence[float] | None
-    ) -> tuple[CompliantSerialArm, np.ndarray]:
+    ) -> tuple[CompliantSpatialArm, np.ndarray]:
         """The model of a plan whose poses carry ``payloads`` (kg; default 0 and the robot
         file's payload), with the compliance that poses at those payloads identify (a
         fixed probe of random poses within the limits decides)."""
         values = np.array(payload_choices(self.elastic.payload_kg, payloads))
-        model = CompliantSerialArm.for_loads(
+        model = CompliantSpatialArm.for_loads(
             self.arm, self.elastic, Loads.create(values.size, values)
         )
         lo, hi = self.joint_limits[:, 0], self.joint_limits[:, 1]
@@ -704,7 +704,7 @@ class CompliantSerialArm(ArmEffect):
         joint = self.arm.orientation_joint_jacobian(bent, geometry)
         return np.concatenate([geo, self._columns(conditions, joint)], axis=-1)
 
-    def in_robot_frame(self, params: np.ndarray) -> tuple[CompliantSerialArm, np.ndarray]:
+    def in_robot_frame(self, params: np.ndarray) -> tuple[CompliantSpatialArm, np.ndarray]:
         """The base pose set to 0; gravity is in the base frame already."""
         geometry, compliance = self.split(np.asarray(params, dtype=float))
         arm, robot = self.arm.in_robot_frame(geometry)

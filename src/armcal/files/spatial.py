@@ -22,28 +22,27 @@ from __future__ import annotations
 
 import os
 from collections.abc import Sequence
-from dataclasses import dataclass, replace
+from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
 from ..errors import ArmcalError, ArmcalWarning, InputError, unrendered
-from ..formats import SERIAL_KEYS, SERIAL_TRUTH_KEYS, TRUTH_KEYS, allowed_keys
+from ..families.registry import RobotSpec
+from ..formats import SPATIAL_KEYS, SPATIAL_TRUTH_KEYS, TRUTH_KEYS, allowed_keys
 from ..models import (
-    CompliantSerialArm,
+    FitModel,
     LinkMasses,
     SerialChain,
-    SerialElastics,
     SpatialArm,
+    SpatialElastics,
     SpatialView,
     rpy_matrix,
     transform,
 )
 from ..models.spatial.dh import convention_mistake, table_chain
-from ..paper import BUILTIN_ROBOTS
 from .common import (
-    STDIO,
     check_keys,
     check_truth_keys,
     fail,
@@ -55,14 +54,13 @@ from .common import (
 )
 from .robot_units import check_mdh_angles, check_reach, limit_warnings, urdf_limit_warning
 from .robots import (
-    SERIAL_ROBOT_KEYS,
-    RobotSpec,
+    SPATIAL_ROBOT_KEYS,
     fixed_parameters,
     held_terms,
-    load_robot,
+    refuse_unknown_robot,
     rigid_truth_message,
 )
-from .serial_noise import read_serial_noise
+from .spatial_noise import read_spatial_noise
 from .ur import (
     UR_MODELS,
     read_ur_calibration,
@@ -74,19 +72,17 @@ from .ur import (
 from .urdf import read_urdf
 
 __all__ = [
-    "BUILTIN_SERIAL_ROBOTS",
-    "SerialSpec",
-    "is_serial_robot",
-    "load_any_robot",
-    "load_serial_robot",
-    "load_serial_truth",
+    "BUILTIN_SPATIAL_ROBOTS",
+    "is_spatial_robot",
+    "load_spatial_robot",
+    "load_spatial_truth",
 ]
 
 #: The folder of the built-in spatial robots' files.
 ROBOT_FOLDER = Path(__file__).resolve().parents[1] / "robots"
 
 #: Built-in spatial robots by name: the robot file each is.
-BUILTIN_SERIAL_ROBOTS = {
+BUILTIN_SPATIAL_ROBOTS = {
     "industrial-6r": ROBOT_FOLDER / "industrial-6r.toml",
     "cobot-6r": ROBOT_FOLDER / "cobot-6r.toml",
     "arm-7r": ROBOT_FOLDER / "arm-7r.toml",
@@ -97,40 +93,11 @@ BUILTIN_SERIAL_ROBOTS = {
 _MDH_REQUIRED = ("alpha_deg", "a_mm", "theta_deg", "d_mm")
 
 
-@dataclass(frozen=True, eq=False)
-class SerialSpec:
-    """A spatial robot as loaded from a built-in name, a URDF or a robot TOML.
-
-    Attributes
-    ----------
-    arm : SpatialArm
-    source : str
-        The built-in name or the file it came from.
-    default_truth : Path or None
-        The built-in robot's truth file (a virtual arm), None for robot files.
-    warnings : tuple of ArmcalWarning
-        What reading the robot warns of.
-    elastic : SerialElastics or None
-        The ``[elastostatic]`` table: the joints twist under gravity and payload
-        (:mod:`armcal.models.spatial.compliance`); None for a rigid arm.
-    gravity_3d : None
-        As :class:`~armcal.files.robots.RobotSpec`'s: a spatial arm's gravity is in
-        its ``[elastostatic]`` table.
-    """
-
-    arm: SpatialArm
-    source: str
-    default_truth: Path | None = None
-    warnings: tuple[ArmcalWarning, ...] = ()
-    elastic: SerialElastics | None = None
-    gravity_3d: None = None
-
-
-def is_serial_robot(name_or_path: str | os.PathLike) -> bool:
+def is_spatial_robot(name_or_path: str | os.PathLike) -> bool:
     """Whether ``name_or_path`` names a spatial robot: a built-in one, a URDF, or a robot
     TOML with ``urdf``, ``[mdh]``, ``[dh]`` or ``[ur]``."""
     key = os.fspath(name_or_path)
-    if key in BUILTIN_SERIAL_ROBOTS or key.lower().endswith(_URDF_SUFFIXES):
+    if key in BUILTIN_SPATIAL_ROBOTS or key.lower().endswith(_URDF_SUFFIXES):
         return True
     path = Path(key)
     if path.suffix.lower() != ".toml" or not path.is_file():
@@ -139,19 +106,19 @@ def is_serial_robot(name_or_path: str | os.PathLike) -> bool:
         data = load_toml(path, "robot")
     except InputError:  # the robot loader reports it
         return False
-    return any(key in data for key in SERIAL_ROBOT_KEYS)
+    return any(key in data for key in SPATIAL_ROBOT_KEYS)
 
 
 #: A URDF's suffixes (a xacro file, ROS's macros for URDF, is read to say what it is).
 _URDF_SUFFIXES = (".urdf", ".xacro")
 
 
-def load_serial_robot(
+def load_spatial_robot(
     name_or_path: str | os.PathLike,
     *,
     base_link: str | None = None,
     tip_link: str | None = None,
-) -> SerialSpec:
+) -> RobotSpec[SpatialArm]:
     """A spatial robot from a built-in name, a URDF or a robot TOML (module notes).
 
     ``base_link`` and ``tip_link`` choose a URDF's chain (over a robot TOML's keys of
@@ -164,8 +131,8 @@ def load_serial_robot(
     """
     key = os.fspath(name_or_path)
     links = (base_link, tip_link)
-    if key in BUILTIN_SERIAL_ROBOTS:
-        path = BUILTIN_SERIAL_ROBOTS[key]
+    if key in BUILTIN_SPATIAL_ROBOTS:
+        path = BUILTIN_SPATIAL_ROBOTS[key]
         truth = path.with_name(path.stem + "-truth.toml")
         spec = _from_toml(path, key, links)
         return replace(spec, default_truth=truth if truth.is_file() else None)
@@ -173,22 +140,9 @@ def load_serial_robot(
     if path.suffix.lower() in _URDF_SUFFIXES:  # a missing one: the URDF reader says so
         found = read_urdf(path, base_link, tip_link)
         warnings = (*found.warnings, *_urdf_units(path, found.chain))
-        return SerialSpec(SpatialArm(found.chain, found.robot), key, warnings=warnings)
-    _refuse_unknown(key)
+        return RobotSpec(SpatialArm(found.chain, found.robot), key, warnings=warnings)
+    refuse_unknown_robot(key)
     return _from_toml(path, None, links)
-
-
-def _refuse_unknown(key: str) -> None:
-    """Refuse a robot that is no file and no built-in, listing the built-ins of both
-    families and the closest to ``key`` (a typo of a name)."""
-    if key == STDIO or key in BUILTIN_ROBOTS or key in BUILTIN_SERIAL_ROBOTS or Path(key).exists():
-        return
-    raise InputError(
-        f"{key}: robot is neither a built-in (planar: {', '.join(BUILTIN_ROBOTS)}; spatial: "
-        f"{', '.join(BUILTIN_SERIAL_ROBOTS)}) nor an existing file; "
-        f"{suggest(key, [*BUILTIN_ROBOTS, *BUILTIN_SERIAL_ROBOTS])}"
-        "give a built-in's name or the path of a robot TOML file or a URDF"
-    )
 
 
 def _urdf_units(path: Path, chain: SerialChain) -> tuple[ArmcalWarning, ...]:
@@ -196,27 +150,6 @@ def _urdf_units(path: Path, chain: SerialChain) -> tuple[ArmcalWarning, ...]:
     warnings for lengths that look like another unit and limits that look like degrees."""
     found = [check_reach(path, chain, urdf=True), urdf_limit_warning(path, chain)]
     return tuple(w for w in found if w is not None)
-
-
-def load_any_robot(
-    name_or_path: str | os.PathLike,
-    *,
-    base_link: str | None = None,
-    tip_link: str | None = None,
-) -> RobotSpec | SerialSpec:
-    """A planar robot (:func:`~armcal.files.robots.load_robot`) or a spatial one
-    (:func:`load_serial_robot`, with ``base_link`` and ``tip_link``), whichever
-    ``name_or_path`` names."""
-    if is_serial_robot(name_or_path):
-        return load_serial_robot(name_or_path, base_link=base_link, tip_link=tip_link)
-    _refuse_unknown(os.fspath(name_or_path))
-    spec = load_robot(name_or_path)
-    if base_link is not None or tip_link is not None:
-        raise ArmcalError(
-            f"{os.fspath(name_or_path)}: a base or tip link was given, but this is a planar "
-            "robot, not one from a URDF: links choose a URDF's chain; drop them"
-        )
-    return spec
 
 
 def _relative_file(path: Path, value: Any, key: str, what: str) -> Path:
@@ -236,7 +169,7 @@ def _ur_chain(path: Path, table: Any) -> tuple[SerialChain, str, tuple[ArmcalWar
     (:mod:`~armcal.files.ur`), within the controller's +-360 degrees."""
     if not isinstance(table, dict):
         raise fail(path, "key 'ur': expected a table [ur] with 'model' (and 'calibration')")
-    check_keys(path, table, allowed_keys("ur", SERIAL_KEYS), "ur.")
+    check_keys(path, table, allowed_keys("ur", SPATIAL_KEYS), "ur.")
     model = table.get("model")
     if model not in UR_MODELS:
         raise fail(path, f"key 'ur.model': expected one of {', '.join(UR_MODELS)}, got {model!r}")
@@ -262,7 +195,7 @@ def _chain(
     """The chain of a robot TOML: its URDF's (from the ``chosen`` base and tip links, else
     the file's), its ``[mdh]`` or ``[dh]`` table's or a UR's (``[ur]``), a default name,
     what reading it warns of, and its URDF's masses."""
-    given = [key for key in SERIAL_ROBOT_KEYS if key in data]
+    given = [key for key in SPATIAL_ROBOT_KEYS if key in data]
     if len(given) > 1:
         raise fail(path, f"keys {' and '.join(given)} all describe the arm; keep one")
     if given and given[0] != "urdf" and any(link is not None for link in chosen):
@@ -294,7 +227,7 @@ def _chain(
     table = data[key]
     if not isinstance(table, dict):
         raise fail(path, f"key '{key}': expected a table [{key}]")
-    check_keys(path, table, allowed_keys(key, SERIAL_KEYS), f"{key}.")
+    check_keys(path, table, allowed_keys(key, SPATIAL_KEYS), f"{key}.")
     values = {}
     for name in _MDH_REQUIRED:
         if name not in table:
@@ -346,9 +279,9 @@ def _chain(
 
 def _from_toml(
     path: Path, builtin: str | None, links: tuple[str | None, str | None] = (None, None)
-) -> SerialSpec:
+) -> RobotSpec[SpatialArm]:
     data = load_toml(path, "robot")
-    check_keys(path, data, allowed_keys("", SERIAL_KEYS))
+    check_keys(path, data, allowed_keys("", SPATIAL_KEYS))
     chain, default_name, read_warnings, masses = _chain(path, data, links)
     n = chain.n_joints
     name = data.get("name", default_name)
@@ -375,7 +308,7 @@ def _from_toml(
             # They replace the URDF's (or UR's) limits, which hold for the joint values M q;
             # an [mdh] table's own limits (mdh.joint_limits_deg) are the user's, and kept.
             chain = replace(chain, joint_limits=np.tile([-np.inf, np.inf], (n, 1)))
-    noise = read_serial_noise(path, data.get("measurement"))
+    noise = read_spatial_noise(path, data.get("measurement"))
     labels, positions, normals = _target_table(path, data.get("targets"))
     view = _view(path, data.get("instrument"), labels, normals)
     arm = SpatialArm(
@@ -399,7 +332,7 @@ def _from_toml(
         arm = arm.with_fixed(fixed_parameters(path, table, arm.param_names, arm.name, terms))
         if elastic is not None:
             elastic = replace(elastic, terms=held_terms(table, terms))
-    return SerialSpec(arm, builtin or os.fspath(path), warnings=read_warnings, elastic=elastic)
+    return RobotSpec(arm, builtin or os.fspath(path), warnings=read_warnings, elastic=elastic)
 
 
 def _limits(
@@ -438,12 +371,12 @@ def _check_map_kinds(path: Path, mapping: np.ndarray, kinds: Sequence[str]) -> N
 
 def _elastostatic(
     path: Path, table: Any, chain: SerialChain, masses: LinkMasses | None
-) -> SerialElastics:
+) -> SpatialElastics:
     """``[elastostatic]`` of a spatial arm: gravity in the base frame, the links' masses
     (the table's, else the URDF's ``<inertial>``, else the lumped mode) and the payload."""
     if not isinstance(table, dict):
         raise fail(path, "key 'elastostatic': expected a table [elastostatic]")
-    check_keys(path, table, allowed_keys("elastostatic", SERIAL_KEYS), "elastostatic.")
+    check_keys(path, table, allowed_keys("elastostatic", SPATIAL_KEYS), "elastostatic.")
     n = chain.n_joints
     key = "elastostatic.gravity"
     gravity = numbers(path, table.get("gravity", [0, 0, -1]), key, 3)
@@ -479,7 +412,7 @@ def _elastostatic(
         path, table.get("payload_com_mm", [0, 0, 0]), "elastostatic.payload_com_mm", 3
     )
     try:
-        return SerialElastics.create(
+        return SpatialElastics.create(
             n,
             gravity=gravity,
             mass_kg=None if lumped else mass,
@@ -537,7 +470,7 @@ def _view(path: Path, table: Any, labels: tuple[str, ...], normals: list) -> Spa
         return None
     if not isinstance(table, dict):
         raise fail(path, "key 'instrument': expected a table [instrument]")
-    check_keys(path, table, allowed_keys("instrument", SERIAL_KEYS), "instrument.")
+    check_keys(path, table, allowed_keys("instrument", SPATIAL_KEYS), "instrument.")
     needs_position = [key for key in ("range_mm", "acceptance_deg") if key in table]
     if needs_position and "position_mm" not in table:
         raise fail(
@@ -595,9 +528,9 @@ def _view(path: Path, table: Any, labels: tuple[str, ...], normals: list) -> Spa
     )
 
 
-def load_serial_truth(
+def load_spatial_truth(
     path: str | os.PathLike,
-    model: SpatialArm | CompliantSerialArm,
+    model: FitModel,
     *,
     links: tuple[str | None, str | None] = (None, None),
     geometry_only: bool = False,
@@ -614,18 +547,18 @@ def load_serial_truth(
     """
     path = Path(path)
     data = load_toml(path, "truth")
-    spatial = allowed_keys("", SERIAL_TRUTH_KEYS)
+    spatial = allowed_keys("", SPATIAL_TRUTH_KEYS)
     check_truth_keys(path, data, spatial, allowed_keys("", TRUTH_KEYS), "spatial")
     check_keys(path, data, spatial)
-    arm = model.arm
-    if not isinstance(model, CompliantSerialArm):
+    arm: SpatialArm = model.arm
+    if model.effect is None:  # a rigid arm
         if "compliance" in data and not geometry_only:
             raise fail(path, rigid_truth_message("compliance", arm.name, "[compliance]"))
         return _geometry_truth(path, data, arm, links)
-    names = model.compliance_names
+    names = model.param_names[arm.n_params :]  # the compliance's, after the arm's
     compliance = np.zeros(len(names))
     if "compliance" in data:
-        example, scale = f"{names[-1]} = 0.5", model.compliance_scale
+        example, scale = f"{names[-1]} = 0.5", model.display_scale[arm.n_params :]
         table = data["compliance"]
         compliance = _named(path, table, "compliance", example, arm, names, names, scale)
     return np.concatenate([_geometry_truth(path, data, arm, links), compliance])
@@ -648,7 +581,7 @@ def _geometry_truth(
         other = _relative_file(path, data["robot"], "robot", "truth file")
         bare = other.suffix.lower() in _URDF_SUFFIXES  # a robot TOML says its own links
         chosen = dict(zip(("base_link", "tip_link"), links, strict=True)) if bare else {}
-        chain = load_serial_robot(other, **chosen).arm.chain
+        chain = load_spatial_robot(other, **chosen).arm.chain
         if chain.kinds != arm.chain.kinds:
             raise fail(
                 path,

@@ -15,7 +15,7 @@ from typing import Any
 import numpy as np
 
 from ..errors import unrendered
-from ..formats import SERIAL_KEYS, allowed_keys
+from ..formats import SPATIAL_KEYS, allowed_keys
 from ..noise import NoiseModel, TrackerNoise
 from .common import check_keys, fail, number, number_within, numbers
 from .robots import SIGMA_RANGE_MM
@@ -23,7 +23,7 @@ from .robots import SIGMA_RANGE_MM
 __all__ = [
     "ORIENTATION_SIGMA_RANGE_DEG",
     "TRACKER_KEYS",
-    "read_serial_noise",
+    "read_spatial_noise",
 ]
 
 #: The four terms of a laser tracker's noise, in the order of :class:`TrackerNoise`.
@@ -34,13 +34,13 @@ TRACKER_KEYS = ("range_mm", "range_mm_per_m", "transverse_mm", "transverse_mm_pe
 ORIENTATION_SIGMA_RANGE_DEG = (1e-5, 5.0)
 
 
-def read_serial_noise(path: Path, table: Any) -> NoiseModel | None:
+def read_spatial_noise(path: Path, table: Any) -> NoiseModel | None:
     """``[measurement]``: the instrument's noise, and a 6-DoF instrument's orientation noise."""
     if table is None:
         return None
     if not isinstance(table, dict):
         raise fail(path, "key 'measurement': expected a table [measurement]")
-    check_keys(path, table, allowed_keys("measurement", SERIAL_KEYS), "measurement.")
+    check_keys(path, table, allowed_keys("measurement", SPATIAL_KEYS), "measurement.")
     noise = _position_noise(path, table)
     if "orientation_sigma_deg" not in table:
         return noise

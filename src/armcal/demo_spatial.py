@@ -21,7 +21,7 @@ from .compensation import compensate
 from .demo import Demo, figure_writer, report_head
 from .doe import random_plan
 from .errors import ACTIONS
-from .export_serial import joint_offsets_csv, serial_robot_toml, serial_urdf
+from .export_spatial import joint_offsets_csv, spatial_robot_toml, spatial_urdf
 from .files import (
     calibration_document,
     format_measurements_csv,
@@ -40,9 +40,9 @@ from .validation import cross_validate, validate
 __all__ = [
     "DEMO_REFLECTORS",
     "DEMO_TRACKER",
-    "SERIAL_DEMO_FILES",
-    "SERIAL_DEMO_POSES",
-    "run_serial_demo",
+    "SPATIAL_DEMO_FILES",
+    "SPATIAL_DEMO_POSES",
+    "run_spatial_demo",
 ]
 
 #: The three reflector nests on the flange (mm, flange frame): a plate 150 mm out, the
@@ -58,13 +58,13 @@ DEMO_REFLECTORS = {
 DEMO_TRACKER = TrackerNoise(0.008, 0.0004, 0.010, 0.0025)
 
 #: Poses of the demo's plan (each measured at the three reflectors).
-SERIAL_DEMO_POSES = 60
+SPATIAL_DEMO_POSES = 60
 
 #: Cross-validation folds, poses of the fresh validation set and of the program.
 FOLDS, VALIDATION_POSES, PROGRAM_POSES = 5, 100, 12
 
 #: Every file the six-axis story writes.
-SERIAL_DEMO_FILES = (
+SPATIAL_DEMO_FILES = (
     "measurements.csv",
     "calibration.json",
     "validation.csv",
@@ -86,11 +86,11 @@ def _rows(arm: SpatialArm, q: np.ndarray) -> tuple[Conditions, list[str], list[s
     return rows, poses, [arm.targets[t] for t in rows.target]
 
 
-def run_serial_demo(
+def run_spatial_demo(
     arm: SpatialArm,
     truth_of: Callable[[SpatialArm], np.ndarray],
     *,
-    poses: int = SERIAL_DEMO_POSES,
+    poses: int = SPATIAL_DEMO_POSES,
     sigma: float | None = None,
     seed: int = 0,
     words: Mapping[str, str] = ACTIONS,
@@ -207,8 +207,8 @@ def run_serial_demo(
         "program_corrected.csv": format_program_csv(
             comp.q, comp.corrected, targets=["A"] * PROGRAM_POSES, kinds=kinds
         ),
-        "robot_calibrated.toml": serial_robot_toml(calibrated),
-        "arm.urdf": serial_urdf(calibrated),
+        "robot_calibrated.toml": spatial_robot_toml(calibrated),
+        "arm.urdf": spatial_urdf(calibrated),
         "joint_offsets.csv": joint_offsets_csv(calibrated),
         "residuals.png": figure_writer(plot_residual_figure),
     }

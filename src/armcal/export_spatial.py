@@ -5,7 +5,7 @@ All three describe the arm in its own frame: the base pose places the arm in
 the instrument's frame during calibration, so it belongs to the instrument and
 is written only as a comment.
 
-**URDF** (:func:`serial_urdf`).  One joint per moving joint, its ``<origin>``
+**URDF** (:func:`spatial_urdf`).  One joint per moving joint, its ``<origin>``
 the calibrated placement (:meth:`SpatialArm.calibrated_chain
 <armcal.models.SpatialArm.calibrated_chain>`) with the joint's zero folded in:
 a turn about the joint's own axis (or a slide along it) commutes with the
@@ -16,7 +16,7 @@ twice).  Every axis is ``0 0 1`` (each joint's frame has its axis as z).
 Lengths in metres, every number with full round-trip precision.  The targets are
 listed in a comment (each a fixed frame would make several leaves).
 
-**Robot TOML** (:func:`serial_robot_toml`).  The calibrated chain as a modified
+**Robot TOML** (:func:`spatial_robot_toml`).  The calibrated chain as a modified
 DH table (:func:`armcal.models.mdh_table`: Craig's rows, Hayati's ``beta_deg``
 where consecutive axes are nearly parallel, ``base_*``/``tip_*`` frames where
 needed), the joint map and limits, the noise, the calibrated targets and, from a
@@ -60,8 +60,8 @@ from .models import (
     STANDARD_GRAVITY,
     CalibratedArm,
     SerialChain,
-    SerialElastics,
     SpatialArm,
+    SpatialElastics,
     matrix_rpy,
     mdh_table,
 )
@@ -69,8 +69,8 @@ from .numerics import box_image
 
 __all__ = [
     "joint_offsets_csv",
-    "serial_robot_toml",
-    "serial_urdf",
+    "spatial_robot_toml",
+    "spatial_urdf",
 ]
 
 #: URDF lengths are in metres, armcal's in mm.
@@ -82,9 +82,7 @@ _OPEN_SLIDE_MM = 1.0e6
 
 
 def _calibrated(cal: CalibratedArm) -> tuple[SpatialArm, np.ndarray]:
-    arm = cal.arm
-    if not isinstance(arm, SpatialArm):
-        raise TypeError("a spatial calibration is needed")
+    arm: SpatialArm = cal.arm  # the spatial family's exports are given its calibrations
     return arm, cal.arm_params
 
 
@@ -141,7 +139,7 @@ def _limit_pairs(limits: np.ndarray, kinds: tuple[str, ...]) -> str:
     return "[" + ", ".join(pairs) + "]"
 
 
-def serial_urdf(cal: CalibratedArm) -> str:
+def spatial_urdf(cal: CalibratedArm) -> str:
     """The calibrated spatial arm as a URDF (module notes).
 
     Reading it back (:func:`armcal.files.read_urdf`) gives the calibrated
@@ -206,7 +204,7 @@ def serial_urdf(cal: CalibratedArm) -> str:
     return "\n".join(lines) + "\n"
 
 
-def serial_robot_toml(cal: CalibratedArm) -> str:
+def spatial_robot_toml(cal: CalibratedArm) -> str:
     """The calibrated spatial arm as a robot TOML with its modified DH table (module notes)."""
     arm, params = _calibrated(cal)
     calibrated = arm.calibrated_chain(params)
@@ -241,8 +239,8 @@ def serial_robot_toml(cal: CalibratedArm) -> str:
             f"{toml_key(label)} = {{ xyz_mm = {nums(xyz)} }}"
             for label, xyz in zip(arm.targets, arm.layout.target_points(params), strict=True)
         ]
-    elastic = getattr(cal.model, "elastic", None)
-    if isinstance(elastic, SerialElastics):
+    if cal.model.effect is not None:  # joint compliance: its loads model
+        elastic: SpatialElastics = cal.model.elastic  # type: ignore[attr-defined]
         held = elastic.terms.held(elastic.term_names(arm))
         if held:
             lines += ["", "[identify]", f"fixed = [{', '.join(toml_string(n) for n in held)}]"]
@@ -251,7 +249,7 @@ def serial_robot_toml(cal: CalibratedArm) -> str:
 
 
 def _elastostatic_lines(
-    elastic: SerialElastics, calibrated: SerialChain, written: SerialChain
+    elastic: SpatialElastics, calibrated: SerialChain, written: SerialChain
 ) -> list[str]:
     """The ``[elastostatic]`` loads model of a calibration with joint compliance, for the
     file's modified DH table: gravity in the base frame and the payload in the tip frame

@@ -1,0 +1,89 @@
+"""The families of arm at the edge: where loading, the calibration file, export,
+pictures, the report's words and the demo find each family's own pieces.
+
+:mod:`~armcal.families.registry` holds the :class:`Family` records and the
+lookups; this module registers the built-in families, planar and spatial, whose
+roles live in :mod:`~armcal.families.planar` and :mod:`~armcal.families.spatial`
+and in the modules they name.  A new family registers a :class:`Family` of its
+own (``armcal.families.register``); the middle of armcal needs nothing but its
+fit model.
+"""
+
+from .registry import (
+    ROLES,
+    Family,
+    RobotSpec,
+    builtin_robots,
+    families,
+    family_for,
+    family_named,
+    family_of,
+    load_robot,
+    register,
+    unregister,
+)
+
+PLANAR = register(
+    Family(
+        "planar",
+        "a planar arm in its plane (the paper's family), rigid or with joint compliance",
+        "a planar robot TOML (link_lengths_mm ...)",
+        fallback=True,
+        refs={
+            "builtins": "armcal.paper:BUILTIN_ROBOTS",
+            "load_robot": "armcal.files.robots:load_planar_robot",
+            "truth": "armcal.families.planar:truth",
+            "encode": "armcal.families.planar:encode",
+            "decode": "armcal.families.planar:decode",
+            "encode_effect": "armcal.families.planar:encode_effect",
+            "decode_effect": "armcal.families.planar:decode_effect",
+            "calibrate": "armcal.workflow.measured:fit_planar",
+            "exports": "armcal.families.planar:exports",
+            "coupled_urdf": "armcal.families.planar:coupled_urdf",
+            "describe": "armcal.report.common:planar_model_lines",
+            "plan_figure": "armcal.families.planar:plan_figure",
+            "demo": "armcal.families.planar:demo",
+        },
+    )
+)
+
+SPATIAL = register(
+    Family(
+        "spatial",
+        "a serial arm in 3-D (a six-axis industrial arm, a cobot), rigid or with joint compliance",
+        "a URDF (with --base-link/--tip-link), or a robot TOML with urdf, [mdh], [dh] or [ur]",
+        aliases=("serial",),
+        refs={
+            "builtins": "armcal.files.spatial:BUILTIN_SPATIAL_ROBOTS",
+            "claims": "armcal.files.spatial:is_spatial_robot",
+            "load_robot": "armcal.files.spatial:load_spatial_robot",
+            "truth": "armcal.families.spatial:truth",
+            "encode": "armcal.families.spatial:encode",
+            "decode": "armcal.families.spatial:decode",
+            "encode_effect": "armcal.families.spatial:encode_effect",
+            "decode_effect": "armcal.families.spatial:decode_effect",
+            "calibrate": "armcal.workflow.measured:fit_spatial",
+            "exports": "armcal.families.spatial:exports",
+            "coupled_urdf": "armcal.families.spatial:coupled_urdf",
+            "describe": "armcal.report.common:spatial_model_lines",
+            "plan_figure": "armcal.families.spatial:plan_figure",
+            "demo": "armcal.families.spatial:demo",
+        },
+    )
+)
+
+__all__ = [
+    "PLANAR",
+    "ROLES",
+    "SPATIAL",
+    "Family",
+    "RobotSpec",
+    "builtin_robots",
+    "families",
+    "family_for",
+    "family_named",
+    "family_of",
+    "load_robot",
+    "register",
+    "unregister",
+]
