@@ -162,10 +162,11 @@ def _robot_seed_json(output: str | None = None, *, required: bool = False) -> tu
         "--robot",
         default=None if required else DEFAULT_ROBOT,
         metavar="NAME_OR_FILE",
-        help="your robot's TOML file, or a built-in name (required: the measurements are of "
-        "one arm)"
+        help="your robot's TOML file or URDF, or a built-in name (required: the measurements "
+        "are of one arm; every built-in and file under reads: above)"
         if required
-        else f"built-in robot name or robot TOML file (default {DEFAULT_ROBOT})",
+        else f"a built-in's name, a robot TOML file or a URDF (default {DEFAULT_ROBOT}; every "
+        "built-in and file under reads: above)",
     )
     return (robot, *_LINKS, _SEED, _JSON, *(() if output is None else (_output(output),)))
 
@@ -501,7 +502,8 @@ COMMAND_TABLE: tuple[Command, ...] = (
 # --------------------------------------------------------------------------- the builder
 
 _WORKFLOW = (
-    "The workflow: write a robot file (armcal formats lists every key), design a plan "
+    "The workflow: describe the robot (a robot TOML file, a URDF or a built-in, planar or "
+    "spatial; armcal formats lists every key), design a plan "
     "(design; evaluate, simulate and poses-needed judge and size it), measure it, identify "
     "the deviations, validate them on held-out poses, then compensate programs or export the "
     "calibrated arm. 'armcal COMMAND --help' shows a command's files and an example; "
