@@ -1,9 +1,12 @@
-"""What each ``armcal`` command's ``--help`` says: what it does, an example, the files it reads.
+"""What each ``armcal`` command's ``--help`` says: what it does, examples, the files it reads.
 
 The words live here, apart from the parser in :mod:`armcal.cli`, so that every
 command is described the same way: a one-line summary for ``armcal --help``;
-a paragraph; one or two examples; and the layout of every file it reads,
-taken from :mod:`armcal.formats` so that help and reader cannot disagree.
+a paragraph; examples, one of them for a six-axis arm where the command takes
+a robot; and the layout of every file it reads, taken from :mod:`armcal.formats`
+and :mod:`armcal.files` so that help and reader cannot disagree. The outputs
+paragraph is said once, in ``armcal --help``; a command that writes files points
+to it in one line.
 """
 
 from __future__ import annotations
@@ -11,10 +14,10 @@ from __future__ import annotations
 import textwrap
 from dataclasses import dataclass
 
+from ..files import BUILTIN_ROBOTS, BUILTIN_SPATIAL_ROBOTS
 from ..formats import columns_line
-from ..paper import BUILTIN_ROBOTS
 
-__all__ = ["COMMANDS", "OUTPUTS_EPILOG", "CommandHelp", "description", "epilog"]
+__all__ = ["COMMANDS", "OUTPUTS_EPILOG", "OUTPUTS_POINTER", "CommandHelp", "description", "epilog"]
 
 OUTPUTS_EPILOG = (
     "Outputs: every output path is checked before any work. A file is written to a "
@@ -27,13 +30,25 @@ OUTPUTS_EPILOG = (
     "of the report; '-' as an input file reads stdin. Exit status: 0 done, 2 bad input "
     "(one 'armcal: error:' line), 130 interrupted, 1 a bug."
 )
+#: The line a command that writes files has where :data:`OUTPUTS_EPILOG` would be.
+OUTPUTS_POINTER = "Outputs, '-' for stdin/stdout and exit status: see 'armcal --help'."
 
 _ROBOT = (
-    f"robot: a built-in name ({', '.join(BUILTIN_ROBOTS)}) or a robot TOML file "
-    "(link_lengths_mm, joint_limits_deg, [measurement] sigma_mm, ...; every key: armcal formats)"
+    f"robot (--robot): a built-in name, planar: {', '.join(BUILTIN_ROBOTS)}; spatial: "
+    f"{', '.join(BUILTIN_SPATIAL_ROBOTS)}; or a file: a planar robot TOML (link_lengths_mm, "
+    "joint_limits_deg, [measurement] sigma_mm, ...), a URDF (the chain from --base-link to "
+    '--tip-link), or a robot TOML over a URDF (urdf = "arm.urdf") or with an MDH, DH or UR '
+    "table ([mdh], [dh], [ur]); every key: armcal formats"
 )
-_TRUTH = "truth TOML: dl_mm = [...], dq_deg = [...] (base_mm, k_urad_per_Nm, c_mdeg_per_m)"
-_CALIBRATION = "calibration JSON: written by armcal identify -o (format armcal-calibration/1)"
+_TRUTH = (
+    "truth TOML: planar: dl_mm = [...], dq_deg = [...] (base_mm, k_urad_per_Nm, c_mdeg_per_m); "
+    "spatial: robot (the true arm's file), base = { xyz_mm, rpy_deg }, [errors] (j2.x, dq3, "
+    "...), [targets], [compliance]"
+)
+_CALIBRATION = (
+    "calibration JSON: written by armcal identify -o (format armcal-calibration/1), of a "
+    "planar or a spatial arm"
+)
 
 
 def _csv(kind: str) -> str:
@@ -55,7 +70,7 @@ class CommandHelp:
     reads : tuple of str
         The files it reads, one line each.
     writes : bool
-        Whether it writes files (the outputs paragraph applies).
+        Whether it writes files (the outputs paragraph of ``armcal --help`` applies).
     """
 
     summary: str
@@ -76,20 +91,25 @@ COMMANDS: dict[str, CommandHelp] = {
         (
             "armcal synthesize --plan plan.csv --sigma 0.02 -o meas.csv",
             "armcal synthesize --robot my-arm.toml --truth truth.toml --plan plan.csv -o meas.csv",
+            "armcal synthesize --robot industrial-6r --plan plan6.csv --sigma 0.02 -o meas6.csv",
         ),
         (_ROBOT, _csv("plan"), _TRUTH),
     ),
     "identify": CommandHelp(
         "parameter deviations ± std from measurements",
-        "Identify the arm's deviations from nominal (dl1..dln in mm, dq1..dqn in deg, the base "
-        "pose with base_offset, the targets' offsets, the joint compliance with [elastostatic]) "
-        "by least squares, with the standard error of every parameter, the goodness of fit "
-        "against the instrument noise, studentized outliers and warnings for what the data "
-        "cannot support. 3-D data (a z_mm column) are fitted in their plane of motion. -o "
-        "writes the calibration JSON that validate, compensate and export read.",
+        "Identify the arm's deviations from nominal (a planar arm: dl1..dln in mm, dq1..dqn in "
+        "deg, the base pose with base_offset, the targets' offsets; a spatial arm: every "
+        "joint's placement and zero (j2.x, dq3, ...), the base pose and the targets' positions, "
+        "reduced to the set the data can identify, the report saying which merge and why; the "
+        "joint compliance with [elastostatic]) by least squares, with the standard error of "
+        "every parameter, the goodness of fit against the instrument noise, studentized "
+        "outliers and warnings for what the data cannot support. 3-D data (a z_mm column) of a "
+        "planar arm are fitted in its plane of motion. -o writes the calibration JSON that "
+        "validate, compensate and export read.",
         (
             "armcal identify --robot my-arm.toml --measurements meas.csv -o cal.json",
             "armcal identify --measurements meas.csv --robust --cross-validate 5",
+            "armcal identify --robot industrial-6r --measurements meas6.csv -o cal6.json",
         ),
         (_ROBOT, _csv("measurements")),
     ),
@@ -97,8 +117,8 @@ COMMANDS: dict[str, CommandHelp] = {
         "positioning error before and after calibration on held-out poses",
         "Compare held-out measurements (poses not used to calibrate) with the nominal arm and "
         "with the calibrated one, both at the calibrated base pose, and with the error the "
-        "calibration predicts (its uncertainty plus the instrument noise). 3-D data are "
-        "projected into the calibration's plane.",
+        "calibration predicts (its uncertainty plus the instrument noise). 3-D data of a planar "
+        "arm are projected into the calibration's plane.",
         (
             "armcal validate --calibration cal.json --measurements test.csv --per-pose "
             "--plot errors.png",
@@ -109,9 +129,9 @@ COMMANDS: dict[str, CommandHelp] = {
         "corrected joint commands of a robot program",
         "Correct a program's joint commands so that the calibrated arm puts the tool where the "
         "nominal program meant, in the robot's own frame (the instrument's pose is never "
-        "corrected); for 3 or more joints the tool's direction too, the remaining redundancy "
-        "going to the smallest joint change. Commands that cannot be corrected within the "
-        "joint limits are kept and listed, never clipped.",
+        "corrected); where the arm has the joints (3 in the plane, 6 in space) the tool's "
+        "orientation too, the remaining redundancy going to the smallest joint change. Commands "
+        "that cannot be corrected within the joint limits are kept and listed, never clipped.",
         ("armcal compensate --calibration cal.json --program prog.csv -o corrected.csv",),
         (_CALIBRATION, _csv("program")),
     ),
@@ -126,6 +146,8 @@ COMMANDS: dict[str, CommandHelp] = {
         (
             "armcal design --robot my-arm.toml --poses 20 -o plan.csv --plot plan.png",
             "armcal design --poses 30 --criterion A --candidates reachable.csv -o plan.csv",
+            "armcal design --robot industrial-6r --poses 30 -o plan6.csv",
+            "armcal design --robot ur5.urdf --tip-link tool0 --poses 30 -o plan-ur5.csv",
         ),
         (_ROBOT, _csv("plan") + " (--candidates, --test-poses)"),
     ),
@@ -134,7 +156,10 @@ COMMANDS: dict[str, CommandHelp] = {
         "Judge any plan before measuring it: its D-efficiency and criteria, the predicted std "
         "of every parameter at the instrument noise, and the predicted positioning error after "
         "calibration over the test poses. Compare a hand-made plan with a designed one.",
-        ("armcal evaluate --robot my-arm.toml --plan plan.csv --sigma 0.05",),
+        (
+            "armcal evaluate --robot my-arm.toml --plan plan.csv --sigma 0.05",
+            "armcal evaluate --robot industrial-6r --plan plan6.csv",
+        ),
         (_ROBOT, _csv("plan") + " (--plan, --test-poses)"),
         writes=False,
     ),
@@ -144,7 +169,10 @@ COMMANDS: dict[str, CommandHelp] = {
         "and identify each (batched), then compare the empirical std and bias of every "
         "parameter with the predicted std: a check that the uncertainty armcal reports is "
         "right for this plan, solver and noise.",
-        ("armcal simulate --plan plan.csv --trials 2000 --sigma 0.02",),
+        (
+            "armcal simulate --plan plan.csv --trials 2000 --sigma 0.02",
+            "armcal simulate --robot industrial-6r --plan plan6.csv --trials 500",
+        ),
         (_ROBOT, _csv("plan") + " (--plan, --test-poses)", _TRUTH),
         writes=False,
     ),
@@ -153,7 +181,10 @@ COMMANDS: dict[str, CommandHelp] = {
         "Size the experiment: the smallest number of poses whose optimal plan reaches a target "
         "std of the lengths, of the angles, or a target positioning error after calibration, "
         "at the instrument noise. -o writes that plan.",
-        ("armcal poses-needed --robot my-arm.toml --position-rms-mm 0.05 -o plan.csv",),
+        (
+            "armcal poses-needed --robot my-arm.toml --position-rms-mm 0.05 -o plan.csv",
+            "armcal poses-needed --robot industrial-6r --position-rms-mm 0.1",
+        ),
         (_ROBOT, _csv("plan") + " (--test-poses)"),
     ),
     "reproduce": CommandHelp(
@@ -176,19 +207,30 @@ COMMANDS: dict[str, CommandHelp] = {
         "the whole workflow on a virtual robot",
         "Design a certified plan, measure a virtual arm with noise and one bumped measurement, "
         "identify robustly, validate on fresh poses, compensate a program and export the "
-        "calibrated arm, then write report.md with its figures into the folder.",
-        ("armcal demo -o demo-out", "armcal demo --robot my-arm.toml --truth truth.toml -o out"),
+        "calibrated arm, then write report.md with its figures into the folder. A spatial arm "
+        "tells a cell's story instead: a laser tracker in an unknown pose, three reflectors "
+        "found from the data, a random plan within the limits.",
+        (
+            "armcal demo -o demo-out",
+            "armcal demo --robot my-arm.toml --truth truth.toml -o out",
+            "armcal demo --robot industrial-6r -o demo-6r",
+        ),
         (_ROBOT, _TRUTH),
     ),
     "export": CommandHelp(
         "the calibrated arm as a robot file every command accepts, or as URDF",
         "Write the arm of a calibration file with its deviations folded into the nominal "
         "values, in the robot's own frame: as a robot TOML file that every armcal command "
-        "accepts (link lengths l + dl, joint_offsets_deg, targets' lengths and angles), and/or "
-        "as a URDF for ROS (each joint's zero offset in its origin's yaw, lengths in m). The "
-        "base pose in the instrument frame (x0, y0, phi0) is the instrument's and appears only "
-        "as a comment. Give --robot-toml, --urdf or both.",
-        ("armcal export --calibration cal.json --robot-toml my-arm-cal.toml --urdf my-arm.urdf",),
+        "accepts (a planar arm: link lengths l + dl, joint_offsets_deg, targets' lengths and "
+        "angles; a spatial arm: the calibrated chain as a modified DH table), as a URDF for ROS "
+        "(each joint's zero folded into its origin, lengths in m), as every joint's zero "
+        "offset for the controller, or as a Universal Robots arm's calibration. The base pose "
+        "in the instrument frame is the instrument's and appears only as a comment. Give one "
+        "or more of the outputs below.",
+        (
+            "armcal export --calibration cal.json --robot-toml my-arm-cal.toml --urdf my-arm.urdf",
+            "armcal export --calibration cal6.json --urdf cal6.urdf --robot-toml cal6.toml",
+        ),
         (_CALIBRATION,),
     ),
     "formats": CommandHelp(
@@ -208,17 +250,20 @@ def description(command: str) -> str:
     text = textwrap.fill(help_.text, 79)
     if help_.reads:
         text += "\n\nreads:\n" + "\n".join(
-            textwrap.fill(line, 79, initial_indent="  ", subsequent_indent="    ")
+            # a hyphenated name (a built-in's, the calibration format's) stays on one line
+            textwrap.fill(
+                line, 79, initial_indent="  ", subsequent_indent="    ", break_on_hyphens=False
+            )
             for line in help_.reads
         )
     return text
 
 
 def epilog(command: str) -> str:
-    """The ``--help`` text below the options: the examples, and the outputs paragraph."""
+    """The ``--help`` text below the options: the examples, and where the outputs are told."""
     help_ = COMMANDS[command]
     text = "example" + ("s" if len(help_.examples) > 1 else "") + ":\n"
     text += "\n".join(f"  {line}" for line in help_.examples)
     if help_.writes:
-        text += "\n\n" + textwrap.fill(OUTPUTS_EPILOG, 79)
+        text += "\n\n" + OUTPUTS_POINTER
     return text

@@ -1,14 +1,20 @@
-"""The ``armcal`` argument parser: every command, its options and its help.
+"""The ``armcal`` argument parser: a table of commands and a short builder that walks it.
 
-Each command's ``run`` is a function of :mod:`.commands`; ``inputs`` and
-``outputs`` name the options whose paths :func:`armcal.cli.main` checks before
-any work, and ``folder_files`` the files a folder output will hold.
+:data:`COMMAND_TABLE` holds one :class:`Command` per sub-command: its name (its
+words, summary, paragraph and examples, live in :mod:`.help` under that name),
+the function of :mod:`.commands` that runs it, and its options in the order
+``--help`` lists them. Options that several commands share are named once below
+(``_SEED``, ``_robot_seed_json``, ...). ``inputs`` and ``outputs`` name the
+options whose paths :func:`armcal.cli.main` checks before any work, and
+``folder_files`` the files a folder output will hold.
 """
 
 from __future__ import annotations
 
 import argparse
 import textwrap
+from collections.abc import Callable
+from dataclasses import dataclass
 from typing import Any
 
 from .._version import __version__
@@ -27,7 +33,7 @@ from .help import COMMANDS, OUTPUTS_EPILOG
 from .help import description as help_description
 from .help import epilog as help_epilog
 
-__all__ = ["build_parser"]
+__all__ = ["COMMAND_TABLE", "Command", "OneOf", "Option", "build_parser", "option"]
 
 
 class _Parser(argparse.ArgumentParser):
@@ -35,65 +41,6 @@ class _Parser(argparse.ArgumentParser):
 
     def error(self, message: str) -> None:  # type: ignore[override]
         raise ArmcalError(f"{message} (see '{self.prog} --help')")
-
-
-#: Files written by ``reproduce -o DIR``, checked before any work.
-_REPRODUCE_FILES = (
-    *(f"{name}.csv" for name in TABLE_COLUMNS),
-    "figure1.png",
-    "figure2.png",
-    "report.md",
-)
-
-
-def _add_common(
-    sub: argparse.ArgumentParser,
-    *,
-    seed: bool = False,
-    output: str | None = None,
-    robot_required: bool = False,
-) -> None:
-    """--robot (with --tip-link and --base-link), --seed, --json and -o.
-
-    ``robot_required``: the command calibrates a real arm's data, so it has no
-    default robot (fitting a user's measurements to the paper's arm would give a
-    wrong calibration without a word); commands that design, simulate or
-    explore default to :data:`DEFAULT_ROBOT` and name it in their report.
-    """
-    sub.add_argument(
-        "--robot",
-        default=None if robot_required else DEFAULT_ROBOT,
-        metavar="NAME_OR_FILE",
-        help="your robot's TOML file, or a built-in name (required: the measurements are of "
-        "one arm)"
-        if robot_required
-        else f"built-in robot name or robot TOML file (default {DEFAULT_ROBOT})",
-    )
-    sub.add_argument(
-        "--tip-link",
-        metavar="LINK",
-        help="for a robot from a URDF: the link where the arm's chain ends (default: the "
-        "robot TOML's tip_link, else the URDF's one leaf)",
-    )
-    sub.add_argument(
-        "--base-link",
-        metavar="LINK",
-        help="for a robot from a URDF: the link where the arm's chain starts (default: the "
-        "robot TOML's base_link, else the URDF's root)",
-    )
-    if seed:
-        sub.add_argument(
-            "--seed", type=options.seed, default=0, help="random seed >= 0 (default 0)"
-        )
-    sub.add_argument("--json", action="store_true", help="print a JSON document on stdout")
-    if output is not None:
-        sub.add_argument("-o", "--output", metavar="PATH", help=output)
-
-
-def _add_calibration(sub: argparse.ArgumentParser) -> None:
-    """``--calibration`` (the file identify wrote) and ``--json``: commands that start from one."""
-    sub.add_argument("--calibration", required=True, metavar="JSON", help="from identify -o")
-    sub.add_argument("--json", action="store_true", help="print a JSON document on stdout")
 
 
 class _Joined(argparse.Action):
@@ -111,19 +58,461 @@ class _Joined(argparse.Action):
         setattr(namespace, self.dest, tuple(dict.fromkeys((*before, *values))))
 
 
-def _add_fix(sub: argparse.ArgumentParser) -> None:
-    sub.add_argument(
-        "--fix",
-        type=options.names,
-        action=_Joined,
-        metavar="P,..",
-        help="parameters held at nominal, not identified (e.g. dl4,dq1; repeats add up); "
-        "replaces the robot file's [identify] set",
+# --------------------------------------------------------------------------- the table's rows
+
+
+@dataclass(frozen=True, eq=False)
+class Option:
+    """One option: its flags and the keywords of :meth:`argparse.ArgumentParser.add_argument`."""
+
+    flags: tuple[str, ...]
+    settings: dict[str, Any]
+
+
+def option(*flags: str, **settings: Any) -> Option:
+    """An :class:`Option` written as the ``add_argument`` call it stands for."""
+    return Option(flags, settings)
+
+
+@dataclass(frozen=True, eq=False)
+class OneOf:
+    """Options of which at most one is given (exactly one when ``required``)."""
+
+    options: tuple[Option, ...]
+    required: bool = False
+
+
+@dataclass(frozen=True, eq=False)
+class Command:
+    """One sub-command: its name, what runs it, its options in their ``--help`` order, and
+    the paths :func:`armcal.cli.main` checks first (option destinations)."""
+
+    name: str
+    run: Callable[[argparse.Namespace], None]
+    options: tuple[Option | OneOf, ...] = ()
+    inputs: tuple[str, ...] = ()
+    outputs: tuple[str, ...] = ()
+    folder_files: tuple[str, ...] = ()
+
+
+# --------------------------------------------------------------------------- shared options
+
+_JSON = option("--json", action="store_true", help="print a JSON document on stdout")
+_SEED = option("--seed", type=options.seed, default=0, help="random seed >= 0 (default 0)")
+_PLAN = option("--plan", required=True, metavar="PLAN_CSV", help="plan CSV (q1_deg..)")
+_TRUTH = option("--truth", metavar="TRUTH_TOML", help="deviations (default: the built-in's)")
+_SIGMA = option(
+    "--sigma",
+    type=options.sigma,
+    metavar="MM",
+    help="isotropic instrument noise in mm, replacing the robot file's (its encoder noise is "
+    f"kept); default: the robot file's [measurement], else {DEFAULT_SIGMA_MM}",
+)
+_TEST_POSES = option(
+    "--test-poses",
+    metavar="PLAN_CSV",
+    help="plan CSV of poses where accuracy matters (default: 1000 uniform in the limits)",
+)
+_FIX = option(
+    "--fix",
+    type=options.names,
+    action=_Joined,
+    metavar="P,..",
+    help="parameters held at nominal, not identified (e.g. dl4,dq1; repeats add up); "
+    "replaces the robot file's [identify] set",
+)
+#: ``--calibration`` (the file identify wrote) and ``--json``: commands that start from one.
+_CALIBRATION = (
+    option("--calibration", required=True, metavar="JSON", help="from identify -o"),
+    _JSON,
+)
+_LINKS = (
+    option(
+        "--tip-link",
+        metavar="LINK",
+        help="for a robot from a URDF: the link where the arm's chain ends (default: the "
+        "robot TOML's tip_link, else the URDF's one leaf)",
+    ),
+    option(
+        "--base-link",
+        metavar="LINK",
+        help="for a robot from a URDF: the link where the arm's chain starts (default: the "
+        "robot TOML's base_link, else the URDF's root)",
+    ),
+)
+
+
+def _output(help_: str, **settings: Any) -> Option:
+    return option("-o", "--output", metavar="PATH", help=help_, **settings)
+
+
+def _trials(default: int, help_: str) -> Option:
+    return option("--trials", type=options.trials, default=default, metavar="N", help=help_)
+
+
+def _robot_seed_json(output: str | None = None, *, required: bool = False) -> tuple[Option, ...]:
+    """--robot (with --tip-link and --base-link), --seed, --json and, given its help, -o.
+
+    ``required``: the command calibrates a real arm's data, so it has no default
+    robot (fitting a user's measurements to the paper's arm would give a wrong
+    calibration without a word); commands that design, simulate or explore
+    default to :data:`DEFAULT_ROBOT` and name it in their report.
+    """
+    robot = option(
+        "--robot",
+        default=None if required else DEFAULT_ROBOT,
+        metavar="NAME_OR_FILE",
+        help="your robot's TOML file or URDF, or a built-in name (required: the measurements "
+        "are of one arm; every built-in and file under reads: above)"
+        if required
+        else f"a built-in's name, a robot TOML file or a URDF (default {DEFAULT_ROBOT}; every "
+        "built-in and file under reads: above)",
     )
+    return (robot, *_LINKS, _SEED, _JSON, *(() if output is None else (_output(output),)))
+
+
+def _choice(flag: str, choices: Any, default: str, help_: str) -> Option:
+    return option(flag, choices=list(choices), default=default, help=help_)
+
+
+#: Files written by ``reproduce -o DIR``, checked before any work.
+_REPRODUCE_FILES = (
+    *(f"{name}.csv" for name in TABLE_COLUMNS),
+    "figure1.png",
+    "figure2.png",
+    "report.md",
+)
+_FIGURE = "(.png, .pdf, .svg or .eps)"
+
+# --------------------------------------------------------------------------- the table
+
+COMMAND_TABLE: tuple[Command, ...] = (
+    Command(
+        "synthesize",
+        commands.synthesize,
+        (
+            _PLAN,
+            _TRUTH,
+            option(
+                "--sigma",
+                type=options.sigma_or_zero,
+                metavar="MM",
+                help=f"noise std in mm (default: robot file's sigma_mm, else {DEFAULT_SIGMA_MM})",
+            ),
+            *_robot_seed_json("measurements CSV to write (default: stdout)"),
+        ),
+        inputs=("robot", "plan", "truth"),
+        outputs=("output",),
+    ),
+    Command(
+        "identify",
+        commands.identify,
+        (
+            option("--measurements", required=True, metavar="CSV", help="measurements CSV"),
+            _choice(
+                "--method",
+                ["auto", *METHODS],
+                "auto",
+                "solver; auto = closed-form, the exact least-squares optimum (default auto)",
+            ),
+            option(
+                "--sigma",
+                type=options.sigma,
+                metavar="MM",
+                help="isotropic instrument noise in mm, replacing the robot file's (its encoder "
+                "noise is kept) and any sigma_mm column; default: the sigma_mm column, the "
+                "robot file's [measurement], else estimated",
+            ),
+            option(
+                "--robust",
+                action="store_true",
+                help="robust fit: Huber M-estimator from the least-squares fit, then the "
+                "studentized outlier test and a refit without the outliers",
+            ),
+            option(
+                "--cross-validate",
+                type=options.folds,
+                metavar="K",
+                help="K-fold cross-validation: every pose predicted by a calibration without it "
+                "(poses with the same pose label stay together); --seed shuffles the folds",
+            ),
+            option(
+                "--no-compliance",
+                action="store_true",
+                help="fit the geometry only, even when the robot file has [elastostatic] (to see "
+                "what the joints' compliance explains)",
+            ),
+            _FIX,
+            *_robot_seed_json("calibration JSON to write", required=True),
+        ),
+        inputs=("robot", "measurements"),
+        outputs=("output",),
+    ),
+    Command(
+        "validate",
+        commands.validate,
+        (
+            *_CALIBRATION,
+            option(
+                "--measurements",
+                required=True,
+                metavar="CSV",
+                help="held-out measurements CSV (columns under reads: above)",
+            ),
+            option("--per-pose", action="store_true", help="a table of every pose's errors"),
+            option(
+                "--iso9283",
+                action="store_true",
+                help="an acceptance test in the spirit of ISO 9283: pose accuracy (AP, before "
+                "and after calibration) and repeatability (RP) of every pose the 'pose' column "
+                "repeats over cycles",
+            ),
+            option(
+                "--plot",
+                metavar="FIGURE",
+                help="draw the error vectors on the workspace, or with --iso9283 every pose's AP "
+                f"and RP {_FIGURE}",
+            ),
+        ),
+        inputs=("calibration", "measurements"),
+        outputs=("plot",),
+    ),
+    Command(
+        "compensate",
+        commands.compensate,
+        (
+            *_CALIBRATION,
+            option(
+                "--program",
+                required=True,
+                metavar="CSV",
+                help="program CSV of joint commands (columns under reads: above)",
+            ),
+            option("--target", metavar="LABEL", help="the target the program is for"),
+            option(
+                "--payload-kg",
+                type=options.not_negative,
+                metavar="KG",
+                help="the program's payload, for a calibration with joint compliance (default: "
+                "the robot file's payload_kg; a payload_kg column gives it per row)",
+            ),
+            option(
+                "-o", "--output", required=True, metavar="CSV", help="corrected program to write"
+            ),
+        ),
+        inputs=("calibration", "program"),
+        outputs=("output",),
+    ),
+    Command(
+        "design",
+        commands.design,
+        (
+            option(
+                "--poses", type=options.poses, required=True, metavar="M", help="number of poses"
+            ),
+            _choice(
+                "--criterion",
+                [*CRITERIA, *TASK_CRITERIA],
+                "D",
+                "criterion (default D); I and G: the mean and the largest predicted position "
+                "error after calibration over the test poses (--test-poses)",
+            ),
+            _choice(
+                "--method",
+                DESIGN_METHODS,
+                "auto",
+                "auto = analytic if it fits the constraints, else optimize + exchange",
+            ),
+            option(
+                "--candidates",
+                metavar="PLAN_CSV",
+                help="reachable poses: every pose of the plan is one of them",
+            ),
+            option(
+                "--payloads",
+                type=options.payloads,
+                metavar="KG,KG",
+                help="payloads a pose may carry, for a robot with [elastostatic]: the design "
+                "picks which poses to load and with what (default: 0 and the robot file's "
+                "payload_kg)",
+            ),
+            _choice(
+                "--order",
+                ORDERS,
+                "travel",
+                "order of the poses in the plan file, which the robot visits in turn: travel = "
+                "short joint travel (the sum of every joint's moves), none = as the method made "
+                "them (default travel; the plan's quality is the same)",
+            ),
+            option(
+                "--distinct",
+                action="store_true",
+                help="no pose twice (poses count as one within "
+                f"{DISTINCT_TOLERANCE:g} rad on every joint): exchange takes each candidate pose "
+                "once and the optimizer's repeated poses are replaced; a note says what that "
+                "cost",
+            ),
+            option(
+                "--plot",
+                metavar="FIGURE",
+                help=f"draw the plan's poses as stick arms {_FIGURE}",
+            ),
+            _SIGMA,
+            _TEST_POSES,
+            _FIX,
+            *_robot_seed_json("plan CSV to write"),
+        ),
+        inputs=("robot", "candidates", "test_poses"),
+        outputs=("output", "plot"),
+    ),
+    Command(
+        "evaluate",
+        commands.evaluate,
+        (_PLAN, _SIGMA, _TEST_POSES, _FIX, *_robot_seed_json()),
+        inputs=("robot", "plan", "test_poses"),
+    ),
+    Command(
+        "simulate",
+        commands.simulate,
+        (
+            _PLAN,
+            _TRUTH,
+            _SIGMA,
+            _trials(10_000, "trials (default 10000)"),
+            _choice(
+                "--method",
+                ["auto", *METHODS],
+                "auto",
+                "solver applied to every trial; auto = closed-form when every parameter is "
+                "free, else gauss-newton (default auto)",
+            ),
+            _TEST_POSES,
+            _FIX,
+            *_robot_seed_json(),
+        ),
+        inputs=("robot", "plan", "truth", "test_poses"),
+    ),
+    Command(
+        "poses-needed",
+        commands.poses_needed,
+        (
+            OneOf(
+                tuple(
+                    option(
+                        flag,
+                        dest=key,
+                        type=options.positive,
+                        metavar="A",
+                        help=REQUIREMENTS[key] + " to reach",
+                    )
+                    for key, flag in commands.REQUIREMENT_OPTIONS.items()
+                ),
+                required=True,
+            ),
+            _SIGMA,
+            _TEST_POSES,
+            option(
+                "--max-poses",
+                type=options.poses,
+                default=5000,
+                metavar="M",
+                help="give up beyond (default 5000)",
+            ),
+            _FIX,
+            *_robot_seed_json("plan CSV of the plan that reaches the target"),
+        ),
+        inputs=("robot", "test_poses"),
+        outputs=("output",),
+    ),
+    Command(
+        "reproduce",
+        commands.reproduce_paper,
+        (
+            _trials(
+                10_000, "Monte Carlo trials per configuration (default 10000, as in the paper)"
+            ),
+            option(
+                "--random-plans",
+                type=options.random_plans,
+                default=10_000,
+                metavar="N",
+                help="random plans per study (default 10000, as in the paper)",
+            ),
+            _SEED,
+            _JSON,
+            option("-o", "--output", required=True, metavar="DIR", help="folder to write"),
+        ),
+        outputs=("output",),
+        folder_files=_REPRODUCE_FILES,
+    ),
+    Command(
+        "check-compliance",
+        commands.check_compliance,
+        (_trials(4000, "Monte Carlo trials (default 4000)"), _SEED, _JSON),
+    ),
+    Command(
+        "demo",
+        commands.demo,
+        (
+            option(
+                "--poses",
+                type=options.poses,
+                help=f"number of poses (default {PLANAR_DEMO_POSES}; {SPATIAL_DEMO_POSES} for a "
+                "spatial arm)",
+            ),
+            _TRUTH,
+            option("--sigma", type=options.sigma, metavar="MM", help="noise std in mm"),
+            *_robot_seed_json("folder for the report, figures and files"),
+        ),
+        inputs=("robot", "truth"),
+        outputs=("output",),
+        folder_files=tuple(dict.fromkeys(DEMO_FILES + SPATIAL_DEMO_FILES)),
+    ),
+    Command(
+        "export",
+        commands.export,
+        (
+            *_CALIBRATION,
+            option("--robot-toml", metavar="PATH", help="robot TOML file to write"),
+            option("--urdf", metavar="PATH", help="URDF file to write"),
+            option(
+                "--joint-offsets",
+                metavar="PATH",
+                help="CSV of every joint's zero offset (deg) for the controller",
+            ),
+            option(
+                "--ur-calibration",
+                metavar="PATH",
+                help="a Universal Robots arm's [mounting] deltas, as the controller's "
+                "calibration.conf holds them (docs/controllers.md)",
+            ),
+            option(
+                "--ros-calibration",
+                metavar="PATH",
+                help="a Universal Robots arm's calibration YAML for the ROS driver (kinematics: "
+                "x, y, z, roll, pitch, yaw per joint; docs/controllers.md)",
+            ),
+        ),
+        inputs=("calibration",),
+        outputs=("robot_toml", "urdf", "joint_offsets", "ur_calibration", "ros_calibration"),
+    ),
+    Command("formats", commands.formats),
+)
+
+# --------------------------------------------------------------------------- the builder
+
+_WORKFLOW = (
+    "The workflow: describe the robot (a robot TOML file, a URDF or a built-in, planar or "
+    "spatial; armcal formats lists every key), design a plan "
+    "(design; evaluate, simulate and poses-needed judge and size it), measure it, identify "
+    "the deviations, validate them on held-out poses, then compensate programs or export the "
+    "calibrated arm. 'armcal COMMAND --help' shows a command's files and an example; "
+    "docs/guide.md walks through a whole calibration."
+)
 
 
 def build_parser() -> argparse.ArgumentParser:
-    """The argument parser of the ``armcal`` program."""
+    """The argument parser of the ``armcal`` program: every command of :data:`COMMAND_TABLE`."""
     parser = _Parser(
         prog="armcal",
         description=(
@@ -135,324 +524,27 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("--version", action="version", version=f"armcal {__version__}")
     subs = parser.add_subparsers(dest="command", metavar="COMMAND", parser_class=_Parser)
     subs.required = True
-
-    sub = _command(subs, "synthesize")
-    sub.add_argument("--plan", required=True, metavar="PLAN_CSV", help="plan CSV (q1_deg..)")
-    sub.add_argument("--truth", metavar="TRUTH_TOML", help="deviations (default: the built-in's)")
-    sub.add_argument(
-        "--sigma",
-        type=options.sigma_or_zero,
-        metavar="MM",
-        help=f"noise std in mm (default: robot file's sigma_mm, else {DEFAULT_SIGMA_MM})",
-    )
-    _add_common(sub, seed=True, output="measurements CSV to write (default: stdout)")
-    sub.set_defaults(
-        run=commands.synthesize, inputs=("robot", "plan", "truth"), outputs=("output",)
-    )
-
-    sub = _command(subs, "identify")
-    sub.add_argument("--measurements", required=True, metavar="CSV", help="measurements CSV")
-    sub.add_argument(
-        "--method",
-        choices=["auto", *METHODS],
-        default="auto",
-        help="solver; auto = closed-form, the exact least-squares optimum (default auto)",
-    )
-    sub.add_argument(
-        "--sigma",
-        type=options.sigma,
-        metavar="MM",
-        help="isotropic instrument noise in mm, replacing the robot file's (its encoder noise "
-        "is kept) and any sigma_mm column; default: the sigma_mm column, the robot file's "
-        "[measurement], else estimated",
-    )
-    sub.add_argument(
-        "--robust",
-        action="store_true",
-        help="robust fit: Huber M-estimator from the least-squares fit, then the studentized "
-        "outlier test and a refit without the outliers",
-    )
-    sub.add_argument(
-        "--cross-validate",
-        type=options.folds,
-        metavar="K",
-        help="K-fold cross-validation: every pose predicted by a calibration without it "
-        "(poses with the same pose label stay together); --seed shuffles the folds",
-    )
-    sub.add_argument(
-        "--no-compliance",
-        action="store_true",
-        help="fit the geometry only, even when the robot file has [elastostatic] (to see what "
-        "the joints' compliance explains)",
-    )
-    _add_fix(sub)
-    _add_common(sub, seed=True, output="calibration JSON to write", robot_required=True)
-    sub.set_defaults(run=commands.identify, inputs=("robot", "measurements"), outputs=("output",))
-
-    sub = _command(subs, "validate")
-    _add_calibration(sub)
-    sub.add_argument(
-        "--measurements",
-        required=True,
-        metavar="CSV",
-        help="held-out measurements CSV (columns under reads: above)",
-    )
-    sub.add_argument("--per-pose", action="store_true", help="a table of every pose's errors")
-    sub.add_argument(
-        "--iso9283",
-        action="store_true",
-        help="an acceptance test in the spirit of ISO 9283: pose accuracy (AP, before and "
-        "after calibration) and repeatability (RP) of every pose the 'pose' column repeats "
-        "over cycles",
-    )
-    sub.add_argument(
-        "--plot",
-        metavar="FIGURE",
-        help="draw the error vectors on the workspace, or with --iso9283 every pose's AP and "
-        "RP (.png, .pdf, .svg or .eps)",
-    )
-    sub.set_defaults(
-        run=commands.validate, inputs=("calibration", "measurements"), outputs=("plot",)
-    )
-
-    sub = _command(subs, "compensate")
-    _add_calibration(sub)
-    sub.add_argument(
-        "--program",
-        required=True,
-        metavar="CSV",
-        help="program CSV of joint commands (columns under reads: above)",
-    )
-    sub.add_argument("--target", metavar="LABEL", help="the target the program is for")
-    sub.add_argument(
-        "--payload-kg",
-        type=options.not_negative,
-        metavar="KG",
-        help="the program's payload, for a calibration with joint compliance (default: the "
-        "robot file's payload_kg; a payload_kg column gives it per row)",
-    )
-    sub.add_argument(
-        "-o", "--output", required=True, metavar="CSV", help="corrected program to write"
-    )
-    sub.set_defaults(
-        run=commands.compensate, inputs=("calibration", "program"), outputs=("output",)
-    )
-
-    sigma_help = (
-        "isotropic instrument noise in mm, replacing the robot file's (its encoder noise is "
-        f"kept); default: the robot file's [measurement], else {DEFAULT_SIGMA_MM}"
-    )
-    test_help = "plan CSV of poses where accuracy matters (default: 1000 uniform in the limits)"
-    sub = _command(subs, "design")
-    sub.add_argument(
-        "--poses", type=options.poses, required=True, metavar="M", help="number of poses"
-    )
-    sub.add_argument(
-        "--criterion",
-        choices=[*CRITERIA, *TASK_CRITERIA],
-        default="D",
-        help="criterion (default D); I and G: the mean and the largest predicted position "
-        "error after calibration over the test poses (--test-poses)",
-    )
-    sub.add_argument(
-        "--method",
-        choices=list(DESIGN_METHODS),
-        default="auto",
-        help="auto = analytic if it fits the constraints, else optimize + exchange",
-    )
-    sub.add_argument(
-        "--candidates",
-        metavar="PLAN_CSV",
-        help="reachable poses: every pose of the plan is one of them",
-    )
-    sub.add_argument(
-        "--payloads",
-        type=options.payloads,
-        metavar="KG,KG",
-        help="payloads a pose may carry, for a robot with [elastostatic]: the design picks "
-        "which poses to load and with what (default: 0 and the robot file's payload_kg)",
-    )
-    sub.add_argument(
-        "--order",
-        choices=list(ORDERS),
-        default="travel",
-        help="order of the poses in the plan file, which the robot visits in turn: travel = "
-        "short joint travel (the sum of every joint's moves), none = as the method made them "
-        "(default travel; the plan's quality is the same)",
-    )
-    sub.add_argument(
-        "--distinct",
-        action="store_true",
-        help="no pose twice (poses count as one within "
-        f"{DISTINCT_TOLERANCE:g} rad on every joint): exchange takes each candidate pose once "
-        "and the optimizer's repeated poses are replaced; a note says what that cost",
-    )
-    sub.add_argument(
-        "--plot",
-        metavar="FIGURE",
-        help="draw the plan's poses as stick arms (.png, .pdf, .svg or .eps)",
-    )
-    sub.add_argument("--sigma", type=options.sigma, metavar="MM", help=sigma_help)
-    sub.add_argument("--test-poses", metavar="PLAN_CSV", help=test_help)
-    _add_fix(sub)
-    _add_common(sub, seed=True, output="plan CSV to write")
-    sub.set_defaults(
-        run=commands.design,
-        inputs=("robot", "candidates", "test_poses"),
-        outputs=("output", "plot"),
-    )
-
-    sub = _command(subs, "evaluate")
-    sub.add_argument("--plan", required=True, metavar="PLAN_CSV", help="plan CSV (q1_deg..)")
-    sub.add_argument("--sigma", type=options.sigma, metavar="MM", help=sigma_help)
-    sub.add_argument("--test-poses", metavar="PLAN_CSV", help=test_help)
-    _add_fix(sub)
-    _add_common(sub, seed=True)
-    sub.set_defaults(run=commands.evaluate, inputs=("robot", "plan", "test_poses"))
-
-    sub = _command(subs, "simulate")
-    sub.add_argument("--plan", required=True, metavar="PLAN_CSV", help="plan CSV (q1_deg..)")
-    sub.add_argument("--truth", metavar="TRUTH_TOML", help="deviations (default: the built-in's)")
-    sub.add_argument("--sigma", type=options.sigma, metavar="MM", help=sigma_help)
-    sub.add_argument(
-        "--trials", type=options.trials, default=10_000, metavar="N", help="trials (default 10000)"
-    )
-    sub.add_argument(
-        "--method",
-        choices=["auto", *METHODS],
-        default="auto",
-        help="solver applied to every trial; auto = closed-form when every parameter is free, "
-        "else gauss-newton (default auto)",
-    )
-    sub.add_argument("--test-poses", metavar="PLAN_CSV", help=test_help)
-    _add_fix(sub)
-    _add_common(sub, seed=True)
-    sub.set_defaults(run=commands.simulate, inputs=("robot", "plan", "truth", "test_poses"))
-
-    sub = _command(subs, "poses-needed")
-    group = sub.add_mutually_exclusive_group(required=True)
-    for key, option in commands.REQUIREMENT_OPTIONS.items():
-        group.add_argument(
-            option,
-            dest=key,
-            type=options.positive,
-            metavar="A",
-            help=REQUIREMENTS[key] + " to reach",
-        )
-    sub.add_argument("--sigma", type=options.sigma, metavar="MM", help=sigma_help)
-    sub.add_argument("--test-poses", metavar="PLAN_CSV", help=test_help)
-    sub.add_argument(
-        "--max-poses",
-        type=options.poses,
-        default=5000,
-        metavar="M",
-        help="give up beyond (default 5000)",
-    )
-    _add_fix(sub)
-    _add_common(sub, seed=True, output="plan CSV of the plan that reaches the target")
-    sub.set_defaults(
-        run=commands.poses_needed, inputs=("robot", "test_poses"), outputs=("output",)
-    )
-
-    sub = _command(subs, "reproduce")
-    sub.add_argument(
-        "--trials",
-        type=options.trials,
-        default=10_000,
-        metavar="N",
-        help="Monte Carlo trials per configuration (default 10000, as in the paper)",
-    )
-    sub.add_argument(
-        "--random-plans",
-        type=options.random_plans,
-        default=10_000,
-        metavar="N",
-        help="random plans per study (default 10000, as in the paper)",
-    )
-    sub.add_argument("--seed", type=options.seed, default=0, help="random seed >= 0 (default 0)")
-    sub.add_argument("--json", action="store_true", help="print a JSON document on stdout")
-    sub.add_argument("-o", "--output", required=True, metavar="DIR", help="folder to write")
-    sub.set_defaults(
-        run=commands.reproduce_paper, outputs=("output",), folder_files=_REPRODUCE_FILES
-    )
-
-    sub = _command(subs, "check-compliance")
-    sub.add_argument(
-        "--trials",
-        type=options.trials,
-        default=4000,
-        metavar="N",
-        help="Monte Carlo trials (default 4000)",
-    )
-    sub.add_argument("--seed", type=options.seed, default=0, help="random seed >= 0 (default 0)")
-    sub.add_argument("--json", action="store_true", help="print a JSON document on stdout")
-    sub.set_defaults(run=commands.check_compliance)
-
-    sub = _command(subs, "demo")
-    sub.add_argument(
-        "--poses",
-        type=options.poses,
-        help=f"number of poses (default {PLANAR_DEMO_POSES}; {SPATIAL_DEMO_POSES} for a "
-        "spatial arm)",
-    )
-    sub.add_argument("--truth", metavar="TRUTH_TOML", help="deviations (default: the built-in's)")
-    sub.add_argument("--sigma", type=options.sigma, metavar="MM", help="noise std in mm")
-    _add_common(sub, seed=True, output="folder for the report, figures and files")
-    sub.set_defaults(
-        run=commands.demo,
-        inputs=("robot", "truth"),
-        outputs=("output",),
-        folder_files=tuple(dict.fromkeys(DEMO_FILES + SPATIAL_DEMO_FILES)),
-    )
-
-    sub = _command(subs, "export")
-    _add_calibration(sub)
-    sub.add_argument("--robot-toml", metavar="PATH", help="robot TOML file to write")
-    sub.add_argument("--urdf", metavar="PATH", help="URDF file to write")
-    sub.add_argument(
-        "--joint-offsets",
-        metavar="PATH",
-        help="CSV of every joint's zero offset (deg) for the controller",
-    )
-    sub.add_argument(
-        "--ur-calibration",
-        metavar="PATH",
-        help="a Universal Robots arm's [mounting] deltas, as the controller's calibration.conf "
-        "holds them (docs/controllers.md)",
-    )
-    sub.add_argument(
-        "--ros-calibration",
-        metavar="PATH",
-        help="a Universal Robots arm's calibration YAML for the ROS driver (kinematics: x, y, "
-        "z, roll, pitch, yaw per joint; docs/controllers.md)",
-    )
-    sub.set_defaults(
-        run=commands.export,
-        inputs=("calibration",),
-        outputs=("robot_toml", "urdf", "joint_offsets", "ur_calibration", "ros_calibration"),
-    )
-
-    sub = _command(subs, "formats")
-    sub.set_defaults(run=commands.formats)
+    for command in COMMAND_TABLE:
+        _add_command(subs, command)
     return parser
 
 
-_WORKFLOW = (
-    "The workflow: write a robot file (armcal formats lists every key), design a plan "
-    "(design; evaluate, simulate and poses-needed judge and size it), measure it, identify "
-    "the deviations, validate them on held-out poses, then compensate programs or export the "
-    "calibrated arm. 'armcal COMMAND --help' shows a command's files and an example; "
-    "docs/guide.md walks through a whole calibration."
-)
-
-
-def _command(subs: Any, name: str) -> argparse.ArgumentParser:
-    """The parser of command ``name``, with its help from :mod:`.help`."""
-    parser: argparse.ArgumentParser = subs.add_parser(
-        name,
-        help=COMMANDS[name].summary,
-        description=help_description(name),
-        epilog=help_epilog(name),
+def _add_command(subs: Any, command: Command) -> None:
+    """Add ``command``'s parser to ``subs``: its help from :mod:`.help`, its options in order."""
+    sub: argparse.ArgumentParser = subs.add_parser(
+        command.name,
+        help=COMMANDS[command.name].summary,
+        description=help_description(command.name),
+        epilog=help_epilog(command.name),
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
-    return parser
+    for entry in command.options:
+        if isinstance(entry, OneOf):
+            group = sub.add_mutually_exclusive_group(required=entry.required)
+            for one in entry.options:
+                group.add_argument(*one.flags, **one.settings)
+        else:
+            sub.add_argument(*entry.flags, **entry.settings)
+    paths = {"inputs": command.inputs, "outputs": command.outputs}
+    paths["folder_files"] = command.folder_files
+    sub.set_defaults(run=command.run, **{key: value for key, value in paths.items() if value})

@@ -51,7 +51,8 @@ SPATIAL = register(
     Family(
         "spatial",
         "a serial arm in 3-D (a six-axis industrial arm, a cobot), rigid or with joint compliance",
-        "a URDF (with --base-link/--tip-link), or a robot TOML with urdf, [mdh], [dh] or [ur]",
+        "a URDF (the chain between a base and a tip link), or a robot TOML with urdf, [mdh], "
+        "[dh] or [ur]",
         aliases=("serial",),
         refs={
             "builtins": "armcal.files.spatial:BUILTIN_SPATIAL_ROBOTS",

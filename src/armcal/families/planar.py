@@ -68,7 +68,7 @@ def truth(
         if path is None:
             keys = ", ".join(COMPLIANCE_TRUTH_KEYS[k] for k in dict.fromkeys(model.kinds))
             raise ArmcalError(
-                f"{robot.source}: a robot with [elastostatic] needs --truth truth.toml with the "
+                f"{robot.source}: a robot with [elastostatic] needs a truth file with the "
                 f"deviations and {keys}"
             )
         geometry = load_truth(path, model.arm)
