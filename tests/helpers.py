@@ -1,5 +1,11 @@
 """Helpers shared by the tests: random arms and deviations, the program run in-process
-or in a subprocess, and the robot file of the virtual six-axis cell with compliance."""
+or in a subprocess, the vertical 3-link arm's cell, and the robot file of the virtual
+six-axis cell with compliance.
+
+Helpers of one concern have their own modules: ``helpers_spatial`` (spatial arms built
+through armcal), ``helpers_slide`` (a slide arm written out independently of armcal),
+``helpers_paper`` (the default robot's valid input files).  A test file imports only
+helpers, never another test file (``test_tests_layout.py``)."""
 
 import contextlib
 import io
@@ -141,6 +147,33 @@ gravity_xy = [0, -1]
 link_masses_kg = [20, 12, 6]
 payload_kg = 10
 """
+
+
+#: The true vertical 3-link arm of the compliance tests: link and joint errors and
+#: every joint's compliance.
+VERTICAL_3LINK_TRUTH = """dl_mm = [1.0, -0.5, 0.8]
+dq_deg = [0.3, -0.2, 0.4]
+k_urad_per_Nm = [1.5, 3.0, 6.0]
+"""
+
+
+def planar_cell(folder: Path, identify_table: str = "") -> None:
+    """The vertical 3-link arm's cell in ``folder``: ``robot.toml`` (:data:`VERTICAL_3LINK`
+    with ``identify_table``), ``truth.toml`` and 40 poses measured by ``synthesize``
+    (``plan.csv``, ``meas.csv``), every other one under the 10 kg payload."""
+    (folder / "robot.toml").write_text(VERTICAL_3LINK + identify_table)
+    (folder / "truth.toml").write_text(VERTICAL_3LINK_TRUTH)
+    rng = np.random.default_rng(4)
+    rows = ["q1_deg,q2_deg,q3_deg,payload_kg"] + [
+        f"{a:.6f},{b:.6f},{c:.6f},{10 if i % 2 else 0}"
+        for i, (a, b, c) in enumerate(rng.uniform(-140, 140, (40, 3)))
+    ]
+    (folder / "plan.csv").write_text("\n".join(rows) + "\n")
+    made = run_cli(
+        folder, "synthesize", "--robot", "robot.toml", "--plan", "plan.csv",
+        "--truth", "truth.toml", "-o", "meas.csv", "--seed", "3",
+    )  # fmt: skip
+    assert made.returncode == 0, made.stderr
 
 
 #: The head of a robot TOML for the built-in industrial 6R's URDF (``{urdf}``) under

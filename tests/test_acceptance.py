@@ -19,7 +19,7 @@ import pytest
 from armcal.acceptance import ISO_CYCLES, pose_characteristics, pose_characteristics_warnings
 from armcal.errors import ArmcalError
 from helpers import run_cli, write_cycles
-from test_spatial_virtual import plan_file
+from helpers_spatial import plan_file
 
 
 def test_pose_accuracy_and_repeatability_agree_with_hand_computed_values():

@@ -27,7 +27,7 @@ from armcal.errors import ArmcalError
 from armcal.models import PlanarArm
 from armcal.workflow.plan import moving_set
 from helpers import VERTICAL_3LINK, run_cli
-from test_spatial_model import ARMS
+from helpers_spatial import ARMS
 
 #: The battery's planar bench (/tmp/battery-planar/bench.toml): three links, limits.
 BENCH = """name = "bench3"

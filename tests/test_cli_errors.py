@@ -27,49 +27,22 @@ from pathlib import Path
 
 import pytest
 
-from helpers import deviated_tip, run_cli, run_program
+from helpers import run_cli, run_program
+from helpers_paper import (
+    MEAS_HEADER,
+    MEAS_ROWS,
+    PLAN_HEADER,
+    PLAN_ROWS,
+    POSES,
+    VALID_MEAS,
+    VALID_PLAN,
+    csv_file,
+    exact_position,
+    noisy_position,
+)
 
 # --------------------------------------------------------------------------- valid inputs
-
-#: Joint columns of the default robot, paper-4link (4 joints, ±180 deg, 8 parameters).
-JOINTS = ("q1_deg", "q2_deg", "q3_deg", "q4_deg")
-PLAN_HEADER = ",".join(JOINTS)
-MEAS_HEADER = ",".join((*JOINTS, "x_mm", "y_mm"))
-
-#: The paper's lengths and deviations, used to make measurements that identify cleanly.
-LINKS_MM = (260.0, 180.0, 120.0, 100.0)
-DL_MM = (1.5, -0.6, -0.4, 0.7)
-DQ_DEG = (0.5, -0.5, 0.7, -0.3)
-
-
-def _wrap(deg: float) -> float:
-    return deg - 360.0 if deg > 180.0 else deg
-
-
-#: A valid 20-pose plan: q1 = 0, q2 = q3 = q4 = 18 k deg (k = 0..19), wrapped to ±180.
-POSES = [(0.0, a, a, a) for a in (_wrap(18.0 * k) for k in range(20))]
-
-
-def _exact_position(q_deg: tuple[float, ...]) -> tuple[float, float]:
-    """Position of the deviated arm (paper eq. 1, written out independently)."""
-    return deviated_tip(q_deg, LINKS_MM, DL_MM, DQ_DEG)
-
-
-def _position(q_deg: tuple[float, ...], k: int) -> tuple[float, float]:
-    """Position of the deviated arm plus a deterministic ~0.1 mm 'noise'."""
-    x, y = _exact_position(q_deg)
-    return x + 0.1 * math.sin(3.7 * k), y + 0.1 * math.cos(2.3 * k)
-
-
-PLAN_ROWS = [",".join(f"{v:g}" for v in pose) for pose in POSES]
-MEAS_ROWS = [
-    ",".join([*(f"{v:g}" for v in pose), *(repr(v) for v in _position(pose, k))])
-    for k, pose in enumerate(POSES)
-]
-
-
-def _csv(header: str, rows: list[str]) -> str:
-    return "\n".join([header, *rows]) + "\n"
+# (the valid files themselves: helpers_paper)
 
 
 def _with_field(rows: list[str], row: int, column: str, value: str, header: str) -> list[str]:
@@ -83,7 +56,7 @@ def _with_field(rows: list[str], row: int, column: str, value: str, header: str)
 
 
 def _meas_with(row: int, column: str, value: str) -> str:
-    return _csv(MEAS_HEADER, _with_field(MEAS_ROWS, row, column, value, MEAS_HEADER))
+    return csv_file(MEAS_HEADER, _with_field(MEAS_ROWS, row, column, value, MEAS_HEADER))
 
 
 def _drop_column(header: str, rows: list[str], column: str) -> str:
@@ -94,12 +67,13 @@ def _drop_column(header: str, rows: list[str], column: str) -> str:
         del fields[col]
         return ",".join(fields)
 
-    return _csv(drop(header), [drop(r) for r in rows])
+    return csv_file(drop(header), [drop(r) for r in rows])
 
 
-VALID_PLAN = _csv(PLAN_HEADER, PLAN_ROWS)
 #: The valid plan in radians under the q*_deg columns (a unit mistake).
-RADIANS_PLAN = _csv(PLAN_HEADER, [",".join(f"{math.radians(v):.6f}" for v in p) for p in POSES])
+RADIANS_PLAN = csv_file(
+    PLAN_HEADER, [",".join(f"{math.radians(v):.6f}" for v in p) for p in POSES]
+)
 
 
 def _turned(row: str) -> str:
@@ -109,13 +83,10 @@ def _turned(row: str) -> str:
     return ",".join(fields)
 
 
-VALID_MEAS = _csv(MEAS_HEADER, MEAS_ROWS)
-
-
 def _scaled_rows(factor: float) -> list[str]:
     """The measurement rows of an arm ``factor`` times as large (same angles)."""
     return [
-        ",".join([*(f"{v:g}" for v in pose), *(repr(factor * v) for v in _position(pose, k))])
+        ",".join([*(f"{v:g}" for v in pose), *(repr(factor * v) for v in noisy_position(pose, k))])
         for k, pose in enumerate(POSES)
     ]
 
@@ -248,13 +219,13 @@ CASES = [
     ),
     case(
         "meas-unknown-column",
-        {"meas.csv": _csv(MEAS_HEADER + ",temp_c", [r + ",0.0" for r in MEAS_ROWS])},
+        {"meas.csv": csv_file(MEAS_HEADER + ",temp_c", [r + ",0.0" for r in MEAS_ROWS])},
         IDENTIFY,
         ("meas.csv", "line 1", "temp_c"),
     ),
     case(
         "meas-duplicate-column",
-        {"meas.csv": _csv(MEAS_HEADER + ",x_mm", [r + ",0.0" for r in MEAS_ROWS])},
+        {"meas.csv": csv_file(MEAS_HEADER + ",x_mm", [r + ",0.0" for r in MEAS_ROWS])},
         IDENTIFY,
         ("meas.csv", "line 1", "x_mm", "duplicate"),
     ),
@@ -290,13 +261,13 @@ CASES = [
     ),
     case(
         "meas-short-row",
-        {"meas.csv": _csv(MEAS_HEADER, [*MEAS_ROWS[:2], MEAS_ROWS[2].rsplit(",", 1)[0]])},
+        {"meas.csv": csv_file(MEAS_HEADER, [*MEAS_ROWS[:2], MEAS_ROWS[2].rsplit(",", 1)[0]])},
         IDENTIFY,
         ("meas.csv", "row 3"),
     ),
     case(
         "meas-row-numbering-skips-blank-lines",
-        {"meas.csv": _csv(MEAS_HEADER, [*MEAS_ROWS[:2], "", "0,abc,0,0,1,2", *MEAS_ROWS[3:]])},
+        {"meas.csv": csv_file(MEAS_HEADER, [*MEAS_ROWS[:2], "", "0,abc,0,0,1,2", *MEAS_ROWS[3:]])},
         IDENTIFY,
         ("meas.csv", "row 3 (line 5)", "q2_deg", "abc"),
     ),
@@ -327,7 +298,7 @@ CASES = [
     ),
     case(  # a controller that reads 0..360: -162 deg (pose 12) read as 198
         "meas-readings-in-0-to-360",
-        {"meas.csv": _csv(MEAS_HEADER, [_turned(r) for r in MEAS_ROWS])},
+        {"meas.csv": csv_file(MEAS_HEADER, [_turned(r) for r in MEAS_ROWS])},
         IDENTIFY,
         ("meas.csv", "row 12", "q2_deg", "198 is -162 + 360", "subtract or add 360"),
     ),
@@ -343,19 +314,19 @@ CASES = [
     ),
     case(
         "meas-too-few-poses",
-        {"meas.csv": _csv(MEAS_HEADER, MEAS_ROWS[1:3])},
+        {"meas.csv": csv_file(MEAS_HEADER, MEAS_ROWS[1:3])},
         IDENTIFY,
         ("meas.csv", "not identifiable", "2 poses", "8 parameters"),
     ),
     case(
         "meas-identical-poses",
-        {"meas.csv": _csv(MEAS_HEADER, [MEAS_ROWS[3]] * 6)},
+        {"meas.csv": csv_file(MEAS_HEADER, [MEAS_ROWS[3]] * 6)},
         IDENTIFY,
         ("meas.csv", "not identifiable", "6 poses"),
     ),
     case(
         "meas-no-residual-to-estimate-sigma",
-        {"meas.csv": _csv(MEAS_HEADER, MEAS_ROWS[0:20:5])},
+        {"meas.csv": csv_file(MEAS_HEADER, MEAS_ROWS[0:20:5])},
         IDENTIFY,
         ("meas.csv", "4 poses", "--sigma"),
     ),
@@ -368,7 +339,7 @@ CASES = [
     case(
         "meas-sigma-column-not-positive",
         {
-            "meas.csv": _csv(
+            "meas.csv": csv_file(
                 MEAS_HEADER + ",sigma_mm", [r + ",0.1" for r in MEAS_ROWS[:-1]]
             ).rstrip("\n")
             + "\n"
@@ -405,7 +376,11 @@ CASES = [
     # ---- plan CSV
     case(
         "plan-text",
-        {"plan.csv": _csv(PLAN_HEADER, _with_field(PLAN_ROWS, 3, "q2_deg", "abc", PLAN_HEADER))},
+        {
+            "plan.csv": csv_file(
+                PLAN_HEADER, _with_field(PLAN_ROWS, 3, "q2_deg", "abc", PLAN_HEADER)
+            )
+        },
         SYNTHESIZE,
         ("plan.csv", "row 3", "q2_deg", "abc"),
     ),
@@ -831,7 +806,7 @@ CASES = [
     # ---- simulate and poses-needed
     case(
         "simulate-unidentifiable-plan",
-        {"plan.csv": _csv(PLAN_HEADER, PLAN_ROWS[:3])},
+        {"plan.csv": csv_file(PLAN_HEADER, PLAN_ROWS[:3])},
         ("simulate", "--plan", "plan.csv"),
         ("plan.csv", "cannot identify"),
     ),
@@ -884,9 +859,9 @@ EXPORT = ("export", "--calibration", "cal.json", "--robot-toml", "arm.toml")
 TARGETS_TOML = ROBOT_TOML + "[targets]\nA = { length_mm = 100.0 }\nB = { length_mm = 60.0 }\n"
 ELASTIC_TOML = ROBOT_TOML + "[elastostatic]\ngravity_xy = [0.0, -1.0]\n"
 #: The measurements with a target column naming A on every row (valid for TARGETS_TOML).
-TARGET_MEAS = _csv(MEAS_HEADER + ",target", [r + ",A" for r in MEAS_ROWS])
+TARGET_MEAS = csv_file(MEAS_HEADER + ",target", [r + ",A" for r in MEAS_ROWS])
 #: The measurements with a z_mm column, points in the plane z = 0.
-MEAS_3D = _csv(MEAS_HEADER + ",z_mm", [r + ",0.0" for r in MEAS_ROWS])
+MEAS_3D = csv_file(MEAS_HEADER + ",z_mm", [r + ",0.0" for r in MEAS_ROWS])
 
 
 def _robot_with(text: str) -> dict[str, object]:
@@ -915,7 +890,7 @@ CASES += [
     ),
     case(
         "meas-long-row",
-        {"meas.csv": _csv(MEAS_HEADER, [*MEAS_ROWS[:4], MEAS_ROWS[4] + ",7", *MEAS_ROWS[5:]])},
+        {"meas.csv": csv_file(MEAS_HEADER, [*MEAS_ROWS[:4], MEAS_ROWS[4] + ",7", *MEAS_ROWS[5:]])},
         IDENTIFY,
         ("meas.csv", "row 5 (line 6)", "7 fields", "6"),
     ),
@@ -954,7 +929,7 @@ CASES += [
         "meas-payload-text",
         {
             "robot.toml": ELASTIC_TOML,
-            "meas.csv": _csv(MEAS_HEADER + ",payload_kg", [r + ",ten" for r in MEAS_ROWS]),
+            "meas.csv": csv_file(MEAS_HEADER + ",payload_kg", [r + ",ten" for r in MEAS_ROWS]),
         },
         IDENTIFY_ROBOT,
         ("meas.csv", "row 1", "payload_kg", "ten"),
@@ -963,7 +938,7 @@ CASES += [
         "meas-negative-payload",
         {
             "robot.toml": ELASTIC_TOML,
-            "meas.csv": _csv(MEAS_HEADER + ",payload_kg", [r + ",-5" for r in MEAS_ROWS]),
+            "meas.csv": csv_file(MEAS_HEADER + ",payload_kg", [r + ",-5" for r in MEAS_ROWS]),
         },
         IDENTIFY_ROBOT,
         ("meas.csv", "payload_kg", "-5"),
@@ -1093,19 +1068,19 @@ CASES += [
     ),
     case(
         "plan-payload-without-elastostatic",
-        {"plan.csv": _csv(PLAN_HEADER + ",payload_kg", [r + ",2" for r in PLAN_ROWS])},
+        {"plan.csv": csv_file(PLAN_HEADER + ",payload_kg", [r + ",2" for r in PLAN_ROWS])},
         SYNTHESIZE,
         ("plan.csv", "payload_kg", "[elastostatic]"),
     ),
     case(
         "plan-too-few-poses-to-evaluate",
-        {"plan.csv": _csv(PLAN_HEADER, PLAN_ROWS[:2])},
+        {"plan.csv": csv_file(PLAN_HEADER, PLAN_ROWS[:2])},
         ("evaluate", "--plan", "plan.csv"),
         ("plan.csv", "2 poses"),
     ),
     case(
         "plan-identical-poses-to-simulate",
-        {"plan.csv": _csv(PLAN_HEADER, [PLAN_ROWS[5]] * 12)},
+        {"plan.csv": csv_file(PLAN_HEADER, [PLAN_ROWS[5]] * 12)},
         ("simulate", "--plan", "plan.csv", "--trials", "50"),
         ("plan.csv", "cannot identify"),
     ),
@@ -1193,7 +1168,7 @@ CASES += [
     ),
     case(  # a 3x larger arm: its points lie beyond paper-4link's reach (issue 20)
         "validate-measurements-of-a-larger-robot",
-        {"cal.json": CALIBRATION, "test.csv": _csv(MEAS_HEADER, _scaled_rows(3.0))},
+        {"cal.json": CALIBRATION, "test.csv": csv_file(MEAS_HEADER, _scaled_rows(3.0))},
         VALIDATE,
         (
             "test.csv",
@@ -1238,7 +1213,7 @@ CASES += [
     ),
     case(
         "compensate-command-outside-limits",
-        {"cal.json": CALIBRATION, "prog.csv": _csv(PLAN_HEADER, ["0,0,0,0", "10,190,0,0"])},
+        {"cal.json": CALIBRATION, "prog.csv": csv_file(PLAN_HEADER, ["0,0,0,0", "10,190,0,0"])},
         COMPENSATE,
         ("prog.csv", "row 2", "q2_deg", "190"),
     ),
@@ -1369,7 +1344,7 @@ SPATIAL_ROWS = [
     f"{300 * (math.sin(math.radians(a)) + math.sin(math.radians(a + b))):.6f},0.0"
     for a, b in ((0, 10), (30, 40), (60, -20), (-45, 90), (90, 30), (120, -60))
 ]
-SPATIAL_MEAS = _csv(SPATIAL_HEADER, SPATIAL_ROWS)
+SPATIAL_MEAS = csv_file(SPATIAL_HEADER, SPATIAL_ROWS)
 IDENTIFY_URDF = ("identify", "--robot", "arm.urdf", "--measurements", "meas.csv", "-o", "cal.json")
 
 #: A 6-DoF instrument's data of the 2R arm: its orientation about z is q1 + q2.
@@ -1442,7 +1417,7 @@ CASES += [
     ),
     case(
         "spatial-wrong-joint-count",
-        {"arm.urdf": URDF_2R, "meas.csv": _csv("q1_deg,x_mm,y_mm,z_mm", ["0,1,2,3"] * 6)},
+        {"arm.urdf": URDF_2R, "meas.csv": csv_file("q1_deg,x_mm,y_mm,z_mm", ["0,1,2,3"] * 6)},
         IDENTIFY_URDF,
         ("meas.csv", "2 joints"),
     ),
@@ -1450,7 +1425,7 @@ CASES += [
         "spatial-without-z",
         {
             "arm.urdf": URDF_2R,
-            "meas.csv": _csv(
+            "meas.csv": csv_file(
                 "q1_deg,q2_deg,x_mm,y_mm", [r.rsplit(",", 1)[0] for r in SPATIAL_ROWS]
             ),
         },
@@ -1462,7 +1437,7 @@ CASES += [
         {
             "robot.toml": ORIENTED_TOML,
             "arm.urdf": URDF_2R,
-            "meas.csv": _csv(
+            "meas.csv": csv_file(
                 ORIENTED_HEADER, _with_field(ORIENTED_ROWS, 3, "ry_deg", "12.5°", ORIENTED_HEADER)
             ),
         },
@@ -1474,7 +1449,7 @@ CASES += [
         {
             "robot.toml": ORIENTED_TOML,
             "arm.urdf": URDF_2R,
-            "meas.csv": _csv(
+            "meas.csv": csv_file(
                 ORIENTED_HEADER, _with_field(ORIENTED_ROWS, 2, "rz_deg", "", ORIENTED_HEADER)
             ),
         },
@@ -1486,7 +1461,7 @@ CASES += [
         {
             "robot.toml": ORIENTED_TOML,
             "arm.urdf": URDF_2R,
-            "meas.csv": _csv(
+            "meas.csv": csv_file(
                 ORIENTED_HEADER.rsplit(",", 1)[0], [r.rsplit(",", 1)[0] for r in ORIENTED_ROWS]
             ),
         },
@@ -1498,7 +1473,7 @@ CASES += [
         {
             "robot.toml": ORIENTED_TOML,
             "arm.urdf": URDF_2R,
-            "meas.csv": _csv(
+            "meas.csv": csv_file(
                 ORIENTED_HEADER, _with_field(ORIENTED_ROWS, 4, "rx_deg", "400", ORIENTED_HEADER)
             ),
         },
@@ -1507,14 +1482,14 @@ CASES += [
     ),
     case(
         "orientation-without-its-noise",
-        {"arm.urdf": URDF_2R, "meas.csv": _csv(ORIENTED_HEADER, ORIENTED_ROWS)},
+        {"arm.urdf": URDF_2R, "meas.csv": csv_file(ORIENTED_HEADER, ORIENTED_ROWS)},
         IDENTIFY_URDF,
         ("orientation_sigma_deg", "[measurement]"),
     ),
     case(
         "orientation-of-a-planar-arm",
         {
-            "meas.csv": _csv(
+            "meas.csv": csv_file(
                 MEAS_HEADER + ",rx_deg,ry_deg,rz_deg", [r + ",0,0,0" for r in MEAS_ROWS]
             )
         },
@@ -1526,7 +1501,7 @@ CASES += [
         {
             "robot.toml": ORIENTED_TOML.replace("0.01", "20"),
             "arm.urdf": URDF_2R,
-            "meas.csv": _csv(ORIENTED_HEADER, ORIENTED_ROWS),
+            "meas.csv": csv_file(ORIENTED_HEADER, ORIENTED_ROWS),
         },
         IDENTIFY_ROBOT,
         ("robot.toml", "orientation_sigma_deg", "check the unit (deg)"),
@@ -1689,7 +1664,7 @@ def test_synthesize_sigma_zero_gives_noiseless_data(tmp_path: Path) -> None:
         fields = [float(v) for v in line.split(",")]
         assert fields[:4] == list(pose)
         # Exact positions of the paper's deviated arm; both sides round off at ~1e-13 mm.
-        for got, want in zip(fields[4:], _exact_position(pose), strict=True):
+        for got, want in zip(fields[4:], exact_position(pose), strict=True):
             assert math.isclose(got, want, rel_tol=0, abs_tol=1e-9), (line, want)
 
 

@@ -51,34 +51,11 @@ from armcal.models import (
     SpatialElastics,
 )
 from armcal.workflow import export_files
-from helpers import VERTICAL_3LINK, cell_toml, run_cli
+from helpers import VERTICAL_3LINK, cell_toml, planar_cell, run_cli
 
 # -- a planar vertical arm with its masses known ----------------------------------------
 
 PLANAR = VERTICAL_3LINK
-
-PLANAR_TRUTH = """dl_mm = [1.0, -0.5, 0.8]
-dq_deg = [0.3, -0.2, 0.4]
-k_urad_per_Nm = [1.5, 3.0, 6.0]
-"""
-
-
-def planar_cell(folder: Path, identify_table: str = "") -> None:
-    """The robot file (with ``identify_table``), its truth and 40 measured poses, every
-    other one under the 10 kg payload."""
-    (folder / "robot.toml").write_text(PLANAR + identify_table)
-    (folder / "truth.toml").write_text(PLANAR_TRUTH)
-    rng = np.random.default_rng(4)
-    rows = ["q1_deg,q2_deg,q3_deg,payload_kg"] + [
-        f"{a:.6f},{b:.6f},{c:.6f},{10 if i % 2 else 0}"
-        for i, (a, b, c) in enumerate(rng.uniform(-140, 140, (40, 3)))
-    ]
-    (folder / "plan.csv").write_text("\n".join(rows) + "\n")
-    made = run_cli(
-        folder, "synthesize", "--robot", "robot.toml", "--plan", "plan.csv",
-        "--truth", "truth.toml", "-o", "meas.csv", "--seed", "3",
-    )  # fmt: skip
-    assert made.returncode == 0, made.stderr
 
 
 def _identify(folder: Path, robot: str, *options: str):

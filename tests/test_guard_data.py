@@ -19,10 +19,9 @@ import pytest
 
 from armcal.errors import InputError
 from armcal.files.joints import SAME_POSE, check_pose_labels, joint_names
-from helpers import Run, cell_toml, deviated_tip, run_cli
-from test_cli_errors import VALID_MEAS
-from test_guard_compliance import planar_cell
-from test_guard_files import KINDS, SLIDE_TOML, slide_plan, slide_points
+from helpers import Run, cell_toml, deviated_tip, planar_cell, run_cli
+from helpers_paper import VALID_MEAS
+from helpers_slide import KINDS, SLIDE_TOML, slide_plan, slide_points
 
 
 def _one_error(run: Run) -> str:

@@ -19,7 +19,7 @@ from armcal.models.spatial.gradient import jacobian_pose_pullback
 from armcal.models.spatial.kinematics import kinematics
 from armcal.noise import NoiseModel, TrackerNoise
 from helpers import INDUSTRIAL_HEAD, central_differences
-from test_spatial_model import ARMS, labelled, random_poses, random_truth
+from helpers_spatial import ARMS, labelled, random_poses, random_truth
 
 
 @pytest.mark.parametrize("name", sorted(ARMS))

@@ -33,8 +33,7 @@ from armcal.models.spatial.chain import (
 from armcal.noise import NoiseModel
 from armcal.simulate import monte_carlo
 from helpers import INDUSTRIAL_HEAD, central_differences, run_cli, write_cycles
-from test_spatial_model import ARMS, labelled, random_poses, random_truth
-from test_spatial_virtual import plan_file
+from helpers_spatial import ARMS, labelled, plan_file, random_poses, random_truth
 
 DEG = np.pi / 180
 SIGMA_MM, SIGMA_DEG = 0.02, 0.005

@@ -15,7 +15,7 @@ import pytest
 from armcal.models.spatial.chain import joint_motion
 from armcal.models.spatial.gravity import STANDARD_GRAVITY, LinkMasses, gravity_torques
 from helpers import central_differences
-from test_spatial_model import ARMS, random_poses
+from helpers_spatial import ARMS, random_poses
 
 
 def _energy(chain, u, links, g, payload_kg, payload_com):

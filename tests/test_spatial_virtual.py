@@ -12,26 +12,17 @@ import json
 
 import numpy as np
 import pytest
+from armcal.demo_serial import SPATIAL_DEMO_FILES
+from armcal.files.serial import ROBOT_FOLDER
 
-from armcal.demo_spatial import SPATIAL_DEMO_FILES
 from armcal.doe import random_plan
 from armcal.files import load_spatial_robot, load_spatial_truth
-from armcal.files.spatial import ROBOT_FOLDER
 from armcal.identification import identify
 from armcal.workflow import simulate_plan
 from helpers import run_cli
+from helpers_spatial import plan_file
 
 ROBOTS = ("industrial-6r", "cobot-6r", "arm-7r")
-
-
-def plan_file(tmp_path, robot, m=30, seed=1, name="plan.csv"):
-    """A random plan of ``m`` poses within the robot's limits, written to ``name``."""
-    arm = load_spatial_robot(robot).arm
-    q = random_plan(arm, m, rng=seed)
-    head = ",".join(f"q{k + 1}_deg" for k in range(arm.n_joints))
-    rows = [",".join(repr(float(v)) for v in np.degrees(row)) for row in q]
-    (tmp_path / name).write_text("\n".join([head, *rows]) + "\n", encoding="utf-8")
-    return arm, q
 
 
 @pytest.mark.parametrize("robot", ROBOTS)

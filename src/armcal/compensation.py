@@ -348,6 +348,101 @@ def _singular_reasons(
     return reasons
 
 
+def _iterate(
+    goal: _Goal,
+    q0: np.ndarray,
+    residual: np.ndarray,
+    bound: np.ndarray,
+    tol_mm: float,
+    max_iter: int,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The trust-region iteration from the program's commands ``q0`` (module notes):
+    the commands reached ``(m, n)``, their residuals, and which poses left their bound."""
+    model = goal.model
+    q = q0.copy()
+    residual = residual.copy()
+    radius = bound.copy()  # the trust region's, for the step's 2-norm (rad)
+    beyond = np.zeros(q.shape[0], dtype=bool)  # left its bound: near a singularity
+    for _ in range(max_iter):
+        norm2 = np.sum(residual**2, axis=1)
+        # A radius that moves the tool by less than tol_mm can no longer make progress.
+        moving = radius * model.reach_mm > tol_mm
+        active = np.flatnonzero((norm2 > tol_mm**2) & moving & ~beyond)
+        if active.size == 0:
+            break
+        step = _trust_region_step(
+            goal.jacobian(q[active], active), residual[active], radius[active],
+            q0[active] - q[active],
+        )  # fmt: skip
+        trial = q[active] + step.dq
+        after = goal.residual(trial, active)
+        fall = norm2[active] - np.sum(after**2, axis=1)
+        fit = np.divide(fall, step.gain, out=np.zeros_like(fall), where=step.gain > 0)
+        good = step.on_radius & (fit > _GOOD_FIT)
+        radius[active] = np.where(
+            fit < _POOR_FIT,
+            radius[active] / 4,
+            np.where(good, np.minimum(2 * radius[active], bound[active]), radius[active]),
+        )
+        taken = fit > _ACCEPT_RATIO
+        rows = active[taken]
+        q[rows], residual[rows] = trial[taken], after[taken]
+        beyond[rows] = np.max(np.abs(q[rows] - q0[rows]), axis=1) > bound[rows]
+    return q, residual, beyond
+
+
+def _refuse_beyond_limits(
+    model: FitModel, q: np.ndarray, done: np.ndarray, reasons: list[str]
+) -> None:
+    """Mark every corrected pose whose commands leave a joint limit as not corrected
+    (``done`` and ``reasons`` changed in place), naming the joint and what it needs."""
+    limits = model.joint_limits
+    inside = model.within_limits(q)
+    for i in np.flatnonzero(done & ~np.all(inside, axis=1)):
+        j = int(np.flatnonzero(~inside[i])[0])
+        slide = model.joint_kinds[j] == "P"  # a prismatic joint's reading is in mm
+        (lo, hi), value = (
+            (limits[j], q[i, j]) if slide else (np.degrees(limits[j]), np.degrees(q[i, j]))
+        )
+        unit = "mm" if slide else "deg"
+        reasons[i] = (
+            f"joint {j + 1} would need {_beyond(value, lo, hi)} {unit}, beyond its limits "
+            f"[{lo:g}, {hi:g}] {unit}"
+        )
+        done[i] = False
+
+
+def _accuracy(
+    cal: CalibratedArm,
+    goal: _Goal,
+    robot: np.ndarray,
+    final: Conditions,
+    at_program: np.ndarray,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray | None, np.ndarray | None]:
+    """The tool's error without the correction and its predicted std with it: position
+    (mm) and, keeping the orientation, angle (deg); the angles None otherwise."""
+    model, program, dim = goal.model, goal.program, goal.dim
+    covariance = cal.robot_covariance()
+    before = np.linalg.norm(at_program[:, :dim], axis=1)
+    baseline = None if cal.baseline is None else cal.model.arm.positions(program, cal.baseline)
+    if baseline is not None:  # the arm without calibration: the nominal one, registered
+        before = np.linalg.norm((cal.positions(program) - baseline)[:, :dim], axis=1)
+    after = np.sqrt(tip_variances(position_jacobian(model, final, robot), covariance))
+    if goal.angle is None:
+        return before, after, None, None
+    arcs = np.linalg.norm(at_program[:, dim:], axis=1)
+    turn_before = np.degrees(arcs / goal.scale)
+    if cal.baseline is not None:
+        turn = cal.model.orientation_error(
+            cal.model.orientation(program, cal.params),
+            cal.model.arm.orientation(program, cal.baseline),
+        )
+        turn_before = np.degrees(np.linalg.norm(turn, axis=1))
+    angles = model.orientation_jacobian(final, robot)  # (m, k, p)
+    turn_after = np.degrees(np.sqrt(tip_variances(angles, covariance)))
+    return before, after, turn_before, turn_after
+
+
 def compensate(
     cal: CalibratedArm,
     q_program: ArrayLike,
@@ -406,74 +501,16 @@ def compensate(
     n, dim = model.n_joints, model.position_dim
     keep = n >= dim + model.orientation_dim if orientation is None else bool(orientation)
     goal = _Goal(model, robot, program, keep)
-    q = q0.copy()
-    everyone = np.arange(q.shape[0])
-    residual = goal.residual(q, everyone)
-    at_program = residual.copy()  # where the program's own commands take the tool
+    everyone = np.arange(q0.shape[0])
+    at_program = goal.residual(q0, everyone)  # where the program's own commands take the tool
     bound = MAX_AMPLIFICATION * goal.error_angle(at_program)  # rad, per pose
-    radius = bound.copy()  # the trust region's, for the step's 2-norm (rad)
-    beyond = np.zeros(q.shape[0], dtype=bool)  # left its bound: near a singularity
-    for _ in range(max_iter):
-        norm2 = np.sum(residual**2, axis=1)
-        # A radius that moves the tool by less than tol_mm can no longer make progress.
-        moving = radius * model.reach_mm > tol_mm
-        active = np.flatnonzero((norm2 > tol_mm**2) & moving & ~beyond)
-        if active.size == 0:
-            break
-        step = _trust_region_step(
-            goal.jacobian(q[active], active), residual[active], radius[active],
-            q0[active] - q[active],
-        )  # fmt: skip
-        trial = q[active] + step.dq
-        after = goal.residual(trial, active)
-        fall = norm2[active] - np.sum(after**2, axis=1)
-        fit = np.divide(fall, step.gain, out=np.zeros_like(fall), where=step.gain > 0)
-        good = step.on_radius & (fit > _GOOD_FIT)
-        radius[active] = np.where(
-            fit < _POOR_FIT,
-            radius[active] / 4,
-            np.where(good, np.minimum(2 * radius[active], bound[active]), radius[active]),
-        )
-        taken = fit > _ACCEPT_RATIO
-        rows = active[taken]
-        q[rows], residual[rows] = trial[taken], after[taken]
-        beyond[rows] = np.max(np.abs(q[rows] - q0[rows]), axis=1) > bound[rows]
+    q, residual, beyond = _iterate(goal, q0, at_program, bound, tol_mm, max_iter)
     done = (np.linalg.norm(residual, axis=1) <= tol_mm) & ~beyond
     reasons = _singular_reasons(goal, q, ~done, beyond, bound, at_program)
-    limits = model.joint_limits
-    inside = model.within_limits(q)
-    for i in np.flatnonzero(done & ~np.all(inside, axis=1)):
-        j = int(np.flatnonzero(~inside[i])[0])
-        slide = model.joint_kinds[j] == "P"  # a prismatic joint's reading is in mm
-        (lo, hi), value = (
-            (limits[j], q[i, j]) if slide else (np.degrees(limits[j]), np.degrees(q[i, j]))
-        )
-        unit = "mm" if slide else "deg"
-        reasons[i] = (
-            f"joint {j + 1} would need {_beyond(value, lo, hi)} {unit}, beyond its limits "
-            f"[{lo:g}, {hi:g}] {unit}"
-        )
-        done[i] = False
+    _refuse_beyond_limits(model, q, done, reasons)
     q = np.where(done[:, None], q, q0)
     final = goal.rows(q, everyone)
-    covariance = cal.robot_covariance()
-    before = np.linalg.norm(at_program[:, :dim], axis=1)
-    baseline = None if cal.baseline is None else cal.model.arm.positions(program, cal.baseline)
-    if baseline is not None:  # the arm without calibration: the nominal one, registered
-        before = np.linalg.norm((cal.positions(program) - baseline)[:, :dim], axis=1)
-    after = np.sqrt(tip_variances(position_jacobian(model, final, robot), covariance))
-    turn_before = turn_after = None
-    if keep:
-        arcs = np.linalg.norm(at_program[:, dim:], axis=1)
-        turn_before = np.degrees(arcs / goal.scale)
-        if cal.baseline is not None:
-            turn = cal.model.orientation_error(
-                cal.model.orientation(program, cal.params),
-                cal.model.arm.orientation(program, cal.baseline),
-            )
-            turn_before = np.degrees(np.linalg.norm(turn, axis=1))
-        angles = model.orientation_jacobian(final, robot)  # (m, k, p)
-        turn_after = np.degrees(np.sqrt(tip_variances(angles, covariance)))
+    before, after, turn_before, turn_after = _accuracy(cal, goal, robot, final, at_program)
     return Compensation(
         q, done, tuple(reasons), before, after, turn_before, turn_after, q0, np.degrees(bound)
     )

@@ -424,6 +424,114 @@ def _check_runs(trials: int, sigma: float | None) -> None:
         raise ArmcalError(f"a Monte Carlo needs a positive noise sigma (mm), got {sigma}")
 
 
+def _position_accumulator(
+    model: FitModel,
+    test_q: np.ndarray | None,
+    truth: np.ndarray,
+    predicted: np.ndarray,
+    trials: int,
+    rng: np.random.Generator,
+) -> _PositionAccumulator | None:
+    """The accumulator of tip errors at the test poses, or None (no test poses, or a
+    model whose points are not linear in coordinates of its parameters)."""
+    if test_q is None:
+        return None
+    test = model.plan_conditions(np.asarray(test_q, dtype=float))
+    linear = model.linear_positions(test)
+    if linear is None:
+        return None
+    sampler = rng.spawn(1)[0]  # leaves the noise stream as it is without test poses
+    return _PositionAccumulator(model, linear, test, truth, predicted, trials, sampler)
+
+
+@dataclass
+class _Trials:
+    """What the trials gave: the estimates' moments about the centre, the count of fits
+    that did not converge, and the time they took (s)."""
+
+    moments: _Moments
+    not_converged: int
+    seconds: float
+
+
+def _run_trials(
+    model: FitModel,
+    rows: Conditions,
+    truth: np.ndarray,
+    sigma: float | None,
+    trials: int,
+    method: str,
+    rng: np.random.Generator,
+    centre: np.ndarray,
+    positions: _PositionAccumulator | None,
+    progress: ProgressCallback | None,
+) -> _Trials:
+    """Synthesize and identify ``trials`` measurement sets, a chunk of them per solve; the
+    estimates go into moments about ``centre`` and into ``positions`` (when given)."""
+    chunk = chunk_size(_floats_per_trial(model, rows.m, method), trials)
+    moments = _Moments(model.n_params)
+    not_converged = 0
+    start = time.perf_counter()
+    done = 0
+    exact = model.positions(rows, truth)  # once: only the noise differs between chunks
+    while done < trials:
+        size = min(chunk, trials - done)
+        xy = synthesize_measurements(
+            model,
+            rows.q,
+            truth,
+            sigma,
+            rng=rng,
+            trials=size,
+            target=rows.target,
+            loads=rows.loads,
+            exact=exact,
+            frames=rows.frames,
+        )
+        found = solve(model, rows, xy, method=method, start=truth)
+        not_converged += int(found.converged.size - np.count_nonzero(found.converged))
+        moments.add(found.params - centre)
+        if positions is not None:
+            positions.add(found.params)
+        done += size
+        if progress is not None:
+            progress(done, trials)
+    return _Trials(moments, not_converged, time.perf_counter() - start)
+
+
+def _trial_warnings(
+    model: FitModel,
+    truth: np.ndarray,
+    conditioning: ArmcalWarning | None,
+    trials: int,
+    not_converged: int,
+    method: str,
+) -> tuple[ArmcalWarning, ...]:
+    """The Monte Carlo's warnings: an ill-conditioned plan, a truth that moves a fixed
+    parameter, too few trials to judge a std, fits that did not converge."""
+    warnings: list[ArmcalWarning] = [] if conditioning is None else [conditioning]
+    warnings.extend(_fixed_truth_warning(model, truth))
+    if trials < FEW_TRIALS:
+        spread = 100 / np.sqrt(2 * (trials - 1))
+        warnings.append(
+            ArmcalWarning(
+                "few-trials",
+                f"with {trials} trials each empirical std is known to about +-{spread:.0f} % "
+                f"(1 std), so a std ratio far from 1 may be chance; use {action('trials', 1000)} "
+                f"or more (+-{100 / np.sqrt(2 * 999):.1f} %)",
+            )
+        )
+    if not_converged:
+        warnings.append(
+            ArmcalWarning(
+                "not-converged",
+                f"{method} did not converge in {not_converged} of {trials} trials; their "
+                "last iterates are included",
+            )
+        )
+    return tuple(warnings)
+
+
 def monte_carlo(
     model: FitModel,
     q: ArrayLike,
@@ -538,69 +646,13 @@ def monte_carlo(
     predicted, ok = predicted_covariance(model, rows, reference, truth)
     if not ok:
         raise ArmcalError("the plan cannot identify every parameter at the given truth")
-    m, p = rows.m, model.n_params
-    chunk = chunk_size(_floats_per_trial(model, m, method), trials)
-    moments = _Moments(p)
     # Moments about the truth keep round-off small; a fixed parameter keeps its held value
     # in every estimate, so about it its mean and scatter are exactly 0 even when the truth
     # moves it.
     centre = np.where(model.free, truth, model.held_values)
-    positions = None
-    if test_q is not None:
-        test = model.plan_conditions(np.asarray(test_q, dtype=float))
-        linear = model.linear_positions(test)
-        if linear is not None:
-            sampler = rng.spawn(1)[0]  # leaves the noise stream as it is without test poses
-            positions = _PositionAccumulator(
-                model, linear, test, truth, predicted, trials, sampler
-            )
-    not_converged = 0
-    start = time.perf_counter()
-    done = 0
-    exact = model.positions(rows, truth)  # once: only the noise differs between chunks
-    while done < trials:
-        size = min(chunk, trials - done)
-        xy = synthesize_measurements(
-            model,
-            rows.q,
-            truth,
-            sigma,
-            rng=rng,
-            trials=size,
-            target=rows.target,
-            loads=rows.loads,
-            exact=exact,
-            frames=rows.frames,
-        )
-        found = solve(model, rows, xy, method=method, start=truth)
-        not_converged += int(found.converged.size - np.count_nonzero(found.converged))
-        moments.add(found.params - centre)
-        if positions is not None:
-            positions.add(found.params)
-        done += size
-        if progress is not None:
-            progress(done, trials)
-    seconds = time.perf_counter() - start
-    warnings: list[ArmcalWarning] = [] if conditioning is None else [conditioning]
-    warnings.extend(_fixed_truth_warning(model, truth))
-    if trials < FEW_TRIALS:
-        spread = 100 / np.sqrt(2 * (trials - 1))
-        warnings.append(
-            ArmcalWarning(
-                "few-trials",
-                f"with {trials} trials each empirical std is known to about +-{spread:.0f} % "
-                f"(1 std), so a std ratio far from 1 may be chance; use {action('trials', 1000)} "
-                f"or more (+-{100 / np.sqrt(2 * 999):.1f} %)",
-            )
-        )
-    if not_converged:
-        warnings.append(
-            ArmcalWarning(
-                "not-converged",
-                f"{method} did not converge in {not_converged} of {trials} trials; their "
-                "last iterates are included",
-            )
-        )
+    positions = _position_accumulator(model, test_q, truth, predicted, trials, rng)
+    run = _run_trials(model, rows, truth, sigma, trials, method, rng, centre, positions, progress)
+    warnings = _trial_warnings(model, truth, conditioning, trials, run.not_converged, method)
     return MonteCarlo(
         model=model,
         q=q,
@@ -608,11 +660,11 @@ def monte_carlo(
         sigma_mm=reference,
         method=method,
         trials=int(trials),
-        mean=centre + moments.mean,
-        covariance=moments.covariance(),
+        mean=centre + run.moments.mean,
+        covariance=run.moments.covariance(),
         predicted_covariance=predicted,
         position=None if positions is None else positions.result(),
-        not_converged=not_converged,
-        seconds=seconds,
-        warnings=tuple(warnings),
+        not_converged=run.not_converged,
+        seconds=run.seconds,
+        warnings=warnings,
     )

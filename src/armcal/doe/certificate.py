@@ -161,6 +161,54 @@ def _weighted_svd(blocks: np.ndarray, weights: np.ndarray) -> ScaledSVD:
     return scaled_svd(weighted.reshape(-1, blocks.shape[-1]))
 
 
+def _reference_support(
+    model: FitModel,
+    distinct: np.ndarray,
+    rng: np.random.Generator,
+    candidates: int,
+    rounds: int,
+    parts: list[ProgressCallback | None],
+) -> tuple[np.ndarray, np.ndarray]:
+    """The support poses ``(k, n)`` and weights ``(k,)`` of a near-D-optimal weighted
+    design ``xi*``: the multiplicative algorithm on the plan's poses, the corners and
+    random feasible poses, refined ``rounds`` times by the maximizers of ``d``."""
+    p = model.n_free
+    pool = np.concatenate(
+        [
+            distinct,
+            _corner_poses(model, rng),
+            feasible_poses(model, candidates, rng=rng),
+        ]
+    )
+    weights = np.full(pool.shape[0], 1.0 / pool.shape[0])
+    for round_ in range(rounds):
+        blocks = _pose_blocks(model, pool)
+        weights = multiplicative_weights(blocks, weights, 150, power=2.0)
+        m_inv, _ = _weighted_svd(blocks, weights).inverse_gram()
+        # Ascend d from its largest values in the pool and in fresh random poses: the
+        # maximizers of a weighted model (encoder noise) can lie in narrow regions
+        # that the first candidates missed.
+        fresh = feasible_poses(model, candidates, rng=rng)
+        starts = []
+        for poses in (pool, fresh):
+            d, _ = _variance_function(model, poses, m_inv)
+            starts.append(poses[np.argsort(-d)[: 4 * p]])
+        found = _maximize_variance(
+            model, m_inv, np.concatenate(starts), progress=parts[1 + round_]
+        )
+        found = found[model.feasible(found[:, None, :])[:, 0]]
+        keep = weights > 1e-6 / pool.shape[0]
+        pool = np.concatenate([pool[keep], found])
+        # New points start at the mean weight: the multiplicative algorithm grows a
+        # weight only by the factor d(x) / p per iteration, too slowly from a tiny one.
+        mean_weight = weights[keep].sum() / np.count_nonzero(keep)
+        weights = np.concatenate([weights[keep], np.full(found.shape[0], mean_weight)])
+        weights /= weights.sum()
+    weights = multiplicative_weights(_pose_blocks(model, pool), weights, 500, power=2.0)
+    support_mask = weights > 1e-6
+    return pool[support_mask], weights[support_mask] / weights[support_mask].sum()
+
+
 def certify(
     model: FitModel,
     q: np.ndarray,
@@ -270,40 +318,7 @@ def certify(
             support=distinct,
             weights=counts / q.shape[0],
         )
-    pool = np.concatenate(
-        [
-            distinct,
-            _corner_poses(model, rng),
-            feasible_poses(model, candidates, rng=rng),
-        ]
-    )
-    weights = np.full(pool.shape[0], 1.0 / pool.shape[0])
-    for round_ in range(rounds):
-        blocks = _pose_blocks(model, pool)
-        weights = multiplicative_weights(blocks, weights, 150, power=2.0)
-        m_inv, _ = _weighted_svd(blocks, weights).inverse_gram()
-        # Ascend d from its largest values in the pool and in fresh random poses: the
-        # maximizers of a weighted model (encoder noise) can lie in narrow regions
-        # that the first candidates missed.
-        fresh = feasible_poses(model, candidates, rng=rng)
-        starts = []
-        for poses in (pool, fresh):
-            d, _ = _variance_function(model, poses, m_inv)
-            starts.append(poses[np.argsort(-d)[: 4 * p]])
-        found = _maximize_variance(
-            model, m_inv, np.concatenate(starts), progress=parts[1 + round_]
-        )
-        found = found[model.feasible(found[:, None, :])[:, 0]]
-        keep = weights > 1e-6 / pool.shape[0]
-        pool = np.concatenate([pool[keep], found])
-        # New points start at the mean weight: the multiplicative algorithm grows a
-        # weight only by the factor d(x) / p per iteration, too slowly from a tiny one.
-        mean_weight = weights[keep].sum() / np.count_nonzero(keep)
-        weights = np.concatenate([weights[keep], np.full(found.shape[0], mean_weight)])
-        weights /= weights.sum()
-    weights = multiplicative_weights(_pose_blocks(model, pool), weights, 500, power=2.0)
-    support_mask = weights > 1e-6
-    support, support_w = pool[support_mask], weights[support_mask] / weights[support_mask].sum()
+    support, support_w = _reference_support(model, distinct, rng, candidates, rounds, parts)
     star = _weighted_svd(_pose_blocks(model, support), support_w)
     # Fs = H^T H with H the plan's scaled Jacobian: inverses and log dets from SVDs.
     star_inverse, star_ok = star.inverse_gram()

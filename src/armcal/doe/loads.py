@@ -196,6 +196,112 @@ def _max_variance(
     return float(max(d.max(), points.variance(found, w[starts], m_inv).max()))
 
 
+def _design_request(
+    model: FitModel, m: int, payloads: Sequence[float] | None, order: str
+) -> tuple[FitModel, np.ndarray]:
+    """The model a plan of these payloads identifies and the payload values (kg), once the
+    request is checked: a known order, points that depend on the load, enough equations."""
+    if order not in ORDERS:
+        raise ArmcalError(f"unknown order {order!r}; choose one of {', '.join(ORDERS)}")
+    chosen = model.design_loads(payloads)
+    if chosen is None:
+        raise ArmcalError(f"the points of {model.name} do not depend on the load: use design()")
+    design_model, values = chosen
+    p = design_model.n_free
+    per_pose = equations_per_pose(design_model)
+    if per_pose * m < p:
+        raise ArmcalError(
+            f"{m} poses give {per_pose * m} equations for {p} parameters "
+            f"({', '.join(design_model.param_names)}); design at least {-(-p // per_pose)} poses"
+        )
+    return design_model, values
+
+
+def _candidate_pool(
+    model: FitModel,
+    design_model: FitModel,
+    values: np.ndarray,
+    candidates: int,
+    rng: np.random.Generator,
+) -> tuple[_Points, np.ndarray, np.ndarray]:
+    """The candidate points: random feasible poses times every payload ``(k, n)``, ``(k,)``,
+    with the design's column scale (their blocks' RMS); refused if they identify nothing."""
+    pool = feasible_poses(model, candidates, rng=rng)
+    pool_q = np.repeat(pool, values.size, axis=0)
+    pool_w = np.tile(values, pool.shape[0])
+    pool_information = design_model.plan_information(pool_q, Loads.create(pool_w.size, pool_w))
+    pool_information.check_identifiable()
+    raw = pool_information.blocks()
+    scale = np.sqrt(np.mean(raw**2, axis=(0, 1)))
+    scale = np.where(scale > 0, scale, 1.0)
+    return _Points(design_model, scale), pool_q, pool_w  # pool blocks: raw / scale
+
+
+def _exact_plan(
+    points: _Points,
+    model: FitModel,
+    pool_q: np.ndarray,
+    pool_w: np.ndarray,
+    m: int,
+    rounds: int,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """The plan's poses and payloads (steps 1-3 of the module notes), and the support
+    poses and payloads of the reference design it was rounded from."""
+    # The reference design first: its support seeds the exact plan.
+    ref_q, ref_w, ref_weights, _ = _reference_design(points, model, pool_q, pool_w, rounds)
+    cand_q = np.concatenate([ref_q, pool_q])
+    cand_w = np.concatenate([ref_w, pool_w])
+    blocks = points.blocks(cand_q, cand_w)
+    counts = np.floor(ref_weights * m).astype(int)
+    start = np.repeat(np.arange(ref_q.shape[0]), counts)[:m]
+    if blocks.shape[-2] == 2:  # one point in the plane: the modified Fedorov exchange
+        index = exchange_indices(blocks, start, m)
+    else:  # several rows a pose: DETMAX from the reference design rounded up
+        ranked = np.argsort(-(ref_weights * m - counts), kind="stable")
+        rest = np.resize(ranked, m - start.size)
+        index = detmax_indices(blocks, np.concatenate([start, rest]))
+    q, w = cand_q[index], cand_w[index]
+    return _polish(points, model, q, w), w, ref_q, ref_w
+
+
+def _plan_certificate(
+    points: _Points,
+    model: FitModel,
+    plan: tuple[np.ndarray, np.ndarray],
+    reference: tuple[np.ndarray, np.ndarray],
+    values: np.ndarray,
+    rng: np.random.Generator,
+    search: int,
+) -> Certificate:
+    """The Kiefer-Wolfowitz certificate of the plan's poses and payloads ``plan``, against
+    the reference design (support ``reference``) refined once more with the plan."""
+    q, w = plan
+    p = points.model.n_free
+    plan_info = _information(points.blocks(q, w), np.full(q.shape[0], 1.0 / q.shape[0]))
+    ref_q, ref_w, ref_weights, star_info = _reference_design(
+        points,
+        model,
+        np.concatenate([reference[0], q]),
+        np.concatenate([reference[1], w]),
+        1,
+    )
+    ref_inv = np.linalg.inv(star_info)
+    max_star = _max_variance(points, model, ref_inv, ref_q, ref_w, values, rng, search)
+    max_plan = _max_variance(
+        points, model, np.linalg.inv(plan_info), q, w, values, rng, search // 4
+    )
+    kw = np.exp((log_det(plan_info) - log_det(star_info)) / p + 1.0 - max_star / p)
+    plan_only = float(np.exp(1.0 - max_plan / p))
+    return Certificate(
+        certified_d_efficiency=float(min(1.0, max(kw, plan_only))),
+        plan_only_bound=plan_only,
+        reference_d_efficiency=float(np.exp(log_det(star_info) / p)),
+        max_variance=float(max_star),
+        support=ref_q,
+        weights=ref_weights,
+    )
+
+
 def design_with_loads(
     model: FitModel,
     m: int,
@@ -243,80 +349,20 @@ def design_with_loads(
         If no plan of these poses and payloads can identify every parameter
         (e.g. ``k`` and ``c`` with a single payload in the lumped mode).
     """
-    if order not in ORDERS:
-        raise ArmcalError(f"unknown order {order!r}; choose one of {', '.join(ORDERS)}")
-    chosen = model.design_loads(payloads)
-    if chosen is None:
-        raise ArmcalError(f"the points of {model.name} do not depend on the load: use design()")
+    design_model, values = _design_request(model, m, payloads, order)
     rng = np.random.default_rng(rng)
     effort = model.design_effort
     candidates = effort.candidates if candidates is None else candidates
     search = effort.search if search is None else search
-    design_model, values = chosen
-    p = design_model.n_free
-    per_pose = equations_per_pose(design_model)
-    if per_pose * m < p:
-        raise ArmcalError(
-            f"{m} poses give {per_pose * m} equations for {p} parameters "
-            f"({', '.join(design_model.param_names)}); design at least {-(-p // per_pose)} poses"
-        )
-    pool = feasible_poses(model, candidates, rng=rng)
-    pool_q = np.repeat(pool, values.size, axis=0)
-    pool_w = np.tile(values, pool.shape[0])
-    pool_information = design_model.plan_information(pool_q, Loads.create(pool_w.size, pool_w))
-    pool_information.check_identifiable()
-    raw = pool_information.blocks()
-    scale = np.sqrt(np.mean(raw**2, axis=(0, 1)))
-    scale = np.where(scale > 0, scale, 1.0)
-    points = _Points(design_model, scale)  # pool blocks: raw / scale
-    # The reference design first: its support seeds the exact plan.
-    ref_q, ref_w, ref_weights, _ = _reference_design(points, model, pool_q, pool_w, rounds)
-    cand_q = np.concatenate([ref_q, pool_q])
-    cand_w = np.concatenate([ref_w, pool_w])
-    blocks = points.blocks(cand_q, cand_w)
-    counts = np.floor(ref_weights * m).astype(int)
-    start = np.repeat(np.arange(ref_q.shape[0]), counts)[:m]
-    if blocks.shape[-2] == 2:  # one point in the plane: the modified Fedorov exchange
-        index = exchange_indices(blocks, start, m)
-    else:  # several rows a pose: DETMAX from the reference design rounded up
-        ranked = np.argsort(-(ref_weights * m - counts), kind="stable")
-        rest = np.resize(ranked, m - start.size)
-        index = detmax_indices(blocks, np.concatenate([start, rest]))
-    q, w = cand_q[index], cand_w[index]
-    q = _polish(points, model, q, w)
-    plan_blocks = points.blocks(q, w)
-    plan_info = _information(plan_blocks, np.full(m, 1.0 / m))
-    # The certificate, against the reference design refined once more with the plan.
-    ref_q, ref_w, ref_weights, star_info = _reference_design(
-        points,
-        model,
-        np.concatenate([ref_q, q]),
-        np.concatenate([ref_w, w]),
-        1,
-    )
-    ref_inv = np.linalg.inv(star_info)
-    max_star = _max_variance(points, model, ref_inv, ref_q, ref_w, values, rng, search)
-    max_plan = _max_variance(
-        points, model, np.linalg.inv(plan_info), q, w, values, rng, search // 4
-    )
-    kw = np.exp((log_det(plan_info) - log_det(star_info)) / p + 1.0 - max_star / p)
-    plan_only = float(np.exp(1.0 - max_plan / p))
-    certified = float(min(1.0, max(kw, plan_only)))
+    points, pool_q, pool_w = _candidate_pool(model, design_model, values, candidates, rng)
+    q, w, ref_q, ref_w = _exact_plan(points, model, pool_q, pool_w, m, rounds)
+    certificate = _plan_certificate(points, model, (q, w), (ref_q, ref_w), values, rng, search)
     travel_found = joint_travel(q)
     if order == "travel":
         perm = order_poses(q)
         q, w = q[perm], w[perm]
-    loads = Loads.create(m, w)
-    plan_information = design_model.plan_information(q, loads)
+    plan_information = design_model.plan_information(q, Loads.create(m, w))
     plan_information.check_identifiable()
-    certificate = Certificate(
-        certified_d_efficiency=certified,
-        plan_only_bound=plan_only,
-        reference_d_efficiency=float(np.exp(log_det(star_info) / p)),
-        max_variance=float(max_star),
-        support=ref_q,
-        weights=ref_weights,
-    )
     return Design(
         model=design_model,
         q=q,

@@ -284,56 +284,55 @@ def _best_end_reversal(
     return float(suffix[i]), i + 1, tour.size - 1
 
 
-def _local_search(
-    q: np.ndarray,
-    path: np.ndarray,
-    neighbours: np.ndarray,
-    distances: np.ndarray,
-    *,
-    max_rounds: int,
-) -> np.ndarray:
-    """Improve an open tour by 2-opt and Or-opt moves to neighbouring poses.
+class _OpenTour:
+    """An open tour under local search, changed in place by 2-opt and Or-opt moves.
 
-    Each round reverses the best prefix or suffix if that shortens the path,
-    marks the poses :func:`_improvable` finds, and processes marked poses one
-    by one (first improvement): a 2-opt move that connects the pose to a
-    neighbour on either side, else an Or-opt move that takes a run of up to
-    :data:`OR_OPT_LENGTH` poses starting or ending at the pose and puts it
-    next to a neighbour, reversed if shorter.  The poses at the ends of the
-    edges a move changes are marked again.  A round that finds nothing ends
-    the search: the tour is then 2-opt optimal over the neighbour lists.
+    ``tour`` lists the poses in order, ``position[a]`` is pose ``a``'s place in it and
+    ``edge[i]`` the travel from the pose at position ``i - 1`` to the one at ``i`` (0
+    beyond the ends).  The moves write these arrays in numpy; the scans read them
+    through memoryviews (``at``, ``where``, ``length``), which give Python ints and
+    floats fast, one at a time.
     """
-    m = q.shape[0]
-    tour = path.copy()
-    position = np.empty(m, dtype=np.intp)
-    position[tour] = np.arange(m)
-    at, where = tour.data, position.data  # memoryviews: fast scalar reads as Python ints
-    coords = [tuple(row) for row in q.tolist()]
-    k = neighbours.shape[1]
-    near, near_distance = neighbours.ravel().data, distances.ravel().data  # row a: a k .. a k + k
-    # edge[i]: travel from the pose at position i - 1 to the one at i; 0 beyond the ends
-    edge = np.zeros(m + 1)
-    edge[1:m] = np.abs(np.diff(q[tour], axis=0)).sum(axis=1)
-    length = edge.data
-    eps = 1e-12 * max(float(np.ptp(q, axis=0).sum()), np.finfo(float).tiny)
 
-    def dist(u: int, v: int) -> float:
+    def __init__(
+        self, q: np.ndarray, path: np.ndarray, neighbours: np.ndarray, distances: np.ndarray
+    ) -> None:
+        m = q.shape[0]
+        self.m = m
+        self.tour = path.copy()
+        self.position = np.empty(m, dtype=np.intp)
+        self.position[self.tour] = np.arange(m)
+        self.at, self.where = self.tour.data, self.position.data
+        self.coords = [tuple(row) for row in q.tolist()]
+        self.k = neighbours.shape[1]
+        # row a of the neighbour lists: a k .. a k + k
+        self.near, self.near_distance = neighbours.ravel().data, distances.ravel().data
+        self.edge = np.zeros(m + 1)
+        self.edge[1:m] = np.abs(np.diff(q[self.tour], axis=0)).sum(axis=1)
+        self.length = self.edge.data
+        self.eps = 1e-12 * max(float(np.ptp(q, axis=0).sum()), np.finfo(float).tiny)
+
+    def dist(self, u: int, v: int) -> float:
         """Travel between poses u and v; 0 when either is -1 (beyond an end of the path)."""
         if u < 0 or v < 0:
             return 0.0
+        coords = self.coords
         return sum(map(abs, map(sub, coords[u], coords[v])))
 
-    def reverse(lo: int, hi: int) -> None:
+    def reverse(self, lo: int, hi: int) -> None:
+        """Reverse the stretch ``tour[lo..hi]`` (inclusive)."""
+        tour, edge, at, m = self.tour, self.edge, self.at, self.m
         tour[lo : hi + 1] = tour[lo : hi + 1][::-1]
-        position[tour[lo : hi + 1]] = np.arange(lo, hi + 1)
+        self.position[tour[lo : hi + 1]] = np.arange(lo, hi + 1)
         edge[lo + 1 : hi + 1] = edge[lo + 1 : hi + 1][::-1]
         if lo > 0:
-            edge[lo] = dist(at[lo - 1], at[lo])
+            edge[lo] = self.dist(at[lo - 1], at[lo])
         if hi < m - 1:
-            edge[hi + 1] = dist(at[hi], at[hi + 1])
+            edge[hi + 1] = self.dist(at[hi], at[hi + 1])
 
-    def move(lo: int, hi: int, after: int, flip: bool) -> None:
+    def move(self, lo: int, hi: int, after: int, flip: bool) -> None:
         """Move ``tour[lo..hi]`` between positions ``after`` and ``after + 1`` (reversed: flip)."""
+        tour, edge, at, m = self.tour, self.edge, self.at, self.m
         run, inner = tour[lo : hi + 1].copy(), edge[lo + 1 : hi + 1].copy()
         if flip:
             run, inner = run[::-1], inner[::-1]
@@ -350,13 +349,15 @@ def _local_search(
             tour[after + 1 : after + 1 + size] = run
             edge[after + 2 : after + size + 1] = inner
             first, last, joins = after + 1, hi, (after + 1, after + size + 1, hi + 1)
-        position[tour[first : last + 1]] = np.arange(first, last + 1)
+        self.position[tour[first : last + 1]] = np.arange(first, last + 1)
         for join in joins:
             if 0 < join < m:
-                edge[join] = dist(at[join - 1], at[join])
+                edge[join] = self.dist(at[join - 1], at[join])
 
-    def two_opt(a: int, i: int) -> tuple[int, ...]:
+    def two_opt(self, a: int, i: int) -> tuple[int, ...]:
         """An improving 2-opt move from pose a at position i; the poses it touched, or ()."""
+        at, where, length, m, k, eps = self.at, self.where, self.length, self.m, self.k, self.eps
+        near, near_distance, dist = self.near, self.near_distance, self.dist
         for step in (1, -1):
             if not 0 <= i + step < m:
                 continue
@@ -377,14 +378,16 @@ def _local_search(
                     # the stretch between the two removed edges turns round
                     lo, hi = (i, j) if j > i else (j, i)
                     if step == 1:
-                        reverse(lo + 1, hi)
+                        self.reverse(lo + 1, hi)
                     else:
-                        reverse(lo, hi - 1)
+                        self.reverse(lo, hi - 1)
                     return a, b, c, e
         return ()
 
-    def or_opt(a: int, i: int) -> tuple[int, ...]:
+    def or_opt(self, a: int, i: int) -> tuple[int, ...]:
         """An improving Or-opt move of a run ending at pose a; the poses it touched, or ()."""
+        at, where, length, m, k, eps = self.at, self.where, self.length, self.m, self.k, self.eps
+        near, near_distance, dist = self.near, self.near_distance, self.dist
         for size in range(1, min(OR_OPT_LENGTH, m - 2) + 1):
             for lo in (i, i - size + 1) if size > 1 else (i,):
                 hi = lo + size - 1
@@ -408,37 +411,67 @@ def _local_search(
                     if j != lo - 1:
                         y = at[j + 1] if j < m - 1 else -1
                         if removed - d_ac - dist(z, y) + length[j + 1] > eps:
-                            move(lo, hi, j, a != at[lo])
+                            self.move(lo, hi, j, a != at[lo])
                             return a, z, p, x, c, y
                     # between the pose before c and c, a next to c
                     if j != hi + 1:
                         y = at[j - 1] if j > 0 else -1
                         if removed - d_ac - dist(y, z) + length[j] > eps:
-                            move(lo, hi, j - 1, a == at[lo])
+                            self.move(lo, hi, j - 1, a == at[lo])
                             return a, z, p, x, c, y
         return ()
 
-    for _ in range(max_rounds):
-        gain, lo, hi = _best_end_reversal(q, tour, edge)
-        if gain > eps:
-            reverse(lo, hi)
-        marked = _improvable(q, tour, position, edge, neighbours, distances, eps).tolist()
-        if not marked and gain <= eps:
-            break
+    def improve(self, marked: list[int]) -> None:
+        """Process the ``marked`` poses first in, first out: a 2-opt move, else an Or-opt
+        move, from each; the poses a move touched are marked again."""
         queue = deque(marked)
-        queued = bytearray(m)
+        queued = bytearray(self.m)
         for a in marked:
             queued[a] = 1
+        where = self.where
         while queue:
             a = queue.popleft()
             queued[a] = 0
             i = where[a]
-            touched = two_opt(a, i) or or_opt(a, i)
+            touched = self.two_opt(a, i) or self.or_opt(a, i)
             for pose in touched:
                 if pose >= 0 and not queued[pose]:
                     queued[pose] = 1
                     queue.append(pose)
-    return tour
+
+
+def _local_search(
+    q: np.ndarray,
+    path: np.ndarray,
+    neighbours: np.ndarray,
+    distances: np.ndarray,
+    *,
+    max_rounds: int,
+) -> np.ndarray:
+    """Improve an open tour by 2-opt and Or-opt moves to neighbouring poses.
+
+    Each round reverses the best prefix or suffix if that shortens the path,
+    marks the poses :func:`_improvable` finds, and processes marked poses one
+    by one (first improvement, :meth:`_OpenTour.improve`): a 2-opt move that
+    connects the pose to a neighbour on either side, else an Or-opt move that
+    takes a run of up to :data:`OR_OPT_LENGTH` poses starting or ending at the
+    pose and puts it next to a neighbour, reversed if shorter.  The poses at the
+    ends of the edges a move changes are marked again.  A round that finds
+    nothing ends the search: the tour is then 2-opt optimal over the neighbour
+    lists.
+    """
+    tour = _OpenTour(q, path, neighbours, distances)
+    for _ in range(max_rounds):
+        gain, lo, hi = _best_end_reversal(q, tour.tour, tour.edge)
+        if gain > tour.eps:
+            tour.reverse(lo, hi)
+        marked = _improvable(
+            q, tour.tour, tour.position, tour.edge, neighbours, distances, tour.eps
+        ).tolist()
+        if not marked and gain <= tour.eps:
+            break
+        tour.improve(marked)
+    return tour.tour
 
 
 def order_poses(

@@ -225,6 +225,101 @@ def _best_plan(
     return _Plan(made.q, made.model, made.method, made.payload_kg, loads)
 
 
+class _SizeSearch:
+    """The best plan of every size tried, designed once each, with the search's progress.
+
+    ``low`` is the largest size known not to reach the goal once the search bisects
+    (None while it jumps) and ``high`` the smallest known to reach it: they set how
+    many designs the progress bar still expects.
+    """
+
+    def __init__(
+        self,
+        model: FitModel,
+        rng: np.random.Generator,
+        payloads: Sequence[float] | None,
+        metric: Callable[[FitModel, np.ndarray, Loads | None], float],
+        plans: str,
+        progress: ProgressCallback | None,
+    ) -> None:
+        self.model, self.rng, self.payloads = model, rng, payloads
+        self.metric, self.plans, self.progress = metric, plans, progress
+        self.found: dict[int, tuple[_Plan, float]] = {}
+        self.low: int | None = None
+        self.high = 0
+        self.shown = 0  # thousandths of the search reported, never going back
+
+    def best(self, size: int) -> float:
+        """The accuracy of the best plan of ``size`` poses (designed on first asking)."""
+        found = self.found
+        if size not in found:
+            # designs left: 2 while jumping, then log2 of the span; the design of this
+            # size fills the bar up to where its end is reported (a long design moves it)
+            left = 2 if self.low is None else max(self.high - self.low - 1, 1).bit_length()
+            after = max(self.shown, 1000 * (len(found) + 1) // (len(found) + 1 + left))
+            part = share(self.progress, self.shown / 1000, after / 1000)
+            made = _best_plan(
+                self.model, size, self.rng, self.payloads, self.metric, self.plans, part
+            )
+            found[size] = (made, self.metric(made.model, made.q, made.loads))
+            if self.progress is not None:
+                self.shown = after
+                self.progress(self.shown, 1000)
+        return found[size][1]
+
+
+def _jump(
+    search: _SizeSearch,
+    reaches: Callable[[int], bool],
+    start: int,
+    failed: int,
+    goal: float,
+    max_poses: int,
+) -> tuple[int, int]:
+    """Jump by the ``1/sqrt(m)`` law from ``start`` to a size that reaches the goal:
+    ``(that size, the largest size known not to reach)``; refused when even
+    ``max_poses`` cannot reach, or the law asks for far more."""
+    m = start
+    while not reaches(m):
+        value = search.best(m)
+        if m >= max_poses:
+            raise ArmcalError(
+                f"{max_poses} poses reach only {value:.4g} against a target of {goal:g}; {_RELAX}"
+            )
+        failed = m
+        # 1/sqrt(m) law from here; an unidentifiable m (inf) just doubles.
+        # std falls as 1/sqrt(m); the ratio is capped so a vanishing goal cannot overflow.
+        jump = m * min(value / goal, 1e6) ** 2 if math.isfinite(value) else 2 * m
+        if jump > UNREACHABLE_MARGIN * max_poses:
+            # A larger plan gains at least 1/sqrt(m) per pose, hardly more: a plan's
+            # information per pose grows only while its poses are few, and not 4-fold.
+            raise ArmcalError(
+                f"{m} poses reach {value:.4g} against a target of {goal:g}; as accuracy "
+                f"grows like sqrt(poses), the target needs about {jump:.3g} poses, beyond "
+                f"the {max_poses} searched; {_RELAX}"
+            )
+        m = min(max_poses, max(m + 1, math.ceil(jump * (1 - 1e-12))))
+    return m, failed
+
+
+def _bisect(search: _SizeSearch, reaches: Callable[[int], bool], failed: int, m: int) -> int:
+    """The smallest size that reaches, between ``failed`` (does not) and ``m`` (does).
+
+    The jump usually lands on the answer, so one pose less is tried first; if that
+    reaches too, the span is bisected: O(log m) designs, not one per pose below an
+    overshooting jump.
+    """
+    search.low, search.high = failed, m
+    middle = m - 1
+    while search.high - search.low > 1:
+        if reaches(middle):
+            search.high = middle
+        else:
+            search.low = middle
+        middle = (search.low + search.high) // 2
+    return search.high
+
+
 def poses_needed(
     model: FitModel,
     requirement: str,
@@ -317,66 +412,20 @@ def poses_needed(
     if test_q is None:
         test_q = random_plan(model, 1000, rng=rng)
     min_poses = -(-fitted.n_free // equations_per_pose(model))
-    found: dict[int, tuple[_Plan, float]] = {}
 
     def metric(fitted: FitModel, q: np.ndarray, loads: Loads | None) -> float:
         return accuracy_metric(fitted, q, requirement, sigma, test_q, loads=loads)
 
-    low: int | None = None  # while bisecting: the largest size known not to reach
-    shown = 0  # thousandths of the search reported, never going back
-
-    def best(size: int) -> float:
-        nonlocal shown
-        if size not in found:
-            # designs left: 2 while jumping, then log2 of the span; the design of this
-            # size fills the bar up to where its end is reported (a long design moves it)
-            left = 2 if low is None else max(m - low - 1, 1).bit_length()
-            after = max(shown, 1000 * (len(found) + 1) // (len(found) + 1 + left))
-            part = share(progress, shown / 1000, after / 1000)
-            made = _best_plan(model, size, rng, payloads, metric, plans, part)
-            found[size] = (made, metric(made.model, made.q, made.loads))
-            if progress is not None:
-                shown = after
-                progress(shown, 1000)
-        return found[size][1]
-
     def reaches(size: int) -> bool:
-        return best(size) <= goal * (1 + REQUIREMENT_RTOL)
+        return search.best(size) <= goal * (1 + REQUIREMENT_RTOL)
 
-    m = max(min_poses, 2 * model.n_joints)
+    search = _SizeSearch(model, rng, payloads, metric, plans, progress)
     failed = min_poses - 1  # largest m known not to reach the goal
-    while not reaches(m):
-        value = best(m)
-        if m >= max_poses:
-            raise ArmcalError(
-                f"{max_poses} poses reach only {value:.4g} against a target of {goal:g}; {_RELAX}"
-            )
-        failed = m
-        # 1/sqrt(m) law from here; an unidentifiable m (inf) just doubles.
-        # std falls as 1/sqrt(m); the ratio is capped so a vanishing goal cannot overflow.
-        jump = m * min(value / goal, 1e6) ** 2 if math.isfinite(value) else 2 * m
-        if jump > UNREACHABLE_MARGIN * max_poses:
-            # A larger plan gains at least 1/sqrt(m) per pose, hardly more: a plan's
-            # information per pose grows only while its poses are few, and not 4-fold.
-            raise ArmcalError(
-                f"{m} poses reach {value:.4g} against a target of {goal:g}; as accuracy "
-                f"grows like sqrt(poses), the target needs about {jump:.3g} poses, beyond "
-                f"the {max_poses} searched; {_RELAX}"
-            )
-        m = min(max_poses, max(m + 1, math.ceil(jump * (1 - 1e-12))))
-    # The jump usually lands on the answer, so try one pose less first; if that
-    # reaches too, bisect between a size that fails and one that reaches: O(log m)
-    # designs, not one per pose below an overshooting jump.
-    low = failed
-    middle = m - 1
-    while m - low > 1:
-        if reaches(middle):
-            m = middle
-        else:
-            low = middle
-        middle = (low + m) // 2
+    m, failed = _jump(search, reaches, max(min_poses, 2 * model.n_joints), failed, goal, max_poses)
+    m = _bisect(search, reaches, failed, m)
     if progress is not None:
         progress(1000, 1000)
+    found = search.found
     made, achieved = found[m]
     measured: tuple[str, ...] = ()
     if requirement in REQUIREMENT_UNITS:
@@ -389,7 +438,7 @@ def poses_needed(
         sigma_mm=float(sigma),
         poses=m,
         achieved=achieved,
-        previous=best(m - 1) if m > min_poses else math.inf,
+        previous=search.best(m - 1) if m > min_poses else math.inf,
         method=made.method,
         plan=made.q[order],
         evaluated={key: value[1] for key, value in sorted(found.items())},

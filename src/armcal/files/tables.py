@@ -10,13 +10,10 @@ decimal comma, tabs) and name the file, row and column of any bad value.
 
 from __future__ import annotations
 
-import csv
 import difflib
-import io
 import os
 import re
-import warnings
-from collections.abc import Callable, Sequence
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -24,7 +21,8 @@ import numpy as np
 from ..errors import ArmcalWarning, action
 from ..formats import reader_columns
 from ..models import FitModel, Loads
-from .common import MAX_ABS_VALUE, fail, parse_number, read_text, shown, suggest
+from .common import fail, read_text, shown, suggest
+from .csv_read import ParsedCsv, column_numbers, parse_csv
 from .joints import (
     JOINT_COLUMN,
     JOINT_UNITS,
@@ -40,7 +38,7 @@ from .joints import (
     revolute,
     wrapped_into,
 )
-from .kinds import field_count_fix, looks_like, not_a_table
+from .kinds import looks_like, not_a_table
 from .robots import METRE_REACH_MM, SIGMA_RANGE_MM
 from .writers import ORIENTATION_COLUMNS
 
@@ -185,149 +183,6 @@ class _Table:
     header_line: int = 1  # file line of the header
 
 
-def _split(
-    path, kept: list[tuple[int, str]], delimiter: str, layout: str
-) -> tuple[int, list[str], list[int], Callable[[int], list[str]]]:
-    """A CSV's header (its file line and fields), its data rows' file lines, and its columns.
-
-    Returns ``(header_line, header, lines, fields)`` where ``fields(c)`` lists
-    column ``c`` of every data row.  A row of empty fields only is skipped, and
-    every data row must have the header's number of fields.  A file without
-    quotes (what instruments and armcal write) is split as one string, so that a
-    10^5-row file makes no Python object per row; a quoted field (which may hold
-    the separator or span lines) goes through the ``csv`` module.
-    """
-    if any('"' in raw for _, raw in kept):
-        records = _records(path, kept, delimiter)
-        rows = [(line, row) for line, row in records if "".join(row).strip()]
-    else:
-        texts = [(line, raw) for line, raw in kept if raw.replace(delimiter, "").strip()]
-        rows = [(line, raw.split(delimiter)) for line, raw in texts[:1]]
-        flat = delimiter.join(raw for _, raw in texts[1:]).split(delimiter)
-        width = len(rows[0][1]) if rows else 0
-        if len(flat) == width * (len(texts) - 1):  # every row as wide as the header
-            lines = [line for line, _ in texts[1:]]
-            return rows[0][0], rows[0][1], lines, lambda c: flat[c::width]
-        rows += [(line, raw.split(delimiter)) for line, raw in texts[1:]]
-    if not rows:
-        raise fail(path, f"file has no header, only empty fields; expected {layout}")
-    (header_line, header), data = rows[0], rows[1:]
-    for r, (line, row) in enumerate(data, start=1):
-        if len(row) != len(header):
-            raise fail(
-                path,
-                f"row {r} (line {line}) has {len(row)} fields but the header has "
-                f"{len(header)}; {field_count_fix(row, len(header), delimiter, header[-1])}",
-            )
-    return header_line, header, [line for line, _ in data], lambda c: [row[c] for _, row in data]
-
-
-def _numeric_file(text: str, text_columns: Sequence[str]) -> tuple[int, str, np.ndarray] | None:
-    """The header's line and text, and every data row's numbers ``(m, width)``: a plain file.
-
-    What instruments and armcal write -- a header, then rows of numbers only, no
-    comment, quote, blank line or decimal comma -- is parsed by NumPy's C reader
-    (about twice as fast as splitting it in Python at 10^5 rows, and without a
-    Python string per field).  Anything else, and any row NumPy or the checks of
-    :func:`_numbers` would refuse, gives None: the general reader then reads the
-    file and names the first problem.
-    """
-    if any(c in text for c in '#"\r'):
-        return None
-    start, end = 0, _line_end(text, 0)
-    while not text[start:end].strip():  # blank lines before the header
-        if end == len(text):
-            return None  # no header
-        start, end = end + 1, _line_end(text, end + 1)
-    header_raw = text[start:end]
-    delimiter = _delimiter(header_raw)
-    header = header_raw.split(delimiter)
-    if delimiter == ";" or any(name.strip() in text_columns for name in header):
-        return None
-    header_line = text.count("\n", 0, start) + 1
-    data = text[end + 1 :]
-    rows = data.count("\n") + (not data.endswith("\n"))
-    if not data.strip() or "\n\n" in data:
-        return None
-    try:
-        with warnings.catch_warnings():
-            warnings.simplefilter("error")  # e.g. loadtxt's "input contained no data"
-            block = np.loadtxt(
-                io.StringIO(data),
-                delimiter=delimiter,
-                comments=None,
-                quotechar=None,
-                ndmin=2,
-                dtype=float,
-            )
-    except (ValueError, Warning):
-        return None
-    if block.shape != (rows, len(header)) or not np.all(np.abs(block) <= MAX_ABS_VALUE):
-        return None
-    return header_line, header_raw, block
-
-
-def _line_end(text: str, start: int) -> int:
-    end = text.find("\n", start)
-    return len(text) if end < 0 else end
-
-
-def _numbers(
-    path, lines: list[int], names: list[str], columns: list[list[str]], delimiter: str
-) -> np.ndarray:
-    """The numeric ``columns`` (one list of fields each) as ``(m, len(columns))``, checked.
-
-    NumPy parses each column at once (as ``float`` does, surrounding spaces
-    allowed); only a block that fails -- a field that is not a number, not
-    finite or beyond :data:`MAX_ABS_VALUE` -- is read again field by field, to
-    name the first bad one in file order.  A semicolon file may write 1,5 for 1.5.
-    """
-    comma = delimiter == ";"
-    # NumPy reads 1_249.3 as 1249.3, as float() does: a column with '_' is read field by field
-    if not comma and not any("_" in "".join(column) for column in columns):
-        try:
-            # C order, as every reader gives: the fits' round-off follows the layout.
-            values = np.ascontiguousarray(np.array(columns, dtype=float).reshape(-1, len(lines)).T)
-        except ValueError:  # a field that is not a number: found below
-            pass
-        else:
-            if np.all(np.abs(values) <= MAX_ABS_VALUE):  # NaN fails it too
-                return values
-    values = np.empty((len(lines), len(columns)))
-    for r, line in enumerate(lines):  # row by row: the first bad field in file order
-        where = f"row {r + 1} (line {line})"
-        for c, name in enumerate(names):
-            values[r, c] = parse_number(path, where, name, columns[c][r].strip(), comma)
-    return values
-
-
-def _records(path, kept: list[tuple[int, str]], delimiter: str) -> list[tuple[int, list[str]]]:
-    """CSV records of the ``(file line, text)`` lines kept, each with the file line it starts on.
-
-    A quoted field may span lines; a record is numbered by its first line.
-    """
-    reader = csv.reader((raw + "\n" for _, raw in kept), delimiter=delimiter)
-    records = []
-    start = 0  # index in ``kept`` of the next record's first line
-    try:
-        for row in reader:
-            records.append((kept[start][0], row))
-            start = reader.line_num
-    except csv.Error as exc:  # a field beyond the csv module's size limit, a NUL byte
-        line = kept[min(start, len(kept) - 1)][0]
-        raise fail(path, f"line {line}: not a CSV row ({exc}); check the file") from None
-    return records
-
-
-def _delimiter(header: str) -> str:
-    """The separator of a CSV whose header line is ``header``: a comma, else ';' or a tab."""
-    if "," not in header:
-        for candidate in (";", "\t"):
-            if candidate in header:
-                return candidate
-    return ","
-
-
 def _unit_hint(name: str, allowed: Sequence[str]) -> str:
     """What to do about an ``allowed`` column in another unit (``q1_rad``, ``x_m``), else ``""``.
 
@@ -363,61 +218,17 @@ def _unit_hint(name: str, allowed: Sequence[str]) -> str:
     return f"positions are read in mm: name the column {fixed} and give millimetres; "
 
 
-def _read_csv(
-    path,
-    arm: FitModel,
-    what: str,
-    measured: bool = False,
-    arm_from: str | None = None,
-) -> _Table:
-    """Validate a CSV of kind ``what`` (a key of :data:`armcal.formats.COLUMNS`).
-
-    ``arm_from`` names where the arm came from when not from ``--robot`` (``"the
-    calibration cal.json"``), for the errors that blame a wrong robot.
-
-    Its joint columns (in every joint's unit: :func:`~armcal.files.writers.joint_names`)
-    and required columns must be there; its optional text and numeric columns may
-    be.  A ``measured`` joint value beyond its limit by at most
-    :data:`LIMIT_TOLERANCE_DEG` (:data:`LIMIT_TOLERANCE_MM` for a prismatic joint) is
-    accepted and listed in ``beyond``; farther is an error, as any value beyond a
-    limit of a plan or program is.
-    """
-    numeric, optional, optional_numeric = reader_columns(what)
-    kinds = arm.joint_kinds
-    expected = joint_names(kinds) + list(numeric)
-    extras = list(optional) + list(optional_numeric)
-    layout = ",".join(expected) + "".join(f" [,{c}]" for c in extras)
-    text = read_text(path, what)
-    expected_kind = f"{what}-file"
-    if not_a_table(text):  # JSON, XML or TOML
-        other = looks_like(text, expected_kind)
-        if other:
-            raise fail(path, f"not a {what} CSV file: {other}expected a header line {layout}")
-    numeric_file = _numeric_file(text, optional)
-    if numeric_file is not None:
-        header_line, header_raw, block = numeric_file
-        header = header_raw.split(_delimiter(header_raw))
-        lines = list(range(header_line + 1, header_line + 1 + block.shape[0]))
-    else:
-        # Lines that start with '#' are comments (instrument exports often begin with some).
-        numbered = enumerate(text.splitlines(), start=1)
-        kept = (
-            [(line, raw) for line, raw in numbered if not raw.lstrip().startswith("#")]
-            if "#" in text
-            else list(numbered)
-        )
-        if not any(raw.strip() for _, raw in kept):
-            raise fail(path, f"file is empty; expected a header line {layout}")
-        header_raw = next(raw for _, raw in kept if raw.strip())
-        delimiter = _delimiter(header_raw)
-        header_line, header, lines, fields = _split(path, kept, delimiter, layout)
-    header = [h.strip() for h in header]
+def _check_header_names(
+    path, text: str, parsed: ParsedCsv, allowed: list[str], kind: str, layout: str
+) -> None:
+    """Every column named, once, and known: one of ``allowed`` or a joint column."""
+    header, header_line = parsed.header, parsed.header_line
     for col, name in enumerate(header, start=1):
         if not name and col == len(header) > 1:  # Excel's trailing separator
             raise fail(
                 path,
                 f"line {header_line}: header column {col} is empty: the header ends with a "
-                f"separator: remove the trailing separator ({_delimiter(header_raw)!r}) at "
+                f"separator: remove the trailing separator ({parsed.delimiter!r}) at "
                 "the end of each line",
             )
         if not name:
@@ -425,13 +236,28 @@ def _read_csv(
         if header.count(name) > 1:
             raise fail(path, f"line {header_line}: duplicate column '{name}'; keep one")
     for name in header:
-        if name not in expected and name not in extras and not JOINT_COLUMN.match(name):
-            hint = _unit_hint(name, expected + extras) or looks_like(text, expected_kind)
+        if name not in allowed and not JOINT_COLUMN.match(name):
+            hint = _unit_hint(name, allowed) or looks_like(text, kind)
             raise fail(
                 path,
                 f"line {header_line}: unknown column {shown(name)}: "
-                f"{hint or suggest(name, expected + extras)}expected {layout}",
+                f"{hint or suggest(name, allowed)}expected {layout}",
             )
+
+
+def _check_required(
+    path,
+    text: str,
+    parsed: ParsedCsv,
+    arm: FitModel,
+    expected: list[str],
+    what: str,
+    arm_from: str | None,
+    layout: str,
+) -> None:
+    """A joint column for every joint of ``arm`` in its unit, every ``expected`` column,
+    and at least one row."""
+    header, header_line = parsed.header, parsed.header_line
     found = check_joint_units(path, header, header_line, arm)
     if found and len(found) != arm.n_joints:
         has = f"has {len(found)} joint columns ({found[0][1]}..{found[-1][1]})"
@@ -449,27 +275,56 @@ def _read_csv(
             raise fail(
                 path,
                 f"line {header_line}: missing column '{name}'; "
-                f"{looks_like(text, expected_kind)}expected {layout}",
+                f"{looks_like(text, f'{what}-file')}expected {layout}",
             )
-    if not lines:
+    if not parsed.lines:
         raise fail(
             path, f"has a header but no poses; add one row per pose after line {header_line}"
         )
+
+
+def _columns(
+    path,
+    parsed: ParsedCsv,
+    expected: list[str],
+    optional: Sequence[str],
+    optional_numeric: Sequence[str],
+) -> tuple[np.ndarray, dict[str, np.ndarray], dict[str, list[str]]]:
+    """The ``expected`` columns' numbers ``(m, len(expected))``, and the optional numeric
+    and text columns present, by name."""
+    header = parsed.header
     index = {name: header.index(name) for name in expected}
     present = [name for name in optional_numeric if name in header]
     columns = [index[name] for name in expected] + [header.index(name) for name in present]
-    if numeric_file is None:
+    if parsed.block is None:
+        assert parsed.fields is not None
         names = [*expected, *present]
-        block = _numbers(path, lines, names, [fields(c) for c in columns], delimiter)
+        fields = [parsed.fields(c) for c in columns]
+        block = column_numbers(path, parsed.lines, names, fields, parsed.delimiter)
     else:
-        block = np.ascontiguousarray(block[:, columns])
+        block = np.ascontiguousarray(parsed.block[:, columns])
     values = block[:, : len(expected)]
     numbers = {name: block[:, len(expected) + k] for k, name in enumerate(present)}
-    texts = {
-        name: [field.strip() for field in fields(header.index(name))]
-        for name in optional
-        if name in header
-    }
+    texts = {}
+    for name in optional:
+        if name in header:  # never in a file of plain numbers (parse_csv's block)
+            assert parsed.fields is not None
+            texts[name] = [field.strip() for field in parsed.fields(header.index(name))]
+    return values, numbers, texts
+
+
+def _beyond_limits(
+    path,
+    arm: FitModel,
+    what: str,
+    values: np.ndarray,
+    lines: list[int],
+    expected: list[str],
+    measured: bool,
+) -> list[tuple[int, int, float, float]]:
+    """Joint values beyond a limit: ``(row, joint, value, by)`` for those a ``measured``
+    file may have (within the tolerance); an error for any other."""
+    kinds = arm.joint_kinds
     q_file = values[:, : arm.n_joints]
     turns = revolute(kinds)
     units = [JOINT_UNITS[kind] for kind in kinds]
@@ -504,16 +359,56 @@ def _read_csv(
             f"row {r + 1} (line {lines[r]}), column {expected[j]}: {values[r, j]:g} {unit} is "
             f"outside joint {j + 1}'s limits [{lo:g}, {hi:g}] {unit}; {fix}",
         )
-    beyond = [
+    return [
         (int(r), int(j), float(values[r, j]), float(by[r, j])) for r, j in np.argwhere(outside)
     ]
+
+
+def _read_csv(
+    path,
+    arm: FitModel,
+    what: str,
+    measured: bool = False,
+    arm_from: str | None = None,
+) -> _Table:
+    """Validate a CSV of kind ``what`` (a key of :data:`armcal.formats.COLUMNS`).
+
+    ``arm_from`` names where the arm came from when not from ``--robot`` (``"the
+    calibration cal.json"``), for the errors that blame a wrong robot.
+
+    Its joint columns (in every joint's unit: :func:`~armcal.files.writers.joint_names`)
+    and required columns must be there; its optional text and numeric columns may
+    be.  A ``measured`` joint value beyond its limit by at most
+    :data:`LIMIT_TOLERANCE_DEG` (:data:`LIMIT_TOLERANCE_MM` for a prismatic joint) is
+    accepted and listed in ``beyond``; farther is an error, as any value beyond a
+    limit of a plan or program is.
+    """
+    numeric, optional, optional_numeric = reader_columns(what)
+    kinds = arm.joint_kinds
+    expected = joint_names(kinds) + list(numeric)
+    extras = list(optional) + list(optional_numeric)
+    layout = ",".join(expected) + "".join(f" [,{c}]" for c in extras)
+    text = read_text(path, what)
+    expected_kind = f"{what}-file"
+    if not_a_table(text):  # JSON, XML or TOML
+        other = looks_like(text, expected_kind)
+        if other:
+            raise fail(path, f"not a {what} CSV file: {other}expected a header line {layout}")
+    parsed = parse_csv(path, text, optional, layout)
+    _check_header_names(path, text, parsed, expected + extras, expected_kind, layout)
+    _check_required(path, text, parsed, arm, expected, what, arm_from, layout)
+    lines = parsed.lines
+    values, numbers, texts = _columns(path, parsed, expected, optional, optional_numeric)
+    beyond = _beyond_limits(path, arm, what, values, lines, expected, measured)
+    q_file = values[:, : arm.n_joints]
     if what in ("plan", "program"):
+        turns = revolute(kinds)
         if turns.any():
-            refuse_radians(path, what, q_file[:, turns], limits[turns])
+            refuse_radians(path, what, q_file[:, turns], file_limits(arm)[turns])
         check_joint_values(path, what, arm, model_units(q_file, kinds), lines)
     if "pose" in texts:
         check_pose_labels(path, texts["pose"], q_file, kinds, lines)
-    return _Table(values, texts, numbers, lines, beyond, header_line)
+    return _Table(values, texts, numbers, lines, beyond, parsed.header_line)
 
 
 def read_plan(path: str | os.PathLike, arm: FitModel) -> np.ndarray:

@@ -209,27 +209,20 @@ def _unique(path: Path, text: str, root: ET.Element, tag: str) -> list[str]:
     return names
 
 
-def read_urdf(
-    path: str | os.PathLike, base_link: str | None = None, tip_link: str | None = None
-) -> UrdfChain:
-    """The chain of the URDF at ``path`` from ``base_link`` (default: the root) to
-    ``tip_link`` (default: the one leaf beyond the base).
+@dataclass(frozen=True, eq=False)
+class _Tree:
+    """A URDF's links and joints as a tree: every link's parent joint, every link's
+    children, and the joints other joints mimic."""
 
-    Joints off the chain (a gripper's fingers, a camera's mount) are ignored, of any
-    kind.  The chain's warnings (:attr:`UrdfChain.warnings`): ``gripper-joint`` when it
-    ends in a joint that looks like a gripper's.
+    links: list[str]
+    parent_joint: dict[str, ET.Element]
+    children: dict[str, list[str]]
+    mimicked: set[str]
 
-    Raises
-    ------
-    InputError
-        Naming the file (and line): a missing, empty or malformed file, or a xacro
-        file; a link or joint name declared twice; a link that is the child of two
-        joints or a loop; an unknown base or tip link; several leaves and no tip link;
-        a mimic, floating or planar joint on the chain; a joint of an unknown type or
-        without a parent or child.
-    """
-    path = Path(path)
-    root, text = _parse(path)
+
+def _tree(path: Path, text: str, root: ET.Element) -> _Tree:
+    """The URDF's tree, every joint checked: a known type, a parent and a child that are
+    links, no link the child of two joints (a loop)."""
     links = _unique(path, text, root, "link")
     _unique(path, text, root, "joint")
     parent_joint: dict[str, ET.Element] = {}
@@ -266,7 +259,14 @@ def read_urdf(
         mimic = joint.find("mimic")
         if mimic is not None:
             mimicked.add(mimic.get("joint", ""))
-    roots = [name for name in links if name not in parent_joint]
+    return _Tree(links, parent_joint, children, mimicked)
+
+
+def _ends(path: Path, tree: _Tree, base_link: str | None, tip_link: str | None) -> tuple[str, str]:
+    """The chain's base link (default: the one root) and tip link (default: the one leaf
+    beyond the base), each checked to be a link of the URDF."""
+    links, children = tree.links, tree.children
+    roots = [name for name in links if name not in tree.parent_joint]
     if not roots:
         raise InputError(
             f"{path}: every link is the child of a joint, so the joints form a loop; a URDF "
@@ -286,36 +286,70 @@ def read_urdf(
                 f"{path}: {role} {end!r} is not a link of the URDF; {suggest(end, links)}"
                 f"its links are {', '.join(links)}"
             )
-    if tip_link is None:
-        leaves, stack = [], [base]
-        while stack:
-            link = stack.pop()
-            stack.extend(children[link])
-            if not children[link]:
-                leaves.append(link)
-        if len(leaves) != 1:
-            counted = ", ".join(
-                f"{leaf}: {_moving_to(leaf, base, parent_joint)} joints" for leaf in sorted(leaves)
-            )
-            raise InputError(
-                f"{path}: {len(leaves)} links end chains beyond {base!r} ({counted}); say "
-                f"which is the tip: {action('choose-tip')}"
-            )
-        tip_link = leaves[0]
+    if tip_link is not None:
+        return base, tip_link
+    leaves, stack = [], [base]
+    while stack:
+        link = stack.pop()
+        stack.extend(children[link])
+        if not children[link]:
+            leaves.append(link)
+    if len(leaves) != 1:
+        counted = ", ".join(
+            f"{leaf}: {_moving_to(leaf, base, tree.parent_joint)} joints"
+            for leaf in sorted(leaves)
+        )
+        raise InputError(
+            f"{path}: {len(leaves)} links end chains beyond {base!r} ({counted}); say "
+            f"which is the tip: {action('choose-tip')}"
+        )
+    return base, leaves[0]
+
+
+def _chain_joints(path: Path, tree: _Tree, base: str, tip_link: str) -> list[ET.Element]:
+    """The joints from ``base`` to ``tip_link``, base first; refused when the tip does not
+    lie beyond the base."""
     chain: list[ET.Element] = []
     link = tip_link
     while link != base:
-        if link not in parent_joint:
+        if link not in tree.parent_joint:
             raise InputError(
                 f"{path}: tip_link {tip_link!r} does not lie beyond base_link {base!r}; "
                 "choose links on one chain"
             )
-        joint = parent_joint[link]
+        joint = tree.parent_joint[link]
         chain.append(joint)
         parent = joint.find("parent")
         assert parent is not None
         link = parent.get("link", "")
     chain.reverse()
+    return chain
+
+
+def read_urdf(
+    path: str | os.PathLike, base_link: str | None = None, tip_link: str | None = None
+) -> UrdfChain:
+    """The chain of the URDF at ``path`` from ``base_link`` (default: the root) to
+    ``tip_link`` (default: the one leaf beyond the base).
+
+    Joints off the chain (a gripper's fingers, a camera's mount) are ignored, of any
+    kind.  The chain's warnings (:attr:`UrdfChain.warnings`): ``gripper-joint`` when it
+    ends in a joint that looks like a gripper's.
+
+    Raises
+    ------
+    InputError
+        Naming the file (and line): a missing, empty or malformed file, or a xacro
+        file; a link or joint name declared twice; a link that is the child of two
+        joints or a loop; an unknown base or tip link; several leaves and no tip link;
+        a mimic, floating or planar joint on the chain; a joint of an unknown type or
+        without a parent or child.
+    """
+    path = Path(path)
+    root, text = _parse(path)
+    tree = _tree(path, text, root)
+    base, tip_link = _ends(path, tree, base_link, tip_link)
+    chain = _chain_joints(path, tree, base, tip_link)
     _check_chain(path, text, chain, base, tip_link)
     joints = [_joint(path, text, element) for element in chain]
     if all(joint.kind == "fixed" for joint in joints):
@@ -330,8 +364,8 @@ def read_urdf(
             f"{path}: the chain from {base!r} to {tip_link!r}: {unrendered(exc)}"
         ) from None
     moving = [(element, joint) for element, joint in zip(chain, joints, strict=True)]
-    masses = _link_masses(path, text, root, moving, parent_joint, children)
-    gripper = _gripper_warning(path, text, chain, mimicked)
+    masses = _link_masses(path, text, root, moving, tree.parent_joint, tree.children)
+    gripper = _gripper_warning(path, text, chain, tree.mimicked)
     warnings = () if gripper is None else (gripper,)
     return UrdfChain(serial, root.get("name", path.stem), base, tip_link, masses, warnings)
 

@@ -175,6 +175,95 @@ def _describe(
     )
 
 
+def _best_relabellings(
+    problem: Problem, fit: Fit, group: np.ndarray, count: int
+) -> list[list[tuple[int, int]]]:
+    """The best relabelling of each of the :data:`WORST_POSES` worst poses that cuts its
+    sum of squares :data:`SWAP_GAIN` times at the fit's parameters (none: an empty list)."""
+    model, conditions, points = problem.model, problem.conditions, problem.points
+    target = conditions.target
+    assert target is not None
+    d = model.position_dim
+    row_squares = np.sum(fit.residuals[:, :d] ** 2, axis=1)
+    pose_squares = np.bincount(group, weights=row_squares, minlength=count)
+    order = np.argsort(group, kind="stable")
+    starts = np.searchsorted(group[order], np.arange(count + 1))
+    worst = [int(g) for g in np.argsort(-pose_squares)[:WORST_POSES]]
+    candidates = [
+        (g, change)
+        for g in worst
+        for change in _relabels(order[starts[g] : starts[g + 1]], target, len(model.target_labels))
+    ]
+    if not candidates:
+        return []
+    changes = np.array([pair for _, change in candidates for pair in change])
+    owner = np.repeat(np.arange(len(candidates)), [len(c) for _, c in candidates])
+    # The change of its pose's sum of squares if a candidate's relabelling is applied.
+    delta = (
+        _relabelled(model, conditions, points, fit.params, changes) - row_squares[changes[:, 0]]
+    )
+    change = np.bincount(owner, weights=delta, minlength=len(candidates))
+    chosen: dict[int, int] = {}  # pose -> its best candidate
+    for k, (g, _) in enumerate(candidates):
+        after = pose_squares[g] + change[k]
+        if after * SWAP_GAIN <= pose_squares[g] and (
+            g not in chosen or change[k] < change[chosen[g]]
+        ):
+            chosen[g] = k
+    return [candidates[k][1] for k in chosen.values()]
+
+
+def _relabelled_refit(
+    problem: Problem, fit: Fit, picked: list[list[tuple[int, int]]]
+) -> tuple[Problem, Fit] | None:
+    """The problem with the ``picked`` relabellings applied and its refit from the fit, or
+    None when the refit fails or does not cut the chi-square :data:`SWAP_GAIN` times."""
+    conditions = problem.conditions
+    assert conditions.target is not None
+    applied = np.array([pair for item in picked for pair in item])
+    relabelled = conditions.target.copy()
+    relabelled[applied[:, 0]] = applied[:, 1]
+    swapped = Problem(
+        problem.model,
+        replace(conditions, target=relabelled),
+        problem.points,
+        problem.method,
+        problem.tol,
+        problem.max_iter,
+    )
+    try:
+        refit = swapped.fit(np.ones(conditions.m, dtype=bool), start=fit.params)
+    except ArmcalError:  # NotIdentifiableError among them: the relabelling tells nothing
+        return None
+    if _chi2(refit) * SWAP_GAIN > _chi2(fit):
+        return None
+    return swapped, refit
+
+
+def _still_better(
+    problem: Problem, swapped: Problem, refit: Fit, picked: list[list[tuple[int, int]]]
+) -> list[list[tuple[int, int]]]:
+    """The relabellings of ``picked`` that still fit :data:`SWAP_GAIN` times better than
+    their labels at the refit's parameters."""
+    target = problem.conditions.target
+    assert target is not None
+    applied = np.array([pair for item in picked for pair in item])
+    back = np.column_stack([applied[:, 0], target[applied[:, 0]]])
+    owners = np.repeat(np.arange(len(picked)), [len(item) for item in picked])
+    as_labelled = np.bincount(
+        owners,
+        weights=_relabelled(problem.model, swapped.conditions, problem.points, refit.params, back),
+    )
+    d = problem.model.position_dim
+    refit_squares = np.sum(refit.residuals[:, :d] ** 2, axis=1)
+    relabelled_squares = np.bincount(owners, weights=refit_squares[applied[:, 0]])
+    return [
+        item
+        for item, a, b in zip(picked, relabelled_squares, as_labelled, strict=True)
+        if a * SWAP_GAIN <= b
+    ]
+
+
 def swapped_targets(
     problem: Problem,
     fit: Fit,
@@ -201,74 +290,22 @@ def swapped_targets(
         None without several targets, or when no relabelling passes the tests of the
         module notes.
     """
-    model, conditions, points = problem.model, problem.conditions, problem.points
-    target = conditions.target
+    model, target = problem.model, problem.conditions.target
     labels = model.target_labels
     if target is None or len(labels) < 2:
         return None
     group, count = _pose_groups(np.asarray(pose_labels), target)
-    d = model.position_dim
-    row_squares = np.sum(fit.residuals[:, :d] ** 2, axis=1)
-    pose_squares = np.bincount(group, weights=row_squares, minlength=count)
-    order = np.argsort(group, kind="stable")
-    starts = np.searchsorted(group[order], np.arange(count + 1))
-    worst = [int(g) for g in np.argsort(-pose_squares)[:WORST_POSES]]
-    candidates = [
-        (g, change)
-        for g in worst
-        for change in _relabels(order[starts[g] : starts[g + 1]], target, len(labels))
-    ]
-    if not candidates:
+    picked = _best_relabellings(problem, fit, group, count)
+    if not picked:
         return None
-    changes = np.array([pair for _, change in candidates for pair in change])
-    owner = np.repeat(np.arange(len(candidates)), [len(c) for _, c in candidates])
-    # The change of its pose's sum of squares if a candidate's relabelling is applied.
-    delta = (
-        _relabelled(model, conditions, points, fit.params, changes) - row_squares[changes[:, 0]]
-    )
-    change = np.bincount(owner, weights=delta, minlength=len(candidates))
-    chosen: dict[int, int] = {}  # pose -> its best candidate
-    for k, (g, _) in enumerate(candidates):
-        after = pose_squares[g] + change[k]
-        if after * SWAP_GAIN <= pose_squares[g] and (
-            g not in chosen or change[k] < change[chosen[g]]
-        ):
-            chosen[g] = k
-    if not chosen:
+    refitted = _relabelled_refit(problem, fit, picked)
+    if refitted is None:
         return None
-    picked = [candidates[k][1] for k in chosen.values()]
-    applied = np.array([pair for item in picked for pair in item])
-    relabelled = target.copy()
-    relabelled[applied[:, 0]] = applied[:, 1]
-    swapped = Problem(
-        model,
-        replace(conditions, target=relabelled),
-        points,
-        problem.method,
-        problem.tol,
-        problem.max_iter,
-    )
-    try:
-        refit = swapped.fit(np.ones(conditions.m, dtype=bool), start=fit.params)
-    except ArmcalError:  # NotIdentifiableError among them: the relabelling tells nothing
-        return None
-    if _chi2(refit) * SWAP_GAIN > _chi2(fit):
-        return None
-    # Each relabelling must still fit far better than its labels at the refit's parameters.
-    back = np.column_stack([applied[:, 0], target[applied[:, 0]]])
-    owners = np.repeat(np.arange(len(picked)), [len(item) for item in picked])
-    as_labelled = np.bincount(
-        owners, weights=_relabelled(model, swapped.conditions, points, refit.params, back)
-    )
-    refit_squares = np.sum(refit.residuals[:, :d] ** 2, axis=1)
-    relabelled_squares = np.bincount(owners, weights=refit_squares[applied[:, 0]])
-    kept = [
-        item
-        for item, a, b in zip(picked, relabelled_squares, as_labelled, strict=True)
-        if a * SWAP_GAIN <= b
-    ]
+    swapped, refit = refitted
+    kept = _still_better(problem, swapped, refit, picked)
     if not kept:
         return None
+    d = model.position_dim
     named = [_describe(item, target, labels, pose_labels, rows) for item in kept[:5]]
     more = f" and {len(kept) - 5} more" if len(kept) > 5 else ""
     before = rms(fit.residuals[:, :d])

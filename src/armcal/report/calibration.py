@@ -72,6 +72,113 @@ def _outlier_lines(cal: Calibration) -> list[str]:
     return lines
 
 
+def _poses_phrase(cal: Calibration) -> str:
+    """``"20 poses"``, or with targets ``"20 poses (60 measurements of 3 targets)"``, and
+    the rows left out of the fit."""
+    used = cal.n_used
+    if cal.target is None:
+        poses = f"{cal.n_poses} poses"
+    else:  # a row is one target's point of a pose
+        targets = len(cal.arm.targets)
+        poses = (
+            f"{len(set(cal.pose_labels))} poses ({cal.n_poses} measurements of "
+            f"{targets} target{'s' if targets > 1 else ''})"
+        )
+    if used < cal.n_poses:
+        rows = "" if cal.target is None else " measurements"
+        poses += f" ({cal.n_poses - used}{rows} left out of the fit)"
+    return poses
+
+
+def _heading_lines(cal: Calibration, words: Mapping[str, str], header: str) -> list[str]:
+    """What was calibrated and how, the model's lines, the effect's held terms, and the
+    table's ``header``."""
+    arm = cal.arm
+    return [
+        f"calibration of {arm.name}: {_poses_phrase(cal)}, {identified(arm)}"
+        + (
+            ""
+            if cal.nested is None
+            else f" and {len(cal.nested.names)} of {cal.nested.effect.name}"
+        )
+        + f", method {cal.method}"
+        + (", robust" if cal.robust else ""),
+        *model_lines(arm, plan=False, words=words, registered=True),
+        *_effect_held_lines(cal),
+        "",
+        header,
+    ]
+
+
+def _parameter_lines(cal: Calibration, truth: np.ndarray | None) -> list[str]:
+    """One line per parameter: value ± std (or ``fixed``) and unit, with the truth and
+    the error in standard errors when ``truth`` is given; those a rule holds are left
+    out (listed with why in the heading)."""
+    arm = cal.arm
+    truth_display = None if truth is None else np.asarray(truth) * cal.display_scale
+    # held by a rule, listed with why above: the spatial arm's, and its effect's (compliance)
+    merged = set(arm.rule_held)
+    model, mine = cal.model, set(arm.param_names)
+    merged |= {
+        n
+        for n, free in zip(model.param_names, model.free, strict=True)
+        if not free and n not in mine
+    }
+    lines = []
+    for i, (name, unit) in enumerate(zip(cal.names, cal.units, strict=True)):
+        if name in merged:
+            continue  # held by the identifiable-set rule: listed with why, above
+        if name in arm.fixed:
+            line = f"{name:<10}{cal.values[i]:>12.5f}  {'fixed':<10}  {unit:<4}"
+        else:
+            line = f"{name:<10}{cal.values[i]:>12.5f}  ± {small(cal.std[i], 5):<8}  {unit:<4}"
+        if truth_display is not None:
+            line += f"{truth_display[i]:>12.5f}"
+            if name not in arm.fixed and cal.std[i] > 0:
+                line += f"{(cal.values[i] - truth_display[i]) / cal.std[i]:>+11.2f}"
+        lines.append(line.rstrip())
+    return lines
+
+
+def _fit_lines(cal: Calibration) -> list[str]:
+    """Sigma and the residuals, the goodness of fit, the solver, strong correlations."""
+    worst = cal.worst_pose
+    lines = [
+        "",
+        f"sigma {cal.sigma_mm:.4g} mm ({cal.sigma_source}); "
+        f"residual RMS {cal.residual_rms:.4g} mm per coordinate "
+        f"({cal.residual_rms_per_point:.4g} mm per point), "
+        f"max {cal.residual_max:.4g} mm at pose {cal.pose_labels[worst]}; "
+        + _turn_residual(cal)
+        + f"{cal.dof} degrees of freedom",
+        _fit_line(cal),
+        f"{cal.method}: {cal.iterations} iteration(s), "
+        + ("converged" if cal.converged else "NOT converged: the estimate may be off"),
+    ]
+    strong = [f"{a}/{b} {r:+.2f}" for a, b, r in cal.strong_correlations()]
+    if strong:
+        lines.append(f"strongly correlated (|r| > {STRONG_CORRELATION:g}): " + ", ".join(strong))
+    return lines
+
+
+def _plane_lines(cal: Calibration) -> list[str]:
+    """The plane of motion fitted to 3-D data of a planar arm, when there is one."""
+    if cal.plane is None:
+        return []
+    plane = cal.plane
+    offsets = ", ".join(
+        f"{label or 'all'} {d:+.4g}"
+        for label, d in zip(plane.labels or ("",), plane.offsets, strict=True)
+    )
+    normal = ", ".join(f"{v:.4f}" for v in plane.normal)
+    return [
+        "",
+        f"3-D data: plane of motion fitted with normal ({normal}) in the instrument frame; "
+        f"out of plane RMS {plane.rms_mm:.4g} mm per point, max {plane.max_mm:.4g} mm; target "
+        f"planes at {offsets} mm; x0, y0, phi0 are the base pose in the plane's axes",
+    ]
+
+
 def format_calibration(
     cal: Calibration, *, truth: np.ndarray | None = None, words: Mapping[str, str] = ACTIONS
 ) -> str:
@@ -94,88 +201,17 @@ def format_calibration(
         model that is not isotropic iid), the parameters (fixed ones marked
         ``fixed``), sigma and residuals, the goodness of fit, the outliers.
     """
-    arm = cal.arm
     header = f"{'parameter':<10}{'value':>12}  {'± std':>10}  unit"
     if truth is not None:
         header += f"{'truth':>12}{'error/std':>11}"
-    used = cal.n_used
-    if cal.target is None:
-        poses = f"{cal.n_poses} poses"
-    else:  # a row is one target's point of a pose
-        targets = len(arm.targets)
-        poses = (
-            f"{len(set(cal.pose_labels))} poses ({cal.n_poses} measurements of "
-            f"{targets} target{'s' if targets > 1 else ''})"
-        )
-    if used < cal.n_poses:
-        rows = "" if cal.target is None else " measurements"
-        poses += f" ({cal.n_poses - used}{rows} left out of the fit)"
     lines = [
-        f"calibration of {arm.name}: {poses}, {identified(arm)}"
-        + (
-            ""
-            if cal.nested is None
-            else f" and {len(cal.nested.names)} of {cal.nested.effect.name}"
-        )
-        + f", method {cal.method}"
-        + (", robust" if cal.robust else ""),
-        *model_lines(arm, plan=False, words=words, registered=True),
-        *_effect_held_lines(cal),
-        "",
-        header,
+        *_heading_lines(cal, words, header),
+        *_parameter_lines(cal, truth),
+        *_fit_lines(cal),
+        *_outlier_lines(cal),
+        *_plane_lines(cal),
+        *effect_lines(cal),
     ]
-    truth_display = None if truth is None else np.asarray(truth) * cal.display_scale
-    # held by a rule, listed with why above: the spatial arm's, and its effect's (compliance)
-    merged = set(arm.rule_held)
-    model, mine = cal.model, set(arm.param_names)
-    merged |= {
-        n
-        for n, free in zip(model.param_names, model.free, strict=True)
-        if not free and n not in mine
-    }
-    for i, (name, unit) in enumerate(zip(cal.names, cal.units, strict=True)):
-        if name in merged:
-            continue  # held by the identifiable-set rule: listed with why, above
-        if name in arm.fixed:
-            line = f"{name:<10}{cal.values[i]:>12.5f}  {'fixed':<10}  {unit:<4}"
-        else:
-            line = f"{name:<10}{cal.values[i]:>12.5f}  ± {small(cal.std[i], 5):<8}  {unit:<4}"
-        if truth_display is not None:
-            line += f"{truth_display[i]:>12.5f}"
-            if name not in arm.fixed and cal.std[i] > 0:
-                line += f"{(cal.values[i] - truth_display[i]) / cal.std[i]:>+11.2f}"
-        lines.append(line.rstrip())
-    worst = cal.worst_pose
-    lines += [
-        "",
-        f"sigma {cal.sigma_mm:.4g} mm ({cal.sigma_source}); "
-        f"residual RMS {cal.residual_rms:.4g} mm per coordinate "
-        f"({cal.residual_rms_per_point:.4g} mm per point), "
-        f"max {cal.residual_max:.4g} mm at pose {cal.pose_labels[worst]}; "
-        + _turn_residual(cal)
-        + f"{cal.dof} degrees of freedom",
-        _fit_line(cal),
-        f"{cal.method}: {cal.iterations} iteration(s), "
-        + ("converged" if cal.converged else "NOT converged: the estimate may be off"),
-    ]
-    strong = [f"{a}/{b} {r:+.2f}" for a, b, r in cal.strong_correlations()]
-    if strong:
-        lines.append(f"strongly correlated (|r| > {STRONG_CORRELATION:g}): " + ", ".join(strong))
-    lines += _outlier_lines(cal)
-    if cal.plane is not None:
-        plane = cal.plane
-        offsets = ", ".join(
-            f"{label or 'all'} {d:+.4g}"
-            for label, d in zip(plane.labels or ("",), plane.offsets, strict=True)
-        )
-        normal = ", ".join(f"{v:.4f}" for v in plane.normal)
-        lines += [
-            "",
-            f"3-D data: plane of motion fitted with normal ({normal}) in the instrument frame; "
-            f"out of plane RMS {plane.rms_mm:.4g} mm per point, max {plane.max_mm:.4g} mm; target "
-            f"planes at {offsets} mm; x0, y0, phi0 are the base pose in the plane's axes",
-        ]
-    lines += effect_lines(cal)
     return "\n".join(lines)
 
 

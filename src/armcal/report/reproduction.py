@@ -37,11 +37,9 @@ def _equations_line(result: Reproduction) -> str:
     )
 
 
-def format_reproduction(result: Reproduction) -> str:
-    """``report.md``: set-up, Tables I-III, Figures 1-2, equations checked, disagreements."""
-    t3 = result.tables["table3"]
-    study = result.figure1.summary()
-    lines = [
+def _setup_lines(result: Reproduction) -> list[str]:
+    """The report's title and its set-up section: arms, noise, plans, seed, the counts."""
+    return [
         "# The paper's Sections II-VI, recomputed by armcal",
         "",
         "Klimchik et al., *Design of Experiments for Calibration of Planar Anthropomorphic "
@@ -74,6 +72,12 @@ def format_reproduction(result: Reproduction) -> str:
         f"{100 * result.std_sampling_error:.1f} %).",
         f"- Equations: {_equations_line(result)} (section 'Equations checked').",
         "",
+    ]
+
+
+def _table_lines(result: Reproduction) -> list[str]:
+    """Tables I-III as markdown, each under its heading."""
+    return [
         "## Table I: optimality conditions on the generated plans (`table1.csv`)",
         "",
         *markdown(result.tables["table1"], TABLE_COLUMNS["table1"]),
@@ -84,8 +88,15 @@ def format_reproduction(result: Reproduction) -> str:
         "",
         "## Table III: identification accuracy, analytic and simulated (`table3.csv`)",
         "",
-        *markdown(t3, TABLE_COLUMNS["table3"]),
+        *markdown(result.tables["table3"], TABLE_COLUMNS["table3"]),
         "",
+    ]
+
+
+def _figure_lines(result: Reproduction) -> list[str]:
+    """Figures 1-2, each with what it shows."""
+    study = result.figure1.summary()
+    return [
         "## Figure 1: random 10-pose plans of the 4-link arm (`figure1.png`)",
         "",
         "![Figure 1](figure1.png)",
@@ -106,6 +117,12 @@ def format_reproduction(result: Reproduction) -> str:
         f"random plans, mean and median over {result.random_plans} plans of the predicted "
         "accuracy (the mean is dominated by nearly singular plans at small m).",
         "",
+    ]
+
+
+def _check_lines(result: Reproduction) -> list[str]:
+    """The printed equations checked, one numbered item each with its verdict."""
+    lines = [
         "## Equations checked",
         "",
         "Each printed equation of Sections II-V, computed: model (1) from its printed double "
@@ -120,12 +137,29 @@ def format_reproduction(result: Reproduction) -> str:
             f"Computed: {check.evidence}.",
             "",
         ]
-    lines += ["## Where this differs from the paper", ""]
+    return lines
+
+
+def _disagreement_lines(result: Reproduction) -> list[str]:
+    """Where the paper differs, one numbered item each with its cause."""
+    lines = ["## Where this differs from the paper", ""]
     for i, d in enumerate(result.disagreements, start=1):
         lines += [
             f"{i}. **{d.where}.** Paper: {d.paper}. Computed: {d.computed}. Cause: {d.cause}.",
             "",
         ]
+    return lines
+
+
+def format_reproduction(result: Reproduction) -> str:
+    """``report.md``: set-up, Tables I-III, Figures 1-2, equations checked, disagreements."""
+    lines = [
+        *_setup_lines(result),
+        *_table_lines(result),
+        *_figure_lines(result),
+        *_check_lines(result),
+        *_disagreement_lines(result),
+    ]
     return "\n".join(lines)
 
 

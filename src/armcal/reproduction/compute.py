@@ -352,9 +352,9 @@ def _table3(
     return rows, plans, ranks, evidence
 
 
-def _table3_disagreements(
-    table3: list[dict], ranks: dict[tuple[int, int], int], sigma: float, rng: np.random.Generator
-) -> list[Disagreement]:
+def _table3_wrong_values(table3: list[dict]) -> list[Disagreement]:
+    """Printed values of Table III that differ, by configuration and unit: each group
+    either another column's values repeated or simply different."""
     found: list[Disagreement] = []
     value = {
         (r["links"], r["poses"], r["parameter"]): r["analytic_std"]
@@ -394,6 +394,15 @@ def _table3_disagreements(
             found.append(
                 disagreement("table3_repeated", other_poses=other, other=others, **fields)
             )
+    return found
+
+
+def _table3_not_computable(
+    ranks: dict[tuple[int, int], int], sigma: float, rng: np.random.Generator
+) -> list[Disagreement]:
+    """The configurations the paper prints that no plan can calibrate: whether its values
+    are the formulas of an orthogonal plan, and how many poses would do."""
+    found: list[Disagreement] = []
     for (n, m), rank in sorted(ranks.items()):
         arm, _ = paper_arm(n)
         printed = PAPER_TABLE3[(n, m)]
@@ -421,27 +430,45 @@ def _table3_disagreements(
                 min_poses=min_poses,
             )
         )
+    return found
+
+
+def _table3_dq_label(table3: list[dict]) -> list[Disagreement]:
+    """Table III's 'dq_k' columns when they agree with the joint offsets' std rather than
+    the cumulative angles' the paper's text names (one example kept)."""
     angles = [r for r in table3 if r["compared_with"].startswith("dtheta")]
     computable = [r for r in angles if r["computable"] == "yes"]
     as_joint = [r for r in computable if _agrees(r["joint_offset_std"], r["paper_value"])]
     mislabelled = [r for r in computable if r not in as_joint]
-    if mislabelled:
-        example = max(mislabelled, key=lambda r: (r["links"], r["poses"], r["parameter"]))
-        found.append(
-            disagreement(
-                "table3_dq_label",
-                links=example["links"],
-                poses=example["poses"],
-                k=example["parameter"][2:],
-                printed=example["paper_value"],
-                total=len(computable),
-                theta_agree=sum(r["agrees"] == "yes" for r in computable),
-                dq_agree=len(as_joint),
-                joint=example["joint_offset_std"],
-                theta=example["analytic_std"],
-            )
+    if not mislabelled:
+        return []
+    example = max(mislabelled, key=lambda r: (r["links"], r["poses"], r["parameter"]))
+    return [
+        disagreement(
+            "table3_dq_label",
+            links=example["links"],
+            poses=example["poses"],
+            k=example["parameter"][2:],
+            printed=example["paper_value"],
+            total=len(computable),
+            theta_agree=sum(r["agrees"] == "yes" for r in computable),
+            dq_agree=len(as_joint),
+            joint=example["joint_offset_std"],
+            theta=example["analytic_std"],
         )
-    return found
+    ]
+
+
+def _table3_disagreements(
+    table3: list[dict], ranks: dict[tuple[int, int], int], sigma: float, rng: np.random.Generator
+) -> list[Disagreement]:
+    """Where Table III differs: wrong values, configurations no plan can calibrate, and
+    the label of its joint-offset columns."""
+    return [
+        *_table3_wrong_values(table3),
+        *_table3_not_computable(ranks, sigma, rng),
+        *_table3_dq_label(table3),
+    ]
 
 
 def _length_std(arm: PlanarArm, m: int, sigma: float) -> float:

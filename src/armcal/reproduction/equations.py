@@ -461,16 +461,13 @@ def _information_checks(s: _Setting) -> list[EquationCheck]:
     return [blocks, diag_check, off_blocks]
 
 
-def _dstar_checks(
-    s: _Setting, plans: dict[tuple[int, int], np.ndarray], rng: np.random.Generator
-) -> list[EquationCheck]:
-    """Eq. (20)-(23): the D* normalization and determinant, D-optimality, derivatives."""
-    n, m = s.n, PAPER_FIGURE1_POSES
-    optimal = orthogonal_plan(s.arm, m)
+def _dstar_normalization(s: _Setting, optimal: np.ndarray) -> EquationCheck:
+    """Eq. (20): ``det(C / n)`` of the orthogonal plan is 1 (``det(C / m)`` is not)."""
+    n, m = s.n, optimal.shape[0]
     cos_opt, _ = _relative_sums(link_angles(optimal))
     det_over_n = float(np.linalg.det(cos_opt / n))
     det_over_m = float(np.linalg.det(cos_opt / m))
-    normalization = equation_check(
+    return equation_check(
         "dstar_normalization",
         agrees=abs(det_over_n - 1) <= EXACT_RTOL,
         poses=m,
@@ -478,12 +475,16 @@ def _dstar_checks(
         det_over_n=det_over_n,
         det_over_m=det_over_m,
     )
+
+
+def _dstar_determinant(m: int, rng: np.random.Generator) -> EquationCheck:
+    """Eq. (21) on random 3-link plans: ``|det S'| = 0`` does not force ``S = 0``."""
     arm3, _ = paper_arm(3)
     odd = random_plan(arm3, RANDOM_PLANS * m, rng=rng).reshape(RANDOM_PLANS, m, 3)
     _, sin_odd = _relative_sums(link_angles(odd))
     det_max = float(np.abs(np.linalg.det(sin_odd / m)).max())
     s_max = float(np.abs(sin_odd / m).max())
-    determinant = equation_check(
+    return equation_check(
         "dstar_determinant",
         # The criterion enforces S = 0 only if |det S'| = 0 forces it.
         agrees=not (det_max <= EXACT_RTOL and s_max > 1e-6),
@@ -492,50 +493,75 @@ def _dstar_checks(
         det_max=det_max,
         s_max=s_max,
     )
-    random4 = random_plan(s.arm, RANDOM_PLANS * m, rng=rng).reshape(RANDOM_PLANS, m, n)
+
+
+def _d_optimality(
+    s: _Setting, plans: dict[tuple[int, int], np.ndarray], random4: np.ndarray
+) -> EquationCheck:
+    """Eq. (22): the orthogonal plans are D-optimal, random plans ``random4`` below 1."""
     orthogonal = max(
         abs(1 - float(d_efficiency(paper_arm(k)[0], q))) for (k, _), q in plans.items()
     )
     random_max = float(d_efficiency(s.arm, random4).max())
-    optimality = equation_check(
+    return equation_check(
         "d_optimality",
         agrees=orthogonal <= EXACT_RTOL and random_max < 1,
         orthogonal=orthogonal,
         plans=RANDOM_PLANS,
-        poses=m,
+        poses=random4.shape[-2],
         random_max=random_max,
     )
 
-    def sums(theta: np.ndarray) -> np.ndarray:
-        return np.stack(_relative_sums(theta))  # (2, n, n): C, S
 
-    def printed(theta: np.ndarray, b: int) -> np.ndarray:
-        cos_sums, sin_sums = _relative_sums(theta)
-        out = np.zeros((2, n, n))
-        out[0, b, :], out[1, b, :] = -sin_sums[b, :], cos_sums[b, :]  # b = j
-        out[0, :, b], out[1, :, b] = sin_sums[:, b], -cos_sums[:, b]  # b = k
-        out[:, b, b] = 0.0  # j = k = b: c_bb = m and s_bb = 0 are constant
-        return out
+def _sums(theta: np.ndarray) -> np.ndarray:
+    """The relative sums ``C`` and ``S`` ``(2, n, n)`` of link angles ``theta`` ``(m, n)``."""
+    return np.stack(_relative_sums(theta))
 
-    def common_shift(theta: np.ndarray, b: int) -> np.ndarray:
-        return _central(lambda t: sums(theta + t[0] * np.eye(n)[b]), np.zeros(1))[..., 0]
 
-    def single_shift(theta: np.ndarray, b: int) -> np.ndarray:
-        unit = np.zeros_like(theta)
-        unit[0, b] = 1.0
-        return _central(lambda t: sums(theta + t[0] * unit), np.zeros(1))[..., 0]
+def _printed_derivatives(theta: np.ndarray, b: int) -> np.ndarray:
+    """The paper's derivatives ``(2, n, n)`` of ``C`` and ``S`` in ``theta_b``."""
+    n = theta.shape[-1]
+    cos_sums, sin_sums = _relative_sums(theta)
+    out = np.zeros((2, n, n))
+    out[0, b, :], out[1, b, :] = -sin_sums[b, :], cos_sums[b, :]  # b = j
+    out[0, :, b], out[1, :, b] = sin_sums[:, b], -cos_sums[:, b]  # b = k
+    out[:, b, b] = 0.0  # j = k = b: c_bb = m and s_bb = 0 are constant
+    return out
 
+
+def _common_shift(theta: np.ndarray, b: int) -> np.ndarray:
+    """Central differences ``(2, n, n)`` of the sums, ``theta_b`` shifted at every pose."""
+    n = theta.shape[-1]
+    return _central(lambda t: _sums(theta + t[0] * np.eye(n)[b]), np.zeros(1))[..., 0]
+
+
+def _single_shift(theta: np.ndarray, b: int) -> np.ndarray:
+    """Central differences ``(2, n, n)`` of the sums, ``theta_b`` shifted at the first pose."""
+    unit = np.zeros_like(theta)
+    unit[0, b] = 1.0
+    return _central(lambda t: _sums(theta + t[0] * unit), np.zeros(1))[..., 0]
+
+
+def _sum_derivatives(s: _Setting) -> EquationCheck:
+    """Eq. (23): the printed derivatives of the sums against central differences."""
+    n = s.n
     theta = link_angles(s.q)
-    expected = np.stack([printed(theta, b) for b in range(n)])
-    derivatives = equation_check(
+    expected = np.stack([_printed_derivatives(theta, b) for b in range(n)])
+    return equation_check(
         "sum_derivatives",
-        agrees=_rel(np.stack([common_shift(theta, b) for b in range(n)]), expected) <= FD_RTOL,
+        agrees=_rel(np.stack([_common_shift(theta, b) for b in range(n)]), expected) <= FD_RTOL,
         poses=s.q.shape[0],
-        common=_rel(np.stack([common_shift(theta, b) for b in range(n)]), expected),
-        single=_rel(np.stack([single_shift(theta, b) for b in range(n)]), expected),
+        common=_rel(np.stack([_common_shift(theta, b) for b in range(n)]), expected),
+        single=_rel(np.stack([_single_shift(theta, b) for b in range(n)]), expected),
     )
+
+
+def _stationarity(s: _Setting, optimal: np.ndarray, random4: np.ndarray) -> EquationCheck:
+    """The orthogonal plan is stationary (derivatives of the sums and of ``det C'`` 0) and
+    no random plan ``random4`` has a larger ``det C'``."""
+    m, n = optimal.shape
     theta_opt = link_angles(optimal)
-    common = float(np.abs(np.stack([common_shift(theta_opt, b) for b in range(n)])).max())
+    common = float(np.abs(np.stack([_common_shift(theta_opt, b) for b in range(n)])).max())
 
     def det_c(flat: np.ndarray) -> float:
         cos_sums, _ = _relative_sums(flat.reshape(m, n))
@@ -543,7 +569,7 @@ def _dstar_checks(
 
     single = float(np.abs(_central(det_c, theta_opt.reshape(-1))).max())
     det_random = float(dstar(s.arm, random4).det_c.max())
-    stationarity = equation_check(
+    return equation_check(
         "stationarity",
         # Derivatives of sums of m unit terms: round-off of m eps / h.
         agrees=common <= m * FD_RTOL and single <= FD_RTOL and det_random <= 1 + EXACT_RTOL,
@@ -553,7 +579,24 @@ def _dstar_checks(
         plans=RANDOM_PLANS,
         det_max=det_random,
     )
-    return [normalization, determinant, optimality, derivatives, stationarity]
+
+
+def _dstar_checks(
+    s: _Setting, plans: dict[tuple[int, int], np.ndarray], rng: np.random.Generator
+) -> list[EquationCheck]:
+    """Eq. (20)-(23): the D* normalization and determinant, D-optimality, derivatives."""
+    m = PAPER_FIGURE1_POSES
+    optimal = orthogonal_plan(s.arm, m)
+    normalization = _dstar_normalization(s, optimal)
+    determinant = _dstar_determinant(m, rng)  # draws from rng before the 4-link plans
+    random4 = random_plan(s.arm, RANDOM_PLANS * m, rng=rng).reshape(RANDOM_PLANS, m, s.n)
+    return [
+        normalization,
+        determinant,
+        _d_optimality(s, plans, random4),
+        _sum_derivatives(s),
+        _stationarity(s, optimal, random4),
+    ]
 
 
 def _optimal_accuracy_checks(s: _Setting) -> list[EquationCheck]:

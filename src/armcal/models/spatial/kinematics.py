@@ -292,6 +292,127 @@ class ChainKinematics:
     joint_velocities: np.ndarray | None = None
 
 
+@dataclass(frozen=True, eq=False)
+class _Screws:
+    """Every parameter and joint value as a screw at the tip: axis ``w`` and moment
+    ``v - w x c`` (a translation's axis 0), shapes ``(..., m, p, 3)`` and ``(..., m, n, 3)``."""
+
+    axis: np.ndarray
+    moment: np.ndarray
+    joint_axis: np.ndarray
+    joint_moment: np.ndarray
+
+
+def _base_screws(
+    base: np.ndarray, rot: np.ndarray, pos: np.ndarray, lead: tuple[int, ...], n: int, p: int
+) -> _Screws:
+    """The screws of the base pose's six parameters; every other one 0 until the chain
+    walk reaches it."""
+    axis = np.zeros((*lead, p, 3))
+    moment = np.zeros((*lead, p, 3))
+    joint_axis = np.zeros((*lead, n, 3))
+    joint_moment = np.zeros((*lead, n, 3))
+    moment[..., 0:3, :] = np.eye(3)
+    yaw = elementary(2, base[..., 5])
+    axis[..., 3, :] = rot[..., :, 0]
+    axis[..., 4, :] = np.broadcast_to(yaw[..., :, 1], (*lead, 3))
+    axis[..., 5, :] = [0.0, 0.0, 1.0]
+    moment[..., 3:6, :] = -cross(axis[..., 3:6, :], pos[..., None, :])
+    return _Screws(axis, moment, joint_axis, joint_moment)
+
+
+def _walk_chain(
+    chain: SerialChain,
+    errors: np.ndarray,
+    u: np.ndarray,
+    pos: np.ndarray,
+    rot: np.ndarray,
+    screws: _Screws | None,
+) -> tuple[np.ndarray, np.ndarray]:
+    """The tip frame's position and rotation from the base's, joint by joint: nominal
+    origin, placement error, joint value; with ``screws``, every placement parameter's
+    and joint's screw is filled in on the way."""
+    for k, kind in enumerate(chain.kinds):
+        pos = pos + rot @ chain.origins[k, :3, 3]
+        rot = rot @ chain.origins[k, :3, :3]
+        err = errors[..., k, :]
+        start = 6 + 5 * k
+        slots = {c: start + slot for slot, c in enumerate(_PLACEMENT[kind])}
+        if screws is not None:
+            for c in (0, 1, 2):
+                if c in slots:
+                    screws.moment[..., slots[c], :] = rot[..., :, c]
+        pos = pos + np.einsum("...ij,...j->...i", rot, err[..., :3])
+        for c in (3, 4, 5):
+            if screws is not None and c in slots:
+                w = rot[..., :, c - 3]
+                screws.axis[..., slots[c], :] = w
+                screws.moment[..., slots[c], :] = -cross(w, pos)
+            if c in slots:
+                rot = rot @ elementary(c - 3, err[..., c])
+        w = rot[..., :, 2]
+        if kind == "R":
+            if screws is not None:
+                screws.joint_axis[..., k, :] = w
+                screws.joint_moment[..., k, :] = -cross(w, pos)
+            rot = rot @ elementary(2, u[..., k])
+        else:
+            if screws is not None:
+                screws.joint_moment[..., k, :] = w
+            pos = pos + w * u[..., k, None]
+    pos = pos + rot @ chain.tip[:3, 3]
+    rot = rot @ chain.tip[:3, :3]
+    return pos, rot
+
+
+def _with_jacobians(
+    joint_map: np.ndarray,
+    layout: SpatialLayout,
+    screws: _Screws,
+    points: np.ndarray,
+    rot: np.ndarray,
+    index: np.ndarray,
+    turn: np.ndarray | None,
+    target_rotation: np.ndarray | None,
+) -> ChainKinematics:
+    """The kinematics with its Jacobians, from the screws at the points: a screw moves a
+    point ``x`` at ``w x x + moment``; a target's own columns are the tip's rotation."""
+    axis, moment = screws.axis, screws.moment
+    joint_axis, joint_moment = screws.joint_axis, screws.joint_moment
+    # Zero errors: d/dq_i = sum_j M_ji d/du_j.
+    zero_axis = np.einsum("ji,...jc->...ic", joint_map, joint_axis)
+    zero_moment = np.einsum("ji,...jc->...ic", joint_map, joint_moment)
+    axis[..., layout.zero_start : layout.target_start, :] = zero_axis
+    moment[..., layout.zero_start : layout.target_start, :] = zero_moment
+    jac = cross(axis, points[..., None, :]) + moment  # (..., m, p, 3)
+    jac = np.swapaxes(jac, -1, -2).copy()  # (..., m, 3, p)
+    target_angular = None
+    angular = np.swapaxes(axis, -1, -2)
+    if turn is not None:  # a target's turn exp(v) moves at rot J_l(v) dv (chain.py)
+        target_angular = angular.copy()
+        turning = rot @ left_jacobian(turn)
+    for t in range(len(layout.targets)):
+        cols, turn_cols = layout.target_columns(t)
+        mine = (index == t)[:, None, None]
+        jac[..., cols] = np.where(mine, rot, 0.0)
+        if target_angular is not None and turn_cols is not None:
+            jac[..., turn_cols] = 0.0
+            target_angular[..., turn_cols] = np.where(mine, turning, 0.0)
+    joint_jac = np.swapaxes(cross(zero_axis, points[..., None, :]) + zero_moment, -1, -2)
+    return ChainKinematics(
+        points,
+        rot,
+        jac,
+        joint_jac,
+        np.swapaxes(zero_axis, -1, -2),
+        angular,
+        target_rotation,
+        target_angular,
+        joint_axis,
+        cross(joint_axis, points[..., None, :]) + joint_moment,
+    )
+
+
 def kinematics(
     chain: SerialChain,
     joint_map: np.ndarray,
@@ -329,48 +450,9 @@ def kinematics(
     base = params[..., :6]
     rot = np.broadcast_to(rpy_matrix(base[..., 3:6]), (*lead, 3, 3)).copy()
     pos = np.broadcast_to(base[..., :3], (*lead, 3)).copy()
-    if derivatives:
-        # Every parameter (and joint value) as a screw: axis w, moment v - w x c.
-        axis = np.zeros((*lead, p, 3))
-        moment = np.zeros((*lead, p, 3))
-        joint_axis = np.zeros((*lead, n, 3))
-        joint_moment = np.zeros((*lead, n, 3))
-        moment[..., 0:3, :] = np.eye(3)
-        yaw = elementary(2, base[..., 5])
-        axis[..., 3, :] = rot[..., :, 0]
-        axis[..., 4, :] = np.broadcast_to(yaw[..., :, 1], (*lead, 3))
-        axis[..., 5, :] = [0.0, 0.0, 1.0]
-        moment[..., 3:6, :] = -cross(axis[..., 3:6, :], pos[..., None, :])
-    for k, kind in enumerate(chain.kinds):
-        pos = pos + rot @ chain.origins[k, :3, 3]
-        rot = rot @ chain.origins[k, :3, :3]
-        err = errors[..., k, :]
-        start = 6 + 5 * k
-        slots = {c: start + slot for slot, c in enumerate(_PLACEMENT[kind])}
-        if derivatives:
-            for c in (0, 1, 2):
-                if c in slots:
-                    moment[..., slots[c], :] = rot[..., :, c]
-        pos = pos + np.einsum("...ij,...j->...i", rot, err[..., :3])
-        for c in (3, 4, 5):
-            if derivatives and c in slots:
-                w = rot[..., :, c - 3]
-                axis[..., slots[c], :] = w
-                moment[..., slots[c], :] = -cross(w, pos)
-            if c in slots:
-                rot = rot @ elementary(c - 3, err[..., c])
-        w = rot[..., :, 2]
-        if kind == "R":
-            if derivatives:
-                joint_axis[..., k, :] = w
-                joint_moment[..., k, :] = -cross(w, pos)
-            rot = rot @ elementary(2, u[..., k])
-        else:
-            if derivatives:
-                joint_moment[..., k, :] = w
-            pos = pos + w * u[..., k, None]
-    pos = pos + rot @ chain.tip[:3, 3]
-    rot = rot @ chain.tip[:3, :3]
+    # Every parameter (and joint value) as a screw: axis w, moment v - w x c.
+    screws = _base_screws(base, rot, pos, lead, n, p) if derivatives else None
+    pos, rot = _walk_chain(chain, errors, u, pos, rot, screws)
     points_tip = layout.target_points(params[..., 0, :])  # (..., k, 3)
     index = np.zeros(lead[-1], dtype=int) if target is None else np.asarray(target)
     local = np.take(points_tip, index, axis=-2)  # (..., m, 3)
@@ -381,35 +463,5 @@ def kinematics(
         target_rotation = rot @ vector_rotation(turn)
     if not derivatives:
         return ChainKinematics(points, rot, target_rotation=target_rotation)
-    # Zero errors: d/dq_i = sum_j M_ji d/du_j.
-    zero_axis = np.einsum("ji,...jc->...ic", joint_map, joint_axis)
-    zero_moment = np.einsum("ji,...jc->...ic", joint_map, joint_moment)
-    axis[..., layout.zero_start : layout.target_start, :] = zero_axis
-    moment[..., layout.zero_start : layout.target_start, :] = zero_moment
-    jac = cross(axis, points[..., None, :]) + moment  # (..., m, p, 3)
-    jac = np.swapaxes(jac, -1, -2).copy()  # (..., m, 3, p)
-    target_angular = None
-    angular = np.swapaxes(axis, -1, -2)
-    if turn is not None:  # a target's turn exp(v) moves at rot J_l(v) dv (chain.py)
-        target_angular = angular.copy()
-        turning = rot @ left_jacobian(turn)
-    for t in range(len(layout.targets)):
-        cols, turn_cols = layout.target_columns(t)
-        mine = (index == t)[:, None, None]
-        jac[..., cols] = np.where(mine, rot, 0.0)
-        if target_angular is not None and turn_cols is not None:
-            jac[..., turn_cols] = 0.0
-            target_angular[..., turn_cols] = np.where(mine, turning, 0.0)
-    joint_jac = np.swapaxes(cross(zero_axis, points[..., None, :]) + zero_moment, -1, -2)
-    return ChainKinematics(
-        points,
-        rot,
-        jac,
-        joint_jac,
-        np.swapaxes(zero_axis, -1, -2),
-        angular,
-        target_rotation,
-        target_angular,
-        joint_axis,
-        cross(joint_axis, points[..., None, :]) + joint_moment,
-    )
+    assert screws is not None
+    return _with_jacobians(joint_map, layout, screws, points, rot, index, turn, target_rotation)
