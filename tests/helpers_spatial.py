@@ -10,7 +10,7 @@ from __future__ import annotations
 import numpy as np
 
 from armcal.doe import random_plan
-from armcal.files import load_serial_robot
+from armcal.files import load_spatial_robot
 from armcal.models import SerialChain, SpatialArm
 
 DEG = np.pi / 180
@@ -92,7 +92,7 @@ def random_poses(arm: SpatialArm, m: int, rng: np.random.Generator) -> np.ndarra
 
 def plan_file(tmp_path, robot, m=30, seed=1, name="plan.csv"):
     """A random plan of ``m`` poses within the robot's limits, written to ``name``."""
-    arm = load_serial_robot(robot).arm
+    arm = load_spatial_robot(robot).arm
     q = random_plan(arm, m, rng=seed)
     head = ",".join(f"q{k + 1}_deg" for k in range(arm.n_joints))
     rows = [",".join(repr(float(v)) for v in np.degrees(row)) for row in q]

@@ -207,28 +207,14 @@ def test_the_line_counter_counts_code_only(tmp_path):
 #: (the test below fails while a listed function is no longer over the cap), and never add
 #: one: a new long function is split, or states at its top why it is long.
 PENDING_SPLIT = {
-    "compensation.compensate",
     "demo.run_demo",
     "demo_spatial.run_spatial_demo",
-    "doe.certificate.certify",
     "doe.designer.design",
-    "doe.loads.design_with_loads",
-    "doe.order._local_search",
-    "doe.sizing.poses_needed",
     "files.calibration.calibration_document",
     "files.calibration.read_calibration",
     "files.robots.load_planar_robot",
     "files.spatial._chain",
-    "files.tables._read_csv",
-    "files.urdf.read_urdf",
     "identification.calibrate.identify",
-    "identification.diagnosis.swapped_targets",
-    "models.spatial.kinematics.kinematics",
-    "report.calibration.format_calibration",
-    "report.reproduction.format_reproduction",
-    "reproduction.compute._table3_disagreements",
-    "reproduction.equations._dstar_checks",
-    "simulate.monte_carlo",
 }
 
 
