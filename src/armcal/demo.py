@@ -11,6 +11,7 @@ from __future__ import annotations
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -18,6 +19,7 @@ from .compensation import compensate
 from .doe import design, random_plan
 from .errors import ACTIONS, ArmcalWarning
 from .export import robot_toml, urdf
+from .families import RobotSpec
 from .files import (
     calibration_document,
     format_measurements_csv,
@@ -309,3 +311,26 @@ def _report(arm: PlanarArm, text: str, before: np.ndarray, after: np.ndarray) ->
             "",
         ]
     )
+
+
+#: What the planar demo writes, for the line that says so.
+DEMO_KINDS = "report.md, figures, plan, measurements, calibration, program, robot file, URDF"
+
+
+def planar_demo(
+    robot: RobotSpec[PlanarArm],
+    truth_of: Callable[[Any], np.ndarray],
+    *,
+    poses: int | None = None,
+    sigma: float | None = None,
+    seed: int = 0,
+    words: Mapping[str, str] = ACTIONS,
+) -> tuple[Any, str]:
+    """The planar story (:func:`armcal.demo.run_demo`) and what it writes."""
+    from .workflow.setup import design_sigma  # the sigma every command designs with
+
+    truth_ = truth_of(robot.arm)
+    sigma = design_sigma(robot.arm) if sigma is None else sigma
+    poses = PLANAR_DEMO_POSES if poses is None else poses
+    result = run_demo(robot.arm, truth_, poses=poses, sigma=sigma, seed=seed, words=words)
+    return result, DEMO_KINDS

@@ -14,6 +14,7 @@ from __future__ import annotations
 
 from collections.abc import Callable, Mapping
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -22,6 +23,7 @@ from .demo import Demo, figure_writer, report_head
 from .doe import random_plan
 from .errors import ACTIONS
 from .export_spatial import joint_offsets_csv, spatial_robot_toml, spatial_urdf
+from .families import RobotSpec
 from .files import (
     calibration_document,
     format_measurements_csv,
@@ -221,3 +223,29 @@ def run_spatial_demo(
     )
     files["report.md"] = report
     return Demo(text, report, files, document, cal.warnings)
+
+
+#: What the six-axis demo writes, for the line that says so.
+DEMO_KINDS = "report.md, residuals, measurements, calibration, program, URDF, DH table, offsets"
+
+
+def spatial_demo(
+    robot: RobotSpec[SpatialArm],
+    truth_of: Callable[[Any], np.ndarray],
+    *,
+    poses: int | None = None,
+    sigma: float | None = None,
+    seed: int = 0,
+    words: Mapping[str, str] = ACTIONS,
+) -> tuple[Any, str]:
+    """The six-axis story (:func:`armcal.demo_spatial.run_spatial_demo`): a tracker and
+    three reflectors; and what it writes."""
+    result = run_spatial_demo(
+        robot.arm,
+        truth_of,
+        poses=SPATIAL_DEMO_POSES if poses is None else poses,
+        sigma=sigma,
+        seed=seed,
+        words=words,
+    )
+    return result, DEMO_KINDS

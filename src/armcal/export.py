@@ -52,6 +52,7 @@ from __future__ import annotations
 import json
 import math
 import textwrap
+from collections.abc import Callable
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -533,3 +534,14 @@ def urdf(cal: CalibratedArm) -> str:
         ]
     lines.append("</robot>")
     return "\n".join(lines) + "\n"
+
+
+def planar_coupled_urdf(arm: PlanarArm) -> str | None:
+    """What a URDF's joint values are when they are not the controller's readings."""
+    return None if urdf_joints_are_readings(arm) else "the relative link angles D M q"
+
+
+def planar_exports() -> dict[str, Callable[[CalibratedArm], str]]:
+    """The planar arm's files (:mod:`armcal.families`, role ``exports``): a robot TOML and
+    a URDF."""
+    return {"robot": robot_toml, "urdf": urdf}

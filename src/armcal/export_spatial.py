@@ -40,6 +40,8 @@ still has the nominal link geometry; the URDF or robot TOML carry the rest.
 
 from __future__ import annotations
 
+from collections.abc import Callable
+
 import numpy as np
 
 from ._version import __version__
@@ -300,3 +302,14 @@ def joint_offsets_csv(cal: CalibratedArm) -> str:
             f"{num(std[i] * scale[i])},{int(names[i] not in model.fixed)}"
         )
     return "\n".join(lines) + "\n"
+
+
+def spatial_coupled_urdf(arm: SpatialArm) -> str | None:
+    """What a URDF's joint values are when they are not the controller's readings."""
+    return None if np.array_equal(arm.joint_map, np.eye(arm.n_joints)) else "M q"
+
+
+def spatial_exports() -> dict[str, Callable[[CalibratedArm], str]]:
+    """The spatial arm's files (:mod:`armcal.families`, role ``exports``): a robot TOML and
+    a URDF (a UR controller's are role ``controller_files``)."""
+    return {"robot": spatial_robot_toml, "urdf": spatial_urdf}

@@ -738,3 +738,11 @@ def save_figure(fig: Figure, path: str | os.PathLike) -> None:
     FigureCanvasAgg(fig)  # attach the Agg canvas: no GUI backend is ever involved
     kind = FIGURE_FORMATS.get(os.path.splitext(os.fspath(path))[1].lower(), "png")
     atomic_write(path, lambda handle: fig.savefig(handle, format=kind, dpi=120))
+
+
+def planar_plan_figure(robot: Any, run: Any, *, seed: int = 0) -> Figure:
+    """A designed plan (a :class:`~armcal.workflow.DesignRun`) of a planar robot (a
+    :class:`~armcal.families.RobotSpec`) in the workspace and in joint space, with its
+    payloads and gravity (:mod:`armcal.families`, role ``plan_figure``)."""
+    gravity = None if robot.elastic is None else robot.elastic.gravity
+    return plot_plan(robot.arm, run.q, payload_kg=run.payload_kg, gravity=gravity)

@@ -7,6 +7,8 @@ Imported only when a picture is asked for (matplotlib is slow to import), like
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 from matplotlib.figure import Figure
 from matplotlib.layout_engine import ConstrainedLayoutEngine
@@ -124,3 +126,15 @@ def plot_spatial_plan(
         _variance(fig, grid[1, 1], model, certificate, poses)
     fig.suptitle(f"plan of {arm.name}")
     return fig
+
+
+def spatial_plan_figure(robot: Any, run: Any, *, seed: int = 0) -> Figure:
+    """A designed plan (a :class:`~armcal.workflow.DesignRun`) in four panels
+    (:func:`plot_spatial_plan`; :mod:`armcal.families`, role ``plan_figure``)."""
+    return plot_spatial_plan(
+        run.design.model,
+        run.q,
+        sigma=run.quality.sigma_mm,
+        certificate=run.design.certificate,
+        rng=seed,
+    )

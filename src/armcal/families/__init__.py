@@ -3,8 +3,9 @@ pictures, the report's words and the demo find each family's own pieces.
 
 :mod:`~armcal.families.registry` holds the :class:`Family` records and the
 lookups; this module registers the built-in families, planar and spatial, whose
-roles live in :mod:`~armcal.families.planar` and :mod:`~armcal.families.spatial`
-and in the modules they name.  A new family registers a :class:`Family` of its
+roles live in the modules they name, beside the work each role does: the
+family's robot and truth files in :mod:`armcal.files`, its calibration-file
+sections, its exports, its pictures and its demo.  A new family registers a :class:`Family` of its
 own (``armcal.families.register``); the middle of armcal needs nothing but its
 fit model.
 """
@@ -32,17 +33,17 @@ PLANAR = register(
         refs={
             "builtins": "armcal.paper:BUILTIN_ROBOTS",
             "load_robot": "armcal.files.robots:load_planar_robot",
-            "truth": "armcal.families.planar:truth",
-            "encode": "armcal.families.planar:encode",
-            "decode": "armcal.families.planar:decode",
-            "encode_effect": "armcal.families.planar:encode_effect",
-            "decode_effect": "armcal.families.planar:decode_effect",
+            "truth": "armcal.files.robots:planar_truth",
+            "encode": "armcal.files.calibration_planar:encode",
+            "decode": "armcal.files.calibration_planar:decode",
+            "encode_effect": "armcal.files.calibration_planar:encode_effect",
+            "decode_effect": "armcal.files.calibration_planar:decode_effect",
             "calibrate": "armcal.workflow.measured:fit_planar",
-            "exports": "armcal.families.planar:exports",
-            "coupled_urdf": "armcal.families.planar:coupled_urdf",
+            "exports": "armcal.export:planar_exports",
+            "coupled_urdf": "armcal.export:planar_coupled_urdf",
             "describe": "armcal.report.common:planar_model_lines",
-            "plan_figure": "armcal.families.planar:plan_figure",
-            "demo": "armcal.families.planar:demo",
+            "plan_figure": "armcal.plotting:planar_plan_figure",
+            "demo": "armcal.demo:planar_demo",
         },
     )
 )
@@ -58,17 +59,18 @@ SPATIAL = register(
             "builtins": "armcal.files.spatial:BUILTIN_SPATIAL_ROBOTS",
             "claims": "armcal.files.spatial:is_spatial_robot",
             "load_robot": "armcal.files.spatial:load_spatial_robot",
-            "truth": "armcal.families.spatial:truth",
-            "encode": "armcal.families.spatial:encode",
-            "decode": "armcal.families.spatial:decode",
-            "encode_effect": "armcal.families.spatial:encode_effect",
-            "decode_effect": "armcal.families.spatial:decode_effect",
+            "truth": "armcal.files.spatial:spatial_truth",
+            "encode": "armcal.files.calibration_spatial:encode",
+            "decode": "armcal.files.calibration_spatial:decode",
+            "encode_effect": "armcal.files.calibration_spatial:encode_effect",
+            "decode_effect": "armcal.files.calibration_spatial:decode_effect",
             "calibrate": "armcal.workflow.measured:fit_spatial",
-            "exports": "armcal.families.spatial:exports",
-            "coupled_urdf": "armcal.families.spatial:coupled_urdf",
+            "exports": "armcal.export_spatial:spatial_exports",
+            "controller_files": "armcal.files.ur:ur_texts",
+            "coupled_urdf": "armcal.export_spatial:spatial_coupled_urdf",
             "describe": "armcal.report.common:spatial_model_lines",
-            "plan_figure": "armcal.families.spatial:plan_figure",
-            "demo": "armcal.families.spatial:demo",
+            "plan_figure": "armcal.plotting_spatial:spatial_plan_figure",
+            "demo": "armcal.demo_spatial:spatial_demo",
         },
     )
 )

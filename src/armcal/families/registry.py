@@ -46,6 +46,7 @@ ROLES = (
     "decode_effect",
     "calibrate",
     "exports",
+    "controller_files",
     "coupled_urdf",
     "describe",
     "plan_figure",
@@ -94,6 +95,9 @@ class Family:
     exports
         ``() -> Mapping[str, callable]``: the calibrated arm's files by kind
         (``"robot"``, ``"urdf"``, ``"dh"``, ``"offsets"``), each ``(cal) -> str``.
+    controller_files
+        ``(cal, ur_path, ros_path) -> dict[str, str]``: a controller's own calibration
+        files by path (Universal Robots' calibration.conf and the ROS driver's YAML).
     coupled_urdf
         ``(arm) -> str | None``: what a URDF's joint values are where they are not
         the controller's readings (coupled axes), None where they are.
@@ -152,6 +156,7 @@ _ROLE_WORDS = {
     "decode_effect": "calibration file for its effect",
     "calibrate": "measurement files",
     "exports": "exports",
+    "controller_files": "controller files",
     "coupled_urdf": "URDF",
     "describe": "report lines",
     "plan_figure": "plan figure",

@@ -25,6 +25,7 @@ from ..models import (
     Box,
     CompliantArm,
     Elastostatic,
+    FitModel,
     PlanarArm,
     Region,
     Target,
@@ -61,6 +62,7 @@ __all__ = [
     "load_planar_robot",
     "load_truth",
     "parse_region",
+    "planar_truth",
     "refuse_unknown_robot",
     "rigid_truth_message",
     "unknown_parameter",
@@ -659,3 +661,32 @@ def load_compliance_truth(path: str | os.PathLike, model: CompliantArm) -> np.nd
             )
         values += numbers(path, data[key], key, n)
     return np.array(values) / model.compliance_scale
+
+
+def planar_truth(
+    robot: RobotSpec[PlanarArm],
+    model: FitModel,
+    path: str | os.PathLike | None,
+    *,
+    links: tuple[str | None, str | None] = (None, None),
+    geometry_only: bool = False,
+) -> np.ndarray:
+    """The virtual robot's parameters of ``model``: a truth file's (``path``), with its
+    compliance for a model of joint compliance, else the built-in robot's deviations.
+
+    ``geometry_only`` (the demo's rigid arm) leaves a truth's compliance out.
+    """
+    if model.effect is not None:  # joint compliance: its terms follow the geometry's
+        compliant: CompliantArm = model  # type: ignore[assignment]
+        if path is None:
+            keys = ", ".join(COMPLIANCE_TRUTH_KEYS[k] for k in dict.fromkeys(compliant.kinds))
+            raise ArmcalError(
+                f"{robot.source}: a robot with [elastostatic] needs a truth file with the "
+                f"deviations and {keys}"
+            )
+        geometry = load_truth(path, compliant.arm)
+        return np.concatenate([geometry, load_compliance_truth(path, compliant)])
+    if path is not None:
+        return load_truth(path, robot.arm, rigid=not geometry_only)
+    assert isinstance(robot.default_truth, np.ndarray)
+    return robot.default_truth

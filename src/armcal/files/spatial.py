@@ -76,6 +76,7 @@ __all__ = [
     "is_spatial_robot",
     "load_spatial_robot",
     "load_spatial_truth",
+    "spatial_truth",
 ]
 
 #: The folder of the built-in spatial robots' files.
@@ -652,3 +653,18 @@ def _named(
         i = list(order).index(name)
         out[i] = number(path, value, f"{key}.{name}") / scale[i]
     return out
+
+
+def spatial_truth(
+    robot: RobotSpec[SpatialArm],
+    model: FitModel,
+    path: str | os.PathLike | None,
+    *,
+    links: tuple[str | None, str | None] = (None, None),
+    geometry_only: bool = False,
+) -> np.ndarray:
+    """The virtual robot's parameters of ``model`` from a truth file (``path``, else the
+    built-in robot's own): :func:`armcal.files.spatial.load_spatial_truth`."""
+    found = path if path is not None else robot.default_truth
+    assert found is not None
+    return load_spatial_truth(found, model, links=links, geometry_only=geometry_only)

@@ -36,7 +36,8 @@ from pathlib import Path
 
 import numpy as np
 
-from ..errors import ArmcalWarning
+from ..errors import ArmcalError, ArmcalWarning, unrendered
+from ..models import CalibratedArm, SpatialArm
 from ..models.spatial.chain import SerialChain, elementary, transform
 from ..models.spatial.dh import PARALLEL_COS, DhTable, dh_table
 from ..numerics import wrap_angle
@@ -484,3 +485,56 @@ def read_ur_kinematics(path: str | os.PathLike) -> SerialChain:
         origins.append(transform(rotation, 1000.0 * np.array([entry[k] for k in "xyz"])))
     limits = np.tile([-np.inf, np.inf], (6, 1))
     return SerialChain(np.array(origins), ("R",) * 6, np.eye(4), UR_JOINTS, limits)
+
+
+def _ur_arm(cal: CalibratedArm, path: str) -> tuple[SerialChain, str, UrDh]:
+    """The calibrated chain of a UR arm (DH base frame to flange, whatever frames its
+    description used: :func:`armcal.files.ur.ur_frames`), its model
+    (:func:`armcal.files.ur.ur_model_of`) and its deltas from that model's table, for a
+    controller's file at ``path``."""
+    arm: SpatialArm = cal.arm
+    if arm.n_joints != 6 or set(arm.chain.kinds) != {"R"}:
+        raise ArmcalError(f"{path}: a UR file needs a six-axis revolute arm; {arm.name} is not")
+    frames = ur_frames(arm.chain)  # of the nominal: they hold for its calibration
+    if frames.distance_mm > FAR_FROM_NOMINAL_MM:
+        raise ArmcalError(
+            f"{path}: {arm.name} is no UR model in any base and tip frames (nearest "
+            f"{frames.model}, {frames.distance_mm:.4g} mm away); describe the arm with a robot "
+            "file's [ur] table or Universal Robots' own URDF"
+        )
+    chain = frames.apply(arm.calibrated_chain(cal.arm_params))
+    model, distance = ur_model_of(chain)
+    if distance > FAR_FROM_NOMINAL_MM:
+        raise ArmcalError(
+            f"{path}: the calibrated {arm.name} moves the flange {distance:.4g} mm from the "
+            f"nominal {model}'s (a calibration moves it a few mm); check the calibration"
+        )
+    try:
+        deltas = ur_deltas(chain, model)
+    except ValueError as exc:  # what a UR's DH table cannot hold, e.g. a tilted joint 1
+        raise ArmcalError(
+            f"{path}: the calibrated {arm.name} has no UR DH table: {unrendered(exc)}; a UR's "
+            "table starts "
+            "at joint 1's axis, so leave the base pose free (the joint's placement merges "
+            "into it) rather than fixing base.* and identifying j1.*"
+        ) from None
+    return chain, model, deltas
+
+
+def ur_texts(cal: CalibratedArm, ur_path: str | None, ros_path: str | None) -> dict[str, str]:
+    """A UR controller's calibration.conf deltas and the ROS driver's calibration YAML."""
+    texts: dict[str, str] = {}
+    first = ur_path if ur_path is not None else ros_path
+    if first is None:
+        return texts
+    chain, model, deltas = _ur_arm(cal, first)
+    if ur_path is not None:
+        texts[ur_path] = format_ur_calibration(deltas)
+    if ros_path is not None:
+        try:
+            texts[ros_path] = format_ur_kinematics(chain, model, f"armcal_{cal.arm.name}_{model}")
+        except ValueError as exc:
+            raise ArmcalError(
+                f"{ros_path}: the calibrated {cal.arm.name}: {unrendered(exc)}"
+            ) from None
+    return texts

@@ -477,12 +477,12 @@ def export_files(
     writers = family.role("exports")()
     texts: dict[str, str] = {}
     if ur_path is not None or ros_path is not None:
-        if "ur" not in writers:
+        if not family.has("controller_files"):
             first = ur_path if ur_path is not None else ros_path
             raise ArmcalError(
                 f"{first}: a UR file needs a six-axis revolute arm; {cal.arm.name} is not"
             )
-        texts.update(writers["ur"](cal, ur_path, ros_path))
+        texts.update(family.role("controller_files")(cal, ur_path, ros_path))
     if robot_toml_path is not None:
         texts[robot_toml_path] = writers["robot"](cal)
     warnings = []

@@ -1,85 +1,33 @@
-"""The planar family's own pieces at the edge: its truth files, its calibration-file
-section, its exports, its plan picture and its demo, each behind a role of
-:class:`~armcal.families.registry.Family` (:mod:`armcal.families` registers them).
+"""A planar arm's sections of the calibration file: ``robot`` and ``elastostatic``.
 
-The robot loader is :func:`armcal.files.robots.load_planar_robot`, the report's
-lines :func:`armcal.report.common.planar_model_lines`; the rest is here, as thin
-adapters onto the modules that do the work.
+The planar family's codec (:mod:`armcal.families`, roles ``encode``, ``decode``,
+``encode_effect`` and ``decode_effect``); :mod:`armcal.files.calibration` writes and
+reads the rest of the document, the same for every family.
 """
 
 from __future__ import annotations
 
 import math
-import os
-from collections.abc import Callable, Mapping
 from typing import Any
 
 import numpy as np
 
-from ..errors import ACTIONS, ArmcalError
-from ..export import robot_toml, urdf, urdf_joints_are_readings
-from ..files.checked import BadKey, array_of
-from ..files.robots import (
-    COMPLIANCE_TRUTH_KEYS,
-    load_compliance_truth,
-    load_truth,
-    parse_region,
-)
 from ..models import (
     Annulus,
     Box,
     CompliantArm,
     Elastostatic,
+    FitModel,
     PlanarArm,
     Region,
     Target,
     TermChoice,
 )
 from ..noise import NoiseModel
-from .registry import RobotSpec
+from .checked import BadKey, array_of
+from .robots import parse_region
 
-__all__ = [
-    "coupled_urdf",
-    "decode",
-    "decode_effect",
-    "demo",
-    "encode",
-    "encode_effect",
-    "exports",
-    "plan_figure",
-    "truth",
-]
-
-
-def truth(
-    robot: RobotSpec[PlanarArm],
-    model: PlanarArm | CompliantArm,
-    path: str | os.PathLike | None,
-    *,
-    links: tuple[str | None, str | None] = (None, None),
-    geometry_only: bool = False,
-) -> np.ndarray:
-    """The virtual robot's parameters of ``model``: a truth file's (``path``), with its
-    compliance for a model of joint compliance, else the built-in robot's deviations.
-
-    ``geometry_only`` (the demo's rigid arm) leaves a truth's compliance out.
-    """
-    if isinstance(model, CompliantArm):
-        if path is None:
-            keys = ", ".join(COMPLIANCE_TRUTH_KEYS[k] for k in dict.fromkeys(model.kinds))
-            raise ArmcalError(
-                f"{robot.source}: a robot with [elastostatic] needs a truth file with the "
-                f"deviations and {keys}"
-            )
-        geometry = load_truth(path, model.arm)
-        return np.concatenate([geometry, load_compliance_truth(path, model)])
-    if path is not None:
-        return load_truth(path, robot.arm, rigid=not geometry_only)
-    assert isinstance(robot.default_truth, np.ndarray)
-    return robot.default_truth
-
-
-# --------------------------------------------------------------------------- calibration file
+__all__ = ["decode", "decode_effect", "encode", "encode_effect"]
 
 
 def _region_to_dict(region: Region | None) -> dict[str, Any] | None:
@@ -166,12 +114,13 @@ def decode(
     return arm
 
 
-def encode_effect(model: PlanarArm | CompliantArm) -> dict[str, Any] | None:
+def encode_effect(model: FitModel) -> dict[str, Any] | None:
     """The ``elastostatic`` section of a planar model of joint compliance (gravity in
     m/s^2), None for a rigid arm."""
-    if not isinstance(model, CompliantArm):
+    if model.effect is None:
         return None
-    elastic = model.elastic
+    compliant: CompliantArm = model  # type: ignore[assignment]  # the planar effect
+    elastic = compliant.elastic
     return {
         "gravity_mps2": None if elastic.gravity is None else elastic.gravity.tolist(),
         "link_masses_kg": None
@@ -179,8 +128,8 @@ def encode_effect(model: PlanarArm | CompliantArm) -> dict[str, Any] | None:
         else elastic.link_masses_kg.tolist(),
         "com_fraction": elastic.com_fraction.tolist(),
         "payload_kg": elastic.payload_kg,
-        "known_loads": model.known_loads,
-        "parameters": list(model.compliance_names),
+        "known_loads": compliant.known_loads,
+        "parameters": list(compliant.compliance_names),
     }
 
 
@@ -200,52 +149,3 @@ def decode_effect(arm: PlanarArm, data: dict[str, Any], user: TermChoice) -> Com
     if list(data.get("parameters", model.compliance_names)) != list(model.compliance_names):
         raise ValueError(f"compliance parameters do not match {', '.join(model.compliance_names)}")
     return model
-
-
-# --------------------------------------------------------------------------- exports
-
-
-def coupled_urdf(arm: PlanarArm) -> str | None:
-    """What a URDF's joint values are when they are not the controller's readings."""
-    return None if urdf_joints_are_readings(arm) else "the relative link angles D M q"
-
-
-def exports() -> Mapping[str, Callable[..., str]]:
-    """The planar arm's files: a robot TOML and a URDF."""
-    return {"robot": robot_toml, "urdf": urdf}
-
-
-# --------------------------------------------------------------------------- pictures, demo
-
-
-def plan_figure(robot: RobotSpec[PlanarArm], run: Any, *, seed: int = 0) -> Any:
-    """A designed plan (a :class:`~armcal.workflow.DesignRun`) in the workspace and in
-    joint space, with its payloads and gravity."""
-    from ..plotting import plot_plan  # matplotlib only when a plot is asked for
-
-    gravity = None if robot.elastic is None else robot.elastic.gravity
-    return plot_plan(robot.arm, run.q, payload_kg=run.payload_kg, gravity=gravity)
-
-
-#: What the planar demo writes, for the line that says so.
-DEMO_KINDS = "report.md, figures, plan, measurements, calibration, program, robot file, URDF"
-
-
-def demo(
-    robot: RobotSpec[PlanarArm],
-    truth_of: Callable[[Any], np.ndarray],
-    *,
-    poses: int | None = None,
-    sigma: float | None = None,
-    seed: int = 0,
-    words: Mapping[str, str] = ACTIONS,
-) -> tuple[Any, str]:
-    """The planar story (:func:`armcal.demo.run_demo`) and what it writes."""
-    from ..demo import PLANAR_DEMO_POSES, run_demo
-    from ..workflow.setup import design_sigma
-
-    truth_ = truth_of(robot.arm)
-    sigma = design_sigma(robot.arm) if sigma is None else sigma
-    poses = PLANAR_DEMO_POSES if poses is None else poses
-    result = run_demo(robot.arm, truth_, poses=poses, sigma=sigma, seed=seed, words=words)
-    return result, DEMO_KINDS
