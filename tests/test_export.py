@@ -12,7 +12,7 @@ from numpy.testing import assert_allclose
 from armcal import PlanarArm, forward_kinematics, identify, load_robot
 from armcal.cli import main
 from armcal.doe import random_plan
-from armcal.export import folded_arm, robot_toml, urdf, urdf_joint_values
+from armcal.export_planar import folded_arm, robot_toml, urdf, urdf_joint_values
 from armcal.files import calibration_document, read_calibration, to_json
 from armcal.models import Annulus, Box, CalibratedArm, Target, tool_angles
 from armcal.noise import NoiseModel

@@ -208,3 +208,32 @@ def test_the_registry_reads_calibration_files_of_both_words(tmp_path):
     doc = SPATIAL.role("encode")(arm)
     assert doc["kind"] == "spatial"
     assert family_named("serial").role("decode") is SPATIAL.role("decode")
+
+
+def test_one_export_entry_writes_either_family(tmp_path):
+    """``armcal.export`` writes a planar and a spatial calibration through its family's
+    exporters; each URDF reads back as a robot of the same family (an independent check of
+    the files is in tests/test_export.py and tests/test_spatial_export.py)."""
+    planar = load_robot("paper-2link").arm
+    q = armcal.random_plan(planar, 12, rng=1)
+    truth = np.array([0.5, -0.3, 0.01, -0.02])  # mm, mm, rad, rad: a calibration's size
+    cal = armcal.identify(
+        planar, q, armcal.synthesize_measurements(planar, q, truth, sigma=0.01, rng=2)
+    )
+    spatial = load_robot("industrial-6r").arm
+    qs = armcal.random_plan(spatial, 30, rng=3)
+    nominal = np.zeros(spatial.n_params)
+    points = armcal.synthesize_measurements(spatial, qs, nominal, sigma=0.0, rng=4)
+    cal6 = armcal.identify(spatial, qs, points)
+    for calibration, family in ((cal, "planar"), (cal6, "spatial")):
+        calibrated = calibration.calibrated()
+        text = armcal.export(calibrated, "urdf")
+        path = tmp_path / f"{family}.urdf"
+        path.write_text(text, encoding="utf-8")
+        assert "<robot" in text and load_robot(path).arm.family == "spatial"
+        robot = tmp_path / f"{family}.toml"
+        robot.write_text(armcal.export(calibrated, "robot"), encoding="utf-8")
+        assert load_robot(robot).arm.family == family
+        assert armcal.export(calibrated, "offsets").startswith("joint,")
+    with pytest.raises(ArmcalError, match="the kinds are robot, urdf, offsets"):
+        armcal.export(cal.calibrated(), "step")

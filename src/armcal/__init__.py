@@ -1,11 +1,20 @@
-"""armcal: design, run and evaluate geometric calibration experiments for planar arms.
+"""armcal: design, run and evaluate geometric calibration experiments for robot arms.
+
+Every family of arm -- a planar arm, a spatial serial arm (a six-axis arm from a
+URDF or a DH table), either with joint compliance -- goes through the same
+calls: :func:`load_robot` takes any robot description, and :func:`design`,
+:func:`evaluate_plan`, :func:`synthesize_measurements`, :func:`identify`,
+:func:`validate`, :func:`compensate` and :func:`monte_carlo` take its arm.
 
 The public API, by concern (each module's docstring says more):
 
 * :mod:`armcal.models` -- the fit-model interface every family of arm implements
   (:class:`FitModel`), the planar arm (:class:`PlanarArm`: forward kinematics,
-  Jacobians, regions), joint compliance (:class:`CompliantArm`), the calibrated
-  arm (:class:`CalibratedArm`);
+  Jacobians, regions), the spatial arm (:class:`SpatialArm`), joint compliance
+  (:class:`CompliantArm`, :class:`CompliantSpatialArm`), the calibrated arm
+  (:class:`CalibratedArm`);
+* :mod:`armcal.families` -- the family registry: each family's robot files,
+  calibration-file sections, exports, pictures and demo (:func:`load_robot`);
 * :mod:`armcal.criteria` -- design criteria (:data:`CRITERIA`), predicted accuracy,
   :func:`evaluate_plan`;
 * :mod:`armcal.doe` -- plans: :func:`design`, :func:`certify`, :func:`poses_needed`;
@@ -14,7 +23,8 @@ The public API, by concern (each module's docstring says more):
   :class:`Plane`;
 * :mod:`armcal.validation` -- :func:`validate` on held-out poses, :func:`cross_validate`;
 * :mod:`armcal.compensation` -- :func:`compensate` a program;
-* :mod:`armcal.export` -- :func:`robot_toml` and :func:`urdf` of a calibrated arm;
+* :mod:`armcal.export_planar`, :mod:`armcal.export_spatial` -- a calibrated arm's robot
+  TOML and URDF (:func:`export` writes either family's);
 * :mod:`armcal.synthesis` and :mod:`armcal.simulate` -- :func:`synthesize_measurements`,
   batched :func:`monte_carlo`;
 * :mod:`armcal.workflow` -- what each command does beyond its files, as library
@@ -48,7 +58,7 @@ from .doe import (
     random_plan,
 )
 from .errors import ArmcalError, ArmcalWarning, InputError, NotIdentifiableError
-from .export import robot_toml, urdf
+from .export_planar import robot_toml, urdf
 from .files import load_robot, load_truth, read_calibration, read_measurements, read_plan
 from .identification import Calibration, Estimate, GoodnessOfFit, Outlier, identify, solve
 from .instrument import identify_3d
@@ -83,6 +93,7 @@ from .reproduction.study import PlanStudy, random_plan_study
 from .simulate import MonteCarlo, monte_carlo
 from .synthesis import synthesize_measurements
 from .validation import CrossValidation, Validation, cross_validate, validate
+from .workflow import calibrate, export
 
 __all__ = [
     "CRITERIA",
@@ -117,6 +128,7 @@ __all__ = [
     "Target",
     "Validation",
     "__version__",
+    "calibrate",
     "certify",
     "check_identifiable",
     "compensate",
@@ -124,6 +136,7 @@ __all__ = [
     "d_efficiency",
     "design",
     "evaluate_plan",
+    "export",
     "fit_plane",
     "format_calibration",
     "forward_kinematics",

@@ -18,7 +18,7 @@ import numpy as np
 from .compensation import compensate
 from .doe import design, random_plan
 from .errors import ACTIONS, ArmcalWarning
-from .export import robot_toml, urdf
+from .export_planar import robot_toml, urdf
 from .families import RobotSpec
 from .files import (
     calibration_document,

@@ -1,6 +1,6 @@
 """Text that reads back exactly: numbers, TOML strings and keys, XML attributes and comments.
 
-The pieces every exported file (:mod:`armcal.export`, :mod:`armcal.export_spatial`)
+The pieces every exported file (:mod:`armcal.export_planar`, :mod:`armcal.export_spatial`)
 is written with: every number with full round-trip precision, every name escaped
 for where it goes.
 """

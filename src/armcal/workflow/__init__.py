@@ -16,6 +16,7 @@ from .calibration import (
     ValidationRun,
     calibrate,
     compensate_program,
+    export,
     export_files,
     validate_measurements,
 )
@@ -59,6 +60,7 @@ __all__ = [
     "design_plan",
     "design_sigma",
     "evaluate_file",
+    "export",
     "export_files",
     "fit_model",
     "measured_arm",

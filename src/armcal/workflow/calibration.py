@@ -58,6 +58,7 @@ __all__ = [
     "ValidationRun",
     "calibrate",
     "compensate_program",
+    "export",
     "export_files",
     "validate_measurements",
 ]
@@ -452,6 +453,47 @@ class ExportRun:
     texts: dict[str, str]
     warnings: tuple[ArmcalWarning, ...]
     rigid: RigidExport | None = None
+
+
+#: The files :func:`export` writes, by kind: what each holds.
+EXPORT_KINDS = {
+    "robot": "a robot TOML of the calibrated arm (armcal reads it as a robot file)",
+    "urdf": "a URDF of the calibrated arm",
+    "offsets": "a CSV of the joint zero offsets alone",
+}
+
+
+def export(cal: CalibratedArm, kind: str = "urdf") -> str:
+    """The text of a file of the calibrated arm ``cal``, of any family.
+
+    Parameters
+    ----------
+    cal : CalibratedArm
+        A calibration (:meth:`armcal.identification.Calibration.calibrated`, or
+        :func:`armcal.files.read_calibration`).
+    kind : str
+        One of :data:`EXPORT_KINDS`: ``"robot"``, ``"urdf"`` or ``"offsets"``.
+
+    Returns
+    -------
+    str
+        The file's text; :func:`export_files` gives the same texts with what
+        they leave out (a joint compliance, coupled axes) as warnings.
+
+    Raises
+    ------
+    ArmcalError
+        For another kind, or one the arm's family does not write.
+    """
+    if kind not in EXPORT_KINDS:
+        raise ArmcalError(f"no export of kind {kind!r}; the kinds are {', '.join(EXPORT_KINDS)}")
+    if kind == "offsets":
+        return joint_offsets_csv(cal)
+    writers = family_of(cal.model).role("exports")()
+    if kind not in writers:
+        raise ArmcalError(f"the {cal.model.family} family writes no {kind} file")
+    text: str = writers[kind](cal)
+    return text
 
 
 def export_files(
