@@ -12,8 +12,8 @@ import json
 
 import numpy as np
 import pytest
-from armcal.demo_serial import SPATIAL_DEMO_FILES
-from armcal.files.serial import ROBOT_FOLDER
+from armcal.demo_spatial import SPATIAL_DEMO_FILES
+from armcal.files.spatial import ROBOT_FOLDER
 
 from armcal.doe import random_plan
 from armcal.files import load_spatial_robot, load_spatial_truth
