@@ -12,11 +12,11 @@ import json
 
 import numpy as np
 import pytest
-from armcal.demo_spatial import SPATIAL_DEMO_FILES
-from armcal.files.spatial import ROBOT_FOLDER
 
+from armcal.demo_spatial import SPATIAL_DEMO_FILES
 from armcal.doe import random_plan
 from armcal.files import load_spatial_robot, load_spatial_truth
+from armcal.files.spatial import ROBOT_FOLDER
 from armcal.identification import identify
 from armcal.workflow import simulate_plan
 from helpers import run_cli
