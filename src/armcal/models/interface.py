@@ -487,19 +487,24 @@ class PaperCriteria:
     optimality_sums: dict[str, float]
 
 
-class FitModel(Protocol):
-    """A family of arm as identification, design, simulation and validation see it.
+class Core(Protocol):
+    """The required core: names, units and free parameters; joints; the instrument's
+    noise and points; positions and Jacobians; whitening; the start. A family that
+    implements only these (:class:`~armcal.models.core.CoreModel` gives the rest) is
+    identified, validated and simulated."""
 
-    Parameters are ``(p,)`` in internal units (mm, rad, and the family's own
-    for other effects); every method is batched over leading axes of ``params``.
-    See the module notes for what each group of members is for.
-    """
-
-    # -- what is identified -------------------------------------------------
     @property
     def name(self) -> str: ...
+
+    @property
+    def family(self) -> str:
+        """The name of the model's family of arm (``"planar"``, ``"spatial"``): the key
+        under which :mod:`armcal.families` finds its files, exports and pictures."""
+        ...
+
     @property
     def param_names(self) -> tuple[str, ...]: ...
+
     @property
     def param_units(self) -> tuple[str, ...]:
         """Display units, e.g. ``mm``, ``deg``."""
@@ -528,10 +533,13 @@ class FitModel(Protocol):
 
     @property
     def free_names(self) -> tuple[str, ...]: ...
+
     @property
     def n_params(self) -> int: ...
+
     @property
     def n_free(self) -> int: ...
+
     @property
     def angle_params(self) -> np.ndarray:
         """Boolean ``(p,)``: angles, wrapped into ``(-pi, pi]`` after a fit."""
@@ -552,8 +560,10 @@ class FitModel(Protocol):
 
     @property
     def noise(self) -> NoiseModel | None: ...
+
     @property
     def n_joints(self) -> int: ...
+
     @property
     def joint_limits(self) -> np.ndarray:
         """``(n, 2)`` limits of the joint readings, rad (mm for a prismatic joint)."""
@@ -565,84 +575,18 @@ class FitModel(Protocol):
         ...
 
     @property
-    def value_limits(self) -> np.ndarray | None:
-        """``(n, 2)`` limits of the joint values ``u = M q`` that the arm's description sets
-        (a URDF's ``<limit>``), beyond those of the readings; None where only the readings
-        are limited."""
-        ...
-
-    @property
     def joint_names(self) -> tuple[str, ...]:
         """Every joint's name in the arm's description (a URDF's), or ``joint 1`` ...."""
-        ...
-
-    @property
-    def tip_reach_mm(self) -> float:
-        """How far from the base a measured point can lie (mm): the links to the farthest
-        target."""
-        ...
-
-    @property
-    def base_offset(self) -> bool:
-        """Whether the base's place in the instrument's frame is identified."""
-        ...
-
-    @property
-    def rule_held(self) -> tuple[str, ...]:
-        """The parameters the family's rule holds because the measurements cannot separate
-        them (:meth:`held_notes` says why); empty for a family of minimal parameters."""
-        ...
-
-    def within_limits(self, q: np.ndarray, *, tol: float = 1e-9) -> np.ndarray:
-        """Boolean ``(..., m, n)``: every joint reading of ``q`` (rad) within its limits."""
-        ...
-
-    @property
-    def point_dim(self) -> int:
-        """Coordinates of a measured point: 2 (in the plane) or 3, and 6 when the
-        instrument also measures the target's orientation (then the last three are a
-        rotation vector, rad)."""
-        ...
-
-    @property
-    def design_effort(self) -> DesignEffort:
-        """How hard the plan optimizer and the certificate search for this family."""
-        ...
-
-    @property
-    def position_dim(self) -> int:
-        """The coordinates of a point that are a position (mm): the first ones.  Errors
-        and RMS in mm are of these; the rest (an orientation) are reported apart."""
-        ...
-
-    def anchor(self, conditions: Conditions, points: np.ndarray) -> tuple[Conditions, np.ndarray]:
-        """Measured rows as the fit compares them with :meth:`positions`: ``points``
-        ``(m, d)`` as the instrument gives them (an orientation as a rotation vector in
-        its frame); a model measuring orientations takes each as its row's reference
-        (:attr:`Conditions.frames`) and leaves a zero turn from it, so the fit's
-        orientation residuals are small rotation vectors at every orientation."""
-        ...
-
-    def unanchor(self, conditions: Conditions, points: np.ndarray) -> np.ndarray:
-        """:meth:`anchor` undone: ``points`` ``(..., m, d)`` of these conditions as the
-        instrument gives them."""
-        ...
-
-    @property
-    def reach_mm(self) -> float:
-        """A length scale of the arm (its stretched reach), for tolerances, mm."""
-        ...
-
-    @property
-    def deviation_bounds(self) -> DeviationBounds:
-        """Which parameters are the robot's deviations, and how large one is implausible
-        for a calibration (the ``large-deviation`` warning)."""
         ...
 
     @property
     def joint_map(self) -> np.ndarray:
         """``M`` ``(n, n)``: the chain's joint values (a planar arm's absolute link angles)
         are ``M q`` of the controller's readings ``q``."""
+        ...
+
+    def within_limits(self, q: np.ndarray, *, tol: float = 1e-9) -> np.ndarray:
+        """Boolean ``(..., m, n)``: every joint reading of ``q`` (rad) within its limits."""
         ...
 
     @property
@@ -655,12 +599,6 @@ class FitModel(Protocol):
         """The geometric arm the model is of (the model itself for a geometric family)."""
         ...
 
-    @property
-    def family(self) -> str:
-        """The name of the model's family of arm (``"planar"``, ``"spatial"``): the key
-        under which :mod:`armcal.families` finds its files, exports and pictures."""
-        ...
-
     def with_noise(self, noise: NoiseModel | None) -> Self:
         """The same model with another noise model."""
         ...
@@ -670,29 +608,18 @@ class FitModel(Protocol):
         ...
 
     @property
-    def default_payload_kg(self) -> float | None:
-        """The payload (kg) of a row that gives none; None when loads do not move the points."""
-        ...
-
-    def unpredicted_loads(self, loads: Loads) -> str | None:
-        """What of ``loads`` this model cannot predict, in words; None when it predicts all.
-
-        A calibration is applied (validation, compensation) under other loads than
-        it was identified under; a model that saw one payload only and merged it
-        into other parameters says so here, and the caller warns.
-        """
+    def point_dim(self) -> int:
+        """Coordinates of a measured point: 2 (in the plane) or 3, and 6 when the
+        instrument also measures the target's orientation (then the last three are a
+        rotation vector, rad)."""
         ...
 
     @property
-    def uses_gravity(self) -> bool:
-        """Whether the model's points depend on gravity's direction (joint compliance)."""
+    def position_dim(self) -> int:
+        """The coordinates of a point that are a position (mm): the first ones.  Errors
+        and RMS in mm are of these; the rest (an orientation) are reported apart."""
         ...
 
-    def with_gravity(self, gravity: np.ndarray | None) -> FitModel:
-        """The same model with gravity (m/s^2) in the frame of the measurements."""
-        ...
-
-    # -- measurement --------------------------------------------------------
     def conditions(
         self,
         q: ArrayLike,
@@ -746,41 +673,17 @@ class FitModel(Protocol):
         """
         ...
 
-    # -- fitting ------------------------------------------------------------
-    @property
-    def has_closed_form(self) -> bool:
-        """Whether :meth:`closed_form` exists for this model (the rule of ``method="auto"``)."""
+    def anchor(self, conditions: Conditions, points: np.ndarray) -> tuple[Conditions, np.ndarray]:
+        """Measured rows as the fit compares them with :meth:`positions`: ``points``
+        ``(m, d)`` as the instrument gives them (an orientation as a rotation vector in
+        its frame); a model measuring orientations takes each as its row's reference
+        (:attr:`Conditions.frames`) and leaves a zero turn from it, so the fit's
+        orientation residuals are small rotation vectors at every orientation."""
         ...
 
-    @property
-    def why_no_closed_form(self) -> str:
-        """Why a closed form was asked of a model without one (a sentence with the fix, for
-        an error's text: the fix refers to an :func:`~armcal.errors.action`)."""
-        ...
-
-    def closed_form(self, conditions: Conditions) -> ClosedForm | None:
-        """The exact least-squares solver at these conditions, or None."""
-        ...
-
-    @property
-    def nested(self) -> FitModel | None:
-        """The model without its extra effect (the geometry without compliance), or None.
-
-        A fit starts from the nested model's (:meth:`lift`), and a fit whose effect
-        lowers the residual no more than noise would is said to be unseen.
-        """
-        ...
-
-    @property
-    def effect(self) -> Effect | None:
-        """What the model adds to :attr:`nested`, in words; None without a nested model."""
-        ...
-
-    def lift(self, nested_params: np.ndarray) -> np.ndarray:
-        """Parameters ``(..., p)``: the nested model's ``(..., p_nested)``, then the effect's at 0.
-
-        The nested model's parameters are the first ``p_nested`` of the model's.
-        """
+    def unanchor(self, conditions: Conditions, points: np.ndarray) -> np.ndarray:
+        """:meth:`anchor` undone: ``points`` ``(..., m, d)`` of these conditions as the
+        instrument gives them."""
         ...
 
     def start(
@@ -803,7 +706,39 @@ class FitModel(Protocol):
         """``(p,)``: how far (mm) a unit step of each parameter moves the points at most."""
         ...
 
-    # -- analysis -----------------------------------------------------------
+
+class ClosedFormRole(Protocol):
+    """The fit's shortcuts: a closed form (the planar arm's global optimum by one linear
+    solve) and the linear positions behind it."""
+
+    @property
+    def has_closed_form(self) -> bool:
+        """Whether :meth:`closed_form` exists for this model (the rule of ``method="auto"``)."""
+        ...
+
+    @property
+    def why_no_closed_form(self) -> str:
+        """Why a closed form was asked of a model without one (a sentence with the fix, for
+        an error's text: the fix refers to an :func:`~armcal.errors.action`)."""
+        ...
+
+    def closed_form(self, conditions: Conditions) -> ClosedForm | None:
+        """The exact least-squares solver at these conditions, or None."""
+        ...
+
+    def linear_positions(self, conditions: Conditions) -> LinearPositions | None:
+        """The points as a linear map of coordinates of the parameters, where they are one."""
+        ...
+
+    def fit_details(self, conditions: Conditions, params: np.ndarray) -> dict[str, np.ndarray]:
+        """What a report shows of a fit besides its parameters (e.g. the largest deflection)."""
+        ...
+
+
+class IdentifiabilityRole(Protocol):
+    """What the rows can and cannot separate: the identifiable set a family's rule
+    chooses for them, the rank analysis, the covariance."""
+
     def prepared(self, conditions: Conditions, points: np.ndarray | None = None) -> FitModel:
         """The model made ready for these rows: its nuisance parameters placed from the
         measured ``points`` (when given) and its identifiable set chosen for them.
@@ -824,6 +759,12 @@ class FitModel(Protocol):
     @property
     def held_notes(self) -> tuple[str, ...]:
         """Why the parameters held by the family's rule are held: what each merges into."""
+        ...
+
+    @property
+    def rule_held(self) -> tuple[str, ...]:
+        """The parameters the family's rule holds because the measurements cannot separate
+        them (:meth:`held_notes` says why); empty for a family of minimal parameters."""
         ...
 
     def identifiability(self, conditions: Conditions) -> tuple[Identifiability, ScaledSVD]:
@@ -848,19 +789,54 @@ class FitModel(Protocol):
         """
         ...
 
-    def fit_details(self, conditions: Conditions, params: np.ndarray) -> dict[str, np.ndarray]:
-        """What a report shows of a fit besides its parameters (e.g. the largest deflection)."""
+
+class PlausibilityRole(Protocol):
+    """What a calibration's size and the data's reach should be: a deviation far
+    beyond its bound or a point beyond the reach says the robot file or the units are
+    wrong."""
+
+    @property
+    def reach_mm(self) -> float:
+        """A length scale of the arm (its stretched reach), for tolerances, mm."""
         ...
 
-    def linear_positions(self, conditions: Conditions) -> LinearPositions | None:
-        """The points as a linear map of coordinates of the parameters, where they are one."""
+    @property
+    def tip_reach_mm(self) -> float:
+        """How far from the base a measured point can lie (mm): the links to the farthest
+        target."""
         ...
+
+    @property
+    def deviation_bounds(self) -> DeviationBounds:
+        """Which parameters are the robot's deviations, and how large one is implausible
+        for a calibration (the ``large-deviation`` warning)."""
+        ...
+
+    @property
+    def base_offset(self) -> bool:
+        """Whether the base's place in the instrument's frame is identified."""
+        ...
+
+    @property
+    def value_limits(self) -> np.ndarray | None:
+        """``(n, 2)`` limits of the joint values ``u = M q`` that the arm's description sets
+        (a URDF's ``<limit>``), beyond those of the readings; None where only the readings
+        are limited."""
+        ...
+
+
+class DesignRole(Protocol):
+    """The design view: which poses a plan may hold and what a plan tells."""
 
     def plan_conditions(self, q: np.ndarray, loads: Loads | None = None) -> Conditions:
         """The rows a plan of poses ``q`` ``(m, n)`` is measured in: every target of every pose."""
         ...
 
-    # -- design ---------------------------------------------------------------
+    @property
+    def design_effort(self) -> DesignEffort:
+        """How hard the plan optimizer and the certificate search for this family."""
+        ...
+
     def feasible(self, q: np.ndarray, *, tol: float = 1e-9) -> np.ndarray:
         """Mask ``(..., m)`` of poses within the joint limits and the instrument's view."""
         ...
@@ -905,7 +881,71 @@ class FitModel(Protocol):
         not move the points."""
         ...
 
-    # -- the tool, for compensation -----------------------------------------
+
+class EffectRole(Protocol):
+    """An effect around an arm (joint compliance): its nested model, its loads and
+    gravity; a rigid arm has none."""
+
+    @property
+    def nested(self) -> FitModel | None:
+        """The model without its extra effect (the geometry without compliance), or None.
+
+        A fit starts from the nested model's (:meth:`lift`), and a fit whose effect
+        lowers the residual no more than noise would is said to be unseen.
+        """
+        ...
+
+    @property
+    def effect(self) -> Effect | None:
+        """What the model adds to :attr:`nested`, in words; None without a nested model."""
+        ...
+
+    def lift(self, nested_params: np.ndarray) -> np.ndarray:
+        """Parameters ``(..., p)``: the nested model's ``(..., p_nested)``, then the effect's at 0.
+
+        The nested model's parameters are the first ``p_nested`` of the model's.
+        """
+        ...
+
+    @property
+    def default_payload_kg(self) -> float | None:
+        """The payload (kg) of a row that gives none; None when loads do not move the points."""
+        ...
+
+    def unpredicted_loads(self, loads: Loads) -> str | None:
+        """What of ``loads`` this model cannot predict, in words; None when it predicts all.
+
+        A calibration is applied (validation, compensation) under other loads than
+        it was identified under; a model that saw one payload only and merged it
+        into other parameters says so here, and the caller warns.
+        """
+        ...
+
+    @property
+    def uses_gravity(self) -> bool:
+        """Whether the model's points depend on gravity's direction (joint compliance)."""
+        ...
+
+    def with_gravity(self, gravity: np.ndarray | None) -> FitModel:
+        """The same model with gravity (m/s^2) in the frame of the measurements."""
+        ...
+
+    def in_robot_frame(self, params: np.ndarray) -> tuple[FitModel, np.ndarray]:
+        """The model and parameters in the robot's own frame: the instrument's pose taken out.
+
+        The instrument parameters become 0, and whatever the model states in the
+        instrument's frame (gravity) is turned into the robot's.
+        """
+        ...
+
+    def arm_params(self, params: np.ndarray) -> np.ndarray:
+        """The parameters of :attr:`arm` within ``params`` ``(..., p)``."""
+        ...
+
+
+class ToolRole(Protocol):
+    """The tool's orientation, for a 6-DoF instrument and compensation."""
+
     @property
     def orientation_dim(self) -> int:
         """Orientation coordinates of the tool: 1 in the plane, 3 in space."""
@@ -938,17 +978,26 @@ class FitModel(Protocol):
         """``d orientation / d params`` ``(..., m, k, p)``."""
         ...
 
-    def in_robot_frame(self, params: np.ndarray) -> tuple[FitModel, np.ndarray]:
-        """The model and parameters in the robot's own frame: the instrument's pose taken out.
 
-        The instrument parameters become 0, and whatever the model states in the
-        instrument's frame (gravity) is turned into the robot's.
-        """
-        ...
+class FitModel(
+    Core,
+    ClosedFormRole,
+    IdentifiabilityRole,
+    PlausibilityRole,
+    DesignRole,
+    EffectRole,
+    ToolRole,
+    Protocol,
+):
+    """A family of arm as identification, design, simulation and validation see it.
 
-    def arm_params(self, params: np.ndarray) -> np.ndarray:
-        """The parameters of :attr:`arm` within ``params`` ``(..., p)``."""
-        ...
+    The required :class:`Core` and the optional roles, each with one default
+    implementation in :class:`~armcal.models.core.CoreModel`: closed form,
+    identifiability, plausibility, design, effect, tool.  Parameters are ``(p,)`` in
+    internal units (mm, rad, and the family's own for other effects); every method is
+    batched over leading axes of ``params``.  See the module notes for what each role
+    is for.
+    """
 
 
 def position_jacobian(
