@@ -51,7 +51,7 @@ import numpy as np
 
 from .errors import ArmcalWarning
 from .models import FitModel, Loads, PaperCriteria, PlanInformation, position_jacobian
-from .models.information import display_std, mean_tip_variance, tip_variances
+from .models.information import display_std, identifying, mean_tip_variance, tip_variances
 from .numerics import COND_WARN, RANK_RTOL, gram_of_factor, log_det, spd_inverse
 
 __all__ = [
@@ -517,7 +517,11 @@ def evaluate_plan(
 
     ``test_q`` ``(k, n)`` are the poses where positioning accuracy matters (none:
     no position figures); ``loads`` every pose's loads for a model whose points
-    depend on them (default: the model's).
+    depend on them (default: the model's).  Every target of every pose is measured
+    (:meth:`~armcal.models.interface.FitModel.plan_conditions`).  A model the plan
+    does not identify as given is first prepared for it
+    (:func:`~armcal.models.information.identifying`: a spatial arm as loaded holds
+    what the plan cannot separate); :attr:`PlanQuality.model` is the model evaluated.
 
     Raises
     ------
@@ -536,6 +540,8 @@ def evaluate_plan(
     True
     """
     q = np.asarray(q, dtype=float)
+    # An arm as loaded (an over-complete spatial one) holds what the plan cannot separate.
+    model = identifying(model, model.plan_conditions(q, loads))
     info = model.plan_information(q, loads)  # one factorization serves every figure below
     identified = info.check_identifiable()
     warning = model.conditioning_warning(identified)

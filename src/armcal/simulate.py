@@ -424,6 +424,19 @@ def _check_runs(trials: int, sigma: float | None) -> None:
         raise ArmcalError(f"a Monte Carlo needs a positive noise sigma (mm), got {sigma}")
 
 
+def _for_plan(model: FitModel, rows: Conditions, truth: np.ndarray) -> tuple[FitModel, np.ndarray]:
+    """The model the plan's ``rows`` identify and the truth in its parameters: as given
+    where the rows identify the model, else (the rule of
+    :func:`~armcal.models.information.identifying`) the model prepared for the truth's
+    points and the truth as its fit sees it
+    (:meth:`~armcal.models.interface.FitModel.expressed`).  The points are evaluated only
+    then: a Monte Carlo evaluates the arm at the truth once."""
+    if model.identifiability(rows)[0].identifiable:
+        return model, truth
+    ready = model.prepared(rows, model.positions(rows, truth))
+    return ready, ready.expressed(rows, truth)
+
+
 def monte_carlo(
     model: FitModel,
     q: ArrayLike,
@@ -443,7 +456,10 @@ def monte_carlo(
     ----------
     model : FitModel
         The nominal model: its noise model and fixed parameters are the model
-        simulated and identified.
+        simulated and identified.  A model the plan does not identify as given (a
+        spatial arm as loaded) is prepared for it
+        (:func:`~armcal.models.information.identifying`) and the truth expressed in its
+        parameters; :attr:`MonteCarlo.model` and :attr:`MonteCarlo.truth` are those.
     q : ndarray, shape (m, n)
         The plan (rad), measured at every target of every pose; must identify
         every free parameter.
@@ -533,6 +549,7 @@ def monte_carlo(
     model = model.with_noise(noise)
     reference = float(sigma) if sigma is not None else noise.sigma_mm
     rows = model.plan_conditions(q, loads)  # every target of every pose
+    model, truth = _for_plan(model, rows, truth)
     conditioning = model.conditioning_warning(model.check_identifiable(rows))
     rng = np.random.default_rng(rng)
     predicted, ok = predicted_covariance(model, rows, reference, truth)

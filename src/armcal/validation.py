@@ -36,6 +36,7 @@ from numpy.typing import ArrayLike
 from .errors import ArmcalError, ArmcalWarning, NotIdentifiableError, action
 from .identification import identify
 from .identification.registration import register_nominal
+from .identification.result import Calibration, calibrated_arm
 from .models import CalibratedArm, Conditions, FitModel, Loads
 from .models.information import tip_variances
 from .noise import NoiseModel
@@ -256,7 +257,7 @@ def _turns(
 
 
 def validate(
-    cal: CalibratedArm,
+    cal: Calibration | CalibratedArm,
     q: ArrayLike,
     points: ArrayLike,
     *,
@@ -268,15 +269,17 @@ def validate(
 
     Parameters
     ----------
-    cal : CalibratedArm
+    cal : Calibration or CalibratedArm
+        What :func:`~armcal.identification.identify` returns, or a calibrated arm
+        (:func:`~armcal.files.read_calibration`).
     q : ndarray, shape (m, n)
         Joint angles of the held-out poses, rad.
     points : ndarray, shape (m, d) or (m, 3)
         Measured positions in the instrument frame, mm: as the calibration's
         data were (3-D points of a planar arm calibrated from 3-D data are
         projected into its plane).
-    target : ndarray of int, shape (m,), optional
-        Every row's target, for an arm with several.
+    target : ndarray of int or sequence of str, shape (m,), optional
+        Every row's target, for an arm with several: its index or its label.
     row_sigma : ndarray, shape (m,), optional
         Per-row instrument noise (mm) for the predicted error.
     loads : Loads, optional
@@ -303,6 +306,7 @@ def validate(
     >>> bool(v.summary()["rms_before_mm"] > 0.02), float(v.summary()["rms_after_mm"])
     (True, 0.0)
     """
+    cal = calibrated_arm(cal)
     model = cal.model
     conditions = model.conditions(q, target=target, loads=loads, sigma_mm=row_sigma)
     points = np.asarray(points, dtype=float)

@@ -30,6 +30,7 @@ __all__ = [
     "Calibration",
     "Estimate",
     "NestedFit",
+    "calibrated_arm",
 ]
 
 #: The correlation of two estimates beyond which a report names the pair (|r|).
@@ -332,3 +333,10 @@ class Calibration:
         off = np.abs(corr - np.eye(len(self.names)))
         pairs = zip(*np.nonzero(np.triu(off > above)), strict=True)
         return [(self.names[i], self.names[j], float(corr[i, j])) for i, j in pairs]
+
+
+def calibrated_arm(cal: Calibration | CalibratedArm) -> CalibratedArm:
+    """The calibrated arm of ``cal``: a :class:`Calibration`'s
+    (:meth:`Calibration.calibrated`), or ``cal`` itself (one read from a calibration
+    file), so that validation and compensation take what :func:`identify` returns."""
+    return cal.calibrated() if isinstance(cal, Calibration) else cal

@@ -56,7 +56,7 @@ from typing import Any, Protocol
 import numpy as np
 from numpy.typing import ArrayLike
 
-from ..errors import ArmcalError, ArmcalWarning
+from ..errors import ArmcalError, ArmcalWarning, action
 from ..noise import NoiseModel
 from ..numerics import ScaledSVD
 from .identifiability import Identifiability
@@ -76,6 +76,8 @@ __all__ = [
     "PlanInformation",
     "equations_per_pose",
     "position_jacobian",
+    "target_indices",
+    "targets_missing",
 ]
 
 
@@ -928,3 +930,47 @@ def position_jacobian(
 def equations_per_pose(model: FitModel) -> int:
     """Equations one pose measured at every target gives: ``point_dim`` per target."""
     return model.point_dim * max(len(model.target_labels), 1)
+
+
+def target_indices(target: ArrayLike | None, labels: Sequence[str]) -> np.ndarray | None:
+    """Every row's target index from ``target``: the labels of ``labels`` looked up,
+    indices as they are (the family checks their range); None stays None.
+
+    What the families' :meth:`FitModel.conditions` take, so that a Python user gives the
+    labels the measurement file has, where the command line derives the indices.
+
+    Raises
+    ------
+    ArmcalError
+        For a label that is not one of ``labels``, naming them.
+
+    Examples
+    --------
+    >>> target_indices(["B", "A", "B"], ("A", "B")).tolist()
+    [1, 0, 1]
+    >>> target_indices(np.array([1, 0]), ("A", "B")).tolist()
+    [1, 0]
+    """
+    if target is None:
+        return None
+    given = np.asarray(target)
+    if given.dtype.kind not in "USO":
+        return given
+    lookup = {label: i for i, label in enumerate(labels)}
+    texts = [str(label) for label in given.reshape(-1)]
+    unknown = sorted(set(texts) - lookup.keys())
+    if unknown:
+        known = ", ".join(labels) if labels else "none"
+        raise ArmcalError(
+            f"unknown target {', '.join(map(repr, unknown))}; the model's targets are {known}"
+        )
+    return np.array([lookup[text] for text in texts], dtype=int).reshape(given.shape)
+
+
+def targets_missing(name: str, labels: Sequence[str]) -> ArmcalError:
+    """The error for rows of a model with several targets given without theirs."""
+    return ArmcalError(
+        f"{name} has {len(labels)} targets ({', '.join(labels)}): give every row's target "
+        f"with {action('target')} (its label or its index); every target of every pose is "
+        "the rows of model.plan_conditions(q)"
+    )

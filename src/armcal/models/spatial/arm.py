@@ -45,6 +45,8 @@ from ..interface import (
     FitModel,
     LinearPositions,
     Loads,
+    target_indices,
+    targets_missing,
 )
 from . import pose as spatial_pose
 from .chain import (
@@ -173,7 +175,17 @@ class SpatialArm(RigidLoads):
         return np.where(np.isfinite(base), base, turn)
 
     def replace(self, **changes: Any) -> SpatialArm:
-        """The same arm with fields changed."""
+        """The same arm with fields changed.
+
+        New ``targets`` without their ``target_positions`` start where targets the robot
+        file does not place start (:func:`~armcal.models.spatial.kinematics.default_targets`,
+        found from the data by a fit), not at the old targets' positions.
+        """
+        targets = changes.get("targets")
+        if targets is not None and tuple(targets) != self.targets:
+            if "target_positions" not in changes:
+                changes.update(target_positions=np.zeros((0, 3)), known_targets=False)
+            changes.setdefault("target_turns", np.zeros((0, 3)))
         return replace(self, **changes)
 
     @cached_property
@@ -410,15 +422,17 @@ deviation_bounds`); the base pose and the targets are the instrument's."""
         q = np.asarray(q, dtype=float)
         if q.ndim < 2 or q.shape[-1] != self.n_joints:
             raise ValueError(f"q must have shape (m, {self.n_joints}), got {q.shape}")
-        index = None
-        if target is not None:
-            index = np.asarray(target, dtype=int)
+        index = target_indices(target, self.targets)
+        if index is not None:
+            if not np.issubdtype(index.dtype, np.integer):
+                index = index.astype(int)
             if index.shape != q.shape[-2:-1] or np.any((index < 0) | (index >= len(self.targets))):
                 raise ValueError(
-                    f"target must hold {q.shape[-2]} indices below {len(self.targets)}"
+                    f"target must hold {q.shape[-2]} indices below {len(self.targets)} "
+                    f"or labels of {', '.join(self.targets)}"
                 )
         elif len(self.targets) > 1:
-            raise ValueError(f"{self.name} has several targets: say which one every row measures")
+            raise targets_missing(self.name, self.targets)
         return Conditions(q, index, None, sigma_mm)
 
     def _kinematics(
