@@ -39,7 +39,7 @@ from .identification.registration import register_nominal
 from .identification.result import Calibration, calibrated_arm
 from .models import CalibratedArm, Conditions, FitModel, Loads
 from .models.information import tip_variances
-from .noise import NoiseModel
+from .noise import NoiseModel, per_row_sigma
 from .numerics import point_norms, rms
 from .progress import ProgressCallback
 
@@ -694,7 +694,9 @@ def cross_validate(
         Rows that belong together (the targets measured at one pose) stay in
         one fold; every row its own group by default.
     target, sigma, row_sigma, loads
-        As for :func:`armcal.identification.identify`.
+        As for :func:`armcal.identification.identify`: a given ``sigma`` replaces
+        ``row_sigma`` (:func:`armcal.noise.per_row_sigma`) in every fold's fit and
+        in the error each fold predicts.
     rng : numpy.random.Generator or int or None
         Shuffles the groups into folds.
     progress : callable, optional
@@ -711,6 +713,7 @@ def cross_validate(
         parameters (too few poses for ``K`` folds).
     """
     rng = np.random.default_rng(rng)
+    row_sigma = per_row_sigma(sigma, row_sigma)  # a given sigma replaces them, fold by fold
     conditions = model.conditions(q, target=target, loads=loads, sigma_mm=row_sigma)
     conditions, points = model.anchor(conditions, np.asarray(points, dtype=float))
     m = conditions.m
