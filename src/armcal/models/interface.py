@@ -932,39 +932,48 @@ def equations_per_pose(model: FitModel) -> int:
     return model.point_dim * max(len(model.target_labels), 1)
 
 
-def target_indices(target: ArrayLike | None, labels: Sequence[str]) -> np.ndarray | None:
-    """Every row's target index from ``target``: the labels of ``labels`` looked up,
-    indices as they are (the family checks their range); None stays None.
+def target_indices(target: ArrayLike | None, labels: Sequence[str], m: int) -> np.ndarray | None:
+    """Every row's target index ``(m,)`` from ``target``, checked: the labels of
+    ``labels`` looked up, indices as they are; None stays None.
 
     What the families' :meth:`FitModel.conditions` take, so that a Python user gives the
-    labels the measurement file has, where the command line derives the indices.
+    labels a measurement file has, where the command line derives the indices.  A
+    model with one target (``labels`` empty or one) takes index 0.
 
     Raises
     ------
     ArmcalError
-        For a label that is not one of ``labels``, naming them.
+        For a label that is not one of ``labels`` (naming them), or indices that are
+        not ``m`` integers in ``0..k-1``.
 
     Examples
     --------
-    >>> target_indices(["B", "A", "B"], ("A", "B")).tolist()
+    >>> target_indices(["B", "A", "B"], ("A", "B"), 3).tolist()
     [1, 0, 1]
-    >>> target_indices(np.array([1, 0]), ("A", "B")).tolist()
+    >>> target_indices(np.array([1, 0]), ("A", "B"), 2).tolist()
     [1, 0]
     """
     if target is None:
         return None
     given = np.asarray(target)
-    if given.dtype.kind not in "USO":
-        return given
-    lookup = {label: i for i, label in enumerate(labels)}
-    texts = [str(label) for label in given.reshape(-1)]
-    unknown = sorted(set(texts) - lookup.keys())
-    if unknown:
-        known = ", ".join(labels) if labels else "none"
+    count = max(len(labels), 1)
+    if given.dtype.kind in "USO":
+        lookup = {label: i for i, label in enumerate(labels)}
+        texts = [str(label) for label in given.reshape(-1)]
+        unknown = sorted(set(texts) - lookup.keys())
+        if unknown:
+            known = ", ".join(labels) if labels else "none"
+            raise ArmcalError(
+                f"unknown target {', '.join(map(repr, unknown))}; the model's targets are {known}"
+            )
+        given = np.array([lookup[text] for text in texts], dtype=int).reshape(given.shape)
+    if given.shape != (m,) or not np.issubdtype(given.dtype, np.integer):
         raise ArmcalError(
-            f"unknown target {', '.join(map(repr, unknown))}; the model's targets are {known}"
+            f"target must hold {m} target labels or integer indices, got shape {given.shape}"
         )
-    return np.array([lookup[text] for text in texts], dtype=int).reshape(given.shape)
+    if given.size and (given.min() < 0 or given.max() >= count):
+        raise ArmcalError(f"target indices must lie in 0..{count - 1}")
+    return given
 
 
 def targets_missing(name: str, labels: Sequence[str]) -> ArmcalError:

@@ -58,12 +58,8 @@ def check_target(
         if arm.n_target_links > 1:
             raise targets_missing(arm.name, arm.target_labels)
         return None
-    index = np.asarray(target_indices(target, arm.target_labels))
     m = np.shape(q)[-2] if np.ndim(q) >= 2 else 1
-    if index.shape != (m,) or not np.issubdtype(index.dtype, np.integer):
-        raise ValueError(f"target must be an integer array of shape ({m},), got {index.shape}")
-    if index.size and (index.min() < 0 or index.max() >= arm.n_target_links):
-        raise ValueError(f"target indices must lie in 0..{arm.n_target_links - 1}")
+    index = target_indices(target, arm.target_labels, m)
     return index if arm.n_target_links > 1 else None
 
 

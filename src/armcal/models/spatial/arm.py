@@ -181,11 +181,10 @@ class SpatialArm(RigidLoads):
         file does not place start (:func:`~armcal.models.spatial.kinematics.default_targets`,
         found from the data by a fit), not at the old targets' positions.
         """
-        targets = changes.get("targets")
-        if targets is not None and tuple(targets) != self.targets:
-            if "target_positions" not in changes:
-                changes.update(target_positions=np.zeros((0, 3)), known_targets=False)
-            changes.setdefault("target_turns", np.zeros((0, 3)))
+        new = tuple(changes.get("targets", self.targets)) != self.targets
+        if new and "target_positions" not in changes:
+            unplaced = np.zeros((0, 3))
+            changes.update(target_positions=unplaced, target_turns=unplaced, known_targets=False)
         return replace(self, **changes)
 
     @cached_property
@@ -422,16 +421,8 @@ deviation_bounds`); the base pose and the targets are the instrument's."""
         q = np.asarray(q, dtype=float)
         if q.ndim < 2 or q.shape[-1] != self.n_joints:
             raise ValueError(f"q must have shape (m, {self.n_joints}), got {q.shape}")
-        index = target_indices(target, self.targets)
-        if index is not None:
-            if not np.issubdtype(index.dtype, np.integer):
-                index = index.astype(int)
-            if index.shape != q.shape[-2:-1] or np.any((index < 0) | (index >= len(self.targets))):
-                raise ValueError(
-                    f"target must hold {q.shape[-2]} indices below {len(self.targets)} "
-                    f"or labels of {', '.join(self.targets)}"
-                )
-        elif len(self.targets) > 1:
+        index = target_indices(target, self.targets, q.shape[-2])
+        if index is None and len(self.targets) > 1:
             raise targets_missing(self.name, self.targets)
         return Conditions(q, index, None, sigma_mm)
 
