@@ -52,6 +52,7 @@ import numpy as np
 from .errors import ArmcalWarning
 from .models import FitModel, Loads, PaperCriteria, PlanInformation, position_jacobian
 from .models.information import display_std, identifying, mean_tip_variance, tip_variances
+from .notebook import html_table, number
 from .numerics import COND_WARN, RANK_RTOL, gram_of_factor, log_det, spd_inverse
 
 __all__ = [
@@ -481,6 +482,19 @@ class PlanQuality:
             f"PlanQuality({self.n_poses} poses, sigma {self.sigma_mm:g} mm: D {eff['D']:.4f}, "
             f"A {eff['A']:.4f}, E {eff['E']:.4f}{position})"
         )
+
+    def _repr_html_(self) -> str:
+        """The repr over a table of every parameter's predicted std (display units), and the
+        warnings below it: what a notebook shows."""
+        model = self.model
+        rows = [
+            [name, number(std, 3) if free else "fixed", unit]
+            for name, std, unit, free in zip(
+                model.param_names, self.predicted_std, model.param_units, model.free, strict=True
+            )
+        ]
+        notes = [f"warning {w.code}: {w.message}" for w in self.warnings]
+        return html_table(repr(self), ["parameter", "predicted std", "unit"], rows, notes=notes)
 
     def __getitem__(self, name: str) -> dict[str, float | str]:
         """A parameter by name: its predicted std and unit (display units; 0 when fixed).

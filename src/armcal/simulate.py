@@ -29,6 +29,7 @@ from .errors import ArmcalError, ArmcalWarning, action
 from .identification import resolve_method, solve
 from .models import Conditions, FitModel, LinearPositions, Loads, position_jacobian
 from .models.information import predicted_covariance, tip_variances
+from .notebook import html_table, number
 from .progress import ProgressCallback
 from .synthesis import checked_truth, simulated_noise, synthesize_measurements
 
@@ -311,6 +312,26 @@ class MonteCarlo:
             f"MonteCarlo({self.model.name}: {self.trials} trials of {self.q.shape[0]} poses, "
             f"{self.method}, empirical/predicted std {ratio.min():.3f} to {ratio.max():.3f})"
         )
+
+    def _repr_html_(self) -> str:
+        """The repr over a table of every free parameter's truth, bias, empirical and
+        predicted std (display units), and the warnings below it: what a notebook shows."""
+        free = self.model.free
+        truth = self.truth * self.display_scale
+        rows = [
+            [
+                self.names[i],
+                number(truth[i], 6),
+                number(self.bias[i], 3),
+                number(self.std[i], 3),
+                number(self.predicted_std[i], 3),
+                self.units[i],
+            ]
+            for i in np.flatnonzero(free)
+        ]
+        header = ["parameter", "truth", "bias", "std", "predicted std", "unit"]
+        notes = [f"warning {w.code}: {w.message}" for w in self.warnings]
+        return html_table(repr(self), header, rows, notes=notes)
 
     @property
     def arm(self) -> Any:

@@ -40,6 +40,7 @@ from .identification.result import Calibration, calibrated_arm
 from .models import CalibratedArm, Conditions, FitModel, Loads
 from .models.information import tip_variances
 from .noise import NoiseModel, per_row_sigma
+from .notebook import html_table, number
 from .numerics import point_norms, rms
 from .progress import ProgressCallback
 
@@ -106,6 +107,26 @@ class Validation:
             f"{s['rms_before_per_point_mm']:.4g} mm before, {s['rms_after_per_point_mm']:.4g} mm "
             f"after, {s['predicted_rms_after_per_point_mm']:.4g} mm predicted)"
         )
+
+    def _repr_html_(self) -> str:
+        """The repr over a table of the errors before and after calibration (per point,
+        mm; a 6-DoF instrument's orientations in deg): what a notebook shows."""
+        s = self.summary()
+        rows = [
+            ["RMS per point (mm)", number(s["rms_before_mm"]), number(s["rms_after_mm"])],
+            ["max (mm)", number(s["max_before_mm"]), number(s["max_after_mm"])],
+            ["95 % quantile (mm)", number(s["p95_before_mm"]), number(s["p95_after_mm"])],
+            ["predicted RMS per point (mm)", "", number(s["predicted_rms_after_per_point_mm"])],
+        ]
+        if self.turns is not None:
+            rows.append(
+                [
+                    "orientation RMS (deg)",
+                    number(s["orientation_rms_before_deg"]),
+                    number(s["orientation_rms_after_deg"]),
+                ]
+            )
+        return html_table(repr(self), ["", "before", "after"], rows)
 
     @property
     def before_mm(self) -> np.ndarray:

@@ -185,6 +185,18 @@ class PosesNeeded:
     model: FitModel | None = None
     measured: tuple[str, ...] = ()
 
+    def __repr__(self) -> str:
+        unit = self.requirement.rsplit("_", 1)[-1]
+        fewer = (
+            f"{self.poses - 1} reach {self.previous:.4g}"
+            if math.isfinite(self.previous)
+            else f"{self.poses - 1} cannot identify the parameters"
+        )
+        return (
+            f"PosesNeeded({self.requirement} <= {self.goal:g} {unit}: {self.poses} poses reach "
+            f"{self.achieved:.4g}, {fewer}; sigma {self.sigma_mm:g} mm, {self.method})"
+        )
+
 
 #: Random plans drawn per size by ``plans="random"``; the most accurate is kept.
 RANDOM_PLANS = 20

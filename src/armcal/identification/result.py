@@ -21,6 +21,7 @@ import numpy as np
 
 from ..errors import ArmcalWarning
 from ..models import CalibratedArm, Conditions, Effect, FitModel, Plane
+from ..notebook import html_table, number
 from ..numerics import point_norms, rms
 from .judgement import GoodnessOfFit, Outlier
 from .registration import Baseline
@@ -182,6 +183,16 @@ class Calibration:
             f"{self.method}, sigma {self.sigma_mm:.4g} mm ({self.sigma_source}), residual RMS "
             f"{self.residual_rms:.4g} mm per coordinate{codes})"
         )
+
+    def _repr_html_(self) -> str:
+        """The repr over a table of the parameters (value, std, unit in display units),
+        and the warnings below it: what a notebook shows."""
+        rows = [
+            [e.name, number(e.value, 6), "fixed" if e.fixed else number(e.std, 3), e.unit]
+            for e in self.parameters
+        ]
+        notes = [f"warning {w.code}: {w.message}" for w in self.warnings]
+        return html_table(repr(self), ["parameter", "value", "std", "unit"], rows, notes=notes)
 
     def calibrated(self) -> CalibratedArm:
         """The model with these parameters, for validation, compensation and export."""
