@@ -49,9 +49,16 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .errors import ArmcalWarning
-from .models import FitModel, Loads, PaperCriteria, PlanInformation, position_jacobian
-from .models.information import display_std, identifying, mean_tip_variance, tip_variances
+from .errors import ArmcalWarning, NotIdentifiableError
+from .models import (
+    FitModel,
+    Identifiability,
+    Loads,
+    PaperCriteria,
+    PlanInformation,
+    position_jacobian,
+)
+from .models.information import display_std, mean_tip_variance, tip_variances
 from .notebook import html_table, number
 from .numerics import COND_WARN, RANK_RTOL, gram_of_factor, log_det, spd_inverse
 
@@ -519,6 +526,28 @@ class PlanQuality:
         }
 
 
+def _identified_plan(
+    model: FitModel, q: np.ndarray, loads: Loads | None
+) -> tuple[FitModel, PlanInformation, Identifiability]:
+    """The model the plan ``q`` identifies, its information (one factorization serves
+    every figure of :func:`evaluate_plan`) and identifiability.
+
+    The rule of :func:`~armcal.models.information.identifying`, at no cost where the
+    plan identifies the model as given: only a model it does not (a spatial arm as
+    loaded, over-complete) is prepared for the plan's rows and checked again.
+    NotIdentifiableError where the prepared model is not identified either.
+    """
+    info = model.plan_information(q, loads)
+    try:
+        return model, info, info.check_identifiable()
+    except NotIdentifiableError:
+        ready = model.prepared(model.plan_conditions(q, loads))
+        if ready is model:  # a minimal family: what the plan misses is the error
+            raise
+    info = ready.plan_information(q, loads)
+    return ready, info, info.check_identifiable()
+
+
 def evaluate_plan(
     model: FitModel,
     q: np.ndarray,
@@ -554,10 +583,7 @@ def evaluate_plan(
     True
     """
     q = np.asarray(q, dtype=float)
-    # An arm as loaded (an over-complete spatial one) holds what the plan cannot separate.
-    model = identifying(model, model.plan_conditions(q, loads))
-    info = model.plan_information(q, loads)  # one factorization serves every figure below
-    identified = info.check_identifiable()
+    model, info, identified = _identified_plan(model, q, loads)
     warning = model.conditioning_warning(identified)
     counts = None
     if model.default_payload_kg is not None:  # the points depend on the load

@@ -25,9 +25,16 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike
 
-from .errors import ArmcalError, ArmcalWarning, action
+from .errors import ArmcalError, ArmcalWarning, NotIdentifiableError, action
 from .identification import resolve_method, solve
-from .models import Conditions, FitModel, LinearPositions, Loads, position_jacobian
+from .models import (
+    Conditions,
+    FitModel,
+    Identifiability,
+    LinearPositions,
+    Loads,
+    position_jacobian,
+)
 from .models.information import predicted_covariance, tip_variances
 from .notebook import html_table, number
 from .progress import ProgressCallback
@@ -445,17 +452,22 @@ def _check_runs(trials: int, sigma: float | None) -> None:
         raise ArmcalError(f"a Monte Carlo needs a positive noise sigma (mm), got {sigma}")
 
 
-def _for_plan(model: FitModel, rows: Conditions, truth: np.ndarray) -> tuple[FitModel, np.ndarray]:
-    """The model the plan's ``rows`` identify and the truth in its parameters: as given
-    where the rows identify the model, else (the rule of
-    :func:`~armcal.models.information.identifying`) the model prepared for the truth's
-    points and the truth as its fit sees it
-    (:meth:`~armcal.models.interface.FitModel.expressed`).  The points are evaluated only
-    then: a Monte Carlo evaluates the arm at the truth once."""
-    if model.identifiability(rows)[0].identifiable:
-        return model, truth
-    ready = model.prepared(rows, model.positions(rows, truth))
-    return ready, ready.expressed(rows, truth)
+def _for_plan(
+    model: FitModel, rows: Conditions, truth: np.ndarray
+) -> tuple[FitModel, np.ndarray, Identifiability]:
+    """The model the plan's ``rows`` identify, the truth in its parameters, and the
+    identifiability: the model as given where the rows identify it (the rule of
+    :func:`~armcal.models.information.identifying`, here at no cost then), else the model
+    prepared for the truth's points and the truth as its fit sees it
+    (:meth:`~armcal.models.interface.FitModel.expressed`).  NotIdentifiableError where
+    the prepared model is not identified either (a minimal family is itself)."""
+    try:
+        return model, truth, model.check_identifiable(rows)
+    except NotIdentifiableError:
+        ready = model.prepared(rows, model.positions(rows, truth))
+        if ready is model:
+            raise
+    return ready, ready.expressed(rows, truth), ready.check_identifiable(rows)
 
 
 def monte_carlo(
@@ -570,8 +582,8 @@ def monte_carlo(
     model = model.with_noise(noise)
     reference = float(sigma) if sigma is not None else noise.sigma_mm
     rows = model.plan_conditions(q, loads)  # every target of every pose
-    model, truth = _for_plan(model, rows, truth)
-    conditioning = model.conditioning_warning(model.check_identifiable(rows))
+    model, truth, identified = _for_plan(model, rows, truth)
+    conditioning = model.conditioning_warning(identified)
     rng = np.random.default_rng(rng)
     predicted, ok = predicted_covariance(model, rows, reference, truth)
     if not ok:
