@@ -670,8 +670,9 @@ class FitModel(Protocol):
     ) -> Conditions:
         """Checked conditions of measured rows (ValueError naming what is wrong).
 
-        ``q`` ``(m, n)`` rad; ``target`` ``(m,)`` target indices, needed when the
-        model has several; ``loads`` the rows' loads (default: the model's);
+        ``q`` ``(m, n)`` rad; ``target`` ``(m,)`` target indices or labels
+        (:func:`target_indices`), needed when the model has several (else
+        :func:`targets_missing`); ``loads`` the rows' loads (default: the model's);
         ``sigma_mm`` ``(m,)`` per-row instrument noise.
         """
         ...
