@@ -352,6 +352,7 @@ def test_every_result_has_a_short_repr_and_the_tables_a_notebook_shows():
         text = repr(result)
         assert _is_short(text), (name, text)
         assert type(result).__name__ == name
+    assert "24 measurements" in repr(cal)  # 8 poses, each at 3 targets: rows, not poses
     html = cal._repr_html_()
     assert html.count("<tr>") == 1 + cal.model.n_params  # the header and every parameter
     assert "<td>dq2</td>" in html

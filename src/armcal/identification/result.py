@@ -23,7 +23,7 @@ from ..errors import ArmcalWarning
 from ..models import CalibratedArm, Conditions, Effect, FitModel, Plane
 from ..notebook import html_table, number
 from ..numerics import point_norms, rms
-from .judgement import GoodnessOfFit, Outlier
+from .judgement import GoodnessOfFit, Outlier, row_noun
 from .registration import Baseline
 
 __all__ = [
@@ -179,9 +179,9 @@ class Calibration:
         used = f"{self.n_used} of {self.n_poses}" if self.n_used < self.n_poses else self.n_poses
         codes = f", warnings {[w.code for w in self.warnings]}" if self.warnings else ""
         return (
-            f"Calibration({self.model.name}: {used} poses, {self.n_free} free parameters, "
-            f"{self.method}, sigma {self.sigma_mm:.4g} mm ({self.sigma_source}), residual RMS "
-            f"{self.residual_rms:.4g} mm per coordinate{codes})"
+            f"Calibration({self.model.name}: {used} {row_noun(self.target)}, {self.n_free} "
+            f"free parameters, {self.method}, sigma {self.sigma_mm:.4g} mm ({self.sigma_source}), "
+            f"residual RMS {self.residual_rms:.4g} mm per coordinate{codes})"
         )
 
     def _repr_html_(self) -> str:
