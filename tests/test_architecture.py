@@ -209,12 +209,10 @@ def test_the_line_counter_counts_code_only(tmp_path):
 PENDING_SPLIT = {
     "demo.run_demo",
     "demo_spatial.run_spatial_demo",
-    "doe.designer.design",
     "files.calibration.calibration_document",
     "files.calibration.read_calibration",
     "files.robots.load_planar_robot",
     "files.spatial._chain",
-    "identification.calibrate.identify",
 }
 
 

@@ -297,13 +297,14 @@ def test_sigma_overrides_the_instrument_and_keeps_the_encoder(arm4, paper_truth4
 
 def test_row_sigma_replaces_the_instrument_row_by_row(arm4, paper_truth4):
     """Per-row sigma s_i: each row's x and y have std s_i (each of 8 stds within 5
-    standard errors s_i / sqrt(2N) at N = 20 000), whatever sigma or the arm say."""
+    standard errors s_i / sqrt(2N) at N = 20 000), whatever the arm says (a given sigma
+    would replace them: tests/test_api_every_family.py)."""
     q = random_plan(arm4, 4, rng=7)
     rows = np.array([0.01, 0.05, 0.2, 0.02])
     arm = arm4.replace(noise=NoiseModel.per_axis(1.0, 3.0))
     trials = 20_000
     xy = sim.synthesize_measurements(
-        arm, q, paper_truth4, 0.5, rng=4, trials=trials, row_sigma=rows
+        arm, q, paper_truth4, None, rng=4, trials=trials, row_sigma=rows
     )
     std = np.std(xy - forward_kinematics(arm4, q, paper_truth4), axis=0, ddof=1)  # (m, 2)
     assert np.all(np.abs(std / rows[:, None] - 1) <= 5 / np.sqrt(2 * trials))

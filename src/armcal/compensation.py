@@ -54,6 +54,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike
 
+from .identification.result import Calibration, calibrated_arm
 from .models import CalibratedArm, Conditions, FitModel, Loads, position_jacobian
 from .models.information import tip_variances
 from .numerics import RANK_RTOL, rms
@@ -444,7 +445,7 @@ def _accuracy(
 
 
 def compensate(
-    cal: CalibratedArm,
+    cal: Calibration | CalibratedArm,
     q_program: ArrayLike,
     *,
     target: ArrayLike | None = None,
@@ -457,11 +458,14 @@ def compensate(
 
     Parameters
     ----------
-    cal : CalibratedArm
+    cal : Calibration or CalibratedArm
+        What :func:`~armcal.identification.identify` returns, or a calibrated arm
+        (:func:`~armcal.files.read_calibration`).
     q_program : ndarray, shape (m, n)
         The program's joint commands, rad (within the joint limits).
-    target : ndarray of int, shape (m,), optional
-        The target (tool point) every command is meant for, on an arm with several.
+    target : ndarray of int or sequence of str, shape (m,), optional
+        The target (tool point) every command is meant for, on an arm with several:
+        its index or its label.
     orientation : bool, optional
         Keep the tool's orientation too; default where the arm has the joints
         (``n >= d + k``: 3 joints in the plane).
@@ -495,6 +499,7 @@ def compensate(
     >>> result.corrected.tolist()
     [True, True]
     """
+    cal = calibrated_arm(cal)
     model, robot = cal.in_robot_frame()
     program = model.conditions(q_program, target=target, loads=loads)
     q0 = program.q

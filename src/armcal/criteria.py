@@ -49,9 +49,17 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .errors import ArmcalWarning
-from .models import FitModel, Loads, PaperCriteria, PlanInformation, position_jacobian
+from .errors import ArmcalWarning, NotIdentifiableError
+from .models import (
+    FitModel,
+    Identifiability,
+    Loads,
+    PaperCriteria,
+    PlanInformation,
+    position_jacobian,
+)
 from .models.information import display_std, mean_tip_variance, tip_variances
+from .notebook import html_table, number
 from .numerics import COND_WARN, RANK_RTOL, gram_of_factor, log_det, spd_inverse
 
 __all__ = [
@@ -482,6 +490,19 @@ class PlanQuality:
             f"A {eff['A']:.4f}, E {eff['E']:.4f}{position})"
         )
 
+    def _repr_html_(self) -> str:
+        """The repr over a table of every parameter's predicted std (display units), and the
+        warnings below it: what a notebook shows."""
+        model = self.model
+        rows = [
+            [name, number(std, 3) if free else "fixed", unit]
+            for name, std, unit, free in zip(
+                model.param_names, self.predicted_std, model.param_units, model.free, strict=True
+            )
+        ]
+        notes = [f"warning {w.code}: {w.message}" for w in self.warnings]
+        return html_table(repr(self), ["parameter", "predicted std", "unit"], rows, notes=notes)
+
     def __getitem__(self, name: str) -> dict[str, float | str]:
         """A parameter by name: its predicted std and unit (display units; 0 when fixed).
 
@@ -505,6 +526,28 @@ class PlanQuality:
         }
 
 
+def _identified_plan(
+    model: FitModel, q: np.ndarray, loads: Loads | None
+) -> tuple[FitModel, PlanInformation, Identifiability]:
+    """The model the plan ``q`` identifies, its information (one factorization serves
+    every figure of :func:`evaluate_plan`) and identifiability.
+
+    The rule of :func:`~armcal.models.information.identifying`, at no cost where the
+    plan identifies the model as given: only a model it does not (a spatial arm as
+    loaded, over-complete) is prepared for the plan's rows and checked again.
+    NotIdentifiableError where the prepared model is not identified either.
+    """
+    info = model.plan_information(q, loads)
+    try:
+        return model, info, info.check_identifiable()
+    except NotIdentifiableError:
+        ready = model.prepared(model.plan_conditions(q, loads))
+        if ready is model:  # a minimal family: what the plan misses is the error
+            raise
+    info = ready.plan_information(q, loads)
+    return ready, info, info.check_identifiable()
+
+
 def evaluate_plan(
     model: FitModel,
     q: np.ndarray,
@@ -517,7 +560,11 @@ def evaluate_plan(
 
     ``test_q`` ``(k, n)`` are the poses where positioning accuracy matters (none:
     no position figures); ``loads`` every pose's loads for a model whose points
-    depend on them (default: the model's).
+    depend on them (default: the model's).  Every target of every pose is measured
+    (:meth:`~armcal.models.interface.FitModel.plan_conditions`).  A model the plan
+    does not identify as given is first prepared for it
+    (:func:`~armcal.models.information.identifying`: a spatial arm as loaded holds
+    what the plan cannot separate); :attr:`PlanQuality.model` is the model evaluated.
 
     Raises
     ------
@@ -536,8 +583,7 @@ def evaluate_plan(
     True
     """
     q = np.asarray(q, dtype=float)
-    info = model.plan_information(q, loads)  # one factorization serves every figure below
-    identified = info.check_identifiable()
+    model, info, identified = _identified_plan(model, q, loads)
     warning = model.conditioning_warning(identified)
     counts = None
     if model.default_payload_kg is not None:  # the points depend on the load

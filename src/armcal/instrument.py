@@ -32,6 +32,7 @@ import numpy as np
 from .errors import ArmcalError, ArmcalWarning
 from .identification import Calibration, identify, solve
 from .models import STANDARD_GRAVITY, Conditions, FitModel, Plane, fit_plane
+from .noise import per_row_sigma
 
 __all__ = [
     "PLANARITY_ALPHA",
@@ -100,6 +101,7 @@ def identify_3d(
             "base_rotation (armcal.workflow.measured_arm sets both)"
         )
     xyz = np.asarray(xyz, dtype=float)
+    row_sigma = per_row_sigma(sigma, row_sigma)  # a given sigma replaces them, in and out of plane
     rigid = arm.conditions(q, target=target, sigma_mm=row_sigma)
     arm.check_identifiable(rigid)
     plane = fit_plane(xyz, rigid.target, arm.target_labels)

@@ -36,6 +36,7 @@ of the isotropic model is unchanged.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import TypeVar
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -45,9 +46,13 @@ __all__ = [
     "NoiseModel",
     "TrackerNoise",
     "instrument_override",
+    "per_row_sigma",
     "relative_noise",
 ]
 
+
+#: Per-row sigma as a caller holds it (an array, a list).
+_Rows = TypeVar("_Rows")
 
 #: The distance (mm) at which a laser tracker's reference noise (:attr:`NoiseModel.sigma_mm`)
 #: is stated: 1 m, the unit of the data sheets' distance terms.
@@ -524,6 +529,27 @@ def instrument_override(noise: NoiseModel | None, sigma_mm: float) -> NoiseModel
     if noise is None:
         return NoiseModel.isotropic(sigma_mm)
     return noise.with_instrument_sigma(sigma_mm)
+
+
+def per_row_sigma(sigma_mm: float | None, row_sigma: _Rows | None) -> _Rows | None:
+    """The per-row instrument noise a fit or a draw uses, given both: the one rule of
+    precedence between ``sigma`` and per-row sigma, in one place.
+
+    An explicit ``sigma_mm`` is the instrument's noise: it replaces the noise
+    model's instrument part (:func:`instrument_override`) *and* any per-row sigma
+    (an instrument's reported uncertainties, a measurement file's ``sigma_mm``
+    column), which is then not used; the encoder noise stays.  Without it the
+    per-row values replace the instrument covariance row by row.  The command
+    line's ``--sigma`` means the same.
+
+    Examples
+    --------
+    >>> per_row_sigma(0.05, [0.01, 0.02]) is None
+    True
+    >>> per_row_sigma(None, [0.01, 0.02])
+    [0.01, 0.02]
+    """
+    return None if sigma_mm is not None else row_sigma
 
 
 def relative_noise(noise: NoiseModel | None) -> NoiseModel:

@@ -25,10 +25,18 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike
 
-from .errors import ArmcalError, ArmcalWarning, action
+from .errors import ArmcalError, ArmcalWarning, NotIdentifiableError, action
 from .identification import resolve_method, solve
-from .models import Conditions, FitModel, LinearPositions, Loads, position_jacobian
+from .models import (
+    Conditions,
+    FitModel,
+    Identifiability,
+    LinearPositions,
+    Loads,
+    position_jacobian,
+)
 from .models.information import predicted_covariance, tip_variances
+from .notebook import html_table, number
 from .progress import ProgressCallback
 from .synthesis import checked_truth, simulated_noise, synthesize_measurements
 
@@ -312,6 +320,26 @@ class MonteCarlo:
             f"{self.method}, empirical/predicted std {ratio.min():.3f} to {ratio.max():.3f})"
         )
 
+    def _repr_html_(self) -> str:
+        """The repr over a table of every free parameter's truth, bias, empirical and
+        predicted std (display units), and the warnings below it: what a notebook shows."""
+        free = self.model.free
+        truth = self.truth * self.display_scale
+        rows = [
+            [
+                self.names[i],
+                number(truth[i], 6),
+                number(self.bias[i], 3),
+                number(self.std[i], 3),
+                number(self.predicted_std[i], 3),
+                self.units[i],
+            ]
+            for i in np.flatnonzero(free)
+        ]
+        header = ["parameter", "truth", "bias", "std", "predicted std", "unit"]
+        notes = [f"warning {w.code}: {w.message}" for w in self.warnings]
+        return html_table(repr(self), header, rows, notes=notes)
+
     @property
     def arm(self) -> Any:
         """The geometric arm of the model."""
@@ -532,6 +560,24 @@ def _trial_warnings(
     return tuple(warnings)
 
 
+def _for_plan(
+    model: FitModel, rows: Conditions, truth: np.ndarray
+) -> tuple[FitModel, np.ndarray, Identifiability]:
+    """The model the plan's ``rows`` identify, the truth in its parameters, and the
+    identifiability: the model as given where the rows identify it (the rule of
+    :func:`~armcal.models.information.identifying`, here at no cost then), else the model
+    prepared for the truth's points and the truth as its fit sees it
+    (:meth:`~armcal.models.interface.FitModel.expressed`).  NotIdentifiableError where
+    the prepared model is not identified either (a minimal family is itself)."""
+    try:
+        return model, truth, model.check_identifiable(rows)
+    except NotIdentifiableError:
+        ready = model.prepared(rows, model.positions(rows, truth))
+        if ready is model:
+            raise
+    return ready, ready.expressed(rows, truth), ready.check_identifiable(rows)
+
+
 def monte_carlo(
     model: FitModel,
     q: ArrayLike,
@@ -551,7 +597,10 @@ def monte_carlo(
     ----------
     model : FitModel
         The nominal model: its noise model and fixed parameters are the model
-        simulated and identified.
+        simulated and identified.  A model the plan does not identify as given (a
+        spatial arm as loaded) is prepared for it
+        (:func:`~armcal.models.information.identifying`) and the truth expressed in its
+        parameters; :attr:`MonteCarlo.model` and :attr:`MonteCarlo.truth` are those.
     q : ndarray, shape (m, n)
         The plan (rad), measured at every target of every pose; must identify
         every free parameter.
@@ -641,7 +690,8 @@ def monte_carlo(
     model = model.with_noise(noise)
     reference = float(sigma) if sigma is not None else noise.sigma_mm
     rows = model.plan_conditions(q, loads)  # every target of every pose
-    conditioning = model.conditioning_warning(model.check_identifiable(rows))
+    model, truth, identified = _for_plan(model, rows, truth)
+    conditioning = model.conditioning_warning(identified)
     rng = np.random.default_rng(rng)
     predicted, ok = predicted_covariance(model, rows, reference, truth)
     if not ok:

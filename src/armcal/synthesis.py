@@ -23,7 +23,7 @@ from numpy.typing import ArrayLike
 
 from .errors import ArmcalError
 from .models import Conditions, FitModel, Loads
-from .noise import NoiseModel, instrument_override
+from .noise import NoiseModel, instrument_override, per_row_sigma
 
 __all__ = [
     "checked_truth",
@@ -119,6 +119,8 @@ def _instrument_factor(
                 f"row_sigma must hold one positive, finite sigma (mm) per pose, shape ({m},), "
                 f"got shape {rows.shape}"
             )
+    rows = per_row_sigma(sigma, rows)  # a given sigma replaces them, as in a fit
+    if rows is not None:
         if not oriented:
             return rows[:, None]
     elif sigma is not None:
@@ -185,7 +187,8 @@ def synthesize_measurements(
         Parameters of the virtual robot (internal units: mm, rad, ...).
     sigma : float, optional
         Isotropic instrument noise (1 std, mm) that overrides the model's
-        instrument covariance, as ``--sigma`` does; the encoder noise stays.  0
+        instrument covariance and any ``row_sigma``, as ``--sigma`` does; the
+        encoder noise stays.  0
         gives no instrument noise.  Without it the model's noise is used as it
         is (see :func:`simulated_noise`).
     rng : numpy.random.Generator or int or None
@@ -195,9 +198,10 @@ def synthesize_measurements(
     row_sigma : ndarray, shape (m,), optional
         Per-row instrument noise (mm), for instruments that report each point's
         uncertainty: pose ``i`` gets ``s_i^2 I`` in place of the instrument
-        covariance (and of ``sigma``).
-    target : ndarray of int, shape (m,), optional
-        The target every row measures, on an arm with several.
+        covariance; a given ``sigma`` replaces them (the one rule of
+        :func:`armcal.noise.per_row_sigma`, as in :func:`armcal.identify`).
+    target : ndarray of int or sequence of str, shape (m,), optional
+        The target every row measures, on an arm with several: its index or its label.
     loads : Loads, optional
         Every row's payload and tip force (a model of joint compliance; default:
         the robot file's payload).

@@ -36,9 +36,11 @@ from numpy.typing import ArrayLike
 from .errors import ArmcalError, ArmcalWarning, NotIdentifiableError, action
 from .identification import identify
 from .identification.registration import register_nominal
+from .identification.result import Calibration, calibrated_arm
 from .models import CalibratedArm, Conditions, FitModel, Loads
 from .models.information import tip_variances
-from .noise import NoiseModel
+from .noise import NoiseModel, per_row_sigma
+from .notebook import html_table, number
 from .numerics import point_norms, rms
 from .progress import ProgressCallback
 
@@ -105,6 +107,26 @@ class Validation:
             f"{s['rms_before_per_point_mm']:.4g} mm before, {s['rms_after_per_point_mm']:.4g} mm "
             f"after, {s['predicted_rms_after_per_point_mm']:.4g} mm predicted)"
         )
+
+    def _repr_html_(self) -> str:
+        """The repr over a table of the errors before and after calibration (per point,
+        mm; a 6-DoF instrument's orientations in deg): what a notebook shows."""
+        s = self.summary()
+        rows = [
+            ["RMS per point (mm)", number(s["rms_before_mm"]), number(s["rms_after_mm"])],
+            ["max (mm)", number(s["max_before_mm"]), number(s["max_after_mm"])],
+            ["95 % quantile (mm)", number(s["p95_before_mm"]), number(s["p95_after_mm"])],
+            ["predicted RMS per point (mm)", "", number(s["predicted_rms_after_per_point_mm"])],
+        ]
+        if self.turns is not None:
+            rows.append(
+                [
+                    "orientation RMS (deg)",
+                    number(s["orientation_rms_before_deg"]),
+                    number(s["orientation_rms_after_deg"]),
+                ]
+            )
+        return html_table(repr(self), ["", "before", "after"], rows)
 
     @property
     def before_mm(self) -> np.ndarray:
@@ -256,7 +278,7 @@ def _turns(
 
 
 def validate(
-    cal: CalibratedArm,
+    cal: Calibration | CalibratedArm,
     q: ArrayLike,
     points: ArrayLike,
     *,
@@ -268,15 +290,17 @@ def validate(
 
     Parameters
     ----------
-    cal : CalibratedArm
+    cal : Calibration or CalibratedArm
+        What :func:`~armcal.identification.identify` returns, or a calibrated arm
+        (:func:`~armcal.files.read_calibration`).
     q : ndarray, shape (m, n)
         Joint angles of the held-out poses, rad.
     points : ndarray, shape (m, d) or (m, 3)
         Measured positions in the instrument frame, mm: as the calibration's
         data were (3-D points of a planar arm calibrated from 3-D data are
         projected into its plane).
-    target : ndarray of int, shape (m,), optional
-        Every row's target, for an arm with several.
+    target : ndarray of int or sequence of str, shape (m,), optional
+        Every row's target, for an arm with several: its index or its label.
     row_sigma : ndarray, shape (m,), optional
         Per-row instrument noise (mm) for the predicted error.
     loads : Loads, optional
@@ -303,6 +327,7 @@ def validate(
     >>> bool(v.summary()["rms_before_mm"] > 0.02), float(v.summary()["rms_after_mm"])
     (True, 0.0)
     """
+    cal = calibrated_arm(cal)
     model = cal.model
     conditions = model.conditions(q, target=target, loads=loads, sigma_mm=row_sigma)
     points = np.asarray(points, dtype=float)
@@ -690,7 +715,9 @@ def cross_validate(
         Rows that belong together (the targets measured at one pose) stay in
         one fold; every row its own group by default.
     target, sigma, row_sigma, loads
-        As for :func:`armcal.identification.identify`.
+        As for :func:`armcal.identification.identify`: a given ``sigma`` replaces
+        ``row_sigma`` (:func:`armcal.noise.per_row_sigma`) in every fold's fit and
+        in the error each fold predicts.
     rng : numpy.random.Generator or int or None
         Shuffles the groups into folds.
     progress : callable, optional
@@ -707,6 +734,7 @@ def cross_validate(
         parameters (too few poses for ``K`` folds).
     """
     rng = np.random.default_rng(rng)
+    row_sigma = per_row_sigma(sigma, row_sigma)  # a given sigma replaces them, fold by fold
     conditions = model.conditions(q, target=target, loads=loads, sigma_mm=row_sigma)
     conditions, points = model.anchor(conditions, np.asarray(points, dtype=float))
     m = conditions.m

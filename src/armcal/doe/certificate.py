@@ -73,6 +73,17 @@ class Certificate:
     max_pose: np.ndarray | None = None
     pool_size: int | None = None
 
+    def __repr__(self) -> str:
+        over = (
+            "every feasible pose"
+            if self.pool_size is None
+            else f"the {self.pool_size} distinct candidate poses"
+        )
+        return (
+            f"Certificate(D-efficiency >= {self.certified_d_efficiency:.4f} against the best "
+            f"design over {over}; plan-only bound {self.plan_only_bound:.4f})"
+        )
+
     def reference_inverse(self, model: FitModel) -> np.ndarray:
         """``M(xi*)^-1`` of the reference design (its support and weights) by the rank
         policy: the matrix whose variance function ``max_variance`` bounds."""

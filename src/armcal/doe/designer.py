@@ -11,21 +11,36 @@ import numpy as np
 from ..criteria import CRITERIA, Criterion, attains_unit_bound, d_efficiency, efficiencies
 from ..errors import ArmcalError, ArmcalWarning, action, render
 from ..models import ClosedFormPlan, ClosedFormPlans, FitModel, equations_per_pose
+from ..models.information import identifying
 from ..progress import ProgressCallback, share
 from .certificate import Certificate, certify, certify_pool
 from .exchange import exchange_plan
 from .optimizer import optimize_plan
 from .order import ORDERS, Order, joint_travel, order_poses
-from .plans import DISTINCT_TOLERANCE, feasible_poses, repeated_poses
+from .plans import DISTINCT_TOLERANCE, feasible_poses, random_plan, repeated_poses
 from .pool import distinct_count, pool_plan
 from .task import TASK_CRITERIA, task_criterion
 
 __all__ = [
     "METHODS",
+    "PROBE_POSES",
     "REPLICATE_ABOVE",
+    "ClosedForms",
     "Design",
+    "MadePlan",
+    "analytic_plan",
+    "certified",
+    "check_options",
+    "check_size",
+    "closed_forms",
+    "closing_notes",
     "design",
+    "exchanged_plan",
+    "identifiable_model",
+    "pool_made_plan",
     "pool_warnings",
+    "replicated_plan",
+    "searched_plan",
 ]
 
 
@@ -44,6 +59,11 @@ REPLICATE_ABOVE = 120
 
 
 METHODS = ("auto", "analytic", "optimize", "exchange")
+
+#: Poses of the random plan on which :func:`identifiable_model` chooses what a plan
+#: moving every joint identifies (as the command line's design does): far more rows
+#: than any arm's parameters, so that only what no plan separates is held.
+PROBE_POSES = 200
 
 
 @dataclass(frozen=True, eq=False)
@@ -216,7 +236,11 @@ def design(
     model : FitModel
         The model to design for: the arm with its noise model and fixed
         parameters (a model whose points depend on the load is designed with
-        the payloads by :func:`armcal.doe.loads.design_with_loads`).
+        the payloads by :func:`armcal.doe.loads.design_with_loads`).  A model that a
+        plan moving every joint does not identify as given (a spatial arm as
+        loaded, with several targets or one) is designed for what such a plan
+        identifies (:func:`identifiable_model`); :attr:`Design.model` is the model
+        designed for.
     m : int
         Number of poses; at least ``ceil(p_f / 2)`` for ``p_f`` free parameters.
     criterion : {"D", "A", "E", "I", "G"}
@@ -297,21 +321,105 @@ def design(
 
     **Order.**  The criteria and the certificate are computed for the plan as
     the method made it; ordering only permutes its poses.
+
+    **Steps.**  The options are checked (:func:`check_options`), the model made
+    identifiable (:func:`identifiable_model`) and sized (:func:`check_size`); the
+    closed-form plans that fit are found (:func:`closed_forms`); one method makes the
+    plan (:func:`analytic_plan`, :func:`replicated_plan`, :func:`pool_made_plan`,
+    :func:`exchanged_plan` or :func:`searched_plan`), the notes on it are added
+    (:func:`closing_notes`), and it is certified (:func:`certified`) and ordered.
     """
+    check_options(criterion, method, order, test_q)
+    model = identifiable_model(model)
+    check_size(model, m)
+    aim: str | Criterion = criterion
+    if criterion in TASK_CRITERIA:
+        assert test_q is not None  # check_options refused a task criterion without
+        aim = task_criterion(criterion, model, test_q)
+    rng = np.random.default_rng(rng)
+    pool: np.ndarray | None = None  # the user's candidates: every pose from them
+    if candidates is not None:
+        pool = np.asarray(candidates, dtype=float)
+        if method in ("analytic", "optimize"):
+            raise ArmcalError(
+                f"a plan from candidate poses takes every pose from them, and method {method!r} "
+                f"makes poses of its own; use {action('method', 'auto')} or exchange"
+            )
+    closed = closed_forms(model, m, method, distinct=distinct, from_pool=pool is not None)
+    if method == "analytic" or (method == "auto" and closed.optimal and aim == criterion):
+        made = analytic_plan(closed)
+    elif m > REPLICATE_ABOVE and not distinct:
+        made = replicated_plan(
+            model, m, criterion=criterion, method=method, rng=rng, candidates=candidates,
+            test_q=test_q,
+        )  # fmt: skip
+    elif pool is not None and (method == "auto" or not _planar_exchange(model)):
+        made = pool_made_plan(model, m, pool, criterion=criterion, rng=rng, distinct=distinct)
+    elif method == "exchange":
+        made = exchanged_plan(
+            model, m, candidates, criterion=criterion, rng=rng, distinct=distinct
+        )
+    else:
+        made = searched_plan(
+            model, m, aim, closed, criterion=criterion, rng=rng, distinct=distinct,
+            progress=progress,
+        )  # fmt: skip
+    q = np.asarray(made.q, dtype=float)
+    efficiency = float(d_efficiency(model, q))
+    notes = [*(() if made.replaces_notes else closed.notes), *made.notes]
+    notes.extend(closing_notes(made, closed, q, efficiency, method, distinct=distinct))
+    certificate = certified(model, q, pool, with_certificate, rng=rng, progress=progress)
+    travel_found = joint_travel(q)
+    if order == "travel":
+        q = q[order_poses(q)]
+    if progress is not None:
+        progress(1000, 1000)
+    return Design(
+        model=model,
+        q=q,
+        criterion=criterion,
+        method=made.method,
+        d_efficiency=efficiency,
+        certificate=certificate,
+        note_texts=tuple(notes),
+        order=order,
+        joint_travel=joint_travel(q),
+        joint_travel_unordered=travel_found,
+        distinct=distinct,
+        warnings=() if pool is None else pool_warnings(pool, q),
+    )
+
+
+def check_options(criterion: str, method: str, order: str, test_q: np.ndarray | None) -> None:
+    """ArmcalError for an unknown criterion, method or order, or a task criterion
+    (:data:`armcal.doe.task.TASK_CRITERIA`) without test poses; in that order."""
     names = [*CRITERIA, *TASK_CRITERIA]
     if criterion not in names:
         raise ArmcalError(f"unknown criterion {criterion!r}; choose one of {', '.join(names)}")
-    aim: str | Criterion = criterion
-    if criterion in TASK_CRITERIA:
-        if test_q is None or not len(test_q):
-            raise ArmcalError(
-                f"the {criterion} criterion needs test poses ({action('test-poses')})"
-            )
-        aim = task_criterion(criterion, model, test_q)
+    if criterion in TASK_CRITERIA and (test_q is None or not len(test_q)):
+        raise ArmcalError(f"the {criterion} criterion needs test poses ({action('test-poses')})")
     if method not in METHODS:
         raise ArmcalError(f"unknown method {method!r}; choose one of {', '.join(METHODS)}")
     if order not in ORDERS:
         raise ArmcalError(f"unknown order {order!r}; choose one of {', '.join(ORDERS)}")
+
+
+def identifiable_model(model: FitModel) -> FitModel:
+    """The model reduced to what a plan moving every joint identifies: itself when
+    :data:`PROBE_POSES` random poses identify it (a minimal family, a model already
+    prepared), else :meth:`~armcal.models.interface.FitModel.prepared` for them
+    (:func:`~armcal.models.information.identifying`).
+
+    The poses come from a stream of their own (seed 0), so that the design's stream
+    stays the same; the held set does not depend on them, being chosen by the family's
+    fixed rule (for a spatial arm :mod:`armcal.models.spatial.selection`).
+    """
+    probe = random_plan(model, PROBE_POSES, rng=np.random.default_rng(0))
+    return identifying(model, model.plan_conditions(probe))
+
+
+def check_size(model: FitModel, m: int) -> None:
+    """ArmcalError when ``m`` poses give fewer equations than the model's free parameters."""
     p = model.n_free
     per_pose = equations_per_pose(model)
     min_poses = -(-p // per_pose)
@@ -321,113 +429,245 @@ def design(
             f"{m} poses give {per_pose * m} equations for the {p}{free} parameters of "
             f"{model.name}; use {action('poses', min_poses)} or more"
         )
-    rng = np.random.default_rng(rng)
-    notes: list[str] = []
-    q: np.ndarray | None = None
-    used: str = method
-    user_pool: np.ndarray | None = None  # the user's candidates: every pose from them
-    if candidates is not None:
-        user_pool = np.asarray(candidates, dtype=float)
-        if method in ("analytic", "optimize"):
-            raise ArmcalError(
-                f"a plan from candidate poses takes every pose from them, and method {method!r} "
-                f"makes poses of its own; use {action('method', 'auto')} or exchange"
-            )
-    # placed only where asked for (auto, analytic): never for a plan from a pool
-    family = None if user_pool is not None else model.closed_form_plans(m)
-    closed: list[ClosedFormPlan] = []
-    repeats, found = 0, 0.0  # the optimizer's repeated poses and its plan's D-criterion
-    searched = False  # whether the optimizer searched (its note comes after)
+
+
+@dataclass(frozen=True, eq=False)
+class ClosedForms:
+    """The family's closed-form plans a design may take, and what was said of them.
+
+    Attributes
+    ----------
+    family : ClosedFormPlans or None
+        The family's closed-form plans of the size (None: it has none, or the plan
+        is from a pool).
+    plans : tuple of ClosedFormPlan
+        Those that fit the constraints (and, for a distinct plan, repeat no pose);
+        empty unless the method is ``auto`` or ``analytic``.
+    notes : tuple of str
+        Why none was taken (none fits; every one repeats a pose).
+    d : dict of str to float
+        Every plan's D-efficiency, by label.
+    best : ClosedFormPlan or None
+        The plan of the highest D-efficiency.
+    optimal : bool
+        Whether ``best`` reaches the bound of 1 (:func:`armcal.criteria.attains_unit_bound`).
+    """
+
+    family: ClosedFormPlans | None
+    plans: tuple[ClosedFormPlan, ...]
+    notes: tuple[str, ...]
+    d: dict[str, float]
+    best: ClosedFormPlan | None
+    optimal: bool
+
+
+def closed_forms(
+    model: FitModel, m: int, method: str, *, distinct: bool, from_pool: bool
+) -> ClosedForms:
+    """The closed-form ``m``-pose plans a design by ``method`` may take (none for a plan
+    from a pool).
+
+    Raises ArmcalError for ``method="analytic"`` where the family has none, none fits
+    the constraints, or (``distinct``) every one that fits repeats a pose.
+    """
+    family = None if from_pool else model.closed_form_plans(m)
     if method == "analytic" and family is None:
         raise ArmcalError(
             f"{model.name} has no closed-form plans; use {action('method', 'auto')}, optimize or "
             "exchange"
         )
+    plans: list[ClosedFormPlan] = []
+    notes: list[str] = []
     if family is not None and method in ("auto", "analytic"):
-        closed = list(family.plans)
-        if not closed:
+        plans = list(family.plans)
+        if not plans:
             if method == "analytic":
                 assert family.failure is not None
                 raise family.failure
             notes.append(family.unfit_note())
-        elif distinct and all(repeated_poses(plan.q).any() for plan in closed):
+        elif distinct and all(repeated_poses(plan.q).any() for plan in plans):
             if method == "analytic":
                 raise ArmcalError(family.repeats_message(refused=True))
             notes.append(family.repeats_message(refused=False))
-            closed = []
+            plans = []
         elif distinct:
-            closed = [plan for plan in closed if not repeated_poses(plan.q).any()]
-    d_closed = {plan.label: float(d_efficiency(model, plan.q)) for plan in closed}
-    best = max(closed, key=lambda plan: d_closed[plan.label]) if closed else None
-    optimal_closed = best is not None and attains_unit_bound(model, best.q, d_closed[best.label])
-    if method == "analytic" or (method == "auto" and optimal_closed and aim == criterion):
-        assert best is not None and family is not None  # raised above otherwise
-        q, used = best.q, "analytic"
-        note = family.choice_note(best, d_closed, optimal_closed)
-        if note is not None:
-            notes.append(note)
-    elif m > REPLICATE_ABOVE and not distinct:
-        copies = -(-m // REPLICATE_ABOVE)
-        size = m // copies
-        base = design(
-            model, size, criterion=criterion, method=method, rng=rng, candidates=candidates,
-            with_certificate=False, order="none", test_q=test_q,
-        )  # fmt: skip
-        # whole copies, then the plan's first poses: ``m`` in all (``copies * size`` may
-        # fall short by more than ``size`` poses, so count the copies of ``size`` anew)
-        copies, extra = divmod(m, size)
-        q = np.concatenate([np.tile(base.q, (copies, 1)), base.q[:extra]])
-        used = base.method
-        notes.clear()  # the family's notes are of the m-pose plans; the smaller plan's replace
-        notes.extend(base.note_texts)
-        notes.append(
-            f"{m} poses: the optimal {size}-pose plan taken {copies} times"
-            + (f", and its first {extra} poses once more" if extra else "")
-            + f": a plan's information per pose is no better above {REPLICATE_ABOVE} poses "
-            "than the best plan below, and searching every pose would cost time and memory "
-            "in proportion"
-        )
-    elif user_pool is not None and (method == "auto" or not _planar_exchange(model)):
-        # Every pose from the user's pool: the pool's D-optimal weights, then DETMAX, then
-        # (one point in the plane a pose) the Fedorov exchange over the pool, if better.
-        q = user_pool[pool_plan(model, m, user_pool, distinct=distinct)]
-        used = "pool"
-        if _planar_exchange(model):
-            swapped = exchange_plan(model, m, user_pool, start=q, rng=rng, distinct=distinct)
-            if float(d_efficiency(model, swapped)) > float(d_efficiency(model, q)) * (1 + 1e-12):
-                q, used = swapped, "pool+exchange"
-        if criterion != "D":
-            notes.append("a plan from a pool maximizes D; it was not tuned for " + criterion)
-    elif method == "exchange":
-        pool = feasible_poses(model, 4000, rng=rng) if candidates is None else candidates
-        q = exchange_plan(model, m, pool, rng=rng, distinct=distinct)
-        if criterion != "D":
-            notes.append("exchange maximizes D; the plan was not tuned for " + criterion)
-    else:
-        searched = True
-        initial = np.stack([plan.q for plan in closed]) if closed else None
-        q = optimize_plan(
-            model, m, criterion=aim, rng=rng, initial=initial, progress=share(progress, 0, 0.5)
-        )
-        used = "optimize"
-        repeats = int(np.count_nonzero(repeated_poses(q))) if distinct else 0
-        found = float(d_efficiency(model, q))
-        single = _planar_exchange(model)
-        if criterion == "D" and single:
-            pool = feasible_poses(model, 4000, rng=rng)
-            polished = exchange_plan(model, m, pool, start=q, rng=rng, distinct=distinct)
-            if repeats or float(d_efficiency(model, polished)) > found * (1 + 1e-12):
-                q, used = polished, "optimize+exchange"
-        elif repeats and single:  # replace the repeats, without exchanges that tune for D
-            pool = feasible_poses(model, 4000, rng=rng)
-            q = exchange_plan(model, m, pool, start=q, rng=rng, max_swaps=0, distinct=True)
-        if best is not None and _score(model, best.q, aim) > _score(model, q, aim):
-            q, used = best.q, "analytic"  # not expected: the optimizer starts from it
-    q = np.asarray(q, dtype=float)
-    efficiency = float(d_efficiency(model, q))
-    if searched and family is not None:
+            plans = [plan for plan in plans if not repeated_poses(plan.q).any()]
+    d = {plan.label: float(d_efficiency(model, plan.q)) for plan in plans}
+    best = max(plans, key=lambda plan: d[plan.label]) if plans else None
+    optimal = best is not None and attains_unit_bound(model, best.q, d[best.label])
+    return ClosedForms(family, tuple(plans), tuple(notes), d, best, optimal)
+
+
+@dataclass(frozen=True, eq=False)
+class MadePlan:
+    """A plan as one method made it, before notes, certificate and order.
+
+    Attributes
+    ----------
+    q : ndarray, shape (m, n)
+        The poses, rad.
+    method : str
+        :attr:`Design.method`.
+    notes : tuple of str
+        What the method says of the plan.
+    replaces_notes : bool
+        Whether ``notes`` replace the closed forms' (a replicated plan's are the
+        smaller plan's).
+    repeats : int
+        The optimizer's repeated poses, replaced for a distinct plan.
+    found : float
+        The D-criterion of the optimizer's plan, before the repeats were replaced.
+    searched : bool
+        Whether the optimizer searched (the family's note on its closed forms follows).
+    """
+
+    q: np.ndarray
+    method: str
+    notes: tuple[str, ...] = ()
+    replaces_notes: bool = False
+    repeats: int = 0
+    found: float = 0.0
+    searched: bool = False
+
+
+def analytic_plan(closed: ClosedForms) -> MadePlan:
+    """The best closed-form plan, with the family's note on the choice."""
+    assert closed.best is not None and closed.family is not None  # closed_forms raised
+    note = closed.family.choice_note(closed.best, closed.d, closed.optimal)
+    return MadePlan(closed.best.q, "analytic", () if note is None else (note,))
+
+
+def replicated_plan(
+    model: FitModel,
+    m: int,
+    *,
+    criterion: str,
+    method: Method,
+    rng: np.random.Generator,
+    candidates: np.ndarray | None,
+    test_q: np.ndarray | None,
+) -> MadePlan:
+    """Above :data:`REPLICATE_ABOVE` poses: the optimal plan of at most that many poses,
+    taken as many whole times as fit, then its first poses: ``m`` in all."""
+    copies = -(-m // REPLICATE_ABOVE)
+    size = m // copies
+    base = design(
+        model, size, criterion=criterion, method=method, rng=rng, candidates=candidates,
+        with_certificate=False, order="none", test_q=test_q,
+    )  # fmt: skip
+    # whole copies, then the plan's first poses: ``m`` in all (``copies * size`` may
+    # fall short by more than ``size`` poses, so count the copies of ``size`` anew)
+    copies, extra = divmod(m, size)
+    q = np.concatenate([np.tile(base.q, (copies, 1)), base.q[:extra]])
+    note = (
+        f"{m} poses: the optimal {size}-pose plan taken {copies} times"
+        + (f", and its first {extra} poses once more" if extra else "")
+        + f": a plan's information per pose is no better above {REPLICATE_ABOVE} poses "
+        "than the best plan below, and searching every pose would cost time and memory "
+        "in proportion"
+    )
+    # the family's notes are of the m-pose plans; the smaller plan's replace them
+    return MadePlan(q, base.method, (*base.note_texts, note), replaces_notes=True)
+
+
+def pool_made_plan(
+    model: FitModel,
+    m: int,
+    pool: np.ndarray,
+    *,
+    criterion: str,
+    rng: np.random.Generator,
+    distinct: bool,
+) -> MadePlan:
+    """Every pose from the user's ``pool``: the pool's D-optimal weights, then DETMAX
+    (:func:`~armcal.doe.pool.pool_plan`), then (one point in the plane a pose) the
+    Fedorov exchange over the pool, if better."""
+    q = pool[pool_plan(model, m, pool, distinct=distinct)]
+    used = "pool"
+    if _planar_exchange(model):
+        swapped = exchange_plan(model, m, pool, start=q, rng=rng, distinct=distinct)
+        if float(d_efficiency(model, swapped)) > float(d_efficiency(model, q)) * (1 + 1e-12):
+            q, used = swapped, "pool+exchange"
+    notes = (
+        ()
+        if criterion == "D"
+        else ("a plan from a pool maximizes D; it was not tuned for " + criterion,)
+    )
+    return MadePlan(q, used, notes)
+
+
+def exchanged_plan(
+    model: FitModel,
+    m: int,
+    candidates: np.ndarray | None,
+    *,
+    criterion: str,
+    rng: np.random.Generator,
+    distinct: bool,
+) -> MadePlan:
+    """The Fedorov exchange over ``candidates`` (default: 4000 random feasible poses)."""
+    pool = feasible_poses(model, 4000, rng=rng) if candidates is None else candidates
+    q = exchange_plan(model, m, pool, rng=rng, distinct=distinct)
+    notes = (
+        ()
+        if criterion == "D"
+        else ("exchange maximizes D; the plan was not tuned for " + criterion,)
+    )
+    return MadePlan(q, "exchange", notes)
+
+
+def searched_plan(
+    model: FitModel,
+    m: int,
+    aim: str | Criterion,
+    closed: ClosedForms,
+    *,
+    criterion: str,
+    rng: np.random.Generator,
+    distinct: bool,
+    progress: ProgressCallback | None,
+) -> MadePlan:
+    """The optimizer's plan (:func:`~armcal.doe.optimizer.optimize_plan`, started also from
+    the closed forms), polished for D by exchange (one point in the plane a pose), its
+    repeated poses replaced for a distinct plan; the best closed form if it does better."""
+    initial = np.stack([plan.q for plan in closed.plans]) if closed.plans else None
+    q = optimize_plan(
+        model, m, criterion=aim, rng=rng, initial=initial, progress=share(progress, 0, 0.5)
+    )
+    used = "optimize"
+    repeats = int(np.count_nonzero(repeated_poses(q))) if distinct else 0
+    found = float(d_efficiency(model, q))
+    single = _planar_exchange(model)
+    if criterion == "D" and single:
+        pool = feasible_poses(model, 4000, rng=rng)
+        polished = exchange_plan(model, m, pool, start=q, rng=rng, distinct=distinct)
+        if repeats or float(d_efficiency(model, polished)) > found * (1 + 1e-12):
+            q, used = polished, "optimize+exchange"
+    elif repeats and single:  # replace the repeats, without exchanges that tune for D
+        pool = feasible_poses(model, 4000, rng=rng)
+        q = exchange_plan(model, m, pool, start=q, rng=rng, max_swaps=0, distinct=True)
+    best = closed.best
+    if best is not None and _score(model, best.q, aim) > _score(model, q, aim):
+        q, used = best.q, "analytic"  # not expected: the optimizer starts from it
+    return MadePlan(q, used, repeats=repeats, found=found, searched=True)
+
+
+def closing_notes(
+    made: MadePlan,
+    closed: ClosedForms,
+    q: np.ndarray,
+    efficiency: float,
+    method: str,
+    *,
+    distinct: bool,
+) -> list[str]:
+    """The notes on the plan ``q`` made: how a searched plan compares with the family's
+    closed forms, and what making the poses distinct cost."""
+    notes = []
+    family = closed.family
+    if made.searched and family is not None:
         note = family.search_note(
-            None if best is None else d_closed[best.label],
+            None if closed.best is None else closed.d[closed.best.label],
             efficiency,
             method,
             lambda: _would_be_optimal(family),
@@ -436,37 +676,35 @@ def design(
             notes.append(note)
     if distinct:
         assert not repeated_poses(q).any(), "a distinct plan repeats a pose"
-        if repeats and used != "analytic":
+        if made.repeats and made.method != "analytic":
             notes.append(
-                f"distinct poses: the optimizer's plan repeated {repeats} of its {m} poses "
-                f"(D-criterion {found:.4f}); each repeat was replaced by the candidate pose "
-                f"adding the most information, no candidate taken twice (D-criterion "
-                f"{efficiency:.4f}); poses count as one within {DISTINCT_TOLERANCE:g} rad on "
-                "every joint"
+                f"distinct poses: the optimizer's plan repeated {made.repeats} of its "
+                f"{q.shape[0]} poses (D-criterion {made.found:.4f}); each repeat was replaced "
+                f"by the candidate pose adding the most information, no candidate taken twice "
+                f"(D-criterion {efficiency:.4f}); poses count as one within "
+                f"{DISTINCT_TOLERANCE:g} rad on every joint"
             )
+    return notes
+
+
+def certified(
+    model: FitModel,
+    q: np.ndarray,
+    pool: np.ndarray | None,
+    with_certificate: bool,
+    *,
+    rng: np.random.Generator,
+    progress: ProgressCallback | None,
+) -> Certificate | None:
+    """The plan's certificate (None when not asked for): against the best design over the
+    user's ``pool`` (:func:`certify_pool`), else over the constraints (:func:`certify`);
+    ``progress`` from 500 to 950 of 1000."""
     tick = progress if progress is not None else (lambda done, total: None)
     tick(500, 1000)
     certificate = None
-    if with_certificate and user_pool is not None:  # the best plan is the pool's best
-        certificate = certify_pool(model, q, user_pool)
+    if with_certificate and pool is not None:  # the best plan is the pool's best
+        certificate = certify_pool(model, q, pool)
     elif with_certificate:
         certificate = certify(model, q, rng=rng, progress=share(progress, 0.5, 0.95))
     tick(950, 1000)
-    travel_found = joint_travel(q)
-    if order == "travel":
-        q = q[order_poses(q)]
-    tick(1000, 1000)
-    return Design(
-        model=model,
-        q=q,
-        criterion=criterion,
-        method=used,
-        d_efficiency=efficiency,
-        certificate=certificate,
-        note_texts=tuple(notes),
-        order=order,
-        joint_travel=joint_travel(q),
-        joint_travel_unordered=travel_found,
-        distinct=distinct,
-        warnings=() if user_pool is None else pool_warnings(user_pool, q),
-    )
+    return certificate

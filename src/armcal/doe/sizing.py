@@ -13,7 +13,7 @@ from ..criteria import position_rms, predicted_std
 from ..errors import ArmcalError, action
 from ..models import FitModel, Loads, equations_per_pose
 from ..progress import ProgressCallback, share
-from .designer import design
+from .designer import design, identifiable_model
 from .loads import design_with_loads
 from .order import order_poses
 from .plans import random_plan
@@ -185,6 +185,18 @@ class PosesNeeded:
     model: FitModel | None = None
     measured: tuple[str, ...] = ()
 
+    def __repr__(self) -> str:
+        unit = self.requirement.rsplit("_", 1)[-1]
+        fewer = (
+            f"{self.poses - 1} reach {self.previous:.4g}"
+            if math.isfinite(self.previous)
+            else f"{self.poses - 1} cannot identify the parameters"
+        )
+        return (
+            f"PosesNeeded({self.requirement} <= {self.goal:g} {unit}: {self.poses} poses reach "
+            f"{self.achieved:.4g}, {fewer}; sigma {self.sigma_mm:g} mm, {self.method})"
+        )
+
 
 #: Random plans drawn per size by ``plans="random"``; the most accurate is kept.
 RANDOM_PLANS = 20
@@ -338,6 +350,9 @@ def poses_needed(
     Parameters
     ----------
     model : FitModel
+        The model to calibrate; one that a plan moving every joint does not identify
+        as given (a spatial arm as loaded) is sized for what such a plan identifies
+        (:func:`~armcal.doe.designer.identifiable_model`).
     requirement : {"length_std_mm", "angle_std_deg", "position_rms_mm"}
         What must reach ``goal`` (see :data:`REQUIREMENTS`).
     goal : float
@@ -404,6 +419,7 @@ def poses_needed(
     _check_requirement(requirement)
     if not (goal > 0 and math.isfinite(goal)):
         raise ArmcalError(f"the target accuracy must be a positive number, got {goal}")
+    model = identifiable_model(model)  # a spatial arm as loaded: what plans identify
     chosen = model.design_loads(payloads)
     fitted = model if chosen is None else chosen[0]  # what a plan of poses and loads fits
     if requirement in REQUIREMENT_UNITS:  # before any plan is designed

@@ -21,8 +21,9 @@ import numpy as np
 
 from ..errors import ArmcalWarning
 from ..models import CalibratedArm, Conditions, Effect, FitModel, Plane
+from ..notebook import html_table, number
 from ..numerics import point_norms, rms
-from .judgement import GoodnessOfFit, Outlier
+from .judgement import GoodnessOfFit, Outlier, row_noun
 from .registration import Baseline
 
 __all__ = [
@@ -30,6 +31,7 @@ __all__ = [
     "Calibration",
     "Estimate",
     "NestedFit",
+    "calibrated_arm",
 ]
 
 #: The correlation of two estimates beyond which a report names the pair (|r|).
@@ -177,10 +179,20 @@ class Calibration:
         used = f"{self.n_used} of {self.n_poses}" if self.n_used < self.n_poses else self.n_poses
         codes = f", warnings {[w.code for w in self.warnings]}" if self.warnings else ""
         return (
-            f"Calibration({self.model.name}: {used} poses, {self.n_free} free parameters, "
-            f"{self.method}, sigma {self.sigma_mm:.4g} mm ({self.sigma_source}), residual RMS "
-            f"{self.residual_rms:.4g} mm per coordinate{codes})"
+            f"Calibration({self.model.name}: {used} {row_noun(self.target)}, {self.n_free} "
+            f"free parameters, {self.method}, sigma {self.sigma_mm:.4g} mm ({self.sigma_source}), "
+            f"residual RMS {self.residual_rms:.4g} mm per coordinate{codes})"
         )
+
+    def _repr_html_(self) -> str:
+        """The repr over a table of the parameters (value, std, unit in display units),
+        and the warnings below it: what a notebook shows."""
+        rows = [
+            [e.name, number(e.value, 6), "fixed" if e.fixed else number(e.std, 3), e.unit]
+            for e in self.parameters
+        ]
+        notes = [f"warning {w.code}: {w.message}" for w in self.warnings]
+        return html_table(repr(self), ["parameter", "value", "std", "unit"], rows, notes=notes)
 
     def calibrated(self) -> CalibratedArm:
         """The model with these parameters, for validation, compensation and export."""
@@ -332,3 +344,10 @@ class Calibration:
         off = np.abs(corr - np.eye(len(self.names)))
         pairs = zip(*np.nonzero(np.triu(off > above)), strict=True)
         return [(self.names[i], self.names[j], float(corr[i, j])) for i, j in pairs]
+
+
+def calibrated_arm(cal: Calibration | CalibratedArm) -> CalibratedArm:
+    """The calibrated arm of ``cal``: a :class:`Calibration`'s
+    (:meth:`Calibration.calibrated`), or ``cal`` itself (one read from a calibration
+    file), so that validation and compensation take what :func:`identify` returns."""
+    return cal.calibrated() if isinstance(cal, Calibration) else cal

@@ -38,6 +38,7 @@ __all__ = [
     "column_identifiability",
     "covariance_factor_from",
     "display_std",
+    "identifying",
     "mean_tip_variance",
     "pose_derivative",
     "predicted_covariance",
@@ -166,6 +167,25 @@ def identifiable_or_raise(
         f"{p}): not identifiable: {listing(info.unidentifiable) or '(none)'}; {advice}",
         list(info.combinations),
     )
+
+
+def identifying(
+    model: FitModel, conditions: Conditions, points: np.ndarray | None = None
+) -> FitModel:
+    """The model for these rows: as given where they identify its free parameters, else
+    :meth:`~armcal.models.interface.FitModel.prepared` for them (and for the measured
+    ``points``, when given).
+
+    An over-complete family (a spatial arm straight from its robot file) then holds
+    what the rows cannot separate, by its fixed rule, so that a Python user passes the
+    arm as loaded, as the command line does; a model already prepared (or a minimal
+    one the rows identify) is kept as it is, so a caller's choice is never redone.  A
+    minimal family the rows do not identify is itself: the caller's check then says
+    what the rows miss.
+    """
+    if model.identifiability(conditions)[0].identifiable:
+        return model
+    return model.prepared(conditions, points)
 
 
 def ill_conditioned_warning(info: Identifiability, said: str, advice: str) -> ArmcalWarning | None:

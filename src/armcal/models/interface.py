@@ -56,7 +56,7 @@ from typing import Any, Protocol, Self
 import numpy as np
 from numpy.typing import ArrayLike
 
-from ..errors import ArmcalError, ArmcalWarning
+from ..errors import ArmcalError, ArmcalWarning, action
 from ..noise import NoiseModel
 from ..numerics import ScaledSVD
 from .identifiability import Identifiability
@@ -76,6 +76,8 @@ __all__ = [
     "PlanInformation",
     "equations_per_pose",
     "position_jacobian",
+    "target_indices",
+    "targets_missing",
 ]
 
 
@@ -630,8 +632,9 @@ class Core(Protocol):
     ) -> Conditions:
         """Checked conditions of measured rows (ValueError naming what is wrong).
 
-        ``q`` ``(m, n)`` rad; ``target`` ``(m,)`` target indices, needed when the
-        model has several; ``loads`` the rows' loads (default: the model's);
+        ``q`` ``(m, n)`` rad; ``target`` ``(m,)`` target indices or labels
+        (:func:`target_indices`), needed when the model has several (else
+        :func:`targets_missing`); ``loads`` the rows' loads (default: the model's);
         ``sigma_mm`` ``(m,)`` per-row instrument noise.
         """
         ...
@@ -1012,3 +1015,56 @@ def position_jacobian(
 def equations_per_pose(model: FitModel) -> int:
     """Equations one pose measured at every target gives: ``point_dim`` per target."""
     return model.point_dim * max(len(model.target_labels), 1)
+
+
+def target_indices(target: ArrayLike | None, labels: Sequence[str], m: int) -> np.ndarray | None:
+    """Every row's target index ``(m,)`` from ``target``, checked: the labels of
+    ``labels`` looked up, indices as they are; None stays None.
+
+    What the families' :meth:`FitModel.conditions` take, so that a Python user gives the
+    labels a measurement file has, where the command line derives the indices.  A
+    model with one target (``labels`` empty or one) takes index 0.
+
+    Raises
+    ------
+    ArmcalError
+        For a label that is not one of ``labels`` (naming them), or indices that are
+        not ``m`` integers in ``0..k-1``.
+
+    Examples
+    --------
+    >>> target_indices(["B", "A", "B"], ("A", "B"), 3).tolist()
+    [1, 0, 1]
+    >>> target_indices(np.array([1, 0]), ("A", "B"), 2).tolist()
+    [1, 0]
+    """
+    if target is None:
+        return None
+    given = np.asarray(target)
+    count = max(len(labels), 1)
+    if given.dtype.kind in "USO":
+        lookup = {label: i for i, label in enumerate(labels)}
+        texts = [str(label) for label in given.reshape(-1)]
+        unknown = sorted(set(texts) - lookup.keys())
+        if unknown:
+            known = ", ".join(labels) if labels else "none"
+            raise ArmcalError(
+                f"unknown target {', '.join(map(repr, unknown))}; the model's targets are {known}"
+            )
+        given = np.array([lookup[text] for text in texts], dtype=int).reshape(given.shape)
+    if given.shape != (m,) or not np.issubdtype(given.dtype, np.integer):
+        raise ArmcalError(
+            f"target must hold {m} target labels or integer indices, got shape {given.shape}"
+        )
+    if given.size and (given.min() < 0 or given.max() >= count):
+        raise ArmcalError(f"target indices must lie in 0..{count - 1}")
+    return given
+
+
+def targets_missing(name: str, labels: Sequence[str]) -> ArmcalError:
+    """The error for rows of a model with several targets given without theirs."""
+    return ArmcalError(
+        f"{name} has {len(labels)} targets ({', '.join(labels)}): give every row's target "
+        f"with {action('target')} (its label or its index); every target of every pose is "
+        "the rows of model.plan_conditions(q)"
+    )

@@ -19,6 +19,7 @@ from typing import Literal
 import numpy as np
 from numpy.typing import ArrayLike
 
+from ..interface import target_indices, targets_missing
 from .geometry import PlanarGeometry, split_params
 
 __all__ = [
@@ -47,23 +48,18 @@ def _check_q(arm: PlanarGeometry, q: np.ndarray) -> np.ndarray:
 def check_target(
     arm: PlanarGeometry, q: np.ndarray, target: ArrayLike | None
 ) -> np.ndarray | None:
-    """The rows' target indices ``(m,)`` (None: every row measures the only target).
+    """The rows' target indices ``(m,)`` (None: every row measures the only target), from
+    indices or the targets' labels.
 
-    Raises ValueError for an arm with several targets and no ``target``, or
-    indices out of range.
+    Raises ValueError (an ArmcalError) for an arm with several targets and no ``target``,
+    an unknown label, or indices out of range.
     """
     if target is None:
         if arm.n_target_links > 1:
-            raise ValueError(
-                f"{arm.name} has {arm.n_target_links} targets: give the target of every row"
-            )
+            raise targets_missing(arm.name, arm.target_labels)
         return None
-    index = np.asarray(target)
     m = np.shape(q)[-2] if np.ndim(q) >= 2 else 1
-    if index.shape != (m,) or not np.issubdtype(index.dtype, np.integer):
-        raise ValueError(f"target must be an integer array of shape ({m},), got {index.shape}")
-    if index.size and (index.min() < 0 or index.max() >= arm.n_target_links):
-        raise ValueError(f"target indices must lie in 0..{arm.n_target_links - 1}")
+    index = target_indices(target, arm.target_labels, m)
     return index if arm.n_target_links > 1 else None
 
 

@@ -40,6 +40,8 @@ from ..interface import (
     Effect,
     LinearPositions,
     Loads,
+    target_indices,
+    targets_missing,
 )
 from . import pose as spatial_pose
 from .chain import (
@@ -189,7 +191,16 @@ class SpatialArm(SpatialDesign, SpatialTool, RigidLoads):
         return np.where(np.isfinite(base), base, turn)
 
     def replace(self, **changes: Any) -> SpatialArm:
-        """The same arm with fields changed."""
+        """The same arm with fields changed.
+
+        New ``targets`` without their ``target_positions`` start where targets the robot
+        file does not place start (:func:`~armcal.models.spatial.kinematics.default_targets`,
+        found from the data by a fit), not at the old targets' positions.
+        """
+        new = tuple(changes.get("targets", self.targets)) != self.targets
+        if new and "target_positions" not in changes:
+            unplaced = np.zeros((0, 3))
+            changes.update(target_positions=unplaced, target_turns=unplaced, known_targets=False)
         return replace(self, **changes)
 
     @cached_property
@@ -426,15 +437,9 @@ deviation_bounds`); the base pose and the targets are the instrument's."""
         q = np.asarray(q, dtype=float)
         if q.ndim < 2 or q.shape[-1] != self.n_joints:
             raise ValueError(f"q must have shape (m, {self.n_joints}), got {q.shape}")
-        index = None
-        if target is not None:
-            index = np.asarray(target, dtype=int)
-            if index.shape != q.shape[-2:-1] or np.any((index < 0) | (index >= len(self.targets))):
-                raise ValueError(
-                    f"target must hold {q.shape[-2]} indices below {len(self.targets)}"
-                )
-        elif len(self.targets) > 1:
-            raise ValueError(f"{self.name} has several targets: say which one every row measures")
+        index = target_indices(target, self.targets, q.shape[-2])
+        if index is None and len(self.targets) > 1:
+            raise targets_missing(self.name, self.targets)
         return Conditions(q, index, None, sigma_mm)
 
     def chain_kinematics(
