@@ -555,8 +555,8 @@ FIGURE_FORMATS: dict[str, str] = {".png": "png", ".pdf": "pdf", ".svg": "svg", "
 FILE_KINDS: dict[str, str] = {
     "robot": "robot TOML (--robot): the arm, its instrument and what to identify",
     "truth": "truth TOML (--truth): the deviations of a virtual robot",
-    "serial robot": "spatial robot TOML (--robot, or a URDF itself): a serial arm in 3-D",
-    "serial truth": "spatial truth TOML (--truth): the errors of a virtual spatial arm",
+    "spatial robot": "spatial robot TOML (--robot, or a URDF itself): a serial arm in 3-D",
+    "spatial truth": "spatial truth TOML (--truth): the errors of a virtual spatial arm",
     "plan": "plan CSV (--plan, --candidates, --test-poses): poses to visit",
     "measurements": "measurements CSV (--measurements): poses and what the instrument read",
     "program": "program CSV (--program): joint commands to correct",
@@ -646,12 +646,12 @@ def format_reference() -> str:
         lines += _entries(rows, max(len(k.name) for k in ROBOT_KEYS))
     lines += ["", FILE_KINDS["truth"] + ":"]
     lines += _entries([(k.name, _key_text(k)) for k in TRUTH_KEYS])
-    lines += ["", FILE_KINDS["serial robot"] + ":"]
+    lines += ["", FILE_KINDS["spatial robot"] + ":"]
     for table in dict.fromkeys(k.table for k in SPATIAL_KEYS):
         lines += ["", f"  [{table}]" if table else "  top level"]
         rows = [(k.name, _key_text(k)) for k in SPATIAL_KEYS if k.table == table]
         lines += _entries(rows, max(len(k.name) for k in SPATIAL_KEYS))
-    lines += ["", FILE_KINDS["serial truth"] + ":"]
+    lines += ["", FILE_KINDS["spatial truth"] + ":"]
     lines += _entries([(k.name, _key_text(k)) for k in SPATIAL_TRUTH_KEYS])
     for kind, columns in COLUMNS.items():
         lines += ["", FILE_KINDS[kind] + ":"]

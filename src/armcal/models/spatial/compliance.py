@@ -392,7 +392,7 @@ class CompliantSpatialArm(ArmEffect):
         payload's centre and the nominal chain (by value: a key outlives its model)."""
         elastic, chain, links = self.elastic, self.arm.chain, self.elastic.links
         return (
-            "serial compliance loads",
+            "spatial compliance loads",
             self._terms,
             elastic.payload_kg,  # the rows' payload where they give none
             elastic.gravity.tobytes(),
