@@ -30,6 +30,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
+from functools import cached_property
 from typing import TYPE_CHECKING, Any, Self
 
 import numpy as np
@@ -48,7 +49,14 @@ from .information import (
     ill_conditioned_warning,
     whitened_free_jacobian,
 )
-from .interface import Conditions, DesignEffort, DeviationBounds, Effect, Loads
+from .interface import (
+    Conditions,
+    DesignEffort,
+    DeviationBounds,
+    Effect,
+    LinearPositions,
+    Loads,
+)
 
 __all__ = ["CoreModel"]
 
@@ -147,7 +155,7 @@ class CoreModel(RigidLoads):
     def joint_names(self) -> tuple[str, ...]:
         return tuple(f"joint {j + 1}" for j in range(self.n_joints))
 
-    @property
+    @cached_property  # not a property: a family's dataclass field of the name overrides it
     def joint_map(self) -> np.ndarray:
         return np.eye(self.n_joints)
 
@@ -214,10 +222,10 @@ class CoreModel(RigidLoads):
             columns.append((ahead - behind) / (2 * step))
         return np.stack(columns, axis=-1)
 
-    def _noise(self, noise: NoiseModel | None) -> NoiseModel:
+    def _core_noise(self, noise: NoiseModel | None) -> NoiseModel:
         return relative_noise(self.noise if noise is None else noise).for_dim(self.point_dim)
 
-    def _row_noise(self, conditions: Conditions, noise: NoiseModel) -> dict[str, Any]:
+    def _core_row_noise(self, conditions: Conditions, noise: NoiseModel) -> dict[str, Any]:
         joint = None if noise.joint_sigma is None else self.joint_jacobian(conditions)
         return {
             "shape": np.shape(conditions.q)[:-1],
@@ -232,16 +240,16 @@ class CoreModel(RigidLoads):
         *,
         noise: NoiseModel | None = None,
     ) -> np.ndarray:
-        found = self._noise(noise)
-        return found.pose_covariances(**self._row_noise(conditions, found))
+        found = self._core_noise(noise)
+        return found.pose_covariances(**self._core_row_noise(conditions, found))
 
     def whitening(
         self, conditions: Conditions, params: np.ndarray | None = None
     ) -> np.ndarray | None:
         if (self.noise is None or self.noise.isotropic_iid) and conditions.sigma_mm is None:
             return None
-        found = self._noise(None)
-        return found.whitening(**self._row_noise(conditions, found))
+        found = self._core_noise(None)
+        return found.whitening(**self._core_row_noise(conditions, found))
 
     # -- fitting -----------------------------------------------------------------------
 
@@ -321,7 +329,7 @@ class CoreModel(RigidLoads):
     def fit_details(self, conditions: Conditions, params: np.ndarray) -> dict[str, np.ndarray]:
         return {}
 
-    def linear_positions(self, conditions: Conditions) -> None:
+    def linear_positions(self, conditions: Conditions) -> LinearPositions | None:
         return None
 
     # -- plausibility ------------------------------------------------------------------
@@ -373,7 +381,7 @@ class CoreModel(RigidLoads):
     def has_view(self) -> bool:
         return False
 
-    def view_constraints(self, q: np.ndarray) -> None:
+    def view_constraints(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray] | None:
         return None
 
     @property

@@ -21,23 +21,15 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike
 
-from ...errors import ArmcalWarning, action
+from ...errors import action
 from ...noise import NoiseModel, relative_noise
-from ...numerics import ScaledSVD
-from ..defaults import RigidLoads
-from ..identifiability import Identifiability
+from ..core import CoreModel
 from ..information import (
-    column_identifiability,
-    covariance_factor_from,
-    identifiable_or_raise,
-    ill_conditioned_warning,
     refit_free,
-    whitened_free_jacobian,
 )
 from ..interface import (
     Conditions,
     DeviationBounds,
-    Effect,
     LinearPositions,
     Loads,
     target_indices,
@@ -78,7 +70,7 @@ SINGLE_TARGET = "tool"
 
 
 @dataclass(frozen=True, eq=False)
-class SpatialArm(SpatialDesign, SpatialTool, RigidLoads):
+class SpatialArm(SpatialDesign, SpatialTool, CoreModel):
     """A spatial serial arm to calibrate.
 
     Attributes
@@ -570,29 +562,11 @@ deviation_bounds`); the base pose and the targets are the instrument's."""
     # -- fitting -----------------------------------------------------------------------
 
     @property
-    def has_closed_form(self) -> bool:
-        return False
-
-    @property
     def why_no_closed_form(self) -> str:
         return (
             f"{self.name} is a spatial arm, whose points are not linear in any coordinates "
             f"of its parameters; use {action('method', 'gauss-newton')} (or auto)"
         )
-
-    def closed_form(self, conditions: Conditions) -> None:
-        return None
-
-    @property
-    def nested(self) -> None:
-        return None
-
-    @property
-    def effect(self) -> Effect | None:
-        return None
-
-    def lift(self, nested_params: np.ndarray) -> np.ndarray:
-        return np.asarray(nested_params, dtype=float)
 
     def registration(
         self, conditions: Conditions, points: np.ndarray, weights: np.ndarray | None = None
@@ -703,26 +677,6 @@ deviation_bounds`); the base pose and the targets are the instrument's."""
     @property
     def held_notes(self) -> tuple[str, ...]:
         return self.merges
-
-    def identifiability(self, conditions: Conditions) -> tuple[Identifiability, ScaledSVD]:
-        return column_identifiability(self, conditions, self.nominal)
-
-    def check_identifiable(self, conditions: Conditions) -> Identifiability:
-        return identifiable_or_raise(
-            self,
-            conditions,
-            self.name,
-            "measure poses in which every joint takes several different values",
-        )
-
-    def conditioning_warning(self, info: Identifiability) -> ArmcalWarning | None:
-        said = f"{self.name} is barely identifiable from these measurements"
-        return ill_conditioned_warning(info, said, "measure poses that move every joint more")
-
-    def covariance_factor(
-        self, conditions: Conditions, params: np.ndarray | None = None
-    ) -> tuple[np.ndarray, np.ndarray]:
-        return covariance_factor_from(whitened_free_jacobian(self, conditions, params), self.free)
 
     def fit_details(self, conditions: Conditions, params: np.ndarray) -> dict[str, np.ndarray]:
         return {}

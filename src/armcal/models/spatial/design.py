@@ -10,7 +10,7 @@ a search works.
 
 from __future__ import annotations
 
-from collections.abc import Callable, Sequence
+from collections.abc import Callable
 from typing import TYPE_CHECKING, Self, cast
 
 import numpy as np
@@ -88,14 +88,6 @@ class SpatialDesign:
         )
         return self.view.of_rows(kin, self.target_positions, rows.target, len(self.targets))
 
-    @property
-    def rotation_invariant(self) -> bool:
-        return False
-
-    @property
-    def information_bound(self) -> bool:
-        return False
-
     def plan_information(self, q: np.ndarray, loads: Loads | None = None) -> BlockInformation:
         me = cast(FitModel, self)  # the arm this role is part of
         return BlockInformation(me, q, loads, unit_columns=True, linearize=self.linearize)
@@ -116,12 +108,3 @@ class SpatialDesign:
         columns, noise = np.flatnonzero(self.free), self.noise_of(None)
         added = None if extra is None else extra(kin)
         return linearization(kin, self.layout, self.joint_map, columns, noise, added)
-
-    def closed_form_plans(self, m: int) -> None:
-        return None
-
-    def paper_criteria(self, q: np.ndarray) -> None:
-        return None
-
-    def design_loads(self, payloads: Sequence[float] | None) -> None:
-        return None
