@@ -15,8 +15,8 @@ from typing import Any
 
 import numpy as np
 
-from .compensation import compensate
-from .doe import design, random_plan
+from .compensation import Compensation, compensate
+from .doe import Design, design, random_plan
 from .errors import ACTIONS, ArmcalWarning
 from .export_planar import robot_toml, urdf
 from .families import RobotSpec
@@ -27,12 +27,12 @@ from .files import (
     format_program_csv,
     to_json,
 )
-from .identification import identify
-from .models import PlanarArm, forward_kinematics
+from .identification import Calibration, identify
+from .models import CalibratedArm, PlanarArm, forward_kinematics
 from .numerics import rms
 from .report import format_calibration
 from .synthesis import synthesize_measurements
-from .validation import validate
+from .validation import Validation, validate
 
 __all__ = [
     "DEMO_FILES",
@@ -150,36 +150,147 @@ def run_demo(
     -------
     Demo
     """
+    # One generator, drawn from in the story's order: plan, measurements, validation,
+    # program, error map.
     rng = np.random.default_rng(seed)
     model = arm.replace(sigma=sigma)
-    plan = design(model, poses, rng=rng)
-    q = plan.q
-    xy = synthesize_measurements(arm, q, truth, sigma, rng=rng)
-    bumped = poses // 3  # a reflector knocked during one measurement
-    xy[bumped] += OUTLIER_MM
-    labels = [str(i + 1) for i in range(poses)]
-    cal = identify(model, q, xy, robust=True, pose_labels=labels)
+    measured = _measure(arm, model, truth, poses, sigma, rng)
+    cal = identify(model, measured.plan.q, measured.xy, robust=True, pose_labels=measured.labels)
     calibrated = cal.calibrated()
     document = calibration_document(cal, words=words)
+    validated = _validate(arm, calibrated, truth, sigma, rng)
+    compensated = _compensate(arm, calibrated, truth, rng)
+    error_map = _error_map(arm, cal.params, truth, rng)
+    story = _Story(measured, cal, calibrated, validated, compensated, error_map)
+    text = "\n".join(_lines(arm, story, truth, sigma=sigma, seed=seed, words=words))
+    files = _files(arm, story, to_json(document))
+    report = _report(arm, text, error_map.before, error_map.after)
+    files["report.md"] = report
+    return Demo(text, report, files, document, cal.warnings)
 
+
+@dataclass(frozen=True, eq=False)
+class _Measured:
+    """Step 1 and 2: the designed plan and its virtual measurements, one of them bumped."""
+
+    plan: Design
+    xy: np.ndarray
+    labels: list[str]
+    bumped: int
+
+
+@dataclass(frozen=True, eq=False)
+class _Validated:
+    """Step 4: fresh poses, their measurements and the calibrated arm's errors there."""
+
+    q: np.ndarray
+    xy: np.ndarray
+    validation: Validation
+
+
+@dataclass(frozen=True, eq=False)
+class _Compensated:
+    """Step 5: a program, its corrected commands and its true errors before and after."""
+
+    program: np.ndarray
+    comp: Compensation
+    true_before: np.ndarray
+    true_after: np.ndarray
+
+
+@dataclass(frozen=True, eq=False)
+class _ErrorMap:
+    """The true position error over the workspace, nominal and calibrated."""
+
+    q: np.ndarray
+    real: np.ndarray
+    before: np.ndarray
+    after: np.ndarray
+
+
+@dataclass(frozen=True, eq=False)
+class _Story:
+    """Every step's results, for the text and the files."""
+
+    measured: _Measured
+    cal: Calibration
+    calibrated: CalibratedArm
+    validated: _Validated
+    compensated: _Compensated
+    error_map: _ErrorMap
+
+
+def _measure(
+    arm: PlanarArm,
+    model: PlanarArm,
+    truth: np.ndarray,
+    poses: int,
+    sigma: float,
+    rng: np.random.Generator,
+) -> _Measured:
+    """Design the plan of ``poses`` poses and measure it on the virtual arm, one
+    measurement moved by :data:`OUTLIER_MM` (a reflector knocked)."""
+    plan = design(model, poses, rng=rng)
+    xy = synthesize_measurements(arm, plan.q, truth, sigma, rng=rng)
+    bumped = poses // 3
+    xy[bumped] += OUTLIER_MM
+    return _Measured(plan, xy, [str(i + 1) for i in range(poses)], bumped)
+
+
+def _validate(
+    arm: PlanarArm,
+    calibrated: CalibratedArm,
+    truth: np.ndarray,
+    sigma: float,
+    rng: np.random.Generator,
+) -> _Validated:
+    """Measure :data:`VALIDATION_POSES` fresh random poses and validate the calibration there."""
     q_test = random_plan(arm, VALIDATION_POSES, rng=rng)
     xy_test = synthesize_measurements(arm, q_test, truth, sigma, rng=rng)
-    validation = validate(calibrated, q_test, xy_test)
-    check = validation.summary()
+    return _Validated(q_test, xy_test, validate(calibrated, q_test, xy_test))
 
+
+def _compensate(
+    arm: PlanarArm, calibrated: CalibratedArm, truth: np.ndarray, rng: np.random.Generator
+) -> _Compensated:
+    """Compensate a random program of :data:`PROGRAM_POSES` poses (within 80 % of the
+    limits) and measure its true error, the nominal arm's point the goal."""
     limits = arm.joint_limits
     program = rng.uniform(0.8 * limits[:, 0], 0.8 * limits[:, 1], (PROGRAM_POSES, arm.n_joints))
     comp = compensate(calibrated, program)
     goal = forward_kinematics(arm, program)
     true_before = np.linalg.norm(forward_kinematics(arm, program, truth) - goal, axis=1)
     true_after = np.linalg.norm(forward_kinematics(arm, comp.q, truth) - goal, axis=1)
-    predicted = comp.summary()
+    return _Compensated(program, comp, true_before, true_after)
 
+
+def _error_map(
+    arm: PlanarArm, params: np.ndarray, truth: np.ndarray, rng: np.random.Generator
+) -> _ErrorMap:
+    """The true position error at :data:`MAP_POSES` random poses, of the nominal arm and
+    of the one with the identified ``params``."""
     q_map = random_plan(arm, MAP_POSES, rng=rng)
     real = forward_kinematics(arm, q_map, truth)
-    map_before = np.linalg.norm(real - forward_kinematics(arm, q_map), axis=1)
-    map_after = np.linalg.norm(real - forward_kinematics(arm, q_map, cal.params), axis=1)
+    before = np.linalg.norm(real - forward_kinematics(arm, q_map), axis=1)
+    after = np.linalg.norm(real - forward_kinematics(arm, q_map, params), axis=1)
+    return _ErrorMap(q_map, real, before, after)
 
+
+def _lines(
+    arm: PlanarArm,
+    story: _Story,
+    truth: np.ndarray,
+    *,
+    sigma: float,
+    seed: int,
+    words: Mapping[str, str],
+) -> list[str]:
+    """The story as printed, step by step."""
+    plan, cal = story.measured.plan, story.cal
+    poses = plan.q.shape[0]
+    check = story.validated.validation.summary()
+    comp = story.compensated.comp
+    predicted = comp.summary()
     cert = plan.certificate
     certified = "" if cert is None else f", certified >= {cert.certified_d_efficiency:.4f}"
     travel = (
@@ -188,13 +299,13 @@ def run_demo(
     )
     outliers = [o for o in cal.outliers if o.removed]
     found = ", ".join(f"pose {o.pose} ({o.residual_mm:.3g} mm)" for o in outliers) or "none found"
-    lines = [
+    return [
         f"armcal demo on {arm.name}: a virtual arm with the paper's deviations, noise "
         f"sigma {sigma:g} mm, seed {seed}",
         "",
         f"1. design: {poses} poses, method {plan.method}, D-efficiency "
         f"{plan.d_efficiency:.4f}{certified}{travel}",
-        f"2. measure: {poses} poses with noise; pose {bumped + 1} moved by "
+        f"2. measure: {poses} poses with noise; pose {story.measured.bumped + 1} moved by "
         f"{np.hypot(*OUTLIER_MM):.2g} mm (a bumped reflector)",
         f"3. identify (robust): outliers left out: {found}",
         "",
@@ -205,18 +316,24 @@ def run_demo(
         f"{check['rms_after_per_point_mm']:.3g} mm calibrated "
         f"(predicted {check['predicted_rms_after_per_point_mm']:.3g} mm with the noise)",
         f"5. compensate a {PROGRAM_POSES}-pose program: {int(comp.corrected.sum())} corrected; "
-        f"true error RMS per point {rms(true_before):.3g} mm before, "
-        f"{rms(true_after):.3g} mm after (predicted {predicted['rms_before_per_point_mm']:.3g} "
+        f"true error RMS per point {rms(story.compensated.true_before):.3g} mm before, "
+        f"{rms(story.compensated.true_after):.3g} mm after (predicted "
+        f"{predicted['rms_before_per_point_mm']:.3g} "
         f"and {predicted['rms_after_per_point_mm']:.3g} mm)",
         "6. export: robot_calibrated.toml (a robot file with the deviations folded in), "
         "arm.urdf (ROS)",
     ]
-    text = "\n".join(lines)
+
+
+def _figures(arm: PlanarArm, story: _Story) -> dict[str, str | Callable[[Path], None]]:
+    """The story's four figures, each drawn only when its file is written."""
+    q, cal = story.measured.plan.q, story.cal
+    validated, error_map = story.validated, story.error_map
 
     def plot_plan_figure():
         from .plotting import plot_plan
 
-        return plot_plan(arm, q, numbers=True, title=f"{arm.name}: the {poses}-pose plan")
+        return plot_plan(arm, q, numbers=True, title=f"{arm.name}: the {q.shape[0]}-pose plan")
 
     def plot_residual_figure():
         from .plotting import plot_residuals
@@ -226,30 +343,40 @@ def run_demo(
     def plot_validation_figure():
         from .plotting import plot_validation
 
-        return plot_validation(arm, q_test, validation)
+        return plot_validation(arm, validated.q, validated.validation)
 
     def plot_map_figure():
         from .plotting import plot_error_map
 
-        return plot_error_map(arm, q_map, map_before, map_after, real)
+        return plot_error_map(arm, error_map.q, error_map.before, error_map.after, error_map.real)
 
-    files: dict[str, str | Callable[[Path], None]] = {
-        "plan.csv": format_plan_csv(q),
-        "measurements.csv": format_measurements_csv(q, xy, labels),
-        "calibration.json": to_json(document),
-        "validation.csv": format_measurements_csv(q_test, xy_test),
-        "program.csv": format_plan_csv(program),
-        "program_corrected.csv": format_program_csv(comp.q, comp.corrected),
-        "robot_calibrated.toml": robot_toml(calibrated),
-        "arm.urdf": urdf(calibrated),
+    return {
         "plan.png": figure_writer(plot_plan_figure),
         "residuals.png": figure_writer(plot_residual_figure),
         "validation.png": figure_writer(plot_validation_figure),
         "error_map.png": figure_writer(plot_map_figure),
     }
-    report = _report(arm, text, map_before, map_after)
-    files["report.md"] = report
-    return Demo(text, report, files, document, cal.warnings)
+
+
+def _files(
+    arm: PlanarArm, story: _Story, calibration_json: str
+) -> dict[str, str | Callable[[Path], None]]:
+    """Every file of :data:`DEMO_FILES` but ``report.md``, by name."""
+    q, measured = story.measured.plan.q, story.measured
+    compensated, calibrated = story.compensated, story.calibrated
+    return {
+        "plan.csv": format_plan_csv(q),
+        "measurements.csv": format_measurements_csv(q, measured.xy, measured.labels),
+        "calibration.json": calibration_json,
+        "validation.csv": format_measurements_csv(story.validated.q, story.validated.xy),
+        "program.csv": format_plan_csv(compensated.program),
+        "program_corrected.csv": format_program_csv(
+            compensated.comp.q, compensated.comp.corrected
+        ),
+        "robot_calibrated.toml": robot_toml(calibrated),
+        "arm.urdf": urdf(calibrated),
+        **_figures(arm, story),
+    }
 
 
 def report_head(name: str, what: str, text: str) -> list[str]:

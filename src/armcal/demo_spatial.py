@@ -13,12 +13,13 @@ within the limits.
 from __future__ import annotations
 
 from collections.abc import Callable, Mapping
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from .compensation import compensate
+from .compensation import Compensation, compensate
 from .demo import Demo, figure_writer, report_head
 from .doe import random_plan
 from .errors import ACTIONS
@@ -31,8 +32,8 @@ from .files import (
     format_program_csv,
     to_json,
 )
-from .identification import identify
-from .models import Conditions, SpatialArm
+from .identification import Calibration, identify
+from .models import CalibratedArm, Conditions, SpatialArm
 from .noise import NoiseModel, TrackerNoise
 from .numerics import rms
 from .report import format_calibration, format_cross_validation
@@ -115,39 +116,104 @@ def run_spatial_demo(
         The words of the advice in the text and the calibration file's warnings
         (:func:`armcal.errors.render`; default the library's).
     """
+    # One generator, drawn from in the story's order: plan, measurements, folds, fresh
+    # poses and their measurements, program.
     rng = np.random.default_rng(seed)
-    labels = tuple(DEMO_REFLECTORS)
+    model = _tracked(arm, sigma)
+    truth = truth_of(model.replace(target_positions=np.array(list(DEMO_REFLECTORS.values()))))
+    measured = _measure(model, truth, random_plan(model, poses, rng=rng), rng)
+    rows, points = measured.rows, measured.points
+    cal = identify(model, rows.q, points, target=rows.target, pose_labels=measured.poses)
+    calibrated = cal.calibrated()
+    seen = cal.model.expressed(rows, truth)
+    groups = np.repeat(np.arange(poses), len(DEMO_REFLECTORS))
+    folds = cross_validate(
+        model, rows.q, points, FOLDS, groups=groups, target=rows.target, rng=rng
+    ).summary()
+    fresh = _measure(model, truth, random_plan(model, VALIDATION_POSES, rng=rng), rng)
+    check = validate(calibrated, fresh.rows.q, fresh.points, target=fresh.rows.target).summary()
+    compensated = _compensate(model, calibrated, truth, seen, rng)
+    story = _Story(measured, cal, seen, folds, fresh, check, compensated)
+    text = "\n".join(_lines(arm, story, truth, poses=poses, seed=seed, words=words))
+    document = calibration_document(cal, words=words)
+    files = _files(arm, story, calibrated, to_json(document))
+    report = "\n".join(
+        [
+            *report_head(arm.name, "A virtual six-axis arm with known errors", text),
+            "![residuals](residuals.png)",
+            "",
+        ]
+    )
+    files["report.md"] = report
+    return Demo(text, report, files, document, cal.warnings)
+
+
+@dataclass(frozen=True, eq=False)
+class _Measured:
+    """Every reflector of every pose of a plan, measured on the virtual arm."""
+
+    rows: Conditions
+    points: np.ndarray
+    poses: list[str]
+    targets: list[str]
+
+
+@dataclass(frozen=True, eq=False)
+class _Compensated:
+    """Step 5: a program for reflector A, its corrected commands and its true errors."""
+
+    program: np.ndarray
+    comp: Compensation
+    before: np.ndarray
+    after: np.ndarray
+
+
+@dataclass(frozen=True, eq=False)
+class _Story:
+    """Every step's results, for the text and the files."""
+
+    measured: _Measured
+    cal: Calibration
+    seen: np.ndarray
+    folds: dict[str, Any]
+    fresh: _Measured
+    check: dict[str, Any]
+    compensated: _Compensated
+
+
+def _tracked(arm: SpatialArm, sigma: float | None) -> SpatialArm:
+    """The arm with the demo's reflectors (positions unknown to the fit) and its tracker's
+    noise, or an isotropic ``sigma``."""
     noise = (
         NoiseModel.laser_tracker(DEMO_TRACKER)
         if sigma is None
         else NoiseModel.isotropic(sigma, dim=3)
     )
-    model = arm.replace(
-        targets=labels, target_positions=np.zeros((0, 3)), known_targets=False
+    return arm.replace(
+        targets=tuple(DEMO_REFLECTORS), target_positions=np.zeros((0, 3)), known_targets=False
     ).with_noise(noise)
-    truth = truth_of(model.replace(target_positions=np.array(list(DEMO_REFLECTORS.values()))))
 
-    def measure(q: np.ndarray) -> tuple[Conditions, np.ndarray, list[str], list[str]]:
-        rows, pose_labels, targets = _rows(model, q)
-        points = synthesize_measurements(model, rows.q, truth, rng=rng, target=rows.target)
-        return rows, points, pose_labels, targets
 
-    q = random_plan(model, poses, rng=rng)
-    rows, points, pose_labels, targets = measure(q)
-    cal = identify(model, rows.q, points, target=rows.target, pose_labels=pose_labels)
-    calibrated = cal.calibrated()
-    seen = cal.model.expressed(rows, truth)
-    groups = np.repeat(np.arange(poses), len(labels))
-    folds = cross_validate(
-        model, rows.q, points, FOLDS, groups=groups, target=rows.target, rng=rng
-    ).summary()
+def _measure(
+    model: SpatialArm, truth: np.ndarray, q: np.ndarray, rng: np.random.Generator
+) -> _Measured:
+    """The plan ``q`` measured at every reflector on the virtual arm (``truth``)."""
+    rows, poses, targets = _rows(model, q)
+    points = synthesize_measurements(model, rows.q, truth, rng=rng, target=rows.target)
+    return _Measured(rows, points, poses, targets)
 
-    q_test = random_plan(model, VALIDATION_POSES, rng=rng)
-    test_rows, test_points, test_poses, test_targets = measure(q_test)
-    check = validate(calibrated, test_rows.q, test_points, target=test_rows.target).summary()
 
+def _compensate(
+    model: SpatialArm,
+    calibrated: CalibratedArm,
+    truth: np.ndarray,
+    seen: np.ndarray,
+    rng: np.random.Generator,
+) -> _Compensated:
+    """Compensate a random program of :data:`PROGRAM_POSES` poses (within half the limits)
+    taught for reflector A, and measure its true error before and after."""
     limits = model.limits
-    program = rng.uniform(0.5 * limits[:, 0], 0.5 * limits[:, 1], (PROGRAM_POSES, arm.n_joints))
+    program = rng.uniform(0.5 * limits[:, 0], 0.5 * limits[:, 1], (PROGRAM_POSES, model.n_joints))
     aim = np.zeros(PROGRAM_POSES, dtype=int)  # the program is taught for reflector A
     comp = compensate(calibrated, program, target=aim)
     # What really happens: the true arm at the commands, against where the nominal arm
@@ -161,68 +227,77 @@ def run_spatial_demo(
         reached = model.positions(model.conditions(commands, target=aim), truth)
         return np.linalg.norm(reached - meant, axis=1)
 
-    before, after = true_error(program), true_error(comp.q)
+    return _Compensated(program, comp, true_error(program), true_error(comp.q))
 
+
+def _lines(
+    arm: SpatialArm,
+    story: _Story,
+    truth: np.ndarray,
+    *,
+    poses: int,
+    seed: int,
+    words: Mapping[str, str],
+) -> list[str]:
+    """The story as printed, step by step."""
+    cal, check, compensated = story.cal, story.check, story.compensated
     free = cal.model.free
-    error = (cal.params - seen)[free] / cal.std[free]
-    lines = [
+    error = (cal.params - story.seen)[free] / cal.std[free]
+    return [
         f"armcal demo on {arm.name}: a virtual six-axis arm, a laser tracker "
         f"{np.linalg.norm(truth[:3]) / 1000:.1f} m away, three reflectors, seed {seed}",
         "",
         f"1. plan: {poses} random poses within the limits, each measured at reflectors "
-        f"{', '.join(labels)}: {rows.m} points",
+        f"{', '.join(DEMO_REFLECTORS)}: {story.measured.rows.m} points",
         "2. identify, with no initial guess (the tracker's pose and the reflectors found "
         f"from the data): {cal.model.n_free} of {cal.model.n_params} parameters identifiable; "
         f"largest |estimate - truth| {np.max(np.abs(error)):.2g} std",
         "",
-        format_calibration(cal, truth=seen, words=words),
+        format_calibration(cal, truth=story.seen, words=words),
         "",
-        f"3. {format_cross_validation(folds)}",
+        f"3. {format_cross_validation(story.folds)}",
         f"4. validate on {VALIDATION_POSES} fresh poses: position error RMS per point "
         f"{check['rms_before_per_point_mm']:.3g} mm nominal, "
         f"{check['rms_after_per_point_mm']:.3g} mm calibrated "
         f"(predicted {check['predicted_rms_after_per_point_mm']:.3g} mm with the noise)",
         f"5. compensate a {PROGRAM_POSES}-pose program for reflector A: "
-        f"{int(comp.corrected.sum())} corrected; true error RMS {rms(before):.3g} mm before, "
-        f"{rms(after):.3g} mm after",
+        f"{int(compensated.comp.corrected.sum())} corrected; true error RMS "
+        f"{rms(compensated.before):.3g} mm before, {rms(compensated.after):.3g} mm after",
         "6. export: arm.urdf (every zero in the joint origins), robot_calibrated.toml "
         "(modified DH table), joint_offsets.csv (the controller's zero offsets)",
     ]
-    text = "\n".join(lines)
+
+
+def _files(
+    arm: SpatialArm, story: _Story, calibrated: CalibratedArm, calibration_json: str
+) -> dict[str, str | Callable[[Path], None]]:
+    """Every file of :data:`SPATIAL_DEMO_FILES` but ``report.md``, by name."""
+    cal, measured, fresh, compensated = story.cal, story.measured, story.fresh, story.compensated
 
     def plot_residual_figure():
         from .plotting import plot_residuals
 
         return plot_residuals(cal.residuals, cal.sigma_mm, used=cal.used)
 
-    document = calibration_document(cal, words=words)
     kinds = arm.joint_kinds
-    files: dict[str, str | Callable[[Path], None]] = {
+    aimed = ["A"] * PROGRAM_POSES
+    return {
         "measurements.csv": format_measurements_csv(
-            rows.q, points, pose_labels, targets, kinds=kinds
+            measured.rows.q, measured.points, measured.poses, measured.targets, kinds=kinds
         ),
-        "calibration.json": to_json(document),
+        "calibration.json": calibration_json,
         "validation.csv": format_measurements_csv(
-            test_rows.q, test_points, test_poses, test_targets, kinds=kinds
+            fresh.rows.q, fresh.points, fresh.poses, fresh.targets, kinds=kinds
         ),
-        "program.csv": format_plan_csv(program, targets=["A"] * PROGRAM_POSES, kinds=kinds),
+        "program.csv": format_plan_csv(compensated.program, targets=aimed, kinds=kinds),
         "program_corrected.csv": format_program_csv(
-            comp.q, comp.corrected, targets=["A"] * PROGRAM_POSES, kinds=kinds
+            compensated.comp.q, compensated.comp.corrected, targets=aimed, kinds=kinds
         ),
         "robot_calibrated.toml": spatial_robot_toml(calibrated),
         "arm.urdf": spatial_urdf(calibrated),
         "joint_offsets.csv": joint_offsets_csv(calibrated),
         "residuals.png": figure_writer(plot_residual_figure),
     }
-    report = "\n".join(
-        [
-            *report_head(arm.name, "A virtual six-axis arm with known errors", text),
-            "![residuals](residuals.png)",
-            "",
-        ]
-    )
-    files["report.md"] = report
-    return Demo(text, report, files, document, cal.warnings)
 
 
 #: What the six-axis demo writes, for the line that says so.

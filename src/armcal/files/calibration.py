@@ -11,8 +11,8 @@ from __future__ import annotations
 import json
 import math
 import os
-from collections.abc import Mapping, Sequence
-from typing import Any
+from collections.abc import Callable, Mapping, Sequence
+from typing import Any, TypeVar
 
 import numpy as np
 
@@ -42,6 +42,8 @@ CALIBRATION_FORMAT = "armcal-calibration/1"
 #: The coordinates of a standardized residual: a point's, then a 6-DoF instrument's turn.
 _AXES = ("x", "y", "z", "rx", "ry", "rz")
 
+T = TypeVar("T")
+
 
 def robot_to_dict(arm: FitModel) -> dict[str, Any]:
     """The ``robot`` section of a calibration file: everything needed to rebuild the arm,
@@ -65,6 +67,35 @@ def read_calibration(path: str | os.PathLike) -> CalibratedArm:
         For a file that is not JSON, of another format or version, or whose
         parameters do not match its robot; the message names the file and key.
     """
+    doc = _document(path)
+    noise = _section(path, "noise", _noise_from_dict, doc.get("noise"))
+    family, arm, fixed = _section(path, "robot", _arm_from_dict, doc, noise)
+    model: FitModel = arm
+    if doc.get("elastostatic") is not None:
+        model = _section(
+            path, "elastostatic", _compliance_from_dict, family, arm, doc["elastostatic"], fixed
+        )
+    rows = _section(
+        path,
+        "training_rows",
+        _rows_from_dict,
+        doc.get("training_rows"),
+        arm.n_joints,
+        len(arm.target_labels),
+    )
+    names, values, stds = _section(path, "parameters", _parameters_from_dict, doc, model)
+    full = _section(path, "covariance", _covariance_from_dict, doc, names, stds, model)
+    sigma = _section(path, "sigma_mm", _sigma_from_dict, doc)
+    plane = _section(path, "plane", _plane_from_dict, doc.get("plane"))
+    baseline = _section(path, "baseline", _baseline_from_dict, arm, doc.get("baseline"))
+    if rows is not None and not np.all(np.isfinite(rows.q)):
+        raise fail(path, "key 'training_rows': joint readings must be finite numbers")
+    return CalibratedArm(model, values, full, sigma, plane, rows, baseline)
+
+
+def _document(path: str | os.PathLike) -> dict[str, Any]:
+    """The JSON object of a calibration file of this format; an :class:`InputError` for a
+    file of another kind, invalid JSON, a list or a scalar, or another format."""
     text = read_text(path, "calibration")
     try:
         doc = json.loads(text)
@@ -93,65 +124,14 @@ def read_calibration(path: str | os.PathLike) -> CalibratedArm:
             f"format {doc['format']!r} is not {CALIBRATION_FORMAT!r}; write the calibration with "
             "this version of armcal identify -o",
         )
-    key = "robot"
+    return doc
+
+
+def _section(path: str | os.PathLike, key: str, read: Callable[..., T], *args: Any) -> T:
+    """``read(*args)``: a section of a calibration file read, what is wrong with it an
+    :class:`InputError` that names the file and the key (or the :class:`BadKey`'s)."""
     try:
-        noise = None
-        if doc.get("noise") is not None:
-            key = "noise"
-            sigma_q = doc["noise"].get("joint_sigma_deg")
-            tracker = doc["noise"].get("tracker")
-            turn = doc["noise"].get("orientation_sigma_deg")
-            noise = NoiseModel(
-                np.array(doc["noise"]["covariance_mm2"], dtype=float),
-                None if sigma_q is None else np.radians(np.array(sigma_q, dtype=float)),
-                tracker=None if tracker is None else TrackerNoise(**tracker),
-                orientation_sigma=None if turn is None else math.radians(float(turn)),
-            )
-        key = "robot"
-        fixed = list(doc.get("fixed", []))
-        family = _family(doc["robot"])
-        arm = family.role("decode")(doc["robot"], noise, fixed, doc)
-        model: FitModel = arm
-        if doc.get("elastostatic") is not None:
-            key = "elastostatic"
-            model = _compliance_from_dict(family, arm, doc["elastostatic"], fixed)
-        key = "training_rows"
-        rows = _rows_from_dict(doc.get("training_rows"), arm.n_joints, len(arm.target_labels))
-        key = "parameters"
-        entries = list_of(doc, "parameters", "an entry per parameter", where="")
-        names = [entry["name"] for entry in entries]
-        expected = model.param_names
-        if tuple(names) != expected:
-            raise ValueError(
-                f"parameters {', '.join(names)} do not match the robot's {', '.join(expected)}"
-            )
-        scale = model.display_scale
-        values = np.array(
-            [number_of(e.get("value"), "parameters", f"the value of {e['name']}") for e in entries]
-        )
-        values = values / scale
-        stds = [entry.get("std") for entry in entries]
-        key = "covariance"
-        if list(doc["covariance"]["names"]) != names:
-            raise ValueError("covariance names do not match the parameters")
-        p = len(names)
-        shown = array_of(
-            doc["covariance"],
-            "matrix",
-            (p, p),
-            "a row and a column per parameter (mm, deg)",
-            where="covariance",
-        )
-        check_covariance(shown, names, stds)
-        full = shown / np.outer(scale, scale)
-        key = "sigma_mm"
-        sigma = number_of(doc.get("sigma_mm"), key, "the noise std (mm)")
-        if not sigma > 0:
-            raise ValueError(f"expected a positive noise std in mm, got {sigma}")
-        key = "plane"
-        plane = None if doc.get("plane") is None else Plane.from_dict(doc["plane"])
-        key = "baseline"
-        baseline = _baseline_from_dict(arm, doc.get("baseline"))
+        return read(*args)
     except (KeyError, TypeError, ValueError, AttributeError, OverflowError, InputError) as exc:
         # AttributeError: a section of the wrong JSON type ("robot": [] has no .get)
         what = unrendered(exc)
@@ -164,9 +144,82 @@ def read_calibration(path: str | os.PathLike) -> CalibratedArm:
         raise fail(
             path, f"key '{key}': {what}; write the calibration again with armcal identify -o"
         ) from None
-    if rows is not None and not np.all(np.isfinite(rows.q)):
-        raise fail(path, "key 'training_rows': joint readings must be finite numbers")
-    return CalibratedArm(model, values, full, sigma, plane, rows, baseline)
+
+
+def _noise_from_dict(data: dict[str, Any] | None) -> NoiseModel | None:
+    """The noise model of a calibration file's ``noise`` section (None without one)."""
+    if data is None:
+        return None
+    sigma_q = data.get("joint_sigma_deg")
+    tracker = data.get("tracker")
+    turn = data.get("orientation_sigma_deg")
+    return NoiseModel(
+        np.array(data["covariance_mm2"], dtype=float),
+        None if sigma_q is None else np.radians(np.array(sigma_q, dtype=float)),
+        tracker=None if tracker is None else TrackerNoise(**tracker),
+        orientation_sigma=None if turn is None else math.radians(float(turn)),
+    )
+
+
+def _arm_from_dict(
+    doc: dict[str, Any], noise: NoiseModel | None
+) -> tuple[Family, FitModel, list[str]]:
+    """The family and the arm of a calibration file's ``robot`` section, as its family
+    decodes it with the file's noise and ``fixed`` parameters, and those names."""
+    fixed = list(doc.get("fixed", []))
+    family = _family(doc["robot"])
+    return family, family.role("decode")(doc["robot"], noise, fixed, doc), fixed
+
+
+def _parameters_from_dict(
+    doc: dict[str, Any], model: FitModel
+) -> tuple[list[str], np.ndarray, list[Any]]:
+    """The names, values (internal units) and stds (display units, as written) of a
+    calibration file's ``parameters``, which must be the model's."""
+    entries = list_of(doc, "parameters", "an entry per parameter", where="")
+    names = [entry["name"] for entry in entries]
+    expected = model.param_names
+    if tuple(names) != expected:
+        raise ValueError(
+            f"parameters {', '.join(names)} do not match the robot's {', '.join(expected)}"
+        )
+    values = np.array(
+        [number_of(e.get("value"), "parameters", f"the value of {e['name']}") for e in entries]
+    )
+    return names, values / model.display_scale, [entry.get("std") for entry in entries]
+
+
+def _covariance_from_dict(
+    doc: dict[str, Any], names: list[str], stds: list[Any], model: FitModel
+) -> np.ndarray:
+    """The covariance (internal units) of a calibration file's ``covariance``: a row and a
+    column per parameter, symmetric, its diagonal the parameters' stds squared."""
+    if list(doc["covariance"]["names"]) != names:
+        raise ValueError("covariance names do not match the parameters")
+    p = len(names)
+    shown = array_of(
+        doc["covariance"],
+        "matrix",
+        (p, p),
+        "a row and a column per parameter (mm, deg)",
+        where="covariance",
+    )
+    check_covariance(shown, names, stds)
+    scale = model.display_scale
+    return shown / np.outer(scale, scale)
+
+
+def _sigma_from_dict(doc: dict[str, Any]) -> float:
+    """A calibration file's ``sigma_mm``: the noise std, positive."""
+    sigma = number_of(doc.get("sigma_mm"), "sigma_mm", "the noise std (mm)")
+    if not sigma > 0:
+        raise ValueError(f"expected a positive noise std in mm, got {sigma}")
+    return sigma
+
+
+def _plane_from_dict(data: dict[str, Any] | None) -> Plane | None:
+    """The plane of 3-D data of a calibration file's ``plane`` (None without one)."""
+    return None if data is None else Plane.from_dict(data)
 
 
 def _family(robot: dict[str, Any]) -> Family:
@@ -314,20 +367,7 @@ def calibration_document(
         parameters carry ``"fixed": true`` and std 0).  No NaN anywhere.
     """
     arm = cal.arm
-    corr = cal.correlation
-    fit = cal.goodness_of_fit
-    # Python numbers, column by column (a 10^5-row table indexed row by row in numpy is slow).
-    rows = [int(r) for r in cal.rows] if cal.rows else list(range(1, cal.n_poses + 1))
-    used = [True] * cal.n_poses if cal.used is None else np.asarray(cal.used, bool).tolist()
-    labels = list(arm.target_labels)
-    targets = (
-        [None] * cal.n_poses if cal.target is None else [labels[t] for t in cal.target.tolist()]
-    )
-    axes = ("dx_mm", "dy_mm", "dz_mm", "drx_deg", "dry_deg", "drz_deg")[: cal.residuals.shape[1]]
-    shown = np.array(cal.residuals, dtype=float)
-    shown[:, 3:] = np.degrees(shown[:, 3:])  # a 6-DoF instrument's turns, in degrees
     turn_rms = cal.orientation_residual_rms_deg
-    standardized = cal.standardized_residuals
     return {
         "format": CALIBRATION_FORMAT,
         "armcal_version": __version__,
@@ -341,53 +381,19 @@ def calibration_document(
         "noise": None if arm.noise is None else arm.noise.to_dict(),
         "elastostatic": _elastostatic_dict(cal),
         "fixed": list(cal.model.fixed),
-        "parameters": [
-            {
-                "name": name,
-                "unit": unit,
-                "value": float(v),
-                "std": 0.0 if name in cal.model.fixed else float(s),
-                "fixed": name in cal.model.fixed,
-            }
-            for name, unit, v, s in zip(cal.names, cal.units, cal.values, cal.std, strict=True)
-        ],
+        "parameters": _parameters_list(cal),
         "covariance": {"names": list(cal.names), "matrix": cal.covariance_display.tolist()},
-        "correlation": {"names": list(cal.names), "matrix": corr.tolist()},
+        "correlation": {"names": list(cal.names), "matrix": cal.correlation.tolist()},
         "residual_rms_mm": cal.residual_rms,
         "residual_rms_per_coordinate_mm": cal.residual_rms,
         "residual_rms_per_point_mm": cal.residual_rms_per_point,
         "residual_max_mm": cal.residual_max,
         **({} if turn_rms is None else {"orientation_residual_rms_per_axis_deg": turn_rms}),
         "degrees_of_freedom": cal.dof,
-        "goodness_of_fit": {
-            "chi2": None if fit is None else _finite_or_none(fit.chi2),
-            "dof": cal.dof if fit is None else int(fit.dof),
-            "p_value": None if fit is None else _finite_or_none(fit.p_value),
-            "p_value_below": None if fit is None else _finite_or_none(fit.p_below),
-        },
-        "residuals": [
-            {"row": row, "pose": label, "target": t, **dict(zip(axes, d, strict=True)), "used": u}
-            for row, label, t, d, u in zip(
-                rows, cal.pose_labels, targets, shown.tolist(), used, strict=True
-            )
-        ],
-        "standardized_residuals": []
-        if standardized is None
-        else [
-            {"row": row, "pose": label, **dict(zip(_AXES, d, strict=False))}
-            for row, label, d in zip(rows, cal.pose_labels, standardized.tolist(), strict=True)
-        ],
-        "outliers": [
-            {
-                "row": int(o.row),
-                "pose": o.pose,
-                "target": o.target,
-                "residual_mm": float(o.residual_mm),
-                "studentized": float(o.studentized),
-                "removed": bool(o.removed),
-            }
-            for o in cal.outliers
-        ],
+        "goodness_of_fit": _goodness_dict(cal),
+        "residuals": _residuals_list(cal),
+        "standardized_residuals": _standardized_list(cal),
+        "outliers": _outliers_list(cal),
         "iterations": cal.iterations,
         "converged": cal.converged,
         "plane": None if cal.plane is None else cal.plane.to_dict(),
@@ -395,3 +401,84 @@ def calibration_document(
         "training_rows": _rows_dict(cal),
         "warnings": [w.to_dict(words) for w in (cal.warnings if warnings is None else warnings)],
     }
+
+
+def _parameters_list(cal: Calibration) -> list[dict[str, Any]]:
+    """``parameters``: every parameter's name, unit, value and std (display units); a
+    fixed one has std 0."""
+    fixed = cal.model.fixed
+    return [
+        {
+            "name": name,
+            "unit": unit,
+            "value": float(v),
+            "std": 0.0 if name in fixed else float(s),
+            "fixed": name in fixed,
+        }
+        for name, unit, v, s in zip(cal.names, cal.units, cal.values, cal.std, strict=True)
+    ]
+
+
+def _goodness_dict(cal: Calibration) -> dict[str, Any]:
+    """``goodness_of_fit``: chi-square, its degrees of freedom and both tails' p-values
+    (null where sigma was estimated)."""
+    fit = cal.goodness_of_fit
+    return {
+        "chi2": None if fit is None else _finite_or_none(fit.chi2),
+        "dof": cal.dof if fit is None else int(fit.dof),
+        "p_value": None if fit is None else _finite_or_none(fit.p_value),
+        "p_value_below": None if fit is None else _finite_or_none(fit.p_below),
+    }
+
+
+def _row_numbers(cal: Calibration) -> list[int]:
+    """The measurement file's row of every residual (1, 2, ... where the rows are not known)."""
+    return [int(r) for r in cal.rows] if cal.rows else list(range(1, cal.n_poses + 1))
+
+
+def _residuals_list(cal: Calibration) -> list[dict[str, Any]]:
+    """``residuals``: every row's residual (mm; a 6-DoF instrument's turns in degrees), its
+    pose and target, and whether the fit used it."""
+    # Python numbers, column by column (a 10^5-row table indexed row by row in numpy is slow).
+    used = [True] * cal.n_poses if cal.used is None else np.asarray(cal.used, bool).tolist()
+    labels = list(cal.arm.target_labels)
+    targets = (
+        [None] * cal.n_poses if cal.target is None else [labels[t] for t in cal.target.tolist()]
+    )
+    axes = ("dx_mm", "dy_mm", "dz_mm", "drx_deg", "dry_deg", "drz_deg")[: cal.residuals.shape[1]]
+    shown = np.array(cal.residuals, dtype=float)
+    shown[:, 3:] = np.degrees(shown[:, 3:])  # a 6-DoF instrument's turns, in degrees
+    return [
+        {"row": row, "pose": label, "target": t, **dict(zip(axes, d, strict=True)), "used": u}
+        for row, label, t, d, u in zip(
+            _row_numbers(cal), cal.pose_labels, targets, shown.tolist(), used, strict=True
+        )
+    ]
+
+
+def _standardized_list(cal: Calibration) -> list[dict[str, Any]]:
+    """``standardized_residuals``: every row's whitened residual (none where the fit has none)."""
+    standardized = cal.standardized_residuals
+    if standardized is None:
+        return []
+    return [
+        {"row": row, "pose": label, **dict(zip(_AXES, d, strict=False))}
+        for row, label, d in zip(
+            _row_numbers(cal), cal.pose_labels, standardized.tolist(), strict=True
+        )
+    ]
+
+
+def _outliers_list(cal: Calibration) -> list[dict[str, Any]]:
+    """``outliers``: every row the robust fit flagged, and whether it was left out."""
+    return [
+        {
+            "row": int(o.row),
+            "pose": o.pose,
+            "target": o.target,
+            "residual_mm": float(o.residual_mm),
+            "studentized": float(o.studentized),
+            "removed": bool(o.removed),
+        }
+        for o in cal.outliers
+    ]

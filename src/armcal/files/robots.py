@@ -11,7 +11,7 @@ from __future__ import annotations
 import math
 import os
 from collections.abc import Sequence
-from dataclasses import replace
+from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any
 
@@ -30,6 +30,7 @@ from ..models import (
     Region,
     Target,
     TermChoice,
+    checked_joint_map,
 )
 from ..noise import NoiseModel
 from ..paper import BUILTIN_ROBOTS, paper_arm
@@ -63,6 +64,7 @@ __all__ = [
     "load_truth",
     "parse_region",
     "planar_truth",
+    "read_joint_map",
     "refuse_unknown_robot",
     "rigid_truth_message",
     "unknown_parameter",
@@ -399,7 +401,58 @@ def load_planar_robot(
     if key in BUILTIN_ROBOTS:
         return _builtin(key)
     path = Path(key)
-    if key == STDIO:
+    data = _planar_data(path)
+    lengths = _link_lengths(path, data)
+    n = len(lengths)
+    name = data.get("name", "robot" if key == STDIO else path.stem)
+    if not isinstance(name, str) or not name.strip():
+        raise fail(path, f"key 'name': expected a non-empty string, got {name!r}")
+    metres = _metre_lengths_warning(path, lengths)
+    warnings: list[ArmcalWarning] = [] if metres is None else [metres]
+    limits = None
+    if "joint_limits_deg" in data:
+        limits, radians = _joint_limits(path, data["joint_limits_deg"], n)
+        warnings += [] if radians is None else [radians]
+    base_offset = data.get("base_offset", False)
+    if not isinstance(base_offset, bool):
+        raise fail(path, f"key 'base_offset': expected true or false, got {base_offset!r}")
+    measurement = _Measurement(None, None, None)
+    if "measurement" in data:
+        measurement = _measurement(path, data["measurement"], n)
+    mapping = None
+    if "joint_map" in data:
+        mapping = read_joint_map(path, data["joint_map"], ("R",) * n)
+    offsets = None
+    if "joint_offsets_deg" in data:
+        offsets = np.radians(numbers(path, data["joint_offsets_deg"], "joint_offsets_deg", n))
+    targets = _targets(path, data["targets"], lengths[-1]) if "targets" in data else ()
+    try:
+        structure = PlanarArm(lengths, base_offset=base_offset, joint_map=mapping, targets=targets)
+    except ValueError as exc:
+        raise fail(path, unrendered(exc)) from None
+    fixed, elastic = _fixed_and_elastic(path, data, structure, name)
+    try:
+        arm = PlanarArm(
+            lengths,
+            limits,
+            base_offset=base_offset,
+            name=name,
+            noise=measurement.noise,
+            region=measurement.region,
+            fixed=fixed,
+            joint_map=mapping,
+            targets=targets,
+            joint_offsets=offsets,
+        )
+    except ValueError as exc:  # every value was checked above; this names what is left
+        raise fail(path, unrendered(exc)) from None
+    return RobotSpec(arm, key, None, tuple(warnings), elastic, measurement.gravity_3d)
+
+
+def _planar_data(path: Path) -> dict[str, Any]:
+    """The table of a planar robot TOML (``-``: stdin, which must be neither a URDF nor a
+    spatial robot file), its keys and its tables' keys checked."""
+    if os.fspath(path) == STDIO:
         text = read_text(path, "robot")
         if text.lstrip().startswith("<"):
             raise fail(path, _PIPED_SPATIAL.format(what="a URDF"))
@@ -412,6 +465,11 @@ def load_planar_robot(
     for table in ("measurement", "identify", "elastostatic"):  # [targets] holds labels
         if isinstance(data.get(table), dict):
             check_keys(path, data[table], allowed_keys(table), f"{table}.")
+    return data
+
+
+def _link_lengths(path: Path, data: dict[str, Any]) -> list[float]:
+    """``link_lengths_mm``: at least one, each within :data:`LINK_LENGTH_RANGE_MM`."""
     if "link_lengths_mm" not in data:
         raise fail(path, "missing key 'link_lengths_mm' (a list of link lengths in mm)")
     lengths = numbers(path, data["link_lengths_mm"], "link_lengths_mm")
@@ -425,91 +483,80 @@ def load_planar_robot(
                 f"key 'link_lengths_mm[{i}]': link {i + 1} length must be between {low:g} and "
                 f"{high:g} mm, got {length:g}; check the unit (mm)",
             )
-    n = len(lengths)
-    name = data.get("name", "robot" if key == STDIO else path.stem)
-    if not isinstance(name, str) or not name.strip():
-        raise fail(path, f"key 'name': expected a non-empty string, got {name!r}")
-    metres = _metre_lengths_warning(path, lengths)
-    warnings: list[ArmcalWarning] = [] if metres is None else [metres]
-    limits = None
-    if "joint_limits_deg" in data:
-        raw = data["joint_limits_deg"]
-        if not isinstance(raw, list) or len(raw) != n:
+    return lengths
+
+
+def _joint_limits(
+    path: Path, raw: Any, n: int
+) -> tuple[list[tuple[float, float]], ArmcalWarning | None]:
+    """``joint_limits_deg``: a pair ``[lo, hi]`` per joint, in rad, and the
+    ``limits-radians`` warning where they look like radians already."""
+    if not isinstance(raw, list) or len(raw) != n:
+        raise fail(
+            path,
+            f"key 'joint_limits_deg': expected {n} pairs [lo, hi], one per joint, got {raw!r}",
+        )
+    pairs = []
+    for j, pair in enumerate(raw):
+        lo, hi = numbers(path, pair, f"joint_limits_deg[{j}]", 2)
+        if not lo < hi:
+            raise fail(path, f"key 'joint_limits_deg[{j}]': need lo < hi, got [{lo}, {hi}]")
+        pairs.append((lo, hi))
+    limits = [(math.radians(lo), math.radians(hi)) for lo, hi in pairs]
+    return limits, _radian_limits_warning(path, pairs)
+
+
+@dataclass(frozen=True)
+class _Measurement:
+    """A planar robot file's ``[measurement]``: the instrument's noise model, the region it
+    measures and gravity's direction in its frame (each None where not given)."""
+
+    noise: NoiseModel | None
+    region: Region | None
+    gravity_3d: np.ndarray | None
+
+
+def _measurement(path: Path, meas: Any, n: int) -> _Measurement:
+    """``[measurement]``: ``gravity``, the instrument's noise (``sigma_mm`` or
+    ``covariance_mm2``), the encoders' (``joint_sigma_deg``) and ``region``."""
+    if not isinstance(meas, dict):
+        raise fail(path, "key 'measurement': expected a table [measurement]")
+    gravity_3d = None
+    if "gravity" in meas:
+        gravity_3d = np.array(numbers(path, meas["gravity"], "measurement.gravity", 3))
+        if not np.any(gravity_3d):
             raise fail(
                 path,
-                f"key 'joint_limits_deg': expected {n} pairs [lo, hi], one per joint, got {raw!r}",
+                "key 'measurement.gravity': needs a non-zero direction in the instrument "
+                "frame, e.g. [0, 0, -1] for a levelled tracker",
             )
-        pairs = []
-        for j, pair in enumerate(raw):
-            lo, hi = numbers(path, pair, f"joint_limits_deg[{j}]", 2)
-            if not lo < hi:
-                raise fail(path, f"key 'joint_limits_deg[{j}]': need lo < hi, got [{lo}, {hi}]")
-            pairs.append((lo, hi))
-        limits = [(math.radians(lo), math.radians(hi)) for lo, hi in pairs]
-        radians = _radian_limits_warning(path, pairs)
-        if radians is not None:
-            warnings.append(radians)
-    base_offset = data.get("base_offset", False)
-    if not isinstance(base_offset, bool):
-        raise fail(path, f"key 'base_offset': expected true or false, got {base_offset!r}")
-    noise, region, gravity_3d = None, None, None
-    if "measurement" in data:
-        meas = data["measurement"]
-        if not isinstance(meas, dict):
-            raise fail(path, "key 'measurement': expected a table [measurement]")
-        if "gravity" in meas:
-            gravity_3d = np.array(numbers(path, meas["gravity"], "measurement.gravity", 3))
-            if not np.any(gravity_3d):
-                raise fail(
-                    path,
-                    "key 'measurement.gravity': needs a non-zero direction in the instrument "
-                    "frame, e.g. [0, 0, -1] for a levelled tracker",
-                )
-        covariance = _instrument_covariance(path, meas)
-        joint_sigma = _joint_sigma(path, meas, n)
-        if joint_sigma is not None and covariance is None:
-            raise fail(
-                path,
-                "key 'measurement.joint_sigma_deg': encoder noise needs the instrument noise "
-                "too; add sigma_mm (or covariance_mm2) to [measurement]",
-            )
-        if covariance is not None:
-            noise = NoiseModel(covariance, joint_sigma)
-        if "region" in meas:
-            region = parse_region(path, meas["region"])
-    mapping = _joint_map(path, data["joint_map"], n) if "joint_map" in data else None
-    offsets = None
-    if "joint_offsets_deg" in data:
-        offsets = np.radians(numbers(path, data["joint_offsets_deg"], "joint_offsets_deg", n))
-    targets = _targets(path, data["targets"], lengths[-1]) if "targets" in data else ()
-    try:
-        structure = PlanarArm(lengths, base_offset=base_offset, joint_map=mapping, targets=targets)
-    except ValueError as exc:
-        raise fail(path, unrendered(exc)) from None
-    names = structure.param_names
+    covariance = _instrument_covariance(path, meas)
+    joint_sigma = _joint_sigma(path, meas, n)
+    if joint_sigma is not None and covariance is None:
+        raise fail(
+            path,
+            "key 'measurement.joint_sigma_deg': encoder noise needs the instrument noise "
+            "too; add sigma_mm (or covariance_mm2) to [measurement]",
+        )
+    noise = None if covariance is None else NoiseModel(covariance, joint_sigma)
+    region = parse_region(path, meas["region"]) if "region" in meas else None
+    return _Measurement(noise, region, gravity_3d)
+
+
+def _fixed_and_elastic(
+    path: Path, data: dict[str, Any], structure: PlanarArm, name: str
+) -> tuple[list[str], Elastostatic | None]:
+    """The parameters ``[identify]`` holds, among the arm's and its ``[elastostatic]``
+    compliance terms, and that table (the terms it holds chosen), None for a rigid arm."""
+    n = structure.n_joints
     elastic = _elastostatic(path, data["elastostatic"], n) if "elastostatic" in data else None
     terms = () if elastic is None else elastic.term_names(structure)
-    fixed = []
+    fixed: list[str] = []
     if "identify" in data:
-        fixed = fixed_parameters(path, data["identify"], names, name, terms)
+        fixed = fixed_parameters(path, data["identify"], structure.param_names, name, terms)
         if elastic is not None:
             elastic = replace(elastic, terms=held_terms(data["identify"], terms))
-    try:
-        arm = PlanarArm(
-            lengths,
-            limits,
-            base_offset=base_offset,
-            name=name,
-            noise=noise,
-            region=region,
-            fixed=fixed,
-            joint_map=mapping,
-            targets=targets,
-            joint_offsets=offsets,
-        )
-    except ValueError as exc:  # every value was checked above; this names what is left
-        raise fail(path, unrendered(exc)) from None
-    return RobotSpec(arm, key, None, tuple(warnings), elastic, gravity_3d)
+    return fixed, elastic
 
 
 def _elastostatic(path, table: Any, n: int) -> Elastostatic:
@@ -538,15 +585,61 @@ def _elastostatic(path, table: Any, n: int) -> Elastostatic:
         raise fail(path, f"[elastostatic]: {unrendered(exc)}") from None
 
 
-def _joint_map(path, value: Any, n: int) -> np.ndarray:
-    """``joint_map``: ``n`` rows of ``n`` numbers, ``theta = M q``."""
+def read_joint_map(path, value: Any, kinds: Sequence[str]) -> np.ndarray:
+    """A robot file's ``joint_map``, in every family's robot file: a row of numbers per
+    joint, its readings' map to the angles the kinematics use (a planar arm's link angles
+    ``theta = M q``, a spatial arm's URDF joint values ``u = M q``).
+
+    Parameters
+    ----------
+    path : path
+        The robot file, for the messages.
+    value : object
+        The key's value as read from the TOML.
+    kinds : sequence of str
+        The arm's joints, ``"R"`` (revolute) or ``"P"`` (prismatic).
+
+    Returns
+    -------
+    ndarray, shape (n, n)
+
+    Raises
+    ------
+    InputError
+        Unless ``value`` is ``n`` rows of ``n`` finite numbers, invertible by the one
+        check of every family (:func:`~armcal.models.checked_joint_map`), whose readings
+        move joints of their own kind only.
+    """
+    n = len(kinds)
     if not isinstance(value, list) or len(value) != n:
         raise fail(
             path,
-            f"key 'joint_map': expected {n} rows of {n} numbers (theta = M q), got {value!r}",
+            f"key 'joint_map': expected {n} rows of {n} numbers (the arm has {n} joints), "
+            f"got {value!r}",
         )
     rows = [numbers(path, row, f"joint_map[{i}]", n) for i, row in enumerate(value)]
-    return np.array(rows)  # PlanarArm judges it (invertible; the last column with targets)
+    try:
+        mapping = checked_joint_map(rows, n)
+    except ValueError as exc:
+        raise fail(path, str(exc)) from None
+    _check_map_kinds(path, mapping, kinds)
+    return mapping
+
+
+def _check_map_kinds(path, mapping: np.ndarray, kinds: Sequence[str]) -> None:
+    """Refuse a ``joint_map`` that makes a revolute joint's angle of a slide's reading (mm)
+    or a slide of an angle: the units do not mix, and every reading's column unit follows
+    the kind of the joints it moves (``q{j}_deg`` or ``q{j}_mm``)."""
+    for i, j in np.argwhere(mapping != 0):
+        if kinds[i] != kinds[j]:
+            what = {"R": "revolute", "P": "prismatic"}
+            raise fail(
+                path,
+                f"key 'joint_map': row {i + 1}, column {j + 1} is {mapping[i, j]:g}: it moves "
+                f"{what[kinds[i]]} joint {i + 1} by reading {j + 1} of {what[kinds[j]]} joint "
+                f"{j + 1}; a reading moves joints of its own kind only (degrees and mm do not "
+                "mix): set it to 0",
+            )
 
 
 def _targets(path, table: Any, last_length: float) -> tuple[Target, ...]:

@@ -57,6 +57,7 @@ from .robots import (
     SPATIAL_ROBOT_KEYS,
     fixed_parameters,
     held_terms,
+    read_joint_map,
     refuse_unknown_robot,
     rigid_truth_message,
 )
@@ -208,41 +209,45 @@ def _chain(
     if "ur" in data:
         return (*_ur_chain(path, data["ur"]), None)
     if "urdf" in data:
-        urdf = _relative_file(path, data["urdf"], "urdf", "robot file")
-        links = {}
-        for name in ("base_link", "tip_link"):
-            if name in data and not isinstance(data[name], str):
-                raise fail(path, f"key '{name}': expected a link name, got {data[name]!r}")
-            links[name] = data.get(name)
-        base_link, tip_link = chosen
-        found = read_urdf(urdf, base_link or links["base_link"], tip_link or links["tip_link"])
-        warned_urdf = (*found.warnings, *_urdf_units(urdf, found.chain))
-        return found.chain, found.robot, warned_urdf, found.masses
+        return _urdf_chain(path, data, chosen)
     if not given:
         raise fail(
             path,
             "needs 'urdf' (a URDF file), an [mdh] or [dh] table or a [ur] model to describe "
             "the arm",
         )
-    key = given[0]  # a table of one of the DH conventions
-    table = data[key]
+    chain, warned = _table_chain(path, given[0], data[given[0]])
+    return chain, path.stem, warned, None
+
+
+def _urdf_chain(
+    path: Path, data: dict, chosen: tuple[str | None, str | None]
+) -> tuple[SerialChain, str, tuple[ArmcalWarning, ...], LinkMasses | None]:
+    """The chain of the URDF a robot TOML names (``urdf``), between the ``chosen`` base and
+    tip links, else the file's ``base_link`` and ``tip_link``: with the robot's name, what
+    reading it warns of and its masses."""
+    urdf = _relative_file(path, data["urdf"], "urdf", "robot file")
+    links = {}
+    for name in ("base_link", "tip_link"):
+        if name in data and not isinstance(data[name], str):
+            raise fail(path, f"key '{name}': expected a link name, got {data[name]!r}")
+        links[name] = data.get(name)
+    base_link, tip_link = chosen
+    found = read_urdf(urdf, base_link or links["base_link"], tip_link or links["tip_link"])
+    warned_urdf = (*found.warnings, *_urdf_units(urdf, found.chain))
+    return found.chain, found.robot, warned_urdf, found.masses
+
+
+def _table_chain(
+    path: Path, key: str, table: Any
+) -> tuple[SerialChain, tuple[ArmcalWarning, ...]]:
+    """The chain of an ``[mdh]`` or ``[dh]`` table (``key``), checked for angles in radians,
+    a table of the other convention and lengths in metres, and its own joint limits."""
     if not isinstance(table, dict):
         raise fail(path, f"key '{key}': expected a table [{key}]")
     check_keys(path, table, allowed_keys(key, SPATIAL_KEYS), f"{key}.")
-    values = {}
-    for name in _MDH_REQUIRED:
-        if name not in table:
-            raise fail(path, f"missing key '{key}.{name}': one value per joint")
-        values[name] = numbers(path, table[name], f"{key}.{name}")
+    values = _table_columns(path, key, table)
     n = len(values["alpha_deg"])
-    values["beta_deg"] = numbers(path, table.get("beta_deg", [0.0] * n), f"{key}.beta_deg")
-    for name, column in values.items():
-        if len(column) != n or n == 0:
-            raise fail(
-                path,
-                f"key '{key}.{name}': expected {n} values (one per joint, as alpha_deg), "
-                f"got {len(column)}",
-            )
     kinds = table.get("joint_types", ["R"] * n)
     if not isinstance(kinds, list) or len(kinds) != n or any(k not in ("R", "P") for k in kinds):
         raise fail(path, f'key \'{key}.joint_types\': expected {n} of "R" or "P", got {kinds!r}')
@@ -275,7 +280,28 @@ def _chain(
         own, more = _limits(path, limits, chain.kinds, f"{key}.joint_limits_deg")
         chain = replace(chain, joint_limits=own)
         warned += more
-    return chain, path.stem, warned, None
+    return chain, warned
+
+
+def _table_columns(path: Path, key: str, table: dict) -> dict[str, list[float]]:
+    """The columns of an ``[mdh]`` or ``[dh]`` table by key: ``alpha_deg``, ``a_mm``,
+    ``theta_deg``, ``d_mm`` (required) and ``beta_deg`` (zeros by default), one value per
+    joint each."""
+    values = {}
+    for name in _MDH_REQUIRED:
+        if name not in table:
+            raise fail(path, f"missing key '{key}.{name}': one value per joint")
+        values[name] = numbers(path, table[name], f"{key}.{name}")
+    n = len(values["alpha_deg"])
+    values["beta_deg"] = numbers(path, table.get("beta_deg", [0.0] * n), f"{key}.beta_deg")
+    for name, column in values.items():
+        if len(column) != n or n == 0:
+            raise fail(
+                path,
+                f"key '{key}.{name}': expected {n} values (one per joint, as alpha_deg), "
+                f"got {len(column)}",
+            )
+    return values
 
 
 def _from_toml(
@@ -290,17 +316,7 @@ def _from_toml(
         raise fail(path, f"key 'name': expected a non-empty string, got {name!r}")
     mapping = np.eye(n)
     if "joint_map" in data:
-        raw = data["joint_map"]
-        if not isinstance(raw, list) or len(raw) != n:
-            raise fail(
-                path, f"key 'joint_map': expected {n} rows of {n} numbers (the arm has {n} joints)"
-            )
-        mapping = np.array([numbers(path, row, f"joint_map[{i}]", n) for i, row in enumerate(raw)])
-        if abs(np.linalg.det(mapping)) < 1e-9:
-            raise fail(
-                path, "key 'joint_map': the matrix is singular; every joint value needs a reading"
-            )
-        _check_map_kinds(path, mapping, chain.kinds)
+        mapping = read_joint_map(path, data["joint_map"], chain.kinds)
     limits = np.zeros((0, 2))
     if "joint_limits_deg" in data:
         limits, warned = _limits(path, data["joint_limits_deg"], chain.kinds, "joint_limits_deg")
@@ -352,22 +368,6 @@ def _limits(
     revolute = np.array([kind == "R" for kind in kinds])
     limits = np.where(revolute[:, None], np.radians(pairs), pairs)
     return limits, tuple(limit_warnings(path, pairs, kinds, key))
-
-
-def _check_map_kinds(path: Path, mapping: np.ndarray, kinds: Sequence[str]) -> None:
-    """Refuse a ``joint_map`` that makes a revolute joint's angle of a slide's reading (mm)
-    or a slide of an angle: the units do not mix, and every reading's column unit follows
-    the kind of the joints it moves (``q{j}_deg`` or ``q{j}_mm``)."""
-    for i, j in np.argwhere(mapping != 0):
-        if kinds[i] != kinds[j]:
-            what = {"R": "revolute", "P": "prismatic"}
-            raise fail(
-                path,
-                f"key 'joint_map': row {i + 1}, column {j + 1} is {mapping[i, j]:g}: it moves "
-                f"{what[kinds[i]]} joint {i + 1} by reading {j + 1} of {what[kinds[j]]} joint "
-                f"{j + 1}; a reading moves joints of its own kind only (degrees and mm do not "
-                "mix): set it to 0",
-            )
 
 
 def _elastostatic(

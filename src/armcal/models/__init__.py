@@ -16,6 +16,7 @@
 * :mod:`~armcal.models.spatial.gravity`, :mod:`~armcal.models.spatial.compliance` --
   its joints twisting under gravity and payload (:class:`CompliantSpatialArm`);
 * :mod:`~armcal.models.plane` -- the plane of motion of 3-D data;
+* :mod:`~armcal.models.joint_maps` -- the one check of a joint map, every family's;
 * :mod:`~armcal.models.calibrated` -- an arm with its identified deviations.
 """
 
@@ -38,6 +39,7 @@ from .interface import (
     equations_per_pose,
     position_jacobian,
 )
+from .joint_maps import checked_joint_map
 from .planar.arm import INSTRUMENT_PARAMS, LARGE_LENGTH_FRACTION, PlanarArm
 from .planar.compliance import (
     STANDARD_GRAVITY,
@@ -150,6 +152,7 @@ __all__ = [
     "check_compliance_identifiable",
     "check_identifiable",
     "check_target",
+    "checked_joint_map",
     "combination",
     "compliance_identifiability",
     "conditioning_warning",

@@ -43,6 +43,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from ...numerics import wrap_angle
+from ..joint_maps import checked_joint_map
 
 __all__ = [
     "PlanarGeometry",
@@ -177,8 +178,8 @@ class PlanarGeometry:
     ) -> None:
         lengths = checked_link_lengths(link_lengths)
         n = lengths.size
-        mapping = standard_joint_map(n) if joint_map is None else np.array(joint_map, dtype=float)
-        _check_joint_map(mapping, n, several_targets=len(targets) > 1)
+        mapping = standard_joint_map(n) if joint_map is None else checked_joint_map(joint_map, n)
+        _check_last_column(mapping, several_targets=len(targets) > 1)
         targets = tuple(targets)
         _check_targets(targets)
         offsets = np.zeros(n) if joint_offsets is None else np.array(joint_offsets, dtype=float)
@@ -423,17 +424,10 @@ class PlanarGeometry:
         return np.array([index[lb] for lb in labels], dtype=int)
 
 
-def _check_joint_map(mapping: np.ndarray, n: int, *, several_targets: bool) -> None:
-    if mapping.shape != (n, n):
-        raise ValueError(f"joint_map must have shape ({n}, {n}), got {mapping.shape}")
-    if not np.all(np.isfinite(mapping)):
-        raise ValueError("joint_map must be finite")
-    s = np.linalg.svd(mapping, compute_uv=False)
-    if s[-1] <= 1e-9 * s[0]:
-        raise ValueError(
-            "joint_map must be invertible: every link angle needs its own joint reading "
-            "(the default has ones in row i, columns 1..i)"
-        )
+def _check_last_column(mapping: np.ndarray, *, several_targets: bool) -> None:
+    """Refuse a joint map that turns a target's own last link by a joint before the last
+    (every target has its own last link vector, turned by the last joint alone)."""
+    n = mapping.shape[0]
     if several_targets and n > 1 and np.any(mapping[: n - 1, n - 1] != 0):
         raise ValueError(
             "with several targets the last joint may turn only the last link: "

@@ -35,6 +35,7 @@ from ..interface import (
     target_indices,
     targets_missing,
 )
+from ..joint_maps import checked_joint_map
 from . import pose as spatial_pose
 from .chain import (
     SerialChain,
@@ -150,8 +151,7 @@ class SpatialArm(SpatialDesign, SpatialTool, CoreModel):
         n = self.chain.n_joints
         if self.joint_map.size == 0:
             object.__setattr__(self, "joint_map", np.eye(n))
-        if self.joint_map.shape != (n, n) or abs(np.linalg.det(self.joint_map)) < 1e-12:
-            raise ValueError(f"joint_map must be an invertible {n} x {n} matrix")
+        checked_joint_map(self.joint_map, n)
         if self.limits.size == 0:
             object.__setattr__(self, "limits", self._limits_from_chain())
         if self.limits.shape != (n, 2) or not np.all(self.limits[:, 0] < self.limits[:, 1]):
