@@ -237,3 +237,15 @@ def test_one_export_entry_writes_either_family(tmp_path):
         assert armcal.export(calibrated, "offsets").startswith("joint,")
     with pytest.raises(ArmcalError, match="the kinds are robot, urdf, offsets"):
         armcal.export(cal.calibrated(), "step")
+
+
+def test_certify_takes_a_spatial_arm_as_loaded():
+    """``armcal.certify`` on the arm as loaded (51 parameters, 18 of them no plan
+    separates) certifies the plan as ``design`` sees it: the same bound as on the
+    prepared model, within (0, 1]."""
+    arm = load_robot("industrial-6r").arm.replace(targets=("A", "B", "C"))
+    plan = armcal.design(arm, 12, rng=0, with_certificate=False)
+    loaded = armcal.certify(arm, plan.q, rng=1, candidates=200, rounds=1, search=200)
+    prepared = armcal.certify(plan.model, plan.q, rng=1, candidates=200, rounds=1, search=200)
+    assert 0 < loaded.certified_d_efficiency <= 1
+    assert loaded.certified_d_efficiency == prepared.certified_d_efficiency

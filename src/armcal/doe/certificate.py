@@ -8,6 +8,7 @@ import numpy as np
 
 from ..criteria import attains_unit_bound, d_efficiency
 from ..models import FitModel
+from ..models.information import identifying
 from ..numerics import ScaledSVD, scaled_svd, spd_inverse
 from ..progress import ProgressCallback, share
 from .ascent import adam_ascent, penalty_weight, to_q, to_u, view_penalty
@@ -235,6 +236,9 @@ def certify(
     Parameters
     ----------
     model : FitModel
+        A model the plan does not identify as given (a spatial arm as loaded, with
+        parameters no plan separates) is certified as the plan identifies it
+        (:func:`~armcal.models.information.identifying`), as :func:`design` does.
     q : ndarray, shape (m, n)
         The plan (rad); must identify every parameter.
     rng : numpy.random.Generator or int or None
@@ -298,6 +302,7 @@ def certify(
     rounds = effort.rounds if rounds is None else rounds
     search = effort.search if search is None else search
     q = np.asarray(q, dtype=float)
+    model = identifying(model, model.plan_conditions(q))  # a spatial arm as loaded: prepared
     p = model.n_free
     plan_information = model.plan_information(q)
     plan = plan_information.svd()
@@ -394,6 +399,7 @@ def certify_pool(model: FitModel, q: np.ndarray, pool: np.ndarray) -> Certificat
     """
     q = np.asarray(q, dtype=float)
     pool = np.asarray(pool, dtype=float)
+    model = identifying(model, model.plan_conditions(q))  # a spatial arm as loaded: prepared
     p = model.n_free
     plan_information = model.plan_information(q)
     plan_information.check_identifiable()
