@@ -249,3 +249,12 @@ def test_certify_takes_a_spatial_arm_as_loaded():
     prepared = armcal.certify(plan.model, plan.q, rng=1, candidates=200, rounds=1, search=200)
     assert 0 < loaded.certified_d_efficiency <= 1
     assert loaded.certified_d_efficiency == prepared.certified_d_efficiency
+
+
+@pytest.mark.parametrize("name", ["paper-2link", "industrial-6r"])
+def test_one_demo_entry_tells_either_family_story(name):
+    """``armcal.run_demo`` runs the family's story through the registry, as ``armcal demo``
+    does: a calibration file among its files, and a report that names the robot."""
+    story = armcal.run_demo(load_robot(name), poses=12 if name == "industrial-6r" else 8)
+    assert name in story.text
+    assert "calibration.json" in story.files

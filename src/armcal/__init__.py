@@ -59,6 +59,7 @@ from .doe import (
 )
 from .errors import ArmcalError, ArmcalWarning, InputError, NotIdentifiableError
 from .export_planar import robot_toml, urdf
+from .families import run_demo
 from .files import load_robot, load_truth, read_calibration, read_measurements, read_plan
 from .identification import Calibration, Estimate, GoodnessOfFit, Outlier, identify, solve
 from .instrument import identify_3d
@@ -160,6 +161,7 @@ __all__ = [
     "read_measurements",
     "read_plan",
     "robot_toml",
+    "run_demo",
     "solve",
     "solve_closed_form",
     "solve_gauss_newton",

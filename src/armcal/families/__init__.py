@@ -21,6 +21,7 @@ from .registry import (
     family_of,
     load_robot,
     register,
+    run_demo,
     unregister,
 )
 
@@ -88,5 +89,6 @@ __all__ = [
     "family_of",
     "load_robot",
     "register",
+    "run_demo",
     "unregister",
 ]

@@ -297,3 +297,33 @@ def load_robot(
         description, base_link=base_link, tip_link=tip_link
     )
     return loaded
+
+
+def run_demo(
+    robot: RobotSpec[Any],
+    *,
+    truth: str | os.PathLike | None = None,
+    poses: int | None = None,
+    sigma: float | None = None,
+    seed: int = 0,
+) -> Any:
+    """The whole story on a robot of any family, nothing written: its family's demo
+    (planar: design, measure, identify, validate, compensate, export; spatial: a tracker
+    and three reflectors), on the virtual arm of ``truth`` (a truth file; None: the
+    built-in robot's own).
+
+    Returns
+    -------
+    Demo
+        The report's text, the JSON document, the files it would write and the warnings
+        (:class:`armcal.demo.Demo`).
+    """
+    family = robot.family
+    read_truth = family.role("truth")
+
+    def truth_of(arm: Any) -> np.ndarray:
+        found: np.ndarray = read_truth(robot, arm, truth, geometry_only=True)
+        return found
+
+    story, _ = family.role("demo")(robot, truth_of, poses=poses, sigma=sigma, seed=seed)
+    return story
