@@ -239,6 +239,7 @@ def test_one_export_entry_writes_either_family(tmp_path):
         armcal.export(cal.calibrated(), "step")
 
 
+@pytest.mark.slow  # about 20 s: a six-axis design and two certificates
 def test_certify_takes_a_spatial_arm_as_loaded():
     """``armcal.certify`` on the arm as loaded (51 parameters, 18 of them no plan
     separates) certifies the plan as ``design`` sees it: the same bound as on the
