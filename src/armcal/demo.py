@@ -33,6 +33,7 @@ from .numerics import rms
 from .report import format_calibration
 from .synthesis import synthesize_measurements
 from .validation import Validation, validate
+from .workflow.setup import design_sigma
 
 __all__ = [
     "DEMO_FILES",
@@ -454,8 +455,6 @@ def planar_demo(
     words: Mapping[str, str] = ACTIONS,
 ) -> tuple[Any, str]:
     """The planar story (:func:`armcal.demo.run_demo`) and what it writes."""
-    from .workflow.setup import design_sigma  # the sigma every command designs with
-
     truth_ = truth_of(robot.arm)
     sigma = design_sigma(robot.arm) if sigma is None else sigma
     poses = PLANAR_DEMO_POSES if poses is None else poses

@@ -34,25 +34,6 @@ from ..errors import ArmcalError, ArmcalWarning
 #: A role: a callable, or the ``"module:name"`` of one, imported on first use.
 Ref = str | Callable[..., Any] | None
 
-#: The roles a family may fill (see :class:`Family`).
-ROLES = (
-    "builtins",
-    "claims",
-    "load_robot",
-    "truth",
-    "encode",
-    "decode",
-    "encode_effect",
-    "decode_effect",
-    "calibrate",
-    "exports",
-    "controller_files",
-    "coupled_urdf",
-    "describe",
-    "plan_figure",
-    "demo",
-)
-
 
 @dataclass(frozen=True)
 class Family:
@@ -162,6 +143,9 @@ _ROLE_WORDS = {
     "plan_figure": "plan figure",
     "demo": "demo",
 }
+
+#: The roles a family may fill (see :class:`Family`).
+ROLES = tuple(_ROLE_WORDS)
 
 _FAMILIES: dict[str, Family] = {}
 

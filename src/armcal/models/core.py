@@ -334,7 +334,7 @@ class CoreModel(RigidLoads):
 
     # -- plausibility ------------------------------------------------------------------
 
-    @property
+    @cached_property  # 256 poses' points: once per model, not per solve
     def reach_mm(self) -> float:
         """The largest distance of a point from the base over 256 seeded poses within
         the limits (at the nominal parameters)."""

@@ -37,6 +37,7 @@ from ..files import Measurements, Program, RobotSpec
 from ..identification import Calibration
 from ..identification.experiment import coverage, plan_degenerate_warning
 from ..models import CalibratedArm, FitModel, Loads
+from ..noise import per_row_sigma
 from ..plausibility import deviation_warning
 from ..progress import ProgressCallback
 from ..validation import (
@@ -189,8 +190,7 @@ def _as_asked(
     """The robot file and the measurements as the options ask: a given ``sigma`` replaces
     the file's ``sigma_mm`` column too, and without ``compliance`` the arm is rigid (the
     data's loads then ``loads-ignored``)."""
-    if sigma is not None:
-        meas = replace(meas, row_sigma=None)
+    meas = replace(meas, row_sigma=per_row_sigma(sigma, meas.row_sigma))
     ignored = _ignored_loads(spec, meas, source, compliance)
     return (spec if compliance else replace(spec, elastic=None)), meas, ignored
 
@@ -516,7 +516,6 @@ def export_files(
     them worse than the nominal arm).
     """
     family = family_of(cal.model)  # the file formats differ by family
-    writers = family.role("exports")()
     texts: dict[str, str] = {}
     if ur_path is not None or ros_path is not None:
         if not family.has("controller_files"):
@@ -526,10 +525,10 @@ def export_files(
             )
         texts.update(family.role("controller_files")(cal, ur_path, ros_path))
     if robot_toml_path is not None:
-        texts[robot_toml_path] = writers["robot"](cal)
+        texts[robot_toml_path] = export(cal, "robot")
     warnings = []
     if offsets_path is not None:
-        texts[offsets_path] = joint_offsets_csv(cal)
+        texts[offsets_path] = export(cal, "offsets")
         warnings.append(
             ArmcalWarning(
                 "offsets-only",
@@ -538,7 +537,7 @@ def export_files(
             )
         )
     if urdf_path is not None:
-        texts[urdf_path] = writers["urdf"](cal)
+        texts[urdf_path] = export(cal, "urdf")
         values = family.role("coupled_urdf")(cal.arm)
         if values is not None:
             warnings.append(

@@ -17,6 +17,7 @@ from ..files import Measurements, RobotSpec
 from ..identification import Calibration, identify
 from ..instrument import identify_3d
 from ..models import FitModel, Loads, PlanarArm, SpatialArm, Target
+from ..models.interface import target_indices
 from ..plausibility import explain, suspicious, unit_mistake
 from .setup import FixError, fit_model, model_spec, prefixed
 
@@ -72,8 +73,7 @@ def row_targets(arm: FitModel, meas: Measurements) -> np.ndarray | None:
     """Every row's target index, for an arm with targets (None without)."""
     if meas.targets is None or not arm.target_labels:
         return None
-    index = {label: i for i, label in enumerate(arm.target_labels)}  # the reader checked them
-    return np.array([index[label] for label in meas.targets], dtype=int)
+    return target_indices(meas.targets, arm.target_labels, len(meas.targets))
 
 
 def _explained(source: str, arm: PlanarArm, meas: Measurements) -> InputError | None:
