@@ -84,7 +84,7 @@ def flags_in(source: str, module: str = "") -> list[tuple[int, str]]:
     functions, which document the command line freely, and the named tables of
     :data:`DOCUMENTS_THE_PROGRAM`.  Comments are not in the syntax tree.  Looking
     only at the arguments of ``ArmcalError(...)`` and ``ArmcalWarning(...)`` would
-    miss the advice built elsewhere (``why_no_closed_form``, a module's advice
+    miss the advice built elsewhere (``no_closed_form``, a module's advice
     constant, a design note); this rule is stricter and as precise.
     """
     tree = ast.parse(source)

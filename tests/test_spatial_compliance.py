@@ -38,6 +38,7 @@ from armcal.models import (
     SpatialElastics,
 )
 from armcal.models.spatial.gravity import STANDARD_GRAVITY, gravity_torques
+from armcal.models.wording import held_sentence
 from armcal.simulate import monte_carlo
 from armcal.validation import validate
 from helpers import cell_toml, run_cli
@@ -171,10 +172,12 @@ def test_joint_1_about_gravity_and_a_wrist_on_its_axis_are_held_and_named():
     model = CompliantSpatialArm.for_loads(_arm(), _elastics(), loads)
     model = model.prepared(model.plan_conditions(q, loads))
     assert set(model.held) == {"k1", "k6"}  # J1 is vertical; the payload hangs on J6's axis
-    assert "k1 cannot be seen: there is no torque on joint 1 that varies" in model.merges
+    assert "k1 cannot be seen: there is no torque on joint 1 that varies" in map(
+        held_sentence, model.merges
+    )
     lumped = CompliantSpatialArm.for_loads(_arm(), _elastics(lumped=True), loads)
     lumped = lumped.prepared(lumped.plan_conditions(q, loads))
-    assert "c2.j5 merges into c2.j4" in lumped.merges  # the spherical wrist: one station
+    assert "c2.j5 merges into c2.j4" in map(held_sentence, lumped.merges)  # a spherical wrist
     assert {"k2", "k3", "c2.j3", "c3.j4"} <= set(lumped.free_names)
 
 

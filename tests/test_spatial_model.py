@@ -13,6 +13,7 @@ import pytest
 
 from armcal.identification import identify
 from armcal.models import SerialChain, UrdfJoint, matrix_rpy, rpy_matrix
+from armcal.models.wording import held_sentence
 from armcal.noise import NoiseModel
 from helpers_spatial import ARMS, cobot, industrial, labelled, random_poses, random_truth
 
@@ -124,7 +125,7 @@ def test_the_chosen_set_is_the_same_for_any_row_order_and_run():
 def test_the_report_names_what_merges_and_why():
     arm = labelled(industrial(), 3)
     cond = arm.plan_conditions(random_poses(arm, 30, np.random.default_rng(8)))
-    notes = "\n".join(arm.prepared(cond).merges)
+    notes = "\n".join(map(held_sentence, arm.prepared(cond).merges))
     assert "the zero of joint 1 (dq1) merges into the base rotation" in notes
     assert "joints 2 and 3 are parallel" in notes
     assert "the zero of joint 6 (dq6) merges into the positions of A, B and C" in notes
@@ -136,7 +137,8 @@ def test_a_joint_that_never_moves_is_named():
     q[:, 3] = 0.2
     chosen = arm.prepared(arm.plan_conditions(q))
     assert chosen.n_free < 33
-    assert any("joint 4 does not move in these measurements" in s for s in chosen.merges)
+    said = map(held_sentence, chosen.merges)
+    assert any("joint 4 does not move in these measurements" in s for s in said)
 
 
 @pytest.mark.parametrize("name", ["industrial", "cobot", "seven"])

@@ -59,6 +59,7 @@ from .models import (
     position_jacobian,
 )
 from .models.information import display_std, mean_tip_variance, tip_variances
+from .models.wording import ill_conditioned_warning
 from .notebook import html_table, number
 from .numerics import COND_WARN, RANK_RTOL, gram_of_factor, log_det, spd_inverse
 
@@ -584,7 +585,7 @@ def evaluate_plan(
     """
     q = np.asarray(q, dtype=float)
     model, info, identified = _identified_plan(model, q, loads)
-    warning = model.conditioning_warning(identified)
+    warning = ill_conditioned_warning(model, identified)
     counts = None
     if model.default_payload_kg is not None:  # the points depend on the load
         payload = (

@@ -76,6 +76,12 @@ from .models import (
     rotation_vector,
     vector_rotation,
 )
+from .models.wording import (
+    DEVIATION_CHECKS,
+    absorbing_note,
+    deviation_rule,
+    deviation_summary,
+)
 
 __all__ = [
     "IMPROVEMENT",
@@ -246,12 +252,12 @@ def deviation_warning(model: FitModel, params: np.ndarray) -> ArmcalWarning | No
     absorbing = {model.param_names[i] for i in np.flatnonzero(bounds.absorbing)}
     note = ""
     if any(item.split(" ")[0] in absorbing for item in found):
-        note = f" ({bounds.absorbing_note})"
+        note = f" ({absorbing_note(bounds, model.param_names)})"
     return ArmcalWarning(
         "large-deviation",
-        f"identified deviations are {bounds.summary}: {', '.join(found)}{note}; "
+        f"identified deviations are {deviation_summary(bounds)}: {', '.join(found)}{note}; "
         f"calibration-sized deviations are a few mm and about a degree (here more than "
-        f"{bounds.rule}); {bounds.advice}",
+        f"{deviation_rule(bounds)}); {DEVIATION_CHECKS[bounds.check]}",
     )
 
 
@@ -277,7 +283,8 @@ def truth_warning(model: FitModel, truth: np.ndarray) -> ArmcalWarning | None:
         return None
     return ArmcalWarning(
         "truth-large",
-        f"the virtual arm's deviations are {model.deviation_bounds.summary}: {', '.join(found)}; "
+        f"the virtual arm's deviations are {deviation_summary(model.deviation_bounds)}: "
+        f"{', '.join(found)}; "
         "an arm this far from its nominal model is another arm (a fit from nominal may not "
         "reach it, and the study says little of a real calibration): check the truth's units "
         "and the arm it describes",

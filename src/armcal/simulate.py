@@ -36,6 +36,7 @@ from .models import (
     position_jacobian,
 )
 from .models.information import predicted_covariance, tip_variances
+from .models.wording import ill_conditioned_warning
 from .notebook import html_table, number
 from .progress import ProgressCallback
 from .synthesis import checked_truth, simulated_noise, synthesize_measurements
@@ -691,7 +692,7 @@ def monte_carlo(
     reference = float(sigma) if sigma is not None else noise.sigma_mm
     rows = model.plan_conditions(q, loads)  # every target of every pose
     model, truth, identified = _for_plan(model, rows, truth)
-    conditioning = model.conditioning_warning(identified)
+    conditioning = ill_conditioned_warning(model, identified)
     rng = np.random.default_rng(rng)
     predicted, ok = predicted_covariance(model, rows, reference, truth)
     if not ok:

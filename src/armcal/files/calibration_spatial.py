@@ -21,6 +21,8 @@ from ..models import (
     SpatialElastics,
     TermChoice,
 )
+from ..models.interface import Held
+from ..models.wording import held_sentence
 from ..noise import NoiseModel
 from .checked import BadKey, array_of, list_of
 
@@ -51,7 +53,7 @@ def encode(arm: SpatialArm) -> dict[str, Any]:
             else {}
         ),
         "held": list(arm.held),
-        "merges": list(arm.merges),
+        "merges": [held_sentence(held) for held in arm.merges],
     }
 
 
@@ -89,7 +91,7 @@ def decode(
         ),
         noise=noise,
         held=held,
-        merges=tuple(str(text) for text in list_of(data, "merges", "sentences")),
+        merges=tuple(Held((), said=str(text)) for text in list_of(data, "merges", "sentences")),
         known_targets=bool(data["known_targets"]),
         oriented=bool(data.get("oriented", False)),
         target_turns=array_of(
@@ -112,7 +114,7 @@ def encode_effect(model: FitModel) -> dict[str, Any] | None:
         "known_loads": compliant.known_loads,
         "parameters": list(compliant.compliance_names),
         "held": list(compliant.held),
-        "merges": list(compliant.merges),
+        "merges": [held_sentence(held) for held in compliant.merges],
     }
 
 
@@ -124,7 +126,7 @@ def decode_effect(arm: SpatialArm, data: dict[str, Any], user: TermChoice) -> Co
         replace(SpatialElastics.from_dict(data, arm.n_joints), terms=user),
         bool(data["known_loads"]),
         tuple(str(name) for name in data["held"]),
-        tuple(str(text) for text in data["merges"]),
+        tuple(Held((), said=str(text)) for text in data["merges"]),
     )
     if list(data["parameters"]) != list(model.compliance_names):
         raise ValueError(f"compliance parameters do not match {', '.join(model.compliance_names)}")

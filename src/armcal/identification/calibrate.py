@@ -29,6 +29,7 @@ from numpy.typing import ArrayLike
 from ..errors import ArmcalError, ArmcalWarning, action
 from ..models import Conditions, FitModel, Loads, equations_per_pose
 from ..models.information import display_std
+from ..models.wording import ill_conditioned_warning
 from ..noise import instrument_override, per_row_sigma
 from ..numerics import point_norms, rms
 from .diagnosis import coupled_joints, far_off, swapped_targets
@@ -322,7 +323,7 @@ def identify(
     early = early_diagnosis(problem, least_squares, reference, given=given)
     verdict = judged_fit(problem, least_squares, reference, given=given, robust=robust)
     outliers = outlier_list(model, conditions, verdict, labels, row_numbers)
-    conditioning = model.conditioning_warning(info)
+    conditioning = ill_conditioned_warning(model, info)
     warnings = verdict_warnings(
         problem, verdict, outliers, early, conditioning=conditioning, experiment=experiment,
         repeated=repeated, labels=labels, row_numbers=row_numbers, reference=reference,

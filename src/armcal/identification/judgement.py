@@ -48,6 +48,7 @@ import numpy as np
 
 from ..errors import ArmcalWarning, action
 from ..models import Effect, listing
+from ..models.wording import NEGATIVE_WORDS, effect_advice
 
 __all__ = [
     "FEW_DOF",
@@ -540,11 +541,11 @@ def unseen_warning(
         f"the data do not show the {effect.name}: it lowers the residual RMS per coordinate "
         "only from "
         f"{nested_rms_mm:.4g} to {rms_mm:.4g} mm, no more than noise would (F test p = "
-        f"{p_value:.2g}), and its values are undetermined ({shown}); {effect.advice}",
+        f"{p_value:.2g}), and its values are undetermined ({shown}); {effect_advice(effect)}",
     )
 
 
-#: An effect's parameter that cannot be negative (:attr:`~armcal.models.Effect.negative`)
+#: An effect's parameter that cannot be negative (:attr:`~armcal.models.Effect.positive`)
 #: is warned of when it lies more than this many std below zero: by chance that
 #: happens to 0.13 % of the estimates of a parameter whose true value is 0.
 NEGATIVE_STD = 3.0
@@ -560,7 +561,7 @@ def negative_effect_warning(
     """A ``{short}-negative`` warning (``compliance-negative``) naming the effect's
     parameters identified more than :data:`NEGATIVE_STD` std below zero, where the effect
     says none can be negative; ``values`` and ``std`` in display units ``units``."""
-    if not effect.negative:
+    if not effect.positive:
         return None
     below = [
         f"{name} = {v:.3g} ± {s:.2g} {unit} ({-v / s:.1f} std below 0)"
@@ -573,6 +574,6 @@ def negative_effect_warning(
     return ArmcalWarning(
         f"{effect.short}-negative",
         f"the {effect.name} fitted {'a value' if one else 'values'} that cannot be: "
-        f"{listing(below)}; {effect.negative}; find the cause, or hold "
+        f"{listing(below)}; {NEGATIVE_WORDS}; find the cause, or hold "
         f"{'it' if one else 'them'} at zero ({action('hold-terms')})",
     )

@@ -32,6 +32,7 @@ import numpy as np
 from ..errors import ArmcalError
 from ..models import Conditions, FitModel, wrap_angle
 from ..models.information import weighted_whitening
+from ..models.wording import no_closed_form
 from ..numerics import solve_least_squares
 
 __all__ = [
@@ -105,7 +106,7 @@ def resolve_method(model: FitModel, method: str) -> str:
     if method not in METHODS:
         raise ArmcalError(f"unknown method {method!r}; choose one of auto, {', '.join(METHODS)}")
     if method == "closed-form" and not model.has_closed_form:
-        raise ArmcalError(model.why_no_closed_form)
+        raise ArmcalError(no_closed_form(model))
     return method
 
 

@@ -17,7 +17,8 @@
   its joints twisting under gravity and payload (:class:`CompliantSpatialArm`);
 * :mod:`~armcal.models.plane` -- the plane of motion of 3-D data;
 * :mod:`~armcal.models.joint_maps` -- the one check of a joint map, every family's;
-* :mod:`~armcal.models.calibrated` -- an arm with its identified deviations.
+* :mod:`~armcal.models.calibrated` -- an arm with its identified deviations;
+* :mod:`~armcal.models.wording` -- the interface's data in words, every family's.
 """
 
 from .calibrated import CalibratedArm
@@ -32,10 +33,12 @@ from .interface import (
     DeviationBounds,
     Effect,
     FitModel,
+    Held,
     LinearPositions,
     Loads,
     PaperCriteria,
     PlanInformation,
+    UnpredictedLoads,
     equations_per_pose,
     position_jacobian,
 )
@@ -45,7 +48,6 @@ from .planar.compliance import (
     STANDARD_GRAVITY,
     CompliantArm,
     Elastostatic,
-    barely_identifiable_warning,
     check_compliance_identifiable,
     compliance_identifiability,
 )
@@ -61,7 +63,6 @@ from .planar.geometry import (
 )
 from .planar.information import (
     check_identifiable,
-    conditioning_warning,
     covariance_factor,
     every_target,
     identifiability,
@@ -127,6 +128,7 @@ __all__ = [
     "Effect",
     "Elastostatic",
     "FitModel",
+    "Held",
     "Identifiability",
     "LinearPositions",
     "LinkMasses",
@@ -147,15 +149,14 @@ __all__ = [
     "SpatialView",
     "Target",
     "TermChoice",
+    "UnpredictedLoads",
     "UrdfJoint",
-    "barely_identifiable_warning",
     "check_compliance_identifiable",
     "check_identifiable",
     "check_target",
     "checked_joint_map",
     "combination",
     "compliance_identifiability",
-    "conditioning_warning",
     "covariance_factor",
     "default_targets",
     "equations_per_pose",

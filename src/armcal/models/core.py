@@ -36,7 +36,7 @@ from typing import TYPE_CHECKING, Any, Self
 import numpy as np
 from numpy.typing import ArrayLike
 
-from ..errors import ArmcalError, ArmcalWarning
+from ..errors import ArmcalError
 from ..noise import NoiseModel, relative_noise
 from ..numerics import ScaledSVD
 from .defaults import LARGE_ANGLE_DEG, RigidLoads
@@ -46,7 +46,6 @@ from .information import (
     column_identifiability,
     covariance_factor_from,
     identifiable_or_raise,
-    ill_conditioned_warning,
     whitened_free_jacobian,
 )
 from .interface import (
@@ -54,6 +53,7 @@ from .interface import (
     DesignEffort,
     DeviationBounds,
     Effect,
+    Held,
     LinearPositions,
     Loads,
 )
@@ -258,8 +258,8 @@ class CoreModel(RigidLoads):
         return False
 
     @property
-    def why_no_closed_form(self) -> str:
-        return f"the {self.family} family has no closed form"
+    def closed_form_hold(self) -> None:
+        return None
 
     def closed_form(self, conditions: Conditions) -> None:
         return None
@@ -296,7 +296,7 @@ class CoreModel(RigidLoads):
         return np.asarray(params, dtype=float)
 
     @property
-    def held_notes(self) -> tuple[str, ...]:
+    def held_reasons(self) -> tuple[Held, ...]:
         return ()
 
     @property
@@ -315,10 +315,6 @@ class CoreModel(RigidLoads):
             self.name,
             "measure poses in which every joint takes several different values",
         )
-
-    def conditioning_warning(self, info: Identifiability) -> ArmcalWarning | None:
-        said = f"{self.name} is barely identifiable from these measurements"
-        return ill_conditioned_warning(info, said, "measure poses that move every joint more")
 
     def covariance_factor(
         self, conditions: Conditions, params: np.ndarray | None = None
@@ -362,10 +358,11 @@ class CoreModel(RigidLoads):
             bounds,
             np.where(angle, np.nan, reach),
             tuple("" if a else "the reach" for a in angle),
-            "a large part of the reach",
-            f"{100 * LARGE_LENGTH_FRACTION:g} % of the reach or {LARGE_ANGLE_DEG:g} deg",
-            "check the robot description and the units of the data",
-            np.zeros(self.n_params, dtype=bool),
+            "reach",
+            LARGE_LENGTH_FRACTION,
+            LARGE_ANGLE_DEG,
+            "description",
+            np.zeros(self.n_params),
         )
 
     # -- design ------------------------------------------------------------------------

@@ -21,9 +21,8 @@ import numpy as np
 
 from ..noise import NoiseModel
 from ..numerics import wrap_angle
-from .identifiability import listing
 from .information import covariance_factor_from, whitened_free_jacobian
-from .interface import Conditions, DesignEffort, DeviationBounds, Loads
+from .interface import Conditions, DesignEffort, DeviationBounds, Held, Loads
 
 __all__ = [
     "LARGE_ANGLE_DEG",
@@ -39,17 +38,6 @@ __all__ = [
 #: robot file gives tens of degrees (radians read as degrees: 57 times the angle), so
 #: 10 deg leaves a factor of several on either side (the ``large-deviation`` warning).
 LARGE_ANGLE_DEG = 10.0
-
-#: Why a joint's compliance (``k``) or a lumped weight's (``c``) cannot be negative, and what
-#: makes a fit find one: the :attr:`~armcal.models.interface.Effect.negative` words of both
-#: families' joint compliance.
-NEGATIVE_WORDS = (
-    "a joint's compliance (k) and a lumped weight's twist (c, compliance times weight) "
-    "cannot be negative; a fit finds one where the data hold an effect the model lacks "
-    "(a gravity balancer or a cable pulling on the arm, a gear's backlash), where the "
-    "robot file's link masses or centres of mass are wrong, or in a term the poses' "
-    "torques barely excite, where a misfit elsewhere lands"
-)
 
 
 class RigidLoads:
@@ -116,7 +104,7 @@ class MinimalPlanar:
         return np.zeros(self.n_params)
 
     @property
-    def held_notes(self) -> tuple[str, ...]:
+    def held_reasons(self) -> tuple[Held, ...]:
         return ()
 
     @property
@@ -228,7 +216,7 @@ class ArmEffect:
 
     @property
     def rule_held(self) -> tuple[str, ...]:
-        """The arm's (an effect's own held terms are its :meth:`held_notes`' business)."""
+        """The arm's (an effect's own held terms are its :meth:`held_reasons`' business)."""
         return tuple(self.arm.rule_held)
 
     @property
@@ -237,16 +225,15 @@ class ArmEffect:
         return self.elastic.terms.held(self.compliance_names)
 
     @property
-    def user_note(self) -> tuple[str, ...]:
-        """One sentence naming the terms the user holds, for :attr:`held_notes` (none: empty)."""
+    def user_reason(self) -> tuple[Held, ...]:
+        """The terms the user holds, for :attr:`held_reasons` (none: empty)."""
         held = self.user_held
-        if not held:
-            return ()
-        verb = "is" if len(held) == 1 else "are"
-        return (
-            f"{listing(held)} {verb} held by the user (the robot file's [identify], or "
-            "the fix option)",
-        )
+        return (Held(held, reason="user"),) if held else ()
+
+    @property
+    def closed_form_hold(self) -> None:
+        """None: the effect has no closed form (its nested arm may have one)."""
+        return None
 
     def split_fixed(self, fixed: Sequence[str]) -> tuple[tuple[str, ...], TermChoice]:
         """``fixed`` (the arm's parameters and the effect's terms, as the fix option gives

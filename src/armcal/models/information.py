@@ -27,7 +27,7 @@ from functools import cached_property
 
 import numpy as np
 
-from ..errors import ArmcalWarning, NotIdentifiableError
+from ..errors import NotIdentifiableError
 from ..numerics import COND_WARN, RANK_RTOL, ScaledSVD, gram_of_factor, scaled_svd
 from .identifiability import Identifiability, combination, listing, row_echelon
 from .interface import Conditions, FitModel, Loads
@@ -186,19 +186,6 @@ def identifying(
     if model.identifiability(conditions)[0].identifiable:
         return model
     return model.prepared(conditions, points)
-
-
-def ill_conditioned_warning(info: Identifiability, said: str, advice: str) -> ArmcalWarning | None:
-    """``ill-conditioned`` when the rows barely identify the model: ``said`` (what is barely
-    identifiable), the condition number, the poorly determined combinations and ``advice``;
-    None when they identify it well."""
-    if not info.ill_conditioned:
-        return None
-    return ArmcalWarning(
-        "ill-conditioned",
-        f"{said} (condition number {info.condition_number:.3g}); poorly determined: "
-        f"{'; '.join(info.poorly_determined[:3])}; {advice}",
-    )
 
 
 #: Gauss-Newton steps at most of :func:`refit_free` (it converges in a few).

@@ -26,7 +26,7 @@ What a model provides, by use:
   of a step in mm, and a *nested* model (the same without an effect, e.g. the
   geometry without compliance) with which a fit starts and is judged;
 * **analysis** -- identifiability on the model's own scaled Jacobian, the
-  words for a barely identifiable one, the covariance factor of the free
+  covariance factor of the free
   parameters, and which parameters are the robot's deviations and how large
   one is implausible (:class:`DeviationBounds`);
 * **design** -- the poses a plan may hold (:meth:`~FitModel.feasible`, the
@@ -37,6 +37,11 @@ What a model provides, by use:
   the loads a design may choose;
 * **the tool** -- its orientation and that orientation's Jacobians, for
   compensation.
+
+Members return data and codes, never sentences: :mod:`~armcal.models.wording`
+puts them in words, one place for every family (why no closed form, what is
+held and why, an effect, implausible deviations, loads a model cannot predict,
+a barely identifiable plan).
 
 The identifiable subset of an over-complete parameter set is the model's
 ``fixed`` parameters: a family chooses them by a fixed rule (the planar arm
@@ -50,13 +55,13 @@ compensation and export call the robot.
 from __future__ import annotations
 
 from collections.abc import Callable, Hashable, Mapping, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Any, Protocol, Self
 
 import numpy as np
 from numpy.typing import ArrayLike
 
-from ..errors import ArmcalError, ArmcalWarning, action
+from ..errors import ArmcalError, action
 from ..noise import NoiseModel
 from ..numerics import ScaledSVD
 from .identifiability import Identifiability
@@ -70,10 +75,12 @@ __all__ = [
     "DeviationBounds",
     "Effect",
     "FitModel",
+    "Held",
     "LinearPositions",
     "Loads",
     "PaperCriteria",
     "PlanInformation",
+    "UnpredictedLoads",
     "equations_per_pose",
     "position_jacobian",
     "target_indices",
@@ -238,7 +245,8 @@ class DesignEffort:
 
 @dataclass(frozen=True)
 class Effect:
-    """What a model adds to its nested model, in words for reports and warnings.
+    """What a model adds to its nested model: data that :mod:`~armcal.models.wording`
+    puts in words for reports and warnings.
 
     Attributes
     ----------
@@ -248,24 +256,90 @@ class Effect:
         One word for it ("compliance"): the warning ``{short}-unseen``.
     nested : str
         What the nested model fits ("geometry").
-    description : str
-        How the model parametrizes it (a clause).
+    lumped : bool
+        The effect's terms lump a stiffness with a weight (masses unknown: ``c``)
+        rather than being the stiffness itself (``k``).
+    stations : bool
+        A lumped term belongs to a joint and a station along the arm (``c{j}.{s}``),
+        not to a joint alone (``c{j}``).
     advice : str
-        What to do when the data do not show it (a clause; may hold
-        :func:`~armcal.errors.action` references).
-    negative : str
-        Why none of its parameters can be negative and what makes a fit find one (a
-        clause: joint compliances and lumped weights); empty when either sign is
-        physical.  A parameter identified clearly below zero is warned of
+        What to do when the data do not show it, a code of
+        :data:`~armcal.models.wording.EFFECT_ADVICE`.
+    positive : bool
+        None of its parameters can be negative (joint compliances and lumped
+        weights): one identified clearly below zero is warned of
         (``{short}-negative``).
     """
 
     name: str
     short: str
     nested: str
-    description: str
+    lumped: bool
+    stations: bool
     advice: str
-    negative: str = ""
+    positive: bool = False
+
+
+@dataclass(frozen=True)
+class Held:
+    """Parameters held because the rows cannot separate them from others, or because
+    the user holds them, and why: data that :func:`~armcal.models.wording.held_sentence`
+    puts in words.
+
+    Attributes
+    ----------
+    members : tuple of str
+        The parameters held.
+    into : tuple of str
+        The kept parameters they merge into; empty when they cannot be seen at all
+        (or the user holds them).
+    reason : str
+        Why, a code of :data:`~armcal.models.wording.HELD_REASONS`; empty when the
+        geometry gives no reason.
+    joints : tuple of int
+        The 1-based joints the reason is about.
+    targets : tuple of str
+        The names of the arm's targets, which :attr:`into` groups ("the positions of
+        A and B").
+    oriented : bool
+        The targets are measured in full pose.
+    effect : bool
+        The members are an effect's terms, merging into whatever they merge into
+        (listed by name).
+    said : str
+        The words of a calibration file written before these codes, shown as they are.
+    """
+
+    members: tuple[str, ...]
+    into: tuple[str, ...] = ()
+    reason: str = ""
+    joints: tuple[int, ...] = ()
+    targets: tuple[str, ...] = ()
+    oriented: bool = False
+    effect: bool = False
+    said: str = ""
+
+
+@dataclass(frozen=True)
+class UnpredictedLoads:
+    """Loads a lumped model of joint compliance cannot predict: it saw one payload only.
+
+    Attributes
+    ----------
+    terms : tuple of str
+        The lumped terms that hold the deflection under that payload.
+    payload_kg : float
+        The one payload of the calibration's data.
+    others : tuple of float
+        The other payloads asked for (kg), ascending.
+    forced : bool
+        Tip forces are asked for.
+    """
+
+    terms: tuple[str, ...]
+    payload_kg: float
+    others: tuple[float, ...]
+    forced: bool = False
 
 
 @dataclass(frozen=True, eq=False)
@@ -275,7 +349,8 @@ class DeviationBounds:
     A calibration finds deviations of a few mm and about a degree; one far beyond
     its bound says that the robot file or the data are wrong (a unit, another
     variant of the arm), not the arm: the ``large-deviation`` warning
-    (:func:`armcal.plausibility.deviation_warning`).
+    (:func:`armcal.plausibility.deviation_warning`), in the words of
+    :mod:`~armcal.models.wording`.
 
     Attributes
     ----------
@@ -288,40 +363,47 @@ class DeviationBounds:
         as a percentage; NaN where the bound is not a fraction of a length.
     reference_names : tuple of str, shape (p,)
         What that length is (``"link 2"``); empty where there is none.
-    summary : str
-        What large deviations are, for the warning (``"a large part of a link"``).
-    rule : str
-        The bounds in words (``"10 % of a link or 10 deg"``).
-    advice : str
-        What to check (a clause).
-    absorbing : ndarray of bool, shape (p,)
-        Deviations that may also take up something that is no error of the robot
-        (with a base offset, the joint offsets that turn the instrument's axes).
-    absorbing_note : str
-        What they take up (a clause), said when one of them is large.
+    reference : str
+        What a length's bound is a fraction of: ``"link"`` (each its own link),
+        ``"reach"`` or ``"placement"`` (a joint's placement, a fraction of the reach).
+    length_fraction : float
+        That fraction.
+    angle_deg : float
+        The bound of an angle, degrees.
+    check : str
+        What to check, a code of :data:`~armcal.models.wording.DEVIATION_CHECKS`.
+    turns : ndarray, shape (p,)
+        With a base offset, the combination of deviations (coefficients) that also
+        takes up any rotation of the instrument's axes; zeros without one.
+    length_mm : float
+        The bound of a length in mm where it is one number (NaN for one per link).
     """
 
     bounds: np.ndarray
     reference_mm: np.ndarray
     reference_names: tuple[str, ...]
-    summary: str
-    rule: str
-    advice: str
-    absorbing: np.ndarray
-    absorbing_note: str = ""
+    reference: str
+    length_fraction: float
+    angle_deg: float
+    check: str
+    turns: np.ndarray
+    length_mm: float = float("nan")
+
+    @property
+    def absorbing(self) -> np.ndarray:
+        """``(p,)`` bool: deviations that may also take up something that is no error of
+        the robot (with a base offset, the joint offsets that turn the instrument's axes)."""
+        return np.asarray(self.turns) != 0
 
     def extended(self, count: int) -> DeviationBounds:
         """The same bounds followed by ``count`` parameters that are no deviation of the
         robot (an effect's, appended after the arm's)."""
-        return DeviationBounds(
-            np.concatenate([self.bounds, np.full(count, np.inf)]),
-            np.concatenate([self.reference_mm, np.full(count, np.nan)]),
-            self.reference_names + ("",) * count,
-            self.summary,
-            self.rule,
-            self.advice,
-            np.concatenate([self.absorbing, np.zeros(count, dtype=bool)]),
-            self.absorbing_note,
+        return replace(
+            self,
+            bounds=np.concatenate([self.bounds, np.full(count, np.inf)]),
+            reference_mm=np.concatenate([self.reference_mm, np.full(count, np.nan)]),
+            reference_names=self.reference_names + ("",) * count,
+            turns=np.concatenate([self.turns, np.zeros(count)]),
         )
 
 
@@ -720,9 +802,10 @@ class ClosedFormRole(Protocol):
         ...
 
     @property
-    def why_no_closed_form(self) -> str:
-        """Why a closed form was asked of a model without one (a sentence with the fix, for
-        an error's text: the fix refers to an :func:`~armcal.errors.action`)."""
+    def closed_form_hold(self) -> tuple[str, ...] | None:
+        """The held parameters that keep the family from its closed form (a closed form
+        was asked of a model without one: the error names them); None when the family
+        has no closed form at all."""
         ...
 
     def closed_form(self, conditions: Conditions) -> ClosedForm | None:
@@ -748,7 +831,7 @@ class IdentifiabilityRole(Protocol):
 
         A family whose parameters are minimal returns itself; an over-complete one
         (the spatial arm) holds what the rows cannot separate, by a fixed rule, and
-        says why in :attr:`held_notes`.
+        says why in :attr:`held_reasons`.
         """
         ...
 
@@ -760,14 +843,15 @@ class IdentifiabilityRole(Protocol):
         ...
 
     @property
-    def held_notes(self) -> tuple[str, ...]:
-        """Why the parameters held by the family's rule are held: what each merges into."""
+    def held_reasons(self) -> tuple[Held, ...]:
+        """Why the parameters held by the family's rule (and an effect's terms the user
+        holds) are held: what each merges into (:class:`Held`)."""
         ...
 
     @property
     def rule_held(self) -> tuple[str, ...]:
         """The parameters the family's rule holds because the measurements cannot separate
-        them (:meth:`held_notes` says why); empty for a family of minimal parameters."""
+        them (:meth:`held_reasons` says why); empty for a family of minimal parameters."""
         ...
 
     def identifiability(self, conditions: Conditions) -> tuple[Identifiability, ScaledSVD]:
@@ -776,10 +860,6 @@ class IdentifiabilityRole(Protocol):
 
     def check_identifiable(self, conditions: Conditions) -> Identifiability:
         """:meth:`identifiability`, raising NotIdentifiableError (with why) when rank deficient."""
-        ...
-
-    def conditioning_warning(self, info: Identifiability) -> ArmcalWarning | None:
-        """An ``ill-conditioned`` warning for a barely identifiable model, else None."""
         ...
 
     def covariance_factor(
@@ -915,8 +995,8 @@ class EffectRole(Protocol):
         """The payload (kg) of a row that gives none; None when loads do not move the points."""
         ...
 
-    def unpredicted_loads(self, loads: Loads) -> str | None:
-        """What of ``loads`` this model cannot predict, in words; None when it predicts all.
+    def unpredicted_loads(self, loads: Loads) -> UnpredictedLoads | None:
+        """What of ``loads`` this model cannot predict; None when it predicts all.
 
         A calibration is applied (validation, compensation) under other loads than
         it was identified under; a model that saw one payload only and merged it

@@ -9,6 +9,7 @@ import numpy as np
 from ..errors import ACTIONS
 from ..identification import Calibration
 from ..identification.result import STRONG_CORRELATION
+from ..models.wording import effect_description, held_sentence
 from .common import identified, model_lines, small
 
 __all__ = [
@@ -22,8 +23,8 @@ def _effect_held_lines(cal: Calibration) -> list[str]:
     """The effect's parameters held at zero, each sentence with why: by the user, or because
     the rows cannot identify them (joint compliance of a spatial arm: a joint gravity does
     not twist)."""
-    own = set(cal.arm.held_notes)
-    notes = [note for note in cal.model.held_notes if note not in own]
+    own = set(cal.arm.held_reasons)
+    notes = [held_sentence(held) for held in cal.model.held_reasons if held not in own]
     if not notes:
         return []
     effect = cal.model.effect
@@ -223,7 +224,7 @@ def effect_lines(cal: Calibration) -> list[str]:
     effect = nested.effect
     out = [
         "",
-        f"{effect.name}, {effect.description}; {effect.nested} alone leaves "
+        f"{effect.name}, {effect_description(effect)}; {effect.nested} alone leaves "
         f"{nested.rms_per_coordinate_mm:.4g} mm residual RMS per coordinate, with "
         f"{effect.short} {cal.residual_rms:.4g} mm per coordinate",
     ]

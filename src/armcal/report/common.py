@@ -15,6 +15,7 @@ import numpy as np
 from ..errors import ACTIONS, action, render
 from ..families.registry import family_of
 from ..models import FitModel, PlanarArm, SpatialArm, combination
+from ..models.wording import held_sentence
 
 __all__ = [
     "identified",
@@ -114,7 +115,7 @@ def spatial_model_lines(
         )
     if arm.merges:
         lines.append("held at nominal, because the measurements cannot separate them:")
-        lines += [f"  {sentence}" for sentence in arm.merges]
+        lines += [f"  {held_sentence(held)}" for held in arm.merges]
     noise = _noise_text(arm)
     if noise is not None:
         lines.append(f"noise model: {noise}; not isotropic iid: weighted least squares")

@@ -37,6 +37,7 @@ from ..files import Measurements, Program, RobotSpec
 from ..identification import Calibration
 from ..identification.experiment import coverage, plan_degenerate_warning
 from ..models import CalibratedArm, FitModel, Loads
+from ..models.wording import unpredicted_loads
 from ..noise import per_row_sigma
 from ..plausibility import deviation_warning
 from ..progress import ProgressCallback
@@ -346,8 +347,10 @@ def validate_measurements(
 
 def _unpredicted(cal: CalibratedArm, loads: Loads | None, source: str) -> list[ArmcalWarning]:
     """``loads-unpredicted`` when the calibration cannot predict the deflection of ``loads``."""
-    words = None if loads is None else cal.model.unpredicted_loads(loads)
-    return [] if words is None else [ArmcalWarning("loads-unpredicted", f"{source}: {words}")]
+    found = None if loads is None else cal.model.unpredicted_loads(loads)
+    if found is None:
+        return []
+    return [ArmcalWarning("loads-unpredicted", f"{source}: {unpredicted_loads(found)}")]
 
 
 def _extrapolated(cal: CalibratedArm, loads: Loads | None, source: str) -> list[ArmcalWarning]:

@@ -16,11 +16,10 @@ from collections.abc import Sequence
 import numpy as np
 from numpy.typing import ArrayLike
 
-from ...errors import ArmcalWarning, action
 from ...noise import NoiseModel
 from ...numerics import ScaledSVD
 from ..defaults import LARGE_ANGLE_DEG, MinimalPlanar, RigidLoads
-from ..identifiability import Identifiability, combination
+from ..identifiability import Identifiability
 from ..interface import Conditions, DeviationBounds, LinearPositions, Loads, PaperCriteria
 from . import design as planar_design
 from .closed_form import (
@@ -34,7 +33,6 @@ from .design import PlanarPlanInformation
 from .geometry import split_params, wrap_angle
 from .information import (
     check_identifiable,
-    conditioning_warning,
     covariance_factor,
     identifiability,
     plan_rows,
@@ -186,26 +184,18 @@ class PlanarArm(RigidLoads, MinimalPlanar, PlanarArmSpec):
         reference = np.full(p, np.nan)
         reference[:k] = self.link_nominal
         names = tuple(f"link {name}" for name in self.link_names) + ("",) * (p - k)
-        absorbing = np.zeros(p, dtype=bool)
-        note = ""
+        turns = np.zeros(p)
         if self.base_offset:
-            turn = self.turn_offsets
-            absorbing[k : 2 * k] = turn != 0
-            one = np.count_nonzero(turn) == 1
-            note = (
-                f"with a base offset, {combination(turn, self.param_names[k : 2 * k])} also "
-                f"take{'s' if one else ''} up any rotation of the instrument's axes"
-            )
+            turns[k : 2 * k] = self.turn_offsets
         return DeviationBounds(
             bounds,
             reference,
             names,
-            "a large part of a link",
-            f"{100 * LARGE_LENGTH_FRACTION:g} % of a link or {LARGE_ANGLE_DEG:g} deg",
-            "check the robot file's link lengths, the units of the measurements (mm, deg), "
-            "and base_offset",
-            absorbing,
-            note,
+            "link",
+            LARGE_LENGTH_FRACTION,
+            LARGE_ANGLE_DEG,
+            "links",
+            turns,
         )
 
     @property
@@ -286,13 +276,9 @@ class PlanarArm(RigidLoads, MinimalPlanar, PlanarArmSpec):
         return self.complete
 
     @property
-    def why_no_closed_form(self) -> str:
-        held = ", ".join(self.fixed)
-        verb = "is" if len(self.fixed) == 1 else "are"
-        return (
-            f"the closed form needs every parameter free, but {held} {verb} fixed; "
-            f"use {action('method', 'gauss-newton')} or auto"
-        )
+    def closed_form_hold(self) -> tuple[str, ...]:
+        """The fixed parameters: with every one free the family has its closed form."""
+        return tuple(self.fixed)
 
     def closed_form(self, conditions: Conditions) -> PlanarClosedForm | None:
         """The link-phasor least squares (:mod:`~armcal.models.planar.closed_form`)."""
@@ -376,9 +362,6 @@ class PlanarArm(RigidLoads, MinimalPlanar, PlanarArmSpec):
         return check_identifiable(
             self, conditions.q, svd=self._plan_svd(conditions), target=conditions.target
         )
-
-    def conditioning_warning(self, info: Identifiability) -> ArmcalWarning | None:
-        return conditioning_warning(self, info)
 
     def covariance_factor(
         self, conditions: Conditions, params: np.ndarray | None = None

@@ -55,17 +55,13 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike
 
-from ...errors import ArmcalError, ArmcalWarning, NotIdentifiableError, action
+from ...errors import ArmcalError, NotIdentifiableError
 from ...noise import NoiseModel
 from ...numerics import ScaledSVD
-from ..defaults import NEGATIVE_WORDS, ArmEffect, MinimalPlanar, TermChoice
+from ..defaults import ArmEffect, MinimalPlanar, TermChoice
 from ..identifiability import Identifiability, listing
-from ..information import (
-    BlockInformation,
-    column_identifiability,
-    ill_conditioned_warning,
-)
-from ..interface import Conditions, Effect, Loads
+from ..information import BlockInformation, column_identifiability
+from ..interface import Conditions, Effect, Held, Loads, UnpredictedLoads
 from .arm import PlanarArm
 from .kinematics import (
     forward_kinematics,
@@ -83,7 +79,6 @@ __all__ = [
     "STANDARD_GRAVITY",
     "CompliantArm",
     "Elastostatic",
-    "barely_identifiable_warning",
     "check_compliance_identifiable",
     "compliance_identifiability",
     "payload_values",
@@ -322,9 +317,9 @@ class CompliantArm(ArmEffect, MinimalPlanar):
         return self.arm.n_free + self.n_compliance - len(self.user_held)
 
     @property
-    def held_notes(self) -> tuple[str, ...]:
+    def held_reasons(self) -> tuple[Held, ...]:
         """Which compliance terms the user holds (the planar arm holds none by a rule)."""
-        return self.user_note
+        return self.user_reason
 
     def with_noise(self, noise: NoiseModel | None) -> CompliantArm:
         return CompliantArm(self.arm.with_noise(noise), self.elastic, self.known_loads)
@@ -337,7 +332,7 @@ class CompliantArm(ArmEffect, MinimalPlanar):
         elastic = replace(self.elastic, terms=terms)
         return CompliantArm(self.arm.with_fixed(geometry), elastic, self.known_loads)
 
-    def unpredicted_loads(self, loads: Loads) -> str | None:
+    def unpredicted_loads(self, loads: Loads) -> UnpredictedLoads | None:
         """In lumped mode without ``k1..kn``, any payload but the one ``c1..cn`` hold.
 
         Such a model was identified from data with one payload, which it records
@@ -352,14 +347,7 @@ class CompliantArm(ArmEffect, MinimalPlanar):
         forced = bool(np.any(loads.force_n != 0))
         if not other.size and not forced:
             return None
-        shown = ", ".join(f"{v:g}" for v in other[:4]) + (", ..." if other.size > 4 else "")
-        what = f"payloads of {shown} kg" if other.size else "tip forces"
-        return (
-            f"the calibration's {', '.join(self.compliance_names)} hold the deflection under "
-            f"its data's one payload, {held:g} kg (lumped mode: with one payload the "
-            f"compliance k cannot be told from the weight), so the deflection under {what} "
-            "is not predicted; calibrate with poses at two payloads or more to identify k"
-        )
+        return UnpredictedLoads(self.compliance_names, held, tuple(other.tolist()), forced)
 
     @property
     def uses_gravity(self) -> bool:
@@ -478,27 +466,15 @@ class CompliantArm(ArmEffect, MinimalPlanar):
     # -- fitting ------------------------------------------------------------------------
 
     @property
-    def why_no_closed_form(self) -> str:
-        return (
-            "the closed form fits the geometry only; joint compliance needs "
-            f"{action('method', 'gauss-newton')} (or auto)"
-        )
-
-    @property
     def effect(self) -> Effect:
-        mode = (
-            "lumped mode (masses unknown): c_j is joint j's deflection per metre of horizontal "
-            "lever arm to the tip"
-            if self.elastic.lumped
-            else "link masses known: k_j is joint j's compliance"
-        )
         return Effect(
             "joint compliance",
             "compliance",
             "geometry",
-            mode,
-            f"load the arm more (payload_kg) or {action('geometry-alone')}",
-            NEGATIVE_WORDS,
+            lumped=self.elastic.lumped,
+            stations=False,
+            advice="load-more",
+            positive=True,
         )
 
     def start(
@@ -519,9 +495,6 @@ class CompliantArm(ArmEffect, MinimalPlanar):
 
     def check_identifiable(self, conditions: Conditions) -> Identifiability:
         return check_compliance_identifiable(self, conditions)[0]
-
-    def conditioning_warning(self, info: Identifiability) -> ArmcalWarning | None:
-        return barely_identifiable_warning(info)
 
     def fit_details(self, conditions: Conditions, params: np.ndarray) -> dict[str, np.ndarray]:
         """``max_deflection_rad`` ``(n,)``: every joint's largest fitted deflection."""
@@ -670,12 +643,6 @@ def check_compliance_identifiable(
         f"unseen combinations: {shown}; {why}",
         list(info.combinations),
     )
-
-
-def barely_identifiable_warning(info: Identifiability) -> ArmcalWarning | None:
-    """An ``ill-conditioned`` warning when geometry plus compliance is barely identifiable."""
-    said = "geometry plus compliance is barely identifiable"
-    return ill_conditioned_warning(info, said, "vary the torques more (poses, payloads)")
 
 
 def payload_values(elastic: Elastostatic, given: Sequence[float] | None) -> tuple[float, ...]:

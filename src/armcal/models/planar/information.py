@@ -8,7 +8,7 @@ columns is ``H`` times an orthogonal matrix (each link's two columns turn by
 ``dtheta_k``), so the singular values of ``H`` alone decide, through the one
 policy of :mod:`armcal.numerics`, whether a plan identifies every parameter
 (:func:`identifiability`, :func:`check_identifiable`) and whether results
-carry an ``ill-conditioned`` warning (:func:`conditioning_warning`).
+carry an ``ill-conditioned`` warning (:func:`~armcal.models.wording.ill_conditioned_warning`).
 """
 
 from __future__ import annotations
@@ -17,7 +17,7 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from ...errors import ArmcalWarning, NotIdentifiableError, action
+from ...errors import NotIdentifiableError
 from ...noise import complex_whitening, relative_noise
 from ...numerics import COND_WARN, RANK_RTOL, ScaledSVD, scaled_svd
 from ..identifiability import Identifiability, combination, listing, row_echelon
@@ -28,7 +28,6 @@ from .spec import PlanarArmSpec
 
 __all__ = [
     "check_identifiable",
-    "conditioning_warning",
     "covariance_factor",
     "every_target",
     "identifiability",
@@ -439,43 +438,6 @@ def check_identifiable(
         f"(Jacobian rank {info.rank} of {p}): not identifiable: {', '.join(info.unidentifiable)}; "
         f"unseen combinations: {shown}{more}; {why}",
         list(info.combinations),
-    )
-
-
-def conditioning_warning(arm: PlanarArmSpec, info: Identifiability) -> ArmcalWarning | None:
-    """An ``ill-conditioned`` warning for a plan above ``COND_WARN``, else None.
-
-    Names the poorly determined combinations (the right singular vectors of the
-    smallest singular values, in echelon form like the unseen combinations),
-    how much less precise they are than with an orthogonal plan, and which
-    joints to move more.
-
-    Examples
-    --------
-    >>> arm = PlanarArmSpec([2.0, 1.0])
-    >>> q = np.column_stack([np.linspace(-3, 3, 8), 1e-7 * np.arange(8)])  # q2 barely moves
-    >>> text = conditioning_warning(arm, identifiability(arm, q)).message
-    >>> text.startswith("the plan determines dl1 - dl2 and dq1 - 3*dq2 poorly")
-    True
-    >>> text.endswith("measure poses in which joint 2 moves more (armcal.design)")
-    True
-    """
-    if not info.ill_conditioned:
-        return None
-    cond = info.condition_number
-    combos = list(info.poorly_determined[:3])
-    if len(info.poorly_determined) > 3:
-        combos.append(f"{len(info.poorly_determined) - 3} more")
-    joints = info.joints_to_vary
-    verb = "moves" if len(joints) == 1 else "move"
-    round_off = cond * np.finfo(float).eps * float(np.sum(arm.link_lengths))
-    return ArmcalWarning(
-        "ill-conditioned",
-        f"the plan determines {listing(combos)} poorly: the condition number of its "
-        f"scaled Jacobian is {cond:.2g} (above {COND_WARN:.0e}), so these combinations are "
-        f"up to {cond:.2g} times less precise than with an orthogonal plan, and round-off "
-        f"alone can shift them by about {round_off:.1g} mm; measure poses in which "
-        f"{_joints_phrase(joints)} {verb} more {action('design')}",
     )
 
 

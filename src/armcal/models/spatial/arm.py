@@ -21,7 +21,6 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike
 
-from ...errors import action
 from ...noise import NoiseModel, relative_noise
 from ..core import CoreModel
 from ..information import (
@@ -30,6 +29,7 @@ from ..information import (
 from ..interface import (
     Conditions,
     DeviationBounds,
+    Held,
     LinearPositions,
     Loads,
     target_indices,
@@ -96,8 +96,8 @@ class SpatialArm(SpatialDesign, SpatialTool, CoreModel):
     held : tuple of str
         Parameters left out by the identifiable-set rule for the measurements
         at hand (:meth:`prepared`).
-    merges : tuple of str
-        Why they are left out, one sentence per group.
+    merges : tuple of Held
+        Why they are left out, one record per group.
     known_targets : bool
         Whether the robot file gives the targets' positions.
     oriented : bool
@@ -121,7 +121,7 @@ class SpatialArm(SpatialDesign, SpatialTool, CoreModel):
     noise: NoiseModel | None = None
     user_fixed: tuple[str, ...] = ()
     held: tuple[str, ...] = ()
-    merges: tuple[str, ...] = ()
+    merges: tuple[Held, ...] = ()
     known_targets: bool = False
     oriented: bool = False
     target_turns: np.ndarray = field(default_factory=lambda: np.zeros((0, 3)))
@@ -561,13 +561,6 @@ deviation_bounds`); the base pose and the targets are the instrument's."""
 
     # -- fitting -----------------------------------------------------------------------
 
-    @property
-    def why_no_closed_form(self) -> str:
-        return (
-            f"{self.name} is a spatial arm, whose points are not linear in any coordinates "
-            f"of its parameters; use {action('method', 'gauss-newton')} (or auto)"
-        )
-
     def registration(
         self, conditions: Conditions, points: np.ndarray, weights: np.ndarray | None = None
     ) -> np.ndarray:
@@ -675,7 +668,7 @@ deviation_bounds`); the base pose and the targets are the instrument's."""
         return self.nominal
 
     @property
-    def held_notes(self) -> tuple[str, ...]:
+    def held_reasons(self) -> tuple[Held, ...]:
         return self.merges
 
     def fit_details(self, conditions: Conditions, params: np.ndarray) -> dict[str, np.ndarray]:

@@ -53,20 +53,20 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike
 
-from ...errors import ArmcalError, ArmcalWarning, action
+from ...errors import ArmcalError
 from ...noise import NoiseModel
 from ...numerics import ScaledSVD
-from ..defaults import NEGATIVE_WORDS, ArmEffect, TermChoice
+from ..defaults import ArmEffect, TermChoice
 from ..identifiability import Identifiability
 from ..information import (
     BlockInformation,
     Linearization,
     column_identifiability,
     identifiable_or_raise,
-    ill_conditioned_warning,
     refit_free,
 )
-from ..interface import Conditions, DesignEffort, Effect, Loads
+from ..interface import Conditions, DesignEffort, Effect, Held, Loads, UnpredictedLoads
+from ..wording import held_sentence
 from .arm import SpatialArm
 from .gradient import Extra, jacobian_pose_pullback
 from .gravity import STANDARD_GRAVITY, LinkMasses, chain_frames, gravity_torques
@@ -216,15 +216,15 @@ class CompliantSpatialArm(ArmEffect):
     held : tuple of str
         Compliance parameters the rows cannot identify (:meth:`prepared`); those the
         user holds are ``elastic.terms`` (:attr:`user_held`).
-    merges : tuple of str
-        Why, one sentence per group.
+    merges : tuple of Held
+        Why, one record per group.
     """
 
     arm: SpatialArm
     elastic: SpatialElastics
     known_loads: bool = False
     held: tuple[str, ...] = ()
-    merges: tuple[str, ...] = ()
+    merges: tuple[Held, ...] = ()
 
     def __repr__(self) -> str:
         mode = "lumped" if self.elastic.lumped else "masses known"
@@ -314,8 +314,8 @@ class CompliantSpatialArm(ArmEffect):
         return np.concatenate([self.arm.held_values, np.zeros(self.n_compliance)])
 
     @property
-    def held_notes(self) -> tuple[str, ...]:
-        return self.arm.held_notes + self.user_note + self.merges
+    def held_reasons(self) -> tuple[Held, ...]:
+        return self.arm.held_reasons + self.user_reason + self.merges
 
     @property
     def free_names(self) -> tuple[str, ...]:
@@ -354,7 +354,7 @@ class CompliantSpatialArm(ArmEffect):
         elastic = replace(self.elastic, terms=terms)
         return CompliantSpatialArm(self.arm.with_fixed(geometry), elastic, self.known_loads)
 
-    def unpredicted_loads(self, loads: Loads) -> str | None:
+    def unpredicted_loads(self, loads: Loads) -> UnpredictedLoads | None:
         """In lumped mode without ``k``, any payload but the one the ``c`` hold."""
         if not self.elastic.lumped or self.known_loads:
             return None
@@ -362,13 +362,7 @@ class CompliantSpatialArm(ArmEffect):
         other = np.unique(loads.payload_kg[loads.payload_kg != held])
         if not other.size:
             return None
-        shown = ", ".join(f"{v:g}" for v in other[:4]) + (", ..." if other.size > 4 else "")
-        return (
-            f"the calibration's lumped compliance holds the deflection under its data's one "
-            f"payload, {held:g} kg (with one payload the compliance k cannot be told from the "
-            f"weight), so the deflection under payloads of {shown} kg is not predicted; "
-            "calibrate with poses at two payloads or more to identify k"
-        )
+        return UnpredictedLoads(self.compliance_names, held, tuple(other.tolist()))
 
     @property
     def uses_gravity(self) -> bool:
@@ -508,24 +502,15 @@ class CompliantSpatialArm(ArmEffect):
     # -- fitting ---------------------------------------------------------------------------
 
     @property
-    def why_no_closed_form(self) -> str:
-        return self.arm.why_no_closed_form
-
-    @property
     def effect(self) -> Effect:
-        mode = (
-            "lumped mode (masses unknown): c{j}.{s} is joint j's twist per metre of "
-            "horizontal lever arm to station s"
-            if self.elastic.lumped
-            else "link masses known: k{j} is joint j's compliance"
-        )
         return Effect(
             "joint compliance",
             "compliance",
             "geometry",
-            mode,
-            f"measure poses under two payloads or more, or {action('geometry-alone')}",
-            NEGATIVE_WORDS,
+            lumped=self.elastic.lumped,
+            stations=True,
+            advice="two-payloads",
+            positive=True,
         )
 
     def start(
@@ -567,9 +552,7 @@ class CompliantSpatialArm(ArmEffect):
         held, merges = select_effect(columns, geo_names, names, model.joints[mine])
         asked = [n for n in self.elastic.terms.asked if n in held]
         if asked:
-            why = "; ".join(
-                s for s in merges if set(asked) & {w.strip(",;:") for w in s.split(" ")}
-            )
+            why = "; ".join(held_sentence(m) for m in merges if set(asked) & set(m.members))
             raise ArmcalError(
                 f"[identify] free lists {', '.join(asked)}, which these rows cannot identify "
                 f"({why}); leave {'it' if len(asked) == 1 else 'them'} out of free: "
@@ -592,10 +575,6 @@ class CompliantSpatialArm(ArmEffect):
             "measure poses in which every joint takes several values and the torques vary "
             "(links pointing in different directions relative to gravity, different payloads)",
         )
-
-    def conditioning_warning(self, info: Identifiability) -> ArmcalWarning | None:
-        said = f"geometry plus compliance of {self.name} is barely identifiable"
-        return ill_conditioned_warning(info, said, "vary the torques more (poses, payloads)")
 
     def fit_details(self, conditions: Conditions, params: np.ndarray) -> dict[str, np.ndarray]:
         """``max_deflection_rad`` ``(n,)``: every joint's largest fitted twist."""

@@ -214,12 +214,12 @@ def deviation_bounds(layout: SpatialLayout, reach_mm: float) -> DeviationBounds:
         bounds,
         np.full(p, np.nan),
         ("",) * p,
-        "larger than a calibration finds",
-        f"{100 * LARGE_PLACEMENT_FRACTION:g} % of the reach, {length:.3g} mm, or "
-        f"{LARGE_ANGLE_DEG:g} deg",
-        "check that the robot file describes this arm (the variant of its URDF or MDH table, "
-        "its joint_map) and the units of the measurements (mm, deg)",
-        np.zeros(p, dtype=bool),
+        "placement",
+        LARGE_PLACEMENT_FRACTION,
+        LARGE_ANGLE_DEG,
+        "variant",
+        np.zeros(p),
+        length,
     )
 
 

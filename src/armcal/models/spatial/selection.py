@@ -15,9 +15,10 @@ every further point); measured in full pose by a 6-DoF instrument,
   less (a calibrated arm's small misalignments ``1e-3`` or less), real
   effects far more, so the set is the same on every machine, BLAS and row
   order, and for the nominal and the calibrated arm;
-* **explained** -- every column left out is written as the kept parameters it
-  merges into, with the reason where the geometry gives one ("joints 2 and 3
-  are parallel").
+* **explained** -- every column left out is named with the kept parameters it
+  merges into, and the reason where the geometry gives one ("joints 2 and 3
+  are parallel"): :class:`~armcal.models.interface.Held` records, which
+  :mod:`~armcal.models.wording` puts in words.
 
 The priority: the base pose, the targets, every joint's zero (what a
 controller takes), then the joints' placement errors from the tip down, each
@@ -33,7 +34,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ...numerics import scaled_svd
-from ..identifiability import listing
+from ..interface import Held
 from .chain import SerialChain
 from .kinematics import SpatialLayout
 
@@ -74,14 +75,14 @@ class Selection:
     ----------
     kept : ndarray of bool, shape (p,)
         The parameters identified.
-    merges : tuple of str
-        One sentence per group of parameters left out: what they merge into and why.
+    merges : tuple of Held
+        One record per group of parameters left out: what they merge into and why.
     still : tuple of int
         1-based joints that do not move in the measurements.
     """
 
     kept: np.ndarray
-    merges: tuple[str, ...]
+    merges: tuple[Held, ...]
     still: tuple[int, ...] = ()
 
 
@@ -110,91 +111,41 @@ def parallel_runs(chain: SerialChain, tol: float = 1e-9) -> list[tuple[int, int]
     return runs
 
 
-def _subject(names: Sequence[str]) -> str:
-    """The parameters left out, in words."""
-    words = []
-    for name in names:
-        if name.startswith("dq"):
-            words.append(f"the zero of joint {name[2:]} ({name})")
-        else:
-            words.append(name)
-    return listing(words)
-
-
-def _object(names: Sequence[str], layout: SpatialLayout) -> str:
-    """What they merge into, grouped: the base pose, the targets' positions, or by name."""
-    base = [n for n in names if n.startswith("base.")]
-    targets = sorted({n.split(".")[0] for n in names if n.split(".")[0] in layout.targets})
-    rest = [n for n in names if not n.startswith("base.") and n.split(".")[0] not in targets]
-    words = []
-    if base:
-        rotation = all(n[-2] == "r" for n in base)
-        position = not any(n[-2] == "r" for n in base)
-        words.append(
-            "the base rotation"
-            if rotation
-            else "the base position"
-            if position
-            else "the base pose"
-        )
-    if targets:
-        what = "pose" if layout.oriented else "position"
-        if targets == ["tool"]:
-            words.append(f"the target's {what}")
-        else:
-            words.append(f"the {what}{'s' if len(targets) > 1 else ''} of {listing(targets)}")
-    words += [f"the zero of joint {n[2:]} ({n})" if n.startswith("dq") else n for n in rest]
-    return listing(words)
-
-
 def _reason(
     dropped: str, partners: Sequence[str], layout: SpatialLayout, chain: SerialChain
-) -> str | None:
-    """Why ``dropped`` merges into ``partners``, where the geometry says."""
+) -> tuple[str, tuple[int, ...]]:
+    """Why ``dropped`` merges into ``partners``, where the geometry says: a code of
+    :data:`~armcal.models.wording.HELD_REASONS` and the 1-based joints it is about (an
+    empty code where the geometry gives no reason)."""
     last = layout.n_joints
     into_base = all(p.startswith("base.") for p in partners)
     into_targets = all(p.split(".")[0] in layout.targets for p in partners)
     slides = [kind == "P" for kind in chain.kinds]  # a slide moves along its axis, not about
     if dropped == "dq1" and into_base:
-        if slides[0]:
-            return "joint 1 slides the whole arm along its axis, as the base position does"
-        return "joint 1 turns the whole arm, as the base rotation does"
+        return ("base-slide" if slides[0] else "base-turn"), (1,)
     if dropped.startswith("j1.") and into_base:
-        return "joint 1's placement comes before any joint moves, like the base pose"
+        return "before-motion", (1,)
     if dropped == f"dq{last}" and into_targets:
-        verb = "slides" if slides[last - 1] else "turns"
-        if layout.oriented:
-            return f"every target {verb} with joint {last}, so its zero only moves the targets"
-        return f"a point target {verb} with joint {last}, so its zero only moves the targets"
+        return ("tip-zero-slides" if slides[last - 1] else "tip-zero-turns"), (last,)
     if dropped == f"j{last}.z" and into_targets:
-        return f"a shift along joint {last}'s axis moves every target alike"
+        return "tip-shift", (last,)
     if not dropped.startswith("j"):
-        return None
+        return "", ()
     k = int(dropped[1:].split(".")[0]) - 1
     component = dropped.split(".")[1]
     if component == "z":
         for first, end in parallel_runs(chain):
             if first <= k <= end:
-                joints = (
-                    f"{first + 1} and {end + 1}"
-                    if end == first + 1
-                    else f"{first + 1} to {end + 1}"
-                )
-                return f"joints {joints} are parallel: a shift along their axes passes them"
-        if slides[k]:
-            return f"a shift along joint {k + 1}'s axis is what its zero does: it slides there"
-        return f"a shift along joint {k + 1}'s axis is the same before and after it turns"
+                return "parallel", (first + 1, end + 1)
+        return ("slide-shift" if slides[k] else "axis-shift"), (k + 1,)
     # An error about or along the previous joint's axis is that joint's zero, or passes it.
     direction = chain.origins[k, :3, :3] @ np.eye(3)["xyz".index(component[-1])]
     if k > 0 and abs(abs(direction[2]) - 1.0) < 1e-9:
+        turn = component.startswith("r")
         if slides[k - 1]:  # a slide's zero shifts along its axis; a turn about it passes it
-            if component.startswith("r"):
-                return f"it turns about joint {k}'s axis, which the slide does not change"
-            return f"it shifts along joint {k}'s axis, as joint {k}'s zero does"
-        if component.startswith("r"):
-            return f"it turns about joint {k}'s axis, as joint {k}'s zero does"
-        return f"it shifts along joint {k}'s axis, which is the same before and after it turns"
-    return None
+            return ("turn-past-slide" if turn else "shift-as-slide"), (k,)
+        return ("turn-as-zero" if turn else "shift-past-turn"), (k,)
+    return "", ()
 
 
 def select(
@@ -254,35 +205,50 @@ def _explain(
     kept: np.ndarray,
     dropped: Sequence[int],
     still: Sequence[int],
-) -> tuple[str, ...]:
-    """Sentences for the parameters left out, grouped by what they merge into and why."""
+) -> tuple[Held, ...]:
+    """The parameters left out, grouped by what they merge into and why."""
     names = layout.names
     keep = np.flatnonzero(kept)
     unit = columns / np.maximum(np.linalg.norm(columns, axis=0), 1e-300)
-    groups: dict[tuple[str, str | None], list[str]] = {}
+    groups: dict[tuple[tuple[str, ...], str, tuple[int, ...]], list[str]] = {}
     for i in dropped:
         joint = layout.joint_of(i)
         if joint is not None and joint in still:
-            key = ("", f"joint {joint + 1} does not move in these measurements")
-            groups.setdefault(key, []).append(names[i])
+            groups.setdefault(((), "still", (joint + 1,)), []).append(names[i])
             continue
         if not np.any(unit[:, i]):
-            groups.setdefault(("", "it moves no measured point"), []).append(names[i])
+            groups.setdefault(((), "no-effect", ()), []).append(names[i])
             continue
         coef = np.linalg.lstsq(unit[:, keep], unit[:, i], rcond=None)[0]
         big = np.abs(coef) >= 0.05 * np.max(np.abs(coef))
-        partners = [names[j] for j in keep[big]]
-        reason = _reason(names[i], partners, layout, chain)
-        groups.setdefault((_object(partners, layout), reason), []).append(names[i])
-    sentences = []
-    for (into, reason), members in groups.items():
-        verb = "merges" if len(members) == 1 else "merge"
-        if into:
-            text = f"{_subject(members)} {verb} into {into}"
-        else:
-            text = f"{_subject(members)} cannot be seen"
-        sentences.append(text + (f": {reason}" if reason else ""))
-    return tuple(sentences)
+        partners = tuple(names[j] for j in keep[big])
+        reason, joints = _reason(names[i], partners, layout, chain)
+        groups.setdefault((_grouped(partners, layout), reason, joints), []).append(names[i])
+    return tuple(
+        Held(tuple(members), into, reason, joints, layout.targets, layout.oriented)
+        for (into, reason, joints), members in groups.items()
+    )
+
+
+def _grouped(partners: Sequence[str], layout: SpatialLayout) -> tuple[str, ...]:
+    """``partners`` with one name for each group its words name together (the base's
+    rotation, position or pose, every target's): parameters that merge into the same
+    groups share a sentence."""
+    base = [n for n in partners if n.startswith("base.")]
+    turns = {n[-2] == "r" for n in base}
+    out = (
+        []
+        if not base
+        else ["base.rx"]
+        if turns == {True}
+        else ["base.x"]
+        if turns == {False}
+        else ["base.x", "base.rx"]
+    )
+    targets = sorted({n.split(".")[0] for n in partners if n.split(".")[0] in layout.targets})
+    out += [f"{t}.x" for t in targets]
+    out += [n for n in partners if not n.startswith("base.") and n.split(".")[0] not in targets]
+    return tuple(out)
 
 
 def column_space(rows: np.ndarray) -> np.ndarray:
@@ -298,10 +264,10 @@ def select_from_rows(
     rows: np.ndarray,
     joints: np.ndarray,
     held: Sequence[str] = (),
-) -> tuple[tuple[str, ...], tuple[str, ...]]:
+) -> tuple[tuple[str, ...], tuple[Held, ...]]:
     """:func:`select` from the whitened Jacobian's ``rows`` ``(..., p)`` at joint values
     ``joints`` ``(..., n)`` (the joint map applied): the parameters it holds beyond
-    ``held``, and its merge sentences."""
+    ``held``, and why (:class:`~armcal.models.interface.Held`)."""
     columns = column_space(rows.reshape(-1, layout.n_params))
     still = [j for j in range(layout.n_joints) if np.ptp(joints[..., j]) <= 1e-9]
     chosen = select(layout, chain, columns, still=still, held=held)
@@ -311,7 +277,7 @@ def select_from_rows(
 
 def select_effect(
     columns: np.ndarray, kept_names: Sequence[str], names: Sequence[str], joints: np.ndarray
-) -> tuple[tuple[str, ...], tuple[str, ...]]:
+) -> tuple[tuple[str, ...], tuple[Held, ...]]:
     """An effect's parameters to hold and why (joint compliance of a spatial arm), by the
     rule of :func:`select`: from ``columns`` ``(r, g + P)``, the ``g`` columns the arm
     keeps (``kept_names``) then the effect's ``P`` (``names``, each twisting
@@ -323,13 +289,12 @@ def select_effect(
     top = float(np.max(norms[g:], initial=0.0))
     basis, _ = np.linalg.qr(columns[:, :g])
     kept: list[int] = []
-    groups: dict[str, list[str]] = {}
+    groups: dict[tuple[tuple[str, ...], str, tuple[int, ...]], list[str]] = {}
     everyone = [*kept_names, *names]
     for i in range(len(names)):
         col = columns[:, g + i]
         if norms[g + i] <= _ZERO_RTOL * max(top, 1e-300):
-            why = f"there is no torque on joint {joints[i] + 1} that varies"
-            groups.setdefault(f"cannot be seen: {why}", []).append(names[i])
+            groups.setdefault(((), "no-torque", (int(joints[i]) + 1,)), []).append(names[i])
             continue
         rest = col - basis @ (basis.T @ col)
         rest = rest - basis @ (basis.T @ rest)  # twice is enough (Kahan, Parlett)
@@ -341,15 +306,12 @@ def select_effect(
         unit = columns / np.maximum(norms, 1e-300)
         coef = np.linalg.lstsq(unit[:, keep], unit[:, g + i], rcond=None)[0]
         big = np.abs(coef) >= 0.05 * np.max(np.abs(coef))
-        partners = [everyone[k] for k in keep[big]]
-        into = listing(partners[:4]) + (" and more" if len(partners) > 4 else "")
+        partners = tuple(everyone[k] for k in keep[big])
         zero = any(p.startswith("dq") for p in partners)
-        why = ": a torque that does not change is a zero offset" if zero else ""
-        groups.setdefault(f"into {into}{why}", []).append(names[i])
+        groups.setdefault((partners, "constant-torque" if zero else "", ()), []).append(names[i])
     held = tuple(n for members in groups.values() for n in members)
-    sentences = []
-    for text, members in groups.items():
-        if text.startswith("into"):
-            text = ("merges " if len(members) == 1 else "merge ") + text
-        sentences.append(f"{listing(members)} {text}")
-    return held, tuple(sentences)
+    reasons = tuple(
+        Held(tuple(members), into, reason, joints, effect=True)
+        for (into, reason, joints), members in groups.items()
+    )
+    return held, reasons
