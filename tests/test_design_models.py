@@ -19,12 +19,14 @@ from armcal.doe.certificate import _variance_function
 from armcal.doe.exchange import _swap_ratios
 from armcal.doe.optimizer import _criterion_value_and_gradient
 from armcal.models import model_columns, unit_trace
+from armcal.models.interface import Note
 from armcal.models.planar.design import (
     information_gradient,
-    model_description,
+    model_differences,
     pose_model,
     rotation_invariant,
 )
+from armcal.models.wording import note_words
 from armcal.noise import NoiseModel
 
 PAPER_LENGTHS = [260.0, 180.0, 120.0, 100.0]
@@ -148,7 +150,14 @@ def test_rotation_invariance_is_lost_only_to_a_directed_instrument(rng):
         assert same == rotation_invariant(arm), name
 
 
+def model_description(arm: PlanarArm) -> str:
+    """The differences as a design note says them (the note of a searched plan)."""
+    said = note_words(Note("optimized", {"differences": model_differences(arm), "free": 0}))
+    return said.split(": the plan was optimized")[0]
+
+
 def test_model_description_names_what_differs_from_the_paper():
+    assert model_differences(model_arm("standard")) == ()
     assert model_description(model_arm("standard")) == "the paper's model"
     assert model_description(model_arm("joint offsets only")).startswith("joint offsets only")
     text = model_description(model_arm("encoder per joint, per-axis"))

@@ -12,6 +12,7 @@ from ..criteria import CRITERIA, Criterion, attains_unit_bound, d_efficiency, ef
 from ..errors import ArmcalError, ArmcalWarning, action, render
 from ..models import ClosedFormPlan, ClosedFormPlans, FitModel, equations_per_pose
 from ..models.information import identifying
+from ..models.wording import note_words, plan_repeats
 from ..progress import ProgressCallback, share
 from .certificate import Certificate, certify, certify_pool
 from .exchange import exchange_plan
@@ -484,11 +485,11 @@ def closed_forms(
             if method == "analytic":
                 assert family.failure is not None
                 raise family.failure
-            notes.append(family.unfit_note())
+            notes.append(note_words(family.unfit()))
         elif distinct and all(repeated_poses(plan.q).any() for plan in plans):
             if method == "analytic":
-                raise ArmcalError(family.repeats_message(refused=True))
-            notes.append(family.repeats_message(refused=False))
+                raise ArmcalError(plan_repeats(family.model.name, m, refused=True))
+            notes.append(plan_repeats(family.model.name, m, refused=False))
             plans = []
         elif distinct:
             plans = [plan for plan in plans if not repeated_poses(plan.q).any()]
@@ -533,8 +534,8 @@ class MadePlan:
 def analytic_plan(closed: ClosedForms) -> MadePlan:
     """The best closed-form plan, with the family's note on the choice."""
     assert closed.best is not None and closed.family is not None  # closed_forms raised
-    note = closed.family.choice_note(closed.best, closed.d, closed.optimal)
-    return MadePlan(closed.best.q, "analytic", () if note is None else (note,))
+    note = closed.family.choice(closed.best, closed.d, closed.optimal)
+    return MadePlan(closed.best.q, "analytic", () if note is None else (note_words(note),))
 
 
 def replicated_plan(
@@ -666,14 +667,14 @@ def closing_notes(
     notes = []
     family = closed.family
     if made.searched and family is not None:
-        note = family.search_note(
+        note = family.searched(
             None if closed.best is None else closed.d[closed.best.label],
             efficiency,
             method,
             lambda: _would_be_optimal(family),
         )
         if note is not None:
-            notes.append(note)
+            notes.append(note_words(note))
     if distinct:
         assert not repeated_poses(q).any(), "a distinct plan repeats a pose"
         if made.repeats and made.method != "analytic":

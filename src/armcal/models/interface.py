@@ -78,6 +78,7 @@ __all__ = [
     "Held",
     "LinearPositions",
     "Loads",
+    "Note",
     "PaperCriteria",
     "PlanInformation",
     "UnpredictedLoads",
@@ -278,6 +279,24 @@ class Effect:
     stations: bool
     advice: str
     positive: bool = False
+
+
+@dataclass(frozen=True)
+class Note:
+    """A fact a design or a report states: a code and the values its words place, which
+    :func:`~armcal.models.wording.note_words` puts in words.
+
+    Attributes
+    ----------
+    code : str
+        What is said, a key of :data:`~armcal.models.wording.NOTES`.
+    values : mapping
+        The names and numbers the words place (a value may itself be a tuple of
+        :class:`Note`, said one after the other).
+    """
+
+    code: str
+    values: Mapping[str, Any] = field(default_factory=dict)
 
 
 @dataclass(frozen=True)
@@ -529,27 +548,23 @@ class ClosedFormPlans(Protocol):
         """The same plans for the model without joint limits and view."""
         ...
 
-    def unfit_note(self) -> str:
+    def unfit(self) -> Note:
         """Why no closed-form plan fits the constraints."""
         ...
 
-    def repeats_message(self, *, refused: bool) -> str:
-        """Every closed-form plan repeats a pose: the error (``refused``) or the note."""
-        ...
-
-    def choice_note(
+    def choice(
         self, chosen: ClosedFormPlan, d_criteria: Mapping[str, float], optimal: bool
-    ) -> str | None:
+    ) -> Note | None:
         """Why the chosen plan is (or is not) optimal for the model; None when nothing to say."""
         ...
 
-    def search_note(
+    def searched(
         self,
         closed_d: float | None,
         plan_d: float,
         method: str,
         would_be_optimal: Callable[[], bool],
-    ) -> str | None:
+    ) -> Note | None:
         """What a searched plan is against the closed-form plans; None when nothing to say."""
         ...
 

@@ -15,14 +15,14 @@ calibration file, the report -- so that each takes its words from here.
 from __future__ import annotations
 
 from collections.abc import Sequence
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from ..errors import ArmcalWarning, action
 from ..numerics import COND_WARN
 from .identifiability import Identifiability, combination, listing
-from .interface import DeviationBounds, Effect, Held, UnpredictedLoads
+from .interface import DeviationBounds, Effect, Held, Note, UnpredictedLoads
 
 if TYPE_CHECKING:
     from .interface import FitModel
@@ -32,6 +32,7 @@ __all__ = [
     "EFFECT_ADVICE",
     "HELD_REASONS",
     "NEGATIVE_WORDS",
+    "NOTES",
     "absorbing_note",
     "deviation_rule",
     "deviation_summary",
@@ -40,6 +41,8 @@ __all__ = [
     "held_sentence",
     "ill_conditioned_warning",
     "no_closed_form",
+    "note_words",
+    "plan_repeats",
     "unpredicted_loads",
 ]
 
@@ -332,4 +335,104 @@ def unpredicted_loads(found: UnpredictedLoads) -> str:
         f"{found.payload_kg:g} kg (lumped mode: with one payload the compliance k cannot "
         f"be told from the weight), so the deflection under {what} is not predicted; "
         "calibrate with poses at two payloads or more to identify k"
+    )
+
+
+#: What the paper's orthogonal plans and its D* criterion assume, said where a model
+#: differs.
+_PAPER_ASSUMES = (
+    "the paper's orthogonal plans and its D* criterion assume isotropic iid noise and every "
+    "parameter free"
+)
+
+#: The words of a :class:`~armcal.models.interface.Note`, by code: a template whose fields
+#: are the note's values (``{differences}`` a model's differences from the paper's, said
+#: one after the other), or a function of them where the words depend on the values.
+NOTES: dict[str, str] = {
+    "offsets-only": "joint offsets only ({fixed} fixed)",
+    "fixed": "{fixed} fixed",
+    "anisotropic": "anisotropic instrument noise (sigma_x = {sx:.4g} mm, sigma_y = {sy:.4g} mm)",
+    "correlated": "correlated instrument noise (covariance_mm2 with x-y correlation)",
+    "encoder": "encoder noise ({deg} deg)",
+    "plans-unfit": (
+        "the closed-form orthogonal plans (the paper's Table I family: joints "
+        "{first}..{last} at {m} angles {spacing:g} deg apart{placed}) do not fit the {where} "
+        "of {name}; the optimizer searched all plans within the {where} instead"
+    ),
+    "closed-not-optimal": (
+        "{differences}: " + _PAPER_ASSUMES + "; the closed-form plan is not D-optimal for "
+        "this model (D-criterion {d:.4f}); {auto} optimizes for it"
+    ),
+    "closed-optimal": (
+        "{differences}: every pose's information over the {free} free parameters still has "
+        "trace {free}, so no plan has a larger D-criterion than 1, and {how}: it is "
+        "D-optimal for this model"
+    ),
+    "closed-beaten": (
+        "{differences}: " + _PAPER_ASSUMES + "; they are not D-optimal for this model (the "
+        "closed-form plan reaches D-criterion {closed_d:.4f}, this plan {plan_d:.4f}), so the "
+        "plan was optimized for it"
+    ),
+    "closed-never-optimal": (
+        "{differences}: " + _PAPER_ASSUMES + "; even where they fit they are not D-optimal "
+        "for this model, which the plan was optimized for"
+    ),
+    "optimized": "{differences}: the plan was optimized for this model ({free} free parameters)",
+}
+
+
+def _field(key: str, value: Any) -> Any:
+    """A note's value as its words place it."""
+    if key == "differences":
+        said = [note_words(note) for note in value]
+        return "; ".join(said) if said else "the paper's model"
+    if key == "fixed":
+        return ", ".join(value)
+    if key == "deg":
+        shown = [f"{v:.4g}" for v in value]
+        return shown[0] if len(shown) == 1 else "[" + ", ".join(shown) + "]"
+    return value
+
+
+def note_words(note: Note) -> str:
+    """A note in words.
+
+    Examples
+    --------
+    >>> note_words(Note("fixed", {"fixed": ("dl1", "dq2")}))
+    'dl1, dq2 fixed'
+    >>> note_words(Note("optimized", {"differences": (), "free": 6}))
+    "the paper's model: the plan was optimized for this model (6 free parameters)"
+    """
+    values = {key: _field(key, value) for key, value in note.values.items()}
+    if note.code == "plans-unfit":
+        region = bool(values["region"])
+        values["where"] = "joint limits and measurement region" if region else "joint limits"
+        values["placed"] = ", placed for the largest joint-limit margin" if region else ""
+    if note.code == "closed-not-optimal":
+        values["auto"] = action("method", "auto")
+    if note.code == "closed-optimal":
+        paper_d = values["paper_d"]
+        values["how"] = (
+            "this closed-form orthogonal plan reaches it"
+            if not values["stepping"]
+            else "the closed-form orthogonal plan with joint 1 stepping too reaches it (the "
+            "paper's, with joint 1 held still, "
+            + ("does not fit" if paper_d is None else f"reaches only {paper_d:.4f}")
+            + ")"
+        )
+    return NOTES[note.code].format(**values)
+
+
+def plan_repeats(name: str, m: int, *, refused: bool) -> str:
+    """Every closed-form plan of ``name`` repeats one pose: the error (``refused``) or the
+    design's note."""
+    if refused:
+        return (
+            f"the closed-form {m}-pose plan of {name} repeats one pose (its one joint is "
+            f"held still); distinct poses need {action('method', 'optimize')} or exchange"
+        )
+    return (
+        f"the closed-form plan of {name} repeats one pose {m} times (its one joint is held "
+        "still); for distinct poses the optimizer searched other plans"
     )

@@ -59,6 +59,7 @@ from ...errors import ArmcalError, action
 from ...noise import complex_whitening
 from ...numerics import ScaledSVD
 from ..identifiability import Identifiability
+from ..interface import Note
 from .criteria import model_singular_values, weighted_information
 from .information import (
     check_identifiable,
@@ -77,7 +78,7 @@ __all__ = [
     "PoseModel",
     "feasible",
     "information_gradient",
-    "model_description",
+    "model_differences",
     "pose_model",
     "q_from_theta_gradient",
     "region_constraints",
@@ -98,42 +99,34 @@ def rotation_invariant(arm: PlanarArmSpec) -> bool:
     return arm.noise is None or arm.noise.isotropic_instrument
 
 
-def _names(names: tuple[str, ...]) -> str:
-    return ", ".join(names)
-
-
-def model_description(arm: PlanarArmSpec) -> str:
-    """What makes the model differ from the paper's, in words for design notes.
+def model_differences(arm: PlanarArmSpec) -> tuple[Note, ...]:
+    """What makes the model differ from the paper's, for design notes (in words:
+    :func:`~armcal.models.wording.note_words`).
 
     Examples
     --------
     >>> arm = PlanarArmSpec([260.0, 180.0], fixed=("dl1", "dl2"))
-    >>> model_description(arm)
-    'joint offsets only (dl1, dl2 fixed)'
+    >>> model_differences(arm)
+    (Note(code='offsets-only', values={'fixed': ('dl1', 'dl2')}),)
     """
     parts = []
     n = arm.n_joints
     if arm.fixed:
         lengths = tuple(f"dl{k}" for k in range(1, n + 1))
-        if set(lengths) <= set(arm.fixed) and len(arm.fixed) == n:
-            parts.append(f"joint offsets only ({_names(arm.fixed)} fixed)")
-        else:
-            parts.append(f"{_names(arm.fixed)} fixed")
+        only = set(lengths) <= set(arm.fixed) and len(arm.fixed) == n
+        parts.append(Note("offsets-only" if only else "fixed", {"fixed": tuple(arm.fixed)}))
     noise = arm.noise
     if noise is not None and not noise.isotropic_instrument:
         cov = noise.covariance_mm2
         if cov[0, 1] == 0:
-            parts.append(
-                f"anisotropic instrument noise (sigma_x = {np.sqrt(cov[0, 0]):.4g} mm, "
-                f"sigma_y = {np.sqrt(cov[1, 1]):.4g} mm)"
-            )
+            sigmas = {"sx": float(np.sqrt(cov[0, 0])), "sy": float(np.sqrt(cov[1, 1]))}
+            parts.append(Note("anisotropic", sigmas))
         else:
-            parts.append("correlated instrument noise (covariance_mm2 with x-y correlation)")
+            parts.append(Note("correlated"))
     if noise is not None and noise.joint_sigma is not None:
-        js = np.degrees(noise.joint_sigma)
-        text = f"{js[0]:.4g}" if js.size == 1 else "[" + ", ".join(f"{v:.4g}" for v in js) + "]"
-        parts.append(f"encoder noise ({text} deg)")
-    return "; ".join(parts) if parts else "the paper's model"
+        degrees = tuple(float(v) for v in np.degrees(np.atleast_1d(noise.joint_sigma)))
+        parts.append(Note("encoder", {"deg": degrees}))
+    return tuple(parts)
 
 
 @dataclass(frozen=True, eq=False)

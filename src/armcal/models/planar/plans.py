@@ -18,8 +18,8 @@ from typing import cast
 import numpy as np
 
 from ...errors import ArmcalError, action
-from ..interface import ClosedFormPlan, FitModel
-from .design import feasible, model_description, rotation_invariant
+from ..interface import ClosedFormPlan, FitModel, Note
+from .design import feasible, model_differences, rotation_invariant
 from .geometry import wrap_angle
 from .information import plan_rows
 from .kinematics import forward_kinematics
@@ -430,11 +430,6 @@ def _best_rotation_in_region(
     return float(candidates[best])
 
 
-_PAPER_ASSUMES = (
-    "the paper's orthogonal plans and its D* criterion assume isotropic iid noise and every "
-    "parameter free"
-)
-
 #: Labels of the two closed-form plans: the paper's (joint 1 held still) and the one
 #: with joint 1 stepping too.
 PAPER, JOINT1_STEPPING = "paper", "joint 1 stepping"
@@ -488,35 +483,24 @@ class PaperPlans:
         """The same plans for the arm without joint limits and region."""
         return PaperPlans(self._arm.replace(joint_limits=None, region=None), self.m)
 
-    def unfit_note(self) -> str:
+    def unfit(self) -> Note:
         """Why the closed-form plans were not used: only they, not orthogonal plans in general."""
         arm, m = self._arm, self.m
-        where = "joint limits" if arm.region is None else "joint limits and measurement region"
-        first = 1 if arm.base_offset else 2  # joint 1 steps too when the base is identified
-        return (
-            f"the closed-form orthogonal plans (the paper's Table I family: joints "
-            f"{first}..{arm.n_joints} at {m} angles {360 / m:g} deg apart"
-            + (", placed for the largest joint-limit margin" if arm.region is not None else "")
-            + f") do not fit the {where} of {arm.name}; the optimizer searched all plans within "
-            f"the {where} instead"
+        return Note(
+            "plans-unfit",
+            {
+                "first": 1 if arm.base_offset else 2,  # joint 1 steps when the base is identified
+                "last": arm.n_joints,
+                "m": m,
+                "spacing": 360 / m,
+                "region": arm.region is not None,
+                "name": arm.name,
+            },
         )
 
-    def repeats_message(self, *, refused: bool) -> str:
-        """Every closed-form plan repeats a pose: the error (``refused``) or the note."""
-        name, m = self._arm.name, self.m
-        if refused:
-            return (
-                f"the closed-form {m}-pose plan of {name} repeats one pose (its one joint is "
-                f"held still); distinct poses need {action('method', 'optimize')} or exchange"
-            )
-        return (
-            f"the closed-form plan of {name} repeats one pose {m} times (its one joint is held "
-            "still); for distinct poses the optimizer searched other plans"
-        )
-
-    def choice_note(
+    def choice(
         self, chosen: ClosedFormPlan, d_criteria: Mapping[str, float], optimal: bool
-    ) -> str | None:
+    ) -> Note | None:
         """Why the chosen closed-form plan is (or is not) D-optimal for a model not the paper's.
 
         ``d_criteria``: the D-criterion of every closed-form plan that fits, by label.
@@ -524,33 +508,29 @@ class PaperPlans:
         arm = self._arm
         if arm.standard:
             return None
+        differences = model_differences(arm)
         if not optimal:
-            return (
-                f"{model_description(arm)}: {_PAPER_ASSUMES}; the closed-form plan is not "
-                f"D-optimal for this model (D-criterion {d_criteria[chosen.label]:.4f}); "
-                f"{action('method', 'auto')} optimizes for it"
+            return Note(
+                "closed-not-optimal",
+                {"differences": differences, "d": d_criteria[chosen.label]},
             )
-        how = "this closed-form orthogonal plan reaches it"
-        if chosen.label == JOINT1_STEPPING:
-            paper_d = d_criteria.get(PAPER)
-            paper = "does not fit" if paper_d is None else f"reaches only {paper_d:.4f}"
-            how = (
-                "the closed-form orthogonal plan with joint 1 stepping too reaches it (the "
-                f"paper's, with joint 1 held still, {paper})"
-            )
-        return (
-            f"{model_description(arm)}: every pose's information over the {arm.n_free} free "
-            f"parameters still has trace {arm.n_free}, so no plan has a larger D-criterion "
-            f"than 1, and {how}: it is D-optimal for this model"
+        return Note(
+            "closed-optimal",
+            {
+                "differences": differences,
+                "free": arm.n_free,
+                "stepping": chosen.label == JOINT1_STEPPING,
+                "paper_d": d_criteria.get(PAPER),
+            },
         )
 
-    def search_note(
+    def searched(
         self,
         closed_d: float | None,
         plan_d: float,
         method: str,
         would_be_optimal: Callable[[], bool],
-    ) -> str | None:
+    ) -> Note | None:
         """What a searched plan is against the closed-form plans, for a model not the paper's.
 
         ``closed_d``: the best closed-form plan's D-criterion (None when none fits);
@@ -560,18 +540,12 @@ class PaperPlans:
         arm = self._arm
         if arm.standard:
             return None  # the paper's model: the unfit note says why the closed form was not used
+        differences = model_differences(arm)
         if closed_d is not None:
-            return (
-                f"{model_description(arm)}: {_PAPER_ASSUMES}; they are not D-optimal for this "
-                f"model (the closed-form plan reaches D-criterion {closed_d:.4f}, this plan "
-                f"{plan_d:.4f}), so the plan was optimized for it"
+            return Note(
+                "closed-beaten",
+                {"differences": differences, "closed_d": closed_d, "plan_d": plan_d},
             )
         if method == "auto" and not would_be_optimal():
-            return (
-                f"{model_description(arm)}: {_PAPER_ASSUMES}; even where they fit they are not "
-                "D-optimal for this model, which the plan was optimized for"
-            )
-        return (
-            f"{model_description(arm)}: the plan was optimized for this model "
-            f"({arm.n_free} free parameters)"
-        )
+            return Note("closed-never-optimal", {"differences": differences})
+        return Note("optimized", {"differences": differences, "free": arm.n_free})
