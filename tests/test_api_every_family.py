@@ -370,3 +370,34 @@ def test_py_typed_is_shipped():
     config = (ROOT / "pyproject.toml").read_text(encoding="utf-8")
     wheel = config[config.index("[tool.hatch.build.targets.wheel]") :].split("\n[", 1)[0]
     assert 'packages = ["src/armcal"]' in wheel
+
+
+def test_the_residual_picture_draws_every_rows_position_residual(family):
+    """The family's residual_figure role (armcal.families) draws one bar per row: its
+    Euclidean position residual in the family's dimensions, coloured by target, under the
+    line 99 % of clean rows stay below: sigma sqrt(chi2_d(0.99)), with the chi-square
+    quantile from the regularized incomplete gamma function, P(d/2, x/2) = 0.99."""
+    from scipy.special import gammaincinv
+
+    from armcal.families import family_of
+
+    rows, labels = _rows(family, family.plan(12, 3))
+    points = armcal.synthesize_measurements(
+        family.arm, rows.q, family.truth, 0.05, target=labels, rng=7
+    )
+    cal = armcal.identify(family.arm, rows.q, points, sigma=0.05, target=labels)
+    fig = family_of(cal.model).role("residual_figure")(cal)
+    (ax,) = fig.axes
+    dim = cal.model.position_dim
+    assert dim == (2 if family.name == "planar" else 3)
+    bars = sorted((p.get_x() + p.get_width() / 2, p.get_height()) for p in ax.patches)
+    expected = np.sqrt(np.sum(cal.residuals[:, :dim] ** 2, axis=1))
+    assert_allclose([x for x, _ in bars], np.arange(1, rows.m + 1))
+    assert_allclose([h for _, h in bars], expected, rtol=1e-12)
+    (line,) = [ln for ln in ax.lines if ln.get_linestyle() == "--"]
+    limit = 0.05 * math.sqrt(2.0 * gammaincinv(dim / 2.0, 0.99))
+    assert_allclose(line.get_ydata(), limit, rtol=1e-9)
+    assert ax.get_xlabel() == "measurement row"
+    legend = {t.get_text() for t in ax.get_legend().get_texts()}
+    targets = {f"target {label}" for label in LABELS}
+    assert legend == targets | {f"99 % of clean measurement rows below ({dim}-D)"}

@@ -19,7 +19,7 @@ from .compensation import Compensation, compensate
 from .doe import Design, design, random_plan
 from .errors import ACTIONS, ArmcalWarning
 from .export_planar import robot_toml, urdf
-from .families import RobotSpec
+from .families import RobotSpec, family_of
 from .files import (
     calibration_document,
     format_measurements_csv,
@@ -337,9 +337,7 @@ def _figures(arm: PlanarArm, story: _Story) -> dict[str, str | Callable[[Path], 
         return plot_plan(arm, q, numbers=True, title=f"{arm.name}: the {q.shape[0]}-pose plan")
 
     def plot_residual_figure():
-        from .plotting import plot_residuals
-
-        return plot_residuals(cal.residuals, cal.sigma_mm, used=cal.used)
+        return family_of(cal.model).role("residual_figure")(cal)
 
     def plot_validation_figure():
         from .plotting import plot_validation

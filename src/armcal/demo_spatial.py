@@ -24,7 +24,7 @@ from .demo import Demo, figure_writer, report_head
 from .doe import random_plan
 from .errors import ACTIONS
 from .export_spatial import joint_offsets_csv, spatial_robot_toml, spatial_urdf
-from .families import RobotSpec
+from .families import RobotSpec, family_of
 from .files import (
     calibration_document,
     format_measurements_csv,
@@ -275,9 +275,7 @@ def _files(
     cal, measured, fresh, compensated = story.cal, story.measured, story.fresh, story.compensated
 
     def plot_residual_figure():
-        from .plotting import plot_residuals
-
-        return plot_residuals(cal.residuals, cal.sigma_mm, used=cal.used)
+        return family_of(cal.model).role("residual_figure")(cal)
 
     kinds = arm.joint_kinds
     aimed = ["A"] * PROGRAM_POSES

@@ -28,12 +28,14 @@ from .models import Annulus, PlanarArm, link_vectors
 from .numerics import rms
 
 __all__ = [
+    "clean_limit",
     "plot_accuracy_curves",
     "plot_error_map",
     "plot_plan",
     "plot_random_plans",
     "plot_residuals",
     "plot_validation",
+    "residual_figure",
     "save_figure",
 ]
 
@@ -633,31 +635,54 @@ def plot_validation(
     return fig
 
 
+def clean_limit(sigma: float, dim: int, level: float = 0.99) -> float:
+    """The Euclidean length (mm) below which a clean point's residual lies with probability
+    ``level``: ``sigma sqrt(chi2_dim(level))`` for ``dim`` coordinates of iid noise ``sigma``
+    (``sigma sqrt(-2 ln(1 - level))`` in the plane)."""
+    from scipy.stats import chi2
+
+    return float(sigma * np.sqrt(chi2.ppf(level, dim)))
+
+
 def plot_residuals(
     residuals: np.ndarray,
     sigma: float,
     *,
     used: np.ndarray | None = None,
     title: str | None = None,
+    target: np.ndarray | None = None,
+    target_names: Sequence[str] = (),
+    row: str = "pose",
 ) -> Figure:
-    """Every pose's residual (Euclidean, mm) of a fit, with the noise level.
+    """Every row's residual (Euclidean, mm) of a fit, with the noise level.
 
     Parameters
     ----------
-    residuals : ndarray, shape (m, 2)
-        Measured minus fitted positions, mm.
+    residuals : ndarray, shape (m, d)
+        Measured minus fitted positions, mm (``d`` = 2 in the plane, 3 in space).
     sigma : float
-        The instrument noise (1 std per coordinate, mm): a clean pose's
-        residual is below ``sigma sqrt(-2 ln 0.01)`` with probability 0.99.
+        The instrument noise (1 std per coordinate, mm): a clean row's residual is
+        below :func:`clean_limit` with probability 0.99.
     used : ndarray of bool, shape (m,), optional
-        Poses in the fit; the others (outliers left out) are drawn as crosses.
+        Rows in the fit; the others (outliers left out) are drawn as crosses.
+    target : ndarray of int, shape (m,), optional
+        The target every row measures, for one colour per target (``target_names``).
+    row : str
+        What a row is, for the x axis: ``"pose"``, or ``"measurement row"`` where a pose
+        has a row per target.
     """
+    residuals = np.asarray(residuals, dtype=float)
     fig = Figure(figsize=(8, 3.6), layout="constrained")
     ax = fig.subplots()
-    distance = np.hypot(residuals[:, 0], residuals[:, 1])
+    distance = np.linalg.norm(residuals, axis=1)
     index = np.arange(1, distance.size + 1)
-    kept = np.ones(distance.size, dtype=bool) if used is None else used
-    ax.bar(index[kept], distance[kept], color="tab:blue", width=0.8, label="in the fit")
+    kept = np.ones(distance.size, dtype=bool) if used is None else np.asarray(used, dtype=bool)
+    groups = np.zeros(distance.size, dtype=int) if target is None else np.asarray(target)
+    several = target is not None and len(target_names) > 1
+    for k in np.unique(groups):
+        mine = kept & (groups == k)
+        label = f"target {target_names[k]}" if several else "in the fit"
+        ax.bar(index[mine], distance[mine], color=f"C{k}", width=0.8, label=label)
     if not kept.all():
         ax.plot(
             index[~kept],
@@ -668,15 +693,40 @@ def plot_residuals(
             mew=2,
             label="left out (outlier)",
         )
-    limit = sigma * np.sqrt(-2.0 * np.log(0.01))
-    ax.axhline(limit, color="k", lw=1, ls="--", label="99 % of clean poses below")
+    dim = residuals.shape[1]
+    ax.axhline(
+        clean_limit(sigma, dim),
+        color="k",
+        lw=1,
+        ls="--",
+        label=f"99 % of clean {row}s below ({dim}-D)",
+    )
     ax.set_yscale("log")
     ax.xaxis.set_major_locator(MaxNLocator(integer=True))
-    ax.set_xlabel("pose")
+    ax.set_xlabel(row)
     ax.set_ylabel("residual [mm]")
     ax.legend(fontsize=8, frameon=False)
-    ax.set_title(title if title is not None else "residual of every pose")
+    ax.set_title(title if title is not None else f"residual of every {row}")
     return fig
+
+
+def residual_figure(cal: Any) -> Figure:
+    """A fit's residuals (a :class:`~armcal.identification.Calibration` of any family):
+    the Euclidean residual of every row's position in the model's dimensions, coloured by
+    target where a pose has several (:mod:`armcal.families`, role ``residual_figure``)."""
+    model = cal.model
+    dim = model.position_dim
+    target = None if cal.conditions is None else cal.conditions.target
+    names = tuple(model.target_labels)
+    row = "measurement row" if target is not None and len(names) > 1 else "pose"
+    return plot_residuals(
+        cal.residuals[:, :dim],
+        cal.sigma_mm,
+        used=cal.used,
+        target=target,
+        target_names=names,
+        row=row,
+    )
 
 
 def plot_error_map(

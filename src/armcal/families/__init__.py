@@ -44,6 +44,7 @@ PLANAR = register(
             "coupled_urdf": "armcal.export_planar:planar_coupled_urdf",
             "describe": "armcal.report.common:planar_model_lines",
             "plan_figure": "armcal.plotting:planar_plan_figure",
+            "residual_figure": "armcal.plotting:residual_figure",
             "demo": "armcal.demo:planar_demo",
         },
     )
@@ -71,6 +72,7 @@ SPATIAL = register(
             "coupled_urdf": "armcal.export_spatial:spatial_coupled_urdf",
             "describe": "armcal.report.common:spatial_model_lines",
             "plan_figure": "armcal.plotting_spatial:spatial_plan_figure",
+            "residual_figure": "armcal.plotting:residual_figure",
             "demo": "armcal.demo_spatial:spatial_demo",
         },
     )

@@ -87,6 +87,8 @@ class Family:
         the arm is.
     plan_figure
         ``(robot, design_run, *, seed) -> Figure``: a designed plan drawn.
+    residual_figure
+        ``(calibration) -> Figure``: a fit's residuals drawn.
     demo
         ``(robot, truth, *, poses, sigma, seed, words) -> Demo``: the family's story.
     """
@@ -141,6 +143,7 @@ _ROLE_WORDS = {
     "coupled_urdf": "URDF",
     "describe": "report lines",
     "plan_figure": "plan figure",
+    "residual_figure": "residual figure",
     "demo": "demo",
 }
 
