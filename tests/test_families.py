@@ -235,7 +235,7 @@ def test_one_export_entry_writes_either_family(tmp_path):
         robot.write_text(armcal.export(calibrated, "robot"), encoding="utf-8")
         assert load_robot(robot).arm.family == family
         assert armcal.export(calibrated, "offsets").startswith("joint,")
-    with pytest.raises(ArmcalError, match="the kinds are robot, urdf, offsets"):
+    with pytest.raises(ArmcalError, match="the kinds are robot, urdf, origins, offsets"):
         armcal.export(cal.calibrated(), "step")
 
 

@@ -506,13 +506,24 @@ def demo(args: argparse.Namespace) -> None:
 def export(args: argparse.Namespace) -> None:
     """``armcal export``: the calibrated arm as a robot file or URDF."""
     outputs = (
-        args.robot_toml, args.urdf, args.joint_offsets, args.ur_calibration, args.ros_calibration
+        args.robot_toml, args.urdf, args.origins_yaml, args.joint_offsets, args.ur_calibration,
+        args.ros_calibration,
     )  # fmt: skip
     if all(path is None for path in outputs):
         raise ArmcalError(
             "export needs an output: give --robot-toml FILE, --urdf FILE, --joint-offsets FILE, "
             "--ur-calibration FILE, --ros-calibration FILE or several (see 'armcal export "
             "--help')"
+        )
+    if args.origins_yaml is not None and args.original is None:
+        raise ArmcalError(
+            f"{args.origins_yaml}: --origins-yaml writes the origins of a URDF's joints: give "
+            "the URDF the robot was described by with --from URDF"
+        )
+    if args.original is not None and args.urdf is None and args.origins_yaml is None:
+        raise ArmcalError(
+            f"{args.original}: --from is the URDF to calibrate: give --urdf FILE to write it "
+            "with the calibrated origins (or --origins-yaml FILE)"
         )
     cal = read_calibration(args.calibration)
     run = export_files(
@@ -522,12 +533,16 @@ def export(args: argparse.Namespace) -> None:
         offsets_path=args.joint_offsets,
         ur_path=args.ur_calibration,
         ros_path=args.ros_calibration,
+        original=args.original,
+        origins_path=args.origins_yaml,
     )
     for path, text in run.texts.items():
         atomic_write(path, text)
     document = {
         "robot_toml": args.robot_toml,
         "urdf": args.urdf,
+        "from": args.original,
+        "origins_yaml": args.origins_yaml,
         "joint_offsets": args.joint_offsets,
         "ur_calibration": args.ur_calibration,
         "ros_calibration": args.ros_calibration,

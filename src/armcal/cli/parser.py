@@ -474,7 +474,26 @@ COMMAND_TABLE: tuple[Command, ...] = (
         (
             *_CALIBRATION,
             option("--robot-toml", metavar="PATH", help="robot TOML file to write"),
-            option("--urdf", metavar="PATH", help="URDF file to write"),
+            option(
+                "--urdf",
+                metavar="PATH",
+                help="URDF file to write: with --from, the user's own URDF with only its chain's "
+                "joint origins calibrated",
+            ),
+            option(
+                "--from",
+                dest="original",
+                metavar="URDF",
+                help="the URDF the calibrated robot was described by (a spatial arm): --urdf "
+                "writes it back with the calibrated joint origins, every link, mesh, inertial, "
+                "limit and name kept",
+            ),
+            option(
+                "--origins-yaml",
+                metavar="PATH",
+                help="with --from: the calibrated joint origins as YAML (m, rad per joint), for "
+                "a xacro that takes its origins as properties (docs/six-axis.md)",
+            ),
             option(
                 "--joint-offsets",
                 metavar="PATH",
@@ -493,8 +512,15 @@ COMMAND_TABLE: tuple[Command, ...] = (
                 "x, y, z, roll, pitch, yaw per joint; docs/controllers.md)",
             ),
         ),
-        inputs=("calibration",),
-        outputs=("robot_toml", "urdf", "joint_offsets", "ur_calibration", "ros_calibration"),
+        inputs=("calibration", "original"),
+        outputs=(
+            "robot_toml",
+            "urdf",
+            "origins_yaml",
+            "joint_offsets",
+            "ur_calibration",
+            "ros_calibration",
+        ),
     ),
     Command("formats", commands.formats),
 )

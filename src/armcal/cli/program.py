@@ -23,8 +23,12 @@ from .parser import build_parser
 __all__ = ["main"]
 
 
+#: Options whose destination is not their flag's name (``--from`` is a Python keyword).
+_FLAGS = {"output": "-o", "original": "--from"}
+
+
 def _option(dest: str) -> str:
-    return "-o" if dest == "output" else "--" + dest.replace("_", "-")
+    return _FLAGS.get(dest, "--" + dest.replace("_", "-"))
 
 
 def _check_stdio(args: argparse.Namespace, inputs: dict, outputs: dict) -> None:

@@ -70,6 +70,7 @@ SPATIAL = register(
             "exports": "armcal.export_spatial:spatial_exports",
             "controller_files": "armcal.files.ur:ur_texts",
             "coupled_urdf": "armcal.export_spatial:spatial_coupled_urdf",
+            "calibrated_origins": "armcal.files.urdf_origins:calibrated_origins",
             "describe": "armcal.report.common:spatial_model_lines",
             "plan_figure": "armcal.plotting_spatial:spatial_plan_figure",
             "residual_figure": "armcal.plotting:residual_figure",

@@ -79,6 +79,10 @@ class Family:
     controller_files
         ``(cal, ur_path, ros_path) -> dict[str, str]``: a controller's own calibration
         files by path (Universal Robots' calibration.conf and the ROS driver's YAML).
+    calibrated_origins
+        ``(cal, original) -> CalibratedOrigins``: the user's own URDF ``original`` with
+        the calibrated joint origins, and those origins as YAML (a family whose arms come
+        from a URDF).
     coupled_urdf
         ``(arm) -> str | None``: what a URDF's joint values are where they are not
         the controller's readings (coupled axes), None where they are.
@@ -140,6 +144,7 @@ _ROLE_WORDS = {
     "calibrate": "measurement files",
     "exports": "exports",
     "controller_files": "controller files",
+    "calibrated_origins": "calibrated origins of a user's URDF",
     "coupled_urdf": "URDF",
     "describe": "report lines",
     "plan_figure": "plan figure",

@@ -8,6 +8,11 @@ a prismatic reading of 200 under ``q3_deg`` read as degrees would move the slide
 3.49 mm.  Which kind a reading is comes from the arm (``arm.joint_kinds``); a
 joint map moves joints of a reading's own kind only, so reading ``j`` is of the
 kind of joint ``j``.
+
+A file may instead name its joint columns as the robot publishes them
+(:func:`named_joint_columns`): by the URDF's joint names, in the units of ROS's
+``/joint_states`` (radians, metres) or with a unit suffix (``joint_1_deg``,
+``slide_mm``).  They are mapped to the joints by name, never by position.
 """
 
 from __future__ import annotations
@@ -36,6 +41,7 @@ __all__ = [
     "joint_values",
     "limit_slack",
     "model_units",
+    "named_joint_columns",
     "radians_message",
     "refuse_radians",
     "revolute",
@@ -275,3 +281,76 @@ def radians_message(what: str, q_deg: np.ndarray, limits_deg: np.ndarray) -> str
         f"looks like radians under the q*_deg columns (the joints may turn to "
         f"{np.abs(limits_deg).max():g} deg); convert the angles to degrees (x 180/pi)"
     )
+
+
+#: A named joint column's unit suffix, and its factor to the file's canonical unit (deg or
+#: mm) by the joint's kind; no suffix is ROS's ``/joint_states``: radians and metres.
+_NAMED_UNITS = {
+    "R": {"": math.degrees(1.0), "_rad": math.degrees(1.0), "_deg": 1.0},
+    "P": {"": 1000.0, "_m": 1000.0, "_mm": 1.0},
+}
+
+
+def _named(column: str, names: Sequence[str]) -> tuple[int, str] | None:
+    """``(joint index, suffix)`` of a column that names one of ``names``, else None."""
+    for j, name in enumerate(names):
+        if column == name:
+            return j, ""
+        if column.startswith(name) and column[len(name) :] in ("_rad", "_deg", "_m", "_mm"):
+            return j, column[len(name) :]
+    return None
+
+
+def named_joint_columns(
+    path, header: Sequence[str], header_line: int, arm: FitModel, allowed: Sequence[str]
+) -> tuple[list[str], np.ndarray]:
+    """The header with joint columns named by ``arm``'s joints (its URDF's names) renamed to
+    ``q{j}_deg`` / ``q{j}_mm``, and every joint's factor ``(n,)`` to that unit (1 where the
+    file already uses it): the module notes' other way to name joints.
+
+    A file names all its joints one way.  Named, every joint of the chain needs a column
+    and every other column must be one the file takes: a joint the chain does not have
+    (``/joint_states`` lists a gripper's too) is an error naming it, as is a column in a
+    unit that is not its joint's kind's.
+    """
+    names = [n for n in arm.joint_names]
+    kinds = arm.joint_kinds
+    factors = np.ones(len(names))
+    found = {c: hit for c, h in enumerate(header) if (hit := _named(h, names)) is not None}
+    if not found or any(JOINT_COLUMN.match(h) for h in header):
+        return list(header), factors  # q{j}_deg columns (a mixture: their check names it)
+    where = f"line {header_line}"
+    out = list(header)
+    for c, (j, suffix) in found.items():
+        units = _NAMED_UNITS[kinds[j]]
+        if suffix not in units:
+            right = f"{names[j]}_deg" if kinds[j] == "R" else f"{names[j]}_mm"
+            kind = "revolute" if kinds[j] == "R" else "prismatic"
+            raise fail(
+                path,
+                f"{where}, column {header[c]}: {names[j]} is a {kind} joint; name the column "
+                f"{names[j]} ({'radians' if kinds[j] == 'R' else 'metres'}) or {right}",
+            )
+        factors[j] = units[suffix]
+        out[c] = f"q{j + 1}_{JOINT_UNITS[kinds[j]]}"
+    hits = [j for j, _ in found.values()]
+    for j in sorted({j for j in hits if hits.count(j) > 1}):
+        both = ", ".join(header[c] for c, (i, _) in found.items() if i == j)
+        raise fail(path, f"{where}: joint {names[j]} has two columns ({both}); keep one")
+    missing = [names[j] for j in range(len(names)) if j not in hits]
+    if missing:
+        raise fail(
+            path,
+            f"{where}: the joint columns are named by {arm.name}'s joints, but "
+            f"{', '.join(missing)} {'has' if len(missing) == 1 else 'have'} no column; add "
+            f"{'it' if len(missing) == 1 else 'them'} (radians, or NAME_deg)",
+        )
+    for c, h in enumerate(header):
+        if c not in found and h not in allowed:
+            raise fail(
+                path,
+                f"{where}, column {h}: not a joint of {arm.name}'s chain "
+                f"({', '.join(names)}) nor a column the file takes; drop it (a robot's "
+                "/joint_states lists every joint, the calibrated chain only its own)",
+            )
+    return out, factors

@@ -14,7 +14,7 @@ import difflib
 import os
 import re
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -33,6 +33,7 @@ from .joints import (
     joint_names,
     limit_slack,
     model_units,
+    named_joint_columns,
     radians_message,
     refuse_radians,
     revolute,
@@ -395,10 +396,15 @@ def _read_csv(
         if other:
             raise fail(path, f"not a {what} CSV file: {other}expected a header line {layout}")
     parsed = parse_csv(path, text, optional, layout)
+    header, factors = named_joint_columns(
+        path, parsed.header, parsed.header_line, arm, expected[arm.n_joints :] + extras
+    )
+    parsed = replace(parsed, header=header)
     _check_header_names(path, text, parsed, expected + extras, expected_kind, layout)
     _check_required(path, text, parsed, arm, expected, what, arm_from, layout)
     lines = parsed.lines
     values, numbers, texts = _columns(path, parsed, expected, optional, optional_numeric)
+    values[:, : arm.n_joints] *= factors  # named columns in radians or metres
     beyond = _beyond_limits(path, arm, what, values, lines, expected, measured)
     q_file = values[:, : arm.n_joints]
     if what in ("plan", "program"):

@@ -31,7 +31,11 @@ __all__ = [
     "GRIPPER_WORDS",
     "RPY_BOUND_RAD",
     "UrdfChain",
+    "UrdfTree",
+    "parse_urdf",
     "read_urdf",
+    "urdf_joint",
+    "urdf_tree",
 ]
 
 _MOVING = ("revolute", "continuous", "prismatic")
@@ -132,7 +136,7 @@ def _text(data: bytes) -> str:
         return data.decode("utf-8", errors="replace")
 
 
-def _parse(path: Path) -> tuple[ET.Element, str]:
+def parse_urdf(path: Path) -> tuple[ET.Element, str]:
     """The root element of the URDF at ``path`` and its text.
 
     The parser gets the bytes, so it honours the file's declared encoding (a Latin-1
@@ -210,7 +214,7 @@ def _unique(path: Path, text: str, root: ET.Element, tag: str) -> list[str]:
 
 
 @dataclass(frozen=True, eq=False)
-class _Tree:
+class UrdfTree:
     """A URDF's links and joints as a tree: every link's parent joint, every link's
     children, and the joints other joints mimic."""
 
@@ -220,7 +224,7 @@ class _Tree:
     mimicked: set[str]
 
 
-def _tree(path: Path, text: str, root: ET.Element) -> _Tree:
+def urdf_tree(path: Path, text: str, root: ET.Element) -> UrdfTree:
     """The URDF's tree, every joint checked: a known type, a parent and a child that are
     links, no link the child of two joints (a loop)."""
     links = _unique(path, text, root, "link")
@@ -259,10 +263,12 @@ def _tree(path: Path, text: str, root: ET.Element) -> _Tree:
         mimic = joint.find("mimic")
         if mimic is not None:
             mimicked.add(mimic.get("joint", ""))
-    return _Tree(links, parent_joint, children, mimicked)
+    return UrdfTree(links, parent_joint, children, mimicked)
 
 
-def _ends(path: Path, tree: _Tree, base_link: str | None, tip_link: str | None) -> tuple[str, str]:
+def _ends(
+    path: Path, tree: UrdfTree, base_link: str | None, tip_link: str | None
+) -> tuple[str, str]:
     """The chain's base link (default: the one root) and tip link (default: the one leaf
     beyond the base), each checked to be a link of the URDF."""
     links, children = tree.links, tree.children
@@ -306,7 +312,7 @@ def _ends(path: Path, tree: _Tree, base_link: str | None, tip_link: str | None) 
     return base, leaves[0]
 
 
-def _chain_joints(path: Path, tree: _Tree, base: str, tip_link: str) -> list[ET.Element]:
+def _chain_joints(path: Path, tree: UrdfTree, base: str, tip_link: str) -> list[ET.Element]:
     """The joints from ``base`` to ``tip_link``, base first; refused when the tip does not
     lie beyond the base."""
     chain: list[ET.Element] = []
@@ -346,12 +352,12 @@ def read_urdf(
         without a parent or child.
     """
     path = Path(path)
-    root, text = _parse(path)
-    tree = _tree(path, text, root)
+    root, text = parse_urdf(path)
+    tree = urdf_tree(path, text, root)
     base, tip_link = _ends(path, tree, base_link, tip_link)
     chain = _chain_joints(path, tree, base, tip_link)
     _check_chain(path, text, chain, base, tip_link)
-    joints = [_joint(path, text, element) for element in chain]
+    joints = [urdf_joint(path, text, element) for element in chain]
     if all(joint.kind == "fixed" for joint in joints):
         raise InputError(
             f"{path}: no moving joint (revolute, continuous or prismatic) from base_link "
@@ -531,7 +537,7 @@ def _link_masses(
     return LinkMasses(np.array(masses), np.array(centres)) if seen else None
 
 
-def _joint(path: Path, text: str, element: ET.Element) -> UrdfJoint:
+def urdf_joint(path: Path, text: str, element: ET.Element) -> UrdfJoint:
     """One joint of the chain in mm and rad."""
     name = element.get("name", "")
     where = f"line {_line_of(text, 'joint', name)}, joint {name!r}"

@@ -13,7 +13,7 @@ Errors name the file they concern (``source``).
 from __future__ import annotations
 
 from dataclasses import dataclass, replace
-from typing import TypeVar
+from typing import Any, TypeVar
 
 import numpy as np
 
@@ -461,12 +461,13 @@ class ExportRun:
 #: The files :func:`export` writes, by kind: what each holds.
 EXPORT_KINDS = {
     "robot": "a robot TOML of the calibrated arm (armcal reads it as a robot file)",
-    "urdf": "a URDF of the calibrated arm",
+    "urdf": "a URDF of the calibrated arm (with original: the user's own, origins calibrated)",
+    "origins": "the calibrated joint origins of the user's URDF (original) as YAML, for a xacro",
     "offsets": "a CSV of the joint zero offsets alone",
 }
 
 
-def export(cal: CalibratedArm, kind: str = "urdf") -> str:
+def export(cal: CalibratedArm, kind: str = "urdf", *, original: str | None = None) -> str:
     """The text of a file of the calibrated arm ``cal``, of any family.
 
     Parameters
@@ -475,7 +476,11 @@ def export(cal: CalibratedArm, kind: str = "urdf") -> str:
         A calibration (:meth:`armcal.identification.Calibration.calibrated`, or
         :func:`armcal.files.read_calibration`).
     kind : str
-        One of :data:`EXPORT_KINDS`: ``"robot"``, ``"urdf"`` or ``"offsets"``.
+        One of :data:`EXPORT_KINDS`: ``"robot"``, ``"urdf"``, ``"origins"`` or ``"offsets"``.
+    original : path, optional
+        The URDF the robot was described by: ``"urdf"`` then writes it back with only
+        its chain's joint origins calibrated (every link, mesh, inertial, limit and name
+        kept), and ``"origins"`` (which needs it) gives those origins as YAML.
 
     Returns
     -------
@@ -492,11 +497,40 @@ def export(cal: CalibratedArm, kind: str = "urdf") -> str:
         raise ArmcalError(f"no export of kind {kind!r}; the kinds are {', '.join(EXPORT_KINDS)}")
     if kind == "offsets":
         return joint_offsets_csv(cal)
+    if kind == "origins" or original is not None:
+        if original is None:
+            raise ArmcalError("the origins export needs the robot's URDF: pass original=PATH")
+        origins = _origins_of(cal, original)
+        return str(origins.yaml() if kind == "origins" else origins.urdf())
     writers = family_of(cal.model).role("exports")()
     if kind not in writers:
         raise ArmcalError(f"the {cal.model.family} family writes no {kind} file")
     text: str = writers[kind](cal)
     return text
+
+
+def _origins_of(cal: CalibratedArm, original: str) -> Any:
+    """The calibrated joint origins of the user's URDF ``original``
+    (:mod:`armcal.files.urdf_origins`), through the family's role."""
+    family = family_of(cal.model)
+    if not family.has("calibrated_origins"):
+        raise ArmcalError(
+            f"{original}: a {cal.model.family} arm is not described by a URDF chain; export "
+            "its own URDF (--urdf without --from)"
+        )
+    return family.role("calibrated_origins")(cal, original)
+
+
+def _onto_original(
+    cal: CalibratedArm, original: str, urdf_path: str | None, origins_path: str | None
+) -> dict[str, str]:
+    """The user's own URDF ``original`` with the calibrated joint origins, and/or those
+    origins as YAML, by path."""
+    origins = _origins_of(cal, original)
+    texts = {} if urdf_path is None else {urdf_path: origins.urdf()}
+    if origins_path is not None:
+        texts[origins_path] = origins.yaml()
+    return texts
 
 
 def export_files(
@@ -507,6 +541,8 @@ def export_files(
     offsets_path: str | None = None,
     ur_path: str | None = None,
     ros_path: str | None = None,
+    original: str | None = None,
+    origins_path: str | None = None,
 ) -> ExportRun:
     """The calibrated arm as a robot TOML, a URDF and/or the joint offsets, with what they
     leave out.
@@ -539,8 +575,11 @@ def export_files(
                 "nominal link geometry; the URDF or robot TOML carries the whole calibration",
             )
         )
-    if urdf_path is not None:
+    if original is not None:
+        texts.update(_onto_original(cal, original, urdf_path, origins_path))
+    elif urdf_path is not None:
         texts[urdf_path] = export(cal, "urdf")
+    if urdf_path is not None:
         values = family.role("coupled_urdf")(cal.arm)
         if values is not None:
             warnings.append(
