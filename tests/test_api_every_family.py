@@ -372,32 +372,45 @@ def test_py_typed_is_shipped():
     assert 'packages = ["src/armcal"]' in wheel
 
 
-def test_the_residual_picture_draws_every_rows_position_residual(family):
-    """The family's residual_figure role (armcal.families) draws one bar per row: its
-    Euclidean position residual in the family's dimensions, coloured by target, under the
-    line 99 % of clean rows stay below: sigma sqrt(chi2_d(0.99)), with the chi-square
-    quantile from the regularized incomplete gamma function, P(d/2, x/2) = 0.99."""
+def test_the_residual_picture_draws_every_pose_and_every_joint(family):
+    """The family's residual_figure role (armcal.families): on top one bar per row, its
+    Euclidean position residual in the family's dimensions, standing above its pose's
+    number beside the pose's other targets, under the line 99 % of clean rows stay below:
+    sigma sqrt(chi2_d(0.99)), the chi-square quantile from the regularized incomplete
+    gamma function, P(d/2, x/2) = 0.99; below, every row's residual against each joint's
+    reading in degrees."""
     from scipy.special import gammaincinv
 
     from armcal.families import family_of
 
-    rows, labels = _rows(family, family.plan(12, 3))
+    q = family.plan(12, 3)
+    rows, labels = _rows(family, q)
     points = armcal.synthesize_measurements(
         family.arm, rows.q, family.truth, 0.05, target=labels, rng=7
     )
     cal = armcal.identify(family.arm, rows.q, points, sigma=0.05, target=labels)
     fig = family_of(cal.model).role("residual_figure")(cal)
-    (ax,) = fig.axes
+    top, *joints = fig.axes
     dim = cal.model.position_dim
     assert dim == (2 if family.name == "planar" else 3)
-    bars = sorted((p.get_x() + p.get_width() / 2, p.get_height()) for p in ax.patches)
     expected = np.sqrt(np.sum(cal.residuals[:, :dim] ** 2, axis=1))
-    assert_allclose([x for x, _ in bars], np.arange(1, rows.m + 1))
-    assert_allclose([h for _, h in bars], expected, rtol=1e-12)
-    (line,) = [ln for ln in ax.lines if ln.get_linestyle() == "--"]
+    # plan_conditions: every target of every pose, pose-major; a pose's three bars share
+    # its number, 0.8 wide together.
+    pose = np.repeat(np.arange(1, q.shape[0] + 1), 3)
+    x = pose + (rows.target - 1) * 0.8 / 3
+    bars = sorted((p.get_x() + p.get_width() / 2, p.get_height()) for p in top.patches)
+    order = np.argsort(x, kind="stable")
+    assert_allclose([b for b, _ in bars], x[order], atol=1e-12)
+    assert_allclose([h for _, h in bars], expected[order], rtol=1e-12)
+    (line,) = [ln for ln in top.lines if ln.get_linestyle() == "--"]
     limit = 0.05 * math.sqrt(2.0 * gammaincinv(dim / 2.0, 0.99))
     assert_allclose(line.get_ydata(), limit, rtol=1e-9)
-    assert ax.get_xlabel() == "measurement row"
-    legend = {t.get_text() for t in ax.get_legend().get_texts()}
+    assert top.get_xlabel() == "pose"
+    legend = {t.get_text() for t in top.get_legend().get_texts()}
     targets = {f"target {label}" for label in LABELS}
-    assert legend == targets | {f"99 % of clean measurement rows below ({dim}-D)"}
+    assert legend == targets | {f"99 % of clean rows below ({dim}-D)"}
+    assert len(joints) == cal.model.n_joints
+    for j, ax in enumerate(joints):
+        (dots, _) = ax.lines
+        assert_allclose(dots.get_xdata(), np.degrees(rows.q[:, j]), rtol=1e-12)
+        assert_allclose(dots.get_ydata(), expected, rtol=1e-12)

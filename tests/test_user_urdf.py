@@ -322,3 +322,41 @@ def test_a_missing_extra_or_misnamed_joint_is_an_error(calibrated, tmp_path, cha
     assert result.returncode == 2
     (line,) = result.stderr.strip().splitlines()
     assert line.startswith("armcal: error: named.csv: line 1") and message in line, line
+
+
+def test_named_columns_are_the_urdfs_joint_values_under_a_coupled_joint_map(tmp_path):
+    """ROS publishes the URDF's joint values u = M q; with a coupled joint map (a FANUC's
+    J3 against the horizon: u3 = q2 + q3) the file's named columns are read as u and turned
+    into the controller's readings q."""
+    from armcal.files import read_measurements
+
+    robots = Path(armcal.__file__).parent / "robots"
+    robot = tmp_path / "cell.toml"
+    robot.write_text(
+        f'name = "cell"\nurdf = "{(robots / "industrial-6r.urdf").as_posix()}"\n'
+        'base_link = "base_link"\ntip_link = "flange"\n'
+        "joint_map = [[1, 0, 0, 0, 0, 0], [0, 1, 0, 0, 0, 0], [0, 1, 1, 0, 0, 0],\n"
+        "             [0, 0, 0, 1, 0, 0], [0, 0, 0, 0, 1, 0], [0, 0, 0, 0, 0, 1]]\n",
+        encoding="utf-8",
+    )
+    arm = armcal.load_robot(robot).arm
+    q = armcal.random_plan(arm, 6, rng=3)
+    u = q @ arm.joint_map.T
+    points = arm.positions(arm.conditions(q), arm.nominal)
+    lines = [",".join([*arm.joint_names, "x_mm", "y_mm", "z_mm"])]
+    lines += [",".join(repr(float(v)) for v in [*a, *p]) for a, p in zip(u, points, strict=True)]
+    path = tmp_path / "meas.csv"
+    path.write_text("\n".join(lines) + "\n", encoding="utf-8")
+    assert_allclose(read_measurements(path, arm).q, q, rtol=0, atol=1e-13)
+
+
+def test_identify_plot_draws_the_residual_figure(calibrated, tmp_path):
+    """identify --plot writes the family's residual figure as a PNG (what it plots is
+    checked in test_api_every_family, through the same role)."""
+    deg, _ = _files(tmp_path, calibrated)
+    result = run_cli(
+        tmp_path, "identify", "--robot", "ur5.toml", "--measurements", deg, "--sigma", "0.01",
+        "--plot", "residuals.png",
+    )  # fmt: skip
+    assert result.returncode == 0, result.stderr
+    assert (tmp_path / "residuals.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"

@@ -493,7 +493,11 @@ _JOINTS = Column(
     "deg (mm for a prismatic joint)",
     True,
     "joint commands, one column per joint: q{j}_deg for a revolute joint, q{j}_mm for a "
-    "prismatic one (a slide, read in mm); a column in the other unit is an error",
+    "prismatic one (a slide, read in mm); a column in the other unit is an error. Or, for "
+    "a robot described by a URDF, named by its joints as ROS publishes them: "
+    "shoulder_pan_joint in radians (a slide in metres), shoulder_pan_joint_deg or _rad "
+    "(_mm or _m), in any order, matched by name; every joint of the chain needs one and "
+    "a joint off the chain is an error",
 )
 _POSE = Column(
     "pose", "text", False, "pose label: rows with the same label are one pose (same joint values)"

@@ -291,6 +291,10 @@ def identify(args: argparse.Namespace) -> None:
         text += "\n" + format_cross_validation(summary, folds)
     if args.output is not None:
         atomic_write(args.output, partial(write_json, document))
+    if args.plot is not None:
+        from ..plotting import save_figure  # matplotlib only when asked for
+
+        save_figure(spec.family.role("residual_figure")(cal), args.plot)
     emit(args, document, text, run.warnings)
 
 

@@ -242,11 +242,17 @@ COMMAND_TABLE: tuple[Command, ...] = (
                 help="fit the geometry only, even when the robot file has [elastostatic] (to see "
                 "what the joints' compliance explains)",
             ),
+            option(
+                "--plot",
+                metavar="FIGURE",
+                help="draw every pose's residual (one bar per target, in the arm's 2 or 3 "
+                f"dimensions) and every row's residual against each joint {_FIGURE}",
+            ),
             _FIX,
             *_robot_seed_json("calibration JSON to write", required=True),
         ),
         inputs=("robot", "measurements"),
-        outputs=("output",),
+        outputs=("output", "plot"),
     ),
     Command(
         "validate",

@@ -303,10 +303,12 @@ def _named(column: str, names: Sequence[str]) -> tuple[int, str] | None:
 
 def named_joint_columns(
     path, header: Sequence[str], header_line: int, arm: FitModel, allowed: Sequence[str]
-) -> tuple[list[str], np.ndarray]:
+) -> tuple[list[str], np.ndarray, bool]:
     """The header with joint columns named by ``arm``'s joints (its URDF's names) renamed to
-    ``q{j}_deg`` / ``q{j}_mm``, and every joint's factor ``(n,)`` to that unit (1 where the
-    file already uses it): the module notes' other way to name joints.
+    ``q{j}_deg`` / ``q{j}_mm``, every joint's factor ``(n,)`` to that unit (1 where the file
+    already uses it), and whether the file names them so: the module notes' other way to
+    name joints.  Named columns are the URDF's joint values ``u = M q`` (what ROS
+    publishes), which the caller turns into the readings ``q`` under a coupled joint map.
 
     A file names all its joints one way.  Named, every joint of the chain needs a column
     and every other column must be one the file takes: a joint the chain does not have
@@ -318,7 +320,7 @@ def named_joint_columns(
     factors = np.ones(len(names))
     found = {c: hit for c, h in enumerate(header) if (hit := _named(h, names)) is not None}
     if not found or any(JOINT_COLUMN.match(h) for h in header):
-        return list(header), factors  # q{j}_deg columns (a mixture: their check names it)
+        return list(header), factors, False  # q{j}_deg columns (a mixture: their check names it)
     where = f"line {header_line}"
     out = list(header)
     for c, (j, suffix) in found.items():
@@ -353,4 +355,4 @@ def named_joint_columns(
                 f"({', '.join(names)}) nor a column the file takes; drop it (a robot's "
                 "/joint_states lists every joint, the calibrated chain only its own)",
             )
-    return out, factors
+    return out, factors, True

@@ -396,7 +396,7 @@ def _read_csv(
         if other:
             raise fail(path, f"not a {what} CSV file: {other}expected a header line {layout}")
     parsed = parse_csv(path, text, optional, layout)
-    header, factors = named_joint_columns(
+    header, factors, named = named_joint_columns(
         path, parsed.header, parsed.header_line, arm, expected[arm.n_joints :] + extras
     )
     parsed = replace(parsed, header=header)
@@ -404,7 +404,9 @@ def _read_csv(
     _check_required(path, text, parsed, arm, expected, what, arm_from, layout)
     lines = parsed.lines
     values, numbers, texts = _columns(path, parsed, expected, optional, optional_numeric)
-    values[:, : arm.n_joints] *= factors  # named columns in radians or metres
+    if named:  # the URDF's joint values u = M q, in radians or metres: the readings q
+        u = values[:, : arm.n_joints] * factors
+        values[:, : arm.n_joints] = np.linalg.solve(arm.joint_map, u.T).T
     beyond = _beyond_limits(path, arm, what, values, lines, expected, measured)
     q_file = values[:, : arm.n_joints]
     if what in ("plan", "program"):
