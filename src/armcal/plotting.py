@@ -29,6 +29,7 @@ from .numerics import rms
 
 __all__ = [
     "clean_limit",
+    "figure_png",
     "plot_accuracy_curves",
     "plot_error_map",
     "plot_plan",
@@ -863,6 +864,16 @@ def save_figure(fig: Figure, path: str | os.PathLike) -> None:
     FigureCanvasAgg(fig)  # attach the Agg canvas: no GUI backend is ever involved
     kind = FIGURE_FORMATS.get(os.path.splitext(os.fspath(path))[1].lower(), "png")
     atomic_write(path, lambda handle: fig.savefig(handle, format=kind, dpi=120))
+
+
+def figure_png(fig: Figure) -> bytes:
+    """``fig`` as PNG bytes (for a page that embeds it)."""
+    import io
+
+    FigureCanvasAgg(fig)
+    buffer = io.BytesIO()
+    fig.savefig(buffer, format="png", dpi=100)
+    return buffer.getvalue()
 
 
 def planar_plan_figure(robot: Any, run: Any, *, seed: int = 0) -> Figure:

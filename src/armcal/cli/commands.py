@@ -20,7 +20,7 @@ from typing import Any
 import numpy as np
 
 from ..demo import demo_rigid_warning
-from ..errors import ArmcalError
+from ..errors import ArmcalError, unique_warnings
 from ..files import (
     BUILTIN_ROBOTS,
     BUILTIN_SPATIAL_ROBOTS,
@@ -42,6 +42,7 @@ from ..files import (
 )
 from ..formats import format_reference
 from ..models import FitModel
+from ..models.wording import held_sentence
 from ..progress import ProgressBar
 from ..report import (
     acceptance_report,
@@ -74,7 +75,7 @@ from ..workflow import (
     test_poses,
     validate_measurements,
 )
-from .output import CLI_ACTIONS, emit, print_warnings
+from .output import CLI_ACTIONS, emit, print_warnings, warning_dicts
 
 __all__ = [
     "REQUIREMENT_OPTIONS",
@@ -291,10 +292,23 @@ def identify(args: argparse.Namespace) -> None:
         text += "\n" + format_cross_validation(summary, folds)
     if args.output is not None:
         atomic_write(args.output, partial(write_json, document))
-    if args.plot is not None:
-        from ..plotting import save_figure  # matplotlib only when asked for
+    if args.plot is not None or args.report is not None:
+        from ..plotting import figure_png, save_figure  # matplotlib only when asked for
 
-        save_figure(spec.family.role("residual_figure")(cal), args.plot)
+        figure = spec.family.role("residual_figure")(cal)
+        if args.plot is not None:
+            save_figure(figure, args.plot)
+        if args.report is not None:
+            from ..report.html import calibration_html
+
+            page = calibration_html(
+                {**document, "warnings": warning_dicts(unique_warnings(run.warnings))},
+                text,
+                {"Every pose's residual, and every row's against each joint": figure_png(figure)},
+                source=args.measurements,
+                held=[held_sentence(held) for held in cal.model.held_reasons],
+            )
+            atomic_write(args.report, page)
     emit(args, document, text, run.warnings)
 
 
@@ -305,21 +319,35 @@ def validate(args: argparse.Namespace) -> None:
         args.measurements, cal.arm, arm_from=f"the calibration {args.calibration}"
     )
     run = validate_measurements(cal, meas, source=args.measurements, iso9283=args.iso9283)
-    if args.plot is not None:
-        from ..plotting import plot_validation, save_figure  # matplotlib only when asked for
+    figures = {}
+    if args.plot is not None or args.report is not None:
+        from ..plotting import figure_png, plot_validation, save_figure  # only when asked for
 
+        pose = None if meas.targets is None else meas.labels  # a pose's rows share its label
+        figures["Errors before and after calibration"] = plot_validation(
+            cal.arm, meas.q, run.validation, pose=pose
+        )
         if run.acceptance is not None:
             from ..plotting_acceptance import plot_acceptance
 
-            figure = plot_acceptance(run.acceptance)
-        else:
-            pose = None if meas.targets is None else meas.labels  # a pose's rows share its label
-            figure = plot_validation(cal.arm, meas.q, run.validation, pose=pose)
-        save_figure(figure, args.plot)
+            figures["ISO 9283 pose accuracy and repeatability"] = plot_acceptance(run.acceptance)
+        if args.plot is not None:
+            save_figure(list(figures.values())[-1], args.plot)
     document, text = validation_report(cal, run.validation, meas, per_pose=args.per_pose)
     if run.acceptance is not None:
         document["iso9283"], lines = acceptance_report(run.acceptance)
         text += "\n" + "\n".join(lines)
+    if args.report is not None:
+        from ..report.html import validation_html
+
+        page = validation_html(
+            {**document, "warnings": warning_dicts(unique_warnings(run.warnings))},
+            text,
+            {caption: figure_png(figure) for caption, figure in figures.items()},
+            source=args.measurements,
+            calibration=args.calibration,
+        )
+        atomic_write(args.report, page)
     if args.plot is not None:
         text += f"\nwrote {args.plot}"
     emit(args, document, text, run.warnings)

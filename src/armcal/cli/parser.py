@@ -248,11 +248,17 @@ COMMAND_TABLE: tuple[Command, ...] = (
                 help="draw every pose's residual (one bar per target, in the arm's 2 or 3 "
                 f"dimensions) and every row's residual against each joint {_FIGURE}",
             ),
+            option(
+                "--report",
+                metavar="HTML",
+                help="write the calibration as one self-contained HTML page to hand over: the "
+                "verdict, the data, what they identify, parameters, warnings and figures",
+            ),
             _FIX,
             *_robot_seed_json("calibration JSON to write", required=True),
         ),
         inputs=("robot", "measurements"),
-        outputs=("output", "plot"),
+        outputs=("output", "plot", "report"),
     ),
     Command(
         "validate",
@@ -279,9 +285,16 @@ COMMAND_TABLE: tuple[Command, ...] = (
                 help="draw the error vectors on the workspace, or with --iso9283 every pose's AP "
                 f"and RP {_FIGURE}",
             ),
+            option(
+                "--report",
+                metavar="HTML",
+                help="write the validation as one self-contained HTML page to hand over: the "
+                "verdict on the held-out poses, errors before and after, warnings, figures "
+                "and, with --iso9283, the acceptance test",
+            ),
         ),
         inputs=("calibration", "measurements"),
-        outputs=("plot",),
+        outputs=("plot", "report"),
     ),
     Command(
         "compensate",
