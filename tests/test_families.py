@@ -255,7 +255,14 @@ def test_certify_takes_a_spatial_arm_as_loaded():
 @pytest.mark.parametrize("name", ["paper-2link", "industrial-6r"])
 def test_one_demo_entry_tells_either_family_story(name):
     """``armcal.run_demo`` runs the family's story through the registry, as ``armcal demo``
-    does: a calibration file among its files, and a report that names the robot."""
-    story = armcal.run_demo(load_robot(name), poses=12 if name == "industrial-6r" else 8)
+    does: a calibration file among its files, a report that names the robot, and its
+    progress reported after each of its six stages (a bar on a terminal)."""
+    seen: list[tuple[int, int]] = []
+    story = armcal.run_demo(
+        load_robot(name),
+        poses=12 if name == "industrial-6r" else 8,
+        progress=lambda done, total: seen.append((done, total)),
+    )
     assert name in story.text
     assert "calibration.json" in story.files
+    assert seen == [(k, 6) for k in range(1, 7)]

@@ -30,6 +30,7 @@ from .files import (
 from .identification import Calibration, identify
 from .models import CalibratedArm, PlanarArm, forward_kinematics
 from .numerics import rms
+from .progress import ProgressCallback, steps
 from .report import format_calibration
 from .synthesis import synthesize_measurements
 from .validation import Validation, validate
@@ -45,6 +46,10 @@ __all__ = [
     "report_head",
     "run_demo",
 ]
+
+#: The story's stages, for a progress bar: measure, identify, validate, compensate, the
+#: last check, the report.
+DEMO_STEPS = 6
 
 #: The gross error put on one measurement (a bumped reflector), mm in x and y.
 OUTLIER_MM = (1.2, -0.9)
@@ -128,6 +133,7 @@ def run_demo(
     sigma: float = 0.1,
     seed: int = 0,
     words: Mapping[str, str] = ACTIONS,
+    progress: ProgressCallback | None = None,
 ) -> Demo:
     """Calibrate a virtual robot from design to export; nothing is written here.
 
@@ -155,18 +161,25 @@ def run_demo(
     # program, error map.
     rng = np.random.default_rng(seed)
     model = arm.replace(sigma=sigma)
+    step = steps(progress, DEMO_STEPS)
     measured = _measure(arm, model, truth, poses, sigma, rng)
+    step()
     cal = identify(model, measured.plan.q, measured.xy, robust=True, pose_labels=measured.labels)
+    step()
     calibrated = cal.calibrated()
     document = calibration_document(cal, words=words)
     validated = _validate(arm, calibrated, truth, sigma, rng)
+    step()
     compensated = _compensate(arm, calibrated, truth, rng)
+    step()
     error_map = _error_map(arm, cal.params, truth, rng)
+    step()
     story = _Story(measured, cal, calibrated, validated, compensated, error_map)
     text = "\n".join(_lines(arm, story, truth, sigma=sigma, seed=seed, words=words))
     files = _files(arm, story, to_json(document))
     report = _report(arm, text, error_map.before, error_map.after)
     files["report.md"] = report
+    step()
     return Demo(text, report, files, document, cal.warnings)
 
 
@@ -451,10 +464,13 @@ def planar_demo(
     sigma: float | None = None,
     seed: int = 0,
     words: Mapping[str, str] = ACTIONS,
+    progress: ProgressCallback | None = None,
 ) -> tuple[Any, str]:
     """The planar story (:func:`armcal.demo.run_demo`) and what it writes."""
     truth_ = truth_of(robot.arm)
     sigma = design_sigma(robot.arm) if sigma is None else sigma
     poses = PLANAR_DEMO_POSES if poses is None else poses
-    result = run_demo(robot.arm, truth_, poses=poses, sigma=sigma, seed=seed, words=words)
+    result = run_demo(
+        robot.arm, truth_, poses=poses, sigma=sigma, seed=seed, words=words, progress=progress
+    )
     return result, DEMO_KINDS

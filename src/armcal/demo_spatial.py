@@ -36,6 +36,7 @@ from .identification import Calibration, identify
 from .models import CalibratedArm, Conditions, SpatialArm
 from .noise import NoiseModel, TrackerNoise
 from .numerics import rms
+from .progress import ProgressCallback, steps
 from .report import format_calibration, format_cross_validation
 from .synthesis import synthesize_measurements
 from .validation import cross_validate, validate
@@ -47,6 +48,10 @@ __all__ = [
     "SPATIAL_DEMO_POSES",
     "run_spatial_demo",
 ]
+
+#: The story's stages, for a progress bar: measure, identify, validate, compensate, the
+#: last check, the report.
+DEMO_STEPS = 6
 
 #: The three reflector nests on the flange (mm, flange frame): a plate 150 mm out, the
 #: nests 100 mm apart; the fit is not told where they are.
@@ -97,6 +102,7 @@ def run_spatial_demo(
     sigma: float | None = None,
     seed: int = 0,
     words: Mapping[str, str] = ACTIONS,
+    progress: ProgressCallback | None = None,
 ) -> Demo:
     """Calibrate a virtual spatial arm from measurements to export; nothing is written here.
 
@@ -121,18 +127,24 @@ def run_spatial_demo(
     rng = np.random.default_rng(seed)
     model = _tracked(arm, sigma)
     truth = truth_of(model.replace(target_positions=np.array(list(DEMO_REFLECTORS.values()))))
+    step = steps(progress, DEMO_STEPS)
     measured = _measure(model, truth, random_plan(model, poses, rng=rng), rng)
     rows, points = measured.rows, measured.points
+    step()
     cal = identify(model, rows.q, points, target=rows.target, pose_labels=measured.poses)
+    step()
     calibrated = cal.calibrated()
     seen = cal.model.expressed(rows, truth)
     groups = np.repeat(np.arange(poses), len(DEMO_REFLECTORS))
     folds = cross_validate(
         model, rows.q, points, FOLDS, groups=groups, target=rows.target, rng=rng
     ).summary()
+    step()
     fresh = _measure(model, truth, random_plan(model, VALIDATION_POSES, rng=rng), rng)
     check = validate(calibrated, fresh.rows.q, fresh.points, target=fresh.rows.target).summary()
+    step()
     compensated = _compensate(model, calibrated, truth, seen, rng)
+    step()
     story = _Story(measured, cal, seen, folds, fresh, check, compensated)
     text = "\n".join(_lines(arm, story, truth, poses=poses, seed=seed, words=words))
     document = calibration_document(cal, words=words)
@@ -145,6 +157,7 @@ def run_spatial_demo(
         ]
     )
     files["report.md"] = report
+    step()
     return Demo(text, report, files, document, cal.warnings)
 
 
@@ -310,6 +323,7 @@ def spatial_demo(
     sigma: float | None = None,
     seed: int = 0,
     words: Mapping[str, str] = ACTIONS,
+    progress: ProgressCallback | None = None,
 ) -> tuple[Any, str]:
     """The six-axis story (:func:`armcal.demo_spatial.run_spatial_demo`): a tracker and
     three reflectors; and what it writes."""
@@ -320,5 +334,6 @@ def spatial_demo(
         sigma=sigma,
         seed=seed,
         words=words,
+        progress=progress,
     )
     return result, DEMO_KINDS

@@ -52,6 +52,7 @@ ACTIONS: dict[str, str] = {
     "hold-terms": "fixed = [...] in the robot file's [identify] table, or calibrate(..., "
     "fixed=...)",
     "design": "(armcal.design)",
+    "own-urdf": 'export its own URDF (export(cal, "urdf") without original)',
     "choose-tip": "name the tip link (tip_link in a robot TOML, or load_spatial_robot(..., "
     "tip_link=LINK))",
     "choose-base": "name the base link (base_link in a robot TOML, or load_spatial_robot(..., "

@@ -11,7 +11,7 @@ import time
 from collections.abc import Callable
 from typing import TextIO
 
-__all__ = ["ProgressBar", "ProgressCallback", "share"]
+__all__ = ["ProgressBar", "ProgressCallback", "share", "steps"]
 
 #: ``progress(done, total)``, called as work advances.
 ProgressCallback = Callable[[int, int], None]
@@ -92,3 +92,25 @@ def share(progress: ProgressCallback | None, start: float, stop: float) -> Progr
         report(round(1000 * (start + (stop - start) * fraction)), 1000)
 
     return part
+
+
+def steps(progress: ProgressCallback | None, total: int) -> Callable[[], None]:
+    """A callable that reports one more of ``total`` steps done to ``progress`` each time
+    it is called (nothing without ``progress``): for work made of a few long stages.
+
+    Examples
+    --------
+    >>> seen = []
+    >>> step = steps(lambda done, total: seen.append((done, total)), 3)
+    >>> step(); step()
+    >>> seen
+    [(1, 3), (2, 3)]
+    """
+    done = [0]
+
+    def step() -> None:
+        done[0] += 1
+        if progress is not None:
+            progress(done[0], total)
+
+    return step

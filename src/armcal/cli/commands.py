@@ -526,6 +526,7 @@ def demo(args: argparse.Namespace) -> None:
         sigma=args.sigma,
         seed=args.seed,
         words=CLI_ACTIONS,
+        progress=ProgressBar("demo"),
     )
     lines = [result.text]
     if args.output is not None:

@@ -30,6 +30,7 @@ CLI_ACTIONS = {
     "geometry-only": "--no-compliance fits the geometry only",
     "hold-terms": "--fix NAME, or fixed = [...] in the robot file's [identify] table",
     "design": "(armcal design)",
+    "own-urdf": "export its own URDF (--urdf without --from)",
     "choose-tip": "name the tip link with --tip-link LINK (or tip_link in a robot TOML)",
     "choose-base": "name the base link with --base-link LINK (or base_link in a robot TOML)",
     "method": "--method {}",

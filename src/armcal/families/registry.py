@@ -94,7 +94,8 @@ class Family:
     residual_figure
         ``(calibration) -> Figure``: a fit's residuals drawn.
     demo
-        ``(robot, truth, *, poses, sigma, seed, words) -> Demo``: the family's story.
+        ``(robot, truth, *, poses, sigma, seed, words, progress) -> Demo``: the family's
+        story, with ``progress(done, 6)`` after each of its stages.
     """
 
     name: str
@@ -298,6 +299,7 @@ def run_demo(
     poses: int | None = None,
     sigma: float | None = None,
     seed: int = 0,
+    progress: Callable[[int, int], None] | None = None,
 ) -> Any:
     """The whole story on a robot of any family, nothing written: its family's demo
     (planar: design, measure, identify, validate, compensate, export; spatial: a tracker
@@ -317,5 +319,7 @@ def run_demo(
         found: np.ndarray = read_truth(robot, arm, truth, geometry_only=True)
         return found
 
-    story, _ = family.role("demo")(robot, truth_of, poses=poses, sigma=sigma, seed=seed)
+    story, _ = family.role("demo")(
+        robot, truth_of, poses=poses, sigma=sigma, seed=seed, progress=progress
+    )
     return story

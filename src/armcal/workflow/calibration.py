@@ -515,8 +515,8 @@ def _origins_of(cal: CalibratedArm, original: str) -> Any:
     family = family_of(cal.model)
     if not family.has("calibrated_origins"):
         raise ArmcalError(
-            f"{original}: a {cal.model.family} arm is not described by a URDF chain; export "
-            "its own URDF (--urdf without --from)"
+            f"{original}: a {cal.model.family} arm is not described by a URDF chain; "
+            f"{action('own-urdf')}"
         )
     return family.role("calibrated_origins")(cal, original)
 
