@@ -1,5 +1,5 @@
 # Two entry points, each self-contained on a machine with python3 and make:
-#   make demo   set up .venv and run the calibration workflow on the built-in paper-4link arm
+#   make demo   set up .venv and run the calibration workflow on two built-in arms (planar, six-axis)
 #               and on the six-axis industrial-6r (a laser tracker, three reflectors)
 #   make test   set up .venv with the test extras and run lint, types and tests
 #   make test-slow   the few long end-to-end checks (CI runs them after make test)

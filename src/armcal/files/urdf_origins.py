@@ -27,7 +27,7 @@ from __future__ import annotations
 
 import re
 import xml.etree.ElementTree as ET
-from collections.abc import Iterator
+from collections.abc import Iterator, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -39,7 +39,7 @@ from ..models import CalibratedArm, SerialChain, SpatialArm, UrdfJoint, matrix_r
 from ..models.spatial.chain import axis_frame, rpy_matrix, transform
 from .urdf import parse_urdf, urdf_joint, urdf_tree
 
-__all__ = ["CalibratedOrigins", "calibrated_origins"]
+__all__ = ["CalibratedOrigins", "calibrated_origins", "rpy_near"]
 
 #: A URDF is in metres, armcal in mm.
 _MM_PER_M = 1000.0
@@ -173,6 +173,52 @@ class CalibratedOrigins:
         return "\n".join(lines) + "\n"
 
 
+def _clean(values: np.ndarray) -> np.ndarray:
+    """``values`` with magnitudes below 1e-15 (round-off of a zero) set to 0."""
+    return np.where(np.abs(values) < 1e-15, 0.0, values)
+
+
+def rpy_near(rotation: np.ndarray, start: Sequence[float]) -> np.ndarray:
+    """The roll, pitch and yaw of ``rotation`` nearest ``start`` (rad).
+
+    Near a pitch of +-90 deg (a URDF's joint turned onto another axis, common) only
+    roll - yaw or roll + yaw is fixed, and :func:`matrix_rpy` picks one solution of
+    many; a calibrated origin written that way would look nothing like the original.
+    Gauss-Newton from the original's angles, with the minimum-norm step where the
+    Jacobian loses rank, reaches the rotation by the smallest change of the angles.
+
+    Examples
+    --------
+    >>> start = [0.0, -np.pi / 2, -np.pi / 2]
+    >>> turned = rpy_matrix(start) @ rpy_matrix([1e-3, 0.0, 0.0])
+    >>> near = rpy_near(turned, start)
+    >>> bool(np.allclose(rpy_matrix(near), turned, rtol=0, atol=1e-15))
+    True
+    >>> bool(np.max(np.abs(near - start)) < 2e-3)
+    True
+    """
+    axes = np.eye(3)
+    rpy = np.array(start, dtype=float)
+    for _ in range(50):
+        miss = (rpy_matrix(rpy) - rotation).ravel()
+        if np.max(np.abs(miss)) <= 1e-16:
+            break
+        rz, ry, rx = (rpy_matrix(a) for a in ([0, 0, rpy[2]], [0, rpy[1], 0], [rpy[0], 0, 0]))
+        turns = [np.cross(np.eye(3), axes[i]) for i in range(3)]  # K e_i: skew of each axis
+        jac = np.stack(
+            [
+                (rz @ ry @ rx @ turns[0]).ravel(),
+                (rz @ ry @ turns[1] @ rx).ravel(),
+                (rz @ turns[2] @ ry @ rx).ravel(),
+            ],
+            axis=1,
+        )
+        rpy -= np.linalg.lstsq(jac, miss, rcond=1e-10)[0]
+    if np.max(np.abs(rpy_matrix(rpy) - rotation)) > 1e-14:
+        return matrix_rpy(rotation)  # a large turn: the closed form's angles
+    return rpy
+
+
 def _ancestors(
     path: Path, text: str, parent_joint: dict[str, ET.Element], link: str
 ) -> Iterator[tuple[str, np.ndarray]]:
@@ -224,8 +270,9 @@ def calibrated_origins(cal: CalibratedArm, original: str | Path) -> CalibratedOr
         turn = transform(axis_frame(read.axis))
         error = np.linalg.solve(chain.origins[k], calibrated.origins[k])
         new = origin @ turn @ error @ np.linalg.inv(turn)
-        xyz.append(new[:3, 3] / _MM_PER_M)
-        rpy.append(matrix_rpy(new[:3, :3]))
+        # Round-off of exact zeros (1e-20 m) is written as 0: a reader's file stays clean.
+        xyz.append(_clean(new[:3, 3] / _MM_PER_M))
+        rpy.append(_clean(rpy_near(new[:3, :3], read.rpy)))
         moved = np.max(np.abs(new - origin)[:3, :3]) > _UNCHANGED
         changed.append(bool(moved or np.max(np.abs(new - origin)[:3, 3]) > _UNCHANGED))
     return CalibratedOrigins(
