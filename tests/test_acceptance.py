@@ -15,6 +15,7 @@ import json
 
 import numpy as np
 import pytest
+from numpy.testing import assert_allclose
 
 from armcal.acceptance import ISO_CYCLES, pose_characteristics, pose_characteristics_warnings
 from armcal.errors import ArmcalError
@@ -180,3 +181,35 @@ def test_a_6_dof_instrument_s_orientation_accuracy_and_repeatability():
     summary = found.summary()
     assert summary["rp_orientation_deg"] == pytest.approx(np.degrees(2e-3 * np.sqrt(3)))
     assert summary["ap_before_orientation_deg"] == pytest.approx(np.degrees(7e-3))
+
+
+def test_the_iso9283_figure_plots_ap_and_rp_on_linear_axes_in_the_robots_frame(
+    tmp_path, calibrated
+):
+    """The figure's data: AP before and after, then AP after beside RP, on linear axes
+    from 0; the AP components turned into the robot's base frame, R^T AP with R the
+    tracker's turn, built here from the calibration's base.rx, ry, rz as extrinsic x-y-z
+    angles by scipy (independently of armcal's own rotations)."""
+    from scipy.spatial.transform import Rotation
+
+    from armcal.files import read_calibration, read_measurements
+    from armcal.plotting_acceptance import plot_acceptance
+    from armcal.workflow import validate_measurements
+
+    _cycles_file(tmp_path, poses=4, cycles=6, seed=5)
+    cal = read_calibration(calibrated)
+    meas = read_measurements(tmp_path / "iso.csv", cal.arm)
+    found = validate_measurements(cal, meas, iso9283=True).acceptance
+    assert found is not None
+    before_ax, after_ax, parts = plot_acceptance(found).axes
+    heights = [p.get_height() for p in before_ax.patches]
+    assert_allclose(heights, [*found.accuracy_before_mm, *found.accuracy_after_mm], rtol=1e-12)
+    heights = [p.get_height() for p in after_ax.patches]
+    assert_allclose(heights, [*found.accuracy_after_mm, *found.repeatability_mm], rtol=1e-12)
+    for ax in (before_ax, after_ax):
+        assert ax.get_yscale() == "linear" and ax.get_ylim()[0] == 0.0
+    turn = Rotation.from_euler("xyz", cal.params[3:6]).as_matrix()
+    robot = found.accuracy_after @ turn  # rows: (R^T v)^T
+    for axis, line in enumerate(parts.lines[:3]):
+        assert_allclose(line.get_ydata(), robot[:, axis], rtol=0, atol=1e-9)
+    assert parts.get_ylabel() == "mm (robot base frame)"

@@ -32,10 +32,14 @@ point); the test's figures are its worst pose.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from .errors import ArmcalError, ArmcalWarning
+
+if TYPE_CHECKING:
+    from .models import Conditions, FitModel
 
 __all__ = [
     "ISO_CYCLES",
@@ -43,6 +47,7 @@ __all__ = [
     "PoseCharacteristics",
     "pose_characteristics",
     "pose_characteristics_warnings",
+    "robot_turn",
 ]
 
 #: Cycles per pose that ISO 9283 prescribes for pose accuracy and repeatability (clause 6.9).
@@ -93,6 +98,16 @@ class PoseCharacteristics:
     orientation_before: np.ndarray | None = None
     orientation_after: np.ndarray | None = None
     orientation_repeatability: np.ndarray | None = None
+    robot_turn: np.ndarray | None = None
+
+    @property
+    def accuracy_after_robot(self) -> np.ndarray:
+        """``(k, d)``: :attr:`accuracy_after` in the robot's base frame (``R^T AP`` with
+        :attr:`robot_turn` ``R``, the instrument's turn from the robot's frame; as measured
+        where it is unknown)."""
+        if self.robot_turn is None:
+            return self.accuracy_after
+        return self.accuracy_after @ self.robot_turn
 
     @property
     def names(self) -> tuple[str, ...]:
@@ -246,6 +261,22 @@ def pose_characteristics(
         orientation_after=None if turned is None else turned[1],
         orientation_repeatability=None if turned is None else turned[2],
     )
+
+
+def robot_turn(model: FitModel, conditions: Conditions, params: np.ndarray) -> np.ndarray:
+    """The rotation ``R`` ``(d, d)`` from the robot's base frame to the instrument's, for
+    any family: the model's points at ``params`` and with the instrument's pose taken out
+    (:meth:`~armcal.models.interface.FitModel.in_robot_frame`) differ by one rigid motion,
+    whose turn the SVD of their cross-covariance gives (Kabsch)."""
+    robot_model, robot_params = model.in_robot_frame(params)
+    dim = model.position_dim
+    seen = np.asarray(model.positions(conditions, params))[..., :dim].reshape(-1, dim)
+    own = np.asarray(robot_model.positions(conditions, robot_params))[..., :dim].reshape(-1, dim)
+    a, b = own - own.mean(axis=0), seen - seen.mean(axis=0)
+    u, _, vt = np.linalg.svd(a.T @ b)
+    flip = np.eye(dim)
+    flip[-1, -1] = np.sign(np.linalg.det(u @ vt))
+    return (u @ flip @ vt).T
 
 
 def pose_characteristics_warnings(found: PoseCharacteristics) -> list[ArmcalWarning]:

@@ -16,35 +16,42 @@ __all__ = ["plot_acceptance"]
 
 
 def plot_acceptance(found: PoseCharacteristics) -> Figure:
-    """Two panels: every pose's pose accuracy ``AP_P`` against the nominal and the
-    calibrated model, with its repeatability ``RP_l`` (mm, log scale: before and after
-    calibration differ by orders of magnitude); and the components ``AP_x, AP_y, AP_z``
-    after calibration, whose signs show a systematic error the model misses."""
-    fig = Figure(figsize=(10.0, 4.2), layout=ConstrainedLayoutEngine())
-    left, right = fig.subplots(1, 2, gridspec_kw={"width_ratios": [3, 2]})
+    """Three panels on linear axes: every pose's pose accuracy ``AP_P`` of the nominal arm
+    and of the calibrated model; the calibrated model's ``AP_P`` beside the repeatability
+    ``RP_l`` on their own scale (after calibration they are of one size, and a linear axis
+    shows by how much one exceeds the other); and the components of ``AP`` after
+    calibration in the robot's base frame (:attr:`PoseCharacteristics.accuracy_after_robot`),
+    whose signs show a systematic error the model misses."""
+    fig = Figure(figsize=(12.0, 4.2), layout=ConstrainedLayoutEngine())
+    before_ax, after_ax, parts = fig.subplots(1, 3, gridspec_kw={"width_ratios": [3, 3, 2]})
     names = found.names
     x = np.arange(len(names))
-    width = 0.27
-    left.bar(
-        x - width,
-        found.accuracy_before_mm,
-        width,
+    turn = 45 if len(names) > 8 else 0
+    width = 0.38
+    before_ax.bar(
+        x - width / 2, found.accuracy_before_mm, width, color="C3",
         label="AP, nominal arm (registered on its own)",
-        color="C3",
+    )  # fmt: skip
+    before_ax.bar(
+        x + width / 2, found.accuracy_after_mm, width, color="C0", label="AP, calibrated"
     )
-    left.bar(x, found.accuracy_after_mm, width, label="AP, calibrated model", color="C0")
-    left.bar(x + width, found.repeatability_mm, width, label="RP", color="C2")
-    left.set_yscale("log")
-    left.set_xticks(x, names, rotation=45 if len(names) > 8 else 0, ha="right")
-    left.set_ylabel("mm")
-    left.set_title(f"ISO 9283, {int(found.cycles.min())} cycles or more per pose")
-    left.legend(fontsize="small", ncols=3, loc="lower center", bbox_to_anchor=(0.5, 1.08))
+    before_ax.set_title(f"ISO 9283 pose accuracy, {int(found.cycles.min())} cycles or more")
+    after_ax.bar(x - width / 2, found.accuracy_after_mm, width, color="C0", label="AP, calibrated")
+    after_ax.bar(x + width / 2, found.repeatability_mm, width, color="C2", label="RP")
+    after_ax.set_title("after calibration: accuracy and repeatability")
+    for ax in (before_ax, after_ax):
+        ax.set_xticks(x, names, rotation=turn, ha="right" if turn else "center")
+        ax.set_ylabel("mm")
+        ax.set_ylim(bottom=0.0)
+        ax.legend(fontsize="small", loc="upper right")
     d = found.accuracy_after.shape[-1]
+    robot = found.accuracy_after_robot
+    frame = "robot base frame" if found.robot_turn is not None else "instrument frame"
     for axis, colour in zip(range(d), ("C0", "C1", "C2"), strict=False):
-        right.plot(x, found.accuracy_after[:, axis], "o-", color=colour, label=f"AP_{'xyz'[axis]}")
-    right.axhline(0.0, color="0.6", lw=0.8)
-    right.set_xticks(x, names, rotation=45 if len(names) > 8 else 0, ha="right")
-    right.set_ylabel("mm (instrument frame)")
-    right.set_title("AP components after calibration")
-    right.legend(fontsize="small", ncols=3, loc="lower center", bbox_to_anchor=(0.5, 1.08))
+        parts.plot(x, robot[:, axis], "o-", color=colour, label=f"AP_{'xyz'[axis]}")
+    parts.axhline(0.0, color="0.6", lw=0.8)
+    parts.set_xticks(x, names, rotation=turn, ha="right" if turn else "center")
+    parts.set_ylabel(f"mm ({frame})")
+    parts.set_title("AP components after calibration")
+    parts.legend(fontsize="small", ncols=3, loc="upper right")
     return fig

@@ -21,6 +21,7 @@ from ..acceptance import (
     PoseCharacteristics,
     pose_characteristics,
     pose_characteristics_warnings,
+    robot_turn,
 )
 from ..compensation import Compensation, Payload, compensate
 from ..errors import (
@@ -339,6 +340,9 @@ def validate_measurements(
                 meas.q, result.positions, result.before, result.after, meas.labels,
                 meas.targets, meas.rows, turns,
             )  # fmt: skip
+            sample = cal.model.plan_conditions(meas.q[: min(len(meas.q), 64)])
+            turn = robot_turn(cal.model, sample, cal.params)
+            acceptance = replace(acceptance, robot_turn=turn)
         except ArmcalError as exc:
             raise prefixed(source, exc) from None
         warnings += pose_characteristics_warnings(acceptance)
