@@ -412,6 +412,20 @@ def test_a_spatial_plan_s_picture_is_written(tmp_path):
     assert np.max(variance) <= certificate.max_variance * (1 + 1e-9)
     save_figure(figure, tmp_path / "plan.png")
     assert (tmp_path / "plan.png").stat().st_size > 10_000
+    # The arm panel: every flange numbered by its row, where the chain puts it (the
+    # flange frame's origin, from the URDF's own product of origins and joint motions,
+    # SerialChain.forward), on axes of equal scale.
+    sticks = figure.axes[0]
+    flanges = model.arm.chain.forward(q @ model.arm.joint_map.T)[:, :3, 3]
+    labels = {int(t.get_text()): t.get_position_3d() for t in sticks.texts}
+    assert sorted(labels) == list(range(1, q.shape[0] + 1))
+    for k, place in labels.items():
+        np.testing.assert_allclose(place, flanges[k - 1], rtol=0, atol=1e-6)
+    spans = np.array(
+        [np.ptp(sticks.get_xlim()), np.ptp(sticks.get_ylim()), np.ptp(sticks.get_zlim())]
+    )
+    aspect = np.asarray(sticks.get_box_aspect())
+    np.testing.assert_allclose(aspect / aspect.max(), spans / spans.max(), rtol=1e-9)
 
 
 def test_a_plan_close_enough_to_the_optimum_is_its_own_reference(monkeypatch):

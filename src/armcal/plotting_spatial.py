@@ -19,11 +19,15 @@ from .models import FitModel, SpatialArm
 from .models.spatial.chain import joint_motion
 
 __all__ = [
+    "NUMBERED_POSES_MAX",
     "plot_spatial_plan",
 ]
 
 #: Random feasible poses over which the error map and the variance function are drawn.
 MAP_POSES = 2000
+
+#: A plan of at most this many poses has every flange numbered (more would be a blur).
+NUMBERED_POSES_MAX = 60
 
 
 def _chain_points(arm: SpatialArm, q: np.ndarray) -> np.ndarray:
@@ -40,16 +44,30 @@ def _chain_points(arm: SpatialArm, q: np.ndarray) -> np.ndarray:
 
 
 def _sticks(fig: Figure, spec, arm: SpatialArm, q: np.ndarray) -> None:
+    """The arm at every pose, each flange numbered by its row of the plan, and the
+    instrument where the robot file's view puts it, on equal axes (a metre is a metre
+    along x, y and z)."""
     ax = fig.add_subplot(spec, projection="3d")
     chain = _chain_points(arm, q)
     for pose in chain:
         ax.plot(pose[:, 0], pose[:, 1], pose[:, 2], color="0.4", lw=0.8, alpha=0.6)
-    ax.scatter(chain[:, -1, 0], chain[:, -1, 1], chain[:, -1, 2], s=8, color="C0", label="flange")
+    tips = chain[:, -1]
+    ax.scatter(tips[:, 0], tips[:, 1], tips[:, 2], s=8, color="C0", label="flange")
+    if q.shape[0] <= NUMBERED_POSES_MAX:
+        for k, (x, y, z) in enumerate(tips):
+            ax.text(x, y, z, f" {k + 1}", fontsize=7, color="C0")
+    shown = chain.reshape(-1, 3)
     view = arm.view
     if view is not None:
         x, y, z = view.position
         ax.scatter([x], [y], [z], marker="^", s=60, color="C3", label="instrument")
-    ax.set_title(f"{q.shape[0]} poses")
+        shown = np.vstack([shown, view.position])
+    low, high = shown.min(axis=0), shown.max(axis=0)
+    pad = 0.05 * float(np.max(high - low))
+    for setter, lo, hi in zip((ax.set_xlim, ax.set_ylim, ax.set_zlim), low, high, strict=True):
+        setter(lo - pad, hi + pad)
+    ax.set_box_aspect(tuple(high - low + 2 * pad))
+    ax.set_title(f"{q.shape[0]} poses, numbered by row")
     ax.set_xlabel("x (mm)")
     ax.set_ylabel("y (mm)")
     ax.set_zlabel("z (mm)")
