@@ -464,3 +464,19 @@ def test_a_figure_suffix_armcal_cannot_write_is_refused_before_any_work(tmp_path
     assert run.stderr.startswith(f"armcal: error: --plot {name}:")
     assert ".png, .pdf, .svg, .eps" in run.stderr
     assert list(tmp_path.iterdir()) == []
+
+
+def test_validation_draws_the_errors_before_and_after_as_distributions_on_one_scale():
+    """The ECDF panel: for each model, the sorted held-out errors against i/n (the share of
+    points within each), on one logarithmic error axis."""
+    result = _validation(25, np.random.default_rng(11))
+    fig = plot_validation(PlanarArm([300.0, 200.0]), np.zeros((25, 2)), result)
+    (ax,) = [a for a in fig.axes if any(str(ln.get_gid()).startswith("ecdf") for ln in a.lines)]
+    assert ax.get_xscale() == "log"
+    lines = {ln.get_gid(): ln for ln in ax.lines}
+    for gid, errors in (
+        ("ecdf nominal arm", result.before_mm),
+        ("ecdf calibrated", result.after_mm),
+    ):
+        assert_allclose(lines[gid].get_xdata(), np.sort(errors))
+        assert_allclose(lines[gid].get_ydata(), np.arange(1, 26) / 25)

@@ -559,6 +559,23 @@ def _side_by_side(of_pose: np.ndarray) -> np.ndarray:
     return of_pose + 1.0 + np.where(size > 1, 0.6 * rank / np.maximum(size - 1, 1) - 0.3, 0.0)
 
 
+def _error_ecdf(ax, before_mm: np.ndarray, after_mm: np.ndarray) -> None:
+    """The held-out errors before and after as empirical distribution functions on one
+    logarithmic scale: the fraction of points within each error."""
+    for errors, colour, name in (
+        (before_mm, "0.45", "nominal arm"),
+        (after_mm, "tab:red", "calibrated"),
+    ):
+        ordered = np.sort(np.asarray(errors, dtype=float))
+        share = np.arange(1, ordered.size + 1) / ordered.size
+        ax.step(ordered, share, where="post", color=colour, label=name, gid=f"ecdf {name}")
+    ax.set_xscale("log")
+    ax.set_ylim(0.0, 1.0)
+    ax.set_xlabel("position error [mm]")
+    ax.set_ylabel("fraction of held-out points within")
+    ax.legend(fontsize=8, frameon=False, loc="upper left")
+
+
 def plot_validation(
     arm: PlanarArm,
     q: np.ndarray,
@@ -589,7 +606,8 @@ def plot_validation(
         calibrated one (right) as arrows, each panel at one
         stated magnification with a key arrow in mm.  Bottom: every row's
         error before and after, and the error the calibration predicts (RMS
-        over a pose's rows), against the pose; a pose's rows side by side.
+        over a pose's rows), against the pose; a pose's rows side by side; and the
+        errors before and after as distribution functions on one scale.
 
     Raises
     ------
@@ -600,10 +618,11 @@ def plot_validation(
     rows = positions.shape[0]
     of_pose = _pose_of_rows(pose, rows)
     fig = Figure(figsize=(11, 8.4), layout="constrained")
-    grid = fig.add_gridspec(2, 2, height_ratios=[1.25, 1.0])
-    ax_before = fig.add_subplot(grid[0, 0])
-    ax_after = fig.add_subplot(grid[0, 1], sharex=ax_before, sharey=ax_before)
-    ax_err = fig.add_subplot(grid[1, :])
+    grid = fig.add_gridspec(2, 6, height_ratios=[1.25, 1.0])
+    ax_before = fig.add_subplot(grid[0, :3])
+    ax_after = fig.add_subplot(grid[0, 3:], sharex=ax_before, sharey=ax_before)
+    _error_ecdf(fig.add_subplot(grid[1, 4:]), result.before_mm, result.after_mm)
+    ax_err = fig.add_subplot(grid[1, :4])
     x_name, y_name, frame = ("x", "y", "instrument frame")
     if result.out_of_plane_mm is not None:  # 3-D data: the plane fitted in the instrument frame
         x_name, y_name, frame = ("u", "v", "instrument's plane of motion")
