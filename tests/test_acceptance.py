@@ -213,3 +213,17 @@ def test_the_iso9283_figure_plots_ap_and_rp_on_linear_axes_in_the_robots_frame(
     for axis, line in enumerate(parts.lines[:3]):
         assert_allclose(line.get_ydata(), robot[:, axis], rtol=0, atol=1e-9)
     assert parts.get_ylabel() == "mm (robot base frame)"
+
+
+def test_validate_reports_its_progress(tmp_path, calibrated):
+    """validate_measurements calls progress after the validation and after the ISO 9283
+    test: a bar on a terminal (armcal validate), quiet elsewhere."""
+    from armcal.files import read_calibration, read_measurements
+    from armcal.workflow import validate_measurements
+
+    _cycles_file(tmp_path, poses=3, cycles=4, seed=6)
+    cal = read_calibration(calibrated)
+    meas = read_measurements(tmp_path / "iso.csv", cal.arm)
+    seen: list[tuple[int, int]] = []
+    validate_measurements(cal, meas, iso9283=True, progress=lambda *done: seen.append(done))
+    assert seen == [(1, 2), (2, 2)]

@@ -318,7 +318,13 @@ def validate(args: argparse.Namespace) -> None:
     meas = read_measurements(
         args.measurements, cal.arm, arm_from=f"the calibration {args.calibration}"
     )
-    run = validate_measurements(cal, meas, source=args.measurements, iso9283=args.iso9283)
+    run = validate_measurements(
+        cal,
+        meas,
+        source=args.measurements,
+        iso9283=args.iso9283,
+        progress=ProgressBar("validate"),
+    )
     figures = {}
     if args.plot is not None or args.report is not None:
         from ..plotting import figure_png, plot_validation, save_figure  # only when asked for

@@ -44,7 +44,7 @@ PLANAR = register(
             "coupled_urdf": "armcal.export_planar:planar_coupled_urdf",
             "describe": "armcal.report.common:planar_model_lines",
             "plan_figure": "armcal.plotting:planar_plan_figure",
-            "residual_figure": "armcal.plotting:residual_figure",
+            "residual_figure": "armcal.plotting_residuals:residual_figure",
             "demo": "armcal.demo:planar_demo",
         },
     )
@@ -73,7 +73,7 @@ SPATIAL = register(
             "calibrated_origins": "armcal.files.urdf_origins:calibrated_origins",
             "describe": "armcal.report.common:spatial_model_lines",
             "plan_figure": "armcal.plotting_spatial:spatial_plan_figure",
-            "residual_figure": "armcal.plotting:residual_figure",
+            "residual_figure": "armcal.plotting_residuals:residual_figure",
             "demo": "armcal.demo_spatial:spatial_demo",
         },
     )

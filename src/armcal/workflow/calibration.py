@@ -41,7 +41,7 @@ from ..models import CalibratedArm, FitModel, Loads
 from ..models.wording import unpredicted_loads
 from ..noise import per_row_sigma
 from ..plausibility import deviation_warning
-from ..progress import ProgressCallback
+from ..progress import ProgressCallback, steps
 from ..validation import (
     CrossValidation,
     Validation,
@@ -270,7 +270,12 @@ class ValidationRun:
 
 
 def validate_measurements(
-    cal: CalibratedArm, meas: Measurements, *, source: str = "measurements", iso9283: bool = False
+    cal: CalibratedArm,
+    meas: Measurements,
+    *,
+    source: str = "measurements",
+    iso9283: bool = False,
+    progress: ProgressCallback | None = None,
 ) -> ValidationRun:
     """:func:`armcal.validation.validate` on a measurement file, with its warnings, and with
     ``iso9283`` the pose accuracy and repeatability of its repeated poses
@@ -280,6 +285,8 @@ def validate_measurements(
     does not have or lacks, points of the other dimension, measurements that look
     like a unit mistake (:func:`armcal.plausibility.unit_mistake`), or (``iso9283``)
     poses measured once or with different joint values from cycle to cycle.
+    ``progress(done, 2)`` is called after the validation and after the acceptance test
+    (:mod:`armcal.progress`).
     """
     arm = cal.arm
     if meas.targets is not None and not arm.target_labels:
@@ -308,6 +315,8 @@ def validate_measurements(
         )
     except ArmcalError as exc:
         raise prefixed(source, exc) from None
+    step = steps(progress, 2)  # the validation, then the acceptance test
+    step()
     poses = None if meas.targets is None else np.array(meas.labels)  # a pose's points together
     warnings = [
         *meas.warnings,
@@ -346,6 +355,7 @@ def validate_measurements(
         except ArmcalError as exc:
             raise prefixed(source, exc) from None
         warnings += pose_characteristics_warnings(acceptance)
+    step()
     return ValidationRun(result, tuple(warnings), acceptance)
 
 
