@@ -12,6 +12,7 @@ from collections.abc import Sequence
 
 from ..errors import ArmcalWarning, unique_warnings
 from ..files import to_json
+from ..progress import quiet
 
 __all__ = [
     "CLI_ACTIONS",
@@ -63,6 +64,7 @@ CLI_ACTIONS = {
 
 def print_warnings(warnings: Sequence[ArmcalWarning]) -> None:
     """Each warning as one ``armcal: warning: ...`` line on stderr, in the command line's words."""
+    quiet()  # an elapsed-time line stops before anything is printed
     for warning in warnings:
         print(f"armcal: warning: {warning.render(CLI_ACTIONS)}", file=sys.stderr)
 
@@ -83,6 +85,7 @@ def emit(
     The warnings also replace the document's ``warnings`` list, so the JSON and
     stderr say the same.
     """
+    quiet()  # an elapsed-time line stops before the result is printed
     warnings = unique_warnings(warnings)
     document["warnings"] = warning_dicts(warnings)
     print_warnings(warnings)

@@ -17,6 +17,7 @@ from ..errors import ArmcalError, unique_warnings
 from ..files import BUILTIN_ROBOTS, STDIO, OutputFolder, check_outputs
 from ..files.common import forget_stdin
 from ..formats import FIGURE_FORMATS
+from ..progress import Elapsed
 from .output import CLI_ACTIONS, print_warnings
 from .parser import build_parser
 
@@ -107,7 +108,8 @@ def main(argv: Sequence[str] | None = None) -> int:
         args = build_parser().parse_args(argv)
         _check_paths(args)
         run: Callable[[argparse.Namespace], None] = args.run
-        run(args)
+        with Elapsed(f"armcal {args.command}"):  # a line on a terminal after 2 s of work
+            run(args)
     except ArmcalError as exc:
         # The robot file's warnings (radian limits, lengths in metres) often explain the
         # error that stopped the command before its report: print them first.
