@@ -360,3 +360,26 @@ def test_identify_plot_draws_the_residual_figure(calibrated, tmp_path):
     )  # fmt: skip
     assert result.returncode == 0, result.stderr
     assert (tmp_path / "residuals.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+
+
+def test_a_gantry_whose_joints_are_named_x_y_z_keeps_its_measured_columns(tmp_path):
+    """A Cartesian robot's joints are often named x, y and z: the measurement's own x_mm,
+    y_mm and z_mm stay the measured point, never the joint "x" in mm."""
+    from armcal.files.joints import named_joint_columns
+
+    urdf = tmp_path / "gantry.urdf"
+    axes = ("1 0 0", "0 1 0", "0 0 1")
+    joints = "".join(
+        f'<link name="l{k + 1}"/><joint name="{name}" type="prismatic"><parent link="l{k}"/>'
+        f'<child link="l{k + 1}"/><axis xyz="{axes[k]}"/><limit lower="-1" upper="1"/></joint>'
+        for k, name in enumerate("xyz")
+    )
+    urdf.write_text(f'<robot name="gantry"><link name="l0"/>{joints}</robot>', encoding="utf-8")
+    arm = armcal.load_robot(urdf).arm
+    assert arm.joint_names == ("x", "y", "z")
+    header = ["x", "y", "z", "x_mm", "y_mm", "z_mm"]
+    renamed, factors, named = named_joint_columns(
+        "m.csv", header, 1, arm, ["x_mm", "y_mm", "z_mm", "pose", "target"]
+    )
+    assert named and renamed == ["q1_mm", "q2_mm", "q3_mm", "x_mm", "y_mm", "z_mm"]
+    assert factors.tolist() == [1000.0, 1000.0, 1000.0]  # metres, as ROS publishes a slide

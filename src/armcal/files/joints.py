@@ -318,7 +318,11 @@ def named_joint_columns(
     names = [n for n in arm.joint_names]
     kinds = arm.joint_kinds
     factors = np.ones(len(names))
-    found = {c: hit for c, h in enumerate(header) if (hit := _named(h, names)) is not None}
+    found = {  # a column the file takes itself (x_mm) is never a joint (a gantry's "x")
+        c: hit
+        for c, h in enumerate(header)
+        if h not in allowed and (hit := _named(h, names)) is not None
+    }
     if not found or any(JOINT_COLUMN.match(h) for h in header):
         return list(header), factors, False  # q{j}_deg columns (a mixture: their check names it)
     where = f"line {header_line}"
