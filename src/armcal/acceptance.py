@@ -37,6 +37,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from .errors import ArmcalError, ArmcalWarning
+from .models.spatial.registration import best_rotation
 
 if TYPE_CHECKING:
     from .models import Conditions, FitModel
@@ -266,17 +267,13 @@ def pose_characteristics(
 def robot_turn(model: FitModel, conditions: Conditions, params: np.ndarray) -> np.ndarray:
     """The rotation ``R`` ``(d, d)`` from the robot's base frame to the instrument's, for
     any family: the model's points at ``params`` and with the instrument's pose taken out
-    (:meth:`~armcal.models.interface.FitModel.in_robot_frame`) differ by one rigid motion,
-    whose turn the SVD of their cross-covariance gives (Kabsch)."""
+    (:meth:`~armcal.models.interface.FitModel.in_robot_frame`) differ by one rigid motion
+    (:func:`~armcal.models.spatial.registration.best_rotation` finds its turn)."""
     robot_model, robot_params = model.in_robot_frame(params)
     dim = model.position_dim
     seen = np.asarray(model.positions(conditions, params))[..., :dim].reshape(-1, dim)
     own = np.asarray(robot_model.positions(conditions, robot_params))[..., :dim].reshape(-1, dim)
-    a, b = own - own.mean(axis=0), seen - seen.mean(axis=0)
-    u, _, vt = np.linalg.svd(a.T @ b)
-    flip = np.eye(dim)
-    flip[-1, -1] = np.sign(np.linalg.det(u @ vt))
-    return (u @ flip @ vt).T
+    return best_rotation(own, seen)
 
 
 def pose_characteristics_warnings(found: PoseCharacteristics) -> list[ArmcalWarning]:

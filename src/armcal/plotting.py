@@ -8,9 +8,10 @@ module, so ``import armcal`` does not import matplotlib.
 
 from __future__ import annotations
 
+import io
 import os
 from collections.abc import Sequence
-from typing import Any
+from typing import Any, BinaryIO
 
 import numpy as np
 from matplotlib.backends.backend_agg import FigureCanvasAgg
@@ -708,19 +709,22 @@ def save_figure(fig: Figure, path: str | os.PathLike) -> None:
         If the folder does not exist or is not writable, or ``path`` is a
         directory or a special file (FIFO, device, socket).
     """
-    FigureCanvasAgg(fig)  # attach the Agg canvas: no GUI backend is ever involved
     kind = FIGURE_FORMATS.get(os.path.splitext(os.fspath(path))[1].lower(), "png")
-    atomic_write(path, lambda handle: fig.savefig(handle, format=kind, dpi=120))
+    atomic_write(path, lambda handle: _render(fig, handle, kind, dpi=120))
 
 
 def figure_png(fig: Figure) -> bytes:
-    """``fig`` as PNG bytes (for a page that embeds it)."""
-    import io
-
-    FigureCanvasAgg(fig)
+    """``fig`` as PNG bytes at 100 dpi (for a page that embeds it)."""
     buffer = io.BytesIO()
-    fig.savefig(buffer, format="png", dpi=100)
+    _render(fig, buffer, "png", dpi=100)
     return buffer.getvalue()
+
+
+def _render(fig: Figure, handle: BinaryIO, kind: str, *, dpi: int) -> None:
+    """``fig`` written to ``handle`` as ``kind`` through the Agg canvas (never a GUI
+    backend)."""
+    FigureCanvasAgg(fig)
+    fig.savefig(handle, format=kind, dpi=dpi)
 
 
 def planar_plan_figure(robot: Any, run: Any, *, seed: int = 0) -> Figure:

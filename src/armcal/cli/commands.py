@@ -20,7 +20,7 @@ from typing import Any
 import numpy as np
 
 from ..demo import demo_rigid_warning
-from ..errors import ArmcalError, unique_warnings
+from ..errors import ArmcalError
 from ..files import (
     BUILTIN_ROBOTS,
     BUILTIN_SPATIAL_ROBOTS,
@@ -302,7 +302,7 @@ def identify(args: argparse.Namespace) -> None:
             from ..report.html import calibration_html
 
             page = calibration_html(
-                {**document, "warnings": warning_dicts(unique_warnings(run.warnings))},
+                {**document, "warnings": warning_dicts(run.warnings)},
                 text,
                 {"Every pose's residual, and every row's against each joint": figure_png(figure)},
                 source=args.measurements,
@@ -347,7 +347,7 @@ def validate(args: argparse.Namespace) -> None:
         from ..report.html import validation_html
 
         page = validation_html(
-            {**document, "warnings": warning_dicts(unique_warnings(run.warnings))},
+            {**document, "warnings": warning_dicts(run.warnings)},
             text,
             {caption: figure_png(figure) for caption, figure in figures.items()},
             source=args.measurements,

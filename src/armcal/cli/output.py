@@ -70,8 +70,8 @@ def print_warnings(warnings: Sequence[ArmcalWarning]) -> None:
 
 
 def warning_dicts(warnings: Sequence[ArmcalWarning]) -> list[dict[str, str]]:
-    """The JSON form of warnings, in the command line's words."""
-    return [w.to_dict(CLI_ACTIONS) for w in warnings]
+    """The JSON form of warnings (each once), in the command line's words."""
+    return [w.to_dict(CLI_ACTIONS) for w in unique_warnings(warnings)]
 
 
 def emit(
@@ -85,10 +85,9 @@ def emit(
     The warnings also replace the document's ``warnings`` list, so the JSON and
     stderr say the same.
     """
-    quiet()  # an elapsed-time line stops before the result is printed
     warnings = unique_warnings(warnings)
     document["warnings"] = warning_dicts(warnings)
-    print_warnings(warnings)
+    print_warnings(warnings)  # an elapsed-time line stops first (quiet)
     args.loaded_warnings = ()  # printed: an error after this does not print them again
     if getattr(args, "stdout_taken", False):  # `-o -`: the file is the command's output
         return

@@ -315,7 +315,7 @@ def named_joint_columns(
     (``/joint_states`` lists a gripper's too) is an error naming it, as is a column in a
     unit that is not its joint's kind's.
     """
-    names = [n for n in arm.joint_names]
+    names = list(arm.joint_names)
     kinds = arm.joint_kinds
     factors = np.ones(len(names))
     found = {  # a column the file takes itself (x_mm) is never a joint (a gantry's "x")

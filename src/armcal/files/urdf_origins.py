@@ -129,24 +129,18 @@ class CalibratedOrigins:
     def urdf(self) -> str:
         """The original file with the calibrated origins: every other byte as it was."""
         text = self.text
-        joints = {
-            e.name: e for e in _elements(text) if e.tag == "joint" and e.depth == 1
-        }  # the robot's joints (a transmission's <joint> is deeper)
+        elements = _elements(text)
+        joints = {e.name: e for e in elements if e.tag == "joint" and e.depth == 1}
+        # the robot's joints (a transmission's <joint> is deeper), and their <origin>s
+        origins = {e.start: e for e in elements if e.tag == "origin" and e.depth == 2}
         edits: list[tuple[int, int, str]] = []
         for k, name in enumerate(self.joints):
             if not self.changed[k]:
                 continue
             joint = joints[name]
-            inside = [
-                e
-                for e in _elements(text[joint.open_end : joint.end])
-                if e.tag == "origin" and e.depth == 0
-            ]
+            inside = [e for start, e in origins.items() if joint.open_end <= start < joint.end]
             if inside:
-                first = inside[0]
-                edits.append(
-                    (joint.open_end + first.start, joint.open_end + first.end, self._origin(k))
-                )
+                edits.append((inside[0].start, inside[0].end, self._origin(k)))
             else:
                 line_start = text.rfind("\n", 0, joint.start) + 1
                 indent = text[line_start : joint.start]

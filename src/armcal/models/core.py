@@ -190,12 +190,17 @@ class CoreModel(RigidLoads):
         loads: Loads | None = None,
         sigma_mm: np.ndarray | None = None,
     ) -> Conditions:
-        q = np.asarray(q, dtype=float)
-        if q.ndim < 2 or q.shape[-1] != self.n_joints:
-            raise ValueError(f"q must have shape (m, {self.n_joints}), got {q.shape}")
+        q = self._readings(q)
         if target is not None:
             raise ValueError(f"{self.name} has one target: give no target indices")
         return Conditions(q, None, None, sigma_mm)
+
+    def _readings(self, q: ArrayLike) -> np.ndarray:
+        """``q`` as floats ``(..., m, n)``; ValueError for another shape."""
+        q = np.asarray(q, dtype=float)
+        if q.ndim < 2 or q.shape[-1] != self.n_joints:
+            raise ValueError(f"q must have shape (m, {self.n_joints}), got {q.shape}")
+        return q
 
     def plan_conditions(self, q: np.ndarray, loads: Loads | None = None) -> Conditions:
         return self.conditions(q)

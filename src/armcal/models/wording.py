@@ -289,24 +289,26 @@ def effect_advice(effect: Effect) -> str:
     return EFFECT_ADVICE[effect.advice].format(geometry=action("geometry-alone"))
 
 
+#: What a length's bound is a fraction of (:attr:`DeviationBounds.reference`): the
+#: summary of implausible deviations, and the length in the rule's words.
+_REFERENCES = {
+    "link": ("a large part of a link", "a link"),
+    "reach": ("a large part of the reach", "the reach"),
+    "placement": ("larger than a calibration finds", "the reach"),
+}
+
+
 def deviation_summary(bounds: DeviationBounds) -> str:
     """What the implausible deviations are (``"a large part of a link"``)."""
-    if bounds.reference == "placement":
-        return "larger than a calibration finds"
-    return (
-        f"a large part of the {bounds.reference}"
-        if bounds.reference == "reach"
-        else ("a large part of a link")
-    )
+    return _REFERENCES[bounds.reference][0]
 
 
 def deviation_rule(bounds: DeviationBounds) -> str:
     """The bounds in words (``"10 % of a link or 10 deg"``)."""
-    percent = f"{100 * bounds.length_fraction:g} %"
-    if bounds.reference == "placement":
-        return f"{percent} of the reach, {bounds.length_mm:.3g} mm, or {bounds.angle_deg:g} deg"
-    of = "the reach" if bounds.reference == "reach" else "a link"
-    return f"{percent} of {of} or {bounds.angle_deg:g} deg"
+    of = f"{100 * bounds.length_fraction:g} % of {_REFERENCES[bounds.reference][1]}"
+    if bounds.reference == "placement":  # one length for every joint: said in mm too
+        return f"{of}, {bounds.length_mm:.3g} mm, or {bounds.angle_deg:g} deg"
+    return f"{of} or {bounds.angle_deg:g} deg"
 
 
 def absorbing_note(bounds: DeviationBounds, names: Sequence[str]) -> str:

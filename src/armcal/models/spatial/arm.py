@@ -426,9 +426,7 @@ deviation_bounds`); the base pose and the targets are the instrument's."""
         loads: Loads | None = None,
         sigma_mm: np.ndarray | None = None,
     ) -> Conditions:
-        q = np.asarray(q, dtype=float)
-        if q.ndim < 2 or q.shape[-1] != self.n_joints:
-            raise ValueError(f"q must have shape (m, {self.n_joints}), got {q.shape}")
+        q = self._readings(q)
         index = target_indices(target, self.targets, q.shape[-2])
         if index is None and len(self.targets) > 1:
             raise targets_missing(self.name, self.targets)

@@ -40,7 +40,8 @@ REGISTER_ROWS = 3000
 
 
 def best_rotation(source: np.ndarray, destination: np.ndarray) -> np.ndarray:
-    """The rotation ``R`` ``(3, 3)`` minimizing ``sum |R s_i + b - d_i|^2`` over ``b`` too.
+    """The rotation ``R`` ``(d, d)`` minimizing ``sum |R s_i + b - d_i|^2`` over ``b`` too
+    (points ``(m, d)``: in space, or in the plane).
 
     Arun, Huang and Blostein (1987), with the reflection guard.
 
@@ -84,10 +85,11 @@ def register_turns(
 
 
 def _polar(matrix: np.ndarray) -> np.ndarray:
-    """The rotation nearest ``matrix`` ``(3, 3)`` (its polar factor, det +1)."""
+    """The rotation nearest ``matrix`` ``(d, d)`` (its polar factor, det +1)."""
     u, _, vt = np.linalg.svd(matrix)
-    sign = np.sign(np.linalg.det(u @ vt)) or 1.0
-    return u @ np.diag([1.0, 1.0, sign]) @ vt
+    flip = np.ones(matrix.shape[-1])
+    flip[-1] = np.sign(np.linalg.det(u @ vt)) or 1.0
+    return u @ np.diag(flip) @ vt
 
 
 def _with_rotation(
