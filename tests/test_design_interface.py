@@ -199,7 +199,7 @@ def test_loads_must_give_every_pose_one_row():
 def test_multiplicative_weights_match_the_textbook_update():
     """The certificate's weights by matrix products equal the update written out
     (Titterington 1976): w <- w d(x) / p with d(x) = tr(M^-1 I(x)), M = sum w I(x)."""
-    from armcal.doe.certificate import multiplicative_weights
+    from armcal.doe.weights import multiplicative_weights
 
     rng = np.random.default_rng(3)
     blocks = rng.normal(size=(40, 2, 5))

@@ -16,6 +16,8 @@ isotropic iid, the weighted information over the free parameters otherwise.
 * :mod:`~armcal.doe.exchange` -- modified Fedorov exchange over candidates;
 * :mod:`~armcal.doe.task` -- the task-aimed criteria I and G: the predicted
   position variance after calibration over test poses;
+* :mod:`~armcal.doe.weights` -- D-optimal weights over a finite set of poses
+  (the multiplicative algorithm, Newton's method on the simplex);
 * :mod:`~armcal.doe.pool` -- D-optimal plans from a pool of safe poses, for any
   family (the pool's weights, then DETMAX);
 * :mod:`~armcal.doe.certificate` -- a lower bound on the D-efficiency relative

@@ -13,14 +13,13 @@ from ..numerics import ScaledSVD, scaled_svd, spd_inverse
 from ..progress import ProgressCallback, share
 from .ascent import adam_ascent, penalty_weight, to_q, to_u, view_penalty
 from .plans import feasible_poses
+from .weights import newton_weights, optimal_weights, variances
 
 __all__ = [
     "CLOSE_ENOUGH",
-    "POOL_CERTIFICATE_ITERATIONS",
     "Certificate",
     "certify",
     "certify_pool",
-    "multiplicative_weights",
 ]
 
 #: A plan whose own variance function certifies at least this (``exp(1 - max d / p)``)
@@ -122,7 +121,44 @@ def _maximize_variance(
     u, _ = adam_ascent(
         objective, to_u(model, starts), steps=steps, learning_rate=0.05, progress=progress
     )
-    return to_q(model, u)[0]
+    return _newton_polish(model, m_inv, to_q(model, u)[0])
+
+
+#: Newton iterations that finish every ascent, and the step of the central differences
+#: of the analytic gradient that give their Hessian (rad; truncation ~1e-10 of it).
+POLISH_ITERATIONS, POLISH_STEP = 3, 1e-5
+
+
+def _newton_polish(model: FitModel, m_inv: np.ndarray, q: np.ndarray) -> np.ndarray:
+    """Ascent ends ``q`` ``(k, n)`` taken to their local maxima of ``d`` to round-off:
+    Adam's last steps are small but not zero, and the bound needs the maximum itself.
+
+    Newton's step ``-H^-1 g`` with ``H`` from central differences of the analytic
+    gradient (all ``2 n`` shifts of every pose in one batch), its eigenvalues held at
+    most ``-1e-9 |H|`` (a direction in which ``d`` does not change, such as joint 1 of
+    an arm measured in its own frame, takes no step); within the limits, and kept only
+    where ``d`` grows and the pose stays feasible."""
+    k, n = q.shape
+    lower, upper = model.joint_limits[:, 0], model.joint_limits[:, 1]
+    value, grad = _variance_function(model, q, m_inv)
+    shifts = POLISH_STEP * np.eye(n)
+    for _ in range(POLISH_ITERATIONS):
+        shifted = np.concatenate([q[:, None, :] + shifts, q[:, None, :] - shifts], axis=1)
+        _, around = _variance_function(model, shifted.reshape(-1, n), m_inv)
+        around = around.reshape(k, 2, n, n)
+        hessian = (around[:, 0] - around[:, 1]) / (2 * POLISH_STEP)  # [k, j, :] = d g / d q_j
+        hessian = (hessian + np.swapaxes(hessian, -1, -2)) / 2
+        values, vectors = np.linalg.eigh(hessian)
+        floor = 1e-9 * np.abs(values).max(axis=-1, keepdims=True)
+        values = np.minimum(values, -floor)
+        step = -np.einsum("kij,kj,klj,kl->ki", vectors, 1 / values, vectors, grad)
+        trial = np.clip(q + step, lower, upper)
+        trial_value, trial_grad = _variance_function(model, trial, m_inv)
+        better = (trial_value > value) & model.feasible(trial[:, None, :])[:, 0]
+        q = np.where(better[:, None], trial, q)
+        value = np.where(better, trial_value, value)
+        grad = np.where(better[:, None], trial_grad, grad)
+    return q
 
 
 def _corner_poses(model: FitModel, rng: np.random.Generator) -> np.ndarray:
@@ -138,30 +174,6 @@ def _corner_poses(model: FitModel, rng: np.random.Generator) -> np.ndarray:
     return corners[model.feasible(corners[:, None, :])[:, 0]]
 
 
-def multiplicative_weights(
-    blocks: np.ndarray, weights: np.ndarray, iterations: int, *, power: float = 1.0
-):
-    """Multiplicative algorithm for D-optimal weights (Titterington 1976; Silvey et al. 1978):
-    ``w_x <- w_x (d(x) / p)^power``.  ``power`` 1 never decreases ``det M``; Silvey et al.'s
-    larger powers take fewer iterations to the same optimum, without that guarantee.
-
-    ``M(xi)`` stays positive definite: the pool holds the (identifiable) plan's
-    own poses or the support of an earlier positive definite design, and every
-    weight stays positive.  The inverse is
-    :func:`~armcal.numerics.spd_inverse`, which cannot raise whatever round-off does.
-    """
-    p = blocks.shape[-1]
-    rows = blocks.reshape(-1, p)  # (N r, p): matrix products, not three-operand einsums
-    per_pose = blocks.shape[1]
-    for _ in range(iterations):
-        weighted = rows * np.repeat(weights, per_pose)[:, None]
-        m_inv = spd_inverse(rows.T @ weighted)  # sum_x w_x F_x^T F_x
-        d = np.sum((rows @ m_inv) * rows, axis=1).reshape(-1, per_pose).sum(axis=1)
-        weights = weights * (d / p) ** power
-        weights /= weights.sum()
-    return weights
-
-
 def _weighted_svd(blocks: np.ndarray, weights: np.ndarray) -> ScaledSVD:
     """The rank policy's SVD of ``M(xi) = sum_x w_x I(x)``, from its square-root factor.
 
@@ -173,52 +185,132 @@ def _weighted_svd(blocks: np.ndarray, weights: np.ndarray) -> ScaledSVD:
     return scaled_svd(weighted.reshape(-1, blocks.shape[-1]))
 
 
-def _reference_support(
+#: Ascents of the variance function per search, from the poses where it is largest: a
+#: few ascents from the best points of the sample, not many from random ones.
+ASCENT_STARTS = 48
+
+#: Adam steps of every ascent (:func:`_maximize_variance`); the last search of a
+#: certificate takes twice as many, its maximum being the one the bound rests on.
+ASCENT_STEPS = 100
+
+#: The weighted design's tolerance (:func:`~armcal.doe.weights.newton_weights`): its
+#: candidates are few (the plan's poses, the sample's best, the ascents' maxima), so
+#: Newton's method takes it to the optimum over them.
+REFERENCE_TOLERANCE = 1e-6
+
+#: The plan's share of the weighted design's starting weights (the other candidates share
+#: the rest).
+PLAN_SHARE = 0.9
+
+#: Weights below this share of the largest are dropped from the reference design before
+#: its bound is computed: the design reported is the one certified, and it stays short.
+SMALLEST_WEIGHT = 1e-3
+
+
+@dataclass(frozen=True, eq=False)
+class _Poses:
+    """Poses ``(k, n)`` and their scaled blocks ``(k, r, p)`` (:func:`_pose_blocks`),
+    computed once and searched with every variance function."""
+
+    q: np.ndarray
+    blocks: np.ndarray
+
+    def __add__(self, other: _Poses) -> _Poses:
+        return _Poses(
+            np.concatenate([self.q, other.q]), np.concatenate([self.blocks, other.blocks])
+        )
+
+    def take(self, index: np.ndarray) -> _Poses:
+        return _Poses(self.q[index], self.blocks[index])
+
+
+def _poses(model: FitModel, q: np.ndarray) -> _Poses:
+    return _Poses(q, _pose_blocks(model, q))
+
+
+@dataclass(frozen=True, eq=False)
+class _Maximum:
+    """``max d`` over a sample and the ascents from its best poses: the value, where, and
+    the poses the ascents found."""
+
+    value: float
+    pose: np.ndarray
+    found: _Poses
+
+
+def _search_maximum(
     model: FitModel,
-    distinct: np.ndarray,
-    rng: np.random.Generator,
-    candidates: int,
+    m_inv: np.ndarray,
+    sample: _Poses,
+    *,
+    steps: int,
+    progress: ProgressCallback | None,
+) -> _Maximum:
+    """``max_x d(x)`` over ``sample`` (its blocks, no kinematics) and over ascents from its
+    :data:`ASCENT_STARTS` largest values; ascent iterates that stray outside the view by
+    more than 1e-3 mm do not count."""
+    d = variances(sample.blocks, m_inv)
+    starts = sample.q[np.argsort(-d)[:ASCENT_STARTS]]
+    found = _poses(model, _maximize_variance(model, m_inv, starts, steps=steps, progress=progress))
+    d_found = variances(found.blocks, m_inv)
+    constraints = model.view_constraints(found.q[:, None, :])
+    if constraints is not None:  # count iterates that stray outside only a little
+        d_found = np.where(constraints[0].min(axis=(-2, -1)) > -1e-3, d_found, -np.inf)
+    if d.max() >= d_found.max():
+        return _Maximum(float(d.max()), sample.q[int(np.argmax(d))], found)
+    return _Maximum(float(d_found.max()), found.q[int(np.argmax(d_found))], found)
+
+
+def _trimmed(blocks: np.ndarray, weights: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The weights without those below :data:`SMALLEST_WEIGHT` of the largest (sum 1) and
+    ``M^-1`` of what is left."""
+    weights = np.where(weights >= SMALLEST_WEIGHT * weights.max(), weights, 0.0)
+    weights /= weights.sum()
+    kept = weights > 0
+    rows = blocks[kept].reshape(-1, blocks.shape[-1])
+    scaled = rows * np.repeat(weights[kept], blocks.shape[1])[:, None]
+    return weights, spd_inverse(rows.T @ scaled)
+
+
+def _reference_design(
+    model: FitModel,
+    candidates: _Poses,
+    sample: _Poses,
+    start: np.ndarray,
     rounds: int,
     parts: list[ProgressCallback | None],
-) -> tuple[np.ndarray, np.ndarray]:
-    """The support poses ``(k, n)`` and weights ``(k,)`` of a near-D-optimal weighted
-    design ``xi*``: the multiplicative algorithm on the plan's poses, the corners and
-    random feasible poses, refined ``rounds`` times by the maximizers of ``d``."""
-    p = model.n_free
-    pool = np.concatenate(
-        [
-            distinct,
-            _corner_poses(model, rng),
-            feasible_poses(model, candidates, rng=rng),
-        ]
+) -> tuple[_Poses, np.ndarray, _Maximum]:
+    """A near-D-optimal weighted design ``xi*`` over ``candidates``, refined ``rounds`` times
+    by the maximizers of its variance function, and that function's maximum: its support,
+    weights and :class:`_Maximum`; the first ``len(start)`` candidates are the plan's
+    distinct poses, ``start`` their share of it.  The last search (twice the steps) is of
+    the design returned, so the bound uses the maximum of the very weights reported."""
+    # Start from the plan (its poses lead the candidates, at its own weights): near the
+    # optimum already, where the multiplicative algorithm is slow to arrive from uniform.
+    weights = np.full(
+        candidates.q.shape[0], (1 - PLAN_SHARE) / (candidates.q.shape[0] - len(start))
     )
-    weights = np.full(pool.shape[0], 1.0 / pool.shape[0])
+    weights[: len(start)] = PLAN_SHARE * start
     for round_ in range(rounds):
-        blocks = _pose_blocks(model, pool)
-        weights = multiplicative_weights(blocks, weights, 150, power=2.0)
-        m_inv, _ = _weighted_svd(blocks, weights).inverse_gram()
-        # Ascend d from its largest values in the pool and in fresh random poses: the
-        # maximizers of a weighted model (encoder noise) can lie in narrow regions
-        # that the first candidates missed.
-        fresh = feasible_poses(model, candidates, rng=rng)
-        starts = []
-        for poses in (pool, fresh):
-            d, _ = _variance_function(model, poses, m_inv)
-            starts.append(poses[np.argsort(-d)[: 4 * p]])
-        found = _maximize_variance(
-            model, m_inv, np.concatenate(starts), progress=parts[1 + round_]
+        weights, m_inv = _trimmed(
+            candidates.blocks,
+            newton_weights(candidates.blocks, weights, tolerance=REFERENCE_TOLERANCE).weights,
         )
-        found = found[model.feasible(found[:, None, :])[:, 0]]
-        keep = weights > 1e-6 / pool.shape[0]
-        pool = np.concatenate([pool[keep], found])
-        # New points start at the mean weight: the multiplicative algorithm grows a
-        # weight only by the factor d(x) / p per iteration, too slowly from a tiny one.
-        mean_weight = weights[keep].sum() / np.count_nonzero(keep)
-        weights = np.concatenate([weights[keep], np.full(found.shape[0], mean_weight)])
-        weights /= weights.sum()
-    weights = multiplicative_weights(_pose_blocks(model, pool), weights, 500, power=2.0)
-    support_mask = weights > 1e-6
-    return pool[support_mask], weights[support_mask] / weights[support_mask].sum()
+        last = round_ == rounds - 1
+        maximum = _search_maximum(
+            model,
+            m_inv,
+            candidates + sample,
+            steps=ASCENT_STEPS * (2 if last else 1),
+            progress=parts[1 + round_],
+        )
+        if last:
+            kept = weights > 0
+            return candidates.take(np.flatnonzero(kept)), weights[kept], maximum
+        feasible = model.feasible(maximum.found.q[:, None, :])[:, 0]
+        candidates = candidates + maximum.found.take(np.flatnonzero(feasible))
+        weights = np.concatenate([weights, np.zeros(int(np.count_nonzero(feasible)))])
+    raise AssertionError("a reference design takes at least one round")
 
 
 def certify(
@@ -244,11 +336,13 @@ def certify(
     rng : numpy.random.Generator or int or None
         Seeds the random candidates and searches.
     candidates : int, optional
-        Random feasible poses for the weighted (approximate) design.
+        Poses of the sample where the plan's variance function is largest that join
+        the weighted (approximate) design's candidates.
     rounds : int, optional
-        Rounds of adding the maximizer of the variance function to the candidates.
+        Rounds of adding the maximizers of the variance function to the candidates.
     search : int, optional
-        Random feasible poses from which the final maximization of ``d`` starts.
+        Random feasible poses of the sample: every variance function is evaluated on
+        them (their blocks computed once) and ascended from the best of them.
 
         Each defaults to the model's
         :attr:`~armcal.models.interface.FitModel.design_effort`.
@@ -273,11 +367,16 @@ def certify(
     ``log det M* <= log det M(xi) + max_x d(x, xi) - p`` for the best design ``M*``
     over the feasible poses.  Hence the plan's efficiency relative to ``M*`` is at
     least ``(det M_plan / det M(xi*))^(1/p) exp(1 - max_x d(x, xi*) / p)``.
-    ``xi*`` comes from the multiplicative algorithm on random feasible poses,
-    corners and the plan's own poses, refined by adding the maximizers of ``d``.
-    The final ``max_x d`` is a multistart ascent from the best of ``search``
-    random feasible poses (plus the support); ascent iterates that stray slightly
+    ``xi*`` comes from Newton's method on the simplex
+    (:func:`~armcal.doe.weights.newton_weights`, started from the plan) on the
+    plan's poses, the sample's poses where the plan is least informed and the
+    maximizers of the plan's ``d``, refined by adding the maximizers of its own.
+    Every ``max_x d`` is the sample's (its blocks computed once) and that of
+    :data:`ASCENT_STARTS` ascents from its largest values; the last one, on which the
+    bound rests, takes twice the steps.  Ascent iterates that stray slightly
     outside the region only raise the maximum, which keeps the bound safe.
+    Weights below :data:`SMALLEST_WEIGHT` of the largest are dropped before the
+    bound is computed: the design reported is the one certified.
     The plan itself is a design too (``xi`` = its poses): its own bound
     ``exp(1 - max_x d(x, plan) / p)`` comes first, and when it reaches
     :data:`CLOSE_ENOUGH` the plan is the reference and no ``xi*`` is searched
@@ -298,7 +397,7 @@ def certify(
     """
     rng = np.random.default_rng(rng)
     effort = model.design_effort
-    candidates = effort.candidates if candidates is None else candidates
+    candidates = effort.reference if candidates is None else candidates
     rounds = effort.rounds if rounds is None else rounds
     search = effort.search if search is None else search
     q = np.asarray(q, dtype=float)
@@ -319,49 +418,62 @@ def certify(
     # the pool's and the search's costs are per pose.
     distinct, counts = np.unique(q, axis=0, return_counts=True)
     plan_inverse, _ = plan.inverse_gram()
-    parts = [share(progress, k / (rounds + 2), (k + 1) / (rounds + 2)) for k in range(rounds + 2)]
-    max_plan, plan_pose = _max_variance(model, plan_inverse, distinct, rng, search, parts[0])
+    parts = [share(progress, k / (rounds + 1), (k + 1) / (rounds + 1)) for k in range(rounds + 1)]
+    # The sample's blocks, once: every variance function below is searched on them first.
+    sample = _poses(
+        model,
+        np.concatenate(
+            [distinct, _corner_poses(model, rng), feasible_poses(model, search, rng=rng)]
+        ),
+    )
+    plan_max = _search_maximum(
+        model, plan_inverse, sample, steps=2 * ASCENT_STEPS, progress=parts[0]
+    )
     logdet_plan = float(plan.log_det_gram())
-    plan_only = np.exp(1.0 - max_plan / p)
+    plan_only = np.exp(1.0 - plan_max.value / p)
     hadamard = np.exp(logdet_plan / p) if bounded else 0.0
     if plan_only >= CLOSE_ENOUGH:  # the plan is its own reference design
         return Certificate(
             certified_d_efficiency=float(min(1.0, max(plan_only, hadamard))),
             plan_only_bound=float(plan_only),
             reference_d_efficiency=float(np.exp(logdet_plan / p)),
-            max_variance=max_plan,
-            max_pose=plan_pose,
+            max_variance=plan_max.value,
+            max_pose=plan_max.pose,
             support=distinct,
             weights=counts / q.shape[0],
         )
-    support, support_w = _reference_support(model, distinct, rng, candidates, rounds, parts)
-    star = _weighted_svd(_pose_blocks(model, support), support_w)
-    # Fs = H^T H with H the plan's scaled Jacobian: inverses and log dets from SVDs.
-    star_inverse, star_ok = star.inverse_gram()
-    if bool(star_ok):
-        max_star, max_pose = _max_variance(model, star_inverse, support, rng, search, parts[-1])
-        logdet_star = float(star.log_det_gram())
-    else:  # not expected (xi* is near D-optimal); the other bounds still hold
-        max_star, logdet_star, max_pose = np.inf, -np.inf, None
-    kw = np.exp((logdet_plan - logdet_star) / p + 1.0 - max_star / p) if bool(star_ok) else 0.0
+    # The weighted design's candidates: the plan's poses, where its variance function is
+    # largest in the sample, and where the ascents found it largest.
+    d_plan = variances(sample.blocks, plan_inverse)
+    others = np.setdiff1d(np.argsort(-d_plan)[:candidates], np.arange(distinct.shape[0]))
+    best = np.concatenate([np.arange(distinct.shape[0]), others])
+    support, weights, star_max = _reference_design(
+        model, sample.take(best) + plan_max.found, sample, counts / q.shape[0], rounds, parts
+    )
+    star_information = np.einsum("k,krp,krq->pq", weights, support.blocks, support.blocks)
+    sign, logdet_star = np.linalg.slogdet(star_information)
+    kw = 0.0
+    if sign > 0:  # not expected otherwise (xi* is near D-optimal); the other bounds hold
+        kw = float(np.exp((logdet_plan - logdet_star) / p + 1.0 - star_max.value / p))
     return Certificate(
         certified_d_efficiency=float(min(1.0, max(kw, plan_only, hadamard))),
         plan_only_bound=float(plan_only),
-        reference_d_efficiency=float(np.exp(logdet_star / p)),
-        max_variance=float(max_star),
-        max_pose=max_pose,
-        support=support,
-        weights=support_w,
+        reference_d_efficiency=float(np.exp(logdet_star / p)) if sign > 0 else 0.0,
+        max_variance=star_max.value,
+        max_pose=star_max.pose,
+        support=support.q,
+        weights=weights,
     )
 
 
-#: Iterations of the multiplicative algorithm (Silvey et al.'s power 2) for the best
-#: weighted design over a pool: on a six-axis arm's 1000-pose pool (30 free parameters)
-#: they certify within 0.001 of 1000 iterations of power 1, at a quarter of the time.
-POOL_CERTIFICATE_ITERATIONS = 300
-
-
-def certify_pool(model: FitModel, q: np.ndarray, pool: np.ndarray) -> Certificate:
+def certify_pool(
+    model: FitModel,
+    q: np.ndarray,
+    pool: np.ndarray,
+    *,
+    blocks: np.ndarray | None = None,
+    weights: np.ndarray | None = None,
+) -> Certificate:
     """Certify a plan taken from ``pool`` against the best design over the pool's poses.
 
     Parameters
@@ -371,6 +483,12 @@ def certify_pool(model: FitModel, q: np.ndarray, pool: np.ndarray) -> Certificat
         The plan (rad), every pose a pose of ``pool``; must identify every parameter.
     pool : ndarray, shape (N, n)
         The candidate poses (rad) a plan may take (a cell's collision-free poses).
+    blocks : ndarray, shape (N, r, p_f), optional
+        The pool's information blocks (:meth:`PlanInformation.blocks`) where the
+        caller has them (the pool's design computed them).
+    weights : ndarray, shape (N,), optional
+        Weights the caller found on the pool (the pool's design): the weighted design
+        starts from them.
 
     Returns
     -------
@@ -391,67 +509,46 @@ def certify_pool(model: FitModel, q: np.ndarray, pool: np.ndarray) -> Certificat
     - p`` for the best design ``M*`` over the pool (concavity of ``log det``), so the
     plan's efficiency relative to it is at least ``(det M_plan / det M(xi*))^(1/p)
     exp(1 - max_x d(x, xi*) / p)``, ``xi*`` the multiplicative algorithm's weights
-    (:data:`POOL_CERTIFICATE_ITERATIONS` iterations of power 2; any weights give a
-    valid bound, better ones a tighter).  The plan is a design over the pool too: its own bound
+    (:func:`~armcal.doe.weights.optimal_weights`, from the pool design's own where
+    given; any weights give a valid bound, better ones a tighter), without those below
+    :data:`SMALLEST_WEIGHT` of the largest: the design reported is the one certified.
+    The plan is a design over the pool too: its own bound
     ``exp(1 - max_x d(x, plan) / p)``.  Where every design has ``det M <= 1``
     (:attr:`~armcal.models.interface.FitModel.information_bound`) so has the pool's
     best, and ``det M_plan^(1/p)`` is a bound as well.
     """
     q = np.asarray(q, dtype=float)
     pool = np.asarray(pool, dtype=float)
-    model = identifying(model, model.plan_conditions(q))  # a spatial arm as loaded: prepared
-    p = model.n_free
+    prepared = identifying(model, model.plan_conditions(q))  # a spatial arm as loaded
+    if prepared is not model:  # the caller's blocks are of other columns
+        blocks = weights = None
+    model, p = prepared, prepared.n_free
     plan_information = model.plan_information(q)
     plan_information.check_identifiable()
     plan = plan_information.svd()
     logdet_plan = float(plan.log_det_gram())
-    poses = np.unique(pool, axis=0)  # a copy adds no pose a design could weigh
     plan_inverse, _ = plan.inverse_gram()
-    pool_information = model.plan_information(poses)  # once: both variances and the blocks
-    d_plan, _ = pool_information.pose_variance(plan_inverse)
-    plan_only = float(np.exp(1.0 - d_plan.max() / p))
-    blocks = pool_information.blocks() / np.sqrt(pool_information.rows_per_pose)
-    weights = np.full(poses.shape[0], 1.0 / poses.shape[0])
-    weights = multiplicative_weights(blocks, weights, POOL_CERTIFICATE_ITERATIONS, power=2.0)
-    star = _weighted_svd(blocks, weights)
-    star_inverse, _ = star.inverse_gram()
-    d_star, _ = pool_information.pose_variance(star_inverse)
-    logdet_star = float(star.log_det_gram())
+    pool_information = model.plan_information(pool)
+    if blocks is None:
+        blocks = pool_information.blocks()
+    scaled = blocks / np.sqrt(pool_information.rows_per_pose)  # the plan's normalization
+    plan_only = float(np.exp(1.0 - variances(scaled, plan_inverse).max() / p))
+    found = optimal_weights(scaled, weights)
+    weights, star_inverse = _trimmed(scaled, found.weights)
+    d_star = variances(scaled, star_inverse)  # exact over the pool: no search
+    kept = np.flatnonzero(weights > 0)
+    rows = scaled[kept].reshape(-1, p)
+    star = rows.T @ (rows * np.repeat(weights[kept], scaled.shape[1])[:, None])
+    logdet_star = float(np.linalg.slogdet(star)[1])
     kw = float(np.exp((logdet_plan - logdet_star) / p + 1.0 - d_star.max() / p))
     hadamard = float(np.exp(logdet_plan / p)) if model.information_bound else 0.0
-    support = weights > 1e-6
     return Certificate(
         certified_d_efficiency=float(min(1.0, max(kw, plan_only, hadamard))),
         plan_only_bound=plan_only,
         reference_d_efficiency=float(np.exp(logdet_star / p)),
         max_variance=float(d_star.max()),
-        support=poses[support],
-        weights=weights[support] / weights[support].sum(),
-        max_pose=poses[int(np.argmax(d_star))],
-        pool_size=int(poses.shape[0]),
+        support=pool[kept],
+        weights=weights[kept],
+        max_pose=pool[int(np.argmax(d_star))],
+        pool_size=int(np.unique(pool, axis=0).shape[0]),
     )
-
-
-def _max_variance(
-    model: FitModel,
-    m_inv: np.ndarray,
-    seeds: np.ndarray,
-    rng: np.random.Generator,
-    search: int,
-    progress: ProgressCallback | None = None,
-) -> tuple[float, np.ndarray]:
-    """A thorough ``max_x d(x)`` over feasible poses, and where: random search, then
-    multistart ascent."""
-    sample = np.concatenate(
-        [seeds, _corner_poses(model, rng), feasible_poses(model, search, rng=rng)]
-    )
-    d, _ = _variance_function(model, sample, m_inv)
-    starts = sample[np.argsort(-d)[:64]]
-    found = _maximize_variance(model, m_inv, starts, steps=300, progress=progress)
-    d_found, _ = _variance_function(model, found, m_inv)
-    constraints = model.view_constraints(found[:, None, :])
-    if constraints is not None:  # count iterates that stray outside only a little
-        d_found = np.where(constraints[0].min(axis=(-2, -1)) > -1e-3, d_found, -np.inf)
-    if d.max() >= d_found.max():
-        return float(d.max()), sample[int(np.argmax(d))]
-    return float(d_found.max()), found[int(np.argmax(d_found))]

@@ -19,7 +19,7 @@ from .exchange import exchange_plan
 from .optimizer import optimize_plan
 from .order import ORDERS, Order, joint_travel, order_poses
 from .plans import DISTINCT_TOLERANCE, feasible_poses, random_plan, repeated_poses
-from .pool import distinct_count, pool_plan
+from .pool import PoolPlan, distinct_count, pool_design
 from .task import TASK_CRITERIA, task_criterion
 
 __all__ = [
@@ -172,9 +172,15 @@ class Design:
     def __repr__(self) -> str:
         cert = self.certificate
         certified = "" if cert is None else f", certified >= {cert.certified_d_efficiency:.4f}"
+        if self.normalized:
+            quality = f"D-efficiency {self.d_efficiency:.4f}"
+        else:  # say which basis: the criterion is not an efficiency here
+            quality = f"D-criterion {self.d_efficiency:.4f} in design coordinates"
+            if self.reference_efficiency is not None:
+                quality += f", {self.reference_efficiency:.4f} of the best weighted design"
         return (
             f"Design({self.q.shape[0]} poses of {self.model.name}, criterion {self.criterion}, "
-            f"{self.method}: D {self.d_efficiency:.4f}{certified})"
+            f"{self.method}: {quality}{certified})"
         )
 
 
@@ -369,7 +375,9 @@ def design(
     efficiency = float(d_efficiency(model, q))
     notes = [*(() if made.replaces_notes else closed.notes), *made.notes]
     notes.extend(closing_notes(made, closed, q, efficiency, method, distinct=distinct))
-    certificate = certified(model, q, pool, with_certificate, rng=rng, progress=progress)
+    certificate = certified(
+        model, q, pool, with_certificate, rng=rng, progress=progress, work=made.pool
+    )
     travel_found = joint_travel(q)
     if order == "travel":
         q = q[order_poses(q)]
@@ -520,6 +528,9 @@ class MadePlan:
         The D-criterion of the optimizer's plan, before the repeats were replaced.
     searched : bool
         Whether the optimizer searched (the family's note on its closed forms follows).
+    pool : PoolPlan or None
+        A plan from the user's pool: the pool's blocks and weights, which its
+        certificate reuses.
     """
 
     q: np.ndarray
@@ -529,6 +540,7 @@ class MadePlan:
     repeats: int = 0
     found: float = 0.0
     searched: bool = False
+    pool: PoolPlan | None = None
 
 
 def analytic_plan(closed: ClosedForms) -> MadePlan:
@@ -583,7 +595,8 @@ def pool_made_plan(
     """Every pose from the user's ``pool``: the pool's D-optimal weights, then DETMAX
     (:func:`~armcal.doe.pool.pool_plan`), then (one point in the plane a pose) the
     Fedorov exchange over the pool, if better."""
-    q = pool[pool_plan(model, m, pool, distinct=distinct)]
+    made = pool_design(model, m, pool, distinct=distinct)
+    q = pool[made.index]
     used = "pool"
     if _planar_exchange(model):
         swapped = exchange_plan(model, m, pool, start=q, rng=rng, distinct=distinct)
@@ -594,7 +607,7 @@ def pool_made_plan(
         if criterion == "D"
         else ("a plan from a pool maximizes D; it was not tuned for " + criterion,)
     )
-    return MadePlan(q, used, notes)
+    return MadePlan(q, used, notes, pool=made)
 
 
 def exchanged_plan(
@@ -696,15 +709,18 @@ def certified(
     *,
     rng: np.random.Generator,
     progress: ProgressCallback | None,
+    work: PoolPlan | None = None,
 ) -> Certificate | None:
     """The plan's certificate (None when not asked for): against the best design over the
     user's ``pool`` (:func:`certify_pool`), else over the constraints (:func:`certify`);
-    ``progress`` from 500 to 950 of 1000."""
+    ``progress`` from 500 to 950 of 1000; ``work`` is the pool design's, which the
+    pool's certificate starts from."""
     tick = progress if progress is not None else (lambda done, total: None)
     tick(500, 1000)
     certificate = None
     if with_certificate and pool is not None:  # the best plan is the pool's best
-        certificate = certify_pool(model, q, pool)
+        blocks, weights = (None, None) if work is None else (work.blocks, work.weights)
+        certificate = certify_pool(model, q, pool, blocks=blocks, weights=weights)
     elif with_certificate:
         certificate = certify(model, q, rng=rng, progress=share(progress, 0.5, 0.95))
     tick(950, 1000)

@@ -40,12 +40,13 @@ from ..criteria import d_efficiency
 from ..errors import ArmcalError
 from ..models import FitModel, Loads, PlanInformation, equations_per_pose
 from ..numerics import log_det
-from .certificate import Certificate, multiplicative_weights
+from .certificate import Certificate
 from .designer import Design
 from .exchange import exchange_indices
 from .order import ORDERS, joint_travel, order_poses
 from .plans import feasible_poses
 from .pool import detmax_indices
+from .weights import multiplicative_weights
 
 __all__ = [
     "design_with_loads",

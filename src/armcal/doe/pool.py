@@ -4,8 +4,9 @@ A cell's program often comes with poses known to be free of collision; a plan
 must then take its poses from that pool.  :func:`pool_plan` works for any family
 and any number of rows per pose, on the poses' information blocks:
 
-1. the continuous D-optimal weights on the pool (the multiplicative algorithm,
-   :func:`armcal.doe.certificate.multiplicative_weights`);
+1. the continuous D-optimal weights on the pool (the multiplicative algorithm to
+   a tolerance, :func:`armcal.doe.weights.optimal_weights`), which the plan's
+   certificate starts from (:class:`PoolPlan`);
 2. the ``m`` poses of largest weight -- the plan of the open tools' pool method,
    where it stops;
 3. an exchange from there that never lowers ``det M`` (Mitchell's DETMAX, 1974,
@@ -24,17 +25,21 @@ counts once and such a plan is refused.
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 
 from ..errors import ArmcalError, action
 from ..models import FitModel
 from ..numerics import spd_inverse
-from .certificate import multiplicative_weights
 from .plans import DISTINCT_TOLERANCE, repeated_poses
+from .weights import multiplicative_weights, optimal_weights, variances
 
 __all__ = [
+    "PoolPlan",
     "detmax_indices",
     "distinct_count",
+    "pool_design",
     "pool_plan",
     "pool_weights_plan",
 ]
@@ -68,11 +73,38 @@ def distinct_count(pool: np.ndarray) -> int:
     return int(np.count_nonzero(~repeated_poses(np.asarray(pool, dtype=float))))
 
 
+@dataclass(frozen=True, eq=False)
+class PoolPlan:
+    """A plan from a pool and the work behind it, which its certificate reuses.
+
+    Attributes
+    ----------
+    index : ndarray of int, shape (m,)
+        The plan's poses, as indices into the pool.
+    blocks : ndarray, shape (N, r, p_f) or None
+        Every pool pose's information blocks; None where only the distinct poses
+        were used.
+    weights : ndarray, shape (N,) or None
+        The pool's near D-optimal weights (:func:`~armcal.doe.weights.optimal_weights`)
+        that started the exchange; None with ``blocks``.
+    """
+
+    index: np.ndarray
+    blocks: np.ndarray | None
+    weights: np.ndarray | None
+
+
 def pool_plan(model: FitModel, m: int, pool: np.ndarray, *, distinct: bool = False) -> np.ndarray:
     """Indices ``(m,)`` into ``pool`` ``(N, n)`` of a D-optimal ``m``-pose plan from it
-    (module notes); poses may repeat where the exchange finds a repeat best, and must
-    where the pool holds fewer than ``m`` poses -- unless ``distinct``: then no two poses
-    of the plan are equal (within :data:`~armcal.doe.plans.DISTINCT_TOLERANCE`).
+    (:func:`pool_design`)."""
+    return pool_design(model, m, pool, distinct=distinct).index
+
+
+def pool_design(model: FitModel, m: int, pool: np.ndarray, *, distinct: bool = False) -> PoolPlan:
+    """A D-optimal ``m``-pose plan from ``pool`` ``(N, n)`` (module notes); poses may repeat
+    where the exchange finds a repeat best, and must where the pool holds fewer than ``m``
+    poses -- unless ``distinct``: then no two poses of the plan are equal (within
+    :data:`~armcal.doe.plans.DISTINCT_TOLERANCE`).
 
     Raises ArmcalError when the pool's poses cannot identify every free parameter, or
     ``distinct`` and the pool holds fewer than ``m`` distinct poses.
@@ -91,13 +123,18 @@ def pool_plan(model: FitModel, m: int, pool: np.ndarray, *, distinct: bool = Fal
     index = np.flatnonzero(usable)
     blocks = model.plan_information(pool[index]).blocks()  # once: the weights and the exchange
     p = blocks.shape[-1]
-    everything = np.einsum("krp,krq->pq", blocks, blocks)
+    everything = blocks.reshape(-1, p).T @ blocks.reshape(-1, p)
     if np.linalg.matrix_rank(everything) < p:
         raise ArmcalError(
             f"the {pool.shape[0]} candidate poses cannot identify the {p} free parameters "
             "of " + model.name + " together; add poses that move every joint"
         )
-    return index[detmax_indices(blocks, _largest_weights(blocks, m), distinct=distinct)]
+    weights = optimal_weights(blocks).weights
+    start = np.resize(np.argsort(-weights, kind="stable"), m)
+    chosen = index[detmax_indices(blocks, start, distinct=distinct)]
+    if distinct and count < pool.shape[0]:
+        return PoolPlan(chosen, None, None)
+    return PoolPlan(chosen, blocks, weights)
 
 
 def detmax_indices(blocks: np.ndarray, start: np.ndarray, *, distinct: bool = False) -> np.ndarray:
@@ -109,9 +146,9 @@ def detmax_indices(blocks: np.ndarray, start: np.ndarray, *, distinct: bool = Fa
     m = len(chosen)
     for _ in range(MAX_EXCHANGES):
         plan = blocks[chosen]
-        information = np.einsum("krp,krq->pq", plan, plan)
+        information = plan.reshape(-1, plan.shape[-1]).T @ plan.reshape(-1, plan.shape[-1])
         inverse = spd_inverse(information)
-        variance = np.einsum("krp,pq,krq->k", blocks, inverse, blocks)
+        variance = variances(blocks, inverse)
         if distinct:
             variance[chosen] = -np.inf
             if not np.isfinite(variance).any():  # the plan holds every candidate

@@ -230,16 +230,22 @@ class DesignEffort:
         Random starting plans of the optimizer (batched) and its ascent's steps.
     polish : int
         Iterations of the quasi-Newton polish of the best plans.
-    candidates, rounds, search : int
-        The certificate's random feasible poses for the weighted design, its rounds
-        of adding the variance function's maximizers, and the random poses its final
-        maximization starts from (:func:`armcal.doe.certify`).
+    candidates : int
+        Random feasible poses of a design with payloads' candidate pool
+        (:func:`armcal.doe.design_with_loads`).
+    reference, rounds, search : int
+        The certificate's (:func:`armcal.doe.certify`): how many poses of its sample
+        where the plan is least informed join the weighted design's candidates; the
+        rounds of adding the variance function's maximizers to them; and the sample
+        of random feasible poses, on which every variance function is evaluated first
+        and from whose best poses its ascents start.
     """
 
     starts: int = 48
     steps: int = 400
     polish: int = 500
     candidates: int = 3000
+    reference: int = 300
     rounds: int = 4
     search: int = 20000
 

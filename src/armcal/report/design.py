@@ -7,6 +7,7 @@ from collections.abc import Mapping
 
 import numpy as np
 
+from ..doe.certificate import Certificate
 from ..doe.designer import Design
 from ..doe.sizing import REQUIREMENTS, PosesNeeded
 from ..errors import ACTIONS, render
@@ -39,6 +40,11 @@ def design_summary(
         ``criterion``, ``method``, the certificate's bounds (None without one),
         ``certificate_pool_size`` (the distinct candidate poses a plan from a pool is
         certified against, the best plan over them; None: over every feasible pose),
+        ``reference_design`` (:func:`reference_design`: the weighted design behind the
+        certified figure), ``d_efficiency_basis`` (what ``d_efficiency`` is relative
+        to: ``unconstrained optimum`` where every design's is at most 1, else ``design
+        coordinates``, the D-criterion of the information with unit-norm columns, which
+        compares plans only through ``d_efficiency_vs_best_weighted_design``),
         ``notes``, ``seconds``, ``order``, ``distinct`` and the joint travel in
         the plan's order and in the order the method found
         (``joint_travel_deg``, ``joint_travel_unordered_deg``).
@@ -63,6 +69,10 @@ def design_summary(
         if cert is None or cert.max_pose is None
         else np.degrees(cert.max_pose).tolist(),
         "certificate_pool_size": None if cert is None else cert.pool_size,
+        "reference_design": None if cert is None else reference_design(cert),
+        "d_efficiency_basis": "unconstrained optimum"
+        if result.normalized
+        else "design coordinates",
         "notes": notes,
         "seconds": seconds,
         "order": result.order,
@@ -101,6 +111,21 @@ def design_summary(
         "",
     ]
     return document, lines
+
+
+def reference_design(cert: Certificate) -> dict[str, object]:
+    """The weighted design a certificate divides by, so that anyone can check its claim:
+    its poses (deg) and weights, and where its variance function peaks.
+
+    With ``M = sum_k w_k I(x_k)`` the model's per-pose information at the poses, and
+    ``d(x) = tr(M^-1 I(x))``, the certified figure is ``min(1, max(kw, plan_only, ...))``
+    with ``kw = (det M_plan / det M)^(1/p) exp(1 - max_x d(x) / p)``: ``max_variance``
+    is ``d`` at ``max_variance_pose_deg``, the largest the search found.
+    """
+    return {
+        "poses_deg": np.degrees(cert.support).tolist(),
+        "weights": np.asarray(cert.weights, dtype=float).tolist(),
+    }
 
 
 def _travel_line(result: Design) -> str:

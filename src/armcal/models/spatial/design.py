@@ -54,10 +54,12 @@ class SpatialDesign:
         """A start costs the chain's Jacobian and its derivative at every pose and target,
         and starts agree (the industrial arm's 40-pose D-optimum: 4 starts of 100 steps
         reach 0.7677702, 48 of 400 0.7677832); 150 polish iterations end within 3e-6 of
-        500 in log D (60 poses, 3 reflectors); the certificate's search is sized likewise
-        (a bound of 0.9977 against 0.9984 with the planar defaults)."""
+        500 in log D (60 poses, 3 reflectors); the certificate's sample of 3000 poses and
+        three rounds of its weighted design over 100 of them and the ascents' maxima
+        certify a UR5's 30-pose plan (3 reflectors) 0.9988, where the earlier search
+        over 1000 random candidates, 4.5 times as costly, certified 0.9990."""
         return DesignEffort(
-            starts=4, steps=100, polish=150, candidates=1000, rounds=2, search=3000
+            starts=4, steps=100, polish=150, candidates=1000, reference=100, rounds=3, search=3000
         )
 
     def feasible(self, q: np.ndarray, *, tol: float = 1e-9) -> np.ndarray:

@@ -249,7 +249,25 @@ def cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     axis handling, which costs more than the products on the small arrays here."""
     a0, a1, a2 = a[..., 0], a[..., 1], a[..., 2]
     b0, b1, b2 = b[..., 0], b[..., 1], b[..., 2]
-    return np.stack([a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0], axis=-1)
+    out = np.empty(np.broadcast_shapes(a.shape, b.shape))
+    # Written into one array, not stacked: a copy of the result less.
+    np.subtract(a1 * b2, a2 * b1, out=out[..., 0])
+    np.subtract(a2 * b0, a0 * b2, out=out[..., 1])
+    np.subtract(a0 * b1, a1 * b0, out=out[..., 2])
+    return out
+
+
+def _turned(rot: np.ndarray, axis: int, angle: np.ndarray) -> np.ndarray:
+    """``rot @ elementary(axis, angle)`` ``(..., 3, 3)``, as two columns mixed: no matrix
+    of every row built and multiplied."""
+    c, s = np.cos(angle)[..., None], np.sin(angle)[..., None]
+    i, j = (axis + 1) % 3, (axis + 2) % 3
+    ri, rj = rot[..., :, i], rot[..., :, j]
+    out = np.empty(np.broadcast_shapes(rot.shape, (*c.shape[:-1], 3, 3)))
+    out[..., :, axis] = rot[..., :, axis]
+    out[..., :, i] = ri * c + rj * s
+    out[..., :, j] = rj * c - ri * s
+    return out
 
 
 @dataclass(frozen=True, eq=False)
@@ -349,13 +367,13 @@ def _walk_chain(
                 screws.axis[..., slots[c], :] = w
                 screws.moment[..., slots[c], :] = -cross(w, pos)
             if c in slots:
-                rot = rot @ elementary(c - 3, err[..., c])
+                rot = _turned(rot, c - 3, err[..., c])
         w = rot[..., :, 2]
         if kind == "R":
             if screws is not None:
                 screws.joint_axis[..., k, :] = w
                 screws.joint_moment[..., k, :] = -cross(w, pos)
-            rot = rot @ elementary(2, u[..., k])
+            rot = _turned(rot, 2, u[..., k])
         else:
             if screws is not None:
                 screws.joint_moment[..., k, :] = w
