@@ -6,10 +6,14 @@ paper) are the family's own (:meth:`~armcal.models.interface.FitModel.closed_for
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 import numpy as np
 
 from ..errors import ArmcalError
-from ..models import FitModel
+
+if TYPE_CHECKING:  # annotations only: the command line's help reads this module's tolerance
+    from ..models import FitModel
 
 __all__ = [
     "DISTINCT_TOLERANCE",
