@@ -10,7 +10,7 @@ noise only ever add time):
 * ``python -c "import numpy"`` -- the floor: every command imports numpy;
 * ``armcal --version``, ``armcal --help``, ``armcal identify --help`` and
   ``armcal design --help`` -- what the program shows before it runs anything: the
-  parser and the help text (:mod:`armcal.choices`), none of the library;
+  parser and the help text (:mod:`armcal.choices`), none of the library, no numpy;
 * a bad input (``armcal identify --robot missing.toml ...``, exit status 2) --
   shown without a target: the robot loader runs before the error is known.
 

@@ -18,7 +18,9 @@ __all__ = [
     "DEFAULT_ROBOT",
     "DEFAULT_SIGMA_MM",
     "DESIGN_METHODS",
+    "DISTINCT_TOLERANCE",
     "IDENTIFY_METHODS",
+    "ORDERS",
     "PLANAR_DEMO_POSES",
     "REQUIREMENTS",
     "ROBOT_FOLDER",
@@ -40,6 +42,15 @@ TASK_CRITERIA = {
     "G": "G-efficiency: the largest predicted position variance after calibration over the "
     "test poses (Kiefer and Wolfowitz 1960)",
 }
+
+#: How a plan's poses are ordered (:data:`armcal.doe.order.Order`): ``travel`` for short
+#: joint travel, ``none`` for the order the design method produced.
+ORDERS = ("travel", "none")
+
+#: Two poses are one pose when every joint angle agrees within this many rad (0.2
+#: arcsec: far below any arm's repeatability, so the robot would measure them as one):
+#: :func:`armcal.doe.plans.repeated_poses`, a design's ``distinct``.
+DISTINCT_TOLERANCE = 1e-6
 
 #: How :func:`armcal.doe.design` makes a plan (``method``).
 DESIGN_METHODS = ("auto", "analytic", "optimize", "exchange")

@@ -24,8 +24,6 @@ from functools import partial
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-import numpy as np
-
 from ..choices import BUILTIN_ROBOTS, BUILTIN_SPATIAL_ROBOTS
 from ..errors import ArmcalError
 from ..files import STDIO, atomic_write, load_robot, write_folder, write_json
@@ -33,7 +31,9 @@ from ..formats import format_reference
 from ..progress import ProgressBar
 from .output import CLI_ACTIONS, emit, print_warnings, warning_dicts
 
-if TYPE_CHECKING:
+if TYPE_CHECKING:  # annotations only: the help imports no numpy
+    import numpy as np
+
     from ..files import RobotSpec
     from ..models import FitModel
 

@@ -10,7 +10,7 @@ options whose paths :func:`armcal.cli.main` checks before any work, and
 output will hold (called when the command runs: the names are its modules').
 
 The parser imports :mod:`armcal.choices` for the values it lists, and none of the
-library: ``armcal --help`` and ``armcal COMMAND --help`` cost little more than
+library: ``armcal --help`` and ``armcal COMMAND --help`` import no numerics, not even
 numpy (:mod:`.commands` imports what a command runs when it runs).
 """
 
@@ -28,14 +28,14 @@ from ..choices import (
     DEFAULT_ROBOT,
     DEFAULT_SIGMA_MM,
     DESIGN_METHODS,
+    DISTINCT_TOLERANCE,
+    ORDERS,
     PLANAR_DEMO_POSES,
     REQUIREMENTS,
     SPATIAL_DEMO_POSES,
     TASK_CRITERIA,
 )
 from ..choices import IDENTIFY_METHODS as METHODS
-from ..doe.order import ORDERS
-from ..doe.plans import DISTINCT_TOLERANCE
 from ..errors import ArmcalError
 from . import commands, options
 from .help import COMMANDS, OUTPUTS_EPILOG

@@ -6,14 +6,11 @@ paper) are the family's own (:meth:`~armcal.models.interface.FitModel.closed_for
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
-
 import numpy as np
 
+from ..choices import DISTINCT_TOLERANCE
 from ..errors import ArmcalError
-
-if TYPE_CHECKING:  # annotations only: the command line's help reads this module's tolerance
-    from ..models import FitModel
+from ..models import FitModel
 
 __all__ = [
     "DISTINCT_TOLERANCE",
@@ -60,11 +57,6 @@ def feasible(model: FitModel, q: np.ndarray, *, tol: float = 1e-9) -> np.ndarray
     target's point in the measurement region.)
     """
     return model.feasible(q, tol=tol)
-
-
-#: Two poses are one pose when every joint angle agrees within this many rad (0.2
-#: arcsec: far below any arm's repeatability, so the robot would measure them as one).
-DISTINCT_TOLERANCE = 1e-6
 
 
 def repeated_poses(q: np.ndarray, *, tol: float = DISTINCT_TOLERANCE) -> np.ndarray:
