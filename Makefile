@@ -75,6 +75,7 @@ bench: $(VENV)/.installed
 	$(BIN)/python benchmarks/bench_spatial_compliance.py
 	$(BIN)/python benchmarks/bench_outliers.py
 	$(BIN)/python benchmarks/bench_floor.py
+	$(BIN)/python benchmarks/bench_floor_spatial.py
 
 # Run every example of README.md and write its real output into it (and docs/img/).
 readme: $(VENV)/.installed
