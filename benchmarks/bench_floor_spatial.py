@@ -194,8 +194,8 @@ def armcal_argv(args: list[str]) -> list[str]:
     return [sys.executable, "-m", "armcal", *args]
 
 
-def floor_argv(args: list[str]) -> list[str]:
-    return [sys.executable, FLOORS, *args]
+def floor_argv(args: list[str], script: str = FLOORS) -> list[str]:
+    return [sys.executable, script, *args]
 
 
 # --------------------------------------------------------------------------- the inputs
@@ -293,6 +293,7 @@ class Command:
     check: Callable[[Inputs, int], str]
     target_ratio: float = TARGET_RATIO
     extra: str = ""
+    script: str = FLOORS  # the floor's module
 
     def out(self, inputs: Inputs, n: int, who: str) -> str:
         return inputs(f"{self.name}-{n}-{who}.out")
@@ -590,7 +591,7 @@ def run(command: Command, inputs: Inputs, n: int, repeats: int) -> Timing:
             armcal_argv(command.armcal(inputs, n)), command.out(inputs, n, "armcal")
         )
         f_s, f_mb = measure_cpu(
-            floor_argv(command.floor(inputs, n)), command.out(inputs, n, "floor")
+            floor_argv(command.floor(inputs, n), command.script), command.out(inputs, n, "floor")
         )
         timing.armcal_s, timing.floor_s = min(timing.armcal_s, a_s), min(timing.floor_s, f_s)
         timing.armcal_mb, timing.floor_mb = max(timing.armcal_mb, a_mb), max(timing.floor_mb, f_mb)

@@ -13,6 +13,7 @@ from ..numerics import ScaledSVD, scaled_svd, spd_inverse
 from ..progress import ProgressCallback, share
 from .ascent import adam_ascent, penalty_weight, to_q, to_u, view_penalty
 from .plans import feasible_poses
+from .pool import pool_blocks
 from .weights import newton_weights, optimal_weights, variances
 
 __all__ = [
@@ -187,11 +188,11 @@ def _weighted_svd(blocks: np.ndarray, weights: np.ndarray) -> ScaledSVD:
 
 #: Ascents of the variance function per search, from the poses where it is largest: a
 #: few ascents from the best points of the sample, not many from random ones.
-ASCENT_STARTS = 48
+ASCENT_STARTS = 32
 
 #: Adam steps of every ascent (:func:`_maximize_variance`); the last search of a
 #: certificate takes twice as many, its maximum being the one the bound rests on.
-ASCENT_STEPS = 100
+ASCENT_STEPS = 60
 
 #: The weighted design's tolerance (:func:`~armcal.doe.weights.newton_weights`): its
 #: candidates are few (the plan's poses, the sample's best, the ascents' maxima), so
@@ -528,10 +529,9 @@ def certify_pool(
     plan = plan_information.svd()
     logdet_plan = float(plan.log_det_gram())
     plan_inverse, _ = plan.inverse_gram()
-    pool_information = model.plan_information(pool)
     if blocks is None:
-        blocks = pool_information.blocks()
-    scaled = blocks / np.sqrt(pool_information.rows_per_pose)  # the plan's normalization
+        blocks = pool_blocks(model, pool)
+    scaled = blocks / np.sqrt(plan_information.rows_per_pose)  # the plan's normalization
     plan_only = float(np.exp(1.0 - variances(scaled, plan_inverse).max() / p))
     found = optimal_weights(scaled, weights)
     weights, star_inverse = _trimmed(scaled, found.weights)

@@ -36,9 +36,11 @@ from .plans import DISTINCT_TOLERANCE, repeated_poses
 from .weights import multiplicative_weights, optimal_weights, variances
 
 __all__ = [
+    "BLOCK_CHUNK",
     "PoolPlan",
     "detmax_indices",
     "distinct_count",
+    "pool_blocks",
     "pool_design",
     "pool_plan",
     "pool_weights_plan",
@@ -94,6 +96,19 @@ class PoolPlan:
     weights: np.ndarray | None
 
 
+#: Poses whose information blocks are computed at once: the kinematics behind them holds
+#: every parameter's screw at every row, several times the blocks' size (a six-axis arm's
+#: pool of 10^4 poses peaked at 212 MB in one piece).
+BLOCK_CHUNK = 1000
+
+
+def pool_blocks(model: FitModel, q: np.ndarray) -> np.ndarray:
+    """Every pose's information blocks ``(N, r, p_f)`` (:meth:`PlanInformation.blocks`),
+    :data:`BLOCK_CHUNK` poses at a time: memory of the blocks, not of the kinematics."""
+    parts = np.array_split(q, max(1, -(-q.shape[0] // BLOCK_CHUNK)))
+    return np.concatenate([model.plan_information(part).blocks() for part in parts])
+
+
 def pool_plan(model: FitModel, m: int, pool: np.ndarray, *, distinct: bool = False) -> np.ndarray:
     """Indices ``(m,)`` into ``pool`` ``(N, n)`` of a D-optimal ``m``-pose plan from it
     (:func:`pool_design`)."""
@@ -121,7 +136,7 @@ def pool_design(model: FitModel, m: int, pool: np.ndarray, *, distinct: bool = F
             f"asked for; use {action('poses', count)} or fewer, or give more candidates"
         )
     index = np.flatnonzero(usable)
-    blocks = model.plan_information(pool[index]).blocks()  # once: the weights and the exchange
+    blocks = pool_blocks(model, pool[index])  # once: the weights and the exchange
     p = blocks.shape[-1]
     everything = blocks.reshape(-1, p).T @ blocks.reshape(-1, p)
     if np.linalg.matrix_rank(everything) < p:
