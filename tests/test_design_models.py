@@ -321,7 +321,10 @@ def test_encoder_noise_design_is_certified_and_the_certificate_never_overclaims(
     result = design(arm, 12, rng=0)
     assert result.method.startswith("optimize")
     assert result.d_efficiency > float(d_efficiency(arm, analytic_plan(arm, 12)))
-    assert result.certificate.certified_d_efficiency >= 0.99
+    # Tightness, not safety: the certificate's search costs a design step since issue 37
+    # (a sample's best poses, not 3000 random candidates), and certifies this plan 0.9895
+    # where the costlier search certified above 0.99; the never-overclaim check follows.
+    assert result.certificate.certified_d_efficiency >= 0.985
     # A random plan's efficiency relative to the best plan is at most its D-criterion over
     # the designed plan's (a lower bound on the best): the certificate must stay below.
     q = random_plan(arm, 12, rng=rng)
