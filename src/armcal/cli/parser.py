@@ -6,12 +6,7 @@ the function of :mod:`.commands` that runs it, and its options in the order
 ``--help`` lists them. Options that several commands share are named once below
 (``_SEED``, ``_robot_seed_json``, ...). ``inputs`` and ``outputs`` name the
 options whose paths :func:`armcal.cli.main` checks before any work, and
-``folder_files`` the function of :mod:`.commands` that names the files a folder
-output will hold (called when the command runs: the names are its modules').
-
-The parser imports :mod:`armcal.choices` for the values it lists, and none of the
-library: ``armcal --help`` and ``armcal COMMAND --help`` import no numerics, not even
-numpy (:mod:`.commands` imports what a command runs when it runs).
+``folder_files`` the files a folder output will hold.
 """
 
 from __future__ import annotations
@@ -23,20 +18,16 @@ from dataclasses import dataclass
 from typing import Any
 
 from .._version import __version__
-from ..choices import (
-    CRITERION_NAMES,
-    DEFAULT_ROBOT,
-    DEFAULT_SIGMA_MM,
-    DESIGN_METHODS,
-    DISTINCT_TOLERANCE,
-    ORDERS,
-    PLANAR_DEMO_POSES,
-    REQUIREMENTS,
-    SPATIAL_DEMO_POSES,
-    TASK_CRITERIA,
-)
-from ..choices import IDENTIFY_METHODS as METHODS
+from ..criteria import CRITERIA
+from ..demo import DEMO_FILES, PLANAR_DEMO_POSES
+from ..demo_spatial import SPATIAL_DEMO_FILES, SPATIAL_DEMO_POSES
+from ..doe import DISTINCT_TOLERANCE, ORDERS, REQUIREMENTS, TASK_CRITERIA
+from ..doe import METHODS as DESIGN_METHODS
 from ..errors import ArmcalError
+from ..files import DEFAULT_ROBOT
+from ..identification import METHODS
+from ..reproduction import TABLE_COLUMNS
+from ..workflow import DEFAULT_SIGMA_MM
 from . import commands, options
 from .help import COMMANDS, OUTPUTS_EPILOG
 from .help import description as help_description
@@ -101,7 +92,7 @@ class Command:
     options: tuple[Option | OneOf, ...] = ()
     inputs: tuple[str, ...] = ()
     outputs: tuple[str, ...] = ()
-    folder_files: Callable[[], tuple[str, ...]] | None = None
+    folder_files: tuple[str, ...] = ()
 
 
 # --------------------------------------------------------------------------- shared options
@@ -184,6 +175,13 @@ def _choice(flag: str, choices: Any, default: str, help_: str) -> Option:
     return option(flag, choices=list(choices), default=default, help=help_)
 
 
+#: Files written by ``reproduce -o DIR``, checked before any work.
+_REPRODUCE_FILES = (
+    *(f"{name}.csv" for name in TABLE_COLUMNS),
+    "figure1.png",
+    "figure2.png",
+    "report.md",
+)
 _FIGURE = "(.png, .pdf, .svg or .eps)"
 
 # --------------------------------------------------------------------------- the table
@@ -333,7 +331,7 @@ COMMAND_TABLE: tuple[Command, ...] = (
             ),
             _choice(
                 "--criterion",
-                [*CRITERION_NAMES, *TASK_CRITERIA],
+                [*CRITERIA, *TASK_CRITERIA],
                 "D",
                 "criterion (default D); I and G: the mean and the largest predicted position "
                 "error after calibration over the test poses (--test-poses)",
@@ -464,7 +462,7 @@ COMMAND_TABLE: tuple[Command, ...] = (
             option("-o", "--output", required=True, metavar="DIR", help="folder to write"),
         ),
         outputs=("output",),
-        folder_files=commands.reproduce_files,
+        folder_files=_REPRODUCE_FILES,
     ),
     Command(
         "check-compliance",
@@ -487,7 +485,7 @@ COMMAND_TABLE: tuple[Command, ...] = (
         ),
         inputs=("robot", "truth"),
         outputs=("output",),
-        folder_files=commands.demo_files,
+        folder_files=tuple(dict.fromkeys(DEMO_FILES + SPATIAL_DEMO_FILES)),
     ),
     Command(
         "export",
@@ -592,6 +590,6 @@ def _add_command(subs: Any, command: Command) -> None:
                 group.add_argument(*one.flags, **one.settings)
         else:
             sub.add_argument(*entry.flags, **entry.settings)
-    paths: dict[str, Any] = {"inputs": command.inputs, "outputs": command.outputs}
+    paths = {"inputs": command.inputs, "outputs": command.outputs}
     paths["folder_files"] = command.folder_files
     sub.set_defaults(run=command.run, **{key: value for key, value in paths.items() if value})

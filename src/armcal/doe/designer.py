@@ -8,7 +8,6 @@ from typing import Literal
 
 import numpy as np
 
-from ..choices import DESIGN_METHODS
 from ..criteria import CRITERIA, Criterion, attains_unit_bound, d_efficiency, efficiencies
 from ..errors import ArmcalError, ArmcalWarning, action, render
 from ..models import ClosedFormPlan, ClosedFormPlans, FitModel, equations_per_pose
@@ -60,8 +59,7 @@ Method = Literal["auto", "analytic", "optimize", "exchange"]
 REPLICATE_ABOVE = 120
 
 
-#: How :func:`design` makes a plan (:data:`armcal.choices.DESIGN_METHODS`).
-METHODS = DESIGN_METHODS
+METHODS = ("auto", "analytic", "optimize", "exchange")
 
 #: Poses of the random plan on which :func:`identifiable_model` chooses what a plan
 #: moving every joint identifies (as the command line's design does): far more rows
