@@ -33,68 +33,152 @@ The public API, by concern (each module's docstring says more):
 * :mod:`armcal.report` -- every result as text and as JSON;
 * :mod:`armcal.files` -- robot, truth, plan, measurement and calibration files.
 
-Importing armcal prints nothing, plots nothing and imports neither matplotlib
-nor scipy.
+Importing armcal prints nothing, plots nothing and imports none of numpy, matplotlib
+and scipy: each name imports its module the first time it is used (``armcal.identify``
+imports the identification, not the design).
 """
 
+from typing import TYPE_CHECKING
+
 from ._version import __version__
-from .compensation import Compensation, compensate
-from .criteria import (
-    CRITERIA,
-    PlanQuality,
-    d_efficiency,
-    evaluate_plan,
-    position_accuracy,
-    predicted_std,
-)
-from .doe import (
-    Certificate,
-    Design,
-    PosesNeeded,
-    certify,
-    design,
-    orthogonal_plan,
-    poses_needed,
-    random_plan,
-)
-from .errors import ArmcalError, ArmcalWarning, InputError, NotIdentifiableError
-from .export_planar import robot_toml, urdf
-from .families import run_demo
-from .files import load_robot, load_truth, read_calibration, read_measurements, read_plan
-from .identification import Calibration, Estimate, GoodnessOfFit, Outlier, identify, solve
-from .instrument import identify_3d
-from .models import (
-    Annulus,
-    Box,
-    CalibratedArm,
-    CompliantArm,
-    Conditions,
-    Elastostatic,
-    FitModel,
-    Identifiability,
-    Loads,
-    PlanarArm,
-    Plane,
-    Target,
-    check_identifiable,
-    fit_plane,
-    forward_kinematics,
-    identifiability,
-    jacobian,
-    joint_jacobian,
-    link_angles,
-    paper_from_user_matrix,
-    wrap_angle,
-)
-from .models.planar.closed_form import solve_closed_form
-from .noise import NoiseModel
-from .report import format_calibration
-from .reproduction.algorithm import solve_gauss_newton
-from .reproduction.study import PlanStudy, random_plan_study
-from .simulate import MonteCarlo, monte_carlo
-from .synthesis import synthesize_measurements
-from .validation import CrossValidation, Validation, cross_validate, validate
-from .workflow import calibrate, export
+from .lazy import exports
+
+if TYPE_CHECKING:
+    from .compensation import Compensation, compensate
+    from .criteria import (
+        CRITERIA,
+        PlanQuality,
+        d_efficiency,
+        evaluate_plan,
+        position_accuracy,
+        predicted_std,
+    )
+    from .doe import (
+        Certificate,
+        Design,
+        PosesNeeded,
+        certify,
+        design,
+        orthogonal_plan,
+        poses_needed,
+        random_plan,
+    )
+    from .errors import ArmcalError, ArmcalWarning, InputError, NotIdentifiableError
+    from .export_planar import robot_toml, urdf
+    from .families import run_demo
+    from .files import load_robot, load_truth, read_calibration, read_measurements, read_plan
+    from .identification import Calibration, Estimate, GoodnessOfFit, Outlier, identify, solve
+    from .instrument import identify_3d
+    from .models import (
+        Annulus,
+        Box,
+        CalibratedArm,
+        CompliantArm,
+        Conditions,
+        Elastostatic,
+        FitModel,
+        Identifiability,
+        Loads,
+        PlanarArm,
+        Plane,
+        Target,
+        check_identifiable,
+        fit_plane,
+        forward_kinematics,
+        identifiability,
+        jacobian,
+        joint_jacobian,
+        link_angles,
+        paper_from_user_matrix,
+        wrap_angle,
+    )
+    from .models.planar.closed_form import solve_closed_form
+    from .noise import NoiseModel
+    from .report import format_calibration
+    from .reproduction.algorithm import solve_gauss_newton
+    from .reproduction.study import PlanStudy, random_plan_study
+    from .simulate import MonteCarlo, monte_carlo
+    from .synthesis import synthesize_measurements
+    from .validation import CrossValidation, Validation, cross_validate, validate
+    from .workflow import calibrate, export
+
+# Out of mypy's sight: it sees the names imported above, and still flags a misspelt one.
+if not TYPE_CHECKING:
+    __getattr__, __dir__ = exports(
+        __name__,
+        {
+            ".compensation": ("Compensation", "compensate"),
+            ".criteria": (
+                "CRITERIA",
+                "PlanQuality",
+                "d_efficiency",
+                "evaluate_plan",
+                "position_accuracy",
+                "predicted_std",
+            ),
+            ".doe": (
+                "Certificate",
+                "Design",
+                "PosesNeeded",
+                "certify",
+                "design",
+                "orthogonal_plan",
+                "poses_needed",
+                "random_plan",
+            ),
+            ".errors": ("ArmcalError", "ArmcalWarning", "InputError", "NotIdentifiableError"),
+            ".export_planar": ("robot_toml", "urdf"),
+            ".families": ("run_demo",),
+            ".files": (
+                "load_robot",
+                "load_truth",
+                "read_calibration",
+                "read_measurements",
+                "read_plan",
+            ),
+            ".identification": (
+                "Calibration",
+                "Estimate",
+                "GoodnessOfFit",
+                "Outlier",
+                "identify",
+                "solve",
+            ),
+            ".instrument": ("identify_3d",),
+            ".models": (
+                "Annulus",
+                "Box",
+                "CalibratedArm",
+                "CompliantArm",
+                "Conditions",
+                "Elastostatic",
+                "FitModel",
+                "Identifiability",
+                "Loads",
+                "PlanarArm",
+                "Plane",
+                "Target",
+                "check_identifiable",
+                "fit_plane",
+                "forward_kinematics",
+                "identifiability",
+                "jacobian",
+                "joint_jacobian",
+                "link_angles",
+                "paper_from_user_matrix",
+                "wrap_angle",
+            ),
+            ".models.planar.closed_form": ("solve_closed_form",),
+            ".noise": ("NoiseModel",),
+            ".report": ("format_calibration",),
+            ".reproduction.algorithm": ("solve_gauss_newton",),
+            ".reproduction.study": ("PlanStudy", "random_plan_study"),
+            ".simulate": ("MonteCarlo", "monte_carlo"),
+            ".synthesis": ("synthesize_measurements",),
+            ".validation": ("CrossValidation", "Validation", "cross_validate", "validate"),
+            ".workflow": ("calibrate", "export"),
+        },
+    )
 
 __all__ = [
     "CRITERIA",

@@ -15,6 +15,7 @@ from typing import Any
 
 import numpy as np
 
+from .choices import PLANAR_DEMO_POSES
 from .compensation import Compensation, compensate
 from .doe import Design, design, random_plan
 from .errors import ACTIONS, ArmcalWarning
@@ -53,9 +54,6 @@ DEMO_STEPS = 6
 
 #: The gross error put on one measurement (a bumped reflector), mm in x and y.
 OUTLIER_MM = (1.2, -0.9)
-
-#: Poses of the demo's designed plan.
-PLANAR_DEMO_POSES = 20
 
 #: Poses of the fresh validation set, of the program compensated, of the error map.
 VALIDATION_POSES, PROGRAM_POSES, MAP_POSES = 100, 12, 2000

@@ -19,6 +19,7 @@ from typing import Any
 
 import numpy as np
 
+from .choices import SPATIAL_DEMO_POSES
 from .compensation import Compensation, compensate
 from .demo import Demo, figure_writer, report_head
 from .doe import random_plan
@@ -64,9 +65,6 @@ DEMO_REFLECTORS = {
 #: The virtual tracker's noise (1 std): range 8 um + 0.4 um/m, across the line of sight
 #: 10 um + 2.5 um/m, of the size tracker data sheets give (half their 2-std figures).
 DEMO_TRACKER = TrackerNoise(0.008, 0.0004, 0.010, 0.0025)
-
-#: Poses of the demo's plan (each measured at the three reflectors).
-SPATIAL_DEMO_POSES = 60
 
 #: Cross-validation folds, poses of the fresh validation set and of the program.
 FOLDS, VALIDATION_POSES, PROGRAM_POSES = 5, 100, 12

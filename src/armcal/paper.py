@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from .choices import BUILTIN_ROBOTS
 from .models import PlanarArm
 
 __all__ = [
@@ -35,9 +36,6 @@ __all__ = [
 PAPER_LINK_LENGTHS_MM = (260.0, 180.0, 120.0, 100.0)
 PAPER_DL_MM = (1.5, -0.6, -0.4, 0.7)
 PAPER_DQ_DEG = (0.5, -0.5, 0.7, -0.3)
-
-#: Built-in robot names and their number of links.
-BUILTIN_ROBOTS = {f"paper-{n}link": n for n in (2, 3, 4)}
 
 
 #: Section VI: measurement noise, 1 std per coordinate.

@@ -9,8 +9,24 @@
 
 from __future__ import annotations
 
-from .output import CLI_ACTIONS
-from .parser import build_parser
-from .program import main
+from typing import TYPE_CHECKING
+
+from ..lazy import exports
+
+if TYPE_CHECKING:
+    from .output import CLI_ACTIONS
+    from .parser import build_parser
+    from .program import main
+
+# Out of mypy's sight: it sees the names imported above, and still flags a misspelt one.
+if not TYPE_CHECKING:
+    __getattr__, __dir__ = exports(
+        __name__,
+        {
+            ".output": ("CLI_ACTIONS",),
+            ".parser": ("build_parser",),
+            ".program": ("main",),
+        },
+    )
 
 __all__ = ["CLI_ACTIONS", "build_parser", "main"]

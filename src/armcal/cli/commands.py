@@ -4,6 +4,13 @@ Every command is thin: what it does beyond parsing arguments and writing files
 is a library call of :mod:`armcal.workflow`, and its output is a report of
 :mod:`armcal.report`.  Options that name a flag in an error keep the flag's
 name here.
+
+Each command imports the library it runs in its own body, when it runs, after the
+robot file (or the calibration) it starts from has loaded: the parser imports this
+module, so that ``armcal --help`` imports none of the library, ``armcal design``
+imports the design and its report, not the identification's, and a robot file that
+cannot be read is refused before the rest is imported (a lazy import of a slow
+dependency, the only kind this module has).
 """
 
 from __future__ import annotations
@@ -15,79 +22,34 @@ from collections.abc import Callable
 from dataclasses import replace
 from functools import partial
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
-import numpy as np
-
-from ..demo import demo_rigid_warning
+from ..choices import BUILTIN_ROBOTS, BUILTIN_SPATIAL_ROBOTS
 from ..errors import ArmcalError
-from ..files import (
-    BUILTIN_ROBOTS,
-    BUILTIN_SPATIAL_ROBOTS,
-    STDIO,
-    RobotSpec,
-    atomic_write,
-    calibration_document,
-    format_measurements_csv,
-    format_plan_csv,
-    format_program_csv,
-    load_robot,
-    read_calibration,
-    read_labelled_plan,
-    read_loaded_plan,
-    read_measurements,
-    read_program,
-    write_folder,
-    write_json,
-)
+from ..files import STDIO, atomic_write, load_robot, write_folder, write_json
 from ..formats import format_reference
-from ..models import FitModel
-from ..models.wording import held_sentence
 from ..progress import ProgressBar
-from ..report import (
-    acceptance_report,
-    compensation_report,
-    design_summary,
-    format_calibration,
-    format_cross_validation,
-    format_monte_carlo,
-    format_reproduction,
-    monte_carlo_to_dict,
-    poses_needed_summary,
-    quality_report,
-    reproduction_summary,
-    table_csv,
-    validation_report,
-)
-from ..reproduction import TABLE_COLUMNS, reproduce
-from ..workflow import (
-    calibrate,
-    compensate_program,
-    design_plan,
-    evaluate_file,
-    export_files,
-    model_spec,
-    plan_model,
-    simulate_plan,
-    simulation_sigma,
-    size_plan,
-    synthesize_plan,
-    test_poses,
-    validate_measurements,
-)
 from .output import CLI_ACTIONS, emit, print_warnings, warning_dicts
+
+if TYPE_CHECKING:  # annotations only: the help imports no numpy
+    import numpy as np
+
+    from ..files import RobotSpec
+    from ..models import FitModel
 
 __all__ = [
     "REQUIREMENT_OPTIONS",
     "check_compliance",
     "compensate",
     "demo",
+    "demo_files",
     "design",
     "evaluate",
     "export",
     "formats",
     "identify",
     "poses_needed",
+    "reproduce_files",
     "reproduce_paper",
     "simulate",
     "synthesize",
@@ -115,6 +77,8 @@ def _robot(args: argparse.Namespace) -> RobotSpec:
 def _model(args: argparse.Namespace, spec: RobotSpec) -> tuple[RobotSpec, FitModel]:
     """The robot file and its arm with ``--fix`` (replacing the file's set, the arm's and
     the compliance's) and ``--sigma`` applied."""
+    from ..workflow import model_spec  # when a command runs (module docstring)
+
     fixed = getattr(args, "fix", None)
     return model_spec(spec, spec.arm, fixed=fixed, sigma=getattr(args, "sigma", None))
 
@@ -173,6 +137,8 @@ def _labelled_plan(
     path: str, spec: RobotSpec
 ) -> tuple[np.ndarray, np.ndarray | None, tuple[str, ...] | None]:
     """:func:`_plan` and the plan's ``pose`` labels (None without the column)."""
+    from ..files import read_labelled_plan, read_loaded_plan  # when a command runs
+
     if spec.elastic is None:
         q, labels = read_labelled_plan(path, spec.arm)
         return q, None, labels
@@ -180,12 +146,30 @@ def _labelled_plan(
 
 
 def _test_poses(args: argparse.Namespace, spec: RobotSpec, *, loaded: bool = False) -> np.ndarray:
-    """``--test-poses``, else 1000 uniform poses within the limits (:func:`test_poses`)."""
+    """``--test-poses``, else 1000 uniform poses within the limits
+    (:func:`armcal.workflow.test_poses`)."""
+    from ..workflow import test_poses  # when a command runs (module docstring)
+
     return test_poses(spec, args.seed, args.test_poses, loaded=loaded)
 
 
 def _written(*paths: str | None) -> list[str]:
     return [f"wrote {path}" for path in paths if path is not None]
+
+
+def reproduce_files() -> tuple[str, ...]:
+    """The files ``reproduce -o DIR`` writes, checked before any work."""
+    from ..reproduction import TABLE_COLUMNS  # when the command runs (module docstring)
+
+    return (*(f"{name}.csv" for name in TABLE_COLUMNS), "figure1.png", "figure2.png", "report.md")
+
+
+def demo_files() -> tuple[str, ...]:
+    """The files ``demo -o DIR`` may write, either family's, checked before any work."""
+    from ..demo import DEMO_FILES  # when the command runs (module docstring)
+    from ..demo_spatial import SPATIAL_DEMO_FILES
+
+    return tuple(dict.fromkeys(DEMO_FILES + SPATIAL_DEMO_FILES))
 
 
 # --------------------------------------------------------------------------- commands
@@ -204,6 +188,9 @@ def synthesize(args: argparse.Namespace) -> None:
             "only the summary on stdout); give a name ending in .csv"
         )
     spec = _robot(args)
+    from ..files import format_measurements_csv  # the library it runs (module docstring)
+    from ..workflow import plan_model, simulation_sigma, synthesize_plan
+
     q, payload, labels = _labelled_plan(args.plan, spec)
     model, loads = plan_model(spec, spec.arm, q.shape[0], payload, virtual=True)
     truth, note = _truth(args, spec, model, nominal=True)
@@ -280,6 +267,11 @@ def identify(args: argparse.Namespace) -> None:
             f"its keys) or a built-in name ({builtins})"
         )
     spec = _robot(args)
+    from ..files import calibration_document, read_measurements  # the library it runs
+    from ..models.wording import held_sentence
+    from ..report import format_calibration, format_cross_validation
+    from ..workflow import calibrate
+
     meas = read_measurements(args.measurements, spec.arm)
     run = calibrate(spec, meas, compliance=not args.no_compliance, **_options(args))
     cal = run.calibration
@@ -314,7 +306,13 @@ def identify(args: argparse.Namespace) -> None:
 
 def validate(args: argparse.Namespace) -> None:
     """``armcal validate``: a calibration against held-out measurements."""
+    from ..files import read_calibration  # first, as the robot (module docstring)
+
     cal = read_calibration(args.calibration)
+    from ..files import read_measurements  # the library it runs (module docstring)
+    from ..report import acceptance_report, validation_report
+    from ..workflow import validate_measurements
+
     meas = read_measurements(
         args.measurements, cal.arm, arm_from=f"the calibration {args.calibration}"
     )
@@ -361,7 +359,13 @@ def validate(args: argparse.Namespace) -> None:
 
 def compensate(args: argparse.Namespace) -> None:
     """``armcal compensate``: a program's corrected commands."""
+    from ..files import read_calibration  # first, as the robot (module docstring)
+
     cal = read_calibration(args.calibration)
+    from ..files import format_program_csv, read_program  # the library it runs
+    from ..report import compensation_report
+    from ..workflow import compensate_program
+
     program = read_program(args.program, cal.arm, arm_from=f"the calibration {args.calibration}")
     run = compensate_program(
         cal, program, target=args.target, payload_kg=args.payload_kg, source=args.program
@@ -389,7 +393,12 @@ def compensate(args: argparse.Namespace) -> None:
 
 def design(args: argparse.Namespace) -> None:
     """``armcal design``: an optimal plan, its quality and its picture."""
-    spec, arm = _model(args, _robot(args))
+    spec = _robot(args)
+    from ..files import format_plan_csv  # the library it runs (module docstring)
+    from ..report import design_summary, quality_report
+    from ..workflow import design_plan
+
+    spec, arm = _model(args, spec)
     # with [elastostatic] a candidates file may carry payload_kg: read it, so that the
     # refusal the user sees is design_plan's (candidates with loads), not a column's
     candidates = None if args.candidates is None else _plan(args.candidates, spec)[0]
@@ -426,7 +435,11 @@ def design(args: argparse.Namespace) -> None:
 
 def evaluate(args: argparse.Namespace) -> None:
     """``armcal evaluate``: a plan's quality."""
-    spec, arm = _model(args, _robot(args))
+    spec = _robot(args)
+    from ..report import quality_report  # the library it runs (module docstring)
+    from ..workflow import evaluate_file
+
+    spec, arm = _model(args, spec)
     q, payload = _plan(args.plan, spec)
     run = evaluate_file(
         spec, arm, q, test_q=_test_poses(args, spec), payload=payload, source=args.plan
@@ -436,7 +449,11 @@ def evaluate(args: argparse.Namespace) -> None:
 
 def simulate(args: argparse.Namespace) -> None:
     """``armcal simulate``: a Monte Carlo of a plan."""
-    spec, arm = _model(args, _robot(args))
+    spec = _robot(args)
+    from ..report import format_monte_carlo, monte_carlo_to_dict  # the library it runs
+    from ..workflow import plan_model, simulate_plan
+
+    spec, arm = _model(args, spec)
     q, payload = _plan(args.plan, spec)
     model, loads = plan_model(spec, arm, q.shape[0], payload)
     truth, note = _truth(args, spec, model, nominal=True)
@@ -464,6 +481,10 @@ def simulate(args: argparse.Namespace) -> None:
 def poses_needed(args: argparse.Namespace) -> None:
     """``armcal poses-needed``: the smallest plan that reaches an accuracy."""
     spec = _robot(args)
+    from ..files import format_plan_csv  # the library it runs (module docstring)
+    from ..report import poses_needed_summary
+    from ..workflow import size_plan
+
     arm = _model(args, spec)[1] if spec.elastic is None else spec.arm
     requirement = next(key for key in REQUIREMENT_OPTIONS if getattr(args, key) is not None)
     positions = requirement == "position_rms_mm"  # test poses with the robot's payload
@@ -488,6 +509,8 @@ def poses_needed(args: argparse.Namespace) -> None:
 def reproduce_paper(args: argparse.Namespace) -> None:
     """``armcal reproduce``: the paper's tables and figures, recomputed."""
     from ..plotting import plot_accuracy_curves, plot_random_plans, save_figure
+    from ..report import format_reproduction, reproduction_summary, table_csv
+    from ..reproduction import TABLE_COLUMNS, reproduce
 
     result = reproduce(
         trials=args.trials,
@@ -525,6 +548,8 @@ def check_compliance(args: argparse.Namespace) -> None:
 def demo(args: argparse.Namespace) -> None:
     """``armcal demo``: the whole workflow on a built-in robot."""
     spec = _robot(args)
+    from ..demo import demo_rigid_warning  # the library it runs (module docstring)
+
     result, kinds = spec.family.role("demo")(
         spec,
         lambda arm: _truth(args, spec, arm, geometry_only=True)[0],
@@ -564,7 +589,11 @@ def export(args: argparse.Namespace) -> None:
             f"{args.original}: --from is the URDF to calibrate: give --urdf FILE to write it "
             "with the calibrated origins (or --origins-yaml FILE)"
         )
+    from ..files import read_calibration  # first, as the robot (module docstring)
+
     cal = read_calibration(args.calibration)
+    from ..workflow import export_files  # the library it runs (module docstring)
+
     run = export_files(
         cal,
         robot_toml_path=args.robot_toml,

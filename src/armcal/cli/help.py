@@ -14,7 +14,7 @@ from __future__ import annotations
 import textwrap
 from dataclasses import dataclass
 
-from ..files import BUILTIN_ROBOTS, BUILTIN_SPATIAL_ROBOTS
+from ..choices import BUILTIN_ROBOTS, BUILTIN_SPATIAL_ROBOTS
 from ..formats import columns_line
 
 __all__ = ["COMMANDS", "OUTPUTS_EPILOG", "OUTPUTS_POINTER", "CommandHelp", "description", "epilog"]

@@ -9,7 +9,7 @@ from __future__ import annotations
 import argparse
 import math
 
-from ..files import SIGMA_RANGE_MM
+from ..choices import SIGMA_RANGE_MM
 
 __all__ = [
     "finite",

@@ -6,7 +6,12 @@ the function of :mod:`.commands` that runs it, and its options in the order
 ``--help`` lists them. Options that several commands share are named once below
 (``_SEED``, ``_robot_seed_json``, ...). ``inputs`` and ``outputs`` name the
 options whose paths :func:`armcal.cli.main` checks before any work, and
-``folder_files`` the files a folder output will hold.
+``folder_files`` the function of :mod:`.commands` that names the files a folder
+output will hold (called when the command runs: the names are its modules').
+
+The parser imports :mod:`armcal.choices` for the values it lists, and none of the
+library: ``armcal --help`` and ``armcal COMMAND --help`` import no numerics, not even
+numpy (:mod:`.commands` imports what a command runs when it runs).
 """
 
 from __future__ import annotations
@@ -18,16 +23,20 @@ from dataclasses import dataclass
 from typing import Any
 
 from .._version import __version__
-from ..criteria import CRITERIA
-from ..demo import DEMO_FILES, PLANAR_DEMO_POSES
-from ..demo_spatial import SPATIAL_DEMO_FILES, SPATIAL_DEMO_POSES
-from ..doe import DISTINCT_TOLERANCE, ORDERS, REQUIREMENTS, TASK_CRITERIA
-from ..doe import METHODS as DESIGN_METHODS
+from ..choices import (
+    CRITERION_NAMES,
+    DEFAULT_ROBOT,
+    DEFAULT_SIGMA_MM,
+    DESIGN_METHODS,
+    DISTINCT_TOLERANCE,
+    ORDERS,
+    PLANAR_DEMO_POSES,
+    REQUIREMENTS,
+    SPATIAL_DEMO_POSES,
+    TASK_CRITERIA,
+)
+from ..choices import IDENTIFY_METHODS as METHODS
 from ..errors import ArmcalError
-from ..files import DEFAULT_ROBOT
-from ..identification import METHODS
-from ..reproduction import TABLE_COLUMNS
-from ..workflow import DEFAULT_SIGMA_MM
 from . import commands, options
 from .help import COMMANDS, OUTPUTS_EPILOG
 from .help import description as help_description
@@ -92,7 +101,7 @@ class Command:
     options: tuple[Option | OneOf, ...] = ()
     inputs: tuple[str, ...] = ()
     outputs: tuple[str, ...] = ()
-    folder_files: tuple[str, ...] = ()
+    folder_files: Callable[[], tuple[str, ...]] | None = None
 
 
 # --------------------------------------------------------------------------- shared options
@@ -175,13 +184,6 @@ def _choice(flag: str, choices: Any, default: str, help_: str) -> Option:
     return option(flag, choices=list(choices), default=default, help=help_)
 
 
-#: Files written by ``reproduce -o DIR``, checked before any work.
-_REPRODUCE_FILES = (
-    *(f"{name}.csv" for name in TABLE_COLUMNS),
-    "figure1.png",
-    "figure2.png",
-    "report.md",
-)
 _FIGURE = "(.png, .pdf, .svg or .eps)"
 
 # --------------------------------------------------------------------------- the table
@@ -331,7 +333,7 @@ COMMAND_TABLE: tuple[Command, ...] = (
             ),
             _choice(
                 "--criterion",
-                [*CRITERIA, *TASK_CRITERIA],
+                [*CRITERION_NAMES, *TASK_CRITERIA],
                 "D",
                 "criterion (default D); I and G: the mean and the largest predicted position "
                 "error after calibration over the test poses (--test-poses)",
@@ -462,7 +464,7 @@ COMMAND_TABLE: tuple[Command, ...] = (
             option("-o", "--output", required=True, metavar="DIR", help="folder to write"),
         ),
         outputs=("output",),
-        folder_files=_REPRODUCE_FILES,
+        folder_files=commands.reproduce_files,
     ),
     Command(
         "check-compliance",
@@ -485,7 +487,7 @@ COMMAND_TABLE: tuple[Command, ...] = (
         ),
         inputs=("robot", "truth"),
         outputs=("output",),
-        folder_files=tuple(dict.fromkeys(DEMO_FILES + SPATIAL_DEMO_FILES)),
+        folder_files=commands.demo_files,
     ),
     Command(
         "export",
@@ -590,6 +592,6 @@ def _add_command(subs: Any, command: Command) -> None:
                 group.add_argument(*one.flags, **one.settings)
         else:
             sub.add_argument(*entry.flags, **entry.settings)
-    paths = {"inputs": command.inputs, "outputs": command.outputs}
+    paths: dict[str, Any] = {"inputs": command.inputs, "outputs": command.outputs}
     paths["folder_files"] = command.folder_files
     sub.set_defaults(run=command.run, **{key: value for key, value in paths.items() if value})

@@ -13,8 +13,9 @@ import os
 import sys
 from collections.abc import Callable, Sequence
 
+from ..choices import BUILTIN_ROBOTS
 from ..errors import ArmcalError, unique_warnings
-from ..files import BUILTIN_ROBOTS, STDIO, OutputFolder, check_outputs
+from ..files import STDIO, OutputFolder, check_outputs
 from ..files.common import forget_stdin
 from ..formats import FIGURE_FORMATS
 from ..progress import Elapsed
@@ -43,7 +44,7 @@ def _check_stdio(args: argparse.Namespace, inputs: dict, outputs: dict) -> None:
     to_stdout = [option for option, path in outputs.items() if path == STDIO]
     if not to_stdout:
         return
-    if getattr(args, "folder_files", ()):
+    if getattr(args, "folder_files", None) is not None:
         raise ArmcalError(f"{to_stdout[0]} -: a folder cannot go to stdout; give a folder name")
     if "--plot" in to_stdout:
         raise ArmcalError(
@@ -82,7 +83,8 @@ def _check_paths(args: argparse.Namespace) -> None:
     inputs = {_option(dest): getattr(args, dest) for dest in getattr(args, "inputs", ())}
     if inputs.get("--robot") in BUILTIN_ROBOTS:
         del inputs["--robot"]  # a name, not a file
-    folder_files = getattr(args, "folder_files", ())
+    names = getattr(args, "folder_files", None)  # a folder's files, named by the command
+    folder_files: tuple[str, ...] = () if names is None else names()
     outputs: dict[str, str | OutputFolder | None] = {}
     for dest in getattr(args, "outputs", ()):
         path = getattr(args, dest)

@@ -36,16 +36,45 @@ The planar family's closed-form plans (:func:`orthogonal_plan`,
 beside the other plans.
 """
 
-from ..models.planar.plans import analytic_plan, orthogonal_plan
-from .certificate import Certificate, certify
-from .designer import METHODS, Design, design
-from .exchange import exchange_plan
-from .loads import design_with_loads
-from .optimizer import optimize_plan
-from .order import ORDERS, joint_travel, order_poses
-from .plans import DISTINCT_TOLERANCE, feasible, feasible_poses, random_plan, repeated_poses
-from .sizing import REQUIREMENTS, PosesNeeded, accuracy_metric, poses_needed
-from .task import TASK_CRITERIA, task_criterion
+from typing import TYPE_CHECKING
+
+from ..lazy import exports
+
+if TYPE_CHECKING:
+    from ..models.planar.plans import analytic_plan, orthogonal_plan
+    from .certificate import Certificate, certify
+    from .designer import METHODS, Design, design
+    from .exchange import exchange_plan
+    from .loads import design_with_loads
+    from .optimizer import optimize_plan
+    from .order import ORDERS, joint_travel, order_poses
+    from .plans import DISTINCT_TOLERANCE, feasible, feasible_poses, random_plan, repeated_poses
+    from .sizing import REQUIREMENTS, PosesNeeded, accuracy_metric, poses_needed
+    from .task import TASK_CRITERIA, task_criterion
+
+# Out of mypy's sight: it sees the names imported above, and still flags a misspelt one.
+if not TYPE_CHECKING:
+    __getattr__, __dir__ = exports(
+        __name__,
+        {
+            "..models.planar.plans": ("analytic_plan", "orthogonal_plan"),
+            ".certificate": ("Certificate", "certify"),
+            ".designer": ("METHODS", "Design", "design"),
+            ".exchange": ("exchange_plan",),
+            ".loads": ("design_with_loads",),
+            ".optimizer": ("optimize_plan",),
+            ".order": ("ORDERS", "joint_travel", "order_poses"),
+            ".plans": (
+                "DISTINCT_TOLERANCE",
+                "feasible",
+                "feasible_poses",
+                "random_plan",
+                "repeated_poses",
+            ),
+            ".sizing": ("REQUIREMENTS", "PosesNeeded", "accuracy_metric", "poses_needed"),
+            ".task": ("TASK_CRITERIA", "task_criterion"),
+        },
+    )
 
 __all__ = [
     "DISTINCT_TOLERANCE",

@@ -8,6 +8,7 @@ from typing import Literal
 
 import numpy as np
 
+from ..choices import DESIGN_METHODS
 from ..criteria import CRITERIA, Criterion, attains_unit_bound, d_efficiency, efficiencies
 from ..errors import ArmcalError, ArmcalWarning, action, render
 from ..models import ClosedFormPlan, ClosedFormPlans, FitModel, equations_per_pose
@@ -59,7 +60,8 @@ Method = Literal["auto", "analytic", "optimize", "exchange"]
 REPLICATE_ABOVE = 120
 
 
-METHODS = ("auto", "analytic", "optimize", "exchange")
+#: How :func:`design` makes a plan (:data:`armcal.choices.DESIGN_METHODS`).
+METHODS = DESIGN_METHODS
 
 #: Poses of the random plan on which :func:`identifiable_model` chooses what a plan
 #: moving every joint identifies (as the command line's design does): far more rows

@@ -12,11 +12,12 @@ from __future__ import annotations
 
 from collections import deque
 from operator import sub
-from typing import Literal, get_args
+from typing import Literal
 
 import numpy as np
 from numpy.typing import ArrayLike
 
+from ..choices import ORDERS
 from ..errors import ArmcalError
 
 __all__ = [
@@ -34,7 +35,6 @@ __all__ = [
 #: How a plan's poses are ordered: ``travel`` for short joint travel
 #: (:func:`order_poses`), ``none`` for the order the design method produced.
 Order = Literal["travel", "none"]
-ORDERS: tuple[str, ...] = get_args(Order)
 
 #: Nearest poses (in joint travel) of each pose that the local search may connect it to.
 NEIGHBOURS = 8

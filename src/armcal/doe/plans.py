@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..choices import DISTINCT_TOLERANCE
 from ..errors import ArmcalError
 from ..models import FitModel
 
@@ -56,11 +57,6 @@ def feasible(model: FitModel, q: np.ndarray, *, tol: float = 1e-9) -> np.ndarray
     target's point in the measurement region.)
     """
     return model.feasible(q, tol=tol)
-
-
-#: Two poses are one pose when every joint angle agrees within this many rad (0.2
-#: arcsec: far below any arm's repeatability, so the robot would measure them as one).
-DISTINCT_TOLERANCE = 1e-6
 
 
 def repeated_poses(q: np.ndarray, *, tol: float = DISTINCT_TOLERANCE) -> np.ndarray:

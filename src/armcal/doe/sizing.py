@@ -9,6 +9,7 @@ from typing import Literal
 
 import numpy as np
 
+from ..choices import REQUIREMENTS
 from ..criteria import position_rms, predicted_std
 from ..errors import ArmcalError, action
 from ..models import FitModel, Loads, equations_per_pose
@@ -32,16 +33,6 @@ __all__ = [
 
 
 Requirement = Literal["length_std_mm", "angle_std_deg", "position_rms_mm"]
-
-
-#: Accuracy requirements: what each measures, in which unit.
-REQUIREMENTS: dict[str, str] = {
-    "length_std_mm": "largest std of a length of the arm itself (mm)",
-    "angle_std_deg": "largest std of an angle of the arm itself (deg)",
-    "position_rms_mm": (
-        "predicted RMS tip error per point after calibration at the test poses (mm)"
-    ),
-}
 
 
 #: Relative slack when comparing an accuracy with its requirement, so that a plan

@@ -24,6 +24,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..choices import TASK_CRITERIA
 from ..criteria import Criterion
 from ..errors import ArmcalError
 from ..models import FitModel
@@ -35,13 +36,6 @@ __all__ = [
     "task_criterion",
 ]
 
-#: What each task criterion is, for help texts and reports.
-TASK_CRITERIA = {
-    "I": "I-efficiency tr(L) / tr(Fs^-1 L): the mean predicted position variance after "
-    "calibration over the test poses (Box and Draper 1959)",
-    "G": "G-efficiency: the largest predicted position variance after calibration over the "
-    "test poses (Kiefer and Wolfowitz 1960)",
-}
 
 #: Sharpness of the smooth maximum the optimizer climbs for G: with ``T`` test points it
 #: exceeds the maximum of ``log v_t`` by at most ``log(T) / beta`` (0.35 for 1000 points,

@@ -25,11 +25,12 @@ import importlib
 import os
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
-from typing import Any, Generic, TypeVar
-
-import numpy as np
+from typing import TYPE_CHECKING, Any, Generic, TypeVar
 
 from ..errors import ArmcalError, ArmcalWarning
+
+if TYPE_CHECKING:  # annotations only: the command line's help loads no numpy
+    import numpy as np
 
 #: A role: a callable, or the ``"module:name"`` of one, imported on first use.
 Ref = str | Callable[..., Any] | None

@@ -9,47 +9,107 @@
 * :mod:`~armcal.files.calibration` -- the calibration JSON, written and read.
 """
 
-from ..families.registry import RobotSpec, load_robot
-from .calibration import (
-    CALIBRATION_FORMAT,
-    calibration_document,
-    read_calibration,
-    robot_to_dict,
-)
-from .common import STDIO, to_json, write_json
-from .paths import MANIFEST, OutputFolder, atomic_write, check_outputs, write_folder
-from .robots import (
-    BUILTIN_ROBOTS,
-    COMPLIANCE_TRUTH_KEYS,
-    DEFAULT_ROBOT,
-    JOINT_SIGMA_MAX_DEG,
-    LINK_LENGTH_RANGE_MM,
-    RADIAN_LIMIT_BOUND,
-    SIGMA_RANGE_MM,
-    load_compliance_truth,
-    load_planar_robot,
-    load_truth,
-    unknown_parameter,
-)
-from .spatial import (
-    BUILTIN_SPATIAL_ROBOTS,
-    is_spatial_robot,
-    load_spatial_robot,
-    load_spatial_truth,
-)
-from .tables import (
-    INSTRUMENT_RANGE,
-    LIMIT_TOLERANCE_DEG,
-    REACH_MARGIN,
-    Measurements,
-    Program,
-    read_labelled_plan,
-    read_loaded_plan,
-    read_measurements,
-    read_plan,
-    read_program,
-)
-from .writers import format_measurements_csv, format_plan_csv, format_program_csv
+from typing import TYPE_CHECKING
+
+from ..lazy import exports
+
+if TYPE_CHECKING:
+    from ..families.registry import RobotSpec, load_robot
+    from .calibration import (
+        CALIBRATION_FORMAT,
+        calibration_document,
+        read_calibration,
+        robot_to_dict,
+    )
+    from .common import STDIO, to_json, write_json
+    from .paths import MANIFEST, OutputFolder, atomic_write, check_outputs, write_folder
+    from .robots import (
+        BUILTIN_ROBOTS,
+        COMPLIANCE_TRUTH_KEYS,
+        DEFAULT_ROBOT,
+        JOINT_SIGMA_MAX_DEG,
+        LINK_LENGTH_RANGE_MM,
+        RADIAN_LIMIT_BOUND,
+        SIGMA_RANGE_MM,
+        load_compliance_truth,
+        load_planar_robot,
+        load_truth,
+        unknown_parameter,
+    )
+    from .spatial import (
+        BUILTIN_SPATIAL_ROBOTS,
+        is_spatial_robot,
+        load_spatial_robot,
+        load_spatial_truth,
+    )
+    from .tables import (
+        INSTRUMENT_RANGE,
+        LIMIT_TOLERANCE_DEG,
+        REACH_MARGIN,
+        Measurements,
+        Program,
+        read_labelled_plan,
+        read_loaded_plan,
+        read_measurements,
+        read_plan,
+        read_program,
+    )
+    from .writers import format_measurements_csv, format_plan_csv, format_program_csv
+
+# Out of mypy's sight: it sees the names imported above, and still flags a misspelt one.
+if not TYPE_CHECKING:
+    __getattr__, __dir__ = exports(
+        __name__,
+        {
+            "..families.registry": ("RobotSpec", "load_robot"),
+            ".calibration": (
+                "CALIBRATION_FORMAT",
+                "calibration_document",
+                "read_calibration",
+                "robot_to_dict",
+            ),
+            ".common": ("STDIO", "to_json", "write_json"),
+            ".paths": (
+                "MANIFEST",
+                "OutputFolder",
+                "atomic_write",
+                "check_outputs",
+                "write_folder",
+            ),
+            ".robots": (
+                "BUILTIN_ROBOTS",
+                "COMPLIANCE_TRUTH_KEYS",
+                "DEFAULT_ROBOT",
+                "JOINT_SIGMA_MAX_DEG",
+                "LINK_LENGTH_RANGE_MM",
+                "RADIAN_LIMIT_BOUND",
+                "SIGMA_RANGE_MM",
+                "load_compliance_truth",
+                "load_planar_robot",
+                "load_truth",
+                "unknown_parameter",
+            ),
+            ".spatial": (
+                "BUILTIN_SPATIAL_ROBOTS",
+                "is_spatial_robot",
+                "load_spatial_robot",
+                "load_spatial_truth",
+            ),
+            ".tables": (
+                "INSTRUMENT_RANGE",
+                "LIMIT_TOLERANCE_DEG",
+                "REACH_MARGIN",
+                "Measurements",
+                "Program",
+                "read_labelled_plan",
+                "read_loaded_plan",
+                "read_measurements",
+                "read_plan",
+                "read_program",
+            ),
+            ".writers": ("format_measurements_csv", "format_plan_csv", "format_program_csv"),
+        },
+    )
 
 __all__ = [
     "BUILTIN_ROBOTS",

@@ -17,6 +17,7 @@ from typing import Any
 
 import numpy as np
 
+from ..choices import BUILTIN_ROBOTS, DEFAULT_ROBOT, SIGMA_RANGE_MM
 from ..errors import ArmcalError, ArmcalWarning, InputError, action, unrendered
 from ..families.registry import RobotSpec, builtin_robots
 from ..formats import SPATIAL_TRUTH_KEYS, TRUTH_KEYS, allowed_keys
@@ -33,7 +34,7 @@ from ..models import (
     checked_joint_map,
 )
 from ..noise import NoiseModel
-from ..paper import BUILTIN_ROBOTS, paper_arm
+from ..paper import paper_arm
 from .common import (
     STDIO,
     check_keys,
@@ -70,10 +71,6 @@ __all__ = [
     "unknown_parameter",
 ]
 
-#: Instrument noise accepted (1 std, mm): from a nanometre to a metre.  Beyond it the
-#: value is a unit mistake, and its square under- or overflows in the covariance.
-SIGMA_RANGE_MM = (1e-6, 1e3)
-
 #: Link lengths accepted (mm): from a micrometre to 10 km.
 LINK_LENGTH_RANGE_MM = (1e-3, 1e7)
 
@@ -90,9 +87,6 @@ JOINT_SIGMA_MAX_DEG = 10.0
 #: confined to +-6.3 deg cannot move enough to be calibrated, while radians limits of
 #: any revolute joint lie within +-2 pi.  Such limits give a ``limits-radians`` warning.
 RADIAN_LIMIT_BOUND = 6.3
-
-#: The robot used when a command is given none.
-DEFAULT_ROBOT = "paper-4link"
 
 
 # --------------------------------------------------------------------------- robots

@@ -28,6 +28,7 @@ from typing import Any
 
 import numpy as np
 
+from ..choices import BUILTIN_SPATIAL_ROBOTS, ROBOT_FOLDER
 from ..errors import ArmcalError, ArmcalWarning, InputError, unrendered
 from ..families.registry import RobotSpec
 from ..formats import SPATIAL_KEYS, SPATIAL_TRUTH_KEYS, TRUTH_KEYS, allowed_keys
@@ -74,21 +75,12 @@ from .urdf import read_urdf
 
 __all__ = [
     "BUILTIN_SPATIAL_ROBOTS",
+    "ROBOT_FOLDER",
     "is_spatial_robot",
     "load_spatial_robot",
     "load_spatial_truth",
     "spatial_truth",
 ]
-
-#: The folder of the built-in spatial robots' files.
-ROBOT_FOLDER = Path(__file__).resolve().parents[1] / "robots"
-
-#: Built-in spatial robots by name: the robot file each is.
-BUILTIN_SPATIAL_ROBOTS = {
-    "industrial-6r": ROBOT_FOLDER / "industrial-6r.toml",
-    "cobot-6r": ROBOT_FOLDER / "cobot-6r.toml",
-    "arm-7r": ROBOT_FOLDER / "arm-7r.toml",
-}
 
 # The keys each table takes: the catalogue's (armcal formats prints it), so a key cannot be
 # accepted without being documented.

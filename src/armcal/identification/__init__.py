@@ -10,11 +10,36 @@
 * :mod:`~armcal.identification.calibrate` -- :func:`identify`, all of the above.
 """
 
-from .calibrate import identify
-from .judgement import FEW_DOF, FIT_ALPHA, OUTLIER_ALPHA, GoodnessOfFit, Outlier, PoseTest
-from .result import Calibration, Estimate, NestedFit
-from .robust import HUBER_K
-from .solvers import METHODS, Method, Solution, resolve_method, solve
+from typing import TYPE_CHECKING
+
+from ..lazy import exports
+
+if TYPE_CHECKING:
+    from .calibrate import identify
+    from .judgement import FEW_DOF, FIT_ALPHA, OUTLIER_ALPHA, GoodnessOfFit, Outlier, PoseTest
+    from .result import Calibration, Estimate, NestedFit
+    from .robust import HUBER_K
+    from .solvers import METHODS, Method, Solution, resolve_method, solve
+
+# Out of mypy's sight: it sees the names imported above, and still flags a misspelt one.
+if not TYPE_CHECKING:
+    __getattr__, __dir__ = exports(
+        __name__,
+        {
+            ".calibrate": ("identify",),
+            ".judgement": (
+                "FEW_DOF",
+                "FIT_ALPHA",
+                "OUTLIER_ALPHA",
+                "GoodnessOfFit",
+                "Outlier",
+                "PoseTest",
+            ),
+            ".result": ("Calibration", "Estimate", "NestedFit"),
+            ".robust": ("HUBER_K",),
+            ".solvers": ("METHODS", "Method", "Solution", "resolve_method", "solve"),
+        },
+    )
 
 __all__ = [
     "FEW_DOF",

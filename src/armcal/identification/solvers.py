@@ -29,6 +29,7 @@ from typing import Literal
 
 import numpy as np
 
+from ..choices import IDENTIFY_METHODS
 from ..errors import ArmcalError
 from ..models import Conditions, FitModel, wrap_angle
 from ..models.information import weighted_whitening
@@ -47,7 +48,7 @@ __all__ = [
 Method = Literal["auto", "closed-form", "gauss-newton"]
 
 #: The solvers by name (``"auto"`` chooses one, :func:`resolve_method`).
-METHODS = ("closed-form", "gauss-newton")
+METHODS = IDENTIFY_METHODS
 
 #: A Gauss-Newton step smaller than this times ``cond(J_w)`` times the reach is within
 #: the round-off of its own solve (``cond eps``, eps = 2.2e-16, with a margin of 10).

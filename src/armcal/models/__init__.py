@@ -21,91 +21,201 @@
 * :mod:`~armcal.models.wording` -- the interface's data in words, every family's.
 """
 
-from .calibrated import CalibratedArm
-from .defaults import LARGE_ANGLE_DEG, TermChoice
-from .identifiability import Identifiability, combination, listing, row_echelon
-from .interface import (
-    ClosedForm,
-    ClosedFormPlan,
-    ClosedFormPlans,
-    Conditions,
-    DesignEffort,
-    DeviationBounds,
-    Effect,
-    FitModel,
-    Held,
-    LinearPositions,
-    Loads,
-    PaperCriteria,
-    PlanInformation,
-    UnpredictedLoads,
-    equations_per_pose,
-    position_jacobian,
-)
-from .joint_maps import checked_joint_map
-from .planar.arm import INSTRUMENT_PARAMS, LARGE_LENGTH_FRACTION, PlanarArm
-from .planar.compliance import (
-    STANDARD_GRAVITY,
-    CompliantArm,
-    Elastostatic,
-    check_compliance_identifiable,
-    compliance_identifiability,
-)
-from .planar.geometry import (
-    PlanarGeometry,
-    Target,
-    link_angles,
-    paper_from_user,
-    paper_from_user_matrix,
-    split_params,
-    standard_joint_map,
-    wrap_angle,
-)
-from .planar.information import (
-    check_identifiable,
-    covariance_factor,
-    every_target,
-    identifiability,
-    model_basis,
-    model_columns,
-    plan_rows,
-    plan_svd,
-    scaled_columns,
-    scaled_jacobian,
-    target_weights,
-    unit_trace,
-    user_from_scaled,
-    weighted_user_jacobian,
-)
-from .planar.kinematics import (
-    Parametrization,
-    check_target,
-    forward_kinematics,
-    jacobian,
-    joint_jacobian,
-    link_phasors,
-    link_units,
-    link_vectors,
-    tool_angles,
-)
-from .plane import Plane, fit_plane
-from .regions import Annulus, Box, Region
-from .spatial.arm import SINGLE_TARGET, SpatialArm
-from .spatial.chain import (
-    SerialChain,
-    UrdfJoint,
-    matrix_rpy,
-    rotation_vector,
-    rpy_matrix,
-    transform,
-    vector_rotation,
-)
-from .spatial.compliance import CompliantSpatialArm, SpatialElastics
-from .spatial.dh import MdhTable, mdh_table
-from .spatial.gravity import LinkMasses
-from .spatial.kinematics import LARGE_PLACEMENT_FRACTION, SpatialLayout, default_targets
-from .spatial.selection import Selection
-from .spatial.view import SpatialView
+import importlib
+from typing import TYPE_CHECKING
+
+from ..lazy import exports
+
+# ``identifiability`` names both a module of this package and the planar arm's function
+# this package exports.  Importing a module binds it on its package the first time only:
+# import the module now and unbind it, so that the name stays the function's (found on
+# first use, as every name below) whatever imports the module later.
+importlib.import_module(".identifiability", __name__)
+del globals()["identifiability"]
+
+if TYPE_CHECKING:
+    from .calibrated import CalibratedArm
+    from .defaults import LARGE_ANGLE_DEG, TermChoice
+    from .identifiability import Identifiability, combination, listing, row_echelon
+    from .interface import (
+        ClosedForm,
+        ClosedFormPlan,
+        ClosedFormPlans,
+        Conditions,
+        DesignEffort,
+        DeviationBounds,
+        Effect,
+        FitModel,
+        Held,
+        LinearPositions,
+        Loads,
+        PaperCriteria,
+        PlanInformation,
+        UnpredictedLoads,
+        equations_per_pose,
+        position_jacobian,
+    )
+    from .joint_maps import checked_joint_map
+    from .planar.arm import INSTRUMENT_PARAMS, LARGE_LENGTH_FRACTION, PlanarArm
+    from .planar.compliance import (
+        STANDARD_GRAVITY,
+        CompliantArm,
+        Elastostatic,
+        check_compliance_identifiable,
+        compliance_identifiability,
+    )
+    from .planar.geometry import (
+        PlanarGeometry,
+        Target,
+        link_angles,
+        paper_from_user,
+        paper_from_user_matrix,
+        split_params,
+        standard_joint_map,
+        wrap_angle,
+    )
+    from .planar.information import (
+        check_identifiable,
+        covariance_factor,
+        every_target,
+        identifiability,
+        model_basis,
+        model_columns,
+        plan_rows,
+        plan_svd,
+        scaled_columns,
+        scaled_jacobian,
+        target_weights,
+        unit_trace,
+        user_from_scaled,
+        weighted_user_jacobian,
+    )
+    from .planar.kinematics import (
+        Parametrization,
+        check_target,
+        forward_kinematics,
+        jacobian,
+        joint_jacobian,
+        link_phasors,
+        link_units,
+        link_vectors,
+        tool_angles,
+    )
+    from .plane import Plane, fit_plane
+    from .regions import Annulus, Box, Region
+    from .spatial.arm import SINGLE_TARGET, SpatialArm
+    from .spatial.chain import (
+        SerialChain,
+        UrdfJoint,
+        matrix_rpy,
+        rotation_vector,
+        rpy_matrix,
+        transform,
+        vector_rotation,
+    )
+    from .spatial.compliance import CompliantSpatialArm, SpatialElastics
+    from .spatial.dh import MdhTable, mdh_table
+    from .spatial.gravity import LinkMasses
+    from .spatial.kinematics import LARGE_PLACEMENT_FRACTION, SpatialLayout, default_targets
+    from .spatial.selection import Selection
+    from .spatial.view import SpatialView
+
+# Out of mypy's sight: it sees the names imported above, and still flags a misspelt one.
+if not TYPE_CHECKING:
+    __getattr__, __dir__ = exports(
+        __name__,
+        {
+            ".calibrated": ("CalibratedArm",),
+            ".defaults": ("LARGE_ANGLE_DEG", "TermChoice"),
+            ".identifiability": ("Identifiability", "combination", "listing", "row_echelon"),
+            ".interface": (
+                "ClosedForm",
+                "ClosedFormPlan",
+                "ClosedFormPlans",
+                "Conditions",
+                "DesignEffort",
+                "DeviationBounds",
+                "Effect",
+                "FitModel",
+                "Held",
+                "LinearPositions",
+                "Loads",
+                "PaperCriteria",
+                "PlanInformation",
+                "UnpredictedLoads",
+                "equations_per_pose",
+                "position_jacobian",
+            ),
+            ".joint_maps": ("checked_joint_map",),
+            ".planar.arm": ("INSTRUMENT_PARAMS", "LARGE_LENGTH_FRACTION", "PlanarArm"),
+            ".planar.compliance": (
+                "STANDARD_GRAVITY",
+                "CompliantArm",
+                "Elastostatic",
+                "check_compliance_identifiable",
+                "compliance_identifiability",
+            ),
+            ".planar.geometry": (
+                "PlanarGeometry",
+                "Target",
+                "link_angles",
+                "paper_from_user",
+                "paper_from_user_matrix",
+                "split_params",
+                "standard_joint_map",
+                "wrap_angle",
+            ),
+            ".planar.information": (
+                "check_identifiable",
+                "covariance_factor",
+                "every_target",
+                "identifiability",
+                "model_basis",
+                "model_columns",
+                "plan_rows",
+                "plan_svd",
+                "scaled_columns",
+                "scaled_jacobian",
+                "target_weights",
+                "unit_trace",
+                "user_from_scaled",
+                "weighted_user_jacobian",
+            ),
+            ".planar.kinematics": (
+                "Parametrization",
+                "check_target",
+                "forward_kinematics",
+                "jacobian",
+                "joint_jacobian",
+                "link_phasors",
+                "link_units",
+                "link_vectors",
+                "tool_angles",
+            ),
+            ".plane": ("Plane", "fit_plane"),
+            ".regions": ("Annulus", "Box", "Region"),
+            ".spatial.arm": ("SINGLE_TARGET", "SpatialArm"),
+            ".spatial.chain": (
+                "SerialChain",
+                "UrdfJoint",
+                "matrix_rpy",
+                "rotation_vector",
+                "rpy_matrix",
+                "transform",
+                "vector_rotation",
+            ),
+            ".spatial.compliance": ("CompliantSpatialArm", "SpatialElastics"),
+            ".spatial.dh": ("MdhTable", "mdh_table"),
+            ".spatial.gravity": ("LinkMasses",),
+            ".spatial.kinematics": (
+                "LARGE_PLACEMENT_FRACTION",
+                "SpatialLayout",
+                "default_targets",
+            ),
+            ".spatial.selection": ("Selection",),
+            ".spatial.view": ("SpatialView",),
+        },
+    )
 
 __all__ = [
     "INSTRUMENT_PARAMS",

@@ -11,13 +11,33 @@
 The calibration *file* is written and read by :mod:`armcal.files.calibration`.
 """
 
-from .calibration import effect_lines, format_calibration, format_cross_validation
-from .common import model_lines, model_to_dict, table_csv
-from .design import design_summary, poses_needed_summary
-from .monte_carlo import format_monte_carlo, monte_carlo_to_dict
-from .quality import format_quality, quality_report, quality_to_dict
-from .reproduction import format_reproduction, reproduction_summary
-from .validation import acceptance_report, compensation_report, validation_report
+from typing import TYPE_CHECKING
+
+from ..lazy import exports
+
+if TYPE_CHECKING:
+    from .calibration import effect_lines, format_calibration, format_cross_validation
+    from .common import model_lines, model_to_dict, table_csv
+    from .design import design_summary, poses_needed_summary
+    from .monte_carlo import format_monte_carlo, monte_carlo_to_dict
+    from .quality import format_quality, quality_report, quality_to_dict
+    from .reproduction import format_reproduction, reproduction_summary
+    from .validation import acceptance_report, compensation_report, validation_report
+
+# Out of mypy's sight: it sees the names imported above, and still flags a misspelt one.
+if not TYPE_CHECKING:
+    __getattr__, __dir__ = exports(
+        __name__,
+        {
+            ".calibration": ("effect_lines", "format_calibration", "format_cross_validation"),
+            ".common": ("model_lines", "model_to_dict", "table_csv"),
+            ".design": ("design_summary", "poses_needed_summary"),
+            ".monte_carlo": ("format_monte_carlo", "monte_carlo_to_dict"),
+            ".quality": ("format_quality", "quality_report", "quality_to_dict"),
+            ".reproduction": ("format_reproduction", "reproduction_summary"),
+            ".validation": ("acceptance_report", "compensation_report", "validation_report"),
+        },
+    )
 
 __all__ = [
     "acceptance_report",

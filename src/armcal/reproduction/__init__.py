@@ -17,9 +17,25 @@ model.  The paper's printed numbers (:mod:`armcal.paper`) appear only in the
 ``armcal reproduce``; :mod:`armcal.plotting` draws the figures.
 """
 
-from .catalogue import Disagreement, EquationCheck
-from .compute import TABLE_COLUMNS, Reproduction, reproduce
-from .equations import check_equations
+from typing import TYPE_CHECKING
+
+from ..lazy import exports
+
+if TYPE_CHECKING:
+    from .catalogue import Disagreement, EquationCheck
+    from .compute import TABLE_COLUMNS, Reproduction, reproduce
+    from .equations import check_equations
+
+# Out of mypy's sight: it sees the names imported above, and still flags a misspelt one.
+if not TYPE_CHECKING:
+    __getattr__, __dir__ = exports(
+        __name__,
+        {
+            ".catalogue": ("Disagreement", "EquationCheck"),
+            ".compute": ("TABLE_COLUMNS", "Reproduction", "reproduce"),
+            ".equations": ("check_equations",),
+        },
+    )
 
 __all__ = [
     "TABLE_COLUMNS",

@@ -9,41 +9,89 @@ A Python user gets the same checks and warnings as the command line:
 * :mod:`~armcal.workflow.plan` -- design, evaluate, size, simulate, synthesize.
 """
 
-from .calibration import (
-    CalibrationRun,
-    CompensationRun,
-    ExportRun,
-    ValidationRun,
-    calibrate,
-    compensate_program,
-    export,
-    export_files,
-    validate_measurements,
-)
-from .measured import measured_arm, spatial_measured_arm
-from .plan import (
-    DesignRun,
-    EvaluationRun,
-    Synthesis,
-    design_plan,
-    evaluate_file,
-    simulate_plan,
-    size_plan,
-    synthesize_plan,
-)
-from .setup import (
-    DEFAULT_SIGMA_MM,
-    FixError,
-    design_sigma,
-    fit_model,
-    model_arm,
-    model_spec,
-    plan_model,
-    prefixed,
-    simulation_sigma,
-    test_poses,
-    with_fixed,
-)
+from typing import TYPE_CHECKING
+
+from ..lazy import exports
+
+if TYPE_CHECKING:
+    from .calibration import (
+        CalibrationRun,
+        CompensationRun,
+        ExportRun,
+        ValidationRun,
+        calibrate,
+        compensate_program,
+        export,
+        export_files,
+        validate_measurements,
+    )
+    from .measured import measured_arm, spatial_measured_arm
+    from .plan import (
+        DesignRun,
+        EvaluationRun,
+        Synthesis,
+        design_plan,
+        evaluate_file,
+        simulate_plan,
+        size_plan,
+        synthesize_plan,
+    )
+    from .setup import (
+        DEFAULT_SIGMA_MM,
+        FixError,
+        design_sigma,
+        fit_model,
+        model_arm,
+        model_spec,
+        plan_model,
+        prefixed,
+        simulation_sigma,
+        test_poses,
+        with_fixed,
+    )
+
+# Out of mypy's sight: it sees the names imported above, and still flags a misspelt one.
+if not TYPE_CHECKING:
+    __getattr__, __dir__ = exports(
+        __name__,
+        {
+            ".calibration": (
+                "CalibrationRun",
+                "CompensationRun",
+                "ExportRun",
+                "ValidationRun",
+                "calibrate",
+                "compensate_program",
+                "export",
+                "export_files",
+                "validate_measurements",
+            ),
+            ".measured": ("measured_arm", "spatial_measured_arm"),
+            ".plan": (
+                "DesignRun",
+                "EvaluationRun",
+                "Synthesis",
+                "design_plan",
+                "evaluate_file",
+                "simulate_plan",
+                "size_plan",
+                "synthesize_plan",
+            ),
+            ".setup": (
+                "DEFAULT_SIGMA_MM",
+                "FixError",
+                "design_sigma",
+                "fit_model",
+                "model_arm",
+                "model_spec",
+                "plan_model",
+                "prefixed",
+                "simulation_sigma",
+                "test_poses",
+                "with_fixed",
+            ),
+        },
+    )
 
 __all__ = [
     "DEFAULT_SIGMA_MM",

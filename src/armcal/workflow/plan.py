@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import time
 from dataclasses import dataclass, replace
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -32,11 +33,11 @@ from ..identification.experiment import (
     refuse_registration_only,
 )
 from ..models import FitModel, Loads
-from ..plausibility import truth_warning
 from ..progress import ProgressCallback
-from ..simulate import MonteCarlo, monte_carlo
-from ..synthesis import synthesize_measurements
 from .setup import DEFAULT_SIGMA_MM, check_plan_size, design_sigma, fit_model, plan_model, prefixed
+
+if TYPE_CHECKING:
+    from ..simulate import MonteCarlo
 
 #: Poses of the random plan on which a model's identifiable set is chosen for sizing.
 _SET_POSES = 200
@@ -101,6 +102,11 @@ def synthesize_plan(
     :func:`armcal.synthesis.synthesize_measurements`.  The rows of a pose carry its label
     from ``pose_labels`` (the plan's ``pose`` column), else its number.
     """
+    # Imported here, not with the module: design and evaluate need neither the synthesis
+    # nor the fit behind the truth's check (a lazy import of a slow dependency).
+    from ..plausibility import truth_warning
+    from ..synthesis import synthesize_measurements
+
     arm = model.arm
     rows = model.plan_conditions(q, loads)
     if model.point_dim > model.position_dim:  # a 6-DoF instrument's noise turns the true
@@ -322,6 +328,11 @@ def simulate_plan(
     figures.  Raises NotIdentifiableError, naming ``source``, for a plan that cannot
     identify every parameter.
     """
+    # Imported here, not with the module: design and evaluate need neither the Monte Carlo
+    # nor the fit behind the truth's check (a lazy import of a slow dependency).
+    from ..plausibility import truth_warning
+    from ..simulate import monte_carlo
+
     if test_q is not None and not len(test_q):
         test_q = None
     found = truth_warning(model, truth)  # of the truth as given, in the model's parameters

@@ -17,6 +17,7 @@ from typing import Any, TypeVar
 
 import numpy as np
 
+from ..choices import DEFAULT_SIGMA_MM
 from ..doe import random_plan
 from ..errors import ArmcalError, NotIdentifiableError, action
 from ..files import RobotSpec, read_plan, unknown_parameter
@@ -38,9 +39,6 @@ __all__ = [
     "test_poses",
     "with_fixed",
 ]
-
-#: Noise assumed for design and simulation when neither --sigma nor the robot file gives it.
-DEFAULT_SIGMA_MM = 0.1
 
 
 class FixError(ArmcalError):
