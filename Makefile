@@ -77,6 +77,7 @@ bench: $(VENV)/.installed
 	$(BIN)/python benchmarks/bench_floor.py
 	$(BIN)/python benchmarks/bench_floor_spatial.py
 	$(BIN)/python benchmarks/bench_design_floor.py
+	$(BIN)/python benchmarks/bench_startup.py
 
 # Run every example of README.md and write its real output into it (and docs/img/).
 readme: $(VENV)/.installed
