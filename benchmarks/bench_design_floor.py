@@ -51,6 +51,7 @@ from bench_floor_spatial import (
     run,
     startup,
     table,
+    timing_line,
 )
 from floors_design import design_blocks
 from floors_spatial import config_of, load_config
@@ -172,12 +173,7 @@ def main() -> None:
             for n in sizes:
                 t = run(command, inputs, n, args.repeats)
                 result.timings.append(t)
-                print(
-                    f"{command.name:<20} {n:>6,}  armcal {t.armcal_s:7.3f} s {t.armcal_mb:5.0f} MB"
-                    f"  floor {t.floor_s:7.3f} s {t.floor_mb:5.0f} MB  ratio {t.ratio:5.2f}x\n"
-                    f"  {t.check}",
-                    flush=True,
-                )
+                print(timing_line(command, t), flush=True)
             results.append(result)
     machine = at_end(machine)
     lines = table(results, start)

@@ -605,6 +605,15 @@ def run(command: Command, inputs: Inputs, n: int, repeats: int) -> Timing:
     return timing
 
 
+def timing_line(command: Command, t: Timing) -> str:
+    """One run's figures and its check, as printed while the benchmark runs."""
+    return (
+        f"{command.name:<14} {t.rows:>7,} rows  armcal {t.armcal_s:8.3f} s "
+        f"{t.armcal_mb:6.0f} MB  floor {t.floor_s:7.3f} s {t.floor_mb:5.0f} MB  "
+        f"ratio {t.ratio:5.2f}x\n  {t.check}"
+    )
+
+
 def growth(
     timings: list[Timing], i: int, start: Startup
 ) -> tuple[float | None, float | None] | None:
@@ -713,12 +722,7 @@ def main() -> None:
                 repeats = REPEATS_LARGEST if n == SIZES[-1] else args.repeats
                 t = run(command, inputs, n, repeats)
                 result.timings.append(t)
-                print(
-                    f"{command.name:<11} {n:>7,} rows  armcal {t.armcal_s:8.3f} s "
-                    f"{t.armcal_mb:6.0f} MB  floor {t.floor_s:7.3f} s {t.floor_mb:5.0f} MB  "
-                    f"ratio {t.ratio:5.2f}x\n  {t.check}",
-                    flush=True,
-                )
+                print(timing_line(command, t), flush=True)
             results.append(result)
     machine = at_end(machine)
     lines = table(results, start)

@@ -13,6 +13,7 @@ certifies what armcal's certificate over the same pool certifies for the floor's
 from __future__ import annotations
 
 import importlib.util
+import json
 import sys
 from pathlib import Path
 
@@ -54,8 +55,6 @@ def case(tmp_path_factory):
     model = identifiable_model(arm)
     fixed = [n for n, free in zip(model.param_names, model.free, strict=True) if not free]
     config = folder / "floor.json"
-    import json
-
     config.write_text(json.dumps(fs.config_of(arm, fixed, np.zeros(len(model.param_names)))))
     return model, fs.load_config(str(config)), fd
 
@@ -80,8 +79,6 @@ def test_the_floor_pool_design_certifies_what_armcal_certifies(case, tmp_path, c
     pool = feasible_poses(model, 400, rng=3)
     out = tmp_path / "plan.csv"
     fd.pool_design(arm, pool, 40, str(out))
-    import json
-
     document = json.loads(capsys.readouterr().out)
     plan = np.radians(np.loadtxt(out, delimiter=",", skiprows=1))
     certificate = certify_pool(model, plan, pool)

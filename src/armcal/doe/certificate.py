@@ -14,7 +14,7 @@ from ..progress import ProgressCallback, share
 from .ascent import adam_ascent, penalty_weight, to_q, to_u, view_penalty
 from .plans import feasible_poses
 from .pool import pool_blocks
-from .weights import newton_weights, optimal_weights, variances
+from .weights import information, newton_weights, optimal_weights, variances
 
 __all__ = [
     "CLOSE_ENOUGH",
@@ -237,6 +237,7 @@ class _Maximum:
     value: float
     pose: np.ndarray
     found: _Poses
+    sample_values: np.ndarray  # d over the sample searched
 
 
 def _search_maximum(
@@ -258,19 +259,17 @@ def _search_maximum(
     if constraints is not None:  # count iterates that stray outside only a little
         d_found = np.where(constraints[0].min(axis=(-2, -1)) > -1e-3, d_found, -np.inf)
     if d.max() >= d_found.max():
-        return _Maximum(float(d.max()), sample.q[int(np.argmax(d))], found)
-    return _Maximum(float(d_found.max()), found.q[int(np.argmax(d_found))], found)
+        return _Maximum(float(d.max()), sample.q[int(np.argmax(d))], found, d)
+    return _Maximum(float(d_found.max()), found.q[int(np.argmax(d_found))], found, d)
 
 
 def _trimmed(blocks: np.ndarray, weights: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """The weights without those below :data:`SMALLEST_WEIGHT` of the largest (sum 1) and
-    ``M^-1`` of what is left."""
+    ``M`` of what is left."""
     weights = np.where(weights >= SMALLEST_WEIGHT * weights.max(), weights, 0.0)
     weights /= weights.sum()
     kept = weights > 0
-    rows = blocks[kept].reshape(-1, blocks.shape[-1])
-    scaled = rows * np.repeat(weights[kept], blocks.shape[1])[:, None]
-    return weights, spd_inverse(rows.T @ scaled)
+    return weights, information(blocks[kept], weights[kept])
 
 
 def _reference_design(
@@ -280,12 +279,13 @@ def _reference_design(
     start: np.ndarray,
     rounds: int,
     parts: list[ProgressCallback | None],
-) -> tuple[_Poses, np.ndarray, _Maximum]:
+) -> tuple[_Poses, np.ndarray, np.ndarray, _Maximum]:
     """A near-D-optimal weighted design ``xi*`` over ``candidates``, refined ``rounds`` times
     by the maximizers of its variance function, and that function's maximum: its support,
-    weights and :class:`_Maximum`; the first ``len(start)`` candidates are the plan's
-    distinct poses, ``start`` their share of it.  The last search (twice the steps) is of
-    the design returned, so the bound uses the maximum of the very weights reported."""
+    weights, information ``M(xi*)`` and :class:`_Maximum`; the first ``len(start)``
+    candidates are the plan's distinct poses, ``start`` their share of it.  The last search
+    (twice the steps) is of the design returned, so the bound uses the maximum of the very
+    weights reported."""
     # Start from the plan (its poses lead the candidates, at its own weights): near the
     # optimum already, where the multiplicative algorithm is slow to arrive from uniform.
     weights = np.full(
@@ -293,21 +293,21 @@ def _reference_design(
     )
     weights[: len(start)] = PLAN_SHARE * start
     for round_ in range(rounds):
-        weights, m_inv = _trimmed(
+        weights, star = _trimmed(
             candidates.blocks,
             newton_weights(candidates.blocks, weights, tolerance=REFERENCE_TOLERANCE).weights,
         )
         last = round_ == rounds - 1
         maximum = _search_maximum(
             model,
-            m_inv,
+            spd_inverse(star),
             candidates + sample,
             steps=ASCENT_STEPS * (2 if last else 1),
             progress=parts[1 + round_],
         )
         if last:
             kept = weights > 0
-            return candidates.take(np.flatnonzero(kept)), weights[kept], maximum
+            return candidates.take(np.flatnonzero(kept)), weights[kept], star, maximum
         feasible = model.feasible(maximum.found.q[:, None, :])[:, 0]
         candidates = candidates + maximum.found.take(np.flatnonzero(feasible))
         weights = np.concatenate([weights, np.zeros(int(np.count_nonzero(feasible)))])
@@ -445,14 +445,13 @@ def certify(
         )
     # The weighted design's candidates: the plan's poses, where its variance function is
     # largest in the sample, and where the ascents found it largest.
-    d_plan = variances(sample.blocks, plan_inverse)
-    others = np.setdiff1d(np.argsort(-d_plan)[:candidates], np.arange(distinct.shape[0]))
+    largest = np.argsort(-plan_max.sample_values)[:candidates]
+    others = np.setdiff1d(largest, np.arange(distinct.shape[0]))
     best = np.concatenate([np.arange(distinct.shape[0]), others])
-    support, weights, star_max = _reference_design(
+    support, weights, star, star_max = _reference_design(
         model, sample.take(best) + plan_max.found, sample, counts / q.shape[0], rounds, parts
     )
-    star_information = np.einsum("k,krp,krq->pq", weights, support.blocks, support.blocks)
-    sign, logdet_star = np.linalg.slogdet(star_information)
+    sign, logdet_star = np.linalg.slogdet(star)
     kw = 0.0
     if sign > 0:  # not expected otherwise (xi* is near D-optimal); the other bounds hold
         kw = float(np.exp((logdet_plan - logdet_star) / p + 1.0 - star_max.value / p))
@@ -534,11 +533,9 @@ def certify_pool(
     scaled = blocks / np.sqrt(plan_information.rows_per_pose)  # the plan's normalization
     plan_only = float(np.exp(1.0 - variances(scaled, plan_inverse).max() / p))
     found = optimal_weights(scaled, weights)
-    weights, star_inverse = _trimmed(scaled, found.weights)
-    d_star = variances(scaled, star_inverse)  # exact over the pool: no search
+    weights, star = _trimmed(scaled, found.weights)
+    d_star = variances(scaled, spd_inverse(star))  # exact over the pool: no search
     kept = np.flatnonzero(weights > 0)
-    rows = scaled[kept].reshape(-1, p)
-    star = rows.T @ (rows * np.repeat(weights[kept], scaled.shape[1])[:, None])
     logdet_star = float(np.linalg.slogdet(star)[1])
     kw = float(np.exp((logdet_plan - logdet_star) / p + 1.0 - d_star.max() / p))
     hadamard = float(np.exp(logdet_plan / p)) if model.information_bound else 0.0

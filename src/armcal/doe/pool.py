@@ -33,7 +33,7 @@ from ..errors import ArmcalError, action
 from ..models import FitModel
 from ..numerics import spd_inverse
 from .plans import DISTINCT_TOLERANCE, repeated_poses
-from .weights import multiplicative_weights, optimal_weights, variances
+from .weights import information, multiplicative_weights, optimal_weights, variances
 
 __all__ = [
     "BLOCK_CHUNK",
@@ -138,7 +138,7 @@ def pool_design(model: FitModel, m: int, pool: np.ndarray, *, distinct: bool = F
     index = np.flatnonzero(usable)
     blocks = pool_blocks(model, pool[index])  # once: the weights and the exchange
     p = blocks.shape[-1]
-    everything = blocks.reshape(-1, p).T @ blocks.reshape(-1, p)
+    everything = information(blocks, np.ones(blocks.shape[0]))
     if np.linalg.matrix_rank(everything) < p:
         raise ArmcalError(
             f"the {pool.shape[0]} candidate poses cannot identify the {p} free parameters "
@@ -161,15 +161,15 @@ def detmax_indices(blocks: np.ndarray, start: np.ndarray, *, distinct: bool = Fa
     m = len(chosen)
     for _ in range(MAX_EXCHANGES):
         plan = blocks[chosen]
-        information = plan.reshape(-1, plan.shape[-1]).T @ plan.reshape(-1, plan.shape[-1])
-        inverse = spd_inverse(information)
+        gram = information(plan, np.ones(m))
+        inverse = spd_inverse(gram)
         variance = variances(blocks, inverse)
         if distinct:
             variance[chosen] = -np.inf
             if not np.isfinite(variance).any():  # the plan holds every candidate
                 break
         added = int(np.argmax(variance))
-        grown = information + blocks[added].T @ blocks[added]
+        grown = gram + blocks[added].T @ blocks[added]
         grown_inverse = spd_inverse(grown)
         members = np.array([*chosen, added])
         rows = blocks[members]  # (m + 1, r, p)

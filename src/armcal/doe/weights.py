@@ -28,6 +28,7 @@ __all__ = [
     "POWER",
     "TOLERANCE",
     "OptimalWeights",
+    "information",
     "multiplicative_weights",
     "newton_weights",
     "optimal_weights",
@@ -43,8 +44,9 @@ def variances(blocks: np.ndarray, m_inv: np.ndarray) -> np.ndarray:
     return np.sum((rows @ m_inv) * rows, axis=1).reshape(count, per_pose).sum(axis=1)
 
 
-def _information(blocks: np.ndarray, weights: np.ndarray) -> np.ndarray:
-    """``sum_x w_x F_x^T F_x`` ``(p, p)``."""
+def information(blocks: np.ndarray, weights: np.ndarray) -> np.ndarray:
+    """``M = sum_x w_x F_x^T F_x`` ``(p, p)`` of blocks ``(N, r, p)``: one matrix product of
+    the stacked rows."""
     rows = blocks.reshape(-1, blocks.shape[-1])
     return rows.T @ (rows * np.repeat(weights, blocks.shape[1])[:, None])
 
@@ -63,7 +65,7 @@ def multiplicative_weights(
     """
     p = blocks.shape[-1]
     for _ in range(iterations):
-        d = variances(blocks, spd_inverse(_information(blocks, weights)))
+        d = variances(blocks, spd_inverse(information(blocks, weights)))
         weights = weights * (d / p) ** power
         weights /= weights.sum()
     return weights
@@ -145,12 +147,12 @@ def optimal_weights(
     best: OptimalWeights | None = None
     best_gap = np.inf
     for done in range(iterations + 1):
-        information = _information(blocks, w)
-        m_inv = spd_inverse(information)
+        gram = information(blocks, w)
+        m_inv = spd_inverse(gram)
         d = variances(blocks, m_inv)
         # log det M + max d - p bounds log det M* from above (Kiefer-Wolfowitz): keep the
         # weights of the lowest bound, which a certificate then divides by.
-        sign, logdet = np.linalg.slogdet(information)
+        sign, logdet = np.linalg.slogdet(gram)
         gap = logdet + d.max() if sign > 0 else np.inf
         if best is None or gap < best_gap:
             best, best_gap = OptimalWeights(w, m_inv, d, done), gap
@@ -221,9 +223,9 @@ def newton_weights(
     goal = p * (1 + tolerance)
 
     def state(w: np.ndarray) -> tuple[float, np.ndarray, np.ndarray]:
-        information = _information(blocks, w)
-        sign, logdet = np.linalg.slogdet(information)
-        m_inv = spd_inverse(information)
+        gram = information(blocks, w)
+        sign, logdet = np.linalg.slogdet(gram)
+        m_inv = spd_inverse(gram)
         return (logdet if sign > 0 else -np.inf), m_inv, variances(blocks, m_inv)
 
     logdet, m_inv, d = state(w)
