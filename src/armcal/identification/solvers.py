@@ -12,8 +12,9 @@ trials.
   re-evaluated at the estimate and the solve repeated until it no longer moves.
 * ``"gauss-newton"`` -- one Gauss-Newton loop for every model: whitened rows of
   the Jacobian over the free parameters, the minimum-norm step of the rank
-  policy (:func:`armcal.numerics.solve_least_squares`, never the normal
-  equations), every active set at once.  It starts from the nested model's fit
+  policy (:class:`armcal.numerics.RowTriangle`, never the normal equations),
+  every active set at once, the rows a block at a time (memory ``O(m)``, not
+  ``O(m p)``).  It starts from the nested model's fit
   (the geometry, for a model of joint compliance), or from the model's own
   start (:meth:`~armcal.models.interface.FitModel.start`).
 
@@ -30,10 +31,10 @@ from typing import Literal
 import numpy as np
 
 from ..errors import ArmcalError
-from ..models import Conditions, FitModel, wrap_angle
+from ..models import ROW_BLOCK, Conditions, FitModel, wrap_angle
 from ..models.information import weighted_whitening
 from ..models.wording import no_closed_form
-from ..numerics import solve_least_squares
+from ..numerics import RowTriangle
 
 __all__ = [
     "METHODS",
@@ -258,6 +259,27 @@ def _closed_form(
     return Solution(params, iterations, converged, "closed-form")
 
 
+def _whitened_rows(
+    model: FitModel,
+    conditions: Conditions,
+    points: np.ndarray,
+    params: np.ndarray,
+    free: np.ndarray,
+    weights: np.ndarray | None,
+) -> tuple[np.ndarray, np.ndarray]:
+    """``W J`` over the columns ``free`` ``(N, m, d, p_f)`` and the whitened residuals
+    ``W (points - positions)`` ``(N, m, d)`` of sets ``points`` ``(N, m, d)`` at ``params``
+    ``(N, p)``, ``W`` with the rows' extra ``weights``: the Jacobian first, whose pass
+    gives the points the residuals and the whitening need (a model keeps them,
+    :meth:`~armcal.models.interface.Conditions.latest`)."""
+    jac = model.jacobian(conditions, params)[..., free]
+    w = weighted_whitening(model.whitening(conditions, params), weights, model.point_dim)
+    residual = points - model.positions(conditions, params)
+    if w is None:
+        return jac, residual
+    return w @ jac, (w @ residual[..., None])[..., 0]
+
+
 def gauss_newton(
     model: FitModel,
     conditions: Conditions,
@@ -283,7 +305,7 @@ def gauss_newton(
     ``params`` has it (default: the model's free ones).
     """
     free = model.free if free is None else np.asarray(free, dtype=bool)
-    n_free, dim = int(np.count_nonzero(free)), model.point_dim
+    n_free = int(np.count_nonzero(free))
     params = np.array(params, dtype=float)
     scale = model.step_scale(conditions)
     n_sets = sets.shape[0]
@@ -292,16 +314,18 @@ def gauss_newton(
     previous = np.full(n_sets, np.inf)
     active = np.arange(n_sets)
     floor = 1e-9 * model.reach_mm  # round-off floor of a stalled step, well conditioned
+    # The rows a block at a time (the blocks made once: what a model memoizes on them serves
+    # every iteration), about ROW_BLOCK rows of all the sets together.
+    chunks = conditions.blocks(max(64, ROW_BLOCK // n_sets))
     for _ in range(max_iter):
         current = params[active]
-        w = weighted_whitening(
-            model.whitening(conditions, current), _for_sets(weights, active), dim
-        )
-        jac = model.jacobian(conditions, current)[..., free]  # (N, m, d, p_f)
-        residual = sets[active] - model.positions(conditions, current)
-        rows = (jac if w is None else w @ jac).reshape(active.size, -1, n_free)
-        weighted = residual if w is None else (w @ residual[..., None])[..., 0]
-        step, _, svd = solve_least_squares(rows, weighted.reshape(active.size, -1))
+        measured, set_weights = sets[active], _for_sets(weights, active)
+        rows = RowTriangle(n_free)
+        for sub, part in chunks:
+            w = None if set_weights is None else set_weights[..., part]
+            jac, weighted = _whitened_rows(model, sub, measured[:, part], current, free, w)
+            rows.add(jac.reshape(active.size, -1, n_free), weighted.reshape(active.size, -1))
+        step, _, svd = rows.solve()
         full_step = np.zeros((active.size, free.size))
         full_step[:, free] = step
         params[active] = current + full_step

@@ -25,6 +25,7 @@ from .calibrated import CalibratedArm
 from .defaults import LARGE_ANGLE_DEG, TermChoice
 from .identifiability import Identifiability, combination, listing, row_echelon
 from .interface import (
+    ROW_BLOCK,
     ClosedForm,
     ClosedFormPlan,
     ClosedFormPlans,
@@ -112,6 +113,7 @@ __all__ = [
     "LARGE_ANGLE_DEG",
     "LARGE_LENGTH_FRACTION",
     "LARGE_PLACEMENT_FRACTION",
+    "ROW_BLOCK",
     "SINGLE_TARGET",
     "STANDARD_GRAVITY",
     "Annulus",

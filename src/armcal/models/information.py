@@ -28,7 +28,14 @@ from functools import cached_property
 import numpy as np
 
 from ..errors import NotIdentifiableError
-from ..numerics import COND_WARN, RANK_RTOL, ScaledSVD, gram_of_factor, scaled_svd
+from ..numerics import (
+    COND_WARN,
+    RANK_RTOL,
+    RowTriangle,
+    ScaledSVD,
+    gram_of_factor,
+    scaled_svd,
+)
 from .identifiability import Identifiability, combination, listing, row_echelon
 from .interface import Conditions, FitModel, Loads
 
@@ -38,6 +45,7 @@ __all__ = [
     "column_identifiability",
     "covariance_factor_from",
     "display_std",
+    "factor_from_svd",
     "identifying",
     "mean_tip_variance",
     "pose_derivative",
@@ -47,6 +55,7 @@ __all__ = [
     "weighted_whitening",
     "whitened_blocks",
     "whitened_free_jacobian",
+    "whitened_triangle",
 ]
 
 
@@ -71,6 +80,28 @@ def whitened_free_jacobian(
     the generalized least-squares covariance of the free parameters."""
     jac = whitened_blocks(model, conditions, params)
     return jac.reshape(*jac.shape[:-3], -1, model.n_free)
+
+
+def whitened_triangle(
+    model: FitModel,
+    conditions: Conditions,
+    params: np.ndarray | None = None,
+    *,
+    whiten: bool = True,
+) -> RowTriangle:
+    """:func:`whitened_free_jacobian`'s rows reduced to their triangle a block of rows at a
+    time (:meth:`~armcal.models.interface.Conditions.blocks`): the covariance and the
+    rank analysis need no more, and no ``(m, d, p_f)`` array is held; ``whiten=False``
+    the Jacobian's own rows."""
+    rows = RowTriangle(model.n_free)
+    for block, _ in conditions.blocks():
+        jac = (
+            whitened_blocks(model, block, params)
+            if whiten
+            else model.jacobian(block, params)[..., model.free]
+        )
+        rows.add(jac.reshape(*jac.shape[:-3], -1, model.n_free))
+    return rows
 
 
 def weighted_whitening(
@@ -112,8 +143,14 @@ def covariance_factor_from(
     >>> (g @ g.T).tolist(), bool(ok)
     ([[0.25, 0.0], [0.0, 0.0]], True)
     """
-    factor, ok = scaled_svd(whitened).inverse_gram_factor()
-    p_f = whitened.shape[-1]
+    return factor_from_svd(scaled_svd(whitened), free)
+
+
+def factor_from_svd(svd: ScaledSVD, free: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`covariance_factor_from` given the scaled SVD of the whitened rows (of the
+    whole matrix, or of its triangle, :func:`whitened_triangle`)."""
+    factor, ok = svd.inverse_gram_factor()
+    p_f = svd.singular_values.shape[-1]
     g = np.zeros((*factor.shape[:-2], free.size, p_f))
     g[..., free, :] = np.where(ok[..., None, None], factor, 0.0)
     ok = ok & np.all(np.isfinite(g), axis=(-2, -1))
@@ -128,8 +165,7 @@ def column_identifiability(
     The one rank policy of :mod:`armcal.numerics` on unit-norm columns; the null
     and poorly determined directions in display units (mm, deg).
     """
-    jac = model.jacobian(conditions, params)[..., model.free]
-    svd = scaled_svd(jac.reshape(-1, model.n_free))
+    svd = whitened_triangle(model, conditions, params, whiten=False).svd()
     names = model.free_names
     scale = model.display_scale[model.free]
     null = svd.directions(RANK_RTOL)

@@ -22,6 +22,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from ...noise import NoiseModel, relative_noise
+from ...numerics import RowTriangle
 from ..core import CoreModel
 from ..information import (
     refit_free,
@@ -435,15 +436,27 @@ deviation_bounds`); the base pose and the targets are the instrument's."""
     def chain_kinematics(
         self, conditions: Conditions, params: np.ndarray | None, *, derivatives: bool = False
     ) -> ChainKinematics:
-        return kinematics(
+        """The kinematics of the rows at ``params``; its points and rotations are kept on
+        the conditions (:meth:`~armcal.models.interface.Conditions.latest`), so that the
+        positions and weights a fit needs at the parameters of its Jacobian's pass take
+        no pass of their own."""
+        params = self._params(params)
+        key = (self.chain, self.joint_map, self.layout, params.shape, params.tobytes())
+        if not derivatives:
+            kept = conditions.latest(_KINEMATICS, key)
+            if kept is not None:
+                return _points_of(kept)
+        found = kinematics(
             self.chain,
             self.joint_map,
             self.layout,
             conditions.q,
             conditions.target,
-            self._params(params),
+            params,
             derivatives=derivatives,
         )
+        conditions.keep(_KINEMATICS, key, _points_of(found))
+        return found
 
     def positions(self, conditions: Conditions, params: np.ndarray | None = None) -> np.ndarray:
         """The targets' positions ``(..., m, 3)`` (mm); for a 6-DoF instrument also their
@@ -647,11 +660,15 @@ deviation_bounds`); the base pose and the targets are the instrument's."""
         local = conditions
         if conditions.frames is not None:  # the frames turned back with the base
             local = conditions.with_frames(turn.T @ conditions.frames)
-        jac = replace(arm, base_pose=np.zeros(6)).jacobian(local)
-        w = arm.whitening(conditions)
-        rows = jac if w is None else w @ np.kron(np.eye(arm.point_dim // 3), turn) @ jac
+        at_base = replace(arm, base_pose=np.zeros(6))
+        back = np.kron(np.eye(arm.point_dim // 3), turn)
+        rows = RowTriangle(arm.layout.n_params)  # the rule needs their column space only
+        for block, part in conditions.blocks():
+            jac = at_base.jacobian(block if local is conditions else local.take(part))
+            w = arm.whitening(block)
+            rows.add((jac if w is None else w @ back @ jac).reshape(-1, arm.layout.n_params))
         u = np.asarray(conditions.q) @ arm.joint_map.T
-        held, merges = select_from_rows(arm.layout, arm.chain, rows, u, arm.user_fixed)
+        held, merges = select_from_rows(arm.layout, arm.chain, rows.triangle(), u, arm.user_fixed)
         return replace(arm, held=held, merges=merges)
 
     def expressed(self, conditions: Conditions, params: np.ndarray) -> np.ndarray:
@@ -690,3 +707,14 @@ deviation_bounds`); the base pose and the targets are the instrument's."""
             return rows
         frames = self.chain_kinematics(rows, None).target_rotation
         return rows.with_frames(frames)
+
+
+#: The slot of :meth:`SpatialArm.chain_kinematics` on the conditions.
+_KINEMATICS = "spatial chain kinematics"
+
+
+def _points_of(kin: ChainKinematics) -> ChainKinematics:
+    """A copy of the points and rotations of ``kin``, without its derivatives (what is
+    kept, and what is handed out from it: a caller may change its arrays in place)."""
+    target = None if kin.target_rotation is None else kin.target_rotation.copy()
+    return ChainKinematics(kin.points.copy(), kin.rotation.copy(), target_rotation=target)
