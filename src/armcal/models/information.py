@@ -37,7 +37,7 @@ from ..numerics import (
     scaled_svd,
 )
 from .identifiability import Identifiability, combination, listing, row_echelon
-from .interface import Conditions, FitModel, Loads
+from .interface import ROW_BLOCK, Conditions, FitModel, Loads
 
 __all__ = [
     "BlockInformation",
@@ -92,7 +92,19 @@ def whitened_triangle(
     """:func:`whitened_free_jacobian`'s rows reduced to their triangle a block of rows at a
     time (:meth:`~armcal.models.interface.Conditions.blocks`): the covariance and the
     rank analysis need no more, and no ``(m, d, p_f)`` array is held; ``whiten=False``
-    the Jacobian's own rows."""
+    the Jacobian's own rows.  At the nominal parameters it is made once for the
+    conditions (:meth:`~armcal.models.interface.Conditions.memo`): a plan's criteria
+    and its covariance share it."""
+    if params is None and whiten:
+        return conditions.memo(
+            (model, "whitened triangle"), lambda: _row_triangle(model, conditions, None, True)
+        )
+    return _row_triangle(model, conditions, params, whiten)
+
+
+def _row_triangle(
+    model: FitModel, conditions: Conditions, params: np.ndarray | None, whiten: bool
+) -> RowTriangle:
     rows = RowTriangle(model.n_free)
     for block, _ in conditions.blocks():
         jac = (
@@ -417,7 +429,21 @@ class BlockInformation:
     def blocks(self) -> np.ndarray:
         return self._blocks
 
+    @cached_property
+    def _triangle(self) -> np.ndarray | None:
+        """For one large plan (more than :data:`~armcal.models.interface.ROW_BLOCK` rows)
+        the triangle of its design rows ``W J / scale / sqrt(rows)``
+        (:func:`whitened_triangle`, which its covariance shares): what its criteria
+        need, without its ``(m, d, p_f)`` blocks; None for plans whose blocks are
+        made (a stack of plans, a small one, or one whose gradient was asked for)."""
+        if self.q.ndim != 2 or "_blocks" in self.__dict__ or self._rows.m <= ROW_BLOCK:
+            return None
+        count = self.q.shape[0] * self.rows_per_pose
+        return whitened_triangle(self.model, self._rows).triangle() / (self.scale * np.sqrt(count))
+
     def information(self) -> np.ndarray:
+        if self._triangle is not None:
+            return self._triangle.T @ self._triangle
         f = self._blocks
         rows = f.shape[-3] * self.rows_per_pose
         return np.einsum("...mrp,...mrq->...pq", f, f) / rows
@@ -454,6 +480,8 @@ class BlockInformation:
 
     @cached_property
     def _svd(self) -> ScaledSVD:
+        if self._triangle is not None:
+            return scaled_svd(self._triangle)
         f = self._blocks
         rows = f.shape[-3] * self.rows_per_pose
         stacked = f.reshape(*f.shape[:-3], -1, f.shape[-1]) / np.sqrt(rows)
@@ -465,6 +493,9 @@ class BlockInformation:
     def singular_values(self) -> np.ndarray:
         if self.unit_columns:
             return self._svd.truncated
+        if self._triangle is not None:
+            s = np.linalg.svd(self._triangle, compute_uv=False)
+            return np.where(self._svd.kept, _padded_values(s, self.model.n_free), 0.0)
         f = self._blocks
         rows = f.shape[-3] * self.rows_per_pose
         stacked = f.reshape(*f.shape[:-3], -1, f.shape[-1]) / np.sqrt(rows)
@@ -490,3 +521,8 @@ class BlockInformation:
         rows = whitened_blocks(self.model, self._rows, params)  # plan after plan
         stacked = rows.reshape(*self.q.shape[:-2], -1, self.model.n_free)
         return covariance_factor_from(stacked, self.model.free)
+
+
+def _padded_values(values: np.ndarray, p: int) -> np.ndarray:
+    """Singular values ``(k,)`` padded with zeros to ``(p,)``."""
+    return np.concatenate([values, np.zeros(p - values.shape[-1])])
