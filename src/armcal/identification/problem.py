@@ -14,12 +14,12 @@ from functools import cached_property
 import numpy as np
 
 from ..errors import ArmcalError
-from ..models import Conditions, FitModel
+from ..models import ROW_BLOCK, Conditions, FitModel
 from ..models.information import factor_from_svd
 from ..noise import NoiseModel, relative_noise
 from ..numerics import RowTriangle
 from .judgement import PoseTest, studentized_test
-from .solvers import solve
+from .solvers import LastStep, solve
 
 __all__ = [
     "Fit",
@@ -67,9 +67,12 @@ class Fit:
         used: np.ndarray,
         iterations: int,
         converged: bool,
+        *,
+        last: LastStep | None = None,
     ) -> None:
         model, cond = problem.model, problem.conditions
         self.params, self.used = params, used
+        self._last = last  # the rows of a plain fit's last step (solvers.LastStep)
         self.iterations, self.converged = iterations, converged
         self.residuals = problem.points - model.positions(cond, params)  # mm
         w = model.whitening(cond, params)
@@ -84,11 +87,14 @@ class Fit:
 
         Unweighted over every pose: the model's own covariance factor (the planar
         arm's from its plan's factorization); otherwise from the SVD of the used
-        rows' triangle (a block of rows at a time).
+        rows' triangle (a block of rows at a time); where the fit's last step was
+        within its tolerance, that step's rows'.
         """
         problem = self._problem
         model = problem.model
-        if self._w is None and self.used.all():
+        if self._last is not None:
+            factor, ok = factor_from_svd(self._last.rows.svd(), model.free)
+        elif self._w is None and self.used.all():
             factor, ok = model.covariance_factor(problem.conditions, self.params)
         else:
             rows = RowTriangle(model.n_free)
@@ -113,7 +119,9 @@ class Fit:
         m, d = self.residuals.shape
         out = np.empty((m, d, d))
         for block, part in self._problem.conditions.blocks():
-            b = self._jacobian_rows(block, part) @ factor
+            last = self._last
+            rows = last.blocks[part] if last is not None else self._jacobian_rows(block, part)
+            b = rows @ factor
             out[part] = b @ np.swapaxes(b, -1, -2)
         return out
 
@@ -200,6 +208,10 @@ class Problem:
         start: np.ndarray | None = None,
     ) -> Fit:
         """The fit to the poses ``used`` (times ``weights``, from ``start`` if given)."""
+        # The last step's rows serve the covariance and leverage of a plain fit of every
+        # row, where they save passes of the model (more rows than a block).
+        plain = weights is None and bool(used.all()) and self.conditions.sigma_mm is None
+        plain = plain and self.m > ROW_BLOCK
         found = solve(
             self.model,
             self.rows(used),
@@ -209,5 +221,13 @@ class Problem:
             start=start,
             tol=self.tol,
             max_iter=self.max_iter,
+            keep=plain,
         )
-        return Fit(self, found.params[0], used, int(found.iterations[0]), bool(found.converged[0]))
+        return Fit(
+            self,
+            found.params[0],
+            used,
+            int(found.iterations[0]),
+            bool(found.converged[0]),
+            last=found.last,
+        )
