@@ -502,10 +502,40 @@ def compensate(
     cal = calibrated_arm(cal)
     model, robot = cal.in_robot_frame()
     program = model.conditions(q_program, target=target, loads=loads)
-    q0 = program.q
     n, dim = model.n_joints, model.position_dim
     keep = n >= dim + model.orientation_dim if orientation is None else bool(orientation)
-    goal = _Goal(model, robot, program, keep)
+    # A block of poses at a time: each pose is corrected on its own, and a block's
+    # Jacobians (d points / d params for the accuracy after) are its largest arrays.
+    parts = [
+        _compensated(cal, _Goal(model, robot, rows, keep), tol_mm, max_iter)
+        for rows, _ in program.blocks()
+    ]
+    joined = [
+        np.concatenate(arrays) if arrays[0] is not None else None
+        for arrays in zip(*parts, strict=True)
+    ]
+    q, done, reasons, before, after, turn_before, turn_after, bound = joined
+    assert q is not None and done is not None and reasons is not None and bound is not None
+    assert before is not None and after is not None
+    return Compensation(
+        q,
+        done,
+        tuple(str(r) for r in reasons),
+        before,
+        after,
+        turn_before,
+        turn_after,
+        program.q,
+        np.degrees(bound),
+    )
+
+
+def _compensated(
+    cal: CalibratedArm, goal: _Goal, tol_mm: float, max_iter: int
+) -> tuple[np.ndarray | None, ...]:
+    """:func:`compensate` of the rows of ``goal``: the commands, which were corrected, the
+    reasons, the errors before and after (positions, then angles or None) and the bounds."""
+    model, q0 = goal.model, goal.program.q
     everyone = np.arange(q0.shape[0])
     at_program = goal.residual(q0, everyone)  # where the program's own commands take the tool
     bound = MAX_AMPLIFICATION * goal.error_angle(at_program)  # rad, per pose
@@ -515,10 +545,9 @@ def compensate(
     _refuse_beyond_limits(model, q, done, reasons)
     q = np.where(done[:, None], q, q0)
     final = goal.rows(q, everyone)
-    before, after, turn_before, turn_after = _accuracy(cal, goal, robot, final, at_program)
-    return Compensation(
-        q, done, tuple(reasons), before, after, turn_before, turn_after, q0, np.degrees(bound)
-    )
+    before, after, turn_before, turn_after = _accuracy(cal, goal, goal.params, final, at_program)
+    texts = np.array(reasons, dtype=object)
+    return q, done, texts, before, after, turn_before, turn_after, bound
 
 
 def _beyond(value: float, lo: float, hi: float) -> str:

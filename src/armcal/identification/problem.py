@@ -123,6 +123,7 @@ class Fit:
             rows = last.blocks[part] if last is not None else self._jacobian_rows(block, part)
             b = rows @ factor
             out[part] = b @ np.swapaxes(b, -1, -2)
+        self._last = None  # its rows have served the factor and every row's block
         return out
 
     def _jacobian_rows(self, block: Conditions, part: slice) -> np.ndarray:

@@ -344,7 +344,7 @@ def gauss_newton(
     last = None
     # The rows a block at a time (the blocks made once: what a model memoizes on them serves
     # every iteration), about ROW_BLOCK rows of all the sets together.
-    chunks = conditions.blocks(max(64, ROW_BLOCK // n_sets))
+    chunks = list(conditions.blocks(max(64, ROW_BLOCK // n_sets)))
     for _ in range(max_iter):
         current = params[active]
         measured, set_weights = sets[active], _for_sets(weights, active)

@@ -287,8 +287,12 @@ def tip_variances(jacobian: np.ndarray, covariance: np.ndarray) -> np.ndarray:
     >>> tip_variances(np.array([[[1.0, 0.0], [0.0, 1.0]]]), np.eye(2) * 0.01).tolist()
     [0.02]
     """
-    variance = np.einsum("...kia,...ab,...kib->...k", jacobian, covariance, jacobian)
-    return np.clip(variance, 0.0, None)
+    jacobian, covariance = np.asarray(jacobian), np.asarray(covariance)
+    if covariance.ndim == 2:  # one covariance: one BLAS product of every row's rows
+        weighted = (jacobian.reshape(-1, jacobian.shape[-1]) @ covariance).reshape(jacobian.shape)
+    else:
+        weighted = jacobian @ covariance[..., None, :, :]
+    return np.clip(np.einsum("...kia,...kia->...k", weighted, jacobian), 0.0, None)
 
 
 def mean_tip_variance(jacobian: np.ndarray, covariance: np.ndarray) -> np.ndarray:

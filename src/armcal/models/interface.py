@@ -54,7 +54,7 @@ compensation and export call the robot.
 
 from __future__ import annotations
 
-from collections.abc import Callable, Hashable, Mapping, Sequence
+from collections.abc import Callable, Hashable, Iterator, Mapping, Sequence
 from dataclasses import dataclass, field, replace
 from typing import Any, Protocol, Self
 
@@ -210,17 +210,20 @@ class Conditions:
             None if self.frames is None else self.frames[rows],
         )
 
-    def blocks(self, size: int = 0) -> list[tuple[Conditions, slice]]:
+    def blocks(self, size: int = 0) -> Iterator[tuple[Conditions, slice]]:
         """The rows (of an unbatched ``q``) in blocks of at most ``size`` (default
         :data:`ROW_BLOCK`): each block's conditions and its slice; these conditions
         themselves when they are one block.  What is made per row (a Jacobian, its
-        products) is then made a block at a time: memory ``O(block p)``, not ``O(m p)``."""
+        products) is then made a block at a time: memory ``O(block p)``, not ``O(m p)``
+        (each block's conditions, and what a model keeps on them, go with the block)."""
         size = size or ROW_BLOCK
         m = self.m
         if m <= size:
-            return [(self, slice(0, m))]
-        parts = [slice(start, min(start + size, m)) for start in range(0, m, size)]
-        return [(self.take(part), part) for part in parts]
+            yield self, slice(0, m)
+            return
+        for start in range(0, m, size):
+            part = slice(start, min(start + size, m))
+            yield self.take(part), part
 
     def with_frames(self, frames: np.ndarray | None) -> Conditions:
         """The same rows with reference orientations ``frames`` ``(m, 3, 3)``."""

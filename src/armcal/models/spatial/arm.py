@@ -14,7 +14,7 @@ into the generic ones of :mod:`~armcal.models.information`.
 from __future__ import annotations
 
 from collections.abc import Sequence
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field, fields, replace
 from functools import cached_property
 from typing import Any
 
@@ -28,6 +28,7 @@ from ..information import (
     refit_free,
 )
 from ..interface import (
+    ROW_BLOCK,
     Conditions,
     DeviationBounds,
     Held,
@@ -436,16 +437,19 @@ deviation_bounds`); the base pose and the targets are the instrument's."""
     def chain_kinematics(
         self, conditions: Conditions, params: np.ndarray | None, *, derivatives: bool = False
     ) -> ChainKinematics:
-        """The kinematics of the rows at ``params``; its points and rotations are kept on
-        the conditions (:meth:`~armcal.models.interface.Conditions.latest`), so that the
-        positions and weights a fit needs at the parameters of its Jacobian's pass take
-        no pass of their own."""
+        """The kinematics of the rows at ``params``, kept on the conditions
+        (:meth:`~armcal.models.interface.Conditions.latest`): the positions and weights a
+        fit needs at the parameters of its Jacobian's pass, or a tool's angular Jacobian
+        beside its point's, take no pass of their own.  Derivatives are kept for a block
+        of rows at most (:data:`~armcal.models.interface.ROW_BLOCK`), and only until the
+        points alone are asked for (their last use); the points and rotations always."""
         params = self._params(params)
         key = (self.chain, self.joint_map, self.layout, params.shape, params.tobytes())
-        if not derivatives:
-            kept = conditions.latest(_KINEMATICS, key)
-            if kept is not None:
-                return _points_of(kept)
+        kept = conditions.latest(_KINEMATICS, key)
+        if kept is not None and (kept.jacobian is not None or not derivatives):
+            if not derivatives and kept.jacobian is not None:
+                conditions.keep(_KINEMATICS, key, _copied(kept, derivatives=False))
+            return _copied(kept, derivatives=derivatives)
         found = kinematics(
             self.chain,
             self.joint_map,
@@ -455,7 +459,8 @@ deviation_bounds`); the base pose and the targets are the instrument's."""
             params,
             derivatives=derivatives,
         )
-        conditions.keep(_KINEMATICS, key, _points_of(found))
+        whole = derivatives and found.points.size <= 3 * ROW_BLOCK  # rows times sets
+        conditions.keep(_KINEMATICS, key, _copied(found, derivatives=whole))
         return found
 
     def positions(self, conditions: Conditions, params: np.ndarray | None = None) -> np.ndarray:
@@ -713,8 +718,15 @@ deviation_bounds`); the base pose and the targets are the instrument's."""
 _KINEMATICS = "spatial chain kinematics"
 
 
-def _points_of(kin: ChainKinematics) -> ChainKinematics:
-    """A copy of the points and rotations of ``kin``, without its derivatives (what is
-    kept, and what is handed out from it: a caller may change its arrays in place)."""
-    target = None if kin.target_rotation is None else kin.target_rotation.copy()
-    return ChainKinematics(kin.points.copy(), kin.rotation.copy(), target_rotation=target)
+def _copied(kin: ChainKinematics, *, derivatives: bool) -> ChainKinematics:
+    """A copy of ``kin``'s arrays, its derivatives or only its points and rotations (what
+    is kept, and what is handed out from it: a caller may change its arrays in place)."""
+    if not derivatives:
+        target = None if kin.target_rotation is None else kin.target_rotation.copy()
+        return ChainKinematics(kin.points.copy(), kin.rotation.copy(), target_rotation=target)
+    copies: dict[str, Any] = {f.name: _copy(getattr(kin, f.name)) for f in fields(kin)}
+    return ChainKinematics(**copies)
+
+
+def _copy(array: np.ndarray | None) -> np.ndarray | None:
+    return None if array is None else array.copy()
