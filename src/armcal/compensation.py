@@ -231,11 +231,12 @@ class _Goal:
         """
         parts = []
         for rows, _ in self.rows(q, active).blocks():  # a block's whole Jacobians at a time
-            jac = self.model.joint_jacobian(rows, self.params)[..., : self.dim, :]
+            # The tool's first: a model may keep that pass for the point's (SpatialArm).
+            turn = None
             if self.angle is not None:
                 turn = self.scale * self.model.orientation_joint_jacobian(rows, self.params)
-                jac = np.concatenate([jac, turn], axis=1)
-            parts.append(jac)
+            jac = self.model.joint_jacobian(rows, self.params)[..., : self.dim, :]
+            parts.append(jac if turn is None else np.concatenate([jac, turn], axis=1))
         return np.concatenate(parts)
 
 
@@ -482,10 +483,10 @@ def _accuracy(
         before = np.linalg.norm((cal.positions(program) - baseline)[:, :dim], axis=1)
     after, turn_after = np.empty(final.m), np.empty(final.m)
     for rows, part in final.blocks():  # a block's Jacobians (m, d, p) at a time
-        after[part] = np.sqrt(tip_variances(position_jacobian(model, rows, robot), covariance))
-        if goal.angle is not None:
+        if goal.angle is not None:  # the tool's first (see _Goal.jacobian)
             angles = model.orientation_jacobian(rows, robot)  # (m, k, p)
             turn_after[part] = np.degrees(np.sqrt(tip_variances(angles, covariance)))
+        after[part] = np.sqrt(tip_variances(position_jacobian(model, rows, robot), covariance))
     if goal.angle is None:
         return before, after, None, None
     arcs = np.linalg.norm(at_program[:, dim:], axis=1)

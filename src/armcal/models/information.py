@@ -250,6 +250,8 @@ def refit_free(model: FitModel, conditions: Conditions, params: np.ndarray) -> n
     free = model.free
     out = np.where(free, np.asarray(params, dtype=float), model.held_values)
     tol = 1e-12 * model.reach_mm
+    if conditions.m > ROW_BLOCK:
+        return _refit_blocks(model, conditions, goal, out, tol)
     for _ in range(_REFIT_STEPS):
         miss = (goal - model.positions(conditions, out)).reshape(-1)
         jac = model.jacobian(conditions, out)[..., free].reshape(miss.size, -1)
@@ -257,6 +259,31 @@ def refit_free(model: FitModel, conditions: Conditions, params: np.ndarray) -> n
         out[free] += step
         if np.max(np.abs(jac @ step), initial=0.0) <= tol:
             break
+    return out
+
+
+def _refit_blocks(
+    model: FitModel, conditions: Conditions, goal: np.ndarray, out: np.ndarray, tol: float
+) -> np.ndarray:
+    """:func:`refit_free` of more rows than a block: one pass of the model per step, a
+    block of rows at a time (the points from the Jacobian's pass), the step from the
+    rows' triangle.  Whether a step moved any point by more than ``tol`` is read from
+    the next pass's Jacobian (the same to first order in the step): a last pass then
+    only confirms it."""
+    free, n_free = model.free, model.n_free
+    step = None
+    for _ in range(_REFIT_STEPS + 1):
+        rows, moved = RowTriangle(n_free), 0.0
+        for block, part in conditions.blocks():
+            jac = model.jacobian(block, out)[..., free].reshape(-1, n_free)
+            miss = (goal[part] - model.positions(block, out)).reshape(-1)
+            if step is not None:
+                moved = max(moved, float(np.max(np.abs(jac @ step), initial=0.0)))
+            rows.add(jac, miss)
+        if step is not None and moved <= tol:
+            break
+        step = rows.solve()[0]
+        out[free] += step
     return out
 
 

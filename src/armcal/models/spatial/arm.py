@@ -435,14 +435,20 @@ deviation_bounds`); the base pose and the targets are the instrument's."""
         return Conditions(q, index, None, sigma_mm)
 
     def chain_kinematics(
-        self, conditions: Conditions, params: np.ndarray | None, *, derivatives: bool = False
+        self,
+        conditions: Conditions,
+        params: np.ndarray | None,
+        *,
+        derivatives: bool = False,
+        keep: bool = False,
     ) -> ChainKinematics:
-        """The kinematics of the rows at ``params``, kept on the conditions
-        (:meth:`~armcal.models.interface.Conditions.latest`): the positions and weights a
-        fit needs at the parameters of its Jacobian's pass, or a tool's angular Jacobian
-        beside its point's, take no pass of their own.  Derivatives are kept for a block
-        of rows at most (:data:`~armcal.models.interface.ROW_BLOCK`), and only until the
-        points alone are asked for (their last use); the points and rotations always."""
+        """The kinematics of the rows at ``params``; what it finds is kept on the conditions
+        (:meth:`~armcal.models.interface.Conditions.latest`), so that the positions and
+        weights a fit needs at the parameters of its Jacobian's pass take no pass of their
+        own: the points and rotations always, the derivatives too with ``keep`` (a tool's
+        angular Jacobian, whose point's Jacobian is usually asked for next) for a block of
+        rows at most (:data:`~armcal.models.interface.ROW_BLOCK`), until the points alone
+        are asked for (their last use)."""
         params = self._params(params)
         key = (self.chain, self.joint_map, self.layout, params.shape, params.tobytes())
         kept = conditions.latest(_KINEMATICS, key)
@@ -459,7 +465,7 @@ deviation_bounds`); the base pose and the targets are the instrument's."""
             params,
             derivatives=derivatives,
         )
-        whole = derivatives and found.points.size <= 3 * ROW_BLOCK  # rows times sets
+        whole = derivatives and keep and found.points.size <= 3 * ROW_BLOCK  # rows x sets
         conditions.keep(_KINEMATICS, key, _copied(found, derivatives=whole))
         return found
 
@@ -492,8 +498,10 @@ deviation_bounds`); the base pose and the targets are the instrument's."""
     def derivative(
         self, conditions: Conditions, params: np.ndarray | None, name: str
     ) -> np.ndarray:
-        """One of the derivatives of :class:`ChainKinematics` (``jacobian``, ...)."""
-        found = getattr(self.chain_kinematics(conditions, params, derivatives=True), name)
+        """One of the derivatives of :class:`ChainKinematics` (``jacobian``, ...); the tool
+        role's, so the pass is kept for the point's Jacobian (:meth:`chain_kinematics`)."""
+        kin = self.chain_kinematics(conditions, params, derivatives=True, keep=True)
+        found = getattr(kin, name)
         assert found is not None
         return found
 
