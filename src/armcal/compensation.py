@@ -229,12 +229,15 @@ class _Goal:
         The deflection's own change with ``q`` (about 1e-3 of a step) only slows
         Newton's convergence from quadratic to fast linear.
         """
-        rows = self.rows(q, active)
-        jac = self.model.joint_jacobian(rows, self.params)[..., : self.dim, :]
-        if self.angle is None:
-            return jac
-        turn = self.scale * self.model.orientation_joint_jacobian(rows, self.params)
-        return np.concatenate([jac, turn], axis=1)
+        parts = []
+        for rows, _ in self.rows(q, active).blocks():  # a block's whole Jacobians at a time
+            # The tool's first: a model may keep that pass for the point's (SpatialArm).
+            turn = None
+            if self.angle is not None:
+                turn = self.scale * self.model.orientation_joint_jacobian(rows, self.params)
+            jac = self.model.joint_jacobian(rows, self.params)[..., : self.dim, :]
+            parts.append(jac if turn is None else np.concatenate([jac, turn], axis=1))
+        return np.concatenate(parts)
 
 
 @dataclass(frozen=True, eq=False)
@@ -267,7 +270,57 @@ def _trust_region_step(
     ``pull`` ``(a, n)``, the way back to ``q0``.  Singular values at or below
     :data:`~armcal.numerics.RANK_RTOL` of a row's largest count as zero: the step
     does not move along them, and the pull may.
+
+    A square Jacobian whose condition number is surely below ``1 / RANK_RTOL`` (its
+    Frobenius estimate below :data:`_NEWTON_COND`) and whose Newton step is within the
+    radius takes that step as it is (``mu = 0``, every singular value kept, nothing left
+    for the pull): from one LU inverse, not an SVD, which every other row gets.
     """
+    newton = _newton_steps(jac, residual, radius)
+    if newton is not None:
+        easy, dq, gain = newton
+        hard = ~easy
+        if hard.any():
+            rest = _svd_step(jac[hard], residual[hard], radius[hard], pull[hard])
+            dq[hard], gain[hard] = rest.dq, rest.gain
+            on_radius = np.zeros(easy.size, dtype=bool)
+            on_radius[hard] = rest.on_radius
+            return _Step(dq, gain, on_radius)
+        return _Step(dq, gain, np.zeros(easy.size, dtype=bool))
+    return _svd_step(jac, residual, radius, pull)
+
+
+#: A Frobenius condition number ``|J|_F |J^-1|_F`` (at least the 2-norm one) below which
+#: every singular value of a square goal Jacobian is surely kept (``RANK_RTOL`` = 1e-10):
+#: a margin of 100 for the estimate.
+_NEWTON_COND = 1e8
+
+
+def _newton_steps(
+    jac: np.ndarray, residual: np.ndarray, radius: np.ndarray
+) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
+    """For square goal Jacobians: which rows take Newton's step as it is (module notes of
+    :func:`_trust_region_step`), every row's step ``-J^-1 r`` and its gain ``|r|^2 - |r +
+    J dq|^2``; None where the Jacobians are not square or one is exactly singular."""
+    if jac.shape[-2] != jac.shape[-1] or jac.shape[0] == 0:
+        return None
+    try:
+        inverse = np.linalg.inv(jac)
+    except np.linalg.LinAlgError:
+        return None
+    with np.errstate(invalid="ignore", over="ignore"):
+        dq = -np.einsum("akn,an->ak", inverse, residual)
+        cond = np.linalg.norm(jac, axis=(1, 2)) * np.linalg.norm(inverse, axis=(1, 2))
+        easy = (cond < _NEWTON_COND) & (np.linalg.norm(dq, axis=1) <= radius)
+        after = residual + np.einsum("akn,an->ak", jac, dq)
+        gain = np.sum(residual**2, axis=1) - np.sum(after**2, axis=1)
+    return easy & np.all(np.isfinite(dq), axis=1), dq, gain
+
+
+def _svd_step(
+    jac: np.ndarray, residual: np.ndarray, radius: np.ndarray, pull: np.ndarray
+) -> _Step:
+    """:func:`_trust_region_step` from the SVD of every row's Jacobian."""
     u, s, vt = np.linalg.svd(jac, full_matrices=False)  # (a, k, r), (a, r), (a, r, n)
     kept = s > RANK_RTOL * s[:, :1]
     s = np.where(kept, s, 0.0)
@@ -428,7 +481,12 @@ def _accuracy(
     baseline = None if cal.baseline is None else cal.model.arm.positions(program, cal.baseline)
     if baseline is not None:  # the arm without calibration: the nominal one, registered
         before = np.linalg.norm((cal.positions(program) - baseline)[:, :dim], axis=1)
-    after = np.sqrt(tip_variances(position_jacobian(model, final, robot), covariance))
+    after, turn_after = np.empty(final.m), np.empty(final.m)
+    for rows, part in final.blocks():  # a block's Jacobians (m, d, p) at a time
+        if goal.angle is not None:  # the tool's first (see _Goal.jacobian)
+            angles = model.orientation_jacobian(rows, robot)  # (m, k, p)
+            turn_after[part] = np.degrees(np.sqrt(tip_variances(angles, covariance)))
+        after[part] = np.sqrt(tip_variances(position_jacobian(model, rows, robot), covariance))
     if goal.angle is None:
         return before, after, None, None
     arcs = np.linalg.norm(at_program[:, dim:], axis=1)
@@ -439,8 +497,6 @@ def _accuracy(
             cal.model.arm.orientation(program, cal.baseline),
         )
         turn_before = np.degrees(np.linalg.norm(turn, axis=1))
-    angles = model.orientation_jacobian(final, robot)  # (m, k, p)
-    turn_after = np.degrees(np.sqrt(tip_variances(angles, covariance)))
     return before, after, turn_before, turn_after
 
 

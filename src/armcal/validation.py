@@ -226,7 +226,8 @@ def predicted_errors(
     [[0.0], [0.014142]]
     """
     conditions = cal.model.conditions(q, target=target, loads=loads, sigma_mm=row_sigma)
-    return _predicted(cal, conditions)[:2]
+    uncertainty, expected, *_ = _predicted(cal, conditions)
+    return uncertainty, expected
 
 
 #: Rows whose Jacobians :func:`_predicted` holds at once (about 10 MB for a six-axis arm):
@@ -236,10 +237,11 @@ PREDICTED_CHUNK = 4096
 
 def _predicted(
     cal: CalibratedArm, conditions: Conditions
-) -> tuple[np.ndarray, np.ndarray, np.ndarray | None]:
+) -> tuple[np.ndarray, np.ndarray, np.ndarray | None, np.ndarray]:
     """The model's uncertainty and a measurement's expected error of the positions (mm),
-    and of a 6-DoF instrument's turns (rad; None without), :data:`PREDICTED_CHUNK` rows at
-    a time."""
+    of a 6-DoF instrument's turns (rad; None without), and the calibrated arm's points
+    (from the Jacobian's pass, where the model keeps them), :data:`PREDICTED_CHUNK` rows
+    at a time."""
     parts = [
         _predicted_rows(cal, conditions.take(slice(start, start + PREDICTED_CHUNK)))
         for start in range(0, conditions.m, PREDICTED_CHUNK)
@@ -249,14 +251,16 @@ def _predicted(
         np.concatenate([part[0] for part in parts]),
         np.concatenate([part[1] for part in parts]),
         np.concatenate(turns) if len(turns) == len(parts) else None,
+        np.concatenate([part[3] for part in parts]),
     )
 
 
 def _predicted_rows(
     cal: CalibratedArm, conditions: Conditions
-) -> tuple[np.ndarray, np.ndarray, np.ndarray | None]:
+) -> tuple[np.ndarray, np.ndarray, np.ndarray | None, np.ndarray]:
     model, d = cal.model, cal.model.position_dim
     jac = model.jacobian(conditions, cal.params)
+    positions = cal.positions(conditions)
     noise = model.pose_covariances(conditions, cal.params, noise=_noise(cal))
     variance = tip_variances(jac[..., :d, :], cal.covariance)
     total = variance + np.trace(noise[..., :d, :d], axis1=-2, axis2=-1)
@@ -264,7 +268,7 @@ def _predicted_rows(
     if jac.shape[-2] > d:
         turn_variance = tip_variances(jac[..., d:, :], cal.covariance)
         turn = np.sqrt(turn_variance + np.trace(noise[..., d:, d:], axis1=-2, axis2=-1))
-    return np.sqrt(variance), np.sqrt(np.clip(total, 0.0, None)), turn
+    return np.sqrt(variance), np.sqrt(np.clip(total, 0.0, None)), turn, positions
 
 
 def _turns(
@@ -354,9 +358,9 @@ def validate(
                 "records no baseline; identify again to record one"
             )
         nominal, baseline_rows = model.arm.positions(conditions, found.params), "held-out"
+    uncertainty, predicted, turn, calibrated = _predicted(cal, conditions)
     before = measured - nominal
-    after = measured - cal.positions(conditions)
-    uncertainty, predicted, turn = _predicted(cal, conditions)
+    after = measured - calibrated
     d = model.position_dim
     return Validation(
         before[:, :d],
@@ -772,12 +776,12 @@ def cross_validate(
             ) from None
         test = conditions.take(held)
         fitted = cal.calibrated()
-        errors[held] = points[held] - fitted.positions(test)
+        _, predicted[held], turn, calibrated = _predicted(fitted, test)
+        errors[held] = points[held] - calibrated
         if nominal is not None and fitted.baseline is not None:
             nominal[held] = points[held] - fitted.baseline_positions(test)
         else:  # a fold whose rows cannot place the nominal arm: no baseline to compare
             nominal = None
-        _, predicted[held], turn = _predicted(fitted, test)
         if turn is not None:
             turn_predicted[held] = turn
         if progress is not None:

@@ -14,11 +14,12 @@ from functools import cached_property
 import numpy as np
 
 from ..errors import ArmcalError
-from ..models import Conditions, FitModel
-from ..models.information import covariance_factor_from
+from ..models import ROW_BLOCK, Conditions, FitModel
+from ..models.information import factor_from_svd
 from ..noise import NoiseModel, relative_noise
+from ..numerics import RowTriangle
 from .judgement import PoseTest, studentized_test
-from .solvers import solve
+from .solvers import LastStep, solve
 
 __all__ = [
     "Fit",
@@ -41,14 +42,6 @@ def reference_sigma(model: FitModel, row_sigma: np.ndarray | None) -> float:
 def _noise(model: FitModel) -> NoiseModel:
     """The model's noise model, or unit isotropic noise (weights are relative)."""
     return relative_noise(model.noise)
-
-
-#: Rows whose Jacobian is made at once where only per-row products of it are kept.
-ROW_CHUNK = 1 << 14
-
-
-def _row_chunks(m: int) -> list[slice]:
-    return [slice(start, min(start + ROW_CHUNK, m)) for start in range(0, m, ROW_CHUNK)]
 
 
 class Fit:
@@ -74,9 +67,12 @@ class Fit:
         used: np.ndarray,
         iterations: int,
         converged: bool,
+        *,
+        last: LastStep | None = None,
     ) -> None:
         model, cond = problem.model, problem.conditions
         self.params, self.used = params, used
+        self._last = last  # the rows of a plain fit's last step (solvers.LastStep)
         self.iterations, self.converged = iterations, converged
         self.residuals = problem.points - model.positions(cond, params)  # mm
         w = model.whitening(cond, params)
@@ -86,27 +82,26 @@ class Fit:
         self.whitened = self.residuals if w is None else (w @ self.residuals[:, :, None])[:, :, 0]
 
     @cached_property
-    def jacobian(self) -> np.ndarray:
-        """Whitened Jacobian ``(m, d, p_f)`` over the free parameters, at the estimate."""
-        problem = self._problem
-        jac = problem.model.jacobian(problem.conditions, self.params)[..., problem.model.free]
-        return jac if self._w is None else self._w @ jac
-
-    @cached_property
     def factor(self) -> np.ndarray:
         """``G`` ``(p_f, p_f)`` with ``(J_w^T J_w)^-1 = G G^T`` over the poses fitted.
 
         Unweighted over every pose: the model's own covariance factor (the planar
         arm's from its plan's factorization); otherwise from the SVD of the used
-        rows.
+        rows' triangle (a block of rows at a time); where the fit's last step was
+        within its tolerance, that step's rows'.
         """
         problem = self._problem
         model = problem.model
-        if self._w is None and self.used.all():
+        if self._last is not None:
+            factor, ok = factor_from_svd(self._last.rows.svd(), model.free)
+        elif self._w is None and self.used.all():
             factor, ok = model.covariance_factor(problem.conditions, self.params)
         else:
-            rows = self.jacobian[self.used].reshape(-1, model.n_free)
-            factor, ok = covariance_factor_from(rows, model.free)
+            rows = RowTriangle(model.n_free)
+            for block, part in problem.conditions.blocks():
+                jac = self._jacobian_rows(block, part)[self.used[part]]
+                rows.add(jac.reshape(-1, model.n_free))
+            factor, ok = factor_from_svd(rows.svd(), model.free)
         if not bool(ok):  # identifiable at nominal, so only for absurd deviations
             raise ArmcalError(
                 f"the Jacobian is singular at the estimate; {problem.suspect or 'check the data'}"
@@ -117,25 +112,26 @@ class Fit:
     def leverage(self) -> np.ndarray:
         """``B_i B_i^T`` ``(m, d, d)`` with ``B_i = W_i J_i G``: each pose's hat block.
 
-        A chunk of rows at a time (unless the whole Jacobian is at hand already):
-        the Jacobian ``(m, d, p)`` and its products would be the largest arrays of
-        an identification at 10^5 rows, for blocks of ``d x d``.
+        A block of rows at a time: the Jacobian ``(m, d, p)`` and its products would
+        be the largest arrays of an identification at 10^5 rows, for blocks of ``d x d``.
         """
         factor = self.factor
-        m = self.residuals.shape[0]
-        whole = "jacobian" in self.__dict__
-        out = np.empty((m, self.residuals.shape[1], self.residuals.shape[1]))
-        for rows in [slice(0, m)] if whole else _row_chunks(m):
-            b = (self.jacobian if whole else self._jacobian_rows(rows)) @ factor
-            out[rows] = b @ np.swapaxes(b, -1, -2)
+        m, d = self.residuals.shape
+        out = np.empty((m, d, d))
+        for block, part in self._problem.conditions.blocks():
+            last = self._last
+            rows = last.blocks[part] if last is not None else self._jacobian_rows(block, part)
+            b = rows @ factor
+            out[part] = b @ np.swapaxes(b, -1, -2)
+        self._last = None  # its rows have served the factor and every row's block
         return out
 
-    def _jacobian_rows(self, rows: slice) -> np.ndarray:
-        """:attr:`jacobian` of the rows ``rows`` alone."""
-        problem = self._problem
-        model = problem.model
-        jac = model.jacobian(problem.conditions.take(rows), self.params)[..., model.free]
-        return jac if self._w is None else self._w[rows] @ jac
+    def _jacobian_rows(self, block: Conditions, part: slice) -> np.ndarray:
+        """The whitened Jacobian ``(k, d, p_f)`` over the free parameters of the rows
+        ``part`` (whose conditions are ``block``), at the estimate."""
+        model = self._problem.model
+        jac = model.jacobian(block, self.params)[..., model.free]
+        return jac if self._w is None else self._w[part] @ jac
 
     def scale(self, dof: int) -> float:
         """``sqrt(RSS_w / dof)`` over the poses in the fit (mm of the reference noise)."""
@@ -213,6 +209,10 @@ class Problem:
         start: np.ndarray | None = None,
     ) -> Fit:
         """The fit to the poses ``used`` (times ``weights``, from ``start`` if given)."""
+        # The last step's rows serve the covariance and leverage of a plain fit of every
+        # row, where they save passes of the model (more rows than a block).
+        plain = weights is None and bool(used.all()) and self.conditions.sigma_mm is None
+        plain = plain and self.m > ROW_BLOCK
         found = solve(
             self.model,
             self.rows(used),
@@ -222,5 +222,13 @@ class Problem:
             start=start,
             tol=self.tol,
             max_iter=self.max_iter,
+            keep=plain,
         )
-        return Fit(self, found.params[0], used, int(found.iterations[0]), bool(found.converged[0]))
+        return Fit(
+            self,
+            found.params[0],
+            used,
+            int(found.iterations[0]),
+            bool(found.converged[0]),
+            last=found.last,
+        )

@@ -12,8 +12,9 @@ trials.
   re-evaluated at the estimate and the solve repeated until it no longer moves.
 * ``"gauss-newton"`` -- one Gauss-Newton loop for every model: whitened rows of
   the Jacobian over the free parameters, the minimum-norm step of the rank
-  policy (:func:`armcal.numerics.solve_least_squares`, never the normal
-  equations), every active set at once.  It starts from the nested model's fit
+  policy (:class:`armcal.numerics.RowTriangle`, never the normal equations),
+  every active set at once, the rows a block at a time (memory ``O(m)``, not
+  ``O(m p)``).  It starts from the nested model's fit
   (the geometry, for a model of joint compliance), or from the model's own
   start (:meth:`~armcal.models.interface.FitModel.start`).
 
@@ -31,13 +32,14 @@ import numpy as np
 
 from ..choices import IDENTIFY_METHODS
 from ..errors import ArmcalError
-from ..models import Conditions, FitModel, wrap_angle
+from ..models import ROW_BLOCK, Conditions, FitModel, wrap_angle
 from ..models.information import weighted_whitening
 from ..models.wording import no_closed_form
-from ..numerics import solve_least_squares
+from ..numerics import RowTriangle
 
 __all__ = [
     "METHODS",
+    "LastStep",
     "Method",
     "Solution",
     "gauss_newton",
@@ -75,6 +77,7 @@ class Solution:
     iterations: np.ndarray
     converged: np.ndarray
     method: str
+    last: LastStep | None = None
 
     def __repr__(self) -> str:
         sets = self.params.shape[0]
@@ -83,6 +86,25 @@ class Solution:
             f"Solution({self.method}: {sets} set(s) of {self.params.shape[-1]} parameters, "
             f"{done} converged, at most {int(np.max(self.iterations, initial=0))} iteration(s))"
         )
+
+
+@dataclass(frozen=True, eq=False)
+class LastStep:
+    """The whitened rows of one set's last Gauss-Newton step, where that step was within
+    the tolerance (so its parameters are the estimate's to a part in ``1/tol``, the
+    tolerance's ``1e-12`` of the reach by default): the covariance and the leverage at the
+    estimate, without a pass of their own.
+
+    Attributes
+    ----------
+    blocks : ndarray, shape (m, d, p_f)
+        ``W J`` over the free parameters, row by row.
+    rows : RowTriangle
+        Their triangle (:class:`~armcal.numerics.RowTriangle`).
+    """
+
+    blocks: np.ndarray
+    rows: RowTriangle
 
 
 def resolve_method(model: FitModel, method: str) -> str:
@@ -146,6 +168,7 @@ def solve(
     start: np.ndarray | None = None,
     tol: float = 1e-12,
     max_iter: int = 50,
+    keep: bool = False,
 ) -> Solution:
     """Weighted least squares over the free parameters of ``model``; batched over sets.
 
@@ -168,6 +191,9 @@ def solve(
     tol, max_iter
         A set has converged when its largest step moves the points by less
         than ``tol`` times the arm's reach (mm); iteration cap.
+    keep : bool
+        Gauss-Newton on one set keeps its last step's rows (:class:`LastStep`) in
+        :attr:`Solution.last` where that step was within the tolerance.
 
     Returns
     -------
@@ -203,7 +229,7 @@ def solve(
     else:
         params = np.broadcast_to(np.asarray(start, dtype=float), (sets.shape[0], model.n_params))
     params = np.where(model.free, params, model.held_values)  # held ones where they are held
-    return gauss_newton(model, conditions, sets, params, weights, threshold, max_iter)
+    return gauss_newton(model, conditions, sets, params, weights, threshold, max_iter, keep=keep)
 
 
 def _initial(
@@ -259,6 +285,27 @@ def _closed_form(
     return Solution(params, iterations, converged, "closed-form")
 
 
+def _whitened_rows(
+    model: FitModel,
+    conditions: Conditions,
+    points: np.ndarray,
+    params: np.ndarray,
+    free: np.ndarray,
+    weights: np.ndarray | None,
+) -> tuple[np.ndarray, np.ndarray]:
+    """``W J`` over the columns ``free`` ``(N, m, d, p_f)`` and the whitened residuals
+    ``W (points - positions)`` ``(N, m, d)`` of sets ``points`` ``(N, m, d)`` at ``params``
+    ``(N, p)``, ``W`` with the rows' extra ``weights``: the Jacobian first, whose pass
+    gives the points the residuals and the whitening need (a model keeps them,
+    :meth:`~armcal.models.interface.Conditions.latest`)."""
+    jac = model.jacobian(conditions, params)[..., free]
+    w = weighted_whitening(model.whitening(conditions, params), weights, model.point_dim)
+    residual = points - model.positions(conditions, params)
+    if w is None:
+        return jac, residual
+    return w @ jac, (w @ residual[..., None])[..., 0]
+
+
 def gauss_newton(
     model: FitModel,
     conditions: Conditions,
@@ -269,6 +316,7 @@ def gauss_newton(
     max_iter: int,
     *,
     free: np.ndarray | None = None,
+    keep: bool = False,
 ) -> Solution:
     """Gauss-Newton over the free parameters, on whitened rows, every active set at once.
 
@@ -281,10 +329,11 @@ def gauss_newton(
     in the model's canonical form (angles in ``(-pi, pi]``).
 
     ``free`` ``(p,)`` boolean fits only those parameters, every other held where
-    ``params`` has it (default: the model's free ones).
+    ``params`` has it (default: the model's free ones).  ``keep`` (one set) keeps the
+    last step's rows where it was within the threshold (:class:`LastStep`).
     """
     free = model.free if free is None else np.asarray(free, dtype=bool)
-    n_free, dim = int(np.count_nonzero(free)), model.point_dim
+    n_free = int(np.count_nonzero(free))
     params = np.array(params, dtype=float)
     scale = model.step_scale(conditions)
     n_sets = sets.shape[0]
@@ -293,16 +342,21 @@ def gauss_newton(
     previous = np.full(n_sets, np.inf)
     active = np.arange(n_sets)
     floor = 1e-9 * model.reach_mm  # round-off floor of a stalled step, well conditioned
+    last = None
+    # The rows a block at a time (the blocks made once: what a model memoizes on them serves
+    # every iteration), about ROW_BLOCK rows of all the sets together.
+    chunks = list(conditions.blocks(max(64, ROW_BLOCK // n_sets)))
     for _ in range(max_iter):
         current = params[active]
-        w = weighted_whitening(
-            model.whitening(conditions, current), _for_sets(weights, active), dim
-        )
-        jac = model.jacobian(conditions, current)[..., free]  # (N, m, d, p_f)
-        residual = sets[active] - model.positions(conditions, current)
-        rows = (jac if w is None else w @ jac).reshape(active.size, -1, n_free)
-        weighted = residual if w is None else (w @ residual[..., None])[..., 0]
-        step, _, svd = solve_least_squares(rows, weighted.reshape(active.size, -1))
+        measured, set_weights = sets[active], _for_sets(weights, active)
+        rows, blocks = RowTriangle(n_free), []
+        for sub, part in chunks:
+            w = None if set_weights is None else set_weights[..., part]
+            jac, weighted = _whitened_rows(model, sub, measured[:, part], current, free, w)
+            rows.add(jac.reshape(active.size, -1, n_free), weighted.reshape(active.size, -1))
+            if keep and n_sets == 1:
+                blocks.append(jac[0])
+        step, _, svd = rows.solve()
         full_step = np.zeros((active.size, free.size))
         full_step[:, free] = step
         params[active] = current + full_step
@@ -316,9 +370,11 @@ def gauss_newton(
             resolved = np.maximum(floor, ROUND_OFF * svd.condition_number * model.reach_mm)
         stalled = (size >= 0.5 * previous[active]) & (size < resolved)
         previous[active] = size
+        if blocks and bool(finite[0]) and size[0] <= threshold:
+            last = LastStep(np.concatenate(blocks), rows)
         active = active[finite & (size > threshold) & ~stalled]
         if active.size == 0:
             break
     converged = ~failed
     converged[active] = False
-    return Solution(model.canonical(params), iterations, converged, "gauss-newton")
+    return Solution(model.canonical(params), iterations, converged, "gauss-newton", last)

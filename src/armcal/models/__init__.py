@@ -38,6 +38,7 @@ if TYPE_CHECKING:
     from .defaults import LARGE_ANGLE_DEG, TermChoice
     from .identifiability import Identifiability, combination, listing, row_echelon
     from .interface import (
+        ROW_BLOCK,
         ClosedForm,
         ClosedFormPlan,
         ClosedFormPlans,
@@ -129,6 +130,7 @@ if not TYPE_CHECKING:
             ".defaults": ("LARGE_ANGLE_DEG", "TermChoice"),
             ".identifiability": ("Identifiability", "combination", "listing", "row_echelon"),
             ".interface": (
+                "ROW_BLOCK",
                 "ClosedForm",
                 "ClosedFormPlan",
                 "ClosedFormPlans",
@@ -222,6 +224,7 @@ __all__ = [
     "LARGE_ANGLE_DEG",
     "LARGE_LENGTH_FRACTION",
     "LARGE_PLACEMENT_FRACTION",
+    "ROW_BLOCK",
     "SINGLE_TARGET",
     "STANDARD_GRAVITY",
     "Annulus",

@@ -44,9 +44,9 @@ from .identifiability import Identifiability
 from .information import (
     BlockInformation,
     column_identifiability,
-    covariance_factor_from,
+    factor_from_svd,
     identifiable_or_raise,
-    whitened_free_jacobian,
+    whitened_triangle,
 )
 from .interface import (
     Conditions,
@@ -324,8 +324,7 @@ class CoreModel(RigidLoads):
     def covariance_factor(
         self, conditions: Conditions, params: np.ndarray | None = None
     ) -> tuple[np.ndarray, np.ndarray]:
-        whitened = whitened_free_jacobian(self, conditions, params)
-        return covariance_factor_from(whitened, self.free)
+        return factor_from_svd(whitened_triangle(self, conditions, params).svd(), self.free)
 
     def fit_details(self, conditions: Conditions, params: np.ndarray) -> dict[str, np.ndarray]:
         return {}

@@ -28,9 +28,16 @@ from functools import cached_property
 import numpy as np
 
 from ..errors import NotIdentifiableError
-from ..numerics import COND_WARN, RANK_RTOL, ScaledSVD, gram_of_factor, scaled_svd
+from ..numerics import (
+    COND_WARN,
+    RANK_RTOL,
+    RowTriangle,
+    ScaledSVD,
+    gram_of_factor,
+    scaled_svd,
+)
 from .identifiability import Identifiability, combination, listing, row_echelon
-from .interface import Conditions, FitModel, Loads
+from .interface import ROW_BLOCK, Conditions, FitModel, Loads
 
 __all__ = [
     "BlockInformation",
@@ -38,6 +45,7 @@ __all__ = [
     "column_identifiability",
     "covariance_factor_from",
     "display_std",
+    "factor_from_svd",
     "identifying",
     "mean_tip_variance",
     "pose_derivative",
@@ -47,6 +55,7 @@ __all__ = [
     "weighted_whitening",
     "whitened_blocks",
     "whitened_free_jacobian",
+    "whitened_triangle",
 ]
 
 
@@ -71,6 +80,40 @@ def whitened_free_jacobian(
     the generalized least-squares covariance of the free parameters."""
     jac = whitened_blocks(model, conditions, params)
     return jac.reshape(*jac.shape[:-3], -1, model.n_free)
+
+
+def whitened_triangle(
+    model: FitModel,
+    conditions: Conditions,
+    params: np.ndarray | None = None,
+    *,
+    whiten: bool = True,
+) -> RowTriangle:
+    """:func:`whitened_free_jacobian`'s rows reduced to their triangle a block of rows at a
+    time (:meth:`~armcal.models.interface.Conditions.blocks`): the covariance and the
+    rank analysis need no more, and no ``(m, d, p_f)`` array is held; ``whiten=False``
+    the Jacobian's own rows.  At the nominal parameters it is made once for the
+    conditions (:meth:`~armcal.models.interface.Conditions.memo`): a plan's criteria
+    and its covariance share it."""
+    if params is None and whiten:
+        return conditions.memo(
+            (model, "whitened triangle"), lambda: _row_triangle(model, conditions, None, True)
+        )
+    return _row_triangle(model, conditions, params, whiten)
+
+
+def _row_triangle(
+    model: FitModel, conditions: Conditions, params: np.ndarray | None, whiten: bool
+) -> RowTriangle:
+    rows = RowTriangle(model.n_free)
+    for block, _ in conditions.blocks():
+        jac = (
+            whitened_blocks(model, block, params)
+            if whiten
+            else model.jacobian(block, params)[..., model.free]
+        )
+        rows.add(jac.reshape(*jac.shape[:-3], -1, model.n_free))
+    return rows
 
 
 def weighted_whitening(
@@ -112,8 +155,14 @@ def covariance_factor_from(
     >>> (g @ g.T).tolist(), bool(ok)
     ([[0.25, 0.0], [0.0, 0.0]], True)
     """
-    factor, ok = scaled_svd(whitened).inverse_gram_factor()
-    p_f = whitened.shape[-1]
+    return factor_from_svd(scaled_svd(whitened), free)
+
+
+def factor_from_svd(svd: ScaledSVD, free: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`covariance_factor_from` given the scaled SVD of the whitened rows (of the
+    whole matrix, or of its triangle, :func:`whitened_triangle`)."""
+    factor, ok = svd.inverse_gram_factor()
+    p_f = svd.singular_values.shape[-1]
     g = np.zeros((*factor.shape[:-2], free.size, p_f))
     g[..., free, :] = np.where(ok[..., None, None], factor, 0.0)
     ok = ok & np.all(np.isfinite(g), axis=(-2, -1))
@@ -128,8 +177,7 @@ def column_identifiability(
     The one rank policy of :mod:`armcal.numerics` on unit-norm columns; the null
     and poorly determined directions in display units (mm, deg).
     """
-    jac = model.jacobian(conditions, params)[..., model.free]
-    svd = scaled_svd(jac.reshape(-1, model.n_free))
+    svd = whitened_triangle(model, conditions, params, whiten=False).svd()
     names = model.free_names
     scale = model.display_scale[model.free]
     null = svd.directions(RANK_RTOL)
@@ -202,6 +250,8 @@ def refit_free(model: FitModel, conditions: Conditions, params: np.ndarray) -> n
     free = model.free
     out = np.where(free, np.asarray(params, dtype=float), model.held_values)
     tol = 1e-12 * model.reach_mm
+    if conditions.m > ROW_BLOCK:
+        return _refit_blocks(model, conditions, goal, out, tol)
     for _ in range(_REFIT_STEPS):
         miss = (goal - model.positions(conditions, out)).reshape(-1)
         jac = model.jacobian(conditions, out)[..., free].reshape(miss.size, -1)
@@ -209,6 +259,31 @@ def refit_free(model: FitModel, conditions: Conditions, params: np.ndarray) -> n
         out[free] += step
         if np.max(np.abs(jac @ step), initial=0.0) <= tol:
             break
+    return out
+
+
+def _refit_blocks(
+    model: FitModel, conditions: Conditions, goal: np.ndarray, out: np.ndarray, tol: float
+) -> np.ndarray:
+    """:func:`refit_free` of more rows than a block: one pass of the model per step, a
+    block of rows at a time (the points from the Jacobian's pass), the step from the
+    rows' triangle.  Whether a step moved any point by more than ``tol`` is read from
+    the next pass's Jacobian (the same to first order in the step): a last pass then
+    only confirms it."""
+    free, n_free = model.free, model.n_free
+    step = None
+    for _ in range(_REFIT_STEPS + 1):
+        rows, moved = RowTriangle(n_free), 0.0
+        for block, part in conditions.blocks():
+            jac = model.jacobian(block, out)[..., free].reshape(-1, n_free)
+            miss = (goal[part] - model.positions(block, out)).reshape(-1)
+            if step is not None:
+                moved = max(moved, float(np.max(np.abs(jac @ step), initial=0.0)))
+            rows.add(jac, miss)
+        if step is not None and moved <= tol:
+            break
+        step = rows.solve()[0]
+        out[free] += step
     return out
 
 
@@ -239,8 +314,12 @@ def tip_variances(jacobian: np.ndarray, covariance: np.ndarray) -> np.ndarray:
     >>> tip_variances(np.array([[[1.0, 0.0], [0.0, 1.0]]]), np.eye(2) * 0.01).tolist()
     [0.02]
     """
-    variance = np.einsum("...kia,...ab,...kib->...k", jacobian, covariance, jacobian)
-    return np.clip(variance, 0.0, None)
+    jacobian, covariance = np.asarray(jacobian), np.asarray(covariance)
+    if covariance.ndim == 2:  # one covariance: one BLAS product of every row's rows
+        weighted = (jacobian.reshape(-1, jacobian.shape[-1]) @ covariance).reshape(jacobian.shape)
+    else:
+        weighted = jacobian @ covariance[..., None, :, :]
+    return np.clip(np.einsum("...kia,...kia->...k", weighted, jacobian), 0.0, None)
 
 
 def mean_tip_variance(jacobian: np.ndarray, covariance: np.ndarray) -> np.ndarray:
@@ -381,7 +460,21 @@ class BlockInformation:
     def blocks(self) -> np.ndarray:
         return self._blocks
 
+    @cached_property
+    def _triangle(self) -> np.ndarray | None:
+        """For one large plan (more than :data:`~armcal.models.interface.ROW_BLOCK` rows)
+        the triangle of its design rows ``W J / scale / sqrt(rows)``
+        (:func:`whitened_triangle`, which its covariance shares): what its criteria
+        need, without its ``(m, d, p_f)`` blocks; None for plans whose blocks are
+        made (a stack of plans, a small one, or one whose gradient was asked for)."""
+        if self.q.ndim != 2 or "_blocks" in self.__dict__ or self._rows.m <= ROW_BLOCK:
+            return None
+        count = self.q.shape[0] * self.rows_per_pose
+        return whitened_triangle(self.model, self._rows).triangle() / (self.scale * np.sqrt(count))
+
     def information(self) -> np.ndarray:
+        if self._triangle is not None:
+            return self._triangle.T @ self._triangle
         f = self._blocks
         rows = f.shape[-3] * self.rows_per_pose
         return np.einsum("...mrp,...mrq->...pq", f, f) / rows
@@ -418,6 +511,8 @@ class BlockInformation:
 
     @cached_property
     def _svd(self) -> ScaledSVD:
+        if self._triangle is not None:
+            return scaled_svd(self._triangle)
         f = self._blocks
         rows = f.shape[-3] * self.rows_per_pose
         stacked = f.reshape(*f.shape[:-3], -1, f.shape[-1]) / np.sqrt(rows)
@@ -429,6 +524,9 @@ class BlockInformation:
     def singular_values(self) -> np.ndarray:
         if self.unit_columns:
             return self._svd.truncated
+        if self._triangle is not None:
+            s = np.linalg.svd(self._triangle, compute_uv=False)
+            return np.where(self._svd.kept, _padded_values(s, self.model.n_free), 0.0)
         f = self._blocks
         rows = f.shape[-3] * self.rows_per_pose
         stacked = f.reshape(*f.shape[:-3], -1, f.shape[-1]) / np.sqrt(rows)
@@ -454,3 +552,8 @@ class BlockInformation:
         rows = whitened_blocks(self.model, self._rows, params)  # plan after plan
         stacked = rows.reshape(*self.q.shape[:-2], -1, self.model.n_free)
         return covariance_factor_from(stacked, self.model.free)
+
+
+def _padded_values(values: np.ndarray, p: int) -> np.ndarray:
+    """Singular values ``(k,)`` padded with zeros to ``(p,)``."""
+    return np.concatenate([values, np.zeros(p - values.shape[-1])])

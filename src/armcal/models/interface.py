@@ -54,7 +54,7 @@ compensation and export call the robot.
 
 from __future__ import annotations
 
-from collections.abc import Callable, Hashable, Mapping, Sequence
+from collections.abc import Callable, Hashable, Iterator, Mapping, Sequence
 from dataclasses import dataclass, field, replace
 from typing import Any, Protocol, Self
 
@@ -67,6 +67,7 @@ from ..numerics import ScaledSVD
 from .identifiability import Identifiability
 
 __all__ = [
+    "ROW_BLOCK",
     "ClosedForm",
     "ClosedFormPlan",
     "ClosedFormPlans",
@@ -151,6 +152,11 @@ class Loads:
         return Loads(np.repeat(self.payload_kg, count), np.repeat(self.force_n, count, axis=0))
 
 
+#: Rows of a block of :meth:`Conditions.blocks`: a Jacobian of a few tens of columns over
+#: this many rows is a few MB, and stays in the processor's cache.
+ROW_BLOCK = 1 << 13
+
+
 @dataclass(frozen=True, eq=False)
 class Conditions:
     """What a model needs to know of measured rows besides the measured points.
@@ -204,6 +210,21 @@ class Conditions:
             None if self.frames is None else self.frames[rows],
         )
 
+    def blocks(self, size: int = 0) -> Iterator[tuple[Conditions, slice]]:
+        """The rows (of an unbatched ``q``) in blocks of at most ``size`` (default
+        :data:`ROW_BLOCK`): each block's conditions and its slice; these conditions
+        themselves when they are one block.  What is made per row (a Jacobian, its
+        products) is then made a block at a time: memory ``O(block p)``, not ``O(m p)``
+        (each block's conditions, and what a model keeps on them, go with the block)."""
+        size = size or ROW_BLOCK
+        m = self.m
+        if m <= size:
+            yield self, slice(0, m)
+            return
+        for start in range(0, m, size):
+            part = slice(start, min(start + size, m))
+            yield self.take(part), part
+
     def with_frames(self, frames: np.ndarray | None) -> Conditions:
         """The same rows with reference orientations ``frames`` ``(m, 3, 3)``."""
         return Conditions(self.q, self.target, self.loads, self.sigma_mm, frames)
@@ -217,6 +238,34 @@ class Conditions:
         if key not in self._memo:
             self._memo[key] = compute()
         return self._memo[key]
+
+    def latest(self, slot: Hashable, key: tuple) -> Any:
+        """What :meth:`keep` put in ``slot`` for ``key``, else None.
+
+        One value per slot, for what depends on parameters as well as on these rows
+        (the points at the latest parameters a fit evaluated: its Jacobian's pass has
+        them, and its residuals and weights need them again).  Keys match item by
+        item: ``bytes``, numbers and strings by value, anything else by identity.
+        """
+        found = self._memo.get(("latest", slot))
+        if found is None or not _same_key(found[0], key):
+            return None
+        return found[1]
+
+    def keep(self, slot: Hashable, key: tuple, value: Any) -> None:
+        """Keep ``value`` in ``slot`` for ``key`` (:meth:`latest`), replacing what was there."""
+        self._memo[("latest", slot)] = (key, value)
+
+
+def _same_key(kept: tuple, key: tuple) -> bool:
+    """Whether two keys of :meth:`Conditions.latest` match, item by item."""
+    if len(kept) != len(key):
+        return False
+    by_value = (bytes, str, int, float, tuple)
+    return all(
+        a is b or (isinstance(a, by_value) and type(a) is type(b) and a == b)
+        for a, b in zip(kept, key, strict=True)
+    )
 
 
 @dataclass(frozen=True)

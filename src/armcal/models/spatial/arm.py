@@ -14,7 +14,7 @@ into the generic ones of :mod:`~armcal.models.information`.
 from __future__ import annotations
 
 from collections.abc import Sequence
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field, fields, replace
 from functools import cached_property
 from typing import Any
 
@@ -22,11 +22,13 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from ...noise import NoiseModel, relative_noise
+from ...numerics import RowTriangle
 from ..core import CoreModel
 from ..information import (
     refit_free,
 )
 from ..interface import (
+    ROW_BLOCK,
     Conditions,
     DeviationBounds,
     Held,
@@ -433,17 +435,39 @@ deviation_bounds`); the base pose and the targets are the instrument's."""
         return Conditions(q, index, None, sigma_mm)
 
     def chain_kinematics(
-        self, conditions: Conditions, params: np.ndarray | None, *, derivatives: bool = False
+        self,
+        conditions: Conditions,
+        params: np.ndarray | None,
+        *,
+        derivatives: bool = False,
+        keep: bool = False,
     ) -> ChainKinematics:
-        return kinematics(
+        """The kinematics of the rows at ``params``; what it finds is kept on the conditions
+        (:meth:`~armcal.models.interface.Conditions.latest`), so that the positions and
+        weights a fit needs at the parameters of its Jacobian's pass take no pass of their
+        own: the points and rotations always, the derivatives too with ``keep`` (a tool's
+        angular Jacobian, whose point's Jacobian is usually asked for next) for a block of
+        rows at most (:data:`~armcal.models.interface.ROW_BLOCK`), until the points alone
+        are asked for (their last use)."""
+        params = self._params(params)
+        key = (self.chain, self.joint_map, self.layout, params.shape, params.tobytes())
+        kept = conditions.latest(_KINEMATICS, key)
+        if kept is not None and (kept.jacobian is not None or not derivatives):
+            if not derivatives and kept.jacobian is not None:
+                conditions.keep(_KINEMATICS, key, _copied(kept, derivatives=False))
+            return _copied(kept, derivatives=derivatives)
+        found = kinematics(
             self.chain,
             self.joint_map,
             self.layout,
             conditions.q,
             conditions.target,
-            self._params(params),
+            params,
             derivatives=derivatives,
         )
+        whole = derivatives and keep and found.points.size <= 3 * ROW_BLOCK  # rows x sets
+        conditions.keep(_KINEMATICS, key, _copied(found, derivatives=whole))
+        return found
 
     def positions(self, conditions: Conditions, params: np.ndarray | None = None) -> np.ndarray:
         """The targets' positions ``(..., m, 3)`` (mm); for a 6-DoF instrument also their
@@ -474,8 +498,10 @@ deviation_bounds`); the base pose and the targets are the instrument's."""
     def derivative(
         self, conditions: Conditions, params: np.ndarray | None, name: str
     ) -> np.ndarray:
-        """One of the derivatives of :class:`ChainKinematics` (``jacobian``, ...)."""
-        found = getattr(self.chain_kinematics(conditions, params, derivatives=True), name)
+        """One of the derivatives of :class:`ChainKinematics` (``jacobian``, ...); the tool
+        role's, so the pass is kept for the point's Jacobian (:meth:`chain_kinematics`)."""
+        kin = self.chain_kinematics(conditions, params, derivatives=True, keep=True)
+        found = getattr(kin, name)
         assert found is not None
         return found
 
@@ -647,11 +673,15 @@ deviation_bounds`); the base pose and the targets are the instrument's."""
         local = conditions
         if conditions.frames is not None:  # the frames turned back with the base
             local = conditions.with_frames(turn.T @ conditions.frames)
-        jac = replace(arm, base_pose=np.zeros(6)).jacobian(local)
-        w = arm.whitening(conditions)
-        rows = jac if w is None else w @ np.kron(np.eye(arm.point_dim // 3), turn) @ jac
+        at_base = replace(arm, base_pose=np.zeros(6))
+        back = np.kron(np.eye(arm.point_dim // 3), turn)
+        rows = RowTriangle(arm.layout.n_params)  # the rule needs their column space only
+        for block, part in conditions.blocks():
+            jac = at_base.jacobian(block if local is conditions else local.take(part))
+            w = arm.whitening(block)
+            rows.add((jac if w is None else w @ back @ jac).reshape(-1, arm.layout.n_params))
         u = np.asarray(conditions.q) @ arm.joint_map.T
-        held, merges = select_from_rows(arm.layout, arm.chain, rows, u, arm.user_fixed)
+        held, merges = select_from_rows(arm.layout, arm.chain, rows.triangle(), u, arm.user_fixed)
         return replace(arm, held=held, merges=merges)
 
     def expressed(self, conditions: Conditions, params: np.ndarray) -> np.ndarray:
@@ -690,3 +720,21 @@ deviation_bounds`); the base pose and the targets are the instrument's."""
             return rows
         frames = self.chain_kinematics(rows, None).target_rotation
         return rows.with_frames(frames)
+
+
+#: The slot of :meth:`SpatialArm.chain_kinematics` on the conditions.
+_KINEMATICS = "spatial chain kinematics"
+
+
+def _copied(kin: ChainKinematics, *, derivatives: bool) -> ChainKinematics:
+    """A copy of ``kin``'s arrays, its derivatives or only its points and rotations (what
+    is kept, and what is handed out from it: a caller may change its arrays in place)."""
+    if not derivatives:
+        target = None if kin.target_rotation is None else kin.target_rotation.copy()
+        return ChainKinematics(kin.points.copy(), kin.rotation.copy(), target_rotation=target)
+    copies: dict[str, Any] = {f.name: _copy(getattr(kin, f.name)) for f in fields(kin)}
+    return ChainKinematics(**copies)
+
+
+def _copy(array: np.ndarray | None) -> np.ndarray | None:
+    return None if array is None else array.copy()
