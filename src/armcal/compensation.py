@@ -39,8 +39,8 @@ as at a wrist within about 3 deg of ``J5 = 0`` or a wrist centre near the axis
 of ``J1``.  Such a correction is not the calibration's (the calibration's
 errors are tenths of a mm and hundredths of a degree per joint) and is refused
 with the reason *near a singularity* and the joint change it needs.  The
-iteration stops a pose as soon as it leaves that bound (its steps are no longer
-than the bound either), so it never wanders off to another branch.
+iteration never leaves that bound (a step that would take a joint beyond it stops
+on it), so it never wanders off to another branch; a pose that needs more stalls on it.
 
 A model of joint compliance also takes out the joints' deflection under the
 program's load; every family works through
@@ -416,22 +416,20 @@ def _iterate(
     q = q0.copy()
     residual = residual.copy()
     radius = bound.copy()  # the trust region's, for the step's 2-norm (rad)
-    beyond = np.zeros(q.shape[0], dtype=bool)  # left its bound: near a singularity
     for _ in range(max_iter):
         norm2 = np.sum(residual**2, axis=1)
         # A radius that moves the tool by less than tol_mm can no longer make progress.
         moving = radius * model.reach_mm > tol_mm
-        active = np.flatnonzero((norm2 > tol_mm**2) & moving & ~beyond)
+        active = np.flatnonzero((norm2 > tol_mm**2) & moving)
         if active.size == 0:
             break
-        step = _trust_region_step(
-            goal.jacobian(q[active], active), residual[active], radius[active],
-            q0[active] - q[active],
-        )  # fmt: skip
-        trial = q[active] + step.dq
+        jac, back = goal.jacobian(q[active], active), q0[active] - q[active]
+        step = _trust_region_step(jac, residual[active], radius[active], back)
+        trial, gain = _within_bound(step, jac, residual[active], -back, bound[active])
+        trial += q0[active]
         after = goal.residual(trial, active)
         fall = norm2[active] - np.sum(after**2, axis=1)
-        fit = np.divide(fall, step.gain, out=np.zeros_like(fall), where=step.gain > 0)
+        fit = np.divide(fall, gain, out=np.zeros_like(fall), where=gain > 0)
         good = step.on_radius & (fit > _GOOD_FIT)
         radius[active] = np.where(
             fit < _POOR_FIT,
@@ -441,8 +439,35 @@ def _iterate(
         taken = fit > _ACCEPT_RATIO
         rows = active[taken]
         q[rows], residual[rows] = trial[taken], after[taken]
-        beyond[rows] = np.max(np.abs(q[rows] - q0[rows]), axis=1) > bound[rows]
+    # Left with a joint on its bound: the way on went beyond it.
+    beyond = np.max(np.abs(q - q0), axis=1) >= (1 - _ON_BOUND) * bound
     return q, residual, beyond
+
+
+#: A joint within this fraction of its bound is on it (where a clipped step put it).
+_ON_BOUND = 1e-9
+
+
+def _within_bound(
+    step: _Step, jac: np.ndarray, residual: np.ndarray, offset: np.ndarray, bound: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """The trial's offset from the program's commands ``(a, n)``, each joint's clipped to
+    its pose's ``bound`` (from ``offset``, where the commands are now), and the gain the
+    linear model predicts for the step taken.
+
+    A step that would take a joint beyond its bound stops there (a projected step): the
+    iteration never leaves the bound, and a correction within it that an iterate would
+    have overshot on the way is still found; one that needs more stalls on the bound.
+    """
+    moved = offset + step.dq
+    clipped = np.clip(moved, -bound[:, None], bound[:, None])
+    cut = np.any(clipped != moved, axis=1)
+    gain = step.gain.copy()
+    if cut.any():
+        dq = clipped[cut] - offset[cut]
+        linear = residual[cut] + np.einsum("akn,an->ak", jac[cut], dq)
+        gain[cut] = np.sum(residual[cut] ** 2, axis=1) - np.sum(linear**2, axis=1)
+    return clipped, gain
 
 
 def _refuse_beyond_limits(
@@ -566,7 +591,7 @@ def compensate(
     at_program = goal.residual(q0, everyone)  # where the program's own commands take the tool
     bound = MAX_AMPLIFICATION * goal.error_angle(at_program)  # rad, per pose
     q, residual, beyond = _iterate(goal, q0, at_program, bound, tol_mm, max_iter)
-    done = (np.linalg.norm(residual, axis=1) <= tol_mm) & ~beyond
+    done = np.linalg.norm(residual, axis=1) <= tol_mm  # within the bound: it never leaves it
     reasons = _singular_reasons(goal, q, ~done, beyond, bound, at_program)
     _refuse_beyond_limits(model, q, done, reasons)
     q = np.where(done[:, None], q, q0)
