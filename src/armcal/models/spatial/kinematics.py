@@ -313,7 +313,8 @@ class ChainKinematics:
 @dataclass(frozen=True, eq=False)
 class _Screws:
     """Every parameter and joint value as a screw at the tip: axis ``w`` and moment
-    ``v - w x c`` (a translation's axis 0), shapes ``(..., m, p, 3)`` and ``(..., m, n, 3)``."""
+    ``v - w x c`` (a translation's axis 0), column by column: shapes ``(..., m, 3, p)``
+    and ``(..., m, 3, n)``, the layout of the Jacobians they become."""
 
     axis: np.ndarray
     moment: np.ndarray
@@ -321,22 +322,84 @@ class _Screws:
     joint_moment: np.ndarray
 
 
+def _times(stack: np.ndarray, other: np.ndarray) -> np.ndarray:
+    """``stack @ other`` of matrices ``(..., r, 3)`` and one matrix ``(3, b)`` or vector
+    ``(3,)``: one BLAS product of the stacked rows, not a small product per matrix."""
+    flat = stack.reshape(-1, 3) @ other
+    return flat.reshape(*stack.shape[:-1], *other.shape[1:])
+
+
+def _cross_columns(axis: np.ndarray, point: np.ndarray, out: np.ndarray) -> np.ndarray:
+    """``out += w x x`` for every column ``w`` of ``axis`` ``(..., 3, c)`` and the point
+    ``point`` ``(..., 3)`` of its row: six products through one scratch array, into the
+    columns ``out`` ``(..., 3, c)`` in place."""
+    x = point[..., :, None]
+    scratch = np.empty(np.broadcast_shapes(axis[..., 0, :].shape, x[..., 0, :].shape))
+    for i in range(3):
+        j, k = (i + 1) % 3, (i + 2) % 3
+        np.multiply(axis[..., j, :], x[..., k, :], out=scratch)
+        out[..., i, :] += scratch
+        np.multiply(axis[..., k, :], x[..., j, :], out=scratch)
+        out[..., i, :] -= scratch
+    return out
+
+
 def _base_screws(
     base: np.ndarray, rot: np.ndarray, pos: np.ndarray, lead: tuple[int, ...], n: int, p: int
 ) -> _Screws:
     """The screws of the base pose's six parameters; every other one 0 until the chain
     walk reaches it."""
-    axis = np.zeros((*lead, p, 3))
-    moment = np.zeros((*lead, p, 3))
-    joint_axis = np.zeros((*lead, n, 3))
-    joint_moment = np.zeros((*lead, n, 3))
-    moment[..., 0:3, :] = np.eye(3)
+    axis = np.zeros((*lead, 3, p))
+    moment = np.zeros((*lead, 3, p))
+    joint_axis = np.zeros((*lead, 3, n))
+    joint_moment = np.zeros((*lead, 3, n))
+    moment[..., 0:3] = np.eye(3)
     yaw = elementary(2, base[..., 5])
-    axis[..., 3, :] = rot[..., :, 0]
-    axis[..., 4, :] = np.broadcast_to(yaw[..., :, 1], (*lead, 3))
-    axis[..., 5, :] = [0.0, 0.0, 1.0]
-    moment[..., 3:6, :] = -cross(axis[..., 3:6, :], pos[..., None, :])
+    for c, w in enumerate((rot[..., :, 0], yaw[..., :, 1], np.array([0.0, 0.0, 1.0]))):
+        axis[..., :, 3 + c] = w
+        moment[..., :, 3 + c] = -cross(w, pos)
     return _Screws(axis, moment, joint_axis, joint_moment)
+
+
+def _apply(rot: np.ndarray, other: np.ndarray) -> np.ndarray:
+    """``rot @ other`` of rotations ``(..., m, 3, 3)`` and matrices ``(..., 1, 3, b)`` the
+    same for every row: one BLAS product of the stacked rows where ``other`` is one
+    matrix (one parameter set), a batched product otherwise."""
+    if other.ndim == 2 or all(size == 1 for size in other.shape[:-2]):
+        flat = rot.reshape(-1, 3) @ other.reshape(3, -1)
+        return flat.reshape(*rot.shape[:-1], other.shape[-1])
+    sets = np.broadcast_shapes(rot.shape[:-3], other.shape[:-3])
+    out = np.empty((*sets, rot.shape[-3], 3, other.shape[-1]))
+    if np.prod(sets) > _SETS_LOOPED:
+        np.matmul(rot, other, out=out)
+        return out
+    rot = np.broadcast_to(rot, (*sets, *rot.shape[-3:]))
+    other = np.broadcast_to(other, (*sets, *other.shape[-3:]))
+    for at in np.ndindex(sets):  # a BLAS product per set beats numpy's per-row 3 x 3 ones
+        out[at] = _apply(rot[at], other[at])
+    return out
+
+
+#: Parameter sets up to which :func:`_apply` takes one BLAS product per set.
+_SETS_LOOPED = 64
+
+
+def _joint_frame(
+    origin: np.ndarray, err: np.ndarray, kind: str
+) -> tuple[np.ndarray, np.ndarray, list[tuple[int, np.ndarray]]]:
+    """A joint's constant frame before its value: the nominal origin's rotation turned by
+    the placement's angle errors ``(..., 1, 3, 3)``, its shift in the frame before
+    ``(..., 1, 3, 1)`` (the origin's and the placement's), and for each angle error its
+    axis in that frame ``(slot component, (..., 1, 3, 1))``: a walk takes the whole turn in
+    one product, not one per error, and every screw's axis from one product too."""
+    turn = np.broadcast_to(origin[:3, :3], (*err.shape[:-1], 3, 3))
+    shift = origin[:3, 3, None] + turn @ err[..., :3, None]  # (a missing slot's error is 0)
+    axes = []
+    for c in (3, 4, 5):
+        if c in _PLACEMENT[kind]:
+            axes.append((c, turn[..., :, c - 3 : c - 2]))
+            turn = _turned(turn, c - 3, err[..., c])
+    return turn, shift, axes
 
 
 def _walk_chain(
@@ -349,37 +412,40 @@ def _walk_chain(
 ) -> tuple[np.ndarray, np.ndarray]:
     """The tip frame's position and rotation from the base's, joint by joint: nominal
     origin, placement error, joint value; with ``screws``, every placement parameter's
-    and joint's screw is filled in on the way."""
+    and joint's screw is filled in on the way.
+
+    The frames broadcast: until the first joint turns they are the same for every row
+    (``(..., 1, 3)``, ``(..., 1, 3, 3)``).  A joint's constant frame (origin and placement
+    errors, :func:`_joint_frame`) is one product of the stacked rows.
+    """
     for k, kind in enumerate(chain.kinds):
-        pos = pos + rot @ chain.origins[k, :3, 3]
-        rot = rot @ chain.origins[k, :3, :3]
-        err = errors[..., k, :]
+        turn, shift, axes = _joint_frame(chain.origins[k], errors[..., k, :], kind)
         start = 6 + 5 * k
         slots = {c: start + slot for slot, c in enumerate(_PLACEMENT[kind])}
-        if screws is not None:
+        if screws is not None:  # the origin's frame: the shifts' directions
+            placed = _apply(rot, chain.origins[k][:3, :3])
             for c in (0, 1, 2):
                 if c in slots:
-                    screws.moment[..., slots[c], :] = rot[..., :, c]
-        pos = pos + np.einsum("...ij,...j->...i", rot, err[..., :3])
-        for c in (3, 4, 5):
-            if screws is not None and c in slots:
-                w = rot[..., :, c - 3]
-                screws.axis[..., slots[c], :] = w
-                screws.moment[..., slots[c], :] = -cross(w, pos)
-            if c in slots:
-                rot = _turned(rot, c - 3, err[..., c])
+                    screws.moment[..., :, slots[c]] = placed[..., :, c]
+        pos = pos + _apply(rot, shift)[..., 0]
+        if screws is not None:
+            for c, axis in axes:
+                w = _apply(rot, axis)[..., 0]
+                screws.axis[..., :, slots[c]] = w
+                screws.moment[..., :, slots[c]] = -cross(w, pos)
+        rot = _apply(rot, turn)
         w = rot[..., :, 2]
         if kind == "R":
             if screws is not None:
-                screws.joint_axis[..., k, :] = w
-                screws.joint_moment[..., k, :] = -cross(w, pos)
+                screws.joint_axis[..., :, k] = w
+                screws.joint_moment[..., :, k] = -cross(w, pos)
             rot = _turned(rot, 2, u[..., k])
         else:
             if screws is not None:
-                screws.joint_moment[..., k, :] = w
+                screws.joint_moment[..., :, k] = w
             pos = pos + w * u[..., k, None]
-    pos = pos + rot @ chain.tip[:3, 3]
-    rot = rot @ chain.tip[:3, :3]
+    pos = pos + _times(rot, chain.tip[:3, 3])
+    rot = _times(rot, chain.tip[:3, :3])
     return pos, rot
 
 
@@ -398,16 +464,14 @@ def _with_jacobians(
     axis, moment = screws.axis, screws.moment
     joint_axis, joint_moment = screws.joint_axis, screws.joint_moment
     # Zero errors: d/dq_i = sum_j M_ji d/du_j.
-    zero_axis = np.einsum("ji,...jc->...ic", joint_map, joint_axis)
-    zero_moment = np.einsum("ji,...jc->...ic", joint_map, joint_moment)
-    axis[..., layout.zero_start : layout.target_start, :] = zero_axis
-    moment[..., layout.zero_start : layout.target_start, :] = zero_moment
-    jac = cross(axis, points[..., None, :]) + moment  # (..., m, p, 3)
-    jac = np.swapaxes(jac, -1, -2).copy()  # (..., m, 3, p)
+    zero_axis = joint_axis @ joint_map  # (..., m, 3, n)
+    zero_moment = joint_moment @ joint_map
+    axis[..., layout.zero_start : layout.target_start] = zero_axis
+    moment[..., layout.zero_start : layout.target_start] = zero_moment
+    jac = _cross_columns(axis, points, out=moment)  # (..., m, 3, p): in the moments' array
     target_angular = None
-    angular = np.swapaxes(axis, -1, -2)
     if turn is not None:  # a target's turn exp(v) moves at rot J_l(v) dv (chain.py)
-        target_angular = angular.copy()
+        target_angular = axis.copy()
         turning = rot @ left_jacobian(turn)
     for t in range(len(layout.targets)):
         cols, turn_cols = layout.target_columns(t)
@@ -416,18 +480,19 @@ def _with_jacobians(
         if target_angular is not None and turn_cols is not None:
             jac[..., turn_cols] = 0.0
             target_angular[..., turn_cols] = np.where(mine, turning, 0.0)
-    joint_jac = np.swapaxes(cross(zero_axis, points[..., None, :]) + zero_moment, -1, -2)
+    joint_jac = _cross_columns(zero_axis, points, out=zero_moment)
+    velocities = _cross_columns(joint_axis, points, out=joint_moment)
     return ChainKinematics(
         points,
         rot,
         jac,
         joint_jac,
-        np.swapaxes(zero_axis, -1, -2),
-        angular,
+        zero_axis,
+        axis,
         target_rotation,
         target_angular,
-        joint_axis,
-        cross(joint_axis, points[..., None, :]) + joint_moment,
+        np.swapaxes(joint_axis, -1, -2),
+        np.swapaxes(velocities, -1, -2),
     )
 
 
@@ -466,11 +531,13 @@ def kinematics(
     u = (q + zeros) @ joint_map.T
     errors = layout.placement_errors(params)  # (..., 1, n, 6)
     base = params[..., :6]
-    rot = np.broadcast_to(rpy_matrix(base[..., 3:6]), (*lead, 3, 3)).copy()
-    pos = np.broadcast_to(base[..., :3], (*lead, 3)).copy()
+    rot = rpy_matrix(base[..., 3:6])  # (..., 1, 3, 3): every row's until a joint turns
+    pos = base[..., :3]
     # Every parameter (and joint value) as a screw: axis w, moment v - w x c.
     screws = _base_screws(base, rot, pos, lead, n, p) if derivatives else None
     pos, rot = _walk_chain(chain, errors, u, pos, rot, screws)
+    pos = np.broadcast_to(pos, (*lead, 3))  # a chain that never turns: the same frame
+    rot = np.broadcast_to(rot, (*lead, 3, 3))
     points_tip = layout.target_points(params[..., 0, :])  # (..., k, 3)
     index = np.zeros(lead[-1], dtype=int) if target is None else np.asarray(target)
     local = np.take(points_tip, index, axis=-2)  # (..., m, 3)
