@@ -416,10 +416,16 @@ def _iterate(
     q = q0.copy()
     residual = residual.copy()
     radius = bound.copy()  # the trust region's, for the step's 2-norm (rad)
-    for _ in range(max_iter):
+    # The squared miss at the start of the last _SLOW_STEPS iterations.
+    history = np.full((_SLOW_STEPS, q.shape[0]), np.inf)
+    for turn in range(max_iter):
         norm2 = np.sum(residual**2, axis=1)
-        # A radius that moves the tool by less than tol_mm can no longer make progress.
-        moving = radius * model.reach_mm > tol_mm
+        # A radius that moves the tool by less than tol_mm can no longer make progress;
+        # nor, here, can steps that lowered the miss by less than _SLOW_FALL over the
+        # last _SLOW_STEPS (near a singularity, or along the bound towards a goal beyond).
+        slow = norm2 > _SLOW_FALL * history[turn % _SLOW_STEPS]
+        history[turn % _SLOW_STEPS] = norm2
+        moving = (radius * model.reach_mm > tol_mm) & ~slow
         active = np.flatnonzero((norm2 > tol_mm**2) & moving)
         if active.size == 0:
             break
@@ -443,6 +449,14 @@ def _iterate(
     beyond = np.max(np.abs(q - q0), axis=1) >= (1 - _ON_BOUND) * bound
     return q, residual, beyond
 
+
+#: A pose stops where its squared miss is more than this fraction of what it was
+#: :data:`_SLOW_STEPS` iterations before: Newton's steps converge quadratically, and a
+#: trust region that doubles after every good step reaches them within a few; a pose
+#: that took 8 steps to lower its miss by less than 10x is near a singularity, or moves
+#: along its bound towards a goal beyond it.
+_SLOW_FALL = 0.01
+_SLOW_STEPS = 8
 
 #: A joint within this fraction of its bound is on it (where a clipped step put it).
 _ON_BOUND = 1e-9

@@ -370,6 +370,10 @@ class RowTriangle:
     ----------
     columns : int
         ``p``, the columns of ``A``.
+    sides : int, optional
+        ``K`` right-hand sides of one ``A`` (``rhs`` ``(..., r, K)``, solutions
+        ``(..., K, p)``): sets of data that share their rows' Jacobian, one
+        factorization for them all.  Default one (``rhs`` ``(..., r)``).
 
     Examples
     --------
@@ -381,18 +385,25 @@ class RowTriangle:
     ([1.0, 2.0], True)
     """
 
-    def __init__(self, columns: int) -> None:
+    def __init__(self, columns: int, sides: int | None = None) -> None:
         self.columns = columns
+        self.sides = sides
         self._whole: tuple[np.ndarray, np.ndarray] | None = None
         self._triangle: np.ndarray | None = None
         self._squares: np.ndarray | None = None
 
     def add(self, matrix: np.ndarray, rhs: np.ndarray | None = None) -> None:
-        """Rows ``matrix`` ``(..., r, p)`` of ``A`` and ``rhs`` ``(..., r)`` of ``b`` (0 when
-        None).  Raises :class:`~armcal.errors.ArmcalError` for non-finite entries."""
+        """Rows ``matrix`` ``(..., r, p)`` of ``A`` and ``rhs`` ``(..., r)`` of ``b``
+        (``(..., r, K)`` with ``sides``; 0 when None).  Raises
+        :class:`~armcal.errors.ArmcalError` for non-finite entries."""
         matrix = np.asarray(matrix, dtype=float)
         _check_finite(matrix)
-        right = np.zeros(matrix.shape[:-1]) if rhs is None else np.asarray(rhs, dtype=float)
+        sides = 1 if self.sides is None else self.sides
+        if rhs is None:
+            right = np.zeros((*matrix.shape[:-1], sides))
+        else:
+            right = np.asarray(rhs, dtype=float)
+            right = right[..., None] if self.sides is None else right
         _check_finite(right)
         if self._triangle is None and self._whole is None and matrix.shape[-2] <= WHOLE_ROWS:
             self._whole = (matrix, right)
@@ -407,13 +418,13 @@ class RowTriangle:
         self._squares = squares if self._squares is None else self._squares + squares
         for start in range(0, matrix.shape[-2], TRIANGLE_BLOCK_ROWS):
             rows = slice(start, start + TRIANGLE_BLOCK_ROWS)
-            block = np.concatenate([matrix[..., rows, :], right[..., rows, None]], axis=-1)
+            block = np.concatenate([matrix[..., rows, :], right[..., rows, :]], axis=-1)
             if self._triangle is not None:
                 block = np.concatenate([self._triangle, block], axis=-2)
             self._triangle = _r_only(block)
 
     def _parts(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """``R`` ``(..., k, p)`` (``k = min(rows, p)``), ``Q^T b`` ``(..., k)`` and the
+        """``R`` ``(..., k, p)`` (``k = min(rows, p)``), ``Q^T b`` ``(..., k, K)`` and the
         column norms ``(..., p)`` (1 for a zero column)."""
         if self._triangle is None or self._squares is None:
             raise ValueError("no rows were added")
@@ -421,7 +432,7 @@ class RowTriangle:
         k = min(self._triangle.shape[-2], p)
         norms = np.sqrt(self._squares)
         norms = np.where(norms > 0, norms, 1.0)
-        return self._triangle[..., :k, :p], self._triangle[..., :k, p], norms
+        return self._triangle[..., :k, :p], self._triangle[..., :k, p:], norms
 
     def triangle(self) -> np.ndarray:
         """A matrix ``(..., k, p)`` with the column space and the column norms of ``A``, for
@@ -445,7 +456,7 @@ class RowTriangle:
             norms = np.linalg.norm(matrix, axis=-2)
             norms = np.where(norms > 0, norms, 1.0)
             basis, triangle = np.linalg.qr(matrix / norms[..., None, :], mode="reduced")
-            projected = np.einsum("...rk,...r->...k", basis, rhs)
+            projected = np.einsum("...rk,...rs->...ks", basis, rhs)
             left, s, vt = np.linalg.svd(triangle, full_matrices=True)
         else:
             triangle, projected, norms = self._parts()
@@ -454,9 +465,9 @@ class RowTriangle:
         k = triangle.shape[-2]
         kept = svd.kept[..., :k]
         inverse = np.where(kept, 1.0 / np.where(kept, s[..., :k], 1.0), 0.0)
-        coeffs = np.einsum("...k,...kj->...j", projected, left) * inverse
-        x = np.einsum("...k,...kp->...p", coeffs, vt[..., :k, :]) / norms
-        return x, svd.full_rank, svd
+        coeffs = np.einsum("...ks,...kj->...sj", projected, left) * inverse[..., None, :]
+        x = np.einsum("...sk,...kp->...sp", coeffs, vt[..., :k, :]) / norms[..., None, :]
+        return (x[..., 0, :] if self.sides is None else x), svd.full_rank, svd
 
 
 def _r_only(block: np.ndarray) -> np.ndarray:

@@ -349,11 +349,19 @@ def gauss_newton(
     for _ in range(max_iter):
         current = params[active]
         measured, set_weights = sets[active], _for_sets(weights, active)
-        rows, blocks = RowTriangle(n_free), []
+        # Sets at one point (a Monte Carlo's first step, from the truth) share their rows'
+        # Jacobian: one pass of the model and one factorization for them all.
+        shared = active.size > 1 and set_weights is None and bool(np.all(current == current[0]))
+        rows = RowTriangle(n_free, sides=active.size) if shared else RowTriangle(n_free)
+        blocks = []
         for sub, part in chunks:
             w = None if set_weights is None else set_weights[..., part]
-            jac, weighted = _whitened_rows(model, sub, measured[:, part], current, free, w)
-            rows.add(jac.reshape(active.size, -1, n_free), weighted.reshape(active.size, -1))
+            at = current[:1] if shared else current
+            jac, weighted = _whitened_rows(model, sub, measured[:, part], at, free, w)
+            if shared:
+                rows.add(jac.reshape(-1, n_free), weighted.reshape(active.size, -1).T)
+            else:
+                rows.add(jac.reshape(active.size, -1, n_free), weighted.reshape(active.size, -1))
             if keep and n_sets == 1:
                 blocks.append(jac[0])
         step, _, svd = rows.solve()

@@ -311,7 +311,7 @@ class CoreModel(RigidLoads):
     # -- identifiability ---------------------------------------------------------------
 
     def identifiability(self, conditions: Conditions) -> tuple[Identifiability, ScaledSVD]:
-        return column_identifiability(self, conditions, self.nominal)
+        return column_identifiability(self, conditions)
 
     def check_identifiable(self, conditions: Conditions) -> Identifiability:
         return identifiable_or_raise(

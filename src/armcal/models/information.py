@@ -95,7 +95,9 @@ def whitened_triangle(
     the Jacobian's own rows.  At the nominal parameters it is made once for the
     conditions (:meth:`~armcal.models.interface.Conditions.memo`): a plan's criteria
     and its covariance share it."""
-    if params is None and whiten:
+    # Where the whitening is the identity the two are one triangle (the rank analysis and
+    # the covariance of one plan: one pass of the model for both).
+    if params is None and (whiten or model.whitening(conditions, None) is None):
         return conditions.memo(
             (model, "whitened triangle"), lambda: _row_triangle(model, conditions, None, True)
         )
@@ -170,9 +172,10 @@ def factor_from_svd(svd: ScaledSVD, free: np.ndarray) -> tuple[np.ndarray, np.nd
 
 
 def column_identifiability(
-    model: FitModel, conditions: Conditions, params: np.ndarray
+    model: FitModel, conditions: Conditions, params: np.ndarray | None = None
 ) -> tuple[Identifiability, ScaledSVD]:
-    """Rank analysis of the free columns of ``model``'s Jacobian at ``params``.
+    """Rank analysis of the free columns of ``model``'s Jacobian at ``params`` (nominal when
+    None).
 
     The one rank policy of :mod:`armcal.numerics` on unit-norm columns; the null
     and poorly determined directions in display units (mm, deg).

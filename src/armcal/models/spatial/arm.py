@@ -441,6 +441,7 @@ deviation_bounds`); the base pose and the targets are the instrument's."""
         *,
         derivatives: bool = False,
         keep: bool = False,
+        parameters: bool = True,
     ) -> ChainKinematics:
         """The kinematics of the rows at ``params``; what it finds is kept on the conditions
         (:meth:`~armcal.models.interface.Conditions.latest`), so that the positions and
@@ -448,11 +449,16 @@ deviation_bounds`); the base pose and the targets are the instrument's."""
         own: the points and rotations always, the derivatives too with ``keep`` (a tool's
         angular Jacobian, whose point's Jacobian is usually asked for next) for a block of
         rows at most (:data:`~armcal.models.interface.ROW_BLOCK`), until the points alone
-        are asked for (their last use)."""
+        are asked for (their last use).  ``parameters=False``: the joints' derivatives
+        alone (:func:`~armcal.models.spatial.kinematics.kinematics`)."""
         params = self._params(params)
         key = (self.chain, self.joint_map, self.layout, params.shape, params.tobytes())
         kept = conditions.latest(_KINEMATICS, key)
-        if kept is not None and (kept.jacobian is not None or not derivatives):
+        enough = kept is not None and (
+            not derivatives
+            or (kept.joint_jacobian is not None and (kept.jacobian is not None or not parameters))
+        )
+        if kept is not None and enough:
             if not derivatives and kept.jacobian is not None:
                 conditions.keep(_KINEMATICS, key, _copied(kept, derivatives=False))
             return _copied(kept, derivatives=derivatives)
@@ -464,6 +470,7 @@ deviation_bounds`); the base pose and the targets are the instrument's."""
             conditions.target,
             params,
             derivatives=derivatives,
+            parameters=parameters,
         )
         whole = derivatives and keep and found.points.size <= 3 * ROW_BLOCK  # rows x sets
         conditions.keep(_KINEMATICS, key, _copied(found, derivatives=whole))
@@ -500,7 +507,10 @@ deviation_bounds`); the base pose and the targets are the instrument's."""
     ) -> np.ndarray:
         """One of the derivatives of :class:`ChainKinematics` (``jacobian``, ...); the tool
         role's, so the pass is kept for the point's Jacobian (:meth:`chain_kinematics`)."""
-        kin = self.chain_kinematics(conditions, params, derivatives=True, keep=True)
+        joints = name in _JOINT_DERIVATIVES
+        kin = self.chain_kinematics(
+            conditions, params, derivatives=True, keep=True, parameters=not joints
+        )
         found = getattr(kin, name)
         assert found is not None
         return found
@@ -512,7 +522,7 @@ deviation_bounds`); the base pose and the targets are the instrument's."""
     def joint_jacobian(
         self, conditions: Conditions, params: np.ndarray | None = None
     ) -> np.ndarray:
-        kin = self.chain_kinematics(conditions, params, derivatives=True)
+        kin = self.chain_kinematics(conditions, params, derivatives=True, parameters=False)
         return self._stacked(kin, conditions, kin.joint_jacobian, kin.tip_angular)
 
     def jacobians(
@@ -721,6 +731,10 @@ deviation_bounds`); the base pose and the targets are the instrument's."""
         frames = self.chain_kinematics(rows, None).target_rotation
         return rows.with_frames(frames)
 
+
+#: The derivatives of :class:`ChainKinematics` by the joints: a pass without the
+#: parameters' Jacobians gives them.
+_JOINT_DERIVATIVES = frozenset({"joint_jacobian", "tip_angular", "joint_axes", "joint_velocities"})
 
 #: The slot of :meth:`SpatialArm.chain_kinematics` on the conditions.
 _KINEMATICS = "spatial chain kinematics"

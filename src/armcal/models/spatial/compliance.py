@@ -565,7 +565,7 @@ class CompliantSpatialArm(ArmEffect):
         return refit_free(self, conditions, params)
 
     def identifiability(self, conditions: Conditions) -> tuple[Identifiability, ScaledSVD]:
-        return column_identifiability(self, conditions, self.nominal)
+        return column_identifiability(self, conditions)
 
     def check_identifiable(self, conditions: Conditions) -> Identifiability:
         return identifiable_or_raise(

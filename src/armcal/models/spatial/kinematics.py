@@ -316,8 +316,8 @@ class _Screws:
     ``v - w x c`` (a translation's axis 0), column by column: shapes ``(..., m, 3, p)``
     and ``(..., m, 3, n)``, the layout of the Jacobians they become."""
 
-    axis: np.ndarray
-    moment: np.ndarray
+    axis: np.ndarray | None  # None: the joints' screws alone
+    moment: np.ndarray | None
     joint_axis: np.ndarray
     joint_moment: np.ndarray
 
@@ -345,14 +345,22 @@ def _cross_columns(axis: np.ndarray, point: np.ndarray, out: np.ndarray) -> np.n
 
 
 def _base_screws(
-    base: np.ndarray, rot: np.ndarray, pos: np.ndarray, lead: tuple[int, ...], n: int, p: int
+    base: np.ndarray,
+    rot: np.ndarray,
+    pos: np.ndarray,
+    lead: tuple[int, ...],
+    n: int,
+    p: int,
+    parameters: bool,
 ) -> _Screws:
     """The screws of the base pose's six parameters; every other one 0 until the chain
-    walk reaches it."""
-    axis = np.zeros((*lead, 3, p))
-    moment = np.zeros((*lead, 3, p))
+    walk reaches it.  Without ``parameters``, the joints' screws alone."""
     joint_axis = np.zeros((*lead, 3, n))
     joint_moment = np.zeros((*lead, 3, n))
+    if not parameters:
+        return _Screws(None, None, joint_axis, joint_moment)
+    axis = np.zeros((*lead, 3, p))
+    moment = np.zeros((*lead, 3, p))
     moment[..., 0:3] = np.eye(3)
     yaw = elementary(2, base[..., 5])
     for c, w in enumerate((rot[..., :, 0], yaw[..., :, 1], np.array([0.0, 0.0, 1.0]))):
@@ -394,7 +402,7 @@ def _joint_frame(
     one product, not one per error, and every screw's axis from one product too."""
     turn = np.broadcast_to(origin[:3, :3], (*err.shape[:-1], 3, 3))
     shift = origin[:3, 3, None] + turn @ err[..., :3, None]  # (a missing slot's error is 0)
-    axes = []
+    axes: list[tuple[int, np.ndarray]] = []
     for c in (3, 4, 5):
         if c in _PLACEMENT[kind]:
             axes.append((c, turn[..., :, c - 3 : c - 2]))
@@ -422,13 +430,13 @@ def _walk_chain(
         turn, shift, axes = _joint_frame(chain.origins[k], errors[..., k, :], kind)
         start = 6 + 5 * k
         slots = {c: start + slot for slot, c in enumerate(_PLACEMENT[kind])}
-        if screws is not None:  # the origin's frame: the shifts' directions
+        if screws is not None and screws.moment is not None:  # the shifts' directions
             placed = _apply(rot, chain.origins[k][:3, :3])
             for c in (0, 1, 2):
                 if c in slots:
                     screws.moment[..., :, slots[c]] = placed[..., :, c]
         pos = pos + _apply(rot, shift)[..., 0]
-        if screws is not None:
+        if screws is not None and screws.axis is not None and screws.moment is not None:
             for c, axis in axes:
                 w = _apply(rot, axis)[..., 0]
                 screws.axis[..., :, slots[c]] = w
@@ -466,6 +474,19 @@ def _with_jacobians(
     # Zero errors: d/dq_i = sum_j M_ji d/du_j.
     zero_axis = joint_axis @ joint_map  # (..., m, 3, n)
     zero_moment = joint_moment @ joint_map
+    if axis is None or moment is None:  # the joints' Jacobians alone
+        joint_jac = _cross_columns(zero_axis, points, out=zero_moment)
+        velocities = _cross_columns(joint_axis, points, out=joint_moment)
+        return ChainKinematics(
+            points,
+            rot,
+            None,
+            joint_jac,
+            zero_axis,
+            target_rotation=target_rotation,
+            joint_axes=np.swapaxes(joint_axis, -1, -2),
+            joint_velocities=np.swapaxes(velocities, -1, -2),
+        )
     axis[..., layout.zero_start : layout.target_start] = zero_axis
     moment[..., layout.zero_start : layout.target_start] = zero_moment
     jac = _cross_columns(axis, points, out=moment)  # (..., m, 3, p): in the moments' array
@@ -505,6 +526,7 @@ def kinematics(
     params: np.ndarray,
     *,
     derivatives: bool = False,
+    parameters: bool = True,
 ) -> ChainKinematics:
     """Points (and, with ``derivatives``, Jacobians) of rows ``q`` ``(..., m, n)``.
 
@@ -522,6 +544,10 @@ def kinematics(
         Internal units (mm, rad).
     derivatives : bool
         Also the parameter and joint Jacobians.
+    parameters : bool
+        With ``derivatives``: the parameters' Jacobians too (False: the joints' alone,
+        ``jacobian``, ``angular`` and ``target_angular`` None; what a correction of
+        joint commands needs, at a fraction of the cost).
     """
     params = np.asarray(params, dtype=float)[..., None, :]  # (..., 1, p)
     q = np.asarray(q, dtype=float)
@@ -534,7 +560,7 @@ def kinematics(
     rot = rpy_matrix(base[..., 3:6])  # (..., 1, 3, 3): every row's until a joint turns
     pos = base[..., :3]
     # Every parameter (and joint value) as a screw: axis w, moment v - w x c.
-    screws = _base_screws(base, rot, pos, lead, n, p) if derivatives else None
+    screws = _base_screws(base, rot, pos, lead, n, p, parameters) if derivatives else None
     pos, rot = _walk_chain(chain, errors, u, pos, rot, screws)
     pos = np.broadcast_to(pos, (*lead, 3))  # a chain that never turns: the same frame
     rot = np.broadcast_to(rot, (*lead, 3, 3))
