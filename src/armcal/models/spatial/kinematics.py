@@ -331,16 +331,16 @@ def _times(stack: np.ndarray, other: np.ndarray) -> np.ndarray:
 
 def _cross_columns(axis: np.ndarray, point: np.ndarray, out: np.ndarray) -> np.ndarray:
     """``out += w x x`` for every column ``w`` of ``axis`` ``(..., 3, c)`` and the point
-    ``point`` ``(..., 3)`` of its row: six products through one scratch array, into the
-    columns ``out`` ``(..., 3, c)`` in place."""
-    x = point[..., :, None]
-    scratch = np.empty(np.broadcast_shapes(axis[..., 0, :].shape, x[..., 0, :].shape))
-    for i in range(3):
-        j, k = (i + 1) % 3, (i + 2) % 3
-        np.multiply(axis[..., j, :], x[..., k, :], out=scratch)
-        out[..., i, :] += scratch
-        np.multiply(axis[..., k, :], x[..., j, :], out=scratch)
-        out[..., i, :] -= scratch
+    ``point`` ``(..., 3)`` of its row, into the columns ``out`` ``(..., 3, c)`` in place:
+    ``w x x = [x]^T w`` with ``[x]`` the row's cross-product matrix, one stacked product
+    of every row's ``3 x 3`` by its ``3 x c`` (a few times faster than six products of
+    the columns' components, and the same to round-off)."""
+    x0, x1, x2 = point[..., 0], point[..., 1], point[..., 2]
+    turn = np.zeros((*point.shape, 3))
+    turn[..., 0, 1], turn[..., 0, 2] = x2, -x1
+    turn[..., 1, 0], turn[..., 1, 2] = -x2, x0
+    turn[..., 2, 0], turn[..., 2, 1] = x1, -x0
+    out += turn @ axis
     return out
 
 
