@@ -472,8 +472,9 @@ def _with_jacobians(
     axis, moment = screws.axis, screws.moment
     joint_axis, joint_moment = screws.joint_axis, screws.joint_moment
     # Zero errors: d/dq_i = sum_j M_ji d/du_j.
-    zero_axis = joint_axis @ joint_map  # (..., m, 3, n)
-    zero_moment = joint_moment @ joint_map
+    n = joint_map.shape[0]  # one BLAS product of the stacked rows, (..., m, 3, n)
+    zero_axis = (joint_axis.reshape(-1, n) @ joint_map).reshape(joint_axis.shape)
+    zero_moment = (joint_moment.reshape(-1, n) @ joint_map).reshape(joint_moment.shape)
     if axis is None or moment is None:  # the joints' Jacobians alone
         joint_jac = _cross_columns(zero_axis, points, out=zero_moment)
         velocities = _cross_columns(joint_axis, points, out=joint_moment)
