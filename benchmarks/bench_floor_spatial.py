@@ -500,9 +500,10 @@ COMMANDS = (
             f(f"floor-corrected-{n}.csv"),
         ],
         check_compensate,
-        extra="trust-region steps from an SVD per pose and step, the reason for every pose left "
-        "uncorrected (an SVD or pseudo-inverse of each), the predicted error left after "
-        "compensation (position and orientation, the robot's covariance at every pose)",
+        extra="trust-region steps (Newton's from an inverse where it lies within the radius, "
+        "an SVD per pose otherwise), each pose kept within its bound, the reason for every "
+        "pose left uncorrected (an SVD or pseudo-inverse of each), the predicted error left "
+        "after compensation (position and orientation, the robot's covariance at every pose)",
     ),
     Command(
         "evaluate",
@@ -539,9 +540,10 @@ COMMANDS = (
         ],
         lambda f, n: ["simulate", f("floor.json"), f(f"plan-{n}.csv"), str(TRIALS), str(f.seed)],
         check_simulate,
-        extra="Gauss-Newton of every trial from the truth, a Jacobian per trial and iteration "
-        "(3 each here), where the floor's first step is one factorization for all trials "
-        "and a second step of each trial's own converges it; the identifiable set and the "
+        extra="Gauss-Newton of every trial from the truth to the tolerance (1e-12 of the "
+        "reach): after the first step, shared by all trials as the floor's is, two of each "
+        "trial's own, where the floor stops after one; the identifiable set (a rank "
+        "analysis of the model as given, then of the model prepared for the plan) and the "
         "truth's registration; the bias test",
     ),
 )

@@ -428,8 +428,9 @@ def _fixed_truth_warning(model: FitModel, truth: np.ndarray) -> tuple[ArmcalWarn
     )
 
 
-def _floats_per_trial(model: FitModel, m: int, method: str) -> int:
-    """Floats of working arrays a trial holds in one chunk (sets the chunk size)."""
+def _floats_per_trial(model: FitModel, m: int, method: str, loaded: bool = False) -> int:
+    """Floats of working arrays a trial holds in one chunk (sets the chunk size); ``loaded``
+    rows with loads (a model of compliance)."""
     n, p = model.n_joints, model.n_params
     encoder = model.noise is not None and model.noise.joint_sigma is not None
     if method == "closed-form" and not encoder:
@@ -437,12 +438,21 @@ def _floats_per_trial(model: FitModel, m: int, method: str) -> int:
         # factorization (whitened alike when the noise is anisotropic).  The chunks are
         # then large enough that the command's default 10^4 trials are one solve.
         return 2 * m * 3 + 4 * p
-    # Gauss-Newton, or a closed form re-whitened set by set: whitening (4m), whitened
-    # Jacobian and regressor rows with their factorization (a few 2m p); encoder noise
-    # draws and evaluates the tip at q + dq, and a model of compliance its loads (a few
-    # m n).  Measured peaks (tracemalloc, 4-link arm, m = 20 and 100) are 0.75 to 1.05
-    # CHUNK_BYTES.
-    return 2 * m * (5 * p + 6) + 8 * m * n
+    if method == "closed-form" or encoder or loaded:
+        # A closed form re-whitened set by set: whitening (4m), whitened Jacobian and
+        # regressor rows with their factorization (a few 2m p); encoder noise draws and
+        # evaluates the tip at q + dq, and a model of compliance its loads (a few m n).
+        # Measured peaks (tracemalloc, 4-link arm, m = 20 and 100) are 0.75 to 1.05
+        # CHUNK_BYTES.
+        return 2 * m * (5 * p + 6) + 8 * m * n
+    # Gauss-Newton takes the rows a block at a time (ROW_BLOCK rows of all the sets, at
+    # least 64 of each): a set holds its measurements, their noise and its copy in the
+    # solve (3 m d), and its share of a block: the kinematics' screws and Jacobians, the
+    # free columns and the triangle's rows (about 8 d (p + 1) a row; 64 rows at most
+    # where the block is shared by many sets).  Measured (tracemalloc, six-axis arm, 900
+    # rows, blocks of 200) a trial adds about half of this.
+    d = model.point_dim
+    return 3 * m * d + 8 * min(m, 64) * d * (p + 1)
 
 
 def _check_runs(trials: int, sigma: float | None) -> None:
@@ -497,7 +507,9 @@ def _run_trials(
 ) -> _Trials:
     """Synthesize and identify ``trials`` measurement sets, a chunk of them per solve; the
     estimates go into moments about ``centre`` and into ``positions`` (when given)."""
-    chunk = chunk_size(_floats_per_trial(model, rows.m, method), trials)
+    chunk = chunk_size(
+        _floats_per_trial(model, rows.m, method, loaded=rows.loads is not None), trials
+    )
     moments = _Moments(model.n_params)
     not_converged = 0
     start = time.perf_counter()

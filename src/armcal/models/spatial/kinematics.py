@@ -475,33 +475,21 @@ def _with_jacobians(
     n = joint_map.shape[0]  # one BLAS product of the stacked rows, (..., m, 3, n)
     zero_axis = (joint_axis.reshape(-1, n) @ joint_map).reshape(joint_axis.shape)
     zero_moment = (joint_moment.reshape(-1, n) @ joint_map).reshape(joint_moment.shape)
-    if axis is None or moment is None:  # the joints' Jacobians alone
-        joint_jac = _cross_columns(zero_axis, points, out=zero_moment)
-        velocities = _cross_columns(joint_axis, points, out=joint_moment)
-        return ChainKinematics(
-            points,
-            rot,
-            None,
-            joint_jac,
-            zero_axis,
-            target_rotation=target_rotation,
-            joint_axes=np.swapaxes(joint_axis, -1, -2),
-            joint_velocities=np.swapaxes(velocities, -1, -2),
-        )
-    axis[..., layout.zero_start : layout.target_start] = zero_axis
-    moment[..., layout.zero_start : layout.target_start] = zero_moment
-    jac = _cross_columns(axis, points, out=moment)  # (..., m, 3, p): in the moments' array
-    target_angular = None
-    if turn is not None:  # a target's turn exp(v) moves at rot J_l(v) dv (chain.py)
-        target_angular = axis.copy()
-        turning = rot @ left_jacobian(turn)
-    for t in range(len(layout.targets)):
-        cols, turn_cols = layout.target_columns(t)
-        mine = (index == t)[:, None, None]
-        jac[..., cols] = np.where(mine, rot, 0.0)
-        if target_angular is not None and turn_cols is not None:
-            jac[..., turn_cols] = 0.0
-            target_angular[..., turn_cols] = np.where(mine, turning, 0.0)
+    jac = target_angular = None
+    if axis is not None and moment is not None:  # the parameters' too
+        axis[..., layout.zero_start : layout.target_start] = zero_axis
+        moment[..., layout.zero_start : layout.target_start] = zero_moment
+        jac = _cross_columns(axis, points, out=moment)  # (..., m, 3, p): the moments' array
+        if turn is not None:  # a target's turn exp(v) moves at rot J_l(v) dv (chain.py)
+            target_angular = axis.copy()
+            turning = rot @ left_jacobian(turn)
+        for t in range(len(layout.targets)):
+            cols, turn_cols = layout.target_columns(t)
+            mine = (index == t)[:, None, None]
+            jac[..., cols] = np.where(mine, rot, 0.0)
+            if target_angular is not None and turn_cols is not None:
+                jac[..., turn_cols] = 0.0
+                target_angular[..., turn_cols] = np.where(mine, turning, 0.0)
     joint_jac = _cross_columns(zero_axis, points, out=zero_moment)
     velocities = _cross_columns(joint_axis, points, out=joint_moment)
     return ChainKinematics(
