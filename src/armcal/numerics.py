@@ -48,6 +48,7 @@ __all__ = [
     "scaled_svd",
     "solve_least_squares",
     "spd_inverse",
+    "steps_settled",
     "wrap_angle",
 ]
 
@@ -516,6 +517,28 @@ def solve_least_squares(
     rows = RowTriangle(matrix.shape[-1])
     rows.add(matrix, rhs)
     return rows.solve()
+
+
+#: A step at most this fraction of the one before it (Gauss-Newton near its solution,
+#: where its steps shrink at least linearly) bounds what the steps after it add up to:
+#: ``size * rate / (1 - rate)``, ``rate`` the two steps' ratio.
+FAST_RATE = 0.01
+
+
+def steps_settled(size: ArrayLike, previous: ArrayLike, tol: float) -> np.ndarray:
+    """Whether iterations whose step ``size`` followed one of ``previous`` shrank so fast
+    (to at most :data:`FAST_RATE` of it) that the steps after it add up to at most
+    ``tol``, were the rate to hold.
+
+    Examples
+    --------
+    >>> steps_settled(np.array([1e-6, 1e-6, 1e-3]), np.array([1e-3, np.inf, 1e-2]), 1e-8)
+    array([ True, False, False])
+    """
+    size, previous = np.asarray(size, dtype=float), np.asarray(previous, dtype=float)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        rate = np.where(np.isfinite(previous) & (previous > 0), size / previous, np.inf)
+    return (rate <= FAST_RATE) & (size * rate / (1 - np.minimum(rate, 0.5)) <= tol)
 
 
 def spd_inverse(matrix: np.ndarray) -> np.ndarray:

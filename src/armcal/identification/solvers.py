@@ -35,7 +35,7 @@ from ..errors import ArmcalError
 from ..models import ROW_BLOCK, Conditions, FitModel, wrap_angle
 from ..models.information import weighted_whitening
 from ..models.wording import no_closed_form
-from ..numerics import RowTriangle
+from ..numerics import RowTriangle, steps_settled
 
 __all__ = [
     "METHODS",
@@ -169,6 +169,7 @@ def solve(
     tol: float = 1e-12,
     max_iter: int = 50,
     keep: bool = False,
+    settle: bool = False,
 ) -> Solution:
     """Weighted least squares over the free parameters of ``model``; batched over sets.
 
@@ -194,6 +195,12 @@ def solve(
     keep : bool
         Gauss-Newton on one set keeps its last step's rows (:class:`LastStep`) in
         :attr:`Solution.last` where that step was within the tolerance.
+    settle : bool
+        Gauss-Newton also stops a set whose steps shrank so fast that the ones after
+        its last add up to less than the tolerance
+        (:func:`~armcal.numerics.steps_settled`), without a pass of the model only to
+        confirm it: for estimates needed to a small part of their spread (a Monte
+        Carlo's), not to round-off.
 
     Returns
     -------
@@ -229,7 +236,9 @@ def solve(
     else:
         params = np.broadcast_to(np.asarray(start, dtype=float), (sets.shape[0], model.n_params))
     params = np.where(model.free, params, model.held_values)  # held ones where they are held
-    return gauss_newton(model, conditions, sets, params, weights, threshold, max_iter, keep=keep)
+    return gauss_newton(
+        model, conditions, sets, params, weights, threshold, max_iter, keep=keep, settle=settle
+    )
 
 
 def _initial(
@@ -317,6 +326,7 @@ def gauss_newton(
     *,
     free: np.ndarray | None = None,
     keep: bool = False,
+    settle: bool = False,
 ) -> Solution:
     """Gauss-Newton over the free parameters, on whitened rows, every active set at once.
 
@@ -377,6 +387,8 @@ def gauss_newton(
         with np.errstate(over="ignore"):
             resolved = np.maximum(floor, ROUND_OFF * svd.condition_number * model.reach_mm)
         stalled = (size >= 0.5 * previous[active]) & (size < resolved)
+        if settle:
+            stalled |= steps_settled(size, previous[active], threshold)
         previous[active] = size
         if blocks and bool(finite[0]) and size[0] <= threshold:
             last = LastStep(np.concatenate(blocks), rows)
