@@ -172,3 +172,27 @@ def test_noisy_estimates_lie_within_four_predicted_std():
     free = cal.model.free
     z = (cal.params - exact.params)[free] / (cal.std[free] / cal.model.display_scale[free])
     assert np.max(np.abs(z)) < 4
+
+
+@pytest.mark.parametrize("name", sorted(ARMS))
+def test_the_instruments_columns_from_the_points_are_the_jacobians(name):
+    """What registering the nominal arm fits (the base pose and the targets) is made from
+    the points and the tip's rotation alone (no derivatives): equal to the Jacobian's
+    columns to round-off, for one parameter set and a stack of them; None for columns of
+    the robot's geometry, whose screws need the chain's derivatives."""
+    from armcal.models.interface import columns_jacobian
+
+    arm = labelled(ARMS[name](), 3)
+    rng = np.random.default_rng(4)
+    truth = random_truth(arm, rng)
+    rows = arm.conditions(random_poses(arm, 60, rng), target=np.arange(60) % 3)
+    instrument = np.asarray(arm.registration_params, dtype=bool)
+    for params in (truth, np.stack([truth, random_truth(arm, rng)])):
+        whole = arm.jacobian(rows, params)
+        part = arm.columns_jacobian(rows, params, instrument)
+        assert part is not None and part.shape == (*whole.shape[:-1], instrument.sum())
+        # Round-off of points ~4 m out: 1e-15 of the largest column.
+        assert np.max(np.abs(part - whole[..., instrument])) <= 1e-12 * np.max(np.abs(whole))
+        generic = columns_jacobian(arm, rows, params, arm.free)
+        assert np.array_equal(generic, whole[..., arm.free])
+    assert arm.columns_jacobian(rows, truth, arm.free) is None

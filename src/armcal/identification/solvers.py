@@ -34,6 +34,7 @@ from ..choices import IDENTIFY_METHODS
 from ..errors import ArmcalError
 from ..models import ROW_BLOCK, Conditions, FitModel, wrap_angle
 from ..models.information import weighted_whitening
+from ..models.interface import columns_jacobian
 from ..models.wording import no_closed_form
 from ..numerics import RowTriangle, steps_settled
 
@@ -307,7 +308,7 @@ def _whitened_rows(
     ``(N, p)``, ``W`` with the rows' extra ``weights``: the Jacobian first, whose pass
     gives the points the residuals and the whitening need (a model keeps them,
     :meth:`~armcal.models.interface.Conditions.latest`)."""
-    jac = model.jacobian(conditions, params)[..., free]
+    jac = columns_jacobian(model, conditions, params, free)
     w = weighted_whitening(model.whitening(conditions, params), weights, model.point_dim)
     residual = points - model.positions(conditions, params)
     if w is None:

@@ -83,6 +83,7 @@ __all__ = [
     "PaperCriteria",
     "PlanInformation",
     "UnpredictedLoads",
+    "columns_jacobian",
     "equations_per_pose",
     "position_jacobian",
     "target_indices",
@@ -1160,6 +1161,19 @@ def position_jacobian(
     per internal unit): what a predicted position error is made of, without a 6-DoF
     instrument's orientation rows (rad)."""
     return model.jacobian(conditions, params)[..., : model.position_dim, :]
+
+
+def columns_jacobian(
+    model: FitModel, conditions: Conditions, params: np.ndarray | None, columns: np.ndarray
+) -> np.ndarray:
+    """``model.jacobian(conditions, params)[..., columns]`` (``columns`` boolean ``(p,)``),
+    from the family's own ``columns_jacobian`` where it has one and makes those columns
+    for less than the whole Jacobian (the spatial arm: its instrument's columns, what
+    registering the nominal arm fits), returning None for columns it does not; every
+    other family's whole Jacobian, sliced."""
+    own = getattr(model, "columns_jacobian", None)
+    found = None if own is None else own(conditions, params, columns)
+    return model.jacobian(conditions, params)[..., columns] if found is None else found
 
 
 def equations_per_pose(model: FitModel) -> int:

@@ -53,6 +53,7 @@ from .design import SpatialDesign
 from .kinematics import (
     ChainKinematics,
     SpatialLayout,
+    cross,
     default_targets,
     deviation_bounds,
     kinematics,
@@ -518,6 +519,44 @@ deviation_bounds`); the base pose and the targets are the instrument's."""
     def jacobian(self, conditions: Conditions, params: np.ndarray | None = None) -> np.ndarray:
         kin = self.chain_kinematics(conditions, params, derivatives=True)
         return self._stacked(kin, conditions, kin.jacobian, kin.target_angular)
+
+    def columns_jacobian(
+        self, conditions: Conditions, params: np.ndarray | None, columns: np.ndarray
+    ) -> np.ndarray | None:
+        """:meth:`jacobian`'s ``columns`` ``(..., m, 3, c)`` where they are all the
+        instrument's (the base pose and the targets' positions, as registering the nominal
+        arm fits): from the points and the tip's rotation alone, a pass of the kinematics
+        without derivatives (about a sixth of the cost).  None for other columns, or a
+        6-DoF instrument (:func:`~armcal.models.interface.columns_jacobian`).
+
+        The base's translations move every point alike; a turn of the base about its
+        axis ``w`` (roll about the turned x axis, pitch about the yawed y axis, yaw
+        about z: the base's screws of :mod:`~armcal.models.spatial.kinematics`) moves a
+        point ``x`` at ``w x (x - t)``; a target's position moves its point by the tip's
+        rotation.
+        """
+        columns = np.asarray(columns, dtype=bool)
+        if self.oriented or not bool(np.all(self.layout.instrument[columns])):
+            return None
+        kin = self.chain_kinematics(conditions, params)
+        base = self._params(params)[..., None, :6]  # (..., 1, 6)
+        points = kin.points
+        out = np.zeros((*points.shape[:-1], 3, self.layout.n_params))
+        out[..., :, 0:3] = np.eye(3)
+        axes = (
+            rpy_matrix(base[..., 3:6])[..., :, 0],
+            elementary(2, base[..., 5])[..., :, 1],
+            np.array([0.0, 0.0, 1.0]),
+        )
+        offset = points - base[..., :3]
+        for c, w in enumerate(axes):
+            out[..., :, 3 + c] = cross(np.broadcast_to(w, offset.shape), offset)
+        index = conditions.target
+        index = np.zeros(conditions.m, dtype=int) if index is None else index
+        for t in range(len(self.targets)):
+            cols, _ = self.layout.target_columns(t)
+            out[..., cols] = np.where((index == t)[:, None, None], kin.rotation, 0.0)
+        return out[..., columns]
 
     def joint_jacobian(
         self, conditions: Conditions, params: np.ndarray | None = None
