@@ -542,11 +542,12 @@ COMMANDS = (
         ],
         lambda f, n: ["simulate", f("floor.json"), f(f"plan-{n}.csv"), str(TRIALS), str(f.seed)],
         check_simulate,
-        extra="Gauss-Newton of every trial from the truth to the tolerance (1e-12 of the "
-        "reach): after the first step, shared by all trials as the floor's is, two of each "
-        "trial's own, where the floor stops after one; the identifiable set (a rank "
-        "analysis of the model as given, then of the model prepared for the plan) and the "
-        "truth's registration; the bias test",
+        extra="Gauss-Newton of every trial from the truth until its steps are below, or "
+        "surely settle below, the tolerance (1e-12 of the reach): a first step shared by "
+        "all trials, then one of each trial's own, as the floor's (two where a trial's "
+        "steps do not settle); the identifiable set (a rank analysis of the model as given, "
+        "then of the model prepared for the plan) and the truth's registration; the bias "
+        "test",
     ),
 )
 
