@@ -242,10 +242,7 @@ def _predicted(
     of a 6-DoF instrument's turns (rad; None without), and the calibrated arm's points
     (from the Jacobian's pass, where the model keeps them), :data:`PREDICTED_CHUNK` rows
     at a time."""
-    parts = [
-        _predicted_rows(cal, conditions.take(slice(start, start + PREDICTED_CHUNK)))
-        for start in range(0, conditions.m, PREDICTED_CHUNK)
-    ]
+    parts = [_predicted_rows(cal, block) for block, _ in conditions.blocks(PREDICTED_CHUNK)]
     turns = [part[2] for part in parts if part[2] is not None]
     return (
         np.concatenate([part[0] for part in parts]),

@@ -53,10 +53,12 @@ from .design import SpatialDesign
 from .kinematics import (
     ChainKinematics,
     SpatialLayout,
+    base_turn_axes,
     cross,
     default_targets,
     deviation_bounds,
     kinematics,
+    target_columns_into,
 )
 from .registration import register, registered_targets
 from .selection import select_from_rows
@@ -543,19 +545,12 @@ deviation_bounds`); the base pose and the targets are the instrument's."""
         points = kin.points
         out = np.zeros((*points.shape[:-1], 3, self.layout.n_params))
         out[..., :, 0:3] = np.eye(3)
-        axes = (
-            rpy_matrix(base[..., 3:6])[..., :, 0],
-            elementary(2, base[..., 5])[..., :, 1],
-            np.array([0.0, 0.0, 1.0]),
-        )
         offset = points - base[..., :3]
-        for c, w in enumerate(axes):
+        for c, w in enumerate(base_turn_axes(base)):
             out[..., :, 3 + c] = cross(np.broadcast_to(w, offset.shape), offset)
         index = conditions.target
         index = np.zeros(conditions.m, dtype=int) if index is None else index
-        for t in range(len(self.targets)):
-            cols, _ = self.layout.target_columns(t)
-            out[..., cols] = np.where((index == t)[:, None, None], kin.rotation, 0.0)
+        target_columns_into(out, self.layout, index, kin.rotation)
         return out[..., columns]
 
     def joint_jacobian(

@@ -322,13 +322,6 @@ class _Screws:
     joint_moment: np.ndarray
 
 
-def _times(stack: np.ndarray, other: np.ndarray) -> np.ndarray:
-    """``stack @ other`` of matrices ``(..., r, 3)`` and one matrix ``(3, b)`` or vector
-    ``(3,)``: one BLAS product of the stacked rows, not a small product per matrix."""
-    flat = stack.reshape(-1, 3) @ other
-    return flat.reshape(*stack.shape[:-1], *other.shape[1:])
-
-
 def _cross_columns(axis: np.ndarray, point: np.ndarray, out: np.ndarray) -> np.ndarray:
     """``out += w x x`` for every column ``w`` of ``axis`` ``(..., 3, c)`` and the point
     ``point`` ``(..., 3)`` of its row, into the columns ``out`` ``(..., 3, c)`` in place:
@@ -362,18 +355,43 @@ def _base_screws(
     axis = np.zeros((*lead, 3, p))
     moment = np.zeros((*lead, 3, p))
     moment[..., 0:3] = np.eye(3)
-    yaw = elementary(2, base[..., 5])
-    for c, w in enumerate((rot[..., :, 0], yaw[..., :, 1], np.array([0.0, 0.0, 1.0]))):
+    for c, w in enumerate(base_turn_axes(base)):
         axis[..., :, 3 + c] = w
         moment[..., :, 3 + c] = -cross(w, pos)
     return _Screws(axis, moment, joint_axis, joint_moment)
 
 
+def base_turn_axes(base: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The axes ``(..., 3)`` of the base pose's three turns (``base`` ``(..., 6)``: x, y,
+    z, roll, pitch, yaw): roll about the turned x axis, pitch about the yawed y axis, yaw
+    about z; each moves a point ``x`` at ``w x (x - t)``."""
+    return (
+        rpy_matrix(base[..., 3:6])[..., :, 0],
+        elementary(2, base[..., 5])[..., :, 1],
+        np.array([0.0, 0.0, 1.0]),
+    )
+
+
+def target_columns_into(
+    out: np.ndarray, layout: SpatialLayout, index: np.ndarray, rot: np.ndarray
+) -> None:
+    """Every target's position columns of ``out`` ``(..., m, 3, p)``, in place: the tip's
+    rotation ``rot`` ``(..., m, 3, 3)`` on the rows of that target (``index`` ``(m,)``), 0
+    on the others."""
+    for t in range(len(layout.targets)):
+        cols, _ = layout.target_columns(t)
+        out[..., cols] = np.where((index == t)[:, None, None], rot, 0.0)
+
+
 def _apply(rot: np.ndarray, other: np.ndarray) -> np.ndarray:
-    """``rot @ other`` of rotations ``(..., m, 3, 3)`` and matrices ``(..., 1, 3, b)`` the
-    same for every row: one BLAS product of the stacked rows where ``other`` is one
-    matrix (one parameter set), a batched product otherwise."""
-    if other.ndim == 2 or all(size == 1 for size in other.shape[:-2]):
+    """``rot @ other`` of rotations ``(..., m, 3, 3)`` and a vector ``(3,)``, a matrix
+    ``(3, b)`` or matrices ``(..., 1, 3, b)`` the same for every row: one BLAS product
+    of the stacked rows where ``other`` is one (one parameter set), a batched product
+    otherwise."""
+    if other.ndim <= 2:
+        flat = rot.reshape(-1, 3) @ other
+        return flat.reshape(*rot.shape[:-1], *other.shape[1:])
+    if all(size == 1 for size in other.shape[:-2]):
         flat = rot.reshape(-1, 3) @ other.reshape(3, -1)
         return flat.reshape(*rot.shape[:-1], other.shape[-1])
     sets = np.broadcast_shapes(rot.shape[:-3], other.shape[:-3])
@@ -452,8 +470,8 @@ def _walk_chain(
             if screws is not None:
                 screws.joint_moment[..., :, k] = w
             pos = pos + w * u[..., k, None]
-    pos = pos + _times(rot, chain.tip[:3, 3])
-    rot = _times(rot, chain.tip[:3, :3])
+    pos = pos + _apply(rot, chain.tip[:3, 3])
+    rot = _apply(rot, chain.tip[:3, :3])
     return pos, rot
 
 
@@ -483,13 +501,14 @@ def _with_jacobians(
         if turn is not None:  # a target's turn exp(v) moves at rot J_l(v) dv (chain.py)
             target_angular = axis.copy()
             turning = rot @ left_jacobian(turn)
+        target_columns_into(jac, layout, index, rot)
         for t in range(len(layout.targets)):
-            cols, turn_cols = layout.target_columns(t)
-            mine = (index == t)[:, None, None]
-            jac[..., cols] = np.where(mine, rot, 0.0)
+            _, turn_cols = layout.target_columns(t)
             if target_angular is not None and turn_cols is not None:
                 jac[..., turn_cols] = 0.0
-                target_angular[..., turn_cols] = np.where(mine, turning, 0.0)
+                target_angular[..., turn_cols] = np.where(
+                    (index == t)[:, None, None], turning, 0.0
+                )
     joint_jac = _cross_columns(zero_axis, points, out=zero_moment)
     velocities = _cross_columns(joint_axis, points, out=joint_moment)
     return ChainKinematics(
