@@ -196,3 +196,28 @@ def test_the_instruments_columns_from_the_points_are_the_jacobians(name):
         generic = columns_jacobian(arm, rows, params, arm.free)
         assert np.array_equal(generic, whole[..., arm.free])
     assert arm.columns_jacobian(rows, truth, arm.free) is None
+
+
+@pytest.mark.parametrize(
+    ("name", "m"), [(n, 60) for n in sorted(ARMS)] + [("industrial", 4000), ("seven", 4000)]
+)
+def test_the_nominal_triangle_from_the_selection_is_the_jacobian_s(name, m):
+    """Preparing an arm reduces its Jacobian with the base at the origin (the selection
+    rule's frame); where the whitening is the identity, the rank analysis and the
+    covariance at nominal take their triangle from it, turned to the registered base.  Its
+    Gram matrix is that of the free columns at nominal, made directly, to round-off."""
+    from armcal.models.information import _row_triangle, whitened_triangle
+
+    arm = labelled(ARMS[name](), 3)
+    rng = np.random.default_rng(7)
+    truth = random_truth(arm, rng)
+    rows = arm.plan_conditions(random_poses(arm, m // 3, rng))
+    prepared = arm.prepared(rows, arm.positions(rows, truth))
+    assert prepared.whitening(rows, None) is None
+    derived = whitened_triangle(prepared, rows).triangle()
+    direct = _row_triangle(prepared, rows, None, True).triangle()
+    gram, expected = derived.T @ derived, direct.T @ direct
+    # Round-off of a Gram matrix of rows whose points lie ~4 m out: 1e-13 of its largest entry.
+    assert np.max(np.abs(gram - expected)) <= 1e-13 * np.max(np.abs(expected))
+    # The memo is the prepared arm's alone: the arm as given makes its own.
+    assert whitened_triangle(arm, rows) is not whitened_triangle(prepared, rows)

@@ -14,6 +14,7 @@ import os
 import re
 import sys
 from collections.abc import Iterator, Sequence
+from operator import itemgetter
 from pathlib import Path
 from typing import Any, BinaryIO
 
@@ -449,9 +450,9 @@ def _record_lines(rows: Sequence[Any]) -> Iterator[list[str]] | None:
     if type(first) is not dict or not first:
         return None
     keys = tuple(first)
-    if not all(type(row) is dict and tuple(row) == keys for row in rows):
+    if set(map(type, rows)) != {dict} or set(map(tuple, rows)) != {keys}:
         return None
-    if not all(set(map(type, (row[key] for row in rows))) <= _SCALARS.keys() for key in keys):
+    if not all(set(map(type, map(itemgetter(key), rows))) <= _SCALARS.keys() for key in keys):
         return None
     names = (json.dumps(str(k)).replace("%", "%%") for k in keys)
     template = "{" + ", ".join(f"{name}: %s" for name in names) + "}"
@@ -463,7 +464,7 @@ def _lines(rows: Sequence[dict], keys: tuple, template: str) -> Iterator[list[st
         chunk = rows[start : start + RECORD_CHUNK]
         columns = []
         for key in keys:
-            values = [row[key] for row in chunk]
+            values = list(map(itemgetter(key), chunk))
             kinds = set(map(type, values))
             if len(kinds) == 1:
                 columns.append(_SCALARS[kinds.pop()](values))

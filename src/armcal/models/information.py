@@ -99,9 +99,27 @@ def whitened_triangle(
     # the covariance of one plan: one pass of the model for both).
     if params is None and (whiten or model.whitening(conditions, None) is None):
         return conditions.memo(
-            (model, "whitened triangle"), lambda: _row_triangle(model, conditions, None, True)
+            (model, _NOMINAL_TRIANGLE), lambda: _row_triangle(model, conditions, None, True)
         )
     return _row_triangle(model, conditions, params, whiten)
+
+
+def nominal_triangle_known(model: FitModel, conditions: Conditions, rows: np.ndarray) -> None:
+    """Give :func:`whitened_triangle` at the nominal parameters, for a model whose
+    whitening of these conditions is the identity, from ``rows`` ``(k, p_f)`` with the
+    Gram matrix ``J^T J`` of its free columns there: a family that has made it in
+    another form (a spatial arm's, in the robot's own frame) spares a pass."""
+
+    def made() -> RowTriangle:
+        triangle = RowTriangle(model.n_free)
+        triangle.add(rows)
+        return triangle
+
+    conditions.memo((model, _NOMINAL_TRIANGLE), made)
+
+
+#: The key of the nominal triangle in :meth:`~armcal.models.interface.Conditions.memo`.
+_NOMINAL_TRIANGLE = "whitened triangle"
 
 
 def _row_triangle(

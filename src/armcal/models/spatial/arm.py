@@ -25,6 +25,7 @@ from ...noise import NoiseModel, relative_noise
 from ...numerics import RowTriangle
 from ..core import CoreModel
 from ..information import (
+    nominal_triangle_known,
     refit_free,
 )
 from ..interface import (
@@ -719,14 +720,22 @@ deviation_bounds`); the base pose and the targets are the instrument's."""
             local = conditions.with_frames(turn.T @ conditions.frames)
         at_base = replace(arm, base_pose=np.zeros(6))
         back = np.kron(np.eye(arm.point_dim // 3), turn)
-        rows = RowTriangle(arm.layout.n_params)  # the rule needs their column space only
+        p = arm.layout.n_params
+        rows = RowTriangle(p)  # the rule needs their column space only
+        plain = True  # whether the whitening is the identity
         for block, part in conditions.blocks():
             jac = at_base.jacobian(block if local is conditions else local.take(part))
             w = arm.whitening(block)
-            rows.add((jac if w is None else w @ back @ jac).reshape(-1, arm.layout.n_params))
+            plain = plain and w is None
+            rows.add((jac if w is None else w @ back @ jac).reshape(-1, p))
         u = np.asarray(conditions.q) @ arm.joint_map.T
-        held, merges = select_from_rows(arm.layout, arm.chain, rows.triangle(), u, arm.user_fixed)
-        return replace(arm, held=held, merges=merges)
+        triangle = rows.triangle()
+        held, merges = select_from_rows(arm.layout, arm.chain, triangle, u, arm.user_fixed)
+        out = replace(arm, held=held, merges=merges)
+        if plain:  # the rank analysis and covariance at nominal need no pass of their own
+            rows_at_base = triangle @ _from_base(arm.base_pose, p)
+            nominal_triangle_known(out, conditions, rows_at_base[:, out.free])
+        return out
 
     def expressed(self, conditions: Conditions, params: np.ndarray) -> np.ndarray:
         """The free parameters that reproduce ``params``' points at these rows, the held
@@ -786,3 +795,20 @@ def _copied(kin: ChainKinematics, *, derivatives: bool) -> ChainKinematics:
 
 def _copy(array: np.ndarray | None) -> np.ndarray | None:
     return None if array is None else array.copy()
+
+
+def _from_base(base: np.ndarray, p: int) -> np.ndarray:
+    """``A`` ``(p, p)`` with ``J_T = (I x R) J_0 A``: the Jacobian at the base pose ``base``
+    ``(6,)`` (turn ``R``) from the one with the base at the origin, its rows turned.
+
+    Every column but the base's six is only turned.  A shift ``t`` of the base moves a
+    point by ``t = R (R^T t)``; a turn about ``w`` (:func:`base_turn_axes`) moves the
+    point ``R x_0 + t`` by ``w x R x_0 = R ((R^T w) x x_0)``, the base-at-origin turns'
+    columns ``e_c x x_0`` combined by ``R^T w``.  A 6-DoF point's orientation turns by
+    ``w = R (R^T w)`` alike.
+    """
+    turn = rpy_matrix(base[3:])
+    out = np.eye(p)
+    out[0:3, 0:3] = turn.T
+    out[3:6, 3:6] = turn.T @ np.stack(np.broadcast_arrays(*base_turn_axes(base)), axis=-1)
+    return out
