@@ -201,18 +201,22 @@ def test_the_instruments_columns_from_the_points_are_the_jacobians(name):
 @pytest.mark.parametrize(
     ("name", "m"), [(n, 60) for n in sorted(ARMS)] + [("industrial", 4000), ("seven", 4000)]
 )
-def test_the_nominal_triangle_from_the_selection_is_the_jacobian_s(name, m):
-    """Preparing an arm reduces its Jacobian with the base at the origin (the selection
-    rule's frame); where the whitening is the identity, the rank analysis and the
-    covariance at nominal take their triangle from it, turned to the registered base.  Its
-    Gram matrix is that of the free columns at nominal, made directly, to round-off."""
-    from armcal.models.information import _row_triangle, whitened_triangle
+def test_the_selection_pass_gives_the_nominal_triangle_and_the_first_step(name, m):
+    """Preparing an arm for measured rows reduces its Jacobian with the base at the origin
+    (the selection rule's frame), the registered arm's residuals beside it.  Where the
+    whitening is the identity, the rank analysis and the covariance at nominal take their
+    triangle from it, turned to the registered base, and Gauss-Newton its first step.  The
+    Gram matrix and the step equal those made directly from the free columns at nominal,
+    to round-off; the start is the registration the arm was prepared with."""
+    from armcal.models.information import _row_triangle, start_rows, whitened_triangle
+    from armcal.numerics import RowTriangle
 
     arm = labelled(ARMS[name](), 3)
     rng = np.random.default_rng(7)
     truth = random_truth(arm, rng)
     rows = arm.plan_conditions(random_poses(arm, m // 3, rng))
-    prepared = arm.prepared(rows, arm.positions(rows, truth))
+    points = arm.positions(rows, truth) + rng.normal(scale=0.03, size=(rows.m, 3))
+    prepared = arm.prepared(rows, points)
     assert prepared.whitening(rows, None) is None
     derived = whitened_triangle(prepared, rows).triangle()
     direct = _row_triangle(prepared, rows, None, True).triangle()
@@ -221,3 +225,18 @@ def test_the_nominal_triangle_from_the_selection_is_the_jacobian_s(name, m):
     assert np.max(np.abs(gram - expected)) <= 1e-13 * np.max(np.abs(expected))
     # The memo is the prepared arm's alone: the arm as given makes its own.
     assert whitened_triangle(arm, rows) is not whitened_triangle(prepared, rows)
+
+    start = prepared.start(rows, points)[0]
+    assert np.array_equal(start, prepared.nominal)
+    known = start_rows(prepared, rows, start, points)
+    assert known is not None
+    assert start_rows(prepared, rows, start, points + 1e-9) is None  # other points: none
+    made = RowTriangle(prepared.n_free)
+    jac = prepared.jacobian(rows, start)[..., prepared.free]
+    made.add(jac.reshape(-1, prepared.n_free), (points - prepared.positions(rows, start)).ravel())
+    step, ok, _ = known.solve()
+    reference, _, _ = made.solve()
+    assert bool(ok)
+    # The step (~the errors, 0.1-1 mm and mrad) to 1e-9 of itself: round-off of
+    # residuals of ~1 mm over points ~4 m out, through cond(J) ~1e3.
+    assert np.max(np.abs(step - reference)) <= 1e-9 * np.max(np.abs(reference))

@@ -435,6 +435,18 @@ class RowTriangle:
         norms = np.where(norms > 0, norms, 1.0)
         return self._triangle[..., :k, :p], self._triangle[..., :k, p:], norms
 
+    def transformed(self, matrix: np.ndarray) -> RowTriangle:
+        """The rows of ``A M`` and ``b``, for ``M`` ``(p, q)``: ``[R M | Q^T b]``, the same
+        least squares in ``A M``'s columns (``(A M)^T (A M) = M^T R^T R M``), with no
+        pass over the rows again."""
+        if self._whole is not None:
+            rows, right = self._whole
+        else:
+            rows, right, _ = self._parts()
+        out = RowTriangle(matrix.shape[-1], self.sides)
+        out.add(rows @ matrix, right if self.sides is not None else right[..., 0])
+        return out
+
     def triangle(self) -> np.ndarray:
         """A matrix ``(..., k, p)`` with the column space and the column norms of ``A``, for
         :func:`scaled_svd`: ``R`` (``R^T R = A^T A``), or ``A`` itself when it was given

@@ -104,22 +104,47 @@ def whitened_triangle(
     return _row_triangle(model, conditions, params, whiten)
 
 
-def nominal_triangle_known(model: FitModel, conditions: Conditions, rows: np.ndarray) -> None:
+def nominal_triangle_known(model: FitModel, conditions: Conditions, rows: RowTriangle) -> None:
     """Give :func:`whitened_triangle` at the nominal parameters, for a model whose
-    whitening of these conditions is the identity, from ``rows`` ``(k, p_f)`` with the
-    Gram matrix ``J^T J`` of its free columns there: a family that has made it in
-    another form (a spatial arm's, in the robot's own frame) spares a pass."""
-
-    def made() -> RowTriangle:
-        triangle = RowTriangle(model.n_free)
-        triangle.add(rows)
-        return triangle
-
-    conditions.memo((model, _NOMINAL_TRIANGLE), made)
+    whitening of these conditions is the identity: ``rows`` of its free columns there (any
+    rows with their Gram matrix ``J^T J``), which a family made in another form while
+    preparing the model (a spatial arm's, in the robot's own frame), sparing a pass."""
+    conditions.memo((model, _NOMINAL_TRIANGLE), lambda: rows)
 
 
 #: The key of the nominal triangle in :meth:`~armcal.models.interface.Conditions.memo`.
 _NOMINAL_TRIANGLE = "whitened triangle"
+
+
+def start_rows_known(
+    model: FitModel,
+    conditions: Conditions,
+    params: np.ndarray,
+    points: np.ndarray,
+    rows: RowTriangle,
+) -> None:
+    """Leave Gauss-Newton's first step from ``params`` ``(p,)`` to ``points`` ``(m, d)``:
+    ``rows`` of the whitened free columns there with the whitened residuals beside them
+    (:class:`~armcal.numerics.RowTriangle`), which a family made in another form while
+    preparing the model for these rows (a spatial arm's, in the robot's own frame)."""
+    conditions.keep(_START_ROWS, _start_key(model, params, points), rows)
+
+
+def start_rows(
+    model: FitModel, conditions: Conditions, params: np.ndarray, points: np.ndarray
+) -> RowTriangle | None:
+    """What :func:`start_rows_known` left for these very ``params`` and ``points``, or None."""
+    found: RowTriangle | None = conditions.latest(_START_ROWS, _start_key(model, params, points))
+    return found
+
+
+def _start_key(model: FitModel, params: np.ndarray, points: np.ndarray) -> tuple:
+    values = np.ascontiguousarray(params, dtype=float)
+    return (model, values.tobytes(), np.ascontiguousarray(points, dtype=float).tobytes())
+
+
+#: The slot of :func:`start_rows_known` in :meth:`~armcal.models.interface.Conditions.keep`.
+_START_ROWS = "start rows"
 
 
 def _row_triangle(

@@ -27,6 +27,7 @@ from ..core import CoreModel
 from ..information import (
     nominal_triangle_known,
     refit_free,
+    start_rows_known,
 )
 from ..interface import (
     ROW_BLOCK,
@@ -670,7 +671,11 @@ deviation_bounds`); the base pose and the targets are the instrument's."""
         sets = points.reshape(-1, *points.shape[-2:])
         w = None if weights is None else np.broadcast_to(weights, sets.shape[:2])
         if w is None:  # sets of one experiment (Monte Carlo): their mean is registered once
-            out = np.tile(self.registration(conditions, sets.mean(axis=0)), (sets.shape[0], 1))
+            mean = sets.mean(axis=0)
+            found = conditions.latest(_REGISTERED, (self, _bytes(mean)))  # prepared for them
+            if found is None:
+                found = self.registration(conditions, mean)
+            out = np.tile(found, (sets.shape[0], 1))
         else:
             out = np.array(
                 [self.registration(conditions, s, wi) for s, wi in zip(sets, w, strict=True)]
@@ -705,7 +710,8 @@ deviation_bounds`); the base pose and the targets are the instrument's."""
         """
         arm = self
         if points is not None:
-            registered = self.registration(conditions, np.asarray(points, dtype=float))
+            points = np.asarray(points, dtype=float)
+            registered = self.registration(conditions, points)
             arm = replace(
                 self,
                 base_pose=registered[:6],
@@ -722,19 +728,27 @@ deviation_bounds`); the base pose and the targets are the instrument's."""
         back = np.kron(np.eye(arm.point_dim // 3), turn)
         p = arm.layout.n_params
         rows = RowTriangle(p)  # the rule needs their column space only
-        plain = True  # whether the whitening is the identity
+        plain = True  # the whitening is the identity: then the rows are also the fit's
         for block, part in conditions.blocks():
             jac = at_base.jacobian(block if local is conditions else local.take(part))
             w = arm.whitening(block)
             plain = plain and w is None
-            rows.add((jac if w is None else w @ back @ jac).reshape(-1, p))
+            if w is not None:
+                rows.add((w @ back @ jac).reshape(-1, p))
+            elif points is None:
+                rows.add(jac.reshape(-1, p))
+            else:  # beside them, the registered arm's residuals in its own frame
+                miss = (points[part] - arm.base_pose[:3]) @ turn - at_base.positions(block)
+                rows.add(jac.reshape(-1, p), miss.reshape(-1))
         u = np.asarray(conditions.q) @ arm.joint_map.T
-        triangle = rows.triangle()
-        held, merges = select_from_rows(arm.layout, arm.chain, triangle, u, arm.user_fixed)
+        held, merges = select_from_rows(arm.layout, arm.chain, rows.triangle(), u, arm.user_fixed)
         out = replace(arm, held=held, merges=merges)
-        if plain:  # the rank analysis and covariance at nominal need no pass of their own
-            rows_at_base = triangle @ _from_base(arm.base_pose, p)
-            nominal_triangle_known(out, conditions, rows_at_base[:, out.free])
+        if plain:  # the rank analysis, the covariance at nominal and the fit's first step
+            at_nominal = rows.transformed(_from_base(arm.base_pose, p)[:, out.free])
+            nominal_triangle_known(out, conditions, at_nominal)
+            if points is not None:
+                start_rows_known(out, conditions, out.nominal, points, at_nominal)
+                conditions.keep(_REGISTERED, (out, _bytes(points)), out.nominal)
         return out
 
     def expressed(self, conditions: Conditions, params: np.ndarray) -> np.ndarray:
@@ -812,3 +826,12 @@ def _from_base(base: np.ndarray, p: int) -> np.ndarray:
     out[0:3, 0:3] = turn.T
     out[3:6, 3:6] = turn.T @ np.stack(np.broadcast_arrays(*base_turn_axes(base)), axis=-1)
     return out
+
+
+def _bytes(values: np.ndarray) -> bytes:
+    """``values`` as a key of :meth:`~armcal.models.interface.Conditions.latest`."""
+    return np.ascontiguousarray(values, dtype=float).tobytes()
+
+
+#: The slot of the registration a prepared arm made (:meth:`SpatialArm.start` from it).
+_REGISTERED = "registered arm"
