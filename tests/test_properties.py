@@ -754,6 +754,32 @@ def test_csv_readers_raise_only_armcal_errors_on_csv_like_text(case, scratch):
     read_only_armcal_errors(reader, scratch, text, arm)
 
 
+@settings(PARSING)
+@example(case=("m", None, "q1_deg,q2_deg,x_mm,y_mm,pose\n1,2,3,4,a\n 5 ,6,7,8, b\n"))
+@example(case=("m", None, "\n \nq1_deg|target\n1|A\n2|B"))
+@example(case=("m", None, "q1_deg\n1\n2\n\u00a0\n"))
+@example(case=("m", None, "q1_deg,x_mm\n1,2\n ,\n3,4\n"))
+@given(case=csv_cases())
+def test_the_plain_split_is_the_general_reader_s(case):
+    """A file with no comment, quote, carriage return or blank line (what instruments and
+    armcal write) is split in one call; where it is, the header, every row's file line
+    and every column's fields are the general reader's."""
+    from armcal.files.csv_read import _plain_fields, general_split
+
+    text = case[2]
+    plain = _plain_fields(text)
+    if plain is None:
+        return
+    general = general_split("f.csv", text, "(layout)")
+    assert (plain.header_line, plain.header_raw, plain.header, plain.delimiter) == (
+        general.header_line, general.header_raw, general.header, general.delimiter,
+    )  # fmt: skip
+    assert plain.lines == general.lines
+    assert plain.fields is not None and general.fields is not None
+    for c in range(len(plain.header)):
+        assert plain.fields(c) == general.fields(c)
+
+
 # Robot and truth TOML: keys from the real ones (in their tables and in others), values
 # of every TOML type, often plausible ones.
 

@@ -448,12 +448,10 @@ def _residuals_list(cal: Calibration) -> list[dict[str, Any]]:
     axes = ("dx_mm", "dy_mm", "dz_mm", "drx_deg", "dry_deg", "drz_deg")[: cal.residuals.shape[1]]
     shown = np.array(cal.residuals, dtype=float)
     shown[:, 3:] = np.degrees(shown[:, 3:])  # a 6-DoF instrument's turns, in degrees
-    return [
-        {"row": row, "pose": label, "target": t, **dict(zip(axes, d, strict=True)), "used": u}
-        for row, label, t, d, u in zip(
-            _row_numbers(cal), cal.pose_labels, targets, shown.tolist(), used, strict=True
-        )
-    ]
+    return _records(
+        ("row", "pose", "target", *axes, "used"),
+        _row_numbers(cal), cal.pose_labels, targets, *shown.T.tolist(), used,
+    )  # fmt: skip
 
 
 def _standardized_list(cal: Calibration) -> list[dict[str, Any]]:
@@ -461,12 +459,15 @@ def _standardized_list(cal: Calibration) -> list[dict[str, Any]]:
     standardized = cal.standardized_residuals
     if standardized is None:
         return []
-    return [
-        {"row": row, "pose": label, **dict(zip(_AXES, d, strict=False))}
-        for row, label, d in zip(
-            _row_numbers(cal), cal.pose_labels, standardized.tolist(), strict=True
-        )
-    ]
+    axes = _AXES[: standardized.shape[1]]
+    return _records(
+        ("row", "pose", *axes), _row_numbers(cal), cal.pose_labels, *standardized.T.tolist()
+    )
+
+
+def _records(keys: tuple[str, ...], *columns: Sequence[Any]) -> list[dict[str, Any]]:
+    """One object per row of ``columns`` (one per key, of equal length), keys in order."""
+    return [dict(zip(keys, values, strict=True)) for values in zip(*columns, strict=True)]
 
 
 def _outliers_list(cal: Calibration) -> list[dict[str, Any]]:

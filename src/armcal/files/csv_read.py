@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import csv
 import io
+import re
 import warnings
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
@@ -24,6 +25,7 @@ from .kinds import field_count_fix
 __all__ = [
     "ParsedCsv",
     "column_numbers",
+    "general_split",
     "parse_csv",
 ]
 
@@ -56,6 +58,12 @@ def parse_csv(path, text: str, text_columns: Sequence[str], layout: str) -> Pars
         lines = list(range(header_line + 1, header_line + 1 + block.shape[0]))
         header = [h.strip() for h in header_raw.split(delimiter)]
         return ParsedCsv(header_line, header_raw, header, lines, delimiter, block=block)
+    plain = _plain_fields(text)
+    return plain if plain is not None else general_split(path, text, layout)
+
+
+def general_split(path, text: str, layout: str) -> ParsedCsv:
+    """:func:`parse_csv`'s general reader: comments, quotes, blank lines, any delimiter."""
     # Lines that start with '#' are comments (instrument exports often begin with some).
     numbered = enumerate(text.splitlines(), start=1)
     kept = (
@@ -119,23 +127,15 @@ def _numeric_file(text: str, text_columns: Sequence[str]) -> tuple[int, str, np.
     :func:`column_numbers` would refuse, gives None: the general reader then reads the
     file and names the first problem.
     """
-    if any(c in text for c in '#"\r'):
+    plain = _plain_text(text)
+    if plain is None:
         return None
-    start, end = 0, _line_end(text, 0)
-    while not text[start:end].strip():  # blank lines before the header
-        if end == len(text):
-            return None  # no header
-        start, end = end + 1, _line_end(text, end + 1)
-    header_raw = text[start:end]
+    header_line, header_raw, data = plain
     delimiter = _delimiter(header_raw)
     header = header_raw.split(delimiter)
     if delimiter == ";" or any(name.strip() in text_columns for name in header):
         return None
-    header_line = text.count("\n", 0, start) + 1
-    data = text[end + 1 :]
     rows = data.count("\n") + (not data.endswith("\n"))
-    if not data.strip() or "\n\n" in data:
-        return None
     try:
         with warnings.catch_warnings():
             warnings.simplefilter("error")  # e.g. loadtxt's "input contained no data"
@@ -152,6 +152,47 @@ def _numeric_file(text: str, text_columns: Sequence[str]) -> tuple[int, str, np.
     if block.shape != (rows, len(header)) or not np.all(np.abs(block) <= MAX_ABS_VALUE):
         return None
     return header_line, header_raw, block
+
+
+def _plain_text(text: str) -> tuple[int, str, str] | None:
+    """The header's line and text, and the data after it, of a file with no comment,
+    quote, carriage return or blank line after its header (what instruments and armcal
+    write); None for any other."""
+    if any(c in text for c in '#"\r'):
+        return None
+    start, end = 0, _line_end(text, 0)
+    while not text[start:end].strip():  # blank lines before the header
+        if end == len(text):
+            return None  # no header
+        start, end = end + 1, _line_end(text, end + 1)
+    data = text[end + 1 :]
+    if not data.strip() or "\n\n" in data:
+        return None
+    return text.count("\n", 0, start) + 1, text[start:end], data
+
+
+def _plain_fields(text: str) -> ParsedCsv | None:
+    """:func:`_plain_text`'s file split at its delimiter in one call (no Python object per
+    line), where every row has the header's number of fields and none is blank or holds
+    the delimiters alone; None otherwise."""
+    plain = _plain_text(text)
+    if plain is None:
+        return None
+    header_line, header_raw, data = plain
+    delimiter = _delimiter(header_raw)
+    header = header_raw.split(delimiter)
+    data = data[:-1] if data.endswith("\n") else data
+    if re.search(f"^(?:[^\\S\n]|{re.escape(delimiter)})*$", data, re.MULTILINE):
+        return None  # a line of spaces or delimiters only: the general reader skips it
+    flat = data.replace("\n", delimiter).split(delimiter)
+    rows, width = data.count("\n") + 1, len(header)
+    if len(flat) != rows * width:
+        return None
+    lines = list(range(header_line + 1, header_line + 1 + rows))
+    fields = [h.strip() for h in header]
+    return ParsedCsv(
+        header_line, header_raw, fields, lines, delimiter, fields=lambda c: flat[c::width]
+    )
 
 
 def _line_end(text: str, start: int) -> int:

@@ -299,11 +299,27 @@ def _quadratic_forms(standardized: np.ndarray, leverage: np.ndarray, used: np.nd
         x, y = standardized[:, 0], standardized[:, 1]
         with np.errstate(divide="ignore", invalid="ignore"):
             return np.where(det > 1e-12, (d * x * x - 2 * b * x * y + a * y * y) / det, 0.0)
-    values, vectors = np.linalg.eigh(v)
-    safe = values > 1e-12
-    projected = np.einsum("mij,mi->mj", vectors, standardized)
-    inverse = np.where(safe, 1.0 / np.where(safe, values, 1.0), 0.0)
-    return np.where(np.all(safe, axis=1), np.sum(projected**2 * inverse, axis=1), 0.0)
+    # V's eigenvalues lie in (0, 1] in the fit (I - B, B's in [0, 1]) and are at least 1
+    # out of it, so a determinant above the threshold clears every one of them: those
+    # rows are solved (LU), the few others decided by their eigenvalues.
+    out = np.zeros(v.shape[0])
+    clear = (np.linalg.det(v) > _SINGULAR) | ~used
+    if clear.any():
+        solved = np.linalg.solve(v[clear], standardized[clear][..., None])[..., 0]
+        out[clear] = np.einsum("mi,mi->m", standardized[clear], solved)
+    near = np.flatnonzero(~clear)
+    if near.size:
+        values, vectors = np.linalg.eigh(v[near])
+        safe = values > _SINGULAR
+        projected = np.einsum("mij,mi->mj", vectors, standardized[near])
+        inverse = np.where(safe, 1.0 / np.where(safe, values, 1.0), 0.0)
+        out[near] = np.where(np.all(safe, axis=1), np.sum(projected**2 * inverse, axis=1), 0.0)
+    return out
+
+
+#: An eigenvalue of a pose's ``V`` at or below this is 0: the pose alone determines a
+#: direction, and carries no test (:func:`_quadratic_forms`).
+_SINGULAR = 1e-12
 
 
 # --------------------------------------------------------------------------- warnings
