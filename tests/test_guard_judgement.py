@@ -489,3 +489,30 @@ def test_with_sigma_estimated_a_third_of_the_rows_off_is_a_model_problem_too(fam
     assert cal.sigma_source == "estimated"
     assert cal.n_used == m and not cal.outliers
     assert "none should be dropped" in _warning(cal, "model-misfit")
+
+
+def test_each_pose_s_quadratic_form_is_its_residual_through_v_inverse():
+    """``r^T V^-1 r`` with ``V = I -+ B`` (in the fit or left out), against the inverse
+    made from ``V``'s eigenvalues, on random hat blocks, poses whose block has an
+    eigenvalue of 1 (in the fit: they alone determine a direction, and carry no test,
+    0), and poses left out whose ``V`` is then regular."""
+    from armcal.identification.judgement import _quadratic_forms
+
+    rng = np.random.default_rng(3)
+    m, d = 400, 3
+    factor = rng.normal(size=(m, d, 5)) * 0.2
+    hat = factor @ np.swapaxes(factor, 1, 2)
+    hat /= 1.0 + np.linalg.eigvalsh(hat)[:, -1:, None]  # eigenvalues in [0, 1)
+    hat[:20] = np.diag([1.0, 0.3, 0.1])  # one direction each alone determines
+    used = rng.uniform(size=m) < 0.8
+    used[:10], used[10:20] = True, False
+    r = rng.normal(size=(m, d))
+    v = np.eye(d) + np.where(used, -1.0, 1.0)[:, None, None] * hat
+    values, vectors = np.linalg.eigh(v)
+    regular = values.min(axis=1) > 1e-12
+    safe = np.where(regular[:, None], values, 1.0)
+    expected = np.where(regular, np.sum(np.einsum("mij,mi->mj", vectors, r) ** 2 / safe, 1), 0.0)
+    found = _quadratic_forms(r, hat, used)
+    assert np.all(found[:10] == 0.0) and np.all(found[10:20] > 0)
+    # Two factorizations of a well-conditioned 3x3: 1e-13 of the form.
+    np.testing.assert_allclose(found, expected, rtol=1e-13, atol=0)
