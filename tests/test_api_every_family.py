@@ -148,6 +148,8 @@ def test_identify_recovers_noiseless_data_to_round_off(family):
     rows, labels, points = _noiseless(family)
     cal = armcal.identify(family.arm, rows.q, points, target=labels, sigma=0.01)
     assert cal.n_free == family.identified
+    # Where the family's theory bounds what rows identify, the fit's model reaches it.
+    assert cal.model.rank_bound in (None, family.identified)
     # Round-off: the points lie 3.5 m from the tracker, so 1e-12 of that is 3.5e-9 mm.
     assert_allclose(cal.calibrated().positions(cal.conditions), points, rtol=0, atol=1e-8)
     expected = cal.model.expressed(cal.conditions, family.truth)

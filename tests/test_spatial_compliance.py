@@ -169,9 +169,12 @@ def test_the_jacobian_agrees_with_central_differences(lumped):
 
 def test_joint_1_about_gravity_and_a_wrist_on_its_axis_are_held_and_named():
     q, loads = _poses(40, 3)
-    model = CompliantSpatialArm.for_loads(_arm(), _elastics(), loads)
-    model = model.prepared(model.plan_conditions(q, loads))
+    loaded = CompliantSpatialArm.for_loads(_arm(), _elastics(), loads)
+    model = loaded.prepared(loaded.plan_conditions(q, loads))
     assert set(model.held) == {"k1", "k6"}  # J1 is vertical; the payload hangs on J6's axis
+    # The bound on what rows identify: the arm's 4R + 2P + 3k and every free stiffness.
+    k = len(model.arm.targets)
+    assert loaded.rank_bound == 4 * 6 + 3 * k + 6 and model.rank_bound == 4 * 6 + 3 * k + 4
     assert "k1 cannot be seen: there is no torque on joint 1 that varies" in map(
         held_sentence, model.merges
     )

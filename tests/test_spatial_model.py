@@ -104,6 +104,13 @@ def test_the_identifiable_count_is_4r_plus_2p_plus_3k(name, k):
     prismatic = arm.n_joints - revolute
     assert chosen.n_free == 4 * revolute + 2 * prismatic + 3 * k
     assert chosen.check_identifiable(cond).identifiable
+    # The count bounds the rank over any rows: the arm as loaded surely needs preparing,
+    # with no rank analysis; the prepared one reaches the bound.
+    from armcal.models.information import surely_unidentified
+
+    assert arm.rank_bound == chosen.rank_bound == chosen.n_free
+    assert surely_unidentified(arm) and not surely_unidentified(chosen)
+    assert not arm.identifiability(cond)[0].identifiable
 
 
 def test_the_chosen_set_is_the_same_for_any_row_order_and_run():
@@ -240,3 +247,26 @@ def test_the_selection_pass_gives_the_nominal_triangle_and_the_first_step(name, 
     # The step (~the errors, 0.1-1 mm and mrad) to 1e-9 of itself: round-off of
     # residuals of ~1 mm over points ~4 m out, through cond(J) ~1e3.
     assert np.max(np.abs(step - reference)) <= 1e-9 * np.max(np.abs(reference))
+
+
+def test_a_refit_leaves_the_triangle_at_its_result():
+    """Expressing a truth in a prepared arm's parameters (a refit over more rows than a
+    block) ends on a pass at its result: that pass's triangle is the covariance's there,
+    to round-off, and serves it."""
+    from armcal.models.information import _row_triangle, whitened_triangle
+    from armcal.models.interface import ROW_BLOCK
+
+    arm = labelled(industrial(), 3)
+    rng = np.random.default_rng(8)
+    truth = random_truth(arm, rng)
+    rows = arm.plan_conditions(random_poses(arm, ROW_BLOCK // 3 + 500, rng))
+    assert rows.m > ROW_BLOCK
+    prepared = arm.prepared(rows, arm.positions(rows, truth))
+    expressed = prepared.expressed(rows, truth)
+    kept = whitened_triangle(prepared, rows, expressed)
+    assert kept is whitened_triangle(prepared, rows, expressed.copy())  # by value, not identity
+    derived, direct = kept.triangle(), _row_triangle(prepared, rows, expressed, True).triangle()
+    gram, expected = derived.T @ derived, direct.T @ direct
+    # Round-off of a Gram matrix of rows whose points lie ~4 m out: 1e-13 of its largest entry.
+    assert np.max(np.abs(gram - expected)) <= 1e-13 * np.max(np.abs(expected))
+    assert whitened_triangle(prepared, rows, truth) is not kept  # elsewhere: made anew

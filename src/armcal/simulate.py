@@ -35,7 +35,7 @@ from .models import (
     Loads,
     position_jacobian,
 )
-from .models.information import predicted_covariance, tip_variances
+from .models.information import predicted_covariance, surely_unidentified, tip_variances
 from .models.wording import ill_conditioned_warning
 from .notebook import html_table, number
 from .progress import ProgressCallback
@@ -584,12 +584,16 @@ def _for_plan(
     prepared for the truth's points and the truth as its fit sees it
     (:meth:`~armcal.models.interface.FitModel.expressed`).  NotIdentifiableError where
     the prepared model is not identified either (a minimal family is itself)."""
-    try:
-        return model, truth, model.check_identifiable(rows)
-    except NotIdentifiableError:
-        ready = model.prepared(rows, model.positions(rows, truth))
-        if ready is model:
-            raise
+    unseen = None
+    if not surely_unidentified(model):  # else its rank analysis would only say so
+        try:
+            return model, truth, model.check_identifiable(rows)
+        except NotIdentifiableError as error:
+            unseen = error
+    ready = model.prepared(rows, model.positions(rows, truth))
+    if ready is model:  # a minimal family the rows do not identify: what they miss
+        assert unseen is not None  # (a family with a rank bound prepares)
+        raise unseen
     return ready, ready.expressed(rows, truth), ready.check_identifiable(rows)
 
 

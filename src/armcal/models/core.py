@@ -308,6 +308,10 @@ class CoreModel(RigidLoads):
     def rule_held(self) -> tuple[str, ...]:
         return ()
 
+    @property
+    def rank_bound(self) -> int | None:
+        return None
+
     # -- identifiability ---------------------------------------------------------------
 
     def identifiability(self, conditions: Conditions) -> tuple[Identifiability, ScaledSVD]:

@@ -113,6 +113,11 @@ class MinimalPlanar:
         return ()
 
     @property
+    def rank_bound(self) -> int | None:
+        """None: minimal parameters are all identified by rows that can."""
+        return None
+
+    @property
     def joint_names(self) -> tuple[str, ...]:
         """``joint 1`` ...: a planar arm's description does not name its joints."""
         return tuple(f"joint {j + 1}" for j in range(self.n_joints))
@@ -218,6 +223,13 @@ class ArmEffect:
     def rule_held(self) -> tuple[str, ...]:
         """The arm's (an effect's own held terms are its :meth:`held_reasons`' business)."""
         return tuple(self.arm.rule_held)
+
+    @property
+    def rank_bound(self) -> int | None:
+        """The arm's, and every free term of the effect."""
+        bound = self.arm.rank_bound
+        effect = int(np.count_nonzero(self.free)) - int(np.count_nonzero(self.arm.free))
+        return None if bound is None else int(bound) + effect
 
     @property
     def user_held(self) -> tuple[str, ...]:

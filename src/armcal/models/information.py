@@ -101,6 +101,10 @@ def whitened_triangle(
         return conditions.memo(
             (model, _NOMINAL_TRIANGLE), lambda: _row_triangle(model, conditions, None, True)
         )
+    if params is not None:  # what a refit left, its whitening the identity (_refit_blocks)
+        kept: RowTriangle | None = conditions.latest(_TRIANGLE_AT, (model, _key(params)))
+        if kept is not None:
+            return kept
     return _row_triangle(model, conditions, params, whiten)
 
 
@@ -139,12 +143,19 @@ def start_rows(
 
 
 def _start_key(model: FitModel, params: np.ndarray, points: np.ndarray) -> tuple:
-    values = np.ascontiguousarray(params, dtype=float)
-    return (model, values.tobytes(), np.ascontiguousarray(points, dtype=float).tobytes())
+    return (model, _key(params), _key(points))
+
+
+def _key(values: np.ndarray) -> bytes:
+    """An array as an item of a key of :meth:`~armcal.models.interface.Conditions.latest`."""
+    return np.ascontiguousarray(values, dtype=float).tobytes()
 
 
 #: The slot of :func:`start_rows_known` in :meth:`~armcal.models.interface.Conditions.keep`.
 _START_ROWS = "start rows"
+
+#: The slot of the triangle a refit's last pass made at its result (:func:`_refit_blocks`).
+_TRIANGLE_AT = "triangle at"
 
 
 def _row_triangle(
@@ -277,9 +288,17 @@ def identifying(
     minimal family the rows do not identify is itself: the caller's check then says
     what the rows miss.
     """
-    if model.identifiability(conditions)[0].identifiable:
+    if not surely_unidentified(model) and model.identifiability(conditions)[0].identifiable:
         return model
     return model.prepared(conditions, points)
+
+
+def surely_unidentified(model: FitModel) -> bool:
+    """Whether ``model`` has more free parameters than any rows can identify
+    (:attr:`~armcal.models.interface.FitModel.rank_bound`): it needs preparing, and a
+    rank analysis would only say so."""
+    bound = model.rank_bound
+    return bound is not None and model.n_free > bound
 
 
 #: Gauss-Newton steps at most of :func:`refit_free` (it converges in a few).
@@ -317,6 +336,8 @@ def _refit_blocks(
     the next pass's Jacobian (the same to first order in the step): a last pass then
     only confirms it."""
     free, n_free = model.free, model.n_free
+    first = next(iter(conditions.blocks()))[0]
+    plain = model.whitening(first, out) is None  # then the rows are the covariance's
     step = None
     for _ in range(_REFIT_STEPS + 1):
         rows, moved = RowTriangle(n_free), 0.0
@@ -327,6 +348,8 @@ def _refit_blocks(
                 moved = max(moved, float(np.max(np.abs(jac @ step), initial=0.0)))
             rows.add(jac, miss)
         if step is not None and moved <= tol:
+            if plain:  # the last pass was at the result: its triangle is the covariance's
+                conditions.keep(_TRIANGLE_AT, (model, _key(out)), rows)
             break
         step = rows.solve()[0]
         out[free] += step

@@ -925,6 +925,14 @@ class IdentifiabilityRole(Protocol):
         them (:meth:`held_reasons` says why); empty for a family of minimal parameters."""
         ...
 
+    @property
+    def rank_bound(self) -> int | None:
+        """The most free parameters any rows can identify, where the family's theory
+        bounds it below its free count (an over-complete spatial arm as loaded, before
+        :meth:`prepared`); None where it does not.  A model with more free parameters is
+        known to need preparing without a rank analysis."""
+        ...
+
     def identifiability(self, conditions: Conditions) -> tuple[Identifiability, ScaledSVD]:
         """Rank analysis of the model's scaled, whitened Jacobian at the nominal arm."""
         ...

@@ -336,11 +336,8 @@ def simulate_plan(
     if test_q is not None and not len(test_q):
         test_q = None
     found = truth_warning(model, truth)  # of the truth as given, in the model's parameters
-    # The model for this plan, and the truth as its fit sees it (the same for a family
-    # whose parameters are minimal).
-    rows = model.plan_conditions(q, loads)
-    model = model.prepared(rows, model.positions(rows, truth))
-    truth = model.expressed(rows, truth)
+    # The Monte Carlo prepares the model for this plan and expresses the truth as its fit
+    # sees it (a family whose parameters are minimal is itself).
     try:
         result = monte_carlo(
             model,

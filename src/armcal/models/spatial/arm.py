@@ -704,6 +704,14 @@ deviation_bounds`); the base pose and the targets are the instrument's."""
 
     # -- the identifiable set ------------------------------------------------------------
 
+    @property
+    def rank_bound(self) -> int:
+        """``4R + 2P + 3k`` for point targets, ``4R + 2P + 6k`` in full pose: the parameters
+        a complete, minimal model has (:mod:`~armcal.models.spatial.selection`)."""
+        revolute = int(np.count_nonzero(self.chain.revolute))
+        per = 6 if self.oriented else 3
+        return 4 * revolute + 2 * (self.n_joints - revolute) + per * len(self.targets)
+
     def prepared(self, conditions: Conditions, points: np.ndarray | None = None) -> SpatialArm:
         """The arm for these rows: registered to ``points`` (when given) and reduced to the
         parameters they identify, by the fixed rule of :mod:`~armcal.models.spatial.selection`.
