@@ -39,8 +39,10 @@ class ThroughJacobian:
     def __getattr__(self, name: str):
         return getattr(self._arm, name)
 
-    def plan_information(self, q: np.ndarray, loads: Loads | None = None) -> BlockInformation:
-        return BlockInformation(self, q, loads)
+    def plan_information(
+        self, q: np.ndarray, loads: Loads | None = None, *, rows=None
+    ) -> BlockInformation:
+        return BlockInformation(self, q, loads, rows=rows)
 
     def closed_form_plans(self, m: int) -> None:
         return None

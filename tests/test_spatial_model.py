@@ -270,3 +270,26 @@ def test_a_refit_leaves_the_triangle_at_its_result():
     # Round-off of a Gram matrix of rows whose points lie ~4 m out: 1e-13 of its largest entry.
     assert np.max(np.abs(gram - expected)) <= 1e-13 * np.max(np.abs(expected))
     assert whitened_triangle(prepared, rows, truth) is not kept  # elsewhere: made anew
+
+
+def test_a_plan_evaluated_on_its_prepared_rows_shares_their_triangle():
+    """``evaluate`` prepares the arm on the plan's rows and evaluates the plan on the same
+    rows: the rank analysis and the criteria take the triangle the preparation left (no
+    pass of their own), and every figure is that of rows made anew, to round-off."""
+    from armcal.criteria import evaluate_plan
+    from armcal.models.information import whitened_triangle
+    from armcal.models.interface import ROW_BLOCK
+
+    arm = labelled(industrial(), 3)
+    rng = np.random.default_rng(9)
+    q = random_poses(arm, ROW_BLOCK // 3 + 200, rng)
+    rows = arm.plan_conditions(q)
+    prepared = arm.prepared(rows)
+    made = whitened_triangle(prepared, rows)  # what preparing left
+    shared = evaluate_plan(prepared, q, sigma=0.03, test_q=q[:40], rows=rows)
+    assert shared.model is prepared and whitened_triangle(prepared, rows) is made
+    fresh = evaluate_plan(prepared, q, sigma=0.03, test_q=q[:40])
+    # Two factorizations of the same Gram matrix: 1e-12 relative (the figures' round-off).
+    np.testing.assert_allclose(shared.predicted_std, fresh.predicted_std, rtol=1e-12)
+    for name, value in fresh.efficiencies.items():
+        assert abs(shared.efficiencies[name] - value) <= 1e-12 * abs(value)

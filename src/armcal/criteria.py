@@ -51,6 +51,7 @@ import numpy as np
 
 from .errors import ArmcalWarning, NotIdentifiableError
 from .models import (
+    Conditions,
     FitModel,
     Identifiability,
     Loads,
@@ -58,7 +59,12 @@ from .models import (
     PlanInformation,
     position_jacobian,
 )
-from .models.information import display_std, mean_tip_variance, tip_variances
+from .models.information import (
+    display_std,
+    mean_tip_variance,
+    surely_unidentified,
+    tip_variances,
+)
 from .models.wording import ill_conditioned_warning
 from .notebook import html_table, number
 from .numerics import COND_WARN, RANK_RTOL, gram_of_factor, log_det, spd_inverse
@@ -528,24 +534,29 @@ class PlanQuality:
 
 
 def _identified_plan(
-    model: FitModel, q: np.ndarray, loads: Loads | None
+    model: FitModel, q: np.ndarray, loads: Loads | None, rows: Conditions | None = None
 ) -> tuple[FitModel, PlanInformation, Identifiability]:
-    """The model the plan ``q`` identifies, its information (one factorization serves
-    every figure of :func:`evaluate_plan`) and identifiability.
+    """The model the plan ``q`` (its ``rows``, when made) identifies, its information (one
+    factorization serves every figure of :func:`evaluate_plan`) and identifiability.
 
     The rule of :func:`~armcal.models.information.identifying`, at no cost where the
     plan identifies the model as given: only a model it does not (a spatial arm as
     loaded, over-complete) is prepared for the plan's rows and checked again.
     NotIdentifiableError where the prepared model is not identified either.
     """
-    info = model.plan_information(q, loads)
-    try:
-        return model, info, info.check_identifiable()
-    except NotIdentifiableError:
-        ready = model.prepared(model.plan_conditions(q, loads))
-        if ready is model:  # a minimal family: what the plan misses is the error
-            raise
-    info = ready.plan_information(q, loads)
+    rows = model.plan_conditions(q, loads) if rows is None else rows
+    unseen = None
+    if not surely_unidentified(model):  # else its rank analysis would only say so
+        info = model.plan_information(q, loads, rows=rows)
+        try:
+            return model, info, info.check_identifiable()
+        except NotIdentifiableError as error:
+            unseen = error
+    ready = model.prepared(rows)
+    if ready is model:  # a minimal family: what the plan misses is the error
+        assert unseen is not None  # (a family with a rank bound prepares)
+        raise unseen
+    info = ready.plan_information(q, loads, rows=rows)
     return ready, info, info.check_identifiable()
 
 
@@ -556,13 +567,15 @@ def evaluate_plan(
     sigma: float,
     test_q: np.ndarray,
     loads: Loads | None = None,
+    rows: Conditions | None = None,
 ) -> PlanQuality:
     """Criteria, predicted std and positioning accuracy of plan ``q`` ``(m, n)``.
 
     ``test_q`` ``(k, n)`` are the poses where positioning accuracy matters (none:
     no position figures); ``loads`` every pose's loads for a model whose points
     depend on them (default: the model's).  Every target of every pose is measured
-    (:meth:`~armcal.models.interface.FitModel.plan_conditions`).  A model the plan
+    (:meth:`~armcal.models.interface.FitModel.plan_conditions`; ``rows``, made already,
+    share what is memoized on them, as a model :meth:`prepared` for them left).  A model the plan
     does not identify as given is first prepared for it
     (:func:`~armcal.models.information.identifying`: a spatial arm as loaded holds
     what the plan cannot separate); :attr:`PlanQuality.model` is the model evaluated.
@@ -584,7 +597,7 @@ def evaluate_plan(
     True
     """
     q = np.asarray(q, dtype=float)
-    model, info, identified = _identified_plan(model, q, loads)
+    model, info, identified = _identified_plan(model, q, loads, rows)
     warning = ill_conditioned_warning(model, identified)
     counts = None
     if model.default_payload_kg is not None:  # the points depend on the load

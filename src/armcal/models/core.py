@@ -397,8 +397,10 @@ class CoreModel(RigidLoads):
     def information_bound(self) -> bool:
         return False
 
-    def plan_information(self, q: np.ndarray, loads: Loads | None = None) -> BlockInformation:
-        return BlockInformation(self, q, loads)
+    def plan_information(
+        self, q: np.ndarray, loads: Loads | None = None, *, rows: Conditions | None = None
+    ) -> BlockInformation:
+        return BlockInformation(self, q, loads, rows=rows)
 
     def closed_form_plans(self, m: int) -> None:
         return None

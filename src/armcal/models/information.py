@@ -469,6 +469,9 @@ class BlockInformation:
         The family's :class:`Linearization` of rows: their blocks (the same as
         :func:`whitened_blocks`) and the gradient's pullback, from one pass of
         its kinematics.
+    rows : Conditions, optional
+        One plan's rows, made already by ``model.plan_conditions(q, loads)``: what is
+        memoized on them (:meth:`~armcal.models.interface.Conditions.memo`) is shared.
     """
 
     def __init__(
@@ -480,8 +483,11 @@ class BlockInformation:
         scale: np.ndarray | None = None,
         unit_columns: bool = False,
         linearize: Callable[[Conditions], Linearization] | None = None,
+        rows: Conditions | None = None,
     ) -> None:
         self.model = model
+        if rows is not None:  # the cached property, given
+            self.__dict__["_rows"] = rows
         self.q = np.asarray(q, dtype=float)
         self.loads = loads
         self.scale = np.ones(model.n_free) if scale is None else np.asarray(scale, dtype=float)

@@ -1025,8 +1025,12 @@ class DesignRole(Protocol):
         ``det M <= 1`` with equality iff ``M = I`` (the criteria are then efficiencies)."""
         ...
 
-    def plan_information(self, q: np.ndarray, loads: Loads | None = None) -> PlanInformation:
-        """What plans ``q`` ``(..., m, n)`` (with ``loads``) tell about the free parameters."""
+    def plan_information(
+        self, q: np.ndarray, loads: Loads | None = None, *, rows: Conditions | None = None
+    ) -> PlanInformation:
+        """What plans ``q`` ``(..., m, n)`` (with ``loads``) tell about the free parameters;
+        ``rows``, one plan's :meth:`plan_conditions` made already, shares what is memoized
+        on them (a spatial arm's triangle from :meth:`prepared`)."""
         ...
 
     def closed_form_plans(self, m: int) -> ClosedFormPlans | None:

@@ -179,12 +179,15 @@ def evaluate_file(
     finite quality).
     """
     model, loads = plan_model(spec, arm, q.shape[0], payload)
-    model = model.prepared(model.plan_conditions(q, loads))
+    rows = model.plan_conditions(q, loads)
+    model = model.prepared(rows)
     # A plan that misses part of the arm: its predicted figures assume the rest nominal.
     found = coverage(model, q)
     try:
         refuse_registration_only(found, q.shape[0], "poses")
-        quality = evaluate_plan(model, q, sigma=design_sigma(arm), test_q=test_q, loads=loads)
+        quality = evaluate_plan(
+            model, q, sigma=design_sigma(arm), test_q=test_q, loads=loads, rows=rows
+        )
     except NotIdentifiableError as exc:  # PRODUCT.md: an error, exit 2, one line
         raise prefixed(source, exc) from None
     degenerate = plan_degenerate_warning(

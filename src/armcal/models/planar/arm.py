@@ -413,8 +413,11 @@ class PlanarArm(RigidLoads, MinimalPlanar, PlanarArmSpec):
         """:func:`~armcal.models.planar.information.unit_trace`: the paper's bound holds."""
         return unit_trace(self)
 
-    def plan_information(self, q: np.ndarray, loads: Loads | None = None) -> PlanarPlanInformation:
-        """The complex-column information of the paper (loads move nothing of a rigid arm)."""
+    def plan_information(
+        self, q: np.ndarray, loads: Loads | None = None, *, rows: Conditions | None = None
+    ) -> PlanarPlanInformation:
+        """The complex-column information of the paper (loads move nothing of a rigid arm;
+        it needs no rows)."""
         return PlanarPlanInformation(self, q)
 
     def closed_form_plans(self, m: int) -> PaperPlans:

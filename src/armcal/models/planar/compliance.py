@@ -513,11 +513,13 @@ class CompliantArm(ArmEffect, MinimalPlanar):
         """Gravity has a direction: turning joint 1 changes every deflection."""
         return self.elastic.gravity is None and self.arm.rotation_invariant
 
-    def plan_information(self, q: np.ndarray, loads: Loads | None = None) -> BlockInformation:
+    def plan_information(
+        self, q: np.ndarray, loads: Loads | None = None, *, rows: Conditions | None = None
+    ) -> BlockInformation:
         """From the whitened Jacobian.  The criteria's singular values are those of unit-norm
         columns: no design coordinates are fixed in advance for the compliance parameters,
         so the D-criterion compares how orthogonal a plan's columns are."""
-        return BlockInformation(self, q, loads, unit_columns=True)
+        return BlockInformation(self, q, loads, unit_columns=True, rows=rows)
 
     def design_loads(self, payloads: Sequence[float] | None) -> tuple[CompliantArm, np.ndarray]:
         """The model of a plan whose poses carry ``payloads`` (kg; default 0 and the robot

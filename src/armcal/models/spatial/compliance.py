@@ -594,8 +594,12 @@ class CompliantSpatialArm(ArmEffect):
     def rotation_invariant(self) -> bool:
         return False
 
-    def plan_information(self, q: np.ndarray, loads: Loads | None = None) -> BlockInformation:
-        return BlockInformation(self, q, loads, unit_columns=True, linearize=self.linearize)
+    def plan_information(
+        self, q: np.ndarray, loads: Loads | None = None, *, rows: Conditions | None = None
+    ) -> BlockInformation:
+        return BlockInformation(
+            self, q, loads, unit_columns=True, linearize=self.linearize, rows=rows
+        )
 
     def linearize(self, conditions: Conditions) -> Linearization:
         """The rows' whitened blocks at the nominal parameters and their pullback: the arm's

@@ -90,9 +90,13 @@ class SpatialDesign:
         )
         return self.view.of_rows(kin, self.target_positions, rows.target, len(self.targets))
 
-    def plan_information(self, q: np.ndarray, loads: Loads | None = None) -> BlockInformation:
+    def plan_information(
+        self, q: np.ndarray, loads: Loads | None = None, *, rows: Conditions | None = None
+    ) -> BlockInformation:
         me = cast(FitModel, self)  # the arm this role is part of
-        return BlockInformation(me, q, loads, unit_columns=True, linearize=self.linearize)
+        return BlockInformation(
+            me, q, loads, unit_columns=True, linearize=self.linearize, rows=rows
+        )
 
     def linearize(
         self,
