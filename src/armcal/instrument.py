@@ -29,6 +29,7 @@ from typing import Any
 
 import numpy as np
 
+from .distributions import chi2_sf
 from .errors import ArmcalError, ArmcalWarning
 from .identification import Calibration, identify, solve
 from .models import STANDARD_GRAVITY, Conditions, FitModel, Plane, fit_plane
@@ -174,10 +175,8 @@ def _planarity_warning(
     stated = ""
     if cal.sigma_source == "given" and dof > 0:
         s = row_sigma if row_sigma is not None else (sigma or cal.sigma_mm)
-        from scipy import special  # on use, and not scipy.stats (3x slower to import)
-
         chi2 = float(np.sum((d / s) ** 2))
-        p_value = float(special.chdtrc(dof, chi2))
+        p_value = float(chi2_sf(dof, chi2))
         if p_value >= PLANARITY_ALPHA:
             return None
         stated = f"sigma {cal.sigma_mm:.3g} mm (chi2 = {chi2:.4g} on {dof} dof, p = {p_value:.2g})"

@@ -46,6 +46,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..distributions import chi2_cdf, chi2_sf, f_sf
 from ..errors import ArmcalWarning, action
 from ..models import Effect, listing
 from ..models.wording import NEGATIVE_WORDS, effect_advice
@@ -143,15 +144,11 @@ def goodness_of_fit(standardized: np.ndarray, dof: int, *, sigma_given: bool) ->
     """
     if not sigma_given:
         return GoodnessOfFit(None, int(dof), None)
-    from scipy import special  # on use, and not scipy.stats (3x slower to import)
-
     chi2 = float(np.sum(standardized**2))
     if dof <= 0:
         return GoodnessOfFit(chi2, int(dof), None)
     # Each tail from its own function: 1 - P would lose the small one to round-off.
-    return GoodnessOfFit(
-        chi2, int(dof), float(special.chdtrc(dof, chi2)), float(special.chdtr(dof, chi2))
-    )
+    return GoodnessOfFit(chi2, int(dof), float(chi2_sf(dof, chi2)), float(chi2_cdf(dof, chi2)))
 
 
 @dataclass(frozen=True)
@@ -263,13 +260,9 @@ def studentized_test(
         if dim == 2:
             p_value = np.exp(-quad / 2)  # the chi-square survival function for 2 dof
         else:
-            from scipy import special  # on use, and not scipy.stats (3x slower to import)
-
-            p_value = special.chdtrc(dim, quad)
+            p_value = chi2_sf(dim, quad)
         statistic = np.sqrt(quad)
     else:
-        from scipy import special  # on use, and not scipy.stats (3x slower to import)
-
         rss = float(np.sum(standardized[used] ** 2))  # in units of the estimated sigma
         # Leave-one-out scale for poses in the fit (d fewer equations), the fit's for others.
         dof_i = np.where(used, nu - dim, nu)
@@ -278,7 +271,7 @@ def studentized_test(
             scale2 = np.where(dof_i > 0, rss_i / np.maximum(dof_i, 1), np.nan)
             f = np.where(scale2 > 0, quad / (dim * scale2), 0.0)
         valid = (dof_i > 0) & np.isfinite(scale2) & (scale2 > 0)
-        p_value = np.where(valid, special.fdtrc(dim, np.maximum(dof_i, 1), f), 1.0)
+        p_value = np.where(valid, f_sf(dim, np.maximum(dof_i, 1), f), 1.0)
         statistic = np.where(valid, np.sqrt(dim * f), 0.0)
     flagged = p_value < alpha / max(m, 1)
     return PoseTest(statistic, p_value, flagged)
@@ -528,13 +521,11 @@ def nested_test(
     the noisiest rows and say nothing about the fit.  None when there is nothing
     to test (no degrees of freedom, no extra parameter, or an exact fit).
     """
-    from scipy import special  # on use, and not scipy.stats (3x slower to import)
-
     rss, rss_nested = float(np.sum(whitened**2)), float(np.sum(nested_whitened**2))
     if dof <= 0 or extra == 0 or rss <= 0:
         return None
     f_value = max(rss_nested - rss, 0.0) / extra / (rss / dof)
-    return float(special.fdtrc(extra, dof, f_value))
+    return float(f_sf(extra, dof, f_value))
 
 
 def unseen_warning(

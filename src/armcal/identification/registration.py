@@ -33,6 +33,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..distributions import f_sf
 from ..models import Conditions, FitModel
 from ..numerics import point_norms, rms, solve_least_squares
 from .solvers import gauss_newton
@@ -347,8 +348,6 @@ def instrument_moved(
         return None
     if screen and max(_linear_shares(model, residual, jac, rows.size, moved)) < SCREEN_SHARE:
         return None
-    from scipy import special  # on use, and not scipy.stats (slow to import)
-
     best: Movement | None = None
     for fraction in MOVE_SPLITS:
         split = round(fraction * rows.size)
@@ -364,7 +363,7 @@ def instrument_moved(
             p_value = 0.0
         else:
             statistic = max(total - split_rss, 0.0) / k / (split_rss / residual_dof)
-            p_value = float(special.fdtrc(k, residual_dof, statistic)) * len(MOVE_SPLITS)
+            p_value = float(f_sf(k, residual_dof, statistic)) * len(MOVE_SPLITS)
         if p_value >= MOVE_ALPHA or explained < MOVE_SHARE:
             continue
         apart = model.positions(whole, first) - model.positions(whole, second)

@@ -42,6 +42,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..distributions import chi2_isf
 from ..errors import ArmcalWarning
 from ..numerics import point_norms
 from .judgement import (
@@ -78,9 +79,7 @@ def huber_constant(dim: int) -> float:
     """
     if dim == 2:
         return float(np.sqrt(-2.0 * np.log(0.05)))
-    from scipy import special  # on use, and not scipy.stats (3x slower to import)
-
-    return float(np.sqrt(special.chdtri(dim, 0.05)))
+    return float(np.sqrt(chi2_isf(dim, 0.05)))
 
 
 #: Huber's constant for a point in the plane (:func:`huber_constant` of 2).
@@ -116,9 +115,7 @@ def _median_chi2(dim: int) -> float:
     """The median of chi-square with ``dim`` dof: ``2 ln 2`` for 2."""
     if dim == 2:
         return 2 * math.log(2)
-    from scipy import special  # on use, and not scipy.stats (3x slower to import)
-
-    return float(special.chdtri(dim, 0.5))
+    return float(chi2_isf(dim, 0.5))
 
 
 def misfit_warning(problem: Problem, disagreeing: int, *, left_out: int = 0) -> ArmcalWarning:
