@@ -130,9 +130,7 @@ def _numeric_file(text: str, text_columns: Sequence[str]) -> tuple[int, str, np.
     plain = _plain_text(text)
     if plain is None:
         return None
-    header_line, header_raw, data = plain
-    delimiter = _delimiter(header_raw)
-    header = header_raw.split(delimiter)
+    header_line, header_raw, delimiter, header, data = plain
     if delimiter == ";" or any(name.strip() in text_columns for name in header):
         return None
     rows = data.count("\n") + (not data.endswith("\n"))
@@ -154,10 +152,10 @@ def _numeric_file(text: str, text_columns: Sequence[str]) -> tuple[int, str, np.
     return header_line, header_raw, block
 
 
-def _plain_text(text: str) -> tuple[int, str, str] | None:
-    """The header's line and text, and the data after it, of a file with no comment,
-    quote, carriage return or blank line after its header (what instruments and armcal
-    write); None for any other."""
+def _plain_text(text: str) -> tuple[int, str, str, list[str], str] | None:
+    """The header's line, text, delimiter and fields, and the data after it, of a file
+    with no comment, quote, carriage return or blank line after its header (what
+    instruments and armcal write); None for any other."""
     if any(c in text for c in '#"\r'):
         return None
     start, end = 0, _line_end(text, 0)
@@ -168,7 +166,9 @@ def _plain_text(text: str) -> tuple[int, str, str] | None:
     data = text[end + 1 :]
     if not data.strip() or "\n\n" in data:
         return None
-    return text.count("\n", 0, start) + 1, text[start:end], data
+    header_raw = text[start:end]
+    delimiter = _delimiter(header_raw)
+    return text.count("\n", 0, start) + 1, header_raw, delimiter, header_raw.split(delimiter), data
 
 
 def _plain_fields(text: str) -> ParsedCsv | None:
@@ -178,9 +178,7 @@ def _plain_fields(text: str) -> ParsedCsv | None:
     plain = _plain_text(text)
     if plain is None:
         return None
-    header_line, header_raw, data = plain
-    delimiter = _delimiter(header_raw)
-    header = header_raw.split(delimiter)
+    header_line, header_raw, delimiter, header, data = plain
     data = data[:-1] if data.endswith("\n") else data
     if re.search(f"^(?:[^\\S\n]|{re.escape(delimiter)})*$", data, re.MULTILINE):
         return None  # a line of spaces or delimiters only: the general reader skips it
