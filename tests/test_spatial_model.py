@@ -215,7 +215,7 @@ def test_the_selection_pass_gives_the_nominal_triangle_and_the_first_step(name, 
     triangle from it, turned to the registered base, and Gauss-Newton its first step.  The
     Gram matrix and the step equal those made directly from the free columns at nominal,
     to round-off; the start is the registration the arm was prepared with."""
-    from armcal.models.information import _row_triangle, start_rows, whitened_triangle
+    from armcal.models.information import _row_triangle, known_start, whitened_triangle
     from armcal.numerics import RowTriangle
 
     arm = labelled(ARMS[name](), 3)
@@ -235,9 +235,10 @@ def test_the_selection_pass_gives_the_nominal_triangle_and_the_first_step(name, 
 
     start = prepared.start(rows, points)[0]
     assert np.array_equal(start, prepared.nominal)
-    known = start_rows(prepared, rows, start, points)
-    assert known is not None
-    assert start_rows(prepared, rows, start, points + 1e-9) is None  # other points: none
+    found = known_start(prepared, rows, points)
+    assert found is not None and np.array_equal(found[0], start)
+    known = found[1]
+    assert known_start(prepared, rows, points + 1e-9) is None  # other points: none
     made = RowTriangle(prepared.n_free)
     jac = prepared.jacobian(rows, start)[..., prepared.free]
     made.add(jac.reshape(-1, prepared.n_free), (points - prepared.positions(rows, start)).ravel())

@@ -49,7 +49,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .errors import ArmcalWarning, NotIdentifiableError
+from .errors import ArmcalWarning
 from .models import (
     Conditions,
     FitModel,
@@ -61,8 +61,8 @@ from .models import (
 )
 from .models.information import (
     display_std,
+    identified_or_prepared,
     mean_tip_variance,
-    surely_unidentified,
     tip_variances,
 )
 from .models.wording import ill_conditioned_warning
@@ -539,25 +539,19 @@ def _identified_plan(
     """The model the plan ``q`` (its ``rows``, when made) identifies, its information (one
     factorization serves every figure of :func:`evaluate_plan`) and identifiability.
 
-    The rule of :func:`~armcal.models.information.identifying`, at no cost where the
-    plan identifies the model as given: only a model it does not (a spatial arm as
-    loaded, over-complete) is prepared for the plan's rows and checked again.
+    :func:`~armcal.models.information.identified_or_prepared`: at no cost where the plan
+    identifies the model as given; a model it does not (a spatial arm as loaded,
+    over-complete) is prepared for the plan's rows and checked there.
     NotIdentifiableError where the prepared model is not identified either.
     """
     rows = model.plan_conditions(q, loads) if rows is None else rows
-    unseen = None
-    if not surely_unidentified(model):  # else its rank analysis would only say so
-        info = model.plan_information(q, loads, rows=rows)
-        try:
-            return model, info, info.check_identifiable()
-        except NotIdentifiableError as error:
-            unseen = error
-    ready = model.prepared(rows)
-    if ready is model:  # a minimal family: what the plan misses is the error
-        assert unseen is not None  # (a family with a rank bound prepares)
-        raise unseen
-    info = ready.plan_information(q, loads, rows=rows)
-    return ready, info, info.check_identifiable()
+
+    def check(it: FitModel) -> tuple[PlanInformation, Identifiability]:
+        info = it.plan_information(q, loads, rows=rows)
+        return info, info.check_identifiable()
+
+    ready, (info, identified) = identified_or_prepared(model, rows, check)
+    return ready, info, identified
 
 
 def evaluate_plan(

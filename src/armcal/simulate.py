@@ -25,7 +25,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike
 
-from .errors import ArmcalError, ArmcalWarning, NotIdentifiableError, action
+from .errors import ArmcalError, ArmcalWarning, action
 from .identification import resolve_method, solve
 from .models import (
     Conditions,
@@ -35,7 +35,7 @@ from .models import (
     Loads,
     position_jacobian,
 )
-from .models.information import predicted_covariance, surely_unidentified, tip_variances
+from .models.information import identified_or_prepared, predicted_covariance, tip_variances
 from .models.wording import ill_conditioned_warning
 from .notebook import html_table, number
 from .progress import ProgressCallback
@@ -579,22 +579,15 @@ def _for_plan(
     model: FitModel, rows: Conditions, truth: np.ndarray
 ) -> tuple[FitModel, np.ndarray, Identifiability]:
     """The model the plan's ``rows`` identify, the truth in its parameters, and the
-    identifiability: the model as given where the rows identify it (the rule of
-    :func:`~armcal.models.information.identifying`, here at no cost then), else the model
-    prepared for the truth's points and the truth as its fit sees it
-    (:meth:`~armcal.models.interface.FitModel.expressed`).  NotIdentifiableError where
-    the prepared model is not identified either (a minimal family is itself)."""
-    unseen = None
-    if not surely_unidentified(model):  # else its rank analysis would only say so
-        try:
-            return model, truth, model.check_identifiable(rows)
-        except NotIdentifiableError as error:
-            unseen = error
-    ready = model.prepared(rows, model.positions(rows, truth))
-    if ready is model:  # a minimal family the rows do not identify: what they miss
-        assert unseen is not None  # (a family with a rank bound prepares)
-        raise unseen
-    return ready, ready.expressed(rows, truth), ready.check_identifiable(rows)
+    identifiability (:func:`~armcal.models.information.identified_or_prepared`): the model
+    as given where the rows identify it, else the model prepared for the truth's points
+    and the truth as its fit sees it (:meth:`~armcal.models.interface.FitModel.expressed`).
+    NotIdentifiableError where the prepared model is not identified either (a minimal
+    family is itself)."""
+    ready, identified = identified_or_prepared(
+        model, rows, lambda it: it.check_identifiable(rows), lambda: model.positions(rows, truth)
+    )
+    return ready, (truth if ready is model else ready.expressed(rows, truth)), identified
 
 
 def monte_carlo(

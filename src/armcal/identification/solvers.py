@@ -33,7 +33,7 @@ import numpy as np
 from ..choices import IDENTIFY_METHODS
 from ..errors import ArmcalError
 from ..models import ROW_BLOCK, Conditions, FitModel, wrap_angle
-from ..models.information import start_rows, weighted_whitening
+from ..models.information import known_start, weighted_whitening
 from ..models.interface import columns_jacobian
 from ..models.wording import no_closed_form
 from ..numerics import RowTriangle, steps_settled
@@ -316,6 +316,37 @@ def _whitened_rows(
     return w @ jac, (w @ residual[..., None])[..., 0]
 
 
+def _step_rows(
+    model: FitModel,
+    chunks: list[tuple[Conditions, slice]],
+    measured: np.ndarray,
+    current: np.ndarray,
+    free: np.ndarray,
+    weights: np.ndarray | None,
+    blocks: list[np.ndarray],
+    keep: bool,
+) -> RowTriangle:
+    """The rows of a Gauss-Newton step of the sets ``measured`` ``(N, m, d)`` at ``current``
+    ``(N, p)``, a block of rows at a time; with ``keep`` (one set) each block's Jacobian
+    also goes to ``blocks`` (for :class:`LastStep`).  Sets at one point (a Monte Carlo's first
+    step, from the truth) share their rows' Jacobian: one pass of the model and one
+    factorization for them all."""
+    n_sets, n_free = current.shape[0], int(np.count_nonzero(free))
+    shared = n_sets > 1 and weights is None and bool(np.all(current == current[0]))
+    rows = RowTriangle(n_free, sides=n_sets) if shared else RowTriangle(n_free)
+    for sub, part in chunks:
+        w = None if weights is None else weights[..., part]
+        at = current[:1] if shared else current
+        jac, weighted = _whitened_rows(model, sub, measured[:, part], at, free, w)
+        if shared:
+            rows.add(jac.reshape(-1, n_free), weighted.reshape(n_sets, -1).T)
+        else:
+            rows.add(jac.reshape(n_sets, -1, n_free), weighted.reshape(n_sets, -1))
+        if keep:
+            blocks.append(jac[0])
+    return rows
+
+
 def gauss_newton(
     model: FitModel,
     conditions: Conditions,
@@ -344,7 +375,6 @@ def gauss_newton(
     last step's rows where it was within the threshold (:class:`LastStep`).
     """
     free = model.free if free is None else np.asarray(free, dtype=bool)
-    n_free = int(np.count_nonzero(free))
     params = np.array(params, dtype=float)
     scale = model.step_scale(conditions)
     n_sets = sets.shape[0]
@@ -357,33 +387,21 @@ def gauss_newton(
     # The rows a block at a time (the blocks made once: what a model memoizes on them serves
     # every iteration), about ROW_BLOCK rows of all the sets together.
     chunks = list(conditions.blocks(max(64, ROW_BLOCK // n_sets)))
-    # A first step the model made while preparing for these rows (information.start_rows).
+    # A first step the model made while preparing for these rows (information.start_known).
     known = None
     if n_sets == 1 and weights is None and np.array_equal(free, model.free):
-        known = start_rows(model, conditions, params[0], sets[0])
+        found = known_start(model, conditions, sets[0])
+        if found is not None and np.array_equal(found[0], params[0]):
+            known = found[1]
     for _ in range(max_iter):
         current = params[active]
         measured, set_weights = sets[active], _for_sets(weights, active)
-        # Sets at one point (a Monte Carlo's first step, from the truth) share their rows'
-        # Jacobian: one pass of the model and one factorization for them all.
-        shared = active.size > 1 and set_weights is None and bool(np.all(current == current[0]))
         blocks: list[np.ndarray] = []
         if known is not None:  # the first step's rows, made already
             rows, known = known, None
         else:
-            rows = RowTriangle(n_free, sides=active.size) if shared else RowTriangle(n_free)
-            for sub, part in chunks:
-                w = None if set_weights is None else set_weights[..., part]
-                at = current[:1] if shared else current
-                jac, weighted = _whitened_rows(model, sub, measured[:, part], at, free, w)
-                if shared:
-                    rows.add(jac.reshape(-1, n_free), weighted.reshape(active.size, -1).T)
-                else:
-                    rows.add(
-                        jac.reshape(active.size, -1, n_free), weighted.reshape(active.size, -1)
-                    )
-                if keep and n_sets == 1:
-                    blocks.append(jac[0])
+            one = keep and n_sets == 1  # its last step's rows serve the covariance
+            rows = _step_rows(model, chunks, measured, current, free, set_weights, blocks, one)
         step, _, svd = rows.solve()
         full_step = np.zeros((active.size, free.size))
         full_step[:, free] = step

@@ -24,6 +24,7 @@ from __future__ import annotations
 from collections.abc import Callable
 from dataclasses import dataclass
 from functools import cached_property
+from typing import TypeVar
 
 import numpy as np
 
@@ -37,7 +38,7 @@ from ..numerics import (
     scaled_svd,
 )
 from .identifiability import Identifiability, combination, listing, row_echelon
-from .interface import ROW_BLOCK, Conditions, FitModel, Loads
+from .interface import ROW_BLOCK, Conditions, FitModel, Loads, array_key
 
 __all__ = [
     "BlockInformation",
@@ -46,11 +47,16 @@ __all__ = [
     "covariance_factor_from",
     "display_std",
     "factor_from_svd",
+    "identified_or_prepared",
     "identifying",
+    "known_start",
     "mean_tip_variance",
+    "nominal_triangle_known",
     "pose_derivative",
     "predicted_covariance",
     "refit_free",
+    "start_known",
+    "surely_unidentified",
     "tip_variances",
     "weighted_whitening",
     "whitened_blocks",
@@ -102,7 +108,7 @@ def whitened_triangle(
             (model, _NOMINAL_TRIANGLE), lambda: _row_triangle(model, conditions, None, True)
         )
     if params is not None:  # what a refit left, its whitening the identity (_refit_blocks)
-        kept: RowTriangle | None = conditions.latest(_TRIANGLE_AT, (model, _key(params)))
+        kept: RowTriangle | None = conditions.latest(_TRIANGLE_AT, (model, array_key(params)))
         if kept is not None:
             return kept
     return _row_triangle(model, conditions, params, whiten)
@@ -120,39 +126,34 @@ def nominal_triangle_known(model: FitModel, conditions: Conditions, rows: RowTri
 _NOMINAL_TRIANGLE = "whitened triangle"
 
 
-def start_rows_known(
+def start_known(
     model: FitModel,
     conditions: Conditions,
-    params: np.ndarray,
     points: np.ndarray,
+    params: np.ndarray,
     rows: RowTriangle,
 ) -> None:
-    """Leave Gauss-Newton's first step from ``params`` ``(p,)`` to ``points`` ``(m, d)``:
-    ``rows`` of the whitened free columns there with the whitened residuals beside them
-    (:class:`~armcal.numerics.RowTriangle`), which a family made in another form while
-    preparing the model for these rows (a spatial arm's, in the robot's own frame)."""
-    conditions.keep(_START_ROWS, _start_key(model, params, points), rows)
+    """Leave where a fit of ``model`` to ``points`` ``(m, d)`` starts, ``params`` ``(p,)``,
+    and its first step there: ``rows`` of the whitened free columns with the whitened
+    residuals beside them (:class:`~armcal.numerics.RowTriangle`).  A family that made
+    them in another form while preparing the model for these rows (a spatial arm's
+    registration, and its Jacobian in the robot's own frame) spares a registration and
+    a pass (:meth:`~armcal.models.interface.FitModel.start`, Gauss-Newton)."""
+    conditions.keep(_START, (model, array_key(points)), (params, rows))
 
 
-def start_rows(
-    model: FitModel, conditions: Conditions, params: np.ndarray, points: np.ndarray
-) -> RowTriangle | None:
-    """What :func:`start_rows_known` left for these very ``params`` and ``points``, or None."""
-    found: RowTriangle | None = conditions.latest(_START_ROWS, _start_key(model, params, points))
+def known_start(
+    model: FitModel, conditions: Conditions, points: np.ndarray
+) -> tuple[np.ndarray, RowTriangle] | None:
+    """What :func:`start_known` left for ``model`` and these very ``points``, or None."""
+    found: tuple[np.ndarray, RowTriangle] | None = conditions.latest(
+        _START, (model, array_key(points))
+    )
     return found
 
 
-def _start_key(model: FitModel, params: np.ndarray, points: np.ndarray) -> tuple:
-    return (model, _key(params), _key(points))
-
-
-def _key(values: np.ndarray) -> bytes:
-    """An array as an item of a key of :meth:`~armcal.models.interface.Conditions.latest`."""
-    return np.ascontiguousarray(values, dtype=float).tobytes()
-
-
-#: The slot of :func:`start_rows_known` in :meth:`~armcal.models.interface.Conditions.keep`.
-_START_ROWS = "start rows"
+#: The slot of :func:`start_known` in :meth:`~armcal.models.interface.Conditions.keep`.
+_START = "start"
 
 #: The slot of the triangle a refit's last pass made at its result (:func:`_refit_blocks`).
 _TRIANGLE_AT = "triangle at"
@@ -293,6 +294,31 @@ def identifying(
     return model.prepared(conditions, points)
 
 
+def identified_or_prepared(
+    model: FitModel,
+    conditions: Conditions,
+    check: Callable[[FitModel], _Checked],
+    points: Callable[[], np.ndarray] | None = None,
+) -> tuple[FitModel, _Checked]:
+    """The model for these rows and what ``check`` (which raises NotIdentifiableError
+    where they do not identify it) finds of it: the model as given where the rows
+    identify it, else :meth:`~armcal.models.interface.FitModel.prepared` for them (and
+    for the measured ``points()``, when given).  A model that surely needs preparing is
+    not checked as given (:func:`surely_unidentified`); a minimal family the rows do not
+    identify raises its check's error, which says what they miss."""
+    unseen = None
+    if not surely_unidentified(model):
+        try:
+            return model, check(model)
+        except NotIdentifiableError as error:
+            unseen = error
+    ready = model.prepared(conditions, None if points is None else points())
+    if ready is model:
+        assert unseen is not None  # (a family with a rank bound prepares)
+        raise unseen
+    return ready, check(ready)
+
+
 def surely_unidentified(model: FitModel) -> bool:
     """Whether ``model`` has more free parameters than any rows can identify
     (:attr:`~armcal.models.interface.FitModel.rank_bound`): it needs preparing, and a
@@ -300,6 +326,9 @@ def surely_unidentified(model: FitModel) -> bool:
     bound = model.rank_bound
     return bound is not None and model.n_free > bound
 
+
+#: What a check of :func:`identified_or_prepared` finds.
+_Checked = TypeVar("_Checked")
 
 #: Gauss-Newton steps at most of :func:`refit_free` (it converges in a few).
 _REFIT_STEPS = 30
@@ -349,7 +378,7 @@ def _refit_blocks(
             rows.add(jac, miss)
         if step is not None and moved <= tol:
             if plain:  # the last pass was at the result: its triangle is the covariance's
-                conditions.keep(_TRIANGLE_AT, (model, _key(out)), rows)
+                conditions.keep(_TRIANGLE_AT, (model, array_key(out)), rows)
             break
         step = rows.solve()[0]
         out[free] += step

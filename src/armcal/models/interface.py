@@ -83,6 +83,7 @@ __all__ = [
     "PaperCriteria",
     "PlanInformation",
     "UnpredictedLoads",
+    "array_key",
     "columns_jacobian",
     "equations_per_pose",
     "position_jacobian",
@@ -256,6 +257,11 @@ class Conditions:
     def keep(self, slot: Hashable, key: tuple, value: Any) -> None:
         """Keep ``value`` in ``slot`` for ``key`` (:meth:`latest`), replacing what was there."""
         self._memo[("latest", slot)] = (key, value)
+
+
+def array_key(values: np.ndarray) -> bytes:
+    """An array as an item of a key of :meth:`Conditions.latest` (matched by value)."""
+    return np.ascontiguousarray(values, dtype=float).tobytes()
 
 
 def _same_key(kept: tuple, key: tuple) -> bool:

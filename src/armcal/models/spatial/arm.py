@@ -25,9 +25,10 @@ from ...noise import NoiseModel, relative_noise
 from ...numerics import RowTriangle
 from ..core import CoreModel
 from ..information import (
+    known_start,
     nominal_triangle_known,
     refit_free,
-    start_rows_known,
+    start_known,
 )
 from ..interface import (
     ROW_BLOCK,
@@ -463,7 +464,7 @@ deviation_bounds`); the base pose and the targets are the instrument's."""
             not derivatives
             or (kept.joint_jacobian is not None and (kept.jacobian is not None or not parameters))
         )
-        if kept is not None and enough:
+        if enough:
             if not derivatives and kept.jacobian is not None:
                 conditions.keep(_KINEMATICS, key, _copied(kept, derivatives=False))
             return _copied(kept, derivatives=derivatives)
@@ -672,9 +673,8 @@ deviation_bounds`); the base pose and the targets are the instrument's."""
         w = None if weights is None else np.broadcast_to(weights, sets.shape[:2])
         if w is None:  # sets of one experiment (Monte Carlo): their mean is registered once
             mean = sets.mean(axis=0)
-            found = conditions.latest(_REGISTERED, (self, _bytes(mean)))  # prepared for them
-            if found is None:
-                found = self.registration(conditions, mean)
+            known = known_start(self, conditions, mean)  # prepared for them
+            found = self.registration(conditions, mean) if known is None else known[0]
             out = np.tile(found, (sets.shape[0], 1))
         else:
             out = np.array(
@@ -752,11 +752,10 @@ deviation_bounds`); the base pose and the targets are the instrument's."""
         held, merges = select_from_rows(arm.layout, arm.chain, rows.triangle(), u, arm.user_fixed)
         out = replace(arm, held=held, merges=merges)
         if plain:  # the rank analysis, the covariance at nominal and the fit's first step
-            at_nominal = rows.transformed(_from_base(arm.base_pose, p)[:, out.free])
+            at_nominal = rows.transformed(_from_base(arm.base_pose, turn, p)[:, out.free])
             nominal_triangle_known(out, conditions, at_nominal)
-            if points is not None:
-                start_rows_known(out, conditions, out.nominal, points, at_nominal)
-                conditions.keep(_REGISTERED, (out, _bytes(points)), out.nominal)
+            if points is not None:  # the fit starts at the registration
+                start_known(out, conditions, points, out.nominal, at_nominal)
         return out
 
     def expressed(self, conditions: Conditions, params: np.ndarray) -> np.ndarray:
@@ -819,9 +818,10 @@ def _copy(array: np.ndarray | None) -> np.ndarray | None:
     return None if array is None else array.copy()
 
 
-def _from_base(base: np.ndarray, p: int) -> np.ndarray:
+def _from_base(base: np.ndarray, turn: np.ndarray, p: int) -> np.ndarray:
     """``A`` ``(p, p)`` with ``J_T = (I x R) J_0 A``: the Jacobian at the base pose ``base``
-    ``(6,)`` (turn ``R``) from the one with the base at the origin, its rows turned.
+    ``(6,)`` (its turn ``R``, ``turn``) from the one with the base at the origin, its rows
+    turned.
 
     Every column but the base's six is only turned.  A shift ``t`` of the base moves a
     point by ``t = R (R^T t)``; a turn about ``w`` (:func:`base_turn_axes`) moves the
@@ -829,17 +829,7 @@ def _from_base(base: np.ndarray, p: int) -> np.ndarray:
     columns ``e_c x x_0`` combined by ``R^T w``.  A 6-DoF point's orientation turns by
     ``w = R (R^T w)`` alike.
     """
-    turn = rpy_matrix(base[3:])
     out = np.eye(p)
     out[0:3, 0:3] = turn.T
     out[3:6, 3:6] = turn.T @ np.stack(np.broadcast_arrays(*base_turn_axes(base)), axis=-1)
     return out
-
-
-def _bytes(values: np.ndarray) -> bytes:
-    """``values`` as a key of :meth:`~armcal.models.interface.Conditions.latest`."""
-    return np.ascontiguousarray(values, dtype=float).tobytes()
-
-
-#: The slot of the registration a prepared arm made (:meth:`SpatialArm.start` from it).
-_REGISTERED = "registered arm"
