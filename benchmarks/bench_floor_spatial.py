@@ -84,6 +84,14 @@ Commands and floors (the floors' docstrings say each step):
     and std of every free parameter within :data:`AGREE_STD` of the predicted
     std of armcal's, the predicted std within :data:`AGREE_RELATIVE`.
 
+**Compensate against validate on the same poses** (issue 37: compensate must not
+cost more), at the largest size, the least of :data:`REPEATS_LARGEST` interleaved
+runs of each (:func:`same_poses`): ``compensate`` on the program of ``N`` poses
+against ``validate`` on the cell's measurements at those poses (``armcal
+synthesize``, seed 3: every reflector, ``3 N`` rows), its verdict PASS when
+compensate costs no more; and, printed beside it without a verdict, against
+``validate`` on reflector A's rows alone (``N`` rows, one a pose).
+
 The commands are a table (:data:`COMMANDS`), the runner (:func:`run`) apart:
 a new command is one more :class:`Command`.
 
@@ -275,6 +283,11 @@ def prepare(inputs: Inputs, sizes: tuple[int, ...]) -> list[str]:
         write_plan(f(f"prog-{n}.csv"), arm, n, rng)
         setup(*synth, "--plan", f(f"plan-{n}.csv"), "--seed", "1", "-o", f(f"meas-{n}.csv"))
         setup(*synth, "--plan", f(f"held-{n}.csv"), "--seed", "2", "-o", f(f"heldm-{n}.csv"))
+    largest = sizes[-1]  # the program's poses measured, for compensate against validate
+    setup(*synth, "--plan", f(f"prog-{largest}.csv"), "--seed", "3", "-o", f("progm.csv"))
+    with open(f("progm.csv")) as every, open(f("progm-A.csv"), "w") as one:
+        header = next(every)
+        one.write(header + "".join(line for line in every if line.rstrip().endswith(",A")))
     middle = sizes[len(sizes) // 2]
     setup("identify", *f.robot, "--measurements", f(f"meas-{middle}.csv"), "-o", f("cal.json"))
     doc = json.loads(Path(f("cal.json")).read_text())
@@ -550,6 +563,57 @@ COMMANDS = (
         "test",
     ),
 )
+COMMANDS_BY_NAME = {command.name: command for command in COMMANDS}
+
+
+# --------------------------------------------------------------- compensate vs validate
+
+
+@dataclass(frozen=True)
+class SamePoses:
+    """CPU seconds of ``compensate`` on a program of ``poses`` poses, of ``validate`` on
+    the cell's measurements at those poses (every reflector: 3 rows a pose), and of
+    ``validate`` on reflector A's alone (a row a pose)."""
+
+    poses: int
+    compensate_s: float
+    validate_s: float
+    validate_one_s: float
+
+    def verdict(self) -> str:
+        """Issue 37: compensate must not cost more than validate on the same poses."""
+        ratio = self.compensate_s / self.validate_s
+        return "PASS" if ratio <= 1.0 else f"FAIL: {ratio:.2f}x > 1x"
+
+    def lines(self) -> list[str]:
+        n = self.poses
+        return [
+            f"compensate against validate on the same {n:,} poses (issue 37: not more): "
+            f"compensate {self.compensate_s:.3f} s; validate of the cell's measurements "
+            f"there ({3 * n:,} rows, 3 reflectors a pose) {self.validate_s:.3f} s, ratio "
+            f"{self.compensate_s / self.validate_s:.2f}x: {self.verdict()}",
+            f"  per row: validate of reflector A's {n:,} rows alone {self.validate_one_s:.3f} s,"
+            f" ratio {self.compensate_s / self.validate_one_s:.2f}x (a compensated pose takes "
+            f"3-4 passes of the joints' Jacobian and one of the parameters'; a validated row "
+            f"one of the points and one of the parameters')",
+        ]
+
+
+def same_poses(inputs: Inputs, n: int, repeats: int) -> SamePoses:
+    """The least CPU time of each of the three over ``repeats`` interleaved runs."""
+    f = inputs
+    runs = {
+        "compensate": COMMANDS_BY_NAME["compensate"].armcal(f, n),
+        "validate": ["validate", "--calibration", f("cal.json"), "--measurements",
+                     f("progm.csv"), "--json"],
+        "one": ["validate", "--calibration", f("cal.json"), "--measurements",
+                f("progm-A.csv"), "--json"],
+    }  # fmt: skip
+    best = dict.fromkeys(runs, float("inf"))
+    for _ in range(repeats):
+        for name, args in runs.items():
+            best[name] = min(best[name], measure_cpu(armcal_argv(args))[0])
+    return SamePoses(n, best["compensate"], best["validate"], best["one"])
 
 
 # --------------------------------------------------------------------------- the runner
@@ -729,6 +793,10 @@ def main() -> None:
                 result.timings.append(t)
                 print(timing_line(command, t), flush=True)
             results.append(result)
+        compared = None
+        if not args.only:
+            compared = same_poses(inputs, sizes[-1], REPEATS_LARGEST)
+            print("\n".join(compared.lines()), flush=True)
     machine = at_end(machine)
     lines = table(results, start)
     notes = [
@@ -737,7 +805,8 @@ def main() -> None:
         if r.timings[-1].ratio > r.command.target_ratio
     ]
     checks = [t.check for r in results for t in r.timings]
-    print("\n".join(["", machine, *lines, "", *notes]))
+    same = [] if compared is None else ["", *compared.lines()]
+    print("\n".join(["", machine, *lines, *same, "", *notes]))
     if not args.no_write and not args.only and sizes == SIZES:
         RESULTS.write_text(
             "# Spatial floor benchmark results\n\n"
@@ -753,6 +822,7 @@ def main() -> None:
             + "\n"
             + "\n".join(lines)
             + "\n"
+            + "".join(f"{line}\n" for line in same)
             + (
                 "\nAbove the target, the work armcal does that its floor does not:\n\n"
                 * bool(notes)

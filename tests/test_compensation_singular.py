@@ -230,3 +230,43 @@ def test_a_correction_within_its_bound_is_found_where_newtons_step_overshoots_it
     done = miss(result.q)
     assert np.max(np.linalg.norm(done[:, :3], axis=1)) < CONTRACT_MM
     assert np.degrees(np.max(np.linalg.norm(done[:, 3:], axis=1))) < CONTRACT_DEG
+
+
+def test_newtons_step_is_taken_only_where_every_singular_value_is_kept():
+    """The determinant rule of ``_newton_steps`` (``|det J| / |J|_F^n`` above 1e-8) admits
+    no matrix whose condition number reaches ``1 / RANK_RTOL`` (1e-10), and the step it
+    takes is the SVD's (``mu = 0``, every singular value kept) to round-off.  Matrices
+    with condition numbers 1 to 1e14 by construction (``U diag(s) V^T``, log-uniform
+    spread), one exactly singular, none within the radius for the last 10; every matrix
+    with a condition number below 13.6 is admitted."""
+    from armcal.compensation import _newton_steps, _svd_step
+    from armcal.numerics import RANK_RTOL
+
+    rng = np.random.default_rng(5)
+    a, n = 400, 6
+    u = np.linalg.qr(rng.standard_normal((a, n, n)))[0]
+    v = np.linalg.qr(rng.standard_normal((a, n, n)))[0]
+    cond = 10.0 ** rng.uniform(0, 14, a)
+    s = np.exp(-np.log(cond)[:, None] * np.sort(rng.uniform(0, 1, (a, n)), axis=1))
+    s[:, 0], s[np.arange(a), -1] = 1.0, 1.0 / cond  # s_max / s_min = cond exactly
+    s *= 10.0 ** rng.uniform(-3, 3, (a, 1))  # the scale does not matter
+    jac = np.einsum("aij,aj,akj->aik", u, s, v)
+    jac[0, :, 0] = 0.0  # exactly singular
+    residual = rng.standard_normal((a, n))
+    radius = np.full(a, np.inf)
+    radius[-10:] = 0.0
+    found = _newton_steps(jac, residual, radius)
+    assert found is not None
+    easy, dq, gain = found
+    true_cond = np.linalg.cond(jac[easy])
+    assert np.all(true_cond < RANK_RTOL**-1 / 100)  # the margin of 100
+    # It admits every matrix with cond^(n-1) n^(n/2) < 1e8 (|det J| >= s_max s_min^(n-1),
+    # |J|_F <= sqrt(n) s_max): cond below 13.6 for n = 6.
+    sure = (cond ** (n - 1) * n ** (n / 2) < 1e8) & (radius > 0)
+    sure[0] = False
+    assert sure.sum() > 20 and np.all(easy[sure])
+    assert not easy[0] and not easy[-10:].any()
+    svd = _svd_step(jac[easy], residual[easy], radius[easy], np.zeros((easy.sum(), n)))
+    scale = np.linalg.norm(svd.dq, axis=1, keepdims=True)
+    assert np.max(np.abs(dq[easy] - svd.dq) / scale / true_cond[:, None]) < 1e-13
+    np.testing.assert_allclose(gain[easy], np.sum(residual[easy] ** 2, axis=1))

@@ -427,7 +427,9 @@ class CoreModel(RigidLoads):
     def orientation(self, conditions: Conditions, params: np.ndarray | None = None) -> np.ndarray:
         raise self._no_tool()
 
-    def orientation_error(self, orientation: np.ndarray, reference: np.ndarray) -> np.ndarray:
+    def orientation_turn(
+        self, conditions: Conditions, params: np.ndarray | None, reference: np.ndarray
+    ) -> np.ndarray:
         raise self._no_tool()
 
     def orientation_joint_jacobian(

@@ -70,6 +70,9 @@ class MinimalPlanar:
         def n_params(self) -> int: ...
         @property
         def n_joints(self) -> int: ...
+        def orientation(
+            self, conditions: Conditions, params: np.ndarray | None = None
+        ) -> np.ndarray: ...
 
     def prepared(self, conditions: Conditions, points: np.ndarray | None = None) -> Self:
         """Itself: its parameters are minimal and need no placing."""
@@ -127,9 +130,12 @@ class MinimalPlanar:
         """None: the readings' limits are all a planar arm has."""
         return None
 
-    def orientation_error(self, orientation: np.ndarray, reference: np.ndarray) -> np.ndarray:
-        """The difference of the tool's directions, wrapped into ``(-pi, pi]``."""
-        return wrap_angle(np.asarray(orientation) - np.asarray(reference))
+    def orientation_turn(
+        self, conditions: Conditions, params: np.ndarray | None, reference: np.ndarray
+    ) -> np.ndarray:
+        """The difference of the tool's directions from ``reference``, wrapped into
+        ``(-pi, pi]``."""
+        return wrap_angle(self.orientation(conditions, params) - np.asarray(reference))
 
 
 @dataclass(frozen=True)

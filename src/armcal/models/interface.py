@@ -1132,10 +1132,12 @@ class ToolRole(Protocol):
         """The tool's orientation ``(..., m, k)`` (rad) at every row."""
         ...
 
-    def orientation_error(self, orientation: np.ndarray, reference: np.ndarray) -> np.ndarray:
-        """The small turn ``(..., m, k)`` (rad) from ``reference`` to ``orientation`` (both
-        as :meth:`orientation` gives them): what the two orientation Jacobians below
-        differentiate."""
+    def orientation_turn(
+        self, conditions: Conditions, params: np.ndarray | None, reference: np.ndarray
+    ) -> np.ndarray:
+        """The small turn ``(..., m, k)`` (rad) from ``reference`` (orientations as
+        :meth:`orientation` gives them) to the tool's orientation at every row: what the
+        two orientation Jacobians below differentiate."""
         ...
 
     def orientation_joint_jacobian(

@@ -112,13 +112,23 @@ def vector_rotation(vector: ArrayLike) -> np.ndarray:
     [0.0, 1.0, 0.0]
     """
     v = np.asarray(vector, dtype=float)
-    angle = np.linalg.norm(v, axis=-1)[..., None, None]
-    k = _skew(v)
+    x, y, z = v[..., 0], v[..., 1], v[..., 2]
+    angle2 = x * x + y * y + z * z
+    angle = np.sqrt(angle2)
     small = angle < 1e-8  # the series to second order: exact to round-off there
     safe = np.where(small, 1.0, angle)
-    a = np.where(small, 1.0 - angle**2 / 6, np.sin(safe) / safe)
-    b = np.where(small, 0.5 - angle**2 / 24, (1.0 - np.cos(safe)) / safe**2)
-    return np.eye(3) + a * k + b * (k @ k)
+    a = np.where(small, 1.0 - angle2 / 6, np.sin(safe) / safe)
+    b = np.where(small, 0.5 - angle2 / 24, (1.0 - np.cos(safe)) / safe**2)
+    # I + a [v] + b [v]^2, with [v]^2 = v v^T - |v|^2 I: entry by entry, not a batch of
+    # 3x3 products.
+    out = np.empty((*v.shape[:-1], 3, 3))
+    c, bx, by = 1.0 - b * angle2, b * x, b * y
+    ax, ay, az = a * x, a * y, a * z
+    out[..., 0, 0], out[..., 1, 1], out[..., 2, 2] = c + bx * x, c + by * y, c + b * z * z
+    out[..., 0, 1], out[..., 1, 0] = bx * y - az, bx * y + az
+    out[..., 0, 2], out[..., 2, 0] = bx * z + ay, bx * z - ay
+    out[..., 1, 2], out[..., 2, 1] = by * z - ax, by * z + ax
+    return out
 
 
 def rotation_vector(rotation: np.ndarray) -> np.ndarray:

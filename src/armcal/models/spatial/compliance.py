@@ -670,8 +670,11 @@ class CompliantSpatialArm(ArmEffect):
         bent, geometry = self._bent(conditions, params)
         return self.arm.orientation(bent, geometry)
 
-    def orientation_error(self, orientation: np.ndarray, reference: np.ndarray) -> np.ndarray:
-        return self.arm.orientation_error(orientation, reference)
+    def orientation_turn(
+        self, conditions: Conditions, params: np.ndarray | None, reference: np.ndarray
+    ) -> np.ndarray:
+        bent, geometry = self._bent(conditions, params)
+        return self.arm.orientation_turn(bent, geometry, reference)
 
     def orientation_joint_jacobian(
         self, conditions: Conditions, params: np.ndarray | None = None

@@ -45,11 +45,14 @@ class SpatialTool:
         vector (axis times angle, rad)."""
         return rotation_vector(self.chain_kinematics(conditions, params).rotation)
 
-    def orientation_error(self, orientation: np.ndarray, reference: np.ndarray) -> np.ndarray:
-        """The small turn ``(..., m, 3)`` (rad, instrument frame) from ``reference`` to
-        ``orientation``: the rotation vector of ``R R_ref^T``."""
-        turn = vector_rotation(orientation) @ np.swapaxes(vector_rotation(reference), -1, -2)
-        return rotation_vector(turn)
+    def orientation_turn(
+        self, conditions: Conditions, params: np.ndarray | None, reference: np.ndarray
+    ) -> np.ndarray:
+        """The small turn ``(..., m, 3)`` (rad, instrument frame) from ``reference`` to the
+        tip frame's orientation ``R``: the rotation vector of ``R R_ref^T``, from the
+        pass's rotations (no round trip through rotation vectors)."""
+        rotation = self.chain_kinematics(conditions, params).rotation
+        return rotation_vector(rotation @ np.swapaxes(vector_rotation(reference), -1, -2))
 
     def tip_rotation(self, conditions: Conditions, params: np.ndarray | None = None) -> np.ndarray:
         """The tip frame's rotation ``(..., m, 3, 3)`` in the instrument frame."""
