@@ -422,7 +422,7 @@ class RowTriangle:
             block = np.concatenate([matrix[..., rows, :], right[..., rows, :]], axis=-1)
             if self._triangle is not None:
                 block = np.concatenate([self._triangle, block], axis=-2)
-            self._triangle = _r_only(block)
+            self._triangle = _r_only(block, self.columns)
 
     def _parts(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """``R`` ``(..., k, p)`` (``k = min(rows, p)``), ``Q^T b`` ``(..., k, K)`` and the
@@ -483,10 +483,12 @@ class RowTriangle:
         return (x[..., 0, :] if self.sides is None else x), svd.full_rank, svd
 
 
-def _r_only(block: np.ndarray) -> np.ndarray:
-    """The triangle ``(..., min(r, c), c)`` of a QR of ``block`` ``(..., r, c)``; a block of
-    no more rows than columns is its own."""
-    if block.shape[-2] <= block.shape[-1]:
+def _r_only(block: np.ndarray, p: int) -> np.ndarray:
+    """The triangle ``(..., min(r, c), c)`` of a QR of ``block`` ``(..., r, c)`` (``[A | b]``
+    with ``p`` columns of ``A``); a block of no more rows than ``A`` has columns is its own
+    (its rows are the system itself).  One of more rows is reduced even where the
+    right-hand sides make it wider than tall: only its first ``p`` rows are kept."""
+    if block.shape[-2] <= p:
         return block
     triangle: np.ndarray = np.linalg.qr(block, mode="r")  # type: ignore[assignment]
     return triangle
