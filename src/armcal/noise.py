@@ -201,10 +201,11 @@ class NoiseModel:
         orientation_sigma: float | None = None,
     ) -> None:
         cov = np.array(covariance_mm2, dtype=float)
-        if cov.shape not in ((2, 2), (3, 3)) or not _spd(cov):
+        if cov.shape not in ((1, 1), (2, 2), (3, 3)) or not _spd(cov):
             raise ValueError(
-                "covariance_mm2 must be a symmetric positive definite 2 x 2 (in the plane) or "
-                f"3 x 3 matrix, got {cov.tolist()}"
+                "covariance_mm2 must be a symmetric positive definite 1 x 1 (an instrument "
+                "reading one distance), 2 x 2 (in the plane) or 3 x 3 matrix, got "
+                f"{cov.tolist()}"
             )
         cov = (cov + cov.T) / 2
         cov.flags.writeable = False

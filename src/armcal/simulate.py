@@ -528,6 +528,7 @@ def _run_trials(
             loads=rows.loads,
             exact=exact,
             frames=rows.frames,
+            feature=rows.feature,
         )
         # Estimates to a tiny part of their spread, not to round-off: a trial stops where
         # its steps shrink so fast that the rest are below the tolerance (one pass less).

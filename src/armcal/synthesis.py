@@ -169,6 +169,7 @@ def synthesize_measurements(
     loads: Loads | None = None,
     exact: np.ndarray | None = None,
     frames: np.ndarray | None = None,
+    feature: np.ndarray | None = None,
 ) -> np.ndarray:
     """Measurements of a virtual robot: points at ``truth`` drawn from the noise model.
 
@@ -216,6 +217,9 @@ def synthesize_measurements(
         points' orientations are turns from them, and their noise is drawn as
         such turns (the instrument's noise where the frames are the true
         orientations, :meth:`armcal.models.FitModel.anchor`).
+    feature : ndarray of int, shape (m,), optional
+        For an instrument of several features (:mod:`armcal.instruments`): the one
+        every row touches (:attr:`armcal.models.Conditions.feature`).
 
     Returns
     -------
@@ -258,7 +262,8 @@ def synthesize_measurements(
     if plan.ndim != 2 or plan.shape[1] != n:
         raise ArmcalError(f"the plan must have shape (m, {n}) in rad, got {plan.shape}")
     truth = checked_truth(model, truth)
-    conditions = model.conditions(plan, target=target, loads=loads).with_frames(frames)
+    rows = model.conditions(plan, target=target, loads=loads, **_features(feature))
+    conditions = rows.with_frames(frames)
     m = plan.shape[0]
 
     @cache
@@ -278,9 +283,17 @@ def synthesize_measurements(
     actual = draws[..., dim:]  # where the joints really were: q + dq
     actual *= np.broadcast_to(joint_sigma, (n,))
     actual += plan
-    at = Conditions(actual, conditions.target, conditions.loads, None, conditions.frames)
+    at = Conditions(
+        actual, conditions.target, conditions.loads, None, conditions.frames, conditions.feature
+    )
     positions = model.positions(at, truth)
     instrument = draws[..., :dim]
     _scale_instrument(instrument, factor)
     positions += instrument
     return positions
+
+
+def _features(feature: np.ndarray | None) -> dict[str, np.ndarray]:
+    """``feature`` as a keyword of :meth:`~armcal.models.FitModel.conditions` where
+    given: only a model measured by an instrument of several features takes it."""
+    return {} if feature is None else {"feature": feature}

@@ -143,7 +143,9 @@ class Coverage:
 
 
 def _probe(model: FitModel) -> np.ndarray:
-    """:data:`PROBE_POSES` poses uniform within the joint limits, from :data:`PROBE_SEED`."""
+    """:data:`PROBE_POSES` poses uniform within the joint limits, from :data:`PROBE_SEED`
+    (an instrument that sees the tool only where it meets it moves them there:
+    :meth:`~armcal.models.interface.FitModel.meeting_poses`)."""
     rng = np.random.default_rng(PROBE_SEED)
     limits = np.asarray(model.joint_limits, dtype=float)
     return rng.uniform(limits[:, 0], limits[:, 1], size=(PROBE_POSES, model.n_joints))
@@ -164,7 +166,7 @@ def coverage(model: FitModel, q: np.ndarray | None = None) -> Coverage:
     -------
     Coverage
     """
-    rich = model.prepared(model.plan_conditions(_probe(model)))
+    rich = model.prepared(model.plan_conditions(model.meeting_poses(_probe(model))))
     held = set(model.fixed)
     lost = tuple(name for name in rich.param_names if name in held and name not in rich.fixed)
     still: tuple[int, ...] = ()

@@ -15,6 +15,8 @@
   serial arm (:class:`SpatialArm`) from a URDF or a modified DH table;
 * :mod:`~armcal.models.spatial.gravity`, :mod:`~armcal.models.spatial.compliance` --
   its joints twisting under gravity and payload (:class:`CompliantSpatialArm`);
+* :mod:`~armcal.models.instrumented` -- an arm measured by another instrument than a
+  tracker (:class:`InstrumentedArm`: planes touched, fixed points);
 * :mod:`~armcal.models.plane` -- the plane of motion of 3-D data;
 * :mod:`~armcal.models.joint_maps` -- the one check of a joint map, every family's;
 * :mod:`~armcal.models.calibrated` -- an arm with its identified deviations;
@@ -37,6 +39,7 @@ if TYPE_CHECKING:
     from .calibrated import CalibratedArm
     from .defaults import LARGE_ANGLE_DEG, TermChoice
     from .identifiability import Identifiability, combination, listing, row_echelon
+    from .instrumented import InstrumentedArm
     from .interface import (
         ROW_BLOCK,
         ClosedForm,
@@ -207,6 +210,7 @@ if not TYPE_CHECKING:
                 "vector_rotation",
             ),
             ".spatial.compliance": ("CompliantSpatialArm", "SpatialElastics"),
+            ".instrumented": ("InstrumentedArm",),
             ".spatial.dh": ("MdhTable", "mdh_table"),
             ".spatial.gravity": ("LinkMasses",),
             ".spatial.kinematics": (
@@ -243,6 +247,7 @@ __all__ = [
     "FitModel",
     "Held",
     "Identifiability",
+    "InstrumentedArm",
     "LinearPositions",
     "LinkMasses",
     "Loads",

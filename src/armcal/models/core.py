@@ -39,7 +39,7 @@ from numpy.typing import ArrayLike
 from ..errors import ArmcalError
 from ..noise import NoiseModel, relative_noise
 from ..numerics import ScaledSVD
-from .defaults import LARGE_ANGLE_DEG, RigidLoads
+from .defaults import LARGE_ANGLE_DEG, RigidLoads, SeesAnywhere
 from .identifiability import Identifiability
 from .information import (
     BlockInformation,
@@ -67,7 +67,7 @@ LARGE_LENGTH_FRACTION = 0.1
 _REACH_POSES = 256
 
 
-class CoreModel(RigidLoads):
+class CoreModel(RigidLoads, SeesAnywhere):
     """The defaults of every optional role of a fit model (module notes)."""
 
     if TYPE_CHECKING:  # the family's core (a class attribute here would shadow it)

@@ -61,7 +61,24 @@ class RigidLoads:
         return self
 
 
-class MinimalPlanar:
+class SeesAnywhere:
+    """A model measured by an instrument that sees the tool wherever it is (a tracker, a
+    probe): a plan's poses need not meet it, and what another instrument's rows cannot
+    separate is not this model's rule to choose (:mod:`~armcal.models.instrumented`
+    measures an arm that has one: the spatial arm's)."""
+
+    def meeting_poses(self, q: np.ndarray, params: np.ndarray | None = None) -> np.ndarray:
+        """The poses as they are: the instrument sees the tool at every one."""
+        return np.asarray(q, dtype=float)
+
+    def selected_by(
+        self, rows: np.ndarray, conditions: Conditions, first: Sequence[str] = ()
+    ) -> Self:
+        """Itself: its identifiable set is not chosen by a rule (minimal parameters)."""
+        return self
+
+
+class MinimalPlanar(SeesAnywhere):
     """A planar family with minimal parameters (module notes)."""
 
     if TYPE_CHECKING:  # the family's own (a class attribute here would shadow it)
@@ -175,7 +192,7 @@ class TermChoice:
         return () if self.free is None else self.free
 
 
-class ArmEffect:
+class ArmEffect(SeesAnywhere):
     """A model whose parameters are an arm's followed by an effect's (module notes): the
     arm's limits, instrument, view and tool, and the effect's parameters appended.
 

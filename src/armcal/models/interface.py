@@ -181,6 +181,10 @@ class Conditions:
         orientation, about which the orientation part of a point is a rotation
         vector (:meth:`FitModel.anchor` puts it at the measured orientation); None:
         the instrument's axes.
+    feature : ndarray of int, shape (m,), or None
+        For an instrument of several features (the planes of a block, the fixed
+        points of a fixture: :mod:`armcal.instruments`): the feature every row
+        touches, as an index into the instrument's; None for one.
 
     Examples
     --------
@@ -194,6 +198,7 @@ class Conditions:
     loads: Loads | None = None
     sigma_mm: np.ndarray | None = None
     frames: np.ndarray | None = None
+    feature: np.ndarray | None = None
     # Not an argument: a copy by dataclasses.replace (another q) starts with its own memo.
     _memo: dict[Hashable, Any] = field(default_factory=dict, init=False, repr=False, compare=False)
 
@@ -210,6 +215,7 @@ class Conditions:
             None if self.loads is None else self.loads.take(rows),
             None if self.sigma_mm is None else self.sigma_mm[rows],
             None if self.frames is None else self.frames[rows],
+            None if self.feature is None else self.feature[rows],
         )
 
     def blocks(self, size: int = 0) -> Iterator[tuple[Conditions, slice]]:
@@ -229,7 +235,7 @@ class Conditions:
 
     def with_frames(self, frames: np.ndarray | None) -> Conditions:
         """The same rows with reference orientations ``frames`` ``(m, 3, 3)``."""
-        return Conditions(self.q, self.target, self.loads, self.sigma_mm, frames)
+        return Conditions(self.q, self.target, self.loads, self.sigma_mm, frames, self.feature)
 
     def memo(self, key: Hashable, compute: Callable[[], Any]) -> Any:
         """``compute()`` once for these conditions: a factorization several steps share.
@@ -912,6 +918,17 @@ class IdentifiabilityRole(Protocol):
         """
         ...
 
+    def selected_by(
+        self, rows: np.ndarray, conditions: Conditions, first: Sequence[str] = ()
+    ) -> FitModel:
+        """The model with what ``rows`` ``(r, p + t)`` cannot separate held by its rule:
+        rows of its Jacobian as another measurement sees them (an instrument's readings,
+        :mod:`~armcal.models.instrumented`), at the joint readings of ``conditions``,
+        beside ``t`` columns of that measurement's own parameters ``first``, which are
+        kept before any of the model's.  A family whose parameters are minimal returns
+        itself."""
+        ...
+
     def expressed(self, conditions: Conditions, params: np.ndarray) -> np.ndarray:
         """Parameters of this (prepared) model that put the points of these rows where
         ``params`` does, its held parameters included: a virtual arm's truth as a fit of
@@ -1029,6 +1046,14 @@ class DesignRole(Protocol):
     def information_bound(self) -> bool:
         """Whether every pose's information has trace ``p_f``, so that every design has
         ``det M <= 1`` with equality iff ``M = I`` (the criteria are then efficiencies)."""
+        ...
+
+    def meeting_poses(self, q: np.ndarray, params: np.ndarray | None = None) -> np.ndarray:
+        """The poses of ``q`` ``(m, n)`` moved to meet the instrument at ``params``
+        (default nominal): each to the nearest touch or seat of the feature it is nearest
+        to, by the smallest joint change, those that cannot left out (``(m', n)``, within
+        the limits).  An instrument that sees the tool anywhere (a tracker) leaves them.
+        """
         ...
 
     def plan_information(
@@ -1201,9 +1226,12 @@ def equations_per_pose(model: FitModel) -> int:
     return model.point_dim * max(len(model.target_labels), 1)
 
 
-def target_indices(target: ArrayLike | None, labels: Sequence[str], m: int) -> np.ndarray | None:
+def target_indices(
+    target: ArrayLike | None, labels: Sequence[str], m: int, *, what: str = "target"
+) -> np.ndarray | None:
     """Every row's target index ``(m,)`` from ``target``, checked: the labels of
-    ``labels`` looked up, indices as they are; None stays None.
+    ``labels`` looked up, indices as they are; None stays None.  ``what`` names them in
+    errors (an instrument's ``feature``).
 
     What the families' :meth:`FitModel.conditions` take, so that a Python user gives the
     labels a measurement file has, where the command line derives the indices.  A
@@ -1233,15 +1261,15 @@ def target_indices(target: ArrayLike | None, labels: Sequence[str], m: int) -> n
         if unknown:
             known = ", ".join(labels) if labels else "none"
             raise ArmcalError(
-                f"unknown target {', '.join(map(repr, unknown))}; the model's targets are {known}"
+                f"unknown {what} {', '.join(map(repr, unknown))}; the model's {what}s are {known}"
             )
         given = np.array([lookup[text] for text in texts], dtype=int).reshape(given.shape)
     if given.shape != (m,) or not np.issubdtype(given.dtype, np.integer):
         raise ArmcalError(
-            f"target must hold {m} target labels or integer indices, got shape {given.shape}"
+            f"{what} must hold {m} {what} labels or integer indices, got shape {given.shape}"
         )
     if given.size and (given.min() < 0 or given.max() >= count):
-        raise ArmcalError(f"target indices must lie in 0..{count - 1}")
+        raise ArmcalError(f"{what} indices must lie in 0..{count - 1}")
     return given
 
 

@@ -758,6 +758,18 @@ deviation_bounds`); the base pose and the targets are the instrument's."""
                 start_known(out, conditions, points, out.nominal, at_nominal)
         return out
 
+    def selected_by(
+        self, rows: np.ndarray, conditions: Conditions, first: Sequence[str] = ()
+    ) -> SpatialArm:
+        """The arm with what ``rows`` cannot separate held, by the rule of
+        :mod:`~armcal.models.spatial.selection` (its :attr:`user_fixed` held first, the
+        columns of ``first`` kept first)."""
+        u = np.asarray(conditions.q) @ self.joint_map.T
+        held, merges = select_from_rows(
+            self.layout, self.chain, rows, u, self.user_fixed, tuple(first)
+        )
+        return replace(self, held=held, merges=merges)
+
     def expressed(self, conditions: Conditions, params: np.ndarray) -> np.ndarray:
         """The free parameters that reproduce ``params``' points at these rows, the held
         ones at their nominal values: Gauss-Newton from ``params`` (each merge is an exact

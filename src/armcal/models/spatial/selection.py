@@ -155,6 +155,8 @@ def select(
     *,
     still: Sequence[int] = (),
     held: Sequence[str] = (),
+    first: np.ndarray | None = None,
+    first_names: Sequence[str] = (),
 ) -> Selection:
     """The identifiable set of a spatial arm from the scaled Jacobian's column space.
 
@@ -169,6 +171,11 @@ def select(
         0-based joints that do not move in the measurements (named in the report).
     held : sequence of str
         Parameters the user holds (``--fix``): never kept, never explained.
+    first : ndarray, shape (r, t), optional
+        Columns of another model's parameters, ``first_names``, that come before the
+        arm's and are all kept (an instrument's, :mod:`~armcal.models.instrumented`): an
+        arm's column is then judged by its part outside their span and the kept ones',
+        against its own length.
 
     Returns
     -------
@@ -178,6 +185,9 @@ def select(
     norms = np.linalg.norm(columns, axis=0)
     scale = np.max(norms) if norms.size else 0.0
     basis = np.zeros((columns.shape[0], 0))
+    extra = np.zeros((columns.shape[0], 0)) if first is None else np.asarray(first, dtype=float)
+    if extra.shape[1]:
+        basis = np.linalg.qr(extra)[0]
     kept = np.zeros(layout.n_params, dtype=bool)
     dropped: list[int] = []
     for i in priority(layout):
@@ -194,7 +204,7 @@ def select(
             continue
         basis = np.column_stack([basis, rest / np.linalg.norm(rest)])
         kept[i] = True
-    merges = _explain(layout, chain, columns, kept, dropped, still)
+    merges = _explain(layout, chain, columns, kept, dropped, still, extra, tuple(first_names))
     return Selection(kept, merges, tuple(k + 1 for k in still))
 
 
@@ -205,11 +215,17 @@ def _explain(
     kept: np.ndarray,
     dropped: Sequence[int],
     still: Sequence[int],
+    extra: np.ndarray,
+    extra_names: tuple[str, ...],
 ) -> tuple[Held, ...]:
-    """The parameters left out, grouped by what they merge into and why."""
+    """The parameters left out, grouped by what they merge into (the kept ones and the
+    ``extra`` columns, named ``extra_names``) and why."""
     names = layout.names
-    keep = np.flatnonzero(kept)
-    unit = columns / np.maximum(np.linalg.norm(columns, axis=0), 1e-300)
+    p = layout.n_params
+    keep = np.concatenate([np.flatnonzero(kept), p + np.arange(extra.shape[1])]).astype(int)
+    every = np.column_stack([columns, extra])
+    unit = every / np.maximum(np.linalg.norm(every, axis=0), 1e-300)
+    partner_names = (*names, *extra_names)
     groups: dict[tuple[tuple[str, ...], str, tuple[int, ...]], list[str]] = {}
     for i in dropped:
         joint = layout.joint_of(i)
@@ -221,7 +237,7 @@ def _explain(
             continue
         coef = np.linalg.lstsq(unit[:, keep], unit[:, i], rcond=None)[0]
         big = np.abs(coef) >= 0.05 * np.max(np.abs(coef))
-        partners = tuple(names[j] for j in keep[big])
+        partners = tuple(partner_names[j] for j in keep[big])
         reason, joints = _reason(names[i], partners, layout, chain)
         groups.setdefault((_grouped(partners, layout), reason, joints), []).append(names[i])
     return tuple(
@@ -264,13 +280,24 @@ def select_from_rows(
     rows: np.ndarray,
     joints: np.ndarray,
     held: Sequence[str] = (),
+    first_names: Sequence[str] = (),
 ) -> tuple[tuple[str, ...], tuple[Held, ...]]:
-    """:func:`select` from the whitened Jacobian's ``rows`` ``(..., p)`` at joint values
-    ``joints`` ``(..., n)`` (the joint map applied): the parameters it holds beyond
-    ``held``, and why (:class:`~armcal.models.interface.Held`)."""
-    columns = column_space(rows.reshape(-1, layout.n_params))
+    """:func:`select` from the whitened Jacobian's ``rows`` ``(..., p + t)`` at joint
+    values ``joints`` ``(..., n)`` (the joint map applied): the parameters it holds beyond
+    ``held``, and why (:class:`~armcal.models.interface.Held`).  The last ``t`` columns
+    are another model's parameters, ``first_names``, kept before the arm's (``first``)."""
+    p = layout.n_params
+    columns = column_space(rows.reshape(-1, p + len(first_names)))
     still = [j for j in range(layout.n_joints) if np.ptp(joints[..., j]) <= 1e-9]
-    chosen = select(layout, chain, columns, still=still, held=held)
+    chosen = select(
+        layout,
+        chain,
+        columns[:, :p],
+        still=still,
+        held=held,
+        first=columns[:, p:],
+        first_names=first_names,
+    )
     left = zip(layout.names, chosen.kept, strict=True)
     return tuple(n for n, kept in left if not kept and n not in held), chosen.merges
 

@@ -1,0 +1,24 @@
+"""Instruments other than a tracker: what each reports of the tool, and its unknowns.
+
+An **instrument** maps the tool point, in the robot's base frame, to what it
+reports, with unknown parameters of its own (nuisance, identified with the arm)
+and its own noise (PRODUCT.md, "Instruments").  Each is a measurement equation
+with its analytic derivatives (:class:`~armcal.instruments.base.Instrument`):
+
+* :class:`~armcal.instruments.plane.Planes`: the tool point touches one of
+  several planes; a row reports its signed distance from the plane (0 on a
+  touch), mm.  Unknowns: every plane's normal and offset.
+* :class:`~armcal.instruments.point.FixedPoints`: the tool point sits in one of
+  several fixed points (a cone, a ball socket); a row reports its offset from
+  the point (0 when seated), mm.  Unknowns: every point's position.
+
+:class:`~armcal.models.instrumented.InstrumentedArm` puts an instrument on any
+arm of the model interface: identification, simulation and validation then
+work through it as for a tracker.
+"""
+
+from .base import Instrument, unseen_words
+from .plane import Plane, Planes
+from .point import FixedPoints
+
+__all__ = ["FixedPoints", "Instrument", "Plane", "Planes", "unseen_words"]

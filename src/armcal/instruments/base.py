@@ -1,0 +1,111 @@
+"""What every instrument is: a measurement equation on the tool point, with derivatives.
+
+An instrument reports ``dim`` numbers per row from the tool point ``p`` (mm, the
+robot's base frame) and its own parameters ``theta`` (internal units: mm, rad),
+at the feature the row touches (a plane of several, a fixed point of several):
+``reading(p, feature, theta)``.  Its analytic derivatives,
+``d reading / d p`` and ``d reading / d theta``, give the model's Jacobian by the
+chain rule (:class:`~armcal.models.instrumented.InstrumentedArm`).
+
+Every method is batched over leading axes of ``theta`` ``(..., t)`` and of the
+points ``(..., m, 3)``, as :class:`~armcal.models.interface.FitModel`'s.
+"""
+
+from __future__ import annotations
+
+from typing import Protocol
+
+import numpy as np
+
+__all__ = ["Instrument", "feature_index", "unseen_words", "z_to"]
+
+
+class Instrument(Protocol):
+    """An instrument's measurement equation (module notes)."""
+
+    @property
+    def kind(self) -> str:
+        """The robot file's ``[instrument] kind``: ``"plane"``, ``"point"``, ..."""
+        ...
+
+    @property
+    def labels(self) -> tuple[str, ...]:
+        """The features' labels (a plane's, a fixed point's), in parameter order."""
+        ...
+
+    @property
+    def dim(self) -> int:
+        """Numbers a row reports (mm each)."""
+        ...
+
+    @property
+    def param_names(self) -> tuple[str, ...]: ...
+
+    @property
+    def param_units(self) -> tuple[str, ...]:
+        """``mm`` or ``rad`` (shown in degrees)."""
+        ...
+
+    @property
+    def start(self) -> np.ndarray:
+        """``(t,)``: the parameters where the user says the instrument roughly is."""
+        ...
+
+    @property
+    def unseen(self) -> str:
+        """What the instrument cannot see of the arm, in words (a report's sentence)."""
+        ...
+
+    def reading(
+        self, points: np.ndarray, feature: np.ndarray | None, params: np.ndarray
+    ) -> np.ndarray:
+        """``(..., m, dim)``: what the instrument reports of tool points ``(..., m, 3)``."""
+        ...
+
+    def derivatives(
+        self, points: np.ndarray, feature: np.ndarray | None, params: np.ndarray
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """``d reading / d points`` ``(..., m, dim, 3)`` and ``d reading / d params``
+        ``(..., m, dim, t)``."""
+        ...
+
+
+def feature_index(feature: np.ndarray | None, m: int, labels: tuple[str, ...]) -> np.ndarray:
+    """Every row's feature index ``(m,)``: ``feature`` as given, or 0 for an instrument
+    of one feature (ValueError where it has several and the rows do not say which)."""
+    if feature is None:
+        if len(labels) > 1:
+            raise ValueError(
+                f"the instrument has {len(labels)} features ({', '.join(labels)}): every row "
+                "must say which it touches"
+            )
+        return np.zeros(m, dtype=int)
+    index = np.asarray(feature)
+    if index.shape != (m,) or index.dtype.kind not in "iu":
+        raise ValueError(f"feature must be {m} integer indices")
+    if m and (index.min() < 0 or index.max() >= len(labels)):
+        raise ValueError(f"feature indices must lie in 0..{len(labels) - 1}")
+    return index
+
+
+def z_to(normal: np.ndarray) -> np.ndarray:
+    """The rotation ``(3, 3)`` that takes ``e_z`` to the unit vector ``normal`` along the
+    great circle between them (a half turn about x for ``-e_z``).
+
+    Examples
+    --------
+    >>> r = z_to(np.array([0.0, 0.6, 0.8]))
+    >>> np.round(r @ [0.0, 0.0, 1.0], 12).tolist(), bool(np.allclose(r @ r.T, np.eye(3)))
+    ([0.0, 0.6, 0.8], True)
+    """
+    a, b, c = (float(x) for x in normal)
+    if c <= -1.0 + 1e-12:
+        return np.diag([1.0, -1.0, -1.0])
+    # I + [v] + [v]^2 / (1 + c) with v = e_z x normal = (-b, a, 0).
+    skew = np.array([[0.0, 0.0, a], [0.0, 0.0, b], [-a, -b, 0.0]])
+    return np.eye(3) + skew + skew @ skew / (1.0 + c)
+
+
+def unseen_words(instrument: Instrument) -> str:
+    """The instrument's sentence on what it cannot see (for reports)."""
+    return instrument.unseen

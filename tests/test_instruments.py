@@ -1,0 +1,236 @@
+"""Instruments other than a tracker: planes and fixed points (issue 38, first part).
+
+The arms are the built-in six-axis ``industrial-6r`` and ``cobot-6r`` with their
+built-in virtual truths (every joint placement and zero a few tenths of a mm and
+hundredths of a degree off), the base at the origin of the robot's frame.  The
+virtual data are the true arm's touches and seatings: random poses within the limits
+moved onto the true instrument by :meth:`InstrumentedArm.meeting_poses` (Newton on the
+reading), so every reading is 0 to round-off for the arm as it really is.
+
+The user's rough instrument is the true one 10 mm off in every offset or coordinate and
+its normals 1-2 degrees off (what a user with a ruler knows).  Tolerances: a reading of
+points about 2 m from the base is exact to round-off near 1e-12 mm (5 ulp at 2000 mm is
+2e-12); central differences with a step h have an error of order h^2 (curvature) plus
+eps |value| / h.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from armcal.doe import random_plan
+from armcal.files import load_spatial_robot, load_spatial_truth
+from armcal.identification import identify
+from armcal.instruments import FixedPoints, Plane, Planes
+from armcal.models.instrumented import InstrumentedArm
+from armcal.simulate import monte_carlo
+
+ROUND_OFF_MM = 1e-10
+
+
+def _arm(name: str) -> tuple:
+    spec = load_spatial_robot(name)
+    truth = load_spatial_truth(spec.default_truth, spec.arm)
+    truth[:6] = 0.0  # the robot's own frame: the instruments are placed in it
+    return spec.arm, truth
+
+
+def _instruments(reach: float, kind: str) -> tuple:
+    """The true instrument and the user's rough one (module notes)."""
+    if kind == "plane":
+        true = Planes(
+            {
+                "top": Plane(np.array([0.01, -0.02, 1.0]), 0.1 * reach),
+                "side": Plane(np.array([1.0, 0.03, -0.01]), 0.45 * reach),
+            }
+        )
+        rough = Planes(
+            {
+                "top": Plane(np.array([0.0, 0.0, 1.0]), 0.1 * reach + 10.0),
+                "side": Plane(np.array([1.0, 0.0, 0.0]), 0.45 * reach - 10.0),
+            }
+        )
+        return true, rough
+    centres = {
+        "A": np.array([0.45, 0.1, 0.2]) * reach,
+        "B": np.array([0.4, -0.2, 0.1]) * reach,
+    }
+    return FixedPoints(centres), FixedPoints({k: v + 10.0 for k, v in centres.items()})
+
+
+def _lab(name: str, kind: str, m: int) -> tuple:
+    """The true model and parameters, ``m`` of its touches or seatings, and the model
+    of the user's rough instrument (module notes)."""
+    arm, truth = _arm(name)
+    true, rough = _instruments(arm.reach_mm, kind)
+    true_model = InstrumentedArm.of(arm, true)
+    x_true = np.concatenate([truth, true.start])
+    q = _rows(true_model, x_true, m, seed=1)
+    return true_model, x_true, q, InstrumentedArm.of(arm, rough)
+
+
+def _rows(model: InstrumentedArm, params: np.ndarray, m: int, seed: int) -> np.ndarray:
+    rng = np.random.default_rng(seed)
+    q = model.meeting_poses(random_plan(model.arm.inner, 10 * m, rng=rng), params)
+    assert q.shape[0] >= m
+    return q[:m]
+
+
+@pytest.mark.parametrize("kind", ["plane", "point"])
+def test_readings_derivatives_are_central_differences(kind):
+    """d reading / d point and d reading / d params against central differences (step
+    1e-4 mm or rad: error h^2 |d3| ~ 1e-8 relative, round-off eps 2000 / h ~ 4e-9 mm)."""
+    true, _ = _instruments(2000.0, kind)
+    rng = np.random.default_rng(3)
+    points = rng.normal(size=(7, 3)) * 800.0
+    feature = rng.integers(0, 2, 7)
+    params = true.start + rng.normal(size=true.start.size) * 0.01
+    by_point, by_params = true.derivatives(points, feature, params)
+    h = 1e-4
+
+    def diff(f, x):
+        return np.stack([(f(x + h * e) - f(x - h * e)) / (2 * h) for e in np.eye(x.size)], axis=-1)
+
+    numeric = diff(lambda t: true.reading(points, feature, t), params)
+    np.testing.assert_allclose(by_params, numeric, atol=1e-6 * 2000.0 * h / h)
+    for i in range(7):
+        row = diff(lambda p, i=i: true.reading(p[None], feature[i : i + 1], params)[0], points[i])
+        np.testing.assert_allclose(by_point[i], row, atol=1e-7)
+    # Batched parameters: every set's reading is its own.
+    sets = np.stack([params, params * 1.001])
+    batched = true.reading(points, feature, sets)
+    np.testing.assert_allclose(batched[1], true.reading(points, feature, params * 1.001))
+
+
+@pytest.mark.parametrize("kind", ["plane", "point"])
+def test_the_models_jacobians_are_central_differences(kind):
+    """The chain rule's Jacobian in every parameter (mm per mm or rad) and in every
+    joint, against central differences (step 1e-6: error about 1e-6 mm at 2 m)."""
+    arm, truth = _arm("industrial-6r")
+    true, _ = _instruments(arm.reach_mm, kind)
+    model = InstrumentedArm.of(arm, true)
+    params = np.concatenate([truth, true.start])
+    q = _rows(model, params, 12, seed=4)
+    rows = model.conditions(q, feature=model.plan_conditions(q).feature)
+    jac = model.jacobian(rows, params)
+    h = 1e-6
+    numeric = np.stack(
+        [
+            (model.positions(rows, params + h * e) - model.positions(rows, params - h * e))
+            / (2 * h)
+            for e in np.eye(params.size)
+        ],
+        axis=-1,
+    )
+    np.testing.assert_allclose(jac, numeric, atol=2e-5 * max(1.0, np.abs(jac).max() / 1e3))
+    joint = model.joint_jacobian(rows, params)
+    numeric = np.stack(
+        [
+            (
+                model.positions(model.conditions(q + h * e, feature=rows.feature), params)
+                - model.positions(model.conditions(q - h * e, feature=rows.feature), params)
+            )
+            / (2 * h)
+            for e in np.eye(q.shape[1])
+        ],
+        axis=-1,
+    )
+    np.testing.assert_allclose(joint, numeric, atol=2e-5 * np.abs(joint).max() / 1e3 + 1e-6)
+
+
+@pytest.mark.parametrize("name", ["industrial-6r", "cobot-6r"])
+@pytest.mark.parametrize("kind", ["plane", "point"])
+def test_noiseless_touches_are_recovered_to_round_off(name, kind):
+    """From the rough instrument, 150 touches or seatings of the true arm identify a
+    model whose readings at 60 held-out touches are 0 to round-off; the identifiable
+    count is the rank of the whole Jacobian at the truth (unit columns, singular values
+    above 1e-10), and the instrument's own parameters are all identified."""
+    true_model, x_true, q, model = _lab(name, kind, 150)
+    rows = model.conditions(q, feature=true_model.plan_conditions(q).feature)
+    measured = np.zeros((q.shape[0], model.point_dim))
+    cal = identify(model, q, measured, conditions=rows, sigma=0.02)
+    held_out = _rows(true_model, x_true, 60, seed=2)
+    again = model.conditions(held_out, feature=true_model.plan_conditions(held_out).feature)
+    assert np.max(np.abs(cal.model.positions(again, cal.params))) < ROUND_OFF_MM
+    whole = true_model.jacobian(rows, x_true).reshape(-1, model.n_params)
+    norms = np.linalg.norm(whole, axis=0)
+    s = np.linalg.svd(whole[:, norms > 0] / norms[norms > 0], compute_uv=False)
+    assert cal.model.n_free == int(np.sum(s > 1e-10 * s[0]))
+    assert np.all(cal.model.free[cal.model.instrument_params])
+    assert not any(w.code == "plan-degenerate" for w in cal.warnings)
+
+
+def test_what_a_plane_cannot_see_is_held_and_said():
+    """One plane (z up) cannot see a turn of the whole arm about its normal: joint 1's
+    zero (its axis is the plane's normal) merges into what is kept, and the instrument
+    says so in words."""
+    arm, truth = _arm("industrial-6r")
+    reach = arm.reach_mm
+    true = Planes({"table": Plane(np.array([0.0, 0.0, 1.0]), 0.1 * reach)})
+    model = InstrumentedArm.of(arm, true)
+    x_true = np.concatenate([truth, true.start])
+    q = _rows(model, x_true, 120, seed=5)
+    prepared = model.prepared(model.conditions(q), np.zeros((q.shape[0], 1)))
+    held = {name for merge in prepared.held_reasons for name in merge.members}
+    assert "dq1" in held
+    assert "turn about its normal" in true.unseen
+
+
+def test_rows_that_do_not_fix_the_instrument_are_refused():
+    """Twenty touches at one pose cannot fix a plane's tilt (its three columns are the
+    same at every row: rank 1 of 3)."""
+    arm, truth = _arm("industrial-6r")
+    true = Planes({"table": Plane(np.array([0.0, 0.0, 1.0]), 0.1 * arm.reach_mm)})
+    model = InstrumentedArm.of(arm, true)
+    one = _rows(model, np.concatenate([truth, true.start]), 1, seed=6)
+    q = np.repeat(one, 20, axis=0)
+    with pytest.raises(ValueError, match="do not fix the instrument"):
+        model.prepared(model.conditions(q), np.zeros((20, 1)))
+
+
+def test_a_row_must_name_its_feature_where_there_are_several():
+    arm, _ = _arm("industrial-6r")
+    true, _ = _instruments(arm.reach_mm, "plane")
+    model = InstrumentedArm.of(arm, true)
+    with pytest.raises(ValueError, match="every row must say which"):
+        model.conditions(np.zeros((3, 6)))
+    with pytest.raises(
+        ValueError, match="unknown feature 'floor'; the model's features are top, side"
+    ):
+        model.conditions(np.zeros((2, 6)), feature=["top", "floor"])
+    rows = model.conditions(np.zeros((2, 6)), feature=["side", "top"])
+    assert rows.feature.tolist() == [1, 0]
+
+
+def _monte_carlo_ratios(name: str, kind: str, trials: int) -> np.ndarray:
+    _, x_true, q, model = _lab(name, kind, 150)
+    mc = monte_carlo(model, q, x_true, 0.02, trials, rng=np.random.default_rng(8))
+    assert mc.not_converged == 0
+    free = mc.model.free
+    return mc.std[free] / mc.predicted_std[free]
+
+
+#: The Monte Carlo's agreement (issue 38): within 5 %.  With 4000 trials a std is known
+#: to 1 / sqrt(2 * 3999) = 1.1 % (1 std), so 5 % is 4.5 of its std's: a real mismatch
+#: fails, chance over 26 parameters does not (2000 trials, 1.6 %, left a 3.5-sigma
+#: 0.944 in one of four runs tried).
+MC_TRIALS = 4000
+MC_AGREEMENT = 0.05
+
+
+@pytest.mark.parametrize(
+    ("name", "kind"),
+    [
+        ("industrial-6r", "plane"),
+        ("cobot-6r", "point"),
+        pytest.param("industrial-6r", "point", marks=pytest.mark.slow),
+        pytest.param("cobot-6r", "plane", marks=pytest.mark.slow),
+    ],
+)
+def test_monte_carlo_std_agrees_with_the_predicted_std(name, kind):
+    """4000 noisy touch sets (sigma 0.02 mm along the normal, or per coordinate of a
+    seating) identified from the truth: every free parameter's std within 5 % of the
+    predicted one."""
+    ratios = _monte_carlo_ratios(name, kind, MC_TRIALS)
+    assert np.all(np.abs(ratios - 1.0) <= MC_AGREEMENT), ratios
