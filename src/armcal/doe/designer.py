@@ -422,11 +422,13 @@ def identifiable_model(model: FitModel) -> FitModel:
     (:func:`~armcal.models.information.identifying`).
 
     The poses come from a stream of their own (seed 0), so that the design's stream
-    stays the same; the held set does not depend on them, being chosen by the family's
-    fixed rule (for a spatial arm :mod:`armcal.models.spatial.selection`).
+    stays the same, moved onto an instrument that sees the tool only where it meets it
+    (:meth:`~armcal.models.interface.FitModel.meeting_poses`); the held set does not
+    depend on them, being chosen by the family's fixed rule (for a spatial arm
+    :mod:`armcal.models.spatial.selection`).
     """
     probe = random_plan(model, PROBE_POSES, rng=np.random.default_rng(0))
-    return identifying(model, model.plan_conditions(probe))
+    return identifying(model, model.plan_conditions(model.meeting_poses(probe)))
 
 
 def check_size(model: FitModel, m: int) -> None:
