@@ -150,13 +150,13 @@ def optimal_weights(
     goal = p * (1 + tolerance)
     best: OptimalWeights | None = None
     best_gap = np.inf
-    before, last = -np.inf, w
+    before, last, last_d = -np.inf, w, np.ones(count)
     for done in range(iterations + 1):
         gram = information(blocks, w)
         sign, logdet = np.linalg.slogdet(gram)
         logdet = logdet if sign > 0 else -np.inf
         if logdet < before and power != 1.0:  # the exponent overshot: exponent 1 instead
-            w = _updated(last, variances(blocks, spd_inverse(information(blocks, last))), p, 1.0)
+            w = _updated(last, last_d, p, 1.0)
             gram = information(blocks, w)
             sign, logdet = np.linalg.slogdet(gram)
             logdet = logdet if sign > 0 else -np.inf
@@ -169,7 +169,7 @@ def optimal_weights(
             best, best_gap = OptimalWeights(w, m_inv, d, done), gap
         if d.max() <= goal or done == iterations:
             break
-        before, last = logdet, w
+        before, last, last_d = logdet, w, d
         w = _updated(w, d, p, power)
     assert best is not None
     return best
