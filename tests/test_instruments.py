@@ -23,11 +23,13 @@ from armcal.criteria import d_efficiency
 from armcal.doe import design, random_plan
 from armcal.files import load_spatial_robot, load_spatial_truth
 from armcal.identification import identify
-from armcal.instruments import FixedPoints, Plane, Planes
+from armcal.instruments import Distance, FixedPoints, Plane, Planes
 from armcal.models.instrumented import InstrumentedArm
 from armcal.simulate import monte_carlo
 
 ROUND_OFF_MM = 1e-10
+#: A draw-wire sensor's zero, unknown to the user (who starts from 0).
+TRUE_OFFSET_MM = 50.0
 
 
 def _arm(name: str) -> tuple:
@@ -53,6 +55,10 @@ def _instruments(reach: float, kind: str) -> tuple:
             }
         )
         return true, rough
+    if kind == "distance":  # a draw-wire sensor's long travel
+        pivot = np.array([0.5, 0.1, 0.3]) * reach
+        span = (0.2 * reach, 0.7 * reach)
+        return Distance(pivot, span), Distance(pivot + 10.0, span)
     centres = {
         "A": np.array([0.45, 0.1, 0.2]) * reach,
         "B": np.array([0.4, -0.2, 0.1]) * reach,
@@ -67,6 +73,8 @@ def _lab(name: str, kind: str, m: int) -> tuple:
     true, rough = _instruments(arm.reach_mm, kind)
     true_model = InstrumentedArm.of(arm, true)
     x_true = np.concatenate([truth, true.start])
+    if kind == "distance":
+        x_true[-1] = TRUE_OFFSET_MM
     q = _rows(true_model, x_true, m, seed=1)
     return true_model, x_true, q, InstrumentedArm.of(arm, rough)
 
@@ -78,14 +86,14 @@ def _rows(model: InstrumentedArm, params: np.ndarray, m: int, seed: int) -> np.n
     return q[:m]
 
 
-@pytest.mark.parametrize("kind", ["plane", "point"])
+@pytest.mark.parametrize("kind", ["plane", "point", "distance"])
 def test_readings_derivatives_are_central_differences(kind):
     """d reading / d point and d reading / d params against central differences (step
     1e-4 mm or rad: error h^2 |d3| ~ 1e-8 relative, round-off eps 2000 / h ~ 4e-9 mm)."""
     true, _ = _instruments(2000.0, kind)
     rng = np.random.default_rng(3)
     points = rng.normal(size=(7, 3)) * 800.0
-    feature = rng.integers(0, 2, 7)
+    feature = rng.integers(0, len(true.labels), 7)
     params = true.start + rng.normal(size=true.start.size) * 0.01
     by_point, by_params = true.derivatives(points, feature, params)
     h = 1e-4
@@ -104,7 +112,7 @@ def test_readings_derivatives_are_central_differences(kind):
     np.testing.assert_allclose(batched[1], true.reading(points, feature, params * 1.001))
 
 
-@pytest.mark.parametrize("kind", ["plane", "point"])
+@pytest.mark.parametrize("kind", ["plane", "point", "distance"])
 def test_the_models_jacobians_are_central_differences(kind):
     """The chain rule's Jacobian in every parameter (mm per mm or rad) and in every
     joint, against central differences (step 1e-6: error about 1e-6 mm at 2 m)."""
@@ -141,19 +149,21 @@ def test_the_models_jacobians_are_central_differences(kind):
 
 
 @pytest.mark.parametrize("name", ["industrial-6r", "cobot-6r"])
-@pytest.mark.parametrize("kind", ["plane", "point"])
+@pytest.mark.parametrize("kind", ["plane", "point", "distance"])
 def test_noiseless_touches_are_recovered_to_round_off(name, kind):
-    """From the rough instrument, 150 touches or seatings of the true arm identify a
-    model whose readings at 60 held-out touches are 0 to round-off; the identifiable
-    count is the rank of the whole Jacobian at the truth (unit columns, singular values
-    above 1e-10), and the instrument's own parameters are all identified."""
+    """From the rough instrument, 150 touches, seatings or distances of the true arm
+    identify a model whose readings at 60 held-out poses are the true instrument's to
+    round-off (0 for a touch or a seating); the identifiable count is the rank of the
+    whole Jacobian at the truth (unit columns, singular values above 1e-10), and the
+    instrument's own parameters are all identified."""
     true_model, x_true, q, model = _lab(name, kind, 150)
     rows = model.conditions(q, feature=true_model.plan_conditions(q).feature)
-    measured = np.zeros((q.shape[0], model.point_dim))
+    measured = true_model.positions(rows, x_true)
     cal = identify(model, q, measured, conditions=rows, sigma=0.02)
     held_out = _rows(true_model, x_true, 60, seed=2)
     again = model.conditions(held_out, feature=true_model.plan_conditions(held_out).feature)
-    assert np.max(np.abs(cal.model.positions(again, cal.params))) < ROUND_OFF_MM
+    miss = cal.model.positions(again, cal.params) - true_model.positions(again, x_true)
+    assert np.max(np.abs(miss)) < ROUND_OFF_MM
     whole = true_model.jacobian(rows, x_true).reshape(-1, model.n_params)
     norms = np.linalg.norm(whole, axis=0)
     s = np.linalg.svd(whole[:, norms > 0] / norms[norms > 0], compute_uv=False)
@@ -227,6 +237,8 @@ MC_AGREEMENT = 0.05
         ("cobot-6r", "point"),
         pytest.param("industrial-6r", "point", marks=pytest.mark.slow),
         pytest.param("cobot-6r", "plane", marks=pytest.mark.slow),
+        pytest.param("industrial-6r", "distance", marks=pytest.mark.slow),
+        pytest.param("cobot-6r", "distance", marks=pytest.mark.slow),
     ],
 )
 def test_monte_carlo_std_agrees_with_the_predicted_std(name, kind):

@@ -11,6 +11,9 @@ with its analytic derivatives (:class:`~armcal.instruments.base.Instrument`):
 * :class:`~armcal.instruments.point.FixedPoints`: the tool point sits in one of
   several fixed points (a cone, a ball socket); a row reports its offset from
   the point (0 when seated), mm.  Unknowns: every point's position.
+* :class:`~armcal.instruments.distance.Distance`: a ballbar or a draw-wire
+  sensor reads the tool point's distance from a pivot, less an offset, mm.
+  Unknowns: the pivot's position and the offset.
 
 :class:`~armcal.models.instrumented.InstrumentedArm` puts an instrument on any
 arm of the model interface: identification, simulation and validation then
@@ -18,7 +21,8 @@ work through it as for a tracker.
 """
 
 from .base import Instrument, unseen_words
+from .distance import Distance
 from .plane import Plane, Planes
 from .point import FixedPoints
 
-__all__ = ["FixedPoints", "Instrument", "Plane", "Planes", "unseen_words"]
+__all__ = ["Distance", "FixedPoints", "Instrument", "Plane", "Planes", "unseen_words"]

@@ -62,6 +62,14 @@ class Instrument(Protocol):
         """``(..., m, dim)``: what the instrument reports of tool points ``(..., m, 3)``."""
         ...
 
+    def miss(
+        self, points: np.ndarray, feature: np.ndarray | None, params: np.ndarray
+    ) -> np.ndarray:
+        """``(..., m, dim)``: how far (mm) tool points lie from where the instrument can
+        measure them, 0 there: a touch off its plane, a seating off its point (the reading
+        itself), a distance outside the instrument's range."""
+        ...
+
     def derivatives(
         self, points: np.ndarray, feature: np.ndarray | None, params: np.ndarray
     ) -> tuple[np.ndarray, np.ndarray]:

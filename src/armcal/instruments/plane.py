@@ -125,6 +125,12 @@ class Planes:
         p = np.asarray(params, dtype=float).reshape(*np.shape(params)[:-1], len(self.planes), 3)
         return p[..., 0], p[..., 1], p[..., 2]
 
+    def miss(
+        self, points: np.ndarray, feature: np.ndarray | None, params: np.ndarray
+    ) -> np.ndarray:
+        """The reading: a row is measured where it is 0."""
+        return self.reading(points, feature, params)
+
     def reading(
         self, points: np.ndarray, feature: np.ndarray | None, params: np.ndarray
     ) -> np.ndarray:

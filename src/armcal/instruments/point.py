@@ -82,6 +82,12 @@ class FixedPoints:
             "they all lie on it"
         )
 
+    def miss(
+        self, points: np.ndarray, feature: np.ndarray | None, params: np.ndarray
+    ) -> np.ndarray:
+        """The reading: a row is measured where it is 0."""
+        return self.reading(points, feature, params)
+
     def reading(
         self, points: np.ndarray, feature: np.ndarray | None, params: np.ndarray
     ) -> np.ndarray:

@@ -22,9 +22,9 @@ arm about a fixed point keeps a tool that sits *in* the point there, but moves
 the nominal arm's tool, a few mm off it, by a little, and the rule would keep
 what no seating can see.  The fit starts there too.
 
-The plane and the fixed point are the first instruments; the command line, the
-robot file's ``[instrument]`` table, designs over the constrained poses and the
-guide pages are still to come (issue 38).
+The plane, the fixed point and the distance are the first instruments; the
+command line, the robot file's ``[instrument]`` table, designs over the
+constrained poses and the guide pages are still to come (issue 38).
 """
 
 from __future__ import annotations
@@ -247,7 +247,7 @@ class InstrumentedArm(CoreModel):
         labels = self.instrument.labels
         each = [
             np.linalg.norm(
-                self.instrument.reading(tool, np.full(rows.m, k), self.instrument.start), axis=-1
+                self.instrument.miss(tool, np.full(rows.m, k), self.instrument.start), axis=-1
             )
             for k in range(len(labels))
         ]
@@ -255,21 +255,26 @@ class InstrumentedArm(CoreModel):
 
     def meeting_poses(self, q: np.ndarray, params: np.ndarray | None = None) -> np.ndarray:
         """The poses moved onto the feature each is nearest to at ``params`` (default
-        nominal) by Newton's smallest joint steps on the reading (module notes of
-        :meth:`~armcal.models.interface.FitModel.meeting_poses`)."""
+        nominal) by Newton's smallest joint steps on the instrument's miss (module notes
+        of :meth:`~armcal.models.interface.FitModel.meeting_poses`): the reading of a
+        touch, a distance's excess over its range."""
         at = self._params(params)
         q = np.array(q, dtype=float)
         feature = self.plan_conditions(q).feature
         tol = _MEET_RTOL * self.reach_mm
         for _ in range(_MEET_STEPS):
             rows = self.conditions(q, feature=feature)
-            miss = self.positions(rows, at)
+            miss = self._miss(rows, at)
             if np.max(np.abs(miss), initial=0.0) <= tol:
                 break
             step = np.linalg.pinv(self.joint_jacobian(rows, at), rcond=1e-10)
             q -= np.einsum("mnk,mk->mn", step, miss)
-        miss = np.max(np.abs(self.positions(self.conditions(q, feature=feature), at)), axis=-1)
+        miss = np.max(np.abs(self._miss(self.conditions(q, feature=feature), at)), axis=-1)
         return q[(miss <= tol) & self.feasible(q)]
+
+    def _miss(self, rows: Conditions, params: np.ndarray) -> np.ndarray:
+        x, theta = self.split(params)
+        return self.instrument.miss(self._tool(rows, x), rows.feature, theta)
 
     # -- what the instrument reports ---------------------------------------------------------
 

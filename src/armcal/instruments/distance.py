@@ -1,0 +1,107 @@
+"""A distance: a ballbar or a draw-wire sensor reads the tool point's distance from a pivot.
+
+A row reports ``|p - c| - offset`` (mm): the distance of the tool point ``p`` from
+the pivot ``c`` (base frame), less the reading's unknown offset (a ballbar's
+nominal length, a draw-wire sensor's zero).  Unknowns: ``pivot.x``, ``pivot.y``,
+``pivot.z`` (mm, starting where the user says the pivot roughly is) and
+``offset`` (mm, starting at 0: the reading's zero is what it is).  A pose can be
+measured only within the instrument's range of distances.
+
+**What a distance cannot see.**  Turning the whole arm about the pivot keeps
+every distance: three turns.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from .base import feature_index
+
+__all__ = ["Distance"]
+
+
+@dataclass(frozen=True, eq=False)
+class Distance:
+    """A distance from one pivot (module notes).
+
+    Attributes
+    ----------
+    pivot_mm : ndarray, shape (3,)
+        Where the user says the pivot roughly is (base frame, mm).
+    range_mm : tuple of float
+        The distances ``|p - c|`` the instrument can read, mm (a ballbar's travel).
+    """
+
+    pivot_mm: np.ndarray
+    range_mm: tuple[float, float]
+
+    def __post_init__(self) -> None:
+        pivot = np.asarray(self.pivot_mm, dtype=float)
+        if pivot.shape != (3,) or not np.all(np.isfinite(pivot)):
+            raise ValueError("the pivot's position must be 3 finite numbers (mm)")
+        low, high = (float(v) for v in self.range_mm)
+        if not 0.0 <= low < high or not np.isfinite(high):
+            raise ValueError("the range must be two distances 0 <= low < high (mm)")
+        object.__setattr__(self, "pivot_mm", pivot)
+        object.__setattr__(self, "range_mm", (low, high))
+
+    @property
+    def kind(self) -> str:
+        return "distance"
+
+    @property
+    def labels(self) -> tuple[str, ...]:
+        return ("pivot",)
+
+    @property
+    def dim(self) -> int:
+        return 1
+
+    @property
+    def param_names(self) -> tuple[str, ...]:
+        return ("pivot.x", "pivot.y", "pivot.z", "offset")
+
+    @property
+    def param_units(self) -> tuple[str, ...]:
+        return ("mm",) * 4
+
+    @property
+    def start(self) -> np.ndarray:
+        return np.append(self.pivot_mm, 0.0)
+
+    @property
+    def unseen(self) -> str:
+        return (
+            "a distance cannot see the arm turn about its pivot: three turns of the whole "
+            "arm about the pivot keep every distance"
+        )
+
+    def miss(
+        self, points: np.ndarray, feature: np.ndarray | None, params: np.ndarray
+    ) -> np.ndarray:
+        """``(..., m, 1)``: how far (mm) each point lies outside the range, 0 within it."""
+        centre = np.asarray(params, dtype=float)[..., None, :3]
+        size = np.linalg.norm(points - centre, axis=-1, keepdims=True)
+        return size - np.clip(size, *self.range_mm)
+
+    def reading(
+        self, points: np.ndarray, feature: np.ndarray | None, params: np.ndarray
+    ) -> np.ndarray:
+        """``|p - c| - offset`` ``(..., m, 1)`` (mm)."""
+        feature_index(feature, np.shape(points)[-2], self.labels)
+        params = np.asarray(params, dtype=float)
+        size = np.linalg.norm(points - params[..., None, :3], axis=-1, keepdims=True)
+        return size - params[..., None, 3:4]
+
+    def derivatives(
+        self, points: np.ndarray, feature: np.ndarray | None, params: np.ndarray
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """The unit vector from the pivot ``(..., m, 1, 3)``; its negative and -1 for the
+        pivot and the offset ``(..., m, 1, 4)``."""
+        params = np.asarray(params, dtype=float)
+        offset = points - params[..., None, :3]
+        unit = offset / np.linalg.norm(offset, axis=-1, keepdims=True)
+        by_params = np.concatenate([-unit, np.full((*unit.shape[:-1], 1), -1.0)], axis=-1)
+        return unit[..., None, :], by_params[..., None, :]
