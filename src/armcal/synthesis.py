@@ -16,13 +16,14 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
+from dataclasses import replace
 from functools import cache
 
 import numpy as np
 from numpy.typing import ArrayLike
 
 from .errors import ArmcalError
-from .models import Conditions, FitModel, Loads
+from .models import FitModel, Loads
 from .noise import NoiseModel, instrument_override, per_row_sigma
 
 __all__ = [
@@ -262,7 +263,7 @@ def synthesize_measurements(
     if plan.ndim != 2 or plan.shape[1] != n:
         raise ArmcalError(f"the plan must have shape (m, {n}) in rad, got {plan.shape}")
     truth = checked_truth(model, truth)
-    rows = model.conditions(plan, target=target, loads=loads, **_features(feature))
+    rows = model.conditions(plan, target=target, loads=loads, feature=feature)
     conditions = rows.with_frames(frames)
     m = plan.shape[0]
 
@@ -283,17 +284,9 @@ def synthesize_measurements(
     actual = draws[..., dim:]  # where the joints really were: q + dq
     actual *= np.broadcast_to(joint_sigma, (n,))
     actual += plan
-    at = Conditions(
-        actual, conditions.target, conditions.loads, None, conditions.frames, conditions.feature
-    )
+    at = replace(conditions, q=actual, sigma_mm=None)
     positions = model.positions(at, truth)
     instrument = draws[..., :dim]
     _scale_instrument(instrument, factor)
     positions += instrument
     return positions
-
-
-def _features(feature: np.ndarray | None) -> dict[str, np.ndarray]:
-    """``feature`` as a keyword of :meth:`~armcal.models.FitModel.conditions` where
-    given: only a model measured by an instrument of several features takes it."""
-    return {} if feature is None else {"feature": feature}

@@ -17,7 +17,7 @@ from typing import Protocol
 
 import numpy as np
 
-__all__ = ["Instrument", "feature_index", "unseen_words", "z_to"]
+__all__ = ["Instrument", "MeetsAtZero", "feature_index", "unseen_words", "z_to"]
 
 
 class Instrument(Protocol):
@@ -76,6 +76,22 @@ class Instrument(Protocol):
         """``d reading / d points`` ``(..., m, dim, 3)`` and ``d reading / d params``
         ``(..., m, dim, t)``."""
         ...
+
+
+class MeetsAtZero:
+    """An instrument that measures a pose where its reading is 0 (a touch of a plane, a
+    seating in a point): its miss is its reading."""
+
+    def reading(
+        self, points: np.ndarray, feature: np.ndarray | None, params: np.ndarray
+    ) -> np.ndarray:
+        raise NotImplementedError  # the instrument's own
+
+    def miss(
+        self, points: np.ndarray, feature: np.ndarray | None, params: np.ndarray
+    ) -> np.ndarray:
+        """The reading: a row is measured where it is 0."""
+        return self.reading(points, feature, params)
 
 
 def feature_index(feature: np.ndarray | None, m: int, labels: tuple[str, ...]) -> np.ndarray:

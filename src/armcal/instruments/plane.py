@@ -26,7 +26,7 @@ from functools import cached_property
 
 import numpy as np
 
-from .base import feature_index, z_to
+from .base import MeetsAtZero, feature_index, z_to
 
 __all__ = ["Plane", "Planes"]
 
@@ -58,7 +58,7 @@ class Plane:
 
 
 @dataclass(frozen=True, eq=False)
-class Planes:
+class Planes(MeetsAtZero):
     """Touches of one or several planes (module notes).
 
     Attributes
@@ -124,12 +124,6 @@ class Planes:
     def _split(self, params: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         p = np.asarray(params, dtype=float).reshape(*np.shape(params)[:-1], len(self.planes), 3)
         return p[..., 0], p[..., 1], p[..., 2]
-
-    def miss(
-        self, points: np.ndarray, feature: np.ndarray | None, params: np.ndarray
-    ) -> np.ndarray:
-        """The reading: a row is measured where it is 0."""
-        return self.reading(points, feature, params)
 
     def reading(
         self, points: np.ndarray, feature: np.ndarray | None, params: np.ndarray

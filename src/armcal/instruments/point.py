@@ -18,13 +18,13 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .base import feature_index
+from .base import MeetsAtZero, feature_index
 
 __all__ = ["FixedPoints"]
 
 
 @dataclass(frozen=True, eq=False)
-class FixedPoints:
+class FixedPoints(MeetsAtZero):
     """Seatings in one or several fixed points (module notes).
 
     Attributes
@@ -81,12 +81,6 @@ class FixedPoints:
             "fixed points cannot see the arm turn about the line through two of them when "
             "they all lie on it"
         )
-
-    def miss(
-        self, points: np.ndarray, feature: np.ndarray | None, params: np.ndarray
-    ) -> np.ndarray:
-        """The reading: a row is measured where it is 0."""
-        return self.reading(points, feature, params)
 
     def reading(
         self, points: np.ndarray, feature: np.ndarray | None, params: np.ndarray

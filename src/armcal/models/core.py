@@ -56,6 +56,7 @@ from .interface import (
     Held,
     LinearPositions,
     Loads,
+    refuse_feature,
 )
 
 __all__ = ["CoreModel"]
@@ -189,10 +190,12 @@ class CoreModel(RigidLoads, SeesAnywhere):
         target: ArrayLike | None = None,
         loads: Loads | None = None,
         sigma_mm: np.ndarray | None = None,
+        feature: ArrayLike | None = None,
     ) -> Conditions:
         q = self._readings(q)
         if target is not None:
             raise ValueError(f"{self.name} has one target: give no target indices")
+        refuse_feature(self.name, feature)
         return Conditions(q, None, None, sigma_mm)
 
     def _readings(self, q: ArrayLike) -> np.ndarray:

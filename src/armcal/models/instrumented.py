@@ -37,6 +37,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike
 
+from ..errors import ArmcalError
 from ..instruments.base import Instrument, feature_index
 from ..noise import NoiseModel
 from ..numerics import RowTriangle
@@ -116,16 +117,11 @@ class InstrumentedArm(CoreModel):
         return tuple(self.inner.fixed) + self.instrument_fixed
 
     @cached_property
-    def free(self) -> np.ndarray:
-        held = set(self.fixed)
-        return np.array([n not in held for n in self.param_names], dtype=bool)
-
-    @cached_property
     def nominal(self) -> np.ndarray:
         """The arm's nominal parameters with its base at the origin, then where the user
         says the instrument is."""
         arm = np.array(self.inner.nominal, dtype=float)
-        arm[np.isin(self.inner.param_names, _base_names(self.arm))] = 0.0
+        arm[np.isin(self.inner.param_names, _base_names(self.inner))] = 0.0
         return np.concatenate([arm, self.instrument.start])
 
     @property
@@ -264,11 +260,11 @@ class InstrumentedArm(CoreModel):
         tol = _MEET_RTOL * self.reach_mm
         for _ in range(_MEET_STEPS):
             rows = self.conditions(q, feature=feature)
+            jac = self.joint_jacobian(rows, at)  # its pass has the points the miss needs
             miss = self._miss(rows, at)
             if np.max(np.abs(miss), initial=0.0) <= tol:
                 break
-            step = np.linalg.pinv(self.joint_jacobian(rows, at), rcond=1e-10)
-            q -= np.einsum("mnk,mk->mn", step, miss)
+            q -= np.einsum("mnk,mk->mn", np.linalg.pinv(jac, rcond=1e-10), miss)
         miss = np.max(np.abs(self._miss(self.conditions(q, feature=feature), at)), axis=-1)
         return q[(miss <= tol) & self.feasible(q)]
 
@@ -302,10 +298,11 @@ class InstrumentedArm(CoreModel):
     ) -> np.ndarray:
         """``dh/dp . dp/dq`` ``(..., m, dim, n)``."""
         x, theta = self.split(self._params(params))
-        by_point, _ = self.instrument.derivatives(
+        joint = np.asarray(self.inner.joint_jacobian(conditions, x))[..., :3, :]
+        by_point, _ = self.instrument.derivatives(  # the points from the Jacobian's pass
             self._tool(conditions, x), conditions.feature, theta
         )
-        return by_point @ np.asarray(self.inner.joint_jacobian(conditions, x))[..., :3, :]
+        return by_point @ joint
 
     # -- fitting -----------------------------------------------------------------------
 
@@ -355,7 +352,7 @@ class InstrumentedArm(CoreModel):
         scale = np.linalg.norm(theta, axis=0)
         singular = np.linalg.svd(theta / np.where(scale > 0, scale, 1.0), compute_uv=False)
         if np.any(scale == 0) or (singular.size and singular[-1] <= _FIXES * singular[0]):
-            raise ValueError(
+            raise ArmcalError(
                 f"the rows do not fix the instrument ({self.instrument.kind}): touch every "
                 "feature at poses spread over it (three touches not on a line fix a plane)"
             )
@@ -383,8 +380,8 @@ class InstrumentedArm(CoreModel):
         free = self.free
         goal = np.asarray(points, dtype=float)
         for _ in range(_SEAT_STEPS):
-            miss = (goal - self.positions(conditions, x)).reshape(-1)
-            jac = self.jacobian(conditions, x)[..., free].reshape(miss.size, -1)
+            jac = self.jacobian(conditions, x)[..., free].reshape(goal.size, -1)
+            miss = (goal - self.positions(conditions, x)).reshape(-1)  # the same pass's
             scale = np.linalg.norm(jac, axis=0)
             scale = np.where(scale > 0, scale, 1.0)
             u, sv, vt = np.linalg.svd(jac / scale, full_matrices=False)

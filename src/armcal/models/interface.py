@@ -794,13 +794,17 @@ class Core(Protocol):
         target: ArrayLike | None = None,
         loads: Loads | None = None,
         sigma_mm: np.ndarray | None = None,
+        feature: ArrayLike | None = None,
     ) -> Conditions:
         """Checked conditions of measured rows (ValueError naming what is wrong).
 
         ``q`` ``(m, n)`` rad; ``target`` ``(m,)`` target indices or labels
         (:func:`target_indices`), needed when the model has several (else
         :func:`targets_missing`); ``loads`` the rows' loads (default: the model's);
-        ``sigma_mm`` ``(m,)`` per-row instrument noise.
+        ``sigma_mm`` ``(m,)`` per-row instrument noise; ``feature`` ``(m,)`` the feature
+        of the instrument every row touches (:attr:`Conditions.feature`: its index or
+        its label), which a model measured by a tracker refuses
+        (:func:`refuse_feature`).
         """
         ...
 
@@ -1271,6 +1275,15 @@ def target_indices(
     if given.size and (given.min() < 0 or given.max() >= count):
         raise ArmcalError(f"{what} indices must lie in 0..{count - 1}")
     return given
+
+
+def refuse_feature(name: str, feature: ArrayLike | None) -> None:
+    """ArmcalError where rows of a model measured by a tracker (or a probe) name features:
+    only an instrument with features (:mod:`armcal.instruments`) has them."""
+    if feature is not None:
+        raise ArmcalError(
+            f"{name} is measured by a tracker, whose rows touch no feature: give no feature"
+        )
 
 
 def targets_missing(name: str, labels: Sequence[str]) -> ArmcalError:

@@ -20,7 +20,14 @@ from ...noise import NoiseModel
 from ...numerics import ScaledSVD
 from ..defaults import LARGE_ANGLE_DEG, MinimalPlanar, RigidLoads
 from ..identifiability import Identifiability
-from ..interface import Conditions, DeviationBounds, LinearPositions, Loads, PaperCriteria
+from ..interface import (
+    Conditions,
+    DeviationBounds,
+    LinearPositions,
+    Loads,
+    PaperCriteria,
+    refuse_feature,
+)
 from . import design as planar_design
 from .closed_form import (
     PlanarClosedForm,
@@ -225,6 +232,7 @@ class PlanarArm(RigidLoads, MinimalPlanar, PlanarArmSpec):
         target: ArrayLike | None = None,
         loads: Loads | None = None,
         sigma_mm: np.ndarray | None = None,
+        feature: ArrayLike | None = None,
     ) -> Conditions:
         """Checked conditions: ``q`` ``(m, n)``, every row's target on an arm with several."""
         q = np.asarray(q, dtype=float)
@@ -233,6 +241,7 @@ class PlanarArm(RigidLoads, MinimalPlanar, PlanarArmSpec):
         m = q.shape[0]
         if loads is not None and loads.n_rows != m:
             raise ValueError(f"loads must have {m} rows, got {loads.n_rows}")
+        refuse_feature(self.name, feature)
         return Conditions(q, check_target(self, q, target), loads, sigma_mm)
 
     def positions(self, conditions: Conditions, params: np.ndarray | None = None) -> np.ndarray:

@@ -422,11 +422,14 @@ class CompliantArm(ArmEffect, MinimalPlanar):
         target: ArrayLike | None = None,
         loads: Loads | None = None,
         sigma_mm: np.ndarray | None = None,
+        feature: ArrayLike | None = None,
     ) -> Conditions:
         """The arm's checked conditions, each row loaded (default: the robot file's payload)."""
         m = np.shape(q)[0] if np.ndim(q) == 2 else 0
         loads = self.default_loads(m) if loads is None else loads
-        return self.arm.conditions(q, target=target, loads=loads, sigma_mm=sigma_mm)
+        return self.arm.conditions(
+            q, target=target, loads=loads, sigma_mm=sigma_mm, feature=feature
+        )
 
     def positions(self, conditions: Conditions, params: np.ndarray | None = None) -> np.ndarray:
         """Measured points ``(..., m, 2)`` (mm): the arm deflected under the rows' loads."""

@@ -37,6 +37,7 @@ from ..interface import (
     Held,
     LinearPositions,
     Loads,
+    refuse_feature,
     target_indices,
     targets_missing,
 )
@@ -433,11 +434,13 @@ deviation_bounds`); the base pose and the targets are the instrument's."""
         target: ArrayLike | None = None,
         loads: Loads | None = None,
         sigma_mm: np.ndarray | None = None,
+        feature: ArrayLike | None = None,
     ) -> Conditions:
         q = self._readings(q)
         index = target_indices(target, self.targets, q.shape[-2])
         if index is None and len(self.targets) > 1:
             raise targets_missing(self.name, self.targets)
+        refuse_feature(self.name, feature)
         return Conditions(q, index, None, sigma_mm)
 
     def chain_kinematics(

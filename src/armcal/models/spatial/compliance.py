@@ -468,13 +468,14 @@ class CompliantSpatialArm(ArmEffect):
         target: ArrayLike | None = None,
         loads: Loads | None = None,
         sigma_mm: np.ndarray | None = None,
+        feature: ArrayLike | None = None,
     ) -> Conditions:
         """The arm's checked rows, each loaded (default: the robot file's payload)."""
-        rows = self.arm.conditions(q, target=target, sigma_mm=sigma_mm)
+        rows = self.arm.conditions(q, target=target, sigma_mm=sigma_mm, feature=feature)
         loads = self.default_loads(rows.m) if loads is None else _payloads_only(loads)
         if loads.n_rows != rows.m:
             raise ValueError(f"loads must have {rows.m} rows, got {loads.n_rows}")
-        return Conditions(rows.q, rows.target, loads, rows.sigma_mm)
+        return replace(rows, loads=loads)
 
     def positions(self, conditions: Conditions, params: np.ndarray | None = None) -> np.ndarray:
         bent, geometry = self._bent(conditions, params)

@@ -222,7 +222,7 @@ def _explain(
     ``extra`` columns, named ``extra_names``) and why."""
     names = layout.names
     p = layout.n_params
-    keep = np.concatenate([np.flatnonzero(kept), p + np.arange(extra.shape[1])]).astype(int)
+    keep = np.concatenate([np.flatnonzero(kept), p + np.arange(extra.shape[1])])
     every = np.column_stack([columns, extra])
     unit = every / np.maximum(np.linalg.norm(every, axis=0), 1e-300)
     partner_names = (*names, *extra_names)
