@@ -462,7 +462,7 @@ def test_a_program_is_no_wrong_kind_for_a_plan_nor_a_typo_for_another_kind(calib
 # --------------------------------------------------------------------------- truth keys
 
 PLANAR_TRUTH_KEYS = ("dl_mm", "dq_deg", "base_mm", "k_urad_per_Nm", "c_mdeg_per_m")
-SPATIAL_TRUTH_KEYS = ("robot", "base", "errors", "targets", "compliance")
+SPATIAL_TRUTH_KEYS = ("robot", "base", "errors", "targets", "instrument", "compliance")
 
 
 @pytest.mark.parametrize(

@@ -6,6 +6,10 @@ documented) and its hints for a key written in the wrong table; ``armcal
 formats`` prints it; and each command's ``--help`` names the columns of the
 files it reads.
 
+Why this module is long: it is the catalogue itself, one entry per key and column of
+every file (data, not logic); split by file, the readers and ``armcal formats`` would
+each gather it back.
+
 Examples
 --------
 >>> [key.name for key in ROBOT_KEYS if key.table == "identify"]
@@ -311,6 +315,38 @@ SPATIAL_KEYS: tuple[Key, ...] = (
     ),
     Key(
         "instrument",
+        "kind",
+        "tracker, probe, plane, point or distance",
+        "tracker",
+        "what the instrument reports: points (tracker), poses (probe), touches of planes, "
+        "seatings in fixed points, or distances from a pivot (a ballbar, a draw-wire sensor)",
+    ),
+    Key(
+        "instrument",
+        "planes",
+        "table of LABEL = { normal = [x, y, z], offset_mm = d } in the robot's base frame",
+        "required for kind plane",
+        "every plane touched, normal . p = d, where it roughly is; rows name theirs in a "
+        "plane column",
+    ),
+    Key(
+        "instrument",
+        "points",
+        "table of LABEL = { xyz_mm = [x, y, z] } in the robot's base frame",
+        "required for kind point",
+        "every fixed point (a cone, a ball socket) the tool sits in, where it roughly is; "
+        "rows name theirs in a point column",
+    ),
+    Key(
+        "instrument",
+        "pivot_mm",
+        "mm, [x, y, z] in the robot's base frame",
+        "required for kind distance",
+        "where a distance instrument's pivot roughly is; rows give distance_mm, the "
+        "distance from it less an unknown offset",
+    ),
+    Key(
+        "instrument",
         "position_mm",
         "mm, [x, y, z] in the robot's base frame",
         "none",
@@ -322,8 +358,8 @@ SPATIAL_KEYS: tuple[Key, ...] = (
         "range_mm",
         "mm, [least, greatest]",
         "none",
-        "the distances from position_mm the instrument measures; plans keep every target "
-        "within them",
+        "the distances from position_mm the instrument measures (kind distance: from "
+        "pivot_mm); plans keep every target within them",
     ),
     Key(
         "instrument",
@@ -458,6 +494,13 @@ SPATIAL_TRUTH_KEYS: tuple[Key, ...] = (
     ),
     Key(
         "",
+        "instrument",
+        "the robot file's [instrument] keys; a distance's offset_mm too",
+        "the robot file's",
+        "where a plane, fixed point or distance instrument really is",
+    ),
+    Key(
+        "",
         "compliance",
         "table of parameter = value (urad/(N*m) for k2, mdeg/m for c2.j3)",
         "none: 0",
@@ -528,6 +571,35 @@ _MEASURED = (
     *_FORCE,
 )
 
+#: What a plane, fixed point or distance instrument reads: a row that touches or sits
+#: reports nothing but its feature; a distance its reading.
+_READ = (
+    Column(
+        "plane",
+        "text",
+        False,
+        "kind plane: the [instrument] planes label of the plane the tool point touches "
+        "(required with several planes)",
+    ),
+    Column(
+        "point",
+        "text",
+        False,
+        "kind point: the [instrument] points label of the fixed point the tool point sits in "
+        "(required with several points)",
+    ),
+    Column(
+        "distance_mm",
+        "mm",
+        False,
+        "kind distance (required there): the reading, the tool point's distance from the "
+        "pivot less an unknown offset",
+    ),
+    _POSE,
+    Column("target", "text", False, "the [targets] label of the tool point (with several)"),
+    Column("sigma_mm", "mm", False, "this row's instrument noise (1 std)"),
+)
+
 #: Columns of each CSV file kind, joint columns first.
 COLUMNS: dict[str, tuple[Column, ...]] = {
     "plan": (
@@ -542,6 +614,7 @@ COLUMNS: dict[str, tuple[Column, ...]] = {
         _PAYLOAD,
     ),
     "measurements": (_JOINTS, *_MEASURED),
+    "readings": (_JOINTS, *_READ),
     "program": (
         _JOINTS,
         _POSE,
@@ -563,6 +636,10 @@ FILE_KINDS: dict[str, str] = {
     "spatial truth": "spatial truth TOML (--truth): the errors of a virtual spatial arm",
     "plan": "plan CSV (--plan, --candidates, --test-poses): poses to visit",
     "measurements": "measurements CSV (--measurements): poses and what the instrument read",
+    "readings": (
+        "measurements CSV of a plane, point or distance instrument (--measurements; "
+        "[instrument] kind plane, point or distance): poses and what the instrument read"
+    ),
     "program": "program CSV (--program): joint commands to correct",
     "calibration": "calibration JSON (--calibration): written by identify -o",
 }

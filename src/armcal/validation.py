@@ -286,6 +286,7 @@ def validate(
     target: ArrayLike | None = None,
     row_sigma: np.ndarray | None = None,
     loads: Loads | None = None,
+    feature: ArrayLike | None = None,
 ) -> Validation:
     """Positioning error before and after calibration on held-out measurements.
 
@@ -307,6 +308,9 @@ def validate(
     loads : Loads, optional
         Every row's payload and tip force, for a calibration with compliance
         (default: the robot file's payload).  The nominal model has none.
+    feature : ndarray of int or sequence of str, shape (m,), optional
+        For an instrument of several features (a plane, a fixed point): the one every
+        row touches, its index or label.
 
     Returns
     -------
@@ -330,7 +334,9 @@ def validate(
     """
     cal = calibrated_arm(cal)
     model = cal.model
-    conditions = model.conditions(q, target=target, loads=loads, sigma_mm=row_sigma)
+    conditions = model.conditions(
+        q, target=target, loads=loads, sigma_mm=row_sigma, feature=feature
+    )
     points = np.asarray(points, dtype=float)
     out_of_plane = None
     if cal.plane is not None:

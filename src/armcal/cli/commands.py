@@ -210,6 +210,8 @@ def synthesize(args: argparse.Namespace) -> None:
         made.targets,
         made.payload_kg,
         kinds=spec.arm.joint_kinds,
+        instrument=getattr(spec.arm, "instrument", None),
+        feature=made.feature,
     )
     if args.output is None or args.output == STDIO:
         print_warnings([*spec.warnings, *made.warnings])

@@ -110,7 +110,10 @@ def _maximize_variance(
     steps: int = 150,
     progress: ProgressCallback | None = None,
 ) -> np.ndarray:
-    """Batched ascent of ``d(x)`` from ``starts (k, n)`` within the limits (near the view)."""
+    """Batched ascent of ``d(x)`` from ``starts (k, n)`` within the limits (near the view);
+    over the poses that meet the instrument where a pose must (:func:`_projected_ascent`)."""
+    if model.constrained:
+        return _projected_ascent(model, m_inv, starts, steps=2 * steps)
 
     def objective(u: np.ndarray, step: int):
         q, dq_du = to_q(model, u)
@@ -123,6 +126,43 @@ def _maximize_variance(
         objective, to_u(model, starts), steps=steps, learning_rate=0.05, progress=progress
     )
     return _newton_polish(model, m_inv, to_q(model, u)[0])
+
+
+#: The first joint step of a projected ascent (rad), and the smallest: a pose whose step
+#: has shrunk below it is at its local maximum to round-off of ``d`` (a step of 1e-9 rad
+#: changes ``d`` by about 1e-18 of its scale near a maximum).
+PROJECTED_STEP, PROJECTED_SMALLEST = 0.05, 1e-9
+
+
+def _projected_ascent(
+    model: FitModel, m_inv: np.ndarray, starts: np.ndarray, *, steps: int
+) -> np.ndarray:
+    """Ascent of ``d(x)`` over the poses that meet the instrument (a touch, a seating, a
+    distance within range): a step along ``d``'s gradient, taken back onto the instrument
+    by the smallest joint change (:meth:`~armcal.models.interface.FitModel.meeting_poses`:
+    the gradient projected, to first order, onto the constraint's tangent), kept where
+    ``d`` grows and the pose meets it and is feasible; the step grows by half after a
+    success and shrinks to 0.4 after a failure, pose by pose, until every step is below
+    :data:`PROJECTED_SMALLEST`.  Every pose returned meets the instrument (the starts do)."""
+    lower, upper = model.joint_limits[:, 0], model.joint_limits[:, 1]
+    q = np.array(starts, dtype=float)
+    value, grad = _variance_function(model, q, m_inv)
+    size = np.full(q.shape[0], PROJECTED_STEP)
+    for _ in range(steps):
+        live = size >= PROJECTED_SMALLEST
+        if not live.any():
+            break
+        norm = np.linalg.norm(grad[live], axis=-1, keepdims=True)
+        direction = grad[live] / np.where(norm > 0, norm, 1.0)
+        trial = np.clip(q[live] + size[live, None] * direction, lower, upper)
+        trial, met = model.meeting_poses(trial)
+        trial_value, trial_grad = _variance_function(model, trial, m_inv)
+        better = met & (trial_value > value[live])
+        index = np.flatnonzero(live)
+        kept = index[better]
+        q[kept], value[kept], grad[kept] = trial[better], trial_value[better], trial_grad[better]
+        size[index] = np.where(better, size[index] * 1.5, size[index] * 0.4)
+    return q
 
 
 #: Newton iterations that finish every ascent, and the step of the central differences
@@ -172,7 +212,9 @@ def _corner_poses(model: FitModel, rng: np.random.Generator) -> np.ndarray:
     corners = limits[np.arange(n), grid]
     if model.rotation_invariant:
         corners[:, 0] = rng.uniform(limits[0, 0], limits[0, 1], len(corners))
-    return corners[model.feasible(corners[:, None, :])[:, 0]]
+    corners = corners[model.feasible(corners[:, None, :])[:, 0]]
+    moved, met = model.meeting_poses(corners)  # where a pose must meet the instrument
+    return moved[met]
 
 
 def _weighted_svd(blocks: np.ndarray, weights: np.ndarray) -> ScaledSVD:

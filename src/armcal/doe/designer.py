@@ -346,14 +346,9 @@ def design(
         assert test_q is not None  # check_options refused a task criterion without
         aim = task_criterion(criterion, model, test_q)
     rng = np.random.default_rng(rng)
-    pool: np.ndarray | None = None  # the user's candidates: every pose from them
-    if candidates is not None:
-        pool = np.asarray(candidates, dtype=float)
-        if method in ("analytic", "optimize"):
-            raise ArmcalError(
-                f"a plan from candidate poses takes every pose from them, and method {method!r} "
-                f"makes poses of its own; use {action('method', 'auto')} or exchange"
-            )
+    drawn = candidates is None and model.constrained  # a pool of poses that meet it
+    pool = candidate_pool(model, m, method, candidates, rng)  # every pose from it
+    candidates = pool if drawn else candidates
     closed = closed_forms(model, m, method, distinct=distinct, from_pool=pool is not None)
     if method == "analytic" or (method == "auto" and closed.optimal and aim == criterion):
         made = analytic_plan(closed)
@@ -377,9 +372,10 @@ def design(
     efficiency = float(d_efficiency(model, q))
     notes = [*(() if made.replaces_notes else closed.notes), *made.notes]
     notes.extend(closing_notes(made, closed, q, efficiency, method, distinct=distinct))
-    certificate = certified(
-        model, q, pool, with_certificate, rng=rng, progress=progress, work=made.pool
-    )
+    certificate = certified(  # over the instrument's constrained poses, not the pool drawn
+        model, q, None if drawn else pool, with_certificate, rng=rng, progress=progress,
+        work=made.pool,
+    )  # fmt: skip
     travel_found = joint_travel(q)
     if order == "travel":
         q = q[order_poses(q)]
@@ -397,8 +393,66 @@ def design(
         joint_travel=joint_travel(q),
         joint_travel_unordered=travel_found,
         distinct=distinct,
-        warnings=() if pool is None else pool_warnings(pool, q),
+        warnings=() if pool is None or drawn else pool_warnings(pool, q),
     )
+
+
+#: Poses a plan for an instrument's constrained poses is chosen from: drawn within the
+#: limits and moved to meet it (:func:`constrained_pool`), at least this many ...
+CONSTRAINED_POOL = 3000
+#: ... and this many per pose of the plan.
+CONSTRAINED_POOL_PER_POSE = 30
+
+
+def constrained_pool(model: FitModel, m: int, rng: np.random.Generator) -> np.ndarray:
+    """Random poses within the limits moved to meet the instrument
+    (:func:`~armcal.doe.plans.feasible_poses`): the pool a plan for a plane, a point or a
+    distance is chosen from.  Its certificate is over every pose that meets the
+    instrument (:func:`~armcal.doe.certificate.certify`), not over this pool."""
+    size = max(CONSTRAINED_POOL, CONSTRAINED_POOL_PER_POSE * min(m, REPLICATE_ABOVE))
+    pool = feasible_poses(model, size, rng=rng)
+    labels = model.feature_labels
+    feature = model.plan_conditions(pool).feature if len(labels) > 1 else None
+    if feature is not None:
+        met = np.bincount(feature, minlength=len(labels))
+        missing = [label for label, count in zip(labels, met, strict=True) if count == 0]
+        if missing:
+            raise ArmcalError(
+                f"{model.name}: of {size} poses that meet the instrument, none meets "
+                f"{', '.join(missing)}: no pose within the joint limits reaches "
+                f"{'it' if len(missing) == 1 else 'them'} where the robot file places "
+                f"{'it' if len(missing) == 1 else 'them'}; check [instrument] and the limits"
+            )
+    return pool
+
+
+def candidate_pool(
+    model: FitModel,
+    m: int,
+    method: str,
+    candidates: np.ndarray | None,
+    rng: np.random.Generator,
+) -> np.ndarray | None:
+    """The poses every pose of the plan is taken from: the user's ``candidates``, else for
+    an instrument whose poses must meet it a pool drawn and moved there
+    (:func:`constrained_pool`), else None (poses of the method's own).  ArmcalError for a
+    method that makes poses of its own (analytic, optimize) with either."""
+    if candidates is None and not model.constrained:
+        return None
+    if method in ("analytic", "optimize"):
+        if candidates is None:
+            raise ArmcalError(
+                f"a plan for {model.name}'s instrument is made of poses that meet it, drawn "
+                f"and moved there; method {method!r} makes poses of its own: use "
+                f"{action('method', 'auto')} or exchange"
+            )
+        raise ArmcalError(
+            f"a plan from candidate poses takes every pose from them, and method {method!r} "
+            f"makes poses of its own; use {action('method', 'auto')} or exchange"
+        )
+    if candidates is None:
+        return constrained_pool(model, m, rng)
+    return np.asarray(candidates, dtype=float)
 
 
 def check_options(criterion: str, method: str, order: str, test_q: np.ndarray | None) -> None:
@@ -428,7 +482,8 @@ def identifiable_model(model: FitModel) -> FitModel:
     :mod:`armcal.models.spatial.selection`).
     """
     probe = random_plan(model, PROBE_POSES, rng=np.random.default_rng(0))
-    return identifying(model, model.plan_conditions(model.meeting_poses(probe)))
+    moved, met = model.meeting_poses(probe)
+    return identifying(model, model.plan_conditions(moved[met]))
 
 
 def check_size(model: FitModel, m: int) -> None:

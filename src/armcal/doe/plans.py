@@ -84,12 +84,16 @@ def repeated_poses(q: np.ndarray, *, tol: float = DISTINCT_TOLERANCE) -> np.ndar
 def feasible_poses(
     model: FitModel, k: int, *, rng: np.random.Generator | int | None = None
 ) -> np.ndarray:
-    """``k`` poses ``(k, n)`` uniform in the joint limits, restricted to the region.
+    """``k`` poses ``(k, n)`` uniform in the joint limits, restricted to the region, each
+    moved to meet the instrument where one must (a touch of a plane: the model's
+    :meth:`~armcal.models.interface.FitModel.meeting_poses`; those that cannot are
+    left out).
 
     Raises
     ------
     ArmcalError
-        If fewer than 1 in 10 000 random poses reach the measurement region.
+        If none of 10 000 random poses reaches the measurement region or meets the
+        instrument.
     """
     rng = np.random.default_rng(rng)
     found: list[np.ndarray] = []
@@ -98,11 +102,19 @@ def feasible_poses(
         batch = random_plan(model, max(4 * k, 1000), rng=rng)
         drawn += batch.shape[0]
         batch = batch[model.feasible(batch)]
+        moved, met = model.meeting_poses(batch)
+        batch = moved[met]
         found.append(batch)
         count += batch.shape[0]
         if count == 0 and drawn >= 10_000:
             raise ArmcalError(
-                f"{model.name}: no random pose within the joint limits puts the tip inside the "
-                "measurement region; check the region and the limits"
+                f"{model.name}: no random pose within the joint limits "
+                + (
+                    "meets the instrument where the robot file places it (a plane or a point "
+                    "out of reach, a distance's range no pose reaches); check [instrument]"
+                    if model.constrained
+                    else "puts the tip inside the measurement region; check the region and "
+                    "the limits"
+                )
             )
     return np.concatenate(found)[:k]

@@ -79,7 +79,25 @@ SPATIAL = register(
     )
 )
 
+INSTRUMENTED = register(
+    Family(
+        "instrumented",
+        "an arm of another family measured by touches of planes, seatings in fixed points "
+        "or distances from a pivot",
+        "a robot file of another family with [instrument] kind plane, point or distance",
+        refs={
+            "truth": "armcal.files.instrument_table:instrumented_truth",
+            "encode": "armcal.files.calibration_instrumented:encode",
+            "decode": "armcal.files.calibration_instrumented:decode",
+            "calibrate": "armcal.workflow.measured:fit_instrumented",
+            "describe": "armcal.report.common:instrumented_model_lines",
+            "residual_figure": "armcal.plotting_residuals:residual_figure",
+        },
+    )
+)
+
 __all__ = [
+    "INSTRUMENTED",
     "PLANAR",
     "ROLES",
     "SPATIAL",

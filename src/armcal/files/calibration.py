@@ -266,6 +266,7 @@ def _rows_dict(cal: Calibration) -> dict[str, Any] | None:
         "target": None if rows.target is None else rows.target.tolist(),
         "payload_kg": None if loads is None else loads.payload_kg.tolist(),
         "force_n": None if loads is None or not np.any(loads.force_n) else loads.force_n.tolist(),
+        **({} if rows.feature is None else {"feature": rows.feature.tolist()}),
     }
 
 
@@ -283,7 +284,12 @@ def _rows_from_dict(data: dict[str, Any] | None, n: int, targets: int) -> Condit
     if data["payload_kg"] is not None:
         force = None if data["force_n"] is None else np.array(data["force_n"], dtype=float)
         loads = Loads.create(m, np.array(data["payload_kg"], dtype=float), force)
-    return Conditions(q, target, loads)
+    feature = data.get("feature")
+    if feature is not None:
+        feature = np.array(feature, dtype=int).reshape(m)
+        if np.any(feature < 0):
+            raise ValueError("rows: feature indices must not be negative")
+    return Conditions(q, target, loads, feature=feature)
 
 
 def _elastostatic_dict(cal: Calibration) -> dict | None:

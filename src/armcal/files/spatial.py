@@ -32,6 +32,7 @@ from ..choices import BUILTIN_SPATIAL_ROBOTS, ROBOT_FOLDER
 from ..errors import ArmcalError, ArmcalWarning, InputError, unrendered
 from ..families.registry import RobotSpec
 from ..formats import SPATIAL_KEYS, SPATIAL_TRUTH_KEYS, TRUTH_KEYS, allowed_keys
+from ..instruments import Instrument
 from ..models import (
     FitModel,
     LinkMasses,
@@ -42,6 +43,7 @@ from ..models import (
     rpy_matrix,
     transform,
 )
+from ..models.instrumented import InstrumentedArm
 from ..models.spatial.dh import convention_mistake, table_chain
 from .common import (
     check_keys,
@@ -53,6 +55,7 @@ from .common import (
     numbers,
     suggest,
 )
+from .instrument_table import read_instrument
 from .robot_units import check_mdh_angles, check_reach, limit_warnings, urdf_limit_warning
 from .robots import (
     SPATIAL_ROBOT_KEYS,
@@ -319,7 +322,8 @@ def _from_toml(
             chain = replace(chain, joint_limits=np.tile([-np.inf, np.inf], (n, 1)))
     noise = read_spatial_noise(path, data.get("measurement"))
     labels, positions, normals = _target_table(path, data.get("targets"))
-    view = _view(path, data.get("instrument"), labels, normals)
+    instrument = read_instrument(path, data.get("instrument"))
+    view = None if instrument is not None else _view(path, data.get("instrument"), labels, normals)
     arm = SpatialArm(
         chain,
         name,
@@ -335,13 +339,53 @@ def _from_toml(
     elastic = None
     if "elastostatic" in data:
         elastic = _elastostatic(path, data["elastostatic"], chain, masses)
+    model: Any = arm
+    if instrument is not None:
+        model = _instrumented(path, arm, instrument, elastic is not None, bool(labels))
     if "identify" in data:
         table = data["identify"]
         terms = () if elastic is None else elastic.term_names(arm)
-        arm = arm.with_fixed(fixed_parameters(path, table, arm.param_names, arm.name, terms))
+        model = model.with_fixed(
+            fixed_parameters(path, table, model.param_names, model.name, terms)
+        )
         if elastic is not None:
             elastic = replace(elastic, terms=held_terms(table, terms))
-    return RobotSpec(arm, builtin or os.fspath(path), warnings=read_warnings, elastic=elastic)
+    return RobotSpec(model, builtin or os.fspath(path), warnings=read_warnings, elastic=elastic)
+
+
+def _instrumented(
+    path: Path, arm: SpatialArm, instrument: Instrument, elastic: bool, targets: bool
+) -> InstrumentedArm:
+    """``arm`` measured by ``instrument`` (the robot file's ``[instrument]``)."""
+    if elastic:
+        raise fail(
+            path,
+            f"key 'instrument.kind': a {instrument.kind} instrument with [elastostatic] is not "
+            "supported yet; remove one of them (measure the arm's sag with a tracker)",
+        )
+    if arm.oriented:
+        raise fail(
+            path,
+            f"key 'measurement.orientation_sigma_deg': a {instrument.kind} instrument reads "
+            "no orientation; remove the key",
+        )
+    if len(arm.targets) > 1:
+        raise fail(
+            path,
+            f"key 'targets': a {instrument.kind} instrument touches with one tool point; "
+            f"give one in [targets], not {len(arm.targets)} ({', '.join(arm.targets)})",
+        )
+    if not targets:
+        raise fail(
+            path,
+            f"key 'instrument.kind': a {instrument.kind} instrument touches with the tool "
+            "point: give it in [targets] (tool = { xyz_mm = [x, y, z] }, tip frame), where it "
+            "roughly is",
+        )
+    far = instrument.out_of_reach(arm.tip_reach_mm)
+    if far is not None:
+        raise fail(path, f"key 'instrument': no pose can meet it: {far}; check [instrument]")
+    return InstrumentedArm.of(arm, instrument)
 
 
 def _limits(
@@ -457,13 +501,18 @@ def _target_table(
     return tuple(labels), np.array(positions), normals
 
 
+#: ``[instrument]`` keys of the contact instruments (:mod:`armcal.files.instrument_table`).
+_CONTACT_KEYS = ("planes", "points", "pivot_mm")
+
+
 def _view(path: Path, table: Any, labels: tuple[str, ...], normals: list) -> SpatialView | None:
     """``[instrument]``: where the instrument stands and what it reaches, for plans."""
     if table is None:
         return None
     if not isinstance(table, dict):
         raise fail(path, "key 'instrument': expected a table [instrument]")
-    check_keys(path, table, allowed_keys("instrument", SPATIAL_KEYS), "instrument.")
+    allowed = [k for k in allowed_keys("instrument", SPATIAL_KEYS) if k not in _CONTACT_KEYS]
+    check_keys(path, table, allowed, "instrument.")
     needs_position = [key for key in ("range_mm", "acceptance_deg") if key in table]
     if needs_position and "position_mm" not in table:
         raise fail(

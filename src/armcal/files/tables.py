@@ -15,6 +15,7 @@ import os
 import re
 from collections.abc import Sequence
 from dataclasses import dataclass, replace
+from typing import Any
 
 import numpy as np
 
@@ -128,6 +129,12 @@ class Measurements:
     orientation : ndarray, shape (m, 3), or None
         The optional ``rx_deg, ry_deg, rz_deg`` columns of a 6-DoF instrument: the
         target's orientation as a rotation vector in the instrument's frame (rad).
+    feature : tuple of str, or None
+        A plane, point or distance instrument's rows: the feature every row touches
+        (its ``plane`` or ``point`` column, else the instrument's one feature).
+    readings : ndarray, shape (m, d), or None
+        What such an instrument read (mm): its ``distance_mm`` column, or 0 for a row
+        that touches a plane or sits in a point (``d`` the instrument's numbers a row).
     """
 
     q: np.ndarray
@@ -141,6 +148,8 @@ class Measurements:
     payload_kg: np.ndarray | None = None
     force_n: np.ndarray | None = None
     orientation: np.ndarray | None = None
+    feature: tuple[str, ...] | None = None
+    readings: np.ndarray | None = None
 
     def loads(self, default_payload_kg: float = 0.0) -> Loads:
         """Every row's payload (the file's default where there is no column) and tip force."""
@@ -163,7 +172,10 @@ class Measurements:
     @property
     def instrument_points(self) -> np.ndarray:
         """What the instrument read ``(m, 3)`` or ``(m, 6)``: the 3-D point (mm) and, from a
-        6-DoF instrument, the orientation's rotation vector (rad)."""
+        6-DoF instrument, the orientation's rotation vector (rad); a plane's, a point's or
+        a distance's readings (:attr:`readings`)."""
+        if self.readings is not None:
+            return self.readings
         if self.orientation is None:
             return self.xyz
         return np.column_stack([self.xyz, self.orientation])
@@ -371,6 +383,7 @@ def _read_csv(
     what: str,
     measured: bool = False,
     arm_from: str | None = None,
+    columns: tuple[list[str], list[str], list[str]] | None = None,
 ) -> _Table:
     """Validate a CSV of kind ``what`` (a key of :data:`armcal.formats.COLUMNS`).
 
@@ -382,9 +395,10 @@ def _read_csv(
     be.  A ``measured`` joint value beyond its limit by at most
     :data:`LIMIT_TOLERANCE_DEG` (:data:`LIMIT_TOLERANCE_MM` for a prismatic joint) is
     accepted and listed in ``beyond``; farther is an error, as any value beyond a
-    limit of a plan or program is.
+    limit of a plan or program is.  ``columns``: the required, optional text and
+    optional numeric columns, where they are not those of ``what``.
     """
-    numeric, optional, optional_numeric = reader_columns(what)
+    numeric, optional, optional_numeric = reader_columns(what) if columns is None else columns
     kinds = arm.joint_kinds
     expected = joint_names(kinds) + list(numeric)
     extras = list(optional) + list(optional_numeric)
@@ -618,22 +632,15 @@ def read_measurements(
         :data:`SIGMA_RANGE_MM`; a point no arm of this geometry can reach
         (:data:`REACH_MARGIN`).
     """
+    instrument = getattr(arm, "instrument", None)  # a plane's, a point's, a distance's
+    if instrument is not None:
+        return _read_readings(path, arm, instrument, arm_from)
     table = _read_csv(path, arm, "measurements", measured=True, arm_from=arm_from)
     n = arm.n_joints
     values = table.values
     m = values.shape[0]
     labels = table.texts.get("pose") or [str(i) for i in range(1, m + 1)]
-    row_sigma = table.numbers.get("sigma_mm")
-    if row_sigma is not None:
-        low, high = SIGMA_RANGE_MM
-        bad = np.flatnonzero((row_sigma < low) | (row_sigma > high))
-        if bad.size:
-            r = int(bad[0])
-            raise fail(
-                path,
-                f"row {r + 1} (line {table.lines[r]}), column sigma_mm: {row_sigma[r]:g} is not "
-                f"a noise std between {low:g} and {high:g} mm; check the unit (mm)",
-            )
+    row_sigma = _row_sigma(path, table)
     xy = values[:, n:]
     z = table.numbers.get("z_mm")
     targets = table.texts.get("target")
@@ -661,6 +668,88 @@ def read_measurements(
         force_n=force,
         orientation=orientation,
     )
+
+
+def _row_sigma(path, table: _Table) -> np.ndarray | None:
+    """The ``sigma_mm`` column, every value a noise std within :data:`SIGMA_RANGE_MM`."""
+    row_sigma = table.numbers.get("sigma_mm")
+    if row_sigma is not None:
+        low, high = SIGMA_RANGE_MM
+        bad = np.flatnonzero((row_sigma < low) | (row_sigma > high))
+        if bad.size:
+            r = int(bad[0])
+            raise fail(
+                path,
+                f"row {r + 1} (line {table.lines[r]}), column sigma_mm: {row_sigma[r]:g} is not "
+                f"a noise std between {low:g} and {high:g} mm; check the unit (mm)",
+            )
+    return row_sigma
+
+
+def _read_readings(path, arm: FitModel, instrument: Any, arm_from: str | None) -> Measurements:
+    """The measurements of a plane, point or distance instrument (``readings`` columns):
+    every row's feature (its label column, required with several features) and what it
+    read (0 for a touch or a seating)."""
+    label = instrument.label_column
+    text = ["pose", "target", *([label] if label else [])]
+    table = _read_csv(
+        path,
+        arm,
+        "measurements",
+        measured=True,
+        arm_from=arm_from,
+        columns=(list(instrument.reading_columns), text, ["sigma_mm"]),
+    )
+    n = arm.n_joints
+    m = table.values.shape[0]
+    labels = table.texts.get("pose") or [str(i) for i in range(1, m + 1)]
+    features = _feature_labels(path, instrument, table)
+    targets = table.texts.get("target")
+    if targets is not None:
+        _check_target_labels(path, arm, targets, table.lines)
+    readings = table.values[:, n:]
+    if not instrument.reading_columns:
+        readings = np.zeros((m, instrument.dim))
+    warnings = [] if not table.beyond else [_beyond_limits_warning(path, arm, table.beyond)]
+    return Measurements(
+        model_units(table.values[:, :n], arm.joint_kinds),
+        np.zeros((m, 2)),
+        tuple(labels),
+        rows=tuple(range(1, m + 1)),
+        row_sigma=_row_sigma(path, table),
+        warnings=tuple(warnings),
+        targets=None if targets is None else tuple(targets),
+        feature=features,
+        readings=readings,
+    )
+
+
+def _feature_labels(path, instrument: Any, table: _Table) -> tuple[str, ...]:
+    """Every row's feature: its label column's, each one of the instrument's; the one
+    feature's where the column is absent (an error with several)."""
+    known = tuple(instrument.labels)
+    column = instrument.label_column
+    m = table.values.shape[0]
+    found = None if column is None else table.texts.get(column)
+    if found is None:
+        if len(known) > 1:
+            raise fail(
+                path,
+                f"line {table.header_line}: missing column '{column}': the robot file's "
+                f"[instrument] has {len(known)} {column}s ({', '.join(known)}); add a column "
+                f"'{column}' naming the {column} of every row",
+            )
+        return (known[0],) * m
+    for r, label in enumerate(found):
+        if label not in known:
+            said = shown(label) if label else "empty"
+            raise fail(
+                path,
+                f"row {r + 1} (line {table.lines[r]}), column {column}: {said} "
+                f"is not a {column} of the robot file's [instrument]: {suggest(label, known)}"
+                f"its {column}s are {', '.join(known)}",
+            )
+    return tuple(found)
 
 
 def _orientation_columns(path, arm: FitModel, table: _Table) -> np.ndarray | None:

@@ -10,6 +10,7 @@ joint is revolute.
 from __future__ import annotations
 
 from collections.abc import Sequence
+from typing import Any
 
 import numpy as np
 
@@ -54,6 +55,8 @@ def format_measurements_csv(
     payload_kg: np.ndarray | None = None,
     *,
     kinds: Sequence[str] | None = None,
+    instrument: Any = None,
+    feature: np.ndarray | None = None,
 ) -> str:
     """Measurements CSV text; positions are written with full round-trip precision.
 
@@ -64,8 +67,14 @@ def format_measurements_csv(
     6-DoF instrument's orientation (a rotation vector in rad, written in degrees:
     ``rx_deg, ry_deg, rz_deg``); ``targets`` adds the ``target`` column,
     ``payload_kg`` the payload of every row.
+
+    A plane, point or distance ``instrument`` (:mod:`armcal.instruments`) writes its own
+    columns instead: ``xy`` its readings (``distance_mm``; none for a touch, which reads
+    0) and every row's feature (its index ``feature``) in its label column.
     """
     xy = np.asarray(xy, dtype=float)
+    if instrument is not None:
+        return _readings_csv(q, xy, labels, targets, kinds, instrument, feature)
     head = ["pose"] if labels is not None else []
     head += joint_names(kinds or q.shape[1]) + ["x_mm", "y_mm", "z_mm"][: xy.shape[1]]
     head += list(ORIENTATION_COLUMNS) if xy.shape[1] == 6 else []
@@ -79,6 +88,33 @@ def format_measurements_csv(
     columns += [[str(target) for target in targets]] if targets is not None else []
     if payload_kg is not None:
         columns.append(floats(payload_kg))
+    return csv_text(head, columns)
+
+
+def _readings_csv(
+    q: np.ndarray,
+    readings: np.ndarray,
+    labels: Sequence[str] | None,
+    targets: Sequence[str] | None,
+    kinds: Sequence[str] | None,
+    instrument: Any,
+    feature: np.ndarray | None,
+) -> str:
+    """The measurements of a plane, point or distance instrument (``readings`` columns)."""
+    head = (["pose"] if labels is not None else []) + joint_names(kinds or q.shape[1])
+    columns: list = [[str(label) for label in labels]] if labels is not None else []
+    columns.append(joint_values(q, kinds))
+    names = list(instrument.reading_columns)
+    if names:
+        head += names
+        columns.append(floats(readings[:, : len(names)]))
+    if instrument.label_column is not None:
+        index = np.zeros(q.shape[0], dtype=int) if feature is None else feature
+        head.append(instrument.label_column)
+        columns.append([instrument.labels[k] for k in index])
+    if targets is not None:
+        head.append("target")
+        columns.append([str(target) for target in targets])
     return csv_text(head, columns)
 
 

@@ -166,7 +166,8 @@ def coverage(model: FitModel, q: np.ndarray | None = None) -> Coverage:
     -------
     Coverage
     """
-    rich = model.prepared(model.plan_conditions(model.meeting_poses(_probe(model))))
+    moved, met = model.meeting_poses(_probe(model))
+    rich = model.prepared(model.plan_conditions(moved[met]))
     held = set(model.fixed)
     lost = tuple(name for name in rich.param_names if name in held and name not in rich.fixed)
     still: tuple[int, ...] = ()

@@ -17,7 +17,14 @@ from typing import Protocol
 
 import numpy as np
 
-__all__ = ["Instrument", "MeetsAtZero", "feature_index", "unseen_words", "z_to"]
+__all__ = [
+    "Instrument",
+    "MeetsAtZero",
+    "feature_index",
+    "same_features",
+    "unseen_words",
+    "z_to",
+]
 
 
 class Instrument(Protocol):
@@ -56,6 +63,29 @@ class Instrument(Protocol):
         """What the instrument cannot see of the arm, in words (a report's sentence)."""
         ...
 
+    @property
+    def label_column(self) -> str | None:
+        """The measurement file's column naming every row's feature (``"plane"``), or None
+        for an instrument of one feature that has none."""
+        ...
+
+    @property
+    def reading_columns(self) -> tuple[str, ...]:
+        """The measurement file's columns of what a row reports (``"distance_mm"``), or none
+        where a row reports nothing but that it meets the instrument (a touch reads 0)."""
+        ...
+
+    def params_of(self, true: Instrument) -> np.ndarray:
+        """``(t,)``: this instrument's parameters that describe ``true``, an instrument of
+        the same kind and features (where a virtual lab's instrument really is)."""
+        ...
+
+    def out_of_reach(self, reach_mm: float) -> str | None:
+        """Why no pose of a tool point within ``reach_mm`` of the base's origin can meet
+        the instrument where it roughly is (a plane or a point beyond the reach, a range
+        of distances no such point has from the pivot), else None."""
+        ...
+
     def reading(
         self, points: np.ndarray, feature: np.ndarray | None, params: np.ndarray
     ) -> np.ndarray:
@@ -75,6 +105,14 @@ class Instrument(Protocol):
     ) -> tuple[np.ndarray, np.ndarray]:
         """``d reading / d points`` ``(..., m, dim, 3)`` and ``d reading / d params``
         ``(..., m, dim, t)``."""
+        ...
+
+    def curvatures(
+        self, points: np.ndarray, feature: np.ndarray | None, params: np.ndarray
+    ) -> tuple[np.ndarray | None, np.ndarray | None]:
+        """How :meth:`derivatives` change with the points: ``d^2 reading / d points^2``
+        ``(..., m, dim, 3, 3)`` and ``d^2 reading / d params d points`` ``(..., m, dim, t,
+        3)``, each None where it is 0 (a design's gradient in the poses needs them)."""
         ...
 
 
@@ -110,6 +148,15 @@ def feature_index(feature: np.ndarray | None, m: int, labels: tuple[str, ...]) -
     if m and (index.min() < 0 or index.max() >= len(labels)):
         raise ValueError(f"feature indices must lie in 0..{len(labels) - 1}")
     return index
+
+
+def same_features(mine: Instrument, true: Instrument) -> None:
+    """ValueError unless ``true`` is of ``mine``'s kind with the same features."""
+    if true.kind != mine.kind or true.labels != mine.labels:
+        raise ValueError(
+            f"the true instrument must be a {mine.kind} with the features "
+            f"{', '.join(mine.labels)}, in that order, as the robot file's"
+        )
 
 
 def z_to(normal: np.ndarray) -> np.ndarray:

@@ -17,7 +17,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .base import feature_index
+from .base import Instrument, feature_index, same_features
 
 __all__ = ["Distance"]
 
@@ -32,10 +32,14 @@ class Distance:
         Where the user says the pivot roughly is (base frame, mm).
     range_mm : tuple of float
         The distances ``|p - c|`` the instrument can read, mm (a ballbar's travel).
+    offset_mm : float
+        The reading's offset where it is known (a virtual lab's truth); a user's starts
+        at 0.
     """
 
     pivot_mm: np.ndarray
     range_mm: tuple[float, float]
+    offset_mm: float = 0.0
 
     def __post_init__(self) -> None:
         pivot = np.asarray(self.pivot_mm, dtype=float)
@@ -46,6 +50,9 @@ class Distance:
             raise ValueError("the range must be two distances 0 <= low < high (mm)")
         object.__setattr__(self, "pivot_mm", pivot)
         object.__setattr__(self, "range_mm", (low, high))
+        if not np.isfinite(self.offset_mm):
+            raise ValueError("the offset must be a finite number (mm)")
+        object.__setattr__(self, "offset_mm", float(self.offset_mm))
 
     @property
     def kind(self) -> str:
@@ -69,7 +76,7 @@ class Distance:
 
     @property
     def start(self) -> np.ndarray:
-        return np.append(self.pivot_mm, 0.0)
+        return np.append(self.pivot_mm, self.offset_mm)
 
     @property
     def unseen(self) -> str:
@@ -77,6 +84,31 @@ class Distance:
             "a distance cannot see the arm turn about its pivot: three turns of the whole "
             "arm about the pivot keep every distance"
         )
+
+    @property
+    def label_column(self) -> str | None:
+        return None
+
+    @property
+    def reading_columns(self) -> tuple[str, ...]:
+        return ("distance_mm",)
+
+    def params_of(self, true: Instrument) -> np.ndarray:
+        """``true``'s pivot and offset."""
+        same_features(self, true)
+        return np.asarray(true.start, dtype=float)
+
+    def out_of_reach(self, reach_mm: float) -> str | None:
+        """The tool's distances from the pivot lie within ``|c| -+ reach`` (the triangle
+        inequality): a range outside them is out of reach."""
+        far = float(np.linalg.norm(self.pivot_mm))
+        low, high = max(0.0, far - reach_mm), far + reach_mm
+        if self.range_mm[0] > high or self.range_mm[1] < low:
+            return (
+                f"the range {self.range_mm[0]:g}..{self.range_mm[1]:g} mm is out of reach: the "
+                f"tool's distances from the pivot lie within {low:.6g}..{high:.6g} mm"
+            )
+        return None
 
     def miss(
         self, points: np.ndarray, feature: np.ndarray | None, params: np.ndarray
@@ -105,3 +137,17 @@ class Distance:
         unit = offset / np.linalg.norm(offset, axis=-1, keepdims=True)
         by_params = np.concatenate([-unit, np.full((*unit.shape[:-1], 1), -1.0)], axis=-1)
         return unit[..., None, :], by_params[..., None, :]
+
+    def curvatures(
+        self, points: np.ndarray, feature: np.ndarray | None, params: np.ndarray
+    ) -> tuple[np.ndarray | None, np.ndarray | None]:
+        """``(I - u u^T) / r`` ``(..., m, 1, 3, 3)`` (``u`` the unit vector from the pivot,
+        ``r`` the distance), its negative for the pivot and 0 for the offset ``(..., m, 1,
+        4, 3)``."""
+        params = np.asarray(params, dtype=float)
+        offset = points - params[..., None, :3]
+        size = np.linalg.norm(offset, axis=-1, keepdims=True)
+        unit = offset / size
+        bend = (np.eye(3) - unit[..., :, None] * unit[..., None, :]) / size[..., None]
+        by_params = np.concatenate([-bend, np.zeros((*bend.shape[:-2], 1, 3))], axis=-2)
+        return bend[..., None, :, :], by_params[..., None, :, :]

@@ -26,7 +26,7 @@ from functools import cached_property
 
 import numpy as np
 
-from .base import MeetsAtZero, feature_index, z_to
+from .base import Instrument, MeetsAtZero, feature_index, same_features, z_to
 
 __all__ = ["Plane", "Planes"]
 
@@ -111,6 +111,36 @@ class Planes(MeetsAtZero):
             "where it is"
         )
 
+    @property
+    def label_column(self) -> str | None:
+        return "plane"
+
+    @property
+    def reading_columns(self) -> tuple[str, ...]:
+        return ()
+
+    def params_of(self, true: Instrument) -> np.ndarray:
+        """The turns and offsets that put each plane where ``true``'s is: with ``u = R0^T n``,
+        ``b = asin(u_x)`` and ``a = atan2(-u_y, u_z)`` (module notes)."""
+        same_features(self, true)
+        assert isinstance(true, Planes)
+        out = []
+        for frame, plane in zip(self._frames, true.planes.values(), strict=True):
+            u = frame.T @ plane.normal
+            out.append(
+                [np.arctan2(-u[1], u[2]), np.arcsin(np.clip(u[0], -1.0, 1.0)), plane.offset_mm]
+            )
+        return np.array(out).ravel()
+
+    def out_of_reach(self, reach_mm: float) -> str | None:
+        for label, plane in self.planes.items():
+            if abs(plane.offset_mm) > reach_mm:
+                return (
+                    f"plane {label!r} lies {abs(plane.offset_mm):.6g} mm from the base, beyond "
+                    f"the tool's reach ({reach_mm:.6g} mm)"
+                )
+        return None
+
     @cached_property
     def _frames(self) -> np.ndarray:
         """``R0_k`` ``(K, 3, 3)``: from ``e_z`` to each plane's rough normal."""
@@ -159,6 +189,26 @@ class Planes(MeetsAtZero):
         out[..., rows, 0, 3 * k + 1] = by_b
         out[..., rows, 0, 3 * k + 2] = -1.0
         return np.broadcast_to(normal, (*shape, 3))[..., None, :], out
+
+    def curvatures(
+        self, points: np.ndarray, feature: np.ndarray | None, params: np.ndarray
+    ) -> tuple[np.ndarray | None, np.ndarray | None]:
+        """None (a reading is linear in the point) and ``R0 du/da``, ``R0 du/db`` at the
+        row's plane's turns ``(..., m, 1, 3K, 3)``."""
+        m = np.shape(points)[-2]
+        k = feature_index(feature, m, self.labels)
+        a, b, _ = self._split(params)
+        frames = self._frames[k]
+        ca, sa, cb, sb = np.cos(a[..., k]), np.sin(a[..., k]), np.cos(b[..., k]), np.sin(b[..., k])
+        zero = np.zeros_like(ca)
+        by_a = np.einsum("mij,...mj->...mi", frames, np.stack([zero, -ca * cb, -sa * cb], -1))
+        by_b = np.einsum("mij,...mj->...mi", frames, np.stack([cb, sa * sb, -ca * sb], -1))
+        shape = np.broadcast_shapes(np.shape(by_a)[:-1], np.shape(points)[:-1])
+        out = np.zeros((*shape, 1, 3 * len(self.planes), 3))
+        rows = np.arange(m)
+        out[..., rows, 0, 3 * k, :] = by_a
+        out[..., rows, 0, 3 * k + 1, :] = by_b
+        return None, out
 
 
 def _turned(a: np.ndarray, b: np.ndarray) -> np.ndarray:

@@ -18,7 +18,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .base import MeetsAtZero, feature_index
+from .base import Instrument, MeetsAtZero, feature_index, same_features
 
 __all__ = ["FixedPoints"]
 
@@ -82,6 +82,29 @@ class FixedPoints(MeetsAtZero):
             "they all lie on it"
         )
 
+    @property
+    def label_column(self) -> str | None:
+        return "point"
+
+    @property
+    def reading_columns(self) -> tuple[str, ...]:
+        return ()
+
+    def params_of(self, true: Instrument) -> np.ndarray:
+        """``true``'s points' positions."""
+        same_features(self, true)
+        return np.asarray(true.start, dtype=float)
+
+    def out_of_reach(self, reach_mm: float) -> str | None:
+        for label, xyz in self.points.items():
+            far = float(np.linalg.norm(xyz))
+            if far > reach_mm:
+                return (
+                    f"point {label!r} lies {far:.6g} mm from the base, beyond the tool's "
+                    f"reach ({reach_mm:.6g} mm)"
+                )
+        return None
+
     def reading(
         self, points: np.ndarray, feature: np.ndarray | None, params: np.ndarray
     ) -> np.ndarray:
@@ -89,6 +112,12 @@ class FixedPoints(MeetsAtZero):
         k = feature_index(feature, np.shape(points)[-2], self.labels)
         centres = np.asarray(params, dtype=float).reshape(*np.shape(params)[:-1], -1, 3)
         return points - centres[..., k, :]
+
+    def curvatures(
+        self, points: np.ndarray, feature: np.ndarray | None, params: np.ndarray
+    ) -> tuple[np.ndarray | None, np.ndarray | None]:
+        """None and None: a reading is linear in the point and in the fixed point."""
+        return None, None
 
     def derivatives(
         self, points: np.ndarray, feature: np.ndarray | None, params: np.ndarray

@@ -67,9 +67,31 @@ class SeesAnywhere:
     separate is not this model's rule to choose (:mod:`~armcal.models.instrumented`
     measures an arm that has one: the spatial arm's)."""
 
-    def meeting_poses(self, q: np.ndarray, params: np.ndarray | None = None) -> np.ndarray:
-        """The poses as they are: the instrument sees the tool at every one."""
-        return np.asarray(q, dtype=float)
+    @property
+    def constrained(self) -> bool:
+        """False: the instrument sees the tool at any pose."""
+        return False
+
+    @property
+    def feature_labels(self) -> tuple[str, ...]:
+        """None: a tracker's rows touch no feature."""
+        return ()
+
+    @property
+    def touches(self) -> bool:
+        """False: a row reports where the tool is."""
+        return False
+
+    def meeting_poses(
+        self,
+        q: np.ndarray,
+        params: np.ndarray | None = None,
+        miss: np.ndarray | None = None,
+        feature: np.ndarray | None = None,
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """The poses as they are, every one met: the instrument sees the tool anywhere."""
+        q = np.asarray(q, dtype=float)
+        return q, np.ones(q.shape[0], dtype=bool)
 
     def selected_by(
         self, rows: np.ndarray, conditions: Conditions, first: Sequence[str] = ()

@@ -22,7 +22,7 @@ covariance from its plan's own factorization); the numbers are the same.
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from functools import cached_property
 from typing import TypeVar
 
@@ -584,8 +584,22 @@ class BlockInformation:
         return np.einsum("...mrp,...mrq->...pq", f, f) / rows
 
     def _central_difference(self, value) -> np.ndarray:
-        """``d value(F_i) / d q_i`` ``(..., m, n)`` of a per-pose function of the blocks."""
-        return pose_derivative(lambda q: value(self._blocks_at(q)), self.q)
+        """``d value(F_i) / d q_i`` ``(..., m, n)`` of a per-pose function of the blocks.
+
+        Every pose moves by the same joint shift, so the plans' rows, shifted, are the
+        shifted plans' rows where they carry nothing else that depends on the poses
+        (no reference orientations): what the model chose for them (an instrument's
+        feature) is chosen once."""
+        rows = self._rows
+        if rows.frames is not None:
+            return pose_derivative(lambda q: value(self._blocks_at(q)), self.q)
+        base = np.asarray(rows.q)
+
+        def shifted(q: np.ndarray) -> np.ndarray:
+            shift = (q - self.q).reshape(-1, q.shape[-1])[0]
+            return value(self._blocks_at(q, replace(rows, q=base + shift)))
+
+        return pose_derivative(shifted, self.q)
 
     def _quadratic_derivative(
         self, weight: np.ndarray, weighted: np.ndarray | None = None

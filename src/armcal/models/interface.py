@@ -1052,11 +1052,42 @@ class DesignRole(Protocol):
         ``det M <= 1`` with equality iff ``M = I`` (the criteria are then efficiencies)."""
         ...
 
-    def meeting_poses(self, q: np.ndarray, params: np.ndarray | None = None) -> np.ndarray:
+    @property
+    def constrained(self) -> bool:
+        """Whether a pose is measured only where the tool meets the instrument (touches a
+        plane, sits in a point, lies within a distance's range): plans are then made of
+        poses moved there (:meth:`meeting_poses`), not of any pose within the limits."""
+        ...
+
+    @property
+    def feature_labels(self) -> tuple[str, ...]:
+        """The features of the instrument rows touch (:attr:`Conditions.feature` indexes
+        them: planes, fixed points), empty for one that sees the tool anywhere."""
+        ...
+
+    @property
+    def touches(self) -> bool:
+        """Whether a row reports only that the tool meets the instrument (a touch of a
+        plane, a seating in a point): its reading is 0 by definition, and its noise is in
+        where the arm stopped, so virtual rows carry it in their joint readings
+        (:meth:`meeting_poses` with ``miss``)."""
+        ...
+
+    def meeting_poses(
+        self,
+        q: np.ndarray,
+        params: np.ndarray | None = None,
+        miss: np.ndarray | None = None,
+        feature: np.ndarray | None = None,
+    ) -> tuple[np.ndarray, np.ndarray]:
         """The poses of ``q`` ``(m, n)`` moved to meet the instrument at ``params``
         (default nominal): each to the nearest touch or seat of the feature it is nearest
-        to, by the smallest joint change, those that cannot left out (``(m', n)``, within
-        the limits).  An instrument that sees the tool anywhere (a tracker) leaves them.
+        to, by the smallest joint change; and which of them do (boolean ``(m,)``: met,
+        within the limits).  ``miss`` ``(m, d)``: where the instrument's miss is that
+        instead of 0 (a touch off the plane by its noise); ``feature`` ``(m,)``: the
+        feature each is moved onto instead of its nearest at the nominal parameters (a
+        virtual lab's touch of the plane the plan meant).  An instrument that sees the
+        tool anywhere (a tracker) leaves them, every one met.
         """
         ...
 

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Mapping
+from typing import Any
 
 import numpy as np
 
@@ -117,6 +118,40 @@ def spatial_model_lines(
         lines.append("held at nominal, because the measurements cannot separate them:")
         lines += [f"  {held_sentence(held)}" for held in arm.merges]
     noise = _noise_text(arm)
+    if noise is not None:
+        lines.append(f"noise model: {noise}; not isotropic iid: weighted least squares")
+    return lines
+
+
+def instrumented_model_lines(
+    model: Any,
+    *,
+    plan: bool = True,
+    words: Mapping[str, str] = ACTIONS,
+    registered: bool = False,
+) -> list[str]:
+    """An arm measured by a plane, fixed points or a distance: the instrument, what it
+    cannot see, the identifiable set and what the rows cannot separate."""
+    instrument = model.instrument
+    inner = model.inner
+    lines = [
+        f"instrument: {instrument.kind} ({', '.join(instrument.labels)}), identified with the "
+        f"arm: {', '.join(instrument.param_names)}",
+        f"what it cannot see: {instrument.unseen}",
+        f"identifiable set: {model.n_free} of {model.n_params} parameters (the arm's "
+        f"{inner.n_free}, the instrument's {model.n_free - inner.n_free}); the arm's base is "
+        "the frame the instrument is placed in",
+    ]
+    base = set(model.base_names)
+    user = [n for n in getattr(inner, "user_fixed", ()) if n not in base]
+    user += list(model.instrument_fixed)
+    if user:
+        lines.append(f"fixed (held at nominal, not identified): {', '.join(user)}")
+    merges = tuple(getattr(inner, "merges", ()))
+    if merges:
+        lines.append("held at nominal, because the measurements cannot separate them:")
+        lines += [f"  {held_sentence(held)}" for held in merges]
+    noise = _noise_text(model)
     if noise is not None:
         lines.append(f"noise model: {noise}; not isotropic iid: weighted least squares")
     return lines

@@ -293,12 +293,12 @@ def validate_measurements(
         raise InputError(
             f"{source}: has a target column but the calibration has no targets; remove the column"
         )
-    if arm.target_labels and meas.targets is None:
+    if len(arm.target_labels) > (meas.feature is not None) and meas.targets is None:
         raise InputError(
             f"{source}: the calibration has targets ({', '.join(arm.target_labels)}); add a "
             "column 'target' naming the target of every row"
         )
-    points = meas.xy if meas.z is None else meas.instrument_points
+    points = meas.xy if meas.z is None and meas.readings is None else meas.instrument_points
     loads = row_loads(cal.model, meas)
     target = row_targets(arm, meas)
     mistake = unit_mistake_of(cal.model, meas, target, loads)
@@ -312,6 +312,7 @@ def validate_measurements(
             target=target,
             row_sigma=meas.row_sigma,
             loads=loads,
+            feature=meas.feature,
         )
     except ArmcalError as exc:
         raise prefixed(source, exc) from None

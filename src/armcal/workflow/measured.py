@@ -17,13 +17,16 @@ from ..files import Measurements, RobotSpec
 from ..identification import Calibration, identify
 from ..instrument import identify_3d
 from ..models import FitModel, Loads, PlanarArm, SpatialArm, Target
-from ..models.interface import target_indices
+from ..models.interface import Conditions, target_indices
 from ..plausibility import explain, suspicious, unit_mistake
 from .setup import FixError, fit_model, model_spec, prefixed
 
 __all__ = [
+    "check_meeting",
+    "fit_instrumented",
     "fit_planar",
     "fit_spatial",
+    "instrument_rows",
     "measured_arm",
     "row_targets",
     "spatial_measured_arm",
@@ -132,7 +135,11 @@ def unit_mistake_of(
 ) -> str | None:
     """What in ``meas`` looks like a unit mistake for ``model`` (:func:`unit_mistake`), checked
     before the fit: positions in metres or another unit, angles in radians (joints, a
-    6-DoF instrument's orientations)."""
+    6-DoF instrument's orientations).  A plane's, a point's or a distance's rows have
+    no coordinates to misread: their rows are checked against the instrument's
+    geometry instead (:func:`check_meeting`)."""
+    if meas.readings is not None:
+        return None
     points = meas.xy if meas.z is None else meas.xyz
     return unit_mistake(
         model, meas.q, points, target=target, loads=loads, orientations=meas.orientation
@@ -240,3 +247,84 @@ def fit_spatial(
     except ValueError as exc:
         raise InputError(f"{source}: {unrendered(exc)}") from None
     return cal, points
+
+
+def fit_instrumented(
+    spec: RobotSpec,
+    meas: Measurements,
+    *,
+    source: str,
+    fixed: tuple[str, ...] | None,
+    sigma: float | None,
+    method: str,
+    robust: bool,
+) -> tuple[Calibration, np.ndarray]:
+    """The part of :func:`armcal.workflow.calibrate` for an arm measured by a plane, fixed
+    points or a distance: every row's feature and reading, its rows checked against the
+    instrument's geometry where the robot file places it (:func:`instrument_rows`), and
+    the fit from where the arm meets the readings."""
+    try:
+        spec, model = model_spec(spec, spec.arm, fixed=fixed, sigma=sigma)
+        rows = instrument_rows(model, meas)
+        points = meas.instrument_points
+        check_meeting(source, model, rows, points, meas)
+        cal = identify(
+            model,
+            meas.q,
+            points,
+            method=method,
+            robust=robust,
+            pose_labels=meas.labels,
+            rows=meas.rows,
+            conditions=rows,
+        )
+    except (InputError, FixError):
+        raise
+    except ArmcalError as exc:
+        raise prefixed(source, exc) from None
+    except ValueError as exc:
+        raise InputError(f"{source}: {unrendered(exc)}") from None
+    return cal, points
+
+
+def instrument_rows(model: FitModel, meas: Measurements) -> Conditions:
+    """The rows of ``meas`` for an arm measured by an instrument: joints, targets (the
+    target column, else the arm's one tool point), features and per-row sigma."""
+    if meas.targets is None and len(model.target_labels) > 1:
+        raise InputError(
+            f"{model.name} has targets ({', '.join(model.target_labels)}) but the measurements "
+            "have no target column; add a column 'target' naming the tool point of every row"
+        )
+    return model.conditions(
+        meas.q, target=meas.targets, sigma_mm=meas.row_sigma, feature=meas.feature
+    )
+
+
+#: A row whose reading differs from the others' by more than this fraction of the arm's reach,
+#: at the nominal arm and the instrument where the robot file places it, is not of this
+#: instrument (a wrong label, a pose that touched nothing): no error of a few mm and a degree
+#: in the arm, nor the user's rough placement of the instrument, moves a reading that far.
+_FAR_FROM_FEATURE = 0.1
+
+
+def check_meeting(
+    source: str, model: FitModel, rows: Conditions, points: np.ndarray, meas: Measurements
+) -> None:
+    """InputError for a row that violates the instrument's geometry: its reading, against
+    what the nominal arm and the robot file's instrument predict, differs from the rows'
+    median difference by more than :data:`_FAR_FROM_FEATURE` of the reach (module
+    notes of :data:`_FAR_FROM_FEATURE`)."""
+    found = np.asarray(points, dtype=float) - np.asarray(model.positions(rows))
+    spread = np.linalg.norm(found - np.median(found, axis=0), axis=-1)
+    limit = _FAR_FROM_FEATURE * model.reach_mm
+    if not spread.size or spread.max() <= limit:
+        return
+    r = int(np.argmax(spread))
+    feature = "" if meas.feature is None else f" {meas.feature[r]!r}"
+    raise InputError(
+        f"{source}: row {meas.rows[r]}: at its joint readings the nominal arm's tool point is "
+        f"{spread[r]:.4g} mm from where the other rows put the instrument's feature{feature} "
+        f"(at most {limit:.4g} mm, a tenth of the reach, is an error of the arm or of where "
+        "the robot file places the instrument); check the row's joint readings and its "
+        "label, and where [instrument] places the feature"
+    )

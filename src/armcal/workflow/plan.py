@@ -74,7 +74,11 @@ class Synthesis:
         What the virtual robot adds to its geometry ("joint compliance"), or "".
     warnings : tuple of ArmcalWarning
         ``truth-large`` for a virtual arm far from its nominal model
-        (:func:`armcal.plausibility.truth_warning`).
+        (:func:`armcal.plausibility.truth_warning`); ``poses-unmet`` for poses where the
+        true arm cannot meet its instrument (left out).
+    feature : ndarray of int, shape (r,), or None
+        The feature every row touches, for an instrument of several
+        (:attr:`armcal.models.Conditions.feature`).
     """
 
     q: np.ndarray
@@ -85,6 +89,7 @@ class Synthesis:
     sigma_mm: float
     effect: str
     warnings: tuple[ArmcalWarning, ...] = ()
+    feature: np.ndarray | None = None
 
 
 def synthesize_plan(
@@ -101,6 +106,14 @@ def synthesize_plan(
     ``truth``, every target of every pose, each pose with its ``loads``; ``sigma`` as for
     :func:`armcal.synthesis.synthesize_measurements`.  The rows of a pose carry its label
     from ``pose_labels`` (the plan's ``pose`` column), else its number.
+
+    Where a pose must meet the instrument (a touch, a seating, a distance within range)
+    it is moved to where the true arm meets it, by the smallest joint change
+    (:meth:`~armcal.models.interface.FitModel.meeting_poses`); a row that reports only
+    that it meets it (:attr:`~armcal.models.interface.FitModel.touches`) reads 0, and
+    its noise is where the arm stopped: its joints are moved on until the true reading
+    is the noise drawn (with the sign that makes the reading 0 its measurement).  Poses
+    that cannot are left out, with a ``poses-unmet`` warning.
     """
     # Imported here, not with the module: design and evaluate need neither the synthesis
     # nor the fit behind the truth's check (a lazy import of a slow dependency).
@@ -108,7 +121,19 @@ def synthesize_plan(
     from ..synthesis import synthesize_measurements
 
     arm = model.arm
+    meant = model.plan_conditions(q, loads).feature  # what the plan's poses touch
+    moved, met = model.meeting_poses(q, truth, feature=meant)  # where the true arm does
+    unmet = _unmet_warning(model, met)
+    if not met.any():
+        raise ArmcalError(str(unmet.message) if unmet else "no pose meets the instrument")
+    q = moved[met]
+    if pose_labels is not None:
+        pose_labels = tuple(np.array(pose_labels, dtype=object)[met])
+    if loads is not None:
+        loads = loads.take(met)
     rows = model.plan_conditions(q, loads)
+    if meant is not None:
+        rows = replace(rows, feature=meant[met])
     if model.point_dim > model.position_dim:  # a 6-DoF instrument's noise turns the true
         rows = rows.with_frames(None)  # orientations: drawn about them
         rows, _ = model.anchor(rows, model.positions(rows, truth))
@@ -121,8 +146,18 @@ def synthesize_plan(
         target=rows.target,
         loads=rows.loads,
         frames=rows.frames,
+        feature=rows.feature,
     )
     points = model.unanchor(rows, points)
+    if model.touches:  # a touch reads 0: its noise is where the arm stopped
+        noisy, stopped = model.meeting_poses(rows.q, truth, miss=-points, feature=rows.feature)
+        rows = replace(rows.take(stopped), q=noisy[stopped])
+        points = np.zeros_like(points[stopped])
+        if pose_labels is not None:
+            pose_labels = tuple(np.array(pose_labels, dtype=object)[stopped])
+        kept = met.copy()
+        kept[met] = stopped
+        unmet = _unmet_warning(model, kept)
     labels = targets = None
     names = arm.target_labels
     count = max(1, len(names))  # every target measured at every pose, one row each
@@ -134,12 +169,30 @@ def synthesize_plan(
     if names:
         index = np.zeros(rows.m, dtype=int) if rows.target is None else rows.target
         targets = tuple(names[t] for t in index)
-    shown = sigma if sigma is not None else float(arm.sigma or 0.0)
+    shown = sigma if sigma is not None else float(0.0 if arm.noise is None else arm.noise.sigma_mm)
     effect = "" if model.effect is None else model.effect.name
     payload_kg = None if rows.loads is None else rows.loads.payload_kg
     found = truth_warning(model, truth)
-    warnings = () if found is None else (found,)
-    return Synthesis(rows.q, points, labels, targets, payload_kg, shown, effect, warnings)
+    warnings = tuple(w for w in (found, unmet) if w is not None)
+    return Synthesis(
+        rows.q, points, labels, targets, payload_kg, shown, effect, warnings, rows.feature
+    )
+
+
+def _unmet_warning(model: FitModel, met: np.ndarray) -> ArmcalWarning | None:
+    """``poses-unmet``: poses of the plan where the true arm cannot meet its instrument (a
+    touch beyond reach or the limits), left out of the virtual measurements."""
+    if met.all():
+        return None
+    rows = np.flatnonzero(~met)
+    shown = ", ".join(str(r + 1) for r in rows[:5]) + (", ..." if rows.size > 5 else "")
+    return ArmcalWarning(
+        "poses-unmet",
+        f"{rows.size} of {met.size} poses of the plan (rows {shown}) cannot meet the "
+        "instrument for the arm as it really is (beyond the joint limits or out of reach) "
+        "and are left out of the measurements; design the plan for this instrument "
+        "(armcal design) or move those poses",
+    )
 
 
 @dataclass(frozen=True, eq=False)

@@ -1,0 +1,234 @@
+"""The ``[instrument]`` table of an instrument other than a tracker: where it roughly is.
+
+A robot file's ``[instrument]`` names its ``kind`` (PRODUCT.md, "Instruments"):
+absent, ``tracker`` or ``probe``, the instrument reports points (or poses) and
+the table's keys say where it stands for plans (:mod:`armcal.files.spatial`);
+``plane``, ``point`` or ``distance``, it is an instrument of
+:mod:`armcal.instruments`, read here:
+
+* ``plane``: ``planes = { LABEL = { normal = [x, y, z], offset_mm = d } }``, every
+  plane ``normal . p = d`` in the robot's base frame;
+* ``point``: ``points = { LABEL = { xyz_mm = [x, y, z] } }``;
+* ``distance``: ``pivot_mm = [x, y, z]`` and ``range_mm = [least, greatest]``, the
+  distances from the pivot it reads (a truth file may give the reading's
+  ``offset_mm`` too).
+
+The same table, written back by :func:`instrument_section`, is a calibration
+file's ``instrument`` section and a truth file's ``[instrument]`` (where the
+virtual lab's instrument really is).
+"""
+
+from __future__ import annotations
+
+import os
+from dataclasses import replace
+from typing import Any
+
+import numpy as np
+
+from ..errors import InputError
+from ..families.registry import RobotSpec, family_of
+from ..instruments import Distance, FixedPoints, Instrument, Plane, Planes
+from .common import check_keys, fail, load_toml, number, numbers, shown, suggest
+
+__all__ = [
+    "CONTACT_KINDS",
+    "INSTRUMENT_KINDS",
+    "TRACKER_KINDS",
+    "instrument_kind",
+    "instrument_section",
+    "instrumented_truth",
+    "read_instrument",
+    "true_instrument",
+]
+
+#: Kinds whose rows report points (or poses): the table says where they stand for plans.
+TRACKER_KINDS = ("tracker", "probe")
+#: Kinds of :mod:`armcal.instruments`, read here.
+CONTACT_KINDS = ("plane", "point", "distance")
+#: Every kind PRODUCT.md names, in its order.
+INSTRUMENT_KINDS = ("tracker", "probe", "plane", "point", "distance", "partial", "camera")
+
+#: The keys each kind's table takes (with ``kind``); a truth file's distance adds the offset.
+_KEYS = {
+    "plane": ("kind", "planes"),
+    "point": ("kind", "points"),
+    "distance": ("kind", "pivot_mm", "range_mm"),
+}
+
+
+def instrument_kind(path: str | os.PathLike, table: Any, where: str = "instrument") -> str:
+    """The ``kind`` of an ``[instrument]`` table (``tracker`` where it has none)."""
+    if table is None:
+        return "tracker"
+    if not isinstance(table, dict):
+        raise fail(path, f"key '{where}': expected a table [{where}]")
+    kind = table.get("kind", "tracker")
+    if kind not in INSTRUMENT_KINDS:
+        raise fail(
+            path,
+            f"key '{where}.kind': {shown(str(kind))} is not an instrument: "
+            f"{suggest(str(kind), INSTRUMENT_KINDS)}the kinds are {', '.join(INSTRUMENT_KINDS)}",
+        )
+    if kind in ("partial", "camera"):
+        raise fail(
+            path,
+            f"key '{where}.kind': this version of armcal does not read {kind} measurements "
+            f"yet; the kinds it reads are {', '.join(TRACKER_KINDS + CONTACT_KINDS)}",
+        )
+    return str(kind)
+
+
+def read_instrument(
+    path: str | os.PathLike, table: Any, where: str = "instrument", *, truth: bool = False
+) -> Instrument | None:
+    """The instrument of an ``[instrument]`` table (module notes); None for a tracker's.
+
+    ``truth``: a truth file's table, whose distance may give its ``offset_mm``.
+
+    Raises
+    ------
+    InputError
+        Naming the file and the key: an unknown kind or key, a missing one, a normal
+        of zero length, a range that is not ``0 <= least < greatest``.
+    """
+    kind = instrument_kind(path, table, where)
+    if kind in TRACKER_KINDS:
+        return None
+    allowed = _KEYS[kind] + (("offset_mm",) if truth and kind == "distance" else ())
+    check_keys(path, table, allowed, f"{where}.", robot=False)
+    if kind == "plane":
+        entries = _labelled(
+            path, table, where, "planes", "{ normal = [0, 0, 1], offset_mm = 150 }"
+        )
+        planes = {}
+        for label, entry in entries.items():
+            key = f"{where}.planes.{label}"
+            _entry_keys(path, entry, key, ("normal", "offset_mm"))
+            normal = np.array(numbers(path, entry["normal"], f"{key}.normal", 3))
+            if not np.any(normal):
+                raise fail(
+                    path, f"key '{key}.normal': a normal of zero length; give its direction"
+                )
+            planes[label] = Plane(normal, number(path, entry["offset_mm"], f"{key}.offset_mm"))
+        return Planes(planes)
+    if kind == "point":
+        entries = _labelled(path, table, where, "points", "{ xyz_mm = [900, 0, 200] }")
+        points = {}
+        for label, entry in entries.items():
+            key = f"{where}.points.{label}"
+            _entry_keys(path, entry, key, ("xyz_mm",))
+            points[label] = np.array(numbers(path, entry["xyz_mm"], f"{key}.xyz_mm", 3))
+        return FixedPoints(points)
+    for key in ("pivot_mm", "range_mm"):
+        if key not in table:
+            raise fail(path, f"key '{where}': a distance needs {key} ({_DISTANCE_EXAMPLE})")
+    pivot = np.array(numbers(path, table["pivot_mm"], f"{where}.pivot_mm", 3))
+    low, high = numbers(path, table["range_mm"], f"{where}.range_mm", 2)
+    if not 0.0 <= low < high:
+        raise fail(
+            path,
+            f"key '{where}.range_mm': need 0 <= least < greatest, got [{low:g}, {high:g}] "
+            "(the distances from the pivot the instrument reads, mm)",
+        )
+    offset = number(path, table.get("offset_mm", 0.0), f"{where}.offset_mm")
+    return Distance(pivot, (low, high), offset)
+
+
+_DISTANCE_EXAMPLE = "pivot_mm = [800, 0, 0], range_mm = [95, 155]"
+
+
+def _labelled(path, table: dict, where: str, key: str, example: str) -> dict[str, Any]:
+    """A kind's table of features by label, at least one."""
+    entries = table.get(key)
+    if not isinstance(entries, dict) or not entries:
+        raise fail(
+            path,
+            f"key '{where}.{key}': expected a table of features by label, as "
+            f"{key} = {{ A = {example} }}",
+        )
+    for label in entries:
+        if not label.strip() or label != label.strip():
+            raise fail(path, f"key '{where}.{key}': a label {label!r} is empty or padded")
+    return dict(entries)
+
+
+def _entry_keys(path, entry: Any, key: str, needed: tuple[str, ...]) -> None:
+    if not isinstance(entry, dict):
+        raise fail(path, f"key '{key}': expected an inline table {{ {needed[0]} = ... }}")
+    check_keys(path, entry, needed, f"{key}.", robot=False)
+    for name in needed:
+        if name not in entry:
+            raise fail(path, f"key '{key}': missing {name}")
+
+
+def true_instrument(path: str | os.PathLike, table: Any, instrument: Instrument) -> np.ndarray:
+    """The parameters ``(t,)`` of ``instrument`` (the robot file's) where a truth file's
+    ``[instrument]`` table says the virtual lab's really is; where it says nothing, the
+    robot file's (its start: the user's guess is right)."""
+    if table is None:
+        return np.asarray(instrument.start, dtype=float)
+    if isinstance(table, dict) and "kind" not in table:
+        table = {**table, "kind": instrument.kind}
+    true = read_instrument(path, table, truth=True)
+    if true is None or true.kind != instrument.kind or true.labels != instrument.labels:
+        found = "a tracker" if true is None else f"a {true.kind} ({', '.join(true.labels)})"
+        raise fail(
+            path,
+            f"key 'instrument': the true instrument is {found}, but the robot file's is a "
+            f"{instrument.kind} ({', '.join(instrument.labels)}); describe the same features",
+        )
+    try:
+        return np.asarray(instrument.params_of(true), dtype=float)
+    except ValueError as exc:
+        raise InputError(f"{os.fspath(path)}: key 'instrument': {exc}") from None
+
+
+def instrument_section(instrument: Instrument) -> dict[str, Any]:
+    """The ``[instrument]`` table of ``instrument`` where the user said it is (its start),
+    as :func:`read_instrument` reads it back (a calibration file's ``instrument``)."""
+    if isinstance(instrument, Planes):
+        planes = {
+            label: {"normal": plane.normal.tolist(), "offset_mm": plane.offset_mm}
+            for label, plane in instrument.planes.items()
+        }
+        return {"kind": "plane", "planes": planes}
+    if isinstance(instrument, FixedPoints):
+        points = {label: {"xyz_mm": xyz.tolist()} for label, xyz in instrument.points.items()}
+        return {"kind": "point", "points": points}
+    if isinstance(instrument, Distance):
+        return {
+            "kind": "distance",
+            "pivot_mm": instrument.pivot_mm.tolist(),
+            "range_mm": list(instrument.range_mm),
+        }
+    raise TypeError(f"no [instrument] table for {type(instrument).__name__}")
+
+
+def instrumented_truth(
+    robot: RobotSpec,
+    model: Any,
+    path: str | os.PathLike | None,
+    *,
+    links: tuple[str | None, str | None] = (None, None),
+    geometry_only: bool = False,
+) -> np.ndarray:
+    """The virtual lab's parameters of ``model`` (an arm measured by an instrument): the
+    arm's from the truth file as its own family reads it, its base at the origin of its
+    frame (where the instrument is placed), then the instrument's where the file's
+    ``[instrument]`` says it really is (:func:`true_instrument`)."""
+    inner = model.inner
+    found = path if path is not None else robot.default_truth
+    arm = family_of(inner).role("truth")(
+        replace(robot, arm=robot.arm.inner), inner, found, links=links, geometry_only=geometry_only
+    )
+    data = {} if found is None else load_toml(found, "truth")
+    if "base" in data:
+        raise fail(
+            found,
+            f"key 'base': the arm is measured by a {model.instrument.kind} instrument, placed "
+            "in the robot's own base frame; remove base (say where the instrument really is "
+            "in [instrument])",
+        )
+    theta = true_instrument(found or "truth", data.get("instrument"), model.instrument)
+    return np.concatenate([np.asarray(arm, dtype=float), theta])

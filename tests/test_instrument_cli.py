@@ -1,0 +1,239 @@
+"""Planes, fixed points and distances through the front door: robot and truth files, the
+measurement CSV, the calibration JSON and the commands (issue 38).
+
+A virtual lab is a built-in six-axis arm's robot file with a tool point in ``[targets]``
+and an ``[instrument]`` table (where the user roughly knows the instrument is), and its
+built-in truth without the tracker's ``base`` and with the true instrument (10 mm and
+1-2 degrees from the user's).  The plan is random poses within the limits moved onto
+the rough instrument (what ``design`` does before it chooses); ``synthesize`` moves
+them onto the true one.  Tolerances: readings of points about 2 m from the base are
+exact to about 1e-12 mm (5 ulp at 2000 mm); a held-out RMS below 1e-9 mm is round-off.
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import pytest
+
+from armcal.choices import BUILTIN_SPATIAL_ROBOTS
+from armcal.files import load_robot
+from helpers import run_cli
+from helpers_instruments import TOOL, met_plan, write_lab
+
+
+def ok(folder: Path, *args: str) -> str:
+    run = run_cli(folder, *args)
+    assert run.returncode == 0, run.stderr
+    return run.stdout
+
+
+@pytest.mark.parametrize(
+    ("robot", "kind", "poses"),
+    [
+        ("industrial-6r", "plane", 150),
+        ("cobot-6r", "plane", 150),
+        ("industrial-6r", "point", 150),
+        ("cobot-6r", "point", 150),
+        ("industrial-6r", "distance", 150),
+        ("cobot-6r", "distance", 150),
+    ],
+)
+def test_noiseless_lab_is_recovered_on_held_out_rows(tmp_path, robot, kind, poses):
+    """synthesize (noiseless) -> identify -> validate on other poses: the calibrated model
+    predicts every held-out reading to round-off, from the user's rough instrument."""
+    robot_file, truth = write_lab(tmp_path, robot, kind)
+    train = met_plan(tmp_path, robot_file, poses, 1, "train.csv")
+    test = met_plan(tmp_path, robot_file, 30, 2, "test.csv")
+    for plan, meas in ((train, "meas.csv"), (test, "held.csv")):
+        ok(
+            tmp_path,
+            "synthesize",
+            "--robot",
+            robot_file.name,
+            "--plan",
+            plan.name,
+            "--truth",
+            truth.name,
+            "--sigma",
+            "0",
+            "-o",
+            meas,
+        )
+    header = (tmp_path / "meas.csv").read_text(encoding="utf-8").splitlines()[0]
+    assert "x_mm" not in header
+    assert ("distance_mm" in header) == (kind == "distance")
+    assert header.endswith(f",{kind}") == (kind in ("plane", "point"))
+    ok(
+        tmp_path,
+        "identify",
+        "--robot",
+        robot_file.name,
+        "--measurements",
+        "meas.csv",
+        "-o",
+        "cal.json",
+    )
+    document = json.loads((tmp_path / "cal.json").read_text(encoding="utf-8"))
+    assert document["robot"]["kind"] == "instrumented"
+    assert document["robot"]["instrument"]["kind"] == kind
+    assert document["robot"]["unseen"]
+    names = [p["name"] for p in document["parameters"]]
+    model = load_robot(robot_file).arm
+    assert names == list(model.param_names)
+    summary = json.loads(
+        ok(
+            tmp_path,
+            "validate",
+            "--calibration",
+            "cal.json",
+            "--measurements",
+            "held.csv",
+            "--json",
+        )
+    )
+    assert summary["rms_after_mm"] < 1e-9
+    assert summary["rms_before_mm"] > 1e-3  # the nominal arm misses by the arm's errors
+
+
+def test_noisy_fit_is_consistent_with_sigma(tmp_path):
+    """Touches with noise (sigma 0.01 mm, in where the arm stopped) fit with chi2 near its
+    dof: the noise a touch carries is the noise the fit expects."""
+    robot_file, truth = write_lab(tmp_path, "industrial-6r", "plane")
+    met_plan(tmp_path, robot_file, 80, 3, "plan.csv")
+    ok(
+        tmp_path,
+        "synthesize",
+        "--robot",
+        robot_file.name,
+        "--plan",
+        "plan.csv",
+        "--truth",
+        truth.name,
+        "--seed",
+        "4",
+        "-o",
+        "meas.csv",
+    )
+    document = json.loads(
+        ok(
+            tmp_path,
+            "identify",
+            "--robot",
+            robot_file.name,
+            "--measurements",
+            "meas.csv",
+            "--json",
+        )
+    )
+    fit = document["goodness_of_fit"]
+    assert 1e-3 < fit["p_value"] < 1 - 1e-3, fit
+    assert not [w for w in document["warnings"] if w["code"] == "fit-inconsistent"]
+
+
+def test_evaluate_and_simulate_take_an_instrument(tmp_path):
+    """evaluate and simulate work through the instrument's model, and name its parameters."""
+    robot_file, truth = write_lab(tmp_path, "cobot-6r", "distance")
+    met_plan(tmp_path, robot_file, 40, 5, "plan.csv")
+    quality = json.loads(
+        ok(tmp_path, "evaluate", "--robot", robot_file.name, "--plan", "plan.csv", "--json")
+    )
+    assert "pivot.x" in quality["predicted_std"] and "offset" in quality["predicted_std"]
+    result = json.loads(
+        ok(
+            tmp_path,
+            "simulate",
+            "--robot",
+            robot_file.name,
+            "--plan",
+            "plan.csv",
+            "--truth",
+            truth.name,
+            "--trials",
+            "40",
+            "--json",
+        )
+    )
+    assert result["trials"] == 40
+    assert set(result["empirical_std"]) == set(result["predicted_std"])
+
+
+BAD_ROBOTS = {
+    "unknown kind": ('kind = "planes"\n', "did you mean 'plane'"),
+    "camera": ('kind = "camera"\n', "does not read camera"),
+    "zero normal": (
+        'kind = "plane"\nplanes = { top = { normal = [0, 0, 0], offset_mm = 1.0 } }\n',
+        "zero length",
+    ),
+    "range": ('kind = "distance"\npivot_mm = [0, 0, 0]\nrange_mm = [200, 100]\n', "least"),
+    "unreachable distance": (
+        'kind = "distance"\npivot_mm = [9000, 0, 0]\nrange_mm = [100, 200]\n',
+        "no pose can meet it",
+    ),
+    "unreachable plane": (
+        'kind = "plane"\nplanes = { far = { normal = [0, 0, 1], offset_mm = 9000.0 } }\n',
+        "beyond the tool's reach",
+    ),
+    "tracker key": (
+        'kind = "plane"\nplanes = { a = { normal = [0, 0, 1], '
+        "offset_mm = 1.0 } }\nposition_mm = [0, 0, 0]\n",
+        "position_mm",
+    ),
+}
+
+
+@pytest.mark.parametrize("case", sorted(BAD_ROBOTS))
+def test_bad_instrument_table_is_one_line(tmp_path, case):
+    table, words = BAD_ROBOTS[case]
+    source = BUILTIN_SPATIAL_ROBOTS["cobot-6r"].read_text(encoding="utf-8")
+    (tmp_path / "r.toml").write_text(f"{source}\n{TOOL}[instrument]\n{table}", encoding="utf-8")
+    (tmp_path / "p.csv").write_text("q1_deg,q2_deg,q3_deg,q4_deg,q5_deg,q6_deg\n0,0,0,0,0,0\n")
+    run = run_cli(tmp_path, "evaluate", "--robot", "r.toml", "--plan", "p.csv")
+    assert run.returncode == 2, run.stderr
+    lines = run.stderr.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith("armcal: error: r.toml"), run.stderr
+    assert words in lines[0]
+
+
+def test_bad_measurements_are_one_line(tmp_path):
+    """A label that is no plane, a missing label column with two planes, a tracker's
+    columns, and a row whose tool is far from its plane: exit 2, file and row named."""
+    robot_file, truth = write_lab(tmp_path, "industrial-6r", "plane")
+    met_plan(tmp_path, robot_file, 40, 6, "plan.csv")
+    ok(
+        tmp_path,
+        "synthesize",
+        "--robot",
+        robot_file.name,
+        "--plan",
+        "plan.csv",
+        "--truth",
+        truth.name,
+        "-o",
+        "meas.csv",
+    )
+    good = (tmp_path / "meas.csv").read_text(encoding="utf-8").splitlines()
+    head, rows = good[0], good[1:]
+    wrong_label = rows[0].rsplit(",", 1)[0] + ",tpo"
+    other = "side" if rows[0].endswith("top") else "top"
+    swapped = rows[0].rsplit(",", 1)[0] + "," + other
+    cases = {
+        "label": ([head, wrong_label, *rows[1:]], "row 1 (line 2), column plane", "'top'"),
+        "no column": (
+            [head.rsplit(",", 1)[0], *(r.rsplit(",", 1)[0] for r in rows)],
+            "missing column 'plane'",
+            "add a column 'plane'",
+        ),
+        "tracker": ([head + ",x_mm", *(r + ",1" for r in rows)], "unknown column 'x_mm'", ""),
+        "geometry": ([head, swapped, *rows[1:]], "row 1:", "from where the other rows put"),
+    }
+    for name, (lines, where, words) in cases.items():
+        (tmp_path / "bad.csv").write_text("\n".join(lines) + "\n", encoding="utf-8")
+        run = run_cli(
+            tmp_path, "identify", "--robot", robot_file.name, "--measurements", "bad.csv"
+        )
+        assert run.returncode == 2, (name, run.stderr)
+        err = run.stderr.strip().splitlines()
+        assert len(err) == 1 and err[0].startswith("armcal: error:"), (name, run.stderr)
+        assert where in err[0] and words in err[0], (name, err[0])
