@@ -15,6 +15,7 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from armcal.choices import BUILTIN_SPATIAL_ROBOTS
@@ -237,3 +238,72 @@ def test_bad_measurements_are_one_line(tmp_path):
         err = run.stderr.strip().splitlines()
         assert len(err) == 1 and err[0].startswith("armcal: error:"), (name, run.stderr)
         assert where in err[0] and words in err[0], (name, err[0])
+
+
+def test_validation_figure_and_compensation_of_an_instrument(tmp_path):
+    """validate draws a touch calibration's errors against the pose (no arrows: a touch
+    reads no position) and a figure test checks what it plots; compensate refuses, in
+    one line, a calibration of the arm with its instrument."""
+    from armcal.files import read_calibration, read_measurements
+    from armcal.plotting import plot_validation
+    from armcal.validation import validate
+
+    robot_file, truth = write_lab(tmp_path, "industrial-6r", "plane")
+    met_plan(tmp_path, robot_file, 60, 7, "plan.csv")
+    met_plan(tmp_path, robot_file, 30, 8, "check-plan.csv")
+    for plan, meas in (("plan.csv", "meas.csv"), ("check-plan.csv", "check.csv")):
+        ok(
+            tmp_path,
+            "synthesize",
+            "--robot",
+            robot_file.name,
+            "--plan",
+            plan,
+            "--truth",
+            truth.name,
+            "-o",
+            meas,
+        )
+    ok(
+        tmp_path,
+        "identify",
+        "--robot",
+        robot_file.name,
+        "--measurements",
+        "meas.csv",
+        "-o",
+        "cal.json",
+    )
+    ok(
+        tmp_path,
+        "validate",
+        "--calibration",
+        "cal.json",
+        "--measurements",
+        "check.csv",
+        "--plot",
+        "v.png",
+        "--report",
+        "v.html",
+    )
+    assert (tmp_path / "v.png").stat().st_size > 0 and (tmp_path / "v.html").is_file()
+    cal = read_calibration(tmp_path / "cal.json")
+    meas = read_measurements(tmp_path / "check.csv", cal.arm)
+    result = validate(cal, meas.q, meas.readings, feature=meas.feature)
+    fig = plot_validation(cal.arm, meas.q, result)
+    assert len(fig.axes) == 2  # the errors against the pose and their distribution
+    plotted = fig.axes[1].lines[1].get_ydata()
+    np.testing.assert_array_equal(plotted, result.after_mm)
+    run = run_cli(
+        tmp_path,
+        "compensate",
+        "--calibration",
+        "cal.json",
+        "--program",
+        "check-plan.csv",
+        "-o",
+        "corrected.csv",
+    )
+    assert run.returncode == 2 and len(run.stderr.strip().splitlines()) == 1, run.stderr
+    assert "compensate needs the arm alone" in run.stderr
+    assert not (tmp_path / "corrected.csv").exists()

@@ -604,7 +604,9 @@ def plot_validation(
         stated magnification with a key arrow in mm.  Bottom: every row's
         error before and after, and the error the calibration predicts (RMS
         over a pose's rows), against the pose; a pose's rows side by side; and the
-        errors before and after as distribution functions on one scale.
+        errors before and after as distribution functions on one scale.  Rows that
+        read no position in a plane (a touch of a plane, a seating, a distance) have
+        the bottom panels alone.
 
     Raises
     ------
@@ -614,24 +616,14 @@ def plot_validation(
     positions = result.positions
     rows = positions.shape[0]
     of_pose = _pose_of_rows(pose, rows)
-    fig = Figure(figsize=(11, 8.4), layout="constrained")
-    grid = fig.add_gridspec(2, 6, height_ratios=[1.25, 1.0])
-    ax_before = fig.add_subplot(grid[0, :3])
-    ax_after = fig.add_subplot(grid[0, 3:], sharex=ax_before, sharey=ax_before)
-    _error_ecdf(fig.add_subplot(grid[1, 4:]), result.before_mm, result.after_mm)
-    ax_err = fig.add_subplot(grid[1, :4])
-    x_name, y_name, frame = ("x", "y", "instrument frame")
-    if result.out_of_plane_mm is not None:  # 3-D data: the plane fitted in the instrument frame
-        x_name, y_name, frame = ("u", "v", "instrument's plane of motion")
-    _error_arrows(ax_before, positions, result.before, "nominal arm", "0.45")
-    _error_arrows(ax_after, positions, result.after, "calibrated", "tab:red")
-    lo, hi = positions.min(axis=0), positions.max(axis=0)
-    pad = 0.12 * max(float(np.max(hi - lo)), 1.0)  # the longest arrow is a tenth of the spread
-    ax_before.set(xlim=(lo[0] - pad, hi[0] + pad), ylim=(lo[1] - pad, hi[1] + pad))
-    for ax in (ax_before, ax_after):
-        ax.set_aspect("equal", adjustable="box")
-        ax.set_xlabel(f"{x_name} in {frame} [mm]")
-    ax_before.set_ylabel(f"{y_name} in {frame} [mm]")
+    placed = positions.shape[1] >= 2 and not arm.touches  # positions to draw arrows at
+    fig = Figure(figsize=(11, 8.4 if placed else 4.2), layout="constrained")
+    grid = fig.add_gridspec(2, 6, height_ratios=[1.25, 1.0]) if placed else fig.add_gridspec(1, 6)
+    if placed:  # the axes in the order they always had: arrows, distribution, errors
+        _placed_errors(fig, grid, positions, result)
+    low = 1 if placed else 0
+    _error_ecdf(fig.add_subplot(grid[low, 4:]), result.before_mm, result.after_mm)
+    ax_err = fig.add_subplot(grid[low, :4])
     x = _side_by_side(of_pose)
     ax_err.semilogy(
         x, result.before_mm, "o", color="0.45", ms=3, label="nominal arm (registered on its own)"
@@ -651,6 +643,24 @@ def plot_validation(
     default = f"{arm.name}: validation on {count.size} held-out poses{points}"
     fig.suptitle(title if title is not None else default)
     return fig
+
+
+def _placed_errors(fig: Figure, grid, positions: np.ndarray, result) -> None:
+    """The top panels of :func:`plot_validation`: the errors as arrows where they were."""
+    ax_before = fig.add_subplot(grid[0, :3])
+    ax_after = fig.add_subplot(grid[0, 3:], sharex=ax_before, sharey=ax_before)
+    x_name, y_name, frame = ("x", "y", "instrument frame")
+    if result.out_of_plane_mm is not None:  # 3-D data: the plane fitted in the instrument frame
+        x_name, y_name, frame = ("u", "v", "instrument's plane of motion")
+    _error_arrows(ax_before, positions, result.before, "nominal arm", "0.45")
+    _error_arrows(ax_after, positions, result.after, "calibrated", "tab:red")
+    lo, hi = positions.min(axis=0), positions.max(axis=0)
+    pad = 0.12 * max(float(np.max(hi - lo)), 1.0)  # the longest arrow is a tenth of the spread
+    ax_before.set(xlim=(lo[0] - pad, hi[0] + pad), ylim=(lo[1] - pad, hi[1] + pad))
+    for ax in (ax_before, ax_after):
+        ax.set_aspect("equal", adjustable="box")
+        ax.set_xlabel(f"{x_name} in {frame} [mm]")
+    ax_before.set_ylabel(f"{y_name} in {frame} [mm]")
 
 
 def plot_error_map(

@@ -133,17 +133,28 @@ def _maximize_variance(
 #: changes ``d`` by about 1e-18 of its scale near a maximum).
 PROJECTED_STEP, PROJECTED_SMALLEST = 0.05, 1e-9
 
+#: How far (rad) a pose is moved along the gradient to find the constraint's tangent: the
+#: meeting's second-order error (the curvature times this squared, ~1e-12) stays below
+#: the round-off of the difference (its floor 1e-13 rad over this, ~1e-7 relative).
+TANGENT_PROBE = 1e-6
+
 
 def _projected_ascent(
     model: FitModel, m_inv: np.ndarray, starts: np.ndarray, *, steps: int
 ) -> np.ndarray:
     """Ascent of ``d(x)`` over the poses that meet the instrument (a touch, a seating, a
-    distance within range): a step along ``d``'s gradient, taken back onto the instrument
-    by the smallest joint change (:meth:`~armcal.models.interface.FitModel.meeting_poses`:
-    the gradient projected, to first order, onto the constraint's tangent), kept where
-    ``d`` grows and the pose meets it and is feasible; the step grows by half after a
-    success and shrinks to 0.4 after a failure, pose by pose, until every step is below
-    :data:`PROJECTED_SMALLEST`.  Every pose returned meets the instrument (the starts do)."""
+    distance within range): a step along ``d``'s gradient projected onto the
+    constraint's tangent, taken back onto the instrument by the smallest joint change
+    (:meth:`~armcal.models.interface.FitModel.meeting_poses`), kept where ``d`` grows and
+    the pose meets it and is feasible; the step grows by half after a success and
+    shrinks to 0.4 after a failure, pose by pose, until every step is below
+    :data:`PROJECTED_SMALLEST`.  Every pose returned meets the instrument (the starts do).
+
+    The tangent is the meeting of a pose moved :data:`TANGENT_PROBE` rad along the
+    gradient, divided by that: the gradient less its part across the constraint, to
+    first order.  Stepping along the raw gradient would stall short of a maximum, where
+    the gradient stands nearly across the constraint: what the step gains along it is
+    then less than what its curvature costs on the way back."""
     lower, upper = model.joint_limits[:, 0], model.joint_limits[:, 1]
     q = np.array(starts, dtype=float)
     value, grad = _variance_function(model, q, m_inv)
@@ -154,6 +165,10 @@ def _projected_ascent(
             break
         norm = np.linalg.norm(grad[live], axis=-1, keepdims=True)
         direction = grad[live] / np.where(norm > 0, norm, 1.0)
+        probe, probed = model.meeting_poses(q[live] + TANGENT_PROBE * direction)
+        tangent = np.where(probed[:, None], (probe - q[live]) / TANGENT_PROBE, direction)
+        norm = np.linalg.norm(tangent, axis=-1, keepdims=True)
+        direction = tangent / np.where(norm > 0, norm, 1.0)
         trial = np.clip(q[live] + size[live, None] * direction, lower, upper)
         trial, met = model.meeting_poses(trial)
         trial_value, trial_grad = _variance_function(model, trial, m_inv)

@@ -405,6 +405,12 @@ def compensate_program(
         arm with several targets that says none.
     """
     arm = cal.arm
+    if arm.constrained:
+        raise ArmcalError(
+            f"{source}: compensate needs the arm alone, and this calibration is of the arm "
+            "with its instrument (a plane, fixed points or a distance), which this version "
+            "neither compensates from nor exports yet; calibrate with a tracker to compensate"
+        )
     labels = program.targets
     if labels is None and target is not None:
         labels = (target,) * program.q.shape[0]

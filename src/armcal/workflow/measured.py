@@ -8,6 +8,8 @@ mistakes checked before the fit, and the fit.  Errors name the file (``source``)
 
 from __future__ import annotations
 
+from collections.abc import Iterator
+from contextlib import contextmanager
 from typing import Any
 
 import numpy as np
@@ -203,6 +205,21 @@ def spatial_measured_arm(arm: SpatialArm, meas: Measurements) -> SpatialArm:
     return arm.replace(targets=tuple(seen), target_positions=np.zeros((0, 3)))
 
 
+@contextmanager
+def named(source: str) -> Iterator[None]:
+    """Errors of a fit named by the measurement file ``source``: an :class:`ArmcalError`
+    prefixed with it, a ``ValueError`` an :class:`InputError` of it (an ``InputError``
+    or a :class:`FixError` as raised: they name their file or option already)."""
+    try:
+        yield
+    except (InputError, FixError):
+        raise
+    except ArmcalError as exc:
+        raise prefixed(source, exc) from None
+    except ValueError as exc:
+        raise InputError(f"{source}: {unrendered(exc)}") from None
+
+
 def fit_spatial(
     spec: RobotSpec[SpatialArm],
     meas: Measurements,
@@ -218,7 +235,7 @@ def fit_spatial(
     is chosen for these measurements and named.  With ``[elastostatic]`` the joints'
     compliance is fitted with the geometry, under the rows' payloads.
     """
-    try:
+    with named(source):
         measured = spatial_measured_arm(spec.arm, meas)
         spec, arm = model_spec(spec, measured, fixed=fixed, sigma=sigma)
         points = meas.instrument_points  # 3-D: spatial_measured_arm refuses data without z_mm
@@ -240,12 +257,6 @@ def fit_spatial(
             target=index,
             loads=loads,
         )
-    except (InputError, FixError):
-        raise
-    except ArmcalError as exc:
-        raise prefixed(source, exc) from None
-    except ValueError as exc:
-        raise InputError(f"{source}: {unrendered(exc)}") from None
     return cal, points
 
 
@@ -263,7 +274,7 @@ def fit_instrumented(
     points or a distance: every row's feature and reading, its rows checked against the
     instrument's geometry where the robot file places it (:func:`instrument_rows`), and
     the fit from where the arm meets the readings."""
-    try:
+    with named(source):
         spec, model = model_spec(spec, spec.arm, fixed=fixed, sigma=sigma)
         rows = instrument_rows(model, meas)
         points = meas.instrument_points
@@ -278,12 +289,6 @@ def fit_instrumented(
             rows=meas.rows,
             conditions=rows,
         )
-    except (InputError, FixError):
-        raise
-    except ArmcalError as exc:
-        raise prefixed(source, exc) from None
-    except ValueError as exc:
-        raise InputError(f"{source}: {unrendered(exc)}") from None
     return cal, points
 
 
