@@ -307,3 +307,24 @@ def test_validation_figure_and_compensation_of_an_instrument(tmp_path):
     assert run.returncode == 2 and len(run.stderr.strip().splitlines()) == 1, run.stderr
     assert "compensate needs the arm alone" in run.stderr
     assert not (tmp_path / "corrected.csv").exists()
+
+
+def test_a_plan_figure_the_family_lacks_is_refused_before_the_design(tmp_path):
+    """design --plot for an instrument's arm, whose family draws no plan yet: one line at
+    once, no plan written (the design's half minute is not spent first)."""
+    robot_file, _ = write_lab(tmp_path, "cobot-6r", "plane")
+    run = run_cli(
+        tmp_path,
+        "design",
+        "--robot",
+        robot_file.name,
+        "--poses",
+        "30",
+        "-o",
+        "plan.csv",
+        "--plot",
+        "plan.png",
+    )
+    assert run.returncode == 2, run.stderr
+    assert run.stderr.strip() == "armcal: error: the instrumented family of arm has no plan figure"
+    assert not (tmp_path / "plan.csv").exists() and not (tmp_path / "plan.png").exists()

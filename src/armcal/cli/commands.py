@@ -401,6 +401,8 @@ def design(args: argparse.Namespace) -> None:
     from ..workflow import design_plan
 
     spec, arm = _model(args, spec)
+    if args.plot is not None:  # a family without the figure says so before the work
+        spec.family.role("plan_figure")
     # with [elastostatic] a candidates file may carry payload_kg: read it, so that the
     # refusal the user sees is design_plan's (candidates with loads), not a column's
     candidates = None if args.candidates is None else _plan(args.candidates, spec)[0]
