@@ -240,11 +240,15 @@ def test_bad_measurements_are_one_line(tmp_path):
         assert where in err[0] and words in err[0], (name, err[0])
 
 
-def test_validation_figure_and_compensation_of_an_instrument(tmp_path):
+def test_validation_figure_compensation_and_export_of_an_instrument(tmp_path):
     """validate draws a touch calibration's errors against the pose (no arrows: a touch
-    reads no position) and a figure test checks what it plots; compensate refuses, in
-    one line, a calibration of the arm with its instrument."""
-    from armcal.files import read_calibration, read_measurements
+    reads no position), and the figure plots the validation's numbers; compensate and
+    export work on the arm alone, in the frame the plate was placed in: every corrected
+    command puts the calibrated arm's tool where the nominal arm holding it would have
+    put it (1e-6 mm: the commands are written to 1e-12 deg, 2e-11 mm at 1.2 m), and the
+    exported robot file, holding the calibrated tool (a comment there, as for a tracker),
+    reads back as that calibrated arm (1e-9 mm: its numbers are written to round-trip)."""
+    from armcal.files import read_calibration, read_measurements, read_program
     from armcal.plotting import plot_validation
     from armcal.validation import validate
 
@@ -292,9 +296,8 @@ def test_validation_figure_and_compensation_of_an_instrument(tmp_path):
     result = validate(cal, meas.q, meas.readings, feature=meas.feature)
     fig = plot_validation(cal.arm, meas.q, result)
     assert len(fig.axes) == 2  # the errors against the pose and their distribution
-    plotted = fig.axes[1].lines[1].get_ydata()
-    np.testing.assert_array_equal(plotted, result.after_mm)
-    run = run_cli(
+    np.testing.assert_array_equal(fig.axes[1].lines[1].get_ydata(), result.after_mm)
+    ok(
         tmp_path,
         "compensate",
         "--calibration",
@@ -304,9 +307,26 @@ def test_validation_figure_and_compensation_of_an_instrument(tmp_path):
         "-o",
         "corrected.csv",
     )
-    assert run.returncode == 2 and len(run.stderr.strip().splitlines()) == 1, run.stderr
-    assert "compensate needs the arm alone" in run.stderr
-    assert not (tmp_path / "corrected.csv").exists()
+    alone = cal.alone()
+    assert alone.model is cal.model.inner and alone.params.size == cal.model.n_arm
+    program = read_program(tmp_path / "check-plan.csv", alone.model)
+    table = np.loadtxt(tmp_path / "corrected.csv", delimiter=",", skiprows=1)
+    corrected, done = np.radians(table[:, :6]), table[:, 6] == 1  # q1_deg..q6_deg,corrected
+    assert done.sum() >= 20
+    # The goal: the nominal arm holding the calibrated tool (compensation's, in its notes).
+    meant = np.where(alone.model.instrument_params, alone.params, 0.0)
+    nominal = alone.model.positions(alone.model.conditions(program.q[done]), meant)
+    reached = alone.positions(alone.model.conditions(corrected[done]))
+    np.testing.assert_allclose(reached, nominal, atol=1e-6)
+    ok(tmp_path, "export", "--calibration", "cal.json", "--robot-toml", "calibrated.toml")
+    exported = load_robot(tmp_path / "calibrated.toml").arm  # the tool is a comment there
+    tool = np.char.startswith(exported.param_names, "tool.")
+    holding = np.where(tool, alone.params, exported.nominal)  # the calibrated tool held
+    np.testing.assert_allclose(
+        exported.positions(exported.conditions(program.q), holding),
+        alone.positions(alone.model.conditions(program.q)),
+        atol=1e-9,
+    )
 
 
 def test_a_plan_figure_the_family_lacks_is_refused_before_the_design(tmp_path):

@@ -112,6 +112,16 @@ class CalibratedArm:
             raise ValueError("the calibration has no baseline (the nominal arm registered)")
         return self.model.arm.positions(conditions, self.baseline)
 
+    def alone(self) -> CalibratedArm:
+        """The calibration of the arm alone (:meth:`FitModel.alone`): itself for one
+        measured by a tracker; for one measured by a plane, fixed points or a distance,
+        the arm in the frame the instrument was placed in, what the instrument could not
+        see held at nominal (its training rows kept, its baseline the nominal arm)."""
+        model, params, covariance = self.model.alone(self.params, self.covariance)
+        if model is self.model:
+            return self
+        return CalibratedArm(model, params, covariance, self.sigma_mm, None, None, None)
+
     def in_robot_frame(self) -> tuple[FitModel, np.ndarray]:
         """The model and parameters in the robot's own frame (the instrument's pose out)."""
         return self.model.in_robot_frame(self.params)

@@ -72,6 +72,12 @@ class SeesAnywhere:
         """False: the instrument sees the tool at any pose."""
         return False
 
+    def alone(
+        self, params: np.ndarray, covariance: np.ndarray
+    ) -> tuple[Any, np.ndarray, np.ndarray]:
+        """Itself: a tracker sees the arm whole."""
+        return self, params, covariance
+
     @property
     def feature_labels(self) -> tuple[str, ...]:
         """None: a tracker's rows touch no feature."""

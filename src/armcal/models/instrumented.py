@@ -281,6 +281,14 @@ class InstrumentedArm(CoreModel):
         """True: a pose is measured where the tool meets the instrument."""
         return True
 
+    def alone(
+        self, params: np.ndarray, covariance: np.ndarray
+    ) -> tuple[FitModel, np.ndarray, np.ndarray]:
+        """The arm in its own base frame, where the instrument was placed, with its
+        parameters and their covariance (the instrument's dropped: the marginal)."""
+        k = self.n_arm
+        return self.inner, np.asarray(params)[:k], np.asarray(covariance)[:k, :k]
+
     @property
     def feature_labels(self) -> tuple[str, ...]:
         """The instrument's features (its planes, its points; a distance's pivot)."""

@@ -1162,6 +1162,15 @@ class EffectRole(Protocol):
         """The same model with gravity (m/s^2) in the frame of the measurements."""
         ...
 
+    def alone(
+        self, params: np.ndarray, covariance: np.ndarray
+    ) -> tuple[FitModel, np.ndarray, np.ndarray]:
+        """The arm measured, its parameters and their covariance, without what an
+        instrument that does not see it whole adds (a plane's, a fixed point's, a
+        distance's parameters: :mod:`~armcal.models.instrumented`): what compensation
+        corrects and an export writes.  A model measured by a tracker is itself."""
+        ...
+
     def in_robot_frame(self, params: np.ndarray) -> tuple[FitModel, np.ndarray]:
         """The model and parameters in the robot's own frame: the instrument's pose taken out.
 

@@ -404,13 +404,8 @@ def compensate_program(
         For a target or payload the calibration cannot use, or a program of an
         arm with several targets that says none.
     """
+    cal = cal.alone()  # an instrument's parameters correct no command
     arm = cal.arm
-    if arm.constrained:
-        raise ArmcalError(
-            f"{source}: compensate needs the arm alone, and this calibration is of the arm "
-            "with its instrument (a plane, fixed points or a distance), which this version "
-            "neither compensates from nor exports yet; calibrate with a tracker to compensate"
-        )
     labels = program.targets
     if labels is None and target is not None:
         labels = (target,) * program.q.shape[0]
@@ -516,6 +511,7 @@ def export(cal: CalibratedArm, kind: str = "urdf", *, original: str | None = Non
     """
     if kind not in EXPORT_KINDS:
         raise ArmcalError(f"no export of kind {kind!r}; the kinds are {', '.join(EXPORT_KINDS)}")
+    cal = cal.alone()  # the arm, not the instrument it was measured by
     if kind == "offsets":
         return joint_offsets_csv(cal)
     if kind == "origins" or original is not None:
@@ -575,6 +571,7 @@ def export_files(
     :func:`armcal.export_rigid.rigid_export`; ``rigid-export-worse`` when it fits
     them worse than the nominal arm).
     """
+    cal = cal.alone()  # the arm, not the instrument it was measured by
     family = family_of(cal.model)  # the file formats differ by family
     texts: dict[str, str] = {}
     if ur_path is not None or ros_path is not None:
