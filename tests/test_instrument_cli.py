@@ -13,6 +13,7 @@ exact to about 1e-12 mm (5 ulp at 2000 mm); a held-out RMS below 1e-9 mm is roun
 from __future__ import annotations
 
 import json
+import re
 from pathlib import Path
 
 import numpy as np
@@ -348,3 +349,151 @@ def test_a_plan_figure_the_family_lacks_is_refused_before_the_design(tmp_path):
     assert run.returncode == 2, run.stderr
     assert run.stderr.strip() == "armcal: error: the instrumented family of arm has no plan figure"
     assert not (tmp_path / "plan.csv").exists() and not (tmp_path / "plan.png").exists()
+
+
+def test_fixing_an_instrument_parameter_keeps_the_base_held(tmp_path):
+    """--fix of the arm's or the instrument's parameter leaves the arm's base held at the
+    origin of its frame, where the instrument is placed."""
+    robot_file, truth = write_lab(tmp_path, "cobot-6r", "plane")
+    met_plan(tmp_path, robot_file, 150, 9, "plan.csv")
+    ok(
+        tmp_path,
+        "synthesize",
+        "--robot",
+        robot_file.name,
+        "--plan",
+        "plan.csv",
+        "--truth",
+        truth.name,
+        "--sigma",
+        "0",
+        "-o",
+        "meas.csv",
+    )
+    # The rule frees what merged into the held one (j1.z for the offset, j3.y for dq2):
+    # the rows identify as many parameters as before, none of them the base's.
+    for fixed, free in (("top.offset", 26), ("dq2", 26)):
+        document = json.loads(
+            ok(
+                tmp_path,
+                "identify",
+                "--robot",
+                robot_file.name,
+                "--measurements",
+                "meas.csv",
+                "--fix",
+                fixed,
+                "--json",
+            )
+        )
+        by_name = {p["name"]: p for p in document["parameters"]}
+        assert all(by_name[f"base.{c}"]["fixed"] for c in ("x", "y", "z", "rx", "ry", "rz"))
+        assert by_name[fixed]["fixed"]
+        assert sum(not p["fixed"] for p in document["parameters"]) == free
+
+
+MORE_BAD_ROBOTS = {
+    "a label the arm has": (
+        'kind = "point"\npoints = { tool = { xyz_mm = [500, 0, 300] } }\n',
+        "",
+        "rename them",
+    ),
+    "noise of a point": (
+        'kind = "plane"\nplanes = { top = { normal = [0, 0, 1], offset_mm = 100 } }\n',
+        "[measurement]\nsigma_mm = [0.01, 0.01, 0.03]\n",
+        "key 'measurement'",
+    ),
+    "an underflowing normal": (
+        'kind = "plane"\nplanes = { top = { normal = [0, 0, 1e-320], offset_mm = 100 } }\n',
+        "",
+        "zero length",
+    ),
+    "a bar to an unknown point": (
+        'kind = "point"\npoints = { A = { xyz_mm = [500, 0, 300] } }\n'
+        'known_distances_mm = [["A", "C", 100.0]]\n',
+        "",
+        "'C' is not a point",
+    ),
+}
+
+
+@pytest.mark.parametrize("case", sorted(MORE_BAD_ROBOTS))
+def test_more_bad_instrument_tables_are_one_line(tmp_path, case):
+    table, measurement, words = MORE_BAD_ROBOTS[case]
+    source = BUILTIN_SPATIAL_ROBOTS["cobot-6r"].read_text(encoding="utf-8")
+    text = f"{source}\n{TOOL}{measurement}[instrument]\n{table}"
+    (tmp_path / "r.toml").write_text(text, encoding="utf-8")
+    (tmp_path / "p.csv").write_text("q1_deg,q2_deg,q3_deg,q4_deg,q5_deg,q6_deg\n0,0,0,0,0,0\n")
+    run = run_cli(tmp_path, "evaluate", "--robot", "r.toml", "--plan", "p.csv")
+    assert run.returncode == 2, run.stderr
+    lines = run.stderr.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith("armcal: error: r.toml"), run.stderr
+    assert words in lines[0]
+
+
+def test_a_tracker_said_by_kind_alone_is_a_tracker(tmp_path):
+    """[instrument] kind = "tracker" (the default, written out) and nothing else."""
+    source = BUILTIN_SPATIAL_ROBOTS["cobot-6r"].read_text(encoding="utf-8")
+    (tmp_path / "r.toml").write_text(f'{source}\n[instrument]\nkind = "tracker"\n')
+    (tmp_path / "p.csv").write_text(
+        "q1_deg,q2_deg,q3_deg,q4_deg,q5_deg,q6_deg\n"
+        + "".join(
+            f"{10 * i},{-20 + 7 * i},{30 - 4 * i},{5 * i},{40 - 11 * i},{3 * i}\n"
+            for i in range(30)
+        )
+    )
+    ok(tmp_path, "evaluate", "--robot", "r.toml", "--plan", "p.csv")
+
+
+def test_a_known_distance_between_cones_is_kept_and_recovered(tmp_path):
+    """A bar of known length between cones A and B: B is two turns about A, the distance
+    holds exactly, and noiseless seatings recover the arm to round-off on held-out ones."""
+    robot_file, truth = write_lab(tmp_path, "cobot-6r", "point")
+    true = {
+        label: np.array([float(v) for v in xyz.split(", ")])
+        for label, xyz in re.findall(r"(\w) = \{ xyz_mm = \[([^\]]*)\] \}", truth.read_text())
+    }
+    bar = float(np.linalg.norm(true["B"] - true["A"]))
+    with robot_file.open("a", encoding="utf-8") as handle:
+        handle.write(f'known_distances_mm = [["A", "B", {bar!r}]]\n')
+    model = load_robot(robot_file).arm
+    assert "B.rx" in model.param_names and "B.x" not in model.param_names
+    met_plan(tmp_path, robot_file, 150, 1, "train.csv")
+    met_plan(tmp_path, robot_file, 30, 2, "test.csv")
+    for plan, meas in (("train.csv", "meas.csv"), ("test.csv", "held.csv")):
+        ok(
+            tmp_path,
+            "synthesize",
+            "--robot",
+            robot_file.name,
+            "--plan",
+            plan,
+            "--truth",
+            truth.name,
+            "--sigma",
+            "0",
+            "-o",
+            meas,
+        )
+    ok(
+        tmp_path,
+        "identify",
+        "--robot",
+        robot_file.name,
+        "--measurements",
+        "meas.csv",
+        "-o",
+        "cal.json",
+    )
+    summary = json.loads(
+        ok(
+            tmp_path,
+            "validate",
+            "--calibration",
+            "cal.json",
+            "--measurements",
+            "held.csv",
+            "--json",
+        )
+    )
+    assert summary["rms_after_mm"] < 1e-9

@@ -63,7 +63,11 @@ def _instruments(reach: float, kind: str) -> tuple:
         "A": np.array([0.45, 0.1, 0.2]) * reach,
         "B": np.array([0.4, -0.2, 0.1]) * reach,
     }
-    return FixedPoints(centres), FixedPoints({k: v + 10.0 for k, v in centres.items()})
+    rough = {k: v + 10.0 for k, v in centres.items()}
+    if kind == "bar":  # a calibrated bar between the cones: B tied to A
+        bar = (("A", "B", float(np.linalg.norm(centres["B"] - centres["A"]))),)
+        return FixedPoints(centres, bar), FixedPoints(rough, bar)
+    return FixedPoints(centres), FixedPoints(rough)
 
 
 def _lab(name: str, kind: str, m: int) -> tuple:
@@ -87,7 +91,7 @@ def _rows(model: InstrumentedArm, params: np.ndarray, m: int, seed: int) -> np.n
     return q[:m]
 
 
-@pytest.mark.parametrize("kind", ["plane", "point", "distance"])
+@pytest.mark.parametrize("kind", ["plane", "point", "distance", "bar"])
 def test_readings_derivatives_are_central_differences(kind):
     """d reading / d point and d reading / d params against central differences (step
     1e-4 mm or rad: error h^2 |d3| ~ 1e-8 relative, round-off eps 2000 / h ~ 4e-9 mm)."""
@@ -113,7 +117,7 @@ def test_readings_derivatives_are_central_differences(kind):
     np.testing.assert_allclose(batched[1], true.reading(points, feature, params * 1.001))
 
 
-@pytest.mark.parametrize("kind", ["plane", "point", "distance"])
+@pytest.mark.parametrize("kind", ["plane", "point", "distance", "bar"])
 def test_curvatures_are_central_differences_of_the_derivatives(kind):
     """d^2 reading / d point^2 and d^2 reading / d params d point against central
     differences of the analytic derivatives (step 1e-4 mm: truncation h^2 |d3| ~ 1e-14

@@ -339,6 +339,14 @@ SPATIAL_KEYS: tuple[Key, ...] = (
     ),
     Key(
         "instrument",
+        "known_distances_mm",
+        'list of ["A", "B", mm]',
+        "none",
+        "kind point: calibrated bars between labelled points, each tying the second point to "
+        "the first at that distance (a point is tied to at most one, itself free)",
+    ),
+    Key(
+        "instrument",
         "pivot_mm",
         "mm, [x, y, z] in the robot's base frame",
         "required for kind distance",

@@ -52,7 +52,7 @@ INSTRUMENT_KINDS = ("tracker", "probe", "plane", "point", "distance", "partial",
 #: The keys each kind's table takes (with ``kind``); a truth file's distance adds the offset.
 _KEYS = {
     "plane": ("kind", "planes"),
-    "point": ("kind", "points"),
+    "point": ("kind", "points", "known_distances_mm"),
     "distance": ("kind", "pivot_mm", "range_mm"),
 }
 
@@ -106,7 +106,7 @@ def read_instrument(
             key = f"{where}.planes.{label}"
             _entry_keys(path, entry, key, ("normal", "offset_mm"))
             normal = np.array(numbers(path, entry["normal"], f"{key}.normal", 3))
-            if not np.any(normal):
+            if not np.linalg.norm(normal) > 0:  # an underflow too: 1e-320 has no direction
                 raise fail(
                     path, f"key '{key}.normal': a normal of zero length; give its direction"
                 )
@@ -119,7 +119,11 @@ def read_instrument(
             key = f"{where}.points.{label}"
             _entry_keys(path, entry, key, ("xyz_mm",))
             points[label] = np.array(numbers(path, entry["xyz_mm"], f"{key}.xyz_mm", 3))
-        return FixedPoints(points)
+        known = _known_distances(path, table.get("known_distances_mm", []), where)
+        try:
+            return FixedPoints(points, known)
+        except ValueError as exc:
+            raise fail(path, f"key '{where}.known_distances_mm': {exc}") from None
     for key in ("pivot_mm", "range_mm"):
         if key not in table:
             raise fail(path, f"key '{where}': a distance needs {key} ({_DISTANCE_EXAMPLE})")
@@ -136,6 +140,23 @@ def read_instrument(
 
 
 _DISTANCE_EXAMPLE = "pivot_mm = [800, 0, 0], range_mm = [95, 155]"
+
+
+def _known_distances(path, value: Any, where: str) -> tuple[tuple[str, str, float], ...]:
+    """``known_distances_mm = [["A", "B", 200.0], ...]``: bars between labelled points."""
+    key = f"{where}.known_distances_mm"
+    if not isinstance(value, list):
+        raise fail(path, f'key \'{key}\': expected a list of [A, B, mm], as [["A", "B", 200.0]]')
+    found = []
+    for i, entry in enumerate(value):
+        if (
+            not isinstance(entry, list)
+            or len(entry) != 3
+            or not all(isinstance(label, str) for label in entry[:2])
+        ):
+            raise fail(path, f"key '{key}[{i}]': expected [A, B, mm]: two point labels and mm")
+        found.append((entry[0], entry[1], number(path, entry[2], f"{key}[{i}][2]")))
+    return tuple(found)
 
 
 def _labelled(path, table: dict, where: str, key: str, example: str) -> dict[str, Any]:
@@ -168,8 +189,8 @@ def true_instrument(path: str | os.PathLike, table: Any, instrument: Instrument)
     robot file's (its start: the user's guess is right)."""
     if table is None:
         return np.asarray(instrument.start, dtype=float)
-    if isinstance(table, dict) and "kind" not in table:
-        table = {**table, "kind": instrument.kind}
+    if isinstance(table, dict):  # what it leaves out is the robot file's (a range, a bar)
+        table = {**instrument_section(instrument), **table}
     true = read_instrument(path, table, truth=True)
     if true is None or true.kind != instrument.kind or true.labels != instrument.labels:
         found = "a tracker" if true is None else f"a {true.kind} ({', '.join(true.labels)})"
@@ -195,7 +216,12 @@ def instrument_section(instrument: Instrument) -> dict[str, Any]:
         return {"kind": "plane", "planes": planes}
     if isinstance(instrument, FixedPoints):
         points = {label: {"xyz_mm": xyz.tolist()} for label, xyz in instrument.points.items()}
-        return {"kind": "point", "points": points}
+        known = [[a, b, d] for a, b, d in instrument.known]
+        return {
+            "kind": "point",
+            "points": points,
+            **({"known_distances_mm": known} if known else {}),
+        }
     if isinstance(instrument, Distance):
         return {
             "kind": "distance",

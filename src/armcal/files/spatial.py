@@ -382,6 +382,22 @@ def _instrumented(
             "point: give it in [targets] (tool = { xyz_mm = [x, y, z] }, tip frame), where it "
             "roughly is",
         )
+    clash = sorted(set(instrument.param_names) & set(arm.param_names))
+    if clash:
+        raise fail(
+            path,
+            f"key 'instrument': the labels of its {instrument.kind}s give parameters the arm "
+            f"has already ({', '.join(clash)}); rename them (A, B, top, side, ...)",
+        )
+    if arm.noise is not None:
+        try:
+            arm.noise.for_dim(instrument.dim)
+        except ValueError as exc:
+            raise fail(
+                path,
+                f"key 'measurement': a {instrument.kind} instrument reads {instrument.dim} "
+                f"number{'s' if instrument.dim > 1 else ''} a row: {exc}",
+            ) from None
     far = instrument.out_of_reach(arm.tip_reach_mm)
     if far is not None:
         raise fail(path, f"key 'instrument': no pose can meet it: {far}; check [instrument]")
@@ -502,7 +518,7 @@ def _target_table(
 
 
 #: ``[instrument]`` keys of the contact instruments (:mod:`armcal.files.instrument_table`).
-_CONTACT_KEYS = ("planes", "points", "pivot_mm")
+_CONTACT_KEYS = ("planes", "points", "pivot_mm", "known_distances_mm")
 
 
 def _view(path: Path, table: Any, labels: tuple[str, ...], normals: list) -> SpatialView | None:
@@ -513,6 +529,8 @@ def _view(path: Path, table: Any, labels: tuple[str, ...], normals: list) -> Spa
         raise fail(path, "key 'instrument': expected a table [instrument]")
     allowed = [k for k in allowed_keys("instrument", SPATIAL_KEYS) if k not in _CONTACT_KEYS]
     check_keys(path, table, allowed, "instrument.")
+    if not set(table) - {"kind"}:  # a tracker (or a probe) said, nothing of where it stands
+        return None
     needs_position = [key for key in ("range_mm", "acceptance_deg") if key in table]
     if needs_position and "position_mm" not in table:
         raise fail(

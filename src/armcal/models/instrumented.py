@@ -195,7 +195,7 @@ class InstrumentedArm(CoreModel):
 
     def with_fixed(self, fixed: Sequence[str]) -> InstrumentedArm:
         mine = set(self.instrument.param_names)
-        theirs = (*_base_names(self.arm), *(n for n in fixed if n not in mine))
+        theirs = (*_base_names(self.inner), *(n for n in fixed if n not in mine))
         arm = self.inner.with_fixed(tuple(dict.fromkeys(theirs)))
         return replace(self, inner=arm, instrument_fixed=tuple(n for n in fixed if n in mine))
 
@@ -307,8 +307,9 @@ class InstrumentedArm(CoreModel):
         miss: np.ndarray | None = None,
         feature: np.ndarray | None = None,
     ) -> tuple[np.ndarray, np.ndarray]:
-        """The poses moved onto the feature each is nearest to at ``params`` (default
-        nominal) by Newton's smallest joint steps on the instrument's miss, each taken back
+        """The poses moved onto the feature each is nearest to (at the nominal parameters,
+        or ``feature``) where ``params`` (default nominal) put it, by Newton's smallest joint
+        steps on the instrument's miss, each taken back
         within the joint limits (a projected Newton: a pose whose plain steps would leave
         them meets the feature at the limit instead, where it can) (module notes
         of :meth:`~armcal.models.interface.FitModel.meeting_poses`): the reading of a
