@@ -25,6 +25,25 @@ from helpers import run_cli
 from helpers_instruments import TOOL, met_plan, write_lab
 
 
+def synthesized(
+    folder: Path, robot_file: Path, truth: Path, plan: str, out: str, *options: str
+) -> str:
+    """``armcal synthesize`` of ``plan`` on the lab's truth into ``out`` (with ``options``)."""
+    return ok(
+        folder,
+        "synthesize",
+        "--robot",
+        robot_file.name,
+        "--plan",
+        plan,
+        "--truth",
+        truth.name,
+        *options,
+        "-o",
+        out,
+    )
+
+
 def ok(folder: Path, *args: str) -> str:
     run = run_cli(folder, *args)
     assert run.returncode == 0, run.stderr
@@ -49,20 +68,7 @@ def test_noiseless_lab_is_recovered_on_held_out_rows(tmp_path, robot, kind, pose
     train = met_plan(tmp_path, robot_file, poses, 1, "train.csv")
     test = met_plan(tmp_path, robot_file, 30, 2, "test.csv")
     for plan, meas in ((train, "meas.csv"), (test, "held.csv")):
-        ok(
-            tmp_path,
-            "synthesize",
-            "--robot",
-            robot_file.name,
-            "--plan",
-            plan.name,
-            "--truth",
-            truth.name,
-            "--sigma",
-            "0",
-            "-o",
-            meas,
-        )
+        synthesized(tmp_path, robot_file, truth, plan.name, meas, "--sigma", "0")
     header = (tmp_path / "meas.csv").read_text(encoding="utf-8").splitlines()[0]
     assert "x_mm" not in header
     assert ("distance_mm" in header) == (kind == "distance")
@@ -104,20 +110,7 @@ def test_noisy_fit_is_consistent_with_sigma(tmp_path):
     dof: the noise a touch carries is the noise the fit expects."""
     robot_file, truth = write_lab(tmp_path, "industrial-6r", "plane")
     met_plan(tmp_path, robot_file, 80, 3, "plan.csv")
-    ok(
-        tmp_path,
-        "synthesize",
-        "--robot",
-        robot_file.name,
-        "--plan",
-        "plan.csv",
-        "--truth",
-        truth.name,
-        "--seed",
-        "4",
-        "-o",
-        "meas.csv",
-    )
+    synthesized(tmp_path, robot_file, truth, "plan.csv", "meas.csv", "--seed", "4")
     document = json.loads(
         ok(
             tmp_path,
@@ -203,18 +196,7 @@ def test_bad_measurements_are_one_line(tmp_path):
     columns, and a row whose tool is far from its plane: exit 2, file and row named."""
     robot_file, truth = write_lab(tmp_path, "industrial-6r", "plane")
     met_plan(tmp_path, robot_file, 40, 6, "plan.csv")
-    ok(
-        tmp_path,
-        "synthesize",
-        "--robot",
-        robot_file.name,
-        "--plan",
-        "plan.csv",
-        "--truth",
-        truth.name,
-        "-o",
-        "meas.csv",
-    )
+    synthesized(tmp_path, robot_file, truth, "plan.csv", "meas.csv")
     good = (tmp_path / "meas.csv").read_text(encoding="utf-8").splitlines()
     head, rows = good[0], good[1:]
     wrong_label = rows[0].rsplit(",", 1)[0] + ",tpo"
@@ -257,18 +239,7 @@ def test_validation_figure_compensation_and_export_of_an_instrument(tmp_path):
     met_plan(tmp_path, robot_file, 60, 7, "plan.csv")
     met_plan(tmp_path, robot_file, 30, 8, "check-plan.csv")
     for plan, meas in (("plan.csv", "meas.csv"), ("check-plan.csv", "check.csv")):
-        ok(
-            tmp_path,
-            "synthesize",
-            "--robot",
-            robot_file.name,
-            "--plan",
-            plan,
-            "--truth",
-            truth.name,
-            "-o",
-            meas,
-        )
+        synthesized(tmp_path, robot_file, truth, plan, meas)
     ok(
         tmp_path,
         "identify",
@@ -356,20 +327,7 @@ def test_fixing_an_instrument_parameter_keeps_the_base_held(tmp_path):
     origin of its frame, where the instrument is placed."""
     robot_file, truth = write_lab(tmp_path, "cobot-6r", "plane")
     met_plan(tmp_path, robot_file, 150, 9, "plan.csv")
-    ok(
-        tmp_path,
-        "synthesize",
-        "--robot",
-        robot_file.name,
-        "--plan",
-        "plan.csv",
-        "--truth",
-        truth.name,
-        "--sigma",
-        "0",
-        "-o",
-        "meas.csv",
-    )
+    synthesized(tmp_path, robot_file, truth, "plan.csv", "meas.csv", "--sigma", "0")
     # The rule frees what merged into the held one (j1.z for the offset, j3.y for dq2):
     # the rows identify as many parameters as before, none of them the base's.
     for fixed, free in (("top.offset", 26), ("dq2", 26)):
@@ -461,20 +419,7 @@ def test_a_known_distance_between_cones_is_kept_and_recovered(tmp_path):
     met_plan(tmp_path, robot_file, 150, 1, "train.csv")
     met_plan(tmp_path, robot_file, 30, 2, "test.csv")
     for plan, meas in (("train.csv", "meas.csv"), ("test.csv", "held.csv")):
-        ok(
-            tmp_path,
-            "synthesize",
-            "--robot",
-            robot_file.name,
-            "--plan",
-            plan,
-            "--truth",
-            truth.name,
-            "--sigma",
-            "0",
-            "-o",
-            meas,
-        )
+        synthesized(tmp_path, robot_file, truth, plan, meas, "--sigma", "0")
     ok(
         tmp_path,
         "identify",

@@ -394,6 +394,13 @@ class InstrumentedArm(CoreModel):
         gives its own (:meth:`linearize`)."""
         return BlockInformation(self, q, loads, linearize=self.linearize, rows=rows)
 
+    @cached_property
+    def _bare_linearize(self) -> Any:
+        """The arm's own linearization of its points unwhitened (the instrument whitens),
+        where its family has one (optional: central differences without); made once, not
+        at every step of a design's search."""
+        return getattr(self.inner.with_noise(None), "linearize", None)
+
     def linearize(self, conditions: Conditions) -> Linearization:
         """The rows' whitened blocks ``W [B J_x, D]`` at the nominal parameters and their
         pullback in the poses, from the arm's own (``B``, ``D`` the instrument's
@@ -406,9 +413,7 @@ class InstrumentedArm(CoreModel):
         ``(sum G_x J_x^T H + sum G_t K) J_q``.  Without the arm's pullback (a family
         without one, noise that moves with the poses, rows' own sigmas) the blocks
         alone: central differences then."""
-        # The arm's own linearization, where its family has one (optional: central
-        # differences without), of its points unwhitened: the instrument whitens.
-        arm_linearize = getattr(self.inner.with_noise(None), "linearize", None)
+        arm_linearize = self._bare_linearize
         noise = self.noise
         moving = noise is not None and (noise.joint_sigma is not None or noise.tracker is not None)
         x, theta = self.split(self.nominal)

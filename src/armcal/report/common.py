@@ -143,11 +143,12 @@ def instrumented_model_lines(
         "the frame the instrument is placed in",
     ]
     base = set(model.base_names)
-    user = [n for n in getattr(inner, "user_fixed", ()) if n not in base]
+    held = set(inner.rule_held) | base  # the rule's, and the base the instrument sits in
+    user = [n for n in inner.fixed if n not in held]
     user += list(model.instrument_fixed)
     if user:
         lines.append(f"fixed (held at nominal, not identified): {', '.join(user)}")
-    merges = tuple(getattr(inner, "merges", ()))
+    merges = tuple(inner.held_reasons)
     if merges:
         lines.append("held at nominal, because the measurements cannot separate them:")
         lines += [f"  {held_sentence(held)}" for held in merges]
