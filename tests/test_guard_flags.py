@@ -38,12 +38,12 @@ FLAG = re.compile(r"(?<![\w-])--[a-z][a-z0-9-]+")
 
 #: Strings outside ``cli/`` that may name flags, by module and top-level name: tables
 #: that document the program itself, not advice in a message.  ``FILE_KINDS`` and
-#: ``COLUMNS`` are what ``armcal formats`` prints about each file (which option reads
-#: it); the catalogue entry names the command that offers the paper's missing A
+#: ``COLUMNS`` (:mod:`armcal.columns`) are what ``armcal formats`` prints about each file
+#: (which option reads it); the catalogue entry names the command that offers the paper's missing A
 #: criterion, part of what ``armcal reproduce`` reports about the paper.
 DOCUMENTS_THE_PROGRAM = {
     ("formats.py", "FILE_KINDS"),
-    ("formats.py", "COLUMNS"),
+    ("columns.py", "COLUMNS"),
     ("reproduction/catalogue.py", "DISAGREEMENTS"),
 }
 
