@@ -14,6 +14,7 @@ import numpy as np
 from armcal.choices import BUILTIN_SPATIAL_ROBOTS
 from armcal.doe import feasible_poses
 from armcal.files import format_plan_csv, load_robot
+from helpers import run_cli
 
 
 def instruments(reach: float, kind: str) -> tuple[str, str]:
@@ -39,6 +40,18 @@ def instruments(reach: float, kind: str) -> tuple[str, str]:
             f"points = {{ A = {{ xyz_mm = {mm(0.45, 0.1, 0.2)} }}, "
             f"B = {{ xyz_mm = {mm(0.4, -0.2, 0.1)} }} }}\n",
         )
+    if kind == "partial":  # a CMM's frame, or a rig of dial indicators along its axes
+        return (
+            f'kind = "partial"\nreads = ["x", "y", "z"]\nxyz_mm = {mm(0.5, 0.1, 0.0, shift=10)}\n'
+            "rpy_deg = [0, 0, 90]\n",
+            f"xyz_mm = {mm(0.5, 0.1, 0.0)}\nrpy_deg = [1.0, -1.5, 92.0]\n",
+        )
+    if kind == "dial":  # one dial indicator along the base's x axis (its z turned onto x)
+        return (
+            f'kind = "partial"\nreads = ["z"]\nxyz_mm = {mm(0.6, 0.0, 0.1, shift=10)}\n'
+            "rpy_deg = [0, 90, 0]\n",
+            f"xyz_mm = {mm(0.6, 0.0, 0.1)}\nrpy_deg = [1.0, 88.5, 2.0]\n",
+        )
     span = mm(0.2, 0.7)
     return (
         f'kind = "distance"\npivot_mm = {mm(0.5, 0.1, 0.3, shift=10)}\nrange_mm = {span}\n',
@@ -56,6 +69,8 @@ TOOLS = {
     "plane": "[targets]\ntool = { xyz_mm = [30, -20, 150] }\n",
     "point": "[targets]\ntool = { xyz_mm = [0, 0, 0] }\n",
     "distance": "[targets]\ntool = { xyz_mm = [30, -20, 150] }\n",
+    "partial": "[targets]\ntool = { xyz_mm = [30, -20, 150] }\n",
+    "dial": "[targets]\ntool = { xyz_mm = [30, -20, 150] }\n",
 }
 TOOL = TOOLS["plane"]
 
@@ -86,3 +101,18 @@ def met_plan(folder: Path, robot_file: Path, m: int, seed: int, name: str) -> Pa
     path = folder / name
     path.write_text(format_plan_csv(q, kinds=model.joint_kinds), encoding="utf-8")
     return path
+
+
+def refused_table(folder: Path, table: str, measurement: str = "") -> str:
+    """The one line ``armcal evaluate`` refuses a cobot-6r robot file with ``[instrument]``
+    ``table`` (and ``measurement``, a ``[measurement]`` table) in: exit 2, one line that
+    names the file."""
+    source = BUILTIN_SPATIAL_ROBOTS["cobot-6r"].read_text(encoding="utf-8")
+    text = f"{source}\n{TOOL}{measurement}[instrument]\n{table}"
+    (folder / "r.toml").write_text(text, encoding="utf-8")
+    (folder / "p.csv").write_text("q1_deg,q2_deg,q3_deg,q4_deg,q5_deg,q6_deg\n0,0,0,0,0,0\n")
+    run = run_cli(folder, "evaluate", "--robot", "r.toml", "--plan", "p.csv")
+    assert run.returncode == 2, run.stderr
+    lines = run.stderr.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith("armcal: error: r.toml"), run.stderr
+    return lines[0]

@@ -1,4 +1,5 @@
-"""Designs for planes, fixed points and distances, over the poses that meet them (issue 38).
+"""Designs for planes, fixed points and distances, over the poses that meet them, and for
+partial coordinates, over every pose within the limits (issue 38).
 
 For each instrument on two built-in six-axis arms (the labs of ``test_instrument_cli``):
 a 30-pose plan designed by :func:`armcal.doe.design` beats 100 random plans of 30 poses
@@ -23,7 +24,7 @@ from helpers_instruments import write_lab
 
 CASES = [
     (robot, kind)
-    for kind in ("plane", "point", "distance")
+    for kind in ("plane", "point", "distance", "partial", "dial")
     for robot in ("industrial-6r", "cobot-6r")
 ]
 
@@ -35,7 +36,7 @@ def test_a_designed_plan_beats_random_plans_and_never_overclaims(tmp_path, robot
     model = load_robot(robot_file).arm
     made = design(model, 30, rng=0)
     cert = made.certificate
-    assert cert is not None and cert.pool_size is None  # over the constrained poses
+    assert cert is not None and cert.pool_size is None  # over every pose it may use, no pool
     fitted = made.model
     rng = np.random.default_rng(11)
     pool = feasible_poses(fitted, 3000, rng=rng)

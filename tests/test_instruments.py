@@ -23,8 +23,9 @@ from armcal.criteria import d_efficiency
 from armcal.doe import design, random_plan
 from armcal.files import load_spatial_robot, load_spatial_truth
 from armcal.identification import identify
-from armcal.instruments import Distance, FixedPoints, Plane, Planes
+from armcal.instruments import Coordinates, Distance, FixedPoints, Plane, Planes
 from armcal.models.instrumented import InstrumentedArm
+from armcal.noise import NoiseModel
 from armcal.simulate import monte_carlo
 
 ROUND_OFF_MM = 1e-10
@@ -55,6 +56,14 @@ def _instruments(reach: float, kind: str) -> tuple:
             }
         )
         return true, rough
+    if kind == "partial":  # a CMM's frame, turned a quarter about z
+        where = np.array([0.5, 0.1, 0.0]) * reach
+        true = Coordinates(("x", "y", "z"), where, np.array([1.0, -1.5, 92.0]))
+        return true, Coordinates(("x", "y", "z"), where + 10.0, np.array([0.0, 0.0, 90.0]))
+    if kind == "dial":  # one dial indicator along the base's x axis (its z turned onto x)
+        where = np.array([0.6, 0.0, 0.1]) * reach
+        true = Coordinates(("z",), where, np.array([1.0, 88.5, 2.0]))
+        return true, Coordinates(("z",), where + 10.0, np.array([0.0, 90.0, 0.0]))
     if kind == "distance":  # a draw-wire sensor's long travel
         pivot = np.array([0.5, 0.1, 0.3]) * reach
         span = (0.2 * reach, 0.7 * reach)
@@ -91,7 +100,18 @@ def _rows(model: InstrumentedArm, params: np.ndarray, m: int, seed: int) -> np.n
     return q[:m]
 
 
-@pytest.mark.parametrize("kind", ["plane", "point", "distance", "bar"])
+def _read(features: InstrumentedArm, model: InstrumentedArm, q: np.ndarray):
+    """The rows of poses ``q`` for ``model``, each pose meeting or reading the features
+    ``features`` gives it (a touch its plane at the truth, every axis of partial
+    coordinates)."""
+    rows = features.plan_conditions(q)
+    return model.conditions(rows.q, feature=rows.feature)
+
+
+KINDS = ["plane", "point", "distance", "partial", "dial"]
+
+
+@pytest.mark.parametrize("kind", [*KINDS, "bar"])
 def test_readings_derivatives_are_central_differences(kind):
     """d reading / d point and d reading / d params against central differences (step
     1e-4 mm or rad: error h^2 |d3| ~ 1e-8 relative, round-off eps 2000 / h ~ 4e-9 mm)."""
@@ -117,7 +137,7 @@ def test_readings_derivatives_are_central_differences(kind):
     np.testing.assert_allclose(batched[1], true.reading(points, feature, params * 1.001))
 
 
-@pytest.mark.parametrize("kind", ["plane", "point", "distance", "bar"])
+@pytest.mark.parametrize("kind", [*KINDS, "bar"])
 def test_curvatures_are_central_differences_of_the_derivatives(kind):
     """d^2 reading / d point^2 and d^2 reading / d params d point against central
     differences of the analytic derivatives (step 1e-4 mm: truncation h^2 |d3| ~ 1e-14
@@ -157,7 +177,7 @@ def test_curvatures_are_central_differences_of_the_derivatives(kind):
     np.testing.assert_allclose(0.0 if twist is None else twist, by_params, atol=1e-8)
 
 
-@pytest.mark.parametrize("kind", ["plane", "point", "distance"])
+@pytest.mark.parametrize("kind", [*KINDS, "partial per axis"])
 def test_the_design_gradient_in_the_poses_is_central_differences(kind):
     """The variance function's gradient in the poses, from the arm's pullback and the
     instrument's curvatures, against the central differences of the same blocks that a
@@ -166,7 +186,9 @@ def test_the_design_gradient_in_the_poses_is_central_differences(kind):
     from armcal.models.information import BlockInformation
 
     arm, _ = _arm("industrial-6r")
-    true, _ = _instruments(arm.reach_mm, kind)
+    if kind == "partial per axis":  # every row weighed by its axis's sigma
+        arm = arm.with_noise(NoiseModel(np.diag([0.01, 0.02, 0.04]) ** 2))
+    true, _ = _instruments(arm.reach_mm, kind.split()[0])
     model = InstrumentedArm.of(arm, true)
     q = _rows(model, model.nominal, 40, seed=6)
     model = model.prepared(model.plan_conditions(q))
@@ -179,7 +201,7 @@ def test_the_design_gradient_in_the_poses_is_central_differences(kind):
     assert np.abs(grad).max() > 0
 
 
-@pytest.mark.parametrize("kind", ["plane", "point", "distance"])
+@pytest.mark.parametrize("kind", KINDS)
 def test_the_models_jacobians_are_central_differences(kind):
     """The chain rule's Jacobian in every parameter (mm per mm or rad) and in every
     joint, against central differences (step 1e-6: error about 1e-6 mm at 2 m)."""
@@ -188,7 +210,7 @@ def test_the_models_jacobians_are_central_differences(kind):
     model = InstrumentedArm.of(arm, true)
     params = np.concatenate([truth, true.start])
     q = _rows(model, params, 12, seed=4)
-    rows = model.conditions(q, feature=model.plan_conditions(q).feature)
+    rows = _read(model, model, q)
     jac = model.jacobian(rows, params)
     h = 1e-6
     numeric = np.stack(
@@ -204,11 +226,11 @@ def test_the_models_jacobians_are_central_differences(kind):
     numeric = np.stack(
         [
             (
-                model.positions(model.conditions(q + h * e, feature=rows.feature), params)
-                - model.positions(model.conditions(q - h * e, feature=rows.feature), params)
+                model.positions(model.conditions(rows.q + h * e, feature=rows.feature), params)
+                - model.positions(model.conditions(rows.q - h * e, feature=rows.feature), params)
             )
             / (2 * h)
-            for e in np.eye(q.shape[1])
+            for e in np.eye(rows.q.shape[1])
         ],
         axis=-1,
     )
@@ -216,26 +238,29 @@ def test_the_models_jacobians_are_central_differences(kind):
 
 
 @pytest.mark.parametrize("name", ["industrial-6r", "cobot-6r"])
-@pytest.mark.parametrize("kind", ["plane", "point", "distance"])
+@pytest.mark.parametrize("kind", KINDS)
 def test_noiseless_touches_are_recovered_to_round_off(name, kind):
-    """From the rough instrument, 150 touches, seatings or distances of the true arm
-    identify a model whose readings at 60 held-out poses are the true instrument's to
-    round-off (0 for a touch or a seating); the identifiable count is the rank of the
-    whole Jacobian at the truth (unit columns, singular values above 1e-10), and the
-    instrument's own parameters are all identified."""
+    """From the rough instrument, 150 touches, seatings, distances or poses read in part
+    of the true arm identify a model whose readings at 60 held-out poses are the true
+    instrument's to round-off (0 for a touch or a seating); the identifiable count is
+    the rank of the whole Jacobian at the truth (unit columns, singular values above
+    1e-10), and the instrument's own parameters are all identified but those no row
+    can see (an unread axis's shift)."""
     true_model, x_true, q, model = _lab(name, kind, 150)
-    rows = model.conditions(q, feature=true_model.plan_conditions(q).feature)
+    rows = _read(true_model, model, q)
     measured = true_model.positions(rows, x_true)
-    cal = identify(model, q, measured, conditions=rows, sigma=0.02)
+    cal = identify(model, rows.q, measured, conditions=rows, sigma=0.02)
     held_out = _rows(true_model, x_true, 60, seed=2)
-    again = model.conditions(held_out, feature=true_model.plan_conditions(held_out).feature)
+    again = _read(true_model, model, held_out)
     miss = cal.model.positions(again, cal.params) - true_model.positions(again, x_true)
     assert np.max(np.abs(miss)) < ROUND_OFF_MM
     whole = true_model.jacobian(rows, x_true).reshape(-1, model.n_params)
     norms = np.linalg.norm(whole, axis=0)
     s = np.linalg.svd(whole[:, norms > 0] / norms[norms > 0], compute_uv=False)
     assert cal.model.n_free == int(np.sum(s > 1e-10 * s[0]))
-    assert np.all(cal.model.free[cal.model.instrument_params])
+    held = np.isin(cal.model.param_names, model.instrument.held)
+    assert np.all(cal.model.free[cal.model.instrument_params & ~held])
+    assert not np.any(cal.model.free[held])
     assert not any(w.code == "plan-degenerate" for w in cal.warnings)
 
 
@@ -313,6 +338,25 @@ def test_monte_carlo_std_agrees_with_the_predicted_std(name, kind):
     seating) identified from the truth: every free parameter's std within 5 % of the
     predicted one."""
     ratios = _monte_carlo_ratios(name, kind, MC_TRIALS)
+    assert np.all(np.abs(ratios - 1.0) <= MC_AGREEMENT), ratios
+
+
+@pytest.mark.parametrize(
+    ("name", "kind"),
+    [("industrial-6r", "partial"), pytest.param("cobot-6r", "dial", marks=pytest.mark.slow)],
+)
+def test_monte_carlo_std_agrees_with_the_predicted_std_per_axis(name, kind):
+    """4000 noisy sets of partial coordinates, every axis with its own sigma (0.01, 0.02
+    and 0.04 mm for x, y and z: ``sigma_mm = [sx, sy, sz]``), identified from the truth:
+    every free parameter's std within 5 % of the predicted one."""
+    _, x_true, q, model = _lab(name, kind, 150)
+    model = model.with_noise(NoiseModel(np.diag([0.01, 0.02, 0.04]) ** 2))
+    reads = [("x", "y", "z").index(a) for a in model.instrument.reads]
+    np.testing.assert_array_equal(model.feature_sigma, np.array([0.01, 0.02, 0.04])[reads])
+    mc = monte_carlo(model, q, x_true, None, MC_TRIALS, rng=np.random.default_rng(8))
+    assert mc.not_converged == 0
+    free = mc.model.free
+    ratios = mc.std[free] / mc.predicted_std[free]
     assert np.all(np.abs(ratios - 1.0) <= MC_AGREEMENT), ratios
 
 

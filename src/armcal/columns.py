@@ -75,8 +75,9 @@ _MEASURED = (
     *_FORCE,
 )
 
-#: What a plane, fixed point or distance instrument reads: a row that touches or sits
-#: reports nothing but its feature; a distance its reading.
+#: What a plane, fixed point, distance or partial instrument reads: a row that touches or
+#: sits reports nothing but its feature; a distance its reading; partial coordinates the
+#: axes they read, a cell empty where they read none.
 _READ = (
     Column(
         "plane",
@@ -98,6 +99,16 @@ _READ = (
         False,
         "kind distance (required there): the reading, the tool point's distance from the "
         "pivot less an unknown offset",
+    ),
+    *(
+        Column(
+            f"{axis}_mm",
+            "mm",
+            False,
+            f"kind partial, reading {axis}: the tool point's {axis} in the instrument's frame; "
+            "empty where it read none (one of the reads columns required)",
+        )
+        for axis in ("x", "y", "z")
     ),
     _POSE,
     Column("target", "text", False, "the [targets] label of the tool point (with several)"),

@@ -316,10 +316,34 @@ SPATIAL_KEYS: tuple[Key, ...] = (
     Key(
         "instrument",
         "kind",
-        "tracker, probe, plane, point or distance",
+        "tracker, probe, plane, point, distance or partial",
         "tracker",
         "what the instrument reports: points (tracker), poses (probe), touches of planes, "
-        "seatings in fixed points, or distances from a pivot (a ballbar, a draw-wire sensor)",
+        "seatings in fixed points, distances from a pivot (a ballbar, a draw-wire sensor), "
+        "or some coordinates of the tool point (partial: dial indicators, a displacement "
+        "sensor, a CMM)",
+    ),
+    Key(
+        "instrument",
+        "reads",
+        'list of "x", "y", "z"',
+        "required for kind partial",
+        "the axes of its own frame partial coordinates read (a dial indicator: one); rows "
+        "give x_mm, y_mm, z_mm, a cell empty where it read none",
+    ),
+    Key(
+        "instrument",
+        "xyz_mm",
+        "mm, [x, y, z] in the robot's base frame",
+        "required for kind partial",
+        "where the frame of partial coordinates roughly has its origin",
+    ),
+    Key(
+        "instrument",
+        "rpy_deg",
+        "deg, [roll, pitch, yaw] as in URDF (Rz Ry Rx), in the robot's base frame",
+        "required for kind partial",
+        "how the frame of partial coordinates is roughly turned",
     ),
     Key(
         "instrument",
@@ -505,7 +529,7 @@ SPATIAL_TRUTH_KEYS: tuple[Key, ...] = (
         "instrument",
         "the robot file's [instrument] keys; a distance's offset_mm too",
         "the robot file's",
-        "where a plane, fixed point or distance instrument really is",
+        "where a plane, fixed point, distance or partial instrument really is",
     ),
     Key(
         "",
@@ -530,8 +554,9 @@ FILE_KINDS: dict[str, str] = {
     "plan": "plan CSV (--plan, --candidates, --test-poses): poses to visit",
     "measurements": "measurements CSV (--measurements): poses and what the instrument read",
     "readings": (
-        "measurements CSV of a plane, point or distance instrument (--measurements; "
-        "[instrument] kind plane, point or distance): poses and what the instrument read"
+        "measurements CSV of a plane, point, distance or partial instrument (--measurements; "
+        "[instrument] kind plane, point, distance or partial): poses and what the instrument "
+        "read"
     ),
     "program": "program CSV (--program): joint commands to correct",
     "calibration": "calibration JSON (--calibration): written by identify -o",

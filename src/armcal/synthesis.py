@@ -271,6 +271,8 @@ def synthesize_measurements(
     def noiseless() -> np.ndarray:  # evaluated once, and only where needed
         return model.positions(conditions, truth) if exact is None else exact
 
+    if row_sigma is None:  # the rows' own, where the model gives them (a feature's sigma)
+        row_sigma = rows.sigma_mm
     factor = _instrument_factor(model, sigma, row_sigma, m, noiseless)
     joint_sigma = None if model.noise is None else model.noise.joint_sigma
     sets = () if trials is None else (int(trials),)

@@ -11,7 +11,9 @@ the table's keys say where it stands for plans (:mod:`armcal.files.spatial`);
 * ``point``: ``points = { LABEL = { xyz_mm = [x, y, z] } }``;
 * ``distance``: ``pivot_mm = [x, y, z]`` and ``range_mm = [least, greatest]``, the
   distances from the pivot it reads (a truth file may give the reading's
-  ``offset_mm`` too).
+  ``offset_mm`` too);
+* ``partial``: ``reads = ["z"]`` (the axes of its frame it reads, some of x, y,
+  z), ``xyz_mm = [x, y, z]`` and ``rpy_deg = [r, p, y]``, its frame in the base's.
 
 The same table, written back by :func:`instrument_section`, is a calibration
 file's ``instrument`` section and a truth file's ``[instrument]`` (where the
@@ -28,15 +30,18 @@ import numpy as np
 
 from ..errors import InputError
 from ..families.registry import RobotSpec, family_of
-from ..instruments import Distance, FixedPoints, Instrument, Plane, Planes
+from ..instruments import Coordinates, Distance, FixedPoints, Instrument, Plane, Planes
+from ..instruments.partial import AXES
+from ..models.instrumented import InstrumentedArm
 from .common import check_keys, fail, load_toml, number, numbers, shown, suggest
 
 __all__ = [
-    "CONTACT_KINDS",
+    "EQUATION_KINDS",
     "INSTRUMENT_KINDS",
     "TRACKER_KINDS",
     "instrument_kind",
     "instrument_section",
+    "instrumented_arm",
     "instrumented_truth",
     "read_instrument",
     "true_instrument",
@@ -45,7 +50,7 @@ __all__ = [
 #: Kinds whose rows report points (or poses): the table says where they stand for plans.
 TRACKER_KINDS = ("tracker", "probe")
 #: Kinds of :mod:`armcal.instruments`, read here.
-CONTACT_KINDS = ("plane", "point", "distance")
+EQUATION_KINDS = ("plane", "point", "distance", "partial")
 #: Every kind PRODUCT.md names, in its order.
 INSTRUMENT_KINDS = ("tracker", "probe", "plane", "point", "distance", "partial", "camera")
 
@@ -54,6 +59,7 @@ _KEYS = {
     "plane": ("kind", "planes"),
     "point": ("kind", "points", "known_distances_mm"),
     "distance": ("kind", "pivot_mm", "range_mm"),
+    "partial": ("kind", "reads", "xyz_mm", "rpy_deg"),
 }
 
 
@@ -70,11 +76,11 @@ def instrument_kind(path: str | os.PathLike, table: Any, where: str = "instrumen
             f"key '{where}.kind': {shown(str(kind))} is not an instrument: "
             f"{suggest(str(kind), INSTRUMENT_KINDS)}the kinds are {', '.join(INSTRUMENT_KINDS)}",
         )
-    if kind in ("partial", "camera"):
+    if kind == "camera":
         raise fail(
             path,
             f"key '{where}.kind': this version of armcal does not read {kind} measurements "
-            f"yet; the kinds it reads are {', '.join(TRACKER_KINDS + CONTACT_KINDS)}",
+            f"yet; the kinds it reads are {', '.join(TRACKER_KINDS + EQUATION_KINDS)}",
         )
     return str(kind)
 
@@ -112,6 +118,8 @@ def read_instrument(
                 )
             planes[label] = Plane(normal, number(path, entry["offset_mm"], f"{key}.offset_mm"))
         return Planes(planes)
+    if kind == "partial":
+        return _partial(path, table, where)
     if kind == "point":
         entries = _labelled(path, table, where, "points", "{ xyz_mm = [900, 0, 200] }")
         points = {}
@@ -140,6 +148,29 @@ def read_instrument(
 
 
 _DISTANCE_EXAMPLE = "pivot_mm = [800, 0, 0], range_mm = [95, 155]"
+_PARTIAL_EXAMPLE = 'reads = ["z"], xyz_mm = [900, 0, 0], rpy_deg = [0, 0, 0]'
+
+
+def _partial(path, table: dict, where: str) -> Coordinates:
+    """``kind = "partial"``: the axes it reads and where its frame roughly is."""
+    for key in ("reads", "xyz_mm", "rpy_deg"):
+        if key not in table:
+            raise fail(path, f"key '{where}': partial coordinates need {key} ({_PARTIAL_EXAMPLE})")
+    reads = table["reads"]
+    if (
+        not isinstance(reads, list)
+        or not reads
+        or not all(isinstance(a, str) and a in AXES for a in reads)
+        or len(set(reads)) != len(reads)
+    ):
+        raise fail(
+            path,
+            f"key '{where}.reads': expected a list of the axes the instrument reads, some of "
+            f'"x", "y", "z" (each once), as reads = ["z"]; got {shown(str(reads))}',
+        )
+    xyz = numbers(path, table["xyz_mm"], f"{where}.xyz_mm", 3)
+    rpy = numbers(path, table["rpy_deg"], f"{where}.rpy_deg", 3)
+    return Coordinates(tuple(reads), np.array(xyz), np.array(rpy))
 
 
 def _known_distances(path, value: Any, where: str) -> tuple[tuple[str, str, float], ...]:
@@ -205,6 +236,67 @@ def true_instrument(path: str | os.PathLike, table: Any, instrument: Instrument)
         raise InputError(f"{os.fspath(path)}: key 'instrument': {exc}") from None
 
 
+def instrumented_arm(
+    path: str | os.PathLike, arm: Any, instrument: Instrument, elastic: bool, targets: bool
+) -> InstrumentedArm:
+    """``arm`` (a spatial robot file's) measured by ``instrument`` (its ``[instrument]``),
+    checked: no ``[elastostatic]``, no orientation, one tool point in ``[targets]``, labels
+    that give no parameter the arm has, noise the instrument can read, and an instrument
+    some pose can meet.  ``elastic``: the file has ``[elastostatic]``; ``targets``: it
+    has ``[targets]``."""
+    if elastic:
+        raise fail(
+            path,
+            f"key 'instrument.kind': a {instrument.kind} instrument with [elastostatic] is not "
+            "supported yet; remove one of them (measure the arm's sag with a tracker)",
+        )
+    if arm.oriented:
+        what = (
+            "this version reads positions of partial coordinates only (x_mm, y_mm, z_mm)"
+            if instrument.reads_every_feature
+            else f"a {instrument.kind} instrument reads no orientation"
+        )
+        raise fail(path, f"key 'measurement.orientation_sigma_deg': {what}; remove the key")
+    if len(arm.targets) > 1:
+        raise fail(
+            path,
+            f"key 'targets': a {instrument.kind} instrument measures one tool point; "
+            f"give one in [targets], not {len(arm.targets)} ({', '.join(arm.targets)})",
+        )
+    if not targets:
+        raise fail(
+            path,
+            f"key 'instrument.kind': a {instrument.kind} instrument measures the tool "
+            "point: give it in [targets] (tool = { xyz_mm = [x, y, z] }, tip frame), where it "
+            "roughly is",
+        )
+    clash = sorted(set(instrument.param_names) & set(arm.param_names))
+    if clash:
+        raise fail(
+            path,
+            f"key 'instrument': the labels of its {instrument.kind}s give parameters the arm "
+            f"has already ({', '.join(clash)}); rename them (A, B, top, side, ...)",
+        )
+    if arm.noise is not None:
+        try:
+            instrument.feature_sigma(arm.noise)
+        except ValueError as exc:
+            raise fail(path, f"key 'measurement': {exc}") from None
+        try:
+            if instrument.feature_sigma(arm.noise) is None:
+                arm.noise.for_dim(instrument.dim)
+        except ValueError as exc:
+            raise fail(
+                path,
+                f"key 'measurement': a {instrument.kind} instrument reads {instrument.dim} "
+                f"number{'s' if instrument.dim > 1 else ''} a row: {exc}",
+            ) from None
+    far = instrument.out_of_reach(arm.tip_reach_mm)
+    if far is not None:
+        raise fail(path, f"key 'instrument': no pose can meet it: {far}; check [instrument]")
+    return InstrumentedArm.of(arm, instrument)
+
+
 def instrument_section(instrument: Instrument) -> dict[str, Any]:
     """The ``[instrument]`` table of ``instrument`` where the user said it is (its start),
     as :func:`read_instrument` reads it back (a calibration file's ``instrument``)."""
@@ -221,6 +313,13 @@ def instrument_section(instrument: Instrument) -> dict[str, Any]:
             "kind": "point",
             "points": points,
             **({"known_distances_mm": known} if known else {}),
+        }
+    if isinstance(instrument, Coordinates):
+        return {
+            "kind": "partial",
+            "reads": list(instrument.reads),
+            "xyz_mm": instrument.xyz_mm.tolist(),
+            "rpy_deg": instrument.rpy_deg.tolist(),
         }
     if isinstance(instrument, Distance):
         return {

@@ -32,7 +32,6 @@ from ..choices import BUILTIN_SPATIAL_ROBOTS, ROBOT_FOLDER
 from ..errors import ArmcalError, ArmcalWarning, InputError, unrendered
 from ..families.registry import RobotSpec
 from ..formats import SPATIAL_KEYS, SPATIAL_TRUTH_KEYS, TRUTH_KEYS, allowed_keys
-from ..instruments import Instrument
 from ..models import (
     FitModel,
     LinkMasses,
@@ -43,7 +42,6 @@ from ..models import (
     rpy_matrix,
     transform,
 )
-from ..models.instrumented import InstrumentedArm
 from ..models.spatial.dh import convention_mistake, table_chain
 from .common import (
     check_keys,
@@ -55,7 +53,7 @@ from .common import (
     numbers,
     suggest,
 )
-from .instrument_table import read_instrument
+from .instrument_table import instrumented_arm, read_instrument
 from .robot_units import check_mdh_angles, check_reach, limit_warnings, urdf_limit_warning
 from .robots import (
     SPATIAL_ROBOT_KEYS,
@@ -341,7 +339,7 @@ def _from_toml(
         elastic = _elastostatic(path, data["elastostatic"], chain, masses)
     model: Any = arm
     if instrument is not None:
-        model = _instrumented(path, arm, instrument, elastic is not None, bool(labels))
+        model = instrumented_arm(path, arm, instrument, elastic is not None, bool(labels))
     if "identify" in data:
         table = data["identify"]
         terms = () if elastic is None else elastic.term_names(arm)
@@ -351,57 +349,6 @@ def _from_toml(
         if elastic is not None:
             elastic = replace(elastic, terms=held_terms(table, terms))
     return RobotSpec(model, builtin or os.fspath(path), warnings=read_warnings, elastic=elastic)
-
-
-def _instrumented(
-    path: Path, arm: SpatialArm, instrument: Instrument, elastic: bool, targets: bool
-) -> InstrumentedArm:
-    """``arm`` measured by ``instrument`` (the robot file's ``[instrument]``)."""
-    if elastic:
-        raise fail(
-            path,
-            f"key 'instrument.kind': a {instrument.kind} instrument with [elastostatic] is not "
-            "supported yet; remove one of them (measure the arm's sag with a tracker)",
-        )
-    if arm.oriented:
-        raise fail(
-            path,
-            f"key 'measurement.orientation_sigma_deg': a {instrument.kind} instrument reads "
-            "no orientation; remove the key",
-        )
-    if len(arm.targets) > 1:
-        raise fail(
-            path,
-            f"key 'targets': a {instrument.kind} instrument touches with one tool point; "
-            f"give one in [targets], not {len(arm.targets)} ({', '.join(arm.targets)})",
-        )
-    if not targets:
-        raise fail(
-            path,
-            f"key 'instrument.kind': a {instrument.kind} instrument touches with the tool "
-            "point: give it in [targets] (tool = { xyz_mm = [x, y, z] }, tip frame), where it "
-            "roughly is",
-        )
-    clash = sorted(set(instrument.param_names) & set(arm.param_names))
-    if clash:
-        raise fail(
-            path,
-            f"key 'instrument': the labels of its {instrument.kind}s give parameters the arm "
-            f"has already ({', '.join(clash)}); rename them (A, B, top, side, ...)",
-        )
-    if arm.noise is not None:
-        try:
-            arm.noise.for_dim(instrument.dim)
-        except ValueError as exc:
-            raise fail(
-                path,
-                f"key 'measurement': a {instrument.kind} instrument reads {instrument.dim} "
-                f"number{'s' if instrument.dim > 1 else ''} a row: {exc}",
-            ) from None
-    far = instrument.out_of_reach(arm.tip_reach_mm)
-    if far is not None:
-        raise fail(path, f"key 'instrument': no pose can meet it: {far}; check [instrument]")
-    return InstrumentedArm.of(arm, instrument)
 
 
 def _limits(

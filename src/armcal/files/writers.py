@@ -100,7 +100,10 @@ def _readings_csv(
     instrument: Any,
     feature: np.ndarray | None,
 ) -> str:
-    """The measurements of a plane, point or distance instrument (``readings`` columns)."""
+    """The measurements of a plane, point or distance instrument (``readings`` columns);
+    of partial coordinates, :func:`_partial_csv`."""
+    if instrument.reads_every_feature:
+        return _partial_csv(q, readings, labels, targets, kinds, instrument, feature)
     head = (["pose"] if labels is not None else []) + joint_names(kinds or q.shape[1])
     columns: list = [[str(label) for label in labels]] if labels is not None else []
     columns.append(joint_values(q, kinds))
@@ -115,6 +118,38 @@ def _readings_csv(
     if targets is not None:
         head.append("target")
         columns.append([str(target) for target in targets])
+    return csv_text(head, columns)
+
+
+def _partial_csv(
+    q: np.ndarray,
+    readings: np.ndarray,
+    labels: Sequence[str] | None,
+    targets: Sequence[str] | None,
+    kinds: Sequence[str] | None,
+    instrument: Any,
+    feature: np.ndarray | None,
+) -> str:
+    """Partial coordinates: the readings of one pose (consecutive rows of the same joints,
+    label and target) on one line, a column per axis, empty where it read none."""
+    m = q.shape[0]
+    index = np.zeros(m, dtype=int) if feature is None else np.asarray(feature)
+    same = np.all(q[1:] == q[:-1], axis=1) & (index[1:] > index[:-1])
+    for more in (labels, targets):
+        if more is not None:
+            same &= np.array([a == b for a, b in zip(more[1:], more[:-1], strict=True)], bool)
+    line = np.concatenate([[0], np.cumsum(~same)]) if m else np.zeros(0, dtype=int)
+    first = np.flatnonzero(np.concatenate([[True], ~same])) if m else np.zeros(0, dtype=int)
+    names = list(instrument.reading_columns)
+    cells = [[""] * first.size for _ in names]
+    for r in range(m):
+        cells[index[r]][line[r]] = repr(float(readings[r, 0]))
+    head = (["pose"] if labels is not None else []) + joint_names(kinds or q.shape[1]) + names
+    columns: list = [[str(labels[int(r)]) for r in first]] if labels is not None else []
+    columns += [joint_values(q[first], kinds), *cells]
+    if targets is not None:
+        head.append("target")
+        columns.append([str(targets[int(r)]) for r in first])
     return csv_text(head, columns)
 
 

@@ -151,6 +151,8 @@ def _mirrored_fit(
     """
     model = problem.model
     points = problem.points[used]
+    if points.shape[-1] < 2:  # one number a row (a plane's, a distance's): no mirror
+        return None
     found = []
     for what, order, signs in MIRRORS:
         mirrored = points.copy()

@@ -14,6 +14,9 @@ with its analytic derivatives (:class:`~armcal.instruments.base.Instrument`):
 * :class:`~armcal.instruments.distance.Distance`: a ballbar or a draw-wire
   sensor reads the tool point's distance from a pivot, less an offset, mm.
   Unknowns: the pivot's position and the offset.
+* :class:`~armcal.instruments.partial.Coordinates`: partial coordinates, some of
+  the tool point's coordinates in the instrument's frame (a dial indicator, a
+  displacement sensor), each a number of its own.  Unknowns: the instrument's pose.
 
 :class:`~armcal.models.instrumented.InstrumentedArm` puts an instrument on any
 arm of the model interface: identification, simulation and validation then
@@ -22,7 +25,16 @@ work through it as for a tracker.
 
 from .base import Instrument, unseen_words
 from .distance import Distance
+from .partial import Coordinates
 from .plane import Plane, Planes
 from .point import FixedPoints
 
-__all__ = ["Distance", "FixedPoints", "Instrument", "Plane", "Planes", "unseen_words"]
+__all__ = [
+    "Coordinates",
+    "Distance",
+    "FixedPoints",
+    "Instrument",
+    "Plane",
+    "Planes",
+    "unseen_words",
+]

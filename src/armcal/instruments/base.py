@@ -17,7 +17,10 @@ from typing import Protocol
 
 import numpy as np
 
+from ..noise import NoiseModel
+
 __all__ = [
+    "Contact",
     "Instrument",
     "MeetsAtZero",
     "feature_index",
@@ -75,6 +78,31 @@ class Instrument(Protocol):
         where a row reports nothing but that it meets the instrument (a touch reads 0)."""
         ...
 
+    @property
+    def constrained(self) -> bool:
+        """Whether a pose is measured only where the tool meets the instrument (a plane, a
+        fixed point, a distance within range); False for one that reads it anywhere."""
+        ...
+
+    @property
+    def reads_every_feature(self) -> bool:
+        """Whether a row reads every feature at once, one column each (a partial
+        instrument's axes, empty cells where it did not); else a row meets one feature,
+        named in :attr:`label_column`."""
+        ...
+
+    @property
+    def held(self) -> tuple[str, ...]:
+        """The instrument's parameters no row can see, held where it starts (an unread
+        axis's shift), named in :attr:`unseen`."""
+        ...
+
+    def feature_sigma(self, noise: NoiseModel) -> np.ndarray | None:
+        """Every feature's reading std (mm) under the robot file's ``noise`` where they
+        differ (a partial instrument's axes), else None: the noise's own sigma for every
+        row (ValueError for a noise model the instrument cannot read)."""
+        ...
+
     def params_of(self, true: Instrument) -> np.ndarray:
         """``(t,)``: this instrument's parameters that describe ``true``, an instrument of
         the same kind and features (where a virtual lab's instrument really is)."""
@@ -116,7 +144,28 @@ class Instrument(Protocol):
         ...
 
 
-class MeetsAtZero:
+class Contact:
+    """What a contact instrument (a plane, a fixed point, a distance) shares: a pose is
+    measured where the tool meets one feature, named by the row; every parameter can be
+    seen; its noise is the robot file's, one sigma."""
+
+    @property
+    def constrained(self) -> bool:
+        return True
+
+    @property
+    def reads_every_feature(self) -> bool:
+        return False
+
+    @property
+    def held(self) -> tuple[str, ...]:
+        return ()
+
+    def feature_sigma(self, noise: NoiseModel) -> np.ndarray | None:
+        return None
+
+
+class MeetsAtZero(Contact):
     """An instrument that measures a pose where its reading is 0 (a touch of a plane, a
     seating in a point): its miss is its reading."""
 

@@ -17,13 +17,13 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .base import Instrument, feature_index, same_features
+from .base import Contact, Instrument, feature_index, same_features
 
 __all__ = ["Distance"]
 
 
 @dataclass(frozen=True, eq=False)
-class Distance:
+class Distance(Contact):
     """A distance from one pivot (module notes).
 
     Attributes

@@ -22,9 +22,11 @@ arm about a fixed point keeps a tool that sits *in* the point there, but moves
 the nominal arm's tool, a few mm off it, by a little, and the rule would keep
 what no seating can see.  The fit starts there too.
 
-The plane, the fixed point and the distance are the first instruments; the
-command line, the robot file's ``[instrument]`` table, designs over the
-constrained poses and the guide pages are still to come (issue 38).
+An instrument that reads the tool anywhere (partial coordinates) has no
+symmetry that holds only where the tool meets it: its rows are judged at the
+nominal arm, as a tracker's, and its features are read at every pose at once
+(a pose is a row per axis read, :meth:`InstrumentedArm.plan_conditions`), each
+with its own sigma (:attr:`InstrumentedArm.feature_sigma`).
 """
 
 from __future__ import annotations
@@ -39,7 +41,7 @@ from numpy.typing import ArrayLike
 
 from ..errors import ArmcalError
 from ..instruments.base import Instrument, feature_index
-from ..noise import NoiseModel
+from ..noise import NoiseModel, relative_noise
 from ..numerics import RowTriangle
 from .core import CoreModel
 from .information import BlockInformation, Linearization, refit_free, whitened_blocks
@@ -79,7 +81,7 @@ class InstrumentedArm(CoreModel):
         """``arm`` measured by ``instrument``: its base held at the origin of its own
         frame, where the instrument's parameters are given."""
         held = tuple(dict.fromkeys((*arm.fixed, *_base_names(arm))))
-        return cls(arm.with_fixed(held), instrument)
+        return cls(arm.with_fixed(held), instrument, tuple(instrument.held))
 
     # -- names and parameters ----------------------------------------------------------
 
@@ -187,8 +189,30 @@ class InstrumentedArm(CoreModel):
 
     @cached_property
     def noise(self) -> NoiseModel | None:
+        """The arm's noise for the instrument's readings; where its features' sigmas differ
+        (:attr:`feature_sigma`: ``sigma_mm = [sx, sy, sz]`` of partial coordinates) the
+        arm's own, as the robot file gave it, every row carrying its feature's sigma
+        (:meth:`conditions`)."""
         noise = self.inner.noise
-        return None if noise is None else noise.for_dim(self.instrument.dim)
+        if noise is None or self.feature_sigma is not None:
+            return noise
+        return noise.for_dim(self.instrument.dim)
+
+    def _core_noise(self, noise: NoiseModel | None) -> NoiseModel:
+        """The noise of a reading: of the reference sigma where the features' differ (each
+        row's own sigma is then its feature's)."""
+        found = relative_noise(self.noise if noise is None else noise)
+        if self.feature_sigma is not None and found.dim != self.instrument.dim:
+            return NoiseModel.isotropic(found.sigma_mm, found.joint_sigma, dim=self.instrument.dim)
+        return found.for_dim(self.instrument.dim)
+
+    @cached_property
+    def feature_sigma(self) -> np.ndarray | None:
+        """Every feature's reading std (mm) where they differ (a partial instrument's axes of
+        ``sigma_mm = [sx, sy, sz]``): every row without a sigma of its own is given its
+        feature's (:meth:`conditions`)."""
+        noise = self.inner.noise
+        return None if noise is None else self.instrument.feature_sigma(noise)
 
     def with_noise(self, noise: NoiseModel | None) -> InstrumentedArm:
         return replace(self, inner=self.inner.with_noise(noise))
@@ -197,7 +221,8 @@ class InstrumentedArm(CoreModel):
         mine = set(self.instrument.param_names)
         theirs = (*_base_names(self.inner), *(n for n in fixed if n not in mine))
         arm = self.inner.with_fixed(tuple(dict.fromkeys(theirs)))
-        return replace(self, inner=arm, instrument_fixed=tuple(n for n in fixed if n in mine))
+        held = (*self.instrument.held, *(n for n in fixed if n in mine))
+        return replace(self, inner=arm, instrument_fixed=tuple(dict.fromkeys(held)))
 
     @property
     def n_joints(self) -> int:
@@ -255,31 +280,49 @@ class InstrumentedArm(CoreModel):
         sigma_mm: np.ndarray | None = None,
         feature: ArrayLike | None = None,
     ) -> Conditions:
-        """The arm's conditions of the rows, with the feature every row touches (its
-        index or its label among the instrument's)."""
+        """The arm's conditions of the rows, with the feature every row touches or reads
+        (its index or its label among the instrument's), and the sigma of its feature
+        where the features' differ and the row has none of its own."""
         rows = self.inner.conditions(q, target=target, loads=loads, sigma_mm=sigma_mm)
         labels = self.instrument.labels
-        index = target_indices(feature, labels, rows.m, what="feature")
-        return replace(rows, feature=feature_index(index, rows.m, labels))
+        index = feature_index(
+            target_indices(feature, labels, rows.m, what="feature"), rows.m, labels
+        )
+        return self._with_feature(rows, index)
+
+    def _with_feature(self, rows: Conditions, feature: np.ndarray) -> Conditions:
+        sigma = rows.sigma_mm
+        if sigma is None and self.feature_sigma is not None:
+            sigma = self.feature_sigma[feature]
+        return replace(rows, feature=feature, sigma_mm=sigma)
 
     def plan_conditions(self, q: np.ndarray, loads: Loads | None = None) -> Conditions:
         """The rows of a plan's poses: each touches the feature it is nearest to at the
-        nominal parameters (the one it is on, for a pose that touches one)."""
+        nominal parameters (the one it is on, for a pose that touches one); a pose of an
+        instrument that reads every feature at once is a row per feature, one after
+        the other."""
+        labels = self.instrument.labels
+        if self.instrument.reads_every_feature:
+            k = len(labels)
+            q = np.asarray(q, dtype=float)
+            many = None if loads is None else loads.repeat(k)
+            rows = self.inner.plan_conditions(np.repeat(q, k, axis=-2), many)
+            return self._with_feature(rows, np.tile(np.arange(k), q.shape[-2]))
         rows = self.inner.plan_conditions(q, loads)
         tool = self._tool(rows, self.split(self.nominal)[0])
-        labels = self.instrument.labels
         each = [
             np.linalg.norm(
                 self.instrument.miss(tool, np.full(rows.m, k), self.instrument.start), axis=-1
             )
             for k in range(len(labels))
         ]
-        return replace(rows, feature=np.argmin(np.stack(each), axis=0))
+        return self._with_feature(rows, np.argmin(np.stack(each), axis=0))
 
     @property
     def constrained(self) -> bool:
-        """True: a pose is measured where the tool meets the instrument."""
-        return True
+        """Whether a pose is measured only where the tool meets the instrument (a plane, a
+        fixed point, a distance within range; not partial coordinates)."""
+        return bool(self.instrument.constrained)
 
     def alone(
         self, params: np.ndarray, covariance: np.ndarray
@@ -317,6 +360,8 @@ class InstrumentedArm(CoreModel):
         ``feature`` where given."""
         at = self._params(params)
         q = np.array(q, dtype=float)
+        if not self.constrained:
+            return q, self.feasible(q)
         if feature is None:
             feature = self.plan_conditions(q).feature
         goal = np.zeros((q.shape[0], self.instrument.dim)) if miss is None else miss
@@ -343,6 +388,13 @@ class InstrumentedArm(CoreModel):
     def _miss(self, rows: Conditions, params: np.ndarray) -> np.ndarray:
         x, theta = self.split(params)
         return self.instrument.miss(self._tool(rows, x), rows.feature, theta)
+
+    def orientation_joint_jacobian(
+        self, conditions: Conditions, params: np.ndarray | None = None
+    ) -> np.ndarray:
+        """The tool's angular velocity per reading ``(..., m, 3, n)``: the arm's."""
+        x, _ = self.split(self._params(params))
+        return np.asarray(self.inner.orientation_joint_jacobian(conditions, x))
 
     # -- what the instrument reports ---------------------------------------------------------
 
@@ -385,7 +437,8 @@ class InstrumentedArm(CoreModel):
         variance function's maxima lie apart (a face's far corner, another face), and a
         sample of the arm's own 3000 misses some (found by a dense search of 20 000,
         ``tests/test_instrument_design.py``)."""
-        return replace(self.inner.design_effort, search=CERTIFICATE_SAMPLE)
+        effort = self.inner.design_effort
+        return replace(effort, search=CERTIFICATE_SAMPLE) if self.constrained else effort
 
     def plan_information(
         self, q: np.ndarray, loads: Loads | None = None, *, rows: Conditions | None = None
@@ -412,19 +465,15 @@ class InstrumentedArm(CoreModel):
         and ``J_q`` the point's joint Jacobian: the arm's pullback of ``B^T G_x``, plus
         ``(sum G_x J_x^T H + sum G_t K) J_q``.  Without the arm's pullback (a family
         without one, noise that moves with the poses, rows' own sigmas) the blocks
-        alone: central differences then."""
+        alone: central differences then.  The rows' own sigmas weigh them alike at every
+        pose."""
         arm_linearize = self._bare_linearize
         noise = self.noise
         moving = noise is not None and (noise.joint_sigma is not None or noise.tracker is not None)
         x, theta = self.split(self.nominal)
-        if (
-            arm_linearize is None
-            or moving
-            or conditions.sigma_mm is not None
-            or not np.array_equal(x, self.inner.nominal)
-        ):
+        if arm_linearize is None or moving or not np.array_equal(x, self.inner.nominal):
             return Linearization(whitened_blocks(self, conditions), None)
-        arm = arm_linearize(conditions)
+        arm = arm_linearize(replace(conditions, sigma_mm=None))  # unwhitened: W is below
         if arm.pullback is None:
             return Linearization(whitened_blocks(self, conditions), None)
         tool = self._tool(conditions, x)
@@ -466,8 +515,9 @@ class InstrumentedArm(CoreModel):
     def start(
         self, conditions: Conditions, points: np.ndarray, weights: np.ndarray | None = None
     ) -> np.ndarray:
-        """Where the readings are met (:meth:`_seated`) from the nominal arm and where the
-        user says the instrument is: once for the mean of sets of one experiment (a Monte
+        """Where the readings are met (:meth:`_seated`; registered, for an instrument that
+        reads the tool anywhere) from the nominal arm and where the user says the
+        instrument is: once for the mean of sets of one experiment (a Monte
         Carlo's), else for every set (its rows of weight 0 left out)."""
         points = np.asarray(points, dtype=float)
         sets = points.reshape(-1, *points.shape[-2:])
@@ -494,7 +544,8 @@ class InstrumentedArm(CoreModel):
         moves one a few mm off it.  At the nominal arm, which misses the features by
         the arm's errors, such a turn would look faintly seen, and be kept.
         """
-        at = self.nominal if points is None else self._seated(conditions, points)
+        seated = points is not None and self.constrained  # a tracker's is the nominal arm
+        at = self._seated(conditions, points) if points is not None and seated else self.nominal
         triangle = self._rows(conditions, at)
         mine = self.instrument_params & self.free
         theta = triangle[:, mine]
@@ -524,9 +575,15 @@ class InstrumentedArm(CoreModel):
         steps over every free parameter from the nominal ones, directions seen by less
         than :data:`_SEAT_RCOND` of the best left alone (a step along one would be long
         and move the arm far from its nominal geometry), until a step moves no reading
-        by 1e-9 of the reach."""
+        by 1e-9 of the reach.
+
+        An instrument that reads the tool anywhere (partial coordinates) has no symmetry
+        that holds only where the tool meets it: the nominal arm is where its rows are
+        judged (:meth:`prepared`), as a tracker's, and the fit starts from the
+        instrument's parameters alone fitted to the readings (a registration), the arm's
+        at nominal: those of the arm its readings barely see would move far."""
         x = self.nominal.copy()
-        free = self.free
+        free = self.free if self.constrained else self.free & self.instrument_params
         goal = np.asarray(points, dtype=float)
         for _ in range(_SEAT_STEPS):
             jac = self.jacobian(conditions, x)[..., free].reshape(goal.size, -1)

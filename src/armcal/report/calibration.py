@@ -74,10 +74,14 @@ def _outlier_lines(cal: Calibration) -> list[str]:
 
 
 def _poses_phrase(cal: Calibration) -> str:
-    """``"20 poses"``, or with targets ``"20 poses (60 measurements of 3 targets)"``, and
-    the rows left out of the fit."""
+    """``"20 poses"``, or with targets ``"20 poses (60 measurements of 3 targets)"``, or
+    where a file's line gives several readings (partial coordinates) ``"20 poses (50
+    readings)"``, and the rows left out of the fit."""
     used = cal.n_used
-    if cal.target is None:
+    lines = len(set(cal.rows)) if cal.rows else cal.n_poses
+    if cal.target is None and lines < cal.n_poses:  # a row is one reading of a pose's
+        poses = f"{lines} poses ({cal.n_poses} readings)"
+    elif cal.target is None:
         poses = f"{cal.n_poses} poses"
     else:  # a row is one target's point of a pose
         targets = len(cal.arm.targets)
@@ -86,7 +90,9 @@ def _poses_phrase(cal: Calibration) -> str:
             f"{targets} target{'s' if targets > 1 else ''})"
         )
     if used < cal.n_poses:
-        rows = "" if cal.target is None else " measurements"
+        rows = (
+            " readings" if lines < cal.n_poses else "" if cal.target is None else " measurements"
+        )
         poses += f" ({cal.n_poses - used}{rows} left out of the fit)"
     return poses
 

@@ -136,7 +136,7 @@ def instrumented_model_lines(
     inner = model.inner
     lines = [
         f"instrument: {instrument.kind} ({', '.join(instrument.labels)}), identified with the "
-        f"arm: {', '.join(instrument.param_names)}",
+        f"arm: {', '.join(np.array(model.param_names)[model.instrument_params & model.free])}",
         f"what it cannot see: {instrument.unseen}",
         f"identifiable set: {model.n_free} of {model.n_params} parameters (the arm's "
         f"{inner.n_free}, the instrument's {model.n_free - inner.n_free}); the arm's base is "

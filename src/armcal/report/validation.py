@@ -17,14 +17,15 @@ __all__ = [
 ]
 
 
-def _rows_words(m: int, poses: int | None, result: Validation) -> str:
-    """What validation ran on: ``m`` rows of ``poses`` poses (None: a row is a pose),
-    held out, or not all (the calibration's own rows are not called held-out)."""
+def _rows_words(m: int, poses: int | None, result: Validation, unit: str = "points") -> str:
+    """What validation ran on: ``m`` rows (``unit``: points of targets, readings of
+    partial coordinates) of ``poses`` poses (None: a row is a pose), held out, or not
+    all (the calibration's own rows are not called held-out)."""
     reused = 0 if result.reused is None else int(np.count_nonzero(result.reused))
     if not reused:
-        return f"{m} held-out poses" if poses is None else f"{poses} held-out poses ({m} points)"
+        return f"{m} held-out poses" if poses is None else f"{poses} held-out poses ({m} {unit})"
     own = f"{'all' if reused == m else reused} of them the calibration's own rows, not held out"
-    return f"{m} poses ({own})" if poses is None else f"{poses} poses ({m} points, {own})"
+    return f"{m} poses ({own})" if poses is None else f"{poses} poses ({m} {unit}, {own})"
 
 
 def validation_report(
@@ -33,7 +34,11 @@ def validation_report(
     """The ``validate`` document and text: errors before and after, predicted, per pose."""
     s = result.summary()
     m = result.after.shape[0]
-    held = _rows_words(m, None if meas.targets is None else len(set(meas.labels)), result)
+    lines = len(set(meas.rows)) if meas.rows else m
+    if meas.targets is not None:
+        held = _rows_words(m, len(set(meas.labels)), result)
+    else:  # several readings a line: partial coordinates
+        held = _rows_words(m, lines if lines < m else None, result, "readings")
     lines = [
         f"validation of {cal.arm.name} on {held}"
         + (" (3-D, projected into the calibration's plane)" if cal.plane is not None else ""),

@@ -316,11 +316,15 @@ def check_meeting(
     source: str, model: FitModel, rows: Conditions, points: np.ndarray, meas: Measurements
 ) -> None:
     """InputError for a row that violates the instrument's geometry: its reading, against
-    what the nominal arm and the robot file's instrument predict, differs from the rows'
-    median difference by more than :data:`_FAR_FROM_FEATURE` of the reach (module
-    notes of :data:`_FAR_FROM_FEATURE`)."""
+    what the nominal arm and the robot file's instrument predict, differs from the median
+    difference of the rows of its feature by more than :data:`_FAR_FROM_FEATURE` of the
+    reach (module notes of :data:`_FAR_FROM_FEATURE`)."""
     found = np.asarray(points, dtype=float) - np.asarray(model.positions(rows))
-    spread = np.linalg.norm(found - np.median(found, axis=0), axis=-1)
+    centre = np.empty_like(found)
+    index = np.zeros(len(found), dtype=int) if rows.feature is None else rows.feature
+    for k in np.unique(index):  # a feature's own: an axis's rough offset is its own
+        centre[index == k] = np.median(found[index == k], axis=0)
+    spread = np.linalg.norm(found - centre, axis=-1)
     limit = _FAR_FROM_FEATURE * model.reach_mm
     if not spread.size or spread.max() <= limit:
         return

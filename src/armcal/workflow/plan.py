@@ -121,7 +121,8 @@ def synthesize_plan(
     from ..synthesis import synthesize_measurements
 
     arm = model.arm
-    meant = model.plan_conditions(q, loads).feature  # what the plan's poses touch
+    # what the plan's poses touch, where they must meet the instrument
+    meant = model.plan_conditions(q, loads).feature if model.constrained else None
     moved, met = model.meeting_poses(q, truth, feature=meant)  # where the true arm does
     unmet = _unmet_warning(model, met)
     if not met.any():
@@ -132,6 +133,7 @@ def synthesize_plan(
     if loads is not None:
         loads = loads.take(met)
     rows = model.plan_conditions(q, loads)
+    count = rows.m // max(q.shape[0], 1)  # every target (every axis read) of every pose
     if meant is not None:
         rows = replace(rows, feature=meant[met])
     if model.point_dim > model.position_dim:  # a 6-DoF instrument's noise turns the true
@@ -160,8 +162,7 @@ def synthesize_plan(
         unmet = _unmet_warning(model, kept)
     labels = targets = None
     names = arm.target_labels
-    count = max(1, len(names))  # every target measured at every pose, one row each
-    if names or pose_labels is not None:
+    if names or pose_labels is not None or count > 1:
         labels = tuple(
             str(i // count + 1) if pose_labels is None else pose_labels[i // count]
             for i in range(rows.m)

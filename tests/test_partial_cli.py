@@ -1,0 +1,318 @@
+"""Partial coordinates through the front door (issue 38): dial indicators, a displacement
+sensor or a CMM that reads some of the tool point's coordinates in its own frame.
+
+Two virtual labs on each of two built-in six-axis arms (``helpers_instruments``):
+
+* ``partial``: a frame that reads x, y and z, where the user says it is 10 mm and 1-2
+  degrees from where it really is; the measurement files have a third of their cells
+  emptied (a row reads any subset of the axes);
+* ``dial``: one dial indicator reading z, its axis along the base's x, as rough.
+
+Tolerances as in ``test_instrument_cli``: a held-out RMS below 1e-9 mm is round-off.
+"""
+
+from __future__ import annotations
+
+import json
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from helpers import run_cli
+from helpers_instruments import met_plan, refused_table, write_lab
+
+if sys.version_info >= (3, 11):
+    import tomllib
+else:  # pragma: no cover - Python 3.10
+    import tomli as tomllib
+
+
+def ok(folder: Path, *args: str) -> str:
+    run = run_cli(folder, *args)
+    assert run.returncode == 0, run.stderr
+    return run.stdout
+
+
+def synthesized(folder: Path, robot: Path, truth: Path, plan: str, out: str, *more: str) -> None:
+    ok(
+        folder,
+        "synthesize",
+        "--robot",
+        robot.name,
+        "--plan",
+        plan,
+        "--truth",
+        truth.name,
+        *more,
+        "-o",
+        out,
+    )
+
+
+def holes(path: Path, seed: int) -> int:
+    """Empty a third of the reading cells of ``path`` (never every cell of a line); the
+    readings left."""
+    lines = path.read_text(encoding="utf-8").splitlines()
+    head = lines[0].split(",")
+    axes = [k for k, name in enumerate(head) if name in ("x_mm", "y_mm", "z_mm")]
+    rng = np.random.default_rng(seed)
+    left = 0
+    out = [lines[0]]
+    for line in lines[1:]:
+        cells = line.split(",")
+        drop = [k for k in axes if rng.random() < 1 / 3][: len(axes) - 1]
+        for k in drop:
+            cells[k] = ""
+        left += len(axes) - len(drop)
+        out.append(",".join(cells))
+    path.write_text("\n".join(out) + "\n", encoding="utf-8")
+    return left
+
+
+@pytest.mark.parametrize("robot", ["industrial-6r", "cobot-6r"])
+@pytest.mark.parametrize("kind", ["partial", "dial"])
+def test_noiseless_partial_coordinates_are_recovered_on_held_out_poses(tmp_path, robot, kind):
+    """synthesize (noiseless, one line a pose, a column an axis) -> empty some cells ->
+    identify -> validate on other poses: every held-out reading to round-off."""
+    robot_file, truth = write_lab(tmp_path, robot, kind)
+    met_plan(tmp_path, robot_file, 100, 1, "train.csv")
+    met_plan(tmp_path, robot_file, 30, 2, "test.csv")
+    synthesized(tmp_path, robot_file, truth, "train.csv", "meas.csv", "--sigma", "0")
+    synthesized(tmp_path, robot_file, truth, "test.csv", "held.csv", "--sigma", "0")
+    text = (tmp_path / "meas.csv").read_text(encoding="utf-8").splitlines()
+    columns = ["x_mm", "y_mm", "z_mm"] if kind == "partial" else ["z_mm"]
+    assert text[0].split(",")[-len(columns) :] == columns
+    assert len(text) == 101  # one line a pose
+    readings = holes(tmp_path / "meas.csv", 3) if kind == "partial" else 100
+    held = holes(tmp_path / "held.csv", 4) if kind == "partial" else 30
+    report = ok(
+        tmp_path,
+        "identify",
+        "--robot",
+        robot_file.name,
+        "--measurements",
+        "meas.csv",
+        "-o",
+        "cal.json",
+    )
+    assert f"100 poses ({readings} readings)" in report or kind == "dial"
+    document = json.loads((tmp_path / "cal.json").read_text(encoding="utf-8"))
+    assert document["robot"]["instrument"]["kind"] == "partial"
+    summary = json.loads(
+        ok(
+            tmp_path,
+            "validate",
+            "--calibration",
+            "cal.json",
+            "--measurements",
+            "held.csv",
+            "--json",
+        )
+    )
+    assert summary["rms_after_mm"] < 1e-9
+    assert summary["rms_before_mm"] > 1e-3
+    assert (
+        len(
+            json.loads(
+                ok(
+                    tmp_path,
+                    "validate",
+                    "--calibration",
+                    "cal.json",
+                    "--measurements",
+                    "held.csv",
+                    "--json",
+                    "--per-pose",
+                )
+            )["per_pose"]
+        )
+        == held
+    )
+
+
+def test_what_one_dial_cannot_see_is_held_and_said(tmp_path):
+    """One axis read: the instrument's shift along its other two axes and its turn about
+    its own are held, and the report says what the dial cannot see."""
+    robot_file, truth = write_lab(tmp_path, "industrial-6r", "dial")
+    met_plan(tmp_path, robot_file, 60, 1, "plan.csv")
+    synthesized(tmp_path, robot_file, truth, "plan.csv", "meas.csv")
+    report = ok(tmp_path, "identify", "--robot", robot_file.name, "--measurements", "meas.csv")
+    assert (
+        "cannot see the arm move along the instrument's x or y axes, nor turn about its z"
+        in report
+    )
+    assert (
+        "fixed (held at nominal, not identified): instrument.x, instrument.y, "
+        "instrument.rz" in report
+    )
+    assert "identified with the arm: instrument.z, instrument.rx, instrument.ry\n" in report
+
+
+def test_sigma_per_axis_weighs_every_reading(tmp_path):
+    """``sigma_mm = [sx, sy, sz]``: every reading has its axis's sigma, so the fit is
+    consistent with it (chi2 on its dof), the calibration keeps the noise per axis, and
+    validation predicts the held-out error it finds (90 readings: the RMS is known to
+    about 1 / sqrt(180) = 7.5 %; 30 % is four of those)."""
+    robot_file, truth = write_lab(tmp_path, "cobot-6r", "partial", sigma="[0.01, 0.02, 0.04]")
+    met_plan(tmp_path, robot_file, 100, 1, "plan.csv")
+    met_plan(tmp_path, robot_file, 30, 2, "test.csv")
+    synthesized(tmp_path, robot_file, truth, "plan.csv", "meas.csv", "--seed", "5")
+    synthesized(tmp_path, robot_file, truth, "test.csv", "held.csv", "--seed", "6")
+    fit = json.loads(
+        ok(
+            tmp_path,
+            "identify",
+            "--robot",
+            robot_file.name,
+            "--measurements",
+            "meas.csv",
+            "--json",
+            "-o",
+            "cal.json",
+        )
+    )
+    assert 0.001 < fit["goodness_of_fit"]["p_value"] < 0.999
+    assert np.allclose(np.diag(fit["noise"]["covariance_mm2"]), [1e-4, 4e-4, 16e-4])
+    summary = json.loads(
+        ok(
+            tmp_path,
+            "validate",
+            "--calibration",
+            "cal.json",
+            "--measurements",
+            "held.csv",
+            "--json",
+        )
+    )
+    assert abs(summary["rms_after_mm"] / summary["predicted_rms_after_per_point_mm"] - 1) < 0.3
+
+
+def test_evaluate_simulate_and_export_take_partial_coordinates(tmp_path):
+    """evaluate, simulate and export work through partial coordinates and name the
+    instrument's parameters."""
+    robot_file, truth = write_lab(tmp_path, "cobot-6r", "partial")
+    met_plan(tmp_path, robot_file, 40, 5, "plan.csv")
+    quality = json.loads(
+        ok(tmp_path, "evaluate", "--robot", robot_file.name, "--plan", "plan.csv", "--json")
+    )
+    assert "instrument.rz" in quality["predicted_std"]
+    result = json.loads(
+        ok(
+            tmp_path,
+            "simulate",
+            "--robot",
+            robot_file.name,
+            "--plan",
+            "plan.csv",
+            "--truth",
+            truth.name,
+            "--trials",
+            "40",
+            "--json",
+        )
+    )
+    assert result["trials"] == 40
+    synthesized(tmp_path, robot_file, truth, "plan.csv", "meas.csv", "--sigma", "0")
+    ok(
+        tmp_path,
+        "identify",
+        "--robot",
+        robot_file.name,
+        "--measurements",
+        "meas.csv",
+        "-o",
+        "cal.json",
+    )
+    ok(tmp_path, "export", "--calibration", "cal.json", "--robot-toml", "out.toml")
+    exported = tomllib.loads((tmp_path / "out.toml").read_text(encoding="utf-8"))
+    assert "instrument" not in exported and "mdh" in exported  # the arm alone
+
+
+def _table(reads: str = '["z"]', rpy: str = "[0, 90, 0]", xyz: str = "[900, 0, 100]") -> str:
+    return f'kind = "partial"\nreads = {reads}\nxyz_mm = {xyz}\nrpy_deg = {rpy}\n'
+
+
+BAD_ROBOTS = {
+    "an unknown axis": (_table(reads='["w"]'), "", "key 'instrument.reads'"),
+    "no axis": (_table(reads="[]"), "", "some of"),
+    "an axis twice": (_table(reads='["z", "z"]'), "", "each once"),
+    "no origin": ('kind = "partial"\nreads = ["z"]\nrpy_deg = [0, 0, 0]\n', "", "need xyz_mm"),
+    "two angles": (_table(rpy="[0, 90]"), "", "key 'instrument.rpy_deg'"),
+    "a covariance": (
+        _table(),
+        "[measurement]\ncovariance_mm2 = [[1e-4, 1e-5, 0], [1e-5, 1e-4, 0], [0, 0, 1e-4]]\n",
+        "not a covariance",
+    ),
+    "orientation noise": (
+        _table(),
+        "[measurement]\nsigma_mm = 0.01\norientation_sigma_deg = 0.01\n",
+        "positions of partial coordinates only",
+    ),
+}
+
+
+@pytest.mark.parametrize("case", sorted(BAD_ROBOTS))
+def test_bad_partial_tables_are_one_line(tmp_path, case):
+    table, measurement, words = BAD_ROBOTS[case]
+    assert words in refused_table(tmp_path, table, measurement)
+
+
+def test_bad_partial_measurements_are_one_line(tmp_path):
+    """An axis the instrument does not read, an orientation column, a line without a
+    reading, a cell that is no number, no reading column, and a reading far from the
+    others' (a metre's worth): exit 2, the file, the row or line and the column named."""
+    robot_file, truth = write_lab(tmp_path, "industrial-6r", "partial")
+    met_plan(tmp_path, robot_file, 40, 6, "plan.csv")
+    synthesized(tmp_path, robot_file, truth, "plan.csv", "meas.csv")
+    good = (tmp_path / "meas.csv").read_text(encoding="utf-8").splitlines()
+    head, rows = good[0], good[1:]
+    dial = robot_file.read_text(encoding="utf-8").replace('["x", "y", "z"]', '["z"]')
+    (tmp_path / "dial.toml").write_text(dial, encoding="utf-8")
+
+    def cell(line: str, k: int, value: str) -> str:
+        cells = line.split(",")
+        cells[k] = value
+        return ",".join(cells)
+
+    cases = {
+        "unread axis": ("dial.toml", good, "column x_mm", 'add "x" to [instrument] reads'),
+        "orientation": (
+            robot_file.name,
+            [head + ",rx_deg", *(r + ",1" for r in rows)],
+            "column rx_deg",
+            "positions of partial coordinates only",
+        ),
+        "empty line": (
+            robot_file.name,
+            [head, cell(cell(cell(rows[0], -1, ""), -2, ""), -3, ""), *rows[1:]],
+            "row 1 (line 2): no reading",
+            "x_mm or y_mm or z_mm",
+        ),
+        "not a number": (
+            robot_file.name,
+            [head, cell(rows[0], -1, "abc"), *rows[1:]],
+            "row 1 (line 2), column z_mm",
+            "leave the cell empty",
+        ),
+        "no reading column": (
+            robot_file.name,
+            [",".join(head.split(",")[:-3]), *(",".join(r.split(",")[:-3]) for r in rows)],
+            "no column of a reading",
+            "add a column x_mm or y_mm or z_mm",
+        ),
+        "far reading": (
+            robot_file.name,
+            [head, cell(rows[0], -1, "9000"), *rows[1:]],
+            "row 1:",
+            "feature 'z'",
+        ),
+    }
+    for name, (robot, lines, where, words) in cases.items():
+        (tmp_path / "bad.csv").write_text("\n".join(lines) + "\n", encoding="utf-8")
+        run = run_cli(tmp_path, "identify", "--robot", robot, "--measurements", "bad.csv")
+        assert run.returncode == 2, (name, run.stderr)
+        err = run.stderr.strip().splitlines()
+        assert len(err) == 1 and err[0].startswith("armcal: error: bad.csv"), (name, run.stderr)
+        assert where in err[0] and words in err[0], (name, err[0])
