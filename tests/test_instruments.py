@@ -379,3 +379,45 @@ def test_a_plan_designed_from_touches_beats_random_touch_plans():
     assert ours > max(chance)
     assert found.certificate is not None
     assert 0.0 < found.certificate.certified_d_efficiency <= 1.0
+
+
+@pytest.mark.parametrize("kind", ["plane", "dial"])
+def test_the_predicted_position_error_is_the_arms_own(kind):
+    """evaluate's predicted position error after calibration with an instrument is the
+    arm's own tool point's in 3-D, not the error of a reading: recomputed here from the
+    plan's whitened Jacobian (sigma^2 (J^T J)^-1, its arm block) and central differences
+    of the arm's tool point at random poses (step 1e-6 mm or rad: relative error about
+    1e-6), against the touch or dial reading's own error, which is smaller."""
+    from armcal.criteria import position_accuracy
+
+    arm, _ = _arm("industrial-6r")
+    _, rough = _instruments(arm.reach_mm, kind)
+    model = InstrumentedArm.of(arm, rough)
+    q = _rows(model, model.nominal, 60, seed=9)
+    model = model.prepared(model.plan_conditions(q))
+    test_q = random_plan(model.inner, 50, rng=np.random.default_rng(10))
+    sigma = 0.01
+    found = position_accuracy(model, q, test_q, sigma)
+    jac = model.jacobian(model.plan_conditions(q))[..., model.free]
+    jac = jac.reshape(-1, model.n_free)
+    covariance = sigma**2 * np.linalg.inv(jac.T @ jac)
+    k = model.inner.n_free
+    inner, x = model.inner, model.split(model.nominal)[0]
+    rows = inner.plan_conditions(test_q)
+    h = 1e-6
+    columns = np.flatnonzero(inner.free)
+    tool = np.stack(
+        [
+            (inner.positions(rows, x + h * e) - inner.positions(rows, x - h * e))[..., :3]
+            / (2 * h)
+            for e in np.eye(x.size)[columns]
+        ],
+        axis=-1,
+    )  # (50, 3, k)
+    per_pose = np.einsum("tia,ab,tib->t", tool, covariance[:k, :k], tool)
+    np.testing.assert_allclose(found.rms_mm, np.sqrt(per_pose.mean()), rtol=1e-5)
+    reading = model.jacobian(model.plan_conditions(test_q))[..., model.free]
+    reading_rms = np.sqrt(
+        np.einsum("tia,ab,tib->", reading, covariance, reading) / reading.shape[0]
+    )
+    assert found.rms_mm > 1.2 * reading_rms

@@ -394,7 +394,11 @@ def position_accuracy(
     -----
     The error of the predicted tip position at ``x`` has covariance
     ``sigma^2 J0(x) F^-1 J0(x)^T`` (:func:`armcal.models.information.tip_variances`);
-    its trace is the mean squared position error.  For an orthogonal plan of the
+    its trace is the mean squared position error.  For an arm measured by an
+    instrument other than a tracker, ``J0`` is the arm's own tool point's in the frame
+    the instrument is placed in, ``F^-1`` the arm's block of the covariance
+    (:meth:`~armcal.models.interface.FitModel.alone`): what the instrument cannot see
+    is held, and not in the figure.  For an orthogonal plan of the
     paper's model it equals ``2 n sigma^2 / m`` at every pose
     (``2 (n + 1) sigma^2 / m`` with a base offset).
 
@@ -406,7 +410,10 @@ def position_accuracy(
     info = _information(model, q, loads, info)
     info.check_identifiable()
     covariance, _ = _covariance(info, sigma)
-    j0 = position_jacobian(model, model.plan_conditions(np.asarray(test_q, dtype=float)))
+    # The arm's own tool points: an instrument's readings are not where the arm is
+    # (a touch's error along a normal is not the tool's error in 3-D).
+    arm, _, covariance = model.alone(np.zeros(model.n_params), covariance)
+    j0 = position_jacobian(arm, arm.plan_conditions(np.asarray(test_q, dtype=float)))
     per_pose = np.sqrt(tip_variances(j0, covariance))
     return PositionAccuracy(
         float(np.sqrt(np.mean(per_pose**2))), float(np.max(per_pose)), per_pose

@@ -52,8 +52,13 @@ def _test_blocks(model: FitModel, test_q: np.ndarray) -> np.ndarray:
             "for a 6-DoF instrument"
         )
     plain = model.with_noise(None)  # the position Jacobian itself, not weighted by noise
-    blocks = plain.plan_information(np.asarray(test_q, dtype=float)).blocks()
-    return blocks.reshape(-1, model.position_dim, blocks.shape[-1])
+    # The arm's own tool points (an instrument's readings are not where the arm is): its
+    # parameters are the model's first, an instrument's columns zero.
+    arm = plain.alone(np.zeros(plain.n_params), np.zeros((plain.n_params, plain.n_params)))[0]
+    blocks = arm.plan_information(np.asarray(test_q, dtype=float)).blocks()
+    blocks = blocks.reshape(-1, arm.position_dim, blocks.shape[-1])
+    extra = model.n_free - blocks.shape[-1]
+    return np.concatenate([blocks, np.zeros((*blocks.shape[:-1], extra))], axis=-1)
 
 
 def task_criterion(name: str, model: FitModel, test_q: np.ndarray) -> Criterion:

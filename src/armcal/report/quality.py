@@ -83,6 +83,11 @@ def _text(quality: PlanQuality, words: Mapping[str, str]) -> str:
             f"predicted position error after calibration: RMS {pos.rms_mm:.4g} mm per point, "
             f"max {pos.max_mm:.4g} mm over {pos.per_pose_mm.size} test poses",
         ]
+        if arm.feature_labels:  # an instrument's readings are not where the tool is
+            lines.append(
+                "  (of the arm's tool point in 3-D, in the frame the instrument is placed in; "
+                "what the instrument cannot see is held, not counted)"
+            )
     return "\n".join(lines)
 
 
