@@ -20,6 +20,7 @@ import numpy as np
 import pytest
 
 from armcal.choices import BUILTIN_SPATIAL_ROBOTS
+from armcal.criteria import position_accuracy
 from armcal.files import load_robot
 from helpers import run_cli
 from helpers_instruments import met_plan, refused_table, write_lab
@@ -294,11 +295,17 @@ def test_validation_figure_compensation_and_export_of_an_instrument(tmp_path):
     )
 
 
-def test_a_plan_figure_the_family_lacks_is_refused_before_the_design(tmp_path):
-    """design --plot for an instrument's arm, whose family draws no plan yet: one line at
-    once, no plan written (the design's half minute is not spent first)."""
+def test_a_plan_of_an_instrument_is_drawn(tmp_path):
+    """design --plot for an arm measured by planes: the plan's four panels, the planes
+    marked where the robot file puts them (each plane's point nearest the base's origin,
+    offset times the unit normal), the arm's own predicted error over poses within the
+    limits (criteria.position_accuracy at the same poses), and the variance function over
+    poses that touch a plane at or below the certificate's maximum."""
+    from armcal.doe import certify, feasible_poses
+    from armcal.plotting_spatial import MAP_POSES, plot_spatial_plan
+
     robot_file, _ = write_lab(tmp_path, "cobot-6r", "plane")
-    run = run_cli(
+    ok(
         tmp_path,
         "design",
         "--robot",
@@ -310,9 +317,20 @@ def test_a_plan_figure_the_family_lacks_is_refused_before_the_design(tmp_path):
         "--plot",
         "plan.png",
     )
-    assert run.returncode == 2, run.stderr
-    assert run.stderr.strip() == "armcal: error: the instrumented family of arm has no plan figure"
-    assert not (tmp_path / "plan.csv").exists() and not (tmp_path / "plan.png").exists()
+    assert (tmp_path / "plan.png").stat().st_size > 10_000
+    model = load_robot(robot_file).arm
+    q = feasible_poses(model, 30, rng=np.random.default_rng(3))
+    model = model.prepared(model.plan_conditions(q))
+    certificate = certify(model, q, rng=2, candidates=300, rounds=1, search=500)
+    figure = plot_spatial_plan(model, q, sigma=0.01, certificate=certificate)
+    marks = {t.get_text().strip(): t.get_position_3d() for t in figure.axes[0].texts}
+    for label, plane in model.instrument.planes.items():
+        np.testing.assert_allclose(marks[label], plane.offset_mm * plane.normal, atol=1e-9)
+    workspace = feasible_poses(model.inner, MAP_POSES, rng=0)
+    expected = position_accuracy(model, q, workspace, 0.01).per_pose_mm
+    np.testing.assert_allclose(figure.axes[2].collections[0].get_array(), expected, rtol=1e-12)
+    variance = figure.axes[-1].lines[0].get_ydata()
+    assert np.max(variance) <= certificate.max_variance * (1 + 1e-9)
 
 
 def test_fixing_an_instrument_parameter_keeps_the_base_held(tmp_path):

@@ -43,10 +43,16 @@ def _chain_points(arm: SpatialArm, q: np.ndarray) -> np.ndarray:
     return np.stack(points, axis=1)
 
 
-def _sticks(fig: Figure, spec, arm: SpatialArm, q: np.ndarray) -> None:
+def _sticks(
+    fig: Figure,
+    spec,
+    arm: SpatialArm,
+    q: np.ndarray,
+    marks: tuple[tuple[str, np.ndarray], ...] = (),
+) -> None:
     """The arm at every pose, each flange numbered by its row of the plan, and the
-    instrument where the robot file's view puts it, on equal axes (a metre is a metre
-    along x, y and z)."""
+    instrument where the robot file's view puts it, or an instrument's ``marks`` (its
+    features, labelled), on equal axes (a metre is a metre along x, y and z)."""
     ax = fig.add_subplot(spec, projection="3d")
     chain = _chain_points(arm, q)
     for pose in chain:
@@ -62,6 +68,12 @@ def _sticks(fig: Figure, spec, arm: SpatialArm, q: np.ndarray) -> None:
         x, y, z = view.position
         ax.scatter([x], [y], [z], marker="^", s=60, color="C3", label="instrument")
         shown = np.vstack([shown, view.position])
+    if marks:
+        where = np.array([xyz for _, xyz in marks], dtype=float)
+        ax.scatter(*where.T, marker="^", s=60, color="C3", label="instrument")
+        for label, xyz in marks:
+            ax.text(*xyz, f" {label}", fontsize=7, color="C3")
+        shown = np.vstack([shown, where])
     low, high = shown.min(axis=0), shown.max(axis=0)
     pad = 0.05 * float(np.max(high - low))
     for setter, lo, hi in zip((ax.set_xlim, ax.set_ylim, ax.set_zlim), low, high, strict=True):
@@ -96,7 +108,7 @@ def _error_map(
     ax = fig.add_subplot(spec)
     per_point = position_accuracy(model, q, poses, sigma).per_pose_mm  # every target's
     error = np.sqrt(np.mean(per_point.reshape(poses.shape[0], -1) ** 2, axis=1))
-    arm = model.arm
+    arm = _spatial(model)
     flange = _chain_points(arm, poses)[:, -1]
     shown = ax.scatter(flange[:, 0], flange[:, 1], c=error, s=4, cmap="viridis")
     fig.colorbar(shown, ax=ax, label="predicted error after calibration (mm RMS per point)")
@@ -104,6 +116,12 @@ def _error_map(
     ax.set_xlabel("flange x (mm)")
     ax.set_ylabel("flange y (mm)")
     ax.set_title("over the workspace, seen from above")
+
+
+def _spatial(model: FitModel) -> SpatialArm:
+    """The spatial arm of ``model``: itself, or the arm an instrument measures."""
+    alone = model.alone(np.zeros(model.n_params), np.zeros((model.n_params, model.n_params)))
+    return alone[0].arm
 
 
 def _variance(fig: Figure, spec, model: FitModel, certificate: Certificate, poses) -> None:
@@ -131,15 +149,22 @@ def plot_spatial_plan(
     """A spatial arm's plan in four panels: the arm at every pose with the instrument, the
     joints against their limits, the predicted position error after calibration at
     :data:`MAP_POSES` random feasible poses (noise ``sigma`` mm), and the certificate's
-    variance function there against its premise (where a certificate is given)."""
-    arm = model.arm
+    variance function there against its premise (where a certificate is given).
+
+    An arm measured by an instrument other than a tracker: its features marked, the
+    error of the arm's own tool point over poses within the limits (not only those that
+    meet the instrument: the calibrated arm works everywhere), and the variance function
+    over poses that meet it (the set the certificate is over)."""
+    arm = _spatial(model)
     poses = feasible_poses(model, MAP_POSES, rng=rng)
+    workspace = poses if arm is model.arm else feasible_poses(arm, MAP_POSES, rng=rng)
     fig = Figure(figsize=(12, 9))
     fig.set_layout_engine(ConstrainedLayoutEngine())
     grid = fig.add_gridspec(2, 2)
-    _sticks(fig, grid[0, 0], arm, q)
+    instrument = getattr(model, "instrument", None)  # an instrumented arm's
+    _sticks(fig, grid[0, 0], arm, q, () if instrument is None else instrument.marks)
     _joints(fig, grid[0, 1], arm, q)
-    _error_map(fig, grid[1, 0], model, q, sigma, poses)
+    _error_map(fig, grid[1, 0], model, q, sigma, workspace)
     if certificate is not None:
         _variance(fig, grid[1, 1], model, certificate, poses)
     fig.suptitle(f"plan of {arm.name}")

@@ -91,6 +91,7 @@ INSTRUMENTED = register(
             "decode": "armcal.files.calibration_instrumented:decode",
             "calibrate": "armcal.workflow.measured:fit_instrumented",
             "describe": "armcal.report.common:instrumented_model_lines",
+            "plan_figure": "armcal.plotting_spatial:spatial_plan_figure",
             "residual_figure": "armcal.plotting_residuals:residual_figure",
         },
     )

@@ -103,6 +103,13 @@ class Instrument(Protocol):
         row (ValueError for a noise model the instrument cannot read)."""
         ...
 
+    @property
+    def marks(self) -> tuple[tuple[str, np.ndarray], ...]:
+        """Where a picture marks the instrument, where the user says it is: a label and a
+        point ``(3,)`` (base frame, mm) for each feature (a plane's point nearest the
+        base's origin, a fixed point, a pivot, an instrument's origin)."""
+        ...
+
     def params_of(self, true: Instrument) -> np.ndarray:
         """``(t,)``: this instrument's parameters that describe ``true``, an instrument of
         the same kind and features (where a virtual lab's instrument really is)."""

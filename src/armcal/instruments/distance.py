@@ -86,6 +86,10 @@ class Distance(Contact):
         )
 
     @property
+    def marks(self) -> tuple[tuple[str, np.ndarray], ...]:
+        return (("pivot", self.pivot_mm),)
+
+    @property
     def label_column(self) -> str | None:
         return None
 

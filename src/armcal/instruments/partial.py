@@ -121,6 +121,10 @@ class Coordinates:
         return words
 
     @property
+    def marks(self) -> tuple[tuple[str, np.ndarray], ...]:
+        return (("instrument", self.xyz_mm),)
+
+    @property
     def label_column(self) -> str | None:
         return None
 

@@ -112,6 +112,10 @@ class Planes(MeetsAtZero):
         )
 
     @property
+    def marks(self) -> tuple[tuple[str, np.ndarray], ...]:
+        return tuple((k, p.offset_mm * p.normal) for k, p in self.planes.items())
+
+    @property
     def label_column(self) -> str | None:
         return "plane"
 

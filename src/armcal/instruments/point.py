@@ -142,6 +142,10 @@ class FixedPoints(MeetsAtZero):
         )
 
     @property
+    def marks(self) -> tuple[tuple[str, np.ndarray], ...]:
+        return tuple(self.points.items())
+
+    @property
     def label_column(self) -> str | None:
         return "point"
 
