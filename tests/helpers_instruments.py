@@ -52,12 +52,50 @@ def instruments(reach: float, kind: str) -> tuple[str, str]:
             "rpy_deg = [0, 90, 0]\n",
             f"xyz_mm = {mm(0.6, 0.0, 0.1)}\nrpy_deg = [1.0, 88.5, 2.0]\n",
         )
+    if kind in CAMERAS:  # a 6 x 8 board of 30 mm squares
+        board = "rows = 6, cols = 8, square_mm = 30.0"
+        if kind == "eye-in-hand":  # on the flange, looking along it; the board on the floor
+            return (
+                f'kind = "camera"\ncamera = "cam.yaml"\nmount = "eye-in-hand"\n'
+                "camera_in_tool = { xyz_mm = [0, 60, 100], rpy_deg = [0, 0, 0] }\n"
+                f"board = {{ {board}, xyz_mm = {mm(0.45, 0.0, 0.0, shift=-105)}, "
+                "rpy_deg = [0, 0, 0] }\n",
+                "camera_in_tool = { xyz_mm = [3, 57, 104], rpy_deg = [1.0, -1.2, 0.8] }\n"
+                f"board = {{ xyz_mm = {mm(0.45, 0.0, 0.0, shift=-97)}, "
+                "rpy_deg = [1.5, -0.7, 2.0] }\n",
+            )
+        return (  # eye-to-hand: above the cell looking down; the board on the flange
+            f'kind = "camera"\ncamera = "cam.yaml"\nmount = "eye-to-hand"\n'
+            f"camera_in_base = {{ xyz_mm = {mm(0.4, 0.0, 0.9)}, rpy_deg = [180, 0, 90] }}\n"
+            f"board = {{ {board}, xyz_mm = [-105, -75, 60], rpy_deg = [0, 0, 0] }}\n",
+            f"camera_in_base = {{ xyz_mm = {mm(0.4, 0.0, 0.9, shift=8)}, "
+            "rpy_deg = [178.8, 1.1, 91.3] }\n"
+            "board = { xyz_mm = [-101, -79, 63], rpy_deg = [0.9, -1.4, 1.6] }\n",
+        )
     span = mm(0.2, 0.7)
     return (
         f'kind = "distance"\npivot_mm = {mm(0.5, 0.1, 0.3, shift=10)}\nrange_mm = {span}\n',
         f"pivot_mm = {mm(0.5, 0.1, 0.3)}\nrange_mm = {span}\noffset_mm = 50.0\n",
     )
 
+
+#: The camera labs: its mount.
+CAMERAS = ("eye-in-hand", "eye-to-hand")
+
+#: A camera's camera_info (1280 x 800 pixels, 900 px focal length, a little distortion).
+CAMERA_INFO = """image_width: 1280
+image_height: 800
+camera_name: lab
+camera_matrix:
+  rows: 3
+  cols: 3
+  data: [900.0, 0.0, 640.0, 0.0, 900.0, 400.0, 0.0, 0.0, 1.0]
+distortion_model: plumb_bob
+distortion_coefficients:
+  rows: 1
+  cols: 5
+  data: [0.05, -0.1, 0.0005, -0.0003, 0.0]
+"""
 
 #: The tool point in the flange frame: off joint 6's axis (so its zero is seen) for a
 #: touch or a distance; at the flange's centre for a seating.  Random seatings of a tool
@@ -71,6 +109,8 @@ TOOLS = {
     "distance": "[targets]\ntool = { xyz_mm = [30, -20, 150] }\n",
     "partial": "[targets]\ntool = { xyz_mm = [30, -20, 150] }\n",
     "dial": "[targets]\ntool = { xyz_mm = [30, -20, 150] }\n",
+    "eye-in-hand": "",  # a camera is placed on the flange
+    "eye-to-hand": "",
 }
 TOOL = TOOLS["plane"]
 
@@ -83,8 +123,15 @@ def write_lab(folder: Path, robot: str, kind: str, sigma: str = "0.01") -> tuple
     rough, true = instruments(load_robot(robot).arm.reach_mm, kind)
     text = source.read_text(encoding="utf-8")
     robot_file = folder / f"{robot}-{kind}.toml"
+    noise = (
+        f"sigma_px = {sigma if sigma != '0.01' else '0.2'}"
+        if kind in CAMERAS
+        else (f"sigma_mm = {sigma}")
+    )
+    if kind in CAMERAS:
+        (folder / "cam.yaml").write_text(CAMERA_INFO, encoding="utf-8")
     robot_file.write_text(
-        f"{text}\n{TOOLS[kind]}[measurement]\nsigma_mm = {sigma}\n[instrument]\n{rough}",
+        f"{text}\n{TOOLS[kind]}[measurement]\n{noise}\n[instrument]\n{rough}",
         encoding="utf-8",
     )
     truth = source.with_name(f"{robot}-truth.toml").read_text(encoding="utf-8")

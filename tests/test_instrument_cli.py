@@ -157,7 +157,7 @@ def test_evaluate_and_simulate_take_an_instrument(tmp_path):
 
 BAD_ROBOTS = {
     "unknown kind": ('kind = "planes"\n', "did you mean 'plane'"),
-    "camera": ('kind = "camera"\n', "does not read camera"),
+    "camera without a mount": ('kind = "camera"\n', "key 'instrument.mount': expected"),
     "zero normal": (
         'kind = "plane"\nplanes = { top = { normal = [0, 0, 0], offset_mm = 1.0 } }\n',
         "zero length",

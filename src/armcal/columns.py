@@ -100,6 +100,15 @@ _READ = (
         "kind distance (required there): the reading, the tool point's distance from the "
         "pivot less an unknown offset",
     ),
+    Column(
+        "corner",
+        "text",
+        False,
+        "kind camera (required there): the board's corner, i cols + j (0 first), a row per "
+        "corner of a photo",
+    ),
+    Column("u_px", "px", False, "kind camera (required there): the corner's image column"),
+    Column("v_px", "px", False, "kind camera (required there): the corner's image row"),
     *(
         Column(
             f"{axis}_mm",

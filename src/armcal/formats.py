@@ -20,9 +20,9 @@ from __future__ import annotations
 
 import textwrap
 from collections.abc import Sequence
-from dataclasses import dataclass
 
 from .columns import COLUMNS, Column, columns_line, reader_columns
+from .keys import INSTRUMENT_KEYS, Key
 
 __all__ = [
     "COLUMNS",
@@ -40,31 +40,6 @@ __all__ = [
     "reader_columns",
     "table_of",
 ]
-
-
-@dataclass(frozen=True)
-class Key:
-    """One key of the robot TOML file.
-
-    Attributes
-    ----------
-    table : str
-        ``""`` for the top level, else the table (``measurement``, ...).
-    name : str
-        The key.
-    unit : str
-        Its unit or type.
-    default : str
-        What applies when it is absent.
-    meaning : str
-        What it sets.
-    """
-
-    table: str
-    name: str
-    unit: str
-    default: str
-    meaning: str
 
 
 ROBOT_KEYS: tuple[Key, ...] = (
@@ -314,107 +289,13 @@ SPATIAL_KEYS: tuple[Key, ...] = (
         "measurements with rx_deg, ry_deg, rz_deg; plans are then evaluated for full poses",
     ),
     Key(
-        "instrument",
-        "kind",
-        "tracker, probe, plane, point, distance or partial",
-        "tracker",
-        "what the instrument reports: points (tracker), poses (probe), touches of planes, "
-        "seatings in fixed points, distances from a pivot (a ballbar, a draw-wire sensor), "
-        "or some coordinates of the tool point (partial: dial indicators, a displacement "
-        "sensor, a CMM)",
-    ),
-    Key(
-        "instrument",
-        "reads",
-        'list of "x", "y", "z"',
-        "required for kind partial",
-        "the axes of its own frame partial coordinates read (a dial indicator: one); rows "
-        "give x_mm, y_mm, z_mm, a cell empty where it read none",
-    ),
-    Key(
-        "instrument",
-        "xyz_mm",
-        "mm, [x, y, z] in the robot's base frame",
-        "required for kind partial",
-        "where the frame of partial coordinates roughly has its origin",
-    ),
-    Key(
-        "instrument",
-        "rpy_deg",
-        "deg, [roll, pitch, yaw] as in URDF (Rz Ry Rx), in the robot's base frame",
-        "required for kind partial",
-        "how the frame of partial coordinates is roughly turned",
-    ),
-    Key(
-        "instrument",
-        "planes",
-        "table of LABEL = { normal = [x, y, z], offset_mm = d } in the robot's base frame",
-        "required for kind plane",
-        "every plane touched, normal . p = d, where it roughly is; rows name theirs in a "
-        "plane column",
-    ),
-    Key(
-        "instrument",
-        "points",
-        "table of LABEL = { xyz_mm = [x, y, z] } in the robot's base frame",
-        "required for kind point",
-        "every fixed point (a cone, a ball socket) the tool sits in, where it roughly is; "
-        "rows name theirs in a point column",
-    ),
-    Key(
-        "instrument",
-        "known_distances_mm",
-        'list of ["A", "B", mm]',
+        "measurement",
+        "sigma_px",
+        "px",
         "none",
-        "kind point: calibrated bars between labelled points, each tying the second point to "
-        "the first at that distance (a point is tied to at most one, itself free)",
+        "a camera's noise (1 std per pixel coordinate of a corner), instead of sigma_mm",
     ),
-    Key(
-        "instrument",
-        "pivot_mm",
-        "mm, [x, y, z] in the robot's base frame",
-        "required for kind distance",
-        "where a distance instrument's pivot roughly is; rows give distance_mm, the "
-        "distance from it less an unknown offset",
-    ),
-    Key(
-        "instrument",
-        "position_mm",
-        "mm, [x, y, z] in the robot's base frame",
-        "none",
-        "where the instrument stands, for plans: its range and the reflectors' acceptance "
-        "angle are seen from here",
-    ),
-    Key(
-        "instrument",
-        "range_mm",
-        "mm, [least, greatest]",
-        "none",
-        "the distances from position_mm the instrument measures (kind distance: from "
-        "pivot_mm); plans keep every target within them",
-    ),
-    Key(
-        "instrument",
-        "box_mm",
-        "mm, [[x lo, x hi], [y lo, y hi], [z lo, z hi]] in the robot's base frame",
-        "none",
-        "a measuring volume (a camera's, a CMM's); plans keep every target inside",
-    ),
-    Key(
-        "instrument",
-        "acceptance_deg",
-        "deg",
-        "none",
-        "a reflector's half acceptance angle (an SMR: about 30); plans keep every target's "
-        "normal within it of the line to position_mm (needs every target's normal)",
-    ),
-    Key(
-        "instrument",
-        "floor_z_mm",
-        "mm, in the robot's base frame",
-        "none",
-        "a floor: plans keep every target and the flange above it",
-    ),
+    *INSTRUMENT_KEYS,
     Key(
         "targets",
         "LABEL",
@@ -529,7 +410,7 @@ SPATIAL_TRUTH_KEYS: tuple[Key, ...] = (
         "instrument",
         "the robot file's [instrument] keys; a distance's offset_mm too",
         "the robot file's",
-        "where a plane, fixed point, distance or partial instrument really is",
+        "where a plane, fixed point, distance, partial or camera instrument really is",
     ),
     Key(
         "",
@@ -554,9 +435,9 @@ FILE_KINDS: dict[str, str] = {
     "plan": "plan CSV (--plan, --candidates, --test-poses): poses to visit",
     "measurements": "measurements CSV (--measurements): poses and what the instrument read",
     "readings": (
-        "measurements CSV of a plane, point, distance or partial instrument (--measurements; "
-        "[instrument] kind plane, point, distance or partial): poses and what the instrument "
-        "read"
+        "measurements CSV of a plane, point, distance, partial or camera instrument "
+        "(--measurements; [instrument] kind plane, point, distance, partial or camera): poses "
+        "and what the instrument read"
     ),
     "program": "program CSV (--program): joint commands to correct",
     "calibration": "calibration JSON (--calibration): written by identify -o",

@@ -239,7 +239,7 @@ def synthesize(args: argparse.Namespace) -> None:
         document,
         f"wrote {made.q.shape[0]} measurements of {spec.arm.name}{what} ("
         f"{'laser tracker noise, reference sigma' if tracker else 'sigma'} "
-        f"{made.sigma_mm:g} mm{turn}, seed {args.seed}) to {args.output}"
+        f"{made.sigma_mm:g} {spec.arm.reading_unit}{turn}, seed {args.seed}) to {args.output}"
         + ("" if note is None else f"\n{note}"),
         [*spec.warnings, *made.warnings],
     )

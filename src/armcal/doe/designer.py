@@ -195,8 +195,11 @@ def _score(model: FitModel, q: np.ndarray, criterion: str | Criterion) -> float:
 
 def _planar_exchange(model: FitModel) -> bool:
     """Whether the closed-form exchange applies: one point in the plane per pose (its swaps
-    are evaluated from ``2 x 2`` blocks, :mod:`armcal.doe.exchange`)."""
-    return len(model.target_labels) <= 1 and model.point_dim == 2
+    are evaluated from ``2 x 2`` blocks, :mod:`armcal.doe.exchange`), not a camera's
+    corners, a row each, two pixels a row."""
+    if len(model.target_labels) > 1 or model.point_dim != 2:
+        return False
+    return bool(model.plan_conditions(np.asarray(model.joint_limits, dtype=float)[:, :1].T).m == 1)
 
 
 def pool_warnings(pool: np.ndarray, q: np.ndarray) -> tuple[ArmcalWarning, ...]:

@@ -383,6 +383,8 @@ def calibration_document(
         "poses": cal.n_poses,
         "poses_used": cal.n_used,
         "sigma_mm": cal.sigma_mm,
+        # a camera's sigma and residuals are pixels, under the same keys
+        **({} if cal.model.reading_unit == "mm" else {"reading_unit": cal.model.reading_unit}),
         "sigma_source": cal.sigma_source,
         "noise": None if arm.noise is None else arm.noise.to_dict(),
         "elastostatic": _elastostatic_dict(cal),

@@ -13,7 +13,13 @@ the table's keys say where it stands for plans (:mod:`armcal.files.spatial`);
   distances from the pivot it reads (a truth file may give the reading's
   ``offset_mm`` too);
 * ``partial``: ``reads = ["z"]`` (the axes of its frame it reads, some of x, y,
-  z), ``xyz_mm = [x, y, z]`` and ``rpy_deg = [r, p, y]``, its frame in the base's.
+  z), ``xyz_mm = [x, y, z]`` and ``rpy_deg = [r, p, y]``, its frame in the base's;
+* ``camera``: ``camera = "cam.yaml"`` (its ``camera_info``, relative to the robot
+  file; a calibration file holds the mapping itself), ``mount`` (``eye-in-hand`` or
+  ``eye-to-hand``), ``camera_in_tool`` (eye-in-hand) or ``camera_in_base``
+  (eye-to-hand) ``= { xyz_mm, rpy_deg }``, and ``board = { rows, cols, square_mm,
+  xyz_mm, rpy_deg }``, the board's corners and where it is (in the base frame for
+  eye-in-hand, in the tool's for eye-to-hand).
 
 The same table, written back by :func:`instrument_section`, is a calibration
 file's ``instrument`` section and a truth file's ``[instrument]`` (where the
@@ -24,15 +30,27 @@ from __future__ import annotations
 
 import os
 from dataclasses import replace
+from pathlib import Path
 from typing import Any
 
 import numpy as np
 
 from ..errors import InputError
 from ..families.registry import RobotSpec, family_of
-from ..instruments import Coordinates, Distance, FixedPoints, Instrument, Plane, Planes
+from ..instruments import (
+    Board,
+    Camera,
+    Coordinates,
+    Distance,
+    FixedPoints,
+    Instrument,
+    Plane,
+    Planes,
+)
+from ..instruments.camera import MOUNTS
 from ..instruments.partial import AXES
 from ..models.instrumented import InstrumentedArm
+from .camera_info import camera_info_table, intrinsics_of, read_camera_info
 from .common import check_keys, fail, load_toml, number, numbers, shown, suggest
 
 __all__ = [
@@ -50,7 +68,7 @@ __all__ = [
 #: Kinds whose rows report points (or poses): the table says where they stand for plans.
 TRACKER_KINDS = ("tracker", "probe")
 #: Kinds of :mod:`armcal.instruments`, read here.
-EQUATION_KINDS = ("plane", "point", "distance", "partial")
+EQUATION_KINDS = ("plane", "point", "distance", "partial", "camera")
 #: Every kind PRODUCT.md names, in its order.
 INSTRUMENT_KINDS = ("tracker", "probe", "plane", "point", "distance", "partial", "camera")
 
@@ -60,6 +78,7 @@ _KEYS = {
     "point": ("kind", "points", "known_distances_mm"),
     "distance": ("kind", "pivot_mm", "range_mm"),
     "partial": ("kind", "reads", "xyz_mm", "rpy_deg"),
+    "camera": ("kind", "camera", "mount", "camera_in_tool", "camera_in_base", "board"),
 }
 
 
@@ -75,12 +94,6 @@ def instrument_kind(path: str | os.PathLike, table: Any, where: str = "instrumen
             path,
             f"key '{where}.kind': {shown(str(kind))} is not an instrument: "
             f"{suggest(str(kind), INSTRUMENT_KINDS)}the kinds are {', '.join(INSTRUMENT_KINDS)}",
-        )
-    if kind == "camera":
-        raise fail(
-            path,
-            f"key '{where}.kind': this version of armcal does not read {kind} measurements "
-            f"yet; the kinds it reads are {', '.join(TRACKER_KINDS + EQUATION_KINDS)}",
         )
     return str(kind)
 
@@ -120,6 +133,8 @@ def read_instrument(
         return Planes(planes)
     if kind == "partial":
         return _partial(path, table, where)
+    if kind == "camera":
+        return _camera(path, table, where)
     if kind == "point":
         entries = _labelled(path, table, where, "points", "{ xyz_mm = [900, 0, 200] }")
         points = {}
@@ -149,6 +164,60 @@ def read_instrument(
 
 _DISTANCE_EXAMPLE = "pivot_mm = [800, 0, 0], range_mm = [95, 155]"
 _PARTIAL_EXAMPLE = 'reads = ["z"], xyz_mm = [900, 0, 0], rpy_deg = [0, 0, 0]'
+
+
+_CAMERA_EXAMPLE = (
+    'camera = "cam.yaml", mount = "eye-in-hand", camera_in_tool = { xyz_mm = [0, 60, 100], '
+    "rpy_deg = [0, 0, 0] }, board = { rows = 6, cols = 8, square_mm = 30, xyz_mm = [900, 0, 0], "
+    "rpy_deg = [0, 0, 0] }"
+)
+
+
+def _camera(path, table: dict, where: str) -> Camera:
+    """``kind = "camera"``: its intrinsics, its mount, where it and the board roughly are."""
+    mount = table.get("mount")
+    if mount not in MOUNTS:
+        raise fail(
+            path,
+            f"key '{where}.mount': expected {' or '.join(repr(m) for m in MOUNTS)} (the camera on "
+            f"the tool, or fixed in the cell), got {shown(str(mount))}",
+        )
+    own = "camera_in_tool" if mount == "eye-in-hand" else "camera_in_base"
+    other = "camera_in_base" if own == "camera_in_tool" else "camera_in_tool"
+    if other in table:
+        raise fail(path, f"key '{where}.{other}': a camera {mount} is placed by {own}; rename it")
+    for key in ("camera", own, "board"):
+        if key not in table:
+            raise fail(path, f"key '{where}': a camera needs {key} ({_CAMERA_EXAMPLE})")
+    source = table["camera"]
+    if isinstance(source, str):
+        intrinsics = read_camera_info(Path(path).parent / source)
+    else:
+        intrinsics = intrinsics_of(path, source)
+    placed = _pose(path, table[own], f"{where}.{own}")
+    board = table["board"]
+    key = f"{where}.board"
+    _entry_keys(path, board, key, ("rows", "cols", "square_mm", "xyz_mm", "rpy_deg"))
+    counts = []
+    for name in ("rows", "cols"):
+        value = board[name]
+        if isinstance(value, bool) or not isinstance(value, int) or value < 2:
+            raise fail(path, f"key '{key}.{name}': expected a whole number of corners, 2 or more")
+        counts.append(value)
+    square = number(path, board["square_mm"], f"{key}.square_mm")
+    if not square > 0:
+        raise fail(path, f"key '{key}.square_mm': expected the squares' side in mm, above 0")
+    where_board = _pose(path, {k: board[k] for k in ("xyz_mm", "rpy_deg")}, key)
+    return Camera(intrinsics, Board(counts[0], counts[1], square), mount, placed, where_board)
+
+
+def _pose(path, entry: Any, key: str) -> tuple[np.ndarray, np.ndarray]:
+    """``{ xyz_mm = [..], rpy_deg = [..] }``."""
+    _entry_keys(path, entry, key, ("xyz_mm", "rpy_deg"))
+    return (
+        np.array(numbers(path, entry["xyz_mm"], f"{key}.xyz_mm", 3)),
+        np.array(numbers(path, entry["rpy_deg"], f"{key}.rpy_deg", 3)),
+    )
 
 
 def _partial(path, table: dict, where: str) -> Coordinates:
@@ -221,7 +290,13 @@ def true_instrument(path: str | os.PathLike, table: Any, instrument: Instrument)
     if table is None:
         return np.asarray(instrument.start, dtype=float)
     if isinstance(table, dict):  # what it leaves out is the robot file's (a range, a bar)
-        table = {**instrument_section(instrument), **table}
+        section = instrument_section(instrument)
+        table = {
+            key: {**section[key], **value}
+            if isinstance(value, dict) and isinstance(section.get(key), dict)
+            else value
+            for key, value in {**section, **table}.items()
+        }
     true = read_instrument(path, table, truth=True)
     if true is None or true.kind != instrument.kind or true.labels != instrument.labels:
         found = "a tracker" if true is None else f"a {true.kind} ({', '.join(true.labels)})"
@@ -237,13 +312,39 @@ def true_instrument(path: str | os.PathLike, table: Any, instrument: Instrument)
 
 
 def instrumented_arm(
-    path: str | os.PathLike, arm: Any, instrument: Instrument, elastic: bool, targets: bool
+    path: str | os.PathLike,
+    arm: Any,
+    instrument: Instrument,
+    elastic: bool,
+    targets: bool,
+    noise_keys: tuple[str, ...] = (),
 ) -> InstrumentedArm:
     """``arm`` (a spatial robot file's) measured by ``instrument`` (its ``[instrument]``),
-    checked: no ``[elastostatic]``, no orientation, one tool point in ``[targets]``, labels
-    that give no parameter the arm has, noise the instrument can read, and an instrument
-    some pose can meet.  ``elastic``: the file has ``[elastostatic]``; ``targets``: it
-    has ``[targets]``."""
+    checked: no ``[elastostatic]``, no orientation, one tool point in ``[targets]`` (none
+    for a camera, placed on the flange), labels that give no parameter the arm has, noise
+    the instrument can read (a camera's in pixels, ``sigma_px``, the others' in mm), and
+    an instrument some pose can meet.  ``elastic``: the file has ``[elastostatic]``;
+    ``targets``: it has ``[targets]``; ``noise_keys``: the keys of its ``[measurement]``."""
+    pixels = instrument.unit == "px"
+    wrong = [k for k in noise_keys if k in ("sigma_mm", "covariance_mm2", "tracker")]
+    if pixels and wrong:
+        raise fail(
+            path,
+            f"key 'measurement.{wrong[0]}': a camera's noise is in pixels; give sigma_px "
+            "(about 0.1 to 0.5 for a board's corners)",
+        )
+    if not pixels and "sigma_px" in noise_keys:
+        raise fail(path, "key 'measurement.sigma_px': pixels are a camera's; give sigma_mm")
+    if instrument.frame:  # placed on the flange: the tool point is the flange's origin
+        if targets:
+            raise fail(
+                path,
+                f"key 'targets': a {instrument.kind} on the tool is placed on the flange "
+                "(camera_in_tool, board in the tool's frame); remove [targets]",
+            )
+        held = tuple(n for n in arm.param_names if n.startswith(f"{arm.targets[0]}."))
+        arm = arm.with_fixed((*arm.fixed, *held))
+        targets = True
     if elastic:
         raise fail(
             path,
@@ -313,6 +414,23 @@ def instrument_section(instrument: Instrument) -> dict[str, Any]:
             "kind": "point",
             "points": points,
             **({"known_distances_mm": known} if known else {}),
+        }
+    if isinstance(instrument, Camera):
+        own = "camera_in_tool" if instrument.mount == "eye-in-hand" else "camera_in_base"
+        xyz, rpy = instrument.camera_pose
+        board = instrument.board
+        return {
+            "kind": "camera",
+            "camera": camera_info_table(instrument.intrinsics),
+            "mount": instrument.mount,
+            own: {"xyz_mm": xyz.tolist(), "rpy_deg": rpy.tolist()},
+            "board": {
+                "rows": board.rows,
+                "cols": board.cols,
+                "square_mm": board.square_mm,
+                "xyz_mm": instrument.board_pose[0].tolist(),
+                "rpy_deg": instrument.board_pose[1].tolist(),
+            },
         }
     if isinstance(instrument, Coordinates):
         return {

@@ -339,7 +339,9 @@ def _from_toml(
         elastic = _elastostatic(path, data["elastostatic"], chain, masses)
     model: Any = arm
     if instrument is not None:
-        model = instrumented_arm(path, arm, instrument, elastic is not None, bool(labels))
+        measured = data.get("measurement")
+        keys = tuple(measured) if isinstance(measured, dict) else ()
+        model = instrumented_arm(path, arm, instrument, elastic is not None, bool(labels), keys)
     if "identify" in data:
         table = data["identify"]
         terms = () if elastic is None else elastic.term_names(arm)

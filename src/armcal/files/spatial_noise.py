@@ -22,12 +22,17 @@ from .robots import SIGMA_RANGE_MM
 
 __all__ = [
     "ORIENTATION_SIGMA_RANGE_DEG",
+    "SIGMA_RANGE_PX",
     "TRACKER_KEYS",
     "read_spatial_noise",
 ]
 
 #: The four terms of a laser tracker's noise, in the order of :class:`TrackerNoise`.
 TRACKER_KEYS = ("range_mm", "range_mm_per_m", "transverse_mm", "transverse_mm_per_m")
+
+#: A camera's noise (px, 1 std) outside this range is a wrong unit: a board's corners are
+#: found to 0.05-1 px.
+SIGMA_RANGE_PX = (1e-3, 20.0)
 
 #: A 6-DoF instrument's orientation noise (deg, 1 std) outside this range is a wrong unit:
 #: the probes on trackers and the optical trackers state 0.001-0.1 deg.
@@ -62,7 +67,7 @@ def read_spatial_noise(path: Path, table: Any) -> NoiseModel | None:
 
 def _position_noise(path: Path, table: dict) -> NoiseModel | None:
     """The instrument's position noise of ``[measurement]``, if it gives one."""
-    given = [key for key in ("sigma_mm", "covariance_mm2", "tracker") if key in table]
+    given = [key for key in ("sigma_mm", "covariance_mm2", "tracker", "sigma_px") if key in table]
     if len(given) > 1:
         raise fail(
             path,
@@ -71,6 +76,11 @@ def _position_noise(path: Path, table: dict) -> NoiseModel | None:
         )
     if "tracker" in table:
         return NoiseModel.laser_tracker(_tracker(path, table["tracker"]))
+    if "sigma_px" in table:  # a camera's, in its readings' unit
+        sigma = number_within(
+            path, table["sigma_px"], "measurement.sigma_px", SIGMA_RANGE_PX, "px"
+        )
+        return NoiseModel.isotropic(sigma, dim=3)
     if "sigma_mm" in table:
         raw = table["sigma_mm"]
         values = (

@@ -374,7 +374,7 @@ def _read_readings(path, arm: FitModel, instrument: Any, arm_from: str | None) -
     """The measurements of a plane, point or distance instrument (``readings`` columns):
     every row's feature (its label column, required with several features) and what it
     read (0 for a touch or a seating).  Partial coordinates: :func:`_read_partial`."""
-    if instrument.reads_every_feature:
+    if instrument.reads_every_feature and instrument.label_column is None:
         return _read_partial(path, arm, instrument, arm_from)
     label = instrument.label_column
     text = ["pose", "target", *([label] if label else [])]
@@ -396,6 +396,7 @@ def _read_readings(path, arm: FitModel, instrument: Any, arm_from: str | None) -
     readings = table.values[:, n:]
     if not instrument.reading_columns:
         readings = np.zeros((m, instrument.dim))
+    _check_bounds(path, instrument, readings, table.lines)
     warnings = [] if not table.beyond else [beyond_limits_warning(path, arm, table.beyond)]
     return Measurements(
         model_units(table.values[:, :n], arm.joint_kinds),
@@ -408,6 +409,24 @@ def _read_readings(path, arm: FitModel, instrument: Any, arm_from: str | None) -
         feature=features,
         readings=readings,
     )
+
+
+def _check_bounds(path, instrument: Any, readings: np.ndarray, lines: list[int]) -> None:
+    """InputError for a reading outside what the instrument can read (a camera's pixel
+    outside its image)."""
+    bounds = instrument.reading_bounds
+    if bounds is None:
+        return
+    for k, (name, (low, high)) in enumerate(zip(instrument.reading_columns, bounds, strict=True)):
+        bad = np.flatnonzero((readings[:, k] < low) | (readings[:, k] > high))
+        if bad.size:
+            r = int(bad[0])
+            raise fail(
+                path,
+                f"row {r + 1} (line {lines[r]}), column {name}: {readings[r, k]:g} is outside "
+                f"the image ({low:g} to {high:g} {instrument.unit}); check the camera file's "
+                "image size and the column's unit",
+            )
 
 
 def _read_partial(path, arm: FitModel, instrument: Any, arm_from: str | None) -> Measurements:

@@ -102,7 +102,7 @@ def _readings_csv(
 ) -> str:
     """The measurements of a plane, point or distance instrument (``readings`` columns);
     of partial coordinates, :func:`_partial_csv`."""
-    if instrument.reads_every_feature:
+    if instrument.reads_every_feature and instrument.label_column is None:
         return _partial_csv(q, readings, labels, targets, kinds, instrument, feature)
     head = (["pose"] if labels is not None else []) + joint_names(kinds or q.shape[1])
     columns: list = [[str(label) for label in labels]] if labels is not None else []

@@ -426,7 +426,7 @@ def experiment_warnings(
     noun = row_noun(conditions.target)
     found = coverage(model, conditions.q)
     refuse_registration_only(found, conditions.m, noun)
-    repeats = repeated_rows(conditions.q, points, conditions.target)
+    repeats = repeated_rows(conditions.q, points, conditions.target, conditions.feature)
     said = (plan_degenerate_warning(found), repeated_rows_warning(repeats, row_numbers, noun))
     return [w for w in said if w is not None], int(np.count_nonzero(repeats >= 0))
 
@@ -643,7 +643,13 @@ def verdict_warnings(
         )
     if outliers:
         warnings.append(
-            outlier_warning(outliers, robust=robust, scatter=verdict.scatter, sigma=reference)
+            outlier_warning(
+                outliers,
+                robust=robust,
+                scatter=verdict.scatter,
+                sigma=reference,
+                unit=model.reading_unit,
+            )
         )
     warnings.extend(verdict.extra)
     n_used = int(np.count_nonzero(used))
@@ -661,7 +667,11 @@ def verdict_warnings(
     )  # fmt: skip
     warnings.extend(w for w in (inconsistent, cause) if w is not None)
     if verdict.fit_test.too_good:
-        warnings.append(too_good_warning(verdict.fit_test, verdict.sigma_value, repeated=repeated))
+        warnings.append(
+            too_good_warning(
+                verdict.fit_test, verdict.sigma_value, repeated=repeated, unit=model.reading_unit
+            )
+        )
     return warnings
 
 
@@ -715,6 +725,7 @@ def _misfit(
             disagreeing=verdict.disagreeing,
             scatter=verdict.scatter,
             robust=robust,
+            unit=model.reading_unit,
         )
     elif cause is None and (any_outliers or far_off(model, fit, None)):
         # consistent (sigma estimated, say): judged by its outliers and its size alone

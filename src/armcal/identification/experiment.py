@@ -32,7 +32,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..errors import ArmcalWarning, NotIdentifiableError
+from ..errors import ArmcalError, ArmcalWarning, NotIdentifiableError
 from ..models import FitModel, listing
 
 __all__ = [
@@ -64,13 +64,16 @@ SHOWN = 12
 
 
 def repeated_rows(
-    q: np.ndarray, points: np.ndarray, target: np.ndarray | None = None
+    q: np.ndarray,
+    points: np.ndarray,
+    target: np.ndarray | None = None,
+    feature: np.ndarray | None = None,
 ) -> np.ndarray:
     """For every row, the index of the earlier row it repeats exactly, else -1 ``(m,)``.
 
-    Rows are equal when their joint readings ``q`` ``(m, n)``, target ``(m,)`` and
-    measured point ``points`` ``(m, d)`` are equal number for number.  One sort of
-    the rows (``O(m log m)``).
+    Rows are equal when their joint readings ``q`` ``(m, n)``, target ``(m,)``, an
+    instrument's feature ``(m,)`` and measured point ``points`` ``(m, d)`` are equal
+    number for number.  One sort of the rows (``O(m log m)``).
 
     Examples
     --------
@@ -83,8 +86,9 @@ def repeated_rows(
     points = np.asarray(points, dtype=float)
     m = q.shape[0]
     columns = [q.reshape(m, -1), points.reshape(m, -1)]
-    if target is not None:
-        columns.append(np.asarray(target, dtype=float).reshape(m, 1))
+    for more in (target, feature):
+        if more is not None:
+            columns.append(np.asarray(more, dtype=float).reshape(m, 1))
     rows = np.hstack(columns) + 0.0  # -0.0 and 0.0 are one number
     if m == 0:
         return np.zeros(0, dtype=int)
@@ -167,7 +171,10 @@ def coverage(model: FitModel, q: np.ndarray | None = None) -> Coverage:
     Coverage
     """
     moved, met = model.meeting_poses(_probe(model))
-    rich = model.prepared(model.plan_conditions(moved[met]))
+    try:
+        rich = model.prepared(model.plan_conditions(moved[met]))
+    except ArmcalError:  # too few probe poses meet the instrument to judge by: no verdict
+        rich = model
     held = set(model.fixed)
     lost = tuple(name for name in rich.param_names if name in held and name not in rich.fixed)
     still: tuple[int, ...] = ()

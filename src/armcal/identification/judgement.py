@@ -327,14 +327,16 @@ def outlier_warning(
     robust: bool,
     scatter: float | None = None,
     sigma: float | None = None,
+    unit: str = "mm",
 ) -> ArmcalWarning:
-    """``outlier``: the flagged poses, and what was done with them (or what to do).
+    """``outlier``: the flagged poses, and what was done with them (or what to do); figures
+    in the readings' ``unit`` (a camera's px).
 
     ``scatter`` (mm) is the scale they were judged against when the fit is
     inconsistent with the given ``sigma`` (:func:`~armcal.identification.robust.judge`).
     """
     shown = [
-        f"row {o.row} (pose {o.pose}: residual {o.residual_mm:.3g} mm, "
+        f"row {o.row} (pose {o.pose}: residual {o.residual_mm:.3g} {unit}, "
         f"studentized {o.studentized:.3g})"
         for o in outliers[:5]
     ]
@@ -346,9 +348,9 @@ def outlier_warning(
         then = f"{action('refit-robust')}, or check these measurements"
     against = ""
     if scatter is not None:
-        given = "" if sigma is None else f" = {sigma:.3g} mm"
+        given = "" if sigma is None else f" = {sigma:.3g} {unit}"
         against = (
-            f", judged against the scatter of the other rows ({scatter:.3g} mm) since the "
+            f", judged against the scatter of the other rows ({scatter:.3g} {unit}) since the "
             f"fit is inconsistent with sigma{given}"
         )
     return ArmcalWarning(
@@ -378,6 +380,7 @@ def inconsistent_fit_warning(
     poses: int,
     held: Sequence[str] = (),
     freed: tuple[float, int] | None = None,
+    unit: str = "mm",
     mirrored: tuple[str, float, int] | None = None,
     rows: str = "poses",
     disagreeing: int | None = None,
@@ -439,16 +442,18 @@ def inconsistent_fit_warning(
     if freed is None and held:
         model += f", a wrong fixed value of {', '.join(held)}"
     causes.append(model + ")")
-    causes.append(f"or sigma too small (the residuals suggest about {suggested:.3g} mm)")
+    causes.append(f"or sigma too small (the residuals suggest about {suggested:.3g} {unit})")
     return ArmcalWarning(
         "fit-inconsistent",
-        f"the fit is inconsistent with sigma = {sigma:.3g} mm: chi2 = {fit.chi2:.4g} on "
+        f"the fit is inconsistent with sigma = {sigma:.3g} {unit}: chi2 = {fit.chi2:.4g} on "
         f"{fit.dof} degrees of freedom (p = {fit.p_value:.2g}); likely causes, in order: "
         + "; ".join(causes),
     )
 
 
-def too_good_warning(fit: GoodnessOfFit, sigma: float, *, repeated: int = 0) -> ArmcalWarning:
+def too_good_warning(
+    fit: GoodnessOfFit, sigma: float, *, repeated: int = 0, unit: str = "mm"
+) -> ArmcalWarning:
     """``fit-too-good``: chi-square far below its degrees of freedom (module notes).
 
     The residuals suggest ``sigma sqrt(chi2 / dof)``; every std, proportional to
@@ -463,13 +468,13 @@ def too_good_warning(fit: GoodnessOfFit, sigma: float, *, repeated: int = 0) -> 
     if repeated:
         causes.append(f"rows repeated ({repeated} repeat another exactly)")
     causes += [
-        f"sigma too large (the residuals suggest about {suggested:.3g} mm; give the "
+        f"sigma too large (the residuals suggest about {suggested:.3g} {unit}; give the "
         "instrument's noise for these measurements)",
         "points computed rather than measured (noiseless virtual data)",
     ]
     return ArmcalWarning(
         "fit-too-good",
-        f"the fit is better than sigma = {sigma:.3g} mm allows: chi2 = {chi2:.4g} on {dof} "
+        f"the fit is better than sigma = {sigma:.3g} {unit} allows: chi2 = {chi2:.4g} on {dof} "
         f"degrees of freedom, as small by chance with probability {fit.p_below:.2g} (below "
         f"{FIT_ALPHA:g}); every std is {ratio} too large; likely causes, in order: "
         + "; ".join(causes),

@@ -17,6 +17,9 @@ with its analytic derivatives (:class:`~armcal.instruments.base.Instrument`):
 * :class:`~armcal.instruments.partial.Coordinates`: partial coordinates, some of
   the tool point's coordinates in the instrument's frame (a dial indicator, a
   displacement sensor), each a number of its own.  Unknowns: the instrument's pose.
+* :class:`~armcal.instruments.camera.Camera`: the pixels of a checkerboard's
+  corners, the camera on the tool or the board on it.  Unknowns: the camera's pose
+  and the board's (hand-eye calibration with the arm's).
 
 :class:`~armcal.models.instrumented.InstrumentedArm` puts an instrument on any
 arm of the model interface: identification, simulation and validation then
@@ -24,16 +27,20 @@ work through it as for a tracker.
 """
 
 from .base import Instrument, unseen_words
+from .camera import Board, Camera, Intrinsics
 from .distance import Distance
 from .partial import Coordinates
 from .plane import Plane, Planes
 from .point import FixedPoints
 
 __all__ = [
+    "Board",
+    "Camera",
     "Coordinates",
     "Distance",
     "FixedPoints",
     "Instrument",
+    "Intrinsics",
     "Plane",
     "Planes",
     "unseen_words",

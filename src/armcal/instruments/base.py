@@ -92,6 +92,24 @@ class Instrument(Protocol):
         ...
 
     @property
+    def unit(self) -> str:
+        """The unit of its readings and of their noise: ``"mm"``, a camera's ``"px"``."""
+        ...
+
+    @property
+    def reading_bounds(self) -> tuple[tuple[float, float], ...] | None:
+        """Where each of :attr:`reading_columns` can lie (a camera's image), or None."""
+        ...
+
+    @property
+    def frame(self) -> bool:
+        """Whether it reads the tool's frame, not only its point (a camera on the tool, a
+        board on it): its "points" are then the tip's origin and rotation ``(..., m,
+        12)``, and its derivatives by the point are by the tip's shift and turn ``(..., m,
+        dim, 6)`` (:mod:`~armcal.instruments.camera`)."""
+        ...
+
+    @property
     def held(self) -> tuple[str, ...]:
         """The instrument's parameters no row can see, held where it starts (an unread
         axis's shift), named in :attr:`unseen`."""
@@ -163,6 +181,18 @@ class Contact:
     @property
     def reads_every_feature(self) -> bool:
         return False
+
+    @property
+    def frame(self) -> bool:
+        return False
+
+    @property
+    def unit(self) -> str:
+        return "mm"
+
+    @property
+    def reading_bounds(self) -> tuple[tuple[float, float], ...] | None:
+        return None
 
     @property
     def held(self) -> tuple[str, ...]:

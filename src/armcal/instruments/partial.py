@@ -142,6 +142,19 @@ class Coordinates:
         """True: a row reads every axis, one column each (empty where it did not)."""
         return True
 
+    @property
+    def frame(self) -> bool:
+        """False: it reads the tool point."""
+        return False
+
+    @property
+    def unit(self) -> str:
+        return "mm"
+
+    @property
+    def reading_bounds(self) -> tuple[tuple[float, float], ...] | None:
+        return None
+
     def feature_sigma(self, noise: NoiseModel) -> np.ndarray | None:
         """Every axis's std (mm) from the robot file's ``sigma_mm = [sx, sy, sz]`` where
         they differ; None for one sigma.  ValueError for a laser tracker's model or a

@@ -445,6 +445,9 @@ class CoreModel(RigidLoads, SeesAnywhere):
     ) -> np.ndarray:
         raise self._no_tool()
 
+    def tip_rotation(self, conditions: Conditions, params: np.ndarray | None = None) -> np.ndarray:
+        raise self._no_tool()
+
     def in_robot_frame(self, params: np.ndarray) -> tuple[Self, np.ndarray]:
         return self, np.asarray(params, dtype=float)
 

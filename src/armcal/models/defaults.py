@@ -88,6 +88,11 @@ class SeesAnywhere:
         """False: a row reports where the tool is."""
         return False
 
+    @property
+    def reading_unit(self) -> str:
+        """``"mm"``: a row reads a position."""
+        return "mm"
+
     def meeting_poses(
         self,
         q: np.ndarray,

@@ -338,6 +338,11 @@ class InstrumentedArm(CoreModel):
         return self.instrument.labels
 
     @property
+    def reading_unit(self) -> str:
+        """The instrument's: ``"mm"``, a camera's ``"px"``."""
+        return str(self.instrument.unit)
+
+    @property
     def touches(self) -> bool:
         """Whether a row reports nothing but that it meets the instrument (a plane, a fixed
         point; a distance reports its reading)."""
@@ -362,28 +367,41 @@ class InstrumentedArm(CoreModel):
         q = np.array(q, dtype=float)
         if not self.constrained:
             return q, self.feasible(q)
-        if feature is None:
+        every = self.instrument.reads_every_feature  # a photo: every corner of a pose
+        k = len(self.instrument.labels) if every else 1
+        if feature is None or every:
             feature = self.plan_conditions(q).feature
-        goal = np.zeros((q.shape[0], self.instrument.dim)) if miss is None else miss
-        goal = np.broadcast_to(np.asarray(goal, dtype=float), (q.shape[0], self.instrument.dim))
+        assert feature is not None
+        width = k * self.instrument.dim
+        goal = np.zeros((q.shape[0], width)) if miss is None else miss
+        goal = np.broadcast_to(np.asarray(goal, dtype=float), (q.shape[0], width))
         tol = _MEET_RTOL * self.reach_mm
         limits = self.joint_limits
+
+        def rows_of(poses: np.ndarray) -> Conditions:
+            chosen = (poses[:, None] * k + np.arange(k)).ravel()
+            return self.conditions(np.repeat(q[poses], k, axis=0), feature=feature[chosen])
+
         live = np.arange(q.shape[0])  # the poses still moving: each stops where it meets
         for _ in range(_MEET_STEPS):
-            if feature is not None:
-                rows = self.conditions(q[live], feature=feature[live])
-            else:
-                rows = self.conditions(q[live])
+            rows = rows_of(live)
             jac = self.joint_jacobian(rows, at)  # its pass has the points the miss needs
-            off = self._miss(rows, at) - goal[live]
+            off = (self._miss(rows, at).reshape(live.size, width)) - goal[live]
+            jac = jac.reshape(live.size, width, -1)
+            if every:  # a row within the instrument's bounds may move freely within them
+                jac = np.where((off == 0.0)[..., None], 0.0, jac)
             moving = np.max(np.abs(off), axis=-1, initial=0.0) > tol
             live, jac, off = live[moving], jac[moving], off[moving]
             if not live.size:
                 break
             step = np.einsum("mnk,mk->mn", np.linalg.pinv(jac, rcond=1e-10), off)
+            if every:  # a photo's many rows pull far: a step of a tenth of a turn at most
+                size = np.max(np.abs(step), axis=-1, keepdims=True)
+                step *= np.minimum(1.0, _MEET_STEP_RAD / np.maximum(size, 1e-300))
             q[live] = np.clip(q[live] - step, limits[:, 0], limits[:, 1])  # projected Newton
-        off = self._miss(self.conditions(q, feature=feature), at) - goal
-        return q, (np.max(np.abs(off), axis=-1) <= tol) & self.feasible(q)
+        everything = np.arange(q.shape[0])
+        off = self._miss(rows_of(everything), at).reshape(q.shape[0], width) - goal
+        return q, (np.max(np.abs(off), axis=-1, initial=0.0) <= tol) & self.feasible(q)
 
     def _miss(self, rows: Conditions, params: np.ndarray) -> np.ndarray:
         x, theta = self.split(params)
@@ -398,8 +416,19 @@ class InstrumentedArm(CoreModel):
 
     # -- what the instrument reports ---------------------------------------------------------
 
+    @property
+    def _frame(self) -> bool:
+        """Whether the instrument reads the tool's frame, not only its point (a camera)."""
+        return bool(self.instrument.frame)
+
     def _tool(self, conditions: Conditions, arm_params: np.ndarray) -> np.ndarray:
-        return np.asarray(self.inner.positions(conditions, arm_params))[..., :3]
+        """What the instrument reads of the tool: its point ``(..., m, 3)``; for one that
+        reads its frame, the tip's origin and rotation, row by row ``(..., m, 12)``."""
+        points = np.asarray(self.inner.positions(conditions, arm_params))[..., :3]
+        if not self._frame:
+            return points
+        rotation = np.asarray(self.inner.tip_rotation(conditions, arm_params))
+        return np.concatenate([points, rotation.reshape(*rotation.shape[:-2], 9)], axis=-1)
 
     def positions(self, conditions: Conditions, params: np.ndarray | None = None) -> np.ndarray:
         """What the instrument reports at every row ``(..., m, dim)`` (mm)."""
@@ -407,9 +436,13 @@ class InstrumentedArm(CoreModel):
         return self.instrument.reading(self._tool(conditions, x), conditions.feature, theta)
 
     def jacobian(self, conditions: Conditions, params: np.ndarray | None = None) -> np.ndarray:
-        """``[dh/dp . dp/dx, dh/dtheta]`` ``(..., m, dim, p)``."""
+        """``[dh/dp . dp/dx, dh/dtheta]`` ``(..., m, dim, p)`` (with the tool's turn
+        ``dh/dw . dw/dx`` for an instrument that reads its frame)."""
         x, theta = self.split(self._params(params))
         arm_jacobian = np.asarray(self.inner.jacobian(conditions, x))[..., :3, :]
+        if self._frame:
+            turn = np.asarray(self.inner.orientation_jacobian(conditions, x))
+            arm_jacobian = np.concatenate([arm_jacobian, turn], axis=-2)
         by_point, by_theta = self.instrument.derivatives(
             self._tool(conditions, x), conditions.feature, theta
         )
@@ -420,9 +453,12 @@ class InstrumentedArm(CoreModel):
     def joint_jacobian(
         self, conditions: Conditions, params: np.ndarray | None = None
     ) -> np.ndarray:
-        """``dh/dp . dp/dq`` ``(..., m, dim, n)``."""
+        """``dh/dp . dp/dq`` ``(..., m, dim, n)`` (and ``dh/dw . dw/dq``)."""
         x, theta = self.split(self._params(params))
         joint = np.asarray(self.inner.joint_jacobian(conditions, x))[..., :3, :]
+        if self._frame:
+            turn = np.asarray(self.inner.orientation_joint_jacobian(conditions, x))
+            joint = np.concatenate([joint, turn], axis=-2)
         by_point, _ = self.instrument.derivatives(  # the points from the Jacobian's pass
             self._tool(conditions, x), conditions.feature, theta
         )
@@ -471,7 +507,12 @@ class InstrumentedArm(CoreModel):
         noise = self.noise
         moving = noise is not None and (noise.joint_sigma is not None or noise.tracker is not None)
         x, theta = self.split(self.nominal)
-        if arm_linearize is None or moving or not np.array_equal(x, self.inner.nominal):
+        if (
+            arm_linearize is None
+            or moving
+            or self._frame  # no curvatures of a frame's reading: central differences
+            or not np.array_equal(x, self.inner.nominal)
+        ):
             return Linearization(whitened_blocks(self, conditions), None)
         arm = arm_linearize(replace(conditions, sigma_mm=None))  # unwhitened: W is below
         if arm.pullback is None:
@@ -544,7 +585,7 @@ class InstrumentedArm(CoreModel):
         moves one a few mm off it.  At the nominal arm, which misses the features by
         the arm's errors, such a turn would look faintly seen, and be kept.
         """
-        seated = points is not None and self.constrained  # a tracker's is the nominal arm
+        seated = points is not None and self._seats  # a tracker's is the nominal arm
         at = self._seated(conditions, points) if points is not None and seated else self.nominal
         triangle = self._rows(conditions, at)
         mine = self.instrument_params & self.free
@@ -577,13 +618,14 @@ class InstrumentedArm(CoreModel):
         and move the arm far from its nominal geometry), until a step moves no reading
         by 1e-9 of the reach.
 
-        An instrument that reads the tool anywhere (partial coordinates) has no symmetry
-        that holds only where the tool meets it: the nominal arm is where its rows are
-        judged (:meth:`prepared`), as a tracker's, and the fit starts from the
-        instrument's parameters alone fitted to the readings (a registration), the arm's
-        at nominal: those of the arm its readings barely see would move far."""
+        An instrument that reads the tool anywhere (partial coordinates), or every
+        corner of a board (a camera), has no symmetry that holds only where the tool
+        meets it (:attr:`_seats`): the nominal arm is where its rows are judged
+        (:meth:`prepared`), as a tracker's, and the fit starts from the instrument's
+        parameters alone fitted to the readings (a registration), the arm's at nominal:
+        those of the arm its readings barely see would move far."""
         x = self.nominal.copy()
-        free = self.free if self.constrained else self.free & self.instrument_params
+        free = self.free if self._seats else self.free & self.instrument_params
         goal = np.asarray(points, dtype=float)
         for _ in range(_SEAT_STEPS):
             jac = self.jacobian(conditions, x)[..., free].reshape(goal.size, -1)
@@ -597,6 +639,14 @@ class InstrumentedArm(CoreModel):
             if np.max(np.abs(jac @ step), initial=0.0) <= 1e-9 * self.reach_mm:
                 break
         return x
+
+    @property
+    def _seats(self) -> bool:
+        """Whether the rows meet one feature each where the arm is judged and the fit starts
+        (a touch, a seating, a distance: :meth:`_seated`); not an instrument that reads the
+        tool anywhere, nor a photo of every corner, whose rows are judged at the nominal
+        arm and fitted from a registration."""
+        return self.constrained and not self.instrument.reads_every_feature
 
     @property
     def held_reasons(self) -> tuple[Held, ...]:
@@ -625,6 +675,11 @@ _FIXES = 1e-9
 #: anew than followed: a search's step from a pose that meets takes 3 or 4.
 _MEET_STEPS = 12
 _MEET_RTOL = 1e-14
+
+#: The largest joint step (rad) of a pose moved until a camera sees the whole board: its
+#: 96 equations' Newton steps, from a pose that sees little of it, are long, and a pose
+#: clipped at several limits at once lands where others did (the same pose, twice).
+_MEET_STEP_RAD = 0.6
 
 #: Gauss-Newton steps of :meth:`InstrumentedArm._seated` at most, and the relative
 #: singular value (of the unit-norm columns) below which a direction is left alone.

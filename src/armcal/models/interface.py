@@ -1066,6 +1066,11 @@ class DesignRole(Protocol):
         ...
 
     @property
+    def reading_unit(self) -> str:
+        """The unit of what a row reads and of its noise: ``"mm"``; a camera's ``"px"``."""
+        ...
+
+    @property
     def touches(self) -> bool:
         """Whether a row reports only that the tool meets the instrument (a touch of a
         plane, a seating in a point): its reading is 0 by definition, and its noise is in

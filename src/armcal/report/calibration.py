@@ -63,7 +63,8 @@ def _outlier_lines(cal: Calibration) -> list[str]:
     lines = [
         "",
         f"outliers (studentized residual test, family-wise; {len(cal.outliers)}):",
-        f"{'row':>6}  {'pose':<10}{'residual mm':>12}{'studentized':>13}  status",
+        f"{'row':>6}  {'pose':<10}{'residual ' + cal.model.reading_unit:>12}"
+        f"{'studentized':>13}  status",
     ]
     for o in cal.outliers:
         status = "removed from the fit" if o.removed else "flagged, kept in the fit"
@@ -78,7 +79,9 @@ def _poses_phrase(cal: Calibration) -> str:
     where a file's line gives several readings (partial coordinates) ``"20 poses (50
     readings)"``, and the rows left out of the fit."""
     used = cal.n_used
-    lines = len(set(cal.rows)) if cal.rows else cal.n_poses
+    lines = cal.n_poses  # an instrument's poses of several readings (axes, corners) each
+    if cal.model.feature_labels:
+        lines = len(set(cal.pose_labels))
     if cal.target is None and lines < cal.n_poses:  # a row is one reading of a pose's
         poses = f"{lines} poses ({cal.n_poses} readings)"
     elif cal.target is None:
@@ -148,14 +151,16 @@ def _parameter_lines(cal: Calibration, truth: np.ndarray | None) -> list[str]:
 
 
 def _fit_lines(cal: Calibration) -> list[str]:
-    """Sigma and the residuals, the goodness of fit, the solver, strong correlations."""
+    """Sigma and the residuals, the goodness of fit, the solver, strong correlations (in the
+    readings' unit: mm, a camera's px)."""
     worst = cal.worst_pose
+    u = cal.model.reading_unit
     lines = [
         "",
-        f"sigma {cal.sigma_mm:.4g} mm ({cal.sigma_source}); "
-        f"residual RMS {cal.residual_rms:.4g} mm per coordinate "
-        f"({cal.residual_rms_per_point:.4g} mm per point), "
-        f"max {cal.residual_max:.4g} mm at pose {cal.pose_labels[worst]}; "
+        f"sigma {cal.sigma_mm:.4g} {u} ({cal.sigma_source}); "
+        f"residual RMS {cal.residual_rms:.4g} {u} per coordinate "
+        f"({cal.residual_rms_per_point:.4g} {u} per point), "
+        f"max {cal.residual_max:.4g} {u} at pose {cal.pose_labels[worst]}; "
         + _turn_residual(cal)
         + f"{cal.dof} degrees of freedom",
         _fit_line(cal),

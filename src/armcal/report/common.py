@@ -134,8 +134,12 @@ def instrumented_model_lines(
     cannot see, the identifiable set and what the rows cannot separate."""
     instrument = model.instrument
     inner = model.inner
+    labels = instrument.labels
+    shown = (
+        ", ".join(labels) if len(labels) <= 8 else f"{len(labels)}: {labels[0]} to {labels[-1]}"
+    )
     lines = [
-        f"instrument: {instrument.kind} ({', '.join(instrument.labels)}), identified with the "
+        f"instrument: {instrument.kind} ({shown}), identified with the "
         f"arm: {', '.join(np.array(model.param_names)[model.instrument_params & model.free])}",
         f"what it cannot see: {instrument.unseen}",
         f"identifiable set: {model.n_free} of {model.n_params} parameters (the arm's "

@@ -59,7 +59,8 @@ def _text(quality: PlanQuality, words: Mapping[str, str]) -> str:
     eff = quality.efficiencies
     obs = quality.observability
     lines = [
-        f"{quality.n_poses} poses of {arm.name}, {identified(arm)}, sigma {quality.sigma_mm:g} mm",
+        f"{quality.n_poses} poses of {arm.name}, {identified(arm)}, sigma {quality.sigma_mm:g} "
+        f"{arm.reading_unit}",
         *model_lines(arm, words=words),
         f"{_efficiency_label(quality)}: D {eff['D']:.4f}  A {eff['A']:.4f}  E {eff['E']:.4f}",
         f"observability: O1 {obs['O1']:.4f}  O2 {obs['O2']:.4f}  O3 {obs['O3']:.4f}  "

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 
 from ..acceptance import ISO_CYCLES, PoseCharacteristics
@@ -28,22 +30,29 @@ def _rows_words(m: int, poses: int | None, result: Validation, unit: str = "poin
     return f"{m} poses ({own})" if poses is None else f"{poses} poses ({m} {unit}, {own})"
 
 
+def _error_header(model: Any) -> str:
+    """The table's heading: a position's error in mm, a camera's reading's in pixels."""
+    unit = model.reading_unit
+    return "position error (mm)" if unit == "mm" else f"reading error ({unit})"
+
+
 def validation_report(
     cal: CalibratedArm, result: Validation, meas: Measurements, *, per_pose: bool = False
 ) -> tuple[dict, str]:
     """The ``validate`` document and text: errors before and after, predicted, per pose."""
     s = result.summary()
     m = result.after.shape[0]
-    lines = len(set(meas.rows)) if meas.rows else m
+    poses = len(set(meas.labels))
     if meas.targets is not None:
-        held = _rows_words(m, len(set(meas.labels)), result)
-    else:  # several readings a line: partial coordinates
-        held = _rows_words(m, lines if lines < m else None, result, "readings")
+        held = _rows_words(m, poses, result)
+    else:  # an instrument's poses of several readings each (axes, a photo's corners)
+        several = bool(cal.arm.feature_labels) and poses < m
+        held = _rows_words(m, poses if several else None, result, "readings")
     lines = [
         f"validation of {cal.arm.name} on {held}"
         + (" (3-D, projected into the calibration's plane)" if cal.plane is not None else ""),
         "",
-        f"{'position error (mm)':<24}{'RMS':>10}{'95 %':>10}{'max':>10}   (per point)",
+        f"{_error_header(cal.arm):<24}{'RMS':>10}{'95 %':>10}{'max':>10}   (per point)",
         f"{'nominal arm':<24}{s['rms_before_per_point_mm']:>10.4g}"
         f"{s['p95_before_mm']:>10.4g}{s['max_before_mm']:>10.4g}",
         f"{'calibrated model':<24}{s['rms_after_per_point_mm']:>10.4g}"
@@ -51,10 +60,13 @@ def validation_report(
         f"{'predicted (calibrated)':<24}{s['predicted_rms_after_per_point_mm']:>10.4g}",
         "",
         f"predicted = the noise of a measurement and the calibration's own uncertainty "
-        f"({s['model_rms_per_point_mm']:.3g} mm RMS per point at these poses)",
+        f"({s['model_rms_per_point_mm']:.3g} {cal.arm.reading_unit} RMS per point at these "
+        "poses)",
         _baseline_line(result.baseline_rows),
     ]
     document: dict = {"poses": m, **s, "baseline": result.baseline_rows}
+    if cal.arm.reading_unit != "mm":  # a camera's errors are pixels, under the same keys
+        document["reading_unit"] = cal.arm.reading_unit
     if result.turns is not None:
         lines[6:6] = [
             "",

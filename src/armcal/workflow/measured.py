@@ -312,6 +312,17 @@ def instrument_rows(model: FitModel, meas: Measurements) -> Conditions:
 _FAR_FROM_FEATURE = 0.1
 
 
+#: A camera's reading that differs from the others' by more than this fraction of the
+#: image's diagonal is not of this board (a wrong corner, another camera's file): the
+#: user's rough placement of the camera and the board moves a corner by tens of pixels.
+_FAR_IN_IMAGE = 0.5
+
+
+def _image(model: FitModel) -> np.ndarray:
+    """The instrument's reading bounds ``(dim, 2)`` (a camera's image)."""
+    return np.asarray(model.instrument.reading_bounds, dtype=float)  # type: ignore[attr-defined]
+
+
 def check_meeting(
     source: str, model: FitModel, rows: Conditions, points: np.ndarray, meas: Measurements
 ) -> None:
@@ -326,6 +337,8 @@ def check_meeting(
         centre[index == k] = np.median(found[index == k], axis=0)
     spread = np.linalg.norm(found - centre, axis=-1)
     limit = _FAR_FROM_FEATURE * model.reach_mm
+    if model.reading_unit != "mm":  # a camera's pixels: the image's size, not the reach
+        limit = _FAR_IN_IMAGE * float(np.linalg.norm(np.ptp(_image(model), axis=1)))
     if not spread.size or spread.max() <= limit:
         return
     r = int(np.argmax(spread))

@@ -121,8 +121,11 @@ def synthesize_plan(
     from ..synthesis import synthesize_measurements
 
     arm = model.arm
-    # what the plan's poses touch, where they must meet the instrument
+    # what the plan's poses touch, where they must meet the instrument at one feature each
+    # (a photo meets it at every corner: its poses are moved until the true camera sees all)
     meant = model.plan_conditions(q, loads).feature if model.constrained else None
+    if meant is not None and meant.shape[0] != q.shape[0]:
+        meant = None
     moved, met = model.meeting_poses(q, truth, feature=meant)  # where the true arm does
     unmet = _unmet_warning(model, met)
     if not met.any():
