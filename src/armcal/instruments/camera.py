@@ -362,9 +362,11 @@ class Camera:
         shape = by_shift.shape[:-2]
         own = np.zeros((*shape, 3, 12))
         own[..., :, 0:3] = -np.eye(3)
-        own[..., :, 3:6] = np.einsum("...tji,...mj->...mit", by_cam, local)
+        for turn in range(3):  # (dR_c/da)^T local, and dP/dY (dR_b/da) (c + d_b): matmuls
+            own[..., :, 3 + turn] = local @ by_cam[..., turn, :, :]
+            moved = corner @ np.swapaxes(by_brd[..., turn, :, :], -1, -2)
+            own[..., :, 9 + turn] = (by_board @ moved[..., None])[..., 0]
         own[..., :, 6:9] = by_board @ brd[..., None, :, :]
-        own[..., :, 9:12] = np.einsum("...mij,...tjk,...mk->...mit", by_board, by_brd, corner)
         frame = np.concatenate([by_shift, by_turn], axis=-1)
         return by_p @ frame, by_p @ own
 

@@ -307,7 +307,11 @@ class InstrumentedArm(CoreModel):
             q = np.asarray(q, dtype=float)
             many = None if loads is None else loads.repeat(k)
             rows = self.inner.plan_conditions(np.repeat(q, k, axis=-2), many)
-            return self._with_feature(rows, np.tile(np.arange(k), q.shape[-2]))
+            found = self._with_feature(rows, np.tile(np.arange(k), q.shape[-2]))
+            if q.ndim == 2:  # every pose once for the arm, known without a sort
+                poses = self.inner.plan_conditions(q, loads)
+                found.memo(_ARM_ROWS, lambda: (poses, np.repeat(np.arange(q.shape[0]), k)))
+            return found
         rows = self.inner.plan_conditions(q, loads)
         tool = self._tool(rows, self.split(self.nominal)[0])
         each = [
@@ -380,7 +384,11 @@ class InstrumentedArm(CoreModel):
 
         def rows_of(poses: np.ndarray) -> Conditions:
             chosen = (poses[:, None] * k + np.arange(k)).ravel()
-            return self.conditions(np.repeat(q[poses], k, axis=0), feature=feature[chosen])
+            rows = self.conditions(np.repeat(q[poses], k, axis=0), feature=feature[chosen])
+            if every:  # every pose once for the arm, known without a sort
+                once = self.inner.conditions(q[poses])
+                rows.memo(_ARM_ROWS, lambda: (once, np.repeat(np.arange(poses.size), k)))
+            return rows
 
         live = np.arange(q.shape[0])  # the poses still moving: each stops where it meets
         for _ in range(_MEET_STEPS):
@@ -421,14 +429,57 @@ class InstrumentedArm(CoreModel):
         """Whether the instrument reads the tool's frame, not only its point (a camera)."""
         return bool(self.instrument.frame)
 
+    def _arm_rows(self, conditions: Conditions) -> tuple[Conditions, np.ndarray | None]:
+        """The rows the arm is evaluated at: every pose once where the instrument reads
+        several features at each (a photo's 48 corners: the arm's kinematics once, not 48
+        times), with the index that spreads them back to the rows; else the rows."""
+        if (
+            not self.instrument.reads_every_feature
+            or np.ndim(conditions.q) != 2
+            or conditions.m < 2
+        ):
+            return conditions, None
+
+        def once() -> tuple[Conditions, np.ndarray | None]:
+            q = np.asarray(conditions.q)
+            _, first, inverse = np.unique(q, axis=0, return_index=True, return_inverse=True)
+            if first.size == q.shape[0]:
+                return conditions, None
+            return conditions.take(first), np.asarray(inverse).reshape(-1)
+
+        found: tuple[Conditions, np.ndarray | None] = conditions.memo(_ARM_ROWS, once)
+        return found
+
     def _tool(self, conditions: Conditions, arm_params: np.ndarray) -> np.ndarray:
         """What the instrument reads of the tool: its point ``(..., m, 3)``; for one that
         reads its frame, the tip's origin and rotation, row by row ``(..., m, 12)``."""
-        points = np.asarray(self.inner.positions(conditions, arm_params))[..., :3]
-        if not self._frame:
-            return points
-        rotation = np.asarray(self.inner.tip_rotation(conditions, arm_params))
-        return np.concatenate([points, rotation.reshape(*rotation.shape[:-2], 9)], axis=-1)
+        rows, back = self._arm_rows(conditions)
+        points = np.asarray(self.inner.positions(rows, arm_params))[..., :3]
+        if self._frame:
+            rotation = np.asarray(self.inner.tip_rotation(rows, arm_params))
+            flat = rotation.reshape(*rotation.shape[:-2], 9)
+            points = np.concatenate([points, flat], axis=-1)
+        return points if back is None else points[..., back, :]
+
+    def _arm_jacobian(
+        self, conditions: Conditions, arm_params: np.ndarray, *, joints: bool
+    ) -> np.ndarray:
+        """The tool point's Jacobian ``(..., m, 3, k)`` in the arm's parameters (``joints``:
+        in the joints), with the tip's angular one below it for an instrument that reads
+        the tool's frame ``(..., m, 6, k)``."""
+        rows, back = self._arm_rows(conditions)
+        if joints:
+            found = np.asarray(self.inner.joint_jacobian(rows, arm_params))[..., :3, :]
+        else:
+            found = np.asarray(self.inner.jacobian(rows, arm_params))[..., :3, :]
+        if self._frame:
+            turn = (
+                self.inner.orientation_joint_jacobian(rows, arm_params)
+                if joints
+                else self.inner.orientation_jacobian(rows, arm_params)
+            )
+            found = np.concatenate([found, np.asarray(turn)], axis=-2)
+        return found if back is None else found[..., back, :, :]
 
     def positions(self, conditions: Conditions, params: np.ndarray | None = None) -> np.ndarray:
         """What the instrument reports at every row ``(..., m, dim)`` (mm)."""
@@ -439,10 +490,7 @@ class InstrumentedArm(CoreModel):
         """``[dh/dp . dp/dx, dh/dtheta]`` ``(..., m, dim, p)`` (with the tool's turn
         ``dh/dw . dw/dx`` for an instrument that reads its frame)."""
         x, theta = self.split(self._params(params))
-        arm_jacobian = np.asarray(self.inner.jacobian(conditions, x))[..., :3, :]
-        if self._frame:
-            turn = np.asarray(self.inner.orientation_jacobian(conditions, x))
-            arm_jacobian = np.concatenate([arm_jacobian, turn], axis=-2)
+        arm_jacobian = self._arm_jacobian(conditions, x, joints=False)
         by_point, by_theta = self.instrument.derivatives(
             self._tool(conditions, x), conditions.feature, theta
         )
@@ -455,10 +503,7 @@ class InstrumentedArm(CoreModel):
     ) -> np.ndarray:
         """``dh/dp . dp/dq`` ``(..., m, dim, n)`` (and ``dh/dw . dw/dq``)."""
         x, theta = self.split(self._params(params))
-        joint = np.asarray(self.inner.joint_jacobian(conditions, x))[..., :3, :]
-        if self._frame:
-            turn = np.asarray(self.inner.orientation_joint_jacobian(conditions, x))
-            joint = np.concatenate([joint, turn], axis=-2)
+        joint = self._arm_jacobian(conditions, x, joints=True)
         by_point, _ = self.instrument.derivatives(  # the points from the Jacobian's pass
             self._tool(conditions, x), conditions.feature, theta
         )
@@ -659,6 +704,9 @@ class InstrumentedArm(CoreModel):
     def expressed(self, conditions: Conditions, params: np.ndarray) -> np.ndarray:
         return refit_free(self, conditions, params)
 
+
+#: The memo slot of :meth:`InstrumentedArm._arm_rows`.
+_ARM_ROWS = "instrumented arm: every pose once"
 
 #: Poses that meet the instrument the certificate's search samples (:attr:`design_effort`).
 CERTIFICATE_SAMPLE = 20_000
