@@ -13,6 +13,7 @@ metre away is exact to round-off near 1e-12 px (the readings are about 1e3 px, u
 from __future__ import annotations
 
 import json
+import sys
 from pathlib import Path
 
 import numpy as np
@@ -25,6 +26,11 @@ from armcal.models.spatial.chain import vector_rotation
 from armcal.simulate import monte_carlo
 from helpers import run_cli
 from helpers_instruments import CAMERA_INFO, CAMERAS, met_plan, write_lab
+
+if sys.version_info >= (3, 11):
+    import tomllib
+else:  # pragma: no cover - Python 3.10
+    import tomli as tomllib
 
 INTRINSICS = Intrinsics(
     np.array([[800.0, 0.5, 640.0], [0.0, 810.0, 400.0], [0.0, 0.0, 1.0]]),
@@ -197,7 +203,7 @@ BAD_CAMERAS = {
     ),
     "a matrix of the wrong shape": (
         CAMERA_INFO.replace("  rows: 3\n  cols: 3", "  rows: 3\n  cols: 2", 1),
-        "cam.yaml: field 'camera_matrix': data must be rows x cols numbers",
+        "cam.yaml: field 'camera_matrix': data must be rows x cols = 6 numbers",
     ),
     "no width": (
         CAMERA_INFO.replace("image_width: 1280", "image_width: -5"),
@@ -299,3 +305,84 @@ def test_pixels_outside_the_image_are_one_line(tmp_path):
     run = run_cli(tmp_path, "identify", "--robot", robot_file.name, "--measurements", "bad.csv")
     assert run.returncode == 2
     assert "row 2 (line 3), column corner: '48' is not a corner" in run.stderr
+
+
+def test_the_camera_is_placed_on_the_flange(tmp_path):
+    """Without [targets], the tool point a camera on the tool is placed from is the
+    flange's origin, held there (a built-in arm's default tool point is 112 mm out)."""
+    robot_file, _ = write_lab(tmp_path, "industrial-6r", "eye-in-hand")
+    model = load_robot(robot_file).arm
+    np.testing.assert_array_equal(model.inner.target_positions, np.zeros((1, 3)))
+    tool = [n for n in model.param_names if n.startswith(f"{model.inner.targets[0]}.")]
+    assert len(tool) == 3 and set(tool) <= set(model.fixed)
+
+
+def test_a_pincushion_lens_s_photos_stay_in_the_image(tmp_path):
+    """k1 = 0.15 moves corners outward: the poses synthesize keeps see every corner
+    inside the image where the lens puts it, so identify reads them (no pixel beyond
+    the image), and a plan's pose that misses the board is said by evaluate."""
+    robot_file, truth = write_lab(tmp_path, "industrial-6r", "eye-in-hand")
+    camera = CAMERA_INFO.replace("[0.05, -0.1, 0.0005, -0.0003, 0.0]", "[0.15, 0, 0, 0, 0]")
+    (tmp_path / "cam.yaml").write_text(camera, encoding="utf-8")
+    met_plan(tmp_path, robot_file, 20, 1, "plan.csv")
+    run = run_cli(
+        tmp_path,
+        "synthesize",
+        "--robot",
+        robot_file.name,
+        "--plan",
+        "plan.csv",
+        "--truth",
+        truth.name,
+        "-o",
+        "meas.csv",
+    )
+    assert run.returncode == 0, run.stderr
+    run = run_cli(
+        tmp_path,
+        "identify",
+        "--robot",
+        robot_file.name,
+        "--measurements",
+        "meas.csv",
+        "-o",
+        "cal.json",
+    )
+    assert run.returncode == 0, run.stderr
+    run = run_cli(tmp_path, "export", "--calibration", "cal.json", "--robot-toml", "out.toml")
+    assert run.returncode == 0, run.stderr
+    exported = tomllib.loads((tmp_path / "out.toml").read_text(encoding="utf-8"))
+    assert "measurement" not in exported  # pixels say nothing of the arm's noise in mm
+    plan = (tmp_path / "plan.csv").read_text(encoding="utf-8")
+    (tmp_path / "mixed.csv").write_text(plan + "0,0,0,0,0,0\n", encoding="utf-8")
+    run = run_cli(tmp_path, "evaluate", "--robot", robot_file.name, "--plan", "mixed.csv")
+    assert run.returncode == 0, run.stderr
+    assert "1 of 21 poses (rows 21) do not meet the instrument" in run.stderr
+
+
+@pytest.mark.parametrize(
+    ("data", "words"),
+    [
+        ("  rows: -3\n  cols: -3", "field 'camera_matrix.rows': expected a positive whole number"),
+        (
+            "  rows: true\n  cols: 9",
+            "field 'camera_matrix.rows': expected a positive whole number",
+        ),
+    ],
+)
+def test_a_camera_matrix_of_odd_rows_is_one_line(tmp_path, data, words):
+    text = CAMERA_INFO.replace("  rows: 3\n  cols: 3", data, 1)
+    robot_file = _lab_with(tmp_path, camera_text=text)
+    (tmp_path / "p.csv").write_text("q1_deg,q2_deg,q3_deg,q4_deg,q5_deg,q6_deg\n0,0,0,0,0,0\n")
+    run = run_cli(tmp_path, "evaluate", "--robot", robot_file.name, "--plan", "p.csv")
+    assert run.returncode == 2 and words in run.stderr, run.stderr
+
+
+def test_yaml_numbers_without_a_dot_are_numbers(tmp_path):
+    """YAML 1.1 reads 1e-05 as text; a camera file's coefficient written so is a number."""
+    from armcal.files.camera_info import read_camera_info
+
+    text = CAMERA_INFO.replace("[0.05, -0.1, 0.0005, -0.0003, 0.0]", "[5e-02, -1e-01, 0, 0, 0]")
+    (tmp_path / "cam.yaml").write_text(text, encoding="utf-8")
+    found = read_camera_info(tmp_path / "cam.yaml")
+    np.testing.assert_array_equal(found.distortion, [0.05, -0.1, 0.0, 0.0, 0.0])

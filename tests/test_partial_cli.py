@@ -316,3 +316,25 @@ def test_bad_partial_measurements_are_one_line(tmp_path):
         err = run.stderr.strip().splitlines()
         assert len(err) == 1 and err[0].startswith("armcal: error: bad.csv"), (name, run.stderr)
         assert where in err[0] and words in err[0], (name, err[0])
+
+
+def test_the_rows_a_pose_gives_size_the_plan(tmp_path):
+    """A pose read in x, y and z gives three equations: 8 poses give 24 for 27 free
+    parameters, so 9 are needed (not 27, as one equation a pose would say)."""
+    robot_file, _ = write_lab(tmp_path, "industrial-6r", "partial")
+    run = run_cli(tmp_path, "design", "--robot", robot_file.name, "--poses", "8")
+    assert run.returncode == 2
+    assert "8 poses give 24 equations for the 27 free parameters" in run.stderr
+    assert "use --poses 9 or more" in run.stderr
+
+
+def test_a_target_column_names_the_tool_point(tmp_path):
+    """A measurement file of partial coordinates with a target column (the one tool
+    point's name) is read and fitted."""
+    robot_file, truth = write_lab(tmp_path, "industrial-6r", "partial")
+    met_plan(tmp_path, robot_file, 40, 1, "plan.csv")
+    synthesized(tmp_path, robot_file, truth, "plan.csv", "meas.csv")
+    lines = (tmp_path / "meas.csv").read_text(encoding="utf-8").splitlines()
+    lines = [lines[0] + ",target", *(line + ",tool" for line in lines[1:])]
+    (tmp_path / "tmeas.csv").write_text("\n".join(lines) + "\n", encoding="utf-8")
+    ok(tmp_path, "identify", "--robot", robot_file.name, "--measurements", "tmeas.csv", "--json")

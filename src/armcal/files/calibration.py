@@ -450,8 +450,10 @@ def _residuals_list(cal: Calibration) -> list[dict[str, Any]]:
     # Python numbers, column by column (a 10^5-row table indexed row by row in numpy is slow).
     used = [True] * cal.n_poses if cal.used is None else np.asarray(cal.used, bool).tolist()
     labels = list(cal.arm.target_labels)
-    targets = (
-        [None] * cal.n_poses if cal.target is None else [labels[t] for t in cal.target.tolist()]
+    targets = (  # one target of the default name has no label of its own
+        [None] * cal.n_poses
+        if cal.target is None or not labels
+        else [labels[t] for t in cal.target.tolist()]
     )
     axes = ("dx_mm", "dy_mm", "dz_mm", "drx_deg", "dry_deg", "drz_deg")[: cal.residuals.shape[1]]
     shown = np.array(cal.residuals, dtype=float)

@@ -37,6 +37,8 @@ def decode(
     inner = family_named(str(arm_data.get("kind", ""))).role("decode")(arm_data, noise, fixed, doc)
     instrument = read_instrument("calibration", data["instrument"], "robot.instrument")
     if instrument is None:
-        raise BadKey("robot.instrument", "expected a plane, point or distance instrument")
+        raise BadKey(
+            "robot.instrument", "expected a plane, point, distance, partial or camera instrument"
+        )
     mine = set(instrument.param_names)
     return InstrumentedArm(inner, instrument, tuple(name for name in fixed if name in mine))

@@ -100,15 +100,22 @@ def _matrix(
     if not isinstance(value, dict) or not {"rows", "cols", "data"} <= set(value):
         raise fail(path, f"field '{key}': expected {{rows, cols, data}}")
     rows, cols, data = value["rows"], value["cols"], value["data"]
-    if (
-        not isinstance(rows, int)
-        or not isinstance(cols, int)
-        or not isinstance(data, list)
-        or len(data) != rows * cols
-        or not all(isinstance(v, int | float) and not isinstance(v, bool) for v in data)
-    ):
-        raise fail(path, f"field '{key}': data must be rows x cols numbers")
-    found = np.array(data, dtype=float).reshape(rows, cols)
+    for name, count in (("rows", rows), ("cols", cols)):
+        if isinstance(count, bool) or not isinstance(count, int) or count <= 0:
+            raise fail(
+                path, f"field '{key}.{name}': expected a positive whole number, got {count!r}"
+            )
+    if not isinstance(data, list) or len(data) != rows * cols:
+        raise fail(path, f"field '{key}': data must be rows x cols = {rows * cols} numbers")
+    numbers = []
+    for i, v in enumerate(data):
+        try:  # YAML 1.1 reads 1e-05 (no dot) as text: a number all the same
+            if isinstance(v, bool) or not isinstance(v, int | float | str):
+                raise ValueError
+            numbers.append(float(v))
+        except ValueError:
+            raise fail(path, f"field '{key}': data[{i}] = {v!r} is not a number") from None
+    found = np.array(numbers, dtype=float).reshape(rows, cols)
     if shape is not None and found.shape != shape:
         raise fail(path, f"field '{key}': expected {shape[0]} x {shape[1]}, got {rows} x {cols}")
     if not np.all(np.isfinite(found)):

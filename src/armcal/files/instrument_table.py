@@ -342,6 +342,7 @@ def instrumented_arm(
                 f"key 'targets': a {instrument.kind} on the tool is placed on the flange "
                 "(camera_in_tool, board in the tool's frame); remove [targets]",
             )
+        arm = arm.replace(target_positions=np.zeros((1, 3)), known_targets=True)
         held = tuple(n for n in arm.param_names if n.startswith(f"{arm.targets[0]}."))
         arm = arm.with_fixed((*arm.fixed, *held))
         targets = True

@@ -512,7 +512,17 @@ def _reading(path, text: str, r: int, line: int, name: str) -> float:
             f"row {r + 1} (line {line}), column {name}: {shown(text)} is not a finite number "
             "(mm); leave the cell empty where the instrument read nothing",
         )
+    if abs(value) > _FARTHEST_READING_MM:
+        raise fail(
+            path,
+            f"row {r + 1} (line {line}), column {name}: {shown(text)} is beyond "
+            f"±{_FARTHEST_READING_MM:g} mm; check the unit (mm)",
+        )
     return value
+
+
+#: A coordinate no instrument of a robot cell reads (mm): 1 km is a wrong unit or value.
+_FARTHEST_READING_MM = 1e6
 
 
 def _feature_labels(path, instrument: Any, table: Table) -> tuple[str, ...]:

@@ -21,6 +21,7 @@ from ..noise import NoiseModel
 
 __all__ = [
     "Contact",
+    "Defaults",
     "Instrument",
     "MeetsAtZero",
     "feature_index",
@@ -169,18 +170,9 @@ class Instrument(Protocol):
         ...
 
 
-class Contact:
-    """What a contact instrument (a plane, a fixed point, a distance) shares: a pose is
-    measured where the tool meets one feature, named by the row; every parameter can be
-    seen; its noise is the robot file's, one sigma."""
-
-    @property
-    def constrained(self) -> bool:
-        return True
-
-    @property
-    def reads_every_feature(self) -> bool:
-        return False
+class Defaults:
+    """What most instruments share: they read the tool point in mm, unbounded, every
+    parameter can be seen, and their noise is the robot file's, one sigma."""
 
     @property
     def frame(self) -> bool:
@@ -200,6 +192,19 @@ class Contact:
 
     def feature_sigma(self, noise: NoiseModel) -> np.ndarray | None:
         return None
+
+
+class Contact(Defaults):
+    """What a contact instrument (a plane, a fixed point, a distance) shares besides: a
+    pose is measured where the tool meets one feature, named by the row."""
+
+    @property
+    def constrained(self) -> bool:
+        return True
+
+    @property
+    def reads_every_feature(self) -> bool:
+        return False
 
 
 class MeetsAtZero(Contact):

@@ -42,9 +42,8 @@ from functools import cached_property
 
 import numpy as np
 
-from ..models.spatial.chain import elementary, rpy_matrix
-from ..noise import NoiseModel
-from .base import Instrument, feature_index, same_features
+from ..models.spatial.chain import elementary, rpy_matrix, skew
+from .base import Defaults, Instrument, feature_index, same_features
 
 __all__ = ["MOUNTS", "Board", "Camera", "Intrinsics"]
 
@@ -133,7 +132,7 @@ class Board:
 
 
 @dataclass(frozen=True, eq=False)
-class Camera:
+class Camera(Defaults):
     """A camera and a board (module notes).
 
     Attributes
@@ -207,10 +206,6 @@ class Camera:
         return np.zeros(12)
 
     @property
-    def held(self) -> tuple[str, ...]:
-        return ()
-
-    @property
     def unseen(self) -> str:
         return (
             "with the board's square known a camera sees what a tracker sees: where the arm "
@@ -243,9 +238,6 @@ class Camera:
         fixed = self.board_pose if self.mount == "eye-in-hand" else self.camera_pose
         return (("board" if self.mount == "eye-in-hand" else "camera", fixed[0]),)
 
-    def feature_sigma(self, noise: NoiseModel) -> np.ndarray | None:
-        return None
-
     def params_of(self, true: Instrument) -> np.ndarray:
         """The moves that put the camera and the board where ``true``'s are."""
         same_features(self, true)
@@ -276,7 +268,7 @@ class Camera:
         for k, pose in enumerate((self.camera_pose, self.board_pose)):
             angles = params[..., 6 * k + 3 : 6 * k + 6]
             turns = [elementary(axis, angles[..., axis]) for axis in range(3)]
-            spins = [_spin(axis) @ turns[axis] for axis in range(3)]
+            spins = [skew(np.eye(3)[axis]) @ turns[axis] for axis in range(3)]
             r0 = rpy_matrix(np.radians(pose[1]))
             r = r0 @ turns[0] @ turns[1] @ turns[2]
             by = np.stack(
@@ -319,10 +311,10 @@ class Camera:
         self, points: np.ndarray, feature: np.ndarray | None, params: np.ndarray
     ) -> np.ndarray:
         """How far (px) each corner lies outside the image less :attr:`margin_px`, 0 within
-        it: where the pinhole, undistorted, puts it (the distortion's polynomial folds
-        points far outside the view back into the image: a corner is in view where the
-        lens maps it there, and the polynomial's radius still grows, ``1 + 3 k1 r^2 + 5
-        k2 r^4 + 7 k3 r^6 > 0``); a corner behind the camera, or beyond the fold, by the
+        it, where the lens puts it (distorted: a pincushion moves corners outward); the
+        distortion's polynomial folds points far outside the view back into the image, so
+        a corner is in view only where its radius still grows, ``1 + 3 k1 r^2 + 5 k2 r^4
+        + 7 k3 r^6 > 0``: a corner behind the camera, or beyond the fold, misses by the
         image's size."""
         p, _ = self._seen(np.asarray(points, dtype=float), feature, params)
         depth = p[..., 2]
@@ -330,8 +322,7 @@ class Camera:
         k1, k2, _, _, k3 = self.intrinsics.distortion
         r2 = x * x + y * y
         growing = 1 + r2 * (3 * k1 + r2 * (5 * k2 + 7 * k3 * r2)) > 0
-        a = self.intrinsics.matrix
-        uv = np.stack([a[0, 0] * x + a[0, 1] * y + a[0, 2], a[1, 1] * y + a[1, 2]], axis=-1)
+        uv = self.intrinsics.project(p)[0]  # where the lens puts it, before the fold
         margin = self.margin_px
         high = np.array([self.intrinsics.width, self.intrinsics.height], dtype=float) - margin
         off = uv - np.clip(uv, margin, high)
@@ -352,12 +343,12 @@ class Camera:
             rot_t = np.swapaxes(rot, -1, -2)
             to_p = cam_t @ rot_t  # dP / dX
             by_shift = -to_p
-            by_turn = to_p @ _skew(y - t)
+            by_turn = to_p @ skew(y - t)
             by_board = to_p
         else:
             to_p = cam_t @ rot  # dP / dY
             by_shift = np.broadcast_to(cam_t, to_p.shape)
-            by_turn = -cam_t @ _skew(np.einsum("...mij,...mj->...mi", rot, y))
+            by_turn = -cam_t @ skew(np.einsum("...mij,...mj->...mi", rot, y))
             by_board = to_p
         shape = by_shift.shape[:-2]
         own = np.zeros((*shape, 3, 12))
@@ -374,21 +365,3 @@ class Camera:
         self, points: np.ndarray, feature: np.ndarray | None, params: np.ndarray
     ) -> tuple[np.ndarray | None, np.ndarray | None]:
         raise NotImplementedError("a camera's design gradient is taken by central differences")
-
-
-def _spin(axis: int) -> np.ndarray:
-    """``[e_axis]x`` ``(3, 3)``."""
-    out = np.zeros((3, 3))
-    i, j = (axis + 1) % 3, (axis + 2) % 3
-    out[j, i] = 1.0
-    out[i, j] = -1.0
-    return out
-
-
-def _skew(v: np.ndarray) -> np.ndarray:
-    """``[v]x`` ``(..., 3, 3)`` of vectors ``(..., 3)``."""
-    out = np.zeros((*v.shape, 3))
-    out[..., 0, 1], out[..., 0, 2] = -v[..., 2], v[..., 1]
-    out[..., 1, 0], out[..., 1, 2] = v[..., 2], -v[..., 0]
-    out[..., 2, 0], out[..., 2, 1] = -v[..., 1], v[..., 0]
-    return out

@@ -31,9 +31,9 @@ from functools import cached_property
 
 import numpy as np
 
-from ..models.spatial.chain import elementary, rpy_matrix
+from ..models.spatial.chain import elementary, rpy_matrix, skew
 from ..noise import NoiseModel
-from .base import Instrument, feature_index, same_features
+from .base import Defaults, Instrument, feature_index, same_features
 
 __all__ = ["AXES", "Coordinates"]
 
@@ -42,7 +42,7 @@ AXES = ("x", "y", "z")
 
 
 @dataclass(frozen=True, eq=False)
-class Coordinates:
+class Coordinates(Defaults):
     """Partial coordinates (module notes).
 
     Attributes
@@ -142,19 +142,6 @@ class Coordinates:
         """True: a row reads every axis, one column each (empty where it did not)."""
         return True
 
-    @property
-    def frame(self) -> bool:
-        """False: it reads the tool point."""
-        return False
-
-    @property
-    def unit(self) -> str:
-        return "mm"
-
-    @property
-    def reading_bounds(self) -> tuple[tuple[float, float], ...] | None:
-        return None
-
     def feature_sigma(self, noise: NoiseModel) -> np.ndarray | None:
         """Every axis's std (mm) from the robot file's ``sigma_mm = [sx, sy, sz]`` where
         they differ; None for one sigma.  ValueError for a laser tracker's model or a
@@ -192,7 +179,9 @@ class Coordinates:
         about x, y and z ``(..., 3, 3, 3)`` (the turn first)."""
         angles = np.asarray(params, dtype=float)[..., 3:]
         turns = [elementary(axis, angles[..., axis]) for axis in self._order]
-        spins = [_spin(axis) @ turn for axis, turn in zip(self._order, turns, strict=True)]
+        spins = [
+            skew(np.eye(3)[axis]) @ turn for axis, turn in zip(self._order, turns, strict=True)
+        ]
         r = self._frame @ turns[0] @ turns[1] @ turns[2]
         by = [
             self._frame @ spins[0] @ turns[1] @ turns[2],
@@ -277,12 +266,3 @@ class Coordinates:
         out = np.zeros((*shape, 1, 6, 3))
         out[..., 0, 3:, :] = turned
         return None, out
-
-
-def _spin(axis: int) -> np.ndarray:
-    """``[e_axis]x`` ``(3, 3)``: ``d/da Rot(axis, a) = [e]x Rot(axis, a)``."""
-    out = np.zeros((3, 3))
-    i, j = (axis + 1) % 3, (axis + 2) % 3
-    out[j, i] = 1.0
-    out[i, j] = -1.0
-    return out

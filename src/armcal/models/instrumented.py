@@ -332,9 +332,12 @@ class InstrumentedArm(CoreModel):
         self, params: np.ndarray, covariance: np.ndarray
     ) -> tuple[FitModel, np.ndarray, np.ndarray]:
         """The arm in its own base frame, where the instrument was placed, with its
-        parameters and their covariance (the instrument's dropped: the marginal)."""
+        parameters and their covariance (the instrument's dropped: the marginal); without
+        noise where the instrument's is not in mm (a camera's pixels say nothing of where
+        the tool is)."""
         k = self.n_arm
-        return self.inner, np.asarray(params)[:k], np.asarray(covariance)[:k, :k]
+        arm = self.inner if self.reading_unit == "mm" else self.inner.with_noise(None)
+        return arm, np.asarray(params)[:k], np.asarray(covariance)[:k, :k]
 
     @property
     def feature_labels(self) -> tuple[str, ...]:
@@ -639,8 +642,10 @@ class InstrumentedArm(CoreModel):
         singular = np.linalg.svd(theta / np.where(scale > 0, scale, 1.0), compute_uv=False)
         if np.any(scale == 0) or (singular.size and singular[-1] <= _FIXES * singular[0]):
             raise ArmcalError(
-                f"the rows do not fix the instrument ({self.instrument.kind}): touch every "
-                "feature at poses spread over it (three touches not on a line fix a plane)"
+                f"the rows do not fix the instrument ({self.instrument.kind}): measure every "
+                "feature (plane, point, axis read, corner) at poses spread over it (three "
+                "touches not on a line fix a plane; an axis of partial coordinates needs "
+                "readings of its own)"
             )
         rows = np.column_stack([triangle[:, : self.n_arm], theta])
         names = tuple(np.array(self.param_names)[mine])

@@ -1271,8 +1271,10 @@ def columns_jacobian(
 
 
 def equations_per_pose(model: FitModel) -> int:
-    """Equations one pose measured at every target gives: ``point_dim`` per target."""
-    return model.point_dim * max(len(model.target_labels), 1)
+    """Equations one pose measured at every target gives: ``point_dim`` per row of a
+    plan's pose (a row per target; per axis or corner an instrument reads at every pose)."""
+    rows = model.plan_conditions(np.zeros((1, model.n_joints))).m
+    return model.point_dim * max(len(model.target_labels), rows, 1)
 
 
 def target_indices(

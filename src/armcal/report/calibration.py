@@ -82,12 +82,12 @@ def _poses_phrase(cal: Calibration) -> str:
     lines = cal.n_poses  # an instrument's poses of several readings (axes, corners) each
     if cal.model.feature_labels:
         lines = len(set(cal.pose_labels))
-    if cal.target is None and lines < cal.n_poses:  # a row is one reading of a pose's
+    if lines < cal.n_poses:  # a row is one reading of a pose's
         poses = f"{lines} poses ({cal.n_poses} readings)"
     elif cal.target is None:
         poses = f"{cal.n_poses} poses"
     else:  # a row is one target's point of a pose
-        targets = len(cal.arm.targets)
+        targets = max(len(cal.arm.target_labels), 1)
         poses = (
             f"{len(set(cal.pose_labels))} poses ({cal.n_poses} measurements of "
             f"{targets} target{'s' if targets > 1 else ''})"

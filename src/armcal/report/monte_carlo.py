@@ -22,7 +22,8 @@ def format_monte_carlo(result: MonteCarlo, *, words: Mapping[str, str] = ACTIONS
     arm = result.arm
     lines = [
         f"Monte Carlo: {result.trials} trials of {result.q.shape[0]} poses of {arm.name}, "
-        f"sigma {result.sigma_mm:g} mm, {result.method} ({result.seconds:.2f} s)",
+        f"sigma {result.sigma_mm:g} {arm.reading_unit}, {result.method} "
+        f"({result.seconds:.2f} s)",
         *model_lines(arm, words=words),
         "",
         f"{'parameter':<10}{'truth':>10}{'bias':>11}{'empirical std':>15}{'predicted std':>15}"
@@ -96,6 +97,7 @@ def monte_carlo_to_dict(result: MonteCarlo) -> dict:
         "trials": result.trials,
         "poses": int(result.q.shape[0]),
         "sigma_mm": result.sigma_mm,
+        **({} if result.arm.reading_unit == "mm" else {"reading_unit": result.arm.reading_unit}),
         "method": result.method,
         "units": dict(zip(names, result.units, strict=True)),
         "truth": by_name(result.truth * result.display_scale),

@@ -219,6 +219,31 @@ def _outside_warning(spec: RobotSpec, q: np.ndarray, source: str) -> ArmcalWarni
     )
 
 
+def unmet_plan_warning(model: FitModel, q: np.ndarray, source: str) -> ArmcalWarning | None:
+    """``poses-unmet`` for poses of a plan that do not meet the instrument at the nominal arm
+    (a touch off its plane, a photo that misses part of the board), or None: their rows
+    are counted in the plan's figures as if measured, which they cannot be there."""
+    if not model.constrained:
+        return None
+    moved, met = model.meeting_poses(q)
+    off = np.flatnonzero(~met | (np.max(np.abs(moved - q), axis=-1) > _MEETS_RAD))
+    if not off.size:
+        return None
+    shown = ", ".join(str(r + 1) for r in off[:5]) + (", ..." if off.size > 5 else "")
+    return ArmcalWarning(
+        "poses-unmet",
+        f"{source}: {off.size} of {q.shape[0]} poses (rows {shown}) do not meet the "
+        "instrument at the nominal arm (a touch off its plane, a board not wholly in view): "
+        "their rows are counted as if measured, which they cannot be there; design the plan "
+        "for this instrument (armcal design)",
+    )
+
+
+#: A plan's pose meets the instrument when it need move no joint by more than this (rad)
+#: to meet it: a plan written to a file and read back is off by its digits' round-off.
+_MEETS_RAD = 1e-6
+
+
 def evaluate_file(
     spec: RobotSpec,
     arm: FitModel,
@@ -253,7 +278,12 @@ def evaluate_file(
         holds="its predicted std and predicted position error after calibration hold",
         like="the plan's",
     )
-    extra = tuple(w for w in (degenerate, _outside_warning(spec, q, source)) if w is not None)
+    found_warnings = (
+        degenerate,
+        _outside_warning(spec, q, source),
+        unmet_plan_warning(model, q, source),
+    )
+    extra = tuple(w for w in found_warnings if w is not None)
     return EvaluationRun(quality, (*spec.warnings, *quality.warnings, *extra))
 
 
@@ -396,6 +426,7 @@ def simulate_plan(
     if test_q is not None and not len(test_q):
         test_q = None
     found = truth_warning(model, truth)  # of the truth as given, in the model's parameters
+    unmet = unmet_plan_warning(model, q, source)
     # The Monte Carlo prepares the model for this plan and expresses the truth as its fit
     # sees it (a family whose parameters are minimal is itself).
     try:
@@ -413,7 +444,8 @@ def simulate_plan(
         )
     except NotIdentifiableError as exc:
         raise prefixed(source, exc) from None
-    return result if found is None else replace(result, warnings=(found, *result.warnings))
+    said = tuple(w for w in (found, unmet) if w is not None)
+    return replace(result, warnings=(*said, *result.warnings)) if said else result
 
 
 def size_plan(

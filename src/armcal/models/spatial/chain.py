@@ -46,6 +46,7 @@ __all__ = [
     "matrix_rpy",
     "rotation_vector",
     "rpy_matrix",
+    "skew",
     "transform",
     "vector_rotation",
 ]
@@ -165,7 +166,7 @@ def rotation_vector(rotation: np.ndarray) -> np.ndarray:
     return out
 
 
-def _skew(v: np.ndarray) -> np.ndarray:
+def skew(v: np.ndarray) -> np.ndarray:
     """``[v]_x`` ``(..., 3, 3)`` of vectors ``(..., 3)``."""
     k = np.zeros((*v.shape[:-1], 3, 3))
     k[..., 0, 1], k[..., 0, 2], k[..., 1, 2] = -v[..., 2], v[..., 1], -v[..., 0]
@@ -188,7 +189,7 @@ def left_jacobian(vector: ArrayLike) -> np.ndarray:
     """
     v = np.asarray(vector, dtype=float)
     t = np.linalg.norm(v, axis=-1)[..., None, None]
-    k = _skew(v)
+    k = skew(v)
     small = t < 1e-4  # the series to t^4: exact to round-off there
     safe = np.where(small, 1.0, t)
     a = np.where(small, 0.5 - t**2 / 24 + t**4 / 720, (1.0 - np.cos(safe)) / safe**2)
@@ -211,7 +212,7 @@ def left_jacobian_inverse(vector: ArrayLike) -> np.ndarray:
     """
     v = np.asarray(vector, dtype=float)
     t = np.linalg.norm(v, axis=-1)[..., None, None]
-    k = _skew(v)
+    k = skew(v)
     small = t < 1e-4
     safe = np.where(small, 1.0, t)
     c = np.where(
