@@ -247,6 +247,11 @@ def _weighted_svd(blocks: np.ndarray, weights: np.ndarray) -> ScaledSVD:
 #: few ascents from the best points of the sample, not many from random ones.
 ASCENT_STARTS = 32
 
+#: The starts are chosen among this many times :data:`ASCENT_STARTS` of the best poses, at
+#: least :data:`SPREAD_RAD` apart (:func:`_spread_starts`).
+SPREAD_POOL = 8
+SPREAD_RAD = 0.5
+
 #: Adam steps of every ascent (:func:`_maximize_variance`); the last search of a
 #: certificate takes twice as many, its maximum being the one the bound rests on.
 ASCENT_STEPS = 60
@@ -309,7 +314,7 @@ def _search_maximum(
     :data:`ASCENT_STARTS` largest values; ascent iterates that stray outside the view by
     more than 1e-3 mm do not count."""
     d = variances(sample.blocks, m_inv)
-    starts = sample.q[np.argsort(-d)[:ASCENT_STARTS]]
+    starts = sample.q[_spread_starts(sample.q, d)]
     found = _poses(model, _maximize_variance(model, m_inv, starts, steps=steps, progress=progress))
     d_found = variances(found.blocks, m_inv)
     constraints = model.view_constraints(found.q[:, None, :])
@@ -318,6 +323,26 @@ def _search_maximum(
     if d.max() >= d_found.max():
         return _Maximum(float(d.max()), sample.q[int(np.argmax(d))], found, d)
     return _Maximum(float(d_found.max()), found.q[int(np.argmax(d_found))], found, d)
+
+
+def _spread_starts(q: np.ndarray, d: np.ndarray) -> np.ndarray:
+    """:data:`ASCENT_STARTS` poses of ``q`` where ``d`` is largest, spread over its hills:
+    best first, a pose of the :data:`SPREAD_POOL` best taken only if it lies at least
+    :data:`SPREAD_RAD` (largest joint difference) from every pose taken, the rest of the
+    count filled by the best left.  The best points of a sample crowd on one hill, and
+    ascents from them all climb it: a dense search found another, higher one (the
+    industrial arm with three reflectors, 33.040 against 33.019)."""
+    order = np.argsort(-d)
+    pool = order[: SPREAD_POOL * ASCENT_STARTS]
+    taken: list[int] = []
+    for i in pool:
+        if len(taken) == ASCENT_STARTS:
+            break
+        if not taken or np.min(np.max(np.abs(q[taken] - q[i]), axis=-1)) >= SPREAD_RAD:
+            taken.append(int(i))
+    chosen = set(taken)
+    left = [int(i) for i in order[: 2 * ASCENT_STARTS] if int(i) not in chosen]
+    return np.array(taken + left[: ASCENT_STARTS - len(taken)], dtype=int)
 
 
 def _trimmed(blocks: np.ndarray, weights: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
