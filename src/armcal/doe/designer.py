@@ -202,6 +202,26 @@ def _planar_exchange(model: FitModel) -> bool:
     return bool(model.plan_conditions(np.asarray(model.joint_limits, dtype=float)[:, :1].T).m == 1)
 
 
+def unchecked_warning(
+    model: FitModel, certificate: Certificate | None
+) -> tuple[ArmcalWarning, ...]:
+    """``certificate-unchecked`` for a certificate whose search of the variance function has
+    not been checked against a dense search for models of this kind
+    (:attr:`~armcal.models.interface.DesignEffort.checked`), else nothing."""
+    if certificate is None or model.design_effort.checked:
+        return ()
+    return (
+        ArmcalWarning(
+            "certificate-unchecked",
+            f"the certified figure ({certificate.certified_d_efficiency:.4f}) rests on a "
+            "search of the variance function not yet checked for this instrument: a dense "
+            "search has found maxima such a search missed (a camera's board in view: 33.4 "
+            "against 31.7 on a 20-pose plan), so it may overclaim; take it as a guide, not a "
+            "bound",
+        ),
+    )
+
+
 def pool_warnings(pool: np.ndarray, q: np.ndarray) -> tuple[ArmcalWarning, ...]:
     """``pool-repeats`` for a plan ``q`` ``(m, n)`` from ``pool`` ``(N, n)`` that holds fewer
     distinct poses than the plan: it measures some poses twice or more (none otherwise)."""
@@ -396,7 +416,10 @@ def design(
         joint_travel=joint_travel(q),
         joint_travel_unordered=travel_found,
         distinct=distinct,
-        warnings=() if pool is None or drawn else pool_warnings(pool, q),
+        warnings=(
+            *(() if pool is None or drawn else pool_warnings(pool, q)),
+            *unchecked_warning(model, certificate),
+        ),
     )
 
 

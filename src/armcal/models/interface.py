@@ -301,6 +301,9 @@ class DesignEffort:
         rounds of adding the variance function's maximizers to them; and the sample
         of random feasible poses, on which every variance function is evaluated first
         and from whose best poses its ascents start.
+    checked : bool
+        Whether that search has been checked against a dense search for models of this
+        kind (a certificate that has not says so: ``certificate-unchecked``).
     """
 
     starts: int = 48
@@ -310,6 +313,7 @@ class DesignEffort:
     reference: int = 300
     rounds: int = 4
     search: int = 20000
+    checked: bool = True
 
 
 @dataclass(frozen=True)
