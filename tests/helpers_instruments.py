@@ -157,9 +157,17 @@ def refused_table(folder: Path, table: str, measurement: str = "") -> str:
     source = BUILTIN_SPATIAL_ROBOTS["cobot-6r"].read_text(encoding="utf-8")
     text = f"{source}\n{TOOL}{measurement}[instrument]\n{table}"
     (folder / "r.toml").write_text(text, encoding="utf-8")
+    line = refused_robot(folder, "r.toml")
+    assert line.startswith("armcal: error: r.toml"), line
+    return line
+
+
+def refused_robot(folder: Path, robot: str) -> str:
+    """The one line ``armcal evaluate`` of a one-pose plan refuses the robot file ``robot``
+    in ``folder`` with: exit 2, one line ``armcal: error: ...``."""
     (folder / "p.csv").write_text("q1_deg,q2_deg,q3_deg,q4_deg,q5_deg,q6_deg\n0,0,0,0,0,0\n")
-    run = run_cli(folder, "evaluate", "--robot", "r.toml", "--plan", "p.csv")
+    run = run_cli(folder, "evaluate", "--robot", robot, "--plan", "p.csv")
     assert run.returncode == 2, run.stderr
     lines = run.stderr.strip().splitlines()
-    assert len(lines) == 1 and lines[0].startswith("armcal: error: r.toml"), run.stderr
+    assert len(lines) == 1 and lines[0].startswith("armcal: error:"), run.stderr
     return lines[0]

@@ -381,11 +381,11 @@ def instrumented_arm(
         )
     if arm.noise is not None:
         try:
-            instrument.feature_sigma(arm.noise)
+            per_feature = instrument.feature_sigma(arm.noise)
         except ValueError as exc:
             raise fail(path, f"key 'measurement': {exc}") from None
         try:
-            if instrument.feature_sigma(arm.noise) is None:
+            if per_feature is None:
                 arm.noise.for_dim(instrument.dim)
         except ValueError as exc:
             raise fail(

@@ -17,6 +17,7 @@ from typing import Protocol
 
 import numpy as np
 
+from ..models.spatial.chain import elementary, skew
 from ..noise import NoiseModel
 
 __all__ = [
@@ -26,6 +27,8 @@ __all__ = [
     "MeetsAtZero",
     "feature_index",
     "same_features",
+    "turned_frame",
+    "turns_between",
     "unseen_words",
     "z_to",
 ]
@@ -271,3 +274,42 @@ def z_to(normal: np.ndarray) -> np.ndarray:
 def unseen_words(instrument: Instrument) -> str:
     """The instrument's sentence on what it cannot see (for reports)."""
     return instrument.unseen
+
+
+def turned_frame(
+    frame: np.ndarray, angles: np.ndarray, order: tuple[int, int, int] = (0, 1, 2)
+) -> tuple[np.ndarray, np.ndarray]:
+    """``R = R0 E_i E_j E_k`` ``(..., 3, 3)``: ``frame`` ``R0`` turned about its own axes in
+    ``order`` by ``angles`` ``(..., 3)`` (by axis x, y, z), and its derivatives by the turns
+    about x, y and z ``(..., 3, 3, 3)`` (the turn first): an instrument's small moves from
+    where the user placed it (:mod:`~armcal.instruments.partial`,
+    :mod:`~armcal.instruments.camera`)."""
+    angles = np.asarray(angles, dtype=float)
+    turns = [elementary(axis, angles[..., axis]) for axis in order]
+    spins = [skew(np.eye(3)[axis]) @ turn for axis, turn in zip(order, turns, strict=True)]
+    by = [
+        frame @ spins[0] @ turns[1] @ turns[2],
+        frame @ turns[0] @ spins[1] @ turns[2],
+        frame @ turns[0] @ turns[1] @ spins[2],
+    ]
+    ordered = [by[order.index(axis)] for axis in range(3)]
+    return frame @ turns[0] @ turns[1] @ turns[2], np.stack(ordered, axis=-3)
+
+
+def turns_between(
+    frame: np.ndarray, rotation: np.ndarray, order: tuple[int, int, int] = (0, 1, 2)
+) -> np.ndarray:
+    """The angles ``(3,)`` (by axis) with :func:`turned_frame` ``(frame, angles, order)`` =
+    ``rotation``: for the order's axes ``Q`` (a cyclic order), ``Q^T R0^T R Q = Rx(a)
+    Ry(b) Rz(c)``."""
+    q = np.eye(3)[:, list(order)]
+    m = q.T @ frame.T @ rotation @ q
+    found = (
+        np.arctan2(-m[1, 2], m[2, 2]),
+        np.arcsin(np.clip(m[0, 2], -1.0, 1.0)),
+        np.arctan2(-m[0, 1], m[0, 0]),
+    )
+    out = np.zeros(3)
+    for axis, angle in zip(order, found, strict=True):
+        out[axis] = angle
+    return out

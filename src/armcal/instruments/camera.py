@@ -42,8 +42,15 @@ from functools import cached_property
 
 import numpy as np
 
-from ..models.spatial.chain import elementary, rpy_matrix, skew
-from .base import Defaults, Instrument, feature_index, same_features
+from ..models.spatial.chain import rpy_matrix, skew
+from .base import (
+    Defaults,
+    Instrument,
+    feature_index,
+    same_features,
+    turned_frame,
+    turns_between,
+)
 
 __all__ = ["MOUNTS", "Board", "Camera", "Intrinsics"]
 
@@ -242,19 +249,11 @@ class Camera(Defaults):
         """The moves that put the camera and the board where ``true``'s are."""
         same_features(self, true)
         assert isinstance(true, Camera) and true.mount == self.mount
-        out = np.zeros(12)
-        for k, (mine, theirs) in enumerate(
-            ((self.camera_pose, true.camera_pose), (self.board_pose, true.board_pose))
-        ):
-            r0, r = rpy_matrix(np.radians(mine[1])), rpy_matrix(np.radians(theirs[1]))
-            m = r0.T @ r  # Rx(a) Ry(b) Rz(c)
-            out[6 * k + 3 : 6 * k + 6] = (
-                np.arctan2(-m[1, 2], m[2, 2]),
-                np.arcsin(np.clip(m[0, 2], -1.0, 1.0)),
-                np.arctan2(-m[0, 1], m[0, 0]),
-            )
-            out[6 * k : 6 * k + 3] = r.T @ (theirs[0] - mine[0])
-        return out
+        out = []
+        mine, theirs = (self.camera_pose, self.board_pose), (true.camera_pose, true.board_pose)
+        for a, b, r0, r in zip(mine, theirs, self._frames, true._frames, strict=True):
+            out += [r.T @ (b[0] - a[0]), turns_between(r0, r)]
+        return np.concatenate(out)
 
     def out_of_reach(self, reach_mm: float) -> str | None:
         return None
@@ -264,23 +263,17 @@ class Camera(Defaults):
     def _rotations(self, params: np.ndarray) -> tuple[np.ndarray, ...]:
         """``R_c``, ``dR_c / d(a, b, c)``, ``R_b``, its derivatives: ``(..., 3, 3)`` and
         ``(..., 3, 3, 3)`` (the turn first)."""
-        out = []
-        for k, pose in enumerate((self.camera_pose, self.board_pose)):
-            angles = params[..., 6 * k + 3 : 6 * k + 6]
-            turns = [elementary(axis, angles[..., axis]) for axis in range(3)]
-            spins = [skew(np.eye(3)[axis]) @ turns[axis] for axis in range(3)]
-            r0 = rpy_matrix(np.radians(pose[1]))
-            r = r0 @ turns[0] @ turns[1] @ turns[2]
-            by = np.stack(
-                [
-                    r0 @ spins[0] @ turns[1] @ turns[2],
-                    r0 @ turns[0] @ spins[1] @ turns[2],
-                    r0 @ turns[0] @ turns[1] @ spins[2],
-                ],
-                axis=-3,
-            )
-            out += [r, by]
-        return tuple(out)
+        camera = turned_frame(self._frames[0], params[..., 3:6])
+        board = turned_frame(self._frames[1], params[..., 9:12])
+        return (*camera, *board)
+
+    @cached_property
+    def _frames(self) -> tuple[np.ndarray, np.ndarray]:
+        """Where the user placed the camera and the board: their rotations."""
+        return (
+            rpy_matrix(np.radians(self.camera_pose[1])),
+            rpy_matrix(np.radians(self.board_pose[1])),
+        )
 
     def _seen(self, tool: np.ndarray, feature: np.ndarray | None, params: np.ndarray):
         """Every row's corner in the camera's frame ``P`` and what its derivatives need."""

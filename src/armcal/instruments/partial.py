@@ -31,9 +31,16 @@ from functools import cached_property
 
 import numpy as np
 
-from ..models.spatial.chain import elementary, rpy_matrix, skew
+from ..models.spatial.chain import rpy_matrix
 from ..noise import NoiseModel
-from .base import Defaults, Instrument, feature_index, same_features
+from .base import (
+    Defaults,
+    Instrument,
+    feature_index,
+    same_features,
+    turned_frame,
+    turns_between,
+)
 
 __all__ = ["AXES", "Coordinates"]
 
@@ -177,39 +184,17 @@ class Coordinates(Defaults):
     def rotation(self, params: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """``R`` ``(..., 3, 3)`` at ``params`` ``(..., 6)`` and its derivatives by the turns
         about x, y and z ``(..., 3, 3, 3)`` (the turn first)."""
-        angles = np.asarray(params, dtype=float)[..., 3:]
-        turns = [elementary(axis, angles[..., axis]) for axis in self._order]
-        spins = [
-            skew(np.eye(3)[axis]) @ turn for axis, turn in zip(self._order, turns, strict=True)
-        ]
-        r = self._frame @ turns[0] @ turns[1] @ turns[2]
-        by = [
-            self._frame @ spins[0] @ turns[1] @ turns[2],
-            self._frame @ turns[0] @ spins[1] @ turns[2],
-            self._frame @ turns[0] @ turns[1] @ spins[2],
-        ]
-        ordered = [by[self._order.index(axis)] for axis in range(3)]
-        return r, np.stack(ordered, axis=-3)
+        return turned_frame(self._frame, np.asarray(params, dtype=float)[..., 3:], self._order)
 
     def params_of(self, true: Instrument) -> np.ndarray:
-        """The shift and the turns that put the instrument where ``true`` is: ``Q^T R0^T R Q
-        = Rx(a) Ry(b) Rz(c)`` for the turns' axes ``Q`` (a cyclic order), and ``d = R^T
-        (t - t0)``."""
+        """The shift and the turns that put the instrument where ``true`` is
+        (:func:`~armcal.instruments.base.turns_between`), and ``d = R^T (t - t0)``."""
         same_features(self, true)
         assert isinstance(true, Coordinates)
         r = true._frame
-        q = np.eye(3)[:, list(self._order)]
-        m = q.T @ self._frame.T @ r @ q
-        angles = (
-            np.arctan2(-m[1, 2], m[2, 2]),
-            np.arcsin(np.clip(m[0, 2], -1.0, 1.0)),
-            np.arctan2(-m[0, 1], m[0, 0]),
+        return np.concatenate(
+            [r.T @ (true.xyz_mm - self.xyz_mm), turns_between(self._frame, r, self._order)]
         )
-        out = np.zeros(6)
-        out[:3] = r.T @ (true.xyz_mm - self.xyz_mm)
-        for axis, angle in zip(self._order, angles, strict=True):
-            out[3 + axis] = angle
-        return out
 
     def out_of_reach(self, reach_mm: float) -> str | None:
         return None
