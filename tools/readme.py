@@ -3,7 +3,7 @@
 The README cannot go stale: each ```console block is a script whose lines that
 start with ``$ `` are run, in order, in one fresh temporary folder, with the
 ``armcal`` of this checkout on PATH; the lines after a command are its output
-(stdout and stderr, as a terminal shows them).  A ```toml block whose first
+(stdout and stderr, as a terminal shows them).  A ```toml or ```yaml block whose first
 line is ``# NAME`` (an ```xml block: ``<!-- NAME -->``) is written to NAME in that
 folder before the blocks after it run, so the files the README shows are the
 files the commands read.  A
@@ -120,7 +120,7 @@ def render(text: str, name: str = "README.md") -> tuple[str, Path]:
     for match in FENCE.finditer(text):
         kind, body = match.group(1), match.group(2)
         pieces.append(text[last : match.start()])
-        if kind == "toml" and body.startswith("# "):
+        if kind in ("toml", "yaml") and body.startswith("# "):
             filename = body.splitlines()[0][2:].strip()
             (work / filename).write_text(body, encoding="utf-8")
         elif kind == "xml" and body.startswith("<!-- ") and body.splitlines()[0].endswith("-->"):

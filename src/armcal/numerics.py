@@ -43,6 +43,7 @@ __all__ = [
     "factor_least_squares",
     "gram_of_factor",
     "log_det",
+    "nearest_in",
     "point_norms",
     "rms",
     "scaled_svd",
@@ -641,6 +642,29 @@ def box_image(matrix: np.ndarray, box: np.ndarray) -> np.ndarray:
     low = matrix * box[:, 0]
     high = matrix * box[:, 1]
     return np.column_stack([np.minimum(low, high).sum(axis=1), np.maximum(low, high).sum(axis=1)])
+
+
+def nearest_in(a: np.ndarray, b: np.ndarray, v: np.ndarray) -> np.ndarray:
+    """The point nearest ``v`` ``(n,)`` of ``{x : a x >= b}`` (``a`` ``(c, n)``): ``v + y`` with
+    ``y`` the least-distance solution of ``a y >= b - a v`` from the non-negative least
+    squares of ``[a^T; h^T] u ~ e_{n+1}`` (``h = b - a v``), ``y = -r[:n] / r[n]`` of its
+    residual ``r`` (Lawson and Hanson, ch. 23); ``v`` where every row holds, and 0 (no
+    step) where the linearization has no point at all (not expected: ``x = 0`` holds
+    wherever the pose itself is inside)."""
+    from scipy.optimize import nnls  # here: scipy's optimizers are slow to import
+
+    h = b - a @ v
+    if np.all(h <= 0.0):
+        return v
+    n = v.size
+    e = np.concatenate([a.T, h[None, :]])
+    f = np.zeros(n + 1)
+    f[n] = 1.0
+    u, _ = nnls(e, f, maxiter=50 * e.shape[1])
+    r = e @ u - f
+    if abs(r[n]) < 1e-12:
+        return np.zeros(n)
+    return v - r[:n] / r[n]
 
 
 def wrap_angle(angle: ArrayLike) -> np.ndarray:

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -12,6 +12,7 @@ from ..models.information import identifying
 from ..numerics import ScaledSVD, scaled_svd, spd_inverse
 from ..progress import ProgressCallback, share
 from .ascent import adam_ascent, penalty_weight, to_q, to_u, view_penalty
+from .constrained import bounded_ascent, projected_ascent
 from .plans import feasible_poses
 from .pool import pool_blocks
 from .weights import information, newton_weights, optimal_weights, variances
@@ -85,6 +86,27 @@ class Certificate:
             f"design over {over}; plan-only bound {self.plan_only_bound:.4f})"
         )
 
+    def rebased(self, model: FitModel, q: np.ndarray) -> Certificate | None:
+        """The same reference design's bound for another plan ``q`` of the same ``model``
+        (a plan chosen after this certificate, from poses that include its support):
+        ``(det M_q / det M(xi*))^(1/p) exp(1 - max_variance / p)``, no search, as the
+        bound rests on ``xi*`` alone; None where it cannot be (a certificate without
+        a searched reference design, or one over a pool, or a plan that does not identify
+        the model as it is).  Its plan-only bound is not searched: 0."""
+        q = np.asarray(q, dtype=float)
+        if self.pool_size is not None or self.reference_d_efficiency <= 0.0:
+            return None
+        if identifying(model, model.plan_conditions(q)) is not model:
+            return None
+        p = model.n_free
+        logdet_plan = float(model.plan_information(q).svd().log_det_gram())
+        logdet_star = p * float(np.log(self.reference_d_efficiency))
+        kw = float(np.exp((logdet_plan - logdet_star) / p + 1.0 - self.max_variance / p))
+        hadamard = float(np.exp(logdet_plan / p)) if model.information_bound else 0.0
+        return replace(
+            self, certified_d_efficiency=float(min(1.0, max(kw, hadamard))), plan_only_bound=0.0
+        )
+
     def reference_inverse(self, model: FitModel) -> np.ndarray:
         """``M(xi*)^-1`` of the reference design (its support and weights) by the rank
         policy: the matrix whose variance function ``max_variance`` bounds."""
@@ -111,9 +133,19 @@ def _maximize_variance(
     progress: ProgressCallback | None = None,
 ) -> np.ndarray:
     """Batched ascent of ``d(x)`` from ``starts (k, n)`` within the limits (near the view);
-    over the poses that meet the instrument where a pose must (:func:`_projected_ascent`)."""
+    over the poses that meet the instrument where a pose must: within its view where
+    that is a region with an inside (:func:`~armcal.doe.constrained.bounded_ascent`, a
+    camera's image), else on the thin set of poses that meet it
+    (:func:`~armcal.doe.constrained.projected_ascent`)."""
     if model.constrained:
-        return _projected_ascent(model, m_inv, starts, steps=2 * steps)
+
+        def variance(q: np.ndarray, gradient: bool) -> tuple[np.ndarray, np.ndarray | None]:
+            if gradient:
+                return _variance_function(model, q, m_inv)
+            return variances(_pose_blocks(model, q), m_inv), None
+
+        ascent = bounded_ascent if model.has_view else projected_ascent
+        return ascent(model, variance, starts, steps=2 * steps)
 
     def objective(u: np.ndarray, step: int):
         q, dq_du = to_q(model, u)
@@ -126,58 +158,6 @@ def _maximize_variance(
         objective, to_u(model, starts), steps=steps, learning_rate=0.05, progress=progress
     )
     return _newton_polish(model, m_inv, to_q(model, u)[0])
-
-
-#: The first joint step of a projected ascent (rad), and the smallest: a pose whose step
-#: has shrunk below it is at its local maximum to round-off of ``d`` (a step of 1e-9 rad
-#: changes ``d`` by about 1e-18 of its scale near a maximum).
-PROJECTED_STEP, PROJECTED_SMALLEST = 0.05, 1e-9
-
-#: How far (rad) a pose is moved along the gradient to find the constraint's tangent: the
-#: meeting's second-order error (the curvature times this squared, ~1e-12) stays below
-#: the round-off of the difference (its floor 1e-13 rad over this, ~1e-7 relative).
-TANGENT_PROBE = 1e-6
-
-
-def _projected_ascent(
-    model: FitModel, m_inv: np.ndarray, starts: np.ndarray, *, steps: int
-) -> np.ndarray:
-    """Ascent of ``d(x)`` over the poses that meet the instrument (a touch, a seating, a
-    distance within range): a step along ``d``'s gradient projected onto the
-    constraint's tangent, taken back onto the instrument by the smallest joint change
-    (:meth:`~armcal.models.interface.FitModel.meeting_poses`), kept where ``d`` grows and
-    the pose meets it and is feasible; the step grows by half after a success and
-    shrinks to 0.4 after a failure, pose by pose, until every step is below
-    :data:`PROJECTED_SMALLEST`.  Every pose returned meets the instrument (the starts do).
-
-    The tangent is the meeting of a pose moved :data:`TANGENT_PROBE` rad along the
-    gradient, divided by that: the gradient less its part across the constraint, to
-    first order.  Stepping along the raw gradient would stall short of a maximum, where
-    the gradient stands nearly across the constraint: what the step gains along it is
-    then less than what its curvature costs on the way back."""
-    lower, upper = model.joint_limits[:, 0], model.joint_limits[:, 1]
-    q = np.array(starts, dtype=float)
-    value, grad = _variance_function(model, q, m_inv)
-    size = np.full(q.shape[0], PROJECTED_STEP)
-    for _ in range(steps):
-        live = size >= PROJECTED_SMALLEST
-        if not live.any():
-            break
-        norm = np.linalg.norm(grad[live], axis=-1, keepdims=True)
-        direction = grad[live] / np.where(norm > 0, norm, 1.0)
-        probe, probed = model.meeting_poses(q[live] + TANGENT_PROBE * direction)
-        tangent = np.where(probed[:, None], (probe - q[live]) / TANGENT_PROBE, direction)
-        norm = np.linalg.norm(tangent, axis=-1, keepdims=True)
-        direction = tangent / np.where(norm > 0, norm, 1.0)
-        trial = np.clip(q[live] + size[live, None] * direction, lower, upper)
-        trial, met = model.meeting_poses(trial)
-        trial_value, trial_grad = _variance_function(model, trial, m_inv)
-        better = met & (trial_value > value[live])
-        index = np.flatnonzero(live)
-        kept = index[better]
-        q[kept], value[kept], grad[kept] = trial[better], trial_value[better], trial_grad[better]
-        size[index] = np.where(better, size[index] * 1.5, size[index] * 0.4)
-    return q
 
 
 #: Newton iterations that finish every ascent, and the step of the central differences
@@ -309,13 +289,14 @@ def _search_maximum(
     *,
     steps: int,
     progress: ProgressCallback | None,
+    starts: int = 0,
 ) -> _Maximum:
     """``max_x d(x)`` over ``sample`` (its blocks, no kinematics) and over ascents from its
     :data:`ASCENT_STARTS` largest values; ascent iterates that stray outside the view by
     more than 1e-3 mm do not count."""
     d = variances(sample.blocks, m_inv)
-    starts = sample.q[_spread_starts(sample.q, d)]
-    found = _poses(model, _maximize_variance(model, m_inv, starts, steps=steps, progress=progress))
+    first = sample.q[_spread_starts(sample.q, d, starts or ASCENT_STARTS)]
+    found = _poses(model, _maximize_variance(model, m_inv, first, steps=steps, progress=progress))
     d_found = variances(found.blocks, m_inv)
     constraints = model.view_constraints(found.q[:, None, :])
     if constraints is not None:  # count iterates that stray outside only a little
@@ -325,24 +306,26 @@ def _search_maximum(
     return _Maximum(float(d_found.max()), found.q[int(np.argmax(d_found))], found, d)
 
 
-def _spread_starts(q: np.ndarray, d: np.ndarray) -> np.ndarray:
-    """:data:`ASCENT_STARTS` poses of ``q`` where ``d`` is largest, spread over its hills:
+def _spread_starts(q: np.ndarray, d: np.ndarray, count: int = 0) -> np.ndarray:
+    """``count`` (:data:`ASCENT_STARTS`) poses of ``q`` where ``d`` is largest, spread over
+    its hills:
     best first, a pose of the :data:`SPREAD_POOL` best taken only if it lies at least
     :data:`SPREAD_RAD` (largest joint difference) from every pose taken, the rest of the
     count filled by the best left.  The best points of a sample crowd on one hill, and
     ascents from them all climb it: a dense search found another, higher one (the
     industrial arm with three reflectors, 33.040 against 33.019)."""
+    count = count or ASCENT_STARTS
     order = np.argsort(-d)
-    pool = order[: SPREAD_POOL * ASCENT_STARTS]
+    pool = order[: SPREAD_POOL * count]
     taken: list[int] = []
     for i in pool:
-        if len(taken) == ASCENT_STARTS:
+        if len(taken) == count:
             break
         if not taken or np.min(np.max(np.abs(q[taken] - q[i]), axis=-1)) >= SPREAD_RAD:
             taken.append(int(i))
     chosen = set(taken)
-    left = [int(i) for i in order[: 2 * ASCENT_STARTS] if int(i) not in chosen]
-    return np.array(taken + left[: ASCENT_STARTS - len(taken)], dtype=int)
+    left = [int(i) for i in order[: 2 * count] if int(i) not in chosen]
+    return np.array(taken + left[: count - len(taken)], dtype=int)
 
 
 def _trimmed(blocks: np.ndarray, weights: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -386,6 +369,7 @@ def _reference_design(
             candidates + sample,
             steps=ASCENT_STEPS * (2 if last else 1),
             progress=parts[1 + round_],
+            starts=model.design_effort.last_starts if last else ASCENT_STARTS,
         )
         if last:
             kept = weights > 0

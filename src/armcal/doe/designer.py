@@ -202,26 +202,6 @@ def _planar_exchange(model: FitModel) -> bool:
     return bool(model.plan_conditions(np.asarray(model.joint_limits, dtype=float)[:, :1].T).m == 1)
 
 
-def unchecked_warning(
-    model: FitModel, certificate: Certificate | None
-) -> tuple[ArmcalWarning, ...]:
-    """``certificate-unchecked`` for a certificate whose search of the variance function has
-    not been checked against a dense search for models of this kind
-    (:attr:`~armcal.models.interface.DesignEffort.checked`), else nothing."""
-    if certificate is None or model.design_effort.checked:
-        return ()
-    return (
-        ArmcalWarning(
-            "certificate-unchecked",
-            f"the certified figure ({certificate.certified_d_efficiency:.4f}) rests on a "
-            "search of the variance function not yet checked for this instrument: a dense "
-            "search has found maxima such a search missed (a camera's board in view: 33.4 "
-            "against 31.7 on a 20-pose plan), so it may overclaim; take it as a guide, not a "
-            "bound",
-        ),
-    )
-
-
 def pool_warnings(pool: np.ndarray, q: np.ndarray) -> tuple[ArmcalWarning, ...]:
     """``pool-repeats`` for a plan ``q`` ``(m, n)`` from ``pool`` ``(N, n)`` that holds fewer
     distinct poses than the plan: it measures some poses twice or more (none otherwise)."""
@@ -392,13 +372,15 @@ def design(
             progress=progress,
         )  # fmt: skip
     q = np.asarray(made.q, dtype=float)
-    efficiency = float(d_efficiency(model, q))
-    notes = [*(() if made.replaces_notes else closed.notes), *made.notes]
-    notes.extend(closing_notes(made, closed, q, efficiency, method, distinct=distinct))
     certificate = certified(  # over the instrument's constrained poses, not the pool drawn
         model, q, None if drawn else pool, with_certificate, rng=rng, progress=progress,
         work=made.pool,
     )  # fmt: skip
+    if drawn and pool is not None and certificate is not None:
+        q, certificate = chosen_again(model, m, pool, q, certificate, rng, distinct)
+    efficiency = float(d_efficiency(model, q))
+    notes = [*(() if made.replaces_notes else closed.notes), *made.notes]
+    notes.extend(closing_notes(made, closed, q, efficiency, method, distinct=distinct))
     travel_found = joint_travel(q)
     if order == "travel":
         q = q[order_poses(q)]
@@ -416,10 +398,7 @@ def design(
         joint_travel=joint_travel(q),
         joint_travel_unordered=travel_found,
         distinct=distinct,
-        warnings=(
-            *(() if pool is None or drawn else pool_warnings(pool, q)),
-            *unchecked_warning(model, certificate),
-        ),
+        warnings=() if pool is None or drawn else pool_warnings(pool, q),
     )
 
 
@@ -666,6 +645,42 @@ def replicated_plan(
     )
     # the family's notes are of the m-pose plans; the smaller plan's replace them
     return MadePlan(q, base.method, (*base.note_texts, note), replaces_notes=True)
+
+
+#: A plan from a drawn pool certified at least this is kept as it is (chosen_again).
+CHOSEN_WELL = 0.99
+
+
+def chosen_again(
+    model: FitModel,
+    m: int,
+    pool: np.ndarray,
+    q: np.ndarray,
+    certificate: Certificate,
+    rng: np.random.Generator,
+    distinct: bool,
+) -> tuple[np.ndarray, Certificate]:
+    """A plan from a pool drawn for an instrument, chosen again from the pool and the
+    support of its certificate's reference design, where that is better: random poses
+    that meet the instrument seldom lie where the best design puts its weight (a
+    camera's best photos put the board's corners on the image's edges), and the
+    certificate's search found those poses.  Its certificate is the same reference
+    design's (:meth:`~armcal.doe.certificate.Certificate.rebased`), no second search.
+    A plan certified :data:`CHOSEN_WELL` already, or one the other does not beat, is kept.
+    (A 20-photo plan of a camera on cobot-6r, before its depth and tilt limits: the
+    pool's plan had 0.15 of the reference design's D-criterion, the plan chosen again
+    0.985.)"""
+    if certificate.certified_d_efficiency >= CHOSEN_WELL:
+        return q, certificate
+    richer = np.concatenate([pool, certificate.support])
+    again = pool_made_plan(model, m, richer, criterion="D", rng=rng, distinct=distinct)
+    q_again = np.asarray(again.q, dtype=float)
+    if float(d_efficiency(model, q_again)) <= float(d_efficiency(model, q)):
+        return q, certificate
+    rebased = certificate.rebased(model, q_again)
+    if rebased is None or rebased.certified_d_efficiency <= certificate.certified_d_efficiency:
+        return q, certificate
+    return q_again, rebased
 
 
 def pool_made_plan(

@@ -81,6 +81,12 @@ def repeated_poses(q: np.ndarray, *, tol: float = DISTINCT_TOLERANCE) -> np.ndar
     return marked
 
 
+#: Poses moved onto the instrument at once by :func:`feasible_poses`: its memory stays
+#: that of a few thousand poses however many are drawn (a camera's 80 000 poses of 48
+#: corners each took 4.5 GB at once).
+MEET_CHUNK = 2048
+
+
 def feasible_poses(
     model: FitModel, k: int, *, rng: np.random.Generator | int | None = None
 ) -> np.ndarray:
@@ -102,8 +108,12 @@ def feasible_poses(
         batch = random_plan(model, max(4 * k, 1000), rng=rng)
         drawn += batch.shape[0]
         batch = batch[model.feasible(batch)]
-        moved, met = model.meeting_poses(batch)
-        batch = moved[met]
+        chunks = [  # a few thousand poses at a time: a camera's pose is 48 rows
+            model.meeting_poses(batch[i : i + MEET_CHUNK])
+            for i in range(0, batch.shape[0], MEET_CHUNK)
+        ]
+        batch = np.concatenate([moved[met] for moved, met in chunks] or [batch[:0]])
+        batch = batch[model.feasible(batch)]  # moved within what a plan keeps to
         found.append(batch)
         count += batch.shape[0]
         if count == 0 and drawn >= 10_000:

@@ -106,6 +106,13 @@ class Instrument(Protocol):
         ...
 
     @property
+    def view_box(self) -> tuple[tuple[float, float], ...] | None:
+        """Where each reading must lie for a plan's pose to count it seen (a camera's image
+        less its margin): the view a design keeps to, a region with an inside; None for
+        an instrument met on a thin set (:meth:`miss`) or read anywhere."""
+        ...
+
+    @property
     def frame(self) -> bool:
         """Whether it reads the tool's frame, not only its point (a camera on the tool, a
         board on it): its "points" are then the tip's origin and rotation ``(..., m,
@@ -149,6 +156,14 @@ class Instrument(Protocol):
         """``(..., m, dim)``: what the instrument reports of tool points ``(..., m, 3)``."""
         ...
 
+    def slack(
+        self, points: np.ndarray, feature: np.ndarray | None, params: np.ndarray
+    ) -> np.ndarray | None:
+        """``(..., m, s)``: how far within the limits a plan's pose keeps to besides its
+        :attr:`view_box` each row lies (>= 0 within: a camera's corner beyond its nearest
+        depth, the board within its largest tilt), or None where there are none."""
+        ...
+
     def miss(
         self, points: np.ndarray, feature: np.ndarray | None, params: np.ndarray
     ) -> np.ndarray:
@@ -187,6 +202,15 @@ class Defaults:
 
     @property
     def reading_bounds(self) -> tuple[tuple[float, float], ...] | None:
+        return None
+
+    @property
+    def view_box(self) -> tuple[tuple[float, float], ...] | None:
+        return None
+
+    def slack(
+        self, points: np.ndarray, feature: np.ndarray | None, params: np.ndarray
+    ) -> np.ndarray | None:
         return None
 
     @property

@@ -154,6 +154,13 @@ class Camera(Defaults):
         Where the board roughly is: in the base frame (eye-in-hand) or the tip frame.
     margin_px : float
         How far inside the image's edges a corner must be seen for a plan's pose.
+    min_depth_mm : float
+        How far in front of the lens a corner must be for a plan's pose (a lens focuses
+        from some distance on).
+    max_tilt_deg : float
+        The largest angle between the board's normal and the line of sight to a corner
+        for a plan's pose: a corner seen more obliquely is found poorly, and a design
+        without the limit turns the board edge-on a few centimetres from the lens.
     """
 
     intrinsics: Intrinsics
@@ -162,6 +169,8 @@ class Camera(Defaults):
     camera_pose: tuple[np.ndarray, np.ndarray]
     board_pose: tuple[np.ndarray, np.ndarray]
     margin_px: float = 10.0
+    min_depth_mm: float = 150.0
+    max_tilt_deg: float = 60.0
 
     def __post_init__(self) -> None:
         if self.mount not in MOUNTS:
@@ -198,6 +207,14 @@ class Camera(Defaults):
     def reading_bounds(self) -> tuple[tuple[float, float], ...] | None:
         """The image: ``0 <= u <= width``, ``0 <= v <= height``."""
         return ((0.0, float(self.intrinsics.width)), (0.0, float(self.intrinsics.height)))
+
+    @property
+    def view_box(self) -> tuple[tuple[float, float], ...] | None:
+        """The image less :attr:`margin_px` on every side (where :meth:`miss` is 0, the
+        board in front of the lens and within its fold)."""
+        (_, width), (_, height) = self.reading_bounds or ((0.0, 0.0), (0.0, 0.0))
+        margin = self.margin_px
+        return ((margin, width - margin), (margin, height - margin))
 
     @property
     def param_names(self) -> tuple[str, ...]:
@@ -299,6 +316,27 @@ class Camera(Defaults):
         """The corners' pixels ``(..., m, 2)``."""
         p, _ = self._seen(np.asarray(points, dtype=float), feature, params)
         return self.intrinsics.project(p)[0]
+
+    def slack(
+        self, points: np.ndarray, feature: np.ndarray | None, params: np.ndarray
+    ) -> np.ndarray | None:
+        """Every corner's depth beyond :attr:`min_depth_mm` (mm) and how far the cosine of
+        its line of sight's angle with the board's normal is above that of
+        :attr:`max_tilt_deg` ``(..., m, 2)``."""
+        p, (_, _, rot, cam, _, brd, _, _, _, _) = self._seen(
+            np.asarray(points, dtype=float), feature, params
+        )
+        normal = brd[..., :, 2]  # the board's normal in its parent's frame (..., 3)
+        if self.mount == "eye-in-hand":  # in the base frame: into the tip's
+            normal = np.einsum("...mji,...j->...mi", rot, normal)
+        else:  # on the tip: into the base's
+            normal = np.einsum("...mij,...j->...mi", rot, normal)
+        seen = np.einsum("...ji,...mj->...mi", cam, normal)  # in the camera's frame
+        cosine = np.abs(np.sum(seen * p, axis=-1)) / np.linalg.norm(p, axis=-1)
+        return np.stack(
+            [p[..., 2] - self.min_depth_mm, cosine - np.cos(np.radians(self.max_tilt_deg))],
+            axis=-1,
+        )
 
     def miss(
         self, points: np.ndarray, feature: np.ndarray | None, params: np.ndarray

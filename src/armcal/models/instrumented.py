@@ -31,7 +31,7 @@ with its own sigma (:attr:`InstrumentedArm.feature_sigma`).
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, replace
 from functools import cached_property
 from typing import Any
@@ -42,7 +42,7 @@ from numpy.typing import ArrayLike
 from ..errors import ArmcalError
 from ..instruments.base import Instrument, feature_index
 from ..noise import NoiseModel, relative_noise
-from ..numerics import RowTriangle
+from ..numerics import RowTriangle, nearest_in
 from .core import CoreModel
 from .information import BlockInformation, Linearization, refit_free, whitened_blocks
 from .interface import (
@@ -328,6 +328,59 @@ class InstrumentedArm(CoreModel):
         fixed point, a distance within range; not partial coordinates)."""
         return bool(self.instrument.constrained)
 
+    @property
+    def has_view(self) -> bool:
+        """Whether the instrument's view is a region with an inside a pose keeps to (a
+        camera's image less its margin: :meth:`view_constraints`)."""
+        return self.instrument.view_box is not None
+
+    def view_constraints(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray] | None:
+        """How far inside the instrument's view box every reading of poses ``q`` ``(...,
+        n)`` lies, at the nominal parameters: ``g`` ``(..., 2 k dim)`` (``reading - low``
+        then ``high - reading`` of each of the ``k`` features' readings) and ``dg/dq``
+        ``(..., 2 k dim, n)``; None without a box.  Where :meth:`meeting_poses` also asks
+        that the board be in front of the lens (a camera's), these are the smooth part."""
+        box = self.instrument.view_box
+        if box is None:
+            return None
+        q = np.asarray(q, dtype=float)
+        flat = q.reshape(-1, q.shape[-1])
+        rows = self.plan_conditions(flat)
+        count, n = flat.shape
+        reading = self.positions(rows).reshape(count, -1)
+        jac = self.joint_jacobian(rows).reshape(count, -1, n)
+        low, high = (np.tile(side, reading.shape[1] // len(box)) for side in np.asarray(box).T)
+        g = [reading - low, high - reading]
+        dg = [jac, -jac]
+        slack = self._slack(flat)
+        if slack is not None:  # smooth but without a closed-form derivative: differences
+            g.append(slack)
+            dg.append(pose_derivative_rows(self._slack, flat, _SLACK_STEP))
+        found = np.concatenate(g, axis=-1), np.concatenate(dg, axis=-2)
+        return found[0].reshape(*q.shape[:-1], -1), found[1].reshape(*q.shape[:-1], -1, n)
+
+    def _slack(self, q: np.ndarray) -> np.ndarray | None:
+        """The instrument's :meth:`~armcal.instruments.base.Instrument.slack` of every
+        row of poses ``q`` ``(k, n)`` at the nominal parameters, pose by pose ``(k,
+        rows s)``; None for an instrument without."""
+        rows = self.plan_conditions(q)
+        x, theta = self.split(self.nominal)
+        found = self.instrument.slack(self._tool(rows, x), rows.feature, theta)
+        return None if found is None else found.reshape(q.shape[0], -1)
+
+    def feasible(self, q: np.ndarray, *, tol: float = 1e-9) -> np.ndarray:
+        """Within the limits, and within the instrument's slack where it has one (a
+        camera's nearest depth and largest tilt, at the nominal parameters)."""
+        inside = np.asarray(super().feasible(q, tol=tol))
+        q = np.asarray(q, dtype=float)
+        flat = q.reshape(-1, q.shape[-1])
+        if self.instrument.view_box is None or not flat.shape[0]:
+            return inside
+        slack = self._slack(flat)
+        if slack is None:
+            return inside
+        return inside & (slack.min(axis=-1) >= -tol).reshape(q.shape[:-1])
+
     def alone(
         self, params: np.ndarray, covariance: np.ndarray
     ) -> tuple[FitModel, np.ndarray, np.ndarray]:
@@ -384,6 +437,7 @@ class InstrumentedArm(CoreModel):
         goal = np.broadcast_to(np.asarray(goal, dtype=float), (q.shape[0], width))
         tol = _MEET_RTOL * self.reach_mm
         limits = self.joint_limits
+        box = self.instrument.view_box if every else None
 
         def rows_of(poses: np.ndarray) -> Conditions:
             chosen = (poses[:, None] * k + np.arange(k)).ravel()
@@ -395,24 +449,55 @@ class InstrumentedArm(CoreModel):
 
         live = np.arange(q.shape[0])  # the poses still moving: each stops where it meets
         for _ in range(_MEET_STEPS):
-            rows = rows_of(live)
-            jac = self.joint_jacobian(rows, at)  # its pass has the points the miss needs
-            off = (self._miss(rows, at).reshape(live.size, width)) - goal[live]
-            jac = jac.reshape(live.size, width, -1)
-            if every:  # a row within the instrument's bounds may move freely within them
-                jac = np.where((off == 0.0)[..., None], 0.0, jac)
+            off = self._miss(rows_of(live), at).reshape(live.size, width) - goal[live]
             moving = np.max(np.abs(off), axis=-1, initial=0.0) > tol
-            live, jac, off = live[moving], jac[moving], off[moving]
+            live, off = live[moving], off[moving]
             if not live.size:
                 break
+            rows = rows_of(live)
+            full = self.joint_jacobian(rows, at).reshape(live.size, width, -1)
+            jac = full
+            if every:  # a row within the instrument's bounds may move freely within them
+                jac = np.where((off == 0.0)[..., None], 0.0, jac)
             step = np.einsum("mnk,mk->mn", np.linalg.pinv(jac, rcond=1e-10), off)
             if every:  # a photo's many rows pull far: a step of a tenth of a turn at most
                 size = np.max(np.abs(step), axis=-1, keepdims=True)
                 step *= np.minimum(1.0, _MEET_STEP_RAD / np.maximum(size, 1e-300))
+            if box is not None and miss is None:
+                self._into_box(rows, at, full, off, step, box)
             q[live] = np.clip(q[live] - step, limits[:, 0], limits[:, 1])  # projected Newton
         everything = np.arange(q.shape[0])
         off = self._miss(rows_of(everything), at).reshape(q.shape[0], width) - goal
-        return q, (np.max(np.abs(off), axis=-1, initial=0.0) <= tol) & self.feasible(q)
+        # within the limits (not the slack a plan keeps to: where a pose is met again for
+        # the true arm, the board seen whole is a photo)
+        inside = np.all(self.within_limits(q), axis=-1)
+        return q, (np.max(np.abs(off), axis=-1, initial=0.0) <= tol) & inside
+
+    def _into_box(
+        self,
+        rows: Conditions,
+        params: np.ndarray,
+        full: np.ndarray,
+        off: np.ndarray,
+        step: np.ndarray,
+        box: tuple[tuple[float, float], ...],
+    ) -> None:
+        """``step`` ``(m, n)`` (subtracted) of the poses a little outside the view box made
+        the nearest joint step that puts every reading's linearization in it at once
+        (:func:`~armcal.numerics.nearest_in`): Newton's steps on the readings outside
+        alone push those on the edge out, and crawl (a camera's pose at a plan's edge,
+        met again for the true arm: 12 steps did not reach it).  A pose whose readings
+        lie :data:`_INTO_BOX_PX` or more outside keeps Newton's step."""
+        near = np.flatnonzero(np.max(np.abs(off), axis=-1) < _INTO_BOX_PX)
+        if not near.size:
+            return
+        count, width, n = full.shape  # the readings' joint Jacobian (m, width, n)
+        reading = self.positions(rows, params).reshape(count, width)
+        low, high = (np.tile(side, width // len(box)) for side in np.asarray(box).T)
+        for i in near:
+            a = np.concatenate([full[i], -full[i]])
+            b = np.concatenate([low - reading[i], reading[i] - high])
+            step[i] = -nearest_in(a, b, np.zeros(n))
 
     def _miss(self, rows: Conditions, params: np.ndarray) -> np.ndarray:
         x, theta = self.split(params)
@@ -516,15 +601,20 @@ class InstrumentedArm(CoreModel):
 
     @property
     def design_effort(self) -> DesignEffort:
-        """The arm's own, its certificate's sample of :data:`CERTIFICATE_SAMPLE` poses:
-        the poses that meet an instrument are a thin set of the joint space, whose
-        variance function's maxima lie apart (a face's far corner, another face), and a
-        sample of the arm's own 3000 misses some (found by a dense search of 20 000,
-        ``tests/test_instrument_design.py``)."""
+        """The arm's own, its certificate's sample of :data:`CERTIFICATE_SAMPLE` poses
+        where a pose must meet the instrument: the poses that meet it are a thin set of
+        the joint space (a touch, a seating) or a small one (a camera's, the whole board
+        in view, near enough and not too oblique), whose variance function's maxima lie
+        apart (a face's far corner, another face), and a sample of the arm's own 3000
+        misses some (found by a dense search of 20 000,
+        ``tests/test_instrument_design.py``; a camera's, 35.0 against the certificate's
+        30.3)."""
         effort = self.inner.design_effort
-        if self._frame:  # a camera's: a dense search found maxima its search missed
-            effort = replace(effort, checked=False)
-        return replace(effort, search=CERTIFICATE_SAMPLE) if self.constrained else effort
+        if not self.constrained:
+            return effort
+        if self.has_view:  # a camera's hills are many: ascents from more of them
+            effort = replace(effort, last_starts=LAST_STARTS_IN_VIEW)
+        return replace(effort, search=CERTIFICATE_SAMPLE)
 
     def plan_information(
         self, q: np.ndarray, loads: Loads | None = None, *, rows: Conditions | None = None
@@ -718,6 +808,11 @@ _ARM_ROWS = "instrumented arm: every pose once"
 #: Poses that meet the instrument the certificate's search samples (:attr:`design_effort`).
 CERTIFICATE_SAMPLE = 20_000
 
+#: Ascents of a certificate's last search within a view with an inside (a camera's): its
+#: variance function has many hills (the board's corners on the image's edges, near, at
+#: the largest tilt, in many combinations), and 32 ascents missed one a dense search found.
+LAST_STARTS_IN_VIEW = 128
+
 #: An instrument's parameters are fixed by the rows when their scaled columns' smallest
 #: singular value is above this fraction of the largest.
 _FIXES = 1e-9
@@ -730,6 +825,29 @@ _FIXES = 1e-9
 #: anew than followed: a search's step from a pose that meets takes 3 or 4.
 _MEET_STEPS = 12
 _MEET_RTOL = 1e-14
+
+#: The joint step (rad) of the central differences of an instrument's slack.
+_SLACK_STEP = 1e-6
+
+
+def pose_derivative_rows(
+    value_at: Callable[[np.ndarray], np.ndarray | None], q: np.ndarray, step: float
+) -> np.ndarray:
+    """``d value / d q`` ``(k, c, n)`` of a function of poses ``q`` ``(k, n)`` with ``c``
+    values a pose, by central differences, every pose at once."""
+    k, n = q.shape
+    shifts = np.concatenate([np.eye(n), -np.eye(n)]) * step
+    moved = (q[None] + shifts[:, None]).reshape(-1, n)
+    values = value_at(moved)
+    assert values is not None
+    values = values.reshape(2, n, k, -1)
+    return np.moveaxis((values[0] - values[1]) / (2 * step), 0, -1)
+
+
+#: How far outside its view box (px) a reading may lie for its pose to be moved in by
+#: the nearest step of the box's linearization (:meth:`InstrumentedArm._into_box`): a
+#: pose near the box, where the linearization holds.
+_INTO_BOX_PX = 200.0
 
 #: The largest joint step (rad) of a pose moved until a camera sees the whole board: its
 #: 96 equations' Newton steps, from a pose that sees little of it, are long, and a pose

@@ -301,9 +301,8 @@ class DesignEffort:
         rounds of adding the variance function's maximizers to them; and the sample
         of random feasible poses, on which every variance function is evaluated first
         and from whose best poses its ascents start.
-    checked : bool
-        Whether that search has been checked against a dense search for models of this
-        kind (a certificate that has not says so: ``certificate-unchecked``).
+    last_starts : int
+        The ascents of the certificate's last search, the one its bound rests on.
     """
 
     starts: int = 48
@@ -313,7 +312,7 @@ class DesignEffort:
     reference: int = 300
     rounds: int = 4
     search: int = 20000
-    checked: bool = True
+    last_starts: int = 32
 
 
 @dataclass(frozen=True)

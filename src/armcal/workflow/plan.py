@@ -310,9 +310,12 @@ class DesignRun:
 def moving_set(model: FitModel, seed: int) -> FitModel:
     """The model reduced to what a plan moving every joint identifies (a family with minimal
     parameters is itself), from :data:`_SET_POSES` random poses of a stream of its own, so
-    that the seed's stream (the design's, the search's) stays the same."""
+    that the seed's stream (the design's, the search's) stays the same, moved onto an
+    instrument that sees the tool only where it meets it (a camera's random pose seldom
+    sees the board: its rows held all but one of the arm's parameters)."""
     probe = random_plan(model, _SET_POSES, rng=np.random.default_rng([seed, 1]))
-    return model.prepared(model.plan_conditions(probe))
+    moved, met = model.meeting_poses(probe)
+    return model.prepared(model.plan_conditions(moved[met]))
 
 
 def design_plan(
