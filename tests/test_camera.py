@@ -297,6 +297,20 @@ def test_pixels_outside_the_image_are_one_line(tmp_path):
     run = run_cli(tmp_path, "identify", "--robot", robot_file.name, "--measurements", "bad.csv")
     assert run.returncode == 2
     assert "row 2 (line 3), column corner: '48' is not a corner" in run.stderr
+    # inside the image, but across it from where the camera and the arm put the corner:
+    # more than half the image's diagonal (755 px) from the other rows' offset, in px
+    cells = lines[2].split(",")
+    u_here, v_here = float(cells[u]), float(cells[head.index("v_px")])
+    cells[u] = "5" if u_here > 640 else "1275"
+    cells[head.index("v_px")] = "5" if v_here > 400 else "795"
+    bad = [lines[0], lines[1], ",".join(cells), *lines[3:]]
+    (tmp_path / "bad.csv").write_text("\n".join(bad) + "\n", encoding="utf-8")
+    run = run_cli(tmp_path, "identify", "--robot", robot_file.name, "--measurements", "bad.csv")
+    assert run.returncode == 2, run.stderr
+    line = run.stderr.strip()
+    assert line.startswith("armcal: error: bad.csv: row 2: at its joint readings the nominal arm")
+    assert " px from where the other rows put" in line and "half the image's diagonal" in line
+    assert " mm" not in line and line.count("\n") == 0
 
 
 def test_the_camera_is_placed_on_the_flange(tmp_path):

@@ -337,16 +337,23 @@ def check_meeting(
         centre[index == k] = np.median(found[index == k], axis=0)
     spread = np.linalg.norm(found - centre, axis=-1)
     limit = _FAR_FROM_FEATURE * model.reach_mm
-    if model.reading_unit != "mm":  # a camera's pixels: the image's size, not the reach
+    unit = model.reading_unit
+    if unit != "mm":  # a camera's pixels: the image's size, not the reach
         limit = _FAR_IN_IMAGE * float(np.linalg.norm(np.ptp(_image(model), axis=1)))
     if not spread.size or spread.max() <= limit:
         return
     r = int(np.argmax(spread))
     feature = "" if meas.feature is None else f" {meas.feature[r]!r}"
+    if unit == "mm":
+        what = "the nominal arm's tool point is"
+        bound = "a tenth of the reach"
+    else:  # the reading the arm and the camera predict, in the image
+        what = "the nominal arm and the robot file's camera put the reading"
+        bound = "half the image's diagonal"
     raise InputError(
-        f"{source}: row {meas.rows[r]}: at its joint readings the nominal arm's tool point is "
-        f"{spread[r]:.4g} mm from where the other rows put the instrument's feature{feature} "
-        f"(at most {limit:.4g} mm, a tenth of the reach, is an error of the arm or of where "
-        "the robot file places the instrument); check the row's joint readings and its "
-        "label, and where [instrument] places the feature"
+        f"{source}: row {meas.rows[r]}: at its joint readings {what} {spread[r]:.4g} {unit} "
+        f"from where the other rows put the instrument's feature{feature} (at most "
+        f"{limit:.4g} {unit}, {bound}, is an error of the arm or of where the robot file "
+        "places the instrument); check the row's joint readings and its label, and where "
+        "[instrument] places the feature"
     )
