@@ -248,7 +248,38 @@ BAD_TABLES = {
         lambda t: t.replace('camera = "cam.yaml"', 'camera = "nowhere.yaml"'),
         "nowhere.yaml",
     ),
+    "a margin beyond half the image": (
+        lambda t: t.replace('mount = "eye-in-hand"', 'mount = "eye-in-hand"\nmargin_px = 400'),
+        "key 'instrument.margin_px': expected at least 0 and below 400 (half the image), got 400",
+    ),
+    "a depth of 0": (
+        lambda t: t.replace('mount = "eye-in-hand"', 'mount = "eye-in-hand"\nmin_depth_mm = 0'),
+        "key 'instrument.min_depth_mm': expected above 0",
+    ),
+    "a tilt of 90 degrees": (
+        lambda t: t.replace('mount = "eye-in-hand"', 'mount = "eye-in-hand"\nmax_tilt_deg = 90'),
+        "key 'instrument.max_tilt_deg': expected above 0 and below 90 degrees, got 90",
+    ),
 }
+
+
+def test_a_camera_s_view_keys_are_read_and_written_back(tmp_path):
+    """margin_px, min_depth_mm and max_tilt_deg: the defaults (10 px, 150 mm, 60 deg)
+    where absent, the file's where given, and the calibration file's instrument table
+    carries them (read back, the same camera's view)."""
+    from armcal.files.instrument_table import instrument_section, read_instrument
+
+    robot_file = _lab_with(tmp_path)
+    camera = load_robot(robot_file).arm.instrument
+    assert (camera.margin_px, camera.min_depth_mm, camera.max_tilt_deg) == (10.0, 150.0, 60.0)
+    edit = 'mount = "eye-in-hand"\nmargin_px = 25\nmin_depth_mm = 300.5\nmax_tilt_deg = 45'
+    robot_file = _lab_with(tmp_path, lambda t: t.replace('mount = "eye-in-hand"', edit))
+    camera = load_robot(robot_file).arm.instrument
+    assert (camera.margin_px, camera.min_depth_mm, camera.max_tilt_deg) == (25.0, 300.5, 45.0)
+    table = instrument_section(camera)
+    assert (table["margin_px"], table["min_depth_mm"], table["max_tilt_deg"]) == (25, 300.5, 45)
+    again = read_instrument(robot_file, table)
+    assert (again.margin_px, again.min_depth_mm, again.max_tilt_deg) == (25.0, 300.5, 45.0)
 
 
 @pytest.mark.parametrize("case", sorted(BAD_TABLES))

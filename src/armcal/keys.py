@@ -90,6 +90,28 @@ INSTRUMENT_KEYS: tuple[Key, ...] = (
     ),
     Key(
         "instrument",
+        "margin_px",
+        "number (px)",
+        "optional for kind camera, default 10",
+        "how far inside the image's edges a plan's photo keeps every corner",
+    ),
+    Key(
+        "instrument",
+        "min_depth_mm",
+        "number (mm)",
+        "optional for kind camera, default 150",
+        "how far in front of the lens a plan's photo keeps every corner (its nearest focus)",
+    ),
+    Key(
+        "instrument",
+        "max_tilt_deg",
+        "number (degrees)",
+        "optional for kind camera, default 60",
+        "the largest angle between the board's normal and a corner's line of sight in a "
+        "plan's photo (an oblique corner is found poorly)",
+    ),
+    Key(
+        "instrument",
         "reads",
         'list of "x", "y", "z"',
         "required for kind partial",

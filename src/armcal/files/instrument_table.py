@@ -78,7 +78,17 @@ _KEYS = {
     "point": ("kind", "points", "known_distances_mm"),
     "distance": ("kind", "pivot_mm", "range_mm"),
     "partial": ("kind", "reads", "xyz_mm", "rpy_deg"),
-    "camera": ("kind", "camera", "mount", "camera_in_tool", "camera_in_base", "board"),
+    "camera": (
+        "kind",
+        "camera",
+        "mount",
+        "camera_in_tool",
+        "camera_in_base",
+        "board",
+        "margin_px",
+        "min_depth_mm",
+        "max_tilt_deg",
+    ),
 }
 
 
@@ -208,7 +218,34 @@ def _camera(path, table: dict, where: str) -> Camera:
     if not square > 0:
         raise fail(path, f"key '{key}.square_mm': expected the squares' side in mm, above 0")
     where_board = _pose(path, {k: board[k] for k in ("xyz_mm", "rpy_deg")}, key)
-    return Camera(intrinsics, Board(counts[0], counts[1], square), mount, placed, where_board)
+    view = _camera_view(path, table, where, intrinsics)
+    return Camera(
+        intrinsics, Board(counts[0], counts[1], square), mount, placed, where_board, **view
+    )
+
+
+#: A camera's optional view keys (the last of its keys in _KEYS): where a plan's photo
+#: keeps its corners (the image less a margin, a nearest depth, a largest tilt).
+VIEW_KEYS = _KEYS["camera"][-3:]
+
+
+def _camera_view(path, table: dict, where: str, intrinsics: Any) -> dict[str, float]:
+    """The view keys given, each checked: a margin of at least 0 px that leaves some of
+    the image, a nearest depth above 0 mm, a largest tilt above 0 and below 90 deg."""
+    found: dict[str, float] = {}
+    half = min(intrinsics.width, intrinsics.height) / 2
+    rules = {
+        "margin_px": (lambda v: 0 <= v < half, f"at least 0 and below {half:g} (half the image)"),
+        "min_depth_mm": (lambda v: v > 0, "above 0 (the lens's nearest focus)"),
+        "max_tilt_deg": (lambda v: 0 < v < 90, "above 0 and below 90 degrees"),
+    }
+    for name, (holds, what) in rules.items():
+        if name in table:
+            value = number(path, table[name], f"{where}.{name}")
+            if not holds(value):
+                raise fail(path, f"key '{where}.{name}': expected {what}, got {value:g}")
+            found[name] = value
+    return found
 
 
 def _pose(path, entry: Any, key: str) -> tuple[np.ndarray, np.ndarray]:
@@ -432,6 +469,7 @@ def instrument_section(instrument: Instrument) -> dict[str, Any]:
                 "xyz_mm": instrument.board_pose[0].tolist(),
                 "rpy_deg": instrument.board_pose[1].tolist(),
             },
+            **{name: float(getattr(instrument, name)) for name in VIEW_KEYS},
         }
     if isinstance(instrument, Coordinates):
         return {
