@@ -113,7 +113,8 @@ def feasible_poses(
             for i in range(0, batch.shape[0], MEET_CHUNK)
         ]
         batch = np.concatenate([moved[met] for moved, met in chunks] or [batch[:0]])
-        batch = batch[model.feasible(batch)]  # moved within what a plan keeps to
+        if model.constrained and batch.shape[0]:  # moved: within what a plan keeps to
+            batch = batch[model.feasible(batch)]
         found.append(batch)
         count += batch.shape[0]
         if count == 0 and drawn >= 10_000:
