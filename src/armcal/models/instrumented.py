@@ -335,11 +335,13 @@ class InstrumentedArm(CoreModel):
         return self.instrument.view_box is not None
 
     def view_constraints(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray] | None:
-        """How far inside the instrument's view box every reading of poses ``q`` ``(...,
-        n)`` lies, at the nominal parameters: ``g`` ``(..., 2 k dim)`` (``reading - low``
-        then ``high - reading`` of each of the ``k`` features' readings) and ``dg/dq``
-        ``(..., 2 k dim, n)``; None without a box.  Where :meth:`meeting_poses` also asks
-        that the board be in front of the lens (a camera's), these are the smooth part."""
+        """How far inside the instrument's view every reading of poses ``q`` ``(..., n)``
+        lies, at the nominal parameters: ``g`` ``(..., c)`` (``reading - low`` then ``high
+        - reading`` of each of the ``k`` features' readings, ``2 k dim`` values, then the
+        instrument's slack, :meth:`~armcal.instruments.base.Instrument.slack`: a camera's
+        corners' depth and tilt) and ``dg/dq`` ``(..., c, n)`` (the slack's by central
+        differences); None without a box.  Where :meth:`meeting_poses` also asks that the
+        board be in front of the lens, these are the smooth part."""
         box = self.instrument.view_box
         if box is None:
             return None
