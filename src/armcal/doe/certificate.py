@@ -289,13 +289,13 @@ def _search_maximum(
     *,
     steps: int,
     progress: ProgressCallback | None,
-    starts: int = 0,
+    starts: int = ASCENT_STARTS,
 ) -> _Maximum:
     """``max_x d(x)`` over ``sample`` (its blocks, no kinematics) and over ascents from its
-    :data:`ASCENT_STARTS` largest values; ascent iterates that stray outside the view by
-    more than 1e-3 mm do not count."""
+    ``starts`` largest values (:func:`_spread_starts`); ascent iterates that stray outside
+    the view by more than 1e-3 mm do not count."""
     d = variances(sample.blocks, m_inv)
-    first = sample.q[_spread_starts(sample.q, d, starts or ASCENT_STARTS)]
+    first = sample.q[_spread_starts(sample.q, d, starts)]
     found = _poses(model, _maximize_variance(model, m_inv, first, steps=steps, progress=progress))
     d_found = variances(found.blocks, m_inv)
     constraints = model.view_constraints(found.q[:, None, :])
@@ -306,15 +306,13 @@ def _search_maximum(
     return _Maximum(float(d_found.max()), found.q[int(np.argmax(d_found))], found, d)
 
 
-def _spread_starts(q: np.ndarray, d: np.ndarray, count: int = 0) -> np.ndarray:
-    """``count`` (:data:`ASCENT_STARTS`) poses of ``q`` where ``d`` is largest, spread over
-    its hills:
+def _spread_starts(q: np.ndarray, d: np.ndarray, count: int = ASCENT_STARTS) -> np.ndarray:
+    """``count`` poses of ``q`` where ``d`` is largest, spread over its hills:
     best first, a pose of the :data:`SPREAD_POOL` best taken only if it lies at least
     :data:`SPREAD_RAD` (largest joint difference) from every pose taken, the rest of the
     count filled by the best left.  The best points of a sample crowd on one hill, and
     ascents from them all climb it: a dense search found another, higher one (the
     industrial arm with three reflectors, 33.040 against 33.019)."""
-    count = count or ASCENT_STARTS
     order = np.argsort(-d)
     pool = order[: SPREAD_POOL * count]
     taken: list[int] = []
@@ -344,13 +342,14 @@ def _reference_design(
     start: np.ndarray,
     rounds: int,
     parts: list[ProgressCallback | None],
+    last_starts: int,
 ) -> tuple[_Poses, np.ndarray, np.ndarray, _Maximum]:
     """A near-D-optimal weighted design ``xi*`` over ``candidates``, refined ``rounds`` times
     by the maximizers of its variance function, and that function's maximum: its support,
     weights, information ``M(xi*)`` and :class:`_Maximum`; the first ``len(start)``
     candidates are the plan's distinct poses, ``start`` their share of it.  The last search
-    (twice the steps) is of the design returned, so the bound uses the maximum of the very
-    weights reported."""
+    (twice the steps, ``last_starts`` ascents) is of the design returned, so the bound uses
+    the maximum of the very weights reported."""
     # Start from the plan (its poses lead the candidates, at its own weights): near the
     # optimum already, where the multiplicative algorithm is slow to arrive from uniform.
     weights = np.full(
@@ -369,7 +368,7 @@ def _reference_design(
             candidates + sample,
             steps=ASCENT_STEPS * (2 if last else 1),
             progress=parts[1 + round_],
-            starts=model.design_effort.last_starts if last else ASCENT_STARTS,
+            starts=last_starts if last else ASCENT_STARTS,
         )
         if last:
             kept = weights > 0
@@ -515,7 +514,13 @@ def certify(
     others = np.setdiff1d(largest, np.arange(distinct.shape[0]))
     best = np.concatenate([np.arange(distinct.shape[0]), others])
     support, weights, star, star_max = _reference_design(
-        model, sample.take(best) + plan_max.found, sample, counts / q.shape[0], rounds, parts
+        model,
+        sample.take(best) + plan_max.found,
+        sample,
+        counts / q.shape[0],
+        rounds,
+        parts,
+        effort.last_starts or ASCENT_STARTS,
     )
     sign, logdet_star = np.linalg.slogdet(star)
     kw = 0.0

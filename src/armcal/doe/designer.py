@@ -12,7 +12,7 @@ from ..choices import DESIGN_METHODS
 from ..criteria import CRITERIA, Criterion, attains_unit_bound, d_efficiency, efficiencies
 from ..errors import ArmcalError, ArmcalWarning, action, render
 from ..models import ClosedFormPlan, ClosedFormPlans, FitModel, equations_per_pose
-from ..models.information import identifying
+from ..models.information import identifying, met_rows
 from ..models.wording import note_words, plan_repeats
 from ..progress import ProgressCallback, share
 from .certificate import Certificate, certify, certify_pool
@@ -487,8 +487,7 @@ def identifiable_model(model: FitModel) -> FitModel:
     :mod:`armcal.models.spatial.selection`).
     """
     probe = random_plan(model, PROBE_POSES, rng=np.random.default_rng(0))
-    moved, met = model.meeting_poses(probe)
-    return identifying(model, model.plan_conditions(moved[met]))
+    return identifying(model, met_rows(model, probe))
 
 
 def check_size(model: FitModel, m: int) -> None:

@@ -34,6 +34,7 @@ import numpy as np
 
 from ..errors import ArmcalError, ArmcalWarning, NotIdentifiableError
 from ..models import FitModel, listing
+from ..models.information import met_rows
 
 __all__ = [
     "PROBE_POSES",
@@ -170,9 +171,8 @@ def coverage(model: FitModel, q: np.ndarray | None = None) -> Coverage:
     -------
     Coverage
     """
-    moved, met = model.meeting_poses(_probe(model))
     try:
-        rich = model.prepared(model.plan_conditions(moved[met]))
+        rich = model.prepared(met_rows(model, _probe(model)))
     except ArmcalError:  # too few probe poses meet the instrument to judge by: no verdict
         rich = model
     held = set(model.fixed)

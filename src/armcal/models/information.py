@@ -51,6 +51,7 @@ __all__ = [
     "identifying",
     "known_start",
     "mean_tip_variance",
+    "met_rows",
     "nominal_triangle_known",
     "pose_derivative",
     "predicted_covariance",
@@ -294,6 +295,15 @@ def identifying(
     return model.prepared(conditions, points)
 
 
+def met_rows(model: FitModel, q: np.ndarray) -> Conditions:
+    """The rows of poses ``q`` ``(m, n)`` moved onto the instrument, of those that meet it
+    (:meth:`~armcal.models.interface.FitModel.meeting_poses`; every pose for a tracker):
+    what a probe of random poses judges a model's identifiable set on (a camera's random
+    pose seldom sees the board)."""
+    moved, met = model.meeting_poses(q)
+    return model.plan_conditions(moved[met])
+
+
 def identified_or_prepared(
     model: FitModel,
     conditions: Conditions,
@@ -444,14 +454,13 @@ def pose_derivative(
 
     ``value_at`` maps poses ``(..., m, n)`` to one value per pose ``(..., m)`` that
     depends on that pose only, so one pair of evaluations per joint moves every pose
-    at once.
+    at once; values of several numbers a pose ``(..., m, c)`` give ``(..., m, c, n)``.
     """
-    grad = np.empty(q.shape)
-    for j in range(q.shape[-1]):
-        shift = np.zeros(q.shape[-1])
-        shift[j] = step
-        grad[..., j] = (value_at(q + shift) - value_at(q - shift)) / (2 * step)
-    return grad
+    n = q.shape[-1]
+    return np.stack(
+        [(value_at(q + step * e) - value_at(q - step * e)) / (2 * step) for e in np.eye(n)],
+        axis=-1,
+    )
 
 
 @dataclass(frozen=True, eq=False)

@@ -31,7 +31,7 @@ with its own sigma (:attr:`InstrumentedArm.feature_sigma`).
 
 from __future__ import annotations
 
-from collections.abc import Callable, Sequence
+from collections.abc import Sequence
 from dataclasses import dataclass, replace
 from functools import cached_property
 from typing import Any
@@ -44,7 +44,13 @@ from ..instruments.base import Instrument, feature_index
 from ..noise import NoiseModel, relative_noise
 from ..numerics import RowTriangle, nearest_in
 from .core import CoreModel
-from .information import BlockInformation, Linearization, refit_free, whitened_blocks
+from .information import (
+    BlockInformation,
+    Linearization,
+    pose_derivative,
+    refit_free,
+    whitened_blocks,
+)
 from .interface import (
     Conditions,
     DesignEffort,
@@ -351,15 +357,13 @@ class InstrumentedArm(CoreModel):
         count, n = flat.shape
         reading = self.positions(rows).reshape(count, -1)
         jac = self.joint_jacobian(rows).reshape(count, -1, n)
-        low, high = (np.tile(side, reading.shape[1] // len(box)) for side in np.asarray(box).T)
-        g = [reading - low, high - reading]
-        dg = [jac, -jac]
+        g, dg = _box_rows(reading, jac, box)
         slack = self._slack(flat)
         if slack is not None:  # smooth but without a closed-form derivative: differences
-            g.append(slack)
-            dg.append(pose_derivative_rows(self._slack, flat, _SLACK_STEP))
-        found = np.concatenate(g, axis=-1), np.concatenate(dg, axis=-2)
-        return found[0].reshape(*q.shape[:-1], -1), found[1].reshape(*q.shape[:-1], -1, n)
+            g = np.concatenate([g, slack], axis=-1)
+            by_q = pose_derivative(lambda x: np.asarray(self._slack(x)), flat, _SLACK_STEP)
+            dg = np.concatenate([dg, by_q], axis=-2)
+        return g.reshape(*q.shape[:-1], -1), dg.reshape(*q.shape[:-1], -1, n)
 
     def _slack(self, q: np.ndarray) -> np.ndarray | None:
         """The instrument's :meth:`~armcal.instruments.base.Instrument.slack` of every
@@ -494,12 +498,9 @@ class InstrumentedArm(CoreModel):
         if not near.size:
             return
         count, width, n = full.shape  # the readings' joint Jacobian (m, width, n)
-        reading = self.positions(rows, params).reshape(count, width)
-        low, high = (np.tile(side, width // len(box)) for side in np.asarray(box).T)
+        g, dg = _box_rows(self.positions(rows, params).reshape(count, width), full, box)
         for i in near:
-            a = np.concatenate([full[i], -full[i]])
-            b = np.concatenate([low - reading[i], reading[i] - high])
-            step[i] = -nearest_in(a, b, np.zeros(n))
+            step[i] = -nearest_in(dg[i], -g[i], np.zeros(n))
 
     def _miss(self, rows: Conditions, params: np.ndarray) -> np.ndarray:
         x, theta = self.split(params)
@@ -832,18 +833,16 @@ _MEET_RTOL = 1e-14
 _SLACK_STEP = 1e-6
 
 
-def pose_derivative_rows(
-    value_at: Callable[[np.ndarray], np.ndarray | None], q: np.ndarray, step: float
-) -> np.ndarray:
-    """``d value / d q`` ``(k, c, n)`` of a function of poses ``q`` ``(k, n)`` with ``c``
-    values a pose, by central differences, every pose at once."""
-    k, n = q.shape
-    shifts = np.concatenate([np.eye(n), -np.eye(n)]) * step
-    moved = (q[None] + shifts[:, None]).reshape(-1, n)
-    values = value_at(moved)
-    assert values is not None
-    values = values.reshape(2, n, k, -1)
-    return np.moveaxis((values[0] - values[1]) / (2 * step), 0, -1)
+def _box_rows(
+    reading: np.ndarray, jac: np.ndarray, box: tuple[tuple[float, float], ...]
+) -> tuple[np.ndarray, np.ndarray]:
+    """How far inside ``box`` every reading ``(k, w)`` of a pose lies, ``reading - low``
+    then ``high - reading`` ``(k, 2 w)``, and their joint derivatives ``(k, 2 w, n)``
+    from the readings' ``jac`` ``(k, w, n)``; the box is per reading component, repeated
+    over the features."""
+    low, high = (np.tile(side, reading.shape[-1] // len(box)) for side in np.asarray(box).T)
+    g = np.concatenate([reading - low, high - reading], axis=-1)
+    return g, np.concatenate([jac, -jac], axis=-2)
 
 
 #: How far outside its view box (px) a reading may lie for its pose to be moved in by

@@ -301,8 +301,9 @@ class DesignEffort:
         rounds of adding the variance function's maximizers to them; and the sample
         of random feasible poses, on which every variance function is evaluated first
         and from whose best poses its ascents start.
-    last_starts : int
-        The ascents of the certificate's last search, the one its bound rests on.
+    last_starts : int or None
+        The ascents of the certificate's last search, the one its bound rests on; None:
+        as many as every search's.
     """
 
     starts: int = 48
@@ -312,7 +313,7 @@ class DesignEffort:
     reference: int = 300
     rounds: int = 4
     search: int = 20000
-    last_starts: int = 32
+    last_starts: int | None = None
 
 
 @dataclass(frozen=True)

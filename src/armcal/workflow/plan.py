@@ -33,6 +33,7 @@ from ..identification.experiment import (
     refuse_registration_only,
 )
 from ..models import FitModel, Loads
+from ..models.information import met_rows
 from ..progress import ProgressCallback
 from .setup import DEFAULT_SIGMA_MM, check_plan_size, design_sigma, fit_model, plan_model, prefixed
 
@@ -314,8 +315,7 @@ def moving_set(model: FitModel, seed: int) -> FitModel:
     instrument that sees the tool only where it meets it (a camera's random pose seldom
     sees the board: its rows held all but one of the arm's parameters)."""
     probe = random_plan(model, _SET_POSES, rng=np.random.default_rng([seed, 1]))
-    moved, met = model.meeting_poses(probe)
-    return model.prepared(model.plan_conditions(moved[met]))
+    return model.prepared(met_rows(model, probe))
 
 
 def design_plan(
