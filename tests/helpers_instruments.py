@@ -46,6 +46,14 @@ def instruments(reach: float, kind: str) -> tuple[str, str]:
             "rpy_deg = [0, 0, 90]\n",
             f"xyz_mm = {mm(0.5, 0.1, 0.0)}\nrpy_deg = [1.0, -1.5, 92.0]\n",
         )
+    if kind == "turned":  # a 6-DoF probe's frame read in part: two coordinates, two turns
+        return (
+            f'kind = "partial"\nreads = ["x", "z", "rx", "rz"]\n'
+            f"xyz_mm = {mm(0.5, 0.1, 0.0, shift=10)}\nrpy_deg = [0, 0, 90]\n"
+            "tool_rpy_deg = [0, 0, 30]\n",
+            f"xyz_mm = {mm(0.5, 0.1, 0.0)}\nrpy_deg = [1.0, -1.5, 92.0]\n"
+            "tool_rpy_deg = [1.2, -0.8, 31.0]\n",
+        )
     if kind == "dial":  # one dial indicator along the base's x axis (its z turned onto x)
         return (
             f'kind = "partial"\nreads = ["z"]\nxyz_mm = {mm(0.6, 0.0, 0.1, shift=10)}\n'
@@ -109,6 +117,7 @@ TOOLS = {
     "distance": "[targets]\ntool = { xyz_mm = [30, -20, 150] }\n",
     "partial": "[targets]\ntool = { xyz_mm = [30, -20, 150] }\n",
     "dial": "[targets]\ntool = { xyz_mm = [30, -20, 150] }\n",
+    "turned": "[targets]\ntool = { xyz_mm = [30, -20, 150] }\n",
     "eye-in-hand": "",  # a camera is placed on the flange
     "eye-to-hand": "",
 }
@@ -128,6 +137,8 @@ def write_lab(folder: Path, robot: str, kind: str, sigma: str = "0.01") -> tuple
         if kind in CAMERAS
         else (f"sigma_mm = {sigma}")
     )
+    if kind == "turned":  # a turn's component to a thousandth of a degree
+        noise += "\norientation_sigma_deg = 0.001"
     if kind in CAMERAS:
         (folder / "cam.yaml").write_text(CAMERA_INFO, encoding="utf-8")
     robot_file.write_text(

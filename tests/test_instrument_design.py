@@ -1,6 +1,7 @@
 """Designs for planes, fixed points and distances, over the poses that meet them, for a
 camera, over the poses that see the whole board, and for partial coordinates, over every
-pose within the limits (issue 38).
+pose within the limits (and, where they read the tool's turn, within the turn's range)
+(issue 38).
 
 For each instrument on two built-in six-axis arms (the labs of ``test_instrument_cli``):
 a 30-pose plan designed by :func:`armcal.doe.design` (20 photos of 48 corners for the
@@ -27,7 +28,7 @@ from helpers_instruments import write_lab
 
 CASES = [
     (robot, kind)
-    for kind in ("plane", "point", "distance", "partial", "dial")
+    for kind in ("plane", "point", "distance", "partial", "dial", "turned")
     for robot in ("industrial-6r", "cobot-6r")
 ]
 #: The camera: on the industrial arm's flange looking down at a board on the floor, and

@@ -51,12 +51,16 @@ def synthesized(folder: Path, robot: Path, truth: Path, plan: str, out: str, *mo
     )
 
 
+#: The columns of partial coordinates' readings: the coordinates, and the tool's turn.
+READINGS = ("x_mm", "y_mm", "z_mm", "rx_deg", "ry_deg", "rz_deg")
+
+
 def holes(path: Path, seed: int) -> int:
     """Empty a third of the reading cells of ``path`` (never every cell of a line); the
     readings left."""
     lines = path.read_text(encoding="utf-8").splitlines()
     head = lines[0].split(",")
-    axes = [k for k, name in enumerate(head) if name in ("x_mm", "y_mm", "z_mm")]
+    axes = [k for k, name in enumerate(head) if name in READINGS]
     rng = np.random.default_rng(seed)
     left = 0
     out = [lines[0]]
@@ -130,6 +134,93 @@ def test_noiseless_partial_coordinates_are_recovered_on_held_out_poses(tmp_path,
         )
         == held
     )
+
+
+@pytest.mark.parametrize("robot", ["industrial-6r", "cobot-6r"])
+def test_noiseless_turns_are_recovered_on_held_out_poses(tmp_path, robot):
+    """Partial coordinates with the tool's turn (``turned``: x, z, rx and rz, the tool's
+    axes 1-2 degrees from where the user says): synthesize noiseless, empty a third of
+    the cells, identify, validate on other poses: every held-out coordinate and turn
+    to round-off (1e-9 mm; 1e-9 deg, a turn of 2e-11 rad); the calibration file gives
+    the tool's turns, both sigmas, and each residual's unit; the tool's turns are
+    written in degrees in the measurement file (a few degrees here, not radians)."""
+    robot_file, truth = write_lab(tmp_path, robot, "turned")
+    met_plan(tmp_path, robot_file, 100, 1, "train.csv")
+    met_plan(tmp_path, robot_file, 30, 2, "test.csv")
+    synthesized(tmp_path, robot_file, truth, "train.csv", "meas.csv", "--sigma", "0")
+    synthesized(tmp_path, robot_file, truth, "test.csv", "held.csv", "--sigma", "0")
+    text = (tmp_path / "meas.csv").read_text(encoding="utf-8").splitlines()
+    assert text[0].split(",")[-4:] == ["x_mm", "z_mm", "rx_deg", "rz_deg"]
+    turns = np.array([[float(c) for c in line.split(",")[-2:]] for line in text[1:]])
+    assert np.all(np.abs(turns) <= 150.0) and np.abs(turns).max() > 10.0  # degrees
+    readings = holes(tmp_path / "meas.csv", 3)
+    holes(tmp_path / "held.csv", 4)
+    report = ok(
+        tmp_path, "identify", "--robot", robot_file.name, "--measurements", "meas.csv",
+        "-o", "cal.json",
+    )  # fmt: skip
+    assert f"100 poses ({readings} readings)" in report
+    assert "sigma 0.01 mm a coordinate, 0.001 deg a turn (given)" in report
+    assert "tool.rx" in report and "it reads the tool's turn (rx, rz) too" in report
+    document = json.loads((tmp_path / "cal.json").read_text(encoding="utf-8"))
+    assert document["robot"]["instrument"]["reads"] == ["x", "z", "rx", "rz"]
+    assert document["sigma_mm"] == pytest.approx(0.01) and document[
+        "sigma_turn_deg"
+    ] == pytest.approx(0.001)
+    units = {row["unit"] for row in document["residuals"]}
+    assert units == {"mm", "deg"}
+    names = [p["name"] for p in document["parameters"]]
+    assert names[-3:] == ["tool.rx", "tool.ry", "tool.rz"]
+    summary = json.loads(
+        ok(tmp_path, "validate", "--calibration", "cal.json", "--measurements", "held.csv",
+           "--json")
+    )  # fmt: skip
+    assert summary["rms_after_mm"] < 1e-9
+    assert summary["orientation_rms_after_deg"] < 1e-9
+    assert summary["rms_before_mm"] > 1e-3 and summary["orientation_rms_before_deg"] > 1e-3
+
+
+def test_bad_turns_are_one_line(tmp_path):
+    """A turn beyond a half turn, a line's sigma in mm beside turns, and turns in radians
+    under a degrees column: exit 2, the file, the row or line and the column named."""
+    robot_file, truth = write_lab(tmp_path, "industrial-6r", "turned")
+    met_plan(tmp_path, robot_file, 40, 6, "plan.csv")
+    synthesized(tmp_path, robot_file, truth, "plan.csv", "meas.csv")
+    good = (tmp_path / "meas.csv").read_text(encoding="utf-8").splitlines()
+    head, rows = good[0], good[1:]
+
+    def cell(line: str, k: int, value: str) -> str:
+        cells = line.split(",")
+        cells[k] = value
+        return ",".join(cells)
+
+    def radians(line: str) -> str:
+        cells = line.split(",")
+        cells[-1] = repr(float(np.radians(float(cells[-1]))))
+        return ",".join(cells)
+
+    cases = {
+        "beyond a half turn": (
+            [head, cell(rows[0], -1, "250"), *rows[1:]],
+            "row 1 (line 2), column rz_deg",
+            "no component of a rotation vector",
+        ),
+        "a line's sigma": (
+            [head + ",sigma_mm", *(r + ",0.01" for r in rows)],
+            "column sigma_mm",
+            "orientation_sigma_deg",
+        ),
+        "radians": ([head, *(radians(r) for r in rows)], "row ", "deg from where the other"),
+    }
+    for name, (lines, where, words) in cases.items():
+        (tmp_path / "bad.csv").write_text("\n".join(lines) + "\n", encoding="utf-8")
+        run = run_cli(
+            tmp_path, "identify", "--robot", robot_file.name, "--measurements", "bad.csv"
+        )
+        assert run.returncode == 2, (name, run.stderr)
+        err = run.stderr.strip().splitlines()
+        assert len(err) == 1 and err[0].startswith("armcal: error: bad.csv"), (name, run.stderr)
+        assert where in err[0] and words in err[0], (name, err[0])
 
 
 def test_what_one_dial_cannot_see_is_held_and_said(tmp_path):
@@ -248,7 +339,25 @@ BAD_ROBOTS = {
     "orientation noise": (
         _table(),
         "[measurement]\nsigma_mm = 0.01\norientation_sigma_deg = 0.01\n",
-        "positions of partial coordinates only",
+        'the instrument reads no turn; add "rx", "ry" or "rz"',
+    ),
+    "turns alone": (_table(reads='["rx", "ry"]'), "", 'read a coordinate too (add "x"'),
+    "a turn twice": (_table(reads='["z", "rz", "rz"]'), "", "each once"),
+    "tool axes without turns": (
+        _table() + "tool_rpy_deg = [0, 0, 30]\n",
+        "",
+        "key 'instrument.tool_rpy_deg': the instrument reads no turn",
+    ),
+    "a half turn's range": (
+        _table(reads='["z", "rz"]') + "max_turn_deg = 180\n",
+        "[measurement]\nsigma_mm = 0.01\norientation_sigma_deg = 0.001\n",
+        "key 'instrument.max_turn_deg': expected the largest turn",
+    ),
+    "turns without any noise": (_table(reads='["z", "rz"]'), "", "give sigma_mm and orientation"),
+    "turns without their noise": (
+        _table(reads='["z", "rz"]'),
+        "[measurement]\nsigma_mm = 0.01\n",
+        "give orientation_sigma_deg",
     ),
 }
 
@@ -282,7 +391,7 @@ def test_bad_partial_measurements_are_one_line(tmp_path):
             robot_file.name,
             [head + ",rx_deg", *(r + ",1" for r in rows)],
             "column rx_deg",
-            "positions of partial coordinates only",
+            'add "rx" to [instrument] reads',
         ),
         "empty line": (
             robot_file.name,

@@ -88,6 +88,9 @@ class Validation:
     reused : ndarray of bool, shape (m,), or None
         Which rows are rows the calibration was fitted to (the same joint readings and
         target, to the last bit); None where the calibration does not record its rows.
+    kept : ndarray of int, shape (m,), or None
+        Which of the rows validated the arrays above are, where some rows read a turn
+        instead (partial coordinates': their errors are :attr:`turns`'); None for all.
     """
 
     before: np.ndarray
@@ -99,6 +102,7 @@ class Validation:
     turns: Turns | None = None
     baseline_rows: Literal["calibration", "held-out"] = "calibration"
     reused: np.ndarray | None = None
+    kept: np.ndarray | None = None
 
     def __repr__(self) -> str:
         s = self.summary()
@@ -174,9 +178,9 @@ class Turns:
 
     Attributes
     ----------
-    before, after : ndarray, shape (m, 3)
+    before, after : ndarray, shape (m, 3) or (m, 1)
         The turn from the nominal (calibrated) model's orientation to the measured one,
-        as rotation vectors.
+        as rotation vectors; for partial coordinates, a turn's component's error.
     predicted : ndarray, shape (m,)
         The calibrated turn's expected size (its uncertainty and the noise), rad.
     """
@@ -365,6 +369,24 @@ def validate(
     before = measured - nominal
     after = measured - calibrated
     d = model.position_dim
+    reused = (
+        None if cal.training_rows is None else training_rows_among(cal.training_rows, conditions)
+    )
+    turning = model.turn_rows(conditions)
+    if turning is not None and np.any(turning):  # partial coordinates' turns: in Turns
+        kept = np.flatnonzero(~turning)
+        return Validation(
+            before[kept, :d],
+            after[kept, :d],
+            predicted[kept],
+            uncertainty[kept],
+            measured[kept, :d],
+            out_of_plane,
+            Turns(before[turning], after[turning], predicted[turning]),
+            baseline_rows,
+            None if reused is None else reused[kept],
+            kept,
+        )
     return Validation(
         before[:, :d],
         after[:, :d],
@@ -374,7 +396,7 @@ def validate(
         out_of_plane,
         _turns(model, before, after, turn),
         baseline_rows,
-        None if cal.training_rows is None else training_rows_among(cal.training_rows, conditions),
+        reused,
     )
 
 
@@ -507,7 +529,7 @@ def validation_warnings(
             )
         )
     if result.turns is not None:
-        warnings += _turn_warnings(s, count)
+        warnings += _turn_warnings(s, result.turns.after.shape[0])
     if reused:
         warnings.append(
             ArmcalWarning(

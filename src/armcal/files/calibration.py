@@ -20,6 +20,7 @@ from .._version import __version__
 from ..errors import ACTIONS, ArmcalError, ArmcalWarning, InputError, unrendered
 from ..families.registry import Family, family_named, family_of
 from ..identification import Calibration
+from ..identification.problem import sigma_parts
 from ..models import CalibratedArm, Conditions, FitModel, Loads, Plane, TermChoice
 from ..noise import NoiseModel, TrackerNoise
 from .checked import BadKey, array_of, check_covariance, described, list_of, number_of
@@ -374,6 +375,12 @@ def calibration_document(
     """
     arm = cal.arm
     turn_rms = cal.orientation_residual_rms_deg
+    parts = sigma_parts(cal.model, cal.conditions, cal.sigma_mm)  # coordinates' and turns'
+    sigma = (
+        {"sigma_mm": cal.sigma_mm}
+        if parts is None
+        else {"sigma_mm": parts[0], "sigma_turn_deg": float(np.degrees(parts[1]))}
+    )
     return {
         "format": CALIBRATION_FORMAT,
         "armcal_version": __version__,
@@ -382,7 +389,7 @@ def calibration_document(
         "robust": bool(cal.robust),
         "poses": cal.n_poses,
         "poses_used": cal.n_used,
-        "sigma_mm": cal.sigma_mm,
+        **sigma,
         # a camera's sigma and residuals are pixels, under the same keys
         **({} if cal.model.reading_unit == "mm" else {"reading_unit": cal.model.reading_unit}),
         "sigma_source": cal.sigma_source,
@@ -458,9 +465,17 @@ def _residuals_list(cal: Calibration) -> list[dict[str, Any]]:
     axes = ("dx_mm", "dy_mm", "dz_mm", "drx_deg", "dry_deg", "drz_deg")[: cal.residuals.shape[1]]
     shown = np.array(cal.residuals, dtype=float)
     shown[:, 3:] = np.degrees(shown[:, 3:])  # a 6-DoF instrument's turns, in degrees
+    turn = cal.turn_rows
+    if not np.any(turn):
+        return _records(
+            ("row", "pose", "target", *axes, "used"),
+            _row_numbers(cal), cal.pose_labels, targets, *shown.T.tolist(), used,
+        )  # fmt: skip
+    shown[turn] = np.degrees(shown[turn])  # partial coordinates' turns, in degrees
+    units = np.where(turn, "deg", cal.model.reading_unit).tolist()
     return _records(
-        ("row", "pose", "target", *axes, "used"),
-        _row_numbers(cal), cal.pose_labels, targets, *shown.T.tolist(), used,
+        ("row", "pose", "target", "residual", "unit", "used"),
+        _row_numbers(cal), cal.pose_labels, targets, shown[:, 0].tolist(), units, used,
     )  # fmt: skip
 
 
@@ -488,6 +503,7 @@ def _outliers_list(cal: Calibration) -> list[dict[str, Any]]:
             "pose": o.pose,
             "target": o.target,
             "residual_mm": float(o.residual_mm),
+            **({} if o.unit == "mm" else {"unit": o.unit}),  # a turn's in deg, a camera's px
             "studentized": float(o.studentized),
             "removed": bool(o.removed),
         }

@@ -40,5 +40,8 @@ def decode(
         raise BadKey(
             "robot.instrument", "expected a plane, point, distance, partial or camera instrument"
         )
+    labels = tuple(inner.target_labels)
+    if len(labels) == 1:  # the tool point names the tool's turns
+        instrument = instrument.for_tool(labels[0])
     mine = set(instrument.param_names)
     return InstrumentedArm(inner, instrument, tuple(name for name in fixed if name in mine))

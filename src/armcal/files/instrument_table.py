@@ -12,8 +12,12 @@ the table's keys say where it stands for plans (:mod:`armcal.files.spatial`);
 * ``distance``: ``pivot_mm = [x, y, z]`` and ``range_mm = [least, greatest]``, the
   distances from the pivot it reads (a truth file may give the reading's
   ``offset_mm`` too);
-* ``partial``: ``reads = ["z"]`` (the axes of its frame it reads, some of x, y,
-  z), ``xyz_mm = [x, y, z]`` and ``rpy_deg = [r, p, y]``, its frame in the base's;
+* ``partial``: ``reads = ["z"]`` (what it reads in its frame, some of x, y, z and of
+  the tool's turn rx, ry, rz, at least one coordinate), ``xyz_mm = [x, y, z]`` and
+  ``rpy_deg = [r, p, y]``, its frame in the base's; where it reads turns, optionally
+  ``tool_rpy_deg`` (the tool's axes in the tip frame, default none turned) and
+  ``max_turn_deg`` (the largest turn of the tool from the instrument's axes a plan
+  keeps to, default 150);
 * ``camera``: ``camera = "cam.yaml"`` (its ``camera_info``, relative to the robot
   file; a calibration file holds the mapping itself), ``mount`` (``eye-in-hand`` or
   ``eye-to-hand``), ``camera_in_tool`` (eye-in-hand) or ``camera_in_base``
@@ -48,7 +52,7 @@ from ..instruments import (
     Planes,
 )
 from ..instruments.camera import MOUNTS
-from ..instruments.partial import AXES
+from ..instruments.partial import AXES, COMPONENTS, TURNS
 from ..models.instrumented import InstrumentedArm
 from .camera_info import camera_info_table, intrinsics_of, read_camera_info
 from .common import check_keys, fail, load_toml, number, numbers, shown, suggest
@@ -77,7 +81,7 @@ _KEYS = {
     "plane": ("kind", "planes"),
     "point": ("kind", "points", "known_distances_mm"),
     "distance": ("kind", "pivot_mm", "range_mm"),
-    "partial": ("kind", "reads", "xyz_mm", "rpy_deg"),
+    "partial": ("kind", "reads", "xyz_mm", "rpy_deg", "tool_rpy_deg", "max_turn_deg"),
     "camera": (
         "kind",
         "camera",
@@ -258,7 +262,8 @@ def _pose(path, entry: Any, key: str) -> tuple[np.ndarray, np.ndarray]:
 
 
 def _partial(path, table: dict, where: str) -> Coordinates:
-    """``kind = "partial"``: the axes it reads and where its frame roughly is."""
+    """``kind = "partial"``: what it reads, where its frame roughly is, and for one that
+    reads turns where the tool's axes are and the turns a plan keeps to."""
     for key in ("reads", "xyz_mm", "rpy_deg"):
         if key not in table:
             raise fail(path, f"key '{where}': partial coordinates need {key} ({_PARTIAL_EXAMPLE})")
@@ -266,17 +271,42 @@ def _partial(path, table: dict, where: str) -> Coordinates:
     if (
         not isinstance(reads, list)
         or not reads
-        or not all(isinstance(a, str) and a in AXES for a in reads)
+        or not all(isinstance(a, str) and a in COMPONENTS for a in reads)
         or len(set(reads)) != len(reads)
     ):
         raise fail(
             path,
-            f"key '{where}.reads': expected a list of the axes the instrument reads, some of "
-            f'"x", "y", "z" (each once), as reads = ["z"]; got {shown(str(reads))}',
+            f"key '{where}.reads': expected a list of what the instrument reads, some of "
+            f'"x", "y", "z" and of the tool\'s turn "rx", "ry", "rz" (each once), as reads = '
+            f'["z"] or ["x", "y", "rz"]; got {shown(str(reads))}',
         )
+    if not set(reads) & set(AXES):
+        raise fail(
+            path,
+            f"key '{where}.reads': turns alone ({', '.join(reads)}) see no length of the arm "
+            'and no position of the tool; read a coordinate too (add "x", "y" or "z")',
+        )
+    turned = bool(set(reads) & set(TURNS))
+    extra: dict[str, Any] = {}
+    for key in ("tool_rpy_deg", "max_turn_deg"):
+        if key in table and not turned:
+            raise fail(path, f"key '{where}.{key}': the instrument reads no turn; remove the key")
+    if "tool_rpy_deg" in table:
+        extra["tool_rpy_deg"] = np.array(
+            numbers(path, table["tool_rpy_deg"], f"{where}.tool_rpy_deg", 3)
+        )
+    if "max_turn_deg" in table:
+        largest = number(path, table["max_turn_deg"], f"{where}.max_turn_deg")
+        if not 0.0 < largest < 180.0:
+            raise fail(
+                path,
+                f"key '{where}.max_turn_deg': expected the largest turn of the tool from the "
+                f"instrument's axes, above 0 and below 180 degrees; got {largest:g}",
+            )
+        extra["max_turn_deg"] = largest
     xyz = numbers(path, table["xyz_mm"], f"{where}.xyz_mm", 3)
     rpy = numbers(path, table["rpy_deg"], f"{where}.rpy_deg", 3)
-    return Coordinates(tuple(reads), np.array(xyz), np.array(rpy))
+    return Coordinates(tuple(reads), np.array(xyz), np.array(rpy), **extra)
 
 
 def _known_distances(path, value: Any, where: str) -> tuple[tuple[str, str, float], ...]:
@@ -362,17 +392,8 @@ def instrumented_arm(
     the instrument can read (a camera's in pixels, ``sigma_px``, the others' in mm), and
     an instrument some pose can meet.  ``elastic``: the file has ``[elastostatic]``;
     ``targets``: it has ``[targets]``; ``noise_keys``: the keys of its ``[measurement]``."""
-    pixels = instrument.unit == "px"
-    wrong = [k for k in noise_keys if k in ("sigma_mm", "covariance_mm2", "tracker")]
-    if pixels and wrong:
-        raise fail(
-            path,
-            f"key 'measurement.{wrong[0]}': a camera's noise is in pixels; give sigma_px "
-            "(about 0.1 to 0.5 for a board's corners)",
-        )
-    if not pixels and "sigma_px" in noise_keys:
-        raise fail(path, "key 'measurement.sigma_px': pixels are a camera's; give sigma_mm")
-    if instrument.frame:  # placed on the flange: the tool point is the flange's origin
+    _check_noise_keys(path, instrument, noise_keys)
+    if not instrument.tool_point:  # placed on the flange: the tool point is its origin
         if targets:
             raise fail(
                 path,
@@ -389,13 +410,16 @@ def instrumented_arm(
             f"key 'instrument.kind': a {instrument.kind} instrument with [elastostatic] is not "
             "supported yet; remove one of them (measure the arm's sag with a tracker)",
         )
-    if arm.oriented:
+    if instrument.turn_features:  # the turns are the instrument's readings, not the arm's
+        arm = arm.replace(oriented=False)
+    elif arm.oriented:
         what = (
-            "this version reads positions of partial coordinates only (x_mm, y_mm, z_mm)"
+            'the instrument reads no turn; add "rx", "ry" or "rz" to [instrument] reads, or '
+            "remove the key"
             if instrument.reads_every_feature
-            else f"a {instrument.kind} instrument reads no orientation"
+            else f"a {instrument.kind} instrument reads no orientation; remove the key"
         )
-        raise fail(path, f"key 'measurement.orientation_sigma_deg': {what}; remove the key")
+        raise fail(path, f"key 'measurement.orientation_sigma_deg': {what}")
     if len(arm.targets) > 1:
         raise fail(
             path,
@@ -416,24 +440,51 @@ def instrumented_arm(
             f"key 'instrument': the labels of its {instrument.kind}s give parameters the arm "
             f"has already ({', '.join(clash)}); rename them (A, B, top, side, ...)",
         )
-    if arm.noise is not None:
-        try:
-            per_feature = instrument.feature_sigma(arm.noise)
-        except ValueError as exc:
-            raise fail(path, f"key 'measurement': {exc}") from None
-        try:
-            if per_feature is None:
-                arm.noise.for_dim(instrument.dim)
-        except ValueError as exc:
-            raise fail(
-                path,
-                f"key 'measurement': a {instrument.kind} instrument reads {instrument.dim} "
-                f"number{'s' if instrument.dim > 1 else ''} a row: {exc}",
-            ) from None
+    _check_noise(path, arm.noise, instrument)
     far = instrument.out_of_reach(arm.tip_reach_mm)
     if far is not None:
         raise fail(path, f"key 'instrument': no pose can meet it: {far}; check [instrument]")
     return InstrumentedArm.of(arm, instrument)
+
+
+def _check_noise_keys(path, instrument: Instrument, noise_keys: tuple[str, ...]) -> None:
+    """A camera's noise in pixels (``sigma_px``), the others' in mm."""
+    pixels = instrument.unit == "px"
+    wrong = [k for k in noise_keys if k in ("sigma_mm", "covariance_mm2", "tracker")]
+    if pixels and wrong:
+        raise fail(
+            path,
+            f"key 'measurement.{wrong[0]}': a camera's noise is in pixels; give sigma_px "
+            "(about 0.1 to 0.5 for a board's corners)",
+        )
+    if not pixels and "sigma_px" in noise_keys:
+        raise fail(path, "key 'measurement.sigma_px': pixels are a camera's; give sigma_mm")
+
+
+def _check_noise(path, noise: Any, instrument: Instrument) -> None:
+    """Noise the instrument can read: a sigma for each of its features (a turn's too, which
+    has no default: a turn and a coordinate share no unit)."""
+    if noise is None:
+        if instrument.turn_features:
+            raise fail(
+                path,
+                "key 'measurement': partial coordinates that read the tool's turn weigh "
+                "coordinates and turns by their noise; give sigma_mm and orientation_sigma_deg",
+            )
+        return
+    try:
+        per_feature = instrument.feature_sigma(noise)
+    except ValueError as exc:
+        raise fail(path, f"key 'measurement': {exc}") from None
+    try:
+        if per_feature is None:
+            noise.for_dim(instrument.dim)
+    except ValueError as exc:
+        raise fail(
+            path,
+            f"key 'measurement': a {instrument.kind} instrument reads {instrument.dim} "
+            f"number{'s' if instrument.dim > 1 else ''} a row: {exc}",
+        ) from None
 
 
 def instrument_section(instrument: Instrument) -> dict[str, Any]:
@@ -472,11 +523,20 @@ def instrument_section(instrument: Instrument) -> dict[str, Any]:
             **{name: float(getattr(instrument, name)) for name in VIEW_KEYS},
         }
     if isinstance(instrument, Coordinates):
+        turned = (
+            {
+                "tool_rpy_deg": instrument.tool_rpy_deg.tolist(),
+                "max_turn_deg": float(instrument.max_turn_deg),
+            }
+            if instrument.turns
+            else {}
+        )
         return {
             "kind": "partial",
             "reads": list(instrument.reads),
             "xyz_mm": instrument.xyz_mm.tolist(),
             "rpy_deg": instrument.rpy_deg.tolist(),
+            **turned,
         }
     if isinstance(instrument, Distance):
         return {

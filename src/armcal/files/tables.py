@@ -430,10 +430,11 @@ def _check_bounds(path, instrument: Any, readings: np.ndarray, lines: list[int])
 
 
 def _read_partial(path, arm: FitModel, instrument: Any, arm_from: str | None) -> Measurements:
-    """The measurements of partial coordinates: a column per axis the instrument reads
-    (``x_mm``, ``y_mm``, ``z_mm``), at least one, each cell a reading or empty; every
-    reading a row of its own (its axis its feature), carrying its line's row number,
-    pose, target and sigma."""
+    """The measurements of partial coordinates: a column per component the instrument
+    reads (``x_mm``, ``y_mm``, ``z_mm``; a turn's ``rx_deg``, ``ry_deg``, ``rz_deg``, read
+    in radians), at least one, each cell a reading or empty; every reading a row of its
+    own (its component its feature), carrying its line's row number, pose, target and
+    sigma (a line's ``sigma_mm`` is its coordinates', refused where it reads turns)."""
     names = list(instrument.reading_columns)
     axes = ["x_mm", "y_mm", "z_mm"]
     table = read_table(
@@ -446,16 +447,20 @@ def _read_partial(path, arm: FitModel, instrument: Any, arm_from: str | None) ->
     )
     for name in (*axes, *ORIENTATION_COLUMNS):
         if name in table.texts and name not in names:
-            why = (
-                "this version reads positions of partial coordinates only; remove the column"
-                if name in ORIENTATION_COLUMNS
-                else f'add "{name[0]}" to [instrument] reads, or remove the column'
-            )
+            component = name.split("_")[0]
             raise fail(
                 path,
                 f"line {table.header_line}: column {name}: the robot file's [instrument] reads "
-                f"{', '.join(instrument.reads)} only; {why}",
+                f'{", ".join(instrument.reads)} only; add "{component}" to [instrument] reads, '
+                "or remove the column",
             )
+    if instrument.turn_features and "sigma_mm" in table.numbers:
+        raise fail(
+            path,
+            f"line {table.header_line}: column sigma_mm: a line's sigma in mm cannot be its "
+            "turns'; give the sigmas in the robot file's [measurement] (sigma_mm, "
+            "orientation_sigma_deg) and remove the column",
+        )
     present = [name for name in names if name in table.texts]
     if not present:
         raise fail(
@@ -468,6 +473,8 @@ def _read_partial(path, arm: FitModel, instrument: Any, arm_from: str | None) ->
     for k, name in enumerate(names):
         for r, text in enumerate(table.texts.get(name, ())):
             cells[r, k] = _reading(path, text, r, table.lines[r], name)
+        if name.endswith("_deg"):  # a turn's component: radians inside
+            cells[:, k] = np.radians(cells[:, k])
     found = ~np.isnan(cells)
     empty = np.flatnonzero(~found.any(axis=1))
     if empty.size:
@@ -506,11 +513,19 @@ def _reading(path, text: str, r: int, line: int, name: str) -> float:
         value = float(text)
     except ValueError:
         value = float("nan")
+    unit = name.rsplit("_", 1)[1]
     if not np.isfinite(value):
         raise fail(
             path,
             f"row {r + 1} (line {line}), column {name}: {shown(text)} is not a finite number "
-            "(mm); leave the cell empty where the instrument read nothing",
+            f"({unit}); leave the cell empty where the instrument read nothing",
+        )
+    if unit == "deg" and abs(value) > _LARGEST_TURN_DEG:
+        raise fail(
+            path,
+            f"row {r + 1} (line {line}), column {name}: {shown(text)} is beyond "
+            f"±{_LARGEST_TURN_DEG:g} deg, which no component of a rotation vector (axis times "
+            "angle, at most a half turn) reaches; check the unit (deg) and the convention",
         )
     if abs(value) > _FARTHEST_READING_MM:
         raise fail(
@@ -523,6 +538,8 @@ def _reading(path, text: str, r: int, line: int, name: str) -> float:
 
 #: A coordinate no instrument of a robot cell reads (mm): 1 km is a wrong unit or value.
 _FARTHEST_READING_MM = 1e6
+#: A turn's component is at most its angle, at most half a turn.
+_LARGEST_TURN_DEG = 180.0
 
 
 def _feature_labels(path, instrument: Any, table: Table) -> tuple[str, ...]:

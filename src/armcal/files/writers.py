@@ -131,7 +131,8 @@ def _partial_csv(
     feature: np.ndarray | None,
 ) -> str:
     """Partial coordinates: the readings of one pose (consecutive rows of the same joints,
-    label and target) on one line, a column per axis, empty where it read none."""
+    label and target) on one line, a column per component, empty where it read none (a
+    turn's in degrees)."""
     m = q.shape[0]
     index = np.zeros(m, dtype=int) if feature is None else np.asarray(feature)
     same = np.all(q[1:] == q[:-1], axis=1) & (index[1:] > index[:-1])
@@ -142,8 +143,11 @@ def _partial_csv(
     first = np.flatnonzero(np.concatenate([[True], ~same])) if m else np.zeros(0, dtype=int)
     names = list(instrument.reading_columns)
     cells = [[""] * first.size for _ in names]
+    turn = np.array([name.endswith("_deg") for name in names], dtype=bool)  # radians inside
+    values = np.asarray(readings, dtype=float).reshape(m, -1)[:, 0]
+    shown = np.where(turn[index], np.degrees(values), values)
     for r in range(m):
-        cells[index[r]][line[r]] = repr(float(readings[r, 0]))
+        cells[index[r]][line[r]] = repr(float(shown[r]))
     head = (["pose"] if labels is not None else []) + joint_names(kinds or q.shape[1]) + names
     columns: list = [[str(labels[int(r)]) for r in first]] if labels is not None else []
     columns += [joint_values(q[first], kinds), *cells]

@@ -56,7 +56,7 @@ from .judgement import (
     too_good_warning,
     unseen_warning,
 )
-from .problem import Fit, Problem, reference_sigma
+from .problem import Fit, Problem, reference_sigma, sigma_unit
 from .registration import Movement, instrument_moved, register_nominal
 from .result import Calibration, NestedFit
 from .robust import Judgement, judge
@@ -320,7 +320,7 @@ def identify(
     problem = Problem(model, conditions, points, method, tol, max_iter)
     info = model.check_identifiable(conditions)
     check_residual_freedom(model, m, given=given)
-    reference = reference_sigma(model, row_sigma)
+    reference = reference_sigma(model, conditions.sigma_mm)  # the rows' own, a feature's
     least_squares, nested_fits = least_squares_fit(problem)
     early = early_diagnosis(problem, least_squares, reference, given=given)
     verdict = judged_fit(problem, least_squares, reference, given=given, robust=robust)
@@ -408,9 +408,12 @@ def checked_rows(
             conditions.q, target=conditions.target, loads=conditions.loads, sigma_mm=rows_sigma
         )
     elif sigma is not None and conditions.sigma_mm is not None:  # the given sigma replaces
-        conditions = Conditions(
-            conditions.q, conditions.target, conditions.loads, None, conditions.frames
-        )
+        # the rows' own, and a feature's (an axis, a turn) is the overridden noise's
+        again = model.with_noise(instrument_override(model.noise, sigma)).conditions(
+            conditions.q, target=conditions.target, loads=conditions.loads,
+            feature=conditions.feature,
+        )  # fmt: skip
+        conditions = again if conditions.frames is None else again.with_frames(conditions.frames)
     conditions, points = model.anchor(conditions, points)
     return conditions, points, rows_sigma
 
@@ -600,6 +603,9 @@ def outlier_list(
 ) -> tuple[Outlier, ...]:
     """Every flagged row as an :class:`Outlier`: its pose, target, residual and test."""
     distance = point_norms(verdict.fit.residuals[:, : model.position_dim])
+    turn = model.turn_rows(conditions)  # a turn's residual (rad) in degrees
+    turn = np.zeros(conditions.m, dtype=bool) if turn is None else turn
+    distance = np.where(turn, np.degrees(distance), distance)
     target_index = conditions.target
     test = verdict.test
     return tuple(
@@ -612,6 +618,7 @@ def outlier_list(
             studentized=float(test.statistic[i]),
             p_value=float(test.p_value[i]),
             removed=not bool(verdict.used[i]),
+            unit="deg" if turn[i] else model.reading_unit,
         )
         for i in np.flatnonzero(verdict.flagged)
     )
@@ -636,6 +643,7 @@ def verdict_warnings(
     experiment's, convergence, outliers, too few degrees of freedom, a misfit and its
     likely cause (:func:`_misfit`), a fit too good."""
     model, fit, used = problem.model, verdict.fit, verdict.used
+    scale, unit = sigma_unit(model, problem.conditions, reference)  # rows of turns: a ratio
     warnings = [w for w in (conditioning, *experiment) if w is not None]
     if not fit.converged:
         warnings.append(
@@ -646,9 +654,9 @@ def verdict_warnings(
             outlier_warning(
                 outliers,
                 robust=robust,
-                scatter=verdict.scatter,
-                sigma=reference,
-                unit=model.reading_unit,
+                scatter=None if verdict.scatter is None else verdict.scatter * scale,
+                sigma=reference * scale,
+                unit=unit,
             )
         )
     warnings.extend(verdict.extra)
@@ -669,7 +677,7 @@ def verdict_warnings(
     if verdict.fit_test.too_good:
         warnings.append(
             too_good_warning(
-                verdict.fit_test, verdict.sigma_value, repeated=repeated, unit=model.reading_unit
+                verdict.fit_test, verdict.sigma_value * scale, repeated=repeated, unit=unit
             )
         )
     return warnings
@@ -712,10 +720,11 @@ def _misfit(
         if freed is None and cause is None and most_disagree(verdict.disagreeing, problem.m):
             same = early.mirror_tried and fit is least_squares and sigma_value == reference
             mirrored = early.mirror if same else _mirrored_fit(problem, used, sigma_value, chi2)
+        scale, unit = sigma_unit(model, conditions, reference)  # rows of turns: a ratio
         inconsistent = inconsistent_fit_warning(
             fit_test,
-            sigma_value,
-            suggested,
+            sigma_value * scale,
+            suggested * scale,
             int(np.count_nonzero(verdict.flagged)),
             poses=problem.m,
             held=model.fixed,
@@ -723,9 +732,9 @@ def _misfit(
             mirrored=mirrored,
             rows=row_noun(conditions.target),
             disagreeing=verdict.disagreeing,
-            scatter=verdict.scatter,
+            scatter=None if verdict.scatter is None else verdict.scatter * scale,
             robust=robust,
-            unit=model.reading_unit,
+            unit=unit,
         )
     elif cause is None and (any_outliers or far_off(model, fit, None)):
         # consistent (sigma estimated, say): judged by its outliers and its size alone

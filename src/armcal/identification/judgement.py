@@ -173,6 +173,9 @@ class Outlier:
         The pose's own p-value (before the multiple-testing correction).
     removed : bool
         Whether the final fit leaves the pose out (robust fitting), or only flags it.
+    unit : str
+        The unit of ``residual_mm``: the readings' (mm, a camera's px), or ``deg`` for a
+        row that reads a turn (partial coordinates').
     """
 
     index: int
@@ -183,6 +186,7 @@ class Outlier:
     studentized: float
     p_value: float
     removed: bool
+    unit: str = "mm"
 
     def to_dict(self) -> dict[str, object]:
         """JSON form ``{row, pose, target, residual_mm, studentized, p_value, removed}``."""
@@ -336,7 +340,7 @@ def outlier_warning(
     inconsistent with the given ``sigma`` (:func:`~armcal.identification.robust.judge`).
     """
     shown = [
-        f"row {o.row} (pose {o.pose}: residual {o.residual_mm:.3g} {unit}, "
+        f"row {o.row} (pose {o.pose}: residual {o.residual_mm:.3g} {o.unit}, "
         f"studentized {o.studentized:.3g})"
         for o in outliers[:5]
     ]

@@ -25,6 +25,9 @@ __all__ = [
     "Fit",
     "Problem",
     "reference_sigma",
+    "sigma_parts",
+    "sigma_unit",
+    "sigma_words",
 ]
 
 
@@ -37,6 +40,37 @@ def reference_sigma(model: FitModel, row_sigma: np.ndarray | None) -> float:
     if row_sigma is not None:
         return float(np.sqrt(1.0 / np.mean(1.0 / row_sigma**2)))
     return _noise(model).sigma_mm
+
+
+def sigma_parts(
+    model: FitModel, conditions: Conditions | None, sigma: float
+) -> tuple[float, float] | None:
+    """For rows some of which read turns (partial coordinates' ``rx_deg``...), the
+    coordinates' and the turns' sigma (mm, rad) that ``sigma``, in the rows' reference
+    (:func:`reference_sigma`), stands for; None for rows of one unit."""
+    turn = None if conditions is None else model.turn_rows(conditions)
+    if turn is None or conditions is None or conditions.sigma_mm is None:
+        return None
+    if not np.any(turn) or np.all(turn):
+        return None
+    rows = np.asarray(conditions.sigma_mm, dtype=float)
+    ratio = sigma / reference_sigma(model, rows)
+    return reference_sigma(model, rows[~turn]) * ratio, reference_sigma(model, rows[turn]) * ratio
+
+
+def sigma_unit(model: FitModel, conditions: Conditions | None, sigma: float) -> tuple[float, str]:
+    """What a sigma (and a scale) in the rows' reference is multiplied by, and its unit, for
+    words: 1 and the readings' unit; for rows of coordinates and turns, ``1 / sigma`` and
+    "times the sigmas given (... mm a coordinate, ... deg a turn)"."""
+    parts = sigma_parts(model, conditions, sigma)
+    if parts is None:
+        return 1.0, model.reading_unit
+    return 1.0 / sigma, f"times the sigmas given ({sigma_words(parts)})"
+
+
+def sigma_words(parts: tuple[float, float]) -> str:
+    """``"0.01 mm a coordinate, 0.001 deg a turn"`` of :func:`sigma_parts`."""
+    return f"{parts[0]:.4g} mm a coordinate, {np.degrees(parts[1]):.4g} deg a turn"
 
 
 def _noise(model: FitModel) -> NoiseModel:

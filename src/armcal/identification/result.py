@@ -301,8 +301,20 @@ class Calibration:
         """Euclidean residual of every pose's position ``(m,)`` in mm."""
         return point_norms(self.residuals[:, : self.model.position_dim])
 
+    @property
+    def turn_rows(self) -> np.ndarray:
+        """Which rows read an angle (rad) rather than a position (partial coordinates'
+        turns, :meth:`~armcal.models.interface.FitModel.turn_rows`) ``(m,)``."""
+        found = None if self.conditions is None else self.model.turn_rows(self.conditions)
+        return np.zeros(self.n_poses, dtype=bool) if found is None else np.asarray(found)
+
+    def _position_rows(self) -> np.ndarray:
+        """The rows in the fit that read a position ``(m,)``."""
+        used = np.ones(self.n_poses, dtype=bool) if self.used is None else self.used
+        return used & ~self.turn_rows
+
     def _used_residuals(self) -> np.ndarray:
-        return self.residuals if self.used is None else self.residuals[self.used]
+        return self.residuals[self._position_rows()]
 
     @property
     def residual_rms(self) -> float:
@@ -313,7 +325,12 @@ class Calibration:
     @property
     def orientation_residual_rms_deg(self) -> float | None:
         """For a 6-DoF instrument, RMS of the residual turns' coordinates (per coordinate),
-        degrees; None for positions only."""
+        degrees (for partial coordinates, of the rows that read a turn); None for positions
+        only."""
+        turn = self.turn_rows
+        if np.any(turn):
+            used = turn if self.used is None else turn & self.used
+            return float(np.degrees(rms(self.residuals[used])))
         turns = self._used_residuals()[:, self.model.position_dim :]
         return None if turns.shape[1] == 0 else float(np.degrees(rms(turns)))
 
@@ -321,20 +338,18 @@ class Calibration:
     def residual_rms_per_point(self) -> float:
         """RMS of the Euclidean residuals of the positions of the poses in the fit (per
         point: ``sqrt(d)`` times :attr:`residual_rms` for noise alike on every axis), mm."""
-        used = self.pose_residuals if self.used is None else self.pose_residuals[self.used]
-        return rms(used)
+        return rms(self.pose_residuals[self._position_rows()])
 
     @property
     def residual_max(self) -> float:
         """Largest Euclidean residual of a pose in the fit, mm."""
-        kept = self.pose_residuals if self.used is None else self.pose_residuals[self.used]
-        return float(np.max(kept))
+        return float(np.max(self.pose_residuals[self._position_rows()]))
 
     @property
     def worst_pose(self) -> int:
         """Index of the pose in the fit with the largest Euclidean residual."""
         kept = self.pose_residuals
-        return int(np.argmax(kept if self.used is None else np.where(self.used, kept, -1.0)))
+        return int(np.argmax(np.where(self._position_rows(), kept, -1.0)))
 
     def strong_correlations(
         self, above: float = STRONG_CORRELATION

@@ -126,6 +126,28 @@ class Instrument(Protocol):
         axis's shift), named in :attr:`unseen`."""
         ...
 
+    @property
+    def has_slack(self) -> bool:
+        """Whether a plan's pose keeps within limits besides :attr:`view_box`
+        (:meth:`slack`: a camera's depth and tilt, a turn's range)."""
+        ...
+
+    @property
+    def turn_features(self) -> tuple[int, ...]:
+        """The features whose readings are angles (rad, shown in degrees), not
+        :attr:`unit`'s: the turns partial coordinates read."""
+        ...
+
+    @property
+    def tool_point(self) -> bool:
+        """Whether it measures a tool point the robot file gives in ``[targets]`` (a camera
+        on the tool is placed on the flange instead)."""
+        ...
+
+    def for_tool(self, label: str) -> Instrument:
+        """The same instrument on the tool point ``label`` (which names a tool's turns)."""
+        ...
+
     def feature_sigma(self, noise: NoiseModel) -> np.ndarray | None:
         """Every feature's reading std (mm) under the robot file's ``noise`` where they
         differ (a partial instrument's axes), else None: the noise's own sigma for every
@@ -216,6 +238,21 @@ class Defaults:
     @property
     def held(self) -> tuple[str, ...]:
         return ()
+
+    @property
+    def has_slack(self) -> bool:
+        return False
+
+    @property
+    def turn_features(self) -> tuple[int, ...]:
+        return ()
+
+    @property
+    def tool_point(self) -> bool:
+        return True
+
+    def for_tool(self, label: str) -> Instrument:
+        return self  # type: ignore[return-value]
 
     def feature_sigma(self, noise: NoiseModel) -> np.ndarray | None:
         return None

@@ -199,6 +199,16 @@ class Camera(Defaults):
         return "px"
 
     @property
+    def has_slack(self) -> bool:
+        """True: a photo keeps its corners near enough and the board not too oblique."""
+        return True
+
+    @property
+    def tool_point(self) -> bool:
+        """False: it is placed on the flange (its pose, or the board's, in the tip frame)."""
+        return False
+
+    @property
     def frame(self) -> bool:
         """True: it reads the tool's frame, not only its point (module notes)."""
         return True

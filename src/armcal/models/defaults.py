@@ -93,6 +93,10 @@ class SeesAnywhere:
         """``"mm"``: a row reads a position."""
         return "mm"
 
+    def turn_rows(self, conditions: Conditions) -> np.ndarray | None:
+        """None: a row reads a position (a 6-DoF instrument's turns are columns of it)."""
+        return None
+
     def meeting_poses(
         self,
         q: np.ndarray,

@@ -85,8 +85,12 @@ class InstrumentedArm(CoreModel):
     @classmethod
     def of(cls, arm: FitModel, instrument: Instrument) -> InstrumentedArm:
         """``arm`` measured by ``instrument``: its base held at the origin of its own
-        frame, where the instrument's parameters are given."""
+        frame, where the instrument's parameters are given; on its one tool point (which
+        names a tool's turns)."""
         held = tuple(dict.fromkeys((*arm.fixed, *_base_names(arm))))
+        labels = tuple(arm.target_labels)
+        if len(labels) == 1:
+            instrument = instrument.for_tool(labels[0])
         return cls(arm.with_fixed(held), instrument, tuple(instrument.held))
 
     # -- names and parameters ----------------------------------------------------------
@@ -337,27 +341,29 @@ class InstrumentedArm(CoreModel):
     @property
     def has_view(self) -> bool:
         """Whether the instrument's view is a region with an inside a pose keeps to (a
-        camera's image less its margin: :meth:`view_constraints`)."""
-        return self.instrument.view_box is not None
+        camera's image less its margin, a turn's range: :meth:`view_constraints`)."""
+        return self.instrument.view_box is not None or bool(self.instrument.has_slack)
 
     def view_constraints(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray] | None:
         """How far inside the instrument's view every reading of poses ``q`` ``(..., n)``
         lies, at the nominal parameters: ``g`` ``(..., c)`` (``reading - low`` then ``high
         - reading`` of each of the ``k`` features' readings, ``2 k dim`` values, then the
         instrument's slack, :meth:`~armcal.instruments.base.Instrument.slack`: a camera's
-        corners' depth and tilt) and ``dg/dq`` ``(..., c, n)`` (the slack's by central
-        differences); None without a box.  Where :meth:`meeting_poses` also asks that the
-        board be in front of the lens, these are the smooth part."""
-        box = self.instrument.view_box
-        if box is None:
+        corners' depth and tilt, a turn's range) and ``dg/dq`` ``(..., c, n)`` (the slack's
+        by central differences); None without a view.  Where :meth:`meeting_poses` also
+        asks that the board be in front of the lens, these are the smooth part."""
+        if not self.has_view:
             return None
+        box = self.instrument.view_box
         q = np.asarray(q, dtype=float)
         flat = q.reshape(-1, q.shape[-1])
-        rows = self.plan_conditions(flat)
         count, n = flat.shape
-        reading = self.positions(rows).reshape(count, -1)
-        jac = self.joint_jacobian(rows).reshape(count, -1, n)
-        g, dg = _box_rows(reading, jac, box)
+        g, dg = np.zeros((count, 0)), np.zeros((count, 0, n))
+        if box is not None:
+            rows = self.plan_conditions(flat)
+            reading = self.positions(rows).reshape(count, -1)
+            jac = self.joint_jacobian(rows).reshape(count, -1, n)
+            g, dg = _box_rows(reading, jac, box)
         slack = self._slack(flat)
         if slack is not None:  # smooth but without a closed-form derivative: differences
             g = np.concatenate([g, slack], axis=-1)
@@ -376,11 +382,12 @@ class InstrumentedArm(CoreModel):
 
     def feasible(self, q: np.ndarray, *, tol: float = 1e-9) -> np.ndarray:
         """Within the limits, and within the instrument's slack where it has one (a
-        camera's nearest depth and largest tilt, at the nominal parameters)."""
+        camera's nearest depth and largest tilt, a turn's range, at the nominal
+        parameters)."""
         inside = np.asarray(super().feasible(q, tol=tol))
         q = np.asarray(q, dtype=float)
         flat = q.reshape(-1, q.shape[-1])
-        if self.instrument.view_box is None or not flat.shape[0]:
+        if not self.instrument.has_slack or not flat.shape[0]:
             return inside
         slack = self._slack(flat)
         if slack is None:
@@ -407,6 +414,15 @@ class InstrumentedArm(CoreModel):
     def reading_unit(self) -> str:
         """The instrument's: ``"mm"``, a camera's ``"px"``."""
         return str(self.instrument.unit)
+
+    def turn_rows(self, conditions: Conditions) -> np.ndarray | None:
+        """The rows of the instrument's features that read angles (partial coordinates'
+        turns), None for an instrument without."""
+        turns = self.instrument.turn_features
+        if not turns:
+            return None
+        index = feature_index(conditions.feature, conditions.m, self.instrument.labels)
+        return np.isin(index, turns)
 
     @property
     def touches(self) -> bool:

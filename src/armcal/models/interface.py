@@ -1074,6 +1074,11 @@ class DesignRole(Protocol):
         """The unit of what a row reads and of its noise: ``"mm"``; a camera's ``"px"``."""
         ...
 
+    def turn_rows(self, conditions: Conditions) -> np.ndarray | None:
+        """Which rows read an angle (rad, shown in degrees) rather than
+        :attr:`reading_unit`'s (partial coordinates' turns) ``(m,)``; None where none can."""
+        ...
+
     @property
     def touches(self) -> bool:
         """Whether a row reports only that the tool meets the instrument (a touch of a

@@ -8,6 +8,7 @@ import numpy as np
 
 from ..errors import ACTIONS
 from ..identification import Calibration
+from ..identification.problem import sigma_parts, sigma_words
 from ..identification.result import STRONG_CORRELATION
 from ..models.wording import effect_description, held_sentence
 from .common import identified, model_lines, small
@@ -63,13 +64,17 @@ def _outlier_lines(cal: Calibration) -> list[str]:
     lines = [
         "",
         f"outliers (studentized residual test, family-wise; {len(cal.outliers)}):",
-        f"{'row':>6}  {'pose':<10}{'residual ' + cal.model.reading_unit:>12}"
-        f"{'studentized':>13}  status",
     ]
+    unit = cal.model.reading_unit
+    mixed = any(o.unit != unit for o in cal.outliers)  # a turn's in deg: a unit per row
+    heading = "residual" if mixed else f"residual {unit}"
+    gap = "    " if mixed else ""
+    lines.append(f"{'row':>6}  {'pose':<10}{heading:>12}{gap}{'studentized':>13}  status")
     for o in cal.outliers:
         status = "removed from the fit" if o.removed else "flagged, kept in the fit"
+        own = f" {o.unit:<3}" if mixed else ""
         lines.append(
-            f"{o.row:>6}  {o.pose:<10}{o.residual_mm:>12.4g}{o.studentized:>13.3g}  {status}"
+            f"{o.row:>6}  {o.pose:<10}{o.residual_mm:>12.4g}{own}{o.studentized:>13.3g}  {status}"
         )
     return lines
 
@@ -155,9 +160,11 @@ def _fit_lines(cal: Calibration) -> list[str]:
     readings' unit: mm, a camera's px)."""
     worst = cal.worst_pose
     u = cal.model.reading_unit
+    parts = sigma_parts(cal.model, cal.conditions, cal.sigma_mm)  # coordinates and turns
+    sigma = f"{cal.sigma_mm:.4g} {u}" if parts is None else sigma_words(parts)
     lines = [
         "",
-        f"sigma {cal.sigma_mm:.4g} {u} ({cal.sigma_source}); "
+        f"sigma {sigma} ({cal.sigma_source}); "
         f"residual RMS {cal.residual_rms:.4g} {u} per coordinate "
         f"({cal.residual_rms_per_point:.4g} {u} per point), "
         f"max {cal.residual_max:.4g} {u} at pose {cal.pose_labels[worst]}; "

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 from collections.abc import Mapping
 
 import numpy as np
@@ -20,9 +21,16 @@ def format_monte_carlo(result: MonteCarlo, *, words: Mapping[str, str] = ACTIONS
     """Human-readable table of :func:`monte_carlo`: empirical vs predicted std and bias
     (``words`` say the advice, :func:`armcal.errors.render`)."""
     arm = result.arm
+    noise = arm.noise
+    turned = (  # partial coordinates that read the tool's turn: its sigma too
+        noise is not None
+        and noise.orientation_sigma is not None
+        and arm.turn_rows(arm.plan_conditions(result.q[:1])) is not None
+    )
+    turn = f", {math.degrees(noise.orientation_sigma):g} deg a turn" if turned else ""
     lines = [
         f"Monte Carlo: {result.trials} trials of {result.q.shape[0]} poses of {arm.name}, "
-        f"sigma {result.sigma_mm:g} {arm.reading_unit}, {result.method} "
+        f"sigma {result.sigma_mm:g} {arm.reading_unit}{turn}, {result.method} "
         f"({result.seconds:.2f} s)",
         *model_lines(arm, words=words),
         "",

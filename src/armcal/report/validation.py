@@ -41,7 +41,8 @@ def validation_report(
 ) -> tuple[dict, str]:
     """The ``validate`` document and text: errors before and after, predicted, per pose."""
     s = result.summary()
-    m = result.after.shape[0]
+    m = len(meas.labels)  # every row validated (a turn's rows' errors apart, result.turns)
+    index = np.arange(m) if result.kept is None else result.kept  # the rows of result's arrays
     poses = len(set(meas.labels))
     if meas.targets is not None:
         held = _rows_words(m, poses, result)
@@ -70,7 +71,12 @@ def validation_report(
     if result.turns is not None:
         lines[6:6] = [
             "",
-            f"{'orientation error (deg)':<24}{'RMS':>10}{'':>10}{'max':>10}   (angle of the turn)",
+            f"{'orientation error (deg)':<24}{'RMS':>10}{'':>10}{'max':>10}   "
+            + (
+                "(angle of the turn)"
+                if result.turns.after.shape[1] == 3
+                else "(a turn's component)"
+            ),
             f"{'nominal arm':<24}{s['orientation_rms_before_deg']:>10.4g}",
             f"{'calibrated model':<24}{s['orientation_rms_after_deg']:>10.4g}{'':>10}"
             f"{s['orientation_max_after_deg']:>10.4g}",
@@ -89,22 +95,22 @@ def validation_report(
             f"{'predicted':>11}",
         ]
         rows = []
-        for i in range(m):
+        for k, i in enumerate(index.tolist()):
             target = "" if targets is None else targets[i]
             rows.append(
                 {
                     "row": int(meas.rows[i]),
                     "pose": meas.labels[i],
                     "target": None if targets is None else target,
-                    "before_mm": float(result.before_mm[i]),
-                    "after_mm": float(result.after_mm[i]),
-                    "predicted_mm": float(result.predicted_mm[i]),
+                    "before_mm": float(result.before_mm[k]),
+                    "after_mm": float(result.after_mm[k]),
+                    "predicted_mm": float(result.predicted_mm[k]),
                 }
             )
             lines.append(
                 f"{meas.rows[i]:>5}  {meas.labels[i]:<8}{target:<8}"
-                f"{result.before_mm[i]:>11.4g}{result.after_mm[i]:>10.4g}"
-                f"{result.predicted_mm[i]:>11.4g}"
+                f"{result.before_mm[k]:>11.4g}{result.after_mm[k]:>10.4g}"
+                f"{result.predicted_mm[k]:>11.4g}"
             )
         document["per_pose"] = rows
     return document, "\n".join(lines)

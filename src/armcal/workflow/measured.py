@@ -312,6 +312,12 @@ def instrument_rows(model: FitModel, meas: Measurements) -> Conditions:
 _FAR_FROM_FEATURE = 0.1
 
 
+#: A turn's reading (partial coordinates' rx_deg...) that differs from the others' by more
+#: than this (deg) is not of this tool or instrument (a column in radians, another
+#: convention): the arm's errors and the user's rough axes turn the tool by a few degrees.
+_FAR_TURN_DEG = 10.0
+
+
 #: A camera's reading that differs from the others' by more than this fraction of the
 #: image's diagonal is not of this board (a wrong corner, another camera's file): the
 #: user's rough placement of the camera and the board moves a corner by tens of pixels.
@@ -340,20 +346,30 @@ def check_meeting(
     unit = model.reading_unit
     if unit != "mm":  # a camera's pixels: the image's size, not the reach
         limit = _FAR_IN_IMAGE * float(np.linalg.norm(np.ptp(_image(model), axis=1)))
-    if not spread.size or spread.max() <= limit:
+    turn = model.turn_rows(rows)  # a turn's component (rad): degrees, against its own bound
+    turn = np.zeros(spread.shape, dtype=bool) if turn is None else turn
+    spread = np.where(turn, np.degrees(spread), spread)
+    limits = np.where(turn, _FAR_TURN_DEG, limit)
+    if not spread.size or np.all(spread <= limits):
         return
-    r = int(np.argmax(spread))
+    r = int(np.argmax(spread / limits))
     feature = "" if meas.feature is None else f" {meas.feature[r]!r}"
-    if unit == "mm":
+    if turn[r]:
+        what, unit, limit = "the nominal arm's tool is turned", "deg", _FAR_TURN_DEG
+        bound = "no error of the arm or of where the tool's axes are"
+        where = "its turn"
+    elif unit == "mm":
         what = "the nominal arm's tool point is"
         bound = "a tenth of the reach"
+        where = "the instrument's feature"
     else:  # the reading the arm and the camera predict, in the image
         what = "the nominal arm and the robot file's camera put the reading"
         bound = "half the image's diagonal"
+        where = "the instrument's feature"
     raise InputError(
         f"{source}: row {meas.rows[r]}: at its joint readings {what} {spread[r]:.4g} {unit} "
-        f"from where the other rows put the instrument's feature{feature} (at most "
-        f"{limit:.4g} {unit}, {bound}, is an error of the arm or of where the robot file "
-        "places the instrument); check the row's joint readings and its label, and where "
-        "[instrument] places the feature"
+        f"from where the other rows put {where}{feature} (at most {limit:.4g} {unit}, "
+        f"{bound}, is an error of the arm or of where the robot file places the instrument); "
+        "check the row's joint readings and its label, and where [instrument] places the "
+        "feature"
     )
