@@ -182,3 +182,17 @@ def refused_robot(folder: Path, robot: str) -> str:
     lines = run.stderr.strip().splitlines()
     assert len(lines) == 1 and lines[0].startswith("armcal: error:"), run.stderr
     return lines[0]
+
+
+def refused_measurements(
+    folder: Path, robot: str, lines: list[str], where: str, words: str, *, name: str = ""
+) -> None:
+    """``armcal identify`` of the measurement file of ``lines`` (written to ``bad.csv``) with
+    the robot file ``robot`` refuses it in one line, exit 2, that names the file and says
+    ``where`` and ``words``."""
+    (folder / "bad.csv").write_text("\n".join(lines) + "\n", encoding="utf-8")
+    run = run_cli(folder, "identify", "--robot", robot, "--measurements", "bad.csv")
+    assert run.returncode == 2, (name, run.stderr)
+    err = run.stderr.strip().splitlines()
+    assert len(err) == 1 and err[0].startswith("armcal: error: bad.csv"), (name, run.stderr)
+    assert where in err[0] and words in err[0], (name, err[0])

@@ -167,10 +167,14 @@ def test_noiseless_photos_are_recovered_on_held_out_poses(tmp_path, robot, mount
 
 
 @pytest.mark.slow
-def test_monte_carlo_std_agrees_with_the_predicted_std(tmp_path):
-    """4000 noisy photo sets (0.2 px) of 20 poses eye-to-hand, identified from the truth:
-    every free parameter's std within 5 % of the predicted one (a std known to 1.1 %)."""
-    robot_file, truth = write_lab(tmp_path, "industrial-6r", "eye-to-hand")
+@pytest.mark.parametrize(
+    ("robot", "mount"), [("industrial-6r", "eye-to-hand"), ("cobot-6r", "eye-in-hand")]
+)
+def test_monte_carlo_std_agrees_with_the_predicted_std(tmp_path, robot, mount):
+    """4000 noisy photo sets (0.2 px) of 20 poses, identified from the truth, on two arms
+    and both mounts: every free parameter's std within 5 % of the predicted one (a std
+    known to 1.1 %)."""
+    robot_file, truth = write_lab(tmp_path, robot, mount)
     spec = load_robot(robot_file)
     model = spec.arm
     x_true = instrumented_truth(spec, model, truth)

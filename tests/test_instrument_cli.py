@@ -23,7 +23,7 @@ from armcal.choices import BUILTIN_SPATIAL_ROBOTS
 from armcal.criteria import position_accuracy
 from armcal.files import load_robot
 from helpers import run_cli
-from helpers_instruments import met_plan, refused_table, write_lab
+from helpers_instruments import met_plan, refused_measurements, refused_table, write_lab
 
 
 def synthesized(
@@ -207,14 +207,7 @@ def test_bad_measurements_are_one_line(tmp_path):
         "geometry": ([head, swapped, *rows[1:]], "row 1:", "from where the other rows put"),
     }
     for name, (lines, where, words) in cases.items():
-        (tmp_path / "bad.csv").write_text("\n".join(lines) + "\n", encoding="utf-8")
-        run = run_cli(
-            tmp_path, "identify", "--robot", robot_file.name, "--measurements", "bad.csv"
-        )
-        assert run.returncode == 2, (name, run.stderr)
-        err = run.stderr.strip().splitlines()
-        assert len(err) == 1 and err[0].startswith("armcal: error:"), (name, run.stderr)
-        assert where in err[0] and words in err[0], (name, err[0])
+        refused_measurements(tmp_path, robot_file.name, lines, where, words, name=name)
 
 
 def test_validation_figure_compensation_and_export_of_an_instrument(tmp_path):

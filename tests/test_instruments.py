@@ -221,6 +221,40 @@ def test_a_turns_derivatives_are_central_differences(kind):
     np.testing.assert_allclose(true.reading(frame, feature, at)[:, 0], expected, atol=1e-9)
 
 
+def test_a_turns_range_and_its_derivatives():
+    """A plan keeps the tool within ``max_turn_deg`` of the instrument's axes: the view's
+    constraint is that angle's slack, ``max - |phi|`` (recomputed from the matrices), and
+    its joint derivatives are central differences of it (step 1e-6 rad: error about
+    1e-10); poses beyond it are not feasible."""
+    from armcal.models.spatial.chain import rotation_vector, rpy_matrix
+
+    _, _, _, model = _lab("industrial-6r", "pose", 10)
+    assert model.has_view
+    q = random_plan(model.inner, 40, rng=np.random.default_rng(5))
+    g, dg = model.view_constraints(q)
+    rows = model.plan_conditions(q)
+    r = rpy_matrix(np.radians(model.instrument.rpy_deg))
+    tool = rpy_matrix(np.radians(model.instrument.tool_rpy_deg))
+    tip = model.inner.tip_rotation(model.inner.conditions(q))
+    angle = np.linalg.norm(rotation_vector(r.T @ tip @ tool), axis=-1)
+    turns = len(model.instrument.labels)
+    assert g.shape == (40, turns)  # every row of a pose: its pose's turn
+    np.testing.assert_allclose(
+        g, np.broadcast_to(np.radians(150.0) - angle[:, None], g.shape), atol=1e-12
+    )
+    h = 1e-6
+    numeric = np.stack(
+        [
+            (model.view_constraints(q + h * e)[0] - model.view_constraints(q - h * e)[0]) / (2 * h)
+            for e in np.eye(q.shape[1])
+        ],
+        axis=-1,
+    )
+    np.testing.assert_allclose(dg, numeric, atol=1e-8)
+    assert rows.m == 40 * turns
+    np.testing.assert_array_equal(model.feasible(q), angle <= np.radians(150.0))
+
+
 @pytest.mark.parametrize("kind", [*KINDS, "bar"])
 def test_curvatures_are_central_differences_of_the_derivatives(kind):
     """d^2 reading / d point^2 and d^2 reading / d params d point against central

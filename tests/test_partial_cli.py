@@ -21,7 +21,7 @@ import numpy as np
 import pytest
 
 from helpers import run_cli
-from helpers_instruments import met_plan, refused_table, write_lab
+from helpers_instruments import met_plan, refused_measurements, refused_table, write_lab
 
 if sys.version_info >= (3, 11):
     import tomllib
@@ -213,14 +213,7 @@ def test_bad_turns_are_one_line(tmp_path):
         "radians": ([head, *(radians(r) for r in rows)], "row ", "deg from where the other"),
     }
     for name, (lines, where, words) in cases.items():
-        (tmp_path / "bad.csv").write_text("\n".join(lines) + "\n", encoding="utf-8")
-        run = run_cli(
-            tmp_path, "identify", "--robot", robot_file.name, "--measurements", "bad.csv"
-        )
-        assert run.returncode == 2, (name, run.stderr)
-        err = run.stderr.strip().splitlines()
-        assert len(err) == 1 and err[0].startswith("armcal: error: bad.csv"), (name, run.stderr)
-        assert where in err[0] and words in err[0], (name, err[0])
+        refused_measurements(tmp_path, robot_file.name, lines, where, words, name=name)
 
 
 def test_what_one_dial_cannot_see_is_held_and_said(tmp_path):
@@ -419,12 +412,7 @@ def test_bad_partial_measurements_are_one_line(tmp_path):
         ),
     }
     for name, (robot, lines, where, words) in cases.items():
-        (tmp_path / "bad.csv").write_text("\n".join(lines) + "\n", encoding="utf-8")
-        run = run_cli(tmp_path, "identify", "--robot", robot, "--measurements", "bad.csv")
-        assert run.returncode == 2, (name, run.stderr)
-        err = run.stderr.strip().splitlines()
-        assert len(err) == 1 and err[0].startswith("armcal: error: bad.csv"), (name, run.stderr)
-        assert where in err[0] and words in err[0], (name, err[0])
+        refused_measurements(tmp_path, robot, lines, where, words, name=name)
 
 
 def test_the_rows_a_pose_gives_size_the_plan(tmp_path):

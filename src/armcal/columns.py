@@ -119,9 +119,25 @@ _READ = (
         )
         for axis in ("x", "y", "z")
     ),
+    *(
+        Column(
+            f"r{axis}_deg",
+            "deg",
+            False,
+            f"kind partial, reading r{axis}: the {axis} component of the tool's turn in the "
+            "instrument's frame (rotation vector, axis times angle); empty where it read none",
+        )
+        for axis in ("x", "y", "z")
+    ),
     _POSE,
     Column("target", "text", False, "the [targets] label of the tool point (with several)"),
-    Column("sigma_mm", "mm", False, "this row's instrument noise (1 std)"),
+    Column(
+        "sigma_mm",
+        "mm",
+        False,
+        "this row's instrument noise (1 std; not with a turn's columns: give "
+        "orientation_sigma_deg)",
+    ),
 )
 
 #: Columns of each CSV file kind, joint columns first.

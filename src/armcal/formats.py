@@ -286,7 +286,8 @@ SPATIAL_KEYS: tuple[Key, ...] = (
         "deg",
         "none",
         "a 6-DoF instrument's orientation noise (1 std about each axis): needed for "
-        "measurements with rx_deg, ry_deg, rz_deg; plans are then evaluated for full poses",
+        "measurements with rx_deg, ry_deg, rz_deg; plans are then evaluated for full poses "
+        "(partial coordinates that read a turn: a turn's component's noise)",
     ),
     Key(
         "measurement",

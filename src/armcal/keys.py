@@ -113,10 +113,26 @@ INSTRUMENT_KEYS: tuple[Key, ...] = (
     Key(
         "instrument",
         "reads",
-        'list of "x", "y", "z"',
+        'list of "x", "y", "z", "rx", "ry", "rz"',
         "required for kind partial",
-        "the axes of its own frame partial coordinates read (a dial indicator: one); rows "
-        "give x_mm, y_mm, z_mm, a cell empty where it read none",
+        "what partial coordinates read in their own frame: some of its axes (a dial "
+        "indicator: one) and of the tool's turn (its rotation vector's components, with a "
+        "coordinate); rows give x_mm ... rz_deg, a cell empty where it read none",
+    ),
+    Key(
+        "instrument",
+        "tool_rpy_deg",
+        "deg, [roll, pitch, yaw] as in URDF (Rz Ry Rx), in the tip frame",
+        "optional for kind partial that reads a turn, default [0, 0, 0]",
+        "where the tool's axes roughly are (found with the arm: tool.rx, tool.ry, tool.rz)",
+    ),
+    Key(
+        "instrument",
+        "max_turn_deg",
+        "number (degrees)",
+        "optional for kind partial that reads a turn, default 150",
+        "the largest turn of the tool from the instrument's axes a plan's pose keeps to "
+        "(away from the rotation vector's jump at a half turn)",
     ),
     Key(
         "instrument",

@@ -24,6 +24,7 @@ from ..models import CalibratedArm, Conditions, Effect, FitModel, Plane
 from ..notebook import html_table, number
 from ..numerics import point_norms, rms
 from .judgement import GoodnessOfFit, Outlier, row_noun
+from .problem import sigma_parts, sigma_words
 from .registration import Baseline
 
 __all__ = [
@@ -180,7 +181,7 @@ class Calibration:
         codes = f", warnings {[w.code for w in self.warnings]}" if self.warnings else ""
         return (
             f"Calibration({self.model.name}: {used} {row_noun(self.target)}, {self.n_free} "
-            f"free parameters, {self.method}, sigma {self.sigma_mm:.4g} mm ({self.sigma_source}), "
+            f"free parameters, {self.method}, sigma {self.sigma_text} ({self.sigma_source}), "
             f"residual RMS {self.residual_rms:.4g} mm per coordinate{codes})"
         )
 
@@ -300,6 +301,15 @@ class Calibration:
     def pose_residuals(self) -> np.ndarray:
         """Euclidean residual of every pose's position ``(m,)`` in mm."""
         return point_norms(self.residuals[:, : self.model.position_dim])
+
+    @property
+    def sigma_text(self) -> str:
+        """The noise in words: ``"0.01 mm"`` (the readings' unit); for rows of coordinates
+        and turns each's, ``"0.01 mm a coordinate, 0.005 deg a turn"``."""
+        parts = sigma_parts(self.model, self.conditions, self.sigma_mm)
+        if parts is None:
+            return f"{self.sigma_mm:.4g} {self.model.reading_unit}"
+        return sigma_words(parts)
 
     @property
     def turn_rows(self) -> np.ndarray:

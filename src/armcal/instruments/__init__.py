@@ -16,7 +16,9 @@ with its analytic derivatives (:class:`~armcal.instruments.base.Instrument`):
   Unknowns: the pivot's position and the offset.
 * :class:`~armcal.instruments.partial.Coordinates`: partial coordinates, some of
   the tool point's coordinates in the instrument's frame (a dial indicator, a
-  displacement sensor), each a number of its own.  Unknowns: the instrument's pose.
+  displacement sensor) and of the tool's turn (a 6-DoF probe with gaps), each a
+  number of its own.  Unknowns: the instrument's pose, and the tool's axes where it
+  reads a turn.
 * :class:`~armcal.instruments.camera.Camera`: the pixels of a checkerboard's
   corners, the camera on the tool or the board on it.  Unknowns: the camera's pose
   and the board's (hand-eye calibration with the arm's).

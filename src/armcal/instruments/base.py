@@ -186,6 +186,14 @@ class Instrument(Protocol):
         depth, the board within its largest tilt), or None where there are none."""
         ...
 
+    def slack_derivatives(
+        self, points: np.ndarray, feature: np.ndarray | None, params: np.ndarray
+    ) -> np.ndarray | None:
+        """``d slack / d points`` ``(..., m, s, 3)`` (by the tip's shift and turn ``(..., m,
+        s, 6)`` for one that reads the tool's frame), or None where the model takes them by
+        central differences (a camera's)."""
+        ...
+
     def miss(
         self, points: np.ndarray, feature: np.ndarray | None, params: np.ndarray
     ) -> np.ndarray:
@@ -231,6 +239,11 @@ class Defaults:
         return None
 
     def slack(
+        self, points: np.ndarray, feature: np.ndarray | None, params: np.ndarray
+    ) -> np.ndarray | None:
+        return None
+
+    def slack_derivatives(
         self, points: np.ndarray, feature: np.ndarray | None, params: np.ndarray
     ) -> np.ndarray | None:
         return None

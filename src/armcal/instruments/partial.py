@@ -357,6 +357,23 @@ class Coordinates(Defaults):
         phi = self._turn(tip, np.asarray(params, dtype=float))[0]
         return (np.radians(self.max_turn_deg) - np.linalg.norm(phi, axis=-1))[..., None]
 
+    def slack_derivatives(
+        self, points: np.ndarray, feature: np.ndarray | None, params: np.ndarray
+    ) -> np.ndarray | None:
+        """By the tip's shift and turn ``(..., m, 1, 6)``: none by the shift, and ``-u^T R^T``
+        by the turn, ``u`` the turn's axis (``phi^T J_l(phi)^-1 = phi^T``: a turn moves
+        ``|phi|`` along its own axis alone); None for an instrument that reads no turn."""
+        _, tip = self._split(points)
+        if tip is None:
+            return None
+        params = np.asarray(params, dtype=float)
+        phi, r, *_ = self._turn(tip, params)
+        size = np.linalg.norm(phi, axis=-1, keepdims=True)
+        axis = phi / np.where(size > 0.0, size, 1.0)  # at no turn, the slack's top: 0
+        out = np.zeros((*phi.shape[:-1], 1, 6))
+        out[..., 0, 3:] = -np.einsum("...mi,...ji->...mj", axis, r)  # -(R u)^T = -u^T R^T
+        return out
+
     def miss(
         self, points: np.ndarray, feature: np.ndarray | None, params: np.ndarray
     ) -> np.ndarray:

@@ -364,12 +364,29 @@ class InstrumentedArm(CoreModel):
             reading = self.positions(rows).reshape(count, -1)
             jac = self.joint_jacobian(rows).reshape(count, -1, n)
             g, dg = _box_rows(reading, jac, box)
-        slack = self._slack(flat)
-        if slack is not None:  # smooth but without a closed-form derivative: differences
-            g = np.concatenate([g, slack], axis=-1)
-            by_q = pose_derivative(lambda x: np.asarray(self._slack(x)), flat, _SLACK_STEP)
-            dg = np.concatenate([dg, by_q], axis=-2)
+        found = self._slack_rows(flat)
+        if found is not None:
+            g = np.concatenate([g, found[0]], axis=-1)
+            dg = np.concatenate([dg, found[1]], axis=-2)
         return g.reshape(*q.shape[:-1], -1), dg.reshape(*q.shape[:-1], -1, n)
+
+    def _slack_rows(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray] | None:
+        """The slack of poses ``q`` ``(k, n)`` pose by pose ``(k, rows s)`` and its joint
+        derivatives ``(k, rows s, n)``: the instrument's by the tool's, by the chain rule
+        where it gives them (a turn's range), else central differences (a camera's depth
+        and tilt, smooth but without a closed form); None without a slack."""
+        if not self.instrument.has_slack:
+            return None
+        rows = self.plan_conditions(q)
+        x, theta = self.split(self.nominal)
+        tool = self._tool(rows, x)
+        slack = np.asarray(self.instrument.slack(tool, rows.feature, theta)).reshape(len(q), -1)
+        by_tool = self.instrument.slack_derivatives(tool, rows.feature, theta)
+        if by_tool is None:
+            by_q = pose_derivative(lambda x: np.asarray(self._slack(x)), q, _SLACK_STEP)
+            return slack, by_q
+        joint = self._arm_jacobian(rows, x, joints=True)  # (rows, 3 or 6, n)
+        return slack, (by_tool @ joint).reshape(q.shape[0], -1, q.shape[-1])
 
     def _slack(self, q: np.ndarray) -> np.ndarray | None:
         """The instrument's :meth:`~armcal.instruments.base.Instrument.slack` of every
@@ -575,16 +592,18 @@ class InstrumentedArm(CoreModel):
         in the joints), with the tip's angular one below it for an instrument that reads
         the tool's frame ``(..., m, 6, k)``."""
         rows, back = self._arm_rows(conditions)
-        if joints:
-            found = np.asarray(self.inner.joint_jacobian(rows, arm_params))[..., :3, :]
-        else:
-            found = np.asarray(self.inner.jacobian(rows, arm_params))[..., :3, :]
-        if self._frame:
+        turn = None
+        if self._frame:  # first: the arm keeps this pass for the point's Jacobian next
             turn = (
                 self.inner.orientation_joint_jacobian(rows, arm_params)
                 if joints
                 else self.inner.orientation_jacobian(rows, arm_params)
             )
+        if joints:
+            found = np.asarray(self.inner.joint_jacobian(rows, arm_params))[..., :3, :]
+        else:
+            found = np.asarray(self.inner.jacobian(rows, arm_params))[..., :3, :]
+        if turn is not None:
             found = np.concatenate([found, np.asarray(turn)], axis=-2)
         return found if back is None else found[..., back, :, :]
 

@@ -8,7 +8,6 @@ import numpy as np
 
 from ..errors import ACTIONS
 from ..identification import Calibration
-from ..identification.problem import sigma_parts, sigma_words
 from ..identification.result import STRONG_CORRELATION
 from ..models.wording import effect_description, held_sentence
 from .common import identified, model_lines, small
@@ -160,11 +159,9 @@ def _fit_lines(cal: Calibration) -> list[str]:
     readings' unit: mm, a camera's px)."""
     worst = cal.worst_pose
     u = cal.model.reading_unit
-    parts = sigma_parts(cal.model, cal.conditions, cal.sigma_mm)  # coordinates and turns
-    sigma = f"{cal.sigma_mm:.4g} {u}" if parts is None else sigma_words(parts)
     lines = [
         "",
-        f"sigma {sigma} ({cal.sigma_source}); "
+        f"sigma {cal.sigma_text} ({cal.sigma_source}); "
         f"residual RMS {cal.residual_rms:.4g} {u} per coordinate "
         f"({cal.residual_rms_per_point:.4g} {u} per point), "
         f"max {cal.residual_max:.4g} {u} at pose {cal.pose_labels[worst]}; "
