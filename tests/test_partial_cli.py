@@ -178,6 +178,11 @@ def test_noiseless_turns_are_recovered_on_held_out_poses(tmp_path, robot):
     assert summary["rms_after_mm"] < 1e-9
     assert summary["orientation_rms_after_deg"] < 1e-9
     assert summary["rms_before_mm"] > 1e-3 and summary["orientation_rms_before_deg"] > 1e-3
+    run = run_cli(
+        tmp_path, "validate", "--calibration", "cal.json", "--measurements", "meas.csv"
+    )  # its own rows, the turns' too, are not held out
+    assert f"({readings} readings, all of them the calibration's own rows" in run.stdout
+    assert f"{readings} of {readings} rows are rows the calibration was fitted to" in run.stderr
 
 
 def test_bad_turns_are_one_line(tmp_path):

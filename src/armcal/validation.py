@@ -88,6 +88,7 @@ class Validation:
     reused : ndarray of bool, shape (m,), or None
         Which rows are rows the calibration was fitted to (the same joint readings and
         target, to the last bit); None where the calibration does not record its rows.
+        Of every row validated, a turn's too, where :attr:`kept` is given.
     kept : ndarray of int, shape (m,), or None
         Which of the rows validated the arrays above are, where some rows read a turn
         instead (partial coordinates': their errors are :attr:`turns`'); None for all.
@@ -384,7 +385,7 @@ def validate(
             out_of_plane,
             Turns(before[turning], after[turning], predicted[turning]),
             baseline_rows,
-            None if reused is None else reused[kept],
+            reused,
             kept,
         )
     return Validation(
@@ -534,9 +535,10 @@ def validation_warnings(
         warnings.append(
             ArmcalWarning(
                 "not-held-out",
-                f"{reused} of {count} rows are rows the calibration was fitted to (the same "
-                "joint readings and target): they are not held out, and their errors after "
-                "calibration flatter it; validate on poses the calibration has not seen",
+                f"{reused} of {0 if result.reused is None else result.reused.size} rows are "
+                "rows the calibration was fitted to (the same joint readings and target): they "
+                "are not held out, and their errors after calibration flatter it; validate on "
+                "poses the calibration has not seen",
             )
         )
     if not clearly_better(result.before_mm, result.after_mm, groups):
