@@ -179,8 +179,16 @@ def test_noiseless_turns_are_recovered_on_held_out_poses(tmp_path, robot):
     assert summary["orientation_rms_after_deg"] < 1e-9
     assert summary["rms_before_mm"] > 1e-3 and summary["orientation_rms_before_deg"] > 1e-3
     run = run_cli(
-        tmp_path, "validate", "--calibration", "cal.json", "--measurements", "meas.csv"
-    )  # its own rows, the turns' too, are not held out
+        tmp_path,
+        "validate",
+        "--calibration",
+        "cal.json",
+        "--measurements",
+        "meas.csv",
+        "--plot",
+        "fig.png",
+    )  # its own rows, the turns' too, are not held out; the figure of its coordinates'
+    assert run.returncode == 0 and (tmp_path / "fig.png").stat().st_size > 0, run.stderr
     assert f"({readings} readings, all of them the calibration's own rows" in run.stdout
     assert f"{readings} of {readings} rows are rows the calibration was fitted to" in run.stderr
 

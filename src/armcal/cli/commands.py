@@ -335,9 +335,12 @@ def validate(args: argparse.Namespace) -> None:
     if args.plot is not None or args.report is not None:
         from ..plotting import figure_png, plot_validation, save_figure  # only when asked for
 
-        pose = None if meas.targets is None else meas.labels  # a pose's rows share its label
+        kept = run.validation.kept  # the rows of its position errors (a turn's apart)
+        rows = list(range(len(meas.labels))) if kept is None else kept.tolist()
+        several = meas.targets is not None or meas.feature is not None  # a pose's rows
+        pose = [meas.labels[i] for i in rows] if several else None  # share its label
         figures["Errors before and after calibration"] = plot_validation(
-            cal.arm, meas.q, run.validation, pose=pose
+            cal.arm, meas.q[rows], run.validation, pose=pose
         )
         if run.acceptance is not None:
             from ..plotting_acceptance import plot_acceptance
