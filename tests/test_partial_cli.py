@@ -193,6 +193,28 @@ def test_noiseless_turns_are_recovered_on_held_out_poses(tmp_path, robot):
     assert f"{readings} of {readings} rows are rows the calibration was fitted to" in run.stderr
 
 
+@pytest.mark.parametrize("kind", ["partial", "turned"])
+def test_cross_validation_keeps_a_poses_readings_together(tmp_path, kind):
+    """identify --cross-validate of partial coordinates (it once stopped on a traceback:
+    the folds' rows lost their features): a pose's readings stay in one fold, every fold
+    holds 1/5 of the poses, and noiseless data are predicted to round-off (1e-9 mm;
+    1e-9 deg a turn)."""
+    robot_file, truth = write_lab(tmp_path, "industrial-6r", kind)
+    met_plan(tmp_path, robot_file, 50, 1, "train.csv")
+    synthesized(tmp_path, robot_file, truth, "train.csv", "meas.csv", "--sigma", "0")
+    document = json.loads(
+        ok(
+            tmp_path, "identify", "--robot", robot_file.name, "--measurements", "meas.csv",
+            "--cross-validate", "5", "--json",
+        )
+    )  # fmt: skip
+    checked = document["cross_validation"]
+    coordinates = 3 if kind == "partial" else 2  # x, y, z; x, z (and rx, rz apart)
+    assert [fold["points"] for fold in checked["per_fold"]] == [10 * coordinates] * 5
+    assert checked["rms_per_point_mm"] < 1e-9
+    assert kind == "partial" or checked["orientation_rms_deg"] < 1e-9
+
+
 def test_bad_turns_are_one_line(tmp_path):
     """A turn beyond a half turn, a line's sigma in mm beside turns, and turns in radians
     under a degrees column: exit 2, the file, the row or line and the column named."""

@@ -728,6 +728,7 @@ def cross_validate(
     rng: np.random.Generator | int | None = None,
     loads: Loads | None = None,
     progress: ProgressCallback | None = None,
+    feature: ArrayLike | None = None,
 ) -> CrossValidation:
     """K-fold cross-validation of the calibration of ``model``.
 
@@ -753,6 +754,9 @@ def cross_validate(
         Shuffles the groups into folds.
     progress : callable, optional
         ``progress(done, folds)`` after every fold (:mod:`armcal.progress`).
+    feature : ndarray of int or sequence of str, shape (m,), optional
+        For an instrument of several features (planes, partial coordinates' axes and
+        turns, a board's corners): every row's (as :func:`validate`'s).
 
     Returns
     -------
@@ -766,7 +770,9 @@ def cross_validate(
     """
     rng = np.random.default_rng(rng)
     row_sigma = per_row_sigma(sigma, row_sigma)  # a given sigma replaces them, fold by fold
-    conditions = model.conditions(q, target=target, loads=loads, sigma_mm=row_sigma)
+    conditions = model.conditions(
+        q, target=target, loads=loads, sigma_mm=row_sigma, feature=feature
+    )
     conditions, points = model.anchor(conditions, np.asarray(points, dtype=float))
     m = conditions.m
     keys = np.arange(m) if groups is None else np.unique(groups, return_inverse=True)[1]
@@ -813,14 +819,44 @@ def cross_validate(
             turn_predicted[held] = turn
         if progress is not None:
             progress(k + 1, folds)
+    turn = turn_predicted if points.shape[1] > model.position_dim else None
+    found = (fold, errors, predicted, turn, nominal, groups)
+    return _cross_validation(model, conditions, folds, *found)
+
+
+def _cross_validation(
+    model: FitModel,
+    conditions: Conditions,
+    folds: int,
+    fold: np.ndarray,
+    errors: np.ndarray,
+    predicted: np.ndarray,
+    turn_predicted: np.ndarray | None,
+    nominal: np.ndarray | None,
+    groups: np.ndarray | None,
+) -> CrossValidation:
+    """The folds' errors of every row as a :class:`CrossValidation`: the positions', and a
+    6-DoF instrument's turns (``turn_predicted``) or partial coordinates' rows of turns
+    apart, in :class:`Turns`."""
     d = model.position_dim
-    turns = _turns(model, errors, errors, turn_predicted if points.shape[1] > d else None)
+    turning = model.turn_rows(conditions)
+    if turning is not None and np.any(turning):  # partial coordinates' turns: in Turns
+        kept = ~turning
+        return CrossValidation(
+            folds,
+            fold[kept],
+            errors[kept, :d],
+            predicted[kept],
+            Turns(errors[turning], errors[turning], predicted[turning]),
+            None if nominal is None else nominal[kept, :d],
+            None if groups is None else np.asarray(groups)[kept],
+        )
     return CrossValidation(
         folds,
         fold,
         errors[:, :d],
         predicted,
-        turns,
+        _turns(model, errors, errors, turn_predicted),
         None if nominal is None else nominal[:, :d],
         None if groups is None else np.asarray(groups),
     )

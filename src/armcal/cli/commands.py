@@ -288,8 +288,13 @@ def identify(args: argparse.Namespace) -> None:
     if run.cross_validation is not None:
         summary = run.cross_validation.summary()
         folds = run.cross_validation.per_fold()
-        document["cross_validation"] = {**summary, "per_fold": folds}
-        text += "\n" + format_cross_validation(summary, folds)
+        unit = cal.model.reading_unit  # a camera's pixels, under the same keys
+        document["cross_validation"] = {
+            **summary,
+            "per_fold": folds,
+            **({} if unit == "mm" else {"reading_unit": unit}),
+        }
+        text += "\n" + format_cross_validation(summary, folds, unit)
     if args.output is not None:
         atomic_write(args.output, partial(write_json, document))
     if args.plot is not None or args.report is not None:

@@ -253,14 +253,18 @@ def effect_lines(cal: Calibration) -> list[str]:
     return out
 
 
-def format_cross_validation(summary: dict, per_fold: list[dict] | None = None) -> str:
+def format_cross_validation(
+    summary: dict, per_fold: list[dict] | None = None, unit: str = "mm"
+) -> str:
     """The K-fold prediction error against what the calibrations predict and against the
-    nominal arm registered on the same training rows; with ``per_fold`` a line a fold."""
+    nominal arm registered on the same training rows; with ``per_fold`` a line a fold;
+    in the readings' ``unit`` (a camera's px, under the same keys)."""
     nominal = summary.get("nominal_rms_per_point_mm")
+    u = unit
     text = (
         f"cross-validation ({summary['folds']} folds): prediction error RMS per point "
-        f"{summary['rms_per_point_mm']:.4g} mm (max {summary['max_mm']:.4g} mm); predicted "
-        f"{summary['predicted_rms_per_point_mm']:.4g} mm"
+        f"{summary['rms_per_point_mm']:.4g} {u} (max {summary['max_mm']:.4g} {u}); predicted "
+        f"{summary['predicted_rms_per_point_mm']:.4g} {u}"
         + (
             f"; orientation RMS {summary['orientation_rms_deg']:.4g} deg (predicted "
             f"{summary['predicted_orientation_rms_deg']:.4g} deg)"
@@ -271,7 +275,7 @@ def format_cross_validation(summary: dict, per_fold: list[dict] | None = None) -
             ""
             if nominal is None
             else f"; the nominal arm, registered on its own to the same training rows, "
-            f"{nominal:.4g} mm"
+            f"{nominal:.4g} {u}"
         )
     )
     if not per_fold:
@@ -279,7 +283,7 @@ def format_cross_validation(summary: dict, per_fold: list[dict] | None = None) -
     lines = [
         text,
         f"{'fold':>6}{'points':>8}{'nominal':>11}{'calibrated':>12}{'predicted':>11}"
-        "   (RMS per point, mm)",
+        f"   (RMS per point, {u})",
     ]
     for entry in per_fold:
         before = entry["nominal_rms_per_point_mm"]

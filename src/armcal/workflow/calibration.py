@@ -248,13 +248,15 @@ def _cross_validated(
         meas.q,
         points,
         folds,
-        groups=None if meas.targets is None else np.array(meas.labels),
+        # a pose's rows (its targets, an instrument's readings) stay in one fold
+        groups=None if meas.targets is None and meas.feature is None else np.array(meas.labels),
         target=cal.target,
         sigma=sigma,
         row_sigma=meas.row_sigma,
         rng=seed,
         loads=None if conditions is None else conditions.loads,
         progress=progress,
+        feature=None if conditions is None else conditions.feature,
     )
     warnings.extend(cross_validation_warnings(checked))
     return checked
