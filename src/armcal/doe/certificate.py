@@ -131,13 +131,15 @@ def _maximize_variance(
     *,
     steps: int = 150,
     progress: ProgressCallback | None = None,
+    bounded: bool = False,
 ) -> np.ndarray:
     """Batched ascent of ``d(x)`` from ``starts (k, n)`` within the limits (near the view);
-    over the poses that meet the instrument where a pose must: within its view where
-    that is a region with an inside (:func:`~armcal.doe.constrained.bounded_ascent`, a
-    camera's image), else on the thin set of poses that meet it
-    (:func:`~armcal.doe.constrained.projected_ascent`)."""
-    if model.constrained:
+    over the poses that meet the instrument where a pose must, or where ``bounded`` asks
+    (a turn's range: :attr:`~armcal.models.interface.DesignEffort.bounded`): within its
+    view where that is a region with an inside
+    (:func:`~armcal.doe.constrained.bounded_ascent`, a camera's image), else on the thin
+    set of poses that meet it (:func:`~armcal.doe.constrained.projected_ascent`)."""
+    if model.constrained or bounded:
 
         def variance(q: np.ndarray, gradient: bool) -> tuple[np.ndarray, np.ndarray | None]:
             if gradient:
@@ -290,13 +292,22 @@ def _search_maximum(
     steps: int,
     progress: ProgressCallback | None,
     starts: int = ASCENT_STARTS,
+    bounded: bool = False,
 ) -> _Maximum:
     """``max_x d(x)`` over ``sample`` (its blocks, no kinematics) and over ascents from its
     ``starts`` largest values (:func:`_spread_starts`); ascent iterates that stray outside
-    the view by more than 1e-3 mm do not count."""
+    the view by more than 1e-3 mm do not count.  ``bounded``: a bound rests on this
+    maximum, so a model whose effort asks it keeps to its view step by step
+    (:attr:`~armcal.models.interface.DesignEffort.bounded`)."""
     d = variances(sample.blocks, m_inv)
     first = sample.q[_spread_starts(sample.q, d, starts)]
-    found = _poses(model, _maximize_variance(model, m_inv, first, steps=steps, progress=progress))
+    step_by_step = bounded and model.design_effort.bounded
+    found = _poses(
+        model,
+        _maximize_variance(
+            model, m_inv, first, steps=steps, progress=progress, bounded=step_by_step
+        ),
+    )
     d_found = variances(found.blocks, m_inv)
     constraints = model.view_constraints(found.q[:, None, :])
     if constraints is not None:  # count iterates that stray outside only a little
@@ -369,6 +380,7 @@ def _reference_design(
             steps=ASCENT_STEPS * (2 if last else 1),
             progress=parts[1 + round_],
             starts=last_starts if last else ASCENT_STARTS,
+            bounded=last,  # the search the bound rests on
         )
         if last:
             kept = weights > 0
@@ -492,8 +504,8 @@ def certify(
             [distinct, _corner_poses(model, rng), feasible_poses(model, search, rng=rng)]
         ),
     )
-    plan_max = _search_maximum(
-        model, plan_inverse, sample, steps=2 * ASCENT_STEPS, progress=parts[0]
+    plan_max = _search_maximum(  # a bound rests on it: the plan-only one
+        model, plan_inverse, sample, steps=2 * ASCENT_STEPS, progress=parts[0], bounded=True
     )
     logdet_plan = float(plan.log_det_gram())
     plan_only = np.exp(1.0 - plan_max.value / p)

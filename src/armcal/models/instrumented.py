@@ -648,8 +648,8 @@ class InstrumentedArm(CoreModel):
         ``tests/test_instrument_design.py``; a camera's, 35.0 against the certificate's
         30.3)."""
         effort = self.inner.design_effort
-        if not self.constrained:
-            return effort
+        if not self.constrained:  # a turn's range: its maxima on its edge, kept step by step
+            return replace(effort, bounded=True) if self.has_view else effort
         if self.has_view:  # a camera's hills are many: ascents from more of them
             effort = replace(effort, last_starts=LAST_STARTS_IN_VIEW)
         return replace(effort, search=CERTIFICATE_SAMPLE)

@@ -304,6 +304,13 @@ class DesignEffort:
     last_starts : int or None
         The ascents of the certificate's last search, the one its bound rests on; None:
         as many as every search's.
+    bounded : bool
+        Whether the certificate's searches a bound rests on (the plan's, the last) keep to
+        the view step by step (:func:`~armcal.doe.constrained.bounded_ascent`) rather
+        than by a penalty and a Newton polish: where the variance function's maxima lie
+        on the view's edges (a turn's range), the polish cannot follow an edge, and its
+        maximum falls short (by 1e-6 of it: a dense search found more, and the bound
+        overclaimed).
     """
 
     starts: int = 48
@@ -314,6 +321,7 @@ class DesignEffort:
     rounds: int = 4
     search: int = 20000
     last_starts: int | None = None
+    bounded: bool = False
 
 
 @dataclass(frozen=True)
