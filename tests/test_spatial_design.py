@@ -360,7 +360,18 @@ def test_a_constrained_design_keeps_every_pose_inside_every_constraint(tmp_path,
         assert np.min(g.reshape(30, 3, -1)[..., :6]) < 1.0
     best = max(float(d_efficiency(model, feasible_poses(model, 30, rng=s))) for s in range(30))
     assert made.d_efficiency > best
-    assert made.certificate is not None and made.certificate.certified_d_efficiency > 0.9
+    certificate = made.certificate
+    assert certificate is not None and certificate.certified_d_efficiency > 0.9
+    # Never overclaims against a dense search of the view (its maxima lie on its edges: a
+    # penalized ascent's polish fell short of them, and a tracker's range was certified
+    # 0.9826 where 20 000 poses bound it by 0.9787).
+    blocks = made.model.plan_information(certificate.support).blocks() / np.sqrt(3)
+    inverse = np.linalg.inv(np.einsum("k,krp,krq->pq", certificate.weights, blocks, blocks))
+    largest = 0.0
+    for chunk in np.array_split(feasible_poses(made.model, 20_000, rng=9), 20):
+        variance, _ = made.model.plan_information(chunk).pose_variance(inverse)
+        largest = max(largest, float(variance.max()))
+    assert largest <= certificate.max_variance * (1 + 1e-6)
 
 
 def test_a_pool_plan_takes_every_pose_from_the_pool_and_beats_the_pool_method():
