@@ -377,10 +377,9 @@ class InstrumentedArm(CoreModel):
         and tilt, smooth but without a closed form); None without a slack."""
         if not self.instrument.has_slack:
             return None
-        rows = self.plan_conditions(q)
+        slack, rows, tool = self._slack_of(q)
         x, theta = self.split(self.nominal)
-        tool = self._tool(rows, x)
-        slack = np.asarray(self.instrument.slack(tool, rows.feature, theta)).reshape(len(q), -1)
+        assert slack is not None
         by_tool = self.instrument.slack_derivatives(tool, rows.feature, theta)
         if by_tool is None:
             by_q = pose_derivative(lambda x: np.asarray(self._slack(x)), q, _SLACK_STEP)
@@ -392,10 +391,15 @@ class InstrumentedArm(CoreModel):
         """The instrument's :meth:`~armcal.instruments.base.Instrument.slack` of every
         row of poses ``q`` ``(k, n)`` at the nominal parameters, pose by pose ``(k,
         rows s)``; None for an instrument without."""
+        return self._slack_of(q)[0]
+
+    def _slack_of(self, q: np.ndarray) -> tuple[np.ndarray | None, Conditions, np.ndarray]:
+        """:meth:`_slack`, with the rows and the tool it was found at (its derivative's)."""
         rows = self.plan_conditions(q)
         x, theta = self.split(self.nominal)
-        found = self.instrument.slack(self._tool(rows, x), rows.feature, theta)
-        return None if found is None else found.reshape(q.shape[0], -1)
+        tool = self._tool(rows, x)
+        found = self.instrument.slack(tool, rows.feature, theta)
+        return (None if found is None else found.reshape(q.shape[0], -1)), rows, tool
 
     def feasible(self, q: np.ndarray, *, tol: float = 1e-9) -> np.ndarray:
         """Within the limits, and within the instrument's slack where it has one (a
