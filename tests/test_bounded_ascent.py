@@ -91,10 +91,12 @@ def test_a_linear_function_climbs_to_the_region_s_edge(kind):
     np.testing.assert_allclose(found, np.broadcast_to(expected, found.shape), atol=1e-6)
 
 
-def test_a_camera_s_view_constraints_are_its_image_less_the_margin(tmp_path):
+@pytest.mark.parametrize("mount", ["eye-to-hand", "eye-in-hand"])
+def test_a_camera_s_view_constraints_are_its_image_less_the_margin(tmp_path, mount):
     """Its slack (depth and tilt) by the camera's own geometry: checked in
-    test_a_camera_s_slack_is_its_depth_and_tilt."""
-    robot_file, _ = write_lab(tmp_path, "industrial-6r", "eye-to-hand")
+    test_a_camera_s_slack_is_its_depth_and_tilt; the joint derivatives of both, the box's
+    and the slack's (in closed form), against central differences."""
+    robot_file, _ = write_lab(tmp_path, "industrial-6r", mount)
     model = load_robot(robot_file).arm
     q = feasible_poses(model, 6, rng=np.random.default_rng(2))
     g, dg = model.view_constraints(q)
@@ -106,7 +108,7 @@ def test_a_camera_s_view_constraints_are_its_image_less_the_margin(tmp_path):
     reading = model.positions(model.plan_conditions(q)).reshape(6, -1)
     low = np.tile([box[0][0], box[1][0]], corners)
     np.testing.assert_allclose(g[:, : 2 * corners], reading - low, atol=1e-9)
-    for c in range(0, 6 * corners, 37):  # its derivative: central differences of g
+    for c in [*range(0, 6 * corners, 37), 6 * corners - 2, 6 * corners - 1]:  # and the slack's
         numeric = pose_derivative(lambda x, c=c: model.view_constraints(x)[0][:, c], q)
         scale = np.abs(dg[:, c]).max()
         np.testing.assert_allclose(dg[:, c], numeric, atol=1e-6 * scale)

@@ -90,6 +90,43 @@ def test_the_pixels_derivatives_are_central_differences(mount):
     np.testing.assert_allclose(
         by_tool, np.stack(moved, axis=-1), atol=1e-7 * np.abs(by_tool).max()
     )
+    np.testing.assert_array_equal(camera.tool_derivatives(tool, feature, params), by_tool)
+
+
+@pytest.mark.parametrize("mount", CAMERAS)
+def test_the_view_s_slack_derivatives_are_central_differences(mount):
+    """A corner's depth and the cosine of its line of sight's tilt against the board, by
+    the tip's shift and turn (``R -> exp([w]) R``), against central differences (step
+    1e-6 mm or rad: truncation and round-off about 1e-9 of the largest derivative).  The
+    poses are the derivatives test's, the cosine's sign taken as it comes (its absolute
+    value is what the slack reads)."""
+    camera = _camera(mount)
+    rng = np.random.default_rng(1)
+    m = 9
+    shift = rng.normal(size=(m, 3)) * 300.0
+    turn = vector_rotation(rng.normal(size=(m, 3)))
+    feature = rng.integers(0, 48, m)
+    params = rng.normal(size=12) * np.array([4, 4, 4, 0.04, 0.04, 0.04] * 2)
+    h = 1e-6
+
+    def tool(s: np.ndarray, w: np.ndarray) -> np.ndarray:
+        return np.concatenate([s, (vector_rotation(w) @ turn).reshape(m, 9)], axis=-1)
+
+    def slack(s: np.ndarray, w: np.ndarray) -> np.ndarray:
+        return camera.slack(tool(s, w), feature, params)
+
+    zero = np.zeros((m, 3))
+    found = camera.slack_derivatives(tool(shift, zero), feature, params)
+    numeric = np.stack(
+        [(slack(shift + h * e, zero) - slack(shift - h * e, zero)) / (2 * h) for e in np.eye(3)]
+        + [(slack(shift, h * e + zero) - slack(shift, zero - h * e)) / (2 * h) for e in np.eye(3)],
+        axis=-1,
+    )
+    assert found is not None and found.shape == (m, 2, 6)
+    for row in range(2):  # the depth (mm / mm) and the cosine (1 / mm), each to its scale
+        np.testing.assert_allclose(
+            found[:, row], numeric[:, row], atol=1e-7 * np.abs(numeric[:, row]).max()
+        )
 
 
 def test_the_projection_is_opencv_s_plumb_bob():

@@ -158,3 +158,19 @@ def test_optimal_weights_on_one_reading_a_pose_reach_the_known_optimum():
     guest = np.zeros(x.size)
     guest[-4:] = 0.25
     assert (det(found.weights) / det(guest)) ** 0.25 >= 0.99
+
+
+@pytest.mark.parametrize("per_pose, p", [(2, 4), (3, 30), (12, 5)])
+def test_the_weight_hessian_is_the_squared_cross_products_either_way(per_pose, p):
+    """``H_xy = ||F_x M^-1 F_y^T||_F^2`` (the definition, pair by pair) from both routes:
+    the rows' cross products (few rows a pose) and the Gram matrices' (many), to 1e-12
+    relative."""
+    from armcal.doe.weights import _weight_hessian
+
+    rng = np.random.default_rng(7)
+    blocks = rng.normal(size=(9, per_pose, p))
+    half = rng.normal(size=(p, p))
+    m_inv = half @ half.T / p
+    expected = np.array([[np.sum((fx @ m_inv @ fy.T) ** 2) for fy in blocks] for fx in blocks])
+    found = _weight_hessian(blocks, m_inv)
+    np.testing.assert_allclose(found, expected, rtol=1e-12, atol=1e-12 * np.abs(expected).max())

@@ -12,6 +12,7 @@ files the commands read.  A
     python tools/readme.py                   # rewrite every document with fresh output
     python tools/readme.py --check           # exit 1 and show a diff if one is stale
     python tools/readme.py docs/guide.md     # only this document
+    python tools/readme.py --check --times docs/guide.md   # and each command's wall time
 
 Wall-clock figures (``0.62 s``) differ from run to run; ``--check`` compares
 them as ``<t> s``.  Figures that a command writes under ``docs/`` are copied
@@ -29,6 +30,7 @@ import shutil
 import subprocess
 import sys
 import tempfile
+import time
 from pathlib import Path
 
 # One BLAS thread, as `make test` runs: an optimizer's last digits depend on how the
@@ -90,12 +92,19 @@ def _run(command: str, cwd: Path) -> str:
     return done.stdout
 
 
+#: With ``--times``, each command's wall time goes to stderr: which example makes a check slow.
+TIMES = {"on": False}
+
+
 def _console(body: str, cwd: Path) -> str:
     commands = [line[2:] for line in body.splitlines() if line.startswith("$ ")]
     out = []
     for command in commands:
         out.append(f"$ {command}\n")
+        start = time.perf_counter()
         out.append(_run(command, cwd))
+        if TIMES["on"]:
+            print(f"{time.perf_counter() - start:7.1f} s  {command[:90]}", file=sys.stderr)
     return "".join(out)
 
 
@@ -139,10 +148,12 @@ def render(text: str, name: str = "README.md") -> tuple[str, Path]:
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--check", action="store_true", help="compare instead of rewriting")
+    parser.add_argument("--times", action="store_true", help="each command's wall time on stderr")
     parser.add_argument(
         "documents", nargs="*", type=Path, help="only these documents (default: all)"
     )
     args = parser.parse_args(argv)
+    TIMES["on"] = args.times
     status = 0
     for document in [d.resolve() for d in args.documents] or DOCUMENTS:
         status = max(status, _one(document, check=args.check))

@@ -108,15 +108,15 @@ def feasible_poses(
         batch = random_plan(model, max(4 * k, 1000), rng=rng)
         drawn += batch.shape[0]
         batch = batch[model.feasible(batch)]
-        chunks = [  # a few thousand poses at a time: a camera's pose is 48 rows
-            model.meeting_poses(batch[i : i + MEET_CHUNK])
-            for i in range(0, batch.shape[0], MEET_CHUNK)
-        ]
-        batch = np.concatenate([moved[met] for moved, met in chunks] or [batch[:0]])
-        if model.constrained and batch.shape[0]:  # moved: within what a plan keeps to
-            batch = batch[model.feasible(batch)]
-        found.append(batch)
-        count += batch.shape[0]
+        for i in range(0, batch.shape[0], MEET_CHUNK):  # a camera's pose is 48 rows
+            moved, met = model.meeting_poses(batch[i : i + MEET_CHUNK])
+            moved = moved[met]
+            if model.constrained and moved.shape[0]:  # moved: within what a plan keeps to
+                moved = moved[model.feasible(moved)]
+            found.append(moved)
+            count += moved.shape[0]
+            if count >= k:  # the rest of the batch would be cut off below: not moved
+                break
         if count == 0 and drawn >= 10_000:
             raise ArmcalError(
                 f"{model.name}: no random pose within the joint limits "

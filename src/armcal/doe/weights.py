@@ -36,12 +36,23 @@ __all__ = [
 ]
 
 
+#: Rows of blocks :func:`variances` multiplies at a time: its temporaries stay about
+#: ``VARIANCE_ROWS p`` numbers (a certificate's 20 000 photos of 96 rows each, p = 42:
+#: two temporaries of 650 MB at once before).
+VARIANCE_ROWS = 1 << 16
+
+
 def variances(blocks: np.ndarray, m_inv: np.ndarray) -> np.ndarray:
-    """``d(x) = tr(m_inv F_x^T F_x)`` ``(N,)`` of blocks ``(N, r, p)``: one matrix product
-    of the stacked rows, not a three-operand contraction."""
+    """``d(x) = tr(m_inv F_x^T F_x)`` ``(N,)`` of blocks ``(N, r, p)``: matrix products of
+    the stacked rows, not a three-operand contraction, a few thousand poses at a time."""
     count, per_pose, p = blocks.shape
     rows = blocks.reshape(-1, p)
-    return np.sum((rows @ m_inv) * rows, axis=1).reshape(count, per_pose).sum(axis=1)
+    out = np.empty(rows.shape[0])
+    step = max(1, VARIANCE_ROWS // per_pose) * per_pose  # whole poses
+    for start in range(0, rows.shape[0], step):
+        part = rows[start : start + step]
+        out[start : start + step] = np.sum((part @ m_inv) * part, axis=1)
+    return out.reshape(count, per_pose).sum(axis=1)
 
 
 def information(blocks: np.ndarray, weights: np.ndarray) -> np.ndarray:
@@ -187,6 +198,27 @@ def _updated(w: np.ndarray, d: np.ndarray, p: int, power: float) -> np.ndarray:
 NEWTON_START = 1e-2
 
 
+def _weight_hessian(blocks: np.ndarray, m_inv: np.ndarray) -> np.ndarray:
+    """``H_xy = ||F_x M^-1 F_y^T||_F^2`` ``(A, A)`` of blocks ``(A, r, p)``, the cheaper way.
+
+    Few rows a pose (a tracker's 3): the squares of the rows' cross products, ``(A r)^2
+    p`` work.  Many (a photo's 96 corner coordinates, more than ``sqrt(p)``): with ``M^-1
+    = L L^T``, ``H_xy = tr(M^-1 G_x M^-1 G_y) = <S_x, S_y>`` for ``S_x = (F_x L)^T (F_x
+    L)``, ``A r p^2 + A^2 p^2`` work and ``A p^2`` memory, not ``(A r)^2`` (a camera's 300
+    candidates: 6.6 GB)."""
+    count, per_pose, p = blocks.shape
+    if per_pose * per_pose <= p:
+        rows = blocks.reshape(-1, p)
+        cross = (rows @ m_inv @ rows.T) ** 2
+        return cross.reshape(count, per_pose, count, per_pose).sum(axis=(1, 3))
+    values, vectors = np.linalg.eigh((m_inv + m_inv.T) / 2)
+    root = vectors * np.sqrt(np.clip(values, 0.0, None))  # M^-1 = root root^T
+    turned = blocks @ root  # F_x L (A, r, p)
+    square = np.swapaxes(turned, -1, -2) @ turned  # S_x (A, p, p)
+    flat = square.reshape(count, p * p)
+    return flat @ flat.T
+
+
 def _newton_step(
     blocks: np.ndarray, m_inv: np.ndarray, d: np.ndarray, active: np.ndarray, damping: float
 ) -> np.ndarray:
@@ -195,10 +227,7 @@ def _newton_step(
     F_y^T||_F^2`` and ``mu = damping`` times its mean diagonal.  ``H`` has rank at most
     ``p (p + 1) / 2`` however many candidates: the damping makes every step one along
     which ``det M`` grows, a true Newton step as it goes to 0."""
-    per_pose, p = blocks.shape[1:]
-    rows = blocks[active].reshape(-1, p)
-    cross = (rows @ m_inv @ rows.T) ** 2
-    hessian = cross.reshape(active.size, per_pose, active.size, per_pose).sum(axis=(1, 3))
+    hessian = _weight_hessian(blocks[active], m_inv)
     hessian += damping * np.trace(hessian) / active.size * np.eye(active.size)
     ones = np.ones((active.size, 1))
     system = np.block([[hessian, ones], [ones.T, np.zeros((1, 1))]])

@@ -13,7 +13,7 @@ points ``(..., m, 3)``, as :class:`~armcal.models.interface.FitModel`'s.
 
 from __future__ import annotations
 
-from typing import Protocol
+from typing import Protocol, cast
 
 import numpy as np
 
@@ -191,7 +191,7 @@ class Instrument(Protocol):
     ) -> np.ndarray | None:
         """``d slack / d points`` ``(..., m, s, 3)`` (by the tip's shift and turn ``(..., m,
         s, 6)`` for one that reads the tool's frame), or None where the model takes them by
-        central differences (a camera's)."""
+        central differences."""
         ...
 
     def miss(
@@ -207,6 +207,13 @@ class Instrument(Protocol):
     ) -> tuple[np.ndarray, np.ndarray]:
         """``d reading / d points`` ``(..., m, dim, 3)`` and ``d reading / d params``
         ``(..., m, dim, t)``."""
+        ...
+
+    def tool_derivatives(
+        self, points: np.ndarray, feature: np.ndarray | None, params: np.ndarray
+    ) -> np.ndarray:
+        """:meth:`derivatives`' first, by the points alone (a pose's joint step needs no
+        parameter's column)."""
         ...
 
     def curvatures(
@@ -247,6 +254,12 @@ class Defaults:
         self, points: np.ndarray, feature: np.ndarray | None, params: np.ndarray
     ) -> np.ndarray | None:
         return None
+
+    def tool_derivatives(
+        self, points: np.ndarray, feature: np.ndarray | None, params: np.ndarray
+    ) -> np.ndarray:
+        """Where the instrument's own is no cheaper: :meth:`Instrument.derivatives`'."""
+        return cast(Instrument, self).derivatives(points, feature, params)[0]
 
     @property
     def held(self) -> tuple[str, ...]:

@@ -39,6 +39,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from functools import cached_property
+from typing import NamedTuple
 
 import numpy as np
 
@@ -115,6 +116,20 @@ class Intrinsics:
         distort = np.stack([np.stack([dxx, dxy], -1), np.stack([dyx, dyy], -1)], -2)
         pixels = np.array([[a[0, 0], a[0, 1]], [0.0, a[1, 1]]])
         return uv, pixels @ distort @ by_p
+
+
+class _Sight(NamedTuple):
+    """What a photo's corners' derivatives need, row by row (:meth:`Camera._seen`)."""
+
+    t: np.ndarray  # the tip's origin (..., m, 3)
+    rot: np.ndarray  # the tip's rotation R (..., m, 3, 3)
+    cam: np.ndarray  # the camera's R_c (..., 3, 3) and its derivatives (..., 3, 3, 3)
+    by_cam: np.ndarray
+    brd: np.ndarray  # the board's R_b and its derivatives
+    by_brd: np.ndarray
+    corner: np.ndarray  # c_k + d_b in the board's frame (..., m, 3)
+    y: np.ndarray  # the corner in the board's parent frame (..., m, 3)
+    local: np.ndarray  # the corner in the camera's parent frame, less t_c0 (..., m, 3)
 
 
 @dataclass(frozen=True)
@@ -302,7 +317,9 @@ class Camera(Defaults):
             rpy_matrix(np.radians(self.board_pose[1])),
         )
 
-    def _seen(self, tool: np.ndarray, feature: np.ndarray | None, params: np.ndarray):
+    def _seen(
+        self, tool: np.ndarray, feature: np.ndarray | None, params: np.ndarray
+    ) -> tuple[np.ndarray, _Sight]:
         """Every row's corner in the camera's frame ``P`` and what its derivatives need."""
         m = np.shape(tool)[-2]
         k = feature_index(feature, m, self.labels)
@@ -318,7 +335,7 @@ class Camera(Defaults):
             v = np.einsum("...mij,...mj->...mi", rot, y) + t  # R Y + t: the base's
         local = v - self.camera_pose[0]
         p = np.einsum("...ji,...mj->...mi", cam, local) - params[..., None, :3]
-        return p, (k, t, rot, cam, by_cam, brd, by_brd, corner, y, local)
+        return p, _Sight(t, rot, cam, by_cam, brd, by_brd, corner, y, local)
 
     def reading(
         self, points: np.ndarray, feature: np.ndarray | None, params: np.ndarray
@@ -327,26 +344,57 @@ class Camera(Defaults):
         p, _ = self._seen(np.asarray(points, dtype=float), feature, params)
         return self.intrinsics.project(p)[0]
 
+    def _normal(self, sight: _Sight) -> np.ndarray:
+        """The board's normal in the camera's frame, row by row ``(..., m, 3)``."""
+        rot, cam = sight.rot, sight.cam
+        normal = sight.brd[..., :, 2]  # the board's normal in its parent's frame (..., 3)
+        if self.mount == "eye-in-hand":  # in the base frame: into the tip's
+            normal = np.einsum("...mji,...j->...mi", rot, normal)
+        else:  # on the tip: into the base's
+            normal = np.einsum("...mij,...j->...mi", rot, normal)
+        return np.einsum("...ji,...mj->...mi", cam, normal)
+
     def slack(
         self, points: np.ndarray, feature: np.ndarray | None, params: np.ndarray
     ) -> np.ndarray | None:
         """Every corner's depth beyond :attr:`min_depth_mm` (mm) and how far the cosine of
         its line of sight's angle with the board's normal is above that of
         :attr:`max_tilt_deg` ``(..., m, 2)``."""
-        p, (_, _, rot, cam, _, brd, _, _, _, _) = self._seen(
-            np.asarray(points, dtype=float), feature, params
-        )
-        normal = brd[..., :, 2]  # the board's normal in its parent's frame (..., 3)
-        if self.mount == "eye-in-hand":  # in the base frame: into the tip's
-            normal = np.einsum("...mji,...j->...mi", rot, normal)
-        else:  # on the tip: into the base's
-            normal = np.einsum("...mij,...j->...mi", rot, normal)
-        seen = np.einsum("...ji,...mj->...mi", cam, normal)  # in the camera's frame
+        p, sight = self._seen(np.asarray(points, dtype=float), feature, params)
+        seen = self._normal(sight)
         cosine = np.abs(np.sum(seen * p, axis=-1)) / np.linalg.norm(p, axis=-1)
         return np.stack(
             [p[..., 2] - self.min_depth_mm, cosine - np.cos(np.radians(self.max_tilt_deg))],
             axis=-1,
         )
+
+    def slack_derivatives(
+        self, points: np.ndarray, feature: np.ndarray | None, params: np.ndarray
+    ) -> np.ndarray | None:
+        """By the tip's shift and turn ``(..., m, 2, 6)``: the depth's is ``dP_z``; the
+        cosine ``|n . P| / |P|``'s is ``sign(n . P) (P^T dn + n^T dP) / |P| - |n . P| P^T dP
+        / |P|^3``, with ``dP`` the corner's (:meth:`_by_tip`) and ``dn`` the normal's: by the
+        turn alone, ``R_c^T R^T [n_b]`` for a board in the base (``R^T n_b`` turns by ``-R^T
+        [w] n_b``), ``-R_c^T [R n_b]`` for one on the tip (``[w] R n_b``)."""
+        p, sight = self._seen(np.asarray(points, dtype=float), feature, params)
+        rot = sight.rot
+        by_tip = self._by_tip(sight)  # dP (..., m, 3, 6)
+        cam_t = np.swapaxes(sight.cam, -1, -2)[..., None, :, :]
+        normal = sight.brd[..., None, :, 2]  # (..., 1, 3)
+        if self.mount == "eye-in-hand":
+            by_turn = cam_t @ np.swapaxes(rot, -1, -2) @ skew(normal)
+        else:
+            by_turn = -cam_t @ skew(np.einsum("...mij,...mj->...mi", rot, normal))
+        seen = self._normal(sight)
+        dot = np.sum(seen * p, axis=-1)
+        size = np.linalg.norm(p, axis=-1)
+        along = np.einsum("...mi,...mij->...mj", p, by_tip)  # P^T dP (..., m, 6)
+        cosine = (np.sign(dot) / size)[..., None] * np.einsum("...mi,...mij->...mj", seen, by_tip)
+        cosine[..., 3:] += (np.sign(dot) / size)[..., None] * np.einsum(
+            "...mi,...mij->...mj", p, by_turn
+        )
+        cosine -= (np.abs(dot) / size**3)[..., None] * along
+        return np.stack([by_tip[..., 2, :], cosine], axis=-2)
 
     def miss(
         self, points: np.ndarray, feature: np.ndarray | None, params: np.ndarray
@@ -370,37 +418,53 @@ class Camera(Defaults):
         lost = ((depth <= 0.0) | ~growing)[..., None]
         return np.where(lost, float(self.intrinsics.width + self.intrinsics.height), off)
 
+    def _by_tip(self, sight: _Sight) -> np.ndarray:
+        """``dP / d(shift, turn)`` of the tip ``(..., m, 3, 6)``: ``R_c^T R^T [-I, [X - t]]``
+        for a camera on the tip, ``R_c^T [I, -[R Y]]`` for one in the cell."""
+        t, rot, y = sight.t, sight.rot, sight.y
+        cam_t = np.swapaxes(sight.cam, -1, -2)[..., None, :, :]  # R_c^T, over the rows
+        if self.mount == "eye-in-hand":
+            to_p = cam_t @ np.swapaxes(rot, -1, -2)  # dP / dX
+            return np.concatenate([-to_p, to_p @ skew(y - t)], axis=-1)
+        by_shift = np.broadcast_to(cam_t, (*rot.shape[:-2], 3, 3))
+        by_turn = -cam_t @ skew(np.einsum("...mij,...mj->...mi", rot, y))
+        return np.concatenate([by_shift, by_turn], axis=-1)
+
+    def tool_derivatives(
+        self, points: np.ndarray, feature: np.ndarray | None, params: np.ndarray
+    ) -> np.ndarray:
+        """By the tip's shift and turn alone ``(..., m, 2, 6)``: what a pose's joint step
+        needs, without the twelve parameters' columns."""
+        p, sight = self._seen(np.asarray(points, dtype=float), feature, params)
+        return self.intrinsics.project(p)[1] @ self._by_tip(sight)
+
     def derivatives(
         self, points: np.ndarray, feature: np.ndarray | None, params: np.ndarray
     ) -> tuple[np.ndarray, np.ndarray]:
         """By the tip's shift and turn ``(..., m, 2, 6)`` and by the parameters ``(..., m,
         2, 12)`` (module notes)."""
-        p, (_, t, rot, cam, by_cam, brd, by_brd, corner, y, local) = self._seen(
-            np.asarray(points, dtype=float), feature, params
-        )
+        p, sight = self._seen(np.asarray(points, dtype=float), feature, params)
+        rot, brd = sight.rot, sight.brd
         _, by_p = self.intrinsics.project(p)  # (..., m, 2, 3)
-        cam_t = np.swapaxes(cam, -1, -2)[..., None, :, :]  # R_c^T, over the rows
-        if self.mount == "eye-in-hand":
-            rot_t = np.swapaxes(rot, -1, -2)
-            to_p = cam_t @ rot_t  # dP / dX
-            by_shift = -to_p
-            by_turn = to_p @ skew(y - t)
-            by_board = to_p
-        else:
-            to_p = cam_t @ rot  # dP / dY
-            by_shift = np.broadcast_to(cam_t, to_p.shape)
-            by_turn = -cam_t @ skew(np.einsum("...mij,...mj->...mi", rot, y))
-            by_board = to_p
-        shape = by_shift.shape[:-2]
-        own = np.zeros((*shape, 3, 12))
-        own[..., :, 0:3] = -np.eye(3)
-        for turn in range(3):  # (dR_c/da)^T local, and dP/dY (dR_b/da) (c + d_b): matmuls
-            own[..., :, 3 + turn] = local @ by_cam[..., turn, :, :]
-            moved = corner @ np.swapaxes(by_brd[..., turn, :, :], -1, -2)
-            own[..., :, 9 + turn] = (by_board @ moved[..., None])[..., 0]
-        own[..., :, 6:9] = by_board @ brd[..., None, :, :]
-        frame = np.concatenate([by_shift, by_turn], axis=-1)
-        return by_p @ frame, by_p @ own
+        by_tip = by_p @ self._by_tip(sight)  # (..., m, 2, 6)
+        # dP/dY: R_c^T R^T (board in the base, seen from the tip) or R_c^T R (on the tip)
+        cam_t = np.swapaxes(sight.cam, -1, -2)[..., None, :, :]
+        to_board = (
+            by_p @ cam_t @ (np.swapaxes(rot, -1, -2) if self.mount == "eye-in-hand" else rot)
+        )
+        # the camera's turn k: (dR_c/da_k)^T local; the board's: dP/dY (dR_b/da_k) (c + d_b)
+        by_camera_turn = np.einsum("...mj,...kjl->...mkl", sight.local, sight.by_cam)
+        by_board_turn = np.einsum("...klj,...mj->...mkl", sight.by_brd, sight.corner)
+        own = np.concatenate(
+            [
+                -by_p,
+                by_p @ np.swapaxes(by_camera_turn, -1, -2),
+                to_board @ brd[..., None, :, :],
+                to_board @ np.swapaxes(by_board_turn, -1, -2),
+            ],
+            axis=-1,
+        )
+        return by_tip, own
 
     def curvatures(
         self, points: np.ndarray, feature: np.ndarray | None, params: np.ndarray

@@ -350,7 +350,7 @@ class InstrumentedArm(CoreModel):
         - reading`` of each of the ``k`` features' readings, ``2 k dim`` values, then the
         instrument's slack, :meth:`~armcal.instruments.base.Instrument.slack`: a camera's
         corners' depth and tilt, a turn's range) and ``dg/dq`` ``(..., c, n)`` (the slack's
-        by central differences); None without a view.  Where :meth:`meeting_poses` also
+        as :meth:`_slack_rows` gives it); None without a view.  Where :meth:`meeting_poses` also
         asks that the board be in front of the lens, these are the smooth part."""
         if not self.has_view:
             return None
@@ -373,8 +373,8 @@ class InstrumentedArm(CoreModel):
     def _slack_rows(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray] | None:
         """The slack of poses ``q`` ``(k, n)`` pose by pose ``(k, rows s)`` and its joint
         derivatives ``(k, rows s, n)``: the instrument's by the tool's, by the chain rule
-        where it gives them (a turn's range), else central differences (a camera's depth
-        and tilt, smooth but without a closed form); None without a slack."""
+        where it gives them (a turn's range, a camera's depth and tilt), else central
+        differences; None without a slack."""
         if not self.instrument.has_slack:
             return None
         slack, rows, tool = self._slack_of(q)
@@ -384,8 +384,8 @@ class InstrumentedArm(CoreModel):
         if by_tool is None:
             by_q = pose_derivative(lambda x: np.asarray(self._slack(x)), q, _SLACK_STEP)
             return slack, by_q
-        joint = self._arm_jacobian(rows, x, joints=True)  # (rows, 3 or 6, n)
-        return slack, (by_tool @ joint).reshape(q.shape[0], -1, q.shape[-1])
+        by_q = self._by_arm(by_tool, rows, x, joints=True)  # (rows, s, n)
+        return slack, by_q.reshape(q.shape[0], -1, q.shape[-1])
 
     def _slack(self, q: np.ndarray) -> np.ndarray | None:
         """The instrument's :meth:`~armcal.instruments.base.Instrument.slack` of every
@@ -589,12 +589,35 @@ class InstrumentedArm(CoreModel):
             points = np.concatenate([points, flat], axis=-1)
         return points if back is None else points[..., back, :]
 
+    def _by_arm(
+        self,
+        by_tool: np.ndarray,
+        conditions: Conditions,
+        arm_params: np.ndarray,
+        *,
+        joints: bool,
+    ) -> np.ndarray:
+        """``by_tool @ J`` ``(..., m, d, k)`` of every row's derivative by the tool ``(...,
+        m, d, 3 or 6)`` and the arm's Jacobian ``J`` (:meth:`_arm_jacobian`), a pose's once
+        for all its rows: multiplied :data:`ROW_CHUNK` rows at a time, never repeated row
+        by row (a certificate's 20 000 photos of 48 corners: 2.3 GB of one pose's Jacobian
+        48 times)."""
+        arm, back = self._arm_jacobian(conditions, arm_params, joints=joints)
+        if back is None:
+            return by_tool @ arm
+        out = np.empty((*by_tool.shape[:-1], arm.shape[-1]))
+        for start in range(0, back.size, ROW_CHUNK):
+            part = slice(start, start + ROW_CHUNK)
+            out[..., part, :, :] = by_tool[..., part, :, :] @ arm[..., back[part], :, :]
+        return out
+
     def _arm_jacobian(
         self, conditions: Conditions, arm_params: np.ndarray, *, joints: bool
-    ) -> np.ndarray:
-        """The tool point's Jacobian ``(..., m, 3, k)`` in the arm's parameters (``joints``:
-        in the joints), with the tip's angular one below it for an instrument that reads
-        the tool's frame ``(..., m, 6, k)``."""
+    ) -> tuple[np.ndarray, np.ndarray | None]:
+        """The tool point's Jacobian ``(..., poses, 3, k)`` in the arm's parameters
+        (``joints``: in the joints), with the tip's angular one below it for an instrument
+        that reads the tool's frame ``(..., poses, 6, k)``; each pose's once, with the
+        index of every row's pose (None: a row each)."""
         rows, back = self._arm_rows(conditions)
         turn = None
         if self._frame:  # first: the arm keeps this pass for the point's Jacobian next
@@ -609,7 +632,7 @@ class InstrumentedArm(CoreModel):
             found = np.asarray(self.inner.jacobian(rows, arm_params))[..., :3, :]
         if turn is not None:
             found = np.concatenate([found, np.asarray(turn)], axis=-2)
-        return found if back is None else found[..., back, :, :]
+        return found, back
 
     def positions(self, conditions: Conditions, params: np.ndarray | None = None) -> np.ndarray:
         """What the instrument reports at every row ``(..., m, dim)`` (mm)."""
@@ -620,11 +643,10 @@ class InstrumentedArm(CoreModel):
         """``[dh/dp . dp/dx, dh/dtheta]`` ``(..., m, dim, p)`` (with the tool's turn
         ``dh/dw . dw/dx`` for an instrument that reads its frame)."""
         x, theta = self.split(self._params(params))
-        arm_jacobian = self._arm_jacobian(conditions, x, joints=False)
         by_point, by_theta = self.instrument.derivatives(
             self._tool(conditions, x), conditions.feature, theta
         )
-        by_arm = by_point @ arm_jacobian
+        by_arm = self._by_arm(by_point, conditions, x, joints=False)
         by_theta = np.broadcast_to(by_theta, (*by_arm.shape[:-1], by_theta.shape[-1]))
         return np.concatenate([by_arm, by_theta], axis=-1)
 
@@ -633,11 +655,10 @@ class InstrumentedArm(CoreModel):
     ) -> np.ndarray:
         """``dh/dp . dp/dq`` ``(..., m, dim, n)`` (and ``dh/dw . dw/dq``)."""
         x, theta = self.split(self._params(params))
-        joint = self._arm_jacobian(conditions, x, joints=True)
-        by_point, _ = self.instrument.derivatives(  # the points from the Jacobian's pass
+        by_point = self.instrument.tool_derivatives(
             self._tool(conditions, x), conditions.feature, theta
         )
-        return by_point @ joint
+        return self._by_arm(by_point, conditions, x, joints=True)
 
     # -- design ------------------------------------------------------------------------
 
@@ -867,6 +888,10 @@ _FIXES = 1e-9
 #: anew than followed: a search's step from a pose that meets takes 3 or 4.
 _MEET_STEPS = 12
 _MEET_RTOL = 1e-14
+
+#: Rows whose derivatives by the tool meet their pose's arm Jacobian at a time
+#: (:meth:`InstrumentedArm._by_arm`): a few MB of the repeated Jacobian at once.
+ROW_CHUNK = 8192
 
 #: The joint step (rad) of the central differences of an instrument's slack.
 _SLACK_STEP = 1e-6
