@@ -484,3 +484,36 @@ def test_cross_validation_keeps_a_photos_corners_together(tmp_path):
     assert checked["reading_unit"] == "px"
     assert [fold["points"] for fold in checked["per_fold"]] == [4 * 48] * 3
     assert checked["rms_per_point_mm"] < 1e-6
+
+
+def test_a_camera_s_validation_warnings_and_reprs_speak_pixels():
+    """Errors in pixels are reported in pixels: the validation-error, calibration-worse
+    and cross-validation warnings and the reprs say px, never mm (they said mm)."""
+    from armcal.validation import (
+        CrossValidation,
+        Validation,
+        cross_validation_warnings,
+        validation_warnings,
+    )
+
+    rng = np.random.default_rng(3)
+    m = 200
+    after = rng.normal(size=(m, 2)) * 3.0  # 3 px where 0.2 px is predicted: too large
+    before = after.copy()  # and no better than the nominal arm
+    predicted = np.full(m, 0.2)
+    checked = Validation(before, after, predicted, predicted, after, unit="px")
+    words = " ".join(w.message for w in validation_warnings(checked))
+    assert {w.code for w in validation_warnings(checked)} >= {
+        "validation-error",
+        "calibration-worse",
+    }
+    assert " px" in words and " mm" not in words
+    assert " px " in repr(checked) and " mm" not in repr(checked)
+    folds = CrossValidation(3, np.arange(m) % 3, after, predicted, None, before, unit="px")
+    words = " ".join(w.message for w in cross_validation_warnings(folds))
+    assert {w.code for w in cross_validation_warnings(folds)} == {
+        "cross-validation",
+        "calibration-worse",
+    }
+    assert " px" in words and " mm" not in words
+    assert " px" in repr(folds) and " mm" not in repr(folds)

@@ -27,6 +27,7 @@ from armcal.instruments import Coordinates, Distance, FixedPoints, Plane, Planes
 from armcal.instruments.partial import COMPONENTS
 from armcal.models.instrumented import InstrumentedArm
 from armcal.noise import NoiseModel
+from armcal.report import format_monte_carlo
 from armcal.simulate import monte_carlo
 
 ROUND_OFF_MM = 1e-10
@@ -535,6 +536,8 @@ def test_monte_carlo_std_agrees_with_the_predicted_std_with_turns(name, kind):
     free = mc.model.free
     ratios = mc.std[free] / mc.predicted_std[free]
     assert np.all(np.abs(ratios - 1.0) <= MC_AGREEMENT), ratios
+    assert model.reads_turns and not _lab(name, "plane", 10)[3].reads_turns
+    assert f"sigma 0.02 mm, {TURN_SIGMA_DEG:g} deg a turn" in format_monte_carlo(mc)
 
 
 def test_a_plan_designed_from_touches_beats_random_touch_plans():

@@ -35,8 +35,8 @@ def ok(folder: Path, *args: str) -> str:
     return run.stdout
 
 
-def synthesized(folder: Path, robot: Path, truth: Path, plan: str, out: str, *more: str) -> None:
-    ok(
+def synthesized(folder: Path, robot: Path, truth: Path, plan: str, out: str, *more: str) -> str:
+    return ok(
         folder,
         "synthesize",
         "--robot",
@@ -147,7 +147,8 @@ def test_noiseless_turns_are_recovered_on_held_out_poses(tmp_path, robot):
     robot_file, truth = write_lab(tmp_path, robot, "turned")
     met_plan(tmp_path, robot_file, 100, 1, "train.csv")
     met_plan(tmp_path, robot_file, 30, 2, "test.csv")
-    synthesized(tmp_path, robot_file, truth, "train.csv", "meas.csv", "--sigma", "0")
+    said = synthesized(tmp_path, robot_file, truth, "train.csv", "meas.csv", "--sigma", "0")
+    assert "(sigma 0 mm, orientation 0 deg," in said  # --sigma 0: no noise at all
     synthesized(tmp_path, robot_file, truth, "test.csv", "held.csv", "--sigma", "0")
     text = (tmp_path / "meas.csv").read_text(encoding="utf-8").splitlines()
     assert text[0].split(",")[-4:] == ["x_mm", "z_mm", "rx_deg", "rz_deg"]
@@ -470,3 +471,32 @@ def test_a_target_column_names_the_tool_point(tmp_path):
     lines = [lines[0] + ",target", *(line + ",tool" for line in lines[1:])]
     (tmp_path / "tmeas.csv").write_text("\n".join(lines) + "\n", encoding="utf-8")
     ok(tmp_path, "identify", "--robot", robot_file.name, "--measurements", "tmeas.csv", "--json")
+
+
+def test_a_given_sigma_is_the_coordinates_and_turns_keep_their_own(tmp_path):
+    """synthesize --sigma 0.02 on partial coordinates with turns (the robot file's 0.01 mm
+    and 0.001 deg): the same seed draws the same normals, so every turn reads exactly what
+    it reads without --sigma, and every coordinate's noise is exactly twice the file's
+    (it once gave the turns 0.02 rad, 1.1 deg, while saying 0.001 deg)."""
+    robot_file, truth = write_lab(tmp_path, "industrial-6r", "turned")
+    met_plan(tmp_path, robot_file, 20, 1, "plan.csv")
+    said = synthesized(tmp_path, robot_file, truth, "plan.csv", "given.csv", "--sigma", "0.02")
+    assert "(sigma 0.02 mm, orientation 0.001 deg," in said
+    synthesized(tmp_path, robot_file, truth, "plan.csv", "file.csv")
+    synthesized(tmp_path, robot_file, truth, "plan.csv", "none.csv", "--sigma", "0")
+
+    def read(name: str) -> tuple[list[str], np.ndarray]:
+        lines = (tmp_path / name).read_text(encoding="utf-8").splitlines()
+        return lines[0].split(","), np.array(
+            [[float(c) for c in x.split(",")[-4:]] for x in lines[1:]]
+        )
+
+    header, given = read("given.csv")
+    _, file = read("file.csv")
+    _, none = read("none.csv")
+    assert header[-4:] == ["x_mm", "z_mm", "rx_deg", "rz_deg"]
+    np.testing.assert_allclose(given[:, 2:], file[:, 2:], rtol=0, atol=1e-12)
+    assert np.abs(file[:, 2:] - none[:, 2:]).max() > 1e-4  # the turns are noisy
+    np.testing.assert_allclose(
+        given[:, :2] - none[:, :2], 2 * (file[:, :2] - none[:, :2]), atol=1e-9
+    )

@@ -190,9 +190,10 @@ def synthesize_measurements(
     sigma : float, optional
         Isotropic instrument noise (1 std, mm) that overrides the model's
         instrument covariance and any ``row_sigma``, as ``--sigma`` does; the
-        encoder noise stays.  0
-        gives no instrument noise.  Without it the model's noise is used as it
-        is (see :func:`simulated_noise`).
+        encoder noise stays, and so does the orientations' (a 6-DoF instrument's,
+        the rows of partial coordinates that read a turn).  0 gives no instrument
+        noise at all.  Without it the model's noise is used as it is (see
+        :func:`simulated_noise`).
     rng : numpy.random.Generator or int or None
         Noise source.
     trials : int, optional
@@ -263,6 +264,10 @@ def synthesize_measurements(
     if plan.ndim != 2 or plan.shape[1] != n:
         raise ArmcalError(f"the plan must have shape (m, {n}) in rad, got {plan.shape}")
     truth = checked_truth(model, truth)
+    if sigma is not None and sigma > 0 and row_sigma is None and model.reads_turns:
+        # a sigma in mm is the coordinates': rows that read a turn keep the robot file's
+        # (rad), as identify's --sigma does and as a 6-DoF instrument's orientations do
+        model, sigma = model.with_noise(instrument_override(model.noise, sigma)), None
     rows = model.conditions(plan, target=target, loads=loads, feature=feature)
     conditions = rows.with_frames(frames)
     m = plan.shape[0]

@@ -92,6 +92,9 @@ class Validation:
     kept : ndarray of int, shape (m,), or None
         Which of the rows validated the arrays above are, where some rows read a turn
         instead (partial coordinates': their errors are :attr:`turns`'); None for all.
+    unit : str
+        The readings' unit: the errors' and predictions' ``_mm`` are a camera's pixels
+        under the same names (``"px"``).
     """
 
     before: np.ndarray
@@ -104,24 +107,25 @@ class Validation:
     baseline_rows: Literal["calibration", "held-out"] = "calibration"
     reused: np.ndarray | None = None
     kept: np.ndarray | None = None
+    unit: str = "mm"
 
     def __repr__(self) -> str:
-        s = self.summary()
+        s, u = self.summary(), self.unit
         return (
             f"Validation({self.after.shape[0]} poses: RMS per point "
-            f"{s['rms_before_per_point_mm']:.4g} mm before, {s['rms_after_per_point_mm']:.4g} mm "
-            f"after, {s['predicted_rms_after_per_point_mm']:.4g} mm predicted)"
+            f"{s['rms_before_per_point_mm']:.4g} {u} before, {s['rms_after_per_point_mm']:.4g} "
+            f"{u} after, {s['predicted_rms_after_per_point_mm']:.4g} {u} predicted)"
         )
 
     def _repr_html_(self) -> str:
         """The repr over a table of the errors before and after calibration (per point,
         mm; a 6-DoF instrument's orientations in deg): what a notebook shows."""
-        s = self.summary()
+        s, u = self.summary(), self.unit
         rows = [
-            ["RMS per point (mm)", number(s["rms_before_mm"]), number(s["rms_after_mm"])],
-            ["max (mm)", number(s["max_before_mm"]), number(s["max_after_mm"])],
-            ["95 % quantile (mm)", number(s["p95_before_mm"]), number(s["p95_after_mm"])],
-            ["predicted RMS per point (mm)", "", number(s["predicted_rms_after_per_point_mm"])],
+            [f"RMS per point ({u})", number(s["rms_before_mm"]), number(s["rms_after_mm"])],
+            [f"max ({u})", number(s["max_before_mm"]), number(s["max_after_mm"])],
+            [f"95 % quantile ({u})", number(s["p95_before_mm"]), number(s["p95_after_mm"])],
+            [f"predicted RMS per point ({u})", "", number(s["predicted_rms_after_per_point_mm"])],
         ]
         if self.turns is not None:
             rows.append(
@@ -387,6 +391,7 @@ def validate(
             baseline_rows,
             reused,
             kept,
+            model.reading_unit,
         )
     return Validation(
         before[:, :d],
@@ -398,6 +403,7 @@ def validate(
         _turns(model, before, after, turn),
         baseline_rows,
         reused,
+        unit=model.reading_unit,
     )
 
 
@@ -471,14 +477,15 @@ def clearly_better(
 
 
 def worse_warning(
-    before: float, after: float, predicted: float, count: int, where: str
+    before: float, after: float, predicted: float, count: int, where: str, unit: str = "mm"
 ) -> ArmcalWarning:
     """``calibration-worse``: RMS per point ``after`` calibration is not clearly below the
     nominal arm's ``before`` on ``count`` points, ``where`` (a phrase); ``predicted`` is
-    the calibrated error expected, against which the nominal arm is judged."""
+    the calibrated error expected, against which the nominal arm is judged; all in
+    ``unit`` (a camera's px)."""
     numbers = (
-        f"{after:.3g} mm RMS per point after calibration against {before:.3g} mm for the "
-        "nominal arm registered on its own"
+        f"{after:.3g} {unit} RMS per point after calibration against {before:.3g} {unit} for "
+        "the nominal arm registered on its own"
     )
     causes = (
         "the arm or the instrument changed during the campaign (a tracker or a base that "
@@ -496,7 +503,8 @@ def worse_warning(
             "calibration-worse",
             f"calibration buys nothing measurable on {where} ({numbers}): the nominal arm "
             f"already predicts them within the noise and the calibration's uncertainty "
-            f"({predicted:.3g} mm); keep the nominal model, or measure with a better instrument",
+            f"({predicted:.3g} {unit}); keep the nominal model, or measure with a better "
+            "instrument",
         )
     return ArmcalWarning(
         "calibration-worse",
@@ -523,8 +531,9 @@ def validation_warnings(
                 "validation-error",
                 f"the calibrated model misses {'these' if reused else 'the held-out'} poses "
                 "by RMS "
-                f"{s['rms_after_per_point_mm']:.3g} mm per point, more than the "
-                f"{s['predicted_rms_after_per_point_mm']:.3g} mm it predicts (noise and "
+                f"{s['rms_after_per_point_mm']:.3g} {result.unit} per point, more than the "
+                f"{s['predicted_rms_after_per_point_mm']:.3g} {result.unit} it predicts (noise "
+                "and "
                 "its uncertainty): the model misses an effect, the poses lie outside the "
                 "calibrated range, the arm changed, or the measurements belong to another setup",
             )
@@ -549,6 +558,7 @@ def validation_warnings(
                 s["predicted_rms_after_per_point_mm"],
                 count,
                 poses,
+                result.unit,
             )
         )
     return warnings
@@ -605,6 +615,8 @@ class CrossValidation:
         own to the same training rows as the fold's calibration (its baseline), mm.
     groups : ndarray, shape (m,), or None
         The pose every row belongs to (rows of one pose share its errors).
+    unit : str
+        The readings' unit (:attr:`Validation.unit`).
     """
 
     folds: int
@@ -614,12 +626,14 @@ class CrossValidation:
     turns: Turns | None = None
     nominal_errors: np.ndarray | None = None
     groups: np.ndarray | None = None
+    unit: str = "mm"
 
     def __repr__(self) -> str:
-        s = self.summary()
+        s, u = self.summary(), self.unit
         return (
             f"CrossValidation({self.folds} folds: prediction error RMS per point "
-            f"{s['rms_per_point_mm']:.4g} mm, predicted {s['predicted_rms_per_point_mm']:.4g} mm)"
+            f"{s['rms_per_point_mm']:.4g} {u}, "
+            f"predicted {s['predicted_rms_per_point_mm']:.4g} {u})"
         )
 
     @property
@@ -685,6 +699,7 @@ def cross_validation_warnings(result: CrossValidation) -> list[ArmcalWarning]:
                 s["predicted_rms_per_point_mm"],
                 result.errors.shape[0],
                 "the held-out poses of the cross-validation",
+                result.unit,
             )
         )
     return found
@@ -697,7 +712,8 @@ def cross_validation_warning(result: CrossValidation) -> ArmcalWarning | None:
     rms, predicted = summary["rms_per_point_mm"], summary["predicted_rms_per_point_mm"]
     found = []
     if _too_large(rms, predicted, count):
-        found.append(f"RMS {rms:.3g} mm per point, more than the {predicted:.3g} mm")
+        u = result.unit
+        found.append(f"RMS {rms:.3g} {u} per point, more than the {predicted:.3g} {u}")
     if "orientation_rms_deg" in summary:  # a 6-DoF instrument's orientations
         turn, turn_predicted = (
             summary["orientation_rms_deg"],
@@ -850,6 +866,7 @@ def _cross_validation(
             Turns(errors[turning], errors[turning], predicted[turning]),
             None if nominal is None else nominal[kept, :d],
             None if groups is None else np.asarray(groups)[kept],
+            model.reading_unit,
         )
     return CrossValidation(
         folds,
@@ -859,4 +876,5 @@ def _cross_validation(
         _turns(model, errors, errors, turn_predicted),
         None if nominal is None else nominal[:, :d],
         None if groups is None else np.asarray(groups),
+        model.reading_unit,
     )

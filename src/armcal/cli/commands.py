@@ -232,13 +232,9 @@ def synthesize(args: argparse.Namespace) -> None:
     tracker = args.sigma is None and noise is not None and noise.tracker is not None
     turn_sigma = None if noise is None else noise.orientation_sigma
     turn = ""
-    turns = (
-        made.feature is not None
-        and made.q.shape[0] > 0
-        and spec.arm.turn_rows(spec.arm.conditions(made.q[:1], feature=made.feature[:1]))
-        is not None
-    )  # partial coordinates that read the tool's turn
-    if (made.points.shape[1] == 6 or turns) and turn_sigma is not None:  # a 6-DoF instrument
+    # a 6-DoF instrument, or partial coordinates that read the tool's turn
+    if (made.points.shape[1] == 6 or spec.arm.reads_turns) and turn_sigma is not None:
+        turn_sigma = 0.0 if args.sigma == 0 else turn_sigma  # --sigma 0: no noise at all
         turn = f", orientation {math.degrees(turn_sigma):g} deg"
     emit(
         args,

@@ -97,6 +97,11 @@ class SeesAnywhere:
         """None: a row reads a position (a 6-DoF instrument's turns are columns of it)."""
         return None
 
+    @property
+    def reads_turns(self) -> bool:
+        """False: no row reads an angle alone."""
+        return False
+
     def meeting_poses(
         self,
         q: np.ndarray,

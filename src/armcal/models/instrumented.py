@@ -446,6 +446,12 @@ class InstrumentedArm(CoreModel):
         return np.isin(index, turns)
 
     @property
+    def reads_turns(self) -> bool:
+        """Whether the instrument has features that read angles (partial coordinates'
+        turns)."""
+        return bool(self.instrument.turn_features)
+
+    @property
     def touches(self) -> bool:
         """Whether a row reports nothing but that it meets the instrument (a plane, a fixed
         point; a distance reports its reading)."""

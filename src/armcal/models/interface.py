@@ -1088,6 +1088,12 @@ class DesignRole(Protocol):
         ...
 
     @property
+    def reads_turns(self) -> bool:
+        """Whether some of a plan's rows read an angle (:meth:`turn_rows`): a report names
+        the turns' sigma beside the coordinates'."""
+        ...
+
+    @property
     def touches(self) -> bool:
         """Whether a row reports only that the tool meets the instrument (a touch of a
         plane, a seating in a point): its reading is 0 by definition, and its noise is in

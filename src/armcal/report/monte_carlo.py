@@ -23,9 +23,7 @@ def format_monte_carlo(result: MonteCarlo, *, words: Mapping[str, str] = ACTIONS
     arm = result.arm
     noise = arm.noise
     turned = (  # partial coordinates that read the tool's turn: its sigma too
-        noise is not None
-        and noise.orientation_sigma is not None
-        and arm.turn_rows(arm.plan_conditions(result.q[:1])) is not None
+        noise is not None and noise.orientation_sigma is not None and arm.reads_turns
     )
     turn = f", {math.degrees(noise.orientation_sigma):g} deg a turn" if turned else ""
     lines = [
