@@ -377,34 +377,38 @@ def validate(
     reused = (
         None if cal.training_rows is None else training_rows_among(cal.training_rows, conditions)
     )
-    turning = model.turn_rows(conditions)
-    if turning is not None and np.any(turning):  # partial coordinates' turns: in Turns
-        kept = np.flatnonzero(~turning)
-        return Validation(
-            before[kept, :d],
-            after[kept, :d],
-            predicted[kept],
-            uncertainty[kept],
-            measured[kept, :d],
-            out_of_plane,
-            Turns(before[turning], after[turning], predicted[turning]),
-            baseline_rows,
-            reused,
-            kept,
-            model.reading_unit,
-        )
+    kept, turning = _turn_split(model, conditions)
+    rows = slice(None) if kept is None else kept
+    turns = (
+        _turns(model, before, after, turn)
+        if turning is None
+        else Turns(before[turning], after[turning], predicted[turning])
+    )
     return Validation(
-        before[:, :d],
-        after[:, :d],
-        predicted,
-        uncertainty,
-        measured[:, :d],
+        before[rows, :d],
+        after[rows, :d],
+        predicted[rows],
+        uncertainty[rows],
+        measured[rows, :d],
         out_of_plane,
-        _turns(model, before, after, turn),
+        turns,
         baseline_rows,
         reused,
-        unit=model.reading_unit,
+        kept,
+        model.reading_unit,
     )
+
+
+def _turn_split(
+    model: FitModel, conditions: Conditions
+) -> tuple[np.ndarray | None, np.ndarray | None]:
+    """The rows that read a position and those that read a turn (partial coordinates'
+    turns, reported apart in :class:`Turns`): their indices and mask, or ``(None, None)``
+    where no row reads a turn."""
+    turning = model.turn_rows(conditions)
+    if turning is None or not np.any(turning):
+        return None, None
+    return np.flatnonzero(~turning), turning
 
 
 def _row_keys(rows: Conditions) -> np.ndarray:
@@ -855,26 +859,20 @@ def _cross_validation(
     6-DoF instrument's turns (``turn_predicted``) or partial coordinates' rows of turns
     apart, in :class:`Turns`."""
     d = model.position_dim
-    turning = model.turn_rows(conditions)
-    if turning is not None and np.any(turning):  # partial coordinates' turns: in Turns
-        kept = ~turning
-        return CrossValidation(
-            folds,
-            fold[kept],
-            errors[kept, :d],
-            predicted[kept],
-            Turns(errors[turning], errors[turning], predicted[turning]),
-            None if nominal is None else nominal[kept, :d],
-            None if groups is None else np.asarray(groups)[kept],
-            model.reading_unit,
-        )
+    kept, turning = _turn_split(model, conditions)
+    rows = slice(None) if kept is None else kept
+    turns = (
+        _turns(model, errors, errors, turn_predicted)
+        if turning is None
+        else Turns(errors[turning], errors[turning], predicted[turning])
+    )
     return CrossValidation(
         folds,
-        fold,
-        errors[:, :d],
-        predicted,
-        _turns(model, errors, errors, turn_predicted),
-        None if nominal is None else nominal[:, :d],
-        None if groups is None else np.asarray(groups),
+        fold[rows],
+        errors[rows, :d],
+        predicted[rows],
+        turns,
+        None if nominal is None else nominal[rows, :d],
+        None if groups is None else np.asarray(groups)[rows],
         model.reading_unit,
     )

@@ -284,7 +284,7 @@ def identify(args: argparse.Namespace) -> None:
     if run.cross_validation is not None:
         summary = run.cross_validation.summary()
         folds = run.cross_validation.per_fold()
-        unit = cal.model.reading_unit  # a camera's pixels, under the same keys
+        unit = run.cross_validation.unit  # a camera's pixels, under the same keys
         document["cross_validation"] = {
             **summary,
             "per_fold": folds,
