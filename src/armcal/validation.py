@@ -377,13 +377,8 @@ def validate(
     reused = (
         None if cal.training_rows is None else training_rows_among(cal.training_rows, conditions)
     )
-    kept, turning = _turn_split(model, conditions)
+    kept, turns = _turn_split(model, conditions, before, after, predicted, turn)
     rows = slice(None) if kept is None else kept
-    turns = (
-        _turns(model, before, after, turn)
-        if turning is None
-        else Turns(before[turning], after[turning], predicted[turning])
-    )
     return Validation(
         before[rows, :d],
         after[rows, :d],
@@ -400,15 +395,21 @@ def validate(
 
 
 def _turn_split(
-    model: FitModel, conditions: Conditions
-) -> tuple[np.ndarray | None, np.ndarray | None]:
-    """The rows that read a position and those that read a turn (partial coordinates'
-    turns, reported apart in :class:`Turns`): their indices and mask, or ``(None, None)``
-    where no row reads a turn."""
+    model: FitModel,
+    conditions: Conditions,
+    before: np.ndarray,
+    after: np.ndarray,
+    predicted: np.ndarray,
+    turn_predicted: np.ndarray | None,
+) -> tuple[np.ndarray | None, Turns | None]:
+    """The rows that read a position (their indices; None: every row) and the turns'
+    errors: the rows that read a turn (partial coordinates'), apart, else a 6-DoF
+    instrument's orientations (:func:`_turns`, ``turn_predicted``)."""
     turning = model.turn_rows(conditions)
     if turning is None or not np.any(turning):
-        return None, None
-    return np.flatnonzero(~turning), turning
+        return None, _turns(model, before, after, turn_predicted)
+    turns = Turns(before[turning], after[turning], predicted[turning])
+    return np.flatnonzero(~turning), turns
 
 
 def _row_keys(rows: Conditions) -> np.ndarray:
@@ -859,13 +860,8 @@ def _cross_validation(
     6-DoF instrument's turns (``turn_predicted``) or partial coordinates' rows of turns
     apart, in :class:`Turns`."""
     d = model.position_dim
-    kept, turning = _turn_split(model, conditions)
+    kept, turns = _turn_split(model, conditions, errors, errors, predicted, turn_predicted)
     rows = slice(None) if kept is None else kept
-    turns = (
-        _turns(model, errors, errors, turn_predicted)
-        if turning is None
-        else Turns(errors[turning], errors[turning], predicted[turning])
-    )
     return CrossValidation(
         folds,
         fold[rows],
